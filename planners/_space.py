@@ -1,0 +1,161 @@
+"""Compiled state-space primitives: distance, interpolation and the nearest-neighbour embedding.
+
+A state space is described to the kernels by two small integers, ``(kind, metric)``:
+
+* ``SPACE_RN`` -- real vectors; ``metric`` is one of ``METRIC_L2``, ``METRIC_L1``, ``METRIC_LINF``.
+  The nearest-neighbour embedding is the identity.
+* ``SPACE_RIGID`` -- 6-DoF rigid body ``(x, y, z, tx, ty, tz)`` with Euler angles in ``[-pi, pi)``.
+  ``METRIC_COSSIN``: Euclidean distance on ``(x, y, z, cos tx, sin tx, ..., cos tz, sin tz)``, so the
+  embedding is 9-D and the k-d index applies. ``METRIC_SE3``: translation distance plus
+  ``rot_weight`` times the geodesic rotation angle; no Euclidean embedding exists, so nearest-neighbour
+  queries fall back to a compiled exact scan.
+
+Angles are interpolated along the shorter arc, so a motion from 3.1 to -3.1 rad turns 0.08 rad.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+SPACE_RN = 0
+SPACE_RIGID = 1
+
+METRIC_L2 = 0
+METRIC_L1 = 1
+METRIC_LINF = 2
+METRIC_COSSIN = 3
+METRIC_SE3 = 4
+
+METRIC_NAMES = {
+    "euclidean": METRIC_L2,
+    "manhattan": METRIC_L1,
+    "chebyshev": METRIC_LINF,
+    "cossin": METRIC_COSSIN,
+    "se3": METRIC_SE3,
+}
+
+TWO_PI = 2.0 * math.pi
+
+
+@nb.njit(cache=True, inline="always")
+def wrap_angle(a):
+    """Map an angle to [-pi, pi)."""
+    return (a + math.pi) % TWO_PI - math.pi
+
+
+@nb.njit(cache=True, inline="always")
+def embed_dim(kind, metric, dim):
+    if kind == SPACE_RIGID and metric == METRIC_COSSIN:
+        return 9
+    return dim
+
+
+@nb.njit(cache=True)
+def embed(kind, metric, q, out):
+    """Write the nearest-neighbour embedding of ``q`` into ``out``."""
+    if kind == SPACE_RIGID and metric == METRIC_COSSIN:
+        out[0] = q[0]
+        out[1] = q[1]
+        out[2] = q[2]
+        for i in range(3):
+            out[3 + 2 * i] = math.cos(q[3 + i])
+            out[4 + 2 * i] = math.sin(q[3 + i])
+    else:
+        for i in range(q.shape[0]):
+            out[i] = q[i]
+
+
+@nb.njit(cache=True)
+def _euler_to_quat(tx, ty, tz, out):
+    # H = Ry @ Rx @ Rz, so the quaternion is qy * qx * qz.
+    cx, sx = math.cos(0.5 * tx), math.sin(0.5 * tx)
+    cy, sy = math.cos(0.5 * ty), math.sin(0.5 * ty)
+    cz, sz = math.cos(0.5 * tz), math.sin(0.5 * tz)
+    # qy * qx
+    w1 = cy * cx
+    x1 = cy * sx
+    y1 = sy * cx
+    z1 = -sy * sx
+    # (qy * qx) * qz
+    out[0] = w1 * cz - z1 * sz
+    out[1] = x1 * cz + y1 * sz
+    out[2] = y1 * cz - x1 * sz
+    out[3] = z1 * cz + w1 * sz
+
+
+@nb.njit(cache=True)
+def rotation_angle_between(a, b):
+    """Geodesic angle (radians, in [0, pi]) between the rotations of two rigid-body states."""
+    qa = np.empty(4)
+    qb = np.empty(4)
+    _euler_to_quat(a[3], a[4], a[5], qa)
+    _euler_to_quat(b[3], b[4], b[5], qb)
+    dot = abs(qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3])
+    if dot > 1.0:
+        dot = 1.0
+    return 2.0 * math.acos(dot)
+
+
+@nb.njit(cache=True)
+def distance(kind, metric, rot_weight, a, b):
+    """Distance between two states under ``(kind, metric)``."""
+    if kind == SPACE_RN:
+        if metric == METRIC_L2:
+            s = 0.0
+            for i in range(a.shape[0]):
+                d = a[i] - b[i]
+                s += d * d
+            return math.sqrt(s)
+        elif metric == METRIC_L1:
+            s = 0.0
+            for i in range(a.shape[0]):
+                s += abs(a[i] - b[i])
+            return s
+        else:
+            s = 0.0
+            for i in range(a.shape[0]):
+                d = abs(a[i] - b[i])
+                if d > s:
+                    s = d
+            return s
+    # rigid body
+    t = 0.0
+    for i in range(3):
+        d = a[i] - b[i]
+        t += d * d
+    if metric == METRIC_COSSIN:
+        # |(cos a, sin a) - (cos b, sin b)|^2 = 4 sin^2((a - b) / 2)
+        for i in range(3, 6):
+            s = math.sin(0.5 * (a[i] - b[i]))
+            t += 4.0 * s * s
+        return math.sqrt(t)
+    return math.sqrt(t) + rot_weight * rotation_angle_between(a, b)
+
+
+@nb.njit(cache=True)
+def interpolate(kind, a, b, t, out):
+    """State at fraction ``t`` of the motion from ``a`` to ``b`` (shorter arc for angles)."""
+    if kind == SPACE_RN:
+        for i in range(a.shape[0]):
+            out[i] = a[i] + t * (b[i] - a[i])
+    else:
+        for i in range(3):
+            out[i] = a[i] + t * (b[i] - a[i])
+        for i in range(3, 6):
+            out[i] = wrap_angle(a[i] + t * wrap_angle(b[i] - a[i]))
+
+
+@nb.njit(cache=True, inline="always")
+def kd_metric(metric):
+    """Lp metric code the k-d index uses on the embedding (COSSIN embeds into L2)."""
+    if metric == METRIC_L1 or metric == METRIC_LINF:
+        return metric
+    return METRIC_L2
+
+
+@nb.njit(cache=True, inline="always")
+def uses_kd(kind, metric):
+    return metric != METRIC_SE3

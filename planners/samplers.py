@@ -1,0 +1,158 @@
+"""The one ``Sampler`` protocol every planner calls, and the classic samplers.
+
+A sampler is a configuration object; a planner calls ``sampler.bind(problem)`` once and gets a
+bound copy it owns (so one ``GoalBiasedSampler(0.05)`` can serve many planners). The planner then
+calls ``draw(rng, n, view)`` whenever it needs samples:
+
+* it returns 1..n samples, as an ``(m, dim)`` array or a ``SampleBatch``;
+* one sample consumed is one planner iteration;
+* samples that do not depend on the tree can be returned ``n`` at a time, so the compiled loop runs
+  uninterrupted; tree-dependent samplers read ``view`` and may return fewer;
+* a ``SampleBatch`` can mark samples as *anchored* (offsets from the tree vertex nearest the goal,
+  resolved by the planner when the sample is used, so a batch keeps following the tree's progress)
+  and can say how many raw candidates each sample cost (for samplers that discard candidates).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from planners.planner import TreeView
+    from planners.problem import Problem
+
+
+@dataclass(frozen=True)
+class SampleBatch:
+    """Samples with optional per-sample flags.
+
+    Attributes:
+        points: (m, dim) states, or offsets where ``anchored`` is True.
+        anchored: (m,) bool or None; True rows are offsets from the progress anchor.
+        candidates: (m,) int or None; raw candidates drawn to produce each row (default 1).
+    """
+
+    points: np.ndarray
+    anchored: np.ndarray | None = None
+    candidates: np.ndarray | None = None
+
+
+@runtime_checkable
+class Sampler(Protocol):
+    """Where a planner samples next."""
+
+    def bind(self, problem: Problem) -> Sampler:
+        """A copy of this sampler ready to draw for ``problem``."""
+        ...
+
+    def draw(self, rng: np.random.Generator, n: int, view: TreeView) -> np.ndarray | SampleBatch:
+        """Return between 1 and ``n`` samples."""
+        ...
+
+
+class SamplerBase:
+    """Default ``bind``: a shallow copy that remembers the problem and its bounds."""
+
+    problem: Problem | None = None
+
+    def bind(self, problem: Problem) -> SamplerBase:
+        bound = copy.copy(self)
+        bound.problem = problem
+        bound.low, bound.high = (np.asarray(b, dtype=np.float64) for b in problem.world.bounds)
+        bound._setup()
+        return bound
+
+    def _setup(self) -> None:
+        """Hook for per-problem preparation in subclasses."""
+
+    def _uniform(self, u: np.ndarray) -> np.ndarray:
+        return self.low + (self.high - self.low) * u
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+class UniformSampler(SamplerBase):
+    """Uniform over the world's sampling box (obstacles included, as in OMPL's RRT)."""
+
+    def draw(self, rng, n, view):
+        return self._uniform(rng.random((n, self.problem.dim)))
+
+
+class GoalBiasedSampler(SamplerBase):
+    """The goal state with probability ``p``, otherwise uniform (OMPL's default ``p`` is 0.05).
+
+    Args:
+        p: Goal bias in [0, 1].
+    """
+
+    def __init__(self, p: float = 0.05) -> None:
+        p = float(p)
+        if not (0.0 <= p <= 1.0) or math.isnan(p):
+            raise ValueError(f"goal bias p must lie in [0, 1], got {p}")
+        self.p = p
+
+    def draw(self, rng, n, view):
+        # one row of d + 1 uniforms per sample keeps the stream identical whatever the batch size
+        u = rng.random((n, self.problem.dim + 1))
+        pts = self._uniform(u[:, 1:])
+        pts[u[:, 0] < self.p] = self.problem.goal
+        return pts
+
+    def __repr__(self) -> str:
+        return f"GoalBiasedSampler({self.p:g})"
+
+
+class InformedSampler(SamplerBase):
+    """Uniform until a solution exists, then uniform over the informed set (Gammell et al. 2014).
+
+    The informed set is the prolate hyperspheroid of states that could lie on a path shorter than
+    the best found. A path may end anywhere in the goal ball, so the set is
+    ``|x - start| + |x - goal| <= best_cost + goal_tolerance``. Real-vector, Euclidean spaces only.
+    Points of the ellipsoid outside the sampling box are rejected and counted as candidates.
+    """
+
+    batch = 64
+
+    def _setup(self) -> None:
+        p = self.problem
+        if p.world.space_kind != 0 or p.metric != "euclidean":
+            raise ValueError("InformedSampler needs a real-vector world with the euclidean metric")
+        d = p.dim
+        s, g = np.asarray(p.start), np.asarray(p.goal)
+        self._center = 0.5 * (s + g)
+        self._cmin = float(np.linalg.norm(g - s))
+        a1 = (g - s) / self._cmin if self._cmin > 0 else np.eye(d)[0]
+        # rotation taking e1 to a1 (SVD construction of Gammell et al.)
+        M = np.outer(a1, np.eye(d)[0])
+        U, _, Vt = np.linalg.svd(M)
+        D = np.eye(d)
+        D[-1, -1] = np.linalg.det(U) * np.linalg.det(Vt.T)
+        self._C = U @ D @ Vt
+
+    def draw(self, rng, n, view):
+        c_best = view.best_cost + self.problem.goal_tolerance
+        d = self.problem.dim
+        if not np.isfinite(c_best) or c_best <= self._cmin:
+            return self._uniform(rng.random((n, d)))
+        m = min(n, self.batch)
+        r1 = c_best / 2.0
+        ri = math.sqrt(max(c_best**2 - self._cmin**2, 0.0)) / 2.0
+        L = np.diag([r1] + [ri] * (d - 1))
+        out = np.empty((m, d))
+        cands = np.zeros(m, dtype=np.int64)
+        for i in range(m):
+            while True:
+                cands[i] += 1
+                x = rng.normal(size=d)
+                x *= rng.random() ** (1.0 / d) / np.linalg.norm(x)
+                y = self._C @ (L @ x) + self._center
+                if np.all(y >= self.low) and np.all(y < self.high):
+                    out[i] = y
+                    break
+        return SampleBatch(out, None, cands)
