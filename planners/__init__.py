@@ -4,21 +4,31 @@ from planners.grid import OccupancyGrid
 from planners.nn import NearestNeighbors
 from planners.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
 from planners.problem import Problem, load_movingai_scenarios
+from planners.prm import PRM, LazyPRM
 from planners.rrt import RRT, RRTConnect
+from planners.rrtstar import InformedRRTStar, RRTStar
+from planners.shapes import Circle, GeometricWorld, Rectangle
 from planners.samplers import GoalBiasedSampler, InformedSampler, SampleBatch, Sampler, SamplerBase, UniformSampler
 from planners.world import World
 
 __all__ = [
+    "Circle",
+    "GeometricWorld",
     "GoalBiasedSampler",
+    "InformedRRTStar",
     "InformedSampler",
+    "LazyPRM",
     "NearestNeighbors",
     "OccupancyGrid",
     "PlanResult",
+    "PRM",
     "Planner",
     "PlannerData",
     "Problem",
     "RRT",
     "RRTConnect",
+    "RRTStar",
+    "Rectangle",
     "SampleBatch",
     "Sampler",
     "SamplerBase",
