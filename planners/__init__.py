@@ -7,6 +7,7 @@ from planners.problem import Problem, load_movingai_scenarios
 from planners.prm import PRM, LazyPRM
 from planners.rrt import RRT, RRTConnect
 from planners.rrtstar import InformedRRTStar, RRTStar
+from planners.smoothing import shortcut, simplify, smooth
 from planners.shapes import Circle, GeometricWorld, Rectangle
 from planners.samplers import GoalBiasedSampler, InformedSampler, SampleBatch, Sampler, SamplerBase, UniformSampler
 from planners.world import World
@@ -37,4 +38,7 @@ __all__ = [
     "UniformSampler",
     "World",
     "load_movingai_scenarios",
+    "shortcut",
+    "simplify",
+    "smooth",
 ]

@@ -98,6 +98,13 @@ class PlannerData:
     tags: np.ndarray
 
 
+def require_problem(problem) -> Problem:
+    """Raise a clear TypeError unless ``problem`` is a ``Problem`` (planners check this first)."""
+    if not isinstance(problem, Problem):
+        raise TypeError(f"problem must be a planners.Problem, got {type(problem).__name__}")
+    return problem
+
+
 def _readonly(a: np.ndarray) -> np.ndarray:
     v = a.view()
     v.flags.writeable = False
@@ -167,8 +174,7 @@ class Planner(abc.ABC):
     anytime: ClassVar[bool] = False
 
     def __init__(self, problem: Problem, *, sampler: Sampler | None = None, seed: int | None = None) -> None:
-        if not isinstance(problem, Problem):
-            raise TypeError(f"problem must be a planners.Problem, got {type(problem).__name__}")
+        require_problem(problem)
         if sampler is None:
             sampler = UniformSampler()
         if not isinstance(sampler, Sampler):
@@ -361,8 +367,10 @@ class Planner(abc.ABC):
         self._buf_pts, self._buf_anch, self._buf_cand, self._pos = pts, anch, cand, 0
 
     def _consume(self, n: int) -> int:
+        # always ask for CHUNK: when refills happen (and what a tree-dependent sampler sees) must not
+        # depend on how the caller splits its budget, so step() x N == solve(N) == solve in pieces
         if self._pos >= len(self._buf_pts):
-            self._refill(n)
+            self._refill(CHUNK)
         end = min(self._pos + n, len(self._buf_pts))
         self._reserve(end - self._pos)
         used = self._run(self._buf_pts[self._pos:end], self._buf_anch[self._pos:end])

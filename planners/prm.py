@@ -9,7 +9,7 @@ import numpy as np
 
 from planners import _prm_kernels as KP
 from planners import _rrt_kernels as K
-from planners.planner import CHUNK, Planner, PlannerData, PlanResult, VertexStore
+from planners.planner import require_problem, CHUNK, Planner, PlannerData, PlanResult, VertexStore
 from planners.problem import Problem
 from planners.rrtstar import unit_ball_volume
 from planners.samplers import Sampler
@@ -53,6 +53,7 @@ class PRM(Planner):
     def __init__(self, problem: Problem, *, step_size: float | None = None, k: int = DEFAULT_K,
                  connection: str = "knn", radius: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None) -> None:
+        require_problem(problem)
         if connection not in ("knn", "radius"):
             raise ValueError(f"connection must be 'knn' or 'radius', got {connection!r}")
         if connection == "knn" and (isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1):

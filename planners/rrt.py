@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from planners import _rrt_kernels as K
-from planners.planner import Planner, PlannerData, VertexStore
+from planners.planner import require_problem, Planner, PlannerData, VertexStore
 from planners.problem import Problem
 from planners.samplers import Sampler
 
@@ -50,6 +50,7 @@ class RRT(Planner):
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None) -> None:
+        require_problem(problem)
         self.step_size = default_step(problem, step_size)
         super().__init__(problem, sampler=sampler, seed=seed)
 

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from planners import _rrtstar_kernels as KS
+from planners.planner import require_problem
 from planners.problem import Problem
 from planners.rrt import RRT
 from planners.samplers import InformedSampler, Sampler
@@ -44,6 +45,7 @@ class RRTStar(RRT):
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None, rewire_factor: float = 1.1, stop_on_first_solution: bool = False) -> None:
+        require_problem(problem)
         if not (np.isfinite(rewire_factor) and rewire_factor > 0):
             raise ValueError(f"rewire_factor must be a positive number, got {rewire_factor}")
         self.rewire_factor = float(rewire_factor)

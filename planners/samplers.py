@@ -138,21 +138,29 @@ class InformedSampler(SamplerBase):
     def draw(self, rng, n, view):
         c_best = view.best_cost + self.problem.goal_tolerance
         d = self.problem.dim
+        m = min(n, self.batch)  # small batches: the informed set shrinks as the solution improves
         if not np.isfinite(c_best) or c_best <= self._cmin:
-            return self._uniform(rng.random((n, d)))
-        m = min(n, self.batch)
+            return self._uniform(rng.random((m, d)))
         r1 = c_best / 2.0
         ri = math.sqrt(max(c_best**2 - self._cmin**2, 0.0)) / 2.0
-        L = np.diag([r1] + [ri] * (d - 1))
-        out = np.empty((m, d))
-        cands = np.zeros(m, dtype=np.int64)
-        for i in range(m):
-            while True:
-                cands[i] += 1
-                x = rng.normal(size=d)
-                x *= rng.random() ** (1.0 / d) / np.linalg.norm(x)
-                y = self._C @ (L @ x) + self._center
-                if np.all(y >= self.low) and np.all(y < self.high):
-                    out[i] = y
-                    break
-        return SampleBatch(out, None, cands)
+        T = self._C * np.array([r1] + [ri] * (d - 1))  # rotation times the ellipsoid's radii
+        pts = np.empty((0, d))
+        cands = np.empty(0, dtype=np.int64)
+        carry = 0  # rejected candidates not yet charged to an accepted sample
+        while len(pts) < m:
+            # uniform in the unit ball, mapped onto the ellipsoid; reject what leaves the box
+            x = rng.normal(size=(2 * m, d))
+            x *= (rng.random(2 * m) ** (1.0 / d) / np.linalg.norm(x, axis=1))[:, None]
+            y = x @ T.T + self._center
+            ok = np.flatnonzero(np.all((y >= self.low) & (y < self.high), axis=1))
+            if len(ok) == 0:
+                carry += 2 * m
+                continue
+            counts = np.diff(np.concatenate([[-1], ok]))
+            counts[0] += carry
+            carry = 2 * m - 1 - int(ok[-1])
+            pts = np.concatenate([pts, y[ok]])
+            cands = np.concatenate([cands, counts])
+        # every candidate drawn is charged, those behind surplus samples to the last one returned
+        cands[m - 1] += int(cands[m:].sum()) + carry
+        return SampleBatch(pts[:m], None, cands[:m])

@@ -1,0 +1,112 @@
+"""Shared fixtures: the MovingAI maps, an independent path checker, hypothesis settings."""
+
+from __future__ import annotations
+
+import os
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import settings
+
+from planners import GeometricWorld, OccupancyGrid
+from planners.shapes import Circle
+
+# derandomized so CI runs are reproducible; examples still cover the strategies broadly
+settings.register_profile("samplergym", derandomize=True, deadline=None, max_examples=60, print_blob=True)
+settings.load_profile("samplergym")
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def movingai_dir() -> Path | None:
+    """The shared MovingAI maps: $SAMPLERGYM_MOVINGAI_DIR, else ../shared/maps/movingai next to the repo."""
+    env = os.environ.get("SAMPLERGYM_MOVINGAI_DIR")
+    for cand in ([Path(env)] if env else []) + [REPO.parent / "shared" / "maps" / "movingai"]:
+        if cand.is_dir() and any(cand.glob("*.map")):
+            return cand
+    return None
+
+
+@pytest.fixture(scope="session")
+def movingai() -> Path:
+    d = movingai_dir()
+    if d is None:
+        pytest.skip("MovingAI maps not found: set SAMPLERGYM_MOVINGAI_DIR or place them in ../shared/maps/movingai")
+    return d
+
+
+def _closed_cells_at(grid: OccupancyGrid, p: np.ndarray):
+    """Cells whose closure contains point p (1, 2 or 4 cells)."""
+    x, y = p[0] / grid.resolution, p[1] / grid.resolution
+    cols = {int(np.floor(x))} | ({int(x) - 1} if x == int(x) else set())
+    rows = {int(np.floor(y))} | ({int(y) - 1} if y == int(y) else set())
+    return [(r, c) for r in rows for c in cols]
+
+
+def fine_check_path(world, path, spacing: float = 0.01) -> bool:
+    """Independent validity check: dense points along every segment, tested one by one.
+
+    Shares no code with the planners' compiled checks.
+    """
+    path = np.asarray(path, dtype=float)
+    if isinstance(world, OccupancyGrid):
+        H, W = world.shape
+
+        def ok(p):
+            for r, c in _closed_cells_at(world, p):
+                if not (0 <= r < H and 0 <= c < W) or world.obstacles[r, c]:
+                    return False
+            return True
+    elif isinstance(world, GeometricWorld):
+        def ok(p):
+            if not (0 < p[0] < world.width and 0 < p[1] < world.height):
+                return False
+            for ob in world.obstacles:
+                if isinstance(ob, Circle):
+                    if (p[0] - ob.x) ** 2 + (p[1] - ob.y) ** 2 <= ob.r**2:
+                        return False
+                elif ob.x0 <= p[0] <= ob.x1 and ob.y0 <= p[1] <= ob.y1:
+                    return False
+            return True
+    else:
+        raise TypeError(type(world))
+    if len(path) == 1:
+        return ok(path[0])
+    for a, b in zip(path[:-1], path[1:]):
+        n = max(2, int(np.ceil(np.linalg.norm(b - a) / spacing)) + 1)
+        for t in np.linspace(0.0, 1.0, n):
+            if not ok(a + t * (b - a)):
+                return False
+    return True
+
+
+def exact_segment_free(grid: OccupancyGrid, a, b) -> bool:
+    """Exact oracle in rational arithmetic: does segment a-b avoid every closed blocked/outside cell?"""
+    ax, ay, bx, by = (Fraction(float(v)) / Fraction(grid.resolution) for v in (a[0], a[1], b[0], b[1]))
+    H, W = grid.shape
+    x_lo, x_hi = min(ax, bx), max(ax, bx)
+    y_lo, y_hi = min(ay, by), max(ay, by)
+    for r in range(int(np.floor(float(y_lo))) - 1, int(np.floor(float(y_hi))) + 2):
+        for c in range(int(np.floor(float(x_lo))) - 1, int(np.floor(float(x_hi))) + 2):
+            blocked = not (0 <= r < H and 0 <= c < W) or grid.obstacles[r, c]
+            if blocked and _segment_meets_box(ax, ay, bx, by, Fraction(c), Fraction(r), Fraction(c + 1), Fraction(r + 1)):
+                return False
+    return True
+
+
+def _segment_meets_box(ax, ay, bx, by, x0, y0, x1, y1) -> bool:
+    t0, t1 = Fraction(0), Fraction(1)
+    for p, d, lo, hi in ((ax, bx - ax, x0, x1), (ay, by - ay, y0, y1)):
+        if d == 0:
+            if p < lo or p > hi:
+                return False
+        else:
+            ta, tb = (lo - p) / d, (hi - p) / d
+            if ta > tb:
+                ta, tb = tb, ta
+            t0, t1 = max(t0, ta), min(t1, tb)
+            if t0 > t1:
+                return False
+    return True

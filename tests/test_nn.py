@@ -1,0 +1,64 @@
+"""The k-d forest against brute force, across dimensions, metrics, sizes and duplicates."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from planners import NearestNeighbors
+
+ORD = {"euclidean": 2, "manhattan": 1, "chebyshev": np.inf}
+
+
+@given(
+    dim=st.integers(1, 9),
+    n=st.integers(0, 700),
+    metric=st.sampled_from(sorted(ORD)),
+    coarse=st.booleans(),
+    seed=st.integers(0, 2**31),
+)
+def test_queries_match_brute_force(dim, n, metric, coarse, seed):
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, dim)) * 10
+    if coarse:  # many exact ties and duplicates
+        pts = np.round(pts)
+    nn = NearestNeighbors(dim, metric, capacity=8)
+    for chunk in np.array_split(pts, 3):
+        if len(chunk):
+            nn.add(chunk)
+    assert len(nn) == n
+    for q in rng.random((10, dim)) * 12 - 1:
+        d = np.linalg.norm(pts - q, ord=ORD[metric], axis=1) if n else np.empty(0)
+        i, dist = nn.nearest(q)
+        if n == 0:
+            assert i == -1 and dist == np.inf
+            continue
+        assert dist == pytest.approx(d.min(), abs=1e-9)
+        assert d[i] == pytest.approx(d.min(), abs=1e-9)
+        idx, dk = nn.nearest_k(q, 5)
+        assert np.allclose(dk, np.sort(d)[:5])
+        assert np.allclose(d[idx], dk)
+        r = np.sort(d)[min(n - 1, 7)] + 1e-7
+        assert np.array_equal(nn.nearest_r(q, r), np.flatnonzero(d <= r))
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="metric"):
+        NearestNeighbors(2, "cosine")
+    nn = NearestNeighbors(2)
+    with pytest.raises(ValueError, match="2 columns"):
+        nn.add(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="finite"):
+        nn.add([[0.0, np.nan]])
+    with pytest.raises(ValueError, match=r"shape \(2,\)"):
+        nn.nearest([1.0, 2.0, 3.0])
+
+
+def test_points_view_is_read_only():
+    nn = NearestNeighbors(2)
+    nn.add([[1.0, 2.0], [3.0, 4.0]])
+    assert nn.points.tolist() == [[1.0, 2.0], [3.0, 4.0]]
+    with pytest.raises(ValueError):
+        nn.points[0, 0] = 5.0
