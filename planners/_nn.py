@@ -313,13 +313,8 @@ def query(P, perm, split, box, n, q, metric, mode, k, r, hd, hi, st, sb):
     return cnt
 
 
-@nb.njit(cache=True)
-def nearest_into(P, perm, split, box, n, q, metric, st, sb):
-    """(index, reduced distance) of the nearest of the first ``n`` points; (-1, inf) if n == 0.
-
-    The planners' hot path: a dedicated traversal with the best distance held in a register, and
-    caller-owned scratch stacks ``st`` (2 * STACK ints) and ``sb`` (STACK floats).
-    """
+@nb.njit(cache=True, inline="always")
+def _nearest_impl(P, perm, split, box, n, q, metric, st, sb):
     best = np.inf
     bi = -1
     full = (n // CHUNK) * CHUNK
@@ -392,6 +387,22 @@ def nearest_into(P, perm, split, box, n, q, metric, st, sb):
 
 
 @nb.njit(cache=True)
+def nearest_into(P, perm, split, box, n, q, metric, st, sb):
+    """(index, reduced distance) of the nearest of the first ``n`` points; (-1, inf) if n == 0.
+
+    The planners' hot path: a dedicated traversal with the best distance held in a register, and
+    caller-owned scratch stacks ``st`` (2 * STACK ints) and ``sb`` (STACK floats). Each metric gets
+    its own inlined copy with the metric a compile-time constant: with a runtime metric the
+    distance loops keep their branches and queries run 3-5x slower.
+    """
+    if metric == METRIC_L2:
+        return _nearest_impl(P, perm, split, box, n, q, METRIC_L2, st, sb)
+    if metric == METRIC_L1:
+        return _nearest_impl(P, perm, split, box, n, q, METRIC_L1, st, sb)
+    return _nearest_impl(P, perm, split, box, n, q, METRIC_LINF, st, sb)
+
+
+@nb.njit(cache=True)
 def nearest(P, perm, split, box, n, q, metric):
     """``nearest_into`` with its own scratch stacks."""
     st = np.empty(2 * STACK, dtype=np.int64)
@@ -408,7 +419,12 @@ def nearest_k(P, perm, split, box, n, q, metric, k, out_idx, out_d):
     hi = np.empty(k, dtype=np.int64)
     st = np.empty(2 * STACK, dtype=np.int64)
     sb = np.empty(STACK)
-    cnt = query(P, perm, split, box, n, q, metric, MODE_KNN, k, 0.0, hd, hi, st, sb)
+    if metric == METRIC_L2:
+        cnt = query(P, perm, split, box, n, q, METRIC_L2, MODE_KNN, k, 0.0, hd, hi, st, sb)
+    elif metric == METRIC_L1:
+        cnt = query(P, perm, split, box, n, q, METRIC_L1, MODE_KNN, k, 0.0, hd, hi, st, sb)
+    else:
+        cnt = query(P, perm, split, box, n, q, METRIC_LINF, MODE_KNN, k, 0.0, hd, hi, st, sb)
     order = np.argsort(hd[:cnt], kind="mergesort")
     for j in range(cnt):
         out_idx[j] = hi[order[j]]
@@ -422,7 +438,12 @@ def nearest_r(P, perm, split, box, n, q, metric, radius, out_idx):
     hd = np.empty(1)
     st = np.empty(2 * STACK, dtype=np.int64)
     sb = np.empty(STACK)
-    return query(P, perm, split, box, n, q, metric, MODE_RADIUS, 0, to_reduced(metric, radius), hd, out_idx, st, sb)
+    r = to_reduced(metric, radius)
+    if metric == METRIC_L2:
+        return query(P, perm, split, box, n, q, METRIC_L2, MODE_RADIUS, 0, r, hd, out_idx, st, sb)
+    if metric == METRIC_L1:
+        return query(P, perm, split, box, n, q, METRIC_L1, MODE_RADIUS, 0, r, hd, out_idx, st, sb)
+    return query(P, perm, split, box, n, q, METRIC_LINF, MODE_RADIUS, 0, r, hd, out_idx, st, sb)
 
 
 _METRICS = {"euclidean": METRIC_L2, "manhattan": METRIC_L1, "chebyshev": METRIC_LINF}
@@ -502,3 +523,15 @@ class NearestNeighbors:
         out = np.empty(max(self._n, 1), dtype=np.int64)
         c = nearest_r(self._P, self._perm, self._split, self._box, self._n, self._q(q), self._m, float(radius), out)
         return np.sort(out[:c])
+
+
+@nb.njit(cache=True)
+def time_queries(P, perm, split, box, n, qs, metric):
+    """Run ``nearest`` for every row of ``qs`` inside compiled code (for benchmarks); returns a checksum."""
+    st = np.empty(2 * STACK, dtype=np.int64)
+    sb = np.empty(STACK)
+    s = 0
+    for i in range(qs.shape[0]):
+        j, _ = nearest_into(P, perm, split, box, n, qs[i], metric, st, sb)
+        s += j
+    return s

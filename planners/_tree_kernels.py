@@ -15,7 +15,7 @@ from planners import _nn
 from planners._space import SPACE_RN, distance, embed, interpolate, kd_metric, uses_kd
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def nearest_vertex(tree, n, space, q, qe, st, sb):
     """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n``."""
     X, E, parent, cost, perm, split, box = tree
@@ -33,7 +33,7 @@ def nearest_vertex(tree, n, space, q, qe, st, sb):
     return bi
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def steer(space, a, b, step, out):
     """Write into ``out`` the state at most ``step`` from ``a`` towards ``b``; returns the distance a-b."""
     kind, metric, rw = space
@@ -46,7 +46,7 @@ def steer(space, a, b, step, out):
     return d
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def add_vertex(tree, n, space, q, par, c):
     """Append state ``q`` with parent ``par`` and cost ``c``; returns the new vertex count."""
     X, E, parent, cost, perm, split, box = tree
@@ -62,7 +62,7 @@ def add_vertex(tree, n, space, q, par, c):
     return n + 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def resolve_sample(space, raw, anchored, anchor, low, high, out):
     """The sample a planner uses: ``raw`` itself, or ``anchor + raw`` clipped to the bounds."""
     kind, metric, rw = space

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from planners import _nn
 from planners.nn import NearestNeighbors
 from planners.planner import Planner
 from planners.prm import PRM, LazyPRM
@@ -82,6 +83,7 @@ def growth_profile(step_fn: Callable[[int], tuple[int, float]], checkpoints: Seq
 
 def ours_growth_step(problem: Problem, step: float, seed: int) -> Callable[[int], tuple[int, float]]:
     """``step_fn`` for ``growth_profile`` driving our uniform-sampling RRT."""
+    RRT(problem, step_size=step, seed=seed).solve(max_iterations=10)  # load compiled kernels first
     planner = RRT(problem, step_size=step, sampler=UniformSampler(), seed=seed)
 
     def run(k: int) -> tuple[int, float]:
@@ -93,21 +95,21 @@ def ours_growth_step(problem: Problem, step: float, seed: int) -> Callable[[int]
     return run
 
 
-def nn_scaling(points: np.ndarray, sizes: Iterable[int], queries: int = 2000, seed: int = 0) -> list[dict]:
-    """Mean nearest-neighbour query time of the index vs a numpy brute-force scan, per index size."""
+def nn_scaling(points: np.ndarray, sizes: Iterable[int], low: np.ndarray, high: np.ndarray, queries: int = 20000,
+               seed: int = 0) -> list[dict]:
+    """Nearest-neighbour query time (compiled loop, uniform queries in [low, high)) vs a numpy scan."""
     rng = np.random.default_rng(seed)
-    lo, hi = points.min(axis=0), points.max(axis=0)
     rows = []
     for n in sizes:
         if n > len(points):
             break
         nn = NearestNeighbors(points.shape[1])
         nn.add(points[:n])
-        qs = lo + (hi - lo) * rng.random((queries, points.shape[1]))
-        nn.nearest(qs[0])
+        qs = low + (high - low) * rng.random((queries, points.shape[1]))
+        args = (nn._P, nn._perm, nn._split, nn._box, len(nn))
+        _nn.time_queries(*args, qs[:10], nn._m)
         t = time.perf_counter()
-        for q in qs:
-            nn.nearest(q)
+        _nn.time_queries(*args, qs, nn._m)
         t_index = (time.perf_counter() - t) / queries
         P = points[:n]
         t = time.perf_counter()
