@@ -199,55 +199,57 @@ def rebuild_components(store, edges, uf, vstat, istate, goal, space):
 
 
 @nb.njit(cache=True)
-def astar(store, edges, vstat, n, ne, src, dst, space, only_valid):
-    """Shortest roadmap path src -> dst as (vertex indices, edge indices); empty arrays if none.
-
-    Uses edges that are valid (``only_valid``) or not known invalid, between vertices not known
-    invalid; the heuristic is the metric distance to ``dst`` (admissible, edges are straight).
-    """
-    X = store[0]
-    eu, ev, ew, es = edges
-    kind, metric, rw = space
+def build_csr(edges, n, ne):
+    """Adjacency of the first ``ne`` edges over ``n`` vertices: (offsets, neighbour, edge index)."""
+    eu, ev = edges[0], edges[1]
     deg = np.zeros(n + 1, dtype=np.int64)
     for e in range(ne):
-        ok = es[e] == EDGE_VALID if only_valid else es[e] != EDGE_INVALID
-        if ok and vstat[eu[e]] != V_INVALID and vstat[ev[e]] != V_INVALID:
-            deg[eu[e] + 1] += 1
-            deg[ev[e] + 1] += 1
+        deg[eu[e] + 1] += 1
+        deg[ev[e] + 1] += 1
     for v in range(n):
         deg[v + 1] += deg[v]
     adj_v = np.empty(deg[n], dtype=np.int64)
     adj_e = np.empty(deg[n], dtype=np.int64)
     fill = deg[:n].copy()
     for e in range(ne):
-        ok = es[e] == EDGE_VALID if only_valid else es[e] != EDGE_INVALID
-        if ok and vstat[eu[e]] != V_INVALID and vstat[ev[e]] != V_INVALID:
-            a, b = eu[e], ev[e]
-            adj_v[fill[a]] = b
-            adj_e[fill[a]] = e
-            fill[a] += 1
-            adj_v[fill[b]] = a
-            adj_e[fill[b]] = e
-            fill[b] += 1
+        a, b = eu[e], ev[e]
+        adj_v[fill[a]] = b
+        adj_e[fill[a]] = e
+        fill[a] += 1
+        adj_v[fill[b]] = a
+        adj_e[fill[b]] = e
+        fill[b] += 1
+    return deg, adj_v, adj_e
+
+
+@nb.njit(cache=True)
+def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid):
+    """Shortest path src -> dst as (vertex indices, edge indices); empty arrays if none.
+
+    Follows edges that are valid (``only_valid``) or not known invalid, between vertices not known
+    invalid, reading the statuses live so one adjacency serves a whole lazy search. The heuristic
+    is the metric distance to ``dst`` (admissible: edges are straight).
+    """
+    deg, adj_v, adj_e = csr
+    kind, metric, rw = space
+    n = deg.shape[0] - 1
     g = np.full(n, np.inf)
     via_v = np.full(n, -1, dtype=np.int64)
     via_e = np.full(n, -1, dtype=np.int64)
     closed = np.zeros(n, dtype=np.bool_)
     hf = np.empty(deg[n] + 1)
     hv = np.empty(deg[n] + 1, dtype=np.int64)
-    hn = 0
     g[src] = 0.0
     hf[0] = distance(kind, metric, rw, X[src], X[dst])
     hv[0] = src
     hn = 1
     while hn > 0:
-        # pop min
         v = hv[0]
         hn -= 1
         lf = hf[hn]
         lv = hv[hn]
         i = 0
-        while True:
+        while True:  # sift the last entry down from the root
             c = 2 * i + 1
             if c >= hn:
                 break
@@ -268,13 +270,16 @@ def astar(store, edges, vstat, n, ne, src, dst, space, only_valid):
             break
         for j in range(deg[v], deg[v + 1]):
             u = adj_v[j]
-            if closed[u]:
+            e = adj_e[j]
+            if closed[u] or vstat[u] == V_INVALID:
                 continue
-            nd = g[v] + ew[adj_e[j]]
+            if es[e] == EDGE_INVALID or (only_valid and es[e] != EDGE_VALID):
+                continue
+            nd = g[v] + ew[e]
             if nd < g[u]:
                 g[u] = nd
                 via_v[u] = v
-                via_e[u] = adj_e[j]
+                via_e[u] = e
                 f = nd + distance(kind, metric, rw, X[u], X[dst])
                 i = hn
                 hn += 1
@@ -287,7 +292,7 @@ def astar(store, edges, vstat, n, ne, src, dst, space, only_valid):
                     i = p
                 hf[i] = f
                 hv[i] = u
-    if not closed[dst]:
+    if not closed[dst] or vstat[src] == V_INVALID:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     k = 1
     v = dst
@@ -306,6 +311,12 @@ def astar(store, edges, vstat, n, ne, src, dst, space, only_valid):
 
 
 @nb.njit(cache=True)
+def astar(store, edges, vstat, n, ne, src, dst, space, only_valid):
+    """``astar_csr`` over a freshly built adjacency of the roadmap."""
+    return astar_csr(store[0], build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid)
+
+
+@nb.njit(cache=True)
 def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal):
     """Lazy-PRM query: search the optimistic roadmap, check the path, drop what fails, repeat.
 
@@ -314,8 +325,9 @@ def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal):
     """
     X = store[0]
     eu, ev, ew, es = edges
+    csr = build_csr(edges, istate[I_N], istate[I_E])
     while True:
-        verts, eds = astar(store, edges, vstat, istate[I_N], istate[I_E], istate[I_QS], istate[I_QG], space, False)
+        verts, eds = astar_csr(X, csr, ew, es, vstat, istate[I_QS], istate[I_QG], space, False)
         if verts.shape[0] == 0:
             rebuild_components(store, edges, uf, vstat, istate, goal, space)
             _refresh_anchor(uf, istate, fstate)

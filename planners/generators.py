@@ -146,8 +146,8 @@ def bugtrap(rng: np.random.Generator, size: int = 128, goal_tolerance: float = 4
 
 
 def maze(rng: np.random.Generator, size: int = 128, goal_tolerance: float = 4.0, name: str = "maze") -> Problem:
-    """A perfect maze (randomised depth-first search), corridors about size/16 wide."""
-    w = max(2, size // 16)
+    """A perfect maze (randomised depth-first search) of corridors about size/8 wide (7 x 7 cells at 128)."""
+    w = max(2, size // 8)
     t = max(1, int(round(size / 128)))
     n = (size - t) // (w + t)
     obs = np.ones((size, size), dtype=bool)
@@ -179,7 +179,7 @@ def maze(rng: np.random.Generator, size: int = 128, goal_tolerance: float = 4.0,
 
 
 def rooms(rng: np.random.Generator, size: int = 128, goal_tolerance: float = 4.0, name: str = "rooms") -> Problem:
-    """A k x k grid of rooms (k = 3-4 at 128) joined by doors 3-5 cells wide along a spanning tree."""
+    """A k x k grid of rooms (k = 3-4 at 128) joined by doors 4-6 cells wide along a spanning tree."""
     k = int(rng.integers(max(2, size // 42), max(2, size // 32) + 1))
     t = max(1, _scale(size, 1.5))
     obs = np.zeros((size, size), dtype=bool)
@@ -206,7 +206,7 @@ def rooms(rng: np.random.Generator, size: int = 128, goal_tolerance: float = 4.0
             parent[find(a)] = find(b)
         if not joined and rng.random() > 0.2:
             continue
-        door = int(rng.integers(_scale(size, 3), _scale(size, 5) + 1))
+        door = int(rng.integers(_scale(size, 4), _scale(size, 6) + 1))
         if a[0] != b[0]:  # wall between room rows a[0] and b[0] at edges[b[0]]
             e = edges[b[0]]
             lo, hi = edges[a[1]] + t + 1, edges[a[1] + 1] - t - door - 1
