@@ -232,7 +232,7 @@ class PRM(Planner):
         eu, ev, _, es = self._edges
         keep = es[:e] != KP.EDGE_INVALID
         edges = np.stack([eu[:e][keep], ev[:e][keep]], axis=1)
-        return PlannerData(self._store.X[:n].copy(), edges, self._vstat[:n].astype(np.int64))
+        return PlannerData(self._store.X[:n].copy(), edges, np.zeros(n, dtype=np.int64))
 
 
 class LazyPRM(PRM):
