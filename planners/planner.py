@@ -16,6 +16,8 @@ from planners.samplers import SampleBatch, Sampler, UniformSampler
 
 #: Samples handed to a compiled kernel per call; bounds how late a time limit is noticed.
 CHUNK = 1024
+#: Size of the first sample refill; refills double up to CHUNK, so short solves draw few samples.
+FIRST_REFILL = 64
 
 
 @dataclass(frozen=True)
@@ -203,6 +205,7 @@ class Planner(abc.ABC):
         self._buf_anch = np.empty(0, dtype=np.bool_)
         self._buf_cand = np.empty(0, dtype=np.int64)
         self._pos = 0
+        self._refills = 0
         self._time = 0.0
         self._candidates = 0
         self._stop_reason = "max_iterations"
@@ -332,7 +335,7 @@ class Planner(abc.ABC):
 
     @abc.abstractmethod
     def _reserve(self, iterations: int) -> None:
-        """Make room for at least one and ideally ``iterations`` more iterations."""
+        """Make room for at least one more iteration (kernels stop when full; arrays grow by doubling)."""
 
     @abc.abstractmethod
     def _path(self) -> np.ndarray:
@@ -367,10 +370,12 @@ class Planner(abc.ABC):
         self._buf_pts, self._buf_anch, self._buf_cand, self._pos = pts, anch, cand, 0
 
     def _consume(self, n: int) -> int:
-        # always ask for CHUNK: when refills happen (and what a tree-dependent sampler sees) must not
-        # depend on how the caller splits its budget, so step() x N == solve(N) == solve in pieces
+        # refill sizes follow a fixed schedule: when refills happen (and what a tree-dependent
+        # sampler sees) must not depend on how the caller splits its budget, so that
+        # step() x N == solve(N) == solve in pieces
         if self._pos >= len(self._buf_pts):
-            self._refill(CHUNK)
+            self._refill(min(CHUNK, FIRST_REFILL << self._refills))
+            self._refills += 1
         end = min(self._pos + n, len(self._buf_pts))
         self._reserve(end - self._pos)
         used = self._run(self._buf_pts[self._pos:end], self._buf_anch[self._pos:end])

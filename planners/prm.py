@@ -111,10 +111,10 @@ class PRM(Planner):
 
     def _reserve(self, iterations: int) -> None:
         n = int(self._istate[K.I_N])
-        if self._store.reserve(n, iterations + 2):
+        if self._store.reserve(n, 3):
             self._grow_vertex_arrays()
-        per = self.k if self.k else n + iterations + 2
-        self._grow_edges(int(self._istate[KP.I_E]) + per * max(1, min(iterations, 256)))
+        per = self.k if self.k else n + 3
+        self._grow_edges(int(self._istate[KP.I_E]) + 2 * per)
 
     def _connect_radius(self) -> float:
         if self.k:

@@ -72,7 +72,7 @@ class RRT(Planner):
         self._istate[slot] = add_vertex(store.as_tuple(), 0, self._space, np.ascontiguousarray(q, dtype=np.float64), -1, 0.0)
 
     def _reserve(self, iterations: int) -> None:
-        self._tree.reserve(self.num_vertices, iterations)
+        self._tree.reserve(self.num_vertices, 1)
 
     def _run(self, points, anchored) -> int:
         return K.rrt_run(points, anchored, self._tree.as_tuple(), self._istate, self._fstate, self._last,
@@ -120,9 +120,8 @@ class RRTConnect(RRT):
         self._max_connect = int(math.ceil(diag / self.step_size)) + 2
 
     def _reserve(self, iterations: int) -> None:
-        extra = self._max_connect + min(iterations, 4096)
-        self._tree.reserve(int(self._istate[K.I_N]), extra)
-        self._gtree.reserve(int(self._istate[K.I_N_B]), extra)
+        self._tree.reserve(int(self._istate[K.I_N]), self._max_connect + 1)
+        self._gtree.reserve(int(self._istate[K.I_N_B]), self._max_connect + 1)
 
     def _run(self, points, anchored) -> int:
         return K.connect_run(points, anchored, self._tree.as_tuple(), self._gtree.as_tuple(), self._istate,

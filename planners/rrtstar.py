@@ -86,7 +86,7 @@ class RRTStar(RRT):
         self._aux_cap = cap
 
     def _reserve(self, iterations: int) -> None:
-        if self._tree.reserve(self.num_vertices, iterations):
+        if self._tree.reserve(self.num_vertices, 1):
             self._alloc_aux()
 
     def _run(self, points, anchored) -> int:

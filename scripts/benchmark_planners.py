@@ -1,0 +1,203 @@
+"""Planner benchmark: speed against OMPL in the same run, and every planner on every map family.
+
+    python scripts/benchmark_planners.py                 # full run (~5 min), OMPL if installed
+    python scripts/benchmark_planners.py --quick         # smoke-sized run
+    python scripts/benchmark_planners.py --no-ompl
+
+Prints Markdown tables and writes them, with the raw runs as CSV, under --out.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import os
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from planners import OccupancyGrid, Problem, load_movingai_scenarios  # noqa: E402
+from planners import benchmark as B  # noqa: E402
+from planners import ompl_bridge  # noqa: E402
+from planners.generators import FAMILIES, generate  # noqa: E402
+
+
+def movingai_dir(arg: str | None) -> Path | None:
+    cand = Path(arg) if arg else Path(os.environ.get("SAMPLERGYM_MOVINGAI_DIR",
+                                                     Path(__file__).resolve().parents[2] / "shared" / "maps" / "movingai"))
+    return cand if cand.is_dir() else None
+
+
+def map_set(args) -> dict[str, list[Problem]]:
+    """Queries per map: seeded generated maps of each family, and the longest MovingAI scenarios."""
+    maps = {f"{f}-{args.size}": [generate(f, s, args.size) for s in range(args.seeds)] for f in FAMILIES}
+    d = movingai_dir(args.movingai)
+    if d is None:
+        print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); skipping them", file=sys.stderr)
+        return maps
+    for scen in sorted(d.glob("*.scen")):
+        ps = [p for p in load_movingai_scenarios(scen, goal_tolerance=args.tolerance)
+              if p.distance(p.start, p.goal) > args.tolerance]
+        ps.sort(key=lambda p: -p.reference_length)
+        # spread the picks over the longest half of the scenarios
+        picks = ps[: max(1, len(ps) // 2)][:: max(1, len(ps) // 2 // args.scenarios)][: args.scenarios]
+        maps[scen.name.split(".")[0].replace("-random-1", "")] = picks
+    return maps
+
+
+def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[B.Record]]:
+    """RRT per-iteration time, ours vs OMPL, uniform and goal-biased, on every map."""
+    rows, records = [], []
+    for name, problems in maps.items():
+        for bias, ours_label in ((0.0, "RRT"), (0.05, "RRT+goal0.05")):
+            ours = [B.run_one(p, ours_label, step=args.step, seed=i, max_iterations=args.max_iterations, map_name=name)
+                    for i, p in enumerate(problems)]
+            records += ours
+            row = {"map": name, "goal_bias": bias, "ours_us": _us(ours), "ours_solved": _rate(ours)}
+            if use_ompl:
+                om = []
+                for i, p in enumerate(problems):
+                    o = ompl_bridge.OmplGridPlanner(p, "RRT", step_size=args.step, goal_bias=bias, seed=i).run(args.max_iterations)
+                    om.append(B.Record(name, p.name, f"OMPL RRT b={bias}", o.solved, o.iterations, o.time,
+                                       o.time / max(o.iterations, 1) * 1e6, o.cost, -1, o.num_vertices, i))
+                records += om
+                row |= {"ompl_us": _us(om), "ompl_solved": _rate(om), "ratio": _us(ours) / _us(om)}
+            rows.append(row)
+            print(B.markdown_table([row]).splitlines()[-1], flush=True)
+    return rows, records
+
+
+def _us(rs) -> float:
+    return sum(r.time for r in rs) / max(sum(r.iterations for r in rs), 1) * 1e6
+
+
+def _rate(rs) -> float:
+    return float(np.mean([r.solved for r in rs]))
+
+
+def growth(args, use_ompl: bool, d: Path | None) -> tuple[list[dict], list[dict]]:
+    """Per-iteration time while a uniform-sampling RRT tree grows to 1k, 10k and 100k vertices."""
+    checkpoints = [1000, 10000, 100000] if not args.quick else [1000, 10000]
+    worlds = {f"forest-512-0": generate("forest", 0, 512).world}
+    if d is not None:
+        worlds["random512-10-0"] = OccupancyGrid.from_movingai(d / "random512-10-0.map")
+    rows, nn_rows = [], []
+    for name, g in worlds.items():
+        free = np.argwhere(~g.obstacles)
+        c = free[np.argmin(np.abs(free - np.array(g.shape) // 2).sum(axis=1))]
+        far = free[np.argmax(np.abs(free - c).sum(axis=1))]
+        # a goal region of radius 1e-9 is never reached by uniform sampling: the tree just grows
+        p = Problem(g, g.cell_center(*c), g.cell_center(*far), goal_tolerance=1e-9)
+        step_fn = B.ours_growth_step(p, args.step, 0)
+        for w in B.growth_profile(step_fn, checkpoints):
+            rows.append({"map": name, "planner": "ours RRT", **w})
+        if use_ompl:
+            o = ompl_bridge.OmplGridPlanner(p, "RRT", step_size=args.step, goal_bias=0.0, seed=0)
+
+            def ompl_step(k, o=o):
+                r = o.run(k)
+                return r.num_vertices, r.time
+
+            for w in B.growth_profile(ompl_step, checkpoints, chunk=5000):
+                rows.append({"map": name, "planner": "OMPL RRT", **w})
+        V = step_fn.planner.planner_data().vertices
+        lo, hi = g.bounds
+        for r in B.nn_scaling(V, checkpoints, lo, hi):
+            nn_rows.append({"map": name, **r})
+    return rows, nn_rows
+
+
+def all_planners(maps, args) -> list[B.Record]:
+    records = []
+    for name, problems in maps.items():
+        for label in B.PLANNERS:
+            records += [B.run_one(p, label, step=args.step, seed=i, max_iterations=args.max_iterations, map_name=name)
+                        for i, p in enumerate(problems)]
+        print(f"  {name}: done", flush=True)
+    return records
+
+
+def write_atomic(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}-")
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seeds", type=int, default=30, help="generated maps per family")
+    ap.add_argument("--scenarios", type=int, default=10, help="queries per MovingAI map")
+    ap.add_argument("--size", type=int, default=128, help="generated map side")
+    ap.add_argument("--step", type=float, default=4.0)
+    ap.add_argument("--tolerance", type=float, default=4.0, help="goal radius on MovingAI queries")
+    ap.add_argument("--max-iterations", type=int, default=20000)
+    ap.add_argument("--movingai", help="folder of MovingAI .map/.scen files (default ../shared/maps/movingai)")
+    ap.add_argument("--no-ompl", action="store_true")
+    ap.add_argument("--quick", action="store_true", help="3 seeds, 2 scenarios, growth to 10k only")
+    ap.add_argument("--out", type=Path, default=Path("results/benchmark_planners"))
+    args = ap.parse_args(argv)
+    if args.quick:
+        args.seeds, args.scenarios = 3, 2
+    use_ompl = not args.no_ompl and ompl_bridge.available()
+    if not args.no_ompl and not use_ompl:
+        print("OMPL not installed (pip install -c constraints.txt -e '.[bench]'); running without it", file=sys.stderr)
+    maps = map_set(args)
+    # load compiled kernels before any timing
+    for label in B.PLANNERS:
+        B.run_one(next(iter(maps.values()))[0], label, step=args.step, seed=0, max_iterations=200)
+    out = io.StringIO()
+    header = (f"# Planner benchmark\n\n{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+              f"step {args.step}, cap {args.max_iterations} iterations, {args.seeds} seeds per family "
+              f"({args.size}x{args.size}), {args.scenarios} scenarios per MovingAI map.\n")
+    out.write(header + "\n")
+    print(header)
+
+    print("## RRT time per iteration, ours vs OMPL (same maps, same queries)\n", flush=True)
+    rows, records = throughput(maps, args, use_ompl)
+    cols = ["map", "goal_bias", "ours_us", "ompl_us", "ratio", "ours_solved", "ompl_solved"] if use_ompl else \
+        ["map", "goal_bias", "ours_us", "ours_solved"]
+    table = B.markdown_table(rows, cols)
+    out.write("## RRT time per iteration (us), ours vs OMPL\n\n" + table + "\n")
+    if use_ompl:
+        ratios = np.array([r["ratio"] for r in rows])
+        line = f"ratio ours/OMPL: median {np.median(ratios):.2f}, max {ratios.max():.2f} over {len(ratios)} map x bias cells\n"
+        out.write(line + "\n")
+        print("\n" + line)
+
+    print("## Tree growth (uniform RRT)\n", flush=True)
+    g_rows, nn_rows = growth(args, use_ompl, movingai_dir(args.movingai))
+    gt = B.markdown_table(g_rows, ["map", "planner", "from_vertices", "to_vertices", "iterations", "us_per_iteration"])
+    nt = B.markdown_table(nn_rows, ["map", "vertices", "index_us", "numpy_scan_us"])
+    out.write("## Per-iteration time while the tree grows\n\n" + gt + "\n## Nearest-neighbour query time\n\n" + nt + "\n")
+    print(gt + "\n" + nt)
+
+    print("## Every planner on every map\n", flush=True)
+    recs = all_planners(maps, args)
+    summary = B.summarize(recs)
+    st = B.markdown_table(summary, ["map", "planner", "runs", "success", "median_iterations", "us_per_iteration",
+                                    "median_cost", "median_checks"])
+    out.write("## Every planner on every map (iterations to first solution)\n\n" + st)
+    print(st)
+
+    all_records = B.records_to_dicts(records + recs)
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(all_records[0]))
+    w.writeheader()
+    w.writerows(all_records)
+    write_atomic(args.out / "runs.csv", buf.getvalue())
+    write_atomic(args.out / "summary.md", out.getvalue())
+    print(f"\nwrote {args.out / 'summary.md'} and {args.out / 'runs.csv'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
