@@ -1,0 +1,52 @@
+"""SamplerGym environments; importing this package registers them under ``SamplerGym/``.
+
+    import gymnasium as gym
+    import envs
+    gym.register_envs(envs)
+    env = gym.make("SamplerGym/RRT-Maze-v0", action_mode="relative")
+
+Registered ids:
+
+* ``SamplerGym/RRT-{Forest,NarrowPassage,Bugtrap,Maze,Rooms}-v0``: RRT on a fresh generated map of
+  that family each episode (``source_kwargs={"size": ...}``, default 64).
+* ``SamplerGym/RRT-MovingAI-v0``: RRT on the MovingAI benchmark scenarios (``../shared/maps`` or
+  ``SAMPLERGYM_MOVINGAI_DIR``).
+* ``SamplerGym/RRT-Files-v0``: RRT on your own maps: ``source_kwargs={"paths": [...]}``.
+* ``SamplerGym/Planning-v0``: everything by kwargs (``planner``, ``map_source``, ``step_size``,
+  ``max_iterations``, ``action_mode``, ...).
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+from envs.actions import ACTION_MODES
+from envs.render import record_episode
+from envs.sampler_env import SamplerEnv
+from envs.sources import FamilySource, FileSource, MovingAISource, ProblemListSource
+
+__all__ = ["ACTION_MODES", "ENV_IDS", "FamilySource", "FileSource", "MovingAISource", "ProblemListSource",
+           "SamplerEnv", "record_episode"]
+
+_FAMILY_IDS = {
+    "Forest": "forest",
+    "NarrowPassage": "narrow_passage",
+    "Bugtrap": "bugtrap",
+    "Maze": "maze",
+    "Rooms": "rooms",
+}
+
+ENV_IDS: dict[str, dict] = {f"SamplerGym/RRT-{name}-v0": {"map_source": fam} for name, fam in _FAMILY_IDS.items()}
+ENV_IDS["SamplerGym/RRT-MovingAI-v0"] = {"map_source": "movingai"}
+ENV_IDS["SamplerGym/RRT-Files-v0"] = {"map_source": "files"}
+ENV_IDS["SamplerGym/Planning-v0"] = {}
+
+
+def _register_all() -> None:
+    for env_id, kwargs in ENV_IDS.items():
+        if env_id in registry:  # re-import (e.g. importlib.reload, or a second package path)
+            continue
+        register(id=env_id, entry_point="envs.sampler_env:SamplerEnv", kwargs=kwargs)
+
+
+_register_all()

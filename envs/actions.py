@@ -1,0 +1,160 @@
+"""Action modes: how an agent's action becomes the planner's next sample.
+
+Each mode is a ``Sampler`` (the planners' one protocol), so the environment drives an unmodified
+planner: it stores the action on the planner's bound sampler and calls ``planner.step()``, which
+draws exactly one sample. Randomness comes from the planner's generator, itself seeded from the
+environment's ``np_random``.
+
+Actions live in ``Box(-1, 1)``; out-of-range values are clipped (documented, as SB3 policies can
+emit them) and NaN or wrongly shaped actions raise ``ValueError``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from gymnasium import spaces
+
+from planners import SamplerBase
+
+ACTION_MODES = ("point", "bias", "mixture", "relative")
+
+
+class ActionSampler(SamplerBase):
+    """Base of the action modes: one sample per ``draw``, computed from the last ``set_action``.
+
+    Args:
+        step_size: The planner's step, which sets the scale of Gaussian spreads and offsets.
+        uniform_floor: Probability of a uniform sample whatever the action, so probabilistic
+            completeness is never lost (``mixture`` and ``relative``).
+    """
+
+    dims = 0  # action dimensions beyond the state dimension
+
+    def __init__(self, step_size: float, uniform_floor: float = 0.05) -> None:
+        if not 0.0 <= uniform_floor <= 1.0:
+            raise ValueError(f"uniform_floor must lie in [0, 1], got {uniform_floor}")
+        self.step_size = float(step_size)
+        self.uniform_floor = float(uniform_floor)
+        self.action: np.ndarray | None = None
+
+    def action_space(self, dim: int) -> spaces.Box:
+        return spaces.Box(-1.0, 1.0, (self.action_size(dim),), np.float32)
+
+    def action_size(self, dim: int) -> int:
+        return dim + self.dims
+
+    def set_action(self, action) -> None:
+        a = np.asarray(action, dtype=np.float64)
+        n = self.action_size(self.problem.dim)
+        if a.shape != (n,):
+            raise ValueError(f"action must have shape ({n},) in {type(self).__name__} mode, got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action contains NaN or infinity: {a.tolist()}")
+        self.action = np.clip(a, -1.0, 1.0)
+
+    def draw(self, rng, n, view):
+        if self.action is None:
+            raise RuntimeError("set_action must be called before the planner steps")
+        q = self._sample(rng, view)
+        return self._clip(q)[None, :]
+
+    def _clip(self, q: np.ndarray) -> np.ndarray:
+        hi = np.nextafter(self.high, self.low)
+        return np.minimum(np.maximum(q, self.low), hi)
+
+    def _to_state(self, a: np.ndarray) -> np.ndarray:
+        return self.low + (a + 1.0) * 0.5 * (self.high - self.low)
+
+    def _spread(self, a: float, lo: float, hi: float) -> float:
+        """Log-scale map of a in [-1, 1] to [lo, hi]."""
+        return lo * (hi / lo) ** ((a + 1.0) * 0.5)
+
+    def _sample(self, rng, view) -> np.ndarray:
+        raise NotImplementedError
+
+
+class PointAction(ActionSampler):
+    """``point``: the action is the sample itself, ``Box(-1, 1, (d,))`` mapped to the map bounds."""
+
+    def _sample(self, rng, view):
+        return self._to_state(self.action)
+
+
+class BiasAction(ActionSampler):
+    """``bias``: the action sets this iteration's goal bias p = (a + 1) / 2; ``Box(-1, 1, (1,))``."""
+
+    def action_size(self, dim: int) -> int:
+        return 1
+
+    def _sample(self, rng, view):
+        u = rng.random(self.problem.dim + 1)  # the same stream layout as GoalBiasedSampler
+        if u[0] < (self.action[0] + 1.0) * 0.5:
+            return np.array(self.problem.goal, dtype=np.float64)
+        return self._uniform(u[1:])
+
+
+class MixtureAction(ActionSampler):
+    """``mixture``: a Gaussian (mean, spread) against uniform sampling, ``Box(-1, 1, (d + 2,))``.
+
+    ``a[:d]`` is the mean (mapped to the bounds), ``a[d]`` the spread (log-scale from half a step to
+    a quarter of the map's diagonal), ``a[d + 1]`` the Gaussian's weight w = (a + 1) / 2, capped at
+    ``1 - uniform_floor``.
+    """
+
+    dims = 2
+
+    def _sample(self, rng, view):
+        d = self.problem.dim
+        a = self.action
+        w = min((a[d + 1] + 1.0) * 0.5, 1.0 - self.uniform_floor)
+        u = rng.random()
+        z = rng.standard_normal(d)
+        if u >= w:
+            return self._uniform(rng.random(d))
+        diag = float(np.linalg.norm(self.high - self.low))
+        sigma = self._spread(a[d], 0.5 * self.step_size, 0.25 * diag)
+        return self._to_state(a[:d]) + sigma * z
+
+
+class RelativeAction(ActionSampler):
+    """``relative``: an offset (and spread) from the tree vertex nearest the goal; ``Box(-1, 1, (d + 1,))``.
+
+    ``a[:d]`` scaled by ``reach`` (in units of the step size) is the offset from the anchor vertex,
+    ``a[d]`` the Gaussian spread (log-scale from a quarter step to two steps). With probability
+    ``uniform_floor`` the sample is uniform instead. Policies can thus sample just ahead of the tree.
+
+    Args:
+        reach: Largest offset, in step sizes.
+    """
+
+    dims = 1
+
+    def __init__(self, step_size: float, uniform_floor: float = 0.05, reach: float = 3.0) -> None:
+        super().__init__(step_size, uniform_floor)
+        if not (math.isfinite(reach) and reach > 0):
+            raise ValueError(f"reach must be positive, got {reach}")
+        self.reach = float(reach)
+
+    def _sample(self, rng, view):
+        d = self.problem.dim
+        a = self.action
+        u = rng.random()
+        z = rng.standard_normal(d)
+        if u < self.uniform_floor:
+            return self._uniform(rng.random(d))
+        anchor = view.vertices[view.best_vertex]
+        sigma = self._spread(a[d], 0.25 * self.step_size, 2.0 * self.step_size)
+        q = anchor + a[:d] * self.reach * self.step_size + sigma * z
+        if self.problem.world.space_kind != 0:  # wrap angles of rigid-body states
+            q[3:] = (q[3:] + np.pi) % (2 * np.pi) - np.pi
+        return q
+
+
+def make_action_sampler(mode: str, step_size: float, uniform_floor: float = 0.05, **kwargs) -> ActionSampler:
+    """The ``ActionSampler`` for an action-mode name."""
+    classes = {"point": PointAction, "bias": BiasAction, "mixture": MixtureAction, "relative": RelativeAction}
+    if mode not in classes:
+        raise ValueError(f"action_mode must be one of {ACTION_MODES}, got {mode!r}")
+    return classes[mode](step_size, uniform_floor, **kwargs)

@@ -1,0 +1,202 @@
+"""Observations of a planning episode: fixed-size image stacks plus small vector features.
+
+Building an observation must not dominate a step, so everything static (obstacle views, start and
+goal marks) is computed once per map in ``reset`` and the tree channels are updated incrementally
+from the vertices added since the last step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from gymnasium import spaces
+
+from planners import OccupancyGrid, Planner, Problem
+
+CHANNELS = ("obstacles", "tree", "start", "goal")
+VECTOR_FEATURES = (
+    "start_x", "start_y", "goal_x", "goal_y", "anchor_x", "anchor_y", "to_goal_x", "to_goal_y",
+    "anchor_distance", "iteration_fraction", "tree_size",
+)
+
+
+class GridObservation:
+    """Dict observation for 2-D occupancy-grid problems.
+
+    * ``image``: ``(4, size, size)`` uint8, the whole map resampled to a square (maps of any size or
+      aspect; outside the map counts as obstacle): obstacle area fraction (so a one-cell door in a
+      wall still shows as a lighter pixel), tree vertices, start, goal (discs of the goal radius).
+    * ``local``: ``(4, local_size, local_size)`` uint8, the same channels at native resolution
+      (``local_scale`` cells per pixel) in a window centred on the tree vertex nearest the goal, so
+      narrow corridors survive on maps of any size.
+    * ``vector``: ``(11,)`` float32 in [-1, 1]: start, goal and anchor vertex (map coordinates scaled to
+      [-1, 1]), goal minus anchor over the map diagonal, anchor-goal distance over the diagonal,
+      iteration fraction, log tree size over log of the iteration cap.
+    """
+
+    def __init__(self, size: int = 64, local_size: int = 32, local_scale: int = 1) -> None:
+        for label, v in (("obs_size", size), ("local_size", local_size), ("local_scale", local_scale)):
+            if not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{label} must be a positive integer, got {v!r}")
+        if local_size % 2:
+            raise ValueError(f"local_size must be even, got {local_size}")
+        self.size, self.local_size, self.local_scale = int(size), int(local_size), int(local_scale)
+
+    @property
+    def space(self) -> spaces.Dict:
+        S, L = self.size, self.local_size
+        return spaces.Dict({
+            "image": spaces.Box(0, 255, (len(CHANNELS), S, S), np.uint8),
+            "local": spaces.Box(0, 255, (len(CHANNELS), L, L), np.uint8),
+            "vector": spaces.Box(-1.0, 1.0, (len(VECTOR_FEATURES),), np.float32),
+        })
+
+    def reset(self, problem: Problem, max_iterations: int) -> None:
+        grid = problem.world
+        if not isinstance(grid, OccupancyGrid):
+            raise TypeError("GridObservation needs an OccupancyGrid problem; use VectorObservation otherwise")
+        self.problem = problem
+        self.max_iterations = max_iterations
+        H, W = grid.shape
+        self.res = grid.resolution
+        self.low, self.high = (np.asarray(b, dtype=np.float64) for b in grid.bounds)
+        self.diag = float(np.linalg.norm(self.high - self.low))
+        # global view: pad to a square of `side` cells, `cells_per_px` cells per pixel
+        S = self.size
+        side = max(H, W)
+        self.cells_per_px = side / S
+        obs = np.ones((side, side), dtype=np.float64)
+        obs[:H, :W] = grid.obstacles
+        self.image = np.zeros((len(CHANNELS), S, S), dtype=np.uint8)
+        self.image[0] = np.round(255 * _area_fraction(obs, S)).astype(np.uint8)
+        tol_px = problem.goal_tolerance / (self.res * self.cells_per_px)
+        self.image[2] = _disc((S, S), self._px(problem.start), max(tol_px, 0.75))
+        self.image[3] = _disc((S, S), self._px(problem.goal), max(tol_px, 0.75))
+        # local view: full-resolution channels padded by half a window (and one pixel) of obstacle
+        L, s = self.local_size, self.local_scale
+        self.pad = L * s // 2 + s
+        p = self.pad
+        self.full = np.zeros((len(CHANNELS), H + 2 * p, W + 2 * p), dtype=np.uint8)
+        self.full[0] = 255
+        self.full[0, p:p + H, p:p + W] = np.where(grid.obstacles, 255, 0)
+        tol_cells = problem.goal_tolerance / self.res
+        self.full[2, p:p + H, p:p + W] = _disc((H, W), problem.start / self.res, max(tol_cells, 0.75))
+        self.full[3, p:p + H, p:p + W] = _disc((H, W), problem.goal / self.res, max(tol_cells, 0.75))
+        self.seen = 0
+
+    def _px(self, q: np.ndarray) -> np.ndarray:
+        """Continuous (x, y) pixel coordinates of a world point in the global view."""
+        return np.asarray(q) / (self.res * self.cells_per_px)
+
+    def update(self, planner: Planner) -> None:
+        """Mark the vertices added since the last call."""
+        view = planner.view()
+        n = view.num_vertices
+        if n <= self.seen:
+            return
+        new = view.vertices[self.seen:n]
+        S = self.size
+        gx = np.clip((new[:, 0] / (self.res * self.cells_per_px)).astype(np.int64), 0, S - 1)
+        gy = np.clip((new[:, 1] / (self.res * self.cells_per_px)).astype(np.int64), 0, S - 1)
+        self.image[1, gy, gx] = 255
+        p = self.pad
+        self.full[1, (new[:, 1] / self.res).astype(np.int64) + p, (new[:, 0] / self.res).astype(np.int64) + p] = 255
+        self.seen = n
+
+    def build(self, planner: Planner) -> dict[str, np.ndarray]:
+        view = planner.view()
+        anchor = view.vertices[view.best_vertex]
+        L, s, p = self.local_size, self.local_scale, self.pad
+        r = int(anchor[1] / self.res) + p - L * s // 2
+        c = int(anchor[0] / self.res) + p - L * s // 2
+        crop = self.full[:, r:r + L * s, c:c + L * s]
+        if s > 1:
+            crop = crop.reshape(len(CHANNELS), L, s, L, s).max(axis=(2, 4))
+        else:
+            crop = crop.copy()
+        return {"image": self.image.copy(), "local": crop, "vector": self.vector(view, anchor)}
+
+    def vector(self, view, anchor: np.ndarray) -> np.ndarray:
+        prob = self.problem
+        span = self.high - self.low
+        unit = lambda q: 2.0 * (np.asarray(q) - self.low) / span - 1.0  # noqa: E731
+        v = np.empty(len(VECTOR_FEATURES), dtype=np.float32)
+        v[0:2] = unit(prob.start)
+        v[2:4] = unit(prob.goal)
+        v[4:6] = unit(anchor)
+        v[6:8] = (prob.goal - anchor) / self.diag
+        v[8] = view.best_distance / self.diag
+        v[9] = view.iteration / self.max_iterations
+        v[10] = math.log1p(view.num_vertices) / math.log1p(self.max_iterations + 2)
+        return np.clip(v, -1.0, 1.0)
+
+
+class VectorObservation:
+    """Vector-only observation for worlds without an occupancy grid (geometric worlds, rigid bodies).
+
+    ``(3 * f + 3,)`` float32 in [-1, 1], with ``f`` features per state (positions scaled to [-1, 1],
+    angles as cos and sin): start, goal, anchor vertex; then anchor-goal distance over the sampling
+    box diagonal, iteration fraction, log tree size.
+    """
+
+    def __init__(self, dim: int, angle_dims: int = 0) -> None:
+        self.dim, self.angle_dims = dim, angle_dims
+        self.features = (dim - angle_dims) + 2 * angle_dims
+
+    @property
+    def space(self) -> spaces.Box:
+        return spaces.Box(-1.0, 1.0, (3 * self.features + 3,), np.float32)
+
+    def reset(self, problem: Problem, max_iterations: int) -> None:
+        self.problem, self.max_iterations = problem, max_iterations
+        self.low, self.high = (np.asarray(b, dtype=np.float64) for b in problem.world.bounds)
+        self.diag = float(np.linalg.norm(self.high - self.low))
+
+    def update(self, planner: Planner) -> None:
+        """Nothing to accumulate."""
+
+    def _state(self, q: np.ndarray) -> np.ndarray:
+        k = self.dim - self.angle_dims
+        pos = 2.0 * (q[:k] - self.low[:k]) / (self.high[:k] - self.low[:k]) - 1.0
+        ang = q[k:]
+        return np.concatenate([pos, np.cos(ang), np.sin(ang)])
+
+    def build(self, planner: Planner) -> np.ndarray:
+        view = planner.view()
+        anchor = view.vertices[view.best_vertex]
+        v = np.concatenate([
+            self._state(self.problem.start), self._state(self.problem.goal), self._state(anchor),
+            [view.best_distance / self.diag, view.iteration / self.max_iterations,
+             math.log1p(view.num_vertices) / math.log1p(self.max_iterations + 2)],
+        ])
+        return np.clip(v, -1.0, 1.0).astype(np.float32)
+
+
+def _area_fraction(obs: np.ndarray, S: int) -> np.ndarray:
+    """Mean of a square (side x side) array over an S x S grid of equal pixels (any ratio)."""
+    side = obs.shape[0]
+    if side % S == 0:
+        f = side // S
+        return obs.reshape(S, f, S, f).mean(axis=(1, 3))
+    # integral image over pixel bounds rounded to cells (each pixel covers at least one cell)
+    ii = np.zeros((side + 1, side + 1))
+    ii[1:, 1:] = obs.cumsum(0).cumsum(1)
+    edges = np.floor(np.arange(S + 1) * side / S).astype(np.int64)
+    lo = edges[:-1]
+    hi = np.maximum(edges[1:], lo + 1)
+    tot = ii[hi][:, hi] - ii[lo][:, hi] - ii[hi][:, lo] + ii[lo][:, lo]
+    area = (hi - lo)[:, None] * (hi - lo)[None, :]
+    return tot / area
+
+
+def _disc(shape: tuple[int, int], center_xy: np.ndarray, radius: float) -> np.ndarray:
+    """uint8 mask (255 inside) of a disc given in (x, y) pixel coordinates."""
+    H, W = shape
+    ys = np.arange(H) + 0.5
+    xs = np.arange(W) + 0.5
+    inside = (xs[None, :] - center_xy[0]) ** 2 + (ys[:, None] - center_xy[1]) ** 2 <= radius**2
+    if not inside.any():
+        c = np.clip(np.floor(center_xy).astype(int), 0, [W - 1, H - 1])
+        inside[c[1], c[0]] = True
+    return np.where(inside, 255, 0).astype(np.uint8)

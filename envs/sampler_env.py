@@ -1,0 +1,237 @@
+"""The sampler environment: the agent chooses where the planner samples next."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from envs.actions import ACTION_MODES, make_action_sampler
+from envs.observation import GridObservation, VectorObservation
+from envs.sources import MapSource, make_source
+from planners import PRM, RRT, LazyPRM, OccupancyGrid, Planner, Problem, RRTConnect, RRTStar
+
+PLANNERS = {"rrt": RRT, "rrtstar": RRTStar, "prm": PRM, "rrtconnect": RRTConnect, "lazyprm": LazyPRM}
+
+
+class SamplerEnv(gym.Env):
+    """A sampling-based planner whose sampler is the agent.
+
+    ## Description
+    Each episode is one planning query drawn from ``map_source`` with ``self.np_random``. Each step
+    turns the action into exactly one sample and runs exactly one iteration of an unmodified
+    planner from ``planners`` (RRT by default); the policy thus replaces RRT's fixed goal bias with
+    a learned, state-dependent sampling bias.
+
+    ## Action Space
+    ``Box(-1, 1, (k,), float32)``, by ``action_mode`` (see ``envs.actions``):
+    ``point`` (k = d): the sample itself, mapped to the map bounds; ``bias`` (k = 1): this
+    iteration's goal-bias probability; ``mixture`` (k = d + 2): a Gaussian's mean, spread and weight
+    against uniform sampling (with a uniform floor); ``relative`` (k = d + 1): an offset and spread
+    from the tree vertex nearest the goal. Out-of-range actions are clipped to [-1, 1]; NaN or
+    wrongly shaped actions raise ``ValueError``.
+
+    ## Observation Space
+    Occupancy-grid problems: ``Dict(image=(4, S, S) uint8, local=(4, L, L) uint8, vector=(11,)
+    float32)`` (channels: obstacles, tree, start, goal; see ``envs.observation.GridObservation``),
+    accepted by SB3's ``MultiInputPolicy`` and custom extractors. Other worlds (geometric, 6-DoF
+    rigid body): a ``Box`` vector (``VectorObservation``).
+
+    ## Rewards
+    -1 per iteration, so the return is minus the iterations-to-solution; ``reward="checks"`` adds
+    ``-checks_weight`` per collision check. Optional shaping (``shaping=True``, off by default, never
+    in the observation): ``F = gamma * Phi(s') - Phi(s)`` with ``Phi = -(geodesic distance from the
+    tree's best vertex to the goal) / step_size`` (grid distance transform computed once per map) and
+    ``Phi = 0`` at termination. Potential-based shaping leaves optimal policies unchanged (Ng, Harada
+    & Russell, ICML 1999) when ``shaping_gamma`` equals the agent's discount.
+
+    ## Episode End
+    ``terminated`` when the planner has a solution; ``truncated`` after ``max_iterations`` steps.
+
+    ## Info
+    ``iterations``, ``solved``, ``path_cost``, ``collision_checks``, ``tree_size``, ``sample``,
+    ``added``, ``lower_bound`` (ceil((L* - tolerance) / step) when the problem's reference length is
+    known), and ``is_success`` at the end of an episode.
+
+    ## Arguments
+    ``map_source``: family name (``forest``, ``narrow_passage``, ``bugtrap``, ``maze``, ``rooms``),
+    ``"movingai"``, ``"files"`` or a callable ``np_random -> Problem``; ``source_kwargs`` configure it.
+    ``planner``: ``rrt``, ``rrtstar``, ``prm``, ``rrtconnect``, ``lazyprm``. ``step_size``,
+    ``max_iterations``, ``action_mode``, ``uniform_floor``, ``reach`` (relative mode),
+    ``obs_size``, ``local_size``, ``local_scale``, ``reward``, ``checks_weight``, ``shaping``,
+    ``shaping_gamma``, ``render_mode`` (``rgb_array`` or ``human``).
+
+    ## Version History
+    * v0: initial version.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 15}
+
+    def __init__(
+        self,
+        map_source: str | MapSource = "forest",
+        source_kwargs: dict[str, Any] | None = None,
+        planner: str = "rrt",
+        step_size: float = 4.0,
+        max_iterations: int = 2000,
+        action_mode: str = "point",
+        uniform_floor: float = 0.05,
+        reach: float = 3.0,
+        obs_size: int = 64,
+        local_size: int = 32,
+        local_scale: int = 1,
+        reward: str = "iterations",
+        checks_weight: float = 0.1,
+        shaping: bool = False,
+        shaping_gamma: float = 1.0,
+        dim: int | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        super().__init__()
+        if planner not in PLANNERS:
+            raise ValueError(f"planner must be one of {sorted(PLANNERS)}, got {planner!r}")
+        if action_mode not in ACTION_MODES:
+            raise ValueError(f"action_mode must be one of {ACTION_MODES}, got {action_mode!r}")
+        if reward not in ("iterations", "checks"):
+            raise ValueError(f"reward must be 'iterations' or 'checks', got {reward!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
+        if not (isinstance(max_iterations, (int, np.integer)) and max_iterations >= 1):
+            raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+        if not (math.isfinite(step_size) and step_size > 0):
+            raise ValueError(f"step_size must be positive, got {step_size!r}")
+        self.source = make_source(map_source, **(source_kwargs or {}))
+        self.planner_name = planner
+        self.step_size = float(step_size)
+        self.max_iterations = int(max_iterations)
+        self.action_mode = action_mode
+        self.reward_mode, self.checks_weight = reward, float(checks_weight)
+        self.shaping, self.shaping_gamma = bool(shaping), float(shaping_gamma)
+        self.render_mode = render_mode
+        self._action_sampler = make_action_sampler(action_mode, self.step_size, uniform_floor,
+                                                   **({"reach": reach} if action_mode == "relative" else {}))
+        self.dim = int(dim if dim is not None else getattr(self.source, "dim", 2))
+        if self.dim == 2:
+            self._obs = GridObservation(obs_size, local_size, local_scale)
+        else:
+            self._obs = VectorObservation(self.dim, angle_dims=3 if self.dim == 6 else 0)
+        self.observation_space = self._obs.space
+        self.action_space = self._action_sampler.action_space(self.dim)
+        self.problem: Problem | None = None
+        self.planner: Planner | None = None
+        self._renderer = None
+        self._last_sample = None
+
+    # --- Gymnasium API -------------------------------------------------------------------------
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        problem = (options or {}).get("problem") or self.source(self.np_random)
+        if problem.dim != self.dim:
+            raise ValueError(f"map source returned a {problem.dim}-D problem for a {self.dim}-D environment")
+        self.problem = problem
+        cls = PLANNERS[self.planner_name]
+        kw = {} if cls in (PRM, LazyPRM) else {"step_size": self.step_size}
+        self.planner = cls(problem, sampler=self._action_sampler, seed=int(self.np_random.integers(2**63)), **kw)
+        self._obs.reset(problem, self.max_iterations)
+        self._obs.update(self.planner)
+        self._potential = self._geodesic_potential_init() if self.shaping else 0.0
+        self._last_sample = None
+        self._added = False
+        if self._renderer is not None:
+            self._renderer.reset(problem)
+        if self.render_mode == "human":
+            self.render()
+        return self._obs.build(self.planner), self._info()
+
+    def step(self, action):
+        if self.planner is None:
+            raise RuntimeError("call reset() before step()")
+        if self.planner.solved:
+            raise RuntimeError("the episode has terminated; call reset()")
+        checks = self.planner.collision_checks
+        self.planner.sampler.set_action(action)
+        s = self.planner.step()
+        self._last_sample = s.sample
+        self._added = s.added >= 0
+        self._obs.update(self.planner)
+        terminated = s.solved
+        truncated = not terminated and self.planner.iterations >= self.max_iterations
+        reward = -1.0
+        if self.reward_mode == "checks":
+            reward -= self.checks_weight * (self.planner.collision_checks - checks)
+        if self.shaping:
+            phi = 0.0 if terminated else self._geodesic_potential(s.added)
+            reward += self.shaping_gamma * phi - self._potential
+            self._potential = phi
+        info = self._info()
+        if terminated or truncated:
+            info["is_success"] = terminated
+        if self.render_mode == "human":
+            self.render()
+        return self._obs.build(self.planner), reward, terminated, truncated, info
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' or 'human'")
+            return None
+        if self._renderer is None:
+            from envs.render import EpisodeRenderer
+
+            self._renderer = EpisodeRenderer(human=self.render_mode == "human", fps=self.metadata["render_fps"])
+            if self.problem is not None:
+                self._renderer.reset(self.problem)
+        if self.planner is None:
+            raise RuntimeError("call reset() before render()")
+        frame = self._renderer.draw(self.planner, self._last_sample)
+        return frame if self.render_mode == "rgb_array" else None
+
+    def close(self):
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # --- helpers ---------------------------------------------------------------------------
+
+    def _info(self) -> dict[str, Any]:
+        r = self.planner.result()
+        info = {
+            "iterations": r.iterations,
+            "solved": r.solved,
+            "path_cost": r.cost,
+            "collision_checks": r.collision_checks,
+            "tree_size": r.num_vertices,
+            "sample": None if self._last_sample is None else self._last_sample.copy(),
+            "added": self._added,
+        }
+        ref = self.problem.reference_length
+        if ref is not None:
+            info["lower_bound"] = max(1, math.ceil((ref - self.problem.goal_tolerance) / self.step_size))
+        return info
+
+    def _geodesic_potential_init(self) -> float:
+        from planners.gridsearch import distance_field
+
+        grid = self.problem.world
+        if not isinstance(grid, OccupancyGrid):
+            raise ValueError("shaping needs an OccupancyGrid problem (geodesic distances on the grid)")
+        self._field = distance_field(grid.obstacles, grid.cell_of(self.problem.goal)) * grid.resolution
+        self._best_geo = self._field_at(self.problem.start)
+        return -self._best_geo / self.step_size
+
+    def _field_at(self, q: np.ndarray) -> float:
+        r, c = self.problem.world.cell_of(q)
+        d = self._field[r, c]
+        return float(d) if np.isfinite(d) else float(np.nanmax(self._field[np.isfinite(self._field)]))
+
+    def _geodesic_potential(self, added: int) -> float:
+        if added >= 0:
+            self._best_geo = min(self._best_geo, self._field_at(self.planner.view().vertices[added]))
+        return -self._best_geo / self.step_size
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_renderer"] = None  # matplotlib figures do not pickle
+        return state

@@ -1,0 +1,278 @@
+"""Environments: API checkers, determinism, pickling, vector envs, actions, rewards, rendering."""
+
+from __future__ import annotations
+
+import importlib
+import pickle
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from conftest import movingai_dir
+from PIL import Image
+
+import envs
+from envs import ENV_IDS, SamplerEnv, record_episode
+from planners import RRT, UniformSampler
+from planners.generators import generate
+
+gym.register_envs(envs)
+
+
+@pytest.fixture(scope="module")
+def png_map(tmp_path_factory):
+    img = np.full((48, 64), 255, np.uint8)
+    img[10:38, 30:34] = 0
+    path = tmp_path_factory.mktemp("maps") / "floor.png"
+    Image.fromarray(img).save(path)
+    return path
+
+
+def make_kwargs(env_id, png_map, **extra):
+    kw = dict(extra)
+    if env_id.endswith("Files-v0"):
+        kw["source_kwargs"] = {"paths": [str(png_map)]}
+    if env_id.endswith("MovingAI-v0"):
+        if movingai_dir() is None:
+            pytest.skip("MovingAI maps not found")
+        kw["source_kwargs"] = {"directory": str(movingai_dir()), "maps": ["arena", "room-32-32-4"], "per_map": 5}
+    return kw
+
+
+CHECKER_WARNINGS = (
+    "minimal resolution",  # SB3: the 32x32 local window is below NatureCNN's minimum; we ship our own extractor
+    "not have the same shape",
+    "no display is available",  # the checker renders in human mode too; CI has no screen
+)
+
+ALL_IDS = sorted(ENV_IDS)
+
+
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_gymnasium_and_sb3_checkers(env_id, png_map):
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    for mode in envs.ACTION_MODES:
+        env = gym.make(env_id, action_mode=mode, render_mode="rgb_array", **make_kwargs(env_id, png_map))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            check_env(env.unwrapped, skip_render_check=False)
+            sb3_check_env(env.unwrapped, warn=True)
+        unexpected = [str(w.message) for w in caught
+                      if not any(s in str(w.message) for s in CHECKER_WARNINGS) and "precision" not in str(w.message)]
+        assert not unexpected, unexpected
+        env.close()
+
+
+def rollout(env, seed, steps=60):
+    obs, info = env.reset(seed=seed)
+    env.action_space.seed(seed)
+    out = [(obs, None, info)]
+    for _ in range(steps):
+        obs, r, term, trunc, info = env.step(env.action_space.sample())
+        out.append((obs, r, {k: v for k, v in info.items() if k != "sample"}))
+        if term or trunc:
+            obs, info = env.reset()
+            out.append((obs, None, info))
+    return out
+
+
+def assert_same(a, b):
+    assert len(a) == len(b)
+    for (o1, r1, i1), (o2, r2, i2) in zip(a, b):
+        for k in o1:
+            assert np.array_equal(o1[k], o2[k]), k
+        assert r1 == r2
+        assert {k: v for k, v in i1.items() if k != "sample"} == {k: v for k, v in i2.items() if k != "sample"}
+
+
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_same_seed_same_rollout(env_id, png_map):
+    kw = make_kwargs(env_id, png_map, max_iterations=40)
+    a = rollout(gym.make(env_id, **kw), seed=3)
+    b = rollout(gym.make(env_id, **kw), seed=3)
+    assert_same(a, b)
+    c = rollout(gym.make(env_id, **kw), seed=4)
+    assert not all(np.array_equal(x[0]["image"], y[0]["image"]) for x, y in zip(a, c))
+
+
+def test_pickle_resumes_identically():
+    env = gym.make("SamplerGym/RRT-Maze-v0", action_mode="relative")
+    env.reset(seed=1)
+    env.action_space.seed(1)
+    for _ in range(20):
+        env.step(env.action_space.sample())
+    clone = pickle.loads(pickle.dumps(env))
+    acts = [env.action_space.sample() for _ in range(30)]
+    for a in acts:
+        o1, r1, t1, u1, i1 = env.step(a)
+        o2, r2, t2, u2, i2 = clone.step(a)
+        assert np.array_equal(o1["local"], o2["local"]) and r1 == r2 and i1["iterations"] == i2["iterations"]
+        if t1 or u1:
+            break
+
+
+@pytest.mark.parametrize("vectorization_mode", ["sync", "async"])
+def test_vector_envs(vectorization_mode):
+    vec = gym.make_vec("SamplerGym/RRT-Rooms-v0", num_envs=2, vectorization_mode=vectorization_mode,
+                       action_mode="bias", max_iterations=30)
+    obs, _ = vec.reset(seed=0)
+    assert obs["image"].shape == (2, 4, 64, 64)
+    for _ in range(40):
+        obs, r, term, trunc, info = vec.step(vec.action_space.sample())
+    assert r.shape == (2,) and np.all(r <= -1.0)
+    vec.close()
+
+
+def test_sb3_make_vec_env():
+    from stable_baselines3.common.env_util import make_vec_env
+
+    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v0", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture"})
+    obs = vec.reset()
+    assert obs["vector"].shape == (2, 11)
+    obs, rew, done, info = vec.step(np.stack([vec.action_space.sample()] * 2))
+    assert rew.tolist() == [-1.0, -1.0]
+    vec.close()
+
+
+def test_reregistering_is_harmless():
+    importlib.reload(envs)
+    assert "SamplerGym/RRT-Maze-v0" in gym.registry
+
+
+@pytest.mark.parametrize("mode, n", [("point", 2), ("bias", 1), ("mixture", 4), ("relative", 3)])
+def test_bad_actions_are_rejected_or_clipped(mode, n):
+    env = SamplerEnv("forest", action_mode=mode)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="NaN"):
+        env.step(np.full(n, np.nan))
+    with pytest.raises(ValueError, match=rf"shape \({n},\)"):
+        env.step(np.zeros(n + 1))
+    # out-of-range values are clipped (documented): 5.0 acts like 1.0, and no sample leaves the map
+    a, b = SamplerEnv("forest", action_mode=mode), SamplerEnv("forest", action_mode=mode)
+    a.reset(seed=2)
+    b.reset(seed=2)
+    for _ in range(10):
+        _, _, _, _, ia = a.step(np.full(n, 5.0))
+        _, _, _, _, ib = b.step(np.ones(n))
+        assert np.array_equal(ia["sample"], ib["sample"])
+        lo, hi = a.problem.world.bounds
+        assert np.all(ia["sample"] >= lo) and np.all(ia["sample"] < hi)
+
+
+def test_bad_construction_arguments():
+    with pytest.raises(ValueError, match="action_mode"):
+        SamplerEnv("forest", action_mode="teleport")
+    with pytest.raises(ValueError, match="planner"):
+        SamplerEnv("forest", planner="astar")
+    with pytest.raises(ValueError, match="map_source"):
+        SamplerEnv("volcano")
+    with pytest.raises(ValueError, match="paths"):
+        SamplerEnv("files")
+    with pytest.raises(ValueError, match="max_iterations"):
+        SamplerEnv("forest", max_iterations=0)
+
+
+def test_uniform_point_actions_match_rrt_with_uniform_sampler():
+    """The env adds no hidden advantage or handicap: same iterations-to-solution distribution."""
+    size, n = 64, 300
+    env = SamplerEnv("forest", source_kwargs={"size": size, "seeds": list(range(n))}, action_mode="point",
+                     max_iterations=20000)
+    env_its, rrt_its = [], []
+    for ep in range(n):
+        env.reset(seed=10_000 + ep)
+        env.action_space.seed(ep)
+        done = False
+        while not done:
+            _, _, term, trunc, info = env.step(env.action_space.sample())
+            done = term or trunc
+        env_its.append(info["iterations"])
+        rrt = RRT(env.problem, step_size=env.step_size, sampler=UniformSampler(), seed=ep).solve(max_iterations=20000)
+        rrt_its.append(rrt.iterations)
+    a, b = np.array(env_its, float), np.array(rrt_its, float)
+    # paired by map: the difference of means is zero within sampling error (3 standard errors)
+    d = a - b
+    assert abs(d.mean()) <= 3 * d.std(ddof=1) / np.sqrt(n), (a.mean(), b.mean())
+
+
+def test_rewards_and_potential_based_shaping():
+    plain = SamplerEnv("bugtrap", source_kwargs={"size": 64}, action_mode="bias", max_iterations=5000)
+    shaped = SamplerEnv("bugtrap", source_kwargs={"size": 64}, action_mode="bias", max_iterations=5000,
+                        shaping=True, shaping_gamma=1.0)
+    for seed in range(3):
+        plain.reset(seed=seed)
+        shaped.reset(seed=seed)
+        phi0 = shaped._potential
+        rp = rs = 0.0
+        done = False
+        while not done:
+            a = np.array([0.2])
+            _, r1, term, trunc, i1 = plain.step(a)
+            _, r2, _, _, i2 = shaped.step(a)
+            rp += r1
+            rs += r2
+            done = term or trunc
+        assert term and rp == -i1["iterations"]  # the return is minus the iterations-to-solution
+        assert rs - rp == pytest.approx(-phi0)  # gamma = 1: shaping telescopes to Phi(end) - Phi(start), Phi(end) = 0
+    checks = SamplerEnv("forest", reward="checks", checks_weight=0.5)
+    checks.reset(seed=0)
+    _, r, _, _, info = checks.step(np.zeros(2))
+    assert r == -1.0 - 0.5 * info["collision_checks"]
+
+
+def test_observation_contents():
+    env = SamplerEnv("narrow_passage", source_kwargs={"size": 64}, action_mode="relative", local_size=16)
+    obs, info = env.reset(seed=5)
+    assert obs["image"].dtype == np.uint8 and obs["image"][1].sum() > 0  # the start vertex is marked
+    for _ in range(50):
+        obs, _, term, trunc, info = env.step(np.array([0.3, 0.0, -0.5]))
+        if term or trunc:
+            break
+    tree_px = int((obs["image"][1] > 0).sum())
+    assert 1 <= tree_px <= info["tree_size"]
+    view = env.planner.view()
+    anchor = view.vertices[view.best_vertex]
+    assert obs["local"][1, 8, 8] == 255  # the anchor vertex sits at the window's centre
+    v = obs["vector"]
+    assert v.dtype == np.float32 and np.all(np.abs(v) <= 1)
+    lo, hi = env.problem.world.bounds
+    assert v[4:6] == pytest.approx(2 * (anchor - lo) / (hi - lo) - 1, abs=1e-6)
+    assert obs in env.observation_space
+
+
+@pytest.mark.parametrize("planner", ["rrtstar", "prm", "rrtconnect", "lazyprm"])
+def test_generic_id_runs_other_planners(planner):
+    env = gym.make("SamplerGym/Planning-v0", map_source="rooms", planner=planner, source_kwargs={"size": 64},
+                   max_iterations=3000, action_mode="point")
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    done = False
+    while not done:
+        _, _, term, trunc, info = env.step(env.action_space.sample())
+        done = term or trunc
+    assert term and info["solved"] and info["is_success"]
+
+
+def test_render_and_record(tmp_path):
+    env = gym.make("SamplerGym/RRT-Forest-v0", render_mode="rgb_array", source_kwargs={"size": 64})
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
+    info = record_episode(env, None, tmp_path / "ep.gif", seed=1, every=5)
+    assert "iterations" in info
+    with Image.open(tmp_path / "ep.gif") as img:
+        assert img.n_frames > 2
+    human = SamplerEnv("forest", render_mode="human")
+    human.reset(seed=0)
+    human.step(np.zeros(2))  # no display here: warns once, never crashes
+    human.close()
+
+
+def test_problem_option_and_lower_bound():
+    p = generate("maze", 1, 64)
+    env = SamplerEnv("maze", source_kwargs={"size": 64})
+    _, info = env.reset(seed=0, options={"problem": p})
+    assert env.problem is p
+    assert info["lower_bound"] == int(np.ceil((p.reference_length - p.goal_tolerance) / env.step_size))
