@@ -9,10 +9,23 @@ from planners.rrt import RRT, RRTConnect
 from planners.rrtstar import InformedRRTStar, RRTStar
 from planners.smoothing import shortcut, simplify, smooth
 from planners.shapes import Circle, GeometricWorld, Rectangle
-from planners.samplers import GoalBiasedSampler, InformedSampler, SampleBatch, Sampler, SamplerBase, UniformSampler
+from planners.samplers import (
+    ANCHOR_GOAL,
+    ANCHOR_NONE,
+    ANCHOR_WORLD,
+    GoalBiasedSampler,
+    InformedSampler,
+    SampleBatch,
+    Sampler,
+    SamplerBase,
+    UniformSampler,
+)
 from planners.world import World
 
 __all__ = [
+    "ANCHOR_GOAL",
+    "ANCHOR_NONE",
+    "ANCHOR_WORLD",
     "Circle",
     "GeometricWorld",
     "GoalBiasedSampler",

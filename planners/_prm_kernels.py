@@ -164,7 +164,7 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
             return s
         istate[I_ITER] += 1
         istate[I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], low, high, q)
+        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], goal, low, high, q)
         last[:] = q
         if not lazy:
             istate[I_CHECKS] += 1

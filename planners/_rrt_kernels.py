@@ -61,7 +61,7 @@ def rrt_run(samples, anchored, tree, istate, fstate, last, world, space, goal, s
             return s
         istate[I_ITER] += 1
         istate[I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], low, high, q)
+        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], goal, low, high, q)
         last[:] = q
         near = nearest_vertex(tree, n, space, q, _embed_query(space, q, qe_buf), st, sb)
         d = steer(space, X[near], q, step, new)
@@ -104,7 +104,7 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
             return s
         istate[I_ITER] += 1
         istate[I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], Xa[istate[I_BEST_V]], low, high, q)
+        resolve_sample(space, samples[s], anchored[s], Xa[istate[I_BEST_V]], goal, low, high, q)
         last[:] = q
         from_start = istate[I_SWAP] == 0
         istate[I_SWAP] = 1 - istate[I_SWAP]

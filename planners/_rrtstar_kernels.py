@@ -106,7 +106,7 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
             return s
         istate[I_ITER] += 1
         istate[I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], low, high, q)
+        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], goal, low, high, q)
         last[:] = q
         near = nearest_vertex(tree, n, space, q, _embed_query(space, q, qe_buf), st, sb)
         d = steer(space, X[near], q, step, new)

@@ -63,19 +63,36 @@ def add_vertex(tree, n, space, q, par, c):
 
 
 @nb.njit(cache=True, inline="always")
-def resolve_sample(space, raw, anchored, anchor, low, high, out):
-    """The sample a planner uses: ``raw`` itself, or ``anchor + raw`` clipped to the bounds."""
+def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
+    """The sample a planner uses, by ``anchored`` code.
+
+    0: ``raw`` itself. 1: ``anchor + raw`` (world frame). 2: ``anchor + R raw``, where ``R`` turns the
+    first two coordinates into the frame whose x axis points from the anchor to the goal (y to its
+    left), so an offset like "two steps ahead, slightly left" follows the tree wherever it goes.
+    Anchored results are clipped to the bounds.
+    """
     kind, metric, rw = space
-    if anchored:
-        for i in range(raw.shape[0]):
-            out[i] = anchor[i] + raw[i]
-        for i in range(raw.shape[0]):
-            if out[i] < low[i]:
-                out[i] = low[i]
-            elif out[i] >= high[i]:
-                out[i] = np.nextafter(high[i], low[i])
-        if kind != SPACE_RN:
-            interpolate(kind, out, out, 0.0, out)  # wraps the angles into [-pi, pi)
-    else:
+    if anchored == 0:
         for i in range(raw.shape[0]):
             out[i] = raw[i]
+        return
+    for i in range(raw.shape[0]):
+        out[i] = anchor[i] + raw[i]
+    if anchored == 2:
+        ux = goal[0] - anchor[0]
+        uy = goal[1] - anchor[1]
+        norm = np.sqrt(ux * ux + uy * uy)
+        if norm > 1e-12:
+            ux /= norm
+            uy /= norm
+        else:
+            ux, uy = 1.0, 0.0
+        out[0] = anchor[0] + ux * raw[0] - uy * raw[1]
+        out[1] = anchor[1] + uy * raw[0] + ux * raw[1]
+    for i in range(raw.shape[0]):
+        if out[i] < low[i]:
+            out[i] = low[i]
+        elif out[i] >= high[i]:
+            out[i] = np.nextafter(high[i], low[i])
+    if kind != SPACE_RN:
+        interpolate(kind, out, out, 0.0, out)  # wraps the angles into [-pi, pi)

@@ -1,14 +1,19 @@
 """Exact grid searches: octile distance fields, shortest paths and connected components.
 
 Distances are on the 8-connected grid with straight steps of 1 and diagonal steps of sqrt(2), and no
-corner cutting: a diagonal step is legal only if both orthogonal neighbours are free. This is the
-definition of the MovingAI benchmarks' ``optimal_length``, and matches the continuous collision
-model (closed cells): two free cells are mutually reachable in the plane iff they are 4-connected.
+corner cutting: a diagonal step from (r, c) to (r+dr, c+dc) is legal only if (r+dr, c) and (r, c+dc)
+are both free. This is the definition behind the MovingAI benchmarks' ``optimal_length``, and it
+matches the continuous collision model of ``OccupancyGrid`` (closed cells): two free cells are
+mutually reachable in the plane iff they are 4-connected through free cells.
+
+All kernels work on a copy of the map padded with one ring of blocked cells, so neighbour lookups
+need no bounds checks and the map edge is a wall, as it is for ``OccupancyGrid``.
 """
 
 from __future__ import annotations
 
 import math
+import operator
 
 import numba as nb
 import numpy as np
@@ -17,184 +22,256 @@ from planners.grid import OccupancyGrid
 
 SQRT2 = math.sqrt(2.0)
 
+# the 8 neighbour steps; the first four are straight, the last four diagonal
+_DR = np.array([-1, 1, 0, 0, -1, -1, 1, 1], dtype=np.int64)
+_DC = np.array([0, 0, -1, 1, -1, 1, -1, 1], dtype=np.int64)
 
-def _check(obstacles: np.ndarray, cell, label: str) -> tuple[np.ndarray, tuple[int, int]]:
-    obstacles = np.asarray(obstacles)
-    if obstacles.ndim != 2 or obstacles.size == 0:
-        raise ValueError(f"obstacles must be a non-empty 2-D array, got shape {obstacles.shape}")
-    r, c = (int(v) for v in cell)
+
+# --- input checks -------------------------------------------------------------------------------
+
+
+def _as_obstacles(obstacles) -> np.ndarray:
+    """The map as a non-empty 2-D bool array, or a ValueError naming what was wrong."""
+    arr = np.asarray(obstacles)
+    if arr.ndim != 2 or arr.size == 0:
+        raise ValueError(f"obstacles must be a non-empty 2-D (H, W) bool array, got shape {arr.shape}")
+    if arr.dtype != np.bool_:
+        raise ValueError(f"obstacles must be a bool array (True = obstacle), got dtype {arr.dtype}")
+    return arr
+
+
+def _as_cell(cell, obstacles: np.ndarray, label: str) -> tuple[int, int]:
+    """``cell`` as an in-range, free (row, col) pair of ints, or a ValueError naming it."""
+    try:
+        r, c = (operator.index(v) for v in cell)
+    except (TypeError, ValueError):
+        raise ValueError(f"{label} cell must be a (row, col) pair of integers, got {cell!r}") from None
     H, W = obstacles.shape
     if not (0 <= r < H and 0 <= c < W):
         raise ValueError(f"{label} cell {(r, c)} lies outside the {H}x{W} grid")
     if obstacles[r, c]:
         raise ValueError(f"{label} cell {(r, c)} is blocked")
-    return np.ascontiguousarray(obstacles, dtype=np.bool_), (r, c)
+    return r, c
+
+
+def _padded(obstacles: np.ndarray) -> np.ndarray:
+    return np.pad(obstacles, 1, constant_values=True)
+
+
+def _grid_cell(grid: OccupancyGrid, point, label: str) -> tuple[int, int]:
+    if not isinstance(grid, OccupancyGrid):
+        raise TypeError(f"grid must be an OccupancyGrid, got {type(grid).__name__}")
+    try:
+        cell = grid.cell_of(point)
+    except ValueError as exc:
+        raise ValueError(f"{label} {point!r}: {exc}") from None
+    H, W = grid.shape
+    if not (0 <= cell[0] < H and 0 <= cell[1] < W):
+        raise ValueError(f"{label} {tuple(np.asarray(point, float).tolist())} lies outside the {H}x{W} grid")
+    if grid.obstacles[cell]:
+        raise ValueError(f"{label} {tuple(np.asarray(point, float).tolist())} lies in blocked cell {cell}")
+    return cell
+
+
+# --- compiled kernels ---------------------------------------------------------------------------
 
 
 @nb.njit(cache=True)
-def _dijkstra(blocked, gr, gc):
-    H, W = blocked.shape
-    dist = np.full((H, W), np.inf)
-    done = np.zeros((H, W), dtype=np.bool_)
-    cap = 8 * H * W + 1
-    hd = np.empty(cap)
-    hi = np.empty(cap, dtype=np.int64)
-    dist[gr, gc] = 0.0
-    hd[0] = 0.0
-    hi[0] = gr * W + gc
-    n = 1
-    drs = np.array([-1, 1, 0, 0, -1, -1, 1, 1])
-    dcs = np.array([0, 0, -1, 1, -1, 1, -1, 1])
-    while n > 0:
-        d = hd[0]
-        v = hi[0]
-        n -= 1
-        ld = hd[n]
-        lv = hi[n]
-        i = 0
-        while True:  # sift the last entry down from the root
-            c = 2 * i + 1
-            if c >= n:
-                break
-            if c + 1 < n and hd[c + 1] < hd[c]:
-                c += 1
-            if hd[c] >= ld:
-                break
-            hd[i] = hd[c]
-            hi[i] = hi[c]
-            i = c
-        if n > 0:
-            hd[i] = ld
-            hi[i] = lv
-        r = v // W
-        c0 = v % W
-        if done[r, c0]:
-            continue
-        done[r, c0] = True
+def _sift_up(heap, pos, key, j):
+    v = heap[j]
+    kv = key[v]
+    while j > 0:
+        p = (j - 1) >> 1
+        u = heap[p]
+        if key[u] <= kv:
+            break
+        heap[j] = u
+        pos[u] = j
+        j = p
+    heap[j] = v
+    pos[v] = j
+
+
+@nb.njit(cache=True)
+def _sift_down(heap, pos, key, j, n):
+    v = heap[j]
+    kv = key[v]
+    while True:
+        c = 2 * j + 1
+        if c >= n:
+            break
+        if c + 1 < n and key[heap[c + 1]] < key[heap[c]]:
+            c += 1
+        u = heap[c]
+        if key[u] >= kv:
+            break
+        heap[j] = u
+        pos[u] = j
+        j = c
+    heap[j] = v
+    pos[v] = j
+
+
+@nb.njit(cache=True)
+def _dijkstra(padded, goal, stop, dr, dc):
+    """Octile Dijkstra from flat padded index ``goal``; stops once ``stop`` is settled (-1: never).
+
+    Returns the flat distance array and, per cell, the next cell on a shortest path to the goal.
+    Uses an indexed binary heap with decrease-key, so the heap never holds more than H*W entries.
+    """
+    Wp = padded.shape[1]
+    n = padded.size
+    blocked = padded.ravel()
+    dist = np.full(n, np.inf)
+    toward = np.full(n, -1, dtype=np.int64)
+    pos = np.full(n, -1, dtype=np.int64)  # heap slot; -1 never queued, -2 settled
+    heap = np.empty(n, dtype=np.int64)
+    off = dr * Wp + dc
+    dist[goal] = 0.0
+    heap[0] = goal
+    pos[goal] = 0
+    size = 1
+    while size > 0:
+        v = heap[0]
+        size -= 1
+        if size > 0:
+            heap[0] = heap[size]
+            pos[heap[0]] = 0
+            _sift_down(heap, pos, dist, 0, size)
+        pos[v] = -2
+        if v == stop:
+            break
+        dv = dist[v]
         for k in range(8):
-            rr = r + drs[k]
-            cc = c0 + dcs[k]
-            if rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
+            u = v + off[k]
+            if blocked[u] or pos[u] == -2:
                 continue
             if k >= 4:
-                if blocked[r + drs[k], c0] or blocked[r, c0 + dcs[k]]:
-                    continue  # no corner cutting
-                nd = d + SQRT2
+                # the step is symmetric, so the same test serves the reverse search from the goal
+                if blocked[v + dr[k] * Wp] or blocked[v + dc[k]]:
+                    continue
+                nd = dv + SQRT2
             else:
-                nd = d + 1.0
-            if nd < dist[rr, cc]:
-                dist[rr, cc] = nd
-                j = n
-                n += 1
-                while j > 0:
-                    p = (j - 1) // 2
-                    if hd[p] <= nd:
-                        break
-                    hd[j] = hd[p]
-                    hi[j] = hi[p]
-                    j = p
-                hd[j] = nd
-                hi[j] = rr * W + cc
-    return dist
+                nd = dv + 1.0
+            if nd < dist[u]:
+                dist[u] = nd
+                toward[u] = v
+                if pos[u] == -1:
+                    heap[size] = u
+                    pos[u] = size
+                    size += 1
+                _sift_up(heap, pos, dist, pos[u])
+    return dist, toward
+
+
+@nb.njit(cache=True)
+def _flood(padded, seed, label, value, stop):
+    """4-connected flood fill of free cells from flat padded index ``seed``; True if ``stop`` was reached."""
+    Wp = padded.shape[1]
+    blocked = padded.ravel()
+    stack = np.empty(padded.size, dtype=np.int64)
+    label[seed] = value
+    stack[0] = seed
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        v = stack[sp]
+        if v == stop:
+            return True
+        for u in (v - Wp, v + Wp, v - 1, v + 1):
+            if not blocked[u] and label[u] < 0:
+                label[u] = value
+                stack[sp] = u
+                sp += 1
+    return False
+
+
+@nb.njit(cache=True)
+def _components(padded):
+    label = np.full(padded.size, -1, dtype=np.int32)
+    blocked = padded.ravel()
+    count = 0
+    for v in range(padded.size):
+        if not blocked[v] and label[v] < 0:
+            _flood(padded, v, label, count, -1)
+            count += 1
+    return label
+
+
+# --- public API ---------------------------------------------------------------------------------
 
 
 def distance_field(obstacles: np.ndarray, goal_cell: tuple[int, int]) -> np.ndarray:
-    """(H, W) octile shortest-path distance (in cells) from every cell to ``goal_cell``.
+    """Octile shortest-path distance (in cells) from every cell to ``goal_cell``.
 
-    Blocked and unreachable cells hold +inf.
+    Args:
+        obstacles: (H, W) bool array, True = obstacle.
+        goal_cell: Free (row, col) the distances are measured to.
+
+    Returns:
+        (H, W) float64 array; blocked and unreachable cells hold +inf.
     """
-    blocked, (r, c) = _check(obstacles, goal_cell, "goal")
-    return _dijkstra(blocked, r, c)
+    obstacles = _as_obstacles(obstacles)
+    r, c = _as_cell(goal_cell, obstacles, "goal")
+    padded = _padded(obstacles)
+    dist, _ = _dijkstra(padded, (r + 1) * padded.shape[1] + c + 1, -1, _DR, _DC)
+    return dist.reshape(padded.shape)[1:-1, 1:-1].copy()
+
+
+def _search(grid: OccupancyGrid, start, goal):
+    """Dijkstra from goal's cell until start's cell is settled: (padded map, distances, pointers, start index)."""
+    s = _grid_cell(grid, start, "start")
+    g = _grid_cell(grid, goal, "goal")
+    padded = _padded(np.asarray(grid.obstacles))
+    Wp = padded.shape[1]
+    si = (s[0] + 1) * Wp + s[1] + 1
+    dist, toward = _dijkstra(padded, (g[0] + 1) * Wp + g[1] + 1, si, _DR, _DC)
+    return padded, dist, toward, si
 
 
 def shortest_path_length(grid: OccupancyGrid, start, goal) -> float:
-    """Octile length (world units) between the cells containing ``start`` and ``goal``; inf if disconnected."""
-    s = grid.cell_of(start)
-    field = distance_field(grid.obstacles, grid.cell_of(goal))
-    _check(grid.obstacles, s, "start")
-    return float(field[s]) * grid.resolution
+    """Octile shortest-path length (world units) between the cells containing ``start`` and ``goal``.
 
-
-@nb.njit(cache=True)
-def _descend(field, blocked, r, c):
-    H, W = field.shape
-    out = np.empty((H * W, 2), dtype=np.int64)
-    k = 0
-    out[k, 0] = r
-    out[k, 1] = c
-    k += 1
-    while field[r, c] > 0.0:
-        best = field[r, c]
-        br, bc = -1, -1
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, c + dc
-                if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
-                    continue
-                if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
-                    continue
-                step = SQRT2 if dr != 0 and dc != 0 else 1.0
-                # a neighbour on a shortest path satisfies field[n] + step == field[here]
-                if field[rr, cc] + step <= field[r, c] + 1e-9 and field[rr, cc] < best:
-                    best = field[rr, cc]
-                    br, bc = rr, cc
-        r, c = br, bc
-        out[k, 0] = r
-        out[k, 1] = c
-        k += 1
-    return out[:k]
+    Returns inf if the cells are not connected. Raises ValueError if either point lies outside the
+    grid or in a blocked cell.
+    """
+    _, dist, _, si = _search(grid, start, goal)
+    return float(dist[si]) * grid.resolution
 
 
 def shortest_path(grid: OccupancyGrid, start, goal) -> np.ndarray:
-    """(k, 2) world waypoints (cell centres) of one shortest octile path from start's cell to goal's."""
-    field = distance_field(grid.obstacles, grid.cell_of(goal))
-    _, (r, c) = _check(grid.obstacles, grid.cell_of(start), "start")
-    if not np.isfinite(field[r, c]):
-        raise ValueError(f"no path: start cell {(r, c)} and goal cell {grid.cell_of(goal)} are not connected")
-    cells = _descend(field, np.ascontiguousarray(grid.obstacles), r, c)
-    return np.stack([(cells[:, 1] + 0.5) * grid.resolution, (cells[:, 0] + 0.5) * grid.resolution], axis=1)
+    """One shortest octile path from the cell containing ``start`` to the cell containing ``goal``.
 
+    Returns:
+        (k, 2) world coordinates of the centres of the path's cells, start's cell first.
 
-@nb.njit(cache=True)
-def _label(blocked):
-    H, W = blocked.shape
-    lab = np.full((H, W), -1, dtype=np.int32)
-    stack = np.empty(H * W, dtype=np.int64)
-    cur = 0
-    for r0 in range(H):
-        for c0 in range(W):
-            if blocked[r0, c0] or lab[r0, c0] >= 0:
-                continue
-            lab[r0, c0] = cur
-            sp = 0
-            stack[sp] = r0 * W + c0
-            sp += 1
-            while sp > 0:
-                sp -= 1
-                v = stack[sp]
-                r = v // W
-                c = v % W
-                for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)):
-                    rr, cc = r + dr, c + dc
-                    if 0 <= rr < H and 0 <= cc < W and not blocked[rr, cc] and lab[rr, cc] < 0:
-                        lab[rr, cc] = cur
-                        stack[sp] = rr * W + cc
-                        sp += 1
-            cur += 1
-    return lab
+    Raises:
+        ValueError: If there is no path, or either point lies outside the grid or in a blocked cell.
+    """
+    padded, dist, toward, si = _search(grid, start, goal)
+    if not np.isfinite(dist[si]):
+        raise ValueError(
+            f"no path: start cell {grid.cell_of(start)} and goal cell {grid.cell_of(goal)} are not connected"
+        )
+    cells = [si]
+    while toward[cells[-1]] >= 0:
+        cells.append(int(toward[cells[-1]]))
+    rows, cols = np.divmod(np.array(cells), padded.shape[1])
+    return np.stack([cols - 0.5, rows - 0.5], axis=1) * grid.resolution  # -1 for the padding, +0.5 to centre
 
 
 def free_components(obstacles: np.ndarray) -> np.ndarray:
-    """int32 label of each free cell's 4-connected component; -1 for blocked cells."""
-    obstacles = np.asarray(obstacles)
-    if obstacles.ndim != 2 or obstacles.size == 0:
-        raise ValueError(f"obstacles must be a non-empty 2-D array, got shape {obstacles.shape}")
-    return _label(np.ascontiguousarray(obstacles, dtype=np.bool_))
+    """(H, W) int32 label of each free cell's 4-connected component (0, 1, ... in scan order); -1 if blocked."""
+    padded = _padded(_as_obstacles(obstacles))
+    return _components(padded).reshape(padded.shape)[1:-1, 1:-1].copy()
 
 
 def connected(obstacles: np.ndarray, a_cell: tuple[int, int], b_cell: tuple[int, int]) -> bool:
     """True if free cells ``a_cell`` and ``b_cell`` are 4-connected through free cells."""
-    blocked, a = _check(obstacles, a_cell, "a")
-    _, b = _check(obstacles, b_cell, "b")
-    lab = _label(blocked)
-    return bool(lab[a] == lab[b])
+    obstacles = _as_obstacles(obstacles)
+    a = _as_cell(a_cell, obstacles, "a")
+    b = _as_cell(b_cell, obstacles, "b")
+    padded = _padded(obstacles)
+    Wp = padded.shape[1]
+    label = np.full(padded.size, -1, dtype=np.int32)
+    return bool(_flood(padded, (a[0] + 1) * Wp + a[1] + 1, label, 0, (b[0] + 1) * Wp + b[1] + 1))

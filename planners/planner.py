@@ -202,7 +202,7 @@ class Planner(abc.ABC):
         self._rng = np.random.default_rng(self.seed)
         self.sampler = self._sampler_spec.bind(self.problem)
         self._buf_pts = np.empty((0, self.problem.dim))
-        self._buf_anch = np.empty(0, dtype=np.bool_)
+        self._buf_anch = np.empty(0, dtype=np.int8)
         self._buf_cand = np.empty(0, dtype=np.int64)
         self._pos = 0
         self._refills = 0
@@ -363,10 +363,12 @@ class Planner(abc.ABC):
         if not np.all(np.isfinite(pts)):
             raise ValueError(f"{who}.draw returned a NaN or infinite sample")
         m = len(pts)
-        anch = np.zeros(m, dtype=np.bool_) if anch is None else np.ascontiguousarray(anch, dtype=np.bool_)
+        anch = np.zeros(m, dtype=np.int8) if anch is None else np.ascontiguousarray(anch, dtype=np.int8)
         cand = np.ones(m, dtype=np.int64) if cand is None else np.ascontiguousarray(cand, dtype=np.int64)
         if anch.shape != (m,) or cand.shape != (m,):
             raise ValueError(f"{who}.draw returned anchored/candidates flags that do not match {m} samples")
+        if anch.min() < 0 or anch.max() > 2:
+            raise ValueError(f"{who}.draw returned anchored codes outside 0..2")
         self._buf_pts, self._buf_anch, self._buf_cand, self._pos = pts, anch, cand, 0
 
     def _consume(self, n: int) -> int:

@@ -1,110 +1,172 @@
 """Figures and animations of maps, trees, roadmaps and paths (matplotlib, headless).
 
 Imported on demand only (``import planners`` never loads matplotlib). Uses the object-oriented API
-with an Agg canvas, never pyplot, so it works without a display and in worker processes. Maps are
-drawn in world coordinates with y growing downwards, as in images and MovingAI maps.
+with an Agg canvas, never pyplot, so it works without a display, in threads and in worker processes.
+Worlds are drawn in world coordinates with y growing downwards, as in images and MovingAI maps.
+Every file is written atomically: rendered to a hidden temporary file beside the target, then
+moved into place, so an exception or a crash never leaves a half-written file.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
+import secrets
 import shutil
 import subprocess
-import tempfile
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
+from matplotlib.colors import ListedColormap, to_rgba_array
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle as CirclePatch
-from matplotlib.patches import Rectangle as RectPatch
+from matplotlib.patches import Polygon
+from matplotlib.patches import Rectangle as RectanglePatch
 
 from planners.grid import OccupancyGrid
 from planners.planner import Planner, PlannerData, PlanResult
 from planners.problem import Problem
 from planners.shapes import Circle, GeometricWorld
 
-TREE_COLORS = ("#4a90d9", "#e8a33d")  # start tree, goal tree (RRT-Connect)
-PATH_COLOR = "#d62728"
+OBSTACLE_COLOR = "#3a3a3a"
+START_COLOR = "#2ca02c"
+GOAL_COLOR = "#d62728"
+PATH_COLOR = "#e6007e"
+#: Edge and vertex colours by ``PlannerData.tags``: start tree (and roadmaps), goal tree.
+TREE_COLORS = ("#4a90d9", "#f29e38")
+#: Above this many vertices ``draw_graph`` leaves out the vertex dots unless asked for them.
+MAX_VERTEX_DOTS = 5000
 
 
-def new_figure(size: tuple[float, float] = (6.0, 6.0), dpi: int = 100) -> Figure:
+def new_figure(size: tuple[float, float] = (6.0, 6.0), dpi: float = 100, layout: str | None = "constrained") -> Figure:
     """A Figure with an Agg canvas attached (no pyplot, no display needed)."""
-    fig = Figure(figsize=size, dpi=dpi)
+    fig = Figure(figsize=size, dpi=dpi, layout=layout)
     FigureCanvasAgg(fig)
     return fig
 
 
-def draw_world(ax, world) -> None:
-    """Draw obstacles of an ``OccupancyGrid`` or ``GeometricWorld``; y grows downwards."""
+def _extent(world) -> tuple[float, float]:
+    if not isinstance(world, (OccupancyGrid, GeometricWorld)):
+        raise TypeError(f"cannot draw a {type(world).__name__}: expected an OccupancyGrid or GeometricWorld")
+    w, h = world.bounds[1]
+    return float(w), float(h)
+
+
+def draw_world(ax, world: OccupancyGrid | GeometricWorld) -> None:
+    """Draw a world's obstacles (dark) on white and fit the axes to it, y growing downwards."""
+    w, h = _extent(world)
     if isinstance(world, OccupancyGrid):
-        w, h = world.bounds[1]
-        ax.imshow(world.obstacles, cmap="gray_r", vmin=0, vmax=1.4, origin="upper", extent=(0, w, h, 0),
-                  interpolation="nearest")
-    elif isinstance(world, GeometricWorld):
-        w, h = world.width, world.height
-        ax.add_patch(RectPatch((0, 0), w, h, fill=False, edgecolor="black", linewidth=1.0))
+        # rgba-stage antialiasing keeps one-cell walls visible (grey) when a big map is shrunk
+        ax.imshow(world.obstacles, cmap=ListedColormap(["white", OBSTACLE_COLOR]), vmin=0, vmax=1,
+                  origin="upper", extent=(0, w, h, 0), interpolation="auto", interpolation_stage="rgba", zorder=0)
+    else:
+        ax.set_facecolor("white")
         for ob in world.obstacles:
             if isinstance(ob, Circle):
-                ax.add_patch(CirclePatch((ob.x, ob.y), ob.r, color="0.3"))
+                ax.add_patch(CirclePatch((ob.x, ob.y), ob.r, facecolor=OBSTACLE_COLOR, edgecolor="none", zorder=0))
             else:
-                ax.add_patch(RectPatch((ob.x0, ob.y0), ob.x1 - ob.x0, ob.y1 - ob.y0, color="0.3"))
-    else:
-        raise TypeError(f"cannot draw a {type(world).__name__} in 2-D")
+                ax.add_patch(RectanglePatch((ob.x0, ob.y0), ob.x1 - ob.x0, ob.y1 - ob.y0, facecolor=OBSTACLE_COLOR,
+                                            edgecolor="none", zorder=0))
     ax.set_xlim(0, w)
     ax.set_ylim(h, 0)
     ax.set_aspect("equal")
 
 
+def _goal_region(problem: Problem):
+    """The goal region's outline: the ball of radius goal_tolerance in the problem's metric."""
+    (gx, gy), r = problem.goal[:2], problem.goal_tolerance
+    style = dict(fill=False, linestyle="--", edgecolor=GOAL_COLOR, linewidth=1.2, zorder=4)
+    if problem.metric == "chebyshev":
+        return RectanglePatch((gx - r, gy - r), 2 * r, 2 * r, **style)
+    if problem.metric == "manhattan":
+        return Polygon([(gx + r, gy), (gx, gy + r), (gx - r, gy), (gx, gy - r)], closed=True, **style)
+    return CirclePatch((gx, gy), r, **style)
+
+
 def draw_problem(ax, problem: Problem) -> None:
-    """World, start (green), goal (red) and the goal region (dashed)."""
+    """The world, the start (green dot), the goal (red star) and the goal region (dashed)."""
     draw_world(ax, problem.world)
-    ax.add_patch(CirclePatch(tuple(problem.goal[:2]), problem.goal_tolerance, fill=False, linestyle="--",
-                             edgecolor=PATH_COLOR, linewidth=1.0, zorder=4))
-    ax.plot(*problem.start[:2], "o", color="#2ca02c", markersize=7, zorder=5)
-    ax.plot(*problem.goal[:2], "*", color=PATH_COLOR, markersize=11, zorder=5)
+    ax.add_patch(_goal_region(problem))
+    ax.plot(*problem.start[:2], "o", color=START_COLOR, markersize=8, markeredgecolor="white", zorder=7)
+    ax.plot(*problem.goal[:2], "*", color=GOAL_COLOR, markersize=13, markeredgecolor="white", zorder=7)
 
 
-def graph_segments(data: PlannerData) -> np.ndarray:
-    """(m, 2, 2) line segments of a planner graph's edges."""
-    V = data.vertices[:, :2]
-    return np.stack([V[data.edges[:, 0]], V[data.edges[:, 1]]], axis=1) if len(data.edges) else np.empty((0, 2, 2))
+def _tag_colors(tags: np.ndarray) -> np.ndarray:
+    return to_rgba_array(TREE_COLORS)[np.asarray(tags, dtype=np.int64) % len(TREE_COLORS)]
 
 
-def draw_graph(ax, data: PlannerData, *, linewidth: float = 0.5, show_vertices: bool | None = None) -> list:
-    """Tree or roadmap edges as line collections (one colour per tree tag); returns the artists."""
-    artists = []
-    tags = data.tags[data.edges[:, 1]] if len(data.edges) else np.empty(0, dtype=np.int64)
-    seg = graph_segments(data)
-    for t in np.unique(tags) if len(tags) else [0]:
-        lc = LineCollection(seg[tags == t] if len(tags) else seg, colors=TREE_COLORS[int(t) % 2 if t >= 0 else 0],
-                            linewidths=linewidth, zorder=2)
-        ax.add_collection(lc)
-        artists.append(lc)
+def _edges(data: PlannerData) -> tuple[np.ndarray, np.ndarray]:
+    """(m, 2, 2) edge segments and their (m, 4) colours (by the tag of each edge's second vertex)."""
+    edges = np.asarray(data.edges, dtype=np.int64).reshape(-1, 2)
+    segments = np.asarray(data.vertices, dtype=np.float64)[:, :2][edges]
+    return segments, _tag_colors(np.asarray(data.tags)[edges[:, 1]])
+
+
+def draw_graph(ax, data: PlannerData, *, color=None, linewidth: float | None = None,
+               show_vertices: bool | None = None) -> LineCollection:
+    """Draw a tree or roadmap: edges as one ``LineCollection``, vertices as optional dots.
+
+    Args:
+        ax: Target axes.
+        data: ``Planner.planner_data()``; tag 0 (start tree, roadmaps) and tag 1 (RRT-Connect's goal
+            tree) get the two ``TREE_COLORS``.
+        color: One colour for everything instead of the colours by tag.
+        linewidth: Edge width in points; None thins the lines of big graphs so their shape shows.
+        show_vertices: Draw vertex dots; None draws them up to ``MAX_VERTEX_DOTS`` vertices.
+
+    Returns:
+        The edges' ``LineCollection``.
+    """
+    segments, colors = _edges(data)
+    if linewidth is None:
+        linewidth = float(np.clip(0.6 * np.sqrt(5000 / max(len(segments), 1)), 0.2, 0.6))
+    lc = LineCollection(segments, colors=colors if color is None else color, linewidths=linewidth, zorder=2)
+    ax.add_collection(lc)
     if show_vertices is None:
-        show_vertices = len(data.vertices) <= 5000
+        show_vertices = len(data.vertices) <= MAX_VERTEX_DOTS
     if show_vertices and len(data.vertices):
-        artists.append(ax.scatter(data.vertices[:, 0], data.vertices[:, 1], s=2, color=TREE_COLORS[0], zorder=3))
-    return artists
+        dots = dict(c=_tag_colors(data.tags)) if color is None else dict(color=color)
+        ax.scatter(data.vertices[:, 0], data.vertices[:, 1], s=max(1.5, 8 * linewidth), linewidths=0, zorder=3, **dots)
+    ax.autoscale_view()  # a no-op after draw_world, which fixes the view to the world
+    return lc
 
 
 def draw_path(ax, path, **kw):
-    """A solution path as a thick polyline."""
-    path = np.asarray(path)
-    style = dict(color=PATH_COLOR, linewidth=2.2, zorder=6) | kw
+    """A path as a thick polyline; ``kw`` overrides the ``Line2D`` style. Returns the line."""
+    path = np.asarray(path, dtype=np.float64)
+    if path.ndim != 2 or path.shape[1] < 2:
+        raise ValueError(f"path must have shape (k, 2) or (k, dim), got {path.shape}")
+    style = dict(color=PATH_COLOR, linewidth=2.8, solid_capstyle="round", solid_joinstyle="round", zorder=6) | kw
     return ax.plot(path[:, 0], path[:, 1], **style)[0]
+
+
+def _figure_size(world, longer: float = 6.0) -> tuple[float, float]:
+    w, h = _extent(world)
+    return (longer, max(2.0, longer * h / w)) if w >= h else (max(2.0, longer * w / h), longer)
 
 
 def plot(problem: Problem, planner: Planner | None = None, result: PlanResult | None = None, *, ax=None,
          title: str | None = None, show_vertices: bool | None = None) -> Figure:
-    """One call that draws the problem, the planner's graph and the solution path."""
+    """Draw a problem with a planner's tree or roadmap and a solution path in one call.
+
+    Args:
+        problem: The problem (world, start, goal region).
+        planner: Any planner; its ``planner_data()`` is drawn.
+        result: The result whose path is drawn; defaults to ``planner.result()``.
+        ax: Axes to draw into; None makes a new Figure (Agg canvas) sized to the world.
+        title: Axes title; None gives "<planner>: <n> iterations, cost <c>" (or "not solved") when
+            there is a planner or result, "" gives none.
+        show_vertices: As in ``draw_graph``.
+
+    Returns:
+        The Figure drawn into.
+    """
     if ax is None:
-        fig = new_figure()
-        ax = fig.add_subplot(1, 1, 1)
-    else:
-        fig = ax.figure
+        ax = new_figure(_figure_size(problem.world)).add_subplot()
     if result is None and planner is not None:
         result = planner.result()
     draw_problem(ax, problem)
@@ -112,137 +174,204 @@ def plot(problem: Problem, planner: Planner | None = None, result: PlanResult | 
         draw_graph(ax, planner.planner_data(), show_vertices=show_vertices)
     if result is not None and result.solved:
         draw_path(ax, result.path)
-    if title is None and planner is not None:
+    if title is None and result is not None:
         outcome = f"cost {result.cost:.1f}" if result.solved else "not solved"
-        title = f"{planner.name}: {result.iterations} iterations, {outcome}"
+        title = f"{planner.name if planner is not None else result.planner}: {result.iterations} iterations, {outcome}"
     if title:
         ax.set_title(title)
-    return fig
+    return ax.figure
 
 
-def _atomic_target(path: str | os.PathLike) -> tuple[Path, Path]:
+@contextmanager
+def _atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success move it to ``path``, else delete it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    return path, Path(tmp)
-
-
-def _commit(tmp: Path, path: Path, ok: bool) -> None:
-    if ok:
+    # pid + random token: unique across threads and processes; the leading dot hides it from globs
+    tmp = path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
+    try:
+        yield tmp
+        with open(tmp, "rb+") as f:  # flushed to disk first, so a power cut cannot leave an empty file
+            os.fsync(f.fileno())
         os.replace(tmp, path)
-    else:
+    finally:
         tmp.unlink(missing_ok=True)
 
 
-def save_figure(fig: Figure, path: str | os.PathLike, dpi: int = 120) -> Path:
-    """Write a figure (format from the suffix) atomically: a crash never leaves a partial file."""
-    path, tmp = _atomic_target(path)
-    ok = False
-    try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format=path.suffix.lstrip(".") or "png")
-        ok = True
-    finally:
-        _commit(tmp, path, ok)
+def save_figure(fig: Figure, path: str | os.PathLike, dpi: float = 150, **savefig_kw) -> Path:
+    """Write a figure atomically; the format comes from the suffix (png, pdf, svg, ...).
+
+    The image is ``fig.get_size_inches() * dpi`` pixels unless ``savefig_kw`` says otherwise
+    (e.g. ``bbox_inches="tight"``). Returns the path written.
+    """
+    path = Path(path)
+    fmt = path.suffix.lstrip(".").lower() or "png"
+    with _atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=fmt, **savefig_kw)
     return path
 
 
 def figure_to_array(fig: Figure) -> np.ndarray:
-    """The rendered figure as a uint8 (H, W, 3) array."""
+    """Render a figure to a new uint8 (H, W, 3) RGB array."""
     canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
 
-def save_gif(frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float = 15) -> Path:
-    """Write uint8 (H, W, 3) frames as an animated GIF, atomically."""
+def _checked_frames(frames: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
+    """The frames as C-contiguous uint8 (H, W, 3) arrays, all of the first frame's shape."""
+    shape = None
+    for i, f in enumerate(frames):
+        f = np.asarray(f)
+        if f.dtype != np.uint8 or f.ndim != 3 or f.shape[2] != 3:
+            raise ValueError(f"frame {i} must be a uint8 (H, W, 3) array, got {f.dtype} {f.shape}")
+        if shape is None:
+            shape = f.shape
+        elif f.shape != shape:
+            raise ValueError(f"frame {i} has shape {f.shape}, the first frame {shape}")
+        yield np.ascontiguousarray(f)
+    if shape is None:
+        raise ValueError("no frames to write")
+
+
+def save_gif(frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float = 10, loop: int = 0) -> Path:
+    """Write uint8 (H, W, 3) frames as an animated GIF, atomically.
+
+    Frames are consumed lazily (any iterable); identical consecutive frames merge into one longer
+    frame. ``loop=0`` repeats forever. Returns the path written.
+    """
     from PIL import Image
 
-    path, tmp = _atomic_target(path)
-    ok = False
-    try:
-        images = [Image.fromarray(np.asarray(f, dtype=np.uint8)) for f in frames]
-        if not images:
-            raise ValueError("save_gif needs at least one frame")
-        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
-        ok = True
-    finally:
-        _commit(tmp, path, ok)
-    return path
+    if not fps > 0:
+        raise ValueError(f"fps must be positive, got {fps}")
+    images = (Image.fromarray(f) for f in _checked_frames(frames))
+    with _atomic_path(path) as tmp:
+        first = next(images)
+        first.save(tmp, format="GIF", save_all=True, append_images=images, duration=round(1000 / fps), loop=loop)
+    return Path(path)
 
 
 def save_mp4(frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float = 15) -> Path:
-    """Write frames as an H.264 MP4 through ffmpeg (raises RuntimeError when ffmpeg is absent)."""
+    """Write uint8 (H, W, 3) frames as an H.264 MP4 by piping them to ffmpeg, atomically.
+
+    Raises:
+        RuntimeError: ffmpeg is not on PATH, or it failed.
+    """
     ffmpeg = shutil.which("ffmpeg")
     if ffmpeg is None:
-        raise RuntimeError("ffmpeg not found on PATH; install it or save a GIF instead")
-    frames = [np.asarray(f, dtype=np.uint8) for f in frames]
-    if not frames:
-        raise ValueError("save_mp4 needs at least one frame")
-    h, w = frames[0].shape[:2]
-    h2, w2 = h - h % 2, w - w % 2  # yuv420p needs even sides
-    path, tmp = _atomic_target(path)
-    ok = False
-    try:
-        cmd = [ffmpeg, "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w2}x{h2}",
-               "-r", str(fps), "-i", "-", "-pix_fmt", "yuv420p", "-vcodec", "libx264", "-f", "mp4", str(tmp)]
-        data = b"".join(np.ascontiguousarray(f[:h2, :w2]).tobytes() for f in frames)
-        subprocess.run(cmd, input=data, check=True)
-        ok = True
-    finally:
-        _commit(tmp, path, ok)
-    return path
+        raise RuntimeError("save_mp4 needs the ffmpeg executable on PATH (e.g. apt install ffmpeg); "
+                           "save_gif needs nothing extra")
+    if not fps > 0:
+        raise ValueError(f"fps must be positive, got {fps}")
+    it = _checked_frames(frames)
+    first = next(it)
+    h, w = first.shape[:2]
+    with _atomic_path(path) as tmp:
+        # yuv420p (what players expect) needs even sides: pad by a pixel where needed
+        cmd = [ffmpeg, "-hide_banner", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24",
+               "-s", f"{w}x{h}", "-framerate", f"{fps:g}", "-i", "-", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+               "-c:v", "libx264", "-pix_fmt", "yuv420p", "-f", "mp4", str(tmp)]
+        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        try:
+            for f in itertools.chain([first], it):
+                proc.stdin.write(f.tobytes())
+        except BrokenPipeError:
+            pass  # ffmpeg quit early; its exit status and stderr below say why
+        except BaseException:
+            proc.kill()  # a frame raised: stop ffmpeg, then the partial file is removed
+            raise
+        finally:
+            with suppress(BrokenPipeError):  # unflushed frames are lost anyway if ffmpeg is gone
+                proc.stdin.close()
+            err = proc.stderr.read().decode(errors="replace").strip()
+            proc.stderr.close()
+            proc.wait()
+        if proc.returncode != 0:
+            raise RuntimeError(f"ffmpeg failed (exit {proc.returncode}): {err}")
+    return Path(path)
 
 
 class PlannerAnimator:
-    """Frames of a planner as it grows: one Figure reused, only the edge collection's segments change."""
+    """Renders frames of a growing planner into one reused Figure.
 
-    def __init__(self, problem: Problem, size: tuple[float, float] = (5.0, 5.0), dpi: int = 80) -> None:
-        self.fig = new_figure(size, dpi)
+    The problem is drawn once; each frame only replaces the edge collection's segments and colours,
+    the last sample's marker, the path and a caption.
+
+    Args:
+        problem: The problem the planner solves.
+        size: Figure size in inches.
+        dpi: Pixels per inch of the frames.
+    """
+
+    def __init__(self, problem: Problem, size: tuple[float, float] | None = None, dpi: float = 80) -> None:
+        self.fig = new_figure(size or _figure_size(problem.world, 5.0), dpi, layout=None)
         self.ax = self.fig.add_axes((0, 0, 1, 1))
         self.ax.set_axis_off()
         draw_problem(self.ax, problem)
-        self.edges = [LineCollection([], colors=c, linewidths=0.6, zorder=2) for c in TREE_COLORS]
-        for lc in self.edges:
-            self.ax.add_collection(lc)
-        self.sample = self.ax.plot([], [], "x", color="black", markersize=6, zorder=7)[0]
-        self.path = self.ax.plot([], [], color=PATH_COLOR, linewidth=2.2, zorder=6)[0]
+        self.edges = LineCollection([], linewidths=0.7, zorder=2)
+        self.ax.add_collection(self.edges, autolim=False)
+        self.sample = self.ax.plot([], [], "x", color="black", markersize=7, markeredgewidth=1.5, zorder=8)[0]
+        self.path = draw_path(self.ax, np.empty((0, 2)))
+        self.caption = self.ax.text(0.01, 0.99, "", transform=self.ax.transAxes, va="top", ha="left", fontsize=10,
+                                    bbox=dict(facecolor="white", alpha=0.8, edgecolor="none"), zorder=9)
 
     def frame(self, planner: Planner, sample: np.ndarray | None = None) -> np.ndarray:
-        data = planner.planner_data()
-        seg = graph_segments(data)
-        tags = data.tags[data.edges[:, 1]] if len(data.edges) else np.empty(0, dtype=np.int64)
-        for t, lc in enumerate(self.edges):
-            lc.set_segments(seg[(tags % 2 if len(tags) else tags) == t] if len(seg) else [])
-        if sample is not None:
-            self.sample.set_data([sample[0]], [sample[1]])
-        else:
-            self.sample.set_data([], [])
+        """The planner's current graph (and ``sample``, if given) as a uint8 (H, W, 3) array."""
+        segments, colors = _edges(planner.planner_data())
+        self.edges.set_segments(segments)
+        self.edges.set_color(colors)
+        self.sample.set_data(([sample[0]], [sample[1]]) if sample is not None else ([], []))
         r = planner.result()
-        if r.solved:
-            self.path.set_data(r.path[:, 0], r.path[:, 1])
-        else:
-            self.path.set_data([], [])
+        self.path.set_data(r.path[:, 0], r.path[:, 1])  # empty until solved
+        outcome = f", cost {r.cost:.1f}" if r.solved else ""
+        self.caption.set_text(f"{planner.name}  iteration {r.iterations}{outcome}")
         return figure_to_array(self.fig)
 
 
-def animate_planner(planner: Planner, path: str | os.PathLike, *, every: int = 10, max_frames: int = 150,
-                    fps: float = 15, max_iterations: int = 20000) -> Path:
-    """Step ``planner`` until solved (or a cap), capturing a frame every ``every`` iterations.
+def animate_planner(planner: Planner, path: str | os.PathLike, *, every: int = 10, max_frames: int = 200,
+                    fps: float = 15, size: tuple[float, float] | None = None, dpi: float = 80) -> Path:
+    """Step a planner, capturing a frame every ``every`` iterations, and write the animation.
 
-    Writes a GIF, or an MP4 when ``path`` ends in ``.mp4``. The last frame shows the path.
+    Starts from the planner's current state (fresh or partly run) and stops once it is solved or
+    ``max_frames`` frames are captured (at most ``every * (max_frames - 1)`` iterations). Each frame
+    marks the latest sample; the final frame, with the path if one was found, is held for a second.
+
+    Args:
+        planner: The planner to run; it is advanced in place.
+        path: Output file: ``.gif`` (Pillow) or ``.mp4`` (needs ffmpeg).
+        every: Iterations between frames.
+        max_frames: Cap on captured frames, hence on iterations.
+        fps: Frames per second.
+        size: Figure size in inches; None fits the world in 5 inches.
+        dpi: Pixels per inch of the frames.
+
+    Returns:
+        The path written.
     """
-    anim = PlannerAnimator(planner.problem)
-    frames = [anim.frame(planner)]
-    step = None
-    while not planner.solved and planner.iterations < max_iterations:
-        step = planner.step()
-        if planner.iterations % every == 0:
-            if len(frames) >= max_frames:  # keep the animation bounded: sample frames more sparsely
-                every *= 2
-                frames = frames[::2]
-            frames.append(anim.frame(planner, step.sample))
-    frames += [anim.frame(planner)] * int(fps)  # hold the final picture for a second
-    if str(path).endswith(".mp4"):
-        return save_mp4(frames, path, fps)
-    return save_gif(frames, path, fps)
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"animate_planner writes .gif or .mp4 files, got {str(path)!r}")
+    if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
+        raise ValueError(f"every must be a positive integer, got {every!r}")
+    if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 1:
+        raise ValueError(f"max_frames must be a positive integer, got {max_frames!r}")
+    anim = PlannerAnimator(planner.problem, size, dpi)
+
+    def frames() -> Iterator[np.ndarray]:
+        # a generator: frames are rendered as the writer consumes them, never all held as RGB
+        frame = anim.frame(planner)
+        yield frame
+        for _ in range(max_frames - 1):
+            if planner.solved:
+                break
+            for _ in range(every):
+                step = planner.step()
+                if step.solved:
+                    break
+            frame = anim.frame(planner, None if step.solved else step.sample)
+            yield frame
+        for _ in range(max(1, round(fps))):
+            yield frame
+
+    save = save_mp4 if suffix == ".mp4" else save_gif
+    return save(frames(), path, fps)

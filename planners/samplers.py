@@ -8,9 +8,11 @@ calls ``draw(rng, n, view)`` whenever it needs samples:
 * one sample consumed is one planner iteration;
 * samples that do not depend on the tree can be returned ``n`` at a time, so the compiled loop runs
   uninterrupted; tree-dependent samplers read ``view`` and may return fewer;
-* a ``SampleBatch`` can mark samples as *anchored* (offsets from the tree vertex nearest the goal,
-  resolved by the planner when the sample is used, so a batch keeps following the tree's progress)
-  and can say how many raw candidates each sample cost (for samplers that discard candidates).
+* a ``SampleBatch`` can mark samples as *anchored*: offsets from the tree vertex nearest the goal,
+  in the world frame (``ANCHOR_WORLD``) or in the frame pointing from that vertex to the goal
+  (``ANCHOR_GOAL``), resolved by the planner when the sample is used, so a batch keeps following the
+  tree's progress; and it can say how many raw candidates each sample cost (for samplers that
+  discard candidates).
 """
 
 from __future__ import annotations
@@ -27,13 +29,20 @@ if TYPE_CHECKING:
     from planners.problem import Problem
 
 
+ANCHOR_NONE = 0
+ANCHOR_WORLD = 1
+ANCHOR_GOAL = 2
+
+
 @dataclass(frozen=True)
 class SampleBatch:
     """Samples with optional per-sample flags.
 
     Attributes:
-        points: (m, dim) states, or offsets where ``anchored`` is True.
-        anchored: (m,) bool or None; True rows are offsets from the progress anchor.
+        points: (m, dim) states, or offsets where ``anchored`` is non-zero.
+        anchored: (m,) int codes or bools, or None: ``ANCHOR_NONE`` (0, absolute), ``ANCHOR_WORLD``
+            (1 or True, offset from the progress anchor) or ``ANCHOR_GOAL`` (2, offset whose first two
+            coordinates are along and to the left of the anchor-to-goal direction).
         candidates: (m,) int or None; raw candidates drawn to produce each row (default 1).
     """
 

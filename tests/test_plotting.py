@@ -1,82 +1,305 @@
-"""Figures and animations: headless, atomic writes, pixels where the path is."""
+"""Figures and animations: headless, y downwards, pixels where the path is, atomic writes."""
 
 from __future__ import annotations
 
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
+from matplotlib.collections import LineCollection, PathCollection
+from matplotlib.colors import to_rgba, to_rgba_array
 from PIL import Image
 
-from planners import PRM, RRT, Circle, GeometricWorld, OccupancyGrid, Problem, Rectangle, RRTConnect
-from planners.plotting import PATH_COLOR, figure_to_array, plot, save_figure, save_gif
+from planners import (
+    PRM,
+    RRT,
+    Circle,
+    GeometricWorld,
+    OccupancyGrid,
+    PlannerData,
+    Problem,
+    Rectangle,
+    RRTConnect,
+    plotting,
+)
+from planners.plotting import (
+    PATH_COLOR,
+    TREE_COLORS,
+    animate_planner,
+    draw_graph,
+    figure_to_array,
+    new_figure,
+    plot,
+    save_figure,
+    save_gif,
+    save_mp4,
+)
+
+
+def _rgb(color: str) -> np.ndarray:
+    return np.array(to_rgba(color)[:3]) * 255
+
+
+def _near(img: np.ndarray, color: str, tol: float = 45) -> np.ndarray:
+    """Mask of pixels within ``tol`` (sum of channel differences) of ``color``."""
+    return np.abs(img.astype(float) - _rgb(color)).sum(axis=-1) < tol
+
+
+def _pixel(fig, img: np.ndarray, world, x: float, y: float) -> np.ndarray:
+    """The pixel showing world point (x, y), located from the axes box and the world size, y pointing down."""
+    box = fig.axes[0].get_window_extent()
+    w, h = world.bounds[1]
+    return img[int(img.shape[0] - box.y1 + y / h * box.height), int(box.x0 + x / w * box.width)]
 
 
 @pytest.fixture(scope="module")
-def solved():
+def grid_problem() -> Problem:
     obs = np.zeros((40, 40), bool)
-    obs[10:30, 18:22] = True
-    p = Problem(OccupancyGrid(obs), (5.5, 20.5), (35.5, 20.5), goal_tolerance=1.0)
-    planner = RRTConnect(p, step_size=3.0, seed=0)
-    planner.solve(max_iterations=5000)
-    return p, planner
+    obs[8:40, 18:22] = True  # a wall open at the top: the path must climb
+    obs[2:8, 2:10] = True  # top-left block: tells up from down
+    return Problem(OccupancyGrid(obs), (5.5, 30.5), (35.5, 30.5), goal_tolerance=1.5)
 
 
-def test_plot_and_save_png(solved, tmp_path):
-    p, planner = solved
-    fig = plot(p, planner)
-    out = save_figure(fig, tmp_path / "sub" / "fig.png")
+@pytest.fixture(scope="module")
+def rrt(grid_problem):
+    planner = RRT(grid_problem, step_size=3.0, seed=0)
+    assert planner.solve(max_iterations=20000).solved
+    return planner
+
+
+@pytest.fixture(scope="module")
+def connect(grid_problem):
+    planner = RRTConnect(grid_problem, step_size=3.0, seed=0)
+    assert planner.solve(max_iterations=20000).solved
+    return planner
+
+
+@pytest.fixture
+def fake_ffmpeg(tmp_path, monkeypatch):
+    """An 'ffmpeg' on PATH that copies stdin to its output file (or fails when asked to)."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    script = bin_dir / "ffmpeg"
+    script.write_text(
+        f"#!{sys.executable}\n"
+        "import os, sys\n"
+        "if os.environ.get('FAKE_FFMPEG_FAIL'):\n"
+        "    sys.exit('boom: no encoder')\n"
+        "args = sys.argv[1:]\n"
+        "data = sys.stdin.buffer.read()\n"
+        "open(args[-1], 'wb').write(args[args.index('-s') + 1].encode() + b'|' + data)\n"
+    )
+    script.chmod(0o755)
+    monkeypatch.setenv("PATH", str(bin_dir))
+    return tmp_path / "out"
+
+
+def test_plot_and_save_png(rrt, grid_problem, tmp_path):
+    fig = plot(grid_problem, rrt)
+    r = rrt.result()
+    assert fig.axes[0].get_title() == f"RRT: {r.iterations} iterations, cost {r.cost:.1f}"
+    out = save_figure(fig, tmp_path / "sub" / "fig.png", dpi=50)
     with Image.open(out) as img:
-        assert img.format == "PNG" and img.size[0] > 200
-    assert [f.name for f in out.parent.iterdir()] == ["fig.png"]  # no temp file left behind
+        assert img.format == "PNG"
+        assert img.size == tuple(np.round(fig.get_size_inches() * 50).astype(int))
+    assert [f.name for f in out.parent.iterdir()] == ["fig.png"]  # no temporary file left behind
 
 
-def test_path_pixels_are_drawn(solved):
-    p, planner = solved
-    rgb = np.array([int(PATH_COLOR[i:i + 2], 16) for i in (1, 3, 5)])
-    with_path = figure_to_array(plot(p, planner))
-    without = figure_to_array(plot(p))
-    assert with_path.dtype == np.uint8 and with_path.ndim == 3 and with_path.shape[2] == 3
-    near = lambda img: (np.abs(img.astype(int) - rgb).sum(axis=2) < 40).sum()  # noqa: E731
-    assert near(with_path) > near(without) + 200
+@pytest.mark.parametrize("suffix, magic", [(".pdf", b"%PDF"), (".svg", b"<?xml")])
+def test_save_vector_formats(grid_problem, tmp_path, suffix, magic):
+    out = save_figure(plot(grid_problem), tmp_path / f"fig{suffix}")
+    assert out.read_bytes().startswith(magic)
 
 
-def test_geometric_world_and_roadmap(tmp_path):
-    w = GeometricWorld(50, 30, [Circle(25, 15, 6), Rectangle(5, 20, 15, 25)])
-    p = Problem(w, (2, 2), (48, 28), goal_tolerance=1.0)
+def test_unsolved_title_and_result_without_planner(grid_problem, rrt):
+    planner = RRT(grid_problem, step_size=3.0, seed=0)
+    planner.solve(max_iterations=2)
+    assert plot(grid_problem, planner).axes[0].get_title() == "RRT: 2 iterations, not solved"
+    r = rrt.result()
+    assert plot(grid_problem, result=r).axes[0].get_title().startswith(f"RRT: {r.iterations} iterations, cost")
+
+
+def test_path_pixels_are_drawn_where_the_path_is(rrt, grid_problem):
+    fig = plot(grid_problem, rrt)
+    img = figure_to_array(fig)
+    w, h = fig.canvas.get_width_height()
+    assert img.dtype == np.uint8 and img.shape == (h, w, 3)
+    path = rrt.result().path
+    seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    s = np.concatenate([[0], np.cumsum(seg)])
+    # points along the path, away from the start and goal markers drawn on top of it
+    probes = [(np.interp(t, s, path[:, 0]), np.interp(t, s, path[:, 1])) for t in np.linspace(0.15, 0.85, 25) * s[-1]]
+    on_path = [_near(_pixel(fig, img, grid_problem.world, x, y), PATH_COLOR) for x, y in probes]
+    assert np.mean(on_path) > 0.9
+    fig0 = plot(grid_problem)  # same picture without a planner: those pixels are not path-coloured
+    img0 = figure_to_array(fig0)
+    assert not any(_near(_pixel(fig0, img0, grid_problem.world, x, y), PATH_COLOR) for x, y in probes)
+
+
+def test_y_grows_downwards_for_both_world_types():
+    obs = np.zeros((40, 40), bool)
+    obs[2:8, 2:10] = True
+    geo = GeometricWorld(40, 30, [Circle(6, 5, 3), Rectangle(30, 25, 38, 28)])
+    for world, (x, y) in ((OccupancyGrid(obs), (6, 5)), (geo, (6, 5))):
+        ax = new_figure().add_subplot()
+        plotting.draw_world(ax, world)
+        fig = ax.figure
+        img = figure_to_array(fig)
+        w, h = world.bounds[1]
+        assert ax.yaxis_inverted() and ax.get_xlim() == (0, w) and ax.get_ylim() == (h, 0)
+        assert _near(_pixel(fig, img, world, x, y), plotting.OBSTACLE_COLOR)  # obstacle near the top is dark
+        assert _near(_pixel(fig, img, world, x, h - y), "white")  # its mirror image is free
+        assert img[: img.shape[0] // 2].mean() < img[img.shape[0] // 2 :].mean()  # more ink in the top half
+
+
+def test_tree_edges_and_tags(connect, rrt):
+    for planner, expected_tags in ((rrt, {0}), (connect, {0, 1})):
+        data = planner.planner_data()
+        ax = new_figure().add_subplot()
+        lc = draw_graph(ax, data)
+        segments = lc.get_segments()
+        assert isinstance(lc, LineCollection) and len(segments) == len(data.edges)
+        a, b = data.edges[-1]
+        np.testing.assert_allclose(segments[-1], data.vertices[[a, b]])
+        colors = lc.get_colors()
+        tags = data.tags[data.edges[:, 1]]
+        assert set(tags.tolist()) == expected_tags
+        for t in expected_tags:  # one colour per tree
+            np.testing.assert_allclose(colors[tags == t], np.tile(to_rgba(TREE_COLORS[t]), ((tags == t).sum(), 1)))
+
+
+def test_roadmap_vertices_hidden_when_many():
+    rng = np.random.default_rng(0)
+    big = PlannerData(rng.uniform(1, 39, (6000, 2)), rng.integers(0, 6000, (9000, 2)), np.zeros(6000, np.int64))
+    ax = new_figure().add_subplot()
+    assert len(draw_graph(ax, big, color="black").get_segments()) == 9000
+    assert not [c for c in ax.collections if isinstance(c, PathCollection)]
+    np.testing.assert_allclose(ax.collections[0].get_colors(), to_rgba_array("black"))
+    draw_graph(ax, big, show_vertices=True)
+    dots = [c for c in ax.collections if isinstance(c, PathCollection)]
+    assert len(dots) == 1 and len(dots[0].get_offsets()) == 6000
+    small = PlannerData(big.vertices[:10], np.array([[0, 1], [1, 2]]), np.zeros(10, np.int64))
+    ax = new_figure().add_subplot()
+    draw_graph(ax, small)
+    assert [len(c.get_offsets()) for c in ax.collections if isinstance(c, PathCollection)] == [10]
+
+
+def test_prm_on_geometric_world(tmp_path):
+    world = GeometricWorld(50, 30, [Circle(25, 15, 6), Rectangle(5, 20, 15, 25), Rectangle(35, 0, 38, 12)])
+    p = Problem(world, (2, 2), (48, 28), goal_tolerance=1.0, metric="chebyshev")
     planner = PRM(p, seed=1)
     planner.solve(max_iterations=2000)
-    assert save_figure(plot(p, planner), tmp_path / "g.svg").read_text().startswith("<?xml")
+    fig = plot(p, planner)
+    w, h = fig.canvas.get_width_height()
+    assert w > h  # the figure follows the world's shape
+    with Image.open(save_figure(fig, tmp_path / "prm.png", dpi=40)) as img:
+        assert img.size == (w * 40 // 100, h * 40 // 100)
 
 
-def test_gif_has_frames_and_failures_leave_nothing(tmp_path, solved):
-    p, _ = solved
-    frames = [figure_to_array(plot(p, title=f"frame {i}")) for i in range(3)]  # identical frames get merged
-    out = save_gif(frames, tmp_path / "a.gif", fps=5)
+def test_rendering_in_threads_matches_serial(grid_problem, rrt):
+    serial = figure_to_array(plot(grid_problem, rrt))
+    with ThreadPoolExecutor(2) as pool:
+        images = list(pool.map(lambda _: figure_to_array(plot(grid_problem, rrt)), range(2)))
+    for img in images:
+        np.testing.assert_array_equal(img, serial)
+
+
+def _frames(n: int) -> list[np.ndarray]:
+    return [np.full((20, 30, 3), 40 * i, np.uint8) for i in range(n)]
+
+
+def test_save_gif_writes_frames(tmp_path):
+    out = save_gif(iter(_frames(3)), tmp_path / "a.gif", fps=5)
     with Image.open(out) as img:
-        assert img.n_frames == 3
+        assert img.n_frames == 3 and img.size == (30, 20) and img.info["duration"] == 200
+    assert [f.name for f in tmp_path.iterdir()] == ["a.gif"]
+
+
+def test_failed_writes_leave_old_file_and_no_debris(tmp_path, grid_problem):
+    target = save_gif(_frames(2), tmp_path / "a.gif")
+    before = target.read_bytes()
 
     def broken():
-        yield frames[0]
+        yield from _frames(2)
         raise RuntimeError("renderer crashed")
 
     with pytest.raises(RuntimeError, match="crashed"):
+        save_gif(broken(), target)
+    with pytest.raises(RuntimeError, match="crashed"):
         save_gif(broken(), tmp_path / "b.gif")
-    assert sorted(f.name for f in tmp_path.iterdir()) == ["a.gif"]
+    with pytest.raises(ValueError, match="uint8"):
+        save_gif([np.zeros((20, 30, 3))], tmp_path / "c.gif")
+    with pytest.raises(ValueError, match="no frames"):
+        save_gif([], tmp_path / "d.gif")
+
+    fig = plot(grid_problem)
+
+    def half_written(fname, **kw):
+        with open(fname, "wb") as f:
+            f.write(b"\x89PNG half")
+        raise OSError("disk full")
+
+    fig.savefig = half_written
+    with pytest.raises(OSError, match="disk full"):
+        save_figure(fig, tmp_path / "fig.png")
+    assert target.read_bytes() == before
+    assert [f.name for f in tmp_path.iterdir()] == ["a.gif"]
 
 
-def test_animate_planner(tmp_path):
-    from planners.plotting import animate_planner
+def test_save_mp4_needs_ffmpeg(tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path / "nowhere"))
+    with pytest.raises(RuntimeError, match="ffmpeg"):
+        save_mp4(_frames(2), tmp_path / "a.mp4")
+    assert not list(tmp_path.iterdir())
 
-    obs = np.zeros((30, 30), bool)
-    p = Problem(OccupancyGrid(obs), (2.5, 2.5), (27.5, 27.5), goal_tolerance=2.0)
-    out = animate_planner(RRT(p, step_size=3.0, seed=0), tmp_path / "rrt.gif", every=2, fps=4)
+
+def test_save_mp4_pipes_frames_to_ffmpeg(fake_ffmpeg, monkeypatch):
+    frames = _frames(4)
+    out = save_mp4(frames, fake_ffmpeg / "a.mp4", fps=10)
+    assert out.read_bytes() == b"30x20|" + b"".join(f.tobytes() for f in frames)
+    monkeypatch.setenv("FAKE_FFMPEG_FAIL", "1")
+    with pytest.raises(RuntimeError, match="boom: no encoder"):
+        save_mp4(frames * 50, fake_ffmpeg / "b.mp4")
+    assert [f.name for f in fake_ffmpeg.iterdir()] == ["a.mp4"]
+
+
+@pytest.mark.skipif(plotting.shutil.which("ffmpeg") is None, reason="ffmpeg not installed")
+def test_save_mp4_with_real_ffmpeg(tmp_path):
+    frames = [np.full((21, 31, 3), 50 * i, np.uint8) for i in range(5)]
+    out = save_mp4(frames, tmp_path / "odd.mp4")  # odd sides are padded for yuv420p
+    assert out.stat().st_size > 0 and out.read_bytes()[4:8] == b"ftyp"
+
+
+def test_animate_planner_reuses_one_figure(grid_problem, tmp_path, monkeypatch):
+    made = []
+    monkeypatch.setattr(plotting, "new_figure", lambda *a, **k: made.append(1) or new_figure(*a, **k))
+    planner = RRT(grid_problem, step_size=3.0, seed=0)
+    planner.solve(max_iterations=10)  # a partly run planner continues from where it is
+    out = animate_planner(planner, tmp_path / "rrt.gif", every=10, max_frames=500, fps=4)
+    assert planner.solved and made == [1]
     with Image.open(out) as img:
-        assert img.n_frames > 4
+        assert img.size == (400, 400) and img.n_frames > 4
+        first = np.asarray(img.convert("RGB"))
+        img.seek(img.n_frames - 1)
+        last = np.asarray(img.convert("RGB"))
+        assert img.info["duration"] >= 1000  # the final picture is held
+    assert _near(last, PATH_COLOR, 60).sum() > 100 and not _near(first, PATH_COLOR, 60).any()
 
 
-def test_import_planners_does_not_load_heavy_modules():
-    code = ("import sys, planners; heavy = [m for m in ('matplotlib', 'torch', 'gymnasium', 'ompl') "
-            "if m in sys.modules]; assert not heavy, heavy")
+def test_animate_planner_frame_cap_and_mp4(grid_problem, fake_ffmpeg):
+    planner = RRT(grid_problem, step_size=3.0, seed=0)
+    out = animate_planner(planner, fake_ffmpeg / "rrt.mp4", every=1, max_frames=3, fps=4, dpi=20)
+    assert planner.iterations == 2 and not planner.solved
+    size, data = out.read_bytes().split(b"|", 1)
+    frames = np.frombuffer(data, np.uint8).reshape(-1, 100, 100, 3)
+    assert size == b"100x100" and len(frames) == 3 + 4  # the last frame is held for a second
+    assert (frames[0] != frames[1]).any() and (frames[2:] == frames[2]).all()
+    with pytest.raises(ValueError, match=".gif or .mp4"):
+        animate_planner(planner, fake_ffmpeg / "rrt.avi")
+
+
+def test_import_planners_does_not_load_matplotlib():
+    code = "import sys, planners; loaded = {'matplotlib', 'PIL'} & set(sys.modules); assert not loaded, loaded"
     subprocess.run([sys.executable, "-c", code], check=True)
