@@ -18,7 +18,7 @@ from gymnasium import spaces
 
 from planners import SamplerBase
 
-ACTION_MODES = ("point", "bias", "mixture", "relative")
+ACTION_MODES = ("point", "bias", "mixture", "relative", "guided")
 
 
 class ActionSampler(SamplerBase):
@@ -152,9 +152,41 @@ class RelativeAction(ActionSampler):
         return q
 
 
+class GuidedAction(ActionSampler):
+    """``guided``: ``Discrete(N_ACTIONS)``, an egocentric log-polar cell ahead of the tree's progress
+    vertex or the tree's frontier (see ``envs.guided``). The environment attaches the episode's
+    ``GuidedSampling`` as ``guide``.
+    """
+
+    guide = None
+
+    def action_space(self, dim: int) -> spaces.Discrete:
+        from envs.guided import N_ACTIONS
+
+        return spaces.Discrete(N_ACTIONS)
+
+    def set_action(self, action) -> None:
+        from envs.guided import N_ACTIONS
+
+        a = np.asarray(action)
+        if a.size != 1 or not np.issubdtype(a.dtype, np.integer) and not (np.isfinite(a).all() and float(a) == int(a)):
+            raise ValueError(f"guided action must be one integer in [0, {N_ACTIONS}), got {action!r}")
+        a = int(a.reshape(-1)[0])
+        if not 0 <= a < N_ACTIONS:
+            raise ValueError(f"guided action must lie in [0, {N_ACTIONS}), got {a}")
+        self.action = a
+
+    def draw(self, rng, n, view):
+        if self.action is None or self.guide is None:
+            raise RuntimeError("set_action must be called (and the guide attached) before the planner steps")
+        self.guide.update(view)
+        return self.guide.samples(np.array([self.action]), rng)
+
+
 def make_action_sampler(mode: str, step_size: float, uniform_floor: float = 0.05, **kwargs) -> ActionSampler:
     """The ``ActionSampler`` for an action-mode name."""
-    classes = {"point": PointAction, "bias": BiasAction, "mixture": MixtureAction, "relative": RelativeAction}
+    classes = {"point": PointAction, "bias": BiasAction, "mixture": MixtureAction, "relative": RelativeAction,
+               "guided": GuidedAction}
     if mode not in classes:
         raise ValueError(f"action_mode must be one of {ACTION_MODES}, got {mode!r}")
     return classes[mode](step_size, uniform_floor, **kwargs)

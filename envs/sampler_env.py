@@ -16,6 +16,33 @@ from planners import PRM, RRT, LazyPRM, OccupancyGrid, Planner, Problem, RRTConn
 PLANNERS = {"rrt": RRT, "rrtstar": RRTStar, "prm": PRM, "rrtconnect": RRTConnect, "lazyprm": LazyPRM}
 
 
+class EgocentricObservation:
+    """``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``: windows around the progress vertex at 1/4,
+    1 and 4 steps per pixel (obstacles and tree), turned towards the goal, and vector features (see
+    ``envs.egocentric``); the same on maps of every size.
+    """
+
+    def __init__(self, env: SamplerEnv) -> None:
+        from envs.egocentric import EGO_VECTOR
+
+        self.env = env
+        self.space = gym.spaces.Dict({
+            "local": gym.spaces.Box(0, 255, (6, 16, 16), np.uint8),
+            "vector": gym.spaces.Box(-1.0, 1.0, (len(EGO_VECTOR),), np.float32),
+        })
+
+    def reset(self, problem: Problem, max_iterations: int) -> None:
+        """The episode's ``GuidedSampling`` holds the state."""
+
+    def update(self, planner: Planner) -> None:
+        self.env._guide.update(planner.view())
+
+    def build(self, planner: Planner) -> dict:
+        obs = self.env._guide.observe(planner.view())
+        obs["vector"] = np.clip(obs["vector"], -1.0, 1.0)
+        return obs
+
+
 class SamplerEnv(gym.Env):
     """A sampling-based planner whose sampler is the agent.
 
@@ -30,14 +57,18 @@ class SamplerEnv(gym.Env):
     ``point`` (k = d): the sample itself, mapped to the map bounds; ``bias`` (k = 1): this
     iteration's goal-bias probability; ``mixture`` (k = d + 2): a Gaussian's mean, spread and weight
     against uniform sampling (with a uniform floor); ``relative`` (k = d + 1): an offset and spread
-    from the tree vertex nearest the goal. Out-of-range actions are clipped to [-1, 1]; NaN or
-    wrongly shaped actions raise ``ValueError``.
+    from the tree vertex nearest the goal. ``guided``: ``Discrete(177)``, a log-polar cell in the
+    frame from the tree's progress vertex towards the goal, or the tree's frontier (``envs.guided``).
+    Out-of-range continuous actions are clipped to [-1, 1]; NaN, wrongly shaped or out-of-range
+    discrete actions raise ``ValueError``.
 
     ## Observation Space
     Occupancy-grid problems: ``Dict(image=(4, S, S) uint8, local=(4, L, L) uint8, vector=(11,)
     float32)`` (channels: obstacles, tree, start, goal; see ``envs.observation.GridObservation``),
-    accepted by SB3's ``MultiInputPolicy`` and custom extractors. Other worlds (geometric, 6-DoF
-    rigid body): a ``Box`` vector (``VectorObservation``).
+    accepted by SB3's ``MultiInputPolicy`` and custom extractors. ``observation="egocentric"``:
+    ``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``, multi-scale windows around the progress
+    vertex turned towards the goal (``EgocentricObservation``). Other worlds (geometric, 6-DoF rigid
+    body): a ``Box`` vector (``VectorObservation``).
 
     ## Rewards
     -1 per iteration, so the return is minus the iterations-to-solution; ``reward="checks"`` adds
@@ -60,7 +91,8 @@ class SamplerEnv(gym.Env):
     ``"movingai"``, ``"files"`` or a callable ``np_random -> Problem``; ``source_kwargs`` configure it.
     ``planner``: ``rrt``, ``rrtstar``, ``prm``, ``rrtconnect``, ``lazyprm``. ``step_size``,
     ``max_iterations``, ``action_mode``, ``uniform_floor``, ``reach`` (relative mode),
-    ``obs_size``, ``local_size``, ``local_scale``, ``reward``, ``checks_weight``, ``shaping``,
+    ``observation`` (``image`` or ``egocentric``), ``obs_size``, ``local_size``, ``local_scale``,
+    ``reward``, ``checks_weight``, ``shaping``,
     ``shaping_gamma``, ``render_mode`` (``rgb_array`` or ``human``).
 
     ## Version History
@@ -79,6 +111,7 @@ class SamplerEnv(gym.Env):
         action_mode: str = "point",
         uniform_floor: float = 0.05,
         reach: float = 3.0,
+        observation: str = "image",
         obs_size: int = 64,
         local_size: int = 32,
         local_scale: int = 1,
@@ -94,6 +127,8 @@ class SamplerEnv(gym.Env):
             raise ValueError(f"planner must be one of {sorted(PLANNERS)}, got {planner!r}")
         if action_mode not in ACTION_MODES:
             raise ValueError(f"action_mode must be one of {ACTION_MODES}, got {action_mode!r}")
+        if observation not in ("image", "egocentric"):
+            raise ValueError(f"observation must be 'image' or 'egocentric', got {observation!r}")
         if reward not in ("iterations", "checks"):
             raise ValueError(f"reward must be 'iterations' or 'checks', got {reward!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -113,7 +148,14 @@ class SamplerEnv(gym.Env):
         self._action_sampler = make_action_sampler(action_mode, self.step_size, uniform_floor,
                                                    **({"reach": reach} if action_mode == "relative" else {}))
         self.dim = int(dim if dim is not None else getattr(self.source, "dim", 2))
-        if self.dim == 2:
+        self.observation = observation
+        self.uniform_floor = float(uniform_floor)
+        self._guide = None
+        if (observation == "egocentric" or action_mode == "guided") and self.dim != 2:
+            raise ValueError("egocentric observations and guided actions are defined for 2-D grid problems")
+        if observation == "egocentric":
+            self._obs = EgocentricObservation(self)
+        elif self.dim == 2:
             self._obs = GridObservation(obs_size, local_size, local_scale)
         else:
             self._obs = VectorObservation(self.dim, angle_dims=3 if self.dim == 6 else 0)
@@ -135,6 +177,12 @@ class SamplerEnv(gym.Env):
         cls = PLANNERS[self.planner_name]
         kw = {} if cls in (PRM, LazyPRM) else {"step_size": self.step_size}
         self.planner = cls(problem, sampler=self._action_sampler, seed=int(self.np_random.integers(2**63)), **kw)
+        if self.observation == "egocentric" or self.action_mode == "guided":
+            from envs.guided import GuidedSampling
+
+            self._guide = GuidedSampling(problem, self.step_size, max_iterations=self.max_iterations,
+                                         uniform_floor=self.uniform_floor)
+            self.planner.sampler.guide = self._guide
         self._obs.reset(problem, self.max_iterations)
         self._obs.update(self.planner)
         self._potential = self._geodesic_potential_init() if self.shaping else 0.0
@@ -230,6 +278,11 @@ class SamplerEnv(gym.Env):
         if added >= 0:
             self._best_geo = min(self._best_geo, self._field_at(self.planner.view().vertices[added]))
         return -self._best_geo / self.step_size
+
+    @property
+    def guide(self):
+        """The episode's ``GuidedSampling`` (egocentric observation and guided actions), or None."""
+        return self._guide
 
     def __getstate__(self):
         state = self.__dict__.copy()

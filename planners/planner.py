@@ -203,7 +203,7 @@ class Planner(abc.ABC):
         self.sampler = self._sampler_spec.bind(self.problem)
         self._buf_pts = np.empty((0, self.problem.dim))
         self._buf_anch = np.empty(0, dtype=np.int8)
-        self._buf_cand = np.empty(0, dtype=np.int64)
+        self._buf_cand: np.ndarray | None = None
         self._pos = 0
         self._refills = 0
         self._time = 0.0
@@ -356,20 +356,29 @@ class Planner(abc.ABC):
             pts, anch, cand = out.points, out.anchored, out.candidates
         else:
             pts, anch, cand = out, None, None
-        pts = np.ascontiguousarray(pts, dtype=np.float64)
+        if not (isinstance(pts, np.ndarray) and pts.dtype == np.float64 and pts.flags.c_contiguous):
+            pts = np.ascontiguousarray(pts, dtype=np.float64)
         who = type(self.sampler).__name__
         if pts.ndim != 2 or pts.shape[1] != self.problem.dim or not (1 <= len(pts) <= n):
             raise ValueError(f"{who}.draw(n={n}) must return 1..{n} samples of dimension {self.problem.dim}, got shape {pts.shape}")
-        if not np.all(np.isfinite(pts)):
+        if not np.isfinite(pts.sum()):  # one reduction: any NaN or infinity makes the sum non-finite
             raise ValueError(f"{who}.draw returned a NaN or infinite sample")
         m = len(pts)
-        anch = np.zeros(m, dtype=np.int8) if anch is None else np.ascontiguousarray(anch, dtype=np.int8)
-        cand = np.ones(m, dtype=np.int64) if cand is None else np.ascontiguousarray(cand, dtype=np.int64)
-        if anch.shape != (m,) or cand.shape != (m,):
-            raise ValueError(f"{who}.draw returned anchored/candidates flags that do not match {m} samples")
-        if anch.min() < 0 or anch.max() > 2:
-            raise ValueError(f"{who}.draw returned anchored codes outside 0..2")
-        self._buf_pts, self._buf_anch, self._buf_cand, self._pos = pts, anch, cand, 0
+        if anch is None:
+            anch = np.zeros(m, dtype=np.int8)
+        else:
+            if not (isinstance(anch, np.ndarray) and anch.dtype == np.int8):
+                anch = np.ascontiguousarray(anch, dtype=np.int8)
+            if anch.shape != (m,) or anch.min() < 0 or anch.max() > 2:
+                raise ValueError(f"{who}.draw returned anchored flags that are not {m} codes in 0..2")
+        if cand is None:
+            self._buf_cand = None
+        else:
+            cand = np.ascontiguousarray(cand, dtype=np.int64)
+            if cand.shape != (m,):
+                raise ValueError(f"{who}.draw returned candidate counts that do not match {m} samples")
+            self._buf_cand = cand
+        self._buf_pts, self._buf_anch, self._pos = pts, anch, 0
 
     def _consume(self, n: int) -> int:
         # refill sizes follow a fixed schedule: when refills happen (and what a tree-dependent
@@ -381,6 +390,6 @@ class Planner(abc.ABC):
         end = min(self._pos + n, len(self._buf_pts))
         self._reserve(end - self._pos)
         used = self._run(self._buf_pts[self._pos:end], self._buf_anch[self._pos:end])
-        self._candidates += int(self._buf_cand[self._pos:self._pos + used].sum())
+        self._candidates += used if self._buf_cand is None else int(self._buf_cand[self._pos:self._pos + used].sum())
         self._pos += used
         return used

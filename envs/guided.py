@@ -1,0 +1,196 @@
+"""The guided action space: egocentric sample cells around the tree's progress, or the frontier.
+
+An action is one of ``N_ACTIONS`` classes:
+
+* ``0 .. N_EGO - 1``: a cell of a log-polar grid (16 directions x 11 rings out to 24 steps) in the
+  frame that points from the tree vertex nearest the goal towards the goal. The sample is a uniform
+  point of that cell, kept as an offset (``ANCHOR_GOAL``) so the planner resolves it against the
+  progress vertex current when the sample is used: a batch keeps following the tree.
+* ``FRONTIER``: a point in a frontier cell of the tree (see ``envs.frontier``), cells nearer the goal
+  preferred.
+
+Whatever the class, a ``uniform_floor`` share of samples is uniform over the map, so probabilistic
+completeness is never lost. The same object serves the environment's ``guided`` action mode and the
+learned ``PolicySampler``, so training and inference draw samples identically.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from envs.egocentric import EgocentricView
+from envs.frontier import Frontier
+from planners import Problem, SampleBatch, TreeView
+
+ANGLES = 16
+RINGS = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0)  # in steps
+N_EGO = ANGLES * (len(RINGS) - 1)
+FRONTIER = N_EGO
+N_ACTIONS = N_EGO + 1
+_RINGS = np.asarray(RINGS)
+
+
+@nb.njit(cache=True)
+def _fill_samples(classes, u, uni, front, low, high, step, rings, angles, floor, pts, anch):
+    """Turn classes into samples: egocentric cells (goal-frame offsets), frontier points, uniform floor.
+
+    ``u`` holds 3 uniforms per sample, ``uni`` 2 more for the uniform fallback, ``front`` the frontier
+    points drawn for this batch (fewer than needed when the frontier is empty).
+    """
+    n_ego = angles * (rings.shape[0] - 1)
+    for k in range(classes.shape[0]):
+        c = classes[k]
+        if u[k, 2] < floor or (c >= n_ego and k >= front.shape[0]):
+            pts[k, 0] = low[0] + (high[0] - low[0]) * uni[k, 0]
+            pts[k, 1] = low[1] + (high[1] - low[1]) * uni[k, 1]
+            anch[k] = 0
+        elif c >= n_ego:
+            pts[k, 0] = front[k, 0]
+            pts[k, 1] = front[k, 1]
+            anch[k] = 0
+        else:
+            ring = c // angles
+            ang = c % angles
+            r = (rings[ring] + u[k, 0] * (rings[ring + 1] - rings[ring])) * step
+            a = (ang + u[k, 1]) * (2.0 * math.pi / angles)
+            pts[k, 0] = r * math.cos(a)
+            pts[k, 1] = r * math.sin(a)
+            anch[k] = 2  # ANCHOR_GOAL
+
+
+@nb.njit(cache=True)
+def fill_from_logits(logits, temperature, u, low, high, step, rings, angles, floor, fcell, fW, front, fcount, fdist, ftau,
+                     pts, anch):
+    """Draw a class per row of ``u`` from softmax(logits / temperature) and turn it into a sample.
+
+    ``u`` holds 6 uniforms per sample: class, ring position, angle position, floor test, and two for
+    a uniform or frontier point. One compiled call per batch: the sampler's whole per-batch work.
+    """
+    n_ego = angles * (rings.shape[0] - 1)
+    m = logits.max()
+    cdf = np.empty(logits.shape[0])
+    acc = 0.0
+    for i in range(logits.shape[0]):
+        acc += math.exp((logits[i] - m) / temperature)
+        cdf[i] = acc
+    # frontier cell weights (goal preference), as in envs.frontier
+    fcdf = np.empty(max(fcount, 1))
+    facc = 0.0
+    if fcount > 0:
+        dmin = np.inf
+        for i in range(fcount):
+            dmin = min(dmin, fdist[front[i]])
+        for i in range(fcount):
+            facc += math.exp(-(fdist[front[i]] - dmin) / ftau)
+            fcdf[i] = facc
+    for k in range(u.shape[0]):
+        t = u[k, 0] * acc
+        lo, hi = 0, logits.shape[0] - 1
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if cdf[mid] < t:
+                lo = mid + 1
+            else:
+                hi = mid
+        c = lo
+        if u[k, 3] < floor or (c >= n_ego and fcount == 0):
+            pts[k, 0] = low[0] + (high[0] - low[0]) * u[k, 4]
+            pts[k, 1] = low[1] + (high[1] - low[1]) * u[k, 5]
+            anch[k] = 0
+        elif c >= n_ego:
+            t = u[k, 1] * facc
+            lo, hi = 0, fcount - 1
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if fcdf[mid] < t:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            f = front[lo]
+            pts[k, 0] = (f % fW + u[k, 4]) * fcell
+            pts[k, 1] = (f // fW + u[k, 5]) * fcell
+            anch[k] = 0
+        else:
+            ring = c // angles
+            ang = c % angles
+            r = (rings[ring] + u[k, 1] * (rings[ring + 1] - rings[ring])) * step
+            a = (ang + u[k, 2]) * (2.0 * math.pi / angles)
+            pts[k, 0] = r * math.cos(a)
+            pts[k, 1] = r * math.sin(a)
+            anch[k] = 2  # ANCHOR_GOAL
+
+
+def ego_class(dx: float, dy: float, step: float) -> int:
+    """Class of an offset given in the goal frame (world units); beyond the last ring -> last ring."""
+    r = math.hypot(dx, dy) / step
+    ring = min(len(RINGS) - 2, int(np.searchsorted(_RINGS, r, side="right")) - 1)
+    a = math.atan2(dy, dx) % (2 * math.pi)
+    return ring * ANGLES + int(a / (2 * math.pi) * ANGLES) % ANGLES
+
+
+class GuidedSampling:
+    """Egocentric observation, frontier and action geometry for one 2-D grid problem.
+
+    Args:
+        problem: An ``OccupancyGrid`` problem.
+        step_size: The planner's step (rings and window scales are in steps).
+        scales: Egocentric window scales, in steps per pixel.
+        size: Window side in pixels.
+        max_iterations: Normalises the iteration feature.
+        tau: Frontier goal preference (cells).
+        uniform_floor: Share of uniform samples whatever the class.
+    """
+
+    def __init__(self, problem: Problem, step_size: float, *, scales=(0.25, 1.0, 4.0), size: int = 16,
+                 max_iterations: int = 20000, tau: float = 1.0, uniform_floor: float = 0.05) -> None:
+        self.problem, self.step = problem, float(step_size)
+        res = problem.world.resolution
+        cells = tuple(max(1, int(round(s * self.step / res))) for s in scales)
+        self.ego = EgocentricView(problem, self.step, scales=cells, size=size, max_iterations=max_iterations)
+        self.frontier = Frontier(problem, self.step, tau)
+        self.uniform_floor = float(uniform_floor)
+        self.low, self.high = (np.asarray(b, dtype=np.float64) for b in problem.world.bounds)
+
+    def update(self, view: TreeView) -> None:
+        self.ego.update(view.vertices, view.num_vertices, view.best_distance, view.iteration)
+        self.frontier.update(view.vertices, view.num_vertices)
+
+    def samples_from_logits(self, logits: np.ndarray, temperature: float, m: int, rng: np.random.Generator) -> SampleBatch:
+        """``m`` samples whose classes are drawn from softmax(logits / temperature), in one compiled call."""
+        pts = np.empty((m, 2))
+        anch = np.empty(m, dtype=np.int8)
+        fr = self.frontier
+        fill_from_logits(logits, temperature, rng.random((m, 6)), self.low, self.high, self.step, _RINGS, ANGLES,
+                         self.uniform_floor, fr.cell, fr.W, fr.front, fr.count, fr.dist, fr.tau, pts, anch)
+        return SampleBatch(pts, anch)
+
+    def stuck(self, view: TreeView) -> int:
+        """Iterations since the progress vertex last came closer to the goal."""
+        return view.iteration - self.ego.last_progress
+
+    def observe(self, view: TreeView) -> dict[str, np.ndarray]:
+        anchor = view.vertices[view.best_vertex]
+        return self.ego.observe(anchor, view.best_vertex, view.num_vertices, view.iteration)
+
+    def classify(self, view: TreeView, target: np.ndarray) -> int:
+        """The egocentric class containing world point ``target``."""
+        anchor = view.vertices[view.best_vertex]
+        ux, uy = self.ego.frame(anchor)
+        d = np.asarray(target[:2]) - anchor[:2]
+        return ego_class(d[0] * ux + d[1] * uy, -d[0] * uy + d[1] * ux, self.step)
+
+    def samples(self, classes: np.ndarray, rng: np.random.Generator) -> SampleBatch:
+        """One sample per class (a fixed number of random draws per sample, whatever its class)."""
+        classes = np.ascontiguousarray(classes, dtype=np.int64).reshape(-1)
+        m = len(classes)
+        u = rng.random((m, 3))
+        uni = rng.random((m, 2))
+        front = self.frontier.sample(rng, m)
+        pts = np.empty((m, 2))
+        anch = np.empty(m, dtype=np.int8)
+        _fill_samples(classes, u, uni, front, self.low, self.high, self.step, _RINGS, ANGLES, self.uniform_floor,
+                      pts, anch)
+        return SampleBatch(pts, anch)

@@ -1,0 +1,103 @@
+"""The trained actor re-implemented in numba, for inference inside planners.
+
+A torch forward pass of even a tiny network costs tens of microseconds of framework overhead, which
+is more than the planner spends on dozens of iterations. The actor (extractor, policy MLP, action
+logits) is a fixed stack of convolutions and linear layers, so its weights are copied out of the SB3
+state dict and evaluated here; ``tests/test_learning.py`` checks the logits match torch's.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+#: State-dict keys of the actor, in evaluation order (SB3 ActorCriticPolicy with EgocentricExtractor).
+ACTOR_KEYS = (
+    "pi_features_extractor.cnn.0.weight", "pi_features_extractor.cnn.0.bias",
+    "pi_features_extractor.cnn.2.weight", "pi_features_extractor.cnn.2.bias",
+    "pi_features_extractor.vec.0.weight", "pi_features_extractor.vec.0.bias",
+    "pi_features_extractor.head.0.weight", "pi_features_extractor.head.0.bias",
+    "mlp_extractor.policy_net.0.weight", "mlp_extractor.policy_net.0.bias",
+    "action_net.weight", "action_net.bias",
+)
+
+
+@nb.njit(cache=True, fastmath=True)
+def _patch_conv_relu(x, w, b, k):
+    """Convolution with kernel == stride k as patches (im2col) times a (out, in * k * k) matrix, ReLU.
+
+    Each output is then one contiguous dot product, which LLVM vectorises.
+    """
+    ci, hi, wi = x.shape
+    ho, wo = hi // k, wi // k
+    n = ci * k * k
+    patch = np.empty(n, dtype=np.float32)
+    out = np.empty((w.shape[0], ho, wo), dtype=np.float32)
+    for i in range(ho):
+        for j in range(wo):
+            t = 0
+            for c in range(ci):
+                for di in range(k):
+                    for dj in range(k):
+                        patch[t] = x[c, i * k + di, j * k + dj]
+                        t += 1
+            for o in range(w.shape[0]):
+                s = b[o]
+                for q in range(n):
+                    s += w[o, q] * patch[q]
+                out[o, i, j] = s if s > 0.0 else 0.0
+    return out
+
+
+@nb.njit(cache=True, fastmath=True)
+def _linear(x, w, b, relu):
+    out = np.empty(w.shape[0], dtype=np.float32)
+    for o in range(w.shape[0]):
+        s = b[o]
+        for i in range(w.shape[1]):
+            s += w[o, i] * x[i]
+        out[o] = s if (s > 0.0 or not relu) else 0.0
+    return out
+
+
+@nb.njit(cache=True, fastmath=True)
+def actor_logits(local, vector, k1, k2, c1w, c1b, c2w, c2b, vw, vb, hw, hb, pw, pb, aw, ab):
+    """Action logits for one observation (``local`` uint8 (C, 16, 16), ``vector`` float32).
+
+    ``c1w``/``c2w`` are the convolution kernels flattened to (out, in * k * k).
+    """
+    x = local.astype(np.float32) * np.float32(1.0 / 255.0)
+    h = _patch_conv_relu(x, c1w, c1b, k1)
+    h = _patch_conv_relu(h, c2w, c2b, k2)
+    flat = h.reshape(-1)
+    v = _linear(vector, vw, vb, True)
+    z = np.empty(flat.shape[0] + v.shape[0], dtype=np.float32)
+    z[: flat.shape[0]] = flat
+    z[flat.shape[0]:] = v
+    f = _linear(z, hw, hb, True)
+    p = _linear(f, pw, pb, True)
+    return _linear(p, aw, ab, False)
+
+
+class FastActor:
+    """Numba actor built from an SB3 policy state dict (tensors or arrays)."""
+
+    def __init__(self, state_dict) -> None:
+        missing = [k for k in ACTOR_KEYS if k not in state_dict]
+        if missing:
+            raise ValueError(f"policy weights lack {missing[:3]}{'...' if len(missing) > 3 else ''}: "
+                             "not an egocentric SamplerGym policy")
+        w = [np.ascontiguousarray(_to_numpy(state_dict[k]), dtype=np.float32) for k in ACTOR_KEYS]
+        self.kernels = (int(w[0].shape[2]), int(w[2].shape[2]))
+        w[0] = np.ascontiguousarray(w[0].reshape(w[0].shape[0], -1))
+        w[2] = np.ascontiguousarray(w[2].reshape(w[2].shape[0], -1))
+        self.weights = tuple(w)
+        self.num_actions = self.weights[-1].shape[0]
+
+    def logits(self, local: np.ndarray, vector: np.ndarray) -> np.ndarray:
+        return actor_logits(np.ascontiguousarray(local), np.ascontiguousarray(vector, dtype=np.float32),
+                            *self.kernels, *self.weights)
+
+
+def _to_numpy(t) -> np.ndarray:
+    return t.detach().cpu().numpy() if hasattr(t, "detach") else np.asarray(t)

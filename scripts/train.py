@@ -1,0 +1,72 @@
+"""Train a guided sampler policy: DAgger imitation of the privileged expert, then PPO fine-tuning.
+
+    python scripts/train.py                                   # the shipped checkpoint's recipe
+    python scripts/train.py --name mine --ppo-steps 100000    # variations
+    python scripts/train.py --resume                          # continue an interrupted run
+    tensorboard --logdir runs/                                # curves
+
+Writes runs/<name>/{config.json, checkpoint.zip, imitation.zip, final.zip, state.json, tb/}; a crash
+or Ctrl-C leaves checkpoint.zip usable and --resume continues from it. --export copies final.zip to a
+path of your choice (e.g. checkpoints/guided.zip, with its config beside it as JSON).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import shutil
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from learning.training import TrainConfig, train  # noqa: E402
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--config", type=Path, help="JSON file of TrainConfig fields (flags override it)")
+    ap.add_argument("--out", type=Path, default=Path("runs"))
+    ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--export", type=Path, help="copy final.zip here (and its config as .json beside it)")
+    ap.add_argument("--no-progress", action="store_true")
+    for f in dataclasses.fields(TrainConfig):
+        if f.name == "extra":
+            continue
+        flag = "--" + f.name.replace("_", "-")
+        if f.type in ("tuple[str, ...]", "tuple[int, ...]", "tuple[float, ...]"):
+            ap.add_argument(flag, nargs="+", help=f"default {f.default!r}" if f.default is not dataclasses.MISSING else None)
+        else:
+            typ = {"int": int, "float": float, "str": str}[f.type]
+            ap.add_argument(flag, type=typ, help=f"default {f.default!r}")
+    args = ap.parse_args(argv)
+    cfg = TrainConfig.from_json(args.config) if args.config else TrainConfig()
+    changes = {}
+    for f in dataclasses.fields(TrainConfig):
+        v = getattr(args, f.name, None)
+        if v is not None and f.name != "extra":
+            changes[f.name] = tuple(type(getattr(cfg, f.name)[0])(x) for x in v) if isinstance(v, list) else v
+    cfg = dataclasses.replace(cfg, **changes)
+    t0 = time.perf_counter()
+    try:
+        final = train(cfg, args.out, resume=args.resume, progress=not args.no_progress, log_stdout=False)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: {args.out / cfg.name / 'checkpoint.zip'} is saved; continue with --resume", file=sys.stderr)
+        return 130
+    minutes = (time.perf_counter() - t0) / 60
+    summary = json.loads((final.parent / "summary.json").read_text())
+    print(f"trained in {minutes:.1f} min; kept the {summary['chosen']} policy "
+          f"(validation score {min(summary['validation_ppo'], summary['validation_imitation']):.2f}): {final}")
+    if args.export:
+        args.export.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(final, args.export)
+        meta = {"config": dataclasses.asdict(cfg), "summary": summary, "minutes": round(minutes, 1)}
+        args.export.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")
+        print(f"exported to {args.export}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,155 @@
+"""Learning: reproducible training, the compiled actor, PolicySampler behaviour, and a real gain."""
+
+from __future__ import annotations
+
+import dataclasses
+import zipfile
+
+import numpy as np
+import pytest
+import torch
+
+from learning import PolicySampler
+from learning.fast_policy import FastActor
+from learning.training import TEST_SEED0, TrainConfig, train
+from planners import RRT, OccupancyGrid, Problem, RRTStar, UniformSampler, PRM
+from planners.generators import generate
+
+TINY = TrainConfig(name="tiny", families=("forest",), sizes=(64,), dagger_rounds=2, maps_per_round=8, bc_epochs=3,
+                   ppo_steps=1024, value_warmup=512, ppo_n_steps=256, ppo_batch=128, ppo_epochs=2,
+                   validation_maps=2, checkpoint_every=10**9, max_iterations=1500)
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    out = tmp_path_factory.mktemp("runs")
+    return train(TINY, out, progress=False, log_stdout=False), out
+
+
+def _weights(path):
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    _, params, _ = load_from_zip_file(path, device="cpu", print_system_info=False)
+    return params["policy"]
+
+
+def test_seeded_training_is_reproducible(trained, tmp_path):
+    final, _ = trained
+    again = train(TINY, tmp_path, progress=False, log_stdout=False)
+    a, b = _weights(final), _weights(again)
+    assert a.keys() == b.keys()
+    for k in a:
+        assert torch.equal(a[k], b[k]), k
+    other = train(dataclasses.replace(TINY, seed=1), tmp_path / "other", progress=False, log_stdout=False)
+    assert not torch.equal(_weights(other)["action_net.weight"], a["action_net.weight"])
+
+
+def test_training_writes_config_checkpoints_and_logs(trained):
+    final, out = trained
+    run = out / "tiny"
+    for name in ("config.json", "checkpoint.zip", "imitation.zip", "final.zip", "state.json", "summary.json"):
+        assert (run / name).is_file(), name
+    assert any((run / "tb").glob("events.out.tfevents.*"))
+    assert TrainConfig.from_json(run / "config.json") == TINY
+
+
+def test_resume_continues_from_the_checkpoint(tmp_path):
+    cfg = dataclasses.replace(TINY, dagger_rounds=1, ppo_steps=512, value_warmup=0)
+    train(cfg, tmp_path, progress=False, log_stdout=False)
+    longer = dataclasses.replace(cfg, ppo_steps=1024)
+    with pytest.raises(ValueError, match="differs"):
+        train(longer, tmp_path, resume=True, progress=False, log_stdout=False)
+    (tmp_path / "tiny" / "config.json").write_text((tmp_path / "tiny" / "config.json").read_text())
+    with pytest.raises(FileNotFoundError, match="nothing to resume"):
+        train(cfg, tmp_path / "elsewhere", resume=True, progress=False, log_stdout=False)
+
+
+def test_fast_actor_matches_torch(trained):
+    from stable_baselines3 import PPO
+
+    from envs import SamplerEnv
+
+    final, _ = trained
+    model = PPO.load(final, device="cpu")
+    actor = FastActor(model.policy.state_dict())
+    env = SamplerEnv("maze", source_kwargs={"size": 64}, action_mode="guided", observation="egocentric")
+    obs, _ = env.reset(seed=0)
+    for t in range(40):
+        with torch.no_grad():
+            ref = model.policy.get_distribution(model.policy.obs_to_tensor(obs)[0]).distribution.probs[0].numpy()
+        lg = actor.logits(obs["local"], obs["vector"]).astype(np.float64)
+        p = np.exp(lg - lg.max())
+        assert np.allclose(p / p.sum(), ref, atol=1e-5)
+        obs, _, term, trunc, _ = env.step(int(np.argmax(ref)) if t % 2 else env.action_space.sample())
+        if term or trunc:
+            obs, _ = env.reset()
+
+
+@pytest.mark.parametrize("problem_fn", [
+    lambda: generate("rooms", TEST_SEED0, 64),
+    lambda: generate("bugtrap", TEST_SEED0, 200),
+    lambda: Problem(OccupancyGrid(np.pad(np.zeros((90, 150), bool), 1, constant_values=True)), (3.5, 3.5),
+                    (146.5, 86.5), goal_tolerance=2.0),
+], ids=["64", "200", "non-square"])
+def test_policy_sampler_on_other_maps_and_planners(trained, problem_fn):
+    final, _ = trained
+    sampler = PolicySampler.load(final)
+    p = problem_fn()
+    lo, hi = p.world.bounds
+    planner = RRT(p, step_size=4.0, sampler=sampler, seed=0)
+    for _ in range(300):
+        s = planner.step()
+        assert np.all(np.isfinite(s.sample)) and np.all(s.sample >= lo) and np.all(s.sample < hi)
+        if s.solved:
+            break
+    r = planner.solve(max_iterations=20000)
+    assert r.solved and p.world.path_valid(r.path)
+    assert planner.sampler.forward_passes >= 1
+    for cls in (RRTStar, PRM):
+        kw = {} if cls is PRM else {"step_size": 4.0}
+        assert cls(p, sampler=sampler, seed=1, **kw).solve(max_iterations=20000).solved
+
+
+def test_sampler_rejects_other_worlds(trained):
+    from planners import Circle, GeometricWorld
+
+    final, _ = trained
+    p = Problem(GeometricWorld(20, 20, [Circle(10, 10, 2)]), (2, 2), (18, 18))
+    with pytest.raises(ValueError, match="OccupancyGrid"):
+        RRT(p, step_size=2.0, sampler=PolicySampler.load(final))
+
+
+def test_bad_checkpoints_get_clear_errors(tmp_path, trained):
+    with pytest.raises(FileNotFoundError, match="missing.zip"):
+        PolicySampler.load(tmp_path / "missing.zip")
+    (tmp_path / "junk.zip").write_bytes(b"not a zip at all")
+    with pytest.raises(ValueError, match="junk.zip.*not a readable"):
+        PolicySampler.load(tmp_path / "junk.zip")
+    # a valid SB3 model that is not a SamplerGym policy
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    PPO("MlpPolicy", gym.make("CartPole-v1"), n_steps=64, batch_size=32).save(tmp_path / "cartpole.zip")
+    with pytest.raises(ValueError, match="without a SamplerGym config"):
+        PolicySampler.load(tmp_path / "cartpole.zip")
+    # a SamplerGym checkpoint whose weights were truncated
+    final, _ = trained
+    broken = tmp_path / "broken.zip"
+    with zipfile.ZipFile(final) as src, zipfile.ZipFile(broken, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            dst.writestr(item, data[: len(data) // 2] if item.filename == "policy.pth" else data)
+    with pytest.raises(ValueError, match="broken.zip"):
+        PolicySampler.load(broken)
+
+
+def test_short_training_beats_uniform_sampling(trained):
+    final, _ = trained
+    sampler = PolicySampler.load(final)
+    policy, uniform = [], []
+    for i in range(20):
+        p = generate("forest", TEST_SEED0 + i, 64)
+        policy.append(RRT(p, step_size=4.0, sampler=sampler, seed=i).solve(max_iterations=20000).iterations)
+        uniform.append(RRT(p, step_size=4.0, sampler=UniformSampler(), seed=i).solve(max_iterations=20000).iterations)
+    # a few minutes of imitation on 64x64 forests: at least 2x fewer iterations than uniform
+    assert np.median(policy) < 0.5 * np.median(uniform), (np.median(policy), np.median(uniform))
