@@ -12,6 +12,9 @@ Registered ids:
 * ``SamplerGym/RRT-MovingAI-v0``: RRT on the MovingAI benchmark scenarios (``../shared/maps`` or
   ``SAMPLERGYM_MOVINGAI_DIR``).
 * ``SamplerGym/RRT-Files-v0``: RRT on your own maps: ``source_kwargs={"paths": [...]}``.
+* ``SamplerGym/RRT-RigidBody-v0``: RRT for a 6-DoF rigid body among 3-D boxes, a fresh
+  ``planners.rigid3d.random_scene`` each episode (``source_kwargs={"n_boxes": ...}``); vector
+  observations, step 0.5, 5,000 iterations.
 * ``SamplerGym/Planning-v0``: everything by kwargs (``planner``, ``map_source``, ``step_size``,
   ``max_iterations``, ``action_mode``, ...).
 """
@@ -23,10 +26,10 @@ from gymnasium.envs.registration import register, registry
 from envs.actions import ACTION_MODES
 from envs.render import record_episode
 from envs.sampler_env import SamplerEnv
-from envs.sources import FamilySource, FileSource, MovingAISource, ProblemListSource
+from envs.sources import FamilySource, FileSource, MovingAISource, ProblemListSource, RigidSceneSource
 
 __all__ = ["ACTION_MODES", "ENV_IDS", "FamilySource", "FileSource", "MovingAISource", "ProblemListSource",
-           "SamplerEnv", "record_episode"]
+           "RigidSceneSource", "SamplerEnv", "record_episode"]
 
 _FAMILY_IDS = {
     "Forest": "forest",
@@ -39,6 +42,7 @@ _FAMILY_IDS = {
 ENV_IDS: dict[str, dict] = {f"SamplerGym/RRT-{name}-v0": {"map_source": fam} for name, fam in _FAMILY_IDS.items()}
 ENV_IDS["SamplerGym/RRT-MovingAI-v0"] = {"map_source": "movingai"}
 ENV_IDS["SamplerGym/RRT-Files-v0"] = {"map_source": "files"}
+ENV_IDS["SamplerGym/RRT-RigidBody-v0"] = {"map_source": "rigid", "step_size": 0.5, "max_iterations": 5000}
 ENV_IDS["SamplerGym/Planning-v0"] = {}
 
 

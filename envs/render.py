@@ -37,8 +37,13 @@ class EpisodeRenderer:
             self.human = False
 
     def reset(self, problem: Problem) -> None:
+        if problem.dim == 6:
+            from planners.plotting3d import RigidPlannerAnimator
+
+            self._animator = RigidPlannerAnimator(problem)
+            return
         if problem.dim != 2:
-            raise ValueError("the sampler environment renders 2-D problems; use planners.plotting3d for 6-DoF")
+            raise ValueError(f"the sampler environment renders 2-D and 6-DoF problems, got a {problem.dim}-D one")
         self._animator = PlannerAnimator(problem)
 
     def draw(self, planner: Planner, sample: np.ndarray | None) -> np.ndarray:

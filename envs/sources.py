@@ -1,4 +1,4 @@
-"""Where environments get their planning problems: generated families, MovingAI, files, lists.
+"""Where environments get their planning problems: generated families, MovingAI, files, lists, 6-DoF scenes.
 
 A map source is any callable ``source(np_random) -> Problem``; the environment calls it in
 ``reset`` with its own ``np_random``, so a seeded reset always draws the same problem.
@@ -151,8 +151,46 @@ class FileSource:
         return Problem(grid, s, g, goal_tolerance=self.goal_tolerance, name=f"{Path(str(grid.source)).name}")
 
 
+class RigidSceneSource:
+    """6-DoF rigid-body problems: a fresh ``planners.rigid3d.random_scene`` each reset.
+
+    Args:
+        n_boxes: Boxes per scene.
+        seeds: Optional pool of scene seeds to draw from (e.g. a training split); default any seed.
+        **scene_kwargs: Further ``random_scene`` arguments (``size``, ``goal_tolerance``, ``delta``,
+            ``metric``, ...).
+    """
+
+    dim = 6
+
+    def __init__(self, n_boxes: int = 30, seeds: Sequence[int] | None = None, **scene_kwargs) -> None:
+        from planners.rigid3d import random_scene
+
+        random_scene(0, n_boxes, **scene_kwargs)  # validates the arguments now, not at the first reset
+        self.n_boxes, self.scene_kwargs = int(n_boxes), dict(scene_kwargs)
+        self.seeds = None if seeds is None else np.asarray(seeds, dtype=np.int64)
+        if self.seeds is not None and len(self.seeds) == 0:
+            raise ValueError("seeds must not be empty")
+
+    def __call__(self, np_random: np.random.Generator) -> Problem:
+        """A fresh random scene, its seed drawn from ``np_random``."""
+        from planners.rigid3d import random_scene
+
+        if self.seeds is None:
+            seed = int(np_random.integers(2**31))
+        else:
+            seed = int(self.seeds[np_random.integers(len(self.seeds))])
+        return random_scene(seed, self.n_boxes, **self.scene_kwargs)
+
+    def __repr__(self) -> str:
+        return f"RigidSceneSource(n_boxes={self.n_boxes})"
+
+
 def make_source(source: str | MapSource, **kwargs) -> MapSource:
-    """Build a map source from a name: a family name, ``"movingai"`` or ``"files"``; callables pass."""
+    """Build a map source from a name: a family, ``"movingai"``, ``"files"`` or ``"rigid"``; callables pass.
+
+    ``"rigid"`` is ``RigidSceneSource`` (6-DoF rigid-body scenes).
+    """
     if callable(source):
         if kwargs:
             raise ValueError(f"source options {sorted(kwargs)} given with a callable source")
@@ -165,4 +203,7 @@ def make_source(source: str | MapSource, **kwargs) -> MapSource:
         if "paths" not in kwargs:
             raise ValueError("map_source='files' needs source_kwargs={'paths': [image or .map files]}")
         return FileSource(**kwargs)
-    raise ValueError(f"map_source must be one of {FAMILIES + ('movingai', 'files')} or a callable, got {source!r}")
+    if source == "rigid":
+        return RigidSceneSource(**kwargs)
+    raise ValueError(f"map_source must be one of {FAMILIES + ('movingai', 'files', 'rigid')} or a callable, "
+                     f"got {source!r}")

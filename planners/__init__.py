@@ -5,6 +5,7 @@ from planners.nn import NearestNeighbors
 from planners.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
 from planners.problem import Problem, load_movingai_scenarios
 from planners.prm import PRM, LazyPRM
+from planners.rigid3d import Box3D, RigidBodyWorld, box_body, load_scene, random_scene, save_scene, thin_wall_scene
 from planners.rrt import RRT, RRTConnect
 from planners.rrtstar import InformedRRTStar, RRTStar
 from planners.smoothing import shortcut, simplify, smooth
@@ -50,6 +51,13 @@ __all__ = [
     "TreeView",
     "UniformSampler",
     "World",
+    "Box3D",
+    "RigidBodyWorld",
+    "box_body",
+    "load_scene",
+    "random_scene",
+    "save_scene",
+    "thin_wall_scene",
     "load_movingai_scenarios",
     "shortcut",
     "simplify",

@@ -69,7 +69,7 @@ def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
     0: ``raw`` itself. 1: ``anchor + raw`` (world frame). 2: ``anchor + R raw``, where ``R`` turns the
     first two coordinates into the frame whose x axis points from the anchor to the goal (y to its
     left), so an offset like "two steps ahead, slightly left" follows the tree wherever it goes.
-    Anchored results are clipped to the bounds.
+    Anchored results are clipped to the bounds (rigid-body angles are wrapped first, not clipped).
     """
     kind, metric, rw = space
     if anchored == 0:
@@ -89,10 +89,10 @@ def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
             ux, uy = 1.0, 0.0
         out[0] = anchor[0] + ux * raw[0] - uy * raw[1]
         out[1] = anchor[1] + uy * raw[0] + ux * raw[1]
+    if kind != SPACE_RN:
+        interpolate(kind, out, out, 0.0, out)  # wraps the angles into [-pi, pi) (before clipping)
     for i in range(raw.shape[0]):
         if out[i] < low[i]:
             out[i] = low[i]
         elif out[i] >= high[i]:
             out[i] = np.nextafter(high[i], low[i])
-    if kind != SPACE_RN:
-        interpolate(kind, out, out, 0.0, out)  # wraps the angles into [-pi, pi)

@@ -47,6 +47,7 @@ CHECKER_WARNINGS = (
 )
 
 ALL_IDS = sorted(ENV_IDS)
+VECTOR_IDS = ("SamplerGym/RRT-RigidBody-v0",)  # Box (vector) observations, not Dict
 
 
 @pytest.mark.parametrize("env_id", ALL_IDS)
@@ -55,6 +56,8 @@ def test_gymnasium_and_sb3_checkers(env_id, png_map):
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
     for mode in envs.ACTION_MODES:
+        if mode == "guided" and env_id in VECTOR_IDS:
+            continue  # guided actions are defined for 2-D grid problems only
         env = gym.make(env_id, action_mode=mode, render_mode="rgb_array", **make_kwargs(env_id, png_map))
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -82,6 +85,8 @@ def rollout(env, seed, steps=60):
 def assert_same(a, b):
     assert len(a) == len(b)
     for (o1, r1, i1), (o2, r2, i2) in zip(a, b):
+        if not isinstance(o1, dict):
+            o1, o2 = {"vector": o1}, {"vector": o2}
         for k in o1:
             assert np.array_equal(o1[k], o2[k]), k
         assert r1 == r2
@@ -95,7 +100,8 @@ def test_same_seed_same_rollout(env_id, png_map):
     b = rollout(gym.make(env_id, **kw), seed=3)
     assert_same(a, b)
     c = rollout(gym.make(env_id, **kw), seed=4)
-    assert not all(np.array_equal(x[0]["image"], y[0]["image"]) for x, y in zip(a, c))
+    key = (lambda o: o) if env_id in VECTOR_IDS else (lambda o: o["image"])
+    assert not all(np.array_equal(key(x[0]), key(y[0])) for x, y in zip(a, c, strict=False))
 
 
 def test_pickle_resumes_identically():

@@ -1,0 +1,444 @@
+"""6-DoF rigid body in 3-D: world, motion checks, metrics, planners, scene files, plotting, env."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from PIL import Image
+
+import envs
+from planners import PRM, RRT, GoalBiasedSampler, LazyPRM, Problem, RRTConnect, RRTStar, SampleBatch, SamplerBase
+from planners.rigid3d import (
+    EXAMPLE_SCENE,
+    Box3D,
+    RigidBodyWorld,
+    box_body,
+    densify,
+    load_scene,
+    random_scene,
+    save_scene,
+    thin_wall_scene,
+)
+
+gym.register_envs(envs)
+
+PI = math.pi
+
+
+# --- an independent checker: its own rotation, interpolation and point-in-box tests ------------------
+
+
+def rot(tx, ty, tz):
+    """Ry(ty) Rx(tx) Rz(tz), written out from the definition."""
+    cx, sx, cy, sy, cz, sz = math.cos(tx), math.sin(tx), math.cos(ty), math.sin(ty), math.cos(tz), math.sin(tz)
+    Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return Ry @ Rx @ Rz
+
+
+def short_arc(d):
+    return (np.asarray(d) + PI) % (2 * PI) - PI
+
+
+def states_along(a, b, spacing, radius):
+    """States along a -> b (linear translation, shorter-arc angles) with body-point travel <= spacing."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    dang = short_arc(b[3:] - a[3:])
+    travel = np.linalg.norm(b[:3] - a[:3]) + radius * np.abs(dang).sum()
+    n = max(1, int(np.ceil(travel / spacing)))
+    t = np.linspace(0.0, 1.0, n + 1)[:, None]
+    return np.hstack([a[:3] + t * (b[:3] - a[:3]), a[3:] + t * dang])
+
+
+def points_ok(world, Q):
+    """(len(Q),) bool: every body point strictly inside the workspace and outside every closed box."""
+    body = np.asarray(world.body)
+    P = np.stack([body @ rot(*q[3:]).T + q[:3] for q in Q])  # (n, P, 3)
+    ok = np.all((P > world.low3) & (P < world.high3), axis=(1, 2))
+    for b in np.asarray(world.boxes):
+        inside = np.all((P >= b[:3]) & (P <= b[3:]), axis=2)
+        ok &= ~inside.any(axis=1)
+    return ok
+
+
+def fine_path_ok(world, path, spacing=None):
+    """Every motion of ``path`` re-checked at a finer resolution than the world's (default delta / 4)."""
+    spacing = world.delta / 4 if spacing is None else spacing
+    radius = float(np.linalg.norm(world.body, axis=1).max())
+    path = np.asarray(path, float)
+    if len(path) == 1:
+        return bool(points_ok(world, path)[0])
+    segments = zip(path[:-1], path[1:], strict=True)
+    return all(points_ok(world, states_along(a, b, spacing, radius)).all() for a, b in segments)
+
+
+def cossin_distance(a, b):
+    def emb(q):
+        return np.concatenate([q[:3], np.ravel(np.column_stack([np.cos(q[3:]), np.sin(q[3:])]))])
+
+    return float(np.linalg.norm(emb(np.asarray(a, float)) - emb(np.asarray(b, float))))
+
+
+def rotation_angle(a, b):
+    R = rot(*a[3:]).T @ rot(*b[3:])
+    return float(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1)))
+
+
+def planners_for(problem):
+    bias = GoalBiasedSampler(0.05)
+    return [
+        RRT(problem, step_size=0.5, sampler=bias, seed=1),
+        RRTConnect(problem, step_size=0.5, seed=1),
+        RRTStar(problem, step_size=0.5, sampler=bias, seed=1, stop_on_first_solution=True),
+        PRM(problem, k=3, seed=1),
+        LazyPRM(problem, k=3, seed=1),
+    ]
+
+
+# --- the world ------------------------------------------------------------------------------------
+
+
+def test_body_points_follow_the_rotation_formula():
+    world = RigidBodyWorld([], box_body(1.0, 0.5, 0.25), low=(-5, -5, -5), high=(5, 5, 5))
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        q = np.concatenate([rng.uniform(-2, 2, 3), rng.uniform(-PI, PI, 3)])
+        assert np.allclose(world.body_points(q), world.body @ rot(*q[3:]).T + q[:3])
+    # Rz first, then Rx, then Ry: x -> y under tz = pi/2, then y -> z under tx = pi/2
+    pt = RigidBodyWorld([], [[1.0, 0.0, 0.0]], low=(-5, -5, -5), high=(5, 5, 5))
+    assert np.allclose(pt.body_points([0, 0, 0, PI / 2, 0, PI / 2]), [[0, 0, 1]], atol=1e-12)
+
+
+def test_box_body_points():
+    assert box_body(1, 1, 1, points=8).shape == (8, 3)
+    b16 = box_body(2.0, 0.5, 0.25)
+    assert b16.shape == (16, 3)
+    assert np.allclose(np.abs(b16).max(axis=0), [1.0, 0.25, 0.125])
+    assert sorted(set(np.round(b16[:, 0], 6))) == pytest.approx([-1, -1 / 3, 1 / 3, 1])
+    assert box_body(1, 1, 1, points=20).shape == (20, 3)
+    dense = box_body(1.0, 0.5, 0.5, spacing=0.1)
+    assert len(dense) == 8 + 4 * 9 + 8 * 4
+    with pytest.raises(ValueError, match="points must be 8, 16 or 20"):
+        box_body(1, 1, 1, points=12)
+    with pytest.raises(ValueError, match="side lengths"):
+        box_body(1, -1, 1)
+
+
+def test_world_validation_and_explanations():
+    with pytest.raises(ValueError, match="delta"):
+        RigidBodyWorld([], delta=0)
+    with pytest.raises(ValueError, match=r"box 1: y1 \(0\) < y0 \(1\)"):
+        RigidBodyWorld([(0, 0, 0, 1, 1, 1), (0, 1, 0, 1, 0, 1)])
+    with pytest.raises(ValueError, match="box 0 must be 6"):
+        RigidBodyWorld([(0, 0, 0, 1, 1)])
+    with pytest.raises(ValueError, match=r"body must be a \(P, 3\)"):
+        RigidBodyWorld([], [[0, 0]])
+    with pytest.raises(ValueError, match="on y: low 2, high 1"):
+        RigidBodyWorld([], low=(0, 2, 0), high=(1, 1, 1))
+    with pytest.raises(ValueError, match="rot_weight"):
+        RigidBodyWorld([], rot_weight=-1)
+    world = RigidBodyWorld([Box3D(4, 4, 4, 6, 6, 6)])
+    lo, hi = world.bounds
+    assert lo.tolist() == [0, 0, 0, -PI, -PI, -PI] and hi.tolist() == [10, 10, 10, PI, PI, PI]
+    assert world.dim == 6 and world.metrics == ("cossin", "se3")
+    assert world.explain_invalid([2, 2, 2, 0, 0, 0]) == ""
+    assert "in box 0" in world.explain_invalid([5, 5, 5, 0, 0, 0])
+    assert "outside the workspace" in world.explain_invalid([0.2, 5, 5, 0, 0, 0])
+    assert world.explain_invalid([np.nan, 5, 5, 0, 0, 0]) == "is not finite"
+    with pytest.raises(ValueError, match="start .* is not a valid state: it puts body point"):
+        Problem(world, [5, 5, 5, 0, 0, 0], [2, 2, 2, 0, 0, 0])
+    # free volume: the workspace times (2 pi)^3, less what the box and the walls take
+    mu = world.free_volume()
+    assert 0.5 * 1000 * (2 * PI) ** 3 < mu < 1000 * (2 * PI) ** 3
+
+
+def test_motion_check_never_accepts_what_a_finer_check_rejects():
+    """Random motions among the boxes of cluttered scenes: accepted motions pass the fine re-check."""
+    rng = np.random.default_rng(7)
+    for seed in range(3):
+        world = random_scene(seed, 60).world
+        lo, hi = world.bounds
+        accepted = rejected = 0
+        for _ in range(3000):
+            a = lo + (hi - lo) * rng.random(6)
+            a[0] = rng.uniform(2.5, 7.5)  # among the boxes
+            b = a + rng.normal(0, rng.choice([0.3, 1.0]), 6)
+            if not (world.is_valid(a) and world.is_valid(b)):
+                continue
+            if world.check_motion(a, b):
+                accepted += 1
+                assert fine_path_ok(world, [a, b]), (a, b)
+            else:
+                rejected += 1
+                assert not world.check_motion(b, a)  # symmetric
+            if accepted >= 40 and rejected >= 40:
+                break
+        assert accepted >= 40 and rejected >= 40  # both outcomes were exercised
+
+
+# --- planners on seeded scenes -----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_planners_find_valid_paths_on_seeded_scenes(seed):
+    problem = random_scene(seed, 40)
+    world = problem.world
+    for planner in planners_for(problem):
+        r = planner.solve(max_iterations=20000)
+        assert r.solved, (planner.name, seed)
+        assert np.array_equal(r.path[0], problem.start)
+        assert problem.in_goal(r.path[-1])
+        assert world.path_valid(r.path)
+        assert fine_path_ok(world, r.path), (planner.name, seed)
+
+
+def test_prm_roadmap_of_5000_samples_answers_queries():
+    """The issue's PRM: 5,000 samples, k = 3 nearest neighbours, shortest roadmap paths."""
+    problem = random_scene(8, 40)
+    prm = PRM(problem, k=3, seed=0)
+    prm.grow(5000)
+    assert prm.num_vertices >= 2500  # the free fraction of the samples, plus start and goal
+    for start, goal in ((problem.start, problem.goal), (problem.goal, problem.start)):
+        r = prm.query(start, goal, max_iterations=0)
+        assert r.solved and np.array_equal(r.path[0], start) and np.array_equal(r.path[-1], goal)
+        assert fine_path_ok(problem.world, r.path)
+
+
+def test_se3_metric_plans():
+    problem = random_scene(3, 30, metric="se3")
+    assert problem.metric == "se3"
+    for planner in (RRTConnect(problem, step_size=0.5, seed=0), PRM(problem, k=3, seed=0)):
+        r = planner.solve(max_iterations=5000)
+        assert r.solved and fine_path_ok(problem.world, r.path)
+        assert r.cost == pytest.approx(problem.path_length(r.path))
+
+
+def test_example_scene_is_solved():
+    problem = load_scene(EXAMPLE_SCENE)
+    r = RRTConnect(problem, step_size=0.5, seed=0).solve(max_iterations=20000)
+    assert r.solved and fine_path_ok(problem.world, r.path)
+
+
+# --- the thin wall ---------------------------------------------------------------------------------
+
+
+def test_thin_wall_is_not_stepped_over():
+    problem = thin_wall_scene(thickness=0.01)
+    world = problem.world
+    s, g = problem.start, problem.goal
+    # a coarse check that samples states every 0.25 units passes straight through the wall ...
+    coarse = [s + (g - s) * k / 24 for k in range(25)]
+    assert np.linalg.norm(g[:3] - s[:3]) / 24 == pytest.approx(0.25)
+    assert all(world.is_valid(q) for q in coarse)
+    # ... the motion check does not, nor does a re-check finer than the wall
+    assert not world.check_motion(s, g)
+    assert not fine_path_ok(world, [s, g], spacing=0.005)
+    # two valid states just either side of the wall, and a wall far thinner than delta
+    a, b = [4.4, 2.5, 2.5, 0, 0, 0.3], [5.6, 2.5, 2.5, 0, 0, -0.3]
+    assert world.is_valid(a) and world.is_valid(b) and not world.check_motion(a, b)
+    hair = thin_wall_scene(thickness=1e-4).world
+    assert hair.is_valid(a) and hair.is_valid(b) and not hair.check_motion(a, b)
+    # rotating the body through the wall is caught too (points sweep, the origin stays put)
+    c = [5.0 - 0.3, 2.5, 2.5, 0, 0, PI / 2]
+    assert world.is_valid(c) and not world.check_motion(c, [5.0 - 0.3, 2.5, 2.5, 0, 0, 0])
+
+
+def test_planners_go_through_the_hole():
+    problem = thin_wall_scene(thickness=0.01, hole=1.6)
+    world = problem.world
+    for planner in (RRTConnect(problem, step_size=0.5, seed=1), RRT(problem, step_size=0.5, seed=1,
+                                                                      sampler=GoalBiasedSampler(0.05)),
+                    LazyPRM(problem, k=3, seed=1)):
+        r = planner.solve(max_iterations=20000)
+        assert r.solved, planner.name
+        assert fine_path_ok(world, r.path, spacing=0.005), planner.name
+        # where the body origin crosses the wall plane, it is inside the hole
+        dense = densify(r.path, problem, 0.01)
+        cross = np.flatnonzero(np.diff(np.sign(dense[:, 0] - 5.0)) != 0)
+        assert len(cross)
+        for i in cross:
+            assert np.all(np.abs(dense[i, 1:3] - 5.0) < 0.8), dense[i]
+
+
+# --- metrics and interpolation across +-pi ----------------------------------------------------------
+
+
+def test_cossin_metric_wraps():
+    p = thin_wall_scene()
+    a = np.array([1.0, 2.0, 3.0, PI - 0.01, 0.0, -PI + 0.02])
+    b = np.array([1.0, 2.0, 3.0, -PI + 0.01, 0.0, PI - 0.02])
+    assert p.distance(a, b) == pytest.approx(math.sqrt((2 * math.sin(0.01)) ** 2 + (2 * math.sin(0.02)) ** 2))
+    assert p.distance(a, b) < 0.05
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        a, b = (np.concatenate([rng.uniform(0, 10, 3), rng.uniform(-PI, PI, 3)]) for _ in range(2))
+        assert p.distance(a, b) == pytest.approx(cossin_distance(a, b))
+        assert p.distance(a, b + [0, 0, 0, 2 * PI, -2 * PI, 0]) == pytest.approx(p.distance(a, b))
+
+
+def test_se3_distance_wraps():
+    p = thin_wall_scene(metric="se3")
+    w = p.world.rot_weight
+    assert w == pytest.approx(float(np.linalg.norm(p.world.body, axis=1).max()))
+    a = np.array([1, 1, 1, 0, 0, PI - 0.01])
+    b = np.array([1, 1, 4, 0, 0, -PI + 0.01])
+    assert p.distance(a, b) == pytest.approx(3.0 + w * 0.02, abs=1e-9)
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        a, b = (np.concatenate([rng.uniform(0, 10, 3), rng.uniform(-PI, PI, 3)]) for _ in range(2))
+        expect = np.linalg.norm(a[:3] - b[:3]) + w * rotation_angle(a, b)
+        assert p.distance(a, b) == pytest.approx(expect, abs=1e-7)
+    # the same rotation written with other Euler angles is at rotation distance 0
+    c = np.array([1, 1, 1, PI - 0.3, PI, PI])  # Ry(pi) Rx(pi - 0.3) Rz(pi) == Rx(0.3)
+    d = np.array([1, 1, 1, 0.3, 0, 0])
+    assert np.allclose(rot(*c[3:]), rot(*d[3:]))
+    assert p.distance(c, d) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_interpolation_takes_the_short_arc():
+    p = thin_wall_scene()
+    a = np.array([2.0, 2.0, 2.0, PI - 0.1, -PI + 0.05, 0.0])
+    b = np.array([2.0, 2.0, 2.0, -PI + 0.1, PI - 0.05, 0.0])
+    dense = densify([a, b], p, 0.01)
+    assert len(dense) > 10
+    assert np.all(np.abs(dense[:, 3]) >= PI - 0.1 - 1e-12) and np.all(np.abs(dense[:, 4]) >= PI - 0.05 - 1e-12)
+    assert np.all((dense[:, 3:] >= -PI) & (dense[:, 3:] < PI))
+    mid = densify([a, b], p, p.distance(a, b) / 2)[1]
+    assert abs(short_arc(mid[3] - PI)) < 1e-12 and abs(short_arc(mid[4] - PI)) < 1e-12
+    # the motion check follows the same short arc: turning a long body by 0.2 rad across +-pi in a
+    # slot that the long way round (6.08 rad) would hit
+    world = RigidBodyWorld([(0, 0, 0, 10, 10, 4.7), (0, 0, 5.3, 10, 10, 10)], box_body(2.0, 0.3, 0.3))
+    s = [5, 5, 5, 0, 0, PI - 0.1]
+    t = [5, 5, 5, 0, 0, -PI + 0.1]
+    assert world.is_valid(s) and world.is_valid(t)
+    assert world.check_motion(s, t)
+    assert not world.check_motion(s, [5, 5, 5, 0, PI / 2, PI - 0.1])  # tilting the body hits the slab
+
+
+def test_planner_crosses_pi_the_short_way():
+    world = RigidBodyWorld([], box_body(1.0, 0.5, 0.25))
+    problem = Problem(world, [3, 5, 5, 0, 0, 3.0], [5, 5, 5, 0, 0, -3.0], goal_tolerance=0.05)
+    r = RRT(problem, step_size=4.0, sampler=GoalBiasedSampler(1.0), seed=0).solve(max_iterations=10)
+    assert r.solved and r.iterations == 1 and len(r.path) == 2  # one straight motion, 2.03 long
+    assert r.cost == pytest.approx(math.hypot(2.0, 2 * math.sin(3.0)))
+    turned = np.abs(short_arc(np.diff(r.path[:, 5]))).sum()
+    assert turned == pytest.approx(2 * PI - 6.0)
+
+
+def test_anchored_samples_wrap_angles():
+    class Ahead(SamplerBase):
+        def draw(self, rng, n, view):
+            return SampleBatch(np.tile([0.1, 0, 0, 0, 0, 0.3], (n, 1)), np.ones(n, np.int8))
+
+    world = RigidBodyWorld([], box_body(1.0, 0.5, 0.25))
+    problem = Problem(world, [3, 5, 5, 0, 0, 3.0], [7, 5, 5, 0, 0, 3.0])
+    step = RRT(problem, step_size=0.5, sampler=Ahead(), seed=0).step()
+    assert step.sample[0] == pytest.approx(3.1)
+    assert step.sample[5] == pytest.approx(3.3 - 2 * PI)  # wrapped, not clipped at pi
+
+
+# --- scene files ------------------------------------------------------------------------------------
+
+
+def test_scene_file_round_trip(tmp_path):
+    p = random_scene(4, 10, metric="se3")
+    q = load_scene(save_scene(p, tmp_path / "s.scene"))
+    assert np.array_equal(q.world.boxes, p.world.boxes) and np.array_equal(q.world.body, p.world.body)
+    assert np.array_equal(q.start, p.start) and np.array_equal(q.goal, p.goal)
+    assert (q.metric, q.goal_tolerance, q.world.delta, q.world.rot_weight) == (
+        p.metric, p.goal_tolerance, p.world.delta, p.world.rot_weight)
+    assert np.array_equal(q.world.bounds[1], p.world.bounds[1])
+    ex = load_scene(EXAMPLE_SCENE)
+    assert ex.name == "example" and len(ex.world.boxes) == 6 and len(ex.world.body) == 16
+
+
+GOOD = ["bounds 0 0 0 10 10 10", "body box 1 0.5 0.25", "box 4 4 4 6 6 6", "start 2 2 2 0 0 0", "goal 8 8 8 0 0 1"]
+
+
+@pytest.mark.parametrize("line, lineno, message", [
+    ("boxx 1 2 3 4 5 6", 7, "unknown statement 'boxx'"),
+    ("box 1 2 3 4 5", 7, "'box' takes 6 numbers, got 5"),
+    ("box 1 2 3 0 5 6", 7, r"x1 \(0\) < x0 \(1\)"),
+    ("tolerance abc", 7, "non-numeric"),
+    ("start 1 1 1 0 0 0", 7, "'start' given twice"),
+    ("metric euclid", 7, "metric must be one of"),
+    ("body box 1 1 1 12", 7, "'body' given twice"),
+    ("point 0 0 0", 7, "either a 'body box' line or 'point' lines"),
+    ("delta -1", 2, "delta must be a positive"),
+])
+def test_bad_scene_files_name_file_and_line(tmp_path, line, lineno, message):
+    path = tmp_path / "bad.scene"
+    path.write_text("\n".join(["# a comment", *GOOD, line]) + "\n")
+    with pytest.raises(ValueError, match=rf"bad\.scene, line {lineno}: .*{message}"):
+        load_scene(path)
+
+
+def test_bad_scene_states_and_missing_lines(tmp_path):
+    path = tmp_path / "bad.scene"
+    path.write_text("\n".join(GOOD[:3] + ["start 5 5 5 0 0 0", GOOD[4]]) + "\n")
+    with pytest.raises(ValueError, match=r"bad\.scene, line 4: start .* in box 0"):
+        load_scene(path)
+    path.write_text("\n".join(GOOD[:4]) + "\n")
+    with pytest.raises(ValueError, match=r"bad\.scene: missing required 'goal'"):
+        load_scene(path)
+    path.write_text("\n".join(["bounds 0 0 0 10 10 10", "body box 1 1 1 12"] + GOOD[2:]) + "\n")
+    with pytest.raises(ValueError, match=r"bad\.scene, line 2: points must be 8, 16 or 20"):
+        load_scene(path)
+    with pytest.raises(FileNotFoundError):
+        load_scene(tmp_path / "nope.scene")
+
+
+def test_random_scenes_are_seeded():
+    a, b, c = random_scene(5), random_scene(5), random_scene(6)
+    assert np.array_equal(a.world.boxes, b.world.boxes) and np.array_equal(a.start, b.start)
+    assert not np.array_equal(a.world.boxes, c.world.boxes)
+    for p in (a, c):
+        assert p.world.clearance(p.start) > 2 * p.world.delta and p.world.clearance(p.goal) > 2 * p.world.delta
+
+
+# --- plotting -------------------------------------------------------------------------------------
+
+
+def test_plot_scene_and_animation(tmp_path):
+    from planners.plotting import save_figure
+    from planners.plotting3d import animate_rigid, plot_scene, resample_path
+
+    problem = load_scene(EXAMPLE_SCENE)
+    r = RRTConnect(problem, step_size=0.5, seed=0).solve(max_iterations=20000)
+    fig = plot_scene(problem, r.path, bodies=3, size=(3, 3), dpi=50)
+    out = save_figure(fig, tmp_path / "scene.png", dpi=50)
+    with Image.open(out) as img:
+        assert img.size == (150, 150)
+    gif = animate_rigid(problem, r.path, tmp_path / "move.gif", frames=5, fps=5, size=(2.5, 2.5), dpi=40)
+    with Image.open(gif) as img:
+        assert img.n_frames >= 5
+    # resampling keeps the ends and takes the short arc
+    path = np.array([[2, 2, 2, 0, 0, PI - 0.1], [3, 2, 2, 0, 0, -PI + 0.1]])
+    rs = resample_path(path, problem, 9)
+    assert np.allclose(rs[[0, -1]], path) and np.all(np.abs(rs[:, 5]) >= PI - 0.1 - 1e-12)
+    with pytest.raises(TypeError, match="RigidBodyWorld"):
+        plot_scene(Problem(__import__("planners").GeometricWorld(10, 10), [1, 1], [9, 9]))
+
+
+# --- the environment ------------------------------------------------------------------------------
+
+
+def test_rigid_env_runs_with_vector_observations():
+    env = gym.make("SamplerGym/RRT-RigidBody-v0", action_mode="relative", source_kwargs={"n_boxes": 20})
+    obs, info = env.reset(seed=0)
+    assert obs.shape == (30,) and obs.dtype == np.float32 and obs in env.observation_space
+    assert env.unwrapped.problem.dim == 6
+    env.action_space.seed(0)
+    for _ in range(30):
+        obs, r, term, trunc, info = env.step(env.action_space.sample())
+        assert obs in env.observation_space and r == -1.0
+        if term or trunc:
+            break
+    first = env.unwrapped.problem
+    env.reset(seed=0)
+    assert np.array_equal(env.unwrapped.problem.start, first.start)
+    env.close()
