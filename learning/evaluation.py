@@ -159,6 +159,15 @@ def _worker_init() -> None:
     torch.set_num_threads(1)
 
 
+def pooled(runs: Sequence[Run], name: str, families: Sequence[str]) -> list[Run]:
+    """Copies of the runs on ``families`` relabelled as one family ``name`` (e.g. all MovingAI maps), so
+    the best bias is tuned and the summary taken over the pool as a whole."""
+    from dataclasses import replace
+
+    keep = set(families)
+    return [replace(r, family=name) for r in runs if r.family in keep]
+
+
 def best_bias(runs: Sequence[Run]) -> dict[tuple[str, str], float]:
     """Per (family, planner): the goal bias with the lowest median iterations on the tuning split."""
     out = {}

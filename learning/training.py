@@ -232,7 +232,6 @@ def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False,
         state = {"phase": "bc", "round": k, "ppo_steps": 0, "bc_validation": score}
         _save(model, cfg, ckpt, state)
     if state["phase"] == "bc":
-        os.replace(ckpt, run / "imitation.zip") if ckpt.exists() else None
         _save(model, cfg, run / "imitation.zip", state)
         state = {**state, "phase": "ppo", "ppo_steps": 0}
         _save(model, cfg, ckpt, state)

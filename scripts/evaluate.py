@@ -92,11 +92,17 @@ def main(argv=None) -> int:
         print(f"{len(extra)} runs of {', '.join(args.other_planners)}", flush=True)
         runs += E.run_all(extra, args.processes)
         best = E.best_bias(runs)
-    rows = E.summarize(runs, best)
+    mai = sorted({q.family for q in queries if not q.size})
+    if len(mai) > 1:  # one pooled row over every MovingAI map, beside the per-map rows
+        pool = E.pooled(runs, "MovingAI (all)", mai)
+        best = E.best_bias(runs + pool)
+    else:
+        pool = []
+    rows = E.summarize(runs + pool, best)
     head = E.headline(rows, best)
     args.out.mkdir(parents=True, exist_ok=True)
     E.write_csv(runs, args.out / "runs.csv")
-    plots = E.save_plots(runs, rows, best, args.out)
+    plots = E.save_plots([r for r in runs if r.family not in mai] + pool, rows, best, args.out)
     cols = ["family", "planner", "sampler", "runs", "success", "median_iterations", "iqr", "mean_iterations",
             "mean_ci95", "ratio_to_lower_bound", "median_candidates", "median_checks", "median_wall_ms",
             "median_cost", "median_forward_passes"]

@@ -38,6 +38,8 @@ def main(argv=None) -> int:
         flag = "--" + f.name.replace("_", "-")
         if f.type in ("tuple[str, ...]", "tuple[int, ...]", "tuple[float, ...]"):
             ap.add_argument(flag, nargs="+", help=f"default {f.default!r}" if f.default is not dataclasses.MISSING else None)
+        elif f.type == "bool":
+            ap.add_argument(flag, action=argparse.BooleanOptionalAction, default=None, help=f"default {f.default!r}")
         else:
             typ = {"int": int, "float": float, "str": str}[f.type]
             ap.add_argument(flag, type=typ, help=f"default {f.default!r}")

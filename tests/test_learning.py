@@ -153,3 +153,47 @@ def test_short_training_beats_uniform_sampling(trained):
         uniform.append(RRT(p, step_size=4.0, sampler=UniformSampler(), seed=i).solve(max_iterations=20000).iterations)
     # a few minutes of imitation on 64x64 forests: at least 2x fewer iterations than uniform
     assert np.median(policy) < 0.5 * np.median(uniform), (np.median(policy), np.median(uniform))
+
+
+def test_train_script_builds_a_flag_for_every_config_field():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "scripts" / "train.py"
+    spec = importlib.util.spec_from_file_location("train_script", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    with pytest.raises(SystemExit) as e:
+        mod.main(["--help"])
+    assert e.value.code == 0
+
+
+def _script(name):
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(f"{name}_script", Path(__file__).resolve().parents[1] / "scripts" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_evaluate_script_writes_tables_csv_and_plots(trained, tmp_path, movingai):
+    import csv
+
+    final, _ = trained
+    out = tmp_path / "eval"
+    rc = _script("evaluate").main([
+        "--policy", str(final), "--families", "forest", "--size", "64", "--maps", "3", "--tuning-maps", "2",
+        "--seeds", "1", "--movingai", str(movingai), "--movingai-maps", "maze-32-32-2", "room-32-32-4",
+        "--scenarios", "2", "--other-planners", "PRM", "--processes", "1", "--out", str(out)])
+    assert rc == 0
+    text = (out / "summary.md").read_text()
+    for needle in ("forest", "MovingAI (all)", "policy", "goal bias 0.05 (default", "expert (reference)", "PRM"):
+        assert needle in text, needle
+    rows = list(csv.DictReader((out / "runs.csv").open()))
+    samplers = {r["sampler"] for r in rows}
+    assert {"uniform", "policy", "goal_bias=0.01", "goal_bias=0.5", "expert (reference)"} <= samplers
+    assert all(int(r["candidates"]) >= int(r["iterations"]) for r in rows if r["solved"] == "True")
+    for png in ("ecdf.png", "means.png"):
+        assert (out / png).stat().st_size > 10_000
