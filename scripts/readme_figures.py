@@ -1,0 +1,64 @@
+"""Regenerate the README's pictures (docs/*.png) from the library and the shipped checkpoint.
+
+    python scripts/readme_figures.py                  # writes docs/samplers.png and docs/rigid.png
+
+samplers.png: one held-out map per family, RRT with goal bias 0.05, the tuned best goal bias and the
+learned policy, same planner seed; each panel's title gives the iterations it took.
+rigid.png: RRT-Connect moving a box body through the window of the example 6-DoF scene.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--policy", type=Path, default=ROOT / "checkpoints" / "guided.zip")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs")
+    ap.add_argument("--families", nargs="+", default=["bugtrap", "maze", "rooms"])
+    ap.add_argument("--best-bias", nargs="+", type=float, default=None,
+                    help="best goal bias per family (from evaluate.py's summary); default 0.2 for all")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+
+    from learning import PolicySampler
+    from learning.training import TEST_SEED0
+    from planners import RRT, GoalBiasedSampler, RRTConnect, load_scene
+    from planners.generators import generate
+    from planners.plotting import new_figure, plot, save_figure
+    from planners.plotting3d import plot_scene
+
+    policy = PolicySampler.load(args.policy)
+    best = args.best_bias or [0.2] * len(args.families)
+    fams = args.families
+    fig = new_figure((3.3 * 3, 3.4 * len(fams)))
+    for i, fam in enumerate(fams):
+        problem = generate(fam, TEST_SEED0 + args.seed, 128)
+        for j, (label, sampler) in enumerate((("goal bias 0.05", GoalBiasedSampler(0.05)),
+                                              (f"goal bias {best[i]:g} (best)", GoalBiasedSampler(best[i])),
+                                              ("learned policy", policy))):
+            planner = RRT(problem, step_size=4.0, sampler=sampler, seed=args.seed)
+            r = planner.solve(max_iterations=20000)
+            ax = fig.add_subplot(len(fams), 3, 3 * i + j + 1)
+            plot(problem, planner, r, ax=ax, title=f"{fam}, {label}: {r.iterations} it.")
+            ax.title.set_fontsize(8)
+    p1 = save_figure(fig, args.out / "samplers.png", dpi=90)
+
+    problem = load_scene(ROOT / "planners" / "scenes" / "example.scene")
+    r = RRTConnect(problem, step_size=0.5, seed=args.seed).solve(max_iterations=20000)
+    fig = plot_scene(problem, r.path if r.solved else None,
+                     title=f"6-DoF box, RRT-Connect: {r.iterations} iterations")
+    p2 = save_figure(fig, args.out / "rigid.png", dpi=90)
+    print(p1, p2)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
