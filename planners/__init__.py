@@ -4,6 +4,7 @@ from planners.grid import OccupancyGrid
 from planners.nn import NearestNeighbors
 from planners.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
 from planners.problem import Problem, load_movingai_scenarios
+from planners.obprm import OBPRM, ObstacleBasedSampler
 from planners.prm import PRM, LazyPRM
 from planners.rigid3d import Box3D, RigidBodyWorld, box_body, load_scene, random_scene, save_scene, thin_wall_scene
 from planners.rrt import RRT, RRTConnect
@@ -34,6 +35,8 @@ __all__ = [
     "InformedSampler",
     "LazyPRM",
     "NearestNeighbors",
+    "OBPRM",
+    "ObstacleBasedSampler",
     "OccupancyGrid",
     "PlanResult",
     "PRM",
