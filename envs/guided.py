@@ -158,13 +158,18 @@ class GuidedSampling:
         self.ego.update(view.vertices, view.num_vertices, view.best_distance, view.iteration)
         self.frontier.update(view.vertices, view.num_vertices)
 
-    def samples_from_logits(self, logits: np.ndarray, temperature: float, m: int, rng: np.random.Generator) -> SampleBatch:
-        """``m`` samples whose classes are drawn from softmax(logits / temperature), in one compiled call."""
+    def samples_from_logits(self, logits: np.ndarray, temperature: float, m: int, rng: np.random.Generator,
+                            uniform_floor: float | None = None) -> SampleBatch:
+        """``m`` samples whose classes are drawn from softmax(logits / temperature), in one compiled call.
+
+        ``uniform_floor`` overrides the share of uniform samples for this batch (at least the default's).
+        """
+        floor = self.uniform_floor if uniform_floor is None else max(self.uniform_floor, float(uniform_floor))
         pts = np.empty((m, 2))
         anch = np.empty(m, dtype=np.int8)
         fr = self.frontier
         fill_from_logits(logits, temperature, rng.random((m, 6)), self.low, self.high, self.step, _RINGS, ANGLES,
-                         self.uniform_floor, fr.cell, fr.W, fr.front, fr.count, fr.dist, fr.tau, pts, anch)
+                         floor, fr.cell, fr.W, fr.front, fr.count, fr.dist, fr.tau, pts, anch)
         return SampleBatch(pts, anch)
 
     def stuck(self, view: TreeView) -> int:

@@ -9,8 +9,11 @@ samples are offsets resolved against the tree's progress vertex when used, so th
 tree. The distribution is reused for further batches while the progress vertex stays the same and
 fewer than ``reuse`` iterations have passed since the forward pass, the stretches in which the
 observation's decisive parts (the windows around that vertex) barely change. A ``uniform_floor``
-share of samples is uniform: probabilistic completeness is kept. The policy sees only its
-observation: the map, the tree, start and goal.
+share of samples is uniform: probabilistic completeness is kept. When the tree has made no progress
+towards the goal for ``patience`` iterations the uniform share grows with the time stuck (up to
+``max_floor``): a tree pinned against a wall by its own biased samples gets RRT's Voronoi bias back,
+which cuts the heavy tail of failures on narrow passages without changing the medians. The policy
+sees only its observation: the map, the tree, start and goal.
 """
 
 from __future__ import annotations
@@ -65,10 +68,12 @@ class PolicySampler(SamplerBase):
         batch: Samples per batch; default: the training batch.
         temperature: Softmax temperature of the action distribution.
         reuse: Longest stretch of iterations one forward pass may serve (1: a pass per batch).
+        patience: Iterations without progress after which the uniform share starts to grow.
+        max_floor: The largest uniform share that growth reaches.
     """
 
     def __init__(self, actor: FastActor, config: dict, *, step_size: float | None = None, batch: int | None = None,
-                 temperature: float = 1.0, reuse: int = 32) -> None:
+                 temperature: float = 1.0, reuse: int = 32, patience: int = 200, max_floor: float = 0.5) -> None:
         missing = [k for k in CONFIG_KEYS if k not in config]
         if missing:
             raise ValueError(f"policy config lacks {missing}")
@@ -82,9 +87,12 @@ class PolicySampler(SamplerBase):
         self.batch = int(batch if batch is not None else config["batch"])
         self.temperature = float(temperature)
         self.reuse = int(reuse)
-        if not (self.step_size > 0 and self.batch >= 1 and self.temperature > 0 and self.reuse >= 1):
-            raise ValueError(f"step_size, batch and temperature must be positive, got "
-                             f"{self.step_size}, {self.batch}, {self.temperature}")
+        self.patience, self.max_floor = int(patience), float(max_floor)
+        if not (self.step_size > 0 and self.batch >= 1 and self.temperature > 0 and self.reuse >= 1
+                and self.patience >= 1 and 0.0 <= self.max_floor <= 1.0):
+            raise ValueError(f"need step_size, batch, temperature, reuse, patience > 0 and 0 <= max_floor <= 1, got "
+                             f"{self.step_size}, {self.batch}, {self.temperature}, {self.reuse}, {self.patience}, "
+                             f"{self.max_floor}")
         self.forward_passes = 0
 
     @classmethod
@@ -128,7 +136,9 @@ class PolicySampler(SamplerBase):
             self._logits = self.actor.logits(obs["local"], obs["vector"]).astype(np.float64)
             self._anchor, self._since = view.best_vertex, view.iteration
             self.forward_passes += 1
-        return self.guide.samples_from_logits(self._logits, self.temperature, min(n, self.batch), rng)
+        stuck = self.guide.stuck(view)
+        floor = None if stuck < self.patience else min(self.max_floor, self.guide.uniform_floor * stuck / self.patience)
+        return self.guide.samples_from_logits(self._logits, self.temperature, min(n, self.batch), rng, floor)
 
     def __repr__(self) -> str:
         return f"PolicySampler(step_size={self.step_size:g}, batch={self.batch})"
