@@ -21,6 +21,30 @@ from planners import Problem
 from planners._geometry import motion_free
 
 
+@nb.njit(cache=True, inline="always")
+def cdf_search(cdf, n, t):
+    """Index of the first of ``cdf[:n]`` (non-decreasing) that is >= ``t`` (the last if none is)."""
+    lo, hi = 0, n - 1
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if cdf[mid] < t:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@nb.njit(cache=True, inline="always")
+def softmax_cdf(logits, temperature, cdf):
+    """Fill ``cdf`` with the running sum of exp((logits - max) / temperature); return the total."""
+    m = logits.max()
+    acc = 0.0
+    for i in range(logits.shape[0]):
+        acc += math.exp((logits[i] - m) / temperature)
+        cdf[i] = acc
+    return acc
+
+
 @nb.njit(cache=True)
 def _update(world, vertices, cell, free, cov, pos, front, count):
     """Mark new vertices' cells covered and add their visible uncovered neighbours; returns count."""
@@ -89,15 +113,7 @@ def _sample(front, count, W, cell, dist, tau, u_pick, u_xy, out):
         acc += math.exp(-(dist[front[i]] - dmin) / tau)
         cdf[i] = acc
     for k in range(u_pick.shape[0]):
-        t = u_pick[k] * acc
-        lo, hi = 0, count - 1
-        while lo < hi:  # first cdf entry >= t
-            mid = (lo + hi) // 2
-            if cdf[mid] < t:
-                lo = mid + 1
-            else:
-                hi = mid
-        f = front[lo]
+        f = front[cdf_search(cdf, count, u_pick[k] * acc)]
         out[k, 0] = (f % W + u_xy[k, 0]) * cell
         out[k, 1] = (f // W + u_xy[k, 1]) * cell
     return u_pick.shape[0]

@@ -22,7 +22,7 @@ import numba as nb
 import numpy as np
 
 from envs.egocentric import EgocentricView
-from envs.frontier import Frontier
+from envs.frontier import Frontier, cdf_search, softmax_cdf
 from planners import Problem, SampleBatch, TreeView
 
 ANGLES = 16
@@ -31,6 +31,17 @@ N_EGO = ANGLES * (len(RINGS) - 1)
 FRONTIER = N_EGO
 N_ACTIONS = N_EGO + 1
 _RINGS = np.asarray(RINGS)
+
+
+@nb.njit(cache=True, inline="always")
+def _ego_offset(c, ur, ua, rings, angles, step, pts, anch, k):
+    """Row ``k`` := a uniform point of egocentric cell ``c`` (ring ``c // angles``), a goal-frame offset."""
+    ring = c // angles
+    r = (rings[ring] + ur * (rings[ring + 1] - rings[ring])) * step
+    a = (c % angles + ua) * (2.0 * math.pi / angles)
+    pts[k, 0] = r * math.cos(a)
+    pts[k, 1] = r * math.sin(a)
+    anch[k] = 2  # ANCHOR_GOAL
 
 
 @nb.njit(cache=True)
@@ -52,13 +63,7 @@ def _fill_samples(classes, u, uni, front, low, high, step, rings, angles, floor,
             pts[k, 1] = front[k, 1]
             anch[k] = 0
         else:
-            ring = c // angles
-            ang = c % angles
-            r = (rings[ring] + u[k, 0] * (rings[ring + 1] - rings[ring])) * step
-            a = (ang + u[k, 1]) * (2.0 * math.pi / angles)
-            pts[k, 0] = r * math.cos(a)
-            pts[k, 1] = r * math.sin(a)
-            anch[k] = 2  # ANCHOR_GOAL
+            _ego_offset(c, u[k, 0], u[k, 1], rings, angles, step, pts, anch, k)
 
 
 @nb.njit(cache=True)
@@ -70,12 +75,8 @@ def fill_from_logits(logits, temperature, u, low, high, step, rings, angles, flo
     a uniform or frontier point. One compiled call per batch: the sampler's whole per-batch work.
     """
     n_ego = angles * (rings.shape[0] - 1)
-    m = logits.max()
     cdf = np.empty(logits.shape[0])
-    acc = 0.0
-    for i in range(logits.shape[0]):
-        acc += math.exp((logits[i] - m) / temperature)
-        cdf[i] = acc
+    acc = softmax_cdf(logits, temperature, cdf)
     # frontier cell weights (goal preference), as in envs.frontier
     fcdf = np.empty(max(fcount, 1))
     facc = 0.0
@@ -87,40 +88,18 @@ def fill_from_logits(logits, temperature, u, low, high, step, rings, angles, flo
             facc += math.exp(-(fdist[front[i]] - dmin) / ftau)
             fcdf[i] = facc
     for k in range(u.shape[0]):
-        t = u[k, 0] * acc
-        lo, hi = 0, logits.shape[0] - 1
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if cdf[mid] < t:
-                lo = mid + 1
-            else:
-                hi = mid
-        c = lo
+        c = cdf_search(cdf, logits.shape[0], u[k, 0] * acc)
         if u[k, 3] < floor or (c >= n_ego and fcount == 0):
             pts[k, 0] = low[0] + (high[0] - low[0]) * u[k, 4]
             pts[k, 1] = low[1] + (high[1] - low[1]) * u[k, 5]
             anch[k] = 0
         elif c >= n_ego:
-            t = u[k, 1] * facc
-            lo, hi = 0, fcount - 1
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if fcdf[mid] < t:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            f = front[lo]
+            f = front[cdf_search(fcdf, fcount, u[k, 1] * facc)]
             pts[k, 0] = (f % fW + u[k, 4]) * fcell
             pts[k, 1] = (f // fW + u[k, 5]) * fcell
             anch[k] = 0
         else:
-            ring = c // angles
-            ang = c % angles
-            r = (rings[ring] + u[k, 1] * (rings[ring + 1] - rings[ring])) * step
-            a = (ang + u[k, 2]) * (2.0 * math.pi / angles)
-            pts[k, 0] = r * math.cos(a)
-            pts[k, 1] = r * math.sin(a)
-            anch[k] = 2  # ANCHOR_GOAL
+            _ego_offset(c, u[k, 1], u[k, 2], rings, angles, step, pts, anch, k)
 
 
 def ego_class(dx: float, dy: float, step: float) -> int:

@@ -25,6 +25,18 @@ def default_movingai_dir() -> Path:
     return Path(env) if env else Path(__file__).resolve().parents[2] / "shared" / "maps" / "movingai"
 
 
+def _seeded(seeds: Sequence[int] | None) -> np.ndarray | None:
+    """A fixed pool of map seeds (None: any seed)."""
+    out = None if seeds is None else np.asarray(seeds, dtype=np.int64)
+    if out is not None and len(out) == 0:
+        raise ValueError("seeds must not be empty")
+    return out
+
+
+def _draw_seed(pool: np.ndarray | None, np_random: np.random.Generator) -> int:
+    return int(np_random.integers(2**31)) if pool is None else int(pool[np_random.integers(len(pool))])
+
+
 class FamilySource:
     """Problems from one generated family (see ``planners.generators``), a fresh map each reset.
 
@@ -40,15 +52,10 @@ class FamilySource:
         if family not in FAMILIES:
             raise ValueError(f"unknown family {family!r}; choose from {FAMILIES}")
         self.family, self.size, self.goal_tolerance = family, int(size), float(goal_tolerance)
-        self.seeds = None if seeds is None else np.asarray(seeds, dtype=np.int64)
-        if self.seeds is not None and len(self.seeds) == 0:
-            raise ValueError("seeds must not be empty")
+        self.seeds = _seeded(seeds)
 
     def __call__(self, np_random: np.random.Generator) -> Problem:
-        if self.seeds is None:
-            seed = int(np_random.integers(2**31))
-        else:
-            seed = int(self.seeds[np_random.integers(len(self.seeds))])
+        seed = _draw_seed(self.seeds, np_random)
         return generate(self.family, seed, self.size, goal_tolerance=self.goal_tolerance)
 
     def __repr__(self) -> str:
@@ -168,18 +175,13 @@ class RigidSceneSource:
 
         random_scene(0, n_boxes, **scene_kwargs)  # validates the arguments now, not at the first reset
         self.n_boxes, self.scene_kwargs = int(n_boxes), dict(scene_kwargs)
-        self.seeds = None if seeds is None else np.asarray(seeds, dtype=np.int64)
-        if self.seeds is not None and len(self.seeds) == 0:
-            raise ValueError("seeds must not be empty")
+        self.seeds = _seeded(seeds)
 
     def __call__(self, np_random: np.random.Generator) -> Problem:
         """A fresh random scene, its seed drawn from ``np_random``."""
         from planners.rigid3d import random_scene
 
-        if self.seeds is None:
-            seed = int(np_random.integers(2**31))
-        else:
-            seed = int(self.seeds[np_random.integers(len(self.seeds))])
+        seed = _draw_seed(self.seeds, np_random)
         return random_scene(seed, self.n_boxes, **self.scene_kwargs)
 
     def __repr__(self) -> str:

@@ -26,6 +26,7 @@ from pathlib import Path
 import numba as nb
 import numpy as np
 
+from envs.frontier import cdf_search, softmax_cdf
 from envs.guided import N_ACTIONS, GuidedSampling
 from learning.fast_policy import FastActor
 from planners import OccupancyGrid, SamplerBase
@@ -38,23 +39,11 @@ OBS_VERSION = 1
 @nb.njit(cache=True)
 def sample_classes(logits, temperature, u):
     """Indices drawn from softmax(logits / temperature) by inverse CDF, one per uniform in ``u``."""
-    m = logits.max()
     cdf = np.empty(logits.shape[0])
-    acc = 0.0
-    for i in range(logits.shape[0]):
-        acc += np.exp((logits[i] - m) / temperature)
-        cdf[i] = acc
+    acc = softmax_cdf(logits, temperature, cdf)
     out = np.empty(u.shape[0], dtype=np.int64)
     for k in range(u.shape[0]):
-        t = u[k] * acc
-        lo, hi = 0, logits.shape[0] - 1
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if cdf[mid] < t:
-                lo = mid + 1
-            else:
-                hi = mid
-        out[k] = lo
+        out[k] = cdf_search(cdf, logits.shape[0], u[k] * acc)
     return out
 
 

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planners import _geometry
+from planners import _geometry, _rigid_kernels
 from planners._rigid_kernels import body_points_world
 from planners._space import SPACE_RIGID, interpolate
 from planners.problem import Problem
@@ -43,14 +43,8 @@ DEFAULT_DELTA = 0.05
 
 
 def rotation_matrix(tx: float, ty: float, tz: float) -> np.ndarray:
-    """``H = Ry(ty) @ Rx(tx) @ Rz(tz)`` as a (3, 3) array."""
-    cx, sx = math.cos(tx), math.sin(tx)
-    cy, sy = math.cos(ty), math.sin(ty)
-    cz, sz = math.cos(tz), math.sin(tz)
-    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
-    Ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
-    Rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
-    return Ry @ Rx @ Rz
+    """``H = Ry(ty) @ Rx(tx) @ Rz(tz)`` as a (3, 3) array (the compiled checks' own matrix)."""
+    return _rigid_kernels.rotation_matrix(float(tx), float(ty), float(tz))
 
 
 @dataclass(frozen=True)
