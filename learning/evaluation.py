@@ -19,7 +19,7 @@ import numpy as np
 
 from learning.training import TEST_SEED0, TUNING_SEED0, lower_bound
 from planners import PRM, RRT, GoalBiasedSampler, Problem, RRTStar, UniformSampler, load_movingai_scenarios
-from planners.generators import FAMILIES, generate
+from planners.generators import generate
 
 GOAL_BIASES = (0.01, 0.05, 0.1, 0.2, 0.5)
 PLANNERS = {"RRT": RRT, "RRTstar": RRTStar, "PRM": PRM}
@@ -161,7 +161,8 @@ def _worker_init() -> None:
 
 def pooled(runs: Sequence[Run], name: str, families: Sequence[str]) -> list[Run]:
     """Copies of the runs on ``families`` relabelled as one family ``name`` (e.g. all MovingAI maps), so
-    the best bias is tuned and the summary taken over the pool as a whole."""
+    the best bias is tuned and the summary taken over the pool as a whole.
+    """
     from dataclasses import replace
 
     keep = set(families)
@@ -193,7 +194,8 @@ def bootstrap_mean_ci(x: np.ndarray, rng: np.random.Generator, n: int = 2000) ->
 
 def summarize(runs: Sequence[Run], biases: dict, seed: int = 0) -> list[dict]:
     """One row per (family, planner, sampler) on the test split; goal-bias rows are the default 0.05,
-    the tuned best, and (for completeness) the rest of the sweep."""
+    the tuned best, and (for completeness) the rest of the sweep.
+    """
     rng = np.random.default_rng(seed)
     test = [r for r in runs if r.split == "test"]
     groups: dict = {}
@@ -266,22 +268,22 @@ def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir:
                          "expert (reference)"]
     for i, fam in enumerate(fams):
         ax = fig.add_subplot(nrows, cols, i + 1)
+        # fixed colours per role, so panels where the best bias is the default 0.05 read the same
+        best_s = f"goal_bias={biases.get((fam, planner), 0.05):g}"
+        colors = {"uniform": "C0", best_s: "C2", "goal_bias=0.05": "C1", "policy": "C3", "expert (reference)": "0.4"}
         for s in dict.fromkeys(shown(fam)):
             its = np.sort([r.iterations if r.solved else math.inf for r in test if r.family == fam and r.sampler == s])
             if len(its) == 0:
                 continue
-            label = s.replace("goal_bias=", "goal bias ")
-            if s == f"goal_bias={biases.get((fam, planner), -1):g}":
-                label += " (best)"
-            style = dict(linestyle="--", color="0.4") if s.startswith("expert") else {}
-            ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=label, **style)
+            label = s.replace("goal_bias=", "goal bias ") + (" (best)" if s == best_s else "")
+            style = {"linestyle": "--"} if s.startswith("expert") else {}
+            ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=label, color=colors[s], **style)
         ax.set_xscale("log")
         ax.set_title(fam)
         ax.set_xlabel("iterations to solution")
         ax.set_ylabel("fraction solved")
         ax.grid(alpha=0.3)
-        if i == 0:
-            ax.legend(fontsize=7)
+        ax.legend(fontsize=6)
     p1 = save_figure(fig, out_dir / "ecdf.png", dpi=110)
     fig = new_figure((max(6.0, 1.6 * len(fams)), 3.6))
     ax = fig.add_subplot(1, 1, 1)
