@@ -1,6 +1,6 @@
 """Planner benchmark: speed against OMPL in the same run, and every planner on every map family.
 
-    python scripts/benchmark_planners.py                 # full run (~5 min), OMPL if installed
+    python scripts/benchmark_planners.py                 # full run (~8 min on 2 cores), OMPL if installed
     python scripts/benchmark_planners.py --quick         # smoke-sized run
     python scripts/benchmark_planners.py --no-ompl
 
