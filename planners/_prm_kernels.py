@@ -317,16 +317,22 @@ def astar(store, edges, vstat, n, ne, src, dst, space, only_valid):
 
 
 @nb.njit(cache=True)
-def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal):
+def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, max_rounds):
     """Lazy-PRM query: search the optimistic roadmap, check the path, drop what fails, repeat.
 
     Returns the valid path's vertex indices (and marks the planner solved), or an empty array after
-    rebuilding the components when start and goal turn out to be disconnected.
+    rebuilding the components when start and goal turn out to be disconnected, or an empty array
+    after ``max_rounds`` searches (the checks done so far are kept; the next call goes on), so the
+    caller's time limit is looked at between bounded pieces of work.
     """
     X = store[0]
     eu, ev, ew, es = edges
     csr = build_csr(edges, istate[I_N], istate[I_E])
+    rounds = 0
     while True:
+        if rounds >= max_rounds:
+            return np.empty(0, dtype=np.int64)
+        rounds += 1
         verts, eds = astar_csr(X, csr, ew, es, vstat, istate[I_QS], istate[I_QG], space, False)
         if verts.shape[0] == 0:
             rebuild_components(store, edges, uf, vstat, istate, goal, space)

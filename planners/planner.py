@@ -223,8 +223,8 @@ class Planner(abc.ABC):
         if self._finished():
             return StepResult(False, self.iterations, self._last.copy(), -1, True)
         before = self.iterations
-        while self.iterations == before:
-            self._consume(1)
+        while self.iterations == before and not self._finished():
+            self._consume(1)  # no sample is drawn while a Lazy-PRM resolution is still pending
         self._time += time.perf_counter() - t0
         return StepResult(True, self.iterations, self._last.copy(), int(self._istate[K.I_ADDED]), self.solved)
 

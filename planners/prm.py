@@ -18,6 +18,10 @@ from planners.samplers import Sampler
 DEFAULT_K = 10
 
 
+#: Searches per lazy resolution call: bounds the work between two looks at the caller's time limit
+#: (a huge roadmap with many invalid edges can need thousands of searches).
+LAZY_ROUNDS = 64
+
 class PRM(Planner):
     """Probabilistic roadmap, multi-query.
 
@@ -153,7 +157,8 @@ class PRM(Planner):
             return
         if self.lazy:
             path = KP.lazy_resolve(self._store.as_tuple(), self._edges, self._uf, self._vstat, self._istate,
-                                   self._fstate, self.problem.world.kernel, self._space, self._goal)
+                                   self._fstate, self.problem.world.kernel, self._space, self._goal,
+                                   LAZY_ROUNDS)
             if len(path):
                 self._lazy_path = path
         else:

@@ -349,3 +349,21 @@ def test_uniform_sampler_stays_in_bounds(open_problem):
     pts = s.draw(np.random.default_rng(0), 10000, None)
     lo, hi = open_problem.world.bounds
     assert pts.shape == (10000, 2) and (pts >= lo).all() and (pts < hi).all()
+
+
+def test_lazy_prm_resolution_in_bounded_pieces(monkeypatch):
+    """One search per call (the time limit is looked at in between) changes nothing but the pacing."""
+    import planners.prm as prm_mod
+    from planners.generators import generate
+
+    problem = generate("maze", 3, 64)
+    ref = LazyPRM(problem, seed=2).solve(max_iterations=20000)
+    monkeypatch.setattr(prm_mod, "LAZY_ROUNDS", 1)
+    pieces = LazyPRM(problem, seed=2).solve(max_iterations=20000)
+    assert ref.solved and pieces.solved
+    assert fine_check_path(problem.world, pieces.path)
+    stepped = LazyPRM(problem, seed=2)
+    while not stepped.solved and stepped.iterations < 20000:
+        stepped.step()
+    assert stepped.iterations == pieces.iterations
+    assert np.array_equal(stepped.result().path, pieces.path)
