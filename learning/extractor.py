@@ -40,7 +40,8 @@ class EgocentricExtractor(BaseFeaturesExtractor):
 
 def policy_kwargs(features_dim: int = 128, hidden: int = 128) -> dict:
     """``policy_kwargs`` for ``PPO("MultiInputPolicy", ...)``; actor and critic keep separate extractors
-    so that fitting the critic never disturbs an imitation-trained actor."""
+    so that fitting the critic never disturbs an imitation-trained actor.
+    """
     return dict(
         features_extractor_class=EgocentricExtractor,
         features_extractor_kwargs=dict(features_dim=features_dim),

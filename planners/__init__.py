@@ -2,15 +2,13 @@
 
 from planners.grid import OccupancyGrid
 from planners.nn import NearestNeighbors
-from planners.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
-from planners.problem import Problem, load_movingai_scenarios
 from planners.obprm import OBPRM, ObstacleBasedSampler
+from planners.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
 from planners.prm import PRM, LazyPRM
+from planners.problem import Problem, load_movingai_scenarios
 from planners.rigid3d import Box3D, RigidBodyWorld, box_body, load_scene, random_scene, save_scene, thin_wall_scene
 from planners.rrt import RRT, RRTConnect
 from planners.rrtstar import InformedRRTStar, RRTStar
-from planners.smoothing import shortcut, simplify, smooth
-from planners.shapes import Circle, GeometricWorld, Rectangle
 from planners.samplers import (
     ANCHOR_GOAL,
     ANCHOR_NONE,
@@ -22,6 +20,8 @@ from planners.samplers import (
     SamplerBase,
     UniformSampler,
 )
+from planners.shapes import Circle, GeometricWorld, Rectangle
+from planners.smoothing import shortcut, simplify, smooth
 from planners.world import World
 
 __all__ = [

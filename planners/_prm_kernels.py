@@ -17,7 +17,18 @@ import numpy as np
 
 from planners import _nn
 from planners._geometry import motion_free, state_free
-from planners._rrt_kernels import F_BEST_COST, F_BEST_D, I_ADDED, I_BEST_V, I_CHECKS, I_FIRST, I_ITER, I_N, I_SOLVED, _embed_query
+from planners._rrt_kernels import (
+    F_BEST_COST,
+    F_BEST_D,
+    I_ADDED,
+    I_BEST_V,
+    I_CHECKS,
+    I_FIRST,
+    I_ITER,
+    I_N,
+    I_SOLVED,
+    _embed_query,
+)
 from planners._rrtstar_kernels import near_vertices
 from planners._space import distance, kd_metric, uses_kd
 from planners._tree_kernels import add_vertex, resolve_sample
@@ -76,7 +87,7 @@ def uf_make(uf, v, dgoal):
 
 @nb.njit(cache=True)
 def neighbours(store, n, space, q, qe, k, radius, out, out_d):
-    """k nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices."""
+    """The k nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices."""
     X = store[0]
     E, perm, split, box = store[1], store[4], store[5], store[6]
     kind, metric, rw = space

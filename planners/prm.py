@@ -9,7 +9,7 @@ import numpy as np
 
 from planners import _prm_kernels as KP
 from planners import _rrt_kernels as K
-from planners.planner import require_problem, CHUNK, Planner, PlannerData, PlanResult, VertexStore
+from planners.planner import CHUNK, Planner, PlannerData, PlanResult, VertexStore, require_problem
 from planners.problem import Problem
 from planners.rrtstar import unit_ball_volume
 from planners.samplers import Sampler

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from planners import _rrt_kernels as K
-from planners.planner import require_problem, Planner, PlannerData, VertexStore
+from planners.planner import Planner, PlannerData, VertexStore, require_problem
 from planners.problem import Problem
 from planners.samplers import Sampler
 

@@ -16,16 +16,19 @@ import os
 import platform
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from planners import OccupancyGrid, Problem, load_movingai_scenarios  # noqa: E402
+from planners import (  # noqa: E402
+    OccupancyGrid,
+    Problem,
+    load_movingai_scenarios,
+    ompl_bridge,  # noqa: E402
+)
 from planners import benchmark as B  # noqa: E402
-from planners import ompl_bridge  # noqa: E402
 from planners.generators import FAMILIES, generate  # noqa: E402
 
 
@@ -85,7 +88,7 @@ def _rate(rs) -> float:
 def growth(args, use_ompl: bool, d: Path | None) -> tuple[list[dict], list[dict]]:
     """Per-iteration time while a uniform-sampling RRT tree grows to 1k, 10k and 100k vertices."""
     checkpoints = [1000, 10000, 100000] if not args.quick else [1000, 10000]
-    worlds = {f"forest-512-0": generate("forest", 0, 512).world}
+    worlds = {"forest-512-0": generate("forest", 0, 512).world}
     if d is not None:
         worlds["random512-10-0"] = OccupancyGrid.from_movingai(d / "random512-10-0.map")
     rows, nn_rows = [], []

@@ -12,7 +12,7 @@ import torch
 from learning import PolicySampler
 from learning.fast_policy import FastActor
 from learning.training import TEST_SEED0, TrainConfig, train
-from planners import RRT, OccupancyGrid, Problem, RRTStar, UniformSampler, PRM
+from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler
 from planners.generators import generate
 
 TINY = TrainConfig(name="tiny", families=("forest",), sizes=(64,), dagger_rounds=2, maps_per_round=8, bc_epochs=3,
