@@ -129,11 +129,9 @@ class EgocentricView:
         self.max_iterations = max_iterations
         self.factors = np.asarray(scales, dtype=np.int64)
         obstacles = grid.kernel[1]  # the map as uint8, already contiguous
-        self.levels_obs = [_pyramid_level(obstacles, int(f)) for f in self.factors]
-        self.levels_tree = [np.zeros(lv.shape, dtype=np.int32) for lv in self.levels_obs]
         # tuples of arrays pass into compiled code far faster than typed lists
-        self.levels_obs = tuple(self.levels_obs)
-        self.levels_tree = tuple(self.levels_tree)
+        self.levels_obs = tuple(_pyramid_level(obstacles, int(f)) for f in self.factors)
+        self.levels_tree = tuple(np.zeros(lv.shape, dtype=np.int32) for lv in self.levels_obs)
         self.start = np.ascontiguousarray(problem.start[:2], dtype=np.float64)
         self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
         self.seen = 0

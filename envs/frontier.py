@@ -97,21 +97,28 @@ def _cells(world, H, W, cell, goal):
     return free, dist
 
 
-@nb.njit(cache=True)
-def _sample(front, count, W, cell, dist, tau, u_pick, u_xy, out):
-    """Frontier cells drawn with weight exp(-(d - d_min) / tau), a uniform point in each."""
-    if count == 0:
-        return 0
+@nb.njit(cache=True, inline="always")
+def frontier_cdf(front, count, dist, tau, cdf):
+    """Running sum into ``cdf`` of the frontier cells' weights exp(-(d - d_min) / tau); return the total."""
     dmin = np.inf
     for i in range(count):
         d = dist[front[i]]
         if d < dmin:
             dmin = d
-    cdf = np.empty(count)
     acc = 0.0
     for i in range(count):
         acc += math.exp(-(dist[front[i]] - dmin) / tau)
         cdf[i] = acc
+    return acc
+
+
+@nb.njit(cache=True)
+def _sample(front, count, W, cell, dist, tau, u_pick, u_xy, out):
+    """Frontier cells drawn with weight exp(-(d - d_min) / tau), a uniform point in each."""
+    if count == 0:
+        return 0
+    cdf = np.empty(count)
+    acc = frontier_cdf(front, count, dist, tau, cdf)
     for k in range(u_pick.shape[0]):
         f = front[cdf_search(cdf, count, u_pick[k] * acc)]
         out[k, 0] = (f % W + u_xy[k, 0]) * cell

@@ -22,11 +22,13 @@ import numba as nb
 import numpy as np
 
 from envs.egocentric import EgocentricView
-from envs.frontier import Frontier, cdf_search, softmax_cdf
+from envs.frontier import Frontier, cdf_search, frontier_cdf, softmax_cdf
 from planners import Problem, SampleBatch, TreeView
 
 ANGLES = 16
 RINGS = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0)  # in steps
+SCALES = (0.25, 1.0, 4.0)  # egocentric window scales, in steps per pixel
+WINDOW = 16  # egocentric window side, in pixels
 N_EGO = ANGLES * (len(RINGS) - 1)
 FRONTIER = N_EGO
 N_ACTIONS = N_EGO + 1
@@ -77,16 +79,9 @@ def fill_from_logits(logits, temperature, u, low, high, step, rings, angles, flo
     n_ego = angles * (rings.shape[0] - 1)
     cdf = np.empty(logits.shape[0])
     acc = softmax_cdf(logits, temperature, cdf)
-    # frontier cell weights (goal preference), as in envs.frontier
+    # frontier cell weights (goal preference), built only when a batch draws the frontier class
     fcdf = np.empty(max(fcount, 1))
-    facc = 0.0
-    if fcount > 0:
-        dmin = np.inf
-        for i in range(fcount):
-            dmin = min(dmin, fdist[front[i]])
-        for i in range(fcount):
-            facc += math.exp(-(fdist[front[i]] - dmin) / ftau)
-            fcdf[i] = facc
+    facc = -1.0
     for k in range(u.shape[0]):
         c = cdf_search(cdf, logits.shape[0], u[k, 0] * acc)
         if u[k, 3] < floor or (c >= n_ego and fcount == 0):
@@ -94,6 +89,8 @@ def fill_from_logits(logits, temperature, u, low, high, step, rings, angles, flo
             pts[k, 1] = low[1] + (high[1] - low[1]) * u[k, 5]
             anch[k] = 0
         elif c >= n_ego:
+            if facc < 0.0:
+                facc = frontier_cdf(front, fcount, fdist, ftau, fcdf)
             f = front[cdf_search(fcdf, fcount, u[k, 1] * facc)]
             pts[k, 0] = (f % fW + u[k, 4]) * fcell
             pts[k, 1] = (f // fW + u[k, 5]) * fcell
@@ -123,7 +120,7 @@ class GuidedSampling:
         uniform_floor: Share of uniform samples whatever the class.
     """
 
-    def __init__(self, problem: Problem, step_size: float, *, scales=(0.25, 1.0, 4.0), size: int = 16,
+    def __init__(self, problem: Problem, step_size: float, *, scales=SCALES, size: int = WINDOW,
                  max_iterations: int = 20000, tau: float = 1.0, uniform_floor: float = 0.05) -> None:
         self.problem, self.step = problem, float(step_size)
         res = problem.world.resolution

@@ -24,10 +24,11 @@ class EgocentricObservation:
 
     def __init__(self, env: SamplerEnv) -> None:
         from envs.egocentric import EGO_VECTOR
+        from envs.guided import SCALES, WINDOW
 
         self.env = env
         self.space = gym.spaces.Dict({
-            "local": gym.spaces.Box(0, 255, (6, 16, 16), np.uint8),
+            "local": gym.spaces.Box(0, 255, (2 * len(SCALES), WINDOW, WINDOW), np.uint8),
             "vector": gym.spaces.Box(-1.0, 1.0, (len(EGO_VECTOR),), np.float32),
         })
 
@@ -35,10 +36,12 @@ class EgocentricObservation:
         """The episode's ``GuidedSampling`` holds the state."""
 
     def update(self, planner: Planner) -> None:
-        self.env._guide.update(planner.view())
+        """Nothing: ``build`` brings the guide up to date from the same tree view it observes."""
 
     def build(self, planner: Planner) -> dict:
-        obs = self.env._guide.observe(planner.view())
+        view = planner.view()
+        self.env._guide.update(view)
+        obs = self.env._guide.observe(view)
         obs["vector"] = np.clip(obs["vector"], -1.0, 1.0)
         return obs
 

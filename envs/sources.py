@@ -109,10 +109,10 @@ class MovingAISource(ProblemListSource):
 
 
 class FileSource:
-    """The user's own map files (images or MovingAI ``.map``), with random connected queries.
+    """The user's own map files (images, MovingAI ``.map`` or ``.npy``), with random connected queries.
 
     Args:
-        paths: Image (PNG/JPG/...) or ``.map`` files.
+        paths: Map files (``OccupancyGrid.from_file``).
         threshold: Gray level below which image pixels are obstacles.
         resolution: World units per cell.
         goal_tolerance: Goal radius.
@@ -125,10 +125,7 @@ class FileSource:
             paths = [paths]
         self.grids: list[OccupancyGrid] = []
         for p in paths:
-            p = Path(p)
-            grid = (OccupancyGrid.from_movingai(p, resolution) if p.suffix == ".map"
-                    else OccupancyGrid.from_image(p, threshold, resolution))
-            self.grids.append(grid)
+            self.grids.append(OccupancyGrid.from_file(p, threshold, resolution))
         if not self.grids:
             raise ValueError("FileSource needs at least one map file")
         self.goal_tolerance = float(goal_tolerance)

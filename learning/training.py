@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from envs.sources import FamilySource
 from learning.fast_policy import FastActor
 from learning.imitation import Dataset, behaviour_cloning, collect
 from learning.policy_sampler import OBS_VERSION, PolicySampler
@@ -130,11 +129,12 @@ class _MixedFamilies:
     dim = 2
 
     def __init__(self, cfg: TrainConfig) -> None:
-        self.sources = [FamilySource(f, s, cfg.goal_tolerance) for f in cfg.families for s in cfg.sizes]
+        self.choices = [(f, s) for f in cfg.families for s in cfg.sizes]
+        self.goal_tolerance = cfg.goal_tolerance
 
     def __call__(self, np_random):
-        src = self.sources[int(np_random.integers(len(self.sources)))]
-        return generate(src.family, int(np_random.integers(*TRAIN_SEEDS)), src.size, goal_tolerance=src.goal_tolerance)
+        family, size = self.choices[int(np_random.integers(len(self.choices)))]
+        return generate(family, int(np_random.integers(*TRAIN_SEEDS)), size, goal_tolerance=self.goal_tolerance)
 
 
 def make_env(cfg: TrainConfig, seed: int):

@@ -11,6 +11,9 @@ from planners import _geometry
 from planners._space import SPACE_RN
 from planners.world import WorldBase
 
+#: Image suffixes ``OccupancyGrid.from_file`` reads with Pillow.
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".gif", ".tif", ".tiff", ".webp", ".pgm", ".ppm")
+
 #: MovingAI terrain characters; '.', 'G', 'S' are passable, '@', 'O', 'T', 'W' blocked (see
 #: ../shared/maps/README.md: water is "not passable from terrain", so it is blocked here).
 MOVINGAI_FREE = frozenset(".GS")
@@ -105,6 +108,34 @@ class OccupancyGrid(WorldBase):
         if invert:
             obstacles = ~obstacles
         return cls(obstacles, resolution, source=str(path))
+
+    @classmethod
+    def from_file(cls, path: str | os.PathLike, threshold: float = 0.5, resolution: float = 1.0,
+                  invert: bool = False) -> OccupancyGrid:
+        """Load any map file, by suffix: an image (``from_image``), a MovingAI ``.map``, or a ``.npy`` array.
+
+        Raises:
+            FileNotFoundError: ``path`` does not exist.
+            ValueError: The file is not a readable map of a known kind (the message names the file).
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"map file {str(path)!r} does not exist" if not path.exists()
+                                    else f"map path {str(path)!r} is not a file")
+        suffix = path.suffix.lower()
+        if suffix == ".map":
+            return cls.from_movingai(path, resolution)
+        if suffix == ".npy":
+            try:
+                arr = np.load(path, allow_pickle=False)
+            except (ValueError, OSError) as exc:
+                raise ValueError(f"cannot read {str(path)!r} as a numpy array: {exc}") from None
+            grid = cls(arr, resolution, source=str(path))
+            return cls(~grid.obstacles, resolution, source=str(path)) if invert else grid
+        if suffix not in IMAGE_SUFFIXES:
+            raise ValueError(f"map file {str(path)!r}: unknown kind {suffix or '(no suffix)'!r}; "
+                             f"use an image ({', '.join(IMAGE_SUFFIXES)}), a MovingAI .map or a .npy array")
+        return cls.from_image(path, threshold=threshold, resolution=resolution, invert=invert)
 
     @classmethod
     def from_movingai(cls, path: str | os.PathLike, resolution: float = 1.0) -> OccupancyGrid:

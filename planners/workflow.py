@@ -40,8 +40,6 @@ METRICS = ("euclidean", "manhattan", "chebyshev")
 ANYTIME = ("rrtstar", "informed-rrtstar")
 #: Planners whose sampler is fixed (``sampler`` must stay None for them).
 OWN_SAMPLER = ("informed-rrtstar", "obprm")
-#: Image suffixes read with Pillow; ``.map`` is MovingAI, ``.npy`` a numpy 0/1 or bool array.
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".gif", ".tif", ".tiff", ".webp", ".pgm", ".ppm")
 
 #: Edges drawn at most in the figure and per animation frame (a random, fixed subset beyond that).
 MAX_FIGURE_EDGES = 400_000
@@ -52,30 +50,8 @@ RASTER_PX = 1200
 
 
 def load_map(path: str | os.PathLike, threshold: float = 0.5, *, invert: bool = False) -> OccupancyGrid:
-    """An ``OccupancyGrid`` from an image (pixels darker than ``threshold`` are obstacles), ``.map`` or ``.npy``.
-
-    Raises:
-        FileNotFoundError: ``path`` does not exist.
-        ValueError: The file is not a readable map of a known kind (the message names the file).
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"map file {str(path)!r} does not exist" if not path.exists()
-                                else f"map path {str(path)!r} is not a file")
-    suffix = path.suffix.lower()
-    if suffix == ".map":
-        return OccupancyGrid.from_movingai(path)
-    if suffix == ".npy":
-        try:
-            arr = np.load(path, allow_pickle=False)
-        except (ValueError, OSError) as exc:
-            raise ValueError(f"cannot read {str(path)!r} as a numpy array: {exc}") from None
-        grid = OccupancyGrid(arr, source=str(path))
-        return OccupancyGrid(~grid.obstacles, source=str(path)) if invert else grid
-    if suffix not in IMAGE_SUFFIXES:
-        raise ValueError(f"map file {str(path)!r}: unknown kind {suffix or '(no suffix)'!r}; "
-                         f"use an image ({', '.join(IMAGE_SUFFIXES)}), a MovingAI .map or a .npy array")
-    return OccupancyGrid.from_image(path, threshold=threshold, invert=invert)
+    """An ``OccupancyGrid`` from an image, ``.map`` or ``.npy`` file (``OccupancyGrid.from_file``)."""
+    return OccupancyGrid.from_file(path, threshold, invert=invert)
 
 
 def make_planner(name: str, problem: Problem, *, sampler: str | None = None, goal_bias: float = 0.05,
