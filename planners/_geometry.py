@@ -141,7 +141,7 @@ def shapes_segment_free(geom, params, ax, ay, bx, by):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def motion_free(world, a, b):
     """True if the straight motion from state ``a`` to state ``b`` is collision-free."""
     kind, grid, geom, body, params = world

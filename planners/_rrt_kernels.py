@@ -43,46 +43,59 @@ def _embed_query(space, q, qe):
     return qe
 
 
+@nb.njit(cache=True, inline="always")
+def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
+                q, qe_buf, new):
+    """One RRT iteration on one sample: resolve -> nearest -> steer -> check motion -> add.
+
+    The building block of ``rrt_run`` and of samplers that fuse their draws into the RRT loop (see
+    ``Sampler`` in ``planners.samplers``); the caller checks capacity and the stopping rule first.
+    ``q``, ``qe_buf`` and ``new`` are scratch buffers.
+    """
+    X, E, parent, cost, perm, split, box = tree
+    kind, metric, rw = space
+    istate[I_ITER] += 1
+    istate[I_ADDED] = -1
+    resolve_sample(space, sample, anchored, X[istate[I_BEST_V]], goal, low, high, q)
+    last[:] = q
+    n = istate[I_N]
+    near = nearest_vertex(tree, n, space, q, _embed_query(space, q, qe_buf), st, sb)
+    d = steer(space, X[near], q, step, new)
+    if d <= 1e-12:
+        return
+    istate[I_CHECKS] += 1
+    if not motion_free(world, X[near], new):
+        return
+    c = cost[near] + distance(kind, metric, rw, X[near], new)
+    n = add_vertex(tree, n, space, new, near, c)
+    istate[I_N] = n
+    istate[I_ADDED] = n - 1
+    dg = distance(kind, metric, rw, new, goal)
+    if dg < fstate[F_BEST_D]:
+        fstate[F_BEST_D] = dg
+        istate[I_BEST_V] = n - 1
+    if dg <= tol and not istate[I_SOLVED]:
+        istate[I_SOLVED] = 1
+        istate[I_GOAL_V] = n - 1
+        istate[I_FIRST] = istate[I_ITER]
+        fstate[F_BEST_COST] = c
+
+
 @nb.njit(cache=True)
 def rrt_run(samples, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high,
             stop_when_solved, st, sb):
-    """RRT (LaValle 1998): sample -> nearest -> steer -> check motion -> add."""
-    X, E, parent, cost, perm, split, box = tree
-    kind, metric, rw = space
-    cap = X.shape[0]
+    """RRT (LaValle 1998) over a batch of samples."""
+    X = tree[0]
     q = np.empty(X.shape[1])
-    qe_buf = np.empty(E.shape[1])
+    qe_buf = np.empty(tree[1].shape[1])
     new = np.empty(X.shape[1])
     for s in range(samples.shape[0]):
         if stop_when_solved and istate[I_SOLVED]:
             return s
-        n = istate[I_N]
-        if n >= cap:
+        if istate[I_N] >= X.shape[0]:
             return s
-        istate[I_ITER] += 1
-        istate[I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], goal, low, high, q)
-        last[:] = q
-        near = nearest_vertex(tree, n, space, q, _embed_query(space, q, qe_buf), st, sb)
-        d = steer(space, X[near], q, step, new)
-        if d <= 1e-12:
-            continue
-        istate[I_CHECKS] += 1
-        if not motion_free(world, X[near], new):
-            continue
-        c = cost[near] + distance(kind, metric, rw, X[near], new)
-        n = add_vertex(tree, n, space, new, near, c)
-        istate[I_N] = n
-        istate[I_ADDED] = n - 1
-        dg = distance(kind, metric, rw, new, goal)
-        if dg < fstate[F_BEST_D]:
-            fstate[F_BEST_D] = dg
-            istate[I_BEST_V] = n - 1
-        if dg <= tol and not istate[I_SOLVED]:
-            istate[I_SOLVED] = 1
-            istate[I_GOAL_V] = n - 1
-            istate[I_FIRST] = istate[I_ITER]
-            fstate[F_BEST_COST] = c
+        rrt_iterate(samples[s], anchored[s], tree, istate, fstate, last, world, space, goal, step, tol, low, high,
+                    st, sb, q, qe_buf, new)
     return samples.shape[0]
 
 

@@ -174,6 +174,8 @@ class Planner(abc.ABC):
     name: ClassVar[str] = "planner"
     #: Anytime planners keep improving after the first solution until the budget is spent.
     anytime: ClassVar[bool] = False
+    #: The compiled loop a sampler may fuse its draws into (see ``Sampler``); None: draws only.
+    fusable_loop: ClassVar[str | None] = None
 
     def __init__(self, problem: Problem, *, sampler: Sampler | None = None, seed: int | None = None) -> None:
         require_problem(problem)
@@ -216,6 +218,8 @@ class Planner(abc.ABC):
         self._istate[K.I_FIRST] = -1
         self._last = np.zeros(self.problem.dim)
         self._reset()
+        fuse = getattr(self.sampler, "fuse", None) if self.fusable_loop is not None else None
+        self._fused = fuse(self) if fuse is not None else None
 
     def step(self) -> StepResult:
         """Run exactly one iteration (one sample drawn); a no-op once a non-anytime planner is solved."""
@@ -301,6 +305,15 @@ class Planner(abc.ABC):
     def num_vertices(self) -> int:
         return int(self._istate[K.I_N])
 
+    @property
+    def rng(self) -> np.random.Generator:
+        """The planner's seeded generator, from which every sample is drawn."""
+        return self._rng
+
+    def loop_args(self) -> tuple:
+        """Arguments of the compiled loop named by ``fusable_loop``, after the sample (arrays grow: re-read)."""
+        raise NotImplementedError(f"{type(self).__name__} has no fusable loop")
+
     def view(self) -> TreeView:
         """Read-only snapshot for samplers and observers."""
         n = int(self._istate[K.I_N])
@@ -381,6 +394,11 @@ class Planner(abc.ABC):
         self._buf_pts, self._buf_anch, self._pos = pts, anch, 0
 
     def _consume(self, n: int) -> int:
+        if self._fused is not None:
+            self._reserve(n)
+            used = self._fused(n)
+            self._candidates += used
+            return used
         # refill sizes follow a fixed schedule: when refills happen (and what a tree-dependent
         # sampler sees) must not depend on how the caller splits its budget, so that
         # step() x N == solve(N) == solve in pieces

@@ -47,6 +47,7 @@ class RRT(Planner):
     """
 
     name = "RRT"
+    fusable_loop = "rrt"
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None) -> None:
@@ -79,6 +80,12 @@ class RRT(Planner):
                          self.problem.world.kernel, self._space, self._goal, self.step_size,
                          self.problem.goal_tolerance, self._low, self._high, True, self._stack, self._stack_b)
 
+    def loop_args(self) -> tuple:
+        """Arguments of ``rrt_iterate`` (``planners._rrt_kernels``) after the sample and its anchor code."""
+        return (self._tree.as_tuple(), self._istate, self._fstate, self._last, self.problem.world.kernel, self._space,
+                self._goal, self.step_size, self.problem.goal_tolerance, self._low, self._high, self._stack,
+                self._stack_b)
+
     def _vertex_store(self) -> VertexStore:
         return self._tree
 
@@ -107,6 +114,7 @@ class RRTConnect(RRT):
     """
 
     name = "RRTConnect"
+    fusable_loop = None
 
     def _reset(self) -> None:
         super()._reset()

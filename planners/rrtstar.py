@@ -42,6 +42,7 @@ class RRTStar(RRT):
     """
 
     name = "RRTstar"
+    fusable_loop = None
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None, rewire_factor: float = 1.1, stop_on_first_solution: bool = False) -> None:

@@ -13,6 +13,13 @@ calls ``draw(rng, n, view)`` whenever it needs samples:
   (``ANCHOR_GOAL``), resolved by the planner when the sample is used, so a batch keeps following the
   tree's progress; and it can say how many raw candidates each sample cost (for samplers that
   discard candidates).
+
+A sampler whose draws are compiled may also define ``fuse(planner)``. A planner whose class names a
+``fusable_loop`` (RRT's is ``"rrt"``) calls it once per (re)start; it returns None, or a callable
+``run(n) -> used`` that runs up to ``n`` iterations with the sampler's draws inside the compiled loop
+(built on ``planners._rrt_kernels.rrt_iterate`` and ``planner.loop_args()``, drawing from
+``planner.rng``), so a solve never returns to Python between batches. A fused loop must draw exactly
+what ``draw`` would: it changes the speed, never the run.
 """
 
 from __future__ import annotations

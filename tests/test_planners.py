@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections import deque
 
+import numba
 import numpy as np
 import pytest
 from conftest import fine_check_path
@@ -27,6 +28,7 @@ from planners import (
     SamplerBase,
     UniformSampler,
 )
+from planners import _rrt_kernels as K
 
 ALL = [RRT, RRTConnect, RRTStar, InformedRRTStar, PRM, LazyPRM]
 
@@ -282,6 +284,53 @@ def test_anchored_samples_follow_the_progress_vertex(open_problem):
         assert np.allclose(planner.planner_data().vertices[k], (2.5 + 4 * k, 15.5))
     assert planner.view().best_vertex == 2
     assert planner.step().added == -1  # the next offset ends inside the wall at column 14
+
+
+@numba.njit
+def _uniform_rrt_loop(budget, rng, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb):
+    q, qe, new = np.empty(2), np.empty(2), np.empty(2)
+    sample = np.empty(2)
+    for s in range(budget):
+        if istate[K.I_SOLVED] or istate[K.I_N] >= tree[0].shape[0]:
+            return s
+        for d in range(2):
+            sample[d] = low[d] + (high[d] - low[d]) * rng.random()
+        K.rrt_iterate(sample, 0, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb, q, qe,
+                      new)
+    return budget
+
+
+class FusedUniform(UniformSampler):
+    """Uniform samples drawn inside RRT's compiled loop (the ``Sampler.fuse`` hook)."""
+
+    calls = 0
+
+    def fuse(self, planner):
+        FusedUniform.calls += 1
+        if planner.fusable_loop != "rrt":
+            return None
+        return lambda n: _uniform_rrt_loop(n, planner.rng, *planner.loop_args())
+
+
+def test_fused_sampler_hook(open_problem):
+    # a fused loop that draws what UniformSampler draws gives the same run, stepped or solved
+    ref = RRT(open_problem, step_size=2.0, sampler=UniformSampler(), seed=3).solve(max_iterations=5000)
+    fused = RRT(open_problem, step_size=2.0, sampler=FusedUniform(), seed=3)
+    assert fused._fused is not None
+    r = fused.solve(max_iterations=5000)
+    assert (r.iterations, r.num_vertices, r.collision_checks, r.candidates) == (ref.iterations, ref.num_vertices,
+                                                                               ref.collision_checks, ref.candidates)
+    assert np.array_equal(r.path, ref.path)
+    stepped = RRT(open_problem, step_size=2.0, sampler=FusedUniform(), seed=3)
+    while not stepped.solved:
+        stepped.step()
+    assert stepped.iterations == r.iterations and np.array_equal(stepped.result().path, r.path)
+    # planners without a fusable loop never ask; RRT-Connect and RRT* draw as usual
+    FusedUniform.calls = 0
+    for cls in (RRTConnect, RRTStar, PRM):
+        planner = cls(open_problem, sampler=FusedUniform(), seed=0)
+        assert planner._fused is None and planner.solve(max_iterations=5000).solved
+    assert FusedUniform.calls == 0
 
 
 class BadSampler(SamplerBase):
