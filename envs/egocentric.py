@@ -6,7 +6,7 @@ several scales (1, 4 and 16 cells per pixel by default) it sees a corridor's wal
 opening alike. The same windows on a 32x32 and a 512x512 map make the policy transfer across sizes.
 
 Each scale is a pyramid level of the obstacle grid (the blocked fraction of each block) and of the
-tree's vertex counts, updated incrementally; a window pixel reads the level at the world point the
+blocks that hold a tree vertex, updated incrementally; a window pixel reads the level at the world point the
 pixel's centre maps to. A query costs ``scales * size**2`` lookups in compiled code.
 """
 
@@ -34,6 +34,8 @@ def _window(levels_obs, levels_tree, factors, ax, ay, ux, uy, size, out):
         lt = levels_tree[k]
         H = lo.shape[0]
         W = lo.shape[1]
+        inv = 1.0 / f
+        exact = (f & (f - 1)) == 0  # a power of two: x * (1 / f) is exactly x / f, and a multiply is cheap
         for i in range(size):
             dy = (i + 0.5 - half) * f
             for j in range(size):
@@ -41,8 +43,8 @@ def _window(levels_obs, levels_tree, factors, ax, ay, ux, uy, size, out):
                 # pixel (i, j): dx ahead (towards the goal), dy to the left
                 x = ax + dx * ux + dy * vx
                 y = ay + dx * uy + dy * vy
-                c = int(math.floor(x / f))
-                r = int(math.floor(y / f))
+                c = int(math.floor(x * inv if exact else x / f))
+                r = int(math.floor(y * inv if exact else y / f))
                 if r < 0 or r >= H or c < 0 or c >= W:
                     out[2 * k, i, j] = 255
                     out[2 * k + 1, i, j] = 0
@@ -79,17 +81,27 @@ def _observe(levels_obs, levels_tree, factors, size, res, step, anchor, anchor_i
 def _pyramid_level(obstacles, f):
     """Blocked fraction (0-255) of each f x f block; blocks overhanging the map count the outside as blocked."""
     H, W = obstacles.shape
+    if f == 1:
+        out1 = np.empty((H, W), dtype=np.uint8)
+        for r in range(H):
+            for c in range(W):
+                out1[r, c] = 255 if obstacles[r, c] else 0
+        return out1
     h = (H + f - 1) // f
     w = (W + f - 1) // f
+    count = np.zeros((h, w), dtype=np.int64)
+    # one pass over the map (block-by-block loops cost several times more at f = 1)
+    for r in range(H):
+        i = r // f
+        for c in range(W):
+            if obstacles[r, c]:
+                count[i, c // f] += 1
     out = np.empty((h, w), dtype=np.uint8)
     for i in range(h):
+        rows = min(f, H - i * f)
         for j in range(w):
-            s = 0
-            for r in range(i * f, i * f + f):
-                for c in range(j * f, j * f + f):
-                    if r >= H or c >= W or obstacles[r, c]:
-                        s += 1
-            out[i, j] = np.uint8(round(255.0 * s / (f * f)))
+            outside = f * f - rows * min(f, W - j * f)
+            out[i, j] = np.uint8(round(255.0 * (count[i, j] + outside) / (f * f)))
     return out
 
 
@@ -104,7 +116,7 @@ def _add_vertices(levels_tree, factors, V, res):
             c = int(x / f)
             lt = levels_tree[k]
             if 0 <= r < lt.shape[0] and 0 <= c < lt.shape[1]:
-                lt[r, c] += 1
+                lt[r, c] = 1
 
 
 class EgocentricView:
@@ -131,7 +143,7 @@ class EgocentricView:
         obstacles = grid.kernel[1]  # the map as uint8, already contiguous
         # tuples of arrays pass into compiled code far faster than typed lists
         self.levels_obs = tuple(_pyramid_level(obstacles, int(f)) for f in self.factors)
-        self.levels_tree = tuple(np.zeros(lv.shape, dtype=np.int32) for lv in self.levels_obs)
+        self.levels_tree = tuple(np.zeros(lv.shape, dtype=np.uint8) for lv in self.levels_obs)  # 1: holds a vertex
         self.start = np.ascontiguousarray(problem.start[:2], dtype=np.float64)
         self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
         self.seen = 0

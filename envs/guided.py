@@ -22,7 +22,8 @@ import numba as nb
 import numpy as np
 
 from envs.egocentric import EgocentricView
-from envs.frontier import Frontier, cdf_search, frontier_cdf, softmax_cdf
+from envs.frontier import Frontier, cdf_search, frontier_cdf
+from envs.frontier import _update as frontier_update
 from planners import Problem, SampleBatch, TreeView
 
 ANGLES = 16
@@ -69,34 +70,38 @@ def _fill_samples(classes, u, uni, front, low, high, step, rings, angles, floor,
 
 
 @nb.njit(cache=True)
-def fill_from_logits(logits, temperature, u, low, high, step, rings, angles, floor, fcell, fW, front, fcount, fdist, ftau,
-                     pts, anch):
-    """Draw a class per row of ``u`` from softmax(logits / temperature) and turn it into a sample.
+def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, pts, anch):
+    """Draw a class per row of ``u`` from the class CDF ``cdf`` (total ``acc``) and turn it into a sample.
 
     ``u`` holds 6 uniforms per sample: class, ring position, angle position, floor test, and two for
-    a uniform or frontier point. One compiled call per batch: the sampler's whole per-batch work.
+    a uniform or frontier point. ``frontier`` is ``(world, cell, W, free, covered, pos, cells, dist,
+    tau)`` of a ``Frontier`` and ``fstate`` its ``[vertices seen, cell count]``: it is brought up to
+    date with the tree's vertices ``X[:n]`` only when a sample falls in the frontier class, which
+    spares the visibility checks while the policy samples around the tree's progress.
     """
-    n_ego = angles * (rings.shape[0] - 1)
-    cdf = np.empty(logits.shape[0])
-    acc = softmax_cdf(logits, temperature, cdf)
-    # frontier cell weights (goal preference), built only when a batch draws the frontier class
-    fcdf = np.empty(max(fcount, 1))
+    world, cell, fW, free, cov, fpos, front, fdist, tau = frontier
+    n_ego = ANGLES * (_RINGS.shape[0] - 1)
+    fcdf = np.empty(0)
     facc = -1.0
     for k in range(u.shape[0]):
-        c = cdf_search(cdf, logits.shape[0], u[k, 0] * acc)
-        if u[k, 3] < floor or (c >= n_ego and fcount == 0):
+        c = cdf_search(cdf, cdf.shape[0], u[k, 0] * acc)
+        if c >= n_ego and u[k, 3] >= floor and facc < 0.0:
+            if n > fstate[0]:
+                fstate[1] = frontier_update(world, X[fstate[0]:n], cell, free, cov, fpos, front, fstate[1])
+                fstate[0] = n
+            fcdf = np.empty(max(fstate[1], 1))
+            facc = frontier_cdf(front, fstate[1], fdist, tau, fcdf)
+        if u[k, 3] < floor or (c >= n_ego and fstate[1] == 0):
             pts[k, 0] = low[0] + (high[0] - low[0]) * u[k, 4]
             pts[k, 1] = low[1] + (high[1] - low[1]) * u[k, 5]
             anch[k] = 0
         elif c >= n_ego:
-            if facc < 0.0:
-                facc = frontier_cdf(front, fcount, fdist, ftau, fcdf)
-            f = front[cdf_search(fcdf, fcount, u[k, 1] * facc)]
-            pts[k, 0] = (f % fW + u[k, 4]) * fcell
-            pts[k, 1] = (f // fW + u[k, 5]) * fcell
+            f = front[cdf_search(fcdf, fstate[1], u[k, 1] * facc)]
+            pts[k, 0] = (f % fW + u[k, 4]) * cell
+            pts[k, 1] = (f // fW + u[k, 5]) * cell
             anch[k] = 0
         else:
-            _ego_offset(c, u[k, 1], u[k, 2], rings, angles, step, pts, anch, k)
+            _ego_offset(c, u[k, 1], u[k, 2], _RINGS, ANGLES, step, pts, anch, k)
 
 
 def ego_class(dx: float, dy: float, step: float) -> int:
@@ -133,20 +138,6 @@ class GuidedSampling:
     def update(self, view: TreeView) -> None:
         self.ego.update(view.vertices, view.num_vertices, view.best_distance, view.iteration)
         self.frontier.update(view.vertices, view.num_vertices)
-
-    def samples_from_logits(self, logits: np.ndarray, temperature: float, m: int, rng: np.random.Generator,
-                            uniform_floor: float | None = None) -> SampleBatch:
-        """``m`` samples whose classes are drawn from softmax(logits / temperature), in one compiled call.
-
-        ``uniform_floor`` overrides the share of uniform samples for this batch (at least the default's).
-        """
-        floor = self.uniform_floor if uniform_floor is None else max(self.uniform_floor, float(uniform_floor))
-        pts = np.empty((m, 2))
-        anch = np.empty(m, dtype=np.int8)
-        fr = self.frontier
-        fill_from_logits(logits, temperature, rng.random((m, 6)), self.low, self.high, self.step, _RINGS, ANGLES,
-                         floor, fr.cell, fr.W, fr.front, fr.count, fr.dist, fr.tau, pts, anch)
-        return SampleBatch(pts, anch)
 
     def stuck(self, view: TreeView) -> int:
         """Iterations since the progress vertex last came closer to the goal."""

@@ -14,6 +14,12 @@ towards the goal for ``patience`` iterations the uniform share grows with the ti
 ``max_floor``): a tree pinned against a wall by its own biased samples gets RRT's Voronoi bias back,
 which cuts the heavy tail of failures on narrow passages without changing the medians. The policy
 sees only its observation: the map, the tree, start and goal.
+
+A whole draw (observation update, forward pass, class and sample draws) is one compiled call,
+``policy_draw``. With ``RRT`` the sampler goes further and fuses it into the planner's loop
+(``Sampler.fuse``): a solve then never returns to Python between batches, which is what makes the
+learned sampler cheaper per solve than goal bias. The fused loop draws exactly what ``draw`` would,
+from the same generator, so results do not depend on which path ran.
 """
 
 from __future__ import annotations
@@ -21,19 +27,36 @@ from __future__ import annotations
 import json
 import os
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numba as nb
 import numpy as np
 
+from envs.egocentric import EGO_VECTOR, _add_vertices, _observe
 from envs.frontier import cdf_search, softmax_cdf
-from envs.guided import N_ACTIONS, GuidedSampling
-from learning.fast_policy import FastActor
-from planners import OccupancyGrid, SamplerBase
+from envs.guided import N_ACTIONS, GuidedSampling, fill_from_cdf
+from learning.fast_policy import FastActor, actor_logits
+from planners import OccupancyGrid, SampleBatch, SamplerBase
+from planners import _rrt_kernels as K
+from planners.planner import CHUNK, FIRST_REFILL, Planner
 
 #: Keys of the training config a checkpoint must carry.
 CONFIG_KEYS = ("step_size", "uniform_floor", "batch", "obs_version")
 OBS_VERSION = 1
+
+# slots of the sampler's integer state
+S_SEEN = 0  # vertices already counted into the observation's tree pyramid
+S_PROGRESS = 1  # iteration at which the progress vertex last came closer to the goal
+S_ANCHOR = 2  # progress vertex of the last forward pass
+S_SINCE = 3  # iteration of the last forward pass
+S_FORWARD = 4  # forward passes so far
+S_POS = 5  # next unused row of the fused loop's batch buffer
+S_COUNT = 6  # rows in that buffer
+S_REFILLS = 7  # batches drawn by the fused loop (mirrors the planner's refill schedule)
+S_FSEEN = 8  # vertices already added to the frontier
+S_FRONT = 9  # frontier cells
+N_STATE = 10
 
 
 @nb.njit(cache=True)
@@ -45,6 +68,72 @@ def sample_classes(logits, temperature, u):
     for k in range(u.shape[0]):
         out[k] = cdf_search(cdf, logits.shape[0], u[k] * acc)
     return out
+
+
+@nb.njit(cache=True)
+def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
+    """Run the policy if due and draw ``m`` samples from its action distribution into ``pts``/``anch``.
+
+    ``kern`` bundles the sampler's compiled state (see ``PolicySampler._setup``). The tree enters
+    as its vertices ``X[:n]``, progress vertex and distance. The observation's tree counts are
+    brought up to date only for a forward pass, the frontier only for a frontier sample.
+    """
+    ego, front, actor, params, state = kern
+    levels_obs, levels_tree, factors, size, res, start, goal = ego
+    k1, k2, weights = actor
+    step, temperature, floor0, max_floor, patience, reuse, max_iterations, low, high = params
+    ist, fst, logits, cdf, local, vector = state
+    if best_d < fst[0] - 1e-9:
+        fst[0] = best_d
+        ist[S_PROGRESS] = iteration
+    if ist[S_FORWARD] == 0 or best_v != ist[S_ANCHOR] or iteration - ist[S_SINCE] >= reuse:
+        if n > ist[S_SEEN]:
+            _add_vertices(levels_tree, factors, X[ist[S_SEEN]:n], res)
+            ist[S_SEEN] = n
+        _observe(levels_obs, levels_tree, factors, size, res, step, X[best_v, :2], best_v == 0, start, goal, n,
+                 iteration, ist[S_PROGRESS], max_iterations, local, vector)
+        logits[:] = actor_logits(local, vector, k1, k2, *weights)
+        fst[1] = softmax_cdf(logits, temperature, cdf)  # one softmax per forward pass, not per batch
+        ist[S_ANCHOR] = best_v
+        ist[S_SINCE] = iteration
+        ist[S_FORWARD] += 1
+    stuck = iteration - ist[S_PROGRESS]
+    floor = floor0 if stuck < patience else max(floor0, min(max_floor, floor0 * stuck / patience))
+    u = np.empty((m, 6))
+    for k in range(m):  # row by row, as Generator.random((m, 6)) fills
+        for j in range(6):
+            u[k, j] = rng.random()
+    fill_from_cdf(cdf, fst[1], u, low, high, step, floor, front, ist[S_FSEEN:S_FRONT + 1], X, n, pts, anch)
+
+
+@nb.njit(cache=True)
+def policy_rrt_run(budget, rng, kern, batch, pts, anch, tree, istate, fstate, last, world, space, goal, step, tol,
+                   low, high, st, sb):
+    """Up to ``budget`` RRT iterations with samples from ``policy_draw``, never leaving compiled code.
+
+    Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule would ask
+    for, so the run matches a planner calling ``PolicySampler.draw`` sample for sample.
+    """
+    ist = kern[4][0]
+    X = tree[0]
+    q = np.empty(X.shape[1])
+    qe_buf = np.empty(tree[1].shape[1])
+    new = np.empty(X.shape[1])
+    for s in range(budget):
+        if istate[K.I_SOLVED] or istate[K.I_N] >= X.shape[0]:
+            return s
+        if ist[S_POS] >= ist[S_COUNT]:
+            m = min(batch, CHUNK, FIRST_REFILL << min(ist[S_REFILLS], 16))  # 64 << 16 > CHUNK; no overflow
+            policy_draw(X, istate[K.I_N], istate[K.I_BEST_V], fstate[K.F_BEST_D], istate[K.I_ITER], m, rng, kern,
+                        pts, anch)
+            ist[S_REFILLS] += 1
+            ist[S_COUNT] = m
+            ist[S_POS] = 0
+        p = ist[S_POS]
+        K.rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
+                      q, qe_buf, new)
+        ist[S_POS] = p + 1
+    return budget
 
 
 class PolicySampler(SamplerBase):
@@ -59,10 +148,12 @@ class PolicySampler(SamplerBase):
         reuse: Longest stretch of iterations one forward pass may serve (1: a pass per batch).
         patience: Iterations without progress after which the uniform share starts to grow.
         max_floor: The largest uniform share that growth reaches.
+        fuse: Run inside RRT's compiled loop (same samples, less time); False keeps ``draw`` calls.
     """
 
     def __init__(self, actor: FastActor, config: dict, *, step_size: float | None = None, batch: int | None = None,
-                 temperature: float = 1.0, reuse: int = 32, patience: int = 200, max_floor: float = 0.5) -> None:
+                 temperature: float = 1.0, reuse: int = 32, patience: int = 200, max_floor: float = 0.5,
+                 fuse: bool = True) -> None:
         missing = [k for k in CONFIG_KEYS if k not in config]
         if missing:
             raise ValueError(f"policy config lacks {missing}")
@@ -77,12 +168,13 @@ class PolicySampler(SamplerBase):
         self.temperature = float(temperature)
         self.reuse = int(reuse)
         self.patience, self.max_floor = int(patience), float(max_floor)
+        self.fused = bool(fuse)
         if not (self.step_size > 0 and self.batch >= 1 and self.temperature > 0 and self.reuse >= 1
                 and self.patience >= 1 and 0.0 <= self.max_floor <= 1.0):
             raise ValueError(f"need step_size, batch, temperature, reuse, patience > 0 and 0 <= max_floor <= 1, got "
                              f"{self.step_size}, {self.batch}, {self.temperature}, {self.reuse}, {self.patience}, "
                              f"{self.max_floor}")
-        self.forward_passes = 0
+        self._kernel = None
 
     @classmethod
     def load(cls, path: str | os.PathLike, **kwargs) -> PolicySampler:
@@ -108,26 +200,48 @@ class PolicySampler(SamplerBase):
             raise ValueError(f"{path}: {exc}") from None
         return cls(actor, config, **kwargs)
 
+    @property
+    def forward_passes(self) -> int:
+        """Forward passes since the sampler was bound."""
+        return 0 if self._kernel is None else int(self._kernel[4][0][S_FORWARD])
+
     def _setup(self) -> None:
         if not isinstance(self.problem.world, OccupancyGrid):
             raise ValueError("PolicySampler plans on OccupancyGrid problems (2-D maps of any size)")
-        self.guide = GuidedSampling(self.problem, self.step_size, uniform_floor=self.config["uniform_floor"],
-                                    max_iterations=int(self.config.get("max_iterations", 20000)))
-        self.forward_passes = 0
-        self._logits = None
-        self._anchor = -1
-        self._since = 0
+        guide = GuidedSampling(self.problem, self.step_size, uniform_floor=self.config["uniform_floor"],
+                               max_iterations=int(self.config.get("max_iterations", 20000)))
+        ego, fr = guide.ego, guide.frontier
+        ist = np.zeros(N_STATE, dtype=np.int64)
+        self._kernel = (
+            (ego.levels_obs, ego.levels_tree, ego.factors, ego.size, ego.res, ego.start, ego.goal),
+            (fr.world, fr.cell, fr.W, fr.free, fr.cov, fr.pos, fr.front, fr.dist, fr.tau),
+            (*self.actor.kernels, self.actor.weights),
+            (self.step_size, self.temperature, guide.uniform_floor, self.max_floor, self.patience, self.reuse,
+             ego.max_iterations, guide.low, guide.high),
+            (ist, np.array([np.inf, 0.0]), np.empty(N_ACTIONS), np.empty(N_ACTIONS),
+             np.empty((ego.channels, ego.size, ego.size), np.uint8), np.empty(len(EGO_VECTOR), np.float32)),
+        )
+        self._pts = np.empty((self.batch, 2))
+        self._anch = np.empty(self.batch, dtype=np.int8)
 
     def draw(self, rng, n, view):
-        self.guide.update(view)
-        if self._logits is None or view.best_vertex != self._anchor or view.iteration - self._since >= self.reuse:
-            obs = self.guide.observe(view)
-            self._logits = self.actor.logits(obs["local"], obs["vector"]).astype(np.float64)
-            self._anchor, self._since = view.best_vertex, view.iteration
-            self.forward_passes += 1
-        stuck = self.guide.stuck(view)
-        floor = None if stuck < self.patience else min(self.max_floor, self.guide.uniform_floor * stuck / self.patience)
-        return self.guide.samples_from_logits(self._logits, self.temperature, min(n, self.batch), rng, floor)
+        m = min(n, self.batch)
+        pts = np.empty((m, 2))
+        anch = np.empty(m, dtype=np.int8)
+        policy_draw(view.vertices, view.num_vertices, view.best_vertex, view.best_distance, view.iteration, m, rng,
+                    self._kernel, pts, anch)
+        return SampleBatch(pts, anch)
+
+    def fuse(self, planner: Planner) -> Callable[[int], int] | None:
+        """The planner's loop with this sampler's draws compiled in, for RRT; None for other planners."""
+        if not self.fused or planner.fusable_loop != "rrt":
+            return None
+
+        def run(n: int) -> int:
+            return policy_rrt_run(n, planner.rng, self._kernel, self.batch, self._pts, self._anch,
+                                  *planner.loop_args())
+
+        return run
 
     def __repr__(self) -> str:
         return f"PolicySampler(step_size={self.step_size:g}, batch={self.batch})"

@@ -282,3 +282,16 @@ def test_problem_option_and_lower_bound():
     _, info = env.reset(seed=0, options={"problem": p})
     assert env.problem is p
     assert info["lower_bound"] == int(np.ceil((p.reference_length - p.goal_tolerance) / env.step_size))
+
+
+@pytest.mark.parametrize("shape", [(128, 128), (37, 53), (5, 3)])
+def test_pyramid_levels_match_a_numpy_reference(shape):
+    from envs.egocentric import _pyramid_level
+
+    obstacles = np.random.default_rng(1).random(shape) < 0.3
+    for f in (1, 2, 3, 4, 16):
+        h, w = -(-shape[0] // f), -(-shape[1] // f)
+        padded = np.ones((h * f, w * f), bool)  # the outside of the map counts as blocked
+        padded[: shape[0], : shape[1]] = obstacles
+        ref = np.round(255.0 * padded.reshape(h, f, w, f).mean(axis=(1, 3))).astype(np.uint8)
+        assert np.array_equal(_pyramid_level(obstacles.astype(np.uint8), f), ref), f

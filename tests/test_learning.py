@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -108,6 +109,43 @@ def test_policy_sampler_on_other_maps_and_planners(trained, problem_fn):
     for cls in (RRTStar, PRM):
         kw = {} if cls is PRM else {"step_size": 4.0}
         assert cls(p, sampler=sampler, seed=1, **kw).solve(max_iterations=20000).solved
+
+
+SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+
+
+@pytest.mark.parametrize("family", ["bugtrap", "maze", "narrow_passage"])
+def test_fused_loop_draws_exactly_what_draw_calls_do(family):
+    # the shipped policy, whose timings the README reports: fused and unfused runs must be the same runs
+    fused, plain = PolicySampler.load(SHIPPED), PolicySampler.load(SHIPPED, fuse=False)
+    for key, size in ((TEST_SEED0, 96), (TEST_SEED0 + 1, 128)):
+        p = generate(family, key, size)
+        for seed in range(2):
+            a = RRT(p, step_size=4.0, sampler=fused, seed=seed)
+            b = RRT(p, step_size=4.0, sampler=plain, seed=seed)
+            assert a._fused is not None and b._fused is None
+            ra, rb = a.solve(max_iterations=3000), b.solve(max_iterations=3000)
+            assert (ra.iterations, ra.num_vertices, ra.collision_checks) == (rb.iterations, rb.num_vertices,
+                                                                          rb.collision_checks)
+            assert np.array_equal(ra.path, rb.path)
+            assert a.sampler.forward_passes == b.sampler.forward_passes >= 1
+            # stepping the fused planner one iteration at a time is the same run again
+            c = RRT(p, step_size=4.0, sampler=fused, seed=seed)
+            while not c.solved and c.iterations < ra.iterations:
+                c.step()
+            assert c.iterations == ra.iterations and np.array_equal(c.result().path, ra.path)
+
+
+def test_only_rrt_runs_the_fused_loop():
+    from planners import RRTConnect
+
+    sampler = PolicySampler.load(SHIPPED)
+    p = generate("rooms", TEST_SEED0, 64)
+    assert RRT(p, step_size=4.0, sampler=sampler, seed=0)._fused is not None
+    for planner in (RRTConnect(p, step_size=4.0, sampler=sampler, seed=0),
+                    RRTStar(p, step_size=4.0, sampler=sampler, seed=0), PRM(p, sampler=sampler, seed=0)):
+        assert planner._fused is None
+        assert planner.solve(max_iterations=20000).solved
 
 
 def test_sampler_rejects_other_worlds(trained):
