@@ -44,6 +44,22 @@ def _embed_query(space, q, qe):
 
 
 @nb.njit(cache=True, inline="always")
+def extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb):
+    """Nearest of the first ``n`` vertices to ``q``, steered at most ``step`` into ``new``.
+
+    Returns that vertex, or -1 when the step is empty or its motion collides (a check is counted).
+    """
+    X = tree[0]
+    near = nearest_vertex(tree, n, space, q, _embed_query(space, q, qe_buf), st, sb)
+    if steer(space, X[near], q, step, new) <= 1e-12:
+        return -1
+    istate[I_CHECKS] += 1
+    if not motion_free(world, X[near], new):
+        return -1
+    return near
+
+
+@nb.njit(cache=True, inline="always")
 def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
                 q, qe_buf, new):
     """One RRT iteration on one sample: resolve -> nearest -> steer -> check motion -> add.
@@ -59,12 +75,8 @@ def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal
     resolve_sample(space, sample, anchored, X[istate[I_BEST_V]], goal, low, high, q)
     last[:] = q
     n = istate[I_N]
-    near = nearest_vertex(tree, n, space, q, _embed_query(space, q, qe_buf), st, sb)
-    d = steer(space, X[near], q, step, new)
-    if d <= 1e-12:
-        return
-    istate[I_CHECKS] += 1
-    if not motion_free(world, X[near], new):
+    near = extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb)
+    if near < 0:
         return
     c = cost[near] + distance(kind, metric, rw, X[near], new)
     n = add_vertex(tree, n, space, new, near, c)
@@ -129,12 +141,8 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
         Xo, co = o[0], o[3]
         # extend the active tree one step towards the sample
         n = istate[it]
-        near = nearest_vertex(t, n, space, q, _embed_query(space, q, qe_buf), st, sb)
-        d = steer(space, Xt[near], q, step, new)
-        if d <= 1e-12:
-            continue
-        istate[I_CHECKS] += 1
-        if not motion_free(world, Xt[near], new):
+        near = extend(t, n, space, q, qe_buf, step, new, world, istate, st, sb)
+        if near < 0:
             continue
         n = add_vertex(t, n, space, new, near, ct[near] + distance(kind, metric, rw, Xt[near], new))
         istate[it] = n

@@ -28,9 +28,10 @@ from planners._rrt_kernels import (
     I_N,
     I_SOLVED,
     _embed_query,
+    extend,
 )
 from planners._space import distance, kd_metric, uses_kd
-from planners._tree_kernels import add_vertex, nearest_vertex, resolve_sample, steer
+from planners._tree_kernels import add_vertex, resolve_sample
 
 I_N_GOAL = 11  # vertices in the goal region
 
@@ -108,12 +109,8 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
         istate[I_ADDED] = -1
         resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], goal, low, high, q)
         last[:] = q
-        near = nearest_vertex(tree, n, space, q, _embed_query(space, q, qe_buf), st, sb)
-        d = steer(space, X[near], q, step, new)
-        if d <= 1e-12:
-            continue
-        istate[I_CHECKS] += 1
-        if not motion_free(world, X[near], new):
+        near = extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb)
+        if near < 0:
             continue
         # near set of the new state
         card = n + 1.0
