@@ -396,7 +396,7 @@ class Planner(abc.ABC):
     def _consume(self, n: int) -> int:
         if self._fused is not None:
             self._reserve(n)
-            used = self._fused(n)
+            used = self._fused(self, n)
             self._candidates += used
             return used
         # refill sizes follow a fixed schedule: when refills happen (and what a tree-dependent

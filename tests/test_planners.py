@@ -309,7 +309,7 @@ class FusedUniform(UniformSampler):
         FusedUniform.calls += 1
         if planner.fusable_loop != "rrt":
             return None
-        return lambda n: _uniform_rrt_loop(n, planner.rng, *planner.loop_args())
+        return lambda planner, n: _uniform_rrt_loop(n, planner.rng, *planner.loop_args())
 
 
 def test_fused_sampler_hook(open_problem):
@@ -416,3 +416,23 @@ def test_lazy_prm_resolution_in_bounded_pieces(monkeypatch):
         stepped.step()
     assert stepped.iterations == pieces.iterations
     assert np.array_equal(stepped.result().path, pieces.path)
+
+
+@pytest.mark.parametrize("bitgen", [np.random.PCG64, np.random.MT19937, np.random.Philox, np.random.SFC64])
+def test_compiled_draws_through_the_bitgen_address_continue_the_generators_stream(bitgen):
+    import numba as nb
+
+    from planners._bitgen import bitgen_address, next_double
+
+    @nb.njit
+    def draw(address, n):
+        out = np.empty(n)
+        for i in range(n):
+            out[i] = next_double(address)
+        return out
+
+    a, b = np.random.Generator(bitgen(7)), np.random.Generator(bitgen(7))
+    got = np.concatenate([a.random(3), draw(bitgen_address(a), 500), a.random(4)])
+    assert np.array_equal(got, b.random(507))
+    with pytest.raises(TypeError, match="numpy Generator"):
+        bitgen_address(np.random.RandomState(0))
