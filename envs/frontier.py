@@ -18,7 +18,7 @@ import numba as nb
 import numpy as np
 
 from planners import Problem
-from planners._geometry import WORLD_GRID, grid_segment_free, motion_free
+from planners._geometry import motion_free
 
 
 @nb.njit(cache=True, inline="always")
@@ -45,9 +45,17 @@ def softmax_cdf(logits, temperature, cdf):
     return acc
 
 
+# states of a cell centre in ``Frontier.free``: checked lazily, when a vertex first sees the cell
+UNKNOWN, FREE, BLOCKED = 0, 1, 2
+
+
 @nb.njit(cache=True)
-def _update(world, vertices, cell, free, cov, pos, front, count):
-    """Mark new vertices' cells covered and add their visible uncovered neighbours; returns count."""
+def _update(world, vertices, cell, goal, free, cov, pos, front, dist, count):
+    """Mark new vertices' cells covered and add their visible uncovered neighbours; returns count.
+
+    A cell's centre is checked, and its distance to the goal (in cells) computed, only when a vertex
+    first looks at it: a solve that stays in one part of the map never pays for the rest.
+    """
     H, W = cov.shape
     c_state = np.empty(2)
     for n in range(vertices.shape[0]):
@@ -71,35 +79,23 @@ def _update(world, vertices, cell, free, cov, pos, front, count):
                 cc = c + dc
                 if rr < 0 or rr >= H or cc < 0 or cc >= W:
                     continue
-                if cov[rr, cc] or not free[rr, cc] or pos[rr, cc] >= 0:
+                if cov[rr, cc] or pos[rr, cc] >= 0 or free[rr, cc] == BLOCKED:
                     continue
                 c_state[0] = (cc + 0.5) * cell
                 c_state[1] = (rr + 0.5) * cell
+                if free[rr, cc] == UNKNOWN:
+                    if not motion_free(world, c_state, c_state):
+                        free[rr, cc] = BLOCKED
+                        continue
+                    free[rr, cc] = FREE
+                    dx = c_state[0] - goal[0]
+                    dy = c_state[1] - goal[1]
+                    dist[rr * W + cc] = math.sqrt(dx * dx + dy * dy) / cell  # not ** 2: numba calls pow for that
                 if motion_free(world, v, c_state):
                     front[count] = rr * W + cc
                     pos[rr, cc] = count
                     count += 1
     return count
-
-
-@nb.njit(cache=True)
-def _cells(world, H, W, cell, goal):
-    """Which cell centres are free, and each centre's distance to the goal in cells."""
-    free = np.zeros((H, W), dtype=np.bool_)
-    dist = np.empty(H * W)
-    q = np.empty(2)
-    for r in range(H):
-        for c in range(W):
-            q[0] = (c + 0.5) * cell
-            q[1] = (r + 0.5) * cell
-            if world[0] == WORLD_GRID:  # the point check without the world dispatch: 1024 of them per bind
-                free[r, c] = grid_segment_free(world[1], world[4][0], q[0], q[1], q[0], q[1])
-            else:
-                free[r, c] = motion_free(world, q, q)
-            dx = q[0] - goal[0]
-            dy = q[1] - goal[1]
-            dist[r * W + c] = math.sqrt(dx * dx + dy * dy) / cell  # not ** 2: numba calls pow for that
-    return free, dist
 
 
 @nb.njit(cache=True, inline="always")
@@ -151,8 +147,9 @@ class Frontier:
         self.H = max(1, int(math.ceil((hi[1] - lo[1]) / cell)))
         self.W = max(1, int(math.ceil((hi[0] - lo[0]) / cell)))
         self.world = problem.world.kernel
-        self.free, self.dist = _cells(self.world, self.H, self.W, self.cell,
-                                      np.ascontiguousarray(problem.goal[:2], dtype=np.float64))
+        self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
+        self.free = np.zeros((self.H, self.W), dtype=np.uint8)  # UNKNOWN / FREE / BLOCKED
+        self.dist = np.empty(self.H * self.W)  # goal distance in cells, set when a cell is first checked
         self.cov = np.zeros((self.H, self.W), dtype=np.bool_)
         self.pos = np.full((self.H, self.W), -1, dtype=np.int64)
         self.front = np.empty(self.H * self.W, dtype=np.int64)
@@ -161,8 +158,8 @@ class Frontier:
 
     def update(self, vertices: np.ndarray, num_vertices: int) -> None:
         if num_vertices > self.seen:
-            self.count = _update(self.world, vertices[self.seen:num_vertices], self.cell,
-                                 self.free, self.cov, self.pos, self.front, self.count)
+            self.count = _update(self.world, vertices[self.seen:num_vertices], self.cell, self.goal, self.free,
+                                 self.cov, self.pos, self.front, self.dist, self.count)
             self.seen = num_vertices
 
     def __len__(self) -> int:

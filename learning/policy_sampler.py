@@ -39,6 +39,7 @@ from envs.guided import N_ACTIONS, GuidedSampling, fill_from_cdf
 from learning.fast_policy import FastActor, actor_logits
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners import _rrt_kernels as K
+from planners._bitgen import bitgen_address, next_double
 from planners.planner import CHUNK, FIRST_REFILL, Planner
 
 #: Keys of the training config a checkpoint must carry.
@@ -70,13 +71,14 @@ def sample_classes(logits, temperature, u):
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
     """Run the policy if due and draw ``m`` samples from its action distribution into ``pts``/``anch``.
 
-    ``kern`` bundles the sampler's compiled state (see ``PolicySampler._setup``). The tree enters
-    as its vertices ``X[:n]``, progress vertex and distance. The observation's tree counts are
-    brought up to date only for a forward pass, the frontier only for a frontier sample.
+    ``rng`` is the address of the planner's generator (see ``planners._bitgen``), ``kern`` the
+    sampler's compiled state (see ``PolicySampler._setup``). The tree enters as its vertices
+    ``X[:n]``, progress vertex and distance. The observation's tree counts are brought up to date
+    only for a forward pass, the frontier only for a frontier sample.
     """
     ego, front, actor, params, state = kern
     levels_obs, levels_tree, factors, size, res, start, goal = ego
@@ -102,7 +104,7 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
     u = np.empty((m, 6))
     for k in range(m):  # row by row, as Generator.random((m, 6)) fills
         for j in range(6):
-            u[k, j] = rng.random()
+            u[k, j] = next_double(rng)
     fill_from_cdf(cdf, fst[1], u, low, high, step, floor, front, ist[S_FSEEN:S_FRONT + 1], X, n, pts, anch)
 
 
@@ -214,7 +216,7 @@ class PolicySampler(SamplerBase):
         ist = np.zeros(N_STATE, dtype=np.int64)
         self._kernel = (
             (ego.levels_obs, ego.levels_tree, ego.factors, ego.size, ego.res, ego.start, ego.goal),
-            (fr.world, fr.cell, fr.W, fr.free, fr.cov, fr.pos, fr.front, fr.dist, fr.tau),
+            (fr.world, fr.cell, fr.W, fr.goal, fr.free, fr.cov, fr.pos, fr.front, fr.dist, fr.tau),
             (*self.actor.kernels, self.actor.weights),
             (self.step_size, self.temperature, guide.uniform_floor, self.max_floor, self.patience, self.reuse,
              ego.max_iterations, guide.low, guide.high),
@@ -228,20 +230,19 @@ class PolicySampler(SamplerBase):
         m = min(n, self.batch)
         pts = np.empty((m, 2))
         anch = np.empty(m, dtype=np.int8)
-        policy_draw(view.vertices, view.num_vertices, view.best_vertex, view.best_distance, view.iteration, m, rng,
-                    self._kernel, pts, anch)
+        policy_draw(view.vertices, view.num_vertices, view.best_vertex, view.best_distance, view.iteration, m,
+                    bitgen_address(rng), self._kernel, pts, anch)
         return SampleBatch(pts, anch)
 
-    def fuse(self, planner: Planner) -> Callable[[int], int] | None:
+    def fuse(self, planner: Planner) -> Callable[[Planner, int], int] | None:
         """The planner's loop with this sampler's draws compiled in, for RRT; None for other planners."""
         if not self.fused or planner.fusable_loop != "rrt":
             return None
+        return self._run_fused
 
-        def run(n: int) -> int:
-            return policy_rrt_run(n, planner.rng, self._kernel, self.batch, self._pts, self._anch,
-                                  *planner.loop_args())
-
-        return run
+    def _run_fused(self, planner: Planner, n: int) -> int:
+        return policy_rrt_run(n, bitgen_address(planner.rng), self._kernel, self.batch, self._pts, self._anch,
+                              *planner.loop_args())
 
     def __repr__(self) -> str:
         return f"PolicySampler(step_size={self.step_size:g}, batch={self.batch})"

@@ -136,6 +136,24 @@ def test_fused_loop_draws_exactly_what_draw_calls_do(family):
             assert c.iterations == ra.iterations and np.array_equal(c.result().path, ra.path)
 
 
+def test_a_fused_planner_is_freed_without_the_cycle_collector():
+    # a planner holding a loop that holds the planner would live until the next gc pass, keeping its
+    # arrays (and the time to free them) in whichever solve runs then
+    import gc
+    import weakref
+
+    p = generate("bugtrap", TEST_SEED0, 64)
+    planner = RRT(p, step_size=4.0, sampler=PolicySampler.load(SHIPPED), seed=0)
+    planner.solve(max_iterations=2000)
+    ref = weakref.ref(planner)
+    gc.disable()
+    try:
+        del planner
+        assert ref() is None
+    finally:
+        gc.enable()
+
+
 def test_only_rrt_runs_the_fused_loop():
     from planners import RRTConnect
 
