@@ -74,12 +74,12 @@ def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, p
     """Draw a class per row of ``u`` from the class CDF ``cdf`` (total ``acc``) and turn it into a sample.
 
     ``u`` holds 6 uniforms per sample: class, ring position, angle position, floor test, and two for
-    a uniform or frontier point. ``frontier`` is ``(world, cell, W, goal, free, covered, pos, cells,
-    dist, tau)`` of a ``Frontier`` and ``fstate`` its ``[vertices seen, cell count]``: it is brought up to
+    a uniform or frontier point. ``frontier`` is ``(world, counts, cell, W, goal, free, covered, pos,
+    cells, dist, tau)`` of a ``Frontier`` and ``fstate`` its ``[vertices seen, cell count]``: it is brought up to
     date with the tree's vertices ``X[:n]`` only when a sample falls in the frontier class, which
     spares the visibility checks while the policy samples around the tree's progress.
     """
-    world, cell, fW, fgoal, free, cov, fpos, front, fdist, tau = frontier
+    world, counts, cell, fW, fgoal, free, cov, fpos, front, fdist, tau = frontier
     n_ego = ANGLES * (_RINGS.shape[0] - 1)
     fcdf = np.empty(0)
     facc = -1.0
@@ -87,8 +87,8 @@ def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, p
         c = cdf_search(cdf, cdf.shape[0], u[k, 0] * acc)
         if c >= n_ego and u[k, 3] >= floor and facc < 0.0:
             if n > fstate[0]:
-                fstate[1] = frontier_update(world, X[fstate[0]:n], cell, fgoal, free, cov, fpos, front, fdist,
-                                            fstate[1])
+                fstate[1] = frontier_update(world, counts, X[fstate[0]:n], cell, fgoal, free, cov, fpos, front,
+                                            fdist, fstate[1])
                 fstate[0] = n
             fcdf = np.empty(max(fstate[1], 1))
             facc = frontier_cdf(front, fstate[1], fdist, tau, fcdf)

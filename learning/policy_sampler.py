@@ -216,7 +216,7 @@ class PolicySampler(SamplerBase):
         ist = np.zeros(N_STATE, dtype=np.int64)
         self._kernel = (
             (ego.levels_obs, ego.levels_tree, ego.factors, ego.size, ego.res, ego.start, ego.goal),
-            (fr.world, fr.cell, fr.W, fr.goal, fr.free, fr.cov, fr.pos, fr.front, fr.dist, fr.tau),
+            (fr.world, fr.counts, fr.cell, fr.W, fr.goal, fr.free, fr.cov, fr.pos, fr.front, fr.dist, fr.tau),
             (*self.actor.kernels, self.actor.weights),
             (self.step_size, self.temperature, guide.uniform_floor, self.max_floor, self.patience, self.reuse,
              ego.max_iterations, guide.low, guide.high),

@@ -295,3 +295,37 @@ def test_pyramid_levels_match_a_numpy_reference(shape):
         padded[: shape[0], : shape[1]] = obstacles
         ref = np.round(255.0 * padded.reshape(h, f, w, f).mean(axis=(1, 3))).astype(np.uint8)
         assert np.array_equal(_pyramid_level(obstacles.astype(np.uint8), f), ref), f
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_frontier_is_the_visible_uncovered_free_neighbour_cells(seed):
+    # the incremental, lazily checked frontier (box-sum shortcut included) against its definition,
+    # checked cell by cell with the planners' own motion check
+    from envs.frontier import Frontier
+    from planners import OccupancyGrid, Problem
+    from planners._geometry import motion_free
+
+    rng = np.random.default_rng(seed)
+    res = (1.0, 0.5, 1.0, 0.25)[seed]
+    obstacles = rng.random((40, 52)) < 0.2
+    obstacles[0, 0] = obstacles[-1, -1] = False  # start and goal cells
+    grid = OccupancyGrid(obstacles, resolution=res)
+    lo, hi = grid.bounds
+    problem = Problem(grid, np.asarray(lo) + 0.1, np.asarray(hi) - 0.1)
+    cell = (2.0, 1.5, 4.0, 1.0)[seed]
+    front = Frontier(problem, cell)
+    V = rng.uniform(lo, hi, size=(120, 2))
+    for a, b in ((0, 30), (30, 31), (31, 120)):  # incremental updates
+        front.update(V, b)
+    H, W = front.H, front.W
+    cov = {(int(v[1] // cell), int(v[0] // cell)) for v in V}
+    want = set()
+    for r in range(H):
+        for c in range(W):
+            centre = np.array([(c + 0.5) * cell, (r + 0.5) * cell])
+            if (r, c) in cov or not motion_free(grid.kernel, centre, centre):
+                continue
+            near = [v for v in V if abs(int(v[1] // cell) - r) <= 1 and abs(int(v[0] // cell) - c) <= 1]
+            if any(motion_free(grid.kernel, v, centre) for v in near):
+                want.add(r * W + c)
+    assert set(front.front[:len(front)].tolist()) == want and len(want) > 0
