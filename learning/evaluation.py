@@ -149,8 +149,23 @@ def run_all(tasks: list[tuple], processes: int, progress: bool = True) -> list[R
     import multiprocessing as mp
 
     ctx = mp.get_context("spawn")  # fresh interpreters: no inherited locks or thread pools
-    with ctx.Pool(processes, initializer=_worker_init) as pool:
-        return list(tqdm(pool.imap(run_one, tasks, chunksize=4), total=len(tasks), desc="runs", disable=not progress))
+    # one thread per worker: BLAS and OpenMP pools started in every worker would spin on the cores the
+    # other workers are timing runs on; the variables must be set before a worker imports numpy
+    saved = {k: os.environ.get(k) for k in _THREAD_VARS}
+    os.environ.update(dict.fromkeys(_THREAD_VARS, "1"))
+    try:
+        with ctx.Pool(processes, initializer=_worker_init) as pool:
+            return list(tqdm(pool.imap(run_one, tasks, chunksize=4), total=len(tasks), desc="runs",
+                             disable=not progress))
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def _worker_init() -> None:
