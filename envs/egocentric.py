@@ -77,42 +77,56 @@ def _observe(levels_obs, levels_tree, factors, size, res, step, anchor, anchor_i
     return ux, uy
 
 
-@nb.njit(cache=True)
-def _pyramid_level(obstacles, f):
-    """Blocked fraction (0-255) of each f x f block; blocks overhanging the map count the outside as blocked.
+@nb.njit(cache=True, inline="always")
+def _fill_level(obstacles, f, out):
+    """``out``: blocked fraction (0-255) of each f x f block; blocks overhanging the map count the outside as blocked.
 
     ``obstacles`` holds 0/1. Rows are summed a block row at a time over whole map rows (contiguous,
     vectorised adds), then each block's columns: no per-cell division or scatter.
     """
     H, W = obstacles.shape
     if f == 1:
-        out1 = np.empty((H, W), dtype=np.uint8)
         for r in range(H):
             for c in range(W):
-                out1[r, c] = 255 if obstacles[r, c] else 0
-        return out1
-    h = (H + f - 1) // f
-    w = (W + f - 1) // f
+                out[r, c] = 255 if obstacles[r, c] else 0
+        return
     # 0-255 level of k blocked cells out of f * f, rounded half to even as np.round
     level = np.empty(f * f + 1, dtype=np.uint8)
     for k in range(f * f + 1):
         level[k] = np.uint8(round(255.0 * k / (f * f)))
-    out = np.empty((h, w), dtype=np.uint8)
     acc = np.empty(W, dtype=np.int32)
-    for i in range(h):
+    for i in range(out.shape[0]):
         r0 = i * f
         r1 = min(r0 + f, H)
         acc[:] = 0
         for r in range(r0, r1):
             for c in range(W):
                 acc[c] += obstacles[r, c]
-        for j in range(w):
+        for j in range(out.shape[1]):
             c0 = j * f
             c1 = min(c0 + f, W)
             count = f * f - (r1 - r0) * (c1 - c0)  # cells of the block outside the map
             for c in range(c0, c1):
                 count += acc[c]
             out[i, j] = level[count]
+
+
+@nb.njit(cache=True)
+def _fill_pyramid(obstacles, factors, levels):
+    """All pyramid levels in one compiled call (``levels[k]`` is ceil(H / f) x ceil(W / f) for ``factors[k]``)."""
+    for k in range(factors.shape[0]):
+        _fill_level(obstacles, factors[k], levels[k])
+
+
+def pyramid_shapes(shape: tuple[int, int], factors) -> list[tuple[int, int]]:
+    return [(-(-shape[0] // int(f)), -(-shape[1] // int(f))) for f in factors]
+
+
+def _pyramid_level(obstacles: np.ndarray, f: int) -> np.ndarray:
+    """One pyramid level of a 0/1 grid (see ``_fill_level``)."""
+    factors = np.array([f], dtype=np.int64)
+    out = np.empty(pyramid_shapes(obstacles.shape, factors)[0], dtype=np.uint8)
+    _fill_pyramid(obstacles, factors, (out,))
     return out
 
 
@@ -153,8 +167,10 @@ class EgocentricView:
         self.factors = np.asarray(scales, dtype=np.int64)
         obstacles = grid.kernel[1]  # the map as uint8, already contiguous
         # tuples of arrays pass into compiled code far faster than typed lists
-        self.levels_obs = tuple(_pyramid_level(obstacles, int(f)) for f in self.factors)
-        self.levels_tree = tuple(np.zeros(lv.shape, dtype=np.uint8) for lv in self.levels_obs)  # 1: holds a vertex
+        shapes = pyramid_shapes(obstacles.shape, self.factors)
+        self.levels_obs = tuple(np.empty(s, dtype=np.uint8) for s in shapes)
+        _fill_pyramid(obstacles, self.factors, self.levels_obs)
+        self.levels_tree = tuple(np.zeros(s, dtype=np.uint8) for s in shapes)  # 1: holds a vertex
         self.start = np.ascontiguousarray(problem.start[:2], dtype=np.float64)
         self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
         self.seen = 0
