@@ -119,6 +119,7 @@ def _fill_pyramid(obstacles, factors, levels):
 
 
 def pyramid_shapes(shape: tuple[int, int], factors) -> list[tuple[int, int]]:
+    """Shapes of the pyramid levels of a ``shape`` grid: ceil(H / f) x ceil(W / f) per factor."""
     return [(-(-shape[0] // int(f)), -(-shape[1] // int(f))) for f in factors]
 
 

@@ -137,7 +137,8 @@ def _update(world, counts, vertices, cell, goal, free, cov, pos, front, dist, co
                 dx = c_state[0] - goal[0]
                 dy = c_state[1] - goal[1]
                 dist[rr * W + cc] = math.sqrt(dx * dx + dy * dy) / cell  # not ** 2: numba calls pow for that
-            if _box_clear(world, counts, v, c_state) or grid_segment_free(grid, inv, v[0], v[1], c_state[0], c_state[1]):
+            if (_box_clear(world, counts, v, c_state)
+                    or grid_segment_free(grid, inv, v[0], v[1], c_state[0], c_state[1])):
                 front[count] = rr * W + cc
                 pos[rr, cc] = count
                 count += 1
