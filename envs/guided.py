@@ -75,9 +75,9 @@ def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, p
 
     ``u`` holds 6 uniforms per sample: class, ring position, angle position, floor test, and two for
     a uniform or frontier point. ``frontier`` is ``(world, counts, cell, W, goal, free, covered, pos,
-    cells, dist, tau)`` of a ``Frontier`` and ``fstate`` its ``[vertices seen, cell count]``: it is brought up to
-    date with the tree's vertices ``X[:n]`` only when a sample falls in the frontier class, which
-    spares the visibility checks while the policy samples around the tree's progress.
+    cells, dist, tau)`` of a ``Frontier`` and ``fstate`` its ``[vertices seen, cell count]``: it is
+    brought up to date with the tree's vertices ``X[:n]`` only when a sample falls in the frontier
+    class, which spares the visibility checks while the policy samples around the tree's progress.
     """
     world, counts, cell, fW, fgoal, free, cov, fpos, front, fdist, tau = frontier
     n_ego = ANGLES * (_RINGS.shape[0] - 1)
