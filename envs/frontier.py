@@ -62,14 +62,12 @@ def column_counts(grid):
 
 
 @nb.njit(cache=True, inline="always")
-def _box_clear(world, counts, a, b):
-    """True when no grid cell that ``grid_segment_free`` may read for the segment a-b is blocked.
+def _box_clear(grid, inv, counts, a, b):
+    """True when no cell that ``grid_segment_free(grid, inv, ...)`` may read for the segment a-b is blocked.
 
     Those cells lie in the segment's bounding box as the traversal rounds it; one cell of margin
     covers rounding in its slab arithmetic. False also means "cannot tell" (the box leaves the grid).
     """
-    grid = world[1]
-    inv = world[4][0]
     H, W = grid.shape
     c_lo = int(math.ceil(min(a[0], b[0]) * inv - GRID_EPS)) - 1
     c_hi = int(math.floor(max(a[0], b[0]) * inv + GRID_EPS))
@@ -129,7 +127,7 @@ def _update(world, counts, vertices, cell, goal, free, cov, pos, front, dist, co
             if free[rr, cc] == UNKNOWN:
                 # the box test, else the traversal; spelled out here: behind a helper function (inlined
                 # or not) the update ran 2x slower
-                if not (_box_clear(world, counts, c_state, c_state)
+                if not (_box_clear(grid, inv, counts, c_state, c_state)
                         or grid_segment_free(grid, inv, c_state[0], c_state[1], c_state[0], c_state[1])):
                     free[rr, cc] = BLOCKED
                     continue
@@ -137,7 +135,7 @@ def _update(world, counts, vertices, cell, goal, free, cov, pos, front, dist, co
                 dx = c_state[0] - goal[0]
                 dy = c_state[1] - goal[1]
                 dist[rr * W + cc] = math.sqrt(dx * dx + dy * dy) / cell  # not ** 2: numba calls pow for that
-            if (_box_clear(world, counts, v, c_state)
+            if (_box_clear(grid, inv, counts, v, c_state)
                     or grid_segment_free(grid, inv, v[0], v[1], c_state[0], c_state[1])):
                 front[count] = rr * W + cc
                 pos[rr, cc] = count
