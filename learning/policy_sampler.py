@@ -71,7 +71,7 @@ def sample_classes(logits, temperature, u):
     return out
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True)
 def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
     """Run the policy if due and draw ``m`` samples from its action distribution into ``pts``/``anch``.
 
