@@ -24,16 +24,14 @@ EGO_VECTOR = ("goal_distance", "log_goal_distance", "iteration_fraction", "stuck
 
 
 @nb.njit(cache=True)
-def _window(levels_obs, levels_tree, factors, ax, ay, ux, uy, size, out):
-    """Fill out[2k], out[2k+1] with the obstacle / tree windows of pyramid level k."""
+def _window(levels_obs, levels_tree, layout, ax, ay, ux, uy, size, out):
+    """Fill out[2k], out[2k+1] with the obstacle / tree windows of pyramid level k (see ``build_pyramid``)."""
     half = size / 2.0
     vx, vy = -uy, ux
-    for k in range(factors.shape[0]):
-        f = factors[k]
-        lo = levels_obs[k]
-        lt = levels_tree[k]
-        H = lo.shape[0]
-        W = lo.shape[1]
+    for k in range(layout.shape[0]):
+        off, H, W, f = layout[k, 0], layout[k, 1], layout[k, 2], layout[k, 3]
+        lo = levels_obs[off:off + H * W].reshape((H, W))
+        lt = levels_tree[off:off + H * W].reshape((H, W))
         inv = 1.0 / f
         exact = (f & (f - 1)) == 0  # a power of two: x * (1 / f) is exactly x / f, and a multiply is cheap
         for i in range(size):
@@ -50,19 +48,18 @@ def _window(levels_obs, levels_tree, factors, ax, ay, ux, uy, size, out):
                     out[2 * k + 1, i, j] = 0
                 else:
                     out[2 * k, i, j] = lo[r, c]
-                    t = lt[r, c]
-                    out[2 * k + 1, i, j] = 255 if t > 0 else 0
+                    out[2 * k + 1, i, j] = 255 if lt[r, c] > 0 else 0
 
 
 @nb.njit(cache=True)
-def _observe(levels_obs, levels_tree, factors, size, res, step, anchor, anchor_is_start, start, goal,
+def _observe(levels_obs, levels_tree, layout, size, res, step, anchor, anchor_is_start, start, goal,
              num_vertices, iteration, last_progress, max_iterations, local, vector):
     """Window (into ``local``) and vector features (into ``vector``) at ``anchor``; see ``EGO_VECTOR``."""
     dx = goal[0] - anchor[0]
     dy = goal[1] - anchor[1]
     n = math.sqrt(dx * dx + dy * dy)
     ux, uy = (1.0, 0.0) if n < 1e-12 else (dx / n, dy / n)
-    _window(levels_obs, levels_tree, factors, anchor[0] / res, anchor[1] / res, ux, uy, size, local)
+    _window(levels_obs, levels_tree, layout, anchor[0] / res, anchor[1] / res, ux, uy, size, local)
     dg = n / step
     d0 = math.sqrt((goal[0] - start[0]) ** 2 + (goal[1] - start[1]) ** 2) / step
     ds = math.sqrt((anchor[0] - start[0]) ** 2 + (anchor[1] - start[1]) ** 2) / step
@@ -112,37 +109,48 @@ def _fill_level(obstacles, f, out):
 
 
 @nb.njit(cache=True)
-def _fill_pyramid(obstacles, factors, levels):
-    """All pyramid levels in one compiled call (``levels[k]`` is ceil(H / f) x ceil(W / f) for ``factors[k]``)."""
+def build_pyramid(obstacles, factors):
+    """The obstacle pyramid of a 0/1 grid, flat: ``(layout, levels_obs, levels_tree)``.
+
+    Level k (``factors[k]`` cells per block) is ``rows x cols`` at ``levels[off:off + rows * cols]``
+    with ``layout[k] = (off, rows, cols, factors[k])``. One flat array per pyramid, not a tuple of
+    levels, so that building it is one compiled call and the levels box into Python as one array.
+    ``levels_tree`` (1: the block holds a vertex) starts empty.
+    """
+    H, W = obstacles.shape
+    layout = np.empty((factors.shape[0], 4), dtype=np.int64)
+    total = 0
     for k in range(factors.shape[0]):
-        _fill_level(obstacles, factors[k], levels[k])
-
-
-def pyramid_shapes(shape: tuple[int, int], factors) -> list[tuple[int, int]]:
-    """Shapes of the pyramid levels of a ``shape`` grid: ceil(H / f) x ceil(W / f) per factor."""
-    return [(-(-shape[0] // int(f)), -(-shape[1] // int(f))) for f in factors]
+        f = factors[k]
+        layout[k, 0] = total
+        layout[k, 1] = -(-H // f)
+        layout[k, 2] = -(-W // f)
+        layout[k, 3] = f
+        total += layout[k, 1] * layout[k, 2]
+    levels = np.empty(total, dtype=np.uint8)
+    for k in range(factors.shape[0]):
+        off, rows, cols = layout[k, 0], layout[k, 1], layout[k, 2]
+        _fill_level(obstacles, factors[k], levels[off:off + rows * cols].reshape((rows, cols)))
+    return layout, levels, np.zeros(total, dtype=np.uint8)
 
 
 def _pyramid_level(obstacles: np.ndarray, f: int) -> np.ndarray:
-    """One pyramid level of a 0/1 grid (see ``_fill_level``)."""
-    factors = np.array([f], dtype=np.int64)
-    out = np.empty(pyramid_shapes(obstacles.shape, factors)[0], dtype=np.uint8)
-    _fill_pyramid(obstacles, factors, (out,))
-    return out
+    """One pyramid level of a 0/1 grid, as a 2-D array (see ``_fill_level``)."""
+    layout, levels, _ = build_pyramid(obstacles, np.array([f], dtype=np.int64))
+    return levels.reshape(layout[0, 1], layout[0, 2])
 
 
 @nb.njit(cache=True)
-def _add_vertices(levels_tree, factors, V, res):
+def _add_vertices(levels_tree, layout, V, res):
     for n in range(V.shape[0]):
         x = V[n, 0] / res
         y = V[n, 1] / res
-        for k in range(factors.shape[0]):
-            f = factors[k]
+        for k in range(layout.shape[0]):
+            off, H, W, f = layout[k, 0], layout[k, 1], layout[k, 2], layout[k, 3]
             r = int(y / f)
             c = int(x / f)
-            lt = levels_tree[k]
-            if 0 <= r < lt.shape[0] and 0 <= c < lt.shape[1]:
-                lt[r, c] = 1
+            if 0 <= r < H and 0 <= c < W:
+                levels_tree[off + r * W + c] = 1
 
 
 class EgocentricView:
@@ -166,12 +174,7 @@ class EgocentricView:
         self.size = int(size)
         self.max_iterations = max_iterations
         self.factors = np.asarray(scales, dtype=np.int64)
-        obstacles = grid.kernel[1]  # the map as uint8, already contiguous
-        # tuples of arrays pass into compiled code far faster than typed lists
-        shapes = pyramid_shapes(obstacles.shape, self.factors)
-        self.levels_obs = tuple(np.empty(s, dtype=np.uint8) for s in shapes)
-        _fill_pyramid(obstacles, self.factors, self.levels_obs)
-        self.levels_tree = tuple(np.zeros(s, dtype=np.uint8) for s in shapes)  # 1: holds a vertex
+        self.layout, self.levels_obs, self.levels_tree = build_pyramid(grid.kernel[1], self.factors)
         self.start = np.ascontiguousarray(problem.start[:2], dtype=np.float64)
         self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
         self.seen = 0
@@ -185,7 +188,7 @@ class EgocentricView:
     def update(self, vertices: np.ndarray, num_vertices: int, best_distance: float, iteration: int) -> None:
         """Count the vertices added since the last call; note when the progress vertex improved."""
         if num_vertices > self.seen:
-            _add_vertices(self.levels_tree, self.factors, vertices[self.seen:num_vertices], self.res)
+            _add_vertices(self.levels_tree, self.layout, vertices[self.seen:num_vertices], self.res)
             self.seen = num_vertices
         if best_distance < self.best_distance - 1e-9:
             self.best_distance = best_distance
@@ -201,7 +204,7 @@ class EgocentricView:
         """``{"local": (2 * scales, size, size) uint8, "vector": (8,) float32}`` at ``anchor``."""
         local = np.empty((self.channels, self.size, self.size), dtype=np.uint8)
         vector = np.empty(len(EGO_VECTOR), dtype=np.float32)
-        _observe(self.levels_obs, self.levels_tree, self.factors, self.size, self.res, self.step,
+        _observe(self.levels_obs, self.levels_tree, self.layout, self.size, self.res, self.step,
                  np.ascontiguousarray(anchor[:2], dtype=np.float64), anchor_index == 0, self.start, self.goal,
                  num_vertices, iteration, self.last_progress, self.max_iterations, local, vector)
         return {"local": local, "vector": vector}

@@ -172,6 +172,27 @@ def _sample(front, count, W, cell, dist, tau, u_pick, u_xy, out):
     return u_pick.shape[0]
 
 
+def frontier_shape(grid: OccupancyGrid, cell: float) -> tuple[int, int]:
+    """Rows and columns of the frontier's cells of width ``cell`` over ``grid``."""
+    lo, hi = grid.bounds
+    return max(1, int(math.ceil((hi[1] - lo[1]) / cell))), max(1, int(math.ceil((hi[0] - lo[0]) / cell)))
+
+
+@nb.njit(cache=True)
+def frontier_arrays(obstacles, H, W):
+    """A new frontier's state for ``H x W`` cells over the 0/1 grid ``obstacles``, in one compiled call.
+
+    ``(counts, free, cov, pos, front, dist)``: the grid's ``column_counts`` (most visibility checks
+    become a box sum), each cell's centre UNKNOWN / FREE / BLOCKED, covered flags, each cell's index
+    in the frontier list (-1: not in it), the list, and goal distances (in cells, set when a cell is
+    first checked).
+    """
+    pos = np.empty((H, W), dtype=np.int64)
+    pos[:] = -1
+    return (column_counts(obstacles), np.zeros((H, W), dtype=np.uint8), np.zeros((H, W), dtype=np.bool_), pos,
+            np.empty(H * W, dtype=np.int64), np.empty(H * W))
+
+
 class Frontier:
     """Incremental frontier of a tree on a 2-D grid map.
 
@@ -187,18 +208,12 @@ class Frontier:
             raise TypeError("the frontier is defined on OccupancyGrid problems")
         if not (math.isfinite(cell) and cell > 0 and math.isfinite(tau) and tau > 0):
             raise ValueError(f"cell and tau must be positive, got {cell}, {tau}")
-        lo, hi = problem.world.bounds
         self.cell, self.tau = float(cell), float(tau)
-        self.H = max(1, int(math.ceil((hi[1] - lo[1]) / cell)))
-        self.W = max(1, int(math.ceil((hi[0] - lo[0]) / cell)))
+        self.H, self.W = frontier_shape(problem.world, self.cell)
         self.world = problem.world.kernel
-        self.counts = column_counts(self.world[1])  # most visibility checks become a box sum
         self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
-        self.free = np.zeros((self.H, self.W), dtype=np.uint8)  # UNKNOWN / FREE / BLOCKED
-        self.dist = np.empty(self.H * self.W)  # goal distance in cells, set when a cell is first checked
-        self.cov = np.zeros((self.H, self.W), dtype=np.bool_)
-        self.pos = np.full((self.H, self.W), -1, dtype=np.int64)
-        self.front = np.empty(self.H * self.W, dtype=np.int64)
+        self.counts, self.free, self.cov, self.pos, self.front, self.dist = frontier_arrays(self.world[1], self.H,
+                                                                                          self.W)
         self.count = 0
         self.seen = 0
 

@@ -10,8 +10,9 @@ An action is one of ``N_ACTIONS`` classes:
   preferred.
 
 Whatever the class, a ``uniform_floor`` share of samples is uniform over the map, so probabilistic
-completeness is never lost. The same object serves the environment's ``guided`` action mode and the
-learned ``PolicySampler``, so training and inference draw samples identically.
+completeness is never lost. The environment's ``guided`` action mode (``GuidedSampling``) and the
+learned ``PolicySampler`` share this geometry and its compiled builders and draws, so training and
+inference observe and draw samples identically.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ ANGLES = 16
 RINGS = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0)  # in steps
 SCALES = (0.25, 1.0, 4.0)  # egocentric window scales, in steps per pixel
 WINDOW = 16  # egocentric window side, in pixels
+FRONTIER_TAU = 1.0  # frontier goal preference, in cells
 N_EGO = ANGLES * (len(RINGS) - 1)
 FRONTIER = N_EGO
 N_ACTIONS = N_EGO + 1
@@ -113,6 +115,11 @@ def ego_class(dx: float, dy: float, step: float) -> int:
     return ring * ANGLES + int(a / (2 * math.pi) * ANGLES) % ANGLES
 
 
+def scale_cells(step: float, resolution: float, scales=SCALES) -> tuple[int, ...]:
+    """Grid cells per window pixel at each scale (scales are in steps per pixel); at least one."""
+    return tuple(max(1, int(round(s * step / resolution))) for s in scales)
+
+
 class GuidedSampling:
     """Egocentric observation, frontier and action geometry for one 2-D grid problem.
 
@@ -127,10 +134,9 @@ class GuidedSampling:
     """
 
     def __init__(self, problem: Problem, step_size: float, *, scales=SCALES, size: int = WINDOW,
-                 max_iterations: int = 20000, tau: float = 1.0, uniform_floor: float = 0.05) -> None:
+                 max_iterations: int = 20000, tau: float = FRONTIER_TAU, uniform_floor: float = 0.05) -> None:
         self.problem, self.step = problem, float(step_size)
-        res = problem.world.resolution
-        cells = tuple(max(1, int(round(s * self.step / res))) for s in scales)
+        cells = scale_cells(self.step, problem.world.resolution, scales)
         self.ego = EgocentricView(problem, self.step, scales=cells, size=size, max_iterations=max_iterations)
         self.frontier = Frontier(problem, self.step, tau)
         self.uniform_floor = float(uniform_floor)

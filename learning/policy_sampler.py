@@ -33,9 +33,9 @@ from pathlib import Path
 import numba as nb
 import numpy as np
 
-from envs.egocentric import EGO_VECTOR, _add_vertices, _observe
-from envs.frontier import cdf_search, softmax_cdf
-from envs.guided import N_ACTIONS, GuidedSampling, fill_from_cdf
+from envs.egocentric import EGO_VECTOR, _add_vertices, _observe, build_pyramid
+from envs.frontier import cdf_search, frontier_arrays, frontier_shape, softmax_cdf
+from envs.guided import FRONTIER_TAU, N_ACTIONS, WINDOW, fill_from_cdf, scale_cells
 from learning.fast_policy import FastActor, actor_logits
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners import _rrt_kernels as K
@@ -81,7 +81,7 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
     only for a forward pass, the frontier only for a frontier sample.
     """
     ego, front, actor, params, state = kern
-    levels_obs, levels_tree, factors, size, res, start, goal = ego
+    levels_obs, levels_tree, layout, size, res, start, goal = ego
     k1, k2, weights = actor
     step, temperature, floor0, max_floor, patience, reuse, max_iterations, low, high = params
     ist, fst, logits, cdf, local, vector = state
@@ -90,9 +90,9 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
         ist[S_PROGRESS] = iteration
     if ist[S_FORWARD] == 0 or best_v != ist[S_ANCHOR] or iteration - ist[S_SINCE] >= reuse:
         if n > ist[S_SEEN]:
-            _add_vertices(levels_tree, factors, X[ist[S_SEEN]:n], res)
+            _add_vertices(levels_tree, layout, X[ist[S_SEEN]:n], res)
             ist[S_SEEN] = n
-        _observe(levels_obs, levels_tree, factors, size, res, step, X[best_v, :2], best_v == 0, start, goal, n,
+        _observe(levels_obs, levels_tree, layout, size, res, step, X[best_v, :2], best_v == 0, start, goal, n,
                  iteration, ist[S_PROGRESS], max_iterations, local, vector)
         logits[:] = actor_logits(local, vector, k1, k2, *weights)
         fst[1] = softmax_cdf(logits, temperature, cdf)  # one softmax per forward pass, not per batch
@@ -136,6 +136,19 @@ def policy_rrt_run(budget, rng, kern, batch, pts, anch, tree, istate, fstate, la
                       q, qe_buf, new)
         ist[S_POS] = p + 1
     return budget
+
+
+@nb.njit(cache=True)
+def _new_state(obstacles, factors, H, W):
+    """All arrays of a bound sampler in one compiled call: pyramid, frontier, draw state."""
+    layout, levels_obs, levels_tree = build_pyramid(obstacles, factors)
+    counts, free, cov, pos, front, dist = frontier_arrays(obstacles, H, W)
+    fst = np.empty(2)
+    fst[0] = np.inf  # best goal distance seen
+    fst[1] = 0.0  # total of the class CDF
+    return (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, np.zeros(N_STATE, dtype=np.int64),
+            fst, np.empty(N_ACTIONS), np.empty(N_ACTIONS), np.empty((2 * factors.shape[0], WINDOW, WINDOW), np.uint8),
+            np.empty(len(EGO_VECTOR), np.float32))
 
 
 class PolicySampler(SamplerBase):
@@ -208,20 +221,25 @@ class PolicySampler(SamplerBase):
         return 0 if self._kernel is None else int(self._kernel[4][0][S_FORWARD])
 
     def _setup(self) -> None:
-        if not isinstance(self.problem.world, OccupancyGrid):
+        # the guided geometry of envs.guided.GuidedSampling (the training environment's), built
+        # without its objects: a bind is paid on every query, and built in Python it cost about a
+        # tenth of a bugtrap query
+        grid = self.problem.world
+        if not isinstance(grid, OccupancyGrid):
             raise ValueError("PolicySampler plans on OccupancyGrid problems (2-D maps of any size)")
-        guide = GuidedSampling(self.problem, self.step_size, uniform_floor=self.config["uniform_floor"],
-                               max_iterations=int(self.config.get("max_iterations", 20000)))
-        ego, fr = guide.ego, guide.frontier
-        ist = np.zeros(N_STATE, dtype=np.int64)
+        factors = np.array(scale_cells(self.step_size, grid.resolution), dtype=np.int64)
+        H, W = frontier_shape(grid, self.step_size)
+        (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, ist, fst, logits, cdf, local,
+         vector) = _new_state(grid.kernel[1], factors, H, W)
+        start = np.ascontiguousarray(self.problem.start[:2], dtype=np.float64)
+        goal = np.ascontiguousarray(self.problem.goal[:2], dtype=np.float64)
         self._kernel = (
-            (ego.levels_obs, ego.levels_tree, ego.factors, ego.size, ego.res, ego.start, ego.goal),
-            (fr.world, fr.counts, fr.cell, fr.W, fr.goal, fr.free, fr.cov, fr.pos, fr.front, fr.dist, fr.tau),
+            (levels_obs, levels_tree, layout, WINDOW, grid.resolution, start, goal),
+            (grid.kernel, counts, self.step_size, W, goal, free, cov, pos, front, dist, FRONTIER_TAU),
             (*self.actor.kernels, self.actor.weights),
-            (self.step_size, self.temperature, guide.uniform_floor, self.max_floor, self.patience, self.reuse,
-             ego.max_iterations, guide.low, guide.high),
-            (ist, np.array([np.inf, 0.0]), np.empty(N_ACTIONS), np.empty(N_ACTIONS),
-             np.empty((ego.channels, ego.size, ego.size), np.uint8), np.empty(len(EGO_VECTOR), np.float32)),
+            (self.step_size, self.temperature, float(self.config["uniform_floor"]), self.max_floor, self.patience,
+             self.reuse, int(self.config.get("max_iterations", 20000)), self.low, self.high),
+            (ist, fst, logits, cdf, local, vector),
         )
         self._pts = np.empty((self.batch, 2))
         self._anch = np.empty(self.batch, dtype=np.int8)

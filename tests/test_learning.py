@@ -136,6 +136,28 @@ def test_fused_loop_draws_exactly_what_draw_calls_do(family):
             assert c.iterations == ra.iterations and np.array_equal(c.result().path, ra.path)
 
 
+@pytest.mark.parametrize("family, size", [("maze", 96), ("bugtrap", 130)])
+def test_policy_sampler_observes_what_the_training_environment_observes(family, size):
+    # the sampler builds the guided geometry without GuidedSampling's objects; the policy must still
+    # see at inference exactly what it was trained on
+    from envs.guided import GuidedSampling
+
+    p = generate(family, TEST_SEED0, size)
+    grower = RRT(p, step_size=4.0, seed=0)
+    grower.solve(max_iterations=150)
+    view = grower.view()
+    sampler = PolicySampler.load(SHIPPED).bind(p)
+    sampler.draw(np.random.default_rng(0), 8, view)  # the first draw runs a forward pass
+    guide = GuidedSampling(p, 4.0, uniform_floor=sampler.config["uniform_floor"],
+                           max_iterations=sampler.config["max_iterations"])
+    guide.update(view)
+    obs = guide.observe(view)
+    local, vector = sampler._kernel[4][4], sampler._kernel[4][5]
+    assert view.num_vertices > 30 and obs["local"][1].any()  # the tree shows in the window
+    assert np.array_equal(obs["local"], local)
+    assert np.array_equal(obs["vector"], vector)
+
+
 def test_a_fused_planner_is_freed_without_the_cycle_collector():
     # a planner holding a loop that holds the planner would live until the next gc pass, keeping its
     # arrays (and the time to free them) in whichever solve runs then
