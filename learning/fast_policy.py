@@ -23,16 +23,14 @@ ACTOR_KEYS = (
 
 
 @nb.njit(cache=True, fastmath=True)
-def _patch_conv_relu(x, w, b, k):
-    """Convolution with kernel == stride k as patches (im2col) times a (out, in * k * k) matrix, ReLU.
+def _patch_conv_relu(x, w, b, k, patch, out):
+    """Convolution with kernel == stride k as patches (im2col) times a (out, in * k * k) matrix, ReLU, into ``out``.
 
     Each output is then one contiguous dot product, which LLVM vectorises.
     """
     ci, hi, wi = x.shape
     ho, wo = hi // k, wi // k
     n = ci * k * k
-    patch = np.empty(n, dtype=np.float32)
-    out = np.empty((w.shape[0], ho, wo), dtype=np.float32)
     for i in range(ho):
         for j in range(wo):
             t = 0
@@ -46,37 +44,50 @@ def _patch_conv_relu(x, w, b, k):
                 for q in range(n):
                     s += w[o, q] * patch[q]
                 out[o, i, j] = s if s > 0.0 else 0.0
-    return out
 
 
 @nb.njit(cache=True, fastmath=True)
-def _linear(x, w, b, relu):
-    out = np.empty(w.shape[0], dtype=np.float32)
+def _linear(x, w, b, relu, out):
     for o in range(w.shape[0]):
         s = b[o]
         for i in range(w.shape[1]):
             s += w[o, i] * x[i]
         out[o] = s if (s > 0.0 or not relu) else 0.0
-    return out
+
+
+@nb.njit(cache=True)
+def _take(buf, at, n):
+    return buf[at:at + n], at + n
 
 
 @nb.njit(cache=True, fastmath=True)
-def actor_logits(local, vector, k1, k2, c1w, c1b, c2w, c2b, vw, vb, hw, hb, pw, pb, aw, ab):
-    """Action logits for one observation (``local`` uint8 (C, 16, 16), ``vector`` float32).
+def actor_logits(local, vector, k1, k2, c1w, c1b, c2w, c2b, vw, vb, hw, hb, pw, pb, aw, ab, scratch, logits):
+    """Action logits into ``logits`` for one observation (``local`` uint8 (C, S, S), ``vector`` float32).
 
-    ``c1w``/``c2w`` are the convolution kernels flattened to (out, in * k * k).
+    ``c1w``/``c2w`` are the convolution kernels flattened to (out, in * k * k); ``scratch`` holds
+    ``FastActor.scratch_size`` float32s for the activations, so a pass allocates nothing.
     """
-    x = local.astype(np.float32) * np.float32(1.0 / 255.0)
-    h = _patch_conv_relu(x, c1w, c1b, k1)
-    h = _patch_conv_relu(h, c2w, c2b, k2)
-    flat = h.reshape(-1)
-    v = _linear(vector, vw, vb, True)
-    z = np.empty(flat.shape[0] + v.shape[0], dtype=np.float32)
-    z[: flat.shape[0]] = flat
-    z[flat.shape[0]:] = v
-    f = _linear(z, hw, hb, True)
-    p = _linear(f, pw, pb, True)
-    return _linear(p, aw, ab, False)
+    ci, size = local.shape[0], local.shape[1]
+    s1 = size // k1
+    s2 = s1 // k2
+    x, at = _take(scratch, 0, ci * size * size)
+    patch1, at = _take(scratch, at, c1w.shape[1])
+    h1, at = _take(scratch, at, c1w.shape[0] * s1 * s1)
+    patch2, at = _take(scratch, at, c2w.shape[1])
+    z, at = _take(scratch, at, hw.shape[1])  # conv features, then the vector branch
+    f, at = _take(scratch, at, hw.shape[0])
+    p, at = _take(scratch, at, pw.shape[0])
+    flat = local.reshape(-1)
+    for i in range(flat.shape[0]):
+        x[i] = flat[i] * np.float32(1.0 / 255.0)
+    _patch_conv_relu(x.reshape((ci, size, size)), c1w, c1b, k1, patch1, h1.reshape((c1w.shape[0], s1, s1)))
+    nf = c2w.shape[0] * s2 * s2
+    _patch_conv_relu(h1.reshape((c1w.shape[0], s1, s1)), c2w, c2b, k2, patch2, z[:nf].reshape((c2w.shape[0], s2, s2)))
+    _linear(vector, vw, vb, True, z[nf:])
+    _linear(z, hw, hb, True, f)
+    _linear(f, pw, pb, True, p)
+    _linear(p, aw, ab, False, logits)
+    return logits
 
 
 class FastActor:
@@ -94,9 +105,18 @@ class FastActor:
         self.weights = tuple(w)
         self.num_actions = self.weights[-1].shape[0]
 
+    def scratch_size(self, channels: int, size: int) -> int:
+        """float32s of scratch ``actor_logits`` needs for a ``(channels, size, size)`` window."""
+        (k1, k2), (c1w, _, c2w, _, _, _, hw, _, pw, *_) = self.kernels, self.weights
+        s1 = size // k1
+        return (channels * size * size + c1w.shape[1] + c1w.shape[0] * s1 * s1 + c2w.shape[1] + hw.shape[1]
+                + hw.shape[0] + pw.shape[0])
+
     def logits(self, local: np.ndarray, vector: np.ndarray) -> np.ndarray:
-        return actor_logits(np.ascontiguousarray(local), np.ascontiguousarray(vector, dtype=np.float32),
-                            *self.kernels, *self.weights)
+        local = np.ascontiguousarray(local)
+        scratch = np.empty(self.scratch_size(local.shape[0], local.shape[1]), dtype=np.float32)
+        return actor_logits(local, np.ascontiguousarray(vector, dtype=np.float32), *self.kernels, *self.weights,
+                            scratch, np.empty(self.num_actions, dtype=np.float32))
 
 
 def _to_numpy(t) -> np.ndarray:

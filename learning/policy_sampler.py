@@ -82,7 +82,7 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
     """
     ego, front, actor, params, state = kern
     levels_obs, levels_tree, layout, size, res, start, goal = ego
-    k1, k2, weights = actor
+    k1, k2, weights, scratch = actor
     step, temperature, floor0, max_floor, patience, reuse, max_iterations, low, high = params
     ist, fst, logits, cdf, local, vector = state
     if best_d < fst[0] - 1e-9:
@@ -94,7 +94,7 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
             ist[S_SEEN] = n
         _observe(levels_obs, levels_tree, layout, size, res, step, X[best_v, :2], best_v == 0, start, goal, n,
                  iteration, ist[S_PROGRESS], max_iterations, local, vector)
-        logits[:] = actor_logits(local, vector, k1, k2, *weights)
+        actor_logits(local, vector, k1, k2, *weights, scratch, logits)
         fst[1] = softmax_cdf(logits, temperature, cdf)  # one softmax per forward pass, not per batch
         ist[S_ANCHOR] = best_v
         ist[S_SINCE] = iteration
@@ -139,8 +139,8 @@ def policy_rrt_run(budget, rng, kern, batch, pts, anch, tree, istate, fstate, la
 
 
 @nb.njit(cache=True)
-def _new_state(obstacles, factors, H, W):
-    """All arrays of a bound sampler in one compiled call: pyramid, frontier, draw state."""
+def _new_state(obstacles, factors, H, W, n_scratch):
+    """All arrays of a bound sampler in one compiled call: pyramid, frontier, draw state, actor scratch."""
     layout, levels_obs, levels_tree = build_pyramid(obstacles, factors)
     counts, free, cov, pos, front, dist = frontier_arrays(obstacles, H, W)
     fst = np.empty(2)
@@ -148,7 +148,7 @@ def _new_state(obstacles, factors, H, W):
     fst[1] = 0.0  # total of the class CDF
     return (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, np.zeros(N_STATE, dtype=np.int64),
             fst, np.empty(N_ACTIONS), np.empty(N_ACTIONS), np.empty((2 * factors.shape[0], WINDOW, WINDOW), np.uint8),
-            np.empty(len(EGO_VECTOR), np.float32))
+            np.empty(len(EGO_VECTOR), np.float32), np.empty(n_scratch, np.float32))
 
 
 class PolicySampler(SamplerBase):
@@ -229,14 +229,14 @@ class PolicySampler(SamplerBase):
             raise ValueError("PolicySampler plans on OccupancyGrid problems (2-D maps of any size)")
         factors = np.array(scale_cells(self.step_size, grid.resolution), dtype=np.int64)
         H, W = frontier_shape(grid, self.step_size)
-        (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, ist, fst, logits, cdf, local,
-         vector) = _new_state(grid.kernel[1], factors, H, W)
+        (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, ist, fst, logits, cdf, local, vector,
+         scratch) = _new_state(grid.kernel[1], factors, H, W, self.actor.scratch_size(2 * len(factors), WINDOW))
         start = np.ascontiguousarray(self.problem.start[:2], dtype=np.float64)
         goal = np.ascontiguousarray(self.problem.goal[:2], dtype=np.float64)
         self._kernel = (
             (levels_obs, levels_tree, layout, WINDOW, grid.resolution, start, goal),
             (grid.kernel, counts, self.step_size, W, goal, free, cov, pos, front, dist, FRONTIER_TAU),
-            (*self.actor.kernels, self.actor.weights),
+            (*self.actor.kernels, self.actor.weights, scratch),
             (self.step_size, self.temperature, float(self.config["uniform_floor"]), self.max_floor, self.patience,
              self.reuse, int(self.config.get("max_iterations", 20000)), self.low, self.high),
             (ist, fst, logits, cdf, local, vector),
