@@ -107,8 +107,8 @@ class FastActor:
 
     def scratch_size(self, channels: int, size: int) -> int:
         """float32s of scratch ``actor_logits`` needs for a ``(channels, size, size)`` window."""
-        (k1, k2), (c1w, _, c2w, _, _, _, hw, _, pw, *_) = self.kernels, self.weights
-        s1 = size // k1
+        c1w, _, c2w, _, _, _, hw, _, pw, *_ = self.weights
+        s1 = size // self.kernels[0]
         return (channels * size * size + c1w.shape[1] + c1w.shape[0] * s1 * s1 + c2w.shape[1] + hw.shape[1]
                 + hw.shape[0] + pw.shape[0])
 
