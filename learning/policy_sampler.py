@@ -35,7 +35,7 @@ import numpy as np
 
 from envs.egocentric import EGO_VECTOR, _add_vertices, _observe, build_pyramid
 from envs.frontier import cdf_search, frontier_arrays, frontier_shape, softmax_cdf
-from envs.guided import FRONTIER_TAU, N_ACTIONS, WINDOW, fill_from_cdf, scale_cells
+from envs.guided import FRONTIER_TAU, N_ACTIONS, SCALES, WINDOW, fill_from_cdf, scale_cells
 from learning.fast_policy import FastActor, actor_logits
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners import _rrt_kernels as K
@@ -189,6 +189,11 @@ class PolicySampler(SamplerBase):
             raise ValueError(f"need step_size, batch, temperature, reuse, patience > 0 and 0 <= max_floor <= 1, got "
                              f"{self.step_size}, {self.batch}, {self.temperature}, {self.reuse}, {self.patience}, "
                              f"{self.max_floor}")
+        # per-query constants, prepared once: a bind runs on every query
+        self._params = (self.step_size, self.temperature, float(self.config["uniform_floor"]), self.max_floor,
+                        self.patience, self.reuse, int(self.config.get("max_iterations", 20000)))
+        self._n_scratch = actor.scratch_size(2 * len(SCALES), WINDOW)
+        self._geometry: dict = {}  # (resolution, map shape) -> (cells per pixel per scale, frontier rows, columns)
         self._kernel = None
 
     @classmethod
@@ -227,18 +232,21 @@ class PolicySampler(SamplerBase):
         grid = self.problem.world
         if not isinstance(grid, OccupancyGrid):
             raise ValueError("PolicySampler plans on OccupancyGrid problems (2-D maps of any size)")
-        factors = np.array(scale_cells(self.step_size, grid.resolution), dtype=np.int64)
-        H, W = frontier_shape(grid, self.step_size)
+        key = (grid.resolution, grid.shape)
+        geometry = self._geometry.get(key)
+        if geometry is None:  # shared with the other copies bound from the same sampler
+            factors = np.array(scale_cells(self.step_size, grid.resolution), dtype=np.int64)
+            geometry = self._geometry[key] = (factors, *frontier_shape(grid, self.step_size))
+        factors, H, W = geometry
         (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, ist, fst, logits, cdf, local, vector,
-         scratch) = _new_state(grid.kernel[1], factors, H, W, self.actor.scratch_size(2 * len(factors), WINDOW))
+         scratch) = _new_state(grid.kernel[1], factors, H, W, self._n_scratch)
         start = np.ascontiguousarray(self.problem.start[:2], dtype=np.float64)
         goal = np.ascontiguousarray(self.problem.goal[:2], dtype=np.float64)
         self._kernel = (
             (levels_obs, levels_tree, layout, WINDOW, grid.resolution, start, goal),
             (grid.kernel, counts, self.step_size, W, goal, free, cov, pos, front, dist, FRONTIER_TAU),
             (*self.actor.kernels, self.actor.weights, scratch),
-            (self.step_size, self.temperature, float(self.config["uniform_floor"]), self.max_floor, self.patience,
-             self.reuse, int(self.config.get("max_iterations", 20000)), self.low, self.high),
+            (*self._params, self.low, self.high),
             (ist, fst, logits, cdf, local, vector),
         )
         self._pts = np.empty((self.batch, 2))

@@ -82,7 +82,8 @@ class SamplerBase:
         bound = object.__new__(type(self))
         bound.__dict__.update(self.__dict__)
         bound.problem = problem
-        bound.low, bound.high = (np.asarray(b, dtype=np.float64) for b in problem.world.bounds)
+        low, high = problem.world.bounds
+        bound.low, bound.high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
         bound._setup()
         return bound
 
