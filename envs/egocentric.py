@@ -79,7 +79,8 @@ def _fill_level(obstacles, f, out):
     """``out``: blocked fraction (0-255) of each f x f block; blocks overhanging the map count the outside as blocked.
 
     ``obstacles`` holds 0/1. Rows are summed a block row at a time over whole map rows (contiguous,
-    vectorised adds), then each block's columns: no per-cell division or scatter.
+    vectorised adds), then a running sum along that row gives each block's count as one difference:
+    no per-cell division or scatter, and no per-block loop.
     """
     H, W = obstacles.shape
     if f == 1:
@@ -87,25 +88,30 @@ def _fill_level(obstacles, f, out):
             for c in range(W):
                 out[r, c] = 255 if obstacles[r, c] else 0
         return
+    rows, cols = out.shape
     # 0-255 level of k blocked cells out of f * f, rounded half to even as np.round
     level = np.empty(f * f + 1, dtype=np.uint8)
     for k in range(f * f + 1):
         level[k] = np.uint8(round(255.0 * k / (f * f)))
     acc = np.empty(W, dtype=np.int32)
-    for i in range(out.shape[0]):
+    run = np.empty(cols * f + 1, dtype=np.int32)
+    run[0] = 0
+    for i in range(rows):
         r0 = i * f
         r1 = min(r0 + f, H)
-        acc[:] = 0
+        acc[:] = f - (r1 - r0)  # rows of the block below the map count as blocked
         for r in range(r0, r1):
             for c in range(W):
                 acc[c] += obstacles[r, c]
-        for j in range(out.shape[1]):
-            c0 = j * f
-            c1 = min(c0 + f, W)
-            count = f * f - (r1 - r0) * (c1 - c0)  # cells of the block outside the map
-            for c in range(c0, c1):
-                count += acc[c]
-            out[i, j] = level[count]
+        s = 0
+        for c in range(W):
+            s += acc[c]
+            run[c + 1] = s
+        for c in range(W, cols * f):  # columns right of the map, blocked
+            s += f
+            run[c + 1] = s
+        for j in range(cols):
+            out[i, j] = level[run[(j + 1) * f] - run[j * f]]
 
 
 @nb.njit(cache=True)
