@@ -153,9 +153,9 @@ class RelativeAction(ActionSampler):
 
 
 class GuidedAction(ActionSampler):
-    """``guided``: ``Discrete(N_ACTIONS)``, an egocentric log-polar cell ahead of the tree's progress
-    vertex or the tree's frontier (see ``envs.guided``). The environment attaches the episode's
-    ``GuidedSampling`` as ``guide``.
+    """``guided``: ``Discrete(N_ACTIONS)``, a log-polar cell ahead of the progress vertex, or the frontier.
+
+    See ``envs.guided``. The environment attaches the episode's ``GuidedSampling`` as ``guide``.
     """
 
     guide = None

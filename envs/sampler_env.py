@@ -17,9 +17,10 @@ PLANNERS = {"rrt": RRT, "rrtstar": RRTStar, "prm": PRM, "rrtconnect": RRTConnect
 
 
 class EgocentricObservation:
-    """``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``: windows around the progress vertex at 1/4,
-    1 and 4 steps per pixel (obstacles and tree), turned towards the goal, and vector features (see
-    ``envs.egocentric``); the same on maps of every size.
+    """``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``: egocentric windows and vector features.
+
+    Windows around the progress vertex at 1/4, 1 and 4 steps per pixel (obstacles and tree), turned
+    towards the goal, and vector features (see ``envs.egocentric``); the same on maps of every size.
     """
 
     def __init__(self, env: SamplerEnv) -> None:

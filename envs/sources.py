@@ -131,7 +131,7 @@ class FileSource:
         self.goal_tolerance = float(goal_tolerance)
         self.min_distance = float(min_distance)
         self._labels = [free_components(g.obstacles) for g in self.grids]
-        for g, lab in zip(self.grids, self._labels):
+        for g, lab in zip(self.grids, self._labels, strict=True):
             if (lab >= 0).sum() < 2:
                 raise ValueError(f"map {g.source} has fewer than two free cells")
 

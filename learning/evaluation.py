@@ -47,16 +47,18 @@ def _scenarios(directory: str, name: str, tolerance: float) -> list[Problem]:
     key = (directory, name, tolerance)
     if key not in _SCEN_CACHE:
         d = Path(directory)
-        scen = next((p for p in sorted(d.glob(f"{name}*.scen")) if p.name.split(".")[0].replace("-random-1", "") == name),
-                    None)
+        scen = next((p for p in sorted(d.glob(f"{name}*.scen"))
+                     if p.name.split(".")[0].replace("-random-1", "") == name), None)
         if scen is None:
             raise FileNotFoundError(f"no scenario file for MovingAI map {name!r} in {d}")
-        ps = [p for p in load_movingai_scenarios(scen, goal_tolerance=tolerance) if p.distance(p.start, p.goal) > tolerance]
+        ps = [p for p in load_movingai_scenarios(scen, goal_tolerance=tolerance)
+              if p.distance(p.start, p.goal) > tolerance]
         _SCEN_CACHE[key] = sorted(ps, key=lambda p: (-p.reference_length, p.name))
     return _SCEN_CACHE[key]
 
 
 def generated_queries(families: Sequence[str], size: int, n_test: int, n_tune: int) -> list[Query]:
+    """``n_test`` test and ``n_tune`` tuning maps per family, on their disjoint seed ranges."""
     return ([Query(f, TEST_SEED0 + i, size, "test") for f in families for i in range(n_test)]
             + [Query(f, TUNING_SEED0 + i, size, "tuning") for f in families for i in range(n_tune)])
 
@@ -175,8 +177,9 @@ def _worker_init() -> None:
 
 
 def pooled(runs: Sequence[Run], name: str, families: Sequence[str]) -> list[Run]:
-    """Copies of the runs on ``families`` relabelled as one family ``name`` (e.g. all MovingAI maps), so
-    the best bias is tuned and the summary taken over the pool as a whole.
+    """Copies of the runs on ``families`` relabelled as one family ``name`` (e.g. all MovingAI maps).
+
+    The best bias is then tuned, and the summary taken, over the pool as a whole.
     """
     from dataclasses import replace
 
@@ -208,8 +211,9 @@ def bootstrap_mean_ci(x: np.ndarray, rng: np.random.Generator, n: int = 2000) ->
 
 
 def summarize(runs: Sequence[Run], biases: dict, seed: int = 0) -> list[dict]:
-    """One row per (family, planner, sampler) on the test split; goal-bias rows are the default 0.05,
-    the tuned best, and (for completeness) the rest of the sweep.
+    """One row per (family, planner, sampler) on the test split.
+
+    Goal-bias rows are the default 0.05, the tuned best, and (for completeness) the rest of the sweep.
     """
     rng = np.random.default_rng(seed)
     test = [r for r in runs if r.split == "test"]
@@ -268,7 +272,8 @@ def headline(rows: Sequence[dict], biases: dict) -> list[dict]:
     return out
 
 
-def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path, planner: str = "RRT") -> list[Path]:
+def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path,
+               planner: str = "RRT") -> list[Path]:
     """ECDF of iterations-to-solution per sampler for each family, and bars of means with 95% CIs."""
     from planners.plotting import new_figure, save_figure
 
@@ -327,6 +332,7 @@ def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir:
 
 
 def write_csv(runs: Sequence[Run], path: Path) -> None:
+    """Every run as a CSV row, written whole or not at all."""
     import csv
     import io
     import tempfile

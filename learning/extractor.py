@@ -39,8 +39,9 @@ class EgocentricExtractor(BaseFeaturesExtractor):
 
 
 def policy_kwargs(features_dim: int = 128, hidden: int = 128) -> dict:
-    """``policy_kwargs`` for ``PPO("MultiInputPolicy", ...)``; actor and critic keep separate extractors
-    so that fitting the critic never disturbs an imitation-trained actor.
+    """``policy_kwargs`` for ``PPO("MultiInputPolicy", ...)``.
+
+    Actor and critic keep separate extractors, so fitting the critic never disturbs an imitation-trained actor.
     """
     return dict(
         features_extractor_class=EgocentricExtractor,

@@ -183,7 +183,10 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
                 continue
         radius = 0.0
         if k == 0:
-            radius = fixed_radius if fixed_radius > 0.0 else radius_gamma * (math.log(n + 1.0) / (n + 1.0)) ** (1.0 / dim)
+            if fixed_radius > 0.0:
+                radius = fixed_radius
+            else:
+                radius = radius_gamma * (math.log(n + 1.0) / (n + 1.0)) ** (1.0 / dim)
             if max_edge > 0.0 and radius > max_edge:
                 radius = max_edge
         istate[I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius, max_edge,

@@ -130,7 +130,7 @@ def summarize(records: Sequence[Record], by: Sequence[str] = ("map", "planner"))
         solved = [r for r in rs if r.solved]
         its = sum(r.iterations for r in rs)
         rows.append({
-            **dict(zip(by, key)),
+            **dict(zip(by, key, strict=True)),
             "runs": len(rs),
             "success": len(solved) / len(rs),
             "median_iterations": float(np.median([r.iterations for r in solved])) if solved else float("nan"),
@@ -158,4 +158,5 @@ def markdown_table(rows: Sequence[dict], columns: Sequence[str] | None = None, f
 
 
 def records_to_dicts(records: Iterable[Record]) -> list[dict]:
+    """The records as plain dicts (one per run), e.g. for a CSV writer."""
     return [asdict(r) for r in records]

@@ -205,7 +205,8 @@ class OccupancyGrid(WorldBase):
 
     def __repr__(self) -> str:
         src = f", source={self.source!r}" if self.source else ""
-        return f"OccupancyGrid({self.height}x{self.width}, resolution={self.resolution:g}, free={1 - self._obstacles.mean():.3f}{src})"
+        return (f"OccupancyGrid({self.height}x{self.width}, resolution={self.resolution:g}, "
+                f"free={1 - self._obstacles.mean():.3f}{src})")
 
 
 def _parse_movingai(lines: list[str], path: Path) -> np.ndarray:

@@ -182,7 +182,8 @@ class Planner(abc.ABC):
         if sampler is None:
             sampler = UniformSampler()
         if not isinstance(sampler, Sampler):
-            raise TypeError(f"sampler must implement bind(problem) and draw(rng, n, view), got {type(sampler).__name__}")
+            raise TypeError("sampler must implement bind(problem) and draw(rng, n, view), "
+                            f"got {type(sampler).__name__}")
         if seed is None:
             seed = int(np.random.SeedSequence().entropy % (2**63))
         elif isinstance(seed, (bool, float)) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -244,7 +245,8 @@ class Planner(abc.ABC):
         if max_iterations is None and time_limit is None:
             raise ValueError("give max_iterations or time_limit (or both)")
         if max_iterations is not None:
-            if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 0:
+            if (isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer))
+                    or max_iterations < 0):
                 raise ValueError(f"max_iterations must be a non-negative integer, got {max_iterations!r}")
         if time_limit is not None:
             time_limit = float(time_limit)
@@ -334,7 +336,8 @@ class Planner(abc.ABC):
         """Vertices and edges for plotting (read-only copies)."""
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}(iterations={self.iterations}, vertices={self.num_vertices}, solved={self.solved})"
+        return (f"{type(self).__name__}(iterations={self.iterations}, vertices={self.num_vertices}, "
+                f"solved={self.solved})")
 
     # --- subclass interface ------------------------------------------------------------------
 
@@ -373,7 +376,8 @@ class Planner(abc.ABC):
             pts = np.ascontiguousarray(pts, dtype=np.float64)
         who = type(self.sampler).__name__
         if pts.ndim != 2 or pts.shape[1] != self.problem.dim or not (1 <= len(pts) <= n):
-            raise ValueError(f"{who}.draw(n={n}) must return 1..{n} samples of dimension {self.problem.dim}, got shape {pts.shape}")
+            raise ValueError(f"{who}.draw(n={n}) must return 1..{n} samples of dimension {self.problem.dim}, "
+                             f"got shape {pts.shape}")
         if not np.isfinite(pts.sum()):  # one reduction: any NaN or infinity makes the sum non-finite
             raise ValueError(f"{who}.draw returned a NaN or infinite sample")
         m = len(pts)

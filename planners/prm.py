@@ -124,7 +124,10 @@ class PRM(Planner):
         if self.k:
             return 0.0
         n = int(self._istate[K.I_N])
-        r = self.radius if self.radius is not None else self.gamma * (math.log(n + 1.0) / (n + 1.0)) ** (1.0 / self.problem.dim)
+        if self.radius is not None:
+            r = self.radius
+        else:
+            r = self.gamma * (math.log(n + 1.0) / (n + 1.0)) ** (1.0 / self.problem.dim)
         return min(r, self.step_size) if self.step_size else r
 
     def _insert_query_state(self, q: np.ndarray) -> int:

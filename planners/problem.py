@@ -69,7 +69,8 @@ class Problem:
         object.__setattr__(self, "goal_tolerance", tol)
         metric = world.metrics[0] if self.metric is None else self.metric
         if metric not in world.metrics:
-            raise ValueError(f"metric {metric!r} is not available on {type(world).__name__}; choose from {world.metrics}")
+            raise ValueError(f"metric {metric!r} is not available on {type(world).__name__}; "
+                             f"choose from {world.metrics}")
         object.__setattr__(self, "metric", metric)
 
     @property
@@ -79,7 +80,8 @@ class Problem:
     @property
     def space(self) -> tuple[int, int, float]:
         """``(kind, metric, rot_weight)`` for the compiled kernels."""
-        return (int(self.world.space_kind), int(METRIC_NAMES[self.metric]), float(getattr(self.world, "rot_weight", 1.0)))
+        return (int(self.world.space_kind), int(METRIC_NAMES[self.metric]),
+                float(getattr(self.world, "rot_weight", 1.0)))
 
     def distance(self, a, b) -> float:
         """Distance between two states in this problem's metric."""
@@ -91,7 +93,7 @@ class Problem:
     def path_length(self, path) -> float:
         """Length of a path (sequence of states) in this problem's metric."""
         path = np.asarray(path, dtype=np.float64).reshape(-1, self.dim)
-        return float(sum(self.distance(a, b) for a, b in zip(path[:-1], path[1:])))
+        return float(sum(self.distance(a, b) for a, b in zip(path[:-1], path[1:], strict=True)))
 
     def in_goal(self, q) -> bool:
         return self.distance(q, self.goal) <= self.goal_tolerance
@@ -147,7 +149,8 @@ def load_movingai_scenarios(
             grids[mp] = OccupancyGrid.from_movingai(mp)
         grid = grids[mp]
         if (w, h) != (grid.width, grid.height):
-            raise ValueError(f"{path}, line {lineno}: scenario size {w}x{h} does not match {mp} ({grid.width}x{grid.height})")
+            raise ValueError(f"{path}, line {lineno}: scenario size {w}x{h} does not match {mp} "
+                             f"({grid.width}x{grid.height})")
         for label, (x, y) in (("start", (sx, sy)), ("goal", (gx, gy))):
             if not (0 <= x < w and 0 <= y < h) or grid.obstacles[y, x]:
                 raise ValueError(f"{path}, line {lineno}: {label} cell (x={x}, y={y}) is outside the map or blocked")

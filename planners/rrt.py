@@ -70,7 +70,8 @@ class RRT(Planner):
     def _add_root(self, store: VertexStore, q: np.ndarray, slot: int) -> None:
         from planners._tree_kernels import add_vertex
 
-        self._istate[slot] = add_vertex(store.as_tuple(), 0, self._space, np.ascontiguousarray(q, dtype=np.float64), -1, 0.0)
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        self._istate[slot] = add_vertex(store.as_tuple(), 0, self._space, q, -1, 0.0)
 
     def _reserve(self, iterations: int) -> None:
         self._tree.reserve(self.num_vertices, 1)

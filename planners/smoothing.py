@@ -51,7 +51,7 @@ def shortcut(path, problem: Problem, *, seed: int = 0, attempts: int = 200) -> n
     for _ in range(attempts):
         if len(path) < 3:
             break
-        seg = np.array([problem.distance(a, b) for a, b in zip(path[:-1], path[1:])])
+        seg = np.array([problem.distance(a, b) for a, b in zip(path[:-1], path[1:], strict=True)])
         cum = np.concatenate([[0.0], np.cumsum(seg)])
         total = cum[-1]
         if total <= 0:

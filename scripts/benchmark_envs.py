@@ -61,14 +61,16 @@ def main(argv=None) -> int:
             if mode == "guided" and env_id.endswith("RigidBody-v0"):
                 continue  # guided actions are defined on 2-D grids only
             try:
-                env = gym.make(env_id, action_mode=mode, **kw, **({"observation": "egocentric"} if mode == "guided" else {}))
+                obs_kw = {"observation": "egocentric"} if mode == "guided" else {}
+                env = gym.make(env_id, action_mode=mode, **kw, **obs_kw)
             except FileNotFoundError as exc:
                 print(f"skipping {env_id}: {exc}", file=sys.stderr)
                 break
             steps_per_second(env, 500)  # load compiled kernels
             sps, eps = steps_per_second(env, args.steps)
             obs_kind = "egocentric" if mode == "guided" else "default"
-            rows.append({"id": env_id, "action_mode": mode, "observation": obs_kind, "steps_per_s": sps, "episodes": eps})
+            rows.append({"id": env_id, "action_mode": mode, "observation": obs_kind, "steps_per_s": sps,
+                         "episodes": eps})
             print(markdown_table(rows[-1:]).splitlines()[-1], flush=True)
     print()
     print(markdown_table(rows, floatfmt=".0f"))

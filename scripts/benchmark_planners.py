@@ -33,8 +33,8 @@ from planners.generators import FAMILIES, generate  # noqa: E402
 
 
 def movingai_dir(arg: str | None) -> Path | None:
-    cand = Path(arg) if arg else Path(os.environ.get("SAMPLERGYM_MOVINGAI_DIR",
-                                                     Path(__file__).resolve().parents[2] / "shared" / "maps" / "movingai"))
+    default = Path(__file__).resolve().parents[2] / "shared" / "maps" / "movingai"
+    cand = Path(arg) if arg else Path(os.environ.get("SAMPLERGYM_MOVINGAI_DIR", default))
     return cand if cand.is_dir() else None
 
 
@@ -67,7 +67,8 @@ def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[B.Record]]:
             if use_ompl:
                 om = []
                 for i, p in enumerate(problems):
-                    o = ompl_bridge.OmplGridPlanner(p, "RRT", step_size=args.step, goal_bias=bias, seed=i).run(args.max_iterations)
+                    o = ompl_bridge.OmplGridPlanner(p, "RRT", step_size=args.step, goal_bias=bias,
+                                                    seed=i).run(args.max_iterations)
                     om.append(B.Record(name, p.name, f"OMPL RRT b={bias}", o.solved, o.iterations, o.time,
                                        o.time / max(o.iterations, 1) * 1e6, o.cost, -1, o.num_vertices, i))
                 records += om
@@ -158,7 +159,8 @@ def main(argv=None) -> int:
     for label in B.PLANNERS:
         B.run_one(next(iter(maps.values()))[0], label, step=args.step, seed=0, max_iterations=200)
     out = io.StringIO()
-    header = (f"# Planner benchmark\n\n{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+    header = (f"# Planner benchmark\n\n{platform.processor() or platform.machine()}, "
+              f"Python {platform.python_version()}, "
               f"step {args.step}, cap {args.max_iterations} iterations, {args.seeds} seeds per family "
               f"({args.size}x{args.size}), {args.scenarios} scenarios per MovingAI map.\n")
     out.write(header + "\n")
@@ -172,7 +174,8 @@ def main(argv=None) -> int:
     out.write("## RRT time per iteration (us), ours vs OMPL\n\n" + table + "\n")
     if use_ompl:
         ratios = np.array([r["ratio"] for r in rows])
-        line = f"ratio ours/OMPL: median {np.median(ratios):.2f}, max {ratios.max():.2f} over {len(ratios)} map x bias cells\n"
+        line = (f"ratio ours/OMPL: median {np.median(ratios):.2f}, max {ratios.max():.2f} "
+                f"over {len(ratios)} map x bias cells\n")
         out.write(line + "\n")
         print("\n" + line)
 
@@ -180,7 +183,8 @@ def main(argv=None) -> int:
     g_rows, nn_rows = growth(args, use_ompl, movingai_dir(args.movingai))
     gt = B.markdown_table(g_rows, ["map", "planner", "from_vertices", "to_vertices", "iterations", "us_per_iteration"])
     nt = B.markdown_table(nn_rows, ["map", "vertices", "index_us", "numpy_scan_us"])
-    out.write("## Per-iteration time while the tree grows\n\n" + gt + "\n## Nearest-neighbour query time\n\n" + nt + "\n")
+    out.write("## Per-iteration time while the tree grows\n\n" + gt
+              + "\n## Nearest-neighbour query time\n\n" + nt + "\n")
     print(gt + "\n" + nt)
 
     print("## Every planner on every map\n", flush=True)

@@ -37,7 +37,8 @@ def main(argv=None) -> int:
             continue
         flag = "--" + f.name.replace("_", "-")
         if f.type in ("tuple[str, ...]", "tuple[int, ...]", "tuple[float, ...]"):
-            ap.add_argument(flag, nargs="+", help=f"default {f.default!r}" if f.default is not dataclasses.MISSING else None)
+            ap.add_argument(flag, nargs="+",
+                            help=f"default {f.default!r}" if f.default is not dataclasses.MISSING else None)
         elif f.type == "bool":
             ap.add_argument(flag, action=argparse.BooleanOptionalAction, default=None, help=f"default {f.default!r}")
         else:
@@ -55,7 +56,8 @@ def main(argv=None) -> int:
     try:
         final = train(cfg, args.out, resume=args.resume, progress=not args.no_progress, log_stdout=False)
     except KeyboardInterrupt:
-        print(f"\ninterrupted: {args.out / cfg.name / 'checkpoint.zip'} is saved; continue with --resume", file=sys.stderr)
+        print(f"\ninterrupted: {args.out / cfg.name / 'checkpoint.zip'} is saved; continue with --resume",
+              file=sys.stderr)
         return 130
     minutes = (time.perf_counter() - t0) / 60
     summary = json.loads((final.parent / "summary.json").read_text())

@@ -74,7 +74,7 @@ def fine_check_path(world, path, spacing: float = 0.01) -> bool:
         raise TypeError(type(world))
     if len(path) == 1:
         return ok(path[0])
-    for a, b in zip(path[:-1], path[1:]):
+    for a, b in zip(path[:-1], path[1:], strict=True):
         n = max(2, int(np.ceil(np.linalg.norm(b - a) / spacing)) + 1)
         for t in np.linspace(0.0, 1.0, n):
             if not ok(a + t * (b - a)):
@@ -91,7 +91,8 @@ def exact_segment_free(grid: OccupancyGrid, a, b) -> bool:
     for r in range(int(np.floor(float(y_lo))) - 1, int(np.floor(float(y_hi))) + 2):
         for c in range(int(np.floor(float(x_lo))) - 1, int(np.floor(float(x_hi))) + 2):
             blocked = not (0 <= r < H and 0 <= c < W) or grid.obstacles[r, c]
-            if blocked and _segment_meets_box(ax, ay, bx, by, Fraction(c), Fraction(r), Fraction(c + 1), Fraction(r + 1)):
+            if blocked and _segment_meets_box(ax, ay, bx, by, Fraction(c), Fraction(r), Fraction(c + 1),
+                                              Fraction(r + 1)):
                 return False
     return True
 

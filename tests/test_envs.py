@@ -84,7 +84,7 @@ def rollout(env, seed, steps=60):
 
 def assert_same(a, b):
     assert len(a) == len(b)
-    for (o1, r1, i1), (o2, r2, i2) in zip(a, b):
+    for (o1, r1, i1), (o2, r2, i2) in zip(a, b, strict=True):
         if not isinstance(o1, dict):
             o1, o2 = {"vector": o1}, {"vector": o2}
         for k in o1:
@@ -315,7 +315,7 @@ def test_frontier_is_the_visible_uncovered_free_neighbour_cells(seed):
     cell = (2.0, 1.5, 4.0, 1.0)[seed]
     front = Frontier(problem, cell)
     V = rng.uniform(lo, hi, size=(120, 2))
-    for a, b in ((0, 30), (30, 31), (31, 120)):  # incremental updates
+    for b in (30, 31, 120):  # incremental updates
         front.update(V, b)
     H, W = front.H, front.W
     cov = {(int(v[1] // cell), int(v[0] // cell)) for v in V}

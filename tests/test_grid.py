@@ -71,7 +71,8 @@ def test_from_image_threshold_invert_and_alpha(tmp_path):
     g = OccupancyGrid.from_image(tmp_path / "m.png")
     assert g.shape == (6, 8)
     assert set(map(tuple, np.argwhere(g.obstacles))) == {(1, 2), (4, 5)}
-    assert set(map(tuple, np.argwhere(OccupancyGrid.from_image(tmp_path / "m.png", threshold=0.3).obstacles))) == {(1, 2)}
+    light = OccupancyGrid.from_image(tmp_path / "m.png", threshold=0.3)
+    assert set(map(tuple, np.argwhere(light.obstacles))) == {(1, 2)}
     assert OccupancyGrid.from_image(tmp_path / "m.png", invert=True).obstacles.sum() == 48 - 2
     rgba = np.zeros((3, 3, 4), np.uint8)  # fully transparent black counts as white
     rgba[1, 1] = (0, 0, 0, 255)
@@ -216,7 +217,7 @@ def test_batched_checks_match_single():
     g = _grid(3, 20, 20)
     rng = np.random.default_rng(0)
     A, B = rng.random((200, 2)) * 20, rng.random((200, 2)) * 20
-    single = np.array([g.check_motion(a, b) for a, b in zip(A, B)])
+    single = np.array([g.check_motion(a, b) for a, b in zip(A, B, strict=True)])
     assert np.array_equal(g.check_motions(A, B), single)
     assert 0 < single.sum() < len(single)
     assert not g.check_motion((1.0, np.nan), (2.0, 2.0))
