@@ -60,6 +60,23 @@ def _take(buf, at, n):
     return buf[at:at + n], at + n
 
 
+@nb.njit(cache=True)
+def _activations(scratch, ci, size, k1, k2, c1w, c2w, hw, pw):
+    """Views of ``scratch`` for one pass's activations, and the float32s they need in all.
+
+    The one statement of the scratch layout: with an empty ``scratch`` it only measures it.
+    """
+    s1 = size // k1
+    x, at = _take(scratch, 0, ci * size * size)
+    patch1, at = _take(scratch, at, c1w.shape[1])
+    h1, at = _take(scratch, at, c1w.shape[0] * s1 * s1)
+    patch2, at = _take(scratch, at, c2w.shape[1])
+    z, at = _take(scratch, at, hw.shape[1])  # conv features, then the vector branch
+    f, at = _take(scratch, at, hw.shape[0])
+    p, at = _take(scratch, at, pw.shape[0])
+    return x, patch1, h1, patch2, z, f, p, at
+
+
 @nb.njit(cache=True, fastmath=True)
 def actor_logits(local, vector, k1, k2, c1w, c1b, c2w, c2b, vw, vb, hw, hb, pw, pb, aw, ab, scratch, logits):
     """Action logits into ``logits`` for one observation (``local`` uint8 (C, S, S), ``vector`` float32).
@@ -70,13 +87,7 @@ def actor_logits(local, vector, k1, k2, c1w, c1b, c2w, c2b, vw, vb, hw, hb, pw, 
     ci, size = local.shape[0], local.shape[1]
     s1 = size // k1
     s2 = s1 // k2
-    x, at = _take(scratch, 0, ci * size * size)
-    patch1, at = _take(scratch, at, c1w.shape[1])
-    h1, at = _take(scratch, at, c1w.shape[0] * s1 * s1)
-    patch2, at = _take(scratch, at, c2w.shape[1])
-    z, at = _take(scratch, at, hw.shape[1])  # conv features, then the vector branch
-    f, at = _take(scratch, at, hw.shape[0])
-    p, at = _take(scratch, at, pw.shape[0])
+    x, patch1, h1, patch2, z, f, p, _ = _activations(scratch, ci, size, k1, k2, c1w, c2w, hw, pw)
     flat = local.reshape(-1)
     for i in range(flat.shape[0]):
         x[i] = flat[i] * np.float32(1.0 / 255.0)
@@ -108,9 +119,7 @@ class FastActor:
     def scratch_size(self, channels: int, size: int) -> int:
         """float32s of scratch ``actor_logits`` needs for a ``(channels, size, size)`` window."""
         c1w, _, c2w, _, _, _, hw, _, pw, *_ = self.weights
-        s1 = size // self.kernels[0]
-        return (channels * size * size + c1w.shape[1] + c1w.shape[0] * s1 * s1 + c2w.shape[1] + hw.shape[1]
-                + hw.shape[0] + pw.shape[0])
+        return int(_activations(np.empty(0, dtype=np.float32), channels, size, *self.kernels, c1w, c2w, hw, pw)[-1])
 
     def logits(self, local: np.ndarray, vector: np.ndarray) -> np.ndarray:
         local = np.ascontiguousarray(local)
