@@ -72,6 +72,8 @@ class TrainConfig:
     validation_maps: int = 20
     features_dim: int = 128
     hidden: int = 128
+    conv_channels: tuple[int, ...] = (16, 32)
+    vector_dim: int = 32
     torch_threads: int = 2
     extra: dict = field(default_factory=dict)
 
@@ -88,7 +90,7 @@ class TrainConfig:
         unknown = set(raw) - known
         if unknown:
             raise ValueError(f"{path}: unknown config keys {sorted(unknown)}")
-        for k in ("families", "sizes", "dagger_betas"):
+        for k in ("families", "sizes", "dagger_betas", "conv_channels"):
             if k in raw:
                 raw[k] = tuple(raw[k])
         return cls(**raw)
@@ -195,7 +197,8 @@ def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False,
         model = PPO.load(ckpt, env=env, device="cpu")
         model.set_random_seed(cfg.seed + 7919 * (state["round"] + 2) + state["ppo_steps"])
     else:
-        model = PPO("MultiInputPolicy", env, policy_kwargs=policy_kwargs(cfg.features_dim, cfg.hidden),
+        arch = policy_kwargs(cfg.features_dim, cfg.hidden, cfg.conv_channels, cfg.vector_dim)
+        model = PPO("MultiInputPolicy", env, policy_kwargs=arch,
                     learning_rate=cfg.ppo_lr, n_steps=cfg.ppo_n_steps, batch_size=cfg.ppo_batch,
                     n_epochs=cfg.ppo_epochs, clip_range=cfg.ppo_clip, ent_coef=cfg.ppo_ent_coef, gamma=cfg.gamma,
                     seed=cfg.seed, device="cpu", verbose=0)
