@@ -34,17 +34,6 @@ def cdf_search(cdf, n, t):
     return lo
 
 
-@nb.njit(cache=True, inline="always")
-def softmax_cdf(logits, temperature, cdf):
-    """Fill ``cdf`` with the running sum of exp((logits - max) / temperature); return the total."""
-    m = logits.max()
-    acc = 0.0
-    for i in range(logits.shape[0]):
-        acc += math.exp((logits[i] - m) / temperature)
-        cdf[i] = acc
-    return acc
-
-
 @nb.njit(cache=True)
 def column_counts(grid):
     """``out[r, c]``: blocked cells among rows ``0 .. r - 1`` of column ``c``, modulo 2**16.

@@ -72,7 +72,7 @@ def _fill_samples(classes, u, uni, front, low, high, step, rings, angles, floor,
 
 
 @nb.njit(cache=True)
-def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, pts, anch):
+def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, fcdf, pts, anch):
     """Draw a class per row of ``u`` from the class CDF ``cdf`` (total ``acc``) and turn it into a sample.
 
     ``u`` holds 6 uniforms per sample: class, ring position, angle position, floor test, and two for
@@ -80,10 +80,10 @@ def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, p
     cells, dist, tau)`` of a ``Frontier`` and ``fstate`` its ``[vertices seen, cell count]``: it is
     brought up to date with the tree's vertices ``X[:n]`` only when a sample falls in the frontier
     class, which spares the visibility checks while the policy samples around the tree's progress.
+    ``fcdf`` is scratch for the frontier cells' weights, as long as the frontier can grow.
     """
     world, counts, cell, fW, fgoal, free, cov, fpos, front, fdist, tau = frontier
     n_ego = ANGLES * (_RINGS.shape[0] - 1)
-    fcdf = np.empty(0)
     facc = -1.0
     for k in range(u.shape[0]):
         c = cdf_search(cdf, cdf.shape[0], u[k, 0] * acc)
@@ -92,7 +92,6 @@ def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, p
                 fstate[1] = frontier_update(world, counts, X[fstate[0]:n], cell, fgoal, free, cov, fpos, front,
                                             fdist, fstate[1])
                 fstate[0] = n
-            fcdf = np.empty(max(fstate[1], 1))
             facc = frontier_cdf(front, fstate[1], fdist, tau, fcdf)
         if u[k, 3] < floor or (c >= n_ego and fstate[1] == 0):
             pts[k, 0] = low[0] + (high[0] - low[0]) * u[k, 4]

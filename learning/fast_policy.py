@@ -8,6 +8,8 @@ state dict and evaluated here; ``tests/test_learning.py`` checks the logits matc
 
 from __future__ import annotations
 
+import math
+
 import numba as nb
 import numpy as np
 
@@ -99,6 +101,22 @@ def actor_logits(local, vector, k1, k2, c1w, c1b, c2w, c2b, vw, vb, hw, hb, pw, 
     _linear(f, pw, pb, True, p)
     _linear(p, aw, ab, False, logits)
     return logits
+
+
+@nb.njit(cache=True, inline="always")
+def softmax_cdf(logits, temperature, cdf):
+    """Fill ``cdf`` with the running sum of exp((logits - max) / temperature); return the total.
+
+    The exponentials are single precision (float32 logits; a third cheaper than double) and the
+    running sum double, so no class's share is lost to rounding.
+    """
+    m = logits.max()
+    inv = np.float32(1.0 / temperature)
+    acc = 0.0
+    for i in range(logits.shape[0]):
+        acc += math.exp(np.float32((logits[i] - m) * inv))
+        cdf[i] = acc
+    return acc
 
 
 class FastActor:

@@ -136,6 +136,23 @@ def test_fused_loop_draws_exactly_what_draw_calls_do(family):
             assert c.iterations == ra.iterations and np.array_equal(c.result().path, ra.path)
 
 
+def test_a_frontier_decision_holds_until_the_progress_vertex_moves():
+    # trees stuck in narrow passages: the policy answers "frontier" and would repeat that answer on
+    # every re-run; holding it must save those passes and change nothing else
+    passes = {0.9: 0, 2.0: 0}
+    for key in (2, 5, 9, 10):
+        p = generate("narrow_passage", TEST_SEED0 + key, 96)
+        runs = {}
+        for hold in passes:
+            planner = RRT(p, step_size=4.0, sampler=PolicySampler.load(SHIPPED, hold=hold), seed=0)
+            runs[hold] = planner.solve(max_iterations=20000)
+            passes[hold] += planner.sampler.forward_passes
+        assert runs[0.9].iterations == runs[2.0].iterations and np.array_equal(runs[0.9].path, runs[2.0].path)
+    assert passes[0.9] < 0.5 * passes[2.0], passes
+    with pytest.raises(ValueError, match="hold"):
+        PolicySampler.load(SHIPPED, hold=0.0)
+
+
 @pytest.mark.parametrize("family, size", [("maze", 96), ("bugtrap", 130)])
 def test_policy_sampler_observes_what_the_training_environment_observes(family, size):
     # the sampler builds the guided geometry without GuidedSampling's objects; the policy must still
