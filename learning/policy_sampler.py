@@ -13,7 +13,8 @@ puts at least ``hold`` of its mass on the frontier is kept until the progress ve
 is the policy's answer to a tree stuck behind a wall, and it does not change while the tree stays
 stuck (the expert it imitates labels every such state "frontier"), so the passes it would take
 every ``reuse`` iterations there are skipped (a third to six sevenths of all passes on the
-generated families; on 400 validation runs not one iteration count changed). A ``uniform_floor``
+generated families other than forest, where trees rarely stick; on 400 validation runs not one
+iteration count changed). A ``uniform_floor``
 share of samples is uniform: probabilistic completeness is kept. When the tree has made no progress
 towards the goal for ``patience`` iterations the uniform share grows with the time stuck (up to
 ``max_floor``): a tree pinned against a wall by its own biased samples gets RRT's Voronoi bias back,
@@ -40,7 +41,7 @@ import numpy as np
 
 from envs.egocentric import EGO_VECTOR, _add_vertices, _observe, build_pyramid
 from envs.frontier import cdf_search, frontier_arrays, frontier_shape
-from envs.guided import FRONTIER_TAU, N_ACTIONS, SCALES, WINDOW, fill_from_cdf, scale_cells
+from envs.guided import FRONTIER, FRONTIER_TAU, N_ACTIONS, SCALES, WINDOW, fill_from_cdf, scale_cells
 from learning.fast_policy import FastActor, actor_logits, softmax_cdf
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners import _rrt_kernels as K
@@ -102,7 +103,7 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
                  iteration, ist[S_PROGRESS], max_iterations, local, vector)
         actor_logits(local, vector, k1, k2, *weights, scratch, logits)
         fst[1] = softmax_cdf(logits, temperature, cdf)  # one softmax per forward pass, not per batch
-        fst[2] = (cdf[N_ACTIONS - 1] - cdf[N_ACTIONS - 2]) / fst[1]  # the frontier's share
+        fst[2] = (cdf[FRONTIER] - cdf[FRONTIER - 1]) / fst[1]  # the frontier's share
         ist[S_ANCHOR] = best_v
         ist[S_SINCE] = iteration
         ist[S_FORWARD] += 1
