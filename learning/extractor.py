@@ -14,6 +14,8 @@ import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
+from learning.fast_policy import KERNELS
+
 
 class EgocentricExtractor(BaseFeaturesExtractor):
     """CNN for ``local`` (C, 16, 16) windows plus an MLP for ``vector``.
@@ -33,7 +35,9 @@ class EgocentricExtractor(BaseFeaturesExtractor):
             raise ValueError(f"EgocentricExtractor expects 16x16 windows, got {h}x{w}")
         k = observation_space["vector"].shape[0]
         c1, c2 = (int(x) for x in channels)
-        self.cnn = nn.Sequential(nn.Conv2d(c, c1, 4, 4), nn.ReLU(), nn.Conv2d(c1, c2, 2, 2), nn.ReLU(), nn.Flatten())
+        k1, k2 = KERNELS
+        self.cnn = nn.Sequential(nn.Conv2d(c, c1, k1, k1), nn.ReLU(), nn.Conv2d(c1, c2, k2, k2), nn.ReLU(),
+                                 nn.Flatten())
         with torch.no_grad():  # size the head with one pass, as SB3's extractors do
             n = self.cnn(torch.as_tensor(observation_space["local"].sample()[None]).float()).shape[1]
         self.vec = nn.Sequential(nn.Linear(k, vector_dim), nn.ReLU())

@@ -88,7 +88,7 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
     """
     ego, front, actor, params, state = kern
     levels_obs, levels_tree, layout, size, res, start, goal = ego
-    k1, k2, weights, scratch = actor
+    weights, scratch = actor
     step, temperature, floor0, max_floor, patience, reuse, hold, max_iterations, low, high = params
     ist, fst, logits, cdf, local, vector, u, fcdf = state
     if best_d < fst[0] - 1e-9:
@@ -101,7 +101,7 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
             ist[S_SEEN] = n
         _observe(levels_obs, levels_tree, layout, size, res, step, X[best_v, :2], best_v == 0, start, goal, n,
                  iteration, ist[S_PROGRESS], max_iterations, local, vector)
-        actor_logits(local, vector, k1, k2, *weights, scratch, logits)
+        actor_logits(local, vector, *weights, scratch, logits)
         fst[1] = softmax_cdf(logits, temperature, cdf)  # one softmax per forward pass, not per batch
         fst[2] = (cdf[FRONTIER] - cdf[FRONTIER - 1]) / fst[1]  # the frontier's share
         ist[S_ANCHOR] = best_v
@@ -257,7 +257,7 @@ class PolicySampler(SamplerBase):
         self._kernel = (
             (levels_obs, levels_tree, layout, WINDOW, grid.resolution, start, goal),
             (grid.kernel, counts, self.step_size, W, goal, free, cov, pos, front, dist, FRONTIER_TAU),
-            (*self.actor.kernels, self.actor.weights, scratch),
+            (self.actor.weights, scratch),
             (*self._params, self.low, self.high),
             (ist, fst, logits, cdf, local, vector, u, fcdf),
         )

@@ -1,0 +1,59 @@
+"""What a learned sampler costs: forward-pass time and per-query wall time against goal bias.
+
+    python scripts/benchmark_policy.py                                   # the shipped checkpoint
+    python scripts/benchmark_policy.py --policy old.zip checkpoints/guided.zip --family bugtrap --bias 0.05
+
+For each checkpoint: its actor's parameters, microseconds per forward pass on observations taken
+from real runs, and on held-out 128x128 maps of one family the median wall time per query (binding
+included), iterations and forward passes of RRT with the policy, with the policy without its
+frontier hold, and with goal bias. One process: absolute times are quieter than evaluate.py's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from learning.benchmark import forward_pass_us, observations, query_times  # noqa: E402
+from learning.policy_sampler import PolicySampler  # noqa: E402
+from learning.training import TEST_SEED0  # noqa: E402
+from planners.benchmark import markdown_table  # noqa: E402
+from planners.generators import FAMILIES, generate  # noqa: E402
+
+DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--policy", nargs="+", type=Path, default=[DEFAULT_POLICY])
+    ap.add_argument("--family", default="bugtrap", choices=FAMILIES)
+    ap.add_argument("--bias", type=float, default=0.05, help="goal bias to compare with (evaluate.py tunes it)")
+    ap.add_argument("--maps", type=int, default=40, help="test maps of the family")
+    ap.add_argument("--seeds", type=int, default=2)
+    args = ap.parse_args(argv)
+    for path in args.policy:
+        if not path.is_file():
+            ap.error(f"policy checkpoint {path} not found")
+    problems = [generate(args.family, TEST_SEED0 + i, 128) for i in range(args.maps)]
+    obs_maps = [generate(f, TEST_SEED0 + i, 128) for f in FAMILIES for i in range(4)]
+    rows = []
+    for path in args.policy:
+        policy = PolicySampler.load(path)
+        local, vector = observations(policy, obs_maps)
+        pass_us = forward_pass_us(policy.actor, local, vector)
+        times = query_times(policy, args.bias, problems, args.seeds)
+        for name, t in times.items():
+            rows.append({"checkpoint": path.name, "parameters": sum(w.size for w in policy.actor.weights),
+                         "us_per_pass": pass_us, "observations": len(local), "sampler": name, **t})
+    print(f"{args.family}, {args.maps} test maps x {args.seeds} seeds; forward passes timed on the observations "
+          f"of {len(obs_maps)} runs (4 test maps per family)\n")
+    print(markdown_table(rows, ["checkpoint", "parameters", "us_per_pass", "observations", "sampler", "wall_ms",
+                                "iterations", "forward_passes"]))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
