@@ -51,6 +51,9 @@ def policy_kwargs(features_dim: int = 128, hidden: int = 128, channels: tuple[in
                   vector_dim: int = 32) -> dict:
     """``policy_kwargs`` for ``PPO("MultiInputPolicy", ...)``.
 
+    The defaults are the widths used before they were parameters, so runs saved then still load;
+    ``TrainConfig`` holds the widths training uses now.
+
     Actor and critic keep separate extractors, so fitting the critic never disturbs an imitation-trained actor.
     """
     return dict(

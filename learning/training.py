@@ -42,8 +42,8 @@ class TrainConfig:
 
     The actor is small on purpose: it runs at every sampler decision, inside the planner's loop, so
     its size is paid in planning time. On the validation maps, convolutions of 8 and 16 channels and
-    32-wide layers imitated the expert as well as 16/32 channels and 128-wide layers, at a third of
-    the cost per forward pass. ``torch_threads=1`` keeps the weights bit-identical for a seed: with
+    32-wide layers imitated the expert as well as 16/32 channels and 128-wide layers, at less than
+    half the cost per forward pass. ``torch_threads=1`` keeps the weights bit-identical for a seed: with
     several threads the linear algebra may split its sums differently from run to run.
     """
 
@@ -175,12 +175,7 @@ def _save(model, cfg: TrainConfig, path: Path, state: dict) -> None:
 def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False, progress: bool = True,
           log_stdout: bool = True) -> Path:
     """Run (or resume) training; returns the path of the final checkpoint ``<run>/final.zip``."""
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.logger import configure
-    from tqdm.auto import tqdm
-
-    from learning.extractor import policy_kwargs
 
     run = Path(out_dir) / cfg.name
     run.mkdir(parents=True, exist_ok=True)
@@ -201,105 +196,117 @@ def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False,
     env = make_env(cfg, cfg.seed)
     logger = configure(str(run / "tb"), ["tensorboard", "csv"] + (["stdout"] if log_stdout else []))
     try:
-        if resume:
-            model = PPO.load(ckpt, env=env, device="cpu")
-            model.set_random_seed(cfg.seed + 7919 * (state["round"] + 2) + state["ppo_steps"])
-        else:
-            arch = policy_kwargs(cfg.features_dim, cfg.hidden, cfg.conv_channels, cfg.vector_dim)
-            model = PPO("MultiInputPolicy", env, policy_kwargs=arch,
-                        learning_rate=cfg.ppo_lr, n_steps=cfg.ppo_n_steps, batch_size=cfg.ppo_batch,
-                        n_epochs=cfg.ppo_epochs, clip_range=cfg.ppo_clip, ent_coef=cfg.ppo_ent_coef, gamma=cfg.gamma,
-                        seed=cfg.seed, device="cpu", verbose=0)
-        model.set_logger(logger)
-
-        def log(stats: dict, step: int) -> None:
-            for k, v in stats.items():
-                logger.record(k, v)
-            logger.dump(step)
-
-        # --- phase 1: DAgger -----------------------------------------------------------------------
-        data_path = run / "dagger_data.npz"
-        data = Dataset.load(data_path) if resume and data_path.is_file() else None
-        rounds = range(state["round"] + 1, cfg.dagger_rounds) if state["phase"] == "bc" else range(0)
-        for k in tqdm(rounds, desc="DAgger", disable=not progress):
-            rng = np.random.default_rng([cfg.seed, k])
-            problems = _maps(cfg, rng, cfg.maps_per_round)
-            actor = FastActor(model.policy.state_dict()) if k > 0 else None
-            beta = cfg.dagger_betas[min(k, len(cfg.dagger_betas) - 1)]
-            t0 = time.perf_counter()
-            new, its = collect(problems, actor, beta, seed=cfg.seed * 1_000_003 + k * 10_007, batch=cfg.batch,
-                               step_size=cfg.step_size, stuck_threshold=cfg.stuck_threshold,
-                               uniform_floor=cfg.uniform_floor, max_iterations=cfg.max_iterations, gamma=cfg.gamma,
-                               reward_scale=cfg.reward_scale)
-            data = new if data is None else Dataset.concat([data, new])
-            # with shaping the critic must predict shaped returns: leave it to PPO's warm-up
-            stats = behaviour_cloning(model.policy, data, epochs=cfg.bc_epochs, batch_size=cfg.bc_batch, lr=cfg.bc_lr,
-                                      seed=cfg.seed + k, value_weight=0.0 if cfg.shaping else 0.5)
-            score, fam = validation_score(FastActor(model.policy.state_dict()), cfg)
-            log({**stats, "dagger/round": k, "dagger/beta": beta, "dagger/samples": len(data),
-                 "dagger/median_iterations": float(np.median(its)), "dagger/collect_seconds": time.perf_counter() - t0,
-                 "validation/score": score, **{f"validation/{f}": v for f, v in fam.items()}}, k)
-            data.save(data_path)
-            state = {"phase": "bc", "round": k, "ppo_steps": 0, "bc_validation": score}
-            _save(model, cfg, ckpt, state)
-        if state["phase"] == "bc":
-            _save(model, cfg, run / "imitation.zip", state)
-            state = {**state, "phase": "ppo", "ppo_steps": 0}
-            _save(model, cfg, ckpt, state)
-
-        # --- phase 2: PPO fine-tuning ----------------------------------------------------------------
-        class Checkpointer(BaseCallback):
-            def __init__(self) -> None:
-                super().__init__()
-                self.last = state["ppo_steps"]
-
-            def _on_step(self) -> bool:
-                done = state["ppo_steps"] + self.num_timesteps - self.model._num_timesteps_at_start
-                if done - self.last >= cfg.checkpoint_every:
-                    self.last = done
-                    _save(self.model, cfg, ckpt, {**state, "ppo_steps": done})
-                return True
-
-        # the critic warms up first with the actor frozen, so early, noisy advantages cannot undo imitation
-        actor = [p for name, p in model.policy.named_parameters()
-                 if name.startswith(("pi_features_extractor", "mlp_extractor.policy_net", "action_net"))]
-        for stage_end in (min(cfg.value_warmup, cfg.ppo_steps), cfg.ppo_steps):
-            remaining = stage_end - state["ppo_steps"]
-            if remaining <= 0:
-                continue
-            for p in actor:
-                p.requires_grad_(state["ppo_steps"] >= cfg.value_warmup)
-            cb = Checkpointer()
-            try:
-                model.learn(total_timesteps=remaining, reset_num_timesteps=False, progress_bar=progress, callback=cb,
-                            tb_log_name="ppo")
-            except KeyboardInterrupt:
-                done = state["ppo_steps"] + model.num_timesteps - model._num_timesteps_at_start
-                _save(model, cfg, ckpt, {**state, "ppo_steps": done})
-                raise
-            state = {**state, "ppo_steps": stage_end}
-            _save(model, cfg, ckpt, state)
-        for p in actor:
-            p.requires_grad_(True)
-
-        # --- selection on validation maps ----------------------------------------------------------------
-        from stable_baselines3.common.save_util import load_from_zip_file
-
-        ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg)
-        _, imitation_params, _ = load_from_zip_file(run / "imitation.zip", device="cpu", print_system_info=False)
-        bc_score, bc_fam = validation_score(FastActor(imitation_params["policy"]), cfg)
-        chosen = "ppo" if ppo_score <= bc_score else "imitation"
-        summary = {"chosen": chosen, "validation_ppo": ppo_score, "validation_imitation": bc_score,
-                   "validation_ppo_families": ppo_fam, "validation_imitation_families": bc_fam}
-        log({"validation/final_ppo": ppo_score, "validation/final_imitation": bc_score}, cfg.dagger_rounds + 1)
-        final = run / "final.zip"
-        if chosen == "ppo":
-            _save(model, cfg, final, {**state, **summary})
-        else:
-            model.policy.load_state_dict(imitation_params["policy"])
-            _save(model, cfg, final, {**state, **summary})
-        (run / "summary.json").write_text(json.dumps(summary, indent=2))
-        return final
+        return _train_phases(cfg, run, state, env, logger, resume=resume, progress=progress)
     finally:  # a run that stops, however it stops, leaves no open log files
         logger.close()
         env.close()
+
+
+def _train_phases(cfg: TrainConfig, run: Path, state: dict, env, logger, *, resume: bool, progress: bool) -> Path:
+    """DAgger, then PPO fine-tuning, then the choice between them on validation maps (see ``train``)."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.callbacks import BaseCallback
+    from tqdm.auto import tqdm
+
+    from learning.extractor import policy_kwargs
+
+    ckpt = run / "checkpoint.zip"
+    if resume:
+        model = PPO.load(ckpt, env=env, device="cpu")
+        model.set_random_seed(cfg.seed + 7919 * (state["round"] + 2) + state["ppo_steps"])
+    else:
+        arch = policy_kwargs(cfg.features_dim, cfg.hidden, cfg.conv_channels, cfg.vector_dim)
+        model = PPO("MultiInputPolicy", env, policy_kwargs=arch,
+                    learning_rate=cfg.ppo_lr, n_steps=cfg.ppo_n_steps, batch_size=cfg.ppo_batch,
+                    n_epochs=cfg.ppo_epochs, clip_range=cfg.ppo_clip, ent_coef=cfg.ppo_ent_coef, gamma=cfg.gamma,
+                    seed=cfg.seed, device="cpu", verbose=0)
+    model.set_logger(logger)
+
+    def log(stats: dict, step: int) -> None:
+        for k, v in stats.items():
+            logger.record(k, v)
+        logger.dump(step)
+
+    # --- phase 1: DAgger -----------------------------------------------------------------------
+    data_path = run / "dagger_data.npz"
+    data = Dataset.load(data_path) if resume and data_path.is_file() else None
+    rounds = range(state["round"] + 1, cfg.dagger_rounds) if state["phase"] == "bc" else range(0)
+    for k in tqdm(rounds, desc="DAgger", disable=not progress):
+        rng = np.random.default_rng([cfg.seed, k])
+        problems = _maps(cfg, rng, cfg.maps_per_round)
+        actor = FastActor(model.policy.state_dict()) if k > 0 else None
+        beta = cfg.dagger_betas[min(k, len(cfg.dagger_betas) - 1)]
+        t0 = time.perf_counter()
+        new, its = collect(problems, actor, beta, seed=cfg.seed * 1_000_003 + k * 10_007, batch=cfg.batch,
+                           step_size=cfg.step_size, stuck_threshold=cfg.stuck_threshold,
+                           uniform_floor=cfg.uniform_floor, max_iterations=cfg.max_iterations, gamma=cfg.gamma,
+                           reward_scale=cfg.reward_scale)
+        data = new if data is None else Dataset.concat([data, new])
+        # with shaping the critic must predict shaped returns: leave it to PPO's warm-up
+        stats = behaviour_cloning(model.policy, data, epochs=cfg.bc_epochs, batch_size=cfg.bc_batch, lr=cfg.bc_lr,
+                                  seed=cfg.seed + k, value_weight=0.0 if cfg.shaping else 0.5)
+        score, fam = validation_score(FastActor(model.policy.state_dict()), cfg)
+        log({**stats, "dagger/round": k, "dagger/beta": beta, "dagger/samples": len(data),
+             "dagger/median_iterations": float(np.median(its)), "dagger/collect_seconds": time.perf_counter() - t0,
+             "validation/score": score, **{f"validation/{f}": v for f, v in fam.items()}}, k)
+        data.save(data_path)
+        state = {"phase": "bc", "round": k, "ppo_steps": 0, "bc_validation": score}
+        _save(model, cfg, ckpt, state)
+    if state["phase"] == "bc":
+        _save(model, cfg, run / "imitation.zip", state)
+        state = {**state, "phase": "ppo", "ppo_steps": 0}
+        _save(model, cfg, ckpt, state)
+
+    # --- phase 2: PPO fine-tuning ----------------------------------------------------------------
+    class Checkpointer(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.last = state["ppo_steps"]
+
+        def _on_step(self) -> bool:
+            done = state["ppo_steps"] + self.num_timesteps - self.model._num_timesteps_at_start
+            if done - self.last >= cfg.checkpoint_every:
+                self.last = done
+                _save(self.model, cfg, ckpt, {**state, "ppo_steps": done})
+            return True
+
+    # the critic warms up first with the actor frozen, so early, noisy advantages cannot undo imitation
+    actor = [p for name, p in model.policy.named_parameters()
+             if name.startswith(("pi_features_extractor", "mlp_extractor.policy_net", "action_net"))]
+    for stage_end in (min(cfg.value_warmup, cfg.ppo_steps), cfg.ppo_steps):
+        remaining = stage_end - state["ppo_steps"]
+        if remaining <= 0:
+            continue
+        for p in actor:
+            p.requires_grad_(state["ppo_steps"] >= cfg.value_warmup)
+        cb = Checkpointer()
+        try:
+            model.learn(total_timesteps=remaining, reset_num_timesteps=False, progress_bar=progress, callback=cb,
+                        tb_log_name="ppo")
+        except KeyboardInterrupt:
+            done = state["ppo_steps"] + model.num_timesteps - model._num_timesteps_at_start
+            _save(model, cfg, ckpt, {**state, "ppo_steps": done})
+            raise
+        state = {**state, "ppo_steps": stage_end}
+        _save(model, cfg, ckpt, state)
+    for p in actor:
+        p.requires_grad_(True)
+
+    # --- selection on validation maps ----------------------------------------------------------------
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg)
+    _, imitation_params, _ = load_from_zip_file(run / "imitation.zip", device="cpu", print_system_info=False)
+    bc_score, bc_fam = validation_score(FastActor(imitation_params["policy"]), cfg)
+    chosen = "ppo" if ppo_score <= bc_score else "imitation"
+    summary = {"chosen": chosen, "validation_ppo": ppo_score, "validation_imitation": bc_score,
+               "validation_ppo_families": ppo_fam, "validation_imitation_families": bc_fam}
+    log({"validation/final_ppo": ppo_score, "validation/final_imitation": bc_score}, cfg.dagger_rounds + 1)
+    final = run / "final.zip"
+    if chosen == "ppo":
+        _save(model, cfg, final, {**state, **summary})
+    else:
+        model.policy.load_state_dict(imitation_params["policy"])
+        _save(model, cfg, final, {**state, **summary})
+    (run / "summary.json").write_text(json.dumps(summary, indent=2))
+    return final
