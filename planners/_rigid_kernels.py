@@ -24,14 +24,29 @@ from planners._space import SPACE_RIGID, interpolate, wrap_angle
 
 @nb.njit(cache=True)
 def rotation_matrix(tx, ty, tz):
-    """H = Ry(ty) @ Rx(tx) @ Rz(tz)."""
+    """H = Ry(ty) @ Rx(tx) @ Rz(tz).
+
+    The products are written out: numba's matrix product needs scipy (not a core dependency), and
+    a BLAS call costs more than these few multiplications.
+    """
     cx, sx = math.cos(tx), math.sin(tx)
     cy, sy = math.cos(ty), math.sin(ty)
     cz, sz = math.cos(tz), math.sin(tz)
-    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
-    Ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
-    Rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
-    return Ry @ Rx @ Rz
+    # Ry @ Rx, rows (a, b, c); then (Ry @ Rx) @ Rz mixes the first two columns by tz
+    a0, b0, c0 = cy, sy * sx, sy * cx
+    a1, b1, c1 = 0.0, cx, -sx
+    a2, b2, c2 = -sy, cy * sx, cy * cx
+    H = np.empty((3, 3))
+    H[0, 0] = a0 * cz + b0 * sz
+    H[0, 1] = b0 * cz - a0 * sz
+    H[0, 2] = c0
+    H[1, 0] = a1 * cz + b1 * sz
+    H[1, 1] = b1 * cz - a1 * sz
+    H[1, 2] = c1
+    H[2, 0] = a2 * cz + b2 * sz
+    H[2, 1] = b2 * cz - a2 * sz
+    H[2, 2] = c2
+    return H
 
 
 @nb.njit(cache=True)
