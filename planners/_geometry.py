@@ -4,7 +4,8 @@ A world reaches the kernels as a tuple ``(kind, grid, geom, body, params)`` so t
 compilation serves every world (numba cannot cache kernels that take other jitted functions as
 arguments). Unused slots hold 1x1 placeholder arrays.
 
-* ``WORLD_GRID``: ``grid`` is the (H, W) uint8 obstacle grid, ``params = [1 / resolution]``.
+* ``WORLD_GRID``: ``grid`` is the (H, W) uint8 obstacle grid, ``params = [1 / resolution, ox, oy]``
+  with ``(ox, oy)`` the world coordinates of the corner of cell (0, 0).
 * ``WORLD_SHAPES``: ``geom`` rows are ``(0, cx, cy, r, 0)`` circles and ``(1, x0, y0, x1, y1)``
   axis-aligned rectangles, ``params = [xlo, ylo, xhi, yhi]``.
 * ``WORLD_RIGID``: ``geom`` rows are boxes ``(x0, y0, z0, x1, y1, z1)``, ``body`` the robot's points
@@ -146,7 +147,10 @@ def motion_free(world, a, b):
     """True if the straight motion from state ``a`` to state ``b`` is collision-free."""
     kind, grid, geom, body, params = world
     if kind == WORLD_GRID:
-        return grid_segment_free(grid, params[0], a[0], a[1], b[0], b[1])
+        # x - 0.0 is x exactly, so maps at the origin check bit-identically to the frame-free kernel
+        ox = params[1]
+        oy = params[2]
+        return grid_segment_free(grid, params[0], a[0] - ox, a[1] - oy, b[0] - ox, b[1] - oy)
     elif kind == WORLD_SHAPES:
         return shapes_segment_free(geom, params, a[0], a[1], b[0], b[1])
     else:

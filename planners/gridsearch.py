@@ -243,7 +243,8 @@ def shortest_path(grid: OccupancyGrid, start, goal) -> np.ndarray:
     """One shortest octile path from the cell containing ``start`` to the cell containing ``goal``.
 
     Returns:
-        (k, 2) world coordinates of the centres of the path's cells, start's cell first.
+        (k, 2) world coordinates (the grid's origin included) of the centres of the path's cells,
+        start's cell first.
 
     Raises:
         ValueError: If there is no path, or either point lies outside the grid or in a blocked cell.
@@ -257,7 +258,8 @@ def shortest_path(grid: OccupancyGrid, start, goal) -> np.ndarray:
     while toward[cells[-1]] >= 0:
         cells.append(int(toward[cells[-1]]))
     rows, cols = np.divmod(np.array(cells), padded.shape[1])
-    return np.stack([cols - 0.5, rows - 0.5], axis=1) * grid.resolution  # -1 for the padding, +0.5 to centre
+    # -1 for the padding, +0.5 to centre; adding a zero origin leaves the coordinates bit-identical
+    return np.stack([cols - 0.5, rows - 0.5], axis=1) * grid.resolution + grid.origin
 
 
 def free_components(obstacles: np.ndarray) -> np.ndarray:

@@ -10,6 +10,7 @@ planner termination condition, which OMPL's planners query once per iteration.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -79,18 +80,20 @@ class OmplGridPlanner:
         res = grid.resolution
         blocked = grid.obstacles.tolist()
         inv = 1.0 / res
+        ox, oy = (float(v) for v in grid.origin)
+        (xlo, ylo), (xhi, yhi) = grid.bounds
 
         def valid(state) -> bool:
-            c = int(state[0] * inv)
-            r = int(state[1] * inv)
+            c = math.floor((state[0] - ox) * inv)
+            r = math.floor((state[1] - oy) * inv)
             return 0 <= r < H and 0 <= c < W and not blocked[r][c]
 
         space = ob.RealVectorStateSpace(2)
         bounds = ob.RealVectorBounds(2)
-        bounds.setLow(0, 0.0)
-        bounds.setHigh(0, W * res)
-        bounds.setLow(1, 0.0)
-        bounds.setHigh(1, H * res)
+        bounds.setLow(0, float(xlo))
+        bounds.setHigh(0, float(xhi))
+        bounds.setLow(1, float(ylo))
+        bounds.setHigh(1, float(yhi))
         space.setBounds(bounds)
         si = ob.SpaceInformation(space)
         si.setStateValidityChecker(valid)

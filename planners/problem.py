@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -10,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from planners._space import METRIC_NAMES
+from planners.fileio import InputError
 from planners.grid import OccupancyGrid
 from planners.world import World
 
@@ -49,27 +51,27 @@ class Problem:
             try:
                 q = np.array(raw, dtype=np.float64)
             except (TypeError, ValueError):
-                raise ValueError(f"{label} must be {world.dim} numbers, got {raw!r}") from None
+                raise InputError(f"{label} must be {world.dim} numbers, got {raw!r}") from None
             if q.shape != (world.dim,):
-                raise ValueError(f"{label} must have shape ({world.dim},), got {q.shape} from {raw!r}")
+                raise InputError(f"{label} must have shape ({world.dim},), got {q.shape} from {raw!r}")
             if not np.all(np.isfinite(q)):
-                raise ValueError(f"{label} {tuple(q.tolist())} contains NaN or infinity")
+                raise InputError(f"{label} {tuple(q.tolist())} contains NaN or infinity")
             why = world.explain_invalid(q)
             if why:
-                raise ValueError(f"{label} {tuple(np.round(q, 6).tolist())} is not a valid state: it {why}")
+                raise InputError(f"{label} {tuple(np.round(q, 6).tolist())} is not a valid state: it {why}")
             q.flags.writeable = False
             object.__setattr__(self, label, q)
         tol = self.goal_tolerance
         try:
             tol = float(tol)
         except (TypeError, ValueError):
-            raise ValueError(f"goal_tolerance must be a positive number, got {self.goal_tolerance!r}") from None
+            raise InputError(f"goal_tolerance must be a positive number, got {self.goal_tolerance!r}") from None
         if not np.isfinite(tol) or tol <= 0:
-            raise ValueError(f"goal_tolerance must be a positive finite number, got {tol}")
+            raise InputError(f"goal_tolerance must be a positive finite number, got {tol}")
         object.__setattr__(self, "goal_tolerance", tol)
         metric = world.metrics[0] if self.metric is None else self.metric
         if metric not in world.metrics:
-            raise ValueError(f"metric {metric!r} is not available on {type(world).__name__}; "
+            raise InputError(f"metric {metric!r} is not available on {type(world).__name__}; "
                              f"choose from {world.metrics}")
         object.__setattr__(self, "metric", metric)
 
@@ -129,7 +131,12 @@ def load_movingai_scenarios(
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"MovingAI scenario file {path} does not exist")
-    lines = path.read_text(encoding="ascii").splitlines()
+    raw = path.read_bytes()
+    try:
+        lines = raw.decode("ascii").splitlines()
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not an ASCII MovingAI scenario file (byte {exc.start} is "
+                         f"{raw[exc.start]:#x})") from None
     grids: dict[Path, OccupancyGrid] = {}
     count = 0
     for lineno, line in enumerate(lines, start=1):
@@ -137,23 +144,29 @@ def load_movingai_scenarios(
             continue
         fields = line.split("\t")
         if len(fields) != 9:
-            raise ValueError(f"{path}, line {lineno}: expected 9 tab-separated fields, got {len(fields)}: {line!r}")
+            raise InputError(f"{path}, line {lineno}: expected 9 tab-separated fields, got {len(fields)}: {line!r}")
         try:
             bucket = int(fields[0])
             w, h, sx, sy, gx, gy = (int(v) for v in fields[2:8])
             optimal = float(fields[8])
         except ValueError:
-            raise ValueError(f"{path}, line {lineno}: non-numeric field in {line!r}") from None
+            raise InputError(f"{path}, line {lineno}: non-numeric field in {line!r}") from None
+        if not (math.isfinite(optimal) and optimal >= 0):
+            raise InputError(f"{path}, line {lineno}: optimal length must be a finite number >= 0, "
+                             f"got {fields[8]!r}")
         mp = Path(map_path) if map_path is not None else path.parent / Path(fields[1].replace("\\", "/")).name
         if mp not in grids:
+            if not mp.is_file():
+                raise InputError(f"{path}, line {lineno}: its map {fields[1]!r} is looked up as {str(mp)!r}, "
+                                 f"which does not exist; pass map_path=")
             grids[mp] = OccupancyGrid.from_movingai(mp)
         grid = grids[mp]
         if (w, h) != (grid.width, grid.height):
-            raise ValueError(f"{path}, line {lineno}: scenario size {w}x{h} does not match {mp} "
+            raise InputError(f"{path}, line {lineno}: scenario size {w}x{h} does not match {mp} "
                              f"({grid.width}x{grid.height})")
         for label, (x, y) in (("start", (sx, sy)), ("goal", (gx, gy))):
             if not (0 <= x < w and 0 <= y < h) or grid.obstacles[y, x]:
-                raise ValueError(f"{path}, line {lineno}: {label} cell (x={x}, y={y}) is outside the map or blocked")
+                raise InputError(f"{path}, line {lineno}: {label} cell (x={x}, y={y}) is outside the map or blocked")
         yield Problem(
             grid,
             start=grid.cell_center(sy, sx),

@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from planners import OccupancyGrid
+from planners.fileio import InputError
 
 # --- construction ------------------------------------------------------------------------------
 
@@ -221,3 +222,226 @@ def test_batched_checks_match_single():
     assert np.array_equal(g.check_motions(A, B), single)
     assert 0 < single.sum() < len(single)
     assert not g.check_motion((1.0, np.nan), (2.0, 2.0))
+
+
+# --- origin (maps placed in a world frame) ------------------------------------------------------
+
+
+def test_origin_places_the_cells_in_the_world():
+    a = np.zeros((4, 6), bool)
+    a[1, 2] = True  # row 1, col 2 covers x in [-3 + 1.0, -3 + 1.5), y in [2 + 0.5, 2 + 1.0)
+    g = OccupancyGrid(a, 0.5, origin=(-3.0, 2.0))
+    assert g.origin.tolist() == [-3.0, 2.0] and not g.origin.flags.writeable
+    lo, hi = g.bounds
+    assert lo.tolist() == [-3.0, 2.0] and hi.tolist() == [0.0, 4.0]
+    assert not g.is_valid((-1.75, 2.75)) and g.is_valid((-2.75, 2.75))
+    assert g.cell_of((-1.75, 2.75)) == (1, 2)
+    assert g.cell_center(1, 2).tolist() == [-1.75, 2.75]
+    assert "blocked cell (row 1, col 2)" in g.explain_invalid((-1.75, 2.75))
+    assert "outside" in g.explain_invalid((0.25, 3.0))  # inside the origin-0 extent, outside this one
+    assert not g.is_valid((-3.0, 3.0)) and g.is_valid((-2.99, 3.0))  # the left edge is a wall
+    assert not g.y_up and "origin=(-3, 2)" in repr(g)
+    assert g.free_volume() == OccupancyGrid(a, 0.5).free_volume()
+
+
+@given(seed=st.integers(0, 10_000), ax=EIGHTHS, ay=EIGHTHS, bx=EIGHTHS, by=EIGHTHS,
+       ox=st.sampled_from([-10.0, -3.25, 0.5, 7.0]), oy=st.sampled_from([-10.0, -0.125, 4.0]))
+def test_motion_check_with_origin_equals_the_shifted_oracle(seed, ax, ay, bx, by, ox, oy):
+    g = _grid(seed)
+    shifted = OccupancyGrid(g.obstacles, origin=(ox, oy))
+    assert shifted.check_motion((ax + ox, ay + oy), (bx + ox, by + oy)) == exact_segment_free(g, (ax, ay), (bx, by))
+
+
+def test_bad_origin_is_refused():
+    for bad in [(0.0,), (0.0, np.nan), "ab", (1, 2, 3)]:
+        with pytest.raises(InputError, match="origin"):
+            OccupancyGrid(np.zeros((2, 2), bool), origin=bad)
+
+
+def test_shortest_path_is_in_the_grid_frame():
+    from planners.gridsearch import shortest_path, shortest_path_length
+
+    a = np.zeros((5, 5), bool)
+    a[1:4, 2] = True
+    base = OccupancyGrid(a, 0.5)
+    moved = OccupancyGrid(a, 0.5, origin=(-10.0, 3.0))
+    s, g = (0.25, 1.25), (2.25, 1.25)
+    path = shortest_path(moved, np.add(s, moved.origin), np.add(g, moved.origin))
+    assert np.allclose(path, shortest_path(base, s, g) + moved.origin, atol=1e-12)
+    assert moved.path_valid(path) and all(moved.is_valid(p) for p in path)
+    assert shortest_path_length(moved, path[0], path[-1]) == shortest_path_length(base, s, g)
+
+
+# --- robot radius: inflation ---------------------------------------------------------------------
+
+
+def _inflate_brute_force(obstacles: np.ndarray, rc: float) -> np.ndarray:
+    """The definition, cell pair by cell pair: blocked if the closed squares are within rc cells (edge = wall)."""
+    padded = np.pad(obstacles, 1, constant_values=True)
+    blocked = np.argwhere(padded)
+    out = np.zeros_like(padded)
+    for r, c in np.ndindex(padded.shape):
+        gap_r = np.maximum(np.abs(blocked[:, 0] - r) - 1, 0)
+        gap_c = np.maximum(np.abs(blocked[:, 1] - c) - 1, 0)
+        out[r, c] = bool(np.any(gap_r**2 + gap_c**2 <= rc * rc))
+    return out[1:-1, 1:-1]
+
+
+@given(seed=st.integers(0, 10_000), radius=st.sampled_from([0.01, 0.5, 1.0, 1.49, 1.5, 2.0, 2.2, 3.0, 5.0, 40.0]),
+       res=st.sampled_from([1.0, 0.5, 0.05]))
+def test_inflate_equals_the_cell_distance_definition(seed, radius, res):
+    rng = np.random.default_rng(seed)
+    obs = rng.random((int(rng.integers(1, 12)), int(rng.integers(1, 12)))) < rng.random() * 0.2
+    g = OccupancyGrid(obs, res, origin=(1.0, -2.0), y_up=True, source="s")
+    inf = g.inflate(radius * res)
+    assert np.array_equal(inf.obstacles, _inflate_brute_force(obs, radius))
+    assert (inf.resolution, inf.y_up, inf.source) == (res, True, "s") and inf.origin.tolist() == [1.0, -2.0]
+
+
+def test_inflate_zero_and_bad_radii():
+    g = _grid(1, 8, 9)
+    assert np.array_equal(g.inflate(0).obstacles, g.obstacles)
+    for bad in [-0.1, np.nan, np.inf, "1", None, True]:
+        with pytest.raises(InputError, match="radius"):
+            g.inflate(bad)
+
+
+def min_clearance(grid: OccupancyGrid, path, spacing: float) -> float:
+    """Smallest distance from dense points along ``path`` to a blocked cell's closed square or the map edge.
+
+    Independent of the library's checks: plain distances to every blocked square near each point.
+    """
+    path = np.asarray(path, float)
+    res, (ox, oy) = grid.resolution, grid.origin
+    (x0, y0), (x1, y1) = grid.bounds
+    H, W = grid.shape
+    blocked = np.argwhere(grid.obstacles)
+    lo = np.stack([ox + blocked[:, 1] * res, oy + blocked[:, 0] * res], axis=1)  # squares' lower corners
+    best = np.inf
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        n = max(2, int(np.ceil(np.linalg.norm(b - a) / spacing)) + 1)
+        pts = a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)
+        edge = np.minimum.reduce([pts[:, 0] - x0, x1 - pts[:, 0], pts[:, 1] - y0, y1 - pts[:, 1]])
+        best = min(best, float(edge.min()))
+        for chunk in np.array_split(pts, max(1, len(pts) // 64)):
+            dx = np.maximum(np.maximum(lo[None, :, 0] - chunk[:, None, 0], chunk[:, None, 0] - lo[None, :, 0] - res), 0)
+            dy = np.maximum(np.maximum(lo[None, :, 1] - chunk[:, None, 1], chunk[:, None, 1] - lo[None, :, 1] - res), 0)
+            best = min(best, float(np.sqrt(dx**2 + dy**2).min()))
+    return best
+
+
+def test_inflated_plans_keep_the_robot_radius_clear():
+    from planners import RRT, Problem, smooth
+
+    rng = np.random.default_rng(5)
+    obs = rng.random((40, 40)) < 0.01
+    obs[8:32, 19:21] = True  # a wall to go around
+    obs[:, :3] = obs[:3, :] = False
+    grid = OccupancyGrid(obs, 0.1, origin=(-2.0, -2.0))
+    radius = 0.17
+    inflated = grid.inflate(radius)
+    start, goal = (-1.25, -0.45), (1.05, 0.45)
+    for world in (grid, inflated):
+        assert world.is_valid(start) and world.is_valid(goal)
+    # without inflation a smoothed path hugs the obstacles; that is what a robot radius is for
+    plain = Problem(grid, start, goal, goal_tolerance=0.05)
+    assert min_clearance(grid, smooth(RRT(plain, step_size=0.5, seed=0).solve(20000).path, plain), 0.002) < radius
+    p = Problem(inflated, start, goal, goal_tolerance=0.05)
+    for seed in range(3):
+        res = RRT(p, step_size=0.5, seed=seed).solve(max_iterations=20000)
+        assert res.solved
+        path = smooth(res.path, p, seed=seed)
+        assert min_clearance(grid, path, 0.002) > radius
+
+
+def test_from_file_robot_radius(tmp_path):
+    obs = np.zeros((12, 12), bool)
+    obs[6, 6] = True
+    np.save(tmp_path / "m.npy", obs)
+    g = OccupancyGrid.from_file(tmp_path / "m.npy", resolution=0.5, robot_radius=0.6)
+    assert np.array_equal(g.obstacles, OccupancyGrid(obs, 0.5).inflate(0.6).obstacles)
+    assert g.obstacles[6, 4] and not g.obstacles[6, 3] and g.obstacles[0, 5] and not g.obstacles[2, 5]
+
+
+# --- images read by their own value range --------------------------------------------------------
+
+
+def test_16_bit_png_is_scaled_by_its_range(tmp_path):
+    a = np.full((5, 6), 60000, np.uint16)
+    a[1, 2] = a[3, 4] = 10000
+    Image.fromarray(a).save(tmp_path / "m16.png")
+    g = OccupancyGrid.from_image(tmp_path / "m16.png")
+    assert np.array_equal(g.obstacles, a == 10000)
+    assert not OccupancyGrid.from_file(tmp_path / "m16.png", threshold=0.1).obstacles.any()  # 10000/65535 = 0.15
+
+
+def test_float_tiff_of_zeros_and_ones(tmp_path):
+    f = np.ones((4, 5), np.float32)
+    f[2, 1] = f[0, 4] = 0.0
+    Image.fromarray(f).save(tmp_path / "m.tif")
+    assert np.array_equal(OccupancyGrid.from_file(tmp_path / "m.tif").obstacles, f == 0)
+    Image.fromarray(f * 200).save(tmp_path / "big.tif")
+    with pytest.raises(InputError, match=r"big.tif.*0\.\.200.*\[0, 1\]"):
+        OccupancyGrid.from_file(tmp_path / "big.tif")
+    f[1, 1] = np.nan
+    Image.fromarray(f).save(tmp_path / "nan.tif")
+    with pytest.raises(InputError, match="nan.tif.*NaN"):
+        OccupancyGrid.from_file(tmp_path / "nan.tif")
+
+
+def _png_header_only(path, width, height):
+    """A PNG whose header claims ``width`` x ``height`` gray pixels, with no image data worth decoding."""
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 1, 0, 0, 0, 0)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"\0" * 64))
+                     + chunk(b"IEND", b""))
+    return path
+
+
+def test_huge_image_is_refused_from_its_header(tmp_path, monkeypatch):
+    monkeypatch.delenv("SAMPLERGYM_MAX_PIXELS", raising=False)
+    huge = _png_header_only(tmp_path / "huge.png", 20000, 20000)
+    with pytest.raises(InputError, match=r"huge.png.*20000 x 20000.*max_pixels=400000000.*SAMPLERGYM_MAX_PIXELS"):
+        OccupancyGrid.from_file(huge)
+    Image.fromarray(np.full((300, 200), 255, np.uint8)).save(tmp_path / "m.png")
+    with pytest.raises(InputError, match="m.png.*200 x 300"):
+        OccupancyGrid.from_file(tmp_path / "m.png", max_pixels=59_999)
+    assert OccupancyGrid.from_file(tmp_path / "m.png", max_pixels=60_000).shape == (300, 200)
+    monkeypatch.setenv("SAMPLERGYM_MAX_PIXELS", "50000")
+    with pytest.raises(InputError, match="m.png"):
+        OccupancyGrid.from_image(tmp_path / "m.png")
+    assert OccupancyGrid.from_image(tmp_path / "m.png", max_pixels=10**5).shape == (300, 200)
+    monkeypatch.setenv("SAMPLERGYM_MAX_PIXELS", "lots")
+    with pytest.raises(InputError, match="SAMPLERGYM_MAX_PIXELS='lots'"):
+        OccupancyGrid.from_image(tmp_path / "m.png")
+    # allowed past Pillow's own bomb limit, the header-only file is then read and found truncated
+    with pytest.raises(InputError, match="cannot read .*huge.png"):
+        OccupancyGrid.from_file(huge, max_pixels=400_000_000)
+
+
+def test_huge_movingai_header_is_refused(tmp_path):
+    p = _write(tmp_path, "type octile\nheight 2\nwidth 3\nmap\n.@.\nT..\n")
+    with pytest.raises(InputError, match="m.map.*3 x 2"):
+        OccupancyGrid.from_movingai(p, max_pixels=5)
+
+
+# --- MovingAI: duplicate keys and non-ASCII files -------------------------------------------------
+
+
+def test_movingai_duplicate_header_key_is_refused(tmp_path):
+    p = _write(tmp_path, "type octile\nheight 2\nwidth 3\nheight 1\nmap\n.@.\n")
+    with pytest.raises(InputError, match=r"m.map, line 4: 'height' is given twice \(first '2', again '1'\)"):
+        OccupancyGrid.from_movingai(p)
+
+
+@pytest.mark.parametrize("data", ["type octile\nheight 1\nwidth 2\nmap\n.é\n".encode(), b"type \xff\xfe\n"])
+def test_non_ascii_movingai_map_names_the_file(tmp_path, data):
+    p = tmp_path / "bad.map"
+    p.write_bytes(data)
+    with pytest.raises(InputError, match="bad.map.*not an ASCII"):
+        OccupancyGrid.from_file(p)

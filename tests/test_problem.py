@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from planners import OccupancyGrid, Problem, load_movingai_scenarios
+from planners.fileio import InputError
 
 
 @pytest.fixture
@@ -81,3 +82,42 @@ def test_malformed_scenarios(tmp_path):
         list(load_movingai_scenarios(tmp_path / "c.scen"))
     with pytest.raises(FileNotFoundError):
         list(load_movingai_scenarios(tmp_path / "none.scen"))
+
+
+def _scenario_dir(tmp_path):
+    (tmp_path / "m.map").write_text("type octile\nheight 4\nwidth 4\nmap\n@...\n....\n....\n....\n")
+    return tmp_path
+
+
+@pytest.mark.parametrize("optimal", ["nan", "NaN", "inf", "-1"])
+def test_scenario_with_a_non_finite_or_negative_optimum_is_refused(tmp_path, optimal):
+    d = _scenario_dir(tmp_path)
+    (d / "n.scen").write_text(f"version 1\n0\tm.map\t4\t4\t1\t1\t3\t3\t{optimal}\n")
+    with pytest.raises(InputError, match=f"n.scen, line 2: optimal length.*'{optimal}'"):
+        list(load_movingai_scenarios(d / "n.scen"))
+
+
+@pytest.mark.parametrize("data", ["version 1\n0\tmé.map\t4\t4\t1\t1\t3\t3\t2.8\n".encode(), b"version 1\n\xff\xfe\n"])
+def test_non_ascii_scenario_names_the_file(tmp_path, data):
+    d = _scenario_dir(tmp_path)
+    (d / "u.scen").write_bytes(data)
+    with pytest.raises(InputError, match="u.scen.*not an ASCII"):
+        list(load_movingai_scenarios(d / "u.scen"))
+
+
+def test_scenario_whose_map_is_missing_names_the_line(tmp_path):
+    (tmp_path / "x.scen").write_text("version 1\n0\tmaps/absent.map\t4\t4\t1\t1\t3\t3\t2.8\n")
+    with pytest.raises(InputError, match=r"x.scen, line 2: its map 'maps/absent.map'.*map_path="):
+        list(load_movingai_scenarios(tmp_path / "x.scen"))
+
+
+def test_problem_in_a_world_frame():
+    a = np.zeros((10, 10), bool)
+    a[5, 5] = True
+    g = OccupancyGrid(a, 0.1, origin=(-0.5, 2.0), y_up=True)
+    p = Problem(g, start=(-0.45, 2.05), goal=(0.45, 2.95), goal_tolerance=0.05)
+    assert p.start.tolist() == [-0.45, 2.05]
+    with pytest.raises(InputError, match=r"start \(0.05, 2.55\).*blocked cell \(row 5, col 5\)"):
+        Problem(g, start=(0.05, 2.55), goal=(0.45, 2.95))
+    with pytest.raises(InputError, match=r"goal \(0.55, 1.0\).*outside the map interior \(-0.5, 0.5\) x \(2, 3\)"):
+        Problem(g, start=(-0.45, 2.05), goal=(0.55, 1.0))
