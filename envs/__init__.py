@@ -9,14 +9,20 @@ Registered ids:
 
 * ``SamplerGym/RRT-{Forest,NarrowPassage,Bugtrap,Maze,Rooms}-v0``: RRT on a fresh generated map of
   that family each episode (``source_kwargs={"size": ...}``, default 64).
-* ``SamplerGym/RRT-MovingAI-v0``: RRT on the MovingAI benchmark scenarios (``../shared/maps`` or
-  ``SAMPLERGYM_MOVINGAI_DIR``).
-* ``SamplerGym/RRT-Files-v0``: RRT on your own maps: ``source_kwargs={"paths": [...]}``.
+* ``SamplerGym/RRT-MovingAI-v0``: RRT on the MovingAI benchmark scenarios, found by
+  ``envs.sources.movingai_dir`` (``source_kwargs={"directory": ...}``, else ``SAMPLERGYM_MOVINGAI_DIR``,
+  else ``../shared/maps/movingai`` from the working directory).
+* ``SamplerGym/RRT-Files-v0``: RRT on your own maps (``source_kwargs={"paths": [...]}``), by default on
+  the small sample maps shipped in ``envs/data/maps``.
 * ``SamplerGym/RRT-RigidBody-v0``: RRT for a 6-DoF rigid body among 3-D boxes, a fresh
   ``planners.rigid3d.random_scene`` each episode (``source_kwargs={"n_boxes": ...}``); vector
   observations, step 0.5, 5,000 iterations.
 * ``SamplerGym/Planning-v0``: everything by kwargs (``planner``, ``map_source``, ``step_size``,
-  ``max_iterations``, ``action_mode``, ...).
+  ``max_iterations``, ``action_mode``, ...); ``map=array_or_path, start=(x, y), goal=(x, y)`` plans on
+  your own map.
+
+Every id trains with Stable-Baselines3's defaults: ``PPO("MultiInputPolicy", env)`` (Dict
+observations) or ``PPO("MlpPolicy", env)`` (``RRT-RigidBody-v0``'s Box observations).
 """
 
 from __future__ import annotations
@@ -26,10 +32,18 @@ from gymnasium.envs.registration import register, registry
 from envs.actions import ACTION_MODES
 from envs.render import record_episode
 from envs.sampler_env import SamplerEnv
-from envs.sources import FamilySource, FileSource, MovingAISource, ProblemListSource, RigidSceneSource
+from envs.sources import (
+    FamilySource,
+    FileSource,
+    MovingAISource,
+    ProblemListSource,
+    RigidSceneSource,
+    movingai_dir,
+    sample_map_paths,
+)
 
 __all__ = ["ACTION_MODES", "ENV_IDS", "FamilySource", "FileSource", "MovingAISource", "ProblemListSource",
-           "RigidSceneSource", "SamplerEnv", "record_episode"]
+           "RigidSceneSource", "SamplerEnv", "movingai_dir", "record_episode", "sample_map_paths"]
 
 _FAMILY_IDS = {
     "Forest": "forest",

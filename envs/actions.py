@@ -6,7 +6,7 @@ draws exactly one sample. Randomness comes from the planner's generator, itself 
 environment's ``np_random``.
 
 Actions live in ``Box(-1, 1)``; out-of-range values are clipped (documented, as SB3 policies can
-emit them) and NaN or wrongly shaped actions raise ``ValueError``.
+emit them) and NaN, non-numeric or wrongly shaped actions raise ``planners.fileio.InputError``.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 from gymnasium import spaces
 
 from planners import SamplerBase
+from planners.fileio import InputError
 
 ACTION_MODES = ("point", "bias", "mixture", "relative", "guided")
 
@@ -34,7 +35,7 @@ class ActionSampler(SamplerBase):
 
     def __init__(self, step_size: float, uniform_floor: float = 0.05) -> None:
         if not 0.0 <= uniform_floor <= 1.0:
-            raise ValueError(f"uniform_floor must lie in [0, 1], got {uniform_floor}")
+            raise InputError(f"uniform_floor must lie in [0, 1], got {uniform_floor}")
         self.step_size = float(step_size)
         self.uniform_floor = float(uniform_floor)
         self.action: np.ndarray | None = None
@@ -46,12 +47,16 @@ class ActionSampler(SamplerBase):
         return dim + self.dims
 
     def set_action(self, action) -> None:
-        a = np.asarray(action, dtype=np.float64)
         n = self.action_size(self.problem.dim)
+        expected = f"Box(-1, 1, ({n},), float32) in {type(self).__name__} mode"
+        a = np.asarray(action) if action is not None else None
+        if a is None or not (a.dtype == bool or np.issubdtype(a.dtype, np.number)):
+            raise InputError(f"action must be numbers for {expected}, got {action!r}")
+        a = a.astype(np.float64)
         if a.shape != (n,):
-            raise ValueError(f"action must have shape ({n},) in {type(self).__name__} mode, got {a.shape}")
+            raise InputError(f"action must have shape ({n},) for {expected}, got shape {a.shape}: {action!r}")
         if not np.all(np.isfinite(a)):
-            raise ValueError(f"action contains NaN or infinity: {a.tolist()}")
+            raise InputError(f"action contains NaN or infinity: {a.tolist()}; expected {expected}")
         self.action = np.clip(a, -1.0, 1.0)
 
     def draw(self, rng, n, view):
@@ -134,7 +139,7 @@ class RelativeAction(ActionSampler):
     def __init__(self, step_size: float, uniform_floor: float = 0.05, reach: float = 3.0) -> None:
         super().__init__(step_size, uniform_floor)
         if not (math.isfinite(reach) and reach > 0):
-            raise ValueError(f"reach must be positive, got {reach}")
+            raise InputError(f"reach must be positive, got {reach}")
         self.reach = float(reach)
 
     def _sample(self, rng, view):
@@ -168,12 +173,15 @@ class GuidedAction(ActionSampler):
     def set_action(self, action) -> None:
         from envs.guided import N_ACTIONS
 
-        a = np.asarray(action)
-        if a.size != 1 or not np.issubdtype(a.dtype, np.integer) and not (np.isfinite(a).all() and float(a) == int(a)):
-            raise ValueError(f"guided action must be one integer in [0, {N_ACTIONS}), got {action!r}")
+        expected = f"one integer in [0, {N_ACTIONS}) (Discrete({N_ACTIONS}))"
+        a = np.asarray(action) if action is not None else None
+        if a is None or a.size != 1 or a.dtype == bool or not np.issubdtype(a.dtype, np.number):
+            raise InputError(f"guided action must be {expected}, got {action!r}")
+        if not np.issubdtype(a.dtype, np.integer) and not (np.isfinite(a).all() and float(a.reshape(-1)[0]) % 1 == 0):
+            raise InputError(f"guided action must be {expected}, got {action!r}")
         a = int(a.reshape(-1)[0])
         if not 0 <= a < N_ACTIONS:
-            raise ValueError(f"guided action must lie in [0, {N_ACTIONS}), got {a}")
+            raise InputError(f"guided action must be {expected}, got {a}")
         self.action = a
 
     def draw(self, rng, n, view):
@@ -188,5 +196,5 @@ def make_action_sampler(mode: str, step_size: float, uniform_floor: float = 0.05
     classes = {"point": PointAction, "bias": BiasAction, "mixture": MixtureAction, "relative": RelativeAction,
                "guided": GuidedAction}
     if mode not in classes:
-        raise ValueError(f"action_mode must be one of {ACTION_MODES}, got {mode!r}")
+        raise InputError(f"action_mode must be one of {ACTION_MODES}, got {mode!r}")
     return classes[mode](step_size, uniform_floor, **kwargs)

@@ -13,6 +13,7 @@ import numpy as np
 from gymnasium import spaces
 
 from planners import OccupancyGrid, Planner, Problem
+from planners.fileio import InputError
 
 CHANNELS = ("obstacles", "tree", "start", "goal")
 VECTOR_FEATURES = (
@@ -35,12 +36,12 @@ class GridObservation:
       iteration fraction, log tree size over log of the iteration cap.
     """
 
-    def __init__(self, size: int = 64, local_size: int = 32, local_scale: int = 1) -> None:
+    def __init__(self, size: int = 64, local_size: int = 48, local_scale: int = 1) -> None:
         for label, v in (("obs_size", size), ("local_size", local_size), ("local_scale", local_scale)):
             if not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"{label} must be a positive integer, got {v!r}")
+                raise InputError(f"{label} must be a positive integer, got {v!r}")
         if local_size % 2:
-            raise ValueError(f"local_size must be even, got {local_size}")
+            raise InputError(f"local_size must be even, got {local_size}")
         self.size, self.local_size, self.local_scale = int(size), int(local_size), int(local_scale)
 
     @property

@@ -10,8 +10,9 @@ import numpy as np
 
 from envs.actions import ACTION_MODES, make_action_sampler
 from envs.observation import GridObservation, VectorObservation
-from envs.sources import MapSource, make_source
+from envs.sources import MapSource, make_source, map_problem
 from planners import PRM, RRT, LazyPRM, OccupancyGrid, Planner, Problem, RRTConnect, RRTStar
+from planners.fileio import InputError
 
 PLANNERS = {"rrt": RRT, "rrtstar": RRTStar, "prm": PRM, "rrtconnect": RRTConnect, "lazyprm": LazyPRM}
 
@@ -63,16 +64,20 @@ class SamplerEnv(gym.Env):
     against uniform sampling (with a uniform floor); ``relative`` (k = d + 1): an offset and spread
     from the tree vertex nearest the goal. ``guided``: ``Discrete(177)``, a log-polar cell in the
     frame from the tree's progress vertex towards the goal, or the tree's frontier (``envs.guided``).
-    Out-of-range continuous actions are clipped to [-1, 1]; NaN, wrongly shaped or out-of-range
-    discrete actions raise ``ValueError``.
+    Out-of-range continuous actions are clipped to [-1, 1]; NaN, non-numeric, wrongly shaped or
+    out-of-range discrete actions raise ``planners.fileio.InputError`` (a ``ValueError``) naming the
+    action and the expected space.
 
     ## Observation Space
-    Occupancy-grid problems: ``Dict(image=(4, S, S) uint8, local=(4, L, L) uint8, vector=(11,)
-    float32)`` (channels: obstacles, tree, start, goal; see ``envs.observation.GridObservation``),
-    accepted by SB3's ``MultiInputPolicy`` and custom extractors. ``observation="egocentric"``:
+    Occupancy-grid problems: ``Dict(image=(4, 64, 64) uint8, local=(4, 48, 48) uint8, vector=(11,)
+    float32)`` by default (channels: obstacles, tree, start, goal; see
+    ``envs.observation.GridObservation``). Both images are at least 36x36, the smallest input of
+    SB3's default CNN, so ``PPO("MultiInputPolicy", env)`` trains with SB3's defaults; smaller
+    ``obs_size`` / ``local_size`` (below 36) need a custom extractor. ``observation="egocentric"``:
     ``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``, multi-scale windows around the progress
-    vertex turned towards the goal (``EgocentricObservation``). Other worlds (geometric, 6-DoF rigid
-    body): a ``Box`` vector (``VectorObservation``).
+    vertex turned towards the goal (``EgocentricObservation``), for ``learning.extractor`` (too
+    small for SB3's default CNN). Other worlds (geometric, 6-DoF rigid body): a ``Box`` vector
+    (``VectorObservation``), for SB3's ``MlpPolicy``.
 
     ## Rewards
     -1 per iteration, so the return is minus the iterations-to-solution; ``reward="checks"`` adds
@@ -84,6 +89,7 @@ class SamplerEnv(gym.Env):
 
     ## Episode End
     ``terminated`` when the planner has a solution; ``truncated`` after ``max_iterations`` steps.
+    Stepping after either raises ``RuntimeError`` until ``reset()``.
 
     ## Info
     ``iterations``, ``solved``, ``path_cost``, ``collision_checks``, ``tree_size``, ``sample``,
@@ -92,7 +98,11 @@ class SamplerEnv(gym.Env):
 
     ## Arguments
     ``map_source``: family name (``forest``, ``narrow_passage``, ``bugtrap``, ``maze``, ``rooms``),
-    ``"movingai"``, ``"files"`` or a callable ``np_random -> Problem``; ``source_kwargs`` configure it.
+    ``"movingai"``, ``"files"`` (default: the sample maps shipped in ``envs/data/maps``), a map
+    (array, ``OccupancyGrid`` or path) or a callable ``np_random -> Problem``; ``source_kwargs``
+    configure it. ``map`` (a map file, a 2-D boolean obstacle array or an ``OccupancyGrid``) with
+    optional ``start`` and ``goal`` (world units) plans on the user's own map (random queries
+    without ``start`` / ``goal``); it replaces ``map_source``.
     ``planner``: ``rrt``, ``rrtstar``, ``prm``, ``rrtconnect``, ``lazyprm``. ``step_size``,
     ``max_iterations``, ``action_mode``, ``uniform_floor``, ``reach`` (relative mode),
     ``observation`` (``image`` or ``egocentric``), ``obs_size``, ``local_size``, ``local_scale``,
@@ -117,7 +127,7 @@ class SamplerEnv(gym.Env):
         reach: float = 3.0,
         observation: str = "image",
         obs_size: int = 64,
-        local_size: int = 32,
+        local_size: int = 48,
         local_scale: int = 1,
         reward: str = "iterations",
         checks_weight: float = 0.1,
@@ -125,23 +135,38 @@ class SamplerEnv(gym.Env):
         shaping_gamma: float = 1.0,
         dim: int | None = None,
         render_mode: str | None = None,
+        map: Any = None,  # noqa: A002 (the Gymnasium-style keyword users expect)
+        start: Any = None,
+        goal: Any = None,
     ) -> None:
         super().__init__()
         if planner not in PLANNERS:
-            raise ValueError(f"planner must be one of {sorted(PLANNERS)}, got {planner!r}")
+            raise InputError(f"planner must be one of {sorted(PLANNERS)}, got {planner!r}")
         if action_mode not in ACTION_MODES:
-            raise ValueError(f"action_mode must be one of {ACTION_MODES}, got {action_mode!r}")
+            raise InputError(f"action_mode must be one of {ACTION_MODES}, got {action_mode!r}")
         if observation not in ("image", "egocentric"):
-            raise ValueError(f"observation must be 'image' or 'egocentric', got {observation!r}")
+            raise InputError(f"observation must be 'image' or 'egocentric', got {observation!r}")
         if reward not in ("iterations", "checks"):
-            raise ValueError(f"reward must be 'iterations' or 'checks', got {reward!r}")
+            raise InputError(f"reward must be 'iterations' or 'checks', got {reward!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
-        if not (isinstance(max_iterations, (int, np.integer)) and max_iterations >= 1):
-            raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
-        if not (math.isfinite(step_size) and step_size > 0):
-            raise ValueError(f"step_size must be positive, got {step_size!r}")
-        self.source = make_source(map_source, **(source_kwargs or {}))
+            raise InputError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
+        if isinstance(max_iterations, bool) or not (isinstance(max_iterations, (int, np.integer))
+                                                    and max_iterations >= 1):
+            raise InputError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+        step_size = _number("step_size", step_size, low=0.0, low_open=True)
+        uniform_floor = _number("uniform_floor", uniform_floor, low=0.0, high=1.0)
+        reach = _number("reach", reach, low=0.0, low_open=True)
+        checks_weight = _number("checks_weight", checks_weight, low=0.0)
+        shaping_gamma = _number("shaping_gamma", shaping_gamma, low=0.0, high=1.0)
+        if map is not None:
+            if source_kwargs:
+                raise InputError(f"source_kwargs {sorted(source_kwargs)} given with map=; pass map options "
+                                 "(goal_tolerance, threshold, resolution) through source_kwargs only without map=")
+            self.source = map_problem(map, start, goal)
+        elif start is not None or goal is not None:
+            raise InputError("start and goal need map= (the map they are points of)")
+        else:
+            self.source = make_source(map_source, **(source_kwargs or {}))
         self.planner_name = planner
         self.step_size = float(step_size)
         self.max_iterations = int(max_iterations)
@@ -156,7 +181,7 @@ class SamplerEnv(gym.Env):
         self.uniform_floor = float(uniform_floor)
         self._guide = None
         if (observation == "egocentric" or action_mode == "guided") and self.dim != 2:
-            raise ValueError("egocentric observations and guided actions are defined for 2-D grid problems")
+            raise InputError("egocentric observations and guided actions are defined for 2-D grid problems")
         if observation == "egocentric":
             self._obs = EgocentricObservation(self)
         elif self.dim == 2:
@@ -169,6 +194,7 @@ class SamplerEnv(gym.Env):
         self.planner: Planner | None = None
         self._renderer = None
         self._last_sample = None
+        self._ended = None
 
     # --- Gymnasium API -------------------------------------------------------------------------
 
@@ -192,6 +218,7 @@ class SamplerEnv(gym.Env):
         self._potential = self._geodesic_potential_init() if self.shaping else 0.0
         self._last_sample = None
         self._added = False
+        self._ended = None  # "terminated" / "been truncated": further steps are refused until reset
         if self._renderer is not None:
             self._renderer.reset(problem)
         if self.render_mode == "human":
@@ -201,8 +228,8 @@ class SamplerEnv(gym.Env):
     def step(self, action):
         if self.planner is None:
             raise RuntimeError("call reset() before step()")
-        if self.planner.solved:
-            raise RuntimeError("the episode has terminated; call reset()")
+        if self._ended is not None:
+            raise RuntimeError(f"the episode has {self._ended}; call reset()")
         checks = self.planner.collision_checks
         self.planner.sampler.set_action(action)
         s = self.planner.step()
@@ -221,6 +248,7 @@ class SamplerEnv(gym.Env):
         info = self._info()
         if terminated or truncated:
             info["is_success"] = terminated
+            self._ended = "terminated" if terminated else "been truncated"
         if self.render_mode == "human":
             self.render()
         return self._obs.build(self.planner), reward, terminated, truncated, info
@@ -292,3 +320,16 @@ class SamplerEnv(gym.Env):
         state = self.__dict__.copy()
         state["_renderer"] = None  # matplotlib figures do not pickle
         return state
+
+
+def _number(name: str, value, low: float | None = None, high: float | None = None, low_open: bool = False) -> float:
+    """``value`` as a finite float in [low, high] (``(low, high]`` with ``low_open``), else ``InputError``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(f"{name} must be a number, got {value!r}")
+    v = float(value)
+    lo_ok = low is None or (v > low if low_open else v >= low)
+    if not (math.isfinite(v) and lo_ok and (high is None or v <= high)):
+        lo = "-inf" if low is None else f"{low:g}"
+        rng = f"{'(' if low_open else '['}{lo}, {'inf)' if high is None else f'{high:g}]'}"
+        raise InputError(f"{name} must be a finite number in {rng}, got {value!r}")
+    return v

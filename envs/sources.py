@@ -13,23 +13,67 @@ from pathlib import Path
 import numpy as np
 
 from planners import OccupancyGrid, Problem, load_movingai_scenarios
+from planners.fileio import InputError
 from planners.generators import FAMILIES, generate
 from planners.gridsearch import free_components
 
 MapSource = Callable[[np.random.Generator], Problem]
 
 
+MOVINGAI_ENV = "SAMPLERGYM_MOVINGAI_DIR"
+
+
+def movingai_dir(directory: str | os.PathLike | None = None) -> Path:
+    """The folder of MovingAI ``.map`` / ``.scen`` files, the one place the library looks for it.
+
+    ``directory`` if given, else ``$SAMPLERGYM_MOVINGAI_DIR``, else ``../shared/maps/movingai``
+    relative to the current working directory. Never derived from where this file sits, so an
+    installed (non-editable) package finds the maps too.
+
+    Raises:
+        InputError: The chosen folder does not exist or holds no ``.map`` file; the message names the
+            argument and the environment variable.
+    """
+    cand, origin = _movingai_candidate(directory)
+    if not cand.is_dir() or not any(cand.glob("*.map")):
+        raise InputError(f"MovingAI maps not found: {origin} is not a folder of .map files; pass the folder "
+                         f"as the directory argument (source_kwargs={{'directory': ...}}, --movingai) or set "
+                         f"{MOVINGAI_ENV}")
+    return cand
+
+
+def _movingai_candidate(directory: str | os.PathLike | None) -> tuple[Path, str]:
+    """The folder ``movingai_dir`` would use, and where it came from (for messages); not checked."""
+    if directory is not None:
+        return Path(directory), f"directory={str(directory)!r}"
+    if os.environ.get(MOVINGAI_ENV):
+        return Path(os.environ[MOVINGAI_ENV]), f"{MOVINGAI_ENV}={os.environ[MOVINGAI_ENV]!r}"
+    return (Path.cwd().parent / "shared" / "maps" / "movingai",
+            f"the default ../shared/maps/movingai (from the working directory {Path.cwd()})")
+
+
 def default_movingai_dir() -> Path:
-    """``$SAMPLERGYM_MOVINGAI_DIR``, else ``../shared/maps/movingai`` beside the repository."""
-    env = os.environ.get("SAMPLERGYM_MOVINGAI_DIR")
-    return Path(env) if env else Path(__file__).resolve().parents[2] / "shared" / "maps" / "movingai"
+    """The folder ``movingai_dir()`` resolves to, without checking it (for callers that degrade gracefully)."""
+    return _movingai_candidate(None)[0]
+
+
+def sample_map_paths() -> list[Path]:
+    """The small sample maps shipped with the package (``envs/data/maps/*.png``), used by ``RRT-Files-v0``."""
+    from importlib import resources
+
+    root = resources.files("envs") / "data" / "maps"
+    paths = sorted(Path(str(p)) for p in root.iterdir() if p.name.endswith(".png"))
+    if not paths:
+        raise InputError(f"no sample maps found in {root}; the package data is missing, pass source_kwargs="
+                         "{'paths': [...]}")
+    return paths
 
 
 def _seeded(seeds: Sequence[int] | None) -> np.ndarray | None:
     """A fixed pool of map seeds (None: any seed)."""
     out = None if seeds is None else np.asarray(seeds, dtype=np.int64)
     if out is not None and len(out) == 0:
-        raise ValueError("seeds must not be empty")
+        raise InputError("seeds must not be empty")
     return out
 
 
@@ -50,7 +94,7 @@ class FamilySource:
     def __init__(self, family: str, size: int = 64, goal_tolerance: float = 4.0,
                  seeds: Sequence[int] | None = None) -> None:
         if family not in FAMILIES:
-            raise ValueError(f"unknown family {family!r}; choose from {FAMILIES}")
+            raise InputError(f"unknown family {family!r}; choose from {FAMILIES}")
         self.family, self.size, self.goal_tolerance = family, int(size), float(goal_tolerance)
         self.seeds = _seeded(seeds)
 
@@ -68,7 +112,7 @@ class ProblemListSource:
     def __init__(self, problems: Sequence[Problem]) -> None:
         self.problems = list(problems)
         if not self.problems:
-            raise ValueError("ProblemListSource needs at least one problem")
+            raise InputError("ProblemListSource needs at least one problem")
 
     def __call__(self, np_random: np.random.Generator) -> Problem:
         return self.problems[int(np_random.integers(len(self.problems)))]
@@ -78,7 +122,8 @@ class MovingAISource(ProblemListSource):
     """Scenario queries of the MovingAI benchmark maps.
 
     Args:
-        directory: Folder with ``.map`` and ``.scen`` files (default: ``default_movingai_dir()``).
+        directory: Folder with ``.map`` and ``.scen`` files (default: ``movingai_dir()``: the
+            ``SAMPLERGYM_MOVINGAI_DIR`` variable, else ``../shared/maps/movingai`` from the working directory).
         maps: Map names (stems, e.g. ``"arena"``) to use; default all maps with a scenario file.
         goal_tolerance: Goal radius of every problem.
         per_map: Keep at most this many scenarios per map (the longest ones first).
@@ -86,17 +131,14 @@ class MovingAISource(ProblemListSource):
 
     def __init__(self, directory: str | os.PathLike | None = None, maps: Sequence[str] | None = None,
                  goal_tolerance: float = 4.0, per_map: int | None = 50) -> None:
-        directory = Path(directory) if directory is not None else default_movingai_dir()
-        if not directory.is_dir():
-            raise FileNotFoundError(
-                f"MovingAI maps not found in {directory}; set SAMPLERGYM_MOVINGAI_DIR or pass directory=")
+        directory = movingai_dir(directory)
         scens = sorted(directory.glob("*.scen"))
         if maps is not None:
             wanted = set(maps)
             scens = [s for s in scens if s.name.split(".")[0].replace("-random-1", "") in wanted]
             found = {s.name.split(".")[0].replace("-random-1", "") for s in scens}
             if wanted - found:
-                raise ValueError(f"no scenario file for maps {sorted(wanted - found)} in {directory}")
+                raise InputError(f"no scenario file for maps {sorted(wanted - found)} in {directory}")
         problems = []
         for scen in scens:
             ps = sorted(load_movingai_scenarios(scen, goal_tolerance=goal_tolerance),
@@ -109,31 +151,32 @@ class MovingAISource(ProblemListSource):
 
 
 class FileSource:
-    """The user's own map files (images, MovingAI ``.map`` or ``.npy``), with random connected queries.
+    """The user's own maps (image, MovingAI ``.map`` or ``.npy`` files, or arrays), with random connected queries.
 
     Args:
-        paths: Map files (``OccupancyGrid.from_file``).
+        paths: Map files (``OccupancyGrid.from_file``), boolean obstacle arrays or ``OccupancyGrid``s;
+            default the sample maps shipped with the package (``sample_map_paths()``).
         threshold: Gray level below which image pixels are obstacles.
         resolution: World units per cell.
         goal_tolerance: Goal radius.
         min_distance: Minimum straight-line start-goal distance, as a fraction of the map diagonal.
     """
 
-    def __init__(self, paths: Sequence[str | os.PathLike] | str | os.PathLike, threshold: float = 0.5,
-                 resolution: float = 1.0, goal_tolerance: float = 4.0, min_distance: float = 0.3) -> None:
-        if isinstance(paths, (str, os.PathLike)):
+    def __init__(self, paths=None, threshold: float = 0.5, resolution: float = 1.0, goal_tolerance: float = 4.0,
+                 min_distance: float = 0.3) -> None:
+        if paths is None:
+            paths = sample_map_paths()
+        if isinstance(paths, (str, os.PathLike, np.ndarray, OccupancyGrid)):
             paths = [paths]
-        self.grids: list[OccupancyGrid] = []
-        for p in paths:
-            self.grids.append(OccupancyGrid.from_file(p, threshold, resolution))
+        self.grids = [_as_grid(p, threshold, resolution) for p in paths]
         if not self.grids:
-            raise ValueError("FileSource needs at least one map file")
+            raise InputError("FileSource needs at least one map (paths=[])")
         self.goal_tolerance = float(goal_tolerance)
         self.min_distance = float(min_distance)
         self._labels = [free_components(g.obstacles) for g in self.grids]
         for g, lab in zip(self.grids, self._labels, strict=True):
             if (lab >= 0).sum() < 2:
-                raise ValueError(f"map {g.source} has fewer than two free cells")
+                raise InputError(f"map {g.source} has fewer than two free cells")
 
     def __call__(self, np_random: np.random.Generator) -> Problem:
         i = int(np_random.integers(len(self.grids)))
@@ -153,6 +196,46 @@ class FileSource:
                 break
         _, s, g = best
         return Problem(grid, s, g, goal_tolerance=self.goal_tolerance, name=f"{Path(str(grid.source)).name}")
+
+
+def _as_grid(m, threshold: float, resolution: float) -> OccupancyGrid:
+    """An ``OccupancyGrid`` from a grid, a 2-D obstacle array (True or nonzero = blocked) or a map file."""
+    if isinstance(m, OccupancyGrid):
+        return m
+    if isinstance(m, np.ndarray):
+        if m.ndim != 2 or m.size == 0 or not (m.dtype == bool or np.issubdtype(m.dtype, np.number)):
+            raise InputError(f"map array must be a non-empty 2-D boolean obstacle array, got shape {m.shape}, "
+                             f"dtype {m.dtype}")
+        if not np.isfinite(m).all():
+            raise InputError("map array holds NaN or infinity; expected a boolean obstacle array")
+        return OccupancyGrid(m.astype(bool), resolution=resolution)
+    if isinstance(m, (str, os.PathLike)):
+        return OccupancyGrid.from_file(m, threshold, resolution)
+    raise InputError(f"map must be a file path, a 2-D obstacle array or an OccupancyGrid, got {type(m).__name__}")
+
+
+def map_problem(map, start=None, goal=None, goal_tolerance: float = 4.0, threshold: float = 0.5,
+                resolution: float = 1.0, **kwargs) -> MapSource:
+    """A source for the user's own map: a fixed query when ``start`` and ``goal`` are given, else random ones.
+
+    Args:
+        map: A map file, a 2-D obstacle array (True = blocked) or an ``OccupancyGrid``.
+        start: Start point (x, y) in world units, or None (random queries, as ``FileSource``).
+        goal: Goal point (x, y), given with ``start``.
+        goal_tolerance: Goal radius.
+        threshold: Gray level below which image pixels are obstacles.
+        resolution: World units per cell.
+        **kwargs: Further ``FileSource`` options (random queries only).
+    """
+    grid = _as_grid(map, threshold, resolution)
+    if (start is None) != (goal is None):
+        raise InputError(f"give both start and goal, or neither (random queries); got start={start!r}, "
+                         f"goal={goal!r}")
+    if start is None:
+        return FileSource([grid], goal_tolerance=goal_tolerance, **kwargs)
+    if kwargs:
+        raise InputError(f"options {sorted(kwargs)} apply to random queries only, not with start and goal")
+    return ProblemListSource([Problem(grid, start, goal, goal_tolerance=goal_tolerance)])
 
 
 class RigidSceneSource:
@@ -192,17 +275,20 @@ def make_source(source: str | MapSource, **kwargs) -> MapSource:
     """
     if callable(source):
         if kwargs:
-            raise ValueError(f"source options {sorted(kwargs)} given with a callable source")
+            raise InputError(f"source options {sorted(kwargs)} given with a callable source")
         return source
+    if isinstance(source, (np.ndarray, OccupancyGrid, os.PathLike)):
+        return map_problem(source, **kwargs)  # the user's own map, e.g. map_source=array
+    if not isinstance(source, str):
+        raise InputError(f"map_source must be a family name, 'movingai', 'files', 'rigid', a map (array, "
+                         f"OccupancyGrid or path) or a callable, got {type(source).__name__}")
     if source in FAMILIES:
         return FamilySource(source, **kwargs)
     if source == "movingai":
         return MovingAISource(**kwargs)
     if source == "files":
-        if "paths" not in kwargs:
-            raise ValueError("map_source='files' needs source_kwargs={'paths': [image or .map files]}")
-        return FileSource(**kwargs)
+        return FileSource(**kwargs)  # no paths: the shipped sample maps
     if source == "rigid":
         return RigidSceneSource(**kwargs)
-    raise ValueError(f"map_source must be one of {FAMILIES + ('movingai', 'files', 'rigid')} or a callable, "
-                     f"got {source!r}")
+    raise InputError(f"map_source must be one of {FAMILIES + ('movingai', 'files', 'rigid')}, a map or a "
+                     f"callable, got {source!r}")

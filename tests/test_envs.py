@@ -176,7 +176,7 @@ def test_bad_construction_arguments():
     with pytest.raises(ValueError, match="map_source"):
         SamplerEnv("volcano")
     with pytest.raises(ValueError, match="paths"):
-        SamplerEnv("files")
+        SamplerEnv("files", source_kwargs={"paths": []})
     with pytest.raises(ValueError, match="max_iterations"):
         SamplerEnv("forest", max_iterations=0)
 

@@ -1,0 +1,194 @@
+"""Every registered id works the way Gymnasium and Stable-Baselines3 users expect (issues 14.2, 14.3, 15.2)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from conftest import movingai_dir
+from PIL import Image
+
+import envs
+from envs import ENV_IDS, SamplerEnv
+from planners.fileio import InputError
+
+gym.register_envs(envs)
+MOVINGAI_ENV = "SAMPLERGYM_MOVINGAI_DIR"
+
+ALL_IDS = sorted(ENV_IDS)
+
+
+def _needs_movingai(env_id):
+    if env_id.endswith("MovingAI-v0") and movingai_dir() is None:
+        pytest.skip("MovingAI maps not found")
+
+
+@pytest.fixture
+def shared_cwd(monkeypatch):
+    """Run from the repository, whose parent holds ``shared/`` when the MovingAI maps are present."""
+    d = movingai_dir()
+    if d is not None:
+        monkeypatch.setenv(MOVINGAI_ENV, str(d))
+
+
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_sb3_default_policy_trains_on_every_id(env_id, shared_cwd):
+    """SB3's default policy and extractor (NatureCNN for images) build and train on every id, no kwargs.
+
+    Only the rollout size is shrunk (n_steps, batch_size) to keep the test fast; the policy class,
+    its feature extractor and its preprocessing are SB3's defaults, which is what used to crash.
+    """
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    _needs_movingai(env_id)
+    venv = make_vec_env(env_id, n_envs=2, seed=0, env_kwargs={"max_iterations": 64})
+    policy = "MlpPolicy" if isinstance(venv.observation_space, gym.spaces.Box) else "MultiInputPolicy"
+    model = PPO(policy, venv, n_steps=64, batch_size=64, n_epochs=1, seed=0)
+    if policy == "MultiInputPolicy":  # SB3's default CNN on every image key
+        from stable_baselines3.common.torch_layers import NatureCNN
+
+        cnns = {k for k, m in model.policy.features_extractor.extractors.items() if isinstance(m, NatureCNN)}
+        assert cnns == {"image", "local"}
+    before = [p.detach().clone() for p in model.policy.parameters()]
+    model.learn(256)
+    assert model.num_timesteps >= 256
+    after = model.policy.parameters()
+    assert any(not np.array_equal(a.numpy(), b.detach().numpy()) for a, b in zip(before, after, strict=True))
+    venv.close()
+
+
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_gym_make_without_kwargs(env_id, shared_cwd):
+    _needs_movingai(env_id)
+    env = gym.make(env_id)
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+    obs, *_ = env.step(env.action_space.sample())
+    assert env.observation_space.contains(obs)
+    env.close()
+
+
+def test_files_id_defaults_to_the_shipped_sample_maps():
+    paths = envs.sample_map_paths()
+    assert len(paths) >= 2 and all(p.suffix == ".png" and p.is_file() for p in paths)
+    env = gym.make("SamplerGym/RRT-Files-v0")
+    names = {env.reset(seed=s)[0] is not None and env.unwrapped.problem.name for s in range(20)}
+    assert names <= {p.name for p in paths} and len(names) >= 2
+
+
+@pytest.mark.parametrize("kind", ["array", "png", "npy"])
+def test_planning_id_plans_on_the_users_map(kind, tmp_path):
+    obstacles = np.zeros((40, 48), bool)
+    obstacles[5:35, 24] = True  # a wall with gaps at both ends
+    if kind == "array":
+        m = obstacles
+    elif kind == "png":
+        m = tmp_path / "mine.png"
+        Image.fromarray(np.where(obstacles, 0, 255).astype(np.uint8)).save(m)
+    else:
+        m = tmp_path / "mine.npy"
+        np.save(m, obstacles)
+    env = gym.make("SamplerGym/Planning-v0", map=m, start=(4.5, 20.5), goal=(44.5, 20.5), max_iterations=3000)
+    env.reset(seed=0)
+    p = env.unwrapped.problem
+    assert np.array_equal(p.world.obstacles, obstacles)
+    assert np.array_equal(p.start, [4.5, 20.5]) and np.array_equal(p.goal, [44.5, 20.5])
+    rng = np.random.default_rng(0)
+    for _ in range(3000):
+        _, _, term, trunc, info = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+        if term or trunc:
+            break
+    assert term and info["solved"]
+    # random queries on the user's map without start / goal; map_source=array as well
+    env = gym.make("SamplerGym/Planning-v0", map_source=obstacles)
+    env.reset(seed=1)
+    assert np.array_equal(env.unwrapped.problem.world.obstacles, obstacles)
+    with pytest.raises(InputError, match="start and goal"):
+        SamplerEnv(map=obstacles, start=(4.5, 20.5))
+    with pytest.raises(InputError, match="start"):
+        SamplerEnv(map=obstacles, start=(24.5, 20.5), goal=(44.5, 20.5))  # inside the wall
+
+
+def test_movingai_dir_resolution(tmp_path, monkeypatch):
+    """Argument > SAMPLERGYM_MOVINGAI_DIR > ../shared/maps/movingai from the working directory; not the source path."""
+    from envs import sources
+
+    a, b = tmp_path / "a", tmp_path / "b"
+    for d in (a, b):
+        d.mkdir()
+        (d / "x.map").write_text("type octile\nheight 1\nwidth 1\nmap\n.\n")
+    # simulate a non-editable install: the module sits in site-packages, far from any shared/ folder
+    monkeypatch.setattr(sources, "__file__", str(tmp_path / "venv" / "lib" / "site-packages" / "envs" / "sources.py"))
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv(MOVINGAI_ENV, str(b))
+    assert sources.movingai_dir() == b
+    assert sources.movingai_dir(a) == a
+    monkeypatch.delenv(MOVINGAI_ENV)
+    with pytest.raises(InputError) as err:  # no ../shared beside tmp_path
+        sources.movingai_dir()
+    assert MOVINGAI_ENV in str(err.value) and "directory" in str(err.value)
+    work = tmp_path / "proj" / "work"
+    work.mkdir(parents=True)
+    (tmp_path / "proj" / "shared" / "maps").mkdir(parents=True)
+    (tmp_path / "proj" / "shared" / "maps" / "movingai").symlink_to(a)
+    monkeypatch.chdir(work)
+    assert sources.movingai_dir().resolve() == a.resolve()
+    with pytest.raises(InputError, match=MOVINGAI_ENV):
+        gym.make("SamplerGym/RRT-MovingAI-v0", source_kwargs={"directory": str(tmp_path / "missing")})
+
+
+def test_movingai_id_without_kwargs_uses_the_env_var(monkeypatch, tmp_path):
+    d = movingai_dir()
+    if d is None:
+        pytest.skip("MovingAI maps not found")
+    monkeypatch.chdir(tmp_path)  # no ../shared from here: only the variable can find the maps
+    monkeypatch.setenv(MOVINGAI_ENV, str(d))
+    env = gym.make("SamplerGym/RRT-MovingAI-v0")
+    env.reset(seed=0)
+    assert env.unwrapped.source.directory == d
+
+
+@pytest.mark.parametrize("name, value", [
+    ("checks_weight", float("nan")), ("checks_weight", -1.0), ("checks_weight", float("inf")),
+    ("step_size", float("nan")), ("step_size", 0.0), ("uniform_floor", float("nan")), ("uniform_floor", 5.0),
+    ("uniform_floor", -1.0), ("reach", float("nan")), ("shaping_gamma", float("nan")), ("shaping_gamma", 2.0),
+    ("checks_weight", "0.1"), ("max_iterations", -5), ("max_iterations", True),
+])
+def test_bad_numeric_kwargs_are_refused_by_name(name, value):
+    with pytest.raises(InputError, match=name):
+        SamplerEnv("forest", reward="checks", **{name: value})
+
+
+@pytest.mark.parametrize("action", ["3", None, 3.5, [1, 2], np.nan, True, "abc"])
+def test_bad_guided_actions_name_the_action_and_space(action):
+    env = SamplerEnv("forest", action_mode="guided", observation="egocentric")
+    env.reset(seed=0)
+    with pytest.raises(InputError, match=r"guided action.*Discrete\(177\)"):
+        env.step(action)
+    env.step(np.int64(3))  # the env is still usable
+
+
+@pytest.mark.parametrize("action", ["3", None, "ab", [0.1], [[0.1, 0.2]], [np.nan, 0.0], [0.1, None]])
+def test_bad_box_actions_name_the_action_and_space(action):
+    env = SamplerEnv("forest", action_mode="point")
+    env.reset(seed=0)
+    with pytest.raises(InputError, match=r"action.*Box\(-1, 1, \(2,\)"):
+        env.step(action)
+
+
+@pytest.mark.parametrize("end", ["terminated", "truncated"])
+def test_stepping_after_the_episode_ended_is_refused_alike(end):
+    env = SamplerEnv("forest", max_iterations=5 if end == "truncated" else 2000, action_mode="bias")
+    env.reset(seed=0)
+    for _ in range(2000):
+        _, _, term, trunc, _ = env.step(np.full(1, -0.8, np.float32))  # goal bias 0.1
+        if term or trunc:
+            break
+    assert (term, trunc) == ((True, False) if end == "terminated" else (False, True))
+    iterations = env.planner.iterations
+    with pytest.raises(RuntimeError, match="call reset"):
+        env.step(np.ones(1, np.float32))
+    assert env.planner.iterations == iterations
+    env.reset(seed=0)
+    env.step(np.ones(1, np.float32))
