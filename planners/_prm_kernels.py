@@ -237,12 +237,13 @@ def build_csr(edges, n, ne):
 
 
 @nb.njit(cache=True)
-def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid):
+def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True):
     """Shortest path src -> dst as (vertex indices, edge indices); empty arrays if none.
 
     Follows edges that are valid (``only_valid``) or not known invalid, between vertices not known
     invalid, reading the statuses live so one adjacency serves a whole lazy search. The heuristic
-    is the metric distance to ``dst`` (admissible: edges are straight).
+    is the metric distance to ``dst`` (admissible: edges are straight); ``heuristic=False`` makes
+    the search Dijkstra's (same path length, more vertices expanded).
     """
     deg, adj_v, adj_e = csr
     kind, metric, rw = space
@@ -254,7 +255,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid):
     hf = np.empty(deg[n] + 1)
     hv = np.empty(deg[n] + 1, dtype=np.int64)
     g[src] = 0.0
-    hf[0] = distance(kind, metric, rw, X[src], X[dst])
+    hf[0] = distance(kind, metric, rw, X[src], X[dst]) if heuristic else 0.0
     hv[0] = src
     hn = 1
     while hn > 0:
@@ -294,7 +295,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid):
                 g[u] = nd
                 via_v[u] = v
                 via_e[u] = e
-                f = nd + distance(kind, metric, rw, X[u], X[dst])
+                f = nd + distance(kind, metric, rw, X[u], X[dst]) if heuristic else nd
                 i = hn
                 hn += 1
                 while i > 0:
@@ -325,9 +326,10 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid):
 
 
 @nb.njit(cache=True)
-def astar(store, edges, vstat, n, ne, src, dst, space, only_valid):
+def astar(store, edges, vstat, n, ne, src, dst, space, only_valid, heuristic=True):
     """``astar_csr`` over a freshly built adjacency of the roadmap."""
-    return astar_csr(store[0], build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid)
+    return astar_csr(store[0], build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid,
+                     heuristic)
 
 
 @nb.njit(cache=True)

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import abc
+import threading
 import time
 from dataclasses import dataclass
 from typing import ClassVar, NamedTuple
 
 import numpy as np
+from numba.core import event as _nb_event
 
 from planners import _rrt_kernels as K
 from planners._space import embed_dim, uses_kd
@@ -18,6 +20,50 @@ from planners.samplers import SampleBatch, Sampler, UniformSampler
 CHUNK = 1024
 #: Size of the first sample refill; refills double up to CHUNK, so short solves draw few samples.
 FIRST_REFILL = 64
+#: Under a time limit, one compiled call is sized from the measured time per sample (growing at most
+#: twofold) to end by the deadline and to last at most this many seconds, so the deadline is looked
+#: at every TIME_SLICE seconds at least, and overrun by about one iteration (an iteration can be slow:
+#: long 6-DoF motion checks, a dense roadmap) or one Lazy-PRM search round.
+TIME_SLICE = 0.05
+
+
+class _CompileClock(threading.local):
+    depth = 0
+    since = 0.0
+    total = 0.0
+
+
+_clock = _CompileClock()
+
+
+class _CompileTimer(_nb_event.Listener):
+    """Adds up, per thread, the time spent holding numba's compiler lock (compiling or loading cached code)."""
+
+    def on_start(self, event) -> None:
+        if _clock.depth == 0:
+            _clock.since = time.perf_counter()
+        _clock.depth += 1
+
+    def on_end(self, event) -> None:
+        if _clock.depth == 0:  # a compilation already under way when this module was imported
+            return
+        _clock.depth -= 1
+        if _clock.depth == 0:
+            _clock.total += time.perf_counter() - _clock.since
+
+
+# the lock is taken for every compilation and cache load, nested ones included (it is re-entrant)
+_nb_event.register("numba:compiler_lock", _CompileTimer())
+
+
+def compile_seconds() -> float:
+    """Seconds this thread has spent so far in numba's compiler (compiling or loading cached code).
+
+    Time limits exclude it: the one-off compilation of a kernel says nothing about a planner's speed,
+    and it happens whenever a kernel first meets new argument types (a first solve, a first solution,
+    a new world kind), so no warm-up could cover every case.
+    """
+    return _clock.total + (time.perf_counter() - _clock.since if _clock.depth else 0.0)
 
 
 @dataclass(frozen=True)
@@ -36,7 +82,8 @@ class PlanResult:
         candidates: Raw candidates behind the consumed samples (equals ``iterations`` unless the
             sampler rejects candidates).
         num_vertices: Vertices in the tree(s) or roadmap.
-        time: Wall-clock seconds spent inside ``step``/``solve`` so far.
+        time: Wall-clock seconds spent inside ``step``/``solve`` so far, one-off numba compilation
+            included (``Planner.compile_time`` says how much; time limits leave it out).
         stop_reason: "solved", "max_iterations" or "time_limit".
         planner: Planner name.
         seed: The seed that reproduces this run.
@@ -210,6 +257,12 @@ class Planner(abc.ABC):
         self._pos = 0
         self._refills = 0
         self._time = 0.0
+        self._compile = 0.0
+        # under a time limit: seconds the current compiled call may take (None: untimed), and the
+        # speed measured on the last call, which sizes the next
+        self._call_budget: float | None = None
+        self._sample_s: float | None = None
+        self._last_used = 0
         self._candidates = 0
         self._stop_reason = "max_iterations"
         self._istate = np.zeros(K.N_ISTATE, dtype=np.int64)
@@ -224,12 +277,13 @@ class Planner(abc.ABC):
 
     def step(self) -> StepResult:
         """Run exactly one iteration (one sample drawn); a no-op once a non-anytime planner is solved."""
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), compile_seconds()
         if self._finished():
             return StepResult(False, self.iterations, self._last.copy(), -1, True)
         before = self.iterations
         while self.iterations == before and not self._finished():
             self._consume(1)  # no sample is drawn while a Lazy-PRM resolution is still pending
+        self._compile += compile_seconds() - c0
         self._time += time.perf_counter() - t0
         return StepResult(True, self.iterations, self._last.copy(), int(self._istate[K.I_ADDED]), self.solved)
 
@@ -238,9 +292,17 @@ class Planner(abc.ABC):
 
         Budgets count from this call, so calling ``solve`` again resumes where it stopped.
 
+        The time limit excludes one-off numba compilation (``compile_time``) and holds within a
+        stated margin whatever the input: compiled work is handed out in calls sized by the measured
+        speed to end by the deadline and to last at most ``TIME_SLICE`` (0.05 s), so a solve returns
+        at most about ``TIME_SLICE`` after ``time_limit`` (measured speed can be off by a factor of
+        two), or one iteration or one Lazy-PRM search round after it where that is longer (a
+        millisecond or so on 2-D maps), plus the time ``result()`` takes to extract the path. How
+        the work is split never changes the result: a timed run ends as the same iterations untimed.
+
         Args:
             max_iterations: Iterations (samples) this call may use.
-            time_limit: Seconds this call may use.
+            time_limit: Seconds this call may use, compilation excluded.
         """
         if max_iterations is None and time_limit is None:
             raise ValueError("give max_iterations or time_limit (or both)")
@@ -252,24 +314,53 @@ class Planner(abc.ABC):
             time_limit = float(time_limit)
             if not np.isfinite(time_limit) or time_limit <= 0:
                 raise ValueError(f"time_limit must be a positive number of seconds, got {time_limit}")
-        t0 = time.perf_counter()
-        deadline = None if time_limit is None else t0 + time_limit
+        t0, c0 = time.perf_counter(), compile_seconds()
         budget = np.inf if max_iterations is None else int(max_iterations)
         done = 0
-        while True:
-            if self._finished():
-                reason = "solved"
-                break
-            if done >= budget:
-                reason = "max_iterations"
-                break
-            if deadline is not None and time.perf_counter() >= deadline:
-                reason = "time_limit"
-                break
-            done += self._consume(int(min(budget - done, CHUNK)))
-        self._time += time.perf_counter() - t0
+        try:
+            while True:
+                if self._finished():
+                    reason = "solved"
+                    break
+                if done >= budget:
+                    reason = "max_iterations"
+                    break
+                chunk = CHUNK
+                if time_limit is not None:
+                    left = time_limit - (time.perf_counter() - t0 - (compile_seconds() - c0))
+                    if left <= 0:
+                        reason = "time_limit"
+                        break
+                    self._call_budget = min(left, TIME_SLICE)
+                    chunk = self._timed_chunk(self._call_budget)
+                t_call, c_call = time.perf_counter(), compile_seconds()
+                used = self._consume(int(min(budget - done, chunk)))
+                done += used
+                if time_limit is not None:
+                    spent = time.perf_counter() - t_call - (compile_seconds() - c_call)
+                    self._sample_s, self._last_used = spent / max(used, 1), used
+        finally:
+            self._call_budget = None
+            self._compile += compile_seconds() - c0
+            self._time += time.perf_counter() - t0
         self._stop_reason = reason
         return self.result()
+
+    def _timed_chunk(self, room: float) -> int:
+        """Samples for the next compiled call under a time limit: what fits ``room`` seconds at the measured speed."""
+        # at most doubling: a few cheap samples say little about the next ones. How the samples are
+        # split between calls never changes the result, only when the deadline is looked at
+        grow = min(CHUNK, 2 * max(self._last_used, 1))
+        if self._sample_s is None:
+            return 1
+        if self._sample_s <= 0:
+            return grow
+        return int(min(grow, max(1.0, room / self._sample_s)))
+
+    @property
+    def compile_time(self) -> float:
+        """Seconds of one-off numba compilation inside ``step``/``solve`` so far (in ``time``, not in time limits)."""
+        return self._compile
 
     def result(self) -> PlanResult:
         """The current result (what the last ``solve`` returned, updated by any later ``step``)."""

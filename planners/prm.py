@@ -9,7 +9,16 @@ import numpy as np
 
 from planners import _prm_kernels as KP
 from planners import _rrt_kernels as K
-from planners.planner import CHUNK, Planner, PlannerData, PlanResult, VertexStore, require_problem
+from planners.planner import (
+    CHUNK,
+    TIME_SLICE,
+    Planner,
+    PlannerData,
+    PlanResult,
+    VertexStore,
+    compile_seconds,
+    require_problem,
+)
 from planners.problem import Problem
 from planners.rrtstar import unit_ball_volume
 from planners.samplers import Sampler
@@ -19,7 +28,8 @@ DEFAULT_K = 10
 
 
 #: Searches per lazy resolution call: bounds the work between two looks at the caller's time limit
-#: (a huge roadmap with many invalid edges can need thousands of searches).
+#: (a huge roadmap with many invalid edges can need thousands of searches). Under a time limit a
+#: call makes only as many as fit the call's time slice, by the measured time per search.
 LAZY_ROUNDS = 64
 
 class PRM(Planner):
@@ -29,8 +39,8 @@ class PRM(Planner):
     ``k`` nearest vertices (``connection="knn"``) or to all vertices within a radius
     (``connection="radius"``: ``radius`` if given, else the shrinking PRM* radius), keeping only
     collision-free edges. The query is solved once start and goal share a connected component; the
-    path is the shortest roadmap path (A*) and ends exactly at the goal. ``iterations`` counts the
-    samples drawn until then.
+    path is the shortest roadmap path (A*, or Dijkstra with ``search="dijkstra"``) and ends exactly
+    at the goal. ``iterations`` counts the samples drawn until then.
 
     Multi-query: ``grow(n)`` adds samples regardless of any query, ``query(start, goal)`` answers a
     new query on the existing roadmap (growing it only if needed), ``clear()`` forgets everything.
@@ -49,6 +59,8 @@ class PRM(Planner):
             ``gamma (log n / n)^(1/d)``.
         sampler: Where to sample; default uniform.
         seed: Seed of the planner's generator.
+        search: Shortest-path search on the roadmap: ``"astar"`` or ``"dijkstra"`` (same path
+            length; Lazy-PRM always uses A*).
     """
 
     name = "PRM"
@@ -56,8 +68,12 @@ class PRM(Planner):
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, k: int = DEFAULT_K,
                  connection: str = "knn", radius: float | None = None, sampler: Sampler | None = None,
-                 seed: int | None = None) -> None:
+                 seed: int | None = None, search: str = "astar") -> None:
         require_problem(problem)
+        if search not in (("astar",) if self.lazy else ("astar", "dijkstra")):
+            allowed = "'astar'" if self.lazy else "'astar' or 'dijkstra'"
+            raise ValueError(f"search must be {allowed} for {self.name}, got {search!r}")
+        self.search = search
         if connection not in ("knn", "radius"):
             raise ValueError(f"connection must be 'knn' or 'radius', got {connection!r}")
         if connection == "knn" and (isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1):
@@ -88,6 +104,8 @@ class PRM(Planner):
         self._nbr_d = np.empty(self._store.capacity)
         self._qe = np.empty(self._store.edim)
         self._lazy_path: np.ndarray | None = None
+        self._round_s: float | None = None  # measured seconds per lazy search round (timed solves)
+        self._rounds = 1
         self._iter0 = 0
         self._growing = False
         self._start_query()
@@ -159,11 +177,18 @@ class PRM(Planner):
         if self.solved or not self._joined():
             return
         if self.lazy:
+            rounds = LAZY_ROUNDS
+            if self._call_budget is not None:  # timed: as many rounds as fit the slice, at most doubling
+                rounds = 1 if self._round_s is None else int(
+                    max(1, min(LAZY_ROUNDS, 2 * self._rounds, self._call_budget / max(self._round_s, 1e-9))))
+            t0, c0 = time.perf_counter(), compile_seconds()
             path = KP.lazy_resolve(self._store.as_tuple(), self._edges, self._uf, self._vstat, self._istate,
-                                   self._fstate, self.problem.world.kernel, self._space, self._goal,
-                                   LAZY_ROUNDS)
+                                   self._fstate, self.problem.world.kernel, self._space, self._goal, rounds)
             if len(path):
                 self._lazy_path = path
+            elif self._joined():  # every round was used: an exact time per round
+                self._round_s = (time.perf_counter() - t0 - (compile_seconds() - c0)) / rounds
+                self._rounds = rounds
         else:
             self._istate[K.I_SOLVED] = 1
             if self._istate[K.I_FIRST] < 0:
@@ -182,7 +207,7 @@ class PRM(Planner):
     def _shortest(self, only_valid: bool) -> tuple[np.ndarray, np.ndarray]:
         return KP.astar(self._store.as_tuple(), self._edges, self._vstat, int(self._istate[K.I_N]),
                         int(self._istate[KP.I_E]), int(self._istate[KP.I_QS]), int(self._istate[KP.I_QG]),
-                        self._space, only_valid)
+                        self._space, only_valid, self.search == "astar")
 
     def _path(self) -> np.ndarray:
         verts = self._lazy_path if self.lazy else self._shortest(only_valid=True)[0]
@@ -218,7 +243,12 @@ class PRM(Planner):
         self.sampler = self._sampler_spec.bind(self.problem)
         self._buf_pts = self._buf_pts[:0]
         self._pos = 0
-        self._start_query()
+        if time_limit is not None:  # the first lazy search rounds run here, before solve's clock
+            self._call_budget = min(float(time_limit), TIME_SLICE) if float(time_limit) > 0 else None
+        try:
+            self._start_query()
+        finally:
+            self._call_budget = None
         if self.solved or (max_iterations == 0 and time_limit is None):
             return self.result()
         return self.solve(max_iterations=max_iterations, time_limit=time_limit)

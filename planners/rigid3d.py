@@ -12,7 +12,9 @@ travels more than ``delta`` (the travel of a point is bounded by ``|dt| + r (|dt
 every point of the continuous motion then lies within ``delta / 2`` of a checked position, so it
 touches no obstacle (see ``planners._rigid_kernels``). Motions passing closer than ``delta / 2`` to an
 obstacle are rejected (conservative). What the point model cannot see is an obstacle slipping between
-two body points; use a denser body (``box_body(..., spacing=...)``) where that matters.
+two body points; use a denser body (``box_body(..., spacing=...)``) where that matters. A ``delta``
+that would cut the world's longest motion into more than ``MAX_MOTION_POSES`` poses is refused: it
+bounds the work of one check, and so how late a planner notices its time limit.
 
 Distances (``Problem.metric``): ``"cossin"`` (default) is the Euclidean distance on
 ``(x, y, z, cos tx, sin tx, cos ty, sin ty, cos tz, sin tz)``; ``"se3"`` is the translation distance
@@ -23,6 +25,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,14 +35,31 @@ import numpy as np
 from planners import _geometry, _rigid_kernels
 from planners._rigid_kernels import body_points_world
 from planners._space import SPACE_RIGID, interpolate
+from planners.fileio import InputError, atomic_write_text
 from planners.problem import Problem
 from planners.world import WorldBase
 
 #: The scene shipped with the package (see ``load_scene`` for the format).
 EXAMPLE_SCENE = Path(__file__).resolve().parent / "scenes" / "example.scene"
+#: The seed project's kind of scene: a box flies from one room to the other through a window; both
+#: ``SETUPS`` solve it (``tests/test_rigid3d.py`` checks seeds 0 to 4).
+WINDOW_SCENE = Path(__file__).resolve().parent / "scenes" / "window.scene"
+
+#: The seed project's two planning set-ups, for ``setup_planner`` and ``scripts/plan3d.py``.
+SETUPS = ("prm", "rrt")
+#: PRM set-up: samples in the roadmap, nearest neighbours per sample, roadmap search.
+PRM_SETUP = {"samples": 5000, "k": 3, "search": "dijkstra"}
+#: RRT set-up: step as a fraction of the workspace's longest side, goal distance, goal bias, iteration cap.
+RRT_SETUP = {"step_fraction": 0.01, "goal_distance": 1.0, "goal_bias": 0.05, "max_iterations": 20000}
 
 #: Default resolution of motion checks (world units a body point may travel per checked piece).
 DEFAULT_DELTA = 0.05
+
+#: The most poses one motion check may test: a world whose ``delta`` would cut its longest possible
+#: motion (the workspace diagonal plus a half turn about each axis, ``diagonal + 3 pi r``) into more
+#: pieces is refused. This bounds the work of one check (0.4 us per pose for a 16-point body among six
+#: boxes: about 40 ms at the limit), and so how late a planner can notice its time limit.
+MAX_MOTION_POSES = 100_000
 
 
 def rotation_matrix(tx: float, ty: float, tz: float) -> np.ndarray:
@@ -81,7 +101,7 @@ def box_body(lx: float, ly: float, lz: float, points: int = 16, spacing: float |
     """
     sides = np.array([lx, ly, lz], dtype=np.float64)
     if sides.shape != (3,) or not np.all(np.isfinite(sides)) or np.any(sides <= 0):
-        raise ValueError(f"box_body side lengths must be positive finite numbers, got {(lx, ly, lz)}")
+        raise InputError(f"box_body side lengths must be positive finite numbers, got {(lx, ly, lz)}")
     h = 0.5 * sides
     corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=np.float64) * h
     # the 12 edges: pairs of corners differing in one coordinate, grouped by the axis they run along
@@ -91,7 +111,7 @@ def box_body(lx: float, ly: float, lz: float, points: int = 16, spacing: float |
     if spacing is not None:
         spacing = float(spacing)
         if not (math.isfinite(spacing) and spacing > 0):
-            raise ValueError(f"spacing must be a positive finite number, got {spacing}")
+            raise InputError(f"spacing must be a positive finite number, got {spacing}")
         fracs_by_axis = {a: np.arange(1, max(1, math.ceil(sides[a] / spacing))) / max(1, math.ceil(sides[a] / spacing))
                          for a in range(3)}
         chosen = [(a, e, fracs_by_axis[a]) for a in range(3) for e in edges[a]]
@@ -103,7 +123,7 @@ def box_body(lx: float, ly: float, lz: float, points: int = 16, spacing: float |
     elif points == 20:
         chosen = [(a, e, np.array([0.5])) for a in range(3) for e in edges[a]]
     else:
-        raise ValueError(f"points must be 8, 16 or 20 (or give spacing=), got {points!r}")
+        raise InputError(f"points must be 8, 16 or 20 (or give spacing=), got {points!r}")
     extra = [corners[i] + t * (corners[j] - corners[i]) for _, (i, j), fr in chosen for t in fr]
     return np.concatenate([corners, np.array(extra).reshape(-1, 3)])
 
@@ -120,6 +140,7 @@ class RigidBodyWorld(WorldBase):
         delta: Motion-check resolution (> 0): the largest travel of a body point between checked
             positions; motions must keep a clearance of ``delta / 2`` (see the module docs). A state
             closer than that to an obstacle is valid (``is_valid``) but no motion out of it passes.
+            At least ``(diagonal + 3 pi r) / MAX_MOTION_POSES`` (``r`` the body radius).
         rot_weight: Weight of the rotation angle in the ``"se3"`` metric; default the body radius
             (the farthest a body point moves per radian).
     """
@@ -135,26 +156,33 @@ class RigidBodyWorld(WorldBase):
         hi = _vector(high, 3, "high")
         for j, ax in enumerate("xyz"):
             if not lo[j] < hi[j]:
-                raise ValueError(f"workspace bounds need low < high on every axis; "
+                raise InputError(f"workspace bounds need low < high on every axis; "
                                  f"on {ax}: low {lo[j]:g}, high {hi[j]:g}")
         self.boxes = _boxes(boxes)
         self.body = box_body(1.0, 0.5, 0.25) if body is None else _body(body)
         try:
             delta = float(delta)
         except (TypeError, ValueError):
-            raise ValueError(f"delta must be a positive number, got {delta!r}") from None
+            raise InputError(f"delta must be a positive number, got {delta!r}") from None
         if not (math.isfinite(delta) and delta > 0):
-            raise ValueError(f"delta must be a positive finite number, got {delta}")
+            raise InputError(f"delta must be a positive finite number, got {delta}")
+        with np.errstate(over="ignore"):  # a huge workspace or body gives inf here, refused just below
+            self.radius = float(np.linalg.norm(self.body, axis=1).max())
+            longest = float(np.linalg.norm(hi - lo)) + 3.0 * math.pi * self.radius
+        if not longest / delta <= MAX_MOTION_POSES:
+            raise InputError(f"delta {delta:g} is too fine for this world: its longest motion ({longest:.4g}: the "
+                             f"workspace diagonal plus a half turn about each axis) would be checked at "
+                             f"{longest / delta:.3g} poses, more than MAX_MOTION_POSES = {MAX_MOTION_POSES:,}; "
+                             f"use delta >= {longest / MAX_MOTION_POSES:.3g}")
         self.delta = delta
-        self.radius = float(np.linalg.norm(self.body, axis=1).max())
         if rot_weight is None:
             rot_weight = self.radius if self.radius > 0 else 1.0
         try:
             rot_weight = float(rot_weight)
         except (TypeError, ValueError):
-            raise ValueError(f"rot_weight must be a non-negative number, got {rot_weight!r}") from None
+            raise InputError(f"rot_weight must be a non-negative number, got {rot_weight!r}") from None
         if not (math.isfinite(rot_weight) and rot_weight >= 0):
-            raise ValueError(f"rot_weight must be a non-negative finite number, got {rot_weight}")
+            raise InputError(f"rot_weight must be a non-negative finite number, got {rot_weight}")
         self.rot_weight = rot_weight
         self.low3, self.high3 = lo, hi
         for a in (self.boxes, self.body, self.low3, self.high3):
@@ -230,9 +258,9 @@ def _vector(v, n: int, label: str) -> np.ndarray:
     try:
         a = np.array(v, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"{label} must be {n} numbers, got {v!r}") from None
+        raise InputError(f"{label} must be {n} numbers, got {v!r}") from None
     if a.shape != (n,) or not np.all(np.isfinite(a)):
-        raise ValueError(f"{label} must be {n} finite numbers, got {v!r}")
+        raise InputError(f"{label} must be {n} finite numbers, got {v!r}")
     return a
 
 
@@ -243,12 +271,12 @@ def _boxes(boxes) -> np.ndarray:
         try:
             r = np.array(row, dtype=np.float64)
         except (TypeError, ValueError):
-            raise ValueError(f"box {i} must be 6 numbers (x0, y0, z0, x1, y1, z1), got {b!r}") from None
+            raise InputError(f"box {i} must be 6 numbers (x0, y0, z0, x1, y1, z1), got {b!r}") from None
         if r.shape != (6,) or not np.all(np.isfinite(r)):
-            raise ValueError(f"box {i} must be 6 finite numbers (x0, y0, z0, x1, y1, z1), got {b!r}")
+            raise InputError(f"box {i} must be 6 finite numbers (x0, y0, z0, x1, y1, z1), got {b!r}")
         for j, ax in enumerate("xyz"):
             if r[3 + j] < r[j]:
-                raise ValueError(f"box {i}: {ax}1 ({r[3 + j]:g}) < {ax}0 ({r[j]:g}) in {tuple(r.tolist())}")
+                raise InputError(f"box {i}: {ax}1 ({r[3 + j]:g}) < {ax}0 ({r[j]:g}) in {tuple(r.tolist())}")
         rows.append(r)
     return np.array(rows, dtype=np.float64).reshape(-1, 6)
 
@@ -257,12 +285,51 @@ def _body(body) -> np.ndarray:
     try:
         b = np.array(body, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"body must be a (P, 3) array of points, got {body!r}") from None
+        raise InputError(f"body must be a (P, 3) array of points, got {body!r}") from None
     if b.ndim != 2 or b.shape[1] != 3 or len(b) == 0:
-        raise ValueError(f"body must be a (P, 3) array of points with P >= 1, got shape {b.shape}")
+        raise InputError(f"body must be a (P, 3) array of points with P >= 1, got shape {b.shape}")
     if not np.all(np.isfinite(b)):
-        raise ValueError("body points must be finite")
+        raise InputError("body points must be finite")
     return np.ascontiguousarray(b)
+
+
+# --- the seed project's planning set-ups -----------------------------------------------------------
+
+
+def setup_planner(problem: Problem, setup: str, *, seed: int = 0):
+    """The seed project's planner for a rigid-body problem, and its iteration budget.
+
+    Both plan on the ``cossin`` metric (Euclidean on ``(x, y, z, cos, sin of each angle)``), whatever
+    the problem's own metric.
+
+    * ``"prm"``: PRM with ``k = 3`` nearest neighbours, Dijkstra on the roadmap, 5,000 samples.
+    * ``"rrt"``: RRT with a step of 0.01 times the workspace's longest side, goal distance 1.0 (the
+      problem's goal tolerance is replaced), 5% goal bias, at most 20,000 iterations.
+
+    Args:
+        problem: A ``RigidBodyWorld`` problem.
+        setup: ``"prm"`` or ``"rrt"`` (``SETUPS``).
+        seed: Seed of the planner's generator.
+
+    Returns:
+        ``(planner, max_iterations)``; ``planner.solve(max_iterations=...)`` runs the set-up.
+    """
+    from planners.prm import PRM
+    from planners.rrt import RRT
+    from planners.samplers import GoalBiasedSampler
+
+    if not isinstance(problem, Problem) or not isinstance(problem.world, RigidBodyWorld):
+        raise TypeError(f"setup_planner needs a RigidBodyWorld problem, got {problem!r}")
+    if setup not in SETUPS:
+        raise InputError(f"setup must be one of {SETUPS}, got {setup!r}")
+    if setup == "prm":
+        p = problem.with_query(problem.start, problem.goal, metric="cossin")
+        return PRM(p, k=PRM_SETUP["k"], search=PRM_SETUP["search"], seed=seed), PRM_SETUP["samples"]
+    world = problem.world
+    p = problem.with_query(problem.start, problem.goal, metric="cossin", goal_tolerance=RRT_SETUP["goal_distance"])
+    step = RRT_SETUP["step_fraction"] * float(np.max(world.high3 - world.low3))
+    planner = RRT(p, step_size=step, sampler=GoalBiasedSampler(RRT_SETUP["goal_bias"]), seed=seed)
+    return planner, RRT_SETUP["max_iterations"]
 
 
 # --- dense interpolation -----------------------------------------------------------------------
@@ -275,7 +342,7 @@ def densify(path, problem: Problem, spacing: float) -> np.ndarray:
     """
     path = np.asarray(path, dtype=np.float64).reshape(-1, problem.dim)
     if not (math.isfinite(spacing) and spacing > 0):
-        raise ValueError(f"spacing must be a positive finite number, got {spacing}")
+        raise InputError(f"spacing must be a positive finite number, got {spacing}")
     kind = problem.space[0]
     out = [path[0]]
     q = np.empty(problem.dim)
@@ -290,11 +357,29 @@ def densify(path, problem: Problem, spacing: float) -> np.ndarray:
 # --- scenes --------------------------------------------------------------------------------------
 
 
+#: Plain decimal numbers only: Python's ``float`` also takes ``0_3`` (as 3.0), non-ASCII digits, ``nan``
+#: and ``inf``, none of which a scene file should mean.
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
+def _scene_lines(path: Path) -> list[tuple[int, str]]:
+    """``(line number, text)`` of every line; a line that is not UTF-8 is an InputError naming it."""
+    out = []
+    for lineno, raw in enumerate(path.read_bytes().split(b"\n"), start=1):
+        try:
+            out.append((lineno, raw.decode("utf-8")))
+        except UnicodeDecodeError as e:
+            raise InputError(f"{path}, line {lineno}: not UTF-8 text (byte 0x{raw[e.start]:02x} at column "
+                             f"{e.start + 1}); scene files are plain text") from None
+    return out
+
+
 def load_scene(path: str | os.PathLike) -> Problem:
     """Load a rigid-body planning problem from a text scene file.
 
-    One statement per line; ``#`` starts a comment; numbers are separated by spaces; angles are in
-    radians::
+    One statement per line; ``#`` starts a comment; numbers are plain decimals (``1``, ``-0.5``,
+    ``2.5e-3``) separated by spaces; angles are in radians::
 
         bounds x0 y0 z0 x1 y1 z1        # workspace (required, once)
         body box lx ly lz [points]      # a box body (box_body; points 8, 16 or 20, default 16), or
@@ -303,11 +388,13 @@ def load_scene(path: str | os.PathLike) -> Problem:
         start x y z tx ty tz            # required, once
         goal x y z tx ty tz             # required, once
         tolerance t                     # goal tolerance (optional, default 0.5)
-        delta d                         # motion-check resolution (optional, default 0.05)
+        delta d                         # motion-check resolution (optional, default 0.05; see
+                                        # MAX_MOTION_POSES for the finest allowed)
         rot_weight w                    # se3 rotation weight (optional, default the body radius)
         metric cossin|se3               # optional, default cossin
 
-    Errors name the file and the line. The problem's name is the file's stem.
+    The file is UTF-8 text. Every error is an ``InputError`` naming the file and the line. The
+    problem's name is the file's stem.
     """
     path = Path(path)
     if not path.is_file():
@@ -315,16 +402,15 @@ def load_scene(path: str | os.PathLike) -> Problem:
     spec: dict = {"boxes": [], "points": []}
     counts = {"bounds": 6, "box": 6, "point": 3, "start": 6, "goal": 6, "tolerance": 1, "delta": 1, "rot_weight": 1}
     once = ("bounds", "start", "goal", "tolerance", "delta", "rot_weight", "metric", "body")
-    lines = path.read_text(encoding="utf-8").splitlines()
     where = {}
-    for lineno, raw in enumerate(lines, start=1):
+    for lineno, raw in _scene_lines(path):
         line = raw.split("#", 1)[0].strip()
         if not line:
             continue
         key, *args = line.split()
 
         def fail(msg: str, lineno=lineno) -> None:
-            raise ValueError(f"{path}, line {lineno}: {msg}")
+            raise InputError(f"{path}, line {lineno}: {msg}")
 
         if key in once and key in where:
             fail(f"{key!r} given twice (first on line {where[key]})")
@@ -337,6 +423,9 @@ def load_scene(path: str | os.PathLike) -> Problem:
         if key == "body":
             if not args or args[0] != "box" or len(args) not in (4, 5):
                 fail(f"expected 'body box lx ly lz [points]', got {line!r}")
+            bad = [v for v in args[1:4] if not _NUMBER.fullmatch(v)]
+            if bad or (len(args) == 5 and not _INTEGER.fullmatch(args[4])):
+                fail(f"'body box' takes three plain decimal numbers and an optional integer, got {line!r}")
             try:
                 dims = [float(v) for v in args[1:4]]
                 npts = int(args[4]) if len(args) == 5 else 16
@@ -348,10 +437,10 @@ def load_scene(path: str | os.PathLike) -> Problem:
             fail(f"unknown statement {key!r}; expected one of {sorted(set(counts) | {'metric', 'body'})}")
         if len(args) != counts[key]:
             fail(f"{key!r} takes {counts[key]} numbers, got {len(args)}: {line!r}")
-        try:
-            vals = [float(v) for v in args]
-        except ValueError:
-            fail(f"non-numeric value in {line!r}")
+        bad = [v for v in args if not _NUMBER.fullmatch(v)]
+        if bad:
+            fail(f"non-numeric value {bad[0]!r} in {line!r} (expected a plain decimal number such as 0.3 or 1e-2)")
+        vals = [float(v) for v in args]
         if not all(math.isfinite(v) for v in vals):
             fail(f"non-finite value in {line!r}")
         if key == "box":
@@ -362,26 +451,27 @@ def load_scene(path: str | os.PathLike) -> Problem:
             spec[key] = vals if counts[key] > 1 else vals[0]
     for key in ("bounds", "start", "goal"):
         if key not in spec:
-            raise ValueError(f"{path}: missing required {key!r} line")
+            raise InputError(f"{path}: missing required {key!r} line")
     if "body" in spec and spec["points"]:
-        raise ValueError(f"{path}, line {where['point']}: give either a 'body box' line or 'point' lines, not both")
+        raise InputError(f"{path}, line {where['point']}: give either a 'body box' line or 'point' lines, not both")
     body = spec.get("body", np.array(spec["points"]) if spec["points"] else None)
     for lineno, b in spec["boxes"]:
         try:
             _boxes([b])
         except ValueError as e:
-            raise ValueError(f"{path}, line {lineno}: {e}") from None
+            raise InputError(f"{path}, line {lineno}: {e}") from None
     try:
         world = RigidBodyWorld([b for _, b in spec["boxes"]], body, low=spec["bounds"][:3], high=spec["bounds"][3:],
                                delta=spec.get("delta", DEFAULT_DELTA), rot_weight=spec.get("rot_weight"))
     except ValueError as e:
-        raise ValueError(f"{path}, line {where.get('bounds')}: {e}") from None
+        label = next((k for k in ("delta", "rot_weight", "point") if str(e).startswith(k)), "bounds")
+        raise InputError(f"{path}, line {where.get(label, where.get('bounds'))}: {e}") from None
     try:
         return Problem(world, spec["start"], spec["goal"], goal_tolerance=spec.get("tolerance", 0.5),
                        metric=spec.get("metric"), name=path.stem)
     except ValueError as e:
         label = "start" if str(e).startswith("start") else "goal" if str(e).startswith("goal") else "tolerance"
-        raise ValueError(f"{path}, line {where.get(label, where.get('start'))}: {e}") from None
+        raise InputError(f"{path}, line {where.get(label, where.get('start'))}: {e}") from None
 
 
 def save_scene(problem: Problem, path: str | os.PathLike) -> Path:
@@ -401,8 +491,7 @@ def save_scene(problem: Problem, path: str | os.PathLike) -> Path:
             f"tolerance {problem.goal_tolerance!r}", f"delta {world.delta!r}", f"rot_weight {world.rot_weight!r}",
             f"metric {problem.metric}"]
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(out) + "\n", encoding="utf-8")
+    atomic_write_text(path, "\n".join(out) + "\n")
     return path
 
 
@@ -438,16 +527,16 @@ def random_scene(seed: int, n_boxes: int = 30, *, size: float = 10.0, body=None,
         metric: ``"cossin"`` (default) or ``"se3"``.
     """
     if isinstance(n_boxes, bool) or not isinstance(n_boxes, (int, np.integer)) or n_boxes < 0:
-        raise ValueError(f"n_boxes must be a non-negative integer, got {n_boxes!r}")
+        raise InputError(f"n_boxes must be a non-negative integer, got {n_boxes!r}")
     size = float(size)
     if not (math.isfinite(size) and size > 0):
-        raise ValueError(f"size must be a positive finite number, got {size}")
+        raise InputError(f"size must be a positive finite number, got {size}")
     s = size / 10.0
     rng = np.random.default_rng(seed)
     body = box_body(1.0 * s, 0.5 * s, 0.25 * s) if body is None else body
     lo_side, hi_side = (float(v) * s for v in box_size)
     if not (0 < lo_side <= hi_side):
-        raise ValueError(f"box_size must be (low, high) with 0 < low <= high, got {box_size}")
+        raise InputError(f"box_size must be (low, high) with 0 < low <= high, got {box_size}")
     boxes = []
     for _ in range(int(n_boxes)):
         side = rng.uniform(lo_side, hi_side, 3)
@@ -472,11 +561,11 @@ def thin_wall_scene(thickness: float = 0.01, hole: float = 1.6, *, size: float =
     """
     thickness, hole, size = float(thickness), float(hole), float(size)
     if not (math.isfinite(thickness) and thickness > 0):
-        raise ValueError(f"thickness must be a positive finite number, got {thickness}")
+        raise InputError(f"thickness must be a positive finite number, got {thickness}")
     if not (math.isfinite(size) and size > 0):
-        raise ValueError(f"size must be a positive finite number, got {size}")
+        raise InputError(f"size must be a positive finite number, got {size}")
     if not (math.isfinite(hole) and 0 < hole < size):
-        raise ValueError(f"hole must lie in (0, size={size:g}), got {hole}")
+        raise InputError(f"hole must lie in (0, size={size:g}), got {hole}")
     m = size / 2
     x0, x1 = m - thickness / 2, m + thickness / 2
     h0, h1 = m - hole / 2, m + hole / 2

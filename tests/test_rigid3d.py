@@ -368,12 +368,37 @@ GOOD = ["bounds 0 0 0 10 10 10", "body box 1 0.5 0.25", "box 4 4 4 6 6 6", "star
     ("metric euclid", 7, "metric must be one of"),
     ("body box 1 1 1 12", 7, "'body' given twice"),
     ("point 0 0 0", 7, "either a 'body box' line or 'point' lines"),
-    ("delta -1", 2, "delta must be a positive"),
+    ("delta -1", 7, "delta must be a positive"),
+    ("tolerance 0_3", 7, "non-numeric value '0_3'"),
+    ("tolerance \u0660.\u0663", 7, "non-numeric value"),
+    ("tolerance nan", 7, "non-numeric value 'nan'"),
+    ("delta 1e-9", 7, "delta 1e-09 is too fine for this world"),
 ])
 def test_bad_scene_files_name_file_and_line(tmp_path, line, lineno, message):
+    from planners.fileio import InputError
+
     path = tmp_path / "bad.scene"
-    path.write_text("\n".join(["# a comment", *GOOD, line]) + "\n")
-    with pytest.raises(ValueError, match=rf"bad\.scene, line {lineno}: .*{message}"):
+    path.write_text("\n".join(["# a comment", *GOOD, line]) + "\n", encoding="utf-8")
+    with pytest.raises(InputError, match=rf"bad\.scene, line {lineno}: .*{message}"):
+        load_scene(path)
+
+
+def test_scene_files_that_are_not_utf8_name_file_and_line(tmp_path):
+    from planners.fileio import InputError
+
+    path = tmp_path / "latin.scene"
+    text = "\n".join(["# a comment", *GOOD[:2], "# caf\u00e9 wall", *GOOD[2:]]) + "\n"
+    path.write_bytes(text.encode("latin-1"))
+    with pytest.raises(InputError, match=r"latin\.scene, line 4: not UTF-8 text \(byte 0xe9 at column 6\)"):
+        load_scene(path)
+    path.write_bytes(text.encode("utf-16"))
+    with pytest.raises(InputError, match=r"latin\.scene, line 1: not UTF-8"):
+        load_scene(path)
+    path.write_bytes(text.encode("utf-8"))  # non-ASCII in a comment is fine when the file is UTF-8
+    assert load_scene(path).world.boxes.shape == (1, 6)
+    # float() and int() read other scripts' digits; a scene file does not
+    path.write_text("\n".join([GOOD[0], "body box 1 0.5 0.25 \uff11\uff16", *GOOD[2:]]) + "\n", encoding="utf-8")
+    with pytest.raises(InputError, match=r"latin\.scene, line 2: 'body box' takes three plain decimal numbers"):
         load_scene(path)
 
 
@@ -442,3 +467,153 @@ def test_rigid_env_runs_with_vector_observations():
     env.reset(seed=0)
     assert np.array_equal(env.unwrapped.problem.start, first.start)
     env.close()
+
+
+# --- resolution bound and time limits ----------------------------------------------------------------
+
+
+def test_absurd_resolutions_are_refused():
+    from planners.fileio import InputError
+
+    w = load_scene(EXAMPLE_SCENE).world
+    # the example's longest motion: diagonal 15.36 plus 3 pi times the body radius 0.5728
+    with pytest.raises(InputError, match=r"delta 1e-05 is too fine for this world: .* use delta >= 0\.000208"):
+        RigidBodyWorld(w.boxes, w.body, low=w.low3, high=w.high3, delta=1e-5)
+    with pytest.raises(InputError, match="too fine"):  # a huge workspace at the default delta
+        RigidBodyWorld([], low=(0, 0, 0), high=(1e6, 1e6, 1e6))
+    assert RigidBodyWorld(w.boxes, w.body, low=w.low3, high=w.high3, delta=2.1e-4).delta == 2.1e-4
+
+
+def _finest_example():
+    from planners.rigid3d import MAX_MOTION_POSES
+
+    ex = load_scene(EXAMPLE_SCENE)
+    w = ex.world
+    longest = float(np.linalg.norm(w.high3 - w.low3)) + 3 * PI * w.radius
+    fine = RigidBodyWorld(w.boxes, w.body, low=w.low3, high=w.high3, delta=1.001 * longest / MAX_MOTION_POSES)
+    return Problem(fine, ex.start, ex.goal, goal_tolerance=ex.goal_tolerance)
+
+
+@pytest.mark.parametrize("make", [lambda p: PRM(p, k=3, seed=0), lambda p: RRTConnect(p, seed=0)],
+                         ids=["PRM", "RRTConnect"])
+def test_time_limit_holds_at_the_finest_resolution(make):
+    """Long motions at the finest delta cost tens of ms each; the time limit is still kept (issue 15.4)."""
+    import time
+
+    planner = make(_finest_example())
+    planner.solve(max_iterations=1)  # compile outside the timed run
+    planner.clear()
+    t0 = time.perf_counter()
+    r = planner.solve(time_limit=0.3)
+    elapsed = time.perf_counter() - t0
+    assert r.stop_reason == "time_limit" and not r.solved
+    # the documented margin: one timing slice (50 ms) plus one iteration (a few long checks), with slack
+    # for a loaded machine; before, PRM ran 2.6 s here
+    assert elapsed < 0.3 + 0.4, elapsed
+
+
+def test_a_time_limit_does_not_change_results():
+    """Under a time limit the samples are handed to compiled code in smaller calls: same results."""
+    problem = random_scene(1, 40)
+    for make in (lambda: PRM(problem, k=3, seed=2), lambda: RRT(problem, step_size=0.5, seed=2),
+                 lambda: RRTConnect(problem, step_size=0.5, seed=2)):
+        a = make().solve(max_iterations=3000)
+        b = make().solve(max_iterations=3000, time_limit=1e6)
+        assert (a.solved, a.iterations, a.collision_checks, a.num_vertices) == (
+            b.solved, b.iterations, b.collision_checks, b.num_vertices)
+        assert np.array_equal(a.path, b.path)
+
+
+# --- the seed project's set-ups -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("setup", ["prm", "rrt"])
+def test_seed_project_setups_solve_the_window_scene(setup):
+    from planners.rigid3d import WINDOW_SCENE, setup_planner
+
+    problem = load_scene(WINDOW_SCENE)
+    assert len(problem.world.body) == 16 and problem.metric == "cossin"
+    for seed in range(5):
+        planner, budget = setup_planner(problem, setup, seed=seed)
+        if setup == "prm":
+            assert (type(planner), planner.k, planner.search, budget) == (PRM, 3, "dijkstra", 5000)
+        else:
+            side = float(np.max(problem.world.high3 - problem.world.low3))
+            assert (type(planner), planner.step_size, budget) == (RRT, 0.01 * side, 20000)
+            assert planner.problem.goal_tolerance == 1.0
+        r = planner.solve(max_iterations=budget)
+        assert r.solved and r.iterations <= budget, (setup, seed)
+        assert np.array_equal(r.path[0], problem.start) and planner.problem.in_goal(r.path[-1])
+        assert fine_path_ok(problem.world, r.path), (setup, seed)
+        # the body really goes through the window: where its origin crosses the wall, it is in the window
+        dense = densify(r.path, problem, 0.05)
+        cross = np.flatnonzero(np.diff(np.sign(dense[:, 0] - 50.0)) != 0)
+        assert len(cross)
+        for i in cross:
+            assert 20 < dense[i, 1] < 40 and 10 < dense[i, 2] < 30, dense[i]
+    with pytest.raises(ValueError, match="setup must be one of"):
+        setup_planner(problem, "rrt*")
+
+
+def test_dijkstra_and_astar_find_equally_short_roadmap_paths():
+    from planners.rigid3d import WINDOW_SCENE
+
+    problem = load_scene(WINDOW_SCENE)
+    astar, dijkstra = PRM(problem, k=3, seed=0), PRM(problem, k=3, seed=0, search="dijkstra")
+    for prm in (astar, dijkstra):
+        prm.grow(3000)
+    rng = np.random.default_rng(0)
+    verts = astar.planner_data().vertices
+    assert np.array_equal(verts, dijkstra.planner_data().vertices)  # the same roadmap
+    solved = 0
+    for _ in range(20):
+        s, g = verts[rng.choice(len(verts), 2, replace=False)]
+        a, d = astar.query(s, g), dijkstra.query(s, g)
+        assert a.solved == d.solved
+        if a.solved:
+            solved += 1
+            assert d.cost == pytest.approx(a.cost, rel=1e-12)
+            assert np.array_equal(d.path[0], s) and np.array_equal(d.path[-1], g)
+    assert solved >= 12  # most pairs share the roadmap's giant component
+    with pytest.raises(ValueError, match="search must be 'astar' or 'dijkstra'"):
+        PRM(problem, search="bfs")
+    with pytest.raises(ValueError, match="search must be 'astar' for LazyPRM"):
+        LazyPRM(problem, search="dijkstra")
+
+
+def test_plan3d_script(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from planners.rigid3d import WINDOW_SCENE
+
+    script = Path(__file__).resolve().parents[1] / "scripts" / "plan3d.py"
+
+    def run(*args):
+        return subprocess.run([sys.executable, str(script), *map(str, args)], capture_output=True, text=True,
+                              timeout=300)
+
+    out = tmp_path / "prm"
+    proc = run(WINDOW_SCENE, "--setup", "prm", "--seed", "1", "--out", out, "--frames", "4")
+    assert proc.returncode == 0, proc.stderr
+    assert "solved:           True" in proc.stdout
+    assert sorted(p.name for p in out.iterdir()) == ["plan3d.gif", "plan3d.png"]  # no temporary files left
+    with Image.open(out / "plan3d.png") as img:
+        assert img.size[0] > 300
+    with Image.open(out / "plan3d.gif") as img:
+        assert img.n_frames >= 4
+    # not solved within the budget: the window is walled up; the figure is written, no GIF, exit 1
+    closed = tmp_path / "closed.scene"
+    closed.write_text(WINDOW_SCENE.read_text() + "box 49 20 10  51 40 30\n")
+    proc = run(closed, "--setup", "rrt", "--out", tmp_path / "rrt")
+    assert proc.returncode == 1, proc.stderr
+    assert sorted(p.name for p in (tmp_path / "rrt").iterdir()) == ["plan3d.png"]
+    # bad input: exit 2, an error naming the file and line, nothing written
+    bad = tmp_path / "bad.scene"
+    bad.write_text(WINDOW_SCENE.read_text().replace("tolerance 1.0", "tolerance 0_3"))
+    proc = run(bad, "--setup", "prm", "--out", tmp_path / "bad")
+    assert proc.returncode == 2 and "bad.scene, line" in proc.stderr and "0_3" in proc.stderr
+    assert not (tmp_path / "bad").exists()
+    proc = run(WINDOW_SCENE, "--setup", "prm", "--seed", "-1", "--out", tmp_path / "neg")
+    assert proc.returncode == 2 and "--seed" in proc.stderr
