@@ -2,20 +2,21 @@
 
 Imported on demand only (``import planners`` never loads matplotlib). Uses the object-oriented API
 with an Agg canvas, never pyplot, so it works without a display, in threads and in worker processes.
-Worlds are drawn in world coordinates with y growing downwards, as in images and MovingAI maps.
-Every file is written atomically: rendered to a hidden temporary file beside the target, then
-moved into place, so an exception or a crash never leaves a half-written file.
+Worlds are drawn in world coordinates over their true extent (a grid's origin and resolution), y
+growing downwards as in images and MovingAI maps, or upwards for grids with ``y_up`` (ROS maps).
+Every file is written atomically (``planners.fileio.atomic_path``): rendered to a hidden temporary
+file beside the target, then moved into place, so an exception or a crash never leaves a
+half-written file.
 """
 
 from __future__ import annotations
 
 import itertools
 import os
-import secrets
 import shutil
 import subprocess
 from collections.abc import Iterable, Iterator
-from contextlib import contextmanager, suppress
+from contextlib import suppress
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +28,7 @@ from matplotlib.patches import Circle as CirclePatch
 from matplotlib.patches import Polygon
 from matplotlib.patches import Rectangle as RectanglePatch
 
+from planners.fileio import atomic_path
 from planners.grid import OccupancyGrid
 from planners.planner import Planner, PlannerData, PlanResult
 from planners.problem import Problem
@@ -50,19 +52,63 @@ def new_figure(size: tuple[float, float] = (6.0, 6.0), dpi: float = 100, layout:
 
 
 def _extent(world) -> tuple[float, float]:
+    """Width and height of the world in world units."""
+    x0, x1, y0, y1 = world_box(world)
+    return x1 - x0, y1 - y0
+
+
+def world_box(world) -> tuple[float, float, float, float]:
+    """``(x0, x1, y0, y1)``: the world's bounds (a grid's origin to origin + size * resolution)."""
     if not isinstance(world, (OccupancyGrid, GeometricWorld)):
         raise TypeError(f"cannot draw a {type(world).__name__}: expected an OccupancyGrid or GeometricWorld")
-    w, h = world.bounds[1]
-    return float(w), float(h)
+    lo, hi = world.bounds
+    return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+
+
+def y_up(world) -> bool:
+    """True if the world is shown with y growing upwards (grids flagged ``y_up``, as ROS maps)."""
+    return bool(getattr(world, "y_up", False))
+
+
+def image_extent(world) -> tuple[float, float, float, float]:
+    """``imshow`` extent of an image whose row 0 is drawn at the top of the world's view.
+
+    Use with ``origin="upper"`` and an image from ``display_rows``.
+    """
+    x0, x1, y0, y1 = world_box(world)
+    return (x0, x1, y0, y1) if y_up(world) else (x0, x1, y1, y0)
+
+
+def display_rows(world, image: np.ndarray) -> np.ndarray:
+    """Rows of a per-cell image (row index growing with y) reordered top to bottom as shown."""
+    return image[::-1] if y_up(world) else image
+
+
+def world_to_pixels(world, points, size: tuple[int, int]) -> np.ndarray:
+    """(k, 2) world points as pixel coordinates of a (W, H) = ``size`` image of the world as shown."""
+    x0, x1, y0, y1 = world_box(world)
+    pts = np.asarray(points, dtype=np.float64)[:, :2]
+    px = (pts[:, 0] - x0) * (size[0] / (x1 - x0))
+    py = ((y1 - pts[:, 1]) if y_up(world) else (pts[:, 1] - y0)) * (size[1] / (y1 - y0))
+    return np.stack([px, py], axis=1)
+
+
+def set_world_view(ax, world) -> None:
+    """Fit the axes to the world: equal aspect, y downwards (images) or upwards (``y_up``)."""
+    x0, x1, y0, y1 = world_box(world)
+    ax.set_xlim(x0, x1)
+    ax.set_ylim((y0, y1) if y_up(world) else (y1, y0))
+    ax.set_aspect("equal")
 
 
 def draw_world(ax, world: OccupancyGrid | GeometricWorld) -> None:
-    """Draw a world's obstacles (dark) on white and fit the axes to it, y growing downwards."""
-    w, h = _extent(world)
+    """Draw a world's obstacles (dark) on white and fit the axes to it (see ``set_world_view``)."""
+    world_box(world)
     if isinstance(world, OccupancyGrid):
         # rgba-stage antialiasing keeps one-cell walls visible (grey) when a big map is shrunk
-        ax.imshow(world.obstacles, cmap=ListedColormap(["white", OBSTACLE_COLOR]), vmin=0, vmax=1,
-                  origin="upper", extent=(0, w, h, 0), interpolation="auto", interpolation_stage="rgba", zorder=0)
+        ax.imshow(display_rows(world, world.obstacles), cmap=ListedColormap(["white", OBSTACLE_COLOR]), vmin=0,
+                  vmax=1, origin="upper", extent=image_extent(world), interpolation="auto",
+                  interpolation_stage="rgba", zorder=0)
     else:
         ax.set_facecolor("white")
         for ob in world.obstacles:
@@ -71,9 +117,7 @@ def draw_world(ax, world: OccupancyGrid | GeometricWorld) -> None:
             else:
                 ax.add_patch(RectanglePatch((ob.x0, ob.y0), ob.x1 - ob.x0, ob.y1 - ob.y0, facecolor=OBSTACLE_COLOR,
                                             edgecolor="none", zorder=0))
-    ax.set_xlim(0, w)
-    ax.set_ylim(h, 0)
-    ax.set_aspect("equal")
+    set_world_view(ax, world)
 
 
 def _goal_region(problem: Problem):
@@ -182,22 +226,6 @@ def plot(problem: Problem, planner: Planner | None = None, result: PlanResult | 
     return ax.figure
 
 
-@contextmanager
-def _atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; on success move it to ``path``, else delete it."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # pid + random token: unique across threads and processes; the leading dot hides it from globs
-    tmp = path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
-    try:
-        yield tmp
-        with open(tmp, "rb+") as f:  # flushed to disk first, so a power cut cannot leave an empty file
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
 def save_figure(fig: Figure, path: str | os.PathLike, dpi: float = 150, **savefig_kw) -> Path:
     """Write a figure atomically; the format comes from the suffix (png, pdf, svg, ...).
 
@@ -206,7 +234,7 @@ def save_figure(fig: Figure, path: str | os.PathLike, dpi: float = 150, **savefi
     """
     path = Path(path)
     fmt = path.suffix.lstrip(".").lower() or "png"
-    with _atomic_path(path) as tmp:
+    with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=fmt, **savefig_kw)
     return path
 
@@ -245,7 +273,7 @@ def save_gif(frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float =
     if not fps > 0:
         raise ValueError(f"fps must be positive, got {fps}")
     images = (Image.fromarray(f) for f in _checked_frames(frames))
-    with _atomic_path(path) as tmp:
+    with atomic_path(path) as tmp:
         first = next(images)
         first.save(tmp, format="GIF", save_all=True, append_images=images, duration=round(1000 / fps), loop=loop)
     return Path(path)
@@ -266,7 +294,7 @@ def save_mp4(frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float =
     it = _checked_frames(frames)
     first = next(it)
     h, w = first.shape[:2]
-    with _atomic_path(path) as tmp:
+    with atomic_path(path) as tmp:
         # yuv420p (what players expect) needs even sides: pad by a pixel where needed
         cmd = [ffmpeg, "-hide_banner", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24",
                "-s", f"{w}x{h}", "-framerate", f"{fps:g}", "-i", "-", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",

@@ -1,15 +1,22 @@
-"""Plan a path on any picture map: a floor plan, a drawn map, a MovingAI .map or a .npy array.
+"""Plan a path on any map: a floor plan, a drawn map, a ROS map.yaml, a MovingAI .map or a .npy array.
 
     python scripts/plan.py floor.png --start 40 60 --goal 900 700
     python scripts/plan.py floor.png                        # double-click start, then goal, in a window
     python scripts/plan.py maze.png --start 5 5 --goal 1990 1990 --planner rrt --sampler goal-bias \\
         --goal-bias 0.1 --metric manhattan --step 25 --no-smooth --out results/maze --headless
+    python scripts/plan.py map.yaml --start 0.5 -1.2 --goal 2 1.5 --radius 0.1 --save-path path.csv
+    python scripts/plan.py floor.png --start 40 60 --goal 900 700 --sampler policy   # the learned sampler
 
-Dark pixels (gray below --threshold) are obstacles. Coordinates are pixels, x to the right and y
-downwards, as image viewers show them. Writes plan.png (map, tree or roadmap, raw and smoothed path)
-and plan.gif (the tree growing, then the path) under --out, and prints iterations, collision
-checks, time and path length. Exit status: 0 solved, 1 not solved within the budget, 2 bad input
-(nothing written).
+Dark pixels (gray below --threshold) are obstacles. Coordinates are the map's world units: for
+pictures, pixels with x to the right and y downwards, as image viewers show them; for a ROS
+map.yaml, metres in the map frame with y upwards, as RViz shows them. --radius inflates the
+obstacles by the robot's radius. Writes plan.png (map, tree or roadmap, raw and smoothed path) and
+plan.gif (the tree growing, then the path) under --out, optionally the path (--save-path), and
+prints iterations, collision checks, time and path length. Time limits exclude one-off numba
+compilation (the first run after an install compiles for a while; later runs load the compiled code).
+
+Exit status: 0 solved, 1 not solved within the budget, 2 bad input (nothing written), 3 an output
+could not be written (the message names it; no file is left half-written).
 """
 
 from __future__ import annotations
@@ -23,7 +30,24 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from planners.workflow import METRICS, PLANNERS, SAMPLERS, load_map, plan_on_image  # noqa: E402
+from planners.fileio import InputError  # noqa: E402
+from planners.workflow import (  # noqa: E402
+    METRICS,
+    PLANNERS,
+    SAMPLERS,
+    OutputError,
+    check_output_dir,
+    check_path_file,
+    load_map,
+    plan_on_image,
+)
+
+#: Exit statuses (documented in the module docstring and --help).
+EXIT_SOLVED, EXIT_UNSOLVED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
+#: The learned sampler ``--sampler policy`` loads unless --policy says otherwise.
+DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+#: Set to 1 to print, once the picking window is drawn, how map coordinates map to window pixels.
+PICK_DEBUG_ENV = "SAMPLERGYM_PICK_DEBUG"
 
 
 def display_available() -> bool:
@@ -34,12 +58,23 @@ def display_available() -> bool:
 
 
 def pick_start_goal(grid) -> tuple[tuple[float, float], tuple[float, float]]:
-    """Show the map in a window; the first double-click is the start, the second the goal."""
+    """Show the map in a window; the first double-click is the start, the second the goal.
+
+    With ``SAMPLERGYM_PICK_DEBUG=1`` each draw or resize that moves the axes prints one line
+    ``pick-debug {json}``: the window title and the affine map from world coordinates to pixels of
+    the window (from its top left corner), so a GUI test can click chosen map points.
+    """
+    import json
+
     import matplotlib.pyplot as plt
+
+    from planners import plotting as P
 
     picks: list[tuple[float, float]] = []
     fig, ax = plt.subplots(figsize=(8, 8))
-    ax.imshow(grid.obstacles, cmap="gray_r", origin="upper", extent=(0, grid.width, grid.height, 0))
+    title = "SamplerGym: pick start and goal"
+    fig.canvas.manager.set_window_title(title)
+    P.draw_world(ax, grid)
     ax.set_title("double-click the start")
 
     def on_click(event) -> None:
@@ -48,55 +83,92 @@ def pick_start_goal(grid) -> tuple[tuple[float, float], tuple[float, float]]:
         q = (float(event.xdata), float(event.ydata))
         why = grid.explain_invalid(q)
         if why:
-            ax.set_title(f"({q[0]:.0f}, {q[1]:.0f}) {why}; double-click a free spot")
+            ax.set_title(f"({q[0]:.4g}, {q[1]:.4g}) {why}; double-click a free spot")
             fig.canvas.draw_idle()
             return
         picks.append(q)
-        ax.plot(*q, "o" if len(picks) == 1 else "*", color="#2ca02c" if len(picks) == 1 else "#d62728",
+        ax.plot(*q, "o" if len(picks) == 1 else "*", color=P.START_COLOR if len(picks) == 1 else P.GOAL_COLOR,
                 markersize=10)
         ax.set_title("double-click the goal" if len(picks) == 1 else "planning...")
         fig.canvas.draw_idle()
         if len(picks) == 2:
             plt.close(fig)
 
+    shown: list[str] = []
+
+    def on_view(event) -> None:
+        # display coordinates are the window system's (physical) pixels, y up from the bottom of
+        # the canvas, which is the window's top part (the toolbar sits below it)
+        (a, b, tx), (c, d, ty), _ = ax.transData.get_matrix()
+        height = fig.canvas.get_width_height(physical=True)[1]
+        line = "pick-debug " + json.dumps({"title": title, "world_to_window": [[a, b, tx], [-c, -d, height - ty]]})
+        if not shown or shown[-1] != line:  # again only if a resize moved the axes
+            shown.append(line)
+            print(line, flush=True)
+
     fig.canvas.mpl_connect("button_press_event", on_click)
+    if os.environ.get(PICK_DEBUG_ENV) == "1":
+        for name in ("draw_event", "resize_event"):  # a resize is not always drawn at once
+            fig.canvas.mpl_connect(name, on_view)
     plt.show()
     if len(picks) < 2:
         raise ValueError("the window was closed before a start and a goal were double-clicked")
     return picks[0], picks[1]
 
 
+def load_policy(path: Path, step: float):
+    """The learned sampler from a checkpoint (``learning`` is imported only here: plan.py runs without it)."""
+    try:
+        from learning import PolicySampler
+    except ImportError as exc:
+        raise InputError(f"--sampler policy needs the learning package and its dependencies (torch, "
+                         f"stable-baselines3): {exc}") from None
+    try:
+        return PolicySampler.load(path, step_size=step)
+    except FileNotFoundError:
+        raise InputError(f"--policy {str(path)!r} does not exist") from None
+    except ValueError as exc:
+        raise InputError(f"--policy {str(path)!r}: {exc}") from None
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("map", type=Path, help="image (PNG, JPG, BMP, ...), MovingAI .map or .npy map")
+    ap.add_argument("map", type=Path, help="image (PNG, JPG, BMP, ...), ROS map.yaml, MovingAI .map or .npy map")
     ap.add_argument("--threshold", type=float, default=0.5, help="gray level in (0, 1) below which a pixel is blocked")
     ap.add_argument("--invert", action="store_true", help="light pixels are obstacles")
-    ap.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"), help="start in pixels")
-    ap.add_argument("--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal in pixels")
+    ap.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"), help="start in map units")
+    ap.add_argument("--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal in map units")
+    ap.add_argument("--radius", type=float, default=0.0, metavar="R",
+                    help="robot radius in map units: obstacles are inflated by it (default 0: a point robot)")
     ap.add_argument("--planner", choices=PLANNERS, default="rrt-connect")
-    ap.add_argument("--sampler", choices=SAMPLERS, default=None,
-                    help="default: goal-bias for rrt and rrtstar, uniform otherwise")
+    ap.add_argument("--sampler", choices=(*SAMPLERS, "policy"), default=None,
+                    help="default: goal-bias for rrt and rrtstar, uniform otherwise; policy: the learned sampler")
+    ap.add_argument("--policy", type=Path, default=None, metavar="ZIP",
+                    help="checkpoint for --sampler policy (default: checkpoints/guided.zip of this repository)")
     ap.add_argument("--goal-bias", type=float, default=0.05, metavar="P", help="goal probability of goal-bias")
     ap.add_argument("--metric", choices=METRICS, default="euclidean")
     ap.add_argument("--step", type=float, default=None,
-                    help="step size in pixels (default: 2%% of the map diagonal, at least 4)")
+                    help="step size in map units (default: 2%% of the map diagonal, at least 4 cells)")
     ap.add_argument("--tolerance", type=float, default=None,
-                    help="goal radius in pixels (default: 1%% of the diagonal)")
+                    help="goal radius in map units (default: 1%% of the diagonal)")
     ap.add_argument("--max-iterations", type=int, default=2_000_000)
     ap.add_argument("--time-limit", type=float, default=None,
-                    help="seconds of planning (default: none; 10 for rrtstar and informed-rrtstar, which keep "
-                         "improving until the budget is spent)")
+                    help="seconds of planning, one-off compilation excluded (default: none; 10 for rrtstar and "
+                         "informed-rrtstar, which keep improving until the budget is spent)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--smooth", action=argparse.BooleanOptionalAction, default=True, help="shortcut the path")
     ap.add_argument("--out", type=Path, default=Path("results/plan"), help="folder for plan.png and plan.gif")
     ap.add_argument("--no-gif", action="store_true", help="write the figure only")
-    ap.add_argument("--frames", type=int, default=60, help="growth frames in the GIF at most")
+    ap.add_argument("--frames", type=int, default=60,
+                    help="growth frames in the GIF (fewer only if the run has fewer iterations)")
+    ap.add_argument("--save-path", type=Path, default=None, metavar="FILE",
+                    help="export the final path: .csv (x,y), .json (with units and frame) or .npy")
     ap.add_argument("--headless", action="store_true", help="never open a window")
     args = ap.parse_args(argv)
 
-    def fail(msg: str) -> int:
+    def fail(msg: str, status: int = EXIT_BAD_INPUT) -> int:
         print(f"error: {msg}", file=sys.stderr)
-        return 2
+        return status
 
     if (args.start is None) != (args.goal is None):
         return fail(f"give both --start and --goal, or neither to pick them in a window "
@@ -112,9 +184,24 @@ def main(argv=None) -> int:
         return fail(f"--goal-bias must lie in [0, 1], got {args.goal_bias}")
     if not 0.0 < args.threshold < 1.0:
         return fail(f"--threshold must lie in (0, 1), got {args.threshold}")
+    if args.frames < 2:
+        return fail(f"--frames must be at least 2, got {args.frames}")
+    if not (math.isfinite(args.radius) and args.radius >= 0):
+        return fail(f"--radius must be a non-negative number, got {args.radius}")
+    if args.policy is not None and args.sampler != "policy":
+        return fail("--policy is used with --sampler policy only")
+    # output locations are checked before anything slow happens
+    try:
+        if args.save_path is not None:
+            check_path_file(args.save_path)
+        check_output_dir(args.out)
+    except OutputError as exc:
+        return fail(str(exc), EXIT_WRITE_FAILED)
+    except ValueError as exc:
+        return fail(f"--save-path: {exc}")
     t0 = time.perf_counter()
     try:
-        grid = load_map(args.map, args.threshold, invert=args.invert)
+        grid = load_map(args.map, args.threshold, invert=args.invert, robot_radius=args.radius)
     except (FileNotFoundError, ValueError) as exc:
         return fail(str(exc))
     t_load = time.perf_counter() - t0
@@ -130,37 +217,52 @@ def main(argv=None) -> int:
         start, goal = picked
     step = args.step
     if step is None:
-        w, h = grid.bounds[1]
+        w, h = grid.bounds[1] - grid.bounds[0]
         step = max(4.0 * grid.resolution, 0.02 * math.hypot(w, h))
     time_limit = args.time_limit
     if time_limit is None and args.planner in ("rrtstar", "informed-rrtstar"):
         time_limit = 10.0
+    sampler = args.sampler
     try:
-        out = plan_on_image(grid, start, goal, planner=args.planner, sampler=args.sampler, goal_bias=args.goal_bias,
+        if sampler == "policy":
+            sampler = load_policy(args.policy or DEFAULT_POLICY, step)
+        out = plan_on_image(grid, start, goal, planner=args.planner, sampler=sampler, goal_bias=args.goal_bias,
                             metric=args.metric, step=step, tolerance=args.tolerance,
                             max_iterations=args.max_iterations, time_limit=time_limit, seed=args.seed,
-                            smooth=args.smooth, out_dir=args.out, gif=not args.no_gif, max_frames=args.frames)
+                            smooth=args.smooth, out_dir=args.out, gif=not args.no_gif, max_frames=args.frames,
+                            save_path=args.save_path)
+    except OutputError as exc:
+        return fail(str(exc), EXIT_WRITE_FAILED)
     except (FileNotFoundError, ValueError) as exc:
         return fail(str(exc))
     r = out.result
-    print(f"map:              {args.map} ({grid.width}x{grid.height}, {100 * grid.obstacles.mean():.1f}% blocked)")
+    radius = f", robot radius {args.radius:g}" if args.radius else ""
+    print(f"map:              {args.map} ({grid.width}x{grid.height}, {100 * grid.obstacles.mean():.1f}% blocked"
+          f"{radius})")
     print(f"query:            start ({start[0]:g}, {start[1]:g}) -> goal ({goal[0]:g}, {goal[1]:g}), "
           f"tolerance {out.problem.goal_tolerance:g}, metric {args.metric}")
-    print(f"planner:          {r.planner} (step {step:g}, seed {args.seed})")
+    sampler_name = args.sampler or "default"
+    if args.sampler == "policy":
+        sampler_name = f"policy {args.policy or DEFAULT_POLICY}"
+    print(f"planner:          {r.planner} (step {step:g}, seed {args.seed}, sampler {sampler_name})")
     print(f"solved:           {r.solved} ({r.stop_reason})")
     print(f"iterations:       {r.iterations}")
     print(f"collision checks: {r.collision_checks}")
     print(f"vertices:         {r.num_vertices}")
     t = out.timings
-    print(f"time:             {t['plan']:.3f} s planning (load {t_load:.3f} s, smooth {t['smooth']:.3f} s, "
+    compiled = out.planner.compile_time
+    first_use = f", of which {compiled:.3f} s one-off compilation" if compiled >= 0.0005 else ""
+    print(f"time:             {t['plan']:.3f} s planning{first_use} (load {t_load:.3f} s, smooth {t['smooth']:.3f} s, "
           f"figure {t['figure']:.3f} s, gif {t['gif']:.3f} s)")
     if r.solved:
         print(f"path length:      {out.length:.2f} raw ({len(out.path)} states)")
         if out.smoothed is not None:
             print(f"                  {out.smoothed_length:.2f} smoothed ({len(out.smoothed)} states)")
+    if args.save_path is not None and not r.solved:
+        print(f"no path to save: {args.save_path} not written")
     for f in out.files:
         print(f"wrote {f}")
-    return 0 if r.solved else 1
+    return EXIT_SOLVED if r.solved else EXIT_UNSOLVED
 
 
 if __name__ == "__main__":

@@ -11,7 +11,7 @@ import pytest
 from conftest import REPO, fine_check_path
 from PIL import Image
 
-from planners.workflow import load_map, plan_on_image
+from planners.workflow import load_map, make_planner, plan_on_image
 
 SCRIPT = REPO / "scripts" / "plan.py"
 
@@ -102,3 +102,188 @@ def test_map_kinds(tmp_path):
     with pytest.raises(ValueError, match="unknown kind"):
         (tmp_path / "m.txt").write_text("x")
         load_map(tmp_path / "m.txt")
+
+
+def gif_frames(path) -> int:
+    with Image.open(path) as im:
+        return im.n_frames
+
+
+def test_a_short_run_gets_every_frame_asked_for(map_png, tmp_path):
+    # 527 iterations: the recording used to be every 256 iterations, so the GIF had 4 growth frames
+    out = tmp_path / "out"
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--planner", "rrt", "--step", 3, "--seed", 2,
+            "--frames", 40, "--out", out, "--headless")
+    assert p.returncode == 0, p.stderr
+    assert "iterations:       527" in p.stdout
+    assert gif_frames(out / "plan.gif") == 40 + 1  # growth frames, then the path
+
+
+def test_recording_leaves_the_run_unchanged(map_png):
+    grid = load_map(map_png)
+    for planner, step in (("rrt", 3.0), ("lazy-prm", None), ("rrtstar", 6.0)):
+        budget = 400 if planner == "rrtstar" else 100_000
+        out = plan_on_image(grid, (5.5, 30.5), (90.5, 40.5), planner=planner, step=step, max_iterations=budget,
+                            seed=2, max_frames=30)
+        p = make_planner(planner, out.problem, step=step, seed=2)
+        r = p.solve(max_iterations=budget)
+        assert (out.result.iterations, out.result.collision_checks, out.result.cost) == (
+            r.iterations, r.collision_checks, r.cost)
+        its = [h[0] for h in out.history]
+        assert max(np.diff(its)) <= max(1, its[-1] // 60)  # records at most 1/(2 * frames) of the run apart
+
+
+def test_policy_sampler_from_the_command_line(map_png, tmp_path):
+    pytest.importorskip("torch")
+    pytest.importorskip("stable_baselines3")
+    out = tmp_path / "out"
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--planner", "rrt", "--sampler", "policy",
+            "--out", out, "--headless", "--no-gif")
+    assert p.returncode == 0, p.stderr
+    assert "sampler policy" in p.stdout and "guided.zip" in p.stdout
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--sampler", "policy", "--policy",
+            tmp_path / "none.zip", "--out", out / "x", "--headless")
+    assert p.returncode == 2 and "none.zip" in p.stderr and "Traceback" not in p.stderr
+    assert not (out / "x").exists()
+
+
+def test_policy_sampler_plans_with_the_learned_policy(map_png):
+    learning = pytest.importorskip("learning")
+    sampler = learning.PolicySampler.load(REPO / "checkpoints" / "guided.zip", step_size=3.0)
+    out = plan_on_image(load_map(map_png), (5.5, 30.5), (90.5, 40.5), planner="rrt", sampler=sampler, step=3.0,
+                        seed=0, smooth=False)
+    assert out.result.solved
+    assert type(out.planner.sampler).__name__ == "PolicySampler" and out.planner.sampler.forward_passes > 0
+
+
+def test_plan_script_never_imports_learning(map_png, tmp_path):
+    code = ("import sys; sys.path.insert(0, 'scripts'); import plan; "
+            f"rc = plan.main([{str(map_png)!r}, '--start', '5.5', '30.5', '--goal', '90.5', '40.5', '--headless', "
+            f"'--no-gif', '--out', {str(tmp_path / 'o')!r}]); "
+            "assert rc == 0, rc; bad = {'learning', 'torch', 'stable_baselines3'} & set(sys.modules); "
+            "assert not bad, bad")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=REPO)
+    assert p.returncode == 0, p.stdout + p.stderr
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".json", ".npy"])
+def test_save_path(map_png, tmp_path, suffix):
+    dest = tmp_path / "paths" / f"route{suffix}"
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--out", tmp_path / "out", "--headless",
+            "--no-gif", "--save-path", dest)
+    assert p.returncode == 0, p.stderr
+    assert f"wrote {dest}" in p.stdout
+    if suffix == ".csv":
+        lines = dest.read_text().splitlines()
+        assert lines[0] == "x,y"
+        path = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    elif suffix == ".json":
+        import json
+
+        doc = json.loads(dest.read_text())
+        assert doc["units"] == "px" and doc["y"] == "down" and doc["origin"] == [0.0, 0.0]
+        assert doc["resolution"] == 1.0 and doc["smoothed"] is True and doc["map"] == str(map_png)
+        path = np.array(doc["path"])
+        assert doc["length"] == pytest.approx(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    else:
+        path = np.load(dest, allow_pickle=False)
+    assert path.shape[1] == 2 and len(path) >= 2
+    np.testing.assert_array_equal(path[0], [5.5, 30.5])
+    assert np.hypot(*(path[-1] - [90.5, 40.5])) <= 1.2  # within the default tolerance (1% of the diagonal)
+    assert fine_check_path(load_map(map_png), path, spacing=0.05)
+    assert [f.name for f in dest.parent.iterdir()] == [dest.name]  # no temporary file left
+
+
+def test_save_path_refuses_an_unknown_format_before_planning(map_png, tmp_path):
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--out", tmp_path / "out", "--headless",
+            "--save-path", tmp_path / "route.txt")
+    assert p.returncode == 2 and "route.txt" in p.stderr and ".csv, .json, .npy" in p.stderr
+    assert "iterations" not in p.stdout and "Traceback" not in p.stderr
+    assert sorted(tmp_path.iterdir()) == []
+
+
+def test_an_unusable_output_location_is_its_own_error(map_png, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("keep me")
+    for args in (["--out", blocker], ["--out", blocker / "sub"], ["--out", tmp_path / "o", "--save-path",
+                                                                   blocker / "p.csv"]):
+        p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--headless", *args)
+        assert p.returncode == 3, (args, p.stdout, p.stderr)
+        assert str(blocker) in p.stderr and "is a file" in p.stderr and "Traceback" not in p.stderr
+    assert blocker.read_text() == "keep me" and sorted(f.name for f in tmp_path.iterdir()) == ["file"]
+
+
+def test_a_write_failure_after_planning_is_exit_3_and_leaves_nothing_half_written(map_png, tmp_path):
+    out = tmp_path / "out"
+    (out / "plan.gif").mkdir(parents=True)  # the animation cannot replace a folder: found only when writing
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--out", out, "--headless")
+    assert p.returncode == 3, p.stdout + p.stderr
+    assert "plan.gif" in p.stderr and "written:" in p.stderr and "Traceback" not in p.stderr
+    assert sorted(f.name for f in out.iterdir()) == ["plan.gif", "plan.png"]  # the figure, complete; no temp files
+    assert (out / "plan.gif").is_dir()
+    with Image.open(out / "plan.png") as im:
+        im.load()
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="needs a POSIX user that permissions bind "
+                    "(root writes anywhere)")
+def test_a_read_only_output_folder_is_refused_before_planning(map_png, tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--out", ro / "out", "--headless")
+    finally:
+        ro.chmod(0o700)
+    assert p.returncode == 3 and "not writable" in p.stderr and "iterations" not in p.stdout
+    assert list(ro.iterdir()) == []
+
+
+def _needs_robot_radius():
+    import inspect
+
+    from planners import OccupancyGrid
+
+    if "robot_radius" not in inspect.signature(OccupancyGrid.from_file).parameters:
+        pytest.skip("OccupancyGrid.from_file(robot_radius=...) is not in this tree yet (planners/grid.py)")
+
+
+def test_radius_keeps_the_path_a_radius_away_from_obstacles(map_png, tmp_path):
+    _needs_robot_radius()
+    dest = tmp_path / "p.npy"
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--radius", 1.5, "--out", tmp_path / "o",
+            "--headless", "--no-gif", "--save-path", dest, "--max-iterations", 20000)
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert "robot radius 1.5" in p.stdout
+    path = np.load(dest)
+    blocked = np.argwhere(load_map(map_png).obstacles)  # (row, col) of each blocked cell
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+    pts = np.stack([np.interp(t, s, path[:, k]) for k in (0, 1) for t in [np.linspace(0, s[-1], 2000)]], axis=1)
+    # distance from each point to the nearest blocked cell (a closed unit square)
+    dx = np.maximum(0, np.maximum(blocked[None, :, 1] - pts[:, None, 0], pts[:, None, 0] - blocked[None, :, 1] - 1))
+    dy = np.maximum(0, np.maximum(blocked[None, :, 0] - pts[:, None, 1], pts[:, None, 1] - blocked[None, :, 0] - 1))
+    assert np.hypot(dx, dy).min() >= 1.5 - 1e-9
+    # the door is 6 cells tall: a robot of radius 3.5 cannot pass it
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--radius", 3.5, "--out", tmp_path / "o2",
+            "--headless", "--no-gif", "--max-iterations", 3000)
+    assert p.returncode == 1 and "solved:           False" in p.stdout, p.stdout + p.stderr
+
+
+def test_a_ros_map_plans_in_metres_with_y_up(tmp_path):
+    _needs_robot_radius()
+    yaml = REPO / "tests" / "data" / "ros" / "turtlebot3_world" / "map.yaml"
+    dest = tmp_path / "p.json"
+    p = run(yaml, "--start", -1.9, -0.5, "--goal", 1.9, 0.5, "--radius", 0.1, "--out", tmp_path / "o", "--headless",
+            "--frames", 8, "--save-path", dest)
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert "start (-1.9, -0.5) -> goal (1.9, 0.5)" in p.stdout
+    import json
+
+    doc = json.loads(dest.read_text())
+    assert (doc["units"], doc["frame"], doc["y"], doc["origin"], doc["resolution"]) == ("m", "map", "up",
+                                                                                       [-10.0, -10.0], 0.05)
+    path = np.array(doc["path"])
+    np.testing.assert_array_equal(path[0], [-1.9, -0.5])
+    grid = load_map(yaml, robot_radius=0.1)
+    assert grid.path_valid(path)
+    assert sorted(f.name for f in (tmp_path / "o").iterdir()) == ["plan.gif", "plan.png"]

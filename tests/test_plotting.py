@@ -303,3 +303,70 @@ def test_animate_planner_frame_cap_and_mp4(grid_problem, fake_ffmpeg):
 def test_import_planners_does_not_load_matplotlib():
     code = "import sys, planners; loaded = {'matplotlib', 'PIL'} & set(sys.modules); assert not loaded, loaded"
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def _ros_like_grid() -> OccupancyGrid:
+    """40 x 60 cells of 0.05 m from (-1, -2), y up; a block in the lowest rows, on the left."""
+    obs = np.zeros((40, 60), bool)
+    obs[0:8, 0:10] = True  # row 0 is the lowest y
+    try:
+        return OccupancyGrid(obs, 0.05, origin=(-1.0, -2.0), y_up=True)
+    except TypeError:
+        pytest.skip("OccupancyGrid(origin=..., y_up=...) is not in this tree yet (planners/grid.py)")
+
+
+def test_a_grid_is_drawn_over_its_true_extent_with_y_up():
+    grid = _ros_like_grid()
+    ax = new_figure().add_subplot()
+    plotting.draw_world(ax, grid)
+    fig = ax.figure
+    img = figure_to_array(fig)
+    assert not ax.yaxis_inverted()
+    np.testing.assert_allclose([*ax.get_xlim(), *ax.get_ylim()], [-1.0, 2.0, -2.0, 0.0])
+
+    def at(x, y):  # the rendered pixel under world point (x, y), through the axes' own transform
+        dx, dy = ax.transData.transform((x, y))
+        return img[int(img.shape[0] - dy), int(dx)]
+
+    assert _near(at(-0.8, -1.9), plotting.OBSTACLE_COLOR)  # the block, low left
+    assert _near(at(-0.8, -0.1), "white")  # its mirror image is free
+    assert img[img.shape[0] // 2:].mean() < img[: img.shape[0] // 2].mean()  # more ink in the bottom half
+    np.testing.assert_allclose(plotting.world_to_pixels(grid, [[-1.0, -2.0], [2.0, 0.0]], (300, 200)),
+                               [[0, 200], [300, 0]])
+
+
+def test_plan_on_image_draws_a_y_up_map_the_right_way_up(tmp_path):
+    from planners.workflow import plan_on_image
+
+    grid = _ros_like_grid()
+    out = plan_on_image(grid, (-0.2, -1.8), (1.8, -0.2), planner="rrt-connect", seed=0, out_dir=tmp_path,
+                        max_frames=5)
+    assert out.result.solved
+    with Image.open(tmp_path / "plan.gif") as im:
+        frame = np.asarray(im.convert("RGB"))
+    H = round(frame.shape[1] * 40 / 60)  # the map part, above the caption band
+    dark = frame[:H].mean(axis=2) < 100
+    assert dark[H - 5, 5] and not dark[5, 5]  # the block is at the bottom left, as in RViz
+
+
+def test_gif_path_pixels_follow_the_resolution(tmp_path):
+    from planners.workflow import plan_on_image
+
+    obs = np.zeros((30, 50), bool)
+    obs[:, 24:26] = True
+    obs[12:18, 24:26] = False
+    grid = OccupancyGrid(obs, 2.0)  # 100 x 60 world units
+    out = plan_on_image(grid, (5.0, 10.0), (95.0, 50.0), planner="rrt-connect", seed=0, smooth=False,
+                        out_dir=tmp_path, gif_px=200, max_frames=3)
+    with Image.open(tmp_path / "plan.gif") as im:
+        im.seek(im.n_frames - 1)
+        frame = np.asarray(im.convert("RGB")).astype(int)
+    path = out.path
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+    probes = [(np.interp(t, s, path[:, 0]), np.interp(t, s, path[:, 1])) for t in np.linspace(0.2, 0.8, 15) * s[-1]]
+    pink = np.array(to_rgba(PATH_COLOR)[:3]) * 255
+    # 2 GIF pixels per world unit; the 2-pixel line is looked for in the 3 x 3 pixels around each probe
+    hits = [(np.abs(frame[r - 1:r + 2, c - 1:c + 2] - pink).max(axis=2) < 60).any()
+            for r, c in ((int(y * 2), int(x * 2)) for x, y in probes)]
+    assert np.mean(hits) > 0.9
+
