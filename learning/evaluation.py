@@ -2,14 +2,20 @@
 
 Every run is one planner on one query with one sampler and one seed. Goal bias is swept; the bias
 reported as "best" for a family is chosen on a separate tuning split (other map seeds, or other
-MovingAI scenarios of the same maps), never on the evaluated queries. The privileged expert is a
-reference, not a competitor: it reads the map's geodesic distance field.
+MovingAI scenarios of the same maps), never on the evaluated queries, from a grid that includes
+uniform sampling (bias 0), so the "best" bias is never worse than uniform on the tuning split. The
+privileged expert is a reference, not a competitor: it reads the map's geodesic distance field.
+
+Results are written as a CSV of runs, a Markdown summary, plots, and OMPL benchmark logs
+(:func:`write_ompl_logs`) that OMPL's ``ompl_benchmark_statistics.py`` and Planner Arena open.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import re
+import textwrap
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -19,9 +25,13 @@ import numpy as np
 
 from learning.training import TEST_SEED0, TUNING_SEED0, lower_bound
 from planners import PRM, RRT, GoalBiasedSampler, Problem, RRTStar, UniformSampler, load_movingai_scenarios
+from planners.benchmark_log import PlannerRuns, experiment_name, write_log
+from planners.fileio import atomic_write_text
 from planners.generators import generate
 
 GOAL_BIASES = (0.01, 0.05, 0.1, 0.2, 0.5)
+#: The grid the best goal bias is chosen from: uniform sampling (bias 0) and the sweep.
+TUNING_BIASES = (0.0, *GOAL_BIASES)
 PLANNERS = {"RRT": RRT, "RRTstar": RRTStar, "PRM": PRM}
 
 
@@ -57,6 +67,25 @@ def _scenarios(directory: str, name: str, tolerance: float) -> list[Problem]:
     return _SCEN_CACHE[key]
 
 
+def bias_sampler(bias: float) -> str:
+    """The sampler name of goal bias ``bias``: ``"uniform"`` for 0, else ``"goal_bias=<bias>"``."""
+    return "uniform" if bias == 0 else f"goal_bias={bias:g}"
+
+
+def _sampler_bias(name: str) -> float | None:
+    """The goal bias of sampler ``name`` (0 for uniform), or None for other samplers."""
+    if name == "uniform":
+        return 0.0
+    if name.startswith("goal_bias="):
+        return float(name.split("=")[1])
+    return None
+
+
+def tuning_tasks(queries: Sequence[Query], planner: str, cfg: dict) -> list[tuple]:
+    """Runs that choose the best goal bias: every bias of :data:`TUNING_BIASES` on every tuning query."""
+    return [(q, planner, bias_sampler(b), 0, cfg) for q in queries if q.split == "tuning" for b in TUNING_BIASES]
+
+
 def generated_queries(families: Sequence[str], size: int, n_test: int, n_tune: int) -> list[Query]:
     """``n_test`` test and ``n_tune`` tuning maps per family, on their disjoint seed ranges."""
     return ([Query(f, TEST_SEED0 + i, size, "test") for f in families for i in range(n_test)]
@@ -64,7 +93,10 @@ def generated_queries(families: Sequence[str], size: int, n_test: int, n_tune: i
 
 
 def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: int, tolerance: float) -> list[Query]:
-    """The longest half of each map's scenarios, alternately assigned to the test and tuning splits."""
+    """The longest half of each map's scenarios, alternately assigned to the test and tuning splits.
+
+    ``n_test`` test and ``n_tune`` tuning scenarios per map (fewer where a map has too few).
+    """
     out = []
     for m in maps:
         ps = _scenarios(directory, m, tolerance)
@@ -94,6 +126,7 @@ class Run:
     wall_time: float
     path_cost: float
     forward_passes: int
+    vertices: int
 
 
 def _sampler(name: str, policy_path: str | None, step: float):
@@ -139,7 +172,8 @@ def run_one(task: tuple) -> Run:
     its = r.first_solution_iteration if r.solved else r.iterations
     return Run(query.family, problem.name, query.split, planner_name, sampler_name, seed, r.solved, int(its),
                lower_bound(problem, cfg["step"]), r.candidates, r.collision_checks, wall,
-               r.cost if r.solved else math.inf, int(getattr(planner.sampler, "forward_passes", 0)))
+               r.cost if r.solved else math.inf, int(getattr(planner.sampler, "forward_passes", 0)),
+               int(r.num_vertices))
 
 
 def run_all(tasks: list[tuple], processes: int, progress: bool = True) -> list[Run]:
@@ -188,17 +222,23 @@ def pooled(runs: Sequence[Run], name: str, families: Sequence[str]) -> list[Run]
 
 
 def best_bias(runs: Sequence[Run]) -> dict[tuple[str, str], float]:
-    """Per (family, planner): the goal bias with the lowest median iterations on the tuning split."""
-    out = {}
+    """Per (family, planner): the goal bias with the lowest median iterations on the tuning split.
+
+    Uniform runs count as bias 0, so the choice is never worse than uniform on the tuning split
+    (0 is returned where uniform is best). Test-split runs are never looked at.
+    """
+    out: dict = {}
     groups: dict = {}
     for r in runs:
-        if r.split == "tuning" and r.sampler.startswith("goal_bias="):
-            groups.setdefault((r.family, r.planner, r.sampler), []).append(r.iterations if r.solved else math.inf)
-    for (fam, planner, sampler), its in groups.items():
+        b = _sampler_bias(r.sampler)
+        if r.split == "tuning" and b is not None:
+            groups.setdefault((r.family, r.planner, b), []).append(r.iterations if r.solved else math.inf)
+    # ascending bias: a tie keeps the smaller bias, the one nearer uniform
+    for (fam, planner, b), its in sorted(groups.items(), key=lambda kv: kv[0][2]):
         med = float(np.median(its))
         key = (fam, planner)
         if key not in out or med < out[key][1]:
-            out[key] = (float(sampler.split("=")[1]), med)
+            out[key] = (b, med)
     return {k: v[0] for k, v in out.items()}
 
 
@@ -226,10 +266,10 @@ def summarize(runs: Sequence[Run], biases: dict, seed: int = 0) -> list[dict]:
         solved = np.array([r.solved for r in rs])
         lb = np.array([r.lower_bound for r in rs], dtype=float)
         label = sampler
-        if sampler.startswith("goal_bias="):
-            b = float(sampler.split("=")[1])
+        b = _sampler_bias(sampler)
+        if b is not None:
             tags = [t for t, ok in (("default", b == 0.05), ("best", biases.get((fam, planner)) == b)) if ok]
-            label = f"goal bias {b:g}" + (f" ({', '.join(tags)})" if tags else "")
+            label = ("uniform" if b == 0 else f"goal bias {b:g}") + (f" ({', '.join(tags)})" if tags else "")
         lo, hi = bootstrap_mean_ci(its, rng)
         q1, med, q3 = np.percentile(its, [25, 50, 75])
         rows.append({
@@ -255,7 +295,7 @@ def headline(rows: Sequence[dict], biases: dict) -> list[dict]:
     for fam in sorted({r["family"] for r in rows}):
         b = biases.get((fam, "RRT"))
         pol = by.get((fam, "RRT", "policy"))
-        gb = by.get((fam, "RRT", f"goal_bias={b:g}")) if b is not None else None
+        gb = by.get((fam, "RRT", bias_sampler(b))) if b is not None else None
         uni = by.get((fam, "RRT", "uniform"))
         ref = by.get((fam, "RRT", "expert (reference)"))
         if pol is None or gb is None:
@@ -272,26 +312,45 @@ def headline(rows: Sequence[dict], biases: dict) -> list[dict]:
     return out
 
 
+def _wrap(text: str, width_in: float, fontsize: float) -> str:
+    """``text`` wrapped to lines that fit ``width_in`` inches at ``fontsize`` points."""
+    # a character of the default sans-serif font averages well under 0.6 em wide
+    return textwrap.fill(text, max(12, int(width_in * 72 / (0.6 * fontsize))))
+
+
 def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path,
                planner: str = "RRT") -> list[Path]:
-    """ECDF of iterations-to-solution per sampler for each family, and bars of means with 95% CIs."""
-    from planners.plotting import new_figure, save_figure
+    """Write ``ecdf.png`` (:func:`ecdf_figure`) and ``means.png`` (:func:`means_figure`); returns their paths."""
+    from planners.plotting import save_figure
+
+    if not any(r.split == "test" and r.planner == planner for r in runs):
+        return []
+    return [save_figure(ecdf_figure(runs, biases, planner), out_dir / "ecdf.png", dpi=110),
+            save_figure(means_figure(runs, rows, biases, planner), out_dir / "means.png", dpi=110)]
+
+
+def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT"):
+    """ECDF of iterations-to-solution per sampler, one panel per family (test split).
+
+    Titles are wrapped to the figure's width and the layout is constrained, so no text is cut off.
+    """
+    from planners.plotting import new_figure
 
     test = [r for r in runs if r.split == "test" and r.planner == planner]
     fams = sorted({r.family for r in test})
-    if not fams:
-        return []
     cols = min(4, len(fams))
     nrows = math.ceil(len(fams) / cols)
-    fig = new_figure((4.2 * cols, 3.4 * nrows))
-    shown = lambda fam: ["uniform", "goal_bias=0.05", f"goal_bias={biases.get((fam, planner), 0.05):g}", "policy",  # noqa: E731
-                         "expert (reference)"]
+    size = (4.2 * cols, 3.4 * nrows + 0.5)
+    fig = new_figure(size)
+    fig.suptitle(_wrap(f"{planner} on the test split: fraction of queries solved within n iterations (unsolved "
+                       "runs never reach 1); best goal bias tuned on a separate split", size[0], 11), fontsize=11)
     for i, fam in enumerate(fams):
         ax = fig.add_subplot(nrows, cols, i + 1)
+        best_s = bias_sampler(biases.get((fam, planner), 0.05))
         # fixed colours per role, so panels where the best bias is the default 0.05 read the same
-        best_s = f"goal_bias={biases.get((fam, planner), 0.05):g}"
-        colors = {"uniform": "C0", best_s: "C2", "goal_bias=0.05": "C1", "policy": "C3", "expert (reference)": "0.4"}
-        for s in dict.fromkeys(shown(fam)):
+        colors = {"uniform": "C0", "goal_bias=0.05": "C1", "policy": "C3", "expert (reference)": "0.4"}
+        colors.setdefault(best_s, "C2")
+        for s in dict.fromkeys(["uniform", "goal_bias=0.05", best_s, "policy", "expert (reference)"]):
             its = np.sort([r.iterations if r.solved else math.inf for r in test if r.family == fam and r.sampler == s])
             if len(its) == 0:
                 continue
@@ -299,20 +358,33 @@ def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir:
             style = {"linestyle": "--"} if s.startswith("expert") else {}
             ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=label, color=colors[s], **style)
         ax.set_xscale("log")
-        ax.set_title(fam)
+        ax.set_title(_wrap(fam, 4.0, 12))
         ax.set_xlabel("iterations to solution")
         ax.set_ylabel("fraction solved")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6)
-    p1 = save_figure(fig, out_dir / "ecdf.png", dpi=110)
-    fig = new_figure((max(6.0, 1.6 * len(fams)), 3.6))
+    return fig
+
+
+def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT"):
+    """Mean iterations-to-solution with 95% bootstrap intervals per family: uniform, best bias, policy.
+
+    The legend sits beside the bars, never over them; the title is wrapped to the figure's width.
+    """
+    from planners.plotting import new_figure
+
+    fams = sorted({r.family for r in runs if r.split == "test" and r.planner == planner})
+    size = (max(6.0, 1.6 * len(fams)) + 1.6, 4.0)
+    fig = new_figure(size)
     ax = fig.add_subplot(1, 1, 1)
+    ax.set_title(_wrap(f"{planner} on the test split: mean iterations to solution with 95% bootstrap intervals "
+                       "(unsolved runs count as the cap)", size[0] - 1.6, 11), fontsize=11)
     sel = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy")]
     width = 0.8 / len(sel)
     for j, (label, s) in enumerate(sel):
         means, errs = [], []
         for fam in fams:
-            key = s or f"goal_bias={biases.get((fam, planner), 0.05):g}"
+            key = s or bias_sampler(biases.get((fam, planner), 0.05))
             r = next((x for x in rows if x["family"] == fam and x["planner"] == planner and x["_sampler"] == key), None)
             if r is None:
                 means.append(math.nan)
@@ -326,23 +398,71 @@ def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir:
     ax.set_xticks(np.arange(len(fams)), fams, rotation=30, ha="right")
     ax.set_yscale("log")
     ax.set_ylabel("mean iterations (95% CI)")
-    ax.legend()
-    p2 = save_figure(fig, out_dir / "means.png", dpi=110)
-    return [p1, p2]
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    return fig
 
 
 def write_csv(runs: Sequence[Run], path: Path) -> None:
     """Every run as a CSV row, written whole or not at all."""
     import csv
     import io
-    import tempfile
 
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(asdict(runs[0])))
     w.writeheader()
     w.writerows(asdict(r) for r in runs)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}-")
-    with os.fdopen(fd, "w") as f:
-        f.write(buf.getvalue())
-    os.replace(tmp, path)
+    atomic_write_text(path, buf.getvalue())
+
+
+#: Per-run properties of the OMPL logs: (OMPL property, type, ``Run`` field).
+OMPL_PROPERTIES = (
+    ("time", "REAL", "wall_time"),
+    ("solved", "BOOLEAN", "solved"),
+    ("iterations", "INTEGER", "iterations"),
+    ("graph states", "INTEGER", "vertices"),
+    ("collision checks", "INTEGER", "collision_checks"),
+    ("candidates", "INTEGER", "candidates"),
+    ("solution length", "REAL", "path_cost"),
+    ("lower bound", "INTEGER", "lower_bound"),
+    ("forward passes", "INTEGER", "forward_passes"),
+    ("seed", "INTEGER", "seed"),
+)
+
+
+def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict) -> list[Path]:
+    """One OMPL benchmark log per family (map set) of the test split, under ``out_dir``.
+
+    Each planner and sampler pair is one OMPL planner configuration (e.g. ``RRT goal bias 0.05``);
+    ``time`` is the run's wall time, including binding the sampler. Unsolved runs have no solution
+    length. The logs open with ``ompl_benchmark_statistics.py out_dir/*.log -d db`` and Planner Arena.
+    Tuning-split runs are left out: they choose the best bias, they are not the comparison.
+    """
+    test = [r for r in runs if r.split == "test"]
+    fams: dict = {}
+    for r in test:
+        fams.setdefault(r.family, {}).setdefault((r.planner, r.sampler), []).append(r)
+    paths = []
+    for fam, configs in sorted(fams.items()):
+        planners = {}
+        for (planner, sampler), rs in sorted(configs.items()):
+            b = _sampler_bias(sampler)
+            name = f"{planner} " + (sampler if b is None else "uniform" if b == 0 else f"goal bias {b:g}")
+            settings = {"planner": planner, "sampler": sampler, "step_size": cfg["step"],
+                        "goal_tolerance": cfg["tolerance"], "max_iterations": cfg["max_iterations"]}
+            if b is not None:
+                settings["best_goal_bias_on_tuning_split"] = "yes" if biases.get((fam, planner)) == b else "no"
+            if sampler == "policy":
+                settings["policy"] = cfg["policy"]
+            planners[name] = PlannerRuns(settings, [{p: getattr(r, f) for p, _, f in OMPL_PROPERTIES} for r in rs])
+        queries = len({r.query for r in configs[next(iter(configs))]})
+        setup = (f"SamplerGym comparison on {fam}, test split ({queries} queries, all runs of every sampler on the "
+                 f"same queries and seeds). Iterations to first solution, capped at {cfg['max_iterations']}; "
+                 f"the best goal bias was chosen on a separate tuning split. 'time' is wall time in seconds, "
+                 f"including binding the sampler to the map. The expert is a privileged reference.")
+        stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", fam).strip("_") or "experiment"
+        paths.append(write_log(
+            out_dir / f"{stem}.log", experiment_name(fam), planners, [(p, t) for p, t, _ in OMPL_PROPERTIES],
+            setup=setup, total_time=sum(r.wall_time for rs in configs.values() for r in rs),
+            experiment_properties={"step_size": ("REAL", cfg["step"]), "goal_tolerance": ("REAL", cfg["tolerance"]),
+                                   "max_iterations": ("INTEGER", cfg["max_iterations"])}))
+    return paths

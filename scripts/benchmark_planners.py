@@ -4,7 +4,8 @@
     python scripts/benchmark_planners.py --quick         # smoke-sized run
     python scripts/benchmark_planners.py --no-ompl
 
-Prints Markdown tables and writes them, with the raw runs as CSV, under --out.
+Prints Markdown tables and writes them, with the raw runs as CSV, under --out; also one OMPL
+benchmark log per map (ompl/<map>.log) that OMPL's ompl_benchmark_statistics.py and Planner Arena open.
 """
 
 from __future__ import annotations
@@ -14,8 +15,8 @@ import csv
 import io
 import os
 import platform
+import re
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,8 @@ from planners import (  # noqa: E402
     ompl_bridge,  # noqa: E402
 )
 from planners import benchmark as B  # noqa: E402
+from planners.benchmark_log import PlannerRuns, experiment_name, write_log  # noqa: E402
+from planners.fileio import atomic_write_text  # noqa: E402
 from planners.generators import FAMILIES, generate  # noqa: E402
 
 
@@ -128,12 +131,46 @@ def all_planners(maps, args) -> list[B.Record]:
     return records
 
 
-def write_atomic(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}-")
-    with os.fdopen(fd, "w") as f:
-        f.write(text)
-    os.replace(tmp, path)
+#: Per-run properties of the OMPL logs: (OMPL property, type, ``Record`` field).
+OMPL_PROPERTIES = (
+    ("time", "REAL", "time"),
+    ("solved", "BOOLEAN", "solved"),
+    ("iterations", "INTEGER", "iterations"),
+    ("graph states", "INTEGER", "num_vertices"),
+    ("collision checks", "INTEGER", "collision_checks"),
+    ("solution length", "REAL", "cost"),
+    ("time per iteration", "REAL", "us_per_iteration"),
+    ("seed", "INTEGER", "seed"),
+)
+
+
+def write_ompl_logs(records: list[B.Record], args, out_dir: Path) -> list[Path]:
+    """One OMPL benchmark log per map: each planner label is one OMPL planner configuration.
+
+    ``time`` is in seconds; ``time per iteration`` in microseconds. Counts a planner does not report
+    (OMPL's collision checks, written as -1 in the CSV) are left empty, which the reader stores as NULL.
+    """
+    by_map: dict[str, dict[str, list[B.Record]]] = {}
+    for r in records:
+        by_map.setdefault(r.map, {}).setdefault(r.planner, []).append(r)
+    paths = []
+    for name, planners in by_map.items():
+        entries = {}
+        for label, rs in planners.items():
+            runs = [{p: (None if f == "collision_checks" and r.collision_checks < 0 else getattr(r, f))
+                     for p, _, f in OMPL_PROPERTIES} for r in rs]
+            entries[label] = PlannerRuns({"planner": label, "step_size": args.step,
+                                          "max_iterations": args.max_iterations}, runs)
+        setup = (f"SamplerGym planner benchmark on {name}: {len(next(iter(planners.values())))} queries per planner, "
+                 f"each planner on the same queries and seeds, stopping at the first solution or after "
+                 f"{args.max_iterations} iterations. 'time' is the planner's own solve time in seconds.")
+        stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "map"
+        paths.append(write_log(out_dir / f"{stem}.log", experiment_name(name), entries,
+                               [(p, t) for p, t, _ in OMPL_PROPERTIES], setup=setup,
+                               total_time=sum(r.time for rs in planners.values() for r in rs),
+                               experiment_properties={"step_size": ("REAL", args.step),
+                                                      "max_iterations": ("INTEGER", args.max_iterations)}))
+    return paths
 
 
 def main(argv=None) -> int:
@@ -200,9 +237,15 @@ def main(argv=None) -> int:
     w = csv.DictWriter(buf, fieldnames=list(all_records[0]))
     w.writeheader()
     w.writerows(all_records)
-    write_atomic(args.out / "runs.csv", buf.getvalue())
-    write_atomic(args.out / "summary.md", out.getvalue())
-    print(f"\nwrote {args.out / 'summary.md'} and {args.out / 'runs.csv'}")
+    atomic_write_text(args.out / "runs.csv", buf.getvalue())
+    atomic_write_text(args.out / "summary.md", out.getvalue())
+    # our own runs of the throughput table repeat the all-planners runs (same queries, seeds and cap):
+    # the logs take those once, plus OMPL's runs
+    logs = write_ompl_logs(recs + [r for r in records if r.planner.startswith("OMPL")], args, args.out / "ompl")
+    for old in set((args.out / "ompl").glob("*.log")) - set(logs):
+        old.unlink()  # keep this run's logs only, so `ompl/*.log` never mixes in an earlier run's maps
+    print(f"\nwrote {args.out / 'summary.md'}, {args.out / 'runs.csv'} and {len(logs)} OMPL benchmark logs "
+          f"in {args.out / 'ompl'}")
     return 0
 
 

@@ -12,30 +12,18 @@ from __future__ import annotations
 import argparse
 import csv
 import io
-import os
 import platform
 import sys
-import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from planners.benchmark import markdown_table  # noqa: E402
+from planners.fileio import atomic_write_text  # noqa: E402
 from planners.obprm import compare_prm_variants  # noqa: E402
 
 COLUMNS = ["map", "planner", "runs", "success", "median_samples", "median_candidates", "median_checks",
            "median_time_s"]
-
-
-def write_atomic(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}-")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
 
 
 def main(argv=None) -> int:
@@ -64,8 +52,8 @@ def main(argv=None) -> int:
     w = csv.DictWriter(buf, fieldnames=list(runs[0]))
     w.writeheader()
     w.writerows(runs)
-    write_atomic(args.out / "runs.csv", buf.getvalue())
-    write_atomic(args.out / "summary.md", header + table)
+    atomic_write_text(args.out / "runs.csv", buf.getvalue())
+    atomic_write_text(args.out / "summary.md", header + table)
     print(f"wrote {args.out / 'summary.md'} and {args.out / 'runs.csv'}")
     return 0
 

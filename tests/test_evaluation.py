@@ -1,0 +1,172 @@
+"""The comparison (``learning.evaluation``, ``scripts/evaluate.py``): sound tuning, outputs people can open."""
+
+from __future__ import annotations
+
+import math
+import os
+import sqlite3
+import stat
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from learning import evaluation as E
+from learning.training import TEST_SEED0
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from test_benchmark_log import read_benchmark_log, runs_table  # noqa: E402
+
+
+def _load_evaluate():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("_script_evaluate", REPO / "scripts" / "evaluate.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _run(family, split, sampler, its, solved=True, planner="RRT", query="q", seed=0) -> E.Run:
+    return E.Run(family, query, split, planner, sampler, seed, solved, its, 10, its, 3 * its, its * 1e-5,
+                 40.0 if solved else math.inf, 0, its // 2)
+
+
+# --- point 7a: the best goal bias is chosen soundly, on the tuning split only -------------------------
+
+def test_best_bias_is_never_worse_than_uniform_on_the_tuning_split():
+    runs = [_run("rooms", "tuning", "uniform", i) for i in (900, 1000, 1100)]
+    runs += [_run("rooms", "tuning", f"goal_bias={b:g}", i + k * 100) for k, b in enumerate(E.GOAL_BIASES)
+             for i in (1000, 1100, 1200)]
+    assert E.best_bias(runs) == {("rooms", "RRT"): 0.0}
+    rows = E.summarize(runs + [_run("rooms", "test", "uniform", 5), _run("rooms", "test", "policy", 4)],
+                       E.best_bias(runs))
+    assert [r["sampler"] for r in rows if r["_sampler"] == "uniform"] == ["uniform (best)"]
+
+
+def test_best_bias_never_looks_at_the_test_split():
+    runs = [_run("maze", "tuning", s, i) for s, i in (("uniform", 900), ("goal_bias=0.1", 500), ("goal_bias=0.5", 800))]
+    runs += [_run("maze", "test", s, i) for s, i in (("uniform", 10), ("goal_bias=0.1", 900), ("goal_bias=0.5", 5))]
+    assert E.best_bias(runs) == {("maze", "RRT"): 0.1}
+
+
+def test_tuning_runs_cover_uniform_and_every_bias_on_tuning_queries_only():
+    qs = E.generated_queries(["forest"], 64, n_test=2, n_tune=3)
+    tasks = E.tuning_tasks(qs, "RRT", {})
+    assert {t[0].split for t in tasks} == {"tuning"}
+    assert all(t[0].key < TEST_SEED0 for t in tasks)
+    assert sorted({t[2] for t in tasks}) == sorted(["uniform", *(f"goal_bias={b:g}" for b in E.GOAL_BIASES)])
+    assert len(tasks) == 3 * (1 + len(E.GOAL_BIASES))
+
+
+def test_quick_run_tunes_on_the_full_runs_tuning_split():
+    ev = _load_evaluate()
+    quick, full = ev.parse_args(["--quick"]), ev.parse_args([])
+    assert (quick.tuning_maps, quick.tuning_scenarios) == (full.tuning_maps, full.tuning_scenarios)
+    assert quick.maps < full.maps  # it is still the quick form
+
+
+def test_tuned_bias_beats_or_ties_uniform_on_real_tuning_maps():
+    """The real tuning runs of the quick form, on narrow passages: the choice is not worse than uniform."""
+    cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": "", "step": 4.0, "max_iterations": 20000}
+    n_tune = _load_evaluate().parse_args(["--quick"]).tuning_maps
+    qs = E.generated_queries(["narrow_passage"], 128, n_test=0, n_tune=n_tune)
+    runs = E.run_all(E.tuning_tasks(qs, "RRT", cfg), processes=1, progress=False)
+    b = E.best_bias(runs)[("narrow_passage", "RRT")]
+
+    def median(sampler):
+        return np.median([r.iterations if r.solved else math.inf for r in runs if r.sampler == sampler])
+
+    assert median(E.bias_sampler(b)) <= median("uniform")
+    assert median(E.bias_sampler(b)) == min(median(E.bias_sampler(x)) for x in E.TUNING_BIASES)
+
+
+# --- point 7c: files get normal permissions; titles are not clipped -----------------------------------
+
+def test_runs_csv_has_umask_permissions(tmp_path):
+    path = tmp_path / "out" / "runs.csv"
+    E.write_csv([_run("forest", "test", "uniform", 12)], path)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~_umask()
+    assert path.read_text().splitlines()[0].startswith("family,query,split,planner,sampler")
+    assert [p.name for p in path.parent.iterdir()] == ["runs.csv"]
+
+
+def _clipped(fig) -> list[str]:
+    """What of ``fig`` is drawn (partly) outside it: the suptitle, axes titles, or an axes with its
+    tick labels, axis labels and legend (``get_tightbbox`` counts only the ticks that are drawn)."""
+    renderer = fig.canvas.get_renderer()
+    box = fig.bbox
+    items = [("suptitle", fig._suptitle)] if fig._suptitle is not None else []
+    for i, ax in enumerate(fig.axes):
+        items += [(f"axes {i} title {t.get_text()!r}", t) for t in (ax.title, ax._left_title, ax._right_title)
+                  if t.get_text()]
+        items.append((f"axes {i} with its labels and legend", ax))
+    out = []
+    for name, artist in items:
+        e = artist.get_tightbbox(renderer) if artist in fig.axes else artist.get_window_extent(renderer)
+        if e.x0 < box.x0 - 0.5 or e.x1 > box.x1 + 0.5 or e.y0 < box.y0 - 0.5 or e.y1 > box.y1 + 0.5:
+            out.append(name)
+    return out
+
+
+def _plot_runs(families):
+    runs = []
+    for fam in families:
+        for s, base in (("uniform", 2000), ("goal_bias=0.05", 1500), ("goal_bias=0.01", 1400), ("policy", 300),
+                        ("expert (reference)", 60)):
+            runs += [_run(fam, "test", s, base + 37 * i, query=f"q{i}") for i in range(8)]
+    biases = {(f, "RRT"): 0.01 for f in families}
+    return runs, E.summarize(runs, biases), biases
+
+
+@pytest.mark.parametrize("families", [["narrow_passage"], ["MovingAI (all)", "bugtrap", "forest", "maze",
+                                                             "narrow_passage", "rooms"]])
+def test_plot_text_is_inside_the_figure_and_legend_off_the_bars(families):
+    from matplotlib.patches import Rectangle
+
+    runs, rows, biases = _plot_runs(families)
+    for fig in (E.ecdf_figure(runs, biases), E.means_figure(runs, rows, biases)):
+        fig.canvas.draw()
+        assert _clipped(fig) == []
+        assert fig.get_suptitle() or all(ax.get_title() for ax in fig.axes)
+    renderer = fig.canvas.get_renderer()  # the bar chart
+    ax = fig.axes[0]
+    legend = ax.get_legend().get_window_extent(renderer)
+    bars = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_height() > 0]
+    assert bars and not any(legend.overlaps(b.get_window_extent(renderer)) for b in bars)
+
+
+# --- the main job end to end: every output present, normal permissions, OMPL logs Planner Arena reads --
+
+def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
+    ev = _load_evaluate()
+    out = tmp_path / "evaluation"
+    (out / "ompl").mkdir(parents=True)
+    (out / "ompl" / "stale.log").write_text("an earlier run's map set")
+    rc = ev.main(["--families", "forest", "--size", "64", "--maps", "2", "--tuning-maps", "2", "--seeds", "1",
+                  "--movingai-maps", "--other-planners", "--processes", "1", "--max-iterations", "3000",
+                  "--out", str(out)])
+    assert rc == 0
+    files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+    assert files == ["ecdf.png", "means.png", "ompl/forest.log", "runs.csv", "summary.md"]
+    mode = 0o666 & ~_umask()
+    assert {p: stat.S_IMODE((out / p).stat().st_mode) for p in files} == dict.fromkeys(files, mode)
+    conn = sqlite3.connect(":memory:")
+    rows = runs_table(conn, read_benchmark_log((out / "ompl" / "forest.log").read_text(), conn))
+    samplers = ["uniform", *(f"goal bias {b:g}" for b in E.GOAL_BIASES), "policy", "expert (reference)"]
+    assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
+    assert len(rows) == 2 * len(samplers)  # the test split only: 2 maps x 1 seed per sampler
+    csv_runs = [ln.split(",") for ln in (out / "runs.csv").read_text().splitlines()[1:]]
+    test_its = sorted(int(r[7]) for r in csv_runs if r[2] == "test")
+    assert sorted(r["iterations"] for r in rows) == test_its
+    assert all(r["graph_states"] >= 1 and r["time"] > 0 for r in rows)
+    assert conn.execute("SELECT runcount FROM experiments").fetchone()[0] == 2
