@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import csv
 import io
-import os
 import platform
 import re
 import sys
@@ -23,6 +22,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+import envs  # noqa: E402
 from planners import (  # noqa: E402
     OccupancyGrid,
     Problem,
@@ -31,14 +31,18 @@ from planners import (  # noqa: E402
 )
 from planners import benchmark as B  # noqa: E402
 from planners.benchmark_log import PlannerRuns, experiment_name, write_log  # noqa: E402
-from planners.fileio import atomic_write_text  # noqa: E402
+from planners.fileio import InputError, atomic_write_text  # noqa: E402
 from planners.generators import FAMILIES, generate  # noqa: E402
 
 
 def movingai_dir(arg: str | None) -> Path | None:
-    default = Path(__file__).resolve().parents[2] / "shared" / "maps" / "movingai"
-    cand = Path(arg) if arg else Path(os.environ.get("SAMPLERGYM_MOVINGAI_DIR", default))
-    return cand if cand.is_dir() else None
+    """The MovingAI folder (``--movingai``, else ``envs.movingai_dir``'s rules), or None to skip those maps."""
+    try:
+        return envs.movingai_dir(arg)
+    except InputError:
+        if arg:  # asked for explicitly: a wrong folder is an error, not a silent skip
+            raise
+        return None
 
 
 def map_set(args) -> dict[str, list[Problem]]:
