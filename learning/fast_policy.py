@@ -125,6 +125,9 @@ def softmax_cdf(logits, temperature, cdf):
     return acc
 
 
+_NDIMS = (4, 1, 4, 1, 2, 1, 2, 1, 2, 1, 2, 1)  # dimensions of each ACTOR_KEYS tensor
+
+
 class FastActor:
     """Numba actor built from an SB3 policy state dict (tensors or arrays)."""
 
@@ -134,13 +137,47 @@ class FastActor:
             raise ValueError(f"policy weights lack {missing[:3]}{'...' if len(missing) > 3 else ''}: "
                              "not an egocentric SamplerGym policy")
         w = [np.ascontiguousarray(_to_numpy(state_dict[k]), dtype=np.float32) for k in ACTOR_KEYS]
+        ndims = tuple(a.ndim for a in w)
+        if ndims != _NDIMS:
+            raise ValueError(f"policy weights have {ndims} dimensions, an egocentric actor has {_NDIMS}")
         kernels = (int(w[0].shape[2]), int(w[2].shape[2]))
-        if kernels != KERNELS:
-            raise ValueError(f"policy convolutions have kernels {kernels}, the compiled actor computes {KERNELS}")
+        if kernels != KERNELS or w[0].shape[2] != w[0].shape[3] or w[2].shape[2] != w[2].shape[3]:
+            raise ValueError(f"policy convolutions have kernels {w[0].shape[2:]} and {w[2].shape[2:]}, "
+                             f"the compiled actor computes {KERNELS}")
+        bad = [k for k, a in zip(ACTOR_KEYS, w, strict=True) if not np.isfinite(a).all()]
+        if bad:
+            raise ValueError(f"policy weights {bad[:3]} hold NaN or infinite values")
+        self._conv_shapes = (tuple(w[0].shape), tuple(w[2].shape))
         w[0] = np.ascontiguousarray(w[0].reshape(w[0].shape[0], -1))
         w[2] = np.ascontiguousarray(w[2].reshape(w[2].shape[0], -1))
         self.weights = tuple(w)
         self.num_actions = self.weights[-1].shape[0]
+
+    def check_input(self, channels: int, size: int, vector: int, actions: int) -> str | None:
+        """Why these weights cannot run on ``(channels, size, size)`` windows and ``vector`` features, or None.
+
+        The compiled passes index without bounds checks, so every shape must chain exactly.
+        """
+        (o1, ci, _, _), (o2, c2, _, _) = self._conv_shapes
+        _, b1, _, b2, vw, vb, hw, hb, pw, pb, aw, ab = self.weights
+        s2 = size // KERNELS[0] // KERNELS[1]
+        expected = {
+            "first convolution input channels": (ci, channels),
+            "second convolution input channels": (c2, o1),
+            "first convolution bias": (b1.shape[0], o1),
+            "second convolution bias": (b2.shape[0], o2),
+            "vector layer input": (vw.shape[1], vector),
+            "vector layer bias": (vb.shape[0], vw.shape[0]),
+            "head input": (hw.shape[1], o2 * s2 * s2 + vw.shape[0]),
+            "head bias": (hb.shape[0], hw.shape[0]),
+            "policy layer input": (pw.shape[1], hw.shape[0]),
+            "policy layer bias": (pb.shape[0], pw.shape[0]),
+            "action layer input": (aw.shape[1], pw.shape[0]),
+            "action layer bias": (ab.shape[0], aw.shape[0]),
+            "actions": (aw.shape[0], actions),
+        }
+        wrong = [f"{name} {got} (expected {want})" for name, (got, want) in expected.items() if got != want]
+        return f"policy weights do not fit the guided actor: {', '.join(wrong)}" if wrong else None
 
     def scratch_size(self, channels: int, size: int) -> int:
         """float32s of scratch ``actor_logits`` needs for a ``(channels, size, size)`` window."""

@@ -30,11 +30,8 @@ from the same generator, so results do not depend on which path ran.
 
 from __future__ import annotations
 
-import json
 import os
-import zipfile
 from collections.abc import Callable
-from pathlib import Path
 
 import numba as nb
 import numpy as np
@@ -42,10 +39,12 @@ import numpy as np
 from envs.egocentric import EGO_VECTOR, _add_vertices, _observe, build_pyramid
 from envs.frontier import cdf_search, frontier_arrays, frontier_shape
 from envs.guided import FRONTIER, FRONTIER_TAU, N_ACTIONS, SCALES, WINDOW, fill_from_cdf, scale_cells
+from learning.checkpoint import read_sb3_zip
 from learning.fast_policy import FastActor, actor_logits, softmax_cdf
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners import _rrt_kernels as K
 from planners._bitgen import bitgen_address, next_double
+from planners.fileio import InputError, check_number
 from planners.planner import CHUNK, FIRST_REFILL, Planner
 
 #: Keys of the training config a checkpoint must carry.
@@ -161,6 +160,25 @@ def _new_state(obstacles, factors, H, W, n_scratch, batch):
             np.empty(H * W))
 
 
+def check_config(config, source: str = "policy config") -> dict:
+    """The sampler part of a training config, every value checked; ``InputError`` naming ``source`` if not."""
+    if not isinstance(config, dict):
+        raise InputError(f"{source}: the SamplerGym config is a {type(config).__name__}, expected an object")
+    missing = [k for k in CONFIG_KEYS if k not in config]
+    if missing:
+        raise InputError(f"{source}: the SamplerGym config lacks {missing}")
+    if config["obs_version"] != OBS_VERSION:
+        raise InputError(f"{source}: obs_version = {config['obs_version']!r}: the policy was trained on another "
+                         f"observation, this SamplerGym builds version {OBS_VERSION}")
+    out = dict(config)
+    out["step_size"] = check_number(source, "step_size", config["step_size"], low=0.0, low_open=True)
+    out["uniform_floor"] = check_number(source, "uniform_floor", config["uniform_floor"], low=0.0, high=1.0)
+    out["batch"] = check_number(source, "batch", config["batch"], integer=True, low=1, high=CHUNK)
+    out["max_iterations"] = check_number(source, "max_iterations", config.get("max_iterations", 20000),
+                                         integer=True, low=1)
+    return out
+
+
 class PolicySampler(SamplerBase):
     """A learned sampler for ``OccupancyGrid`` problems of any size.
 
@@ -175,19 +193,16 @@ class PolicySampler(SamplerBase):
         patience: Iterations without progress after which the uniform share starts to grow.
         max_floor: The largest uniform share that growth reaches.
         fuse: Run inside RRT's compiled loop (same samples, less time); False keeps ``draw`` calls.
+        source: Where ``config`` and ``actor`` came from, for error messages.
     """
 
     def __init__(self, actor: FastActor, config: dict, *, step_size: float | None = None, batch: int | None = None,
                  temperature: float = 1.0, reuse: int = 32, hold: float = 0.9, patience: int = 200,
-                 max_floor: float = 0.5, fuse: bool = True) -> None:
-        missing = [k for k in CONFIG_KEYS if k not in config]
-        if missing:
-            raise ValueError(f"policy config lacks {missing}")
-        if config["obs_version"] != OBS_VERSION:
-            raise ValueError(f"policy was trained on observation version {config['obs_version']}, "
-                             f"this SamplerGym builds version {OBS_VERSION}")
-        if actor.num_actions != N_ACTIONS:
-            raise ValueError(f"policy has {actor.num_actions} actions, the guided action space has {N_ACTIONS}")
+                 max_floor: float = 0.5, fuse: bool = True, source: str = "policy config") -> None:
+        config = check_config(config, source)
+        problem = actor.check_input(2 * len(SCALES), WINDOW, len(EGO_VECTOR), N_ACTIONS)
+        if problem:
+            raise InputError(f"{source}: {problem}")
         self.actor, self.config = actor, dict(config)
         self.step_size = float(step_size if step_size is not None else config["step_size"])
         self.batch = int(batch if batch is not None else config["batch"])
@@ -198,39 +213,33 @@ class PolicySampler(SamplerBase):
         self.fused = bool(fuse)
         if not (self.step_size > 0 and self.batch >= 1 and self.temperature > 0 and self.reuse >= 1
                 and self.hold > 0 and self.patience >= 1 and 0.0 <= self.max_floor <= 1.0):
-            raise ValueError(f"need step_size, batch, temperature, reuse, hold, patience > 0 and 0 <= max_floor <= 1, "
+            raise InputError(f"need step_size, batch, temperature, reuse, hold, patience > 0 and 0 <= max_floor <= 1, "
                              f"got {self.step_size}, {self.batch}, {self.temperature}, {self.reuse}, {self.hold}, "
                              f"{self.patience}, {self.max_floor}")
         # per-query constants, prepared once: a bind runs on every query
         self._params = (self.step_size, self.temperature, float(self.config["uniform_floor"]), self.max_floor,
-                        self.patience, self.reuse, self.hold, int(self.config.get("max_iterations", 20000)))
+                        self.patience, self.reuse, self.hold, int(self.config["max_iterations"]))
         self._n_scratch = actor.scratch_size(2 * len(SCALES), WINDOW)
         self._geometry: dict = {}  # (resolution, map shape) -> (cells per pixel per scale, frontier rows, columns)
         self._kernel = None
 
     @classmethod
     def load(cls, path: str | os.PathLike, **kwargs) -> PolicySampler:
-        """Load a checkpoint written by ``scripts/train.py`` (an SB3 zip carrying the SamplerGym config)."""
-        path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"policy checkpoint {path} does not exist")
-        try:
-            from stable_baselines3.common.save_util import load_from_zip_file
+        """Load a checkpoint written by ``scripts/train.py`` (an SB3 zip carrying the SamplerGym config).
 
-            data, params, _ = load_from_zip_file(path, device="cpu", print_system_info=False)
-        except (zipfile.BadZipFile, KeyError, ValueError, RuntimeError, EOFError, json.JSONDecodeError) as exc:
-            raise ValueError(f"{path} is not a readable SamplerGym policy checkpoint: {exc}") from None
-        if not params or "policy" not in params:
-            raise ValueError(f"{path} holds no policy weights")
-        config = (data or {}).get("samplergym_config")
+        Safe for files from anyone: only JSON and tensors are read (``learning.checkpoint``), nothing
+        in the file is unpickled. Every problem with the file is an ``InputError`` naming it.
+        """
+        data, state = read_sb3_zip(path)
+        config = data.get("samplergym_config")
         if not isinstance(config, dict):
-            raise ValueError(f"{path} is a Stable-Baselines3 model without a SamplerGym config: "
+            raise InputError(f"{path} is a Stable-Baselines3 model without a SamplerGym config: "
                              "was it trained by scripts/train.py?")
         try:
-            actor = FastActor(params["policy"])
+            actor = FastActor(state)
         except ValueError as exc:
-            raise ValueError(f"{path}: {exc}") from None
-        return cls(actor, config, **kwargs)
+            raise InputError(f"{path}: {exc}") from None
+        return cls(actor, config, source=str(path), **kwargs)
 
     @property
     def forward_passes(self) -> int:

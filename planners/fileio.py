@@ -7,6 +7,8 @@ file gets the permissions the user's umask gives an ordinary new file.
 
 from __future__ import annotations
 
+import math
+import numbers
 import os
 import secrets
 from collections.abc import Iterator
@@ -52,3 +54,16 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically (see :func:`atomic_path`)."""
     atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def check_number(source, key: str, value, *, integer: bool = False, low: float | None = None,
+                 high: float | None = None, low_open: bool = False) -> float | int:
+    """``value`` as a finite number within bounds, or an ``InputError`` naming ``source`` (file or flag) and ``key``."""
+    ok = isinstance(value, numbers.Integral if integer else numbers.Real)
+    if isinstance(value, bool) or not ok or not math.isfinite(value):
+        raise InputError(f"{source}: {key} = {value!r}, expected a finite {'integer' if integer else 'number'}")
+    if (low is not None and (value <= low if low_open else value < low)) or (high is not None and value > high):
+        lo = "" if low is None else f"{'>' if low_open else '>='} {low:g}"
+        hi = "" if high is None else f"<= {high:g}"
+        raise InputError(f"{source}: {key} = {value!r}, expected a number {' and '.join(s for s in (lo, hi) if s)}")
+    return value

@@ -21,6 +21,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from envs.sources import default_movingai_dir  # noqa: E402
+from learning import PolicySampler  # noqa: E402
 from learning import evaluation as E  # noqa: E402
 from planners.benchmark import markdown_table  # noqa: E402
 from planners.fileio import atomic_write_text  # noqa: E402
@@ -70,6 +71,10 @@ def parse_args(argv=None) -> argparse.Namespace:
             ap.error(f"--{k.replace('_', '-')} must be at least 1, got {getattr(args, k)}")
     if not args.policy.is_file():
         ap.error(f"policy checkpoint {args.policy} not found (train one with scripts/train.py --export ...)")
+    try:  # refused here, by name, rather than as a traceback in every worker
+        PolicySampler.load(args.policy)
+    except ValueError as exc:
+        ap.error(str(exc))
     unknown = set(args.families) - set(FAMILIES)
     if unknown:
         ap.error(f"unknown families {sorted(unknown)}; choose from {FAMILIES}")

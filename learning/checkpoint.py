@@ -1,0 +1,74 @@
+"""Reading Stable-Baselines3 checkpoint zips without running anything in them.
+
+An SB3 ``.zip`` holds ``data`` (JSON, in which values that JSON cannot express are pickled under a
+``":serialized:"`` key), ``policy.pth`` and ``policy.optimizer.pth`` (``torch.save`` files) and
+version notes. ``stable_baselines3`` loads ``data`` by unpickling those values, so a file from
+someone else can run code on load. This reader takes ``data`` as plain JSON, never looks inside a
+``":serialized:"`` value, and reads tensors with ``torch.load(weights_only=True)``, which refuses
+anything but tensors and plain containers. Every failure is an ``InputError`` naming the file.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import zipfile
+from pathlib import Path
+
+import torch
+
+from planners.fileio import InputError
+
+#: Largest entry the reader decompresses: a policy of a few MB is the norm; this stops zip bombs.
+MAX_ENTRY_BYTES = 256 * 1024 * 1024
+
+
+def read_sb3_zip(path: str | os.PathLike, *, weights: str = "policy.pth") -> tuple[dict, dict]:
+    """The ``data`` entry (JSON, ``":serialized:"`` values left unread) and the ``weights`` state dict.
+
+    Raises:
+        FileNotFoundError: ``path`` does not exist.
+        InputError: anything else that makes the file unreadable as a checkpoint.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"policy checkpoint {path} does not exist")
+    try:
+        with zipfile.ZipFile(path) as zf:
+            data_blob = _entry(zf, path, "data")
+            weights_blob = _entry(zf, path, weights)
+    except InputError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - zipfile, zlib and OSError all signal a damaged archive
+        raise InputError(f"{path} is not a readable checkpoint zip: {type(exc).__name__}: {exc}") from None
+    try:
+        data = json.loads(data_blob.decode("utf-8"))
+    except ValueError as exc:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        raise InputError(f"{path}: its 'data' entry is not JSON: {exc}") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: its 'data' entry is a {type(data).__name__}, expected a JSON object")
+    try:
+        state = torch.load(io.BytesIO(weights_blob), map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - untrusted bytes: whatever torch's reader raises, the file is bad
+        raise InputError(f"{path}: its '{weights}' entry is not a readable tensor file "
+                         f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})") from None
+    if not isinstance(state, dict) or not all(isinstance(k, str) and isinstance(v, torch.Tensor)
+                                              for k, v in state.items()):
+        raise InputError(f"{path}: its '{weights}' entry is not a state dict of named tensors")
+    return data, state
+
+
+def _entry(zf: zipfile.ZipFile, path: Path, name: str) -> bytes:
+    try:
+        info = zf.getinfo(name)
+    except KeyError:
+        raise InputError(f"{path} has no '{name}' entry: not a Stable-Baselines3 checkpoint") from None
+    if info.file_size > MAX_ENTRY_BYTES:
+        raise InputError(f"{path}: entry '{name}' unpacks to {info.file_size} bytes, more than the "
+                         f"{MAX_ENTRY_BYTES} a policy checkpoint needs")
+    with zf.open(info) as f:
+        blob = f.read(MAX_ENTRY_BYTES + 1)
+    if len(blob) > MAX_ENTRY_BYTES:  # the header lied about the size
+        raise InputError(f"{path}: entry '{name}' unpacks to more than {MAX_ENTRY_BYTES} bytes")
+    return blob
