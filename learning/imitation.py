@@ -38,6 +38,12 @@ class Dataset:
     def concat(parts: Sequence[Dataset]) -> Dataset:
         return Dataset(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("local", "vector", "label", "value")))
 
+    def head(self, n: int) -> Dataset:
+        """The first ``n`` rows (a resumed run drops rows written after its checkpoint)."""
+        if n > len(self):
+            raise ValueError(f"the DAgger data holds {len(self)} rows, the checkpoint counts {n}")
+        return Dataset(self.local[:n], self.vector[:n], self.label[:n], self.value[:n])
+
     def save(self, path) -> None:
         np.savez_compressed(path, local=self.local, vector=self.vector, label=self.label, value=self.value)
 

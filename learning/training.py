@@ -14,21 +14,28 @@ evaluated map was ever trained on.
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import math
 import os
+import re
 import time
+import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 import torch
+from stable_baselines3.common.logger import KVWriter
 
+from learning.checkpoint import read_sb3_zip
 from learning.fast_policy import FastActor
 from learning.imitation import Dataset, behaviour_cloning, collect
 from learning.policy_sampler import OBS_VERSION, PolicySampler
 from planners import RRT
-from planners.generators import FAMILIES, generate
+from planners.fileio import InputError, atomic_path, atomic_write_text, check_number
+from planners.generators import FAMILIES, MIN_SIZE, generate
 
 TRAIN_SEEDS = (0, 100_000)
 VALIDATION_SEED0 = 200_000
@@ -92,15 +99,59 @@ class TrainConfig:
 
     @classmethod
     def from_json(cls, path) -> TrainConfig:
-        raw = json.loads(Path(path).read_text())
-        known = {f for f in cls.__dataclass_fields__}
-        unknown = set(raw) - known
+        """A config from a JSON file of ``TrainConfig`` fields, every value checked (``InputError`` naming the file)."""
+        try:
+            raw = json.loads(Path(path).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise InputError(f"cannot read training config {path}: {exc.strerror or exc}") from None
+        except ValueError as exc:
+            raise InputError(f"training config {path} is not JSON: {exc}") from None
+        if not isinstance(raw, dict):
+            raise InputError(f"training config {path} holds a {type(raw).__name__}, expected a JSON object")
+        unknown = set(raw) - set(cls.__dataclass_fields__)
         if unknown:
-            raise ValueError(f"{path}: unknown config keys {sorted(unknown)}")
+            raise InputError(f"{path}: unknown config keys {sorted(unknown)}")
         for k in ("families", "sizes", "dagger_betas", "conv_channels"):
             if k in raw:
+                if not isinstance(raw[k], list):
+                    raise InputError(f"{path}: {k} = {raw[k]!r}, expected a list")
                 raw[k] = tuple(raw[k])
-        return cls(**raw)
+        cfg = cls(**raw)
+        cfg.check(str(path))
+        return cfg
+
+    def check(self, source: str = "training config") -> None:
+        """Refuse any value training cannot use, naming ``source`` and the field (``InputError``)."""
+        if not isinstance(self.name, str) or not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", self.name):
+            raise InputError(f"{source}: name = {self.name!r}, expected letters, digits, '_', '-' or '.' "
+                             "(it names the run's folder)")
+        for key, low in (("seed", 0), ("stuck_threshold", 0), ("max_iterations", 1), ("batch", 1),
+                         ("dagger_rounds", 1), ("maps_per_round", 1), ("bc_epochs", 1), ("bc_batch", 1),
+                         ("ppo_steps", 0), ("value_warmup", 0), ("ppo_n_steps", 2), ("ppo_batch", 2),
+                         ("ppo_epochs", 1), ("n_envs", 1), ("checkpoint_every", 1), ("validation_maps", 1),
+                         ("features_dim", 1), ("hidden", 1), ("vector_dim", 1), ("torch_threads", 1)):
+            check_number(source, key, getattr(self, key), integer=True, low=low)
+        for key, low, high in (("step_size", 0.0, None), ("goal_tolerance", 0.0, None), ("bc_lr", 0.0, None),
+                               ("ppo_lr", 0.0, None), ("ppo_clip", 0.0, None), ("reward_scale", 0.0, None),
+                               ("gamma", 0.0, 1.0)):
+            check_number(source, key, getattr(self, key), low=low, high=high, low_open=True)
+        check_number(source, "uniform_floor", self.uniform_floor, low=0.0, high=1.0)
+        check_number(source, "ppo_ent_coef", self.ppo_ent_coef, low=0.0)
+        if not isinstance(self.shaping, bool):
+            raise InputError(f"{source}: shaping = {self.shaping!r}, expected true or false")
+        if not self.families or any(f not in FAMILIES for f in self.families):
+            raise InputError(f"{source}: families = {list(self.families)!r}, expected some of {list(FAMILIES)}")
+        for key, values, low, high, integer in (("sizes", self.sizes, MIN_SIZE, None, True),
+                                                ("dagger_betas", self.dagger_betas, 0.0, 1.0, False),
+                                                ("conv_channels", self.conv_channels, 1, None, True)):
+            if not values:
+                raise InputError(f"{source}: {key} is empty")
+            for v in values:
+                check_number(source, key, v, integer=integer, low=low, high=high)
+        if len(self.conv_channels) != 2:
+            raise InputError(f"{source}: conv_channels = {list(self.conv_channels)!r}, expected two widths")
+        if not isinstance(self.extra, dict):
+            raise InputError(f"{source}: extra = {self.extra!r}, expected an object")
 
 
 def lower_bound(problem, step_size: float) -> int:
@@ -163,57 +214,187 @@ def make_env(cfg: TrainConfig, seed: int):
     return make_vec_env(factory, n_envs=cfg.n_envs, seed=seed, vec_env_cls=DummyVecEnv)
 
 
-def _save(model, cfg: TrainConfig, path: Path, state: dict) -> None:
-    """Write the checkpoint atomically, with the sampler config inside and the run state beside it."""
-    model.samplergym_config = cfg.sampler_config()
-    tmp = path.with_name(f".{path.stem}.tmp.zip")
-    model.save(tmp)
-    os.replace(tmp, path)
-    (path.parent / "state.json").write_text(json.dumps(state, indent=2))
+#: Key of the run state inside a checkpoint's ``data`` entry.
+STATE_KEY = "samplergym_state"
+#: Key of the sampler config inside a checkpoint's ``data`` entry (read by ``PolicySampler.load``).
+CONFIG_KEY = "samplergym_config"
+
+
+def _save_model(model, cfg: TrainConfig, path: Path, state: dict) -> None:
+    """Write ``model`` as an SB3 zip whose ``data`` also carries the sampler config and the run state.
+
+    The two entries are added to the zip SB3 writes rather than set on the model, so nothing of
+    ours lives in SB3's object; the file appears whole or not at all.
+    """
+    buf = io.BytesIO()
+    model.save(buf)
+    buf.seek(0)
+    with atomic_path(path) as tmp, zipfile.ZipFile(buf) as src, zipfile.ZipFile(tmp, "w") as dst:
+        for item in src.infolist():
+            blob = src.read(item.filename)
+            if item.filename == "data":
+                data = json.loads(blob)
+                data[CONFIG_KEY], data[STATE_KEY] = cfg.sampler_config(), state
+                blob = json.dumps(data, indent=4).encode()
+            dst.writestr(item, blob)
+
+
+def _commit(model, cfg: TrainConfig, run: Path, state: dict, log: _ResumableCSV, data: Dataset | None = None) -> None:
+    """One checkpoint, written so that a kill at any instant leaves the previous one or this one.
+
+    ``checkpoint.zip`` is the commit point: it holds the weights, the optimiser and the run state.
+    The DAgger data is written before it and only grows, so the state's row count tells how much of
+    it belongs to the checkpoint; log rows after ``log_rows`` are dropped on resume the same way.
+    ``state.json`` is a copy for people, written last and never read back.
+    """
+    state = {**state, "log_rows": log.rows}
+    if data is not None:
+        with atomic_path(run / "dagger_data.npz") as tmp:
+            data.save(tmp)
+        state["dagger_rows"] = len(data)
+    _save_model(model, cfg, run / "checkpoint.zip", state)
+    atomic_write_text(run / "state.json", json.dumps(state, indent=2) + "\n")
+
+
+def read_state(run: str | os.PathLike) -> dict | None:
+    """The run state committed in ``<run>/checkpoint.zip``, or None if the run has no checkpoint yet."""
+    ckpt = Path(run) / "checkpoint.zip"
+    if not ckpt.is_file():
+        return None
+    data, _ = read_sb3_zip(ckpt)
+    state = data.get(STATE_KEY)
+    if not isinstance(state, dict) or not {"phase", "round", "ppo_steps", "log_rows"} <= state.keys():
+        raise InputError(f"{ckpt} carries no training state: it was not written by this version of "
+                         "scripts/train.py; start the run again without --resume")
+    return state
+
+
+class _ResumableCSV(KVWriter):
+    """``progress.csv`` that a resumed run continues: rows after the checkpoint are dropped, not the rest.
+
+    A Stable-Baselines3 ``KVWriter``. SB3's own CSV writer truncates the file when it opens it and
+    rewrites it in place when a new column appears; this one rewrites atomically and appends otherwise.
+    """
+
+    def __init__(self, path: Path, keep_rows: int | None) -> None:
+        self.path = path
+        self.keys: list[str] = []
+        self.table: list[list[str]] = []
+        if keep_rows is not None and path.is_file():
+            with open(path, newline="", encoding="utf-8") as f:
+                rows = list(csv.reader(f))
+            if rows:
+                self.keys, self.table = rows[0], rows[1:keep_rows + 1]
+        self._rewrite()
+
+    @property
+    def rows(self) -> int:
+        return len(self.table)
+
+    def _rewrite(self) -> None:
+        with atomic_path(self.path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as f:
+            w = csv.writer(f)
+            if self.keys:
+                w.writerow(self.keys)
+            w.writerows(row + [""] * (len(self.keys) - len(row)) for row in self.table)
+        self.file = open(self.path, "a", newline="", encoding="utf-8")  # noqa: SIM115 - closed in close()
+
+    def write(self, key_values: dict, key_excluded: dict, step: int = 0) -> None:
+        values = {k: v for k, v in key_values.items() if "csv" not in (key_excluded.get(k) or ())}
+        new = [k for k in values if k not in self.keys]
+        row = ["" if values.get(k) is None else str(values[k]) for k in self.keys + new]
+        self.table.append(row)
+        if new:
+            self.keys += new
+            self.file.close()
+            self._rewrite()
+        else:
+            csv.writer(self.file).writerow(row)
+            self.file.flush()
+
+    def close(self) -> None:
+        self.file.close()
+
+
+def _logger(run: Path, keep_rows: int | None, stdout: bool):
+    """SB3 logger writing TensorBoard events and ``progress.csv`` under ``<run>/tb``.
+
+    Its ``step_offset`` is added to every step: SB3 counts each PPO segment's steps from zero.
+    """
+    from stable_baselines3.common.logger import Logger, make_output_format
+
+    class RunLogger(Logger):
+        step_offset = 0
+
+        def dump(self, step: int = 0) -> None:
+            if self.step_offset:
+                self.record("time/run_timesteps", step + self.step_offset)
+            super().dump(step + self.step_offset)
+
+    folder = run / "tb"
+    folder.mkdir(parents=True, exist_ok=True)
+    csv_log = _ResumableCSV(folder / "progress.csv", keep_rows)
+    formats = [make_output_format("tensorboard", str(folder)), csv_log]
+    if stdout:
+        formats.append(make_output_format("stdout", str(folder)))
+    return RunLogger(str(folder), formats), csv_log
 
 
 def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False, progress: bool = True,
           log_stdout: bool = True) -> Path:
-    """Run (or resume) training; returns the path of the final checkpoint ``<run>/final.zip``."""
-    from stable_baselines3.common.logger import configure
+    """Run (or resume) training; returns the path of the final checkpoint ``<run>/final.zip``.
 
+    A resumed run ends with the same weights, bit for bit, as one that was never interrupted:
+    each DAgger round depends only on the committed weights and data, and each PPO segment
+    (``checkpoint_every`` steps) starts from a fresh, seeded environment reset and RNG state.
+    """
+    cfg.check()
     run = Path(out_dir) / cfg.name
-    run.mkdir(parents=True, exist_ok=True)
-    ckpt = run / "checkpoint.zip"
-    state_path = run / "state.json"
+    for stale in (*run.glob(".*.tmp*"), *run.glob("tb/.*.tmp*")):  # half-written files of a killed run
+        stale.unlink()
     if resume:
-        if not ckpt.is_file() or not state_path.is_file():
-            raise FileNotFoundError(f"nothing to resume in {run}: no checkpoint.zip/state.json")
+        state = read_state(run)
+        if state is None:
+            raise FileNotFoundError(f"nothing to resume in {run}: no checkpoint.zip (the run was stopped before "
+                                    "its first checkpoint; start it again without --resume)")
         saved = TrainConfig.from_json(run / "config.json")
         if asdict(saved) != asdict(cfg):
-            raise ValueError(f"{run}/config.json differs from the requested config; resume with the same config")
-        state = json.loads(state_path.read_text())
+            raise InputError(f"{run}/config.json differs from the requested config; resume with the same config")
     else:
-        state = {"phase": "bc", "round": -1, "ppo_steps": 0}
-    (run / "config.json").write_text(json.dumps(asdict(cfg), indent=2))
+        state = {"phase": "bc", "round": -1, "ppo_steps": 0, "log_rows": 0}
+        run.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(run / "config.json", json.dumps(asdict(cfg), indent=2) + "\n")
     torch.set_num_threads(cfg.torch_threads)
     torch.manual_seed(cfg.seed)
     env = make_env(cfg, cfg.seed)
-    logger = configure(str(run / "tb"), ["tensorboard", "csv"] + (["stdout"] if log_stdout else []))
+    logger, csv_log = _logger(run, state["log_rows"] if resume else None, log_stdout)
     try:
-        return _train_phases(cfg, run, state, env, logger, resume=resume, progress=progress)
+        return _train_phases(cfg, run, state, env, logger, csv_log, resume=resume, progress=progress)
     finally:  # a run that stops, however it stops, leaves no open log files
         logger.close()
         env.close()
 
 
-def _train_phases(cfg: TrainConfig, run: Path, state: dict, env, logger, *, resume: bool, progress: bool) -> Path:
+def _segments(cfg: TrainConfig) -> list[tuple[int, int]]:
+    """PPO's step ranges between checkpoints: every ``checkpoint_every`` steps and at the end of the warm-up."""
+    ends = {*range(cfg.checkpoint_every, cfg.ppo_steps, cfg.checkpoint_every), cfg.ppo_steps}
+    if 0 < cfg.value_warmup < cfg.ppo_steps:
+        ends.add(cfg.value_warmup)
+    bounds = [0, *sorted(e for e in ends if e > 0)]
+    return list(zip(bounds[:-1], bounds[1:], strict=True))
+
+
+def _train_phases(cfg: TrainConfig, run: Path, state: dict, env, logger, csv_log: _ResumableCSV, *, resume: bool,
+                  progress: bool) -> Path:
     """DAgger, then PPO fine-tuning, then the choice between them on validation maps (see ``train``)."""
     from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import BaseCallback
     from tqdm.auto import tqdm
 
     from learning.extractor import policy_kwargs
 
     ckpt = run / "checkpoint.zip"
-    if resume:
+    if resume:  # our own run's checkpoint: SB3's full load (it unpickles; never point it at others' files)
         model = PPO.load(ckpt, env=env, device="cpu")
-        model.set_random_seed(cfg.seed + 7919 * (state["round"] + 2) + state["ppo_steps"])
     else:
         arch = policy_kwargs(cfg.features_dim, cfg.hidden, cfg.conv_channels, cfg.vector_dim)
         model = PPO("MultiInputPolicy", env, policy_kwargs=arch,
@@ -227,9 +408,13 @@ def _train_phases(cfg: TrainConfig, run: Path, state: dict, env, logger, *, resu
             logger.record(k, v)
         logger.dump(step)
 
+    def commit(new_state: dict, data: Dataset | None = None) -> None:
+        _commit(model, cfg, run, new_state, csv_log, data)
+
     # --- phase 1: DAgger -----------------------------------------------------------------------
-    data_path = run / "dagger_data.npz"
-    data = Dataset.load(data_path) if resume and data_path.is_file() else None
+    data = None
+    if resume and state["phase"] == "bc" and state["round"] >= 0:
+        data = Dataset.load(run / "dagger_data.npz").head(state["dagger_rows"])
     rounds = range(state["round"] + 1, cfg.dagger_rounds) if state["phase"] == "bc" else range(0)
     for k in tqdm(rounds, desc="DAgger", disable=not progress):
         rng = np.random.default_rng([cfg.seed, k])
@@ -249,64 +434,45 @@ def _train_phases(cfg: TrainConfig, run: Path, state: dict, env, logger, *, resu
         log({**stats, "dagger/round": k, "dagger/beta": beta, "dagger/samples": len(data),
              "dagger/median_iterations": float(np.median(its)), "dagger/collect_seconds": time.perf_counter() - t0,
              "validation/score": score, **{f"validation/{f}": v for f, v in fam.items()}}, k)
-        data.save(data_path)
         state = {"phase": "bc", "round": k, "ppo_steps": 0, "bc_validation": score}
-        _save(model, cfg, ckpt, state)
+        commit(state, data)
     if state["phase"] == "bc":
-        _save(model, cfg, run / "imitation.zip", state)
+        _save_model(model, cfg, run / "imitation.zip", state)
         state = {**state, "phase": "ppo", "ppo_steps": 0}
-        _save(model, cfg, ckpt, state)
+        commit(state)
 
-    # --- phase 2: PPO fine-tuning ----------------------------------------------------------------
-    class Checkpointer(BaseCallback):
-        def __init__(self) -> None:
-            super().__init__()
-            self.last = state["ppo_steps"]
-
-        def _on_step(self) -> bool:
-            done = state["ppo_steps"] + self.num_timesteps - self.model._num_timesteps_at_start
-            if done - self.last >= cfg.checkpoint_every:
-                self.last = done
-                _save(self.model, cfg, ckpt, {**state, "ppo_steps": done})
-            return True
-
+    # --- phase 2: PPO fine-tuning, in segments that each start from a seeded reset -------------------
     # the critic warms up first with the actor frozen, so early, noisy advantages cannot undo imitation
-    actor = [p for name, p in model.policy.named_parameters()
-             if name.startswith(("pi_features_extractor", "mlp_extractor.policy_net", "action_net"))]
-    for stage_end in (min(cfg.value_warmup, cfg.ppo_steps), cfg.ppo_steps):
-        remaining = stage_end - state["ppo_steps"]
-        if remaining <= 0:
+    actor_params = [p for name, p in model.policy.named_parameters()
+                    if name.startswith(("pi_features_extractor", "mlp_extractor.policy_net", "action_net"))]
+    for start, end in _segments(cfg):
+        if end <= state["ppo_steps"]:
             continue
-        for p in actor:
-            p.requires_grad_(state["ppo_steps"] >= cfg.value_warmup)
-        cb = Checkpointer()
-        try:
-            model.learn(total_timesteps=remaining, reset_num_timesteps=False, progress_bar=progress, callback=cb,
-                        tb_log_name="ppo")
-        except KeyboardInterrupt:
-            done = state["ppo_steps"] + model.num_timesteps - model._num_timesteps_at_start
-            _save(model, cfg, ckpt, {**state, "ppo_steps": done})
-            raise
-        state = {**state, "ppo_steps": stage_end}
-        _save(model, cfg, ckpt, state)
-    for p in actor:
+        for p in actor_params:
+            p.requires_grad_(start >= cfg.value_warmup)
+        # seeds every RNG PPO draws from (torch, SB3's use of numpy's global state, the env resets)
+        model.set_random_seed(int(np.random.SeedSequence([cfg.seed, start]).generate_state(1)[0]))
+        logger.step_offset = start
+        model.learn(total_timesteps=end - start, reset_num_timesteps=True, progress_bar=progress,
+                    tb_log_name="ppo")
+        logger.dump(model.num_timesteps)  # the last update's statistics, before the checkpoint, not after
+        state = {**state, "ppo_steps": end}
+        commit(state)
+    for p in actor_params:
         p.requires_grad_(True)
+    logger.step_offset = 0
 
     # --- selection on validation maps ----------------------------------------------------------------
-    from stable_baselines3.common.save_util import load_from_zip_file
-
     ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg)
-    _, imitation_params, _ = load_from_zip_file(run / "imitation.zip", device="cpu", print_system_info=False)
-    bc_score, bc_fam = validation_score(FastActor(imitation_params["policy"]), cfg)
+    _, imitation_params = read_sb3_zip(run / "imitation.zip")
+    bc_score, bc_fam = validation_score(FastActor(imitation_params), cfg)
     chosen = "ppo" if ppo_score <= bc_score else "imitation"
     summary = {"chosen": chosen, "validation_ppo": ppo_score, "validation_imitation": bc_score,
                "validation_ppo_families": ppo_fam, "validation_imitation_families": bc_fam}
     log({"validation/final_ppo": ppo_score, "validation/final_imitation": bc_score}, cfg.dagger_rounds + 1)
+    if chosen == "imitation":
+        model.policy.load_state_dict(imitation_params)
     final = run / "final.zip"
-    if chosen == "ppo":
-        _save(model, cfg, final, {**state, **summary})
-    else:
-        model.policy.load_state_dict(imitation_params["policy"])
-        _save(model, cfg, final, {**state, **summary})
-    (run / "summary.json").write_text(json.dumps(summary, indent=2))
+    _save_model(model, cfg, final, {**state, **summary, "log_rows": csv_log.rows})
+    atomic_write_text(run / "summary.json", json.dumps(summary, indent=2) + "\n")
     return final

@@ -5,9 +5,13 @@
     python scripts/train.py --resume                          # continue an interrupted run
     tensorboard --logdir runs/                                # curves
 
-Writes runs/<name>/{config.json, checkpoint.zip, imitation.zip, final.zip, state.json, tb/}; a crash
-or Ctrl-C leaves checkpoint.zip usable and --resume continues from it. --export copies final.zip to a
-path of your choice (e.g. checkpoints/guided.zip, with its config beside it as JSON).
+Writes runs/<name>/{config.json, checkpoint.zip, imitation.zip, final.zip, state.json, tb/}. A crash,
+Ctrl-C or a kill leaves the last checkpoint (after each DAgger round and every --checkpoint-every PPO
+steps) whole, and --resume continues from it to the same weights an uninterrupted run reaches.
+--resume reads your own run's checkpoint with Stable-Baselines3's full loader, which unpickles: never
+resume from a run someone else sent you (load their policy with learning.PolicySampler.load, which
+reads JSON and tensors only). --export copies final.zip to a path of your choice (e.g.
+checkpoints/guided.zip, with its config beside it as JSON).
 """
 
 from __future__ import annotations
@@ -15,14 +19,20 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import shutil
 import sys
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from learning.training import TrainConfig, train  # noqa: E402
+from learning.training import TrainConfig, read_state, train  # noqa: E402
+from planners.fileio import InputError, atomic_write_bytes, atomic_write_text  # noqa: E402
+
+
+def _where(state: dict, cfg: TrainConfig) -> str:
+    if state["phase"] == "bc":
+        return f"DAgger round {state['round'] + 1} of {cfg.dagger_rounds}"
+    return f"PPO step {state['ppo_steps']} of {cfg.ppo_steps}"
 
 
 def main(argv=None) -> int:
@@ -45,29 +55,45 @@ def main(argv=None) -> int:
             typ = {"int": int, "float": float, "str": str}[f.type]
             ap.add_argument(flag, type=typ, help=f"default {f.default!r}")
     args = ap.parse_args(argv)
-    cfg = TrainConfig.from_json(args.config) if args.config else TrainConfig()
-    changes = {}
-    for f in dataclasses.fields(TrainConfig):
-        v = getattr(args, f.name, None)
-        if v is not None and f.name != "extra":
-            changes[f.name] = tuple(type(getattr(cfg, f.name)[0])(x) for x in v) if isinstance(v, list) else v
-    cfg = dataclasses.replace(cfg, **changes)
+    try:
+        cfg = TrainConfig.from_json(args.config) if args.config else TrainConfig()
+        changes = {}
+        for f in dataclasses.fields(TrainConfig):
+            v = getattr(args, f.name, None)
+            if v is not None and f.name != "extra":
+                changes[f.name] = tuple(type(getattr(cfg, f.name)[0])(x) for x in v) if isinstance(v, list) else v
+        cfg = dataclasses.replace(cfg, **changes)
+        cfg.check("command line" if not args.config else f"{args.config} with the command line's flags")
+    except (InputError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    run = args.out / cfg.name
     t0 = time.perf_counter()
     try:
         final = train(cfg, args.out, resume=args.resume, progress=not args.no_progress, log_stdout=False)
     except KeyboardInterrupt:
-        print(f"\ninterrupted: {args.out / cfg.name / 'checkpoint.zip'} is saved; continue with --resume",
-              file=sys.stderr)
+        try:
+            state = read_state(run)
+        except InputError:
+            state = None
+        if state is None:
+            print("\ninterrupted before the first checkpoint: nothing was saved; run the command again "
+                  "(without --resume)", file=sys.stderr)
+        else:
+            print(f"\ninterrupted: {run / 'checkpoint.zip'} holds the run up to {_where(state, cfg)}; "
+                  "continue with --resume", file=sys.stderr)
         return 130
+    except (InputError, FileNotFoundError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     minutes = (time.perf_counter() - t0) / 60
     summary = json.loads((final.parent / "summary.json").read_text())
     print(f"trained in {minutes:.1f} min; kept the {summary['chosen']} policy "
           f"(validation score {min(summary['validation_ppo'], summary['validation_imitation']):.2f}): {final}")
     if args.export:
-        args.export.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(final, args.export)
+        atomic_write_bytes(args.export, final.read_bytes())
         meta = {"config": dataclasses.asdict(cfg), "summary": summary, "minutes": round(minutes, 1)}
-        args.export.with_suffix(".json").write_text(json.dumps(meta, indent=2) + "\n")
+        atomic_write_text(args.export.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
         print(f"exported to {args.export}")
     return 0
 

@@ -1,0 +1,160 @@
+"""A killed training run resumes to the weights and logs of one that was never interrupted.
+
+The kills are real ``SIGKILL``s of a training process, placed deterministically: the process kills
+itself just before its n-th file replacement inside the run folder, the instant at which a
+checkpoint is half written (its temporary file complete, the rename not done). Between two
+replacements nothing on disk changes, so these points cover every state a kill can leave.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+from learning.checkpoint import read_sb3_zip
+from learning.training import TrainConfig, read_state, train
+from planners.fileio import InputError
+
+ROOT = Path(__file__).resolve().parents[1]
+# two DAgger rounds, the transition, two PPO segments (warm-up, then the actor), the selection
+CFG = TrainConfig(name="kill", families=("forest",), sizes=(64,), dagger_rounds=2, maps_per_round=16, bc_epochs=4,
+                  ppo_steps=1024, value_warmup=512, ppo_n_steps=256, ppo_batch=128, ppo_epochs=2,
+                  validation_maps=1, checkpoint_every=512, max_iterations=1000)
+
+DRIVER = """
+import json, os, signal, sys
+from pathlib import Path
+from learning.training import TrainConfig, train
+
+out, kill_at, resume = Path(sys.argv[1]).resolve(), int(sys.argv[2]), sys.argv[3] == "resume"
+real, count = os.replace, 0
+
+def replace(src, dst, *args, **kwargs):
+    global count
+    if Path(dst).resolve().is_relative_to(out):
+        count += 1
+        if count == kill_at:
+            os.kill(os.getpid(), signal.SIGKILL)
+    return real(src, dst, *args, **kwargs)
+
+os.replace = replace
+train(TrainConfig.from_json(sys.argv[4]), out, resume=resume, progress=False, log_stdout=False)
+print("replacements", count)
+"""
+
+
+def _run(tmp: Path, out: Path, kill_at: int, resume: bool) -> subprocess.CompletedProcess:
+    tmp.mkdir(parents=True, exist_ok=True)
+    driver, config = tmp / "driver.py", tmp / "config.json"
+    driver.write_text(DRIVER)
+    config.write_text(json.dumps(dataclasses.asdict(CFG)))
+    return subprocess.run([sys.executable, str(driver), str(out), str(kill_at), "resume" if resume else "fresh",
+                           str(config)], cwd=ROOT, capture_output=True, text=True, timeout=300)
+
+
+def _weights(path: Path) -> dict:
+    return read_sb3_zip(path)[1]
+
+
+def _log(path: Path) -> list[dict]:
+    """progress.csv without the columns that measure time."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    return [{k: v for k, v in r.items() if not k.startswith("time/") and k != "dagger/collect_seconds"} for r in rows]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("reference")
+    done = _run(tmp, tmp / "runs", 0, resume=False)
+    assert done.returncode == 0, done.stderr
+    replacements = int(done.stdout.split()[-1])
+    run = tmp / "runs" / CFG.name
+    return replacements, _weights(run / "final.zip"), _log(run / "tb" / "progress.csv")
+
+
+def _kill_and_resume(tmp: Path, kill_at: int, reference) -> None:
+    _, weights, log = reference
+    out = tmp / "runs"
+    killed = _run(tmp, out, kill_at, resume=False)
+    assert killed.returncode == -9, (kill_at, killed.stderr[-2000:])
+    run = out / CFG.name
+    resumed = _run(tmp, out, 0, resume=(run / "checkpoint.zip").is_file())
+    assert resumed.returncode == 0, (kill_at, resumed.stderr[-2000:])
+    got = _weights(run / "final.zip")
+    assert got.keys() == weights.keys()
+    for k in weights:
+        assert torch.equal(got[k], weights[k]), (kill_at, k)
+    assert _log(run / "tb" / "progress.csv") == log, kill_at
+    assert not list(run.rglob(".*.tmp*")), "the resumed run removes the temporary files the kill left"
+
+
+@pytest.mark.parametrize("fraction", [0.25, 0.5, 0.75, 1.0])
+def test_a_kill_then_resume_equals_an_uninterrupted_run(tmp_path, reference, fraction):
+    _kill_and_resume(tmp_path, max(1, round(fraction * reference[0])), reference)
+
+
+@pytest.mark.slow
+def test_a_kill_at_every_checkpoint_write_then_resume_equals_an_uninterrupted_run(tmp_path, reference):
+    for k in range(1, reference[0] + 1):
+        _kill_and_resume(tmp_path / str(k), k, reference)
+
+
+def test_resume_without_a_checkpoint_says_so(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nothing to resume.*without --resume"):
+        train(CFG, tmp_path, resume=True, progress=False, log_stdout=False)
+
+
+def test_interrupts_report_what_was_saved(tmp_path, monkeypatch, capsys):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("train_script", ROOT / "scripts" / "train.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+
+    def interrupted(cfg, out, **kwargs):
+        raise KeyboardInterrupt
+
+    flags = ["--out", str(tmp_path), "--name", "kill", "--dagger-rounds", "1", "--maps-per-round", "4",
+             "--families", "forest", "--sizes", "64", "--ppo-steps", "0", "--validation-maps", "1", "--no-progress"]
+    monkeypatch.setattr(script, "train", interrupted)
+    assert script.main(flags) == 130
+    assert "before the first checkpoint: nothing was saved" in capsys.readouterr().err
+    assert script.main([*flags, "--resume"]) == 130
+    monkeypatch.undo()
+    assert script.main([*flags, "--resume"]) == 2
+    assert "nothing to resume" in capsys.readouterr().err
+    assert script.main(flags) == 0
+    monkeypatch.setattr(script, "train", interrupted)
+    assert script.main(flags) == 130
+    err = capsys.readouterr().err
+    assert "kill/checkpoint.zip holds the run up to PPO step 0 of 0; continue with --resume" in err, err
+    assert read_state(tmp_path / "kill")["phase"] == "ppo"
+
+
+@pytest.mark.parametrize("field, value", [
+    ("uniform_floor", float("nan")), ("uniform_floor", -1.0), ("uniform_floor", 5.0), ("max_iterations", -5),
+    ("gamma", 1.5), ("sizes", (8,)), ("families", ("nope",)), ("name", "../escape"), ("dagger_betas", ()),
+])
+def test_bad_config_values_are_refused_by_name(tmp_path, field, value):
+    cfg = dataclasses.replace(CFG, **{field: value})
+    with pytest.raises(InputError, match=field):
+        train(cfg, tmp_path, progress=False, log_stdout=False)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(dataclasses.asdict(cfg)))
+    with pytest.raises(InputError, match=rf"bad.json.*{field}"):
+        TrainConfig.from_json(path)
+
+
+def test_unreadable_config_files_are_named(tmp_path):
+    for name, text in (("junk.json", "{not json"), ("list.json", "[1, 2]"), ("keys.json", '{"colour": 1}')):
+        (tmp_path / name).write_text(text)
+        with pytest.raises(InputError, match=name):
+            TrainConfig.from_json(tmp_path / name)
