@@ -30,6 +30,7 @@ from __future__ import annotations
 from gymnasium.envs.registration import register, registry
 
 from envs.actions import ACTION_MODES
+from envs.env_sampler import EnvSampler
 from envs.render import record_episode
 from envs.sampler_env import SamplerEnv
 from envs.sources import (
@@ -42,7 +43,7 @@ from envs.sources import (
     sample_map_paths,
 )
 
-__all__ = ["ACTION_MODES", "ENV_IDS", "FamilySource", "FileSource", "MovingAISource", "ProblemListSource",
+__all__ = ["ACTION_MODES", "ENV_IDS", "EnvSampler", "FamilySource", "FileSource", "MovingAISource", "ProblemListSource",
            "RigidSceneSource", "SamplerEnv", "movingai_dir", "record_episode", "sample_map_paths"]
 
 _FAMILY_IDS = {

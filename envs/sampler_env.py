@@ -24,11 +24,11 @@ class EgocentricObservation:
     towards the goal, and vector features (see ``envs.egocentric``); the same on maps of every size.
     """
 
-    def __init__(self, env: SamplerEnv) -> None:
+    def __init__(self, owner) -> None:
         from envs.egocentric import EGO_VECTOR
         from envs.guided import SCALES, WINDOW
 
-        self.env = env
+        self.owner = owner  # the env or an ``EnvSampler``: whatever holds the episode's ``guide``
         self.space = gym.spaces.Dict({
             "local": gym.spaces.Box(0, 255, (2 * len(SCALES), WINDOW, WINDOW), np.uint8),
             "vector": gym.spaces.Box(-1.0, 1.0, (len(EGO_VECTOR),), np.float32),
@@ -42,8 +42,9 @@ class EgocentricObservation:
 
     def build(self, planner: Planner) -> dict:
         view = planner.view()
-        self.env._guide.update(view)
-        obs = self.env._guide.observe(view)
+        guide = self.owner.guide
+        guide.update(view)
+        obs = guide.observe(view)
         obs["vector"] = np.clip(obs["vector"], -1.0, 1.0)
         return obs
 
@@ -174,20 +175,16 @@ class SamplerEnv(gym.Env):
         self.reward_mode, self.checks_weight = reward, float(checks_weight)
         self.shaping, self.shaping_gamma = bool(shaping), float(shaping_gamma)
         self.render_mode = render_mode
-        self._action_sampler = make_action_sampler(action_mode, self.step_size, uniform_floor,
-                                                   **({"reach": reach} if action_mode == "relative" else {}))
+        self.reach = float(reach)
+        self.uniform_floor = float(uniform_floor)
+        self._action_sampler = self.new_action_sampler()
         self.dim = int(dim if dim is not None else getattr(self.source, "dim", 2))
         self.observation = observation
-        self.uniform_floor = float(uniform_floor)
+        self.obs_size, self.local_size, self.local_scale = obs_size, local_size, local_scale
         self._guide = None
         if (observation == "egocentric" or action_mode == "guided") and self.dim != 2:
             raise InputError("egocentric observations and guided actions are defined for 2-D grid problems")
-        if observation == "egocentric":
-            self._obs = EgocentricObservation(self)
-        elif self.dim == 2:
-            self._obs = GridObservation(obs_size, local_size, local_scale)
-        else:
-            self._obs = VectorObservation(self.dim, angle_dims=3 if self.dim == 6 else 0)
+        self._obs = self.new_observation(self)
         self.observation_space = self._obs.space
         self.action_space = self._action_sampler.action_space(self.dim)
         self.problem: Problem | None = None
@@ -207,11 +204,8 @@ class SamplerEnv(gym.Env):
         cls = PLANNERS[self.planner_name]
         kw = {} if cls in (PRM, LazyPRM) else {"step_size": self.step_size}
         self.planner = cls(problem, sampler=self._action_sampler, seed=int(self.np_random.integers(2**63)), **kw)
-        if self.observation == "egocentric" or self.action_mode == "guided":
-            from envs.guided import GuidedSampling
-
-            self._guide = GuidedSampling(problem, self.step_size, max_iterations=self.max_iterations,
-                                         uniform_floor=self.uniform_floor)
+        self._guide = self.new_guide(problem)
+        if self._guide is not None:
             self.planner.sampler.guide = self._guide
         self._obs.reset(problem, self.max_iterations)
         self._obs.update(self.planner)
@@ -272,6 +266,40 @@ class SamplerEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+
+    # --- the parts a sampler outside the env is built from (``envs.EnvSampler``) -----------------
+
+    def new_action_sampler(self):
+        """A fresh, unbound sampler of this env's action mode: it turns an action into one sample."""
+        return make_action_sampler(self.action_mode, self.step_size, self.uniform_floor,
+                                   **({"reach": self.reach} if self.action_mode == "relative" else {}))
+
+    def new_observation(self, owner):
+        """A fresh observation builder of this env's kind.
+
+        It has ``space``, ``reset(problem, max_iterations)``, ``update(planner)`` and ``build(planner)``;
+        an egocentric one reads the guide from ``owner.guide``.
+        """
+        if self.observation == "egocentric":
+            return EgocentricObservation(owner)
+        if self.dim == 2:
+            return GridObservation(self.obs_size, self.local_size, self.local_scale)
+        return VectorObservation(self.dim, angle_dims=3 if self.dim == 6 else 0)
+
+    def new_guide(self, problem: Problem):
+        """The per-query ``GuidedSampling`` that egocentric observations and guided actions share, or None."""
+        if self.observation != "egocentric" and self.action_mode != "guided":
+            return None
+        from envs.guided import GuidedSampling
+
+        return GuidedSampling(problem, self.step_size, max_iterations=self.max_iterations,
+                              uniform_floor=self.uniform_floor)
+
+    def as_sampler(self, act):
+        """This env's observation and action code as a planner ``Sampler`` driven by ``act(obs, rng)``."""
+        from envs.env_sampler import EnvSampler
+
+        return EnvSampler(self, act)
 
     # --- helpers ---------------------------------------------------------------------------
 

@@ -17,7 +17,7 @@ import numpy as np
 from envs.guided import GuidedSampling
 from learning.fast_policy import FastActor, actor_logits
 from learning.policy_sampler import PolicySampler
-from planners import RRT, GoalBiasedSampler, Problem
+from planners import RRT, GoalBiasedSampler, Problem, Sampler
 
 
 def observations(sampler: PolicySampler, problems: Sequence[Problem], step_size: float = 4.0,
@@ -64,13 +64,14 @@ def forward_pass_us(actor: FastActor, local: np.ndarray, vector: np.ndarray, rep
 
 
 def query_times(policy: PolicySampler, bias: float, problems: Sequence[Problem], seeds: int = 2,
-                step_size: float = 4.0) -> dict[str, dict[str, float]]:
-    """Median per-query wall time (ms), iterations and forward passes: policy, policy without hold, goal bias.
+                step_size: float = 4.0, extra: dict[str, Sampler] | None = None) -> dict[str, dict[str, float]]:
+    """Medians per query: wall time (ms), iterations, forward passes and wall time per iteration (us).
 
-    Runs of the three samplers are interleaved query by query, so drifts in the machine's speed hit all alike.
+    Samplers: the policy, the policy without its hold, goal bias, and ``extra`` (e.g. an ``SB3Sampler``).
+    Runs of the samplers are interleaved query by query, so drifts in the machine's speed hit all alike.
     """
     samplers = {"policy": policy, "policy, no hold": PolicySampler(policy.actor, policy.config, hold=2.0),
-                f"goal bias {bias:g}": GoalBiasedSampler(bias)}
+                f"goal bias {bias:g}": GoalBiasedSampler(bias), **(extra or {})}
     rows: dict[str, list] = {k: [] for k in samplers}
     for p in problems:
         for seed in range(seeds):
@@ -79,6 +80,7 @@ def query_times(policy: PolicySampler, bias: float, problems: Sequence[Problem],
                 planner = RRT(p, step_size=step_size, sampler=sampler, seed=seed)
                 r = planner.solve(max_iterations=20000)
                 wall = time.perf_counter() - t0
-                rows[name].append((wall * 1e3, r.iterations, getattr(planner.sampler, "forward_passes", 0)))
-    return {name: dict(zip(("wall_ms", "iterations", "forward_passes"), np.median(np.array(v), axis=0).tolist(),
-                           strict=True)) for name, v in rows.items()}
+                rows[name].append((wall * 1e3, r.iterations, getattr(planner.sampler, "forward_passes", 0),
+                                   wall * 1e6 / max(r.iterations, 1)))
+    keys = ("wall_ms", "iterations", "forward_passes", "us_per_iteration")
+    return {name: dict(zip(keys, np.median(np.array(v), axis=0).tolist(), strict=True)) for name, v in rows.items()}

@@ -24,9 +24,18 @@ from pathlib import Path
 import numpy as np
 
 from learning.training import TEST_SEED0, TUNING_SEED0, lower_bound
-from planners import PRM, RRT, GoalBiasedSampler, Problem, RRTStar, UniformSampler, load_movingai_scenarios
+from planners import (
+    PRM,
+    RRT,
+    GoalBiasedSampler,
+    Problem,
+    RRTStar,
+    Sampler,
+    UniformSampler,
+    load_movingai_scenarios,
+)
 from planners.benchmark_log import PlannerRuns, experiment_name, write_log
-from planners.fileio import atomic_write_text
+from planners.fileio import InputError, atomic_write_text
 from planners.generators import generate
 
 GOAL_BIASES = (0.01, 0.05, 0.1, 0.2, 0.5)
@@ -129,7 +138,77 @@ class Run:
     vertices: int
 
 
-def _sampler(name: str, policy_path: str | None, step: float):
+#: Sampler names the comparison defines itself; a user sampler takes another name.
+BUILTIN_SAMPLERS = ("uniform", "policy", "expert (reference)")
+
+
+def parse_user_sampler(arg: str) -> tuple[str, str]:
+    """``NAME=SPEC`` from the command line, checked: the name and the spec (see :func:`user_sampler`)."""
+    name, sep, spec = arg.partition("=")
+    name, spec = name.strip(), spec.strip()
+    if not sep or not name or not spec:
+        raise InputError(f"--sampler {arg!r}: expected NAME=SPEC, e.g. mine=user_ppo.zip@SamplerGym/RRT-Forest-v0 "
+                         "or mine=my_module:make_sampler")
+    if name in BUILTIN_SAMPLERS or name.startswith("goal_bias=") or "," in name:
+        raise InputError(f"--sampler {arg!r}: the name {name!r} is taken or has a comma; choose another")
+    return name, spec
+
+
+def user_sampler(spec: str):
+    """The sampler a spec names.
+
+    ``MODEL.zip@ENV_ID[@OPTION...]``: an SB3 model trained on that SamplerGym id (``SB3Sampler``);
+    options are ``stochastic`` (draw actions from the policy's distribution; default deterministic),
+    ``algo=NAME``, or env kwargs ``key=value`` (the ones the model was trained with; values read as
+    JSON where they parse, else as strings). ``module:callable``: ``callable()`` returns a ``Sampler``.
+    """
+    import importlib
+    import json
+
+    if "@" in spec:
+        from learning.sb3_sampler import SB3Sampler
+
+        path, env_id, *options = spec.split("@")
+        kwargs: dict = {"deterministic": True}
+        for opt in options:
+            key, sep, value = opt.partition("=")
+            if opt in ("stochastic", "deterministic"):
+                kwargs["deterministic"] = opt == "deterministic"
+            elif sep and key:
+                try:
+                    kwargs[key] = json.loads(value)
+                except ValueError:
+                    kwargs[key] = value
+            else:
+                raise InputError(f"sampler spec {spec!r}: option {opt!r} is not stochastic, deterministic or key=value")
+        return SB3Sampler(path, env_id, **kwargs)
+    module, sep, attr = spec.partition(":")
+    if not sep or not module or not attr:
+        raise InputError(f"sampler spec {spec!r}: expected MODEL.zip@ENV_ID or module:callable")
+    try:
+        factory = getattr(importlib.import_module(module), attr)
+    except (ImportError, AttributeError) as exc:
+        raise InputError(f"sampler spec {spec!r}: {type(exc).__name__}: {exc}") from None
+    try:
+        sampler = factory()
+    except Exception as exc:  # noqa: BLE001 - the user's code: whatever it raises, name the spec
+        raise InputError(f"sampler spec {spec!r}: {attr}() raised {type(exc).__name__}: {exc}") from None
+    if not isinstance(sampler, Sampler):
+        raise InputError(f"sampler spec {spec!r}: {attr}() returned a {type(sampler).__name__}, not a Sampler "
+                         "(an object with bind(problem) and draw(rng, n, view))")
+    return sampler
+
+
+_USER: dict = {}
+
+
+def _sampler(name: str, cfg: dict):
+    if name in cfg.get("user_samplers", {}):
+        spec = cfg["user_samplers"][name]
+        if spec not in _USER:  # once per process: a model is loaded once, not per run
+            _USER[spec] = user_sampler(spec)
+        return _USER[spec]
+    policy_path, step = cfg["policy"], cfg["step"]
     if name == "uniform":
         return UniformSampler()
     if name.startswith("goal_bias="):
@@ -158,7 +237,7 @@ def run_one(task: tuple) -> Run:
     """Execute one run (a top-level function so worker processes can receive it)."""
     query, planner_name, sampler_name, seed, cfg = task
     problem = query.problem(cfg["movingai_dir"], cfg["tolerance"])
-    sampler = _sampler(sampler_name, cfg["policy"], cfg["step"])
+    sampler = _sampler(sampler_name, cfg)
     cls = PLANNERS[planner_name]
     t0 = time.perf_counter()  # wall time includes binding the sampler (the policy's per-map setup)
     if cls is PRM:
@@ -288,8 +367,11 @@ def summarize(runs: Sequence[Run], biases: dict, seed: int = 0) -> list[dict]:
     return rows
 
 
-def headline(rows: Sequence[dict], biases: dict) -> list[dict]:
-    """Per family (RRT): policy vs best-tuned goal bias, with the target checks."""
+def headline(rows: Sequence[dict], biases: dict, extra: Sequence[str] = ()) -> list[dict]:
+    """Per family (RRT): policy vs best-tuned goal bias, with the target checks.
+
+    ``extra`` samplers (user samplers) get the same median, ratio, success and wall-time columns.
+    """
     out = []
     by = {(r["family"], r["planner"], r["_sampler"]): r for r in rows}
     for fam in sorted({r["family"] for r in rows}):
@@ -309,6 +391,14 @@ def headline(rows: Sequence[dict], biases: dict) -> list[dict]:
             "policy_success": pol["success"], "best_bias_success": gb["success"],
             "policy_wall_ms": pol["median_wall_ms"], "best_bias_wall_ms": gb["median_wall_ms"],
         })
+        for name in extra:
+            u = by.get((fam, "RRT", name))
+            out[-1].update({
+                f"{name}_median": u["median_iterations"] if u else math.nan,
+                f"{name}/best_bias": u["median_iterations"] / max(gb["median_iterations"], 1e-9) if u else math.nan,
+                f"{name}_success": u["success"] if u else math.nan,
+                f"{name}_wall_ms": u["median_wall_ms"] if u else math.nan,
+            })
     return out
 
 
@@ -319,17 +409,17 @@ def _wrap(text: str, width_in: float, fontsize: float) -> str:
 
 
 def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path,
-               planner: str = "RRT") -> list[Path]:
+               planner: str = "RRT", extra: Sequence[str] = ()) -> list[Path]:
     """Write ``ecdf.png`` (:func:`ecdf_figure`) and ``means.png`` (:func:`means_figure`); returns their paths."""
     from planners.plotting import save_figure
 
     if not any(r.split == "test" and r.planner == planner for r in runs):
         return []
-    return [save_figure(ecdf_figure(runs, biases, planner), out_dir / "ecdf.png", dpi=110),
-            save_figure(means_figure(runs, rows, biases, planner), out_dir / "means.png", dpi=110)]
+    return [save_figure(ecdf_figure(runs, biases, planner, extra), out_dir / "ecdf.png", dpi=110),
+            save_figure(means_figure(runs, rows, biases, planner, extra), out_dir / "means.png", dpi=110)]
 
 
-def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT"):
+def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: Sequence[str] = ()):
     """ECDF of iterations-to-solution per sampler, one panel per family (test split).
 
     Titles are wrapped to the figure's width and the layout is constrained, so no text is cut off.
@@ -350,7 +440,8 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT"):
         # fixed colours per role, so panels where the best bias is the default 0.05 read the same
         colors = {"uniform": "C0", "goal_bias=0.05": "C1", "policy": "C3", "expert (reference)": "0.4"}
         colors.setdefault(best_s, "C2")
-        for s in dict.fromkeys(["uniform", "goal_bias=0.05", best_s, "policy", "expert (reference)"]):
+        colors.update({name: f"C{4 + i}" for i, name in enumerate(extra)})
+        for s in dict.fromkeys(["uniform", "goal_bias=0.05", best_s, "policy", *extra, "expert (reference)"]):
             its = np.sort([r.iterations if r.solved else math.inf for r in test if r.family == fam and r.sampler == s])
             if len(its) == 0:
                 continue
@@ -366,7 +457,8 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT"):
     return fig
 
 
-def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT"):
+def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT",
+                 extra: Sequence[str] = ()):
     """Mean iterations-to-solution with 95% bootstrap intervals per family: uniform, best bias, policy.
 
     The legend sits beside the bars, never over them; the title is wrapped to the figure's width.
@@ -379,7 +471,7 @@ def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planne
     ax = fig.add_subplot(1, 1, 1)
     ax.set_title(_wrap(f"{planner} on the test split: mean iterations to solution with 95% bootstrap intervals "
                        "(unsolved runs count as the cap)", size[0] - 1.6, 11), fontsize=11)
-    sel = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy")]
+    sel = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy"), *((n, n) for n in extra)]
     width = 0.8 / len(sel)
     for j, (label, s) in enumerate(sel):
         means, errs = [], []
@@ -393,7 +485,7 @@ def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planne
             lo, hi = (float(v) for v in r["mean_ci95"].split("-"))
             means.append(r["mean_iterations"])
             errs.append((r["mean_iterations"] - lo, hi - r["mean_iterations"]))
-        x = np.arange(len(fams)) + (j - 1) * width
+        x = np.arange(len(fams)) + (j - (len(sel) - 1) / 2) * width
         ax.bar(x, means, width, yerr=np.array(errs).T, capsize=3, label=label)
     ax.set_xticks(np.arange(len(fams)), fams, rotation=30, ha="right")
     ax.set_yscale("log")
@@ -453,6 +545,8 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict)
                 settings["best_goal_bias_on_tuning_split"] = "yes" if biases.get((fam, planner)) == b else "no"
             if sampler == "policy":
                 settings["policy"] = cfg["policy"]
+            if sampler in cfg.get("user_samplers", {}):
+                settings["spec"] = cfg["user_samplers"][sampler]
             planners[name] = PlannerRuns(settings, [{p: getattr(r, f) for p, _, f in OMPL_PROPERTIES} for r in rs])
         queries = len({r.query for r in configs[next(iter(configs))]})
         setup = (f"SamplerGym comparison on {fam}, test split ({queries} queries, all runs of every sampler on the "

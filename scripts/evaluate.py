@@ -3,6 +3,8 @@
     python scripts/evaluate.py                       # default map set, shipped checkpoint
     python scripts/evaluate.py --quick               # fewer test queries, same tuning: about a minute
     python scripts/evaluate.py --policy runs/guided/final.zip --processes 2
+    python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v0   # your SB3 model too
+    python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
 
 Default map set: the five generated families at 128x128 on test seeds (never trained on) and the
 MovingAI maps in ../shared/maps/movingai (or --movingai / SAMPLERGYM_MOVINGAI_DIR). Writes
@@ -19,6 +21,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
 from envs.sources import default_movingai_dir  # noqa: E402
 from learning import PolicySampler  # noqa: E402
@@ -61,6 +64,11 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--no-expert", action="store_true", help="skip the privileged reference")
     ap.add_argument("--quick", action="store_true",
                     help="25 test maps, 4 test scenarios, 2 seeds, no other planners; tuning as in the full run")
+    ap.add_argument("--sampler", action="append", default=[], metavar="NAME=SPEC",
+                    help="also compare this sampler (repeatable): NAME=MODEL.zip@ENV_ID[@stochastic][@key=value...] "
+                         "for a Stable-Baselines3 model trained on that SamplerGym id (deterministic actions unless "
+                         "@stochastic; key=value: the env kwargs it was trained with), or NAME=module:callable "
+                         "for a factory returning a Sampler")
     ap.add_argument("--out", type=Path, default=Path("results/evaluation"))
     args = ap.parse_args(argv)
     if args.quick:
@@ -75,6 +83,16 @@ def parse_args(argv=None) -> argparse.Namespace:
         PolicySampler.load(args.policy)
     except ValueError as exc:
         ap.error(str(exc))
+    args.user_samplers = {}
+    for arg in args.sampler:  # each built once here, so a bad file or spec is refused before any run
+        try:
+            name, spec = E.parse_user_sampler(arg)
+            E.user_sampler(spec)
+        except (ValueError, FileNotFoundError) as exc:
+            ap.error(str(exc))
+        if name in args.user_samplers:
+            ap.error(f"--sampler name {name!r} is given twice")
+        args.user_samplers[name] = spec
     unknown = set(args.families) - set(FAMILIES)
     if unknown:
         ap.error(f"unknown families {sorted(unknown)}; choose from {FAMILIES}")
@@ -92,9 +110,10 @@ def main(argv=None) -> int:
     elif args.movingai_maps:
         print(f"MovingAI maps not found in {mdir}; evaluating generated families only", file=sys.stderr)
     cfg = {"movingai_dir": str(mdir), "tolerance": args.tolerance, "policy": str(args.policy), "step": args.step,
-           "max_iterations": args.max_iterations}
+           "max_iterations": args.max_iterations, "user_samplers": args.user_samplers}
+    users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
-    main_samplers = ["uniform", *biases, "policy"] + ([] if args.no_expert else ["expert (reference)"])
+    main_samplers = ["uniform", *biases, "policy", *users] + ([] if args.no_expert else ["expert (reference)"])
     tasks = E.tuning_tasks(queries, "RRT", cfg)
     tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in main_samplers
               for seed in range(args.seeds)]
@@ -108,7 +127,7 @@ def main(argv=None) -> int:
     for planner in args.other_planners:
         extra += E.tuning_tasks(generated, planner, cfg)
         extra += [(q, planner, s, 0, cfg) for q in generated if q.split == "test"
-                  for s in ("uniform", *biases, "policy")]
+                  for s in ("uniform", *biases, "policy", *users)]
     if extra:
         print(f"{len(extra)} runs of {', '.join(args.other_planners)}", flush=True)
         runs += E.run_all(extra, args.processes)
@@ -120,9 +139,9 @@ def main(argv=None) -> int:
     else:
         pool = []
     rows = E.summarize(runs + pool, best)
-    head = E.headline(rows, best)
+    head = E.headline(rows, best, users)
     E.write_csv(runs, args.out / "runs.csv")
-    plots = E.save_plots([r for r in runs if r.family not in mai] + pool, rows, best, args.out)
+    plots = E.save_plots([r for r in runs if r.family not in mai] + pool, rows, best, args.out, extra=users)
     logs = E.write_ompl_logs(runs + pool, best, args.out / "ompl", cfg)
     # the log folder keeps this run's logs only, so `ompl/*.log` never mixes in an earlier run's map sets
     for old in set((args.out / "ompl").glob("*.log")) - set(logs):
@@ -132,9 +151,13 @@ def main(argv=None) -> int:
             "median_cost", "median_forward_passes"]
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
              "policy_success", "best_bias_success", "policy_wall_ms", "best_bias_wall_ms", "expert_median"]
+    hcols += [f"{n}{c}" for n in users for c in ("_median", "/best_bias", "_success", "_wall_ms")]
+    named = "".join(f"`{n}`: `{spec}`; " for n, spec in args.user_samplers.items())
     text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {(time.perf_counter() - t0) / 60:.1f} "
             f"min; generated maps {args.size}x{args.size} on test seeds, best goal bias chosen on a tuning split. "
             f"Iterations to first solution (cap {args.max_iterations}); the expert is a privileged reference.\n\n"
+            + (f"User samplers: {named.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
+               if users else "") +
             "## RRT: learned policy vs best-tuned goal bias\n\n" + markdown_table(head, hcols) +
             "\n## All cells\n\n" + markdown_table([{k: r[k] for k in cols} for r in rows], cols))
     atomic_write_text(args.out / "summary.md", text)

@@ -1,0 +1,70 @@
+"""A SamplerGym environment's observation and action code as a planner ``Sampler``.
+
+An agent trained in a ``SamplerEnv`` sees an observation and answers an action, which the env's action
+mode turns into one sample. ``EnvSampler`` runs that same code inside any planner: at each draw it
+brings a fresh observation builder up to date from the planner's tree view, asks ``act(obs, rng)`` for
+an action and hands it to a fresh action sampler of the env's mode. With a deterministic ``act``, a
+planner using it and a rollout of the env on the same query and planner seed are the same run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from planners import SamplerBase
+
+if TYPE_CHECKING:
+    from envs.sampler_env import SamplerEnv
+    from planners import Problem
+
+
+class _ViewHolder:
+    """What an observation builder reads from a planner (``view()``), for a sampler that has only a view."""
+
+    __slots__ = ("_view",)
+
+    def __init__(self, view) -> None:
+        self._view = view
+
+    def view(self):
+        return self._view
+
+
+class EnvSampler(SamplerBase):
+    """Samples where ``act`` says, through ``env``'s observation and action mode.
+
+    Args:
+        env: The (unwrapped) ``SamplerEnv`` whose observation kind, action mode, step size, uniform
+            floor and ``max_iterations`` (which scales the iteration feature) define the sampler.
+        act: ``act(obs, rng) -> action``; ``rng`` is the planner's generator, for stochastic choices.
+    """
+
+    guide = None
+
+    def __init__(self, env: SamplerEnv, act: Callable[[Any, np.random.Generator], Any]) -> None:
+        self.env = env
+        self.act = act
+
+    def bind(self, problem: Problem) -> EnvSampler:
+        if problem.dim != self.env.dim:
+            raise ValueError(f"{self!r} is for {self.env.dim}-D problems, got a {problem.dim}-D one")
+        bound = super().bind(problem)
+        bound.guide = self.env.new_guide(problem)
+        bound.actions = self.env.new_action_sampler().bind(problem)
+        if bound.guide is not None:
+            bound.actions.guide = bound.guide
+        bound.observer = self.env.new_observation(bound)
+        bound.observer.reset(problem, self.env.max_iterations)
+        return bound
+
+    def draw(self, rng, n, view):
+        holder = _ViewHolder(view)
+        self.observer.update(holder)
+        self.actions.set_action(self.act(self.observer.build(holder), rng))
+        return self.actions.draw(rng, 1, view)
+
+    def __repr__(self) -> str:
+        return f"EnvSampler({self.env.action_mode} actions, {self.env.observation} observations)"
