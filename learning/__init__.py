@@ -1,9 +1,11 @@
 """Learned samplers: imitation + PPO training of guided sampling policies and ``PolicySampler``.
 
+``ConstantGuidedSampler`` is the ablation: the policy's action classes with a constant distribution.
 ``SB3Sampler`` turns any Stable-Baselines3 model trained on a SamplerGym environment into a sampler.
 """
 
+from learning.ablation import ConstantGuidedSampler
 from learning.policy_sampler import PolicySampler
 from learning.sb3_sampler import SB3Sampler
 
-__all__ = ["PolicySampler", "SB3Sampler"]
+__all__ = ["ConstantGuidedSampler", "PolicySampler", "SB3Sampler"]

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
 from learning.training import TEST_SEED0, TUNING_SEED0, lower_bound
 from planners import (
     PRM,
@@ -88,6 +89,30 @@ def _sampler_bias(name: str) -> float | None:
     if name.startswith("goal_bias="):
         return float(name.split("=")[1])
     return None
+
+
+#: The test-split name of the ablation's runs, each at the frontier probability tuned for its map set.
+CONSTANT = "constant (tuned)"
+
+
+def constant_sampler(frontier: float) -> str:
+    """The sampler name of the constant-distribution ablation at frontier probability ``frontier``."""
+    return f"constant={frontier:g}"
+
+
+def _sampler_constant(name: str) -> float | None:
+    return float(name.split("=")[1]) if name.startswith("constant=") else None
+
+
+def constant_tuning_tasks(queries: Sequence[Query], planner: str, cfg: dict) -> list[tuple]:
+    """Runs that tune the ablation: every frontier probability of ``FRONTIER_GRID`` on every tuning query."""
+    return [(q, planner, constant_sampler(p), 0, cfg) for q in queries if q.split == "tuning" for p in FRONTIER_GRID]
+
+
+def constant_test_tasks(queries: Sequence[Query], planner: str, cfg: dict, best: dict, seeds: int) -> list[tuple]:
+    """The ablation on the test split, at the frontier probability tuned for each query's map set."""
+    return [(q, planner, constant_sampler(best[(q.family, planner)]), seed, cfg) for q in queries
+            if q.split == "test" and (q.family, planner) in best for seed in range(seeds)]
 
 
 def tuning_tasks(queries: Sequence[Query], planner: str, cfg: dict) -> list[tuple]:
@@ -211,6 +236,8 @@ def _sampler(name: str, cfg: dict):
     policy_path, step = cfg["policy"], cfg["step"]
     if name == "uniform":
         return UniformSampler()
+    if name.startswith("constant="):
+        return ConstantGuidedSampler(float(name.split("=")[1]), step_size=step)
     if name.startswith("goal_bias="):
         return GoalBiasedSampler(float(name.split("=")[1]))
     if name == "policy":
@@ -306,10 +333,19 @@ def best_bias(runs: Sequence[Run]) -> dict[tuple[str, str], float]:
     Uniform runs count as bias 0, so the choice is never worse than uniform on the tuning split
     (0 is returned where uniform is best). Test-split runs are never looked at.
     """
+    return _best_on_tuning(runs, _sampler_bias)
+
+
+def best_constant(runs: Sequence[Run]) -> dict[tuple[str, str], float]:
+    """Per (family, planner): the ablation's frontier probability with the lowest median on the tuning split."""
+    return _best_on_tuning(runs, _sampler_constant)
+
+
+def _best_on_tuning(runs: Sequence[Run], value_of) -> dict[tuple[str, str], float]:
     out: dict = {}
     groups: dict = {}
     for r in runs:
-        b = _sampler_bias(r.sampler)
+        b = value_of(r.sampler)
         if r.split == "tuning" and b is not None:
             groups.setdefault((r.family, r.planner, b), []).append(r.iterations if r.solved else math.inf)
     # ascending bias: a tie keeps the smaller bias, the one nearer uniform
@@ -367,10 +403,13 @@ def summarize(runs: Sequence[Run], biases: dict, seed: int = 0) -> list[dict]:
     return rows
 
 
-def headline(rows: Sequence[dict], biases: dict, extra: Sequence[str] = ()) -> list[dict]:
-    """Per family (RRT): policy vs best-tuned goal bias, with the target checks.
+def headline(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
+             constants: dict | None = None) -> list[dict]:
+    """Per family (RRT): policy vs best-tuned goal bias and vs the tuned constant-distribution ablation.
 
-    ``extra`` samplers (user samplers) get the same median, ratio, success and wall-time columns.
+    ``constants`` holds the ablation's tuned frontier probability per (family, planner) (missing for a
+    pooled row, whose maps each have their own). ``extra`` samplers (user samplers) get the same
+    median, ratio, success and wall-time columns.
     """
     out = []
     by = {(r["family"], r["planner"], r["_sampler"]): r for r in rows}
@@ -391,6 +430,15 @@ def headline(rows: Sequence[dict], biases: dict, extra: Sequence[str] = ()) -> l
             "policy_success": pol["success"], "best_bias_success": gb["success"],
             "policy_wall_ms": pol["median_wall_ms"], "best_bias_wall_ms": gb["median_wall_ms"],
         })
+        if constants is not None:
+            c = by.get((fam, "RRT", CONSTANT))
+            out[-1].update({
+                "best_constant": constants.get((fam, "RRT"), "per map"),
+                "constant_median": c["median_iterations"] if c else math.nan,
+                "policy/constant": pol["median_iterations"] / max(c["median_iterations"], 1e-9) if c else math.nan,
+                "constant_success": c["success"] if c else math.nan,
+                "constant_wall_ms": c["median_wall_ms"] if c else math.nan,
+            })
         for name in extra:
             u = by.get((fam, "RRT", name))
             out[-1].update({

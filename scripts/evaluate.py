@@ -15,6 +15,7 @@ runs.csv (every run), summary.md (tables), ecdf.png, means.png and OMPL benchmar
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -114,13 +115,20 @@ def main(argv=None) -> int:
     users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
     main_samplers = ["uniform", *biases, "policy", *users] + ([] if args.no_expert else ["expert (reference)"])
-    tasks = E.tuning_tasks(queries, "RRT", cfg)
+    tasks = E.tuning_tasks(queries, "RRT", cfg) + E.constant_tuning_tasks(queries, "RRT", cfg)
     tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in main_samplers
               for seed in range(args.seeds)]
     print(f"{len(tasks)} RRT runs on {len(queries)} queries ({args.processes} processes)", flush=True)
     t0 = time.perf_counter()
     runs = E.run_all(tasks, args.processes)
     best = E.best_bias(runs)
+    # the ablation (the policy's action classes, constant distribution) on the test split, at the frontier
+    # probability its tuning runs chose for each map set; named as one sampler whatever that probability
+    constants = E.best_constant(runs)
+    ablation_tasks = E.constant_test_tasks(queries, "RRT", cfg, constants, args.seeds)
+    print(f"{len(ablation_tasks)} RRT runs of the constant-distribution ablation at its tuned settings", flush=True)
+    ablation = E.run_all(ablation_tasks, args.processes)
+    runs += [dataclasses.replace(r, sampler=E.CONSTANT) for r in ablation]
     # other planners: uniform, default and best goal bias, policy, on the generated families
     extra = []
     generated = [q for q in queries if q.size]
@@ -139,9 +147,10 @@ def main(argv=None) -> int:
     else:
         pool = []
     rows = E.summarize(runs + pool, best)
-    head = E.headline(rows, best, users)
+    head = E.headline(rows, best, users, constants)
     E.write_csv(runs, args.out / "runs.csv")
-    plots = E.save_plots([r for r in runs if r.family not in mai] + pool, rows, best, args.out, extra=users)
+    plots = E.save_plots([r for r in runs if r.family not in mai] + pool, rows, best, args.out,
+                         extra=[E.CONSTANT, *users])
     logs = E.write_ompl_logs(runs + pool, best, args.out / "ompl", cfg)
     # the log folder keeps this run's logs only, so `ompl/*.log` never mixes in an earlier run's map sets
     for old in set((args.out / "ompl").glob("*.log")) - set(logs):
@@ -150,7 +159,8 @@ def main(argv=None) -> int:
             "mean_ci95", "ratio_to_lower_bound", "median_candidates", "median_checks", "median_wall_ms",
             "median_cost", "median_forward_passes"]
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
-             "policy_success", "best_bias_success", "policy_wall_ms", "best_bias_wall_ms", "expert_median"]
+             "policy_success", "best_bias_success", "policy_wall_ms", "best_bias_wall_ms", "expert_median",
+             "best_constant", "constant_median", "policy/constant", "constant_success", "constant_wall_ms"]
     hcols += [f"{n}{c}" for n in users for c in ("_median", "/best_bias", "_success", "_wall_ms")]
     named = "".join(f"`{n}`: `{spec}`; " for n, spec in args.user_samplers.items())
     text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {(time.perf_counter() - t0) / 60:.1f} "
@@ -158,7 +168,10 @@ def main(argv=None) -> int:
             f"Iterations to first solution (cap {args.max_iterations}); the expert is a privileged reference.\n\n"
             + (f"User samplers: {named.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
                if users else "") +
-            "## RRT: learned policy vs best-tuned goal bias\n\n" + markdown_table(head, hcols) +
+            "## RRT: learned policy vs best-tuned goal bias and vs the tuned constant-distribution ablation\n\n"
+            "The ablation draws the policy's own action classes (frontier, or the cell straight ahead) with a "
+            "constant distribution and no network; its frontier probability is tuned on the tuning split.\n\n"
+            + markdown_table(head, hcols) +
             "\n## All cells\n\n" + markdown_table([{k: r[k] for k in cols} for r in rows], cols))
     atomic_write_text(args.out / "summary.md", text)
     print("\n" + markdown_table(head, hcols))

@@ -1,0 +1,60 @@
+"""The ablation that removes the learning: the policy's action classes drawn from a constant distribution."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from conftest import fine_check_path
+
+from learning import evaluation as E
+from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
+from planners import RRT
+from planners.fileio import InputError
+from planners.generators import generate
+
+
+@pytest.mark.parametrize("family", ["forest", "bugtrap", "maze"])
+def test_paths_are_valid_and_runs_seeded(family):
+    problem = generate(family, 123, 64)
+    runs = []
+    for _ in range(2):
+        planner = RRT(problem, step_size=4.0, sampler=ConstantGuidedSampler(0.7), seed=5)
+        r = planner.solve(max_iterations=20000)
+        runs.append((r.iterations, planner.view().vertices.copy()))
+        assert r.solved and fine_check_path(problem.world, r.path)
+        assert np.allclose(r.path[0], problem.start)
+        assert np.linalg.norm(r.path[-1] - problem.goal) <= problem.goal_tolerance + 1e-9
+    assert runs[0][0] == runs[1][0] and np.array_equal(runs[0][1], runs[1][1])
+
+
+def test_the_frontier_probability_changes_the_run():
+    problem = generate("rooms", 7, 64)
+    its = {p: RRT(problem, step_size=4.0, sampler=ConstantGuidedSampler(p), seed=0).solve(20000).iterations
+           for p in (0.3, 0.9)}
+    assert its[0.3] != its[0.9]
+
+
+@pytest.mark.parametrize("kwargs", [{"frontier": 1.5}, {"frontier": math.nan}, {"frontier": "0.5"},
+                                    {"batch": 0}, {"batch": 2.0}, {"uniform_floor": -0.1}, {"step_size": 0}])
+def test_bad_settings_are_refused_by_name(kwargs):
+    with pytest.raises(InputError, match=next(iter(kwargs))):
+        ConstantGuidedSampler(**kwargs)
+
+
+def test_the_ablation_is_tuned_on_the_tuning_split_only():
+    qs = E.generated_queries(["forest"], 64, n_test=2, n_tune=3)
+    tasks = E.constant_tuning_tasks(qs, "RRT", {})
+    assert {t[0].split for t in tasks} == {"tuning"} and len(tasks) == 3 * len(FRONTIER_GRID)
+    # tuning runs where 0.5 is best; test runs where 0.9 would look best must not sway the choice
+    runs = []
+    for q, planner, name, seed, _ in tasks:
+        its = 10 if name == "constant=0.5" else 100
+        runs.append(E.Run(q.family, str(q.key), "tuning", planner, name, seed, True, its, 1, its, its, 0.001, 1.0,
+                          0, its))
+    runs.append(E.Run("forest", "x", "test", "RRT", "constant=0.9", 0, True, 1, 1, 1, 1, 0.001, 1.0, 0, 1))
+    best = E.best_constant(runs)
+    assert best == {("forest", "RRT"): 0.5}
+    test = E.constant_test_tasks(qs, "RRT", {}, best, seeds=2)
+    assert {t[2] for t in test} == {"constant=0.5"} and {t[0].split for t in test} == {"test"} and len(test) == 4
