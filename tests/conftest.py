@@ -20,6 +20,19 @@ settings.load_profile("samplergym")
 REPO = Path(__file__).resolve().parents[1]
 
 
+def load_script(name: str):
+    """``scripts/<name>.py`` imported as a module (scripts are not a package), registered in ``sys.modules``."""
+    import importlib.util
+    import sys
+
+    spec = importlib.util.spec_from_file_location(f"_script_{name}", Path(__file__).resolve().parents[1] / "scripts"
+                                                  / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def movingai_dir() -> Path | None:
     """The shared MovingAI maps: $SAMPLERGYM_MOVINGAI_DIR, else ../shared/maps/movingai next to the repo."""
     env = os.environ.get("SAMPLERGYM_MOVINGAI_DIR")

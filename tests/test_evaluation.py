@@ -17,17 +17,12 @@ from learning.training import TEST_SEED0
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from conftest import load_script  # noqa: E402
 from test_benchmark_log import read_benchmark_log, runs_table  # noqa: E402
 
 
 def _load_evaluate():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("_script_evaluate", REPO / "scripts" / "evaluate.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("evaluate")
 
 
 def _umask() -> int:

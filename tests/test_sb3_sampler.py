@@ -8,11 +8,9 @@ user's model and a user's Sampler factory beside the baselines.
 from __future__ import annotations
 
 import base64
-import importlib.util
 import json
 import os
 import pickle
-import sys
 import zipfile
 from pathlib import Path
 
@@ -20,7 +18,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from conftest import fine_check_path
+from conftest import fine_check_path, load_script
 from gymnasium.utils import seeding
 from stable_baselines3 import DQN, PPO, SAC
 
@@ -177,11 +175,7 @@ def test_a_model_for_another_env_is_refused_by_name(ppo_forest, tmp_path):
 
 
 def _load_evaluate():
-    spec = importlib.util.spec_from_file_location("_script_evaluate_byos", REPO / "scripts" / "evaluate.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("evaluate")
 
 
 def test_the_worked_example_ranks_a_user_model_and_a_user_factory(ppo_forest, tmp_path, capsys):
