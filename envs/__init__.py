@@ -15,7 +15,7 @@ Registered ids:
 * ``SamplerGym/RRT-Files-v0``: RRT on your own maps (``source_kwargs={"paths": [...]}``), by default on
   the small sample maps shipped in ``envs/data/maps``.
 * ``SamplerGym/RRT-RigidBody-v0``: RRT for a 6-DoF rigid body among 3-D boxes, a fresh
-  ``planners.rigid3d.random_scene`` each episode (``source_kwargs={"n_boxes": ...}``); vector
+  ``planners.worlds.rigid3d.random_scene`` each episode (``source_kwargs={"n_boxes": ...}``); vector
   observations, step 0.5, 5,000 iterations.
 * ``SamplerGym/Planning-v0``: everything by kwargs (``planner``, ``map_source``, ``step_size``,
   ``max_iterations``, ``action_mode``, ...); ``map=array_or_path, start=(x, y), goal=(x, y)`` plans on

@@ -6,7 +6,7 @@ draws exactly one sample. Randomness comes from the planner's generator, itself 
 environment's ``np_random``.
 
 Actions live in ``Box(-1, 1)``; out-of-range values are clipped (documented, as SB3 policies can
-emit them) and NaN, non-numeric or wrongly shaped actions raise ``planners.fileio.InputError``.
+emit them) and NaN, non-numeric or wrongly shaped actions raise ``planners.base.fileio.InputError``.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 from gymnasium import spaces
 
 from planners import SamplerBase
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 ACTION_MODES = ("point", "bias", "mixture", "relative", "guided")
 
@@ -160,18 +160,18 @@ class RelativeAction(ActionSampler):
 class GuidedAction(ActionSampler):
     """``guided``: ``Discrete(N_ACTIONS)``, a log-polar cell ahead of the progress vertex, or the frontier.
 
-    See ``envs.guided``. The environment attaches the episode's ``GuidedSampling`` as ``guide``.
+    See ``planners.guidance.guided``. The environment attaches the episode's ``GuidedSampling`` as ``guide``.
     """
 
     guide = None
 
     def action_space(self, dim: int) -> spaces.Discrete:
-        from envs.guided import N_ACTIONS
+        from planners.guidance.guided import N_ACTIONS
 
         return spaces.Discrete(N_ACTIONS)
 
     def set_action(self, action) -> None:
-        from envs.guided import N_ACTIONS
+        from planners.guidance.guided import N_ACTIONS
 
         expected = f"one integer in [0, {N_ACTIONS}) (Discrete({N_ACTIONS}))"
         a = np.asarray(action) if action is not None else None

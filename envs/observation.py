@@ -13,7 +13,7 @@ import numpy as np
 from gymnasium import spaces
 
 from planners import OccupancyGrid, Planner, Problem
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 CHANNELS = ("obstacles", "tree", "start", "goal")
 VECTOR_FEATURES = (

@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 
 from planners import Planner, Problem
-from planners.plotting import PlannerAnimator, save_gif, save_mp4
+from planners.viz.plotting import PlannerAnimator, save_gif, save_mp4
 
 
 def display_available() -> bool:
@@ -38,7 +38,7 @@ class EpisodeRenderer:
 
     def reset(self, problem: Problem) -> None:
         if problem.dim == 6:
-            from planners.plotting3d import RigidPlannerAnimator
+            from planners.viz.plotting3d import RigidPlannerAnimator
 
             self._animator = RigidPlannerAnimator(problem)
             return

@@ -12,7 +12,7 @@ from envs.actions import ACTION_MODES, make_action_sampler
 from envs.observation import GridObservation, VectorObservation
 from envs.sources import MapSource, make_source, map_problem
 from planners import PRM, RRT, LazyPRM, OccupancyGrid, Planner, Problem, RRTConnect, RRTStar
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 PLANNERS = {"rrt": RRT, "rrtstar": RRTStar, "prm": PRM, "rrtconnect": RRTConnect, "lazyprm": LazyPRM}
 
@@ -21,12 +21,12 @@ class EgocentricObservation:
     """``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``: egocentric windows and vector features.
 
     Windows around the progress vertex at 1/4, 1 and 4 steps per pixel (obstacles and tree), turned
-    towards the goal, and vector features (see ``envs.egocentric``); the same on maps of every size.
+    towards the goal, and vector features (see ``planners.guidance.egocentric``); the same on maps of every size.
     """
 
     def __init__(self, owner) -> None:
-        from envs.egocentric import EGO_VECTOR
-        from envs.guided import SCALES, WINDOW
+        from planners.guidance.egocentric import EGO_VECTOR
+        from planners.guidance.guided import SCALES, WINDOW
 
         self.owner = owner  # the env or an ``EnvSampler``: whatever holds the episode's ``guide``
         self.space = gym.spaces.Dict({
@@ -64,9 +64,9 @@ class SamplerEnv(gym.Env):
     iteration's goal-bias probability; ``mixture`` (k = d + 2): a Gaussian's mean, spread and weight
     against uniform sampling (with a uniform floor); ``relative`` (k = d + 1): an offset and spread
     from the tree vertex nearest the goal. ``guided``: ``Discrete(177)``, a log-polar cell in the
-    frame from the tree's progress vertex towards the goal, or the tree's frontier (``envs.guided``).
+    frame from the tree's progress vertex towards the goal, or the tree's frontier (``planners.guidance.guided``).
     Out-of-range continuous actions are clipped to [-1, 1]; NaN, non-numeric, wrongly shaped or
-    out-of-range discrete actions raise ``planners.fileio.InputError`` (a ``ValueError``) naming the
+    out-of-range discrete actions raise ``planners.base.fileio.InputError`` (a ``ValueError``) naming the
     action and the expected space.
 
     ## Observation Space
@@ -290,7 +290,7 @@ class SamplerEnv(gym.Env):
         """The per-query ``GuidedSampling`` that egocentric observations and guided actions share, or None."""
         if self.observation != "egocentric" and self.action_mode != "guided":
             return None
-        from envs.guided import GuidedSampling
+        from planners.guidance.guided import GuidedSampling
 
         return GuidedSampling(problem, self.step_size, max_iterations=self.max_iterations,
                               uniform_floor=self.uniform_floor)
@@ -320,7 +320,7 @@ class SamplerEnv(gym.Env):
         return info
 
     def _geodesic_potential_init(self) -> float:
-        from planners.gridsearch import distance_field
+        from planners.maps.gridsearch import distance_field
 
         grid = self.problem.world
         if not isinstance(grid, OccupancyGrid):

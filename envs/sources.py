@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from planners import OccupancyGrid, Problem, load_movingai_scenarios
-from planners.fileio import InputError
-from planners.generators import FAMILIES, generate
-from planners.gridsearch import free_components
+from planners.base.fileio import InputError
+from planners.maps.generators import FAMILIES, generate
+from planners.maps.gridsearch import free_components
 
 MapSource = Callable[[np.random.Generator], Problem]
 
@@ -82,10 +82,10 @@ def _draw_seed(pool: np.ndarray | None, np_random: np.random.Generator) -> int:
 
 
 class FamilySource:
-    """Problems from one generated family (see ``planners.generators``), a fresh map each reset.
+    """Problems from one generated family (see ``planners.maps.generators``), a fresh map each reset.
 
     Args:
-        family: One of ``planners.generators.FAMILIES``.
+        family: One of ``planners.maps.generators.FAMILIES``.
         size: Map side in cells.
         goal_tolerance: Goal radius of every problem.
         seeds: Optional pool of map seeds to draw from (e.g. a training split); default any seed.
@@ -239,7 +239,7 @@ def map_problem(map, start=None, goal=None, goal_tolerance: float = 4.0, thresho
 
 
 class RigidSceneSource:
-    """6-DoF rigid-body problems: a fresh ``planners.rigid3d.random_scene`` each reset.
+    """6-DoF rigid-body problems: a fresh ``planners.worlds.rigid3d.random_scene`` each reset.
 
     Args:
         n_boxes: Boxes per scene.
@@ -251,7 +251,7 @@ class RigidSceneSource:
     dim = 6
 
     def __init__(self, n_boxes: int = 30, seeds: Sequence[int] | None = None, **scene_kwargs) -> None:
-        from planners.rigid3d import random_scene
+        from planners.worlds.rigid3d import random_scene
 
         random_scene(0, n_boxes, **scene_kwargs)  # validates the arguments now, not at the first reset
         self.n_boxes, self.scene_kwargs = int(n_boxes), dict(scene_kwargs)
@@ -259,7 +259,7 @@ class RigidSceneSource:
 
     def __call__(self, np_random: np.random.Generator) -> Problem:
         """A fresh random scene, its seed drawn from ``np_random``."""
-        from planners.rigid3d import random_scene
+        from planners.worlds.rigid3d import random_scene
 
         seed = _draw_seed(self.seeds, np_random)
         return random_scene(seed, self.n_boxes, **self.scene_kwargs)

@@ -1,6 +1,6 @@
 """The ablation that removes the learning: the policy's action space with a constant distribution.
 
-The learned sampler chooses, at each decision, one class of the guided action space (``envs.guided``):
+The learned sampler chooses, at each decision, one class of the guided action space (``planners.guidance.guided``):
 a log-polar cell around the tree's progress vertex, in the frame pointing at the goal, or the tree's
 frontier. ``ConstantGuidedSampler`` draws from the same classes, through the same geometry
 (``GuidedSampling.samples``), with a fixed distribution and no network: the frontier with probability
@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from envs.guided import FRONTIER, GuidedSampling, ego_class
 from planners import SamplerBase
-from planners.fileio import InputError
+from planners.base.fileio import InputError
+from planners.guidance.guided import FRONTIER, GuidedSampling, ego_class
 
 #: Frontier probabilities the comparison chooses from on the tuning split (0 is left out: always
 #: straight ahead, it solved no narrow passage, maze or room within 20,000 iterations).

@@ -14,10 +14,10 @@ from collections.abc import Sequence
 import numba as nb
 import numpy as np
 
-from envs.guided import GuidedSampling
 from learning.fast_policy import FastActor, actor_logits
 from learning.policy_sampler import PolicySampler
 from planners import RRT, GoalBiasedSampler, Problem, Sampler
+from planners.guidance.guided import GuidedSampling
 
 
 def observations(sampler: PolicySampler, problems: Sequence[Problem], step_size: float = 4.0,

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import torch
 
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 #: Largest entry the reader decompresses: a policy of a few MB is the norm; this stops zip bombs.
 MAX_ENTRY_BYTES = 256 * 1024 * 1024

@@ -35,9 +35,9 @@ from planners import (
     UniformSampler,
     load_movingai_scenarios,
 )
-from planners.benchmark_log import PlannerRuns, experiment_name, write_log
-from planners.fileio import InputError, atomic_write_text
-from planners.generators import generate
+from planners.base.fileio import InputError, atomic_write_text
+from planners.maps.generators import generate
+from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
 GOAL_BIASES = (0.01, 0.05, 0.1, 0.2, 0.5)
 #: The grid the best goal bias is chosen from: uniform sampling (bias 0) and the sweep.
@@ -459,7 +459,7 @@ def _wrap(text: str, width_in: float, fontsize: float) -> str:
 def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path,
                planner: str = "RRT", extra: Sequence[str] = ()) -> list[Path]:
     """Write ``ecdf.png`` (:func:`ecdf_figure`) and ``means.png`` (:func:`means_figure`); returns their paths."""
-    from planners.plotting import save_figure
+    from planners.viz.plotting import save_figure
 
     if not any(r.split == "test" and r.planner == planner for r in runs):
         return []
@@ -472,7 +472,7 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
 
     Titles are wrapped to the figure's width and the layout is constrained, so no text is cut off.
     """
-    from planners.plotting import new_figure
+    from planners.viz.plotting import new_figure
 
     test = [r for r in runs if r.split == "test" and r.planner == planner]
     fams = sorted({r.family for r in test})
@@ -511,7 +511,7 @@ def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planne
 
     The legend sits beside the bars, never over them; the title is wrapped to the figure's width.
     """
-    from planners.plotting import new_figure
+    from planners.viz.plotting import new_figure
 
     fams = sorted({r.family for r in runs if r.split == "test" and r.planner == planner})
     size = (max(6.0, 1.6 * len(fams)) + 1.6, 4.0)

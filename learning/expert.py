@@ -16,7 +16,7 @@ import numba as nb
 import numpy as np
 
 from planners import OccupancyGrid, Problem, SamplerBase
-from planners.gridsearch import distance_field
+from planners.maps.gridsearch import distance_field
 
 
 @nb.njit(cache=True)

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from envs.guided import FRONTIER, GuidedSampling
 from learning.expert import GeodesicExpert
 from learning.fast_policy import FastActor
 from learning.policy_sampler import sample_classes
 from planners import RRT, Problem, SamplerBase
+from planners.guidance.guided import FRONTIER, GuidedSampling
 
 
 @dataclass

@@ -36,16 +36,16 @@ from collections.abc import Callable
 import numba as nb
 import numpy as np
 
-from envs.egocentric import EGO_VECTOR, _add_vertices, _observe, build_pyramid
-from envs.frontier import cdf_search, frontier_arrays, frontier_shape
-from envs.guided import FRONTIER, FRONTIER_TAU, N_ACTIONS, SCALES, WINDOW, fill_from_cdf, scale_cells
 from learning.checkpoint import read_sb3_zip
 from learning.fast_policy import FastActor, actor_logits, softmax_cdf
 from planners import OccupancyGrid, SampleBatch, SamplerBase
-from planners import _rrt_kernels as K
-from planners._bitgen import bitgen_address, next_double
-from planners.fileio import InputError, check_number
-from planners.planner import CHUNK, FIRST_REFILL, Planner
+from planners.base.fileio import InputError, check_number
+from planners.base.planner import CHUNK, FIRST_REFILL, Planner
+from planners.guidance.egocentric import EGO_VECTOR, _add_vertices, _observe, build_pyramid
+from planners.guidance.frontier import cdf_search, frontier_arrays, frontier_shape
+from planners.guidance.guided import FRONTIER, FRONTIER_TAU, N_ACTIONS, SCALES, WINDOW, fill_from_cdf, scale_cells
+from planners.kernels import rrt as rrt_kernels
+from planners.kernels.bitgen import bitgen_address, next_double
 
 #: Keys of the training config a checkpoint must carry.
 CONFIG_KEYS = ("step_size", "uniform_floor", "batch", "obs_version")
@@ -80,7 +80,7 @@ def sample_classes(logits, temperature, u):
 def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
     """Run the policy if due and draw ``m`` samples from its action distribution into ``pts``/``anch``.
 
-    ``rng`` is the address of the planner's generator (see ``planners._bitgen``), ``kern`` the
+    ``rng`` is the address of the planner's generator (see ``planners.kernels.bitgen``), ``kern`` the
     sampler's compiled state (see ``PolicySampler._setup``). The tree enters as its vertices
     ``X[:n]``, progress vertex and distance. The observation's tree counts are brought up to date
     only for a forward pass, the frontier only for a frontier sample.
@@ -129,17 +129,17 @@ def policy_rrt_run(budget, rng, kern, batch, pts, anch, tree, istate, fstate, la
     qe_buf = np.empty(tree[1].shape[1])
     new = np.empty(X.shape[1])
     for s in range(budget):
-        if istate[K.I_SOLVED] or istate[K.I_N] >= X.shape[0]:
+        if istate[rrt_kernels.I_SOLVED] or istate[rrt_kernels.I_N] >= X.shape[0]:
             return s
         if ist[S_POS] >= ist[S_COUNT]:
             m = min(batch, CHUNK, FIRST_REFILL << min(ist[S_REFILLS], 16))  # 64 << 16 > CHUNK; no overflow
-            policy_draw(X, istate[K.I_N], istate[K.I_BEST_V], fstate[K.F_BEST_D], istate[K.I_ITER], m, rng, kern,
+            policy_draw(X, istate[rrt_kernels.I_N], istate[rrt_kernels.I_BEST_V], fstate[rrt_kernels.F_BEST_D], istate[rrt_kernels.I_ITER], m, rng, kern,
                         pts, anch)
             ist[S_REFILLS] += 1
             ist[S_COUNT] = m
             ist[S_POS] = 0
         p = ist[S_POS]
-        K.rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
+        rrt_kernels.rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
                       q, qe_buf, new)
         ist[S_POS] = p + 1
     return budget
@@ -247,7 +247,7 @@ class PolicySampler(SamplerBase):
         return 0 if self._kernel is None else int(self._kernel[4][0][S_FORWARD])
 
     def _setup(self) -> None:
-        # the guided geometry of envs.guided.GuidedSampling (the training environment's), built
+        # the guided geometry of planners.guidance.guided.GuidedSampling (the training environment's), built
         # without its objects: a bind is paid on every query, and built in Python it cost about a
         # tenth of a bugtrap query
         grid = self.problem.world

@@ -24,7 +24,7 @@ from gymnasium import spaces
 from envs.env_sampler import EnvSampler
 from envs.sampler_env import SamplerEnv
 from learning.checkpoint import read_sb3_zip
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 
 def _algorithms() -> dict[str, Any]:

@@ -34,8 +34,8 @@ from learning.fast_policy import FastActor
 from learning.imitation import Dataset, behaviour_cloning, collect
 from learning.policy_sampler import OBS_VERSION, PolicySampler
 from planners import RRT
-from planners.fileio import InputError, atomic_path, atomic_write_text, check_number
-from planners.generators import FAMILIES, MIN_SIZE, generate
+from planners.base.fileio import InputError, atomic_path, atomic_write_text, check_number
+from planners.maps.generators import FAMILIES, MIN_SIZE, generate
 
 TRAIN_SEEDS = (0, 100_000)
 VALIDATION_SEED0 = 200_000

@@ -1,15 +1,13 @@
 """SamplerGym planning core: worlds, problems, samplers and sampling-based planners (numpy + numba)."""
 
-from planners.grid import OccupancyGrid
-from planners.nn import NearestNeighbors
-from planners.obprm import OBPRM, ObstacleBasedSampler
-from planners.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
-from planners.prm import PRM, LazyPRM
-from planners.problem import Problem, load_movingai_scenarios
-from planners.rigid3d import Box3D, RigidBodyWorld, box_body, load_scene, random_scene, save_scene, thin_wall_scene
-from planners.rrt import RRT, RRTConnect
-from planners.rrtstar import InformedRRTStar, RRTStar
-from planners.samplers import (
+from planners.algorithms.obprm import OBPRM, ObstacleBasedSampler
+from planners.algorithms.prm import PRM, LazyPRM
+from planners.algorithms.rrt import RRT, RRTConnect
+from planners.algorithms.rrtstar import InformedRRTStar, RRTStar
+from planners.algorithms.smoothing import shortcut, simplify, smooth
+from planners.base.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
+from planners.base.problem import Problem, load_movingai_scenarios
+from planners.base.samplers import (
     ANCHOR_GOAL,
     ANCHOR_NONE,
     ANCHOR_WORLD,
@@ -20,9 +18,19 @@ from planners.samplers import (
     SamplerBase,
     UniformSampler,
 )
-from planners.shapes import Circle, GeometricWorld, Rectangle
-from planners.smoothing import shortcut, simplify, smooth
-from planners.world import World
+from planners.base.world import World
+from planners.datastructures.nn import NearestNeighbors
+from planners.worlds.grid import OccupancyGrid
+from planners.worlds.rigid3d import (
+    Box3D,
+    RigidBodyWorld,
+    box_body,
+    load_scene,
+    random_scene,
+    save_scene,
+    thin_wall_scene,
+)
+from planners.worlds.shapes import Circle, GeometricWorld, Rectangle
 
 __all__ = [
     "ANCHOR_GOAL",

@@ -16,7 +16,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import envs  # noqa: E402
-from planners.benchmark import markdown_table  # noqa: E402
+from planners.tools.benchmark import markdown_table  # noqa: E402
 
 gym.register_envs(envs)
 
@@ -47,7 +47,7 @@ def main(argv=None) -> int:
 
         from PIL import Image
 
-        from planners.generators import generate
+        from planners.maps.generators import generate
 
         obs = generate("rooms", 0, 128).world.obstacles
         files = [str(Path(tempfile.mkdtemp()) / "rooms.png")]

@@ -29,10 +29,10 @@ from planners import (  # noqa: E402
     load_movingai_scenarios,
     ompl_bridge,  # noqa: E402
 )
-from planners import benchmark as B  # noqa: E402
-from planners.benchmark_log import PlannerRuns, experiment_name, write_log  # noqa: E402
-from planners.fileio import InputError, atomic_write_text  # noqa: E402
-from planners.generators import FAMILIES, generate  # noqa: E402
+from planners.base.fileio import InputError, atomic_write_text  # noqa: E402
+from planners.maps.generators import FAMILIES, generate  # noqa: E402
+from planners.tools import benchmark  # noqa: E402
+from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log  # noqa: E402
 
 
 def movingai_dir(arg: str | None) -> Path | None:
@@ -62,12 +62,12 @@ def map_set(args) -> dict[str, list[Problem]]:
     return maps
 
 
-def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[B.Record]]:
+def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[benchmark.Record]]:
     """RRT per-iteration time, ours vs OMPL, uniform and goal-biased, on every map."""
     rows, records = [], []
     for name, problems in maps.items():
         for bias, ours_label in ((0.0, "RRT"), (0.05, "RRT+goal0.05")):
-            ours = [B.run_one(p, ours_label, step=args.step, seed=i, max_iterations=args.max_iterations, map_name=name)
+            ours = [benchmark.run_one(p, ours_label, step=args.step, seed=i, max_iterations=args.max_iterations, map_name=name)
                     for i, p in enumerate(problems)]
             records += ours
             row = {"map": name, "goal_bias": bias, "ours_us": _us(ours), "ours_solved": _rate(ours)}
@@ -76,12 +76,12 @@ def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[B.Record]]:
                 for i, p in enumerate(problems):
                     o = ompl_bridge.OmplGridPlanner(p, "RRT", step_size=args.step, goal_bias=bias,
                                                     seed=i).run(args.max_iterations)
-                    om.append(B.Record(name, p.name, f"OMPL RRT b={bias}", o.solved, o.iterations, o.time,
+                    om.append(benchmark.Record(name, p.name, f"OMPL RRT b={bias}", o.solved, o.iterations, o.time,
                                        o.time / max(o.iterations, 1) * 1e6, o.cost, -1, o.num_vertices, i))
                 records += om
                 row |= {"ompl_us": _us(om), "ompl_solved": _rate(om), "ratio": _us(ours) / _us(om)}
             rows.append(row)
-            print(B.markdown_table([row]).splitlines()[-1], flush=True)
+            print(benchmark.markdown_table([row]).splitlines()[-1], flush=True)
     return rows, records
 
 
@@ -106,8 +106,8 @@ def growth(args, use_ompl: bool, d: Path | None) -> tuple[list[dict], list[dict]
         far = free[np.argmax(np.abs(free - c).sum(axis=1))]
         # a goal region of radius 1e-9 is never reached by uniform sampling: the tree just grows
         p = Problem(g, g.cell_center(*c), g.cell_center(*far), goal_tolerance=1e-9)
-        step_fn = B.ours_growth_step(p, args.step, 0)
-        for w in B.growth_profile(step_fn, checkpoints):
+        step_fn = benchmark.ours_growth_step(p, args.step, 0)
+        for w in benchmark.growth_profile(step_fn, checkpoints):
             rows.append({"map": name, "planner": "ours RRT", **w})
         if use_ompl:
             o = ompl_bridge.OmplGridPlanner(p, "RRT", step_size=args.step, goal_bias=0.0, seed=0)
@@ -116,20 +116,20 @@ def growth(args, use_ompl: bool, d: Path | None) -> tuple[list[dict], list[dict]
                 r = o.run(k)
                 return r.num_vertices, r.time
 
-            for w in B.growth_profile(ompl_step, checkpoints, chunk=5000):
+            for w in benchmark.growth_profile(ompl_step, checkpoints, chunk=5000):
                 rows.append({"map": name, "planner": "OMPL RRT", **w})
         V = step_fn.planner.planner_data().vertices
         lo, hi = g.bounds
-        for r in B.nn_scaling(V, checkpoints, lo, hi):
+        for r in benchmark.nn_scaling(V, checkpoints, lo, hi):
             nn_rows.append({"map": name, **r})
     return rows, nn_rows
 
 
-def all_planners(maps, args) -> list[B.Record]:
+def all_planners(maps, args) -> list[benchmark.Record]:
     records = []
     for name, problems in maps.items():
-        for label in B.PLANNERS:
-            records += [B.run_one(p, label, step=args.step, seed=i, max_iterations=args.max_iterations, map_name=name)
+        for label in benchmark.PLANNERS:
+            records += [benchmark.run_one(p, label, step=args.step, seed=i, max_iterations=args.max_iterations, map_name=name)
                         for i, p in enumerate(problems)]
         print(f"  {name}: done", flush=True)
     return records
@@ -148,13 +148,13 @@ OMPL_PROPERTIES = (
 )
 
 
-def write_ompl_logs(records: list[B.Record], args, out_dir: Path) -> list[Path]:
+def write_ompl_logs(records: list[benchmark.Record], args, out_dir: Path) -> list[Path]:
     """One OMPL benchmark log per map: each planner label is one OMPL planner configuration.
 
     ``time`` is in seconds; ``time per iteration`` in microseconds. Counts a planner does not report
     (OMPL's collision checks, written as -1 in the CSV) are left empty, which the reader stores as NULL.
     """
-    by_map: dict[str, dict[str, list[B.Record]]] = {}
+    by_map: dict[str, dict[str, list[benchmark.Record]]] = {}
     for r in records:
         by_map.setdefault(r.map, {}).setdefault(r.planner, []).append(r)
     paths = []
@@ -197,8 +197,8 @@ def main(argv=None) -> int:
         print("OMPL not installed (pip install -c constraints.txt -e '.[bench]'); running without it", file=sys.stderr)
     maps = map_set(args)
     # load compiled kernels before any timing
-    for label in B.PLANNERS:
-        B.run_one(next(iter(maps.values()))[0], label, step=args.step, seed=0, max_iterations=200)
+    for label in benchmark.PLANNERS:
+        benchmark.run_one(next(iter(maps.values()))[0], label, step=args.step, seed=0, max_iterations=200)
     out = io.StringIO()
     header = (f"# Planner benchmark\n\n{platform.processor() or platform.machine()}, "
               f"Python {platform.python_version()}, "
@@ -211,7 +211,7 @@ def main(argv=None) -> int:
     rows, records = throughput(maps, args, use_ompl)
     cols = ["map", "goal_bias", "ours_us", "ompl_us", "ratio", "ours_solved", "ompl_solved"] if use_ompl else \
         ["map", "goal_bias", "ours_us", "ours_solved"]
-    table = B.markdown_table(rows, cols)
+    table = benchmark.markdown_table(rows, cols)
     out.write("## RRT time per iteration (us), ours vs OMPL\n\n" + table + "\n")
     if use_ompl:
         ratios = np.array([r["ratio"] for r in rows])
@@ -222,21 +222,21 @@ def main(argv=None) -> int:
 
     print("## Tree growth (uniform RRT)\n", flush=True)
     g_rows, nn_rows = growth(args, use_ompl, movingai_dir(args.movingai))
-    gt = B.markdown_table(g_rows, ["map", "planner", "from_vertices", "to_vertices", "iterations", "us_per_iteration"])
-    nt = B.markdown_table(nn_rows, ["map", "vertices", "index_us", "numpy_scan_us"])
+    gt = benchmark.markdown_table(g_rows, ["map", "planner", "from_vertices", "to_vertices", "iterations", "us_per_iteration"])
+    nt = benchmark.markdown_table(nn_rows, ["map", "vertices", "index_us", "numpy_scan_us"])
     out.write("## Per-iteration time while the tree grows\n\n" + gt
               + "\n## Nearest-neighbour query time\n\n" + nt + "\n")
     print(gt + "\n" + nt)
 
     print("## Every planner on every map\n", flush=True)
     recs = all_planners(maps, args)
-    summary = B.summarize(recs)
-    st = B.markdown_table(summary, ["map", "planner", "runs", "success", "median_iterations", "us_per_iteration",
+    summary = benchmark.summarize(recs)
+    st = benchmark.markdown_table(summary, ["map", "planner", "runs", "success", "median_iterations", "us_per_iteration",
                                     "median_cost", "median_checks"])
     out.write("## Every planner on every map (iterations to first solution)\n\n" + st)
     print(st)
 
-    all_records = B.records_to_dicts(records + recs)
+    all_records = benchmark.records_to_dicts(records + recs)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(all_records[0]))
     w.writeheader()

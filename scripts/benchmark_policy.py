@@ -23,8 +23,8 @@ from learning import evaluation as E  # noqa: E402
 from learning.benchmark import forward_pass_us, observations, query_times  # noqa: E402
 from learning.policy_sampler import PolicySampler  # noqa: E402
 from learning.training import TEST_SEED0  # noqa: E402
-from planners.benchmark import markdown_table  # noqa: E402
-from planners.generators import FAMILIES, generate  # noqa: E402
+from planners.maps.generators import FAMILIES, generate  # noqa: E402
+from planners.tools.benchmark import markdown_table  # noqa: E402
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 

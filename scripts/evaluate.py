@@ -27,9 +27,9 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 from envs.sources import default_movingai_dir  # noqa: E402
 from learning import PolicySampler  # noqa: E402
 from learning import evaluation as E  # noqa: E402
-from planners.benchmark import markdown_table  # noqa: E402
-from planners.fileio import atomic_write_text  # noqa: E402
-from planners.generators import FAMILIES  # noqa: E402
+from planners.base.fileio import atomic_write_text  # noqa: E402
+from planners.maps.generators import FAMILIES  # noqa: E402
+from planners.tools.benchmark import markdown_table  # noqa: E402
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",

@@ -30,8 +30,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from planners.fileio import InputError  # noqa: E402
-from planners.workflow import (  # noqa: E402
+from planners.base.fileio import InputError  # noqa: E402
+from planners.tools.workflow import (  # noqa: E402
     METRICS,
     PLANNERS,
     SAMPLERS,
@@ -68,13 +68,13 @@ def pick_start_goal(grid) -> tuple[tuple[float, float], tuple[float, float]]:
 
     import matplotlib.pyplot as plt
 
-    from planners import plotting as P
+    from planners.viz import plotting
 
     picks: list[tuple[float, float]] = []
     fig, ax = plt.subplots(figsize=(8, 8))
     title = "SamplerGym: pick start and goal"
     fig.canvas.manager.set_window_title(title)
-    P.draw_world(ax, grid)
+    plotting.draw_world(ax, grid)
     ax.set_title("double-click the start")
 
     def on_click(event) -> None:
@@ -87,7 +87,7 @@ def pick_start_goal(grid) -> tuple[tuple[float, float], tuple[float, float]]:
             fig.canvas.draw_idle()
             return
         picks.append(q)
-        ax.plot(*q, "o" if len(picks) == 1 else "*", color=P.START_COLOR if len(picks) == 1 else P.GOAL_COLOR,
+        ax.plot(*q, "o" if len(picks) == 1 else "*", color=plotting.START_COLOR if len(picks) == 1 else plotting.GOAL_COLOR,
                 markersize=10)
         ax.set_title("double-click the goal" if len(picks) == 1 else "planning...")
         fig.canvas.draw_idle()

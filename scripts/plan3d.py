@@ -3,9 +3,9 @@
     python scripts/plan3d.py planners/scenes/window.scene --setup prm --out results/plan3d
     python scripts/plan3d.py my.scene --setup rrt --seed 3 --out results/rrt3
 
-Set-ups (planners.rigid3d.setup_planner): ``prm``: PRM, 5,000 samples, k = 3, Dijkstra on the
+Set-ups (planners.worlds.rigid3d.setup_planner): ``prm``: PRM, 5,000 samples, k = 3, Dijkstra on the
 (x, y, z, cos, sin of each angle) metric; ``rrt``: RRT, step 0.01 of the scene's longest side, goal
-distance 1.0, 5% goal bias, at most 20,000 iterations. Scene format: planners.rigid3d.load_scene.
+distance 1.0, 5% goal bias, at most 20,000 iterations. Scene format: planners.worlds.rigid3d.load_scene.
 Writes plan3d.png (the scene, the path and the body along it) and, when solved, plan3d.gif (the body
 flying the path) under --out, each atomically, and prints iterations, checks, time and path length.
 Exit status: 0 solved, 1 not solved within the budget, 2 bad input or an output that cannot be written.
@@ -20,13 +20,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from planners.fileio import InputError  # noqa: E402
-from planners.rigid3d import SETUPS, load_scene, setup_planner  # noqa: E402
+from planners.base.fileio import InputError  # noqa: E402
+from planners.worlds.rigid3d import SETUPS, load_scene, setup_planner  # noqa: E402
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("scene", type=Path, help="scene file (format: planners.rigid3d.load_scene)")
+    ap.add_argument("scene", type=Path, help="scene file (format: planners.worlds.rigid3d.load_scene)")
     ap.add_argument("--setup", choices=SETUPS, required=True, help="the seed project's PRM or RRT set-up")
     ap.add_argument("--seed", type=int, default=0, help="planner seed (>= 0)")
     ap.add_argument("--out", type=Path, default=Path("results/plan3d"), help="folder for plan3d.png and plan3d.gif")
@@ -52,8 +52,8 @@ def main(argv=None) -> int:
     r = planner.solve(max_iterations=budget)
 
     # imported only now: matplotlib costs a second, and bad input should fail fast
-    from planners.plotting import save_figure
-    from planners.plotting3d import animate_rigid, plot_scene
+    from planners.viz.plotting import save_figure
+    from planners.viz.plotting3d import animate_rigid, plot_scene
 
     files = []
     t0 = time.perf_counter()

@@ -31,9 +31,9 @@ def main(argv=None) -> int:
     from learning import PolicySampler
     from learning.training import TEST_SEED0
     from planners import RRT, GoalBiasedSampler, RRTConnect, load_scene
-    from planners.generators import generate
-    from planners.plotting import new_figure, plot, save_figure
-    from planners.plotting3d import plot_scene
+    from planners.maps.generators import generate
+    from planners.viz.plotting import new_figure, plot, save_figure
+    from planners.viz.plotting3d import plot_scene
 
     policy = PolicySampler.load(args.policy)
     best = args.best_bias or [0.2] * len(args.families)

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import settings
 
 from planners import GeometricWorld, OccupancyGrid
-from planners.shapes import Circle
+from planners.worlds.shapes import Circle
 
 # derandomized so CI runs are reproducible; examples still cover the strategies broadly
 settings.register_profile("samplergym", derandomize=True, deadline=None, max_examples=60, print_blob=True)

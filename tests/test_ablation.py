@@ -11,8 +11,8 @@ from conftest import fine_check_path
 from learning import evaluation as E
 from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
 from planners import RRT
-from planners.fileio import InputError
-from planners.generators import generate
+from planners.base.fileio import InputError
+from planners.maps.generators import generate
 
 
 @pytest.mark.parametrize("family", ["forest", "bugtrap", "maze"])

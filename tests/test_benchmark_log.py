@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from planners.benchmark_log import PlannerRuns, experiment_name, format_log, write_log
-from planners.fileio import InputError
+from planners.base.fileio import InputError
+from planners.tools.benchmark_log import PlannerRuns, experiment_name, format_log, write_log
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -251,16 +251,16 @@ def _load_script(name: str):
 def test_benchmark_planners_writes_a_log_per_map(tmp_path):
     from types import SimpleNamespace
 
-    from planners import benchmark as B
-    from planners.generators import generate
+    from planners.maps.generators import generate
+    from planners.tools import benchmark
 
     bp = _load_script("benchmark_planners")
     args = SimpleNamespace(step=4.0, max_iterations=3000)
     problems = [generate("forest", s, 64) for s in range(2)]
-    recs = [B.run_one(p, label, step=4.0, seed=i, max_iterations=3000, map_name="forest-64")
+    recs = [benchmark.run_one(p, label, step=4.0, seed=i, max_iterations=3000, map_name="forest-64")
             for label in ("RRT", "PRM") for i, p in enumerate(problems)]
     # OMPL's runs report no collision checks (-1 in the CSV): NULL in the database
-    recs.append(B.Record("forest-64", problems[0].name, "OMPL RRT b=0.0", True, 10, 0.01, 1000.0, 40.0, -1, 11, 0))
+    recs.append(benchmark.Record("forest-64", problems[0].name, "OMPL RRT b=0.0", True, 10, 0.01, 1000.0, 40.0, -1, 11, 0))
     paths = bp.write_ompl_logs(recs, args, tmp_path / "ompl")
     assert [p.name for p in paths] == ["forest-64.log"]
     assert stat.S_IMODE(paths[0].stat().st_mode) == 0o666 & ~_umask()

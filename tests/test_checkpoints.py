@@ -14,7 +14,7 @@ import pytest
 import torch
 
 from learning import PolicySampler
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 

@@ -20,7 +20,7 @@ SCRIPT = textwrap.dedent("""
     sys.modules["scipy"] = None  # "import scipy" now raises ImportError, as on a core install
     import numpy as np
     from planners import RRT, OccupancyGrid, Problem, GoalBiasedSampler
-    from planners.rigid3d import thin_wall_scene
+    from planners.worlds.rigid3d import thin_wall_scene
 
     grid = np.zeros((64, 64), bool)
     grid[20:44, 30:34] = True

@@ -10,7 +10,7 @@ from PIL import Image
 
 import envs
 from envs import ENV_IDS, SamplerEnv
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 gym.register_envs(envs)
 MOVINGAI_ENV = "SAMPLERGYM_MOVINGAI_DIR"

@@ -15,7 +15,7 @@ from PIL import Image
 import envs
 from envs import ENV_IDS, SamplerEnv, record_episode
 from planners import RRT, UniformSampler
-from planners.generators import generate
+from planners.maps.generators import generate
 
 gym.register_envs(envs)
 
@@ -286,7 +286,7 @@ def test_problem_option_and_lower_bound():
 
 @pytest.mark.parametrize("shape", [(128, 128), (37, 53), (5, 3)])
 def test_pyramid_levels_match_a_numpy_reference(shape):
-    from envs.egocentric import _pyramid_level
+    from planners.guidance.egocentric import _pyramid_level
 
     obstacles = np.random.default_rng(1).random(shape) < 0.3
     for f in (1, 2, 3, 4, 16):
@@ -301,9 +301,9 @@ def test_pyramid_levels_match_a_numpy_reference(shape):
 def test_frontier_is_the_visible_uncovered_free_neighbour_cells(seed):
     # the incremental, lazily checked frontier (box-sum shortcut included) against its definition,
     # checked cell by cell with the planners' own motion check
-    from envs.frontier import Frontier
     from planners import OccupancyGrid, Problem
-    from planners._geometry import motion_free
+    from planners.guidance.frontier import Frontier
+    from planners.kernels.geometry import motion_free
 
     rng = np.random.default_rng(seed)
     res = (1.0, 0.5, 1.0, 0.25)[seed]

@@ -3,7 +3,7 @@
 Readers: images, MovingAI ``.map`` and ``.scen``, ROS map_server YAML, rigid-body scene files, sampler
 checkpoints and environment actions. Each gets random bytes and structured near-misses of its format
 (hypothesis, derandomized, so CI is reproducible). The contract under test: a reader returns a valid
-object, or raises :class:`planners.fileio.InputError` whose message names the file or argument; never
+object, or raises :class:`planners.base.fileio.InputError` whose message names the file or argument; never
 another exception type, never a hang (each example has a deadline).
 """
 
@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from planners import OccupancyGrid, Problem, load_movingai_scenarios, load_scene
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 FUZZ = settings(max_examples=40, deadline=2000, suppress_health_check=[HealthCheck.function_scoped_fixture])
 

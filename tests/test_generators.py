@@ -9,8 +9,8 @@ import pytest
 from scipy import ndimage
 
 from planners import Problem
-from planners.generators import FAMILIES, generate
-from planners.gridsearch import connected, free_components, shortest_path_length
+from planners.maps.generators import FAMILIES, generate
+from planners.maps.gridsearch import connected, free_components, shortest_path_length
 
 SIZES_AND_SEEDS = [(32, range(5)), (64, range(10)), (128, range(30)), (256, range(3))]
 

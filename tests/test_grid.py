@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from planners import OccupancyGrid
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 # --- construction ------------------------------------------------------------------------------
 
@@ -259,7 +259,7 @@ def test_bad_origin_is_refused():
 
 
 def test_shortest_path_is_in_the_grid_frame():
-    from planners.gridsearch import shortest_path, shortest_path_length
+    from planners.maps.gridsearch import shortest_path, shortest_path_length
 
     a = np.zeros((5, 5), bool)
     a[1:4, 2] = True

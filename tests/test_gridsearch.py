@@ -13,7 +13,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from planners import OccupancyGrid, load_movingai_scenarios
-from planners.gridsearch import connected, distance_field, free_components, shortest_path, shortest_path_length
+from planners.maps.gridsearch import connected, distance_field, free_components, shortest_path, shortest_path_length
 
 STEPS = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if (dr, dc) != (0, 0)]
 

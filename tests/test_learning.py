@@ -14,7 +14,7 @@ from learning import PolicySampler
 from learning.fast_policy import FastActor
 from learning.training import TEST_SEED0, TrainConfig, train
 from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler
-from planners.generators import generate
+from planners.maps.generators import generate
 
 TINY = TrainConfig(name="tiny", families=("forest",), sizes=(64,), dagger_rounds=2, maps_per_round=32, bc_epochs=10,
                    ppo_steps=1024, value_warmup=512, ppo_n_steps=256, ppo_batch=128, ppo_epochs=2,
@@ -171,7 +171,7 @@ def test_a_frontier_decision_holds_until_the_progress_vertex_moves():
 def test_policy_sampler_observes_what_the_training_environment_observes(family, size):
     # the sampler builds the guided geometry without GuidedSampling's objects; the policy must still
     # see at inference exactly what it was trained on
-    from envs.guided import GuidedSampling
+    from planners.guidance.guided import GuidedSampling
 
     p = generate(family, TEST_SEED0, size)
     grower = RRT(p, step_size=4.0, seed=0)

@@ -7,7 +7,7 @@ import pytest
 from conftest import fine_check_path
 
 from planners import PRM, Circle, GeometricWorld, OccupancyGrid, Problem, Rectangle
-from planners.obprm import OBPRM, ObstacleBasedSampler, compare_prm_variants, wall_with_gap
+from planners.algorithms.obprm import OBPRM, ObstacleBasedSampler, compare_prm_variants, wall_with_gap
 
 
 def _grid_clearance(grid: OccupancyGrid, pts: np.ndarray) -> np.ndarray:

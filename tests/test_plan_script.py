@@ -11,7 +11,7 @@ import pytest
 from conftest import REPO, fine_check_path
 from PIL import Image
 
-from planners.workflow import load_map, make_planner, plan_on_image
+from planners.tools.workflow import load_map, make_planner, plan_on_image
 
 SCRIPT = REPO / "scripts" / "plan.py"
 
@@ -245,7 +245,7 @@ def _needs_robot_radius():
     from planners import OccupancyGrid
 
     if "robot_radius" not in inspect.signature(OccupancyGrid.from_file).parameters:
-        pytest.skip("OccupancyGrid.from_file(robot_radius=...) is not in this tree yet (planners/grid.py)")
+        pytest.skip("OccupancyGrid.from_file(robot_radius=...) is not in this tree yet (planners/worlds/grid.py)")
 
 
 def test_radius_keeps_the_path_a_radius_away_from_obstacles(map_png, tmp_path):

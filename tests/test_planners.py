@@ -28,7 +28,7 @@ from planners import (
     SamplerBase,
     UniformSampler,
 )
-from planners import _rrt_kernels as K
+from planners.kernels import rrt as rrt_kernels
 
 ALL = [RRT, RRTConnect, RRTStar, InformedRRTStar, PRM, LazyPRM]
 
@@ -291,11 +291,11 @@ def _uniform_rrt_loop(budget, rng, tree, istate, fstate, last, world, space, goa
     q, qe, new = np.empty(2), np.empty(2), np.empty(2)
     sample = np.empty(2)
     for s in range(budget):
-        if istate[K.I_SOLVED] or istate[K.I_N] >= tree[0].shape[0]:
+        if istate[rrt_kernels.I_SOLVED] or istate[rrt_kernels.I_N] >= tree[0].shape[0]:
             return s
         for d in range(2):
             sample[d] = low[d] + (high[d] - low[d]) * rng.random()
-        K.rrt_iterate(sample, 0, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb, q, qe,
+        rrt_kernels.rrt_iterate(sample, 0, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb, q, qe,
                       new)
     return budget
 
@@ -402,8 +402,8 @@ def test_uniform_sampler_stays_in_bounds(open_problem):
 
 def test_lazy_prm_resolution_in_bounded_pieces(monkeypatch):
     """One search per call (the time limit is looked at in between) changes nothing but the pacing."""
-    import planners.prm as prm_mod
-    from planners.generators import generate
+    import planners.algorithms.prm as prm_mod
+    from planners.maps.generators import generate
 
     problem = generate("maze", 3, 64)
     ref = LazyPRM(problem, seed=2).solve(max_iterations=20000)
@@ -422,7 +422,7 @@ def test_lazy_prm_resolution_in_bounded_pieces(monkeypatch):
 def test_compiled_draws_through_the_bitgen_address_continue_the_generators_stream(bitgen):
     import numba as nb
 
-    from planners._bitgen import bitgen_address, next_double
+    from planners.kernels.bitgen import bitgen_address, next_double
 
     @nb.njit
     def draw(address, n):

@@ -24,7 +24,7 @@ from planners import (
     RRTConnect,
     plotting,
 )
-from planners.plotting import (
+from planners.viz.plotting import (
     PATH_COLOR,
     TREE_COLORS,
     animate_planner,
@@ -312,7 +312,7 @@ def _ros_like_grid() -> OccupancyGrid:
     try:
         return OccupancyGrid(obs, 0.05, origin=(-1.0, -2.0), y_up=True)
     except TypeError:
-        pytest.skip("OccupancyGrid(origin=..., y_up=...) is not in this tree yet (planners/grid.py)")
+        pytest.skip("OccupancyGrid(origin=..., y_up=...) is not in this tree yet (planners/worlds/grid.py)")
 
 
 def test_a_grid_is_drawn_over_its_true_extent_with_y_up():
@@ -336,7 +336,7 @@ def test_a_grid_is_drawn_over_its_true_extent_with_y_up():
 
 
 def test_plan_on_image_draws_a_y_up_map_the_right_way_up(tmp_path):
-    from planners.workflow import plan_on_image
+    from planners.tools.workflow import plan_on_image
 
     grid = _ros_like_grid()
     out = plan_on_image(grid, (-0.2, -1.8), (1.8, -0.2), planner="rrt-connect", seed=0, out_dir=tmp_path,
@@ -350,7 +350,7 @@ def test_plan_on_image_draws_a_y_up_map_the_right_way_up(tmp_path):
 
 
 def test_gif_path_pixels_follow_the_resolution(tmp_path):
-    from planners.workflow import plan_on_image
+    from planners.tools.workflow import plan_on_image
 
     obs = np.zeros((30, 50), bool)
     obs[:, 24:26] = True

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from planners import OccupancyGrid, Problem, load_movingai_scenarios
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 
 @pytest.fixture

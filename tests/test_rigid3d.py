@@ -11,7 +11,7 @@ from PIL import Image
 
 import envs
 from planners import PRM, RRT, GoalBiasedSampler, LazyPRM, Problem, RRTConnect, RRTStar, SampleBatch, SamplerBase
-from planners.rigid3d import (
+from planners.worlds.rigid3d import (
     EXAMPLE_SCENE,
     Box3D,
     RigidBodyWorld,
@@ -375,7 +375,7 @@ GOOD = ["bounds 0 0 0 10 10 10", "body box 1 0.5 0.25", "box 4 4 4 6 6 6", "star
     ("delta 1e-9", 7, "delta 1e-09 is too fine for this world"),
 ])
 def test_bad_scene_files_name_file_and_line(tmp_path, line, lineno, message):
-    from planners.fileio import InputError
+    from planners.base.fileio import InputError
 
     path = tmp_path / "bad.scene"
     path.write_text("\n".join(["# a comment", *GOOD, line]) + "\n", encoding="utf-8")
@@ -384,7 +384,7 @@ def test_bad_scene_files_name_file_and_line(tmp_path, line, lineno, message):
 
 
 def test_scene_files_that_are_not_utf8_name_file_and_line(tmp_path):
-    from planners.fileio import InputError
+    from planners.base.fileio import InputError
 
     path = tmp_path / "latin.scene"
     text = "\n".join(["# a comment", *GOOD[:2], "# caf\u00e9 wall", *GOOD[2:]]) + "\n"
@@ -429,8 +429,8 @@ def test_random_scenes_are_seeded():
 
 
 def test_plot_scene_and_animation(tmp_path):
-    from planners.plotting import save_figure
-    from planners.plotting3d import animate_rigid, plot_scene, resample_path
+    from planners.viz.plotting import save_figure
+    from planners.viz.plotting3d import animate_rigid, plot_scene, resample_path
 
     problem = load_scene(EXAMPLE_SCENE)
     r = RRTConnect(problem, step_size=0.5, seed=0).solve(max_iterations=20000)
@@ -473,7 +473,7 @@ def test_rigid_env_runs_with_vector_observations():
 
 
 def test_absurd_resolutions_are_refused():
-    from planners.fileio import InputError
+    from planners.base.fileio import InputError
 
     w = load_scene(EXAMPLE_SCENE).world
     # the example's longest motion: diagonal 15.36 plus 3 pi times the body radius 0.5728
@@ -485,7 +485,7 @@ def test_absurd_resolutions_are_refused():
 
 
 def _finest_example():
-    from planners.rigid3d import MAX_MOTION_POSES
+    from planners.worlds.rigid3d import MAX_MOTION_POSES
 
     ex = load_scene(EXAMPLE_SCENE)
     w = ex.world
@@ -529,7 +529,7 @@ def test_a_time_limit_does_not_change_results():
 
 @pytest.mark.parametrize("setup", ["prm", "rrt"])
 def test_seed_project_setups_solve_the_window_scene(setup):
-    from planners.rigid3d import WINDOW_SCENE, setup_planner
+    from planners.worlds.rigid3d import WINDOW_SCENE, setup_planner
 
     problem = load_scene(WINDOW_SCENE)
     assert len(problem.world.body) == 16 and problem.metric == "cossin"
@@ -556,7 +556,7 @@ def test_seed_project_setups_solve_the_window_scene(setup):
 
 
 def test_dijkstra_and_astar_find_equally_short_roadmap_paths():
-    from planners.rigid3d import WINDOW_SCENE
+    from planners.worlds.rigid3d import WINDOW_SCENE
 
     problem = load_scene(WINDOW_SCENE)
     astar, dijkstra = PRM(problem, k=3, seed=0), PRM(problem, k=3, seed=0, search="dijkstra")
@@ -586,7 +586,7 @@ def test_plan3d_script(tmp_path):
     import sys
     from pathlib import Path
 
-    from planners.rigid3d import WINDOW_SCENE
+    from planners.worlds.rigid3d import WINDOW_SCENE
 
     script = Path(__file__).resolve().parents[1] / "scripts" / "plan3d.py"
 

@@ -11,8 +11,8 @@ from PIL import Image
 from test_grid import min_clearance
 
 from planners import RRT, OccupancyGrid, Problem, smooth
-from planners.fileio import InputError
-from planners.rosmap import load_ros_map, parse_map_yaml
+from planners.base.fileio import InputError
+from planners.maps.rosmap import load_ros_map, parse_map_yaml
 
 TB3 = Path(__file__).parent / "data" / "ros" / "turtlebot3_world" / "map.yaml"
 TB3_RADIUS = 0.105  # turtlebot3 burger's footprint radius, metres

@@ -25,7 +25,7 @@ from stable_baselines3 import DQN, PPO, SAC
 import envs
 from learning import SB3Sampler
 from planners import RRT, OccupancyGrid, RRTConnect, RRTStar
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 gym.register_envs(envs)
 REPO = Path(__file__).resolve().parents[1]
@@ -188,7 +188,7 @@ def test_the_worked_example_ranks_a_user_model_and_a_user_factory(ppo_forest, tm
         "--movingai-maps", "--other-planners", "--processes", "1", "--max-iterations", "600", "--no-expert",
         "--sampler", f"mine={path}@SamplerGym/RRT-Forest-v0{opts}",
         "--sampler", f"mine_stochastic={path}@SamplerGym/RRT-Forest-v0{opts}@stochastic",
-        "--sampler", "factory=planners.samplers:UniformSampler", "--out", str(out)])
+        "--sampler", "factory=planners.base.samplers:UniformSampler", "--out", str(out)])
     assert rc == 0
     printed = capsys.readouterr().out
     for col in ("mine_median", "mine/best_bias", "mine_stochastic_success", "factory_wall_ms"):
@@ -206,10 +206,10 @@ def test_the_worked_example_ranks_a_user_model_and_a_user_factory(ppo_forest, tm
 
 @pytest.mark.parametrize(("arg", "match"), [
     ("mine", "expected NAME=SPEC"),
-    ("uniform=planners.samplers:UniformSampler", "taken"),
+    ("uniform=planners.base.samplers:UniformSampler", "taken"),
     ("mine=nowhere.zip@SamplerGym/RRT-Forest-v0", "nowhere.zip"),
-    ("mine=planners.samplers:NoSuchSampler", "NoSuchSampler"),
-    ("mine=planners.grid:OccupancyGrid", "not a Sampler|OccupancyGrid"),
+    ("mine=planners.base.samplers:NoSuchSampler", "NoSuchSampler"),
+    ("mine=planners.worlds.grid:OccupancyGrid", "not a Sampler|OccupancyGrid"),
 ])
 def test_bad_sampler_specs_exit_2_naming_them(arg, match, capsys):
     with pytest.raises(SystemExit) as exc:

@@ -8,8 +8,8 @@ import pytest
 from conftest import fine_check_path
 
 from planners import GoalBiasedSampler, RRTStar, load_movingai_scenarios
-from planners.benchmark import PLANNERS, run_one
-from planners.generators import FAMILIES, generate
+from planners.maps.generators import FAMILIES, generate
+from planners.tools.benchmark import PLANNERS, run_one
 
 SEEDS = range(100)
 

@@ -25,7 +25,7 @@ from planners import (
     RRTStar,
     UniformSampler,
 )
-from planners.planner import TIME_SLICE, compile_seconds
+from planners.base.planner import TIME_SLICE, compile_seconds
 
 #: What a timed solve may overrun its limit by here: the stated TIME_SLICE, plus slack for a busy test machine.
 MARGIN = TIME_SLICE + 0.05

@@ -20,7 +20,7 @@ import torch
 
 from learning.checkpoint import read_sb3_zip
 from learning.training import TrainConfig, read_state, train
-from planners.fileio import InputError
+from planners.base.fileio import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 # two DAgger rounds, the transition, two PPO segments (warm-up, then the actor), the selection

@@ -1,0 +1,160 @@
+"""RRT and RRT-Connect."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from planners.base.planner import Planner, PlannerData, VertexStore, require_problem
+from planners.base.problem import Problem
+from planners.base.samplers import Sampler
+from planners.kernels import rrt as rrt_kernels
+
+#: OMPL's default range: this fraction of the sampling box's diagonal (MAX_MOTION_DISTANCE_FRACTION).
+DEFAULT_RANGE_FRACTION = 0.2
+
+
+def default_step(problem: Problem, step_size: float | None) -> float:
+    """Validate ``step_size``; None means 0.2 x the diagonal of the sampling box (OMPL's default)."""
+    if step_size is None:
+        low, high = problem.world.bounds
+        return DEFAULT_RANGE_FRACTION * float(np.linalg.norm(np.asarray(high) - np.asarray(low)))
+    try:
+        step = float(step_size)
+    except (TypeError, ValueError):
+        raise ValueError(f"step_size must be a positive number, got {step_size!r}") from None
+    if not math.isfinite(step) or step <= 0:
+        raise ValueError(f"step_size must be a positive finite number, got {step_size!r}")
+    return step
+
+
+class RRT(Planner):
+    """Rapidly-exploring random tree.
+
+    Each iteration draws a sample, finds the nearest tree vertex, steers at most ``step_size``
+    towards the sample and adds the new state if the motion is collision-free. Solved when a vertex
+    lies within ``goal_tolerance`` of the goal; the path ends at that vertex.
+
+    S. M. LaValle, "Rapidly-exploring random trees: a new tool for path planning", TR 98-11, 1998.
+
+    Args:
+        problem: The planning problem.
+        step_size: Maximum extension per iteration (OMPL's ``range``); None = 0.2 x box diagonal.
+        sampler: Where to sample; default ``UniformSampler()``. Goal bias is
+            ``GoalBiasedSampler(p)``.
+        seed: Seed of the planner's generator.
+    """
+
+    name = "RRT"
+    fusable_loop = "rrt"
+
+    def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
+                 seed: int | None = None) -> None:
+        require_problem(problem)
+        self.step_size = default_step(problem, step_size)
+        super().__init__(problem, sampler=sampler, seed=seed)
+
+    def _reset(self) -> None:
+        self._tree = VertexStore(self.problem, 1024, tree=True)
+        self._add_root(self._tree, self.problem.start, rrt_kernels.I_N)
+        d = self.problem.distance(self.problem.start, self.problem.goal)
+        self._fstate[rrt_kernels.F_BEST_D] = d
+        self._istate[rrt_kernels.I_BEST_V] = 0
+        if d <= self.problem.goal_tolerance:
+            self._istate[rrt_kernels.I_SOLVED] = 1
+            self._istate[rrt_kernels.I_GOAL_V] = 0
+            self._istate[rrt_kernels.I_FIRST] = 0
+            self._fstate[rrt_kernels.F_BEST_COST] = 0.0
+
+    def _add_root(self, store: VertexStore, q: np.ndarray, slot: int) -> None:
+        from planners.kernels.tree import add_vertex
+
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        self._istate[slot] = add_vertex(store.as_tuple(), 0, self._space, q, -1, 0.0)
+
+    def _reserve(self, iterations: int) -> None:
+        self._tree.reserve(self.num_vertices, 1)
+
+    def _run(self, points, anchored) -> int:
+        return rrt_kernels.rrt_run(points, anchored, self._tree.as_tuple(), self._istate, self._fstate, self._last,
+                         self.problem.world.kernel, self._space, self._goal, self.step_size,
+                         self.problem.goal_tolerance, self._low, self._high, True, self._stack, self._stack_b)
+
+    def loop_args(self) -> tuple:
+        """Arguments of ``rrt_iterate`` (``planners.kernels.rrt``) after the sample and its anchor code."""
+        return (self._tree.as_tuple(), self._istate, self._fstate, self._last, self.problem.world.kernel, self._space,
+                self._goal, self.step_size, self.problem.goal_tolerance, self._low, self._high, self._stack,
+                self._stack_b)
+
+    def _vertex_store(self) -> VertexStore:
+        return self._tree
+
+    def _path(self) -> np.ndarray:
+        idx = rrt_kernels.path_to_root(self._tree.parent, int(self._istate[rrt_kernels.I_GOAL_V]))
+        return self._tree.X[idx].copy()
+
+    def planner_data(self) -> PlannerData:
+        n = self.num_vertices
+        child = np.arange(1, n)
+        edges = np.stack([self._tree.parent[1:n], child], axis=1) if n > 1 else np.empty((0, 2), np.int64)
+        return PlannerData(self._tree.X[:n].copy(), edges, np.zeros(n, dtype=np.int64))
+
+
+class RRTConnect(RRT):
+    """Bidirectional RRT with greedy connection.
+
+    Two trees grow from start and goal; each iteration extends one tree a step towards the sample
+    and then extends the other tree towards the new vertex until it is reached or blocked; the trees
+    swap roles every iteration. The path ends exactly at the goal.
+
+    J. J. Kuffner, S. M. LaValle, "RRT-Connect: An efficient approach to single-query path
+    planning", ICRA 2000, doi:10.1109/ROBOT.2000.844730.
+
+    Args: as ``RRT``. ``TreeView`` and anchored samples refer to the start tree.
+    """
+
+    name = "RRTConnect"
+    fusable_loop = None
+
+    def _reset(self) -> None:
+        super()._reset()
+        self._gtree = VertexStore(self.problem, 1024, tree=True)
+        self._add_root(self._gtree, self.problem.goal, rrt_kernels.I_N_B)
+        if self.solved:  # start within tolerance of the goal: the path is [start]
+            self._istate[rrt_kernels.I_JOIN_B] = -1
+        low, high = self.problem.world.bounds
+        diag = self.problem.distance(np.asarray(low), np.asarray(high) - 1e-9)
+        # the connect phase can add one vertex per step across the whole box
+        self._max_connect = int(math.ceil(diag / self.step_size)) + 2
+
+    def _reserve(self, iterations: int) -> None:
+        self._tree.reserve(int(self._istate[rrt_kernels.I_N]), self._max_connect + 1)
+        self._gtree.reserve(int(self._istate[rrt_kernels.I_N_B]), self._max_connect + 1)
+
+    def _run(self, points, anchored) -> int:
+        return rrt_kernels.connect_run(points, anchored, self._tree.as_tuple(), self._gtree.as_tuple(), self._istate,
+                             self._fstate, self._last, self.problem.world.kernel, self._space, self._goal,
+                             self.step_size, self._low, self._high, self._max_connect, self._stack, self._stack_b)
+
+    @property
+    def num_vertices(self) -> int:
+        return int(self._istate[rrt_kernels.I_N] + self._istate[rrt_kernels.I_N_B])
+
+    def _path(self) -> np.ndarray:
+        a = self._tree.X[rrt_kernels.path_to_root(self._tree.parent, int(self._istate[rrt_kernels.I_GOAL_V]))]
+        jb = int(self._istate[rrt_kernels.I_JOIN_B])
+        if jb < 0:
+            return a.copy()
+        b = self._gtree.X[rrt_kernels.path_to_root(self._gtree.parent, jb)][::-1]
+        if np.array_equal(a[-1], b[0]):
+            b = b[1:]
+        return np.concatenate([a, b])
+
+    def planner_data(self) -> PlannerData:
+        na, nb = int(self._istate[rrt_kernels.I_N]), int(self._istate[rrt_kernels.I_N_B])
+        V = np.concatenate([self._tree.X[:na], self._gtree.X[:nb]])
+        ea = np.stack([self._tree.parent[1:na], np.arange(1, na)], axis=1)
+        eb = np.stack([self._gtree.parent[1:nb], np.arange(1, nb)], axis=1) + na
+        tags = np.concatenate([np.zeros(na, np.int64), np.ones(nb, np.int64)])
+        return PlannerData(V, np.concatenate([ea, eb]).astype(np.int64), tags)

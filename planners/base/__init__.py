@@ -1,0 +1,1 @@
+"""The interfaces every planner and world is built on: ``World``, ``Problem``, ``Sampler``, ``Planner`` and its results, the planner registry, and the library's input error and safe file writes."""

@@ -1,0 +1,508 @@
+"""The steppable planner base class and the result types every planner returns."""
+
+from __future__ import annotations
+
+import abc
+import threading
+import time
+from dataclasses import dataclass
+from typing import ClassVar, NamedTuple
+
+import numpy as np
+from numba.core import event as _nb_event
+
+from planners.base.problem import Problem
+from planners.base.samplers import SampleBatch, Sampler, UniformSampler
+from planners.kernels import rrt as rrt_kernels
+from planners.kernels.space import embed_dim, uses_kd
+
+#: Samples handed to a compiled kernel per call; bounds how late a time limit is noticed.
+CHUNK = 1024
+#: Size of the first sample refill; refills double up to CHUNK, so short solves draw few samples.
+FIRST_REFILL = 64
+#: Under a time limit, one compiled call is sized from the measured time per sample (growing at most
+#: twofold) to end by the deadline and to last at most this many seconds, so the deadline is looked
+#: at every TIME_SLICE seconds at least, and overrun by about one iteration (an iteration can be slow:
+#: long 6-DoF motion checks, a dense roadmap) or one Lazy-PRM search round.
+TIME_SLICE = 0.05
+
+
+class _CompileClock(threading.local):
+    depth = 0
+    since = 0.0
+    total = 0.0
+
+
+_clock = _CompileClock()
+
+
+class _CompileTimer(_nb_event.Listener):
+    """Adds up, per thread, the time spent holding numba's compiler lock (compiling or loading cached code)."""
+
+    def on_start(self, event) -> None:
+        if _clock.depth == 0:
+            _clock.since = time.perf_counter()
+        _clock.depth += 1
+
+    def on_end(self, event) -> None:
+        if _clock.depth == 0:  # a compilation already under way when this module was imported
+            return
+        _clock.depth -= 1
+        if _clock.depth == 0:
+            _clock.total += time.perf_counter() - _clock.since
+
+
+# the lock is taken for every compilation and cache load, nested ones included (it is re-entrant)
+_nb_event.register("numba:compiler_lock", _CompileTimer())
+
+
+def compile_seconds() -> float:
+    """Seconds this thread has spent so far in numba's compiler (compiling or loading cached code).
+
+    Time limits exclude it: the one-off compilation of a kernel says nothing about a planner's speed,
+    and it happens whenever a kernel first meets new argument types (a first solve, a first solution,
+    a new world kind), so no warm-up could cover every case.
+    """
+    return _clock.total + (time.perf_counter() - _clock.since if _clock.depth else 0.0)
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """What ``solve()`` returns.
+
+    Attributes:
+        solved: A path to the goal region exists.
+        path: (k, dim) states from start to a state within tolerance of the goal (every segment
+            collision-free); shape (0, dim) when unsolved.
+        cost: Path length in the problem's metric (inf when unsolved).
+        iterations: Samples consumed so far. For planners that stop at their first solution this
+            is the iterations-to-solution.
+        first_solution_iteration: The iteration that produced the first solution, or None.
+        collision_checks: State and motion validity checks performed.
+        candidates: Raw candidates behind the consumed samples (equals ``iterations`` unless the
+            sampler rejects candidates).
+        num_vertices: Vertices in the tree(s) or roadmap.
+        time: Wall-clock seconds spent inside ``step``/``solve`` so far, one-off numba compilation
+            included (``Planner.compile_time`` says how much; time limits leave it out).
+        stop_reason: "solved", "max_iterations" or "time_limit".
+        planner: Planner name.
+        seed: The seed that reproduces this run.
+    """
+
+    solved: bool
+    path: np.ndarray
+    cost: float
+    iterations: int
+    first_solution_iteration: int | None
+    collision_checks: int
+    candidates: int
+    num_vertices: int
+    time: float
+    stop_reason: str
+    planner: str
+    seed: int
+
+
+class StepResult(NamedTuple):
+    """What ``step()`` returns: the iteration just run."""
+
+    iterated: bool  # False when a non-anytime planner was already solved
+    iteration: int
+    sample: np.ndarray  # the state the iteration sampled (anchored samples resolved)
+    added: int  # vertex added by this iteration, -1 if none
+    solved: bool
+
+
+@dataclass(frozen=True)
+class TreeView:
+    """Read-only snapshot of a planner's state, handed to samplers.
+
+    Attributes:
+        problem: The problem being solved.
+        vertices: (n, dim) states of the start tree (roadmap for PRM), read-only views.
+        parents: (n,) parent index (-1 for roots), or None for roadmaps.
+        num_vertices: n.
+        best_vertex: Index of the vertex nearest the goal: the progress anchor.
+        best_distance: Its distance to the goal.
+        best_cost: Cost of the best solution so far (inf if none).
+        iteration: Iterations run so far.
+    """
+
+    problem: Problem
+    vertices: np.ndarray
+    parents: np.ndarray | None
+    num_vertices: int
+    best_vertex: int
+    best_distance: float
+    best_cost: float
+    iteration: int
+
+
+@dataclass(frozen=True)
+class PlannerData:
+    """A planner's graph for plotting: vertices, directed edges (from, to), a tag per vertex."""
+
+    vertices: np.ndarray
+    edges: np.ndarray
+    tags: np.ndarray
+
+
+def require_problem(problem) -> Problem:
+    """Raise a clear TypeError unless ``problem`` is a ``Problem`` (planners check this first)."""
+    if not isinstance(problem, Problem):
+        raise TypeError(f"problem must be a planners.Problem, got {type(problem).__name__}")
+    return problem
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
+class VertexStore:
+    """Growable vertex arrays plus their nearest-neighbour index (shared by trees and roadmaps)."""
+
+    def __init__(self, problem: Problem, capacity: int, tree: bool) -> None:
+        kind, metric, _ = problem.space
+        self.dim = problem.dim
+        self.edim = int(embed_dim(kind, metric, self.dim))
+        self.same_embedding = kind == 0
+        self.kd = bool(uses_kd(kind, metric))
+        self.tree = tree
+        self._alloc(max(int(capacity), 64), 0)
+
+    def _alloc(self, cap: int, keep: int) -> None:
+        def grown(name, shape, dtype, fill=0):
+            new = np.full(shape, fill, dtype=dtype)
+            old = getattr(self, name, None)
+            if old is not None and keep:
+                new[:keep] = old[:keep]
+            return new
+
+        self.X = grown("X", (cap, self.dim), np.float64)
+        self.E = self.X if self.same_embedding else grown("E", (cap, self.edim), np.float64)
+        self.parent = grown("parent", (cap,), np.int64, -1)
+        self.cost = grown("cost", (cap,), np.float64)
+        self.perm = grown("perm", (cap,), np.int64)
+        self.split = grown("split", (cap,), np.int64)
+        self.box = grown("box", (cap, 2 * self.edim), np.float64)
+
+    @property
+    def capacity(self) -> int:
+        return len(self.X)
+
+    def reserve(self, n_used: int, extra: int) -> bool:
+        """Ensure room for ``extra`` more vertices; returns True if the arrays were reallocated."""
+        need = n_used + extra
+        if need <= self.capacity:
+            return False
+        self._alloc(max(need, 2 * self.capacity), n_used)
+        return True
+
+    def as_tuple(self) -> tuple:
+        return (self.X, self.E, self.parent, self.cost, self.perm, self.split, self.box)
+
+
+class Planner(abc.ABC):
+    """Base class: a planner that can be stepped one iteration at a time and resumed.
+
+    Subclasses implement ``_reset`` (fresh state), ``_run`` (consume samples in compiled code),
+    ``_reserve`` (room for more iterations), ``_path`` and ``planner_data``. This class owns the
+    bookkeeping: the seeded generator, the sample buffer (so ``step()`` N times and ``solve(N)``
+    consume exactly the same samples), time, budgets and the result.
+
+    Args:
+        problem: The planning problem.
+        sampler: Any ``Sampler``; default ``UniformSampler()``.
+        seed: Seed of the planner's ``np.random.Generator``; None draws one (reported in results).
+    """
+
+    name: ClassVar[str] = "planner"
+    #: Anytime planners keep improving after the first solution until the budget is spent.
+    anytime: ClassVar[bool] = False
+    #: The compiled loop a sampler may fuse its draws into (see ``Sampler``); None: draws only.
+    fusable_loop: ClassVar[str | None] = None
+
+    def __init__(self, problem: Problem, *, sampler: Sampler | None = None, seed: int | None = None) -> None:
+        require_problem(problem)
+        if sampler is None:
+            sampler = UniformSampler()
+        if not isinstance(sampler, Sampler):
+            raise TypeError("sampler must implement bind(problem) and draw(rng, n, view), "
+                            f"got {type(sampler).__name__}")
+        if seed is None:
+            seed = int(np.random.SeedSequence().entropy % (2**63))
+        elif isinstance(seed, (bool, float)) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed must be a non-negative integer or None, got {seed!r}")
+        self.problem = problem
+        self.seed = int(seed)
+        self._sampler_spec = sampler
+        self._space = problem.space
+        self._low, self._high = (np.ascontiguousarray(b, dtype=np.float64) for b in problem.world.bounds)
+        self._goal = np.ascontiguousarray(problem.goal, dtype=np.float64)
+        self._stack = np.empty(2 * 256, dtype=np.int64)
+        self._stack_b = np.empty(256)
+        self.clear()
+
+    # --- public API ------------------------------------------------------------------------
+
+    def clear(self) -> None:
+        """Forget all progress; the next solve repeats the first one exactly (same seed)."""
+        self._rng = np.random.default_rng(self.seed)
+        self.sampler = self._sampler_spec.bind(self.problem)
+        self._buf_pts = np.empty((0, self.problem.dim))
+        self._buf_anch = np.empty(0, dtype=np.int8)
+        self._buf_cand: np.ndarray | None = None
+        self._pos = 0
+        self._refills = 0
+        self._time = 0.0
+        self._compile = 0.0
+        # under a time limit: seconds the current compiled call may take (None: untimed), and the
+        # speed measured on the last call, which sizes the next
+        self._call_budget: float | None = None
+        self._sample_s: float | None = None
+        self._last_used = 0
+        self._candidates = 0
+        self._stop_reason = "max_iterations"
+        self._istate = np.zeros(rrt_kernels.N_ISTATE, dtype=np.int64)
+        self._fstate = np.zeros(rrt_kernels.N_FSTATE)
+        self._fstate[rrt_kernels.F_BEST_COST] = np.inf
+        self._istate[rrt_kernels.I_ADDED] = -1
+        self._istate[rrt_kernels.I_FIRST] = -1
+        self._last = np.zeros(self.problem.dim)
+        self._reset()
+        fuse = getattr(self.sampler, "fuse", None) if self.fusable_loop is not None else None
+        self._fused = fuse(self) if fuse is not None else None
+
+    def step(self) -> StepResult:
+        """Run exactly one iteration (one sample drawn); a no-op once a non-anytime planner is solved."""
+        t0, c0 = time.perf_counter(), compile_seconds()
+        if self._finished():
+            return StepResult(False, self.iterations, self._last.copy(), -1, True)
+        before = self.iterations
+        while self.iterations == before and not self._finished():
+            self._consume(1)  # no sample is drawn while a Lazy-PRM resolution is still pending
+        self._compile += compile_seconds() - c0
+        self._time += time.perf_counter() - t0
+        return StepResult(True, self.iterations, self._last.copy(), int(self._istate[rrt_kernels.I_ADDED]), self.solved)
+
+    def solve(self, max_iterations: int | None = None, time_limit: float | None = None) -> PlanResult:
+        """Run until solved (anytime planners: until the budget is spent) or a budget runs out.
+
+        Budgets count from this call, so calling ``solve`` again resumes where it stopped.
+
+        The time limit excludes one-off numba compilation (``compile_time``) and holds within a
+        stated margin whatever the input: compiled work is handed out in calls sized by the measured
+        speed to end by the deadline and to last at most ``TIME_SLICE`` (0.05 s), so a solve returns
+        at most about ``TIME_SLICE`` after ``time_limit`` (measured speed can be off by a factor of
+        two), or one iteration or one Lazy-PRM search round after it where that is longer (a
+        millisecond or so on 2-D maps), plus the time ``result()`` takes to extract the path. How
+        the work is split never changes the result: a timed run ends as the same iterations untimed.
+
+        Args:
+            max_iterations: Iterations (samples) this call may use.
+            time_limit: Seconds this call may use, compilation excluded.
+        """
+        if max_iterations is None and time_limit is None:
+            raise ValueError("give max_iterations or time_limit (or both)")
+        if max_iterations is not None:
+            if (isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer))
+                    or max_iterations < 0):
+                raise ValueError(f"max_iterations must be a non-negative integer, got {max_iterations!r}")
+        if time_limit is not None:
+            time_limit = float(time_limit)
+            if not np.isfinite(time_limit) or time_limit <= 0:
+                raise ValueError(f"time_limit must be a positive number of seconds, got {time_limit}")
+        t0, c0 = time.perf_counter(), compile_seconds()
+        budget = np.inf if max_iterations is None else int(max_iterations)
+        done = 0
+        try:
+            while True:
+                if self._finished():
+                    reason = "solved"
+                    break
+                if done >= budget:
+                    reason = "max_iterations"
+                    break
+                chunk = CHUNK
+                if time_limit is not None:
+                    left = time_limit - (time.perf_counter() - t0 - (compile_seconds() - c0))
+                    if left <= 0:
+                        reason = "time_limit"
+                        break
+                    self._call_budget = min(left, TIME_SLICE)
+                    chunk = self._timed_chunk(self._call_budget)
+                t_call, c_call = time.perf_counter(), compile_seconds()
+                used = self._consume(int(min(budget - done, chunk)))
+                done += used
+                if time_limit is not None:
+                    spent = time.perf_counter() - t_call - (compile_seconds() - c_call)
+                    self._sample_s, self._last_used = spent / max(used, 1), used
+        finally:
+            self._call_budget = None
+            self._compile += compile_seconds() - c0
+            self._time += time.perf_counter() - t0
+        self._stop_reason = reason
+        return self.result()
+
+    def _timed_chunk(self, room: float) -> int:
+        """Samples for the next compiled call under a time limit: what fits ``room`` seconds at the measured speed."""
+        # at most doubling: a few cheap samples say little about the next ones. How the samples are
+        # split between calls never changes the result, only when the deadline is looked at
+        grow = min(CHUNK, 2 * max(self._last_used, 1))
+        if self._sample_s is None:
+            return 1
+        if self._sample_s <= 0:
+            return grow
+        return int(min(grow, max(1.0, room / self._sample_s)))
+
+    @property
+    def compile_time(self) -> float:
+        """Seconds of one-off numba compilation inside ``step``/``solve`` so far (in ``time``, not in time limits)."""
+        return self._compile
+
+    def result(self) -> PlanResult:
+        """The current result (what the last ``solve`` returned, updated by any later ``step``)."""
+        path = self._path() if self.solved else np.empty((0, self.problem.dim))
+        path.flags.writeable = False
+        first = int(self._istate[rrt_kernels.I_FIRST])
+        return PlanResult(
+            solved=self.solved,
+            path=path,
+            cost=float(self._fstate[rrt_kernels.F_BEST_COST]) if self.solved else float("inf"),
+            iterations=self.iterations,
+            first_solution_iteration=first if first >= 0 else None,
+            collision_checks=self.collision_checks,
+            candidates=int(self._candidates),
+            num_vertices=self.num_vertices,
+            time=self._time,
+            stop_reason="solved" if self._finished() else self._stop_reason,
+            planner=self.name,
+            seed=self.seed,
+        )
+
+    @property
+    def iterations(self) -> int:
+        return int(self._istate[rrt_kernels.I_ITER])
+
+    @property
+    def collision_checks(self) -> int:
+        return int(self._istate[rrt_kernels.I_CHECKS])
+
+    @property
+    def solved(self) -> bool:
+        return bool(self._istate[rrt_kernels.I_SOLVED])
+
+    @property
+    def num_vertices(self) -> int:
+        return int(self._istate[rrt_kernels.I_N])
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The planner's seeded generator, from which every sample is drawn."""
+        return self._rng
+
+    def loop_args(self) -> tuple:
+        """Arguments of the compiled loop named by ``fusable_loop``, after the sample (arrays grow: re-read)."""
+        raise NotImplementedError(f"{type(self).__name__} has no fusable loop")
+
+    def view(self) -> TreeView:
+        """Read-only snapshot for samplers and observers."""
+        n = int(self._istate[rrt_kernels.I_N])
+        vs = self._vertex_store()
+        return TreeView(
+            problem=self.problem,
+            vertices=_readonly(vs.X[:n]),
+            parents=_readonly(vs.parent[:n]) if vs.tree else None,
+            num_vertices=n,
+            best_vertex=int(self._istate[rrt_kernels.I_BEST_V]),
+            best_distance=float(self._fstate[rrt_kernels.F_BEST_D]),
+            best_cost=float(self._fstate[rrt_kernels.F_BEST_COST]) if self.solved else float("inf"),
+            iteration=self.iterations,
+        )
+
+    @abc.abstractmethod
+    def planner_data(self) -> PlannerData:
+        """Vertices and edges for plotting (read-only copies)."""
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}(iterations={self.iterations}, vertices={self.num_vertices}, "
+                f"solved={self.solved})")
+
+    # --- subclass interface ------------------------------------------------------------------
+
+    @abc.abstractmethod
+    def _reset(self) -> None:
+        """Allocate fresh state; the start state is already valid."""
+
+    @abc.abstractmethod
+    def _run(self, points: np.ndarray, anchored: np.ndarray) -> int:
+        """Consume up to ``len(points)`` samples in compiled code; return how many were used."""
+
+    @abc.abstractmethod
+    def _reserve(self, iterations: int) -> None:
+        """Make room for at least one more iteration (kernels stop when full; arrays grow by doubling)."""
+
+    @abc.abstractmethod
+    def _path(self) -> np.ndarray:
+        """The current solution path (only called when solved)."""
+
+    @abc.abstractmethod
+    def _vertex_store(self) -> VertexStore:
+        """The store whose vertices samplers see."""
+
+    def _finished(self) -> bool:
+        return self.solved and not self.anytime
+
+    # --- sample buffer ---------------------------------------------------------------------
+
+    def _refill(self, n: int) -> None:
+        out = self.sampler.draw(self._rng, n, self.view())
+        if isinstance(out, SampleBatch):
+            pts, anch, cand = out.points, out.anchored, out.candidates
+        else:
+            pts, anch, cand = out, None, None
+        if not (isinstance(pts, np.ndarray) and pts.dtype == np.float64 and pts.flags.c_contiguous):
+            pts = np.ascontiguousarray(pts, dtype=np.float64)
+        who = type(self.sampler).__name__
+        if pts.ndim != 2 or pts.shape[1] != self.problem.dim or not (1 <= len(pts) <= n):
+            raise ValueError(f"{who}.draw(n={n}) must return 1..{n} samples of dimension {self.problem.dim}, "
+                             f"got shape {pts.shape}")
+        if not np.isfinite(pts.sum()):  # one reduction: any NaN or infinity makes the sum non-finite
+            raise ValueError(f"{who}.draw returned a NaN or infinite sample")
+        m = len(pts)
+        if anch is None:
+            anch = np.zeros(m, dtype=np.int8)
+        else:
+            if not (isinstance(anch, np.ndarray) and anch.dtype == np.int8):
+                anch = np.ascontiguousarray(anch, dtype=np.int8)
+            if anch.shape != (m,) or anch.min() < 0 or anch.max() > 2:
+                raise ValueError(f"{who}.draw returned anchored flags that are not {m} codes in 0..2")
+        if cand is None:
+            self._buf_cand = None
+        else:
+            cand = np.ascontiguousarray(cand, dtype=np.int64)
+            if cand.shape != (m,):
+                raise ValueError(f"{who}.draw returned candidate counts that do not match {m} samples")
+            self._buf_cand = cand
+        self._buf_pts, self._buf_anch, self._pos = pts, anch, 0
+
+    def _consume(self, n: int) -> int:
+        if self._fused is not None:
+            self._reserve(n)
+            used = self._fused(self, n)
+            self._candidates += used
+            return used
+        # refill sizes follow a fixed schedule: when refills happen (and what a tree-dependent
+        # sampler sees) must not depend on how the caller splits its budget, so that
+        # step() x N == solve(N) == solve in pieces
+        if self._pos >= len(self._buf_pts):
+            self._refill(min(CHUNK, FIRST_REFILL << self._refills))
+            self._refills += 1
+        end = min(self._pos + n, len(self._buf_pts))
+        self._reserve(end - self._pos)
+        used = self._run(self._buf_pts[self._pos:end], self._buf_anch[self._pos:end])
+        self._candidates += used if self._buf_cand is None else int(self._buf_cand[self._pos:self._pos + used].sum())
+        self._pos += used
+        return used

@@ -1,0 +1,186 @@
+"""The one ``Sampler`` protocol every planner calls, and the classic samplers.
+
+A sampler is a configuration object; a planner calls ``sampler.bind(problem)`` once and gets a
+bound copy it owns (so one ``GoalBiasedSampler(0.05)`` can serve many planners). The planner then
+calls ``draw(rng, n, view)`` whenever it needs samples:
+
+* it returns 1..n samples, as an ``(m, dim)`` array or a ``SampleBatch``;
+* one sample consumed is one planner iteration;
+* samples that do not depend on the tree can be returned ``n`` at a time, so the compiled loop runs
+  uninterrupted; tree-dependent samplers read ``view`` and may return fewer;
+* a ``SampleBatch`` can mark samples as *anchored*: offsets from the tree vertex nearest the goal,
+  in the world frame (``ANCHOR_WORLD``) or in the frame pointing from that vertex to the goal
+  (``ANCHOR_GOAL``), resolved by the planner when the sample is used, so a batch keeps following the
+  tree's progress; and it can say how many raw candidates each sample cost (for samplers that
+  discard candidates).
+
+A sampler whose draws are compiled may also define ``fuse(planner)``. A planner whose class names a
+``fusable_loop`` (RRT's is ``"rrt"``) calls it once per (re)start; it returns None, or a callable
+``run(planner, n) -> used`` that runs up to ``n`` iterations with the sampler's draws inside the
+compiled loop (built on ``planners.kernels.rrt.rrt_iterate`` and ``planner.loop_args()``, drawing
+from ``planner.rng``, cheaply through ``planners.kernels.bitgen``), so a solve never returns to Python
+between batches. The planner is passed at each call rather than held by ``run``, so a planner and
+its loop form no reference cycle and are freed as soon as they go out of scope. A fused loop must
+draw exactly what ``draw`` would: it changes the speed, never the run.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from planners.base.planner import TreeView
+    from planners.base.problem import Problem
+
+
+ANCHOR_NONE = 0
+ANCHOR_WORLD = 1
+ANCHOR_GOAL = 2
+
+
+@dataclass(frozen=True)
+class SampleBatch:
+    """Samples with optional per-sample flags.
+
+    Attributes:
+        points: (m, dim) states, or offsets where ``anchored`` is non-zero.
+        anchored: (m,) int codes or bools, or None: ``ANCHOR_NONE`` (0, absolute), ``ANCHOR_WORLD``
+            (1 or True, offset from the progress anchor) or ``ANCHOR_GOAL`` (2, offset whose first two
+            coordinates are along and to the left of the anchor-to-goal direction).
+        candidates: (m,) int or None; raw candidates drawn to produce each row (default 1).
+    """
+
+    points: np.ndarray
+    anchored: np.ndarray | None = None
+    candidates: np.ndarray | None = None
+
+
+@runtime_checkable
+class Sampler(Protocol):
+    """Where a planner samples next."""
+
+    def bind(self, problem: Problem) -> Sampler:
+        """A copy of this sampler ready to draw for ``problem``."""
+        ...
+
+    def draw(self, rng: np.random.Generator, n: int, view: TreeView) -> np.ndarray | SampleBatch:
+        """Return between 1 and ``n`` samples."""
+        ...
+
+
+class SamplerBase:
+    """Default ``bind``: a shallow copy that remembers the problem and its bounds."""
+
+    problem: Problem | None = None
+
+    def bind(self, problem: Problem) -> SamplerBase:
+        # a shallow copy; copy.copy's generic protocol costs ~15 us, and a bind is paid on every query
+        bound = object.__new__(type(self))
+        bound.__dict__.update(self.__dict__)
+        bound.problem = problem
+        low, high = problem.world.bounds
+        bound.low, bound.high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+        bound._setup()
+        return bound
+
+    def _setup(self) -> None:
+        """Hook for per-problem preparation in subclasses."""
+
+    def _uniform(self, u: np.ndarray) -> np.ndarray:
+        return self.low + (self.high - self.low) * u
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+class UniformSampler(SamplerBase):
+    """Uniform over the world's sampling box (obstacles included, as in OMPL's RRT)."""
+
+    def draw(self, rng, n, view):
+        return self._uniform(rng.random((n, self.problem.dim)))
+
+
+class GoalBiasedSampler(SamplerBase):
+    """The goal state with probability ``p``, otherwise uniform (OMPL's default ``p`` is 0.05).
+
+    Args:
+        p: Goal bias in [0, 1].
+    """
+
+    def __init__(self, p: float = 0.05) -> None:
+        p = float(p)
+        if not (0.0 <= p <= 1.0) or math.isnan(p):
+            raise ValueError(f"goal bias p must lie in [0, 1], got {p}")
+        self.p = p
+
+    def draw(self, rng, n, view):
+        # one row of d + 1 uniforms per sample keeps the stream identical whatever the batch size
+        u = rng.random((n, self.problem.dim + 1))
+        pts = self._uniform(u[:, 1:])
+        pts[u[:, 0] < self.p] = self.problem.goal
+        return pts
+
+    def __repr__(self) -> str:
+        return f"GoalBiasedSampler({self.p:g})"
+
+
+class InformedSampler(SamplerBase):
+    """Uniform until a solution exists, then uniform over the informed set (Gammell et al. 2014).
+
+    The informed set is the prolate hyperspheroid of states that could lie on a path shorter than
+    the best found. A path may end anywhere in the goal ball, so the set is
+    ``|x - start| + |x - goal| <= best_cost + goal_tolerance``. Real-vector, Euclidean spaces only.
+    Points of the ellipsoid outside the sampling box are rejected and counted as candidates.
+    """
+
+    batch = 64
+
+    def _setup(self) -> None:
+        p = self.problem
+        if p.world.space_kind != 0 or p.metric != "euclidean":
+            raise ValueError("InformedSampler needs a real-vector world with the euclidean metric")
+        d = p.dim
+        s, g = np.asarray(p.start), np.asarray(p.goal)
+        self._center = 0.5 * (s + g)
+        self._cmin = float(np.linalg.norm(g - s))
+        a1 = (g - s) / self._cmin if self._cmin > 0 else np.eye(d)[0]
+        # rotation taking e1 to a1 (SVD construction of Gammell et al.)
+        M = np.outer(a1, np.eye(d)[0])
+        U, _, Vt = np.linalg.svd(M)
+        D = np.eye(d)
+        D[-1, -1] = np.linalg.det(U) * np.linalg.det(Vt.T)
+        self._C = U @ D @ Vt
+
+    def draw(self, rng, n, view):
+        c_best = view.best_cost + self.problem.goal_tolerance
+        d = self.problem.dim
+        m = min(n, self.batch)  # small batches: the informed set shrinks as the solution improves
+        if not np.isfinite(c_best) or c_best <= self._cmin:
+            return self._uniform(rng.random((m, d)))
+        r1 = c_best / 2.0
+        ri = math.sqrt(max(c_best**2 - self._cmin**2, 0.0)) / 2.0
+        T = self._C * np.array([r1] + [ri] * (d - 1))  # rotation times the ellipsoid's radii
+        pts = np.empty((0, d))
+        cands = np.empty(0, dtype=np.int64)
+        carry = 0  # rejected candidates not yet charged to an accepted sample
+        while len(pts) < m:
+            # uniform in the unit ball, mapped onto the ellipsoid; reject what leaves the box
+            x = rng.normal(size=(2 * m, d))
+            x *= (rng.random(2 * m) ** (1.0 / d) / np.linalg.norm(x, axis=1))[:, None]
+            y = x @ T.T + self._center
+            ok = np.flatnonzero(np.all((y >= self.low) & (y < self.high), axis=1))
+            if len(ok) == 0:
+                carry += 2 * m
+                continue
+            counts = np.diff(np.concatenate([[-1], ok]))
+            counts[0] += carry
+            carry = 2 * m - 1 - int(ok[-1])
+            pts = np.concatenate([pts, y[ok]])
+            cands = np.concatenate([cands, counts])
+        # every candidate drawn is charged, those behind surplus samples to the last one returned
+        cands[m - 1] += int(cands[m:].sum()) + carry
+        return SampleBatch(pts[:m], None, cands[:m])

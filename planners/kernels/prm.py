@@ -1,0 +1,381 @@
+"""Compiled roadmap kernels: PRM and Lazy-PRM growth, union-find, A* over the roadmap.
+
+A roadmap reaches the kernels as the vertex tuple of ``planners.kernels.tree`` (its ``parent`` and
+``cost`` slots unused) plus edge arrays ``(eu, ev, ew, es)``: endpoints, length and status
+(``EDGE_VALID`` / ``EDGE_UNKNOWN`` / ``EDGE_INVALID``; PRM only ever stores valid edges). Vertex
+status lives in ``vstat``. ``uf = (parent, rank, cbest, cbest_d)`` is a union-find forest whose roots
+also carry their component's vertex nearest the goal (the progress anchor). For Lazy-PRM the forest
+is optimistic (unchecked edges count) and is rebuilt when checks remove edges.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from planners.datastructures import nn as nn_index
+from planners.kernels.geometry import motion_free, state_free
+from planners.kernels.rrt import (
+    F_BEST_COST,
+    F_BEST_D,
+    I_ADDED,
+    I_BEST_V,
+    I_CHECKS,
+    I_FIRST,
+    I_ITER,
+    I_N,
+    I_SOLVED,
+    _embed_query,
+)
+from planners.kernels.rrtstar import near_vertices
+from planners.kernels.space import distance, kd_metric, uses_kd
+from planners.kernels.tree import add_vertex, resolve_sample
+
+I_E = 11  # edges stored
+I_QS = 12  # start vertex of the current query
+I_QG = 13  # goal vertex of the current query
+
+EDGE_VALID = 1
+EDGE_UNKNOWN = 0
+EDGE_INVALID = -1
+V_VALID = 1
+V_UNKNOWN = 0
+V_INVALID = -1
+
+
+@nb.njit(cache=True)
+def uf_find(uf, v):
+    p = uf[0]
+    r = v
+    while p[r] != r:
+        r = p[r]
+    while p[v] != r:  # path compression
+        nxt = p[v]
+        p[v] = r
+        v = nxt
+    return r
+
+
+@nb.njit(cache=True)
+def uf_union(uf, a, b):
+    """Merge the components of a and b; the root keeps the closer-to-goal anchor."""
+    p, rank, cbest, cbest_d = uf
+    ra = uf_find(uf, a)
+    rb = uf_find(uf, b)
+    if ra == rb:
+        return
+    if rank[ra] < rank[rb]:
+        ra, rb = rb, ra
+    p[rb] = ra
+    if rank[ra] == rank[rb]:
+        rank[ra] += 1
+    if cbest_d[rb] < cbest_d[ra]:
+        cbest_d[ra] = cbest_d[rb]
+        cbest[ra] = cbest[rb]
+
+
+@nb.njit(cache=True)
+def uf_make(uf, v, dgoal):
+    p, rank, cbest, cbest_d = uf
+    p[v] = v
+    rank[v] = 0
+    cbest[v] = v
+    cbest_d[v] = dgoal
+
+
+@nb.njit(cache=True)
+def neighbours(store, n, space, q, qe, k, radius, out, out_d):
+    """The k nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices."""
+    X = store[0]
+    E, perm, split, box = store[1], store[4], store[5], store[6]
+    kind, metric, rw = space
+    if k > 0:
+        if uses_kd(kind, metric):
+            return nn_index.nearest_k(E, perm, split, box, n, qe, kd_metric(metric), k, out, out_d)
+        dd = np.empty(n)  # exact scan for metrics without a Euclidean embedding
+        for i in range(n):
+            dd[i] = distance(kind, metric, rw, X[i], q)
+        order = np.argsort(dd)
+        m = min(k, n)
+        for j in range(m):
+            out[j] = order[j]
+            out_d[j] = dd[order[j]]
+        return m
+    return near_vertices(store, n, space, q, qe, radius, out)
+
+
+@nb.njit(cache=True)
+def _refresh_anchor(uf, istate, fstate):
+    root = uf_find(uf, istate[I_QS])
+    istate[I_BEST_V] = uf[2][root]
+    fstate[F_BEST_D] = uf[3][root]
+
+
+@nb.njit(cache=True)
+def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius, max_edge, lazy, valid,
+                  nbr, nbr_d, qe_buf):
+    """Add state ``q`` and connect it to its neighbours; returns the new vertex index.
+
+    ``valid``: the caller already knows ``q`` is collision-free (query states).
+    """
+    X = store[0]
+    eu, ev, ew, es = edges
+    kind, metric, rw = space
+    n = istate[I_N]
+    qe = _embed_query(space, q, qe_buf)
+    m = neighbours(store, n, space, q, qe, k, radius, nbr, nbr_d)
+    v = n
+    istate[I_N] = add_vertex(store, n, space, q, -1, 0.0)
+    vstat[v] = V_VALID if (valid or not lazy) else V_UNKNOWN
+    uf_make(uf, v, distance(kind, metric, rw, q, goal))
+    for j in range(m):
+        u = nbr[j]
+        if vstat[u] == V_INVALID:
+            continue
+        du = distance(kind, metric, rw, X[u], q)
+        if max_edge > 0.0 and du > max_edge:
+            continue
+        if not lazy:
+            istate[I_CHECKS] += 1
+            if not motion_free(world, X[u], q):
+                continue
+        e = istate[I_E]
+        eu[e] = u
+        ev[e] = v
+        ew[e] = du
+        es[e] = EDGE_UNKNOWN if lazy else EDGE_VALID
+        istate[I_E] = e + 1
+        uf_union(uf, u, v)
+    return v
+
+
+@nb.njit(cache=True)
+def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last, world, space, goal, low, high,
+                k, radius_gamma, fixed_radius, max_edge, dim, lazy, until_joined, nbr, nbr_d):
+    """Grow a PRM (``lazy=False``) or a Lazy-PRM roadmap (``lazy=True``), one sample per iteration.
+
+    PRM checks each sample and each connection to its neighbours (k nearest, or within a radius:
+    ``fixed_radius`` if > 0, else the PRM* radius ``radius_gamma (log n / n)^(1/dim)``) and keeps only
+    valid edges. Lazy-PRM stores samples and connections unchecked. With ``until_joined`` it returns
+    before the next sample once the query's start and goal share a component (PRM: solved;
+    Lazy-PRM: time to search); without it, it grows the roadmap regardless.
+    """
+    X = store[0]
+    cap = X.shape[0]
+    ecap = edges[0].shape[0]
+    q = np.empty(X.shape[1])
+    qe_buf = np.empty(store[1].shape[1])
+    for s in range(samples.shape[0]):
+        if until_joined and uf_find(uf, istate[I_QS]) == uf_find(uf, istate[I_QG]):
+            return s
+        n = istate[I_N]
+        if n >= cap or istate[I_E] + (k if k > 0 else n) > ecap:
+            return s
+        istate[I_ITER] += 1
+        istate[I_ADDED] = -1
+        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], goal, low, high, q)
+        last[:] = q
+        if not lazy:
+            istate[I_CHECKS] += 1
+            if not state_free(world, q):
+                continue
+        radius = 0.0
+        if k == 0:
+            if fixed_radius > 0.0:
+                radius = fixed_radius
+            else:
+                radius = radius_gamma * (math.log(n + 1.0) / (n + 1.0)) ** (1.0 / dim)
+            if max_edge > 0.0 and radius > max_edge:
+                radius = max_edge
+        istate[I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius, max_edge,
+                                        lazy, False, nbr, nbr_d, qe_buf)
+        _refresh_anchor(uf, istate, fstate)
+        if not lazy and uf_find(uf, istate[I_QS]) == uf_find(uf, istate[I_QG]):
+            istate[I_SOLVED] = 1
+            if istate[I_FIRST] < 0:
+                istate[I_FIRST] = istate[I_ITER]
+    return samples.shape[0]
+
+
+@nb.njit(cache=True)
+def rebuild_components(store, edges, uf, vstat, istate, goal, space):
+    """Recompute the union-find from edges that are not known invalid between live vertices."""
+    X = store[0]
+    eu, ev, ew, es = edges
+    kind, metric, rw = space
+    for v in range(istate[I_N]):
+        uf_make(uf, v, distance(kind, metric, rw, X[v], goal) if vstat[v] != V_INVALID else np.inf)
+    for e in range(istate[I_E]):
+        if es[e] != EDGE_INVALID and vstat[eu[e]] != V_INVALID and vstat[ev[e]] != V_INVALID:
+            uf_union(uf, eu[e], ev[e])
+
+
+@nb.njit(cache=True)
+def build_csr(edges, n, ne):
+    """Adjacency of the first ``ne`` edges over ``n`` vertices: (offsets, neighbour, edge index)."""
+    eu, ev = edges[0], edges[1]
+    deg = np.zeros(n + 1, dtype=np.int64)
+    for e in range(ne):
+        deg[eu[e] + 1] += 1
+        deg[ev[e] + 1] += 1
+    for v in range(n):
+        deg[v + 1] += deg[v]
+    adj_v = np.empty(deg[n], dtype=np.int64)
+    adj_e = np.empty(deg[n], dtype=np.int64)
+    fill = deg[:n].copy()
+    for e in range(ne):
+        a, b = eu[e], ev[e]
+        adj_v[fill[a]] = b
+        adj_e[fill[a]] = e
+        fill[a] += 1
+        adj_v[fill[b]] = a
+        adj_e[fill[b]] = e
+        fill[b] += 1
+    return deg, adj_v, adj_e
+
+
+@nb.njit(cache=True)
+def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True):
+    """Shortest path src -> dst as (vertex indices, edge indices); empty arrays if none.
+
+    Follows edges that are valid (``only_valid``) or not known invalid, between vertices not known
+    invalid, reading the statuses live so one adjacency serves a whole lazy search. The heuristic
+    is the metric distance to ``dst`` (admissible: edges are straight); ``heuristic=False`` makes
+    the search Dijkstra's (same path length, more vertices expanded).
+    """
+    deg, adj_v, adj_e = csr
+    kind, metric, rw = space
+    n = deg.shape[0] - 1
+    g = np.full(n, np.inf)
+    via_v = np.full(n, -1, dtype=np.int64)
+    via_e = np.full(n, -1, dtype=np.int64)
+    closed = np.zeros(n, dtype=np.bool_)
+    hf = np.empty(deg[n] + 1)
+    hv = np.empty(deg[n] + 1, dtype=np.int64)
+    g[src] = 0.0
+    hf[0] = distance(kind, metric, rw, X[src], X[dst]) if heuristic else 0.0
+    hv[0] = src
+    hn = 1
+    while hn > 0:
+        v = hv[0]
+        hn -= 1
+        lf = hf[hn]
+        lv = hv[hn]
+        i = 0
+        while True:  # sift the last entry down from the root
+            c = 2 * i + 1
+            if c >= hn:
+                break
+            if c + 1 < hn and hf[c + 1] < hf[c]:
+                c += 1
+            if hf[c] >= lf:
+                break
+            hf[i] = hf[c]
+            hv[i] = hv[c]
+            i = c
+        if hn > 0:
+            hf[i] = lf
+            hv[i] = lv
+        if closed[v]:
+            continue
+        closed[v] = True
+        if v == dst:
+            break
+        for j in range(deg[v], deg[v + 1]):
+            u = adj_v[j]
+            e = adj_e[j]
+            if closed[u] or vstat[u] == V_INVALID:
+                continue
+            if es[e] == EDGE_INVALID or (only_valid and es[e] != EDGE_VALID):
+                continue
+            nd = g[v] + ew[e]
+            if nd < g[u]:
+                g[u] = nd
+                via_v[u] = v
+                via_e[u] = e
+                f = nd + distance(kind, metric, rw, X[u], X[dst]) if heuristic else nd
+                i = hn
+                hn += 1
+                while i > 0:
+                    p = (i - 1) // 2
+                    if hf[p] <= f:
+                        break
+                    hf[i] = hf[p]
+                    hv[i] = hv[p]
+                    i = p
+                hf[i] = f
+                hv[i] = u
+    if not closed[dst] or vstat[src] == V_INVALID:
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    k = 1
+    v = dst
+    while v != src:
+        v = via_v[v]
+        k += 1
+    verts = np.empty(k, dtype=np.int64)
+    eds = np.empty(k - 1, dtype=np.int64)
+    v = dst
+    for i in range(k - 1, 0, -1):
+        verts[i] = v
+        eds[i - 1] = via_e[v]
+        v = via_v[v]
+    verts[0] = src
+    return verts, eds
+
+
+@nb.njit(cache=True)
+def astar(store, edges, vstat, n, ne, src, dst, space, only_valid, heuristic=True):
+    """``astar_csr`` over a freshly built adjacency of the roadmap."""
+    return astar_csr(store[0], build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid,
+                     heuristic)
+
+
+@nb.njit(cache=True)
+def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, max_rounds):
+    """Lazy-PRM query: search the optimistic roadmap, check the path, drop what fails, repeat.
+
+    Returns the valid path's vertex indices (and marks the planner solved), or an empty array after
+    rebuilding the components when start and goal turn out to be disconnected, or an empty array
+    after ``max_rounds`` searches (the checks done so far are kept; the next call goes on), so the
+    caller's time limit is looked at between bounded pieces of work.
+    """
+    X = store[0]
+    eu, ev, ew, es = edges
+    csr = build_csr(edges, istate[I_N], istate[I_E])
+    rounds = 0
+    while True:
+        if rounds >= max_rounds:
+            return np.empty(0, dtype=np.int64)
+        rounds += 1
+        verts, eds = astar_csr(X, csr, ew, es, vstat, istate[I_QS], istate[I_QG], space, False)
+        if verts.shape[0] == 0:
+            rebuild_components(store, edges, uf, vstat, istate, goal, space)
+            _refresh_anchor(uf, istate, fstate)
+            return verts
+        ok = True
+        for v in verts:
+            if vstat[v] == V_UNKNOWN:
+                istate[I_CHECKS] += 1
+                vstat[v] = V_VALID if state_free(world, X[v]) else V_INVALID
+            if vstat[v] == V_INVALID:
+                ok = False
+                break
+        if ok:
+            for e in eds:
+                if es[e] == EDGE_UNKNOWN:
+                    istate[I_CHECKS] += 1
+                    es[e] = EDGE_VALID if motion_free(world, X[eu[e]], X[ev[e]]) else EDGE_INVALID
+                if es[e] == EDGE_INVALID:
+                    ok = False
+                    break
+        if ok:
+            istate[I_SOLVED] = 1
+            if istate[I_FIRST] < 0:
+                istate[I_FIRST] = istate[I_ITER]
+            c = 0.0
+            for e in eds:
+                c += ew[e]
+            fstate[F_BEST_COST] = c
+            return verts

@@ -1,0 +1,389 @@
+"""Seeded map generators for the five map families the learning work uses.
+
+Each family function takes an ``np.random.Generator`` and a map side ``size`` and returns a
+``Problem`` on a ``size x size`` ``OccupancyGrid``. Every dimension scales with ``size`` (the
+numbers quoted in docstrings are for ``size = 128``), so 64 looks like a coarser 128 and 512 like a
+finer one. Start and goal are free cell centres, 4-connected through free cells (what the
+continuous collision model allows), at least ``size / 2`` apart along the octile shortest path,
+and further apart in a straight line than the goal tolerance; ``reference_length`` is that octile
+shortest-path length. All randomness comes from the generator passed in.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from planners.base.problem import Problem
+from planners.maps.gridsearch import distance_field, free_components
+from planners.worlds.grid import OccupancyGrid
+
+FAMILIES = ("forest", "narrow_passage", "bugtrap", "maze", "rooms")
+
+#: Smallest map side ``generate`` accepts: below it the narrowest features would be under 2 cells.
+MIN_SIZE = 32
+
+# rejection budget for a query's goal: every family leaves a large pool of valid starts per goal, so
+# in practice the first try succeeds; the bound only turns a broken design into a clear error
+_QUERY_TRIES = 32
+# forest maps, unlike the others, can seal a corner region off entirely: redraw the map then
+_MAP_TRIES = 16
+
+
+def _scaled(size: int, cells: float, lo: int = 1) -> int:
+    """``cells`` at size 128, scaled in proportion to ``size`` (rounded half up), at least ``lo``."""
+    return max(lo, int(cells * size / 128 + 0.5))
+
+
+def _between(rng: np.random.Generator, lo: int, hi: int) -> int:
+    """A uniform integer in ``[lo, hi]`` (both ends included)."""
+    return int(rng.integers(lo, hi + 1))
+
+
+def _symmetry(rng: np.random.Generator):
+    """A uniformly random one of the 8 symmetries of the square, as a function on (H, W) arrays."""
+    turns, flip = _between(rng, 0, 3), bool(rng.integers(2))
+
+    def apply(a: np.ndarray) -> np.ndarray:
+        a = np.rot90(a, turns)
+        return np.ascontiguousarray(a[:, ::-1] if flip else a)
+
+    return apply
+
+
+def _box(size: int, r0: int, r1: int, c0: int, c1: int) -> np.ndarray:
+    """Mask of rows ``[r0, r1)`` and columns ``[c0, c1)``, clipped to the map."""
+    m = np.zeros((size, size), dtype=bool)
+    m[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = True
+    return m
+
+
+def _query(
+    rng: np.random.Generator,
+    obs: np.ndarray,
+    goal_mask: np.ndarray,
+    start_mask: np.ndarray,
+    *,
+    goal_tolerance: float,
+    name: str,
+) -> Problem | None:
+    """A problem with its goal drawn from ``goal_mask`` and its start from ``start_mask``, or None.
+
+    Both are drawn from the free cells of the largest 4-connected free component. Rejection: draw a
+    goal, keep the starts at least ``size / 2`` away along the octile shortest path and more than
+    ``goal_tolerance`` away in a straight line, and draw one of them; redraw the goal if none is left.
+    """
+    size = obs.shape[0]
+    min_geodesic = 0.5 * size
+    # only the largest free component: a goal in a sealed pocket would waste a try
+    labels = free_components(obs)
+    main = labels == np.argmax(np.bincount(labels[labels >= 0]))
+    goals = np.argwhere(goal_mask & main)
+    rows, cols = np.nonzero(start_mask & main)
+    if len(goals) and len(rows):
+        for _ in range(_QUERY_TRIES):
+            g = goals[rng.integers(len(goals))]
+            field = distance_field(obs, (int(g[0]), int(g[1])))
+            geo = field[rows, cols]
+            far = (geo >= min_geodesic) & (np.hypot(rows - g[0], cols - g[1]) > goal_tolerance)
+            ok = np.flatnonzero(far)
+            if len(ok):
+                i = ok[rng.integers(len(ok))]
+                grid = OccupancyGrid(obs)
+                return Problem(
+                    grid,
+                    start=grid.cell_center(rows[i], cols[i]),
+                    goal=grid.cell_center(g[0], g[1]),
+                    goal_tolerance=goal_tolerance,
+                    name=name,
+                    reference_length=float(geo[i]) * grid.resolution,
+                )
+    return None
+
+
+def _found(problem: Problem | None, name: str, goal_tolerance: float) -> Problem:
+    """``problem``, or a RuntimeError if the rejection sampling found none."""
+    if problem is None:
+        raise RuntimeError(
+            f"{name}: no connected start/goal pair at least half the map side apart along the shortest path "
+            f"and more than goal_tolerance={goal_tolerance:g} apart in a straight line"
+        )
+    return problem
+
+
+def _clutter(rng: np.random.Generator, obs: np.ndarray, count: int, lo: int, hi: int, keep_clear: np.ndarray) -> None:
+    """Adds up to ``count`` random rectangles with sides in ``[lo, hi]`` that avoid ``keep_clear``."""
+    size = obs.shape[0]
+    for _ in range(count):
+        h, w = _between(rng, lo, hi), _between(rng, lo, hi)
+        r, c = _between(rng, 0, size - h), _between(rng, 0, size - w)
+        if not keep_clear[r : r + h, c : c + w].any():
+            obs[r : r + h, c : c + w] = True
+
+
+def _forest_map(rng: np.random.Generator, size: int) -> np.ndarray:
+    obs = np.zeros((size, size), dtype=bool)
+    target = rng.uniform(0.15, 0.25) * size * size
+    lo, hi = _scaled(size, 3, 2), _scaled(size, 12, 3)
+    covered = 0
+    while covered < target:
+        if rng.random() < 0.5:
+            h, w = _between(rng, lo, hi), _between(rng, lo, hi)
+            # top-left corners may hang off the map so the edges get partial shapes too
+            r, c = _between(rng, 1 - h, size - 1), _between(rng, 1 - w, size - 1)
+            r0, c0 = max(r, 0), max(c, 0)
+            shape = np.ones((r + h - r0, c + w - c0), dtype=bool)
+        else:
+            rad = rng.uniform(lo / 2, hi / 2)
+            y, x = rng.uniform(0, size, 2)
+            r0, c0 = max(int(y - rad), 0), max(int(x - rad), 0)
+            rr, cc = np.ogrid[r0 : min(int(y + rad) + 1, size), c0 : min(int(x + rad) + 1, size)]
+            shape = (rr + 0.5 - y) ** 2 + (cc + 0.5 - x) ** 2 <= rad * rad
+        patch = obs[r0 : r0 + shape.shape[0], c0 : c0 + shape.shape[1]]
+        shape = shape[: patch.shape[0], : patch.shape[1]]
+        covered += int((shape & ~patch).sum())
+        patch |= shape
+    return obs
+
+
+def forest(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """Random rectangles and discs, 3-12 cells across, covering 15-25% of the map.
+
+    Start and goal lie in opposite corner squares of side ``size / 4``. Shapes can seal a corner off
+    (rarely, mostly on small maps); then the whole map is redrawn.
+    """
+    name = name or f"forest-{size}"
+    q = size // 4
+    problem = None
+    for _ in range(_MAP_TRIES):
+        obs = _forest_map(rng, size)
+        corners = [_box(size, 0, q, 0, q), _box(size, size - q, size, size - q, size)]
+        if rng.integers(2):  # the other diagonal
+            corners = [np.ascontiguousarray(m[:, ::-1]) for m in corners]
+        if rng.integers(2):
+            corners.reverse()
+        problem = _query(rng, obs, corners[0], corners[1], goal_tolerance=goal_tolerance, name=name)
+        if problem is not None:
+            break
+    return _found(problem, name, goal_tolerance)
+
+
+def narrow_passage(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """A wall 2-4 cells thick across the whole map with one gap 2-3 cells wide, and a few small blocks.
+
+    The wall runs vertically or horizontally within the middle fifth of the map; the gap lies
+    anywhere but the outer eighths of the wall; start and goal are on opposite sides, each at least
+    ``size / 8`` from the wall.
+    """
+    obs = np.zeros((size, size), dtype=bool)
+    thick = _between(rng, _scaled(size, 2, 2), _scaled(size, 4, 2))
+    gap = _between(rng, _scaled(size, 2, 2), _scaled(size, 3, 2))
+    # drawn as a vertical wall at columns [x0, x1); the random symmetry below turns it
+    x0 = _between(rng, int(0.4 * size), int(0.6 * size) - thick)
+    x1 = x0 + thick
+    obs[:, x0:x1] = True
+    y0 = _between(rng, size // 8, size - size // 8 - gap)
+    obs[y0 : y0 + gap, x0:x1] = False
+    # blocks stay clear of the wall, so the gap is never narrowed or sealed off
+    clear = _scaled(size, 3, 2)
+    near_wall = _box(size, 0, size, x0 - clear, x1 + clear)
+    _clutter(rng, obs, _between(rng, 3, 8), _scaled(size, 3), _scaled(size, 10), near_wall)
+    sides = [_box(size, 0, size, 0, x0 - size // 8), _box(size, 0, size, x1 + size // 8, size)]
+    if rng.integers(2):
+        sides.reverse()
+    turn = _symmetry(rng)
+    name = name or f"narrow_passage-{size}"
+    problem = _query(rng, turn(obs), turn(sides[0]), turn(sides[1]), goal_tolerance=goal_tolerance, name=name)
+    return _found(problem, name, goal_tolerance)
+
+
+def bugtrap(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """A U-shaped trap with walls 2 cells thick and an inside 32-42 cells wide and deep.
+
+    The start lies in the third of the inside next to the back wall, the goal beyond the back wall
+    (at least ``size / 8`` past it, within the rows the trap spans), and the opening faces away from
+    the goal, so the straight segment from start to goal always crosses the back wall. A few small
+    blocks lie well clear of the trap.
+    """
+    obs = np.zeros((size, size), dtype=bool)
+    t = _scaled(size, 2)
+    inner = _between(rng, size // 4, size // 3)  # between the two arms
+    depth = _between(rng, size // 4, size // 3)  # from the opening to the back wall
+    outer = inner + 2 * t
+    # drawn opening west, back wall east at columns [xb, xb + t), goal further east; turned below
+    x0 = _between(rng, size // 8, size // 4)
+    xb = x0 + depth
+    y0 = _between(rng, size // 8, size - size // 8 - outer)
+    obs[y0 : y0 + t, x0 : xb + t] = True
+    obs[y0 + outer - t : y0 + outer, x0 : xb + t] = True
+    obs[y0 : y0 + outer, xb : xb + t] = True
+    # the margin keeps every way out of the trap and around it free of clutter
+    clear = _scaled(size, 6, 3)
+    around = _box(size, y0 - clear, y0 + outer + clear, 0, xb + t + clear)
+    _clutter(rng, obs, _between(rng, 2, 6), _scaled(size, 3), _scaled(size, 8), around)
+    side = max(1, inner // 8)
+    inside = _box(size, y0 + t + side, y0 + outer - t - side, xb - max(1, depth // 3), xb)
+    beyond = _box(size, y0, y0 + outer, xb + t + size // 8, size)
+    turn = _symmetry(rng)
+    name = name or f"bugtrap-{size}"
+    problem = _query(rng, turn(obs), turn(beyond), turn(inside), goal_tolerance=goal_tolerance, name=name)
+    return _found(problem, name, goal_tolerance)
+
+
+def maze(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """A perfect maze (randomised depth-first search) with corridors 16 cells wide and walls 1-2 thick.
+
+    Corridors are size/8 wide (7 x 7 maze cells at 128): at size/16, RRT with step 4 solves only about
+    half of the queries within 20,000 iterations; at size/8 it needs a median ~60x the lower bound,
+    the regime of the issue's reference table.
+
+    Start and goal are at the centres of two maze cells (lattice squares of the corridor width).
+    """
+    w = _scaled(size, 16, 2)
+    t = _between(rng, _scaled(size, 1), _scaled(size, 2))
+    n = (size - t) // (w + t)  # maze cells per side
+    margin = (size - t - n * (w + t)) // 2  # the leftover band is solid wall
+    obs = np.ones((size, size), dtype=bool)
+
+    def corner(i: int, j: int) -> tuple[int, int]:
+        return margin + t + i * (w + t), margin + t + j * (w + t)
+
+    for i in range(n):
+        for j in range(n):
+            r, c = corner(i, j)
+            obs[r : r + w, c : c + w] = False
+    seen = np.zeros((n, n), dtype=bool)
+    stack = [(_between(rng, 0, n - 1), _between(rng, 0, n - 1))]
+    seen[stack[0]] = True
+    while stack:
+        i, j = stack[-1]
+        nbrs = [(i + di, j + dj) for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1))
+                if 0 <= i + di < n and 0 <= j + dj < n and not seen[i + di, j + dj]]
+        if not nbrs:
+            stack.pop()
+            continue
+        a, b = nbrs[int(rng.integers(len(nbrs)))]
+        r, c = corner(min(i, a), min(j, b))
+        if a != i:  # open the wall below the upper of two vertically adjacent cells
+            obs[r + w : r + w + t, c : c + w] = False
+        else:
+            obs[r : r + w, c + w : c + w + t] = False
+        seen[a, b] = True
+        stack.append((a, b))
+    centres = np.zeros((size, size), dtype=bool)
+    first = margin + t + w // 2
+    centres[first : first + n * (w + t) : w + t, first : first + n * (w + t) : w + t] = True
+    name = name or f"maze-{size}"
+    problem = _query(rng, obs, centres, centres, goal_tolerance=goal_tolerance, name=name)
+    return _found(problem, name, goal_tolerance)
+
+
+def rooms(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """A 3x3 or 4x4 grid of rooms (walls 1-2 thick, jittered) joined by doors 4-6 cells wide.
+
+    Doors follow a random spanning tree of the room grid, so every room is reachable, and each
+    remaining wall gets a door with probability 1/4, adding loops. Start and goal lie in rooms at
+    least ``k - 1`` steps apart in the room grid (``k`` rooms per side), away from the walls.
+    """
+    k = _between(rng, 3, 4)
+    t = _between(rng, _scaled(size, 1), _scaled(size, 2))
+    span = size / k
+    jitter = int(span / 8)
+    walls = [int(round(i * span)) + _between(rng, -jitter, jitter) for i in range(1, k)]
+    obs = np.zeros((size, size), dtype=bool)
+    for e in walls:
+        obs[e : e + t, :] = True
+        obs[:, e : e + t] = True
+    # free extent [lo[i], hi[i]) of room i along either axis
+    lo = [0] + [e + t for e in walls]
+    hi = walls + [size]
+    door_lo, door_hi = _scaled(size, 4, 2), _scaled(size, 6, 2)
+    parent = list(range(k * k))
+
+    def root(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    # (room row, room col) pairs sharing a wall: below and to the right
+    pairs = [((i, j), (i + 1, j)) for i in range(k - 1) for j in range(k)]
+    pairs += [((i, j), (i, j + 1)) for i in range(k) for j in range(k - 1)]
+    for idx in rng.permutation(len(pairs)):
+        (i, j), (a, b) = pairs[idx]
+        ra, rb = root(i * k + j), root(a * k + b)
+        if ra != rb:
+            parent[ra] = rb
+        elif rng.random() >= 0.25:
+            continue
+        door = _between(rng, door_lo, door_hi)
+        if a != i:  # in the wall below room (i, j), within its columns, a cell clear of the crossing walls
+            x = _between(rng, lo[j] + 1, hi[j] - 1 - door)
+            obs[walls[i] : walls[i] + t, x : x + door] = False
+        else:
+            y = _between(rng, lo[i] + 1, hi[i] - 1 - door)
+            obs[y : y + door, walls[j] : walls[j] + t] = False
+    gap = _scaled(size, 2)
+
+    def interior(i: int, j: int) -> np.ndarray:
+        return _box(size, lo[i] + gap, hi[i] - gap, lo[j] + gap, hi[j] - gap)
+
+    gi, gj = _between(rng, 0, k - 1), _between(rng, 0, k - 1)
+    far = np.zeros((size, size), dtype=bool)
+    for i in range(k):
+        for j in range(k):
+            if abs(i - gi) + abs(j - gj) >= k - 1:
+                far |= interior(i, j)
+    name = name or f"rooms-{size}"
+    problem = _query(rng, obs, interior(gi, gj), far, goal_tolerance=goal_tolerance, name=name)
+    return _found(problem, name, goal_tolerance)
+
+
+_GENERATORS = {"forest": forest, "narrow_passage": narrow_passage, "bugtrap": bugtrap, "maze": maze, "rooms": rooms}
+
+
+def generate(family: str, seed: int | np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0) -> Problem:
+    """A seeded problem of one family; the same family, seed and size always give the same problem.
+
+    Args:
+        family: One of ``FAMILIES``.
+        seed: A non-negative int (named in the problem, ``f"{family}-{size}-{seed}"``) or a
+            ``np.random.Generator`` to draw from (the name is then ``f"{family}-{size}"``).
+        size: Map side in cells, an integer >= ``MIN_SIZE``.
+        goal_tolerance: Goal radius (cells), a positive number.
+
+    Raises:
+        ValueError: For an unknown family, a size below ``MIN_SIZE``, a negative seed or a
+            non-positive goal tolerance.
+    """
+    if not isinstance(family, str) or family not in _GENERATORS:
+        raise ValueError(f"unknown map family {family!r}; choose from {', '.join(FAMILIES)}")
+    if isinstance(size, bool) or not isinstance(size, numbers.Integral) or size < MIN_SIZE:
+        raise ValueError(f"size must be an integer >= {MIN_SIZE}, got {size!r}")
+    try:
+        tol = float(goal_tolerance)
+    except (TypeError, ValueError):
+        tol = float("nan")
+    if not (np.isfinite(tol) and tol > 0):
+        raise ValueError(f"goal_tolerance must be a positive finite number, got {goal_tolerance!r}")
+    size = int(size)
+    if isinstance(seed, np.random.Generator):
+        rng, name = seed, f"{family}-{size}"
+    elif isinstance(seed, numbers.Integral) and not isinstance(seed, bool):
+        if seed < 0:
+            raise ValueError(f"seed must be a non-negative integer or a np.random.Generator, got {seed!r}")
+        rng, name = np.random.default_rng(int(seed)), f"{family}-{size}-{seed}"
+    else:
+        raise TypeError(f"seed must be an int or a np.random.Generator, got {type(seed).__name__} {seed!r}")
+    return _GENERATORS[family](rng, size, goal_tolerance=tol, name=name)

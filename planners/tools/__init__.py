@@ -1,0 +1,1 @@
+"""Around the planners: benchmarks, OMPL benchmark logs, the OMPL bridge, and the plan-on-a-picture workflow."""

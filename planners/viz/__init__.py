@@ -1,0 +1,1 @@
+"""Figures and animations (matplotlib, headless), imported on demand only."""
