@@ -10,7 +10,7 @@ Registered ids:
 * ``SamplerGym/RRT-{Forest,NarrowPassage,Bugtrap,Maze,Rooms}-v0``: RRT on a fresh generated map of
   that family each episode (``source_kwargs={"size": ...}``, default 64).
 * ``SamplerGym/RRT-MovingAI-v0``: RRT on the MovingAI benchmark scenarios, found by
-  ``envs.sources.movingai_dir`` (``source_kwargs={"directory": ...}``, else ``SAMPLERGYM_MOVINGAI_DIR``,
+  ``planners.movingai_dir`` (``source_kwargs={"directory": ...}``, else ``SAMPLERGYM_MOVINGAI_DIR``,
   else ``../shared/maps/movingai`` from the working directory).
 * ``SamplerGym/RRT-Files-v0``: RRT on your own maps (``source_kwargs={"paths": [...]}``), by default on
   the small sample maps shipped in ``envs/data/maps``.
@@ -39,12 +39,11 @@ from envs.sources import (
     MovingAISource,
     ProblemListSource,
     RigidSceneSource,
-    movingai_dir,
     sample_map_paths,
 )
 
 __all__ = ["ACTION_MODES", "ENV_IDS", "EnvSampler", "FamilySource", "FileSource", "MovingAISource", "ProblemListSource",
-           "RigidSceneSource", "SamplerEnv", "movingai_dir", "record_episode", "sample_map_paths"]
+           "RigidSceneSource", "SamplerEnv", "record_episode", "sample_map_paths"]
 
 _FAMILY_IDS = {
     "Forest": "forest",

@@ -314,9 +314,9 @@ class SamplerEnv(gym.Env):
             "sample": None if self._last_sample is None else self._last_sample.copy(),
             "added": self._added,
         }
-        ref = self.problem.reference_length
-        if ref is not None:
-            info["lower_bound"] = max(1, math.ceil((ref - self.problem.goal_tolerance) / self.step_size))
+        bound = self.problem.iteration_lower_bound(self.step_size)
+        if bound is not None:
+            info["lower_bound"] = bound
         return info
 
     def _geodesic_potential_init(self) -> float:

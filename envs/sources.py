@@ -12,49 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
-from planners import OccupancyGrid, Problem, load_movingai_scenarios
+from planners import OccupancyGrid, Problem, load_movingai_scenarios, movingai_dir
 from planners.base.fileio import InputError
 from planners.maps.generators import FAMILIES, generate
 from planners.maps.gridsearch import free_components
 
 MapSource = Callable[[np.random.Generator], Problem]
-
-
-MOVINGAI_ENV = "SAMPLERGYM_MOVINGAI_DIR"
-
-
-def movingai_dir(directory: str | os.PathLike | None = None) -> Path:
-    """The folder of MovingAI ``.map`` / ``.scen`` files, the one place the library looks for it.
-
-    ``directory`` if given, else ``$SAMPLERGYM_MOVINGAI_DIR``, else ``../shared/maps/movingai``
-    relative to the current working directory. Never derived from where this file sits, so an
-    installed (non-editable) package finds the maps too.
-
-    Raises:
-        InputError: The chosen folder does not exist or holds no ``.map`` file; the message names the
-            argument and the environment variable.
-    """
-    cand, origin = _movingai_candidate(directory)
-    if not cand.is_dir() or not any(cand.glob("*.map")):
-        raise InputError(f"MovingAI maps not found: {origin} is not a folder of .map files; pass the folder "
-                         f"as the directory argument (source_kwargs={{'directory': ...}}, --movingai) or set "
-                         f"{MOVINGAI_ENV}")
-    return cand
-
-
-def _movingai_candidate(directory: str | os.PathLike | None) -> tuple[Path, str]:
-    """The folder ``movingai_dir`` would use, and where it came from (for messages); not checked."""
-    if directory is not None:
-        return Path(directory), f"directory={str(directory)!r}"
-    if os.environ.get(MOVINGAI_ENV):
-        return Path(os.environ[MOVINGAI_ENV]), f"{MOVINGAI_ENV}={os.environ[MOVINGAI_ENV]!r}"
-    return (Path.cwd().parent / "shared" / "maps" / "movingai",
-            f"the default ../shared/maps/movingai (from the working directory {Path.cwd()})")
-
-
-def default_movingai_dir() -> Path:
-    """The folder ``movingai_dir()`` resolves to, without checking it (for callers that degrade gracefully)."""
-    return _movingai_candidate(None)[0]
 
 
 def sample_map_paths() -> list[Path]:

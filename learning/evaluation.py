@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 
 from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
-from learning.training import TEST_SEED0, TUNING_SEED0, lower_bound
 from planners import (
     PRM,
     RRT,
@@ -36,7 +35,7 @@ from planners import (
     load_movingai_scenarios,
 )
 from planners.base.fileio import InputError, atomic_write_text
-from planners.maps.generators import generate
+from planners.maps.generators import TEST_SEED0, TUNING_SEED0, generate
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
 GOAL_BIASES = (0.01, 0.05, 0.1, 0.2, 0.5)
@@ -277,7 +276,7 @@ def run_one(task: tuple) -> Run:
     wall = time.perf_counter() - t0
     its = r.first_solution_iteration if r.solved else r.iterations
     return Run(query.family, problem.name, query.split, planner_name, sampler_name, seed, r.solved, int(its),
-               lower_bound(problem, cfg["step"]), r.candidates, r.collision_checks, wall,
+               problem.iteration_lower_bound(cfg["step"]), r.candidates, r.collision_checks, wall,
                r.cost if r.solved else math.inf, int(getattr(planner.sampler, "forward_passes", 0)),
                int(r.num_vertices))
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import os
 import re
 import time
@@ -35,12 +34,7 @@ from learning.imitation import Dataset, behaviour_cloning, collect
 from learning.policy_sampler import OBS_VERSION, PolicySampler
 from planners import RRT
 from planners.base.fileio import InputError, atomic_path, atomic_write_text, check_number
-from planners.maps.generators import FAMILIES, MIN_SIZE, generate
-
-TRAIN_SEEDS = (0, 100_000)
-VALIDATION_SEED0 = 200_000
-TUNING_SEED0 = 300_000
-TEST_SEED0 = 1_000_000
+from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
 
 
 @dataclass
@@ -154,11 +148,6 @@ class TrainConfig:
             raise InputError(f"{source}: extra = {self.extra!r}, expected an object")
 
 
-def lower_bound(problem, step_size: float) -> int:
-    """ceil((L* - tolerance) / step): iterations no sampler can beat."""
-    return max(1, math.ceil((problem.reference_length - problem.goal_tolerance) / step_size))
-
-
 def _maps(cfg: TrainConfig, rng: np.random.Generator, per_family: int, seed0: int | None = None):
     out = []
     for f in cfg.families:
@@ -178,7 +167,7 @@ def validation_score(actor: FastActor, cfg: TrainConfig) -> tuple[float, dict]:
         for i in range(cfg.validation_maps):
             p = generate(f, VALIDATION_SEED0 + i, cfg.sizes[i % len(cfg.sizes)], goal_tolerance=cfg.goal_tolerance)
             r = RRT(p, step_size=cfg.step_size, sampler=sampler, seed=i).solve(max_iterations=20000)
-            ratios.append(r.iterations / lower_bound(p, cfg.step_size) if r.solved else 20000.0)
+            ratios.append(r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0)
         per_family[f] = float(np.median(ratios))
     return float(np.exp(np.mean(np.log(list(per_family.values()))))), per_family
 

@@ -6,7 +6,7 @@ from planners.algorithms.rrt import RRT, RRTConnect
 from planners.algorithms.rrtstar import InformedRRTStar, RRTStar
 from planners.algorithms.smoothing import shortcut, simplify, smooth
 from planners.base.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
-from planners.base.problem import Problem, load_movingai_scenarios
+from planners.base.problem import Problem
 from planners.base.samplers import (
     ANCHOR_GOAL,
     ANCHOR_NONE,
@@ -20,6 +20,7 @@ from planners.base.samplers import (
 )
 from planners.base.world import World
 from planners.datastructures.nn import NearestNeighbors
+from planners.maps.movingai import load_movingai_scenarios, movingai_dir
 from planners.worlds.grid import OccupancyGrid
 from planners.worlds.rigid3d import (
     Box3D,
@@ -70,6 +71,7 @@ __all__ = [
     "save_scene",
     "thin_wall_scene",
     "load_movingai_scenarios",
+    "movingai_dir",
     "shortcut",
     "simplify",
     "smooth",

@@ -13,10 +13,8 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import envs  # noqa: E402
-from planners.tools.benchmark import markdown_table  # noqa: E402
+import envs
+from planners.tools.benchmark import markdown_table
 
 gym.register_envs(envs)
 

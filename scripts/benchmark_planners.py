@@ -20,35 +20,22 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import envs  # noqa: E402
-from planners import (  # noqa: E402
+from planners import (
     OccupancyGrid,
     Problem,
     load_movingai_scenarios,
-    ompl_bridge,  # noqa: E402
+    movingai_dir,
 )
-from planners.base.fileio import InputError, atomic_write_text  # noqa: E402
-from planners.maps.generators import FAMILIES, generate  # noqa: E402
-from planners.tools import benchmark  # noqa: E402
-from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log  # noqa: E402
-
-
-def movingai_dir(arg: str | None) -> Path | None:
-    """The MovingAI folder (``--movingai``, else ``envs.movingai_dir``'s rules), or None to skip those maps."""
-    try:
-        return envs.movingai_dir(arg)
-    except InputError:
-        if arg:  # asked for explicitly: a wrong folder is an error, not a silent skip
-            raise
-        return None
+from planners.base.fileio import atomic_write_text
+from planners.maps.generators import FAMILIES, generate
+from planners.tools import benchmark, ompl_bridge
+from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
 
 def map_set(args) -> dict[str, list[Problem]]:
     """Queries per map: seeded generated maps of each family, and the longest MovingAI scenarios."""
     maps = {f"{f}-{args.size}": [generate(f, s, args.size) for s in range(args.seeds)] for f in FAMILIES}
-    d = movingai_dir(args.movingai)
+    d = movingai_dir(args.movingai, required=False)
     if d is None:
         print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); skipping them", file=sys.stderr)
         return maps
@@ -221,7 +208,7 @@ def main(argv=None) -> int:
         print("\n" + line)
 
     print("## Tree growth (uniform RRT)\n", flush=True)
-    g_rows, nn_rows = growth(args, use_ompl, movingai_dir(args.movingai))
+    g_rows, nn_rows = growth(args, use_ompl, movingai_dir(args.movingai, required=False))
     gt = benchmark.markdown_table(g_rows, ["map", "planner", "from_vertices", "to_vertices", "iterations", "us_per_iteration"])
     nt = benchmark.markdown_table(nn_rows, ["map", "vertices", "index_us", "numpy_scan_us"])
     out.write("## Per-iteration time while the tree grows\n\n" + gt

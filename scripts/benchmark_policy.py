@@ -14,17 +14,17 @@ for --sampler (specs as in evaluate.py). One process: absolute times are quieter
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from learning import evaluation as E  # noqa: E402
-from learning.benchmark import forward_pass_us, observations, query_times  # noqa: E402
-from learning.policy_sampler import PolicySampler  # noqa: E402
-from learning.training import TEST_SEED0  # noqa: E402
-from planners.maps.generators import FAMILIES, generate  # noqa: E402
-from planners.tools.benchmark import markdown_table  # noqa: E402
+from learning import evaluation as E
+from learning.benchmark import forward_pass_us, observations, query_times
+from learning.policy_sampler import PolicySampler
+from planners.maps.generators import (
+    FAMILIES,
+    TEST_SEED0,
+    generate,
+)
+from planners.tools.benchmark import markdown_table
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 

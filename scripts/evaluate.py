@@ -21,15 +21,14 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
-from envs.sources import default_movingai_dir  # noqa: E402
-from learning import PolicySampler  # noqa: E402
-from learning import evaluation as E  # noqa: E402
-from planners.base.fileio import atomic_write_text  # noqa: E402
-from planners.maps.generators import FAMILIES  # noqa: E402
-from planners.tools.benchmark import markdown_table  # noqa: E402
+from learning import PolicySampler
+from learning import evaluation as E
+from planners import movingai_dir
+from planners.base.fileio import InputError, atomic_write_text
+from planners.maps.generators import FAMILIES
+from planners.tools.benchmark import markdown_table
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
@@ -103,14 +102,19 @@ def parse_args(argv=None) -> argparse.Namespace:
 def main(argv=None) -> int:
     """Run the comparison and write its results; returns the exit status."""
     args = parse_args(argv)
-    mdir = args.movingai or default_movingai_dir()
+    try:  # a folder the user named must exist; the default one may be absent
+        mdir = movingai_dir(args.movingai, required=False) if args.movingai_maps else None
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     queries = E.generated_queries(args.families, args.size, args.maps, args.tuning_maps)
-    if args.movingai_maps and mdir.is_dir():
+    if mdir is not None:
         queries += E.movingai_queries(str(mdir), args.movingai_maps, args.scenarios, args.tuning_scenarios,
                                       args.tolerance)
     elif args.movingai_maps:
-        print(f"MovingAI maps not found in {mdir}; evaluating generated families only", file=sys.stderr)
-    cfg = {"movingai_dir": str(mdir), "tolerance": args.tolerance, "policy": str(args.policy), "step": args.step,
+        print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); evaluating generated "
+              "families only", file=sys.stderr)
+    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": args.tolerance, "policy": str(args.policy), "step": args.step,
            "max_iterations": args.max_iterations, "user_samplers": args.user_samplers}
     users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]

@@ -16,11 +16,9 @@ import platform
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from planners.algorithms.obprm import compare_prm_variants  # noqa: E402
-from planners.base.fileio import atomic_write_text  # noqa: E402
-from planners.tools.benchmark import markdown_table  # noqa: E402
+from planners.algorithms.obprm import compare_prm_variants
+from planners.base.fileio import atomic_write_text
+from planners.tools.benchmark import markdown_table
 
 COLUMNS = ["map", "planner", "runs", "success", "median_samples", "median_candidates", "median_checks",
            "median_time_s"]

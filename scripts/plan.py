@@ -28,10 +28,8 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from planners.base.fileio import InputError  # noqa: E402
-from planners.tools.workflow import (  # noqa: E402
+from planners.base.fileio import InputError
+from planners.tools.workflow import (
     METRICS,
     PLANNERS,
     SAMPLERS,

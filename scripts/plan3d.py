@@ -18,10 +18,8 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from planners.base.fileio import InputError  # noqa: E402
-from planners.worlds.rigid3d import SETUPS, load_scene, setup_planner  # noqa: E402
+from planners.base.fileio import InputError
+from planners.worlds.rigid3d import SETUPS, load_scene, setup_planner
 
 
 def main(argv=None) -> int:

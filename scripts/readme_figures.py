@@ -10,10 +10,7 @@ rigid.png: RRT-Connect moving a box body through the window of the example 6-DoF
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -29,9 +26,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from learning import PolicySampler
-    from learning.training import TEST_SEED0
     from planners import RRT, GoalBiasedSampler, RRTConnect, load_scene
-    from planners.maps.generators import generate
+    from planners.maps.generators import TEST_SEED0, generate
     from planners.viz.plotting import new_figure, plot, save_figure
     from planners.viz.plotting3d import plot_scene
 

@@ -23,10 +23,8 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from learning.training import TrainConfig, read_state, train  # noqa: E402
-from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text  # noqa: E402
+from learning.training import TrainConfig, read_state, train
+from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text
 
 
 def _where(state: dict, cfg: TrainConfig) -> str:

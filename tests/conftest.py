@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
+import planners.maps.movingai
 from planners import GeometricWorld, OccupancyGrid
+from planners.base.fileio import InputError
 from planners.worlds.shapes import Circle
 
 # derandomized so CI runs are reproducible; examples still cover the strategies broadly
@@ -34,12 +36,12 @@ def load_script(name: str):
 
 
 def movingai_dir() -> Path | None:
-    """The shared MovingAI maps: $SAMPLERGYM_MOVINGAI_DIR, else ../shared/maps/movingai next to the repo."""
-    env = os.environ.get("SAMPLERGYM_MOVINGAI_DIR")
-    for cand in ([Path(env)] if env else []) + [REPO.parent / "shared" / "maps" / "movingai"]:
-        if cand.is_dir() and any(cand.glob("*.map")):
-            return cand
-    return None
+    """The shared MovingAI maps (the library's lookup, anchored at the repo rather than the working directory)."""
+    try:
+        return planners.movingai_dir(os.environ.get(planners.maps.movingai.MOVINGAI_ENV)
+                                     or REPO.parent / "shared" / "maps" / "movingai")
+    except InputError:
+        return None
 
 
 @pytest.fixture(scope="session")

@@ -112,14 +112,14 @@ def test_planning_id_plans_on_the_users_map(kind, tmp_path):
 
 def test_movingai_dir_resolution(tmp_path, monkeypatch):
     """Argument > SAMPLERGYM_MOVINGAI_DIR > ../shared/maps/movingai from the working directory; not the source path."""
-    from envs import sources
+    from planners.maps import movingai as sources
 
     a, b = tmp_path / "a", tmp_path / "b"
     for d in (a, b):
         d.mkdir()
         (d / "x.map").write_text("type octile\nheight 1\nwidth 1\nmap\n.\n")
     # simulate a non-editable install: the module sits in site-packages, far from any shared/ folder
-    monkeypatch.setattr(sources, "__file__", str(tmp_path / "venv" / "lib" / "site-packages" / "envs" / "sources.py"))
+    monkeypatch.setattr(sources, "__file__", str(tmp_path / "venv" / "lib" / "site-packages" / "planners" / "maps" / "movingai.py"))
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv(MOVINGAI_ENV, str(b))
     assert sources.movingai_dir() == b
@@ -134,6 +134,12 @@ def test_movingai_dir_resolution(tmp_path, monkeypatch):
     (tmp_path / "proj" / "shared" / "maps" / "movingai").symlink_to(a)
     monkeypatch.chdir(work)
     assert sources.movingai_dir().resolve() == a.resolve()
+    (tmp_path / "proj" / "shared" / "maps" / "movingai").unlink()
+    assert sources.movingai_dir(required=False) is None  # the default folder may be absent...
+    monkeypatch.setenv(MOVINGAI_ENV, str(tmp_path / "missing"))
+    with pytest.raises(InputError, match=MOVINGAI_ENV):  # ...but a folder the user named must exist
+        sources.movingai_dir(required=False)
+    monkeypatch.delenv(MOVINGAI_ENV)
     with pytest.raises(InputError, match=MOVINGAI_ENV):
         gym.make("SamplerGym/RRT-MovingAI-v0", source_kwargs={"directory": str(tmp_path / "missing")})
 

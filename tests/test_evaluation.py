@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from learning import evaluation as E
-from learning.training import TEST_SEED0
+from planners.maps.generators import TEST_SEED0
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))

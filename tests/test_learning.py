@@ -12,9 +12,9 @@ import torch
 
 from learning import PolicySampler
 from learning.fast_policy import FastActor
-from learning.training import TEST_SEED0, TrainConfig, train
+from learning.training import TrainConfig, train
 from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler
-from planners.maps.generators import generate
+from planners.maps.generators import TEST_SEED0, generate
 
 TINY = TrainConfig(name="tiny", families=("forest",), sizes=(64,), dagger_rounds=2, maps_per_round=32, bc_epochs=10,
                    ppo_steps=1024, value_warmup=512, ppo_n_steps=256, ppo_batch=128, ppo_epochs=2,

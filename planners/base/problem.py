@@ -3,17 +3,13 @@
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Iterator
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from planners.base.fileio import InputError
 from planners.base.world import World
 from planners.kernels.space import METRIC_NAMES
-from planners.worlds.grid import OccupancyGrid
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,6 +96,16 @@ class Problem:
     def in_goal(self, q) -> bool:
         return self.distance(q, self.goal) <= self.goal_tolerance
 
+    def iteration_lower_bound(self, step_size: float) -> int | None:
+        """``ceil((reference_length - goal_tolerance) / step_size)``, at least 1: iterations no sampler can beat.
+
+        One iteration adds at most one step of length ``step_size``, so reaching the goal region
+        along the shortest path takes at least this many. None when ``reference_length`` is unknown.
+        """
+        if self.reference_length is None:
+            return None
+        return max(1, math.ceil((self.reference_length - self.goal_tolerance) / step_size))
+
     def with_query(self, start, goal, **changes) -> Problem:
         """The same world with another start and goal (and optionally other fields)."""
         fields = dict(world=self.world, start=start, goal=goal, goal_tolerance=self.goal_tolerance,
@@ -112,71 +118,3 @@ class Problem:
         g = np.round(self.goal, 3).tolist()
         label = f"{self.name!r}, " if self.name else ""
         return f"Problem({label}{self.world!r}, start={s}, goal={g}, tol={self.goal_tolerance:g}, metric={self.metric})"
-
-
-def load_movingai_scenarios(
-    path: str | os.PathLike,
-    *,
-    goal_tolerance: float = 1.0,
-    map_path: str | os.PathLike | None = None,
-    metric: str = "euclidean",
-    limit: int | None = None,
-) -> Iterator[Problem]:
-    """Yield one ``Problem`` per line of a MovingAI ``.scen`` file.
-
-    Start and goal are the centres of the scenario's cells (``x + 0.5, y + 0.5``); each problem's
-    ``reference_length`` is the published octile optimum. The map is found by the basename of the
-    scenario's map column next to the ``.scen`` file, unless ``map_path`` is given.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"MovingAI scenario file {path} does not exist")
-    raw = path.read_bytes()
-    try:
-        lines = raw.decode("ascii").splitlines()
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: not an ASCII MovingAI scenario file (byte {exc.start} is "
-                         f"{raw[exc.start]:#x})") from None
-    grids: dict[Path, OccupancyGrid] = {}
-    count = 0
-    for lineno, line in enumerate(lines, start=1):
-        if not line.strip() or (lineno == 1 and line.lower().startswith("version")):
-            continue
-        fields = line.split("\t")
-        if len(fields) != 9:
-            raise InputError(f"{path}, line {lineno}: expected 9 tab-separated fields, got {len(fields)}: {line!r}")
-        try:
-            bucket = int(fields[0])
-            w, h, sx, sy, gx, gy = (int(v) for v in fields[2:8])
-            optimal = float(fields[8])
-        except ValueError:
-            raise InputError(f"{path}, line {lineno}: non-numeric field in {line!r}") from None
-        if not (math.isfinite(optimal) and optimal >= 0):
-            raise InputError(f"{path}, line {lineno}: optimal length must be a finite number >= 0, "
-                             f"got {fields[8]!r}")
-        mp = Path(map_path) if map_path is not None else path.parent / Path(fields[1].replace("\\", "/")).name
-        if mp not in grids:
-            if not mp.is_file():
-                raise InputError(f"{path}, line {lineno}: its map {fields[1]!r} is looked up as {str(mp)!r}, "
-                                 f"which does not exist; pass map_path=")
-            grids[mp] = OccupancyGrid.from_movingai(mp)
-        grid = grids[mp]
-        if (w, h) != (grid.width, grid.height):
-            raise InputError(f"{path}, line {lineno}: scenario size {w}x{h} does not match {mp} "
-                             f"({grid.width}x{grid.height})")
-        for label, (x, y) in (("start", (sx, sy)), ("goal", (gx, gy))):
-            if not (0 <= x < w and 0 <= y < h) or grid.obstacles[y, x]:
-                raise InputError(f"{path}, line {lineno}: {label} cell (x={x}, y={y}) is outside the map or blocked")
-        yield Problem(
-            grid,
-            start=grid.cell_center(sy, sx),
-            goal=grid.cell_center(gy, gx),
-            goal_tolerance=goal_tolerance,
-            metric=metric,
-            name=f"{mp.stem}#{lineno}",
-            reference_length=optimal,
-        )
-        _ = bucket
-        count += 1
-        if limit is not None and count >= limit:
-            return

@@ -21,6 +21,13 @@ from planners.worlds.grid import OccupancyGrid
 
 FAMILIES = ("forest", "narrow_passage", "bugtrap", "maze", "rooms")
 
+# Seed ranges of the map splits. Training draws seeds from TRAIN_SEEDS; validation, tuning and test
+# maps take consecutive seeds from their SEED0, so no split ever holds another split's maps.
+TRAIN_SEEDS = (0, 100_000)
+VALIDATION_SEED0 = 200_000
+TUNING_SEED0 = 300_000
+TEST_SEED0 = 1_000_000
+
 #: Smallest map side ``generate`` accepts: below it the narrowest features would be under 2 cells.
 MIN_SIZE = 32
 

@@ -1,0 +1,119 @@
+"""MovingAI grid benchmarks: where their files are, and their ``.scen`` scenarios as ``Problem`` s.
+
+The ``.map`` reader is ``OccupancyGrid.from_movingai``; ``../shared/maps/README.md`` describes the
+format and its quirks.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+from planners.base.fileio import InputError
+from planners.base.problem import Problem
+from planners.worlds.grid import OccupancyGrid
+
+#: Environment variable naming the folder of MovingAI ``.map`` / ``.scen`` files.
+MOVINGAI_ENV = "SAMPLERGYM_MOVINGAI_DIR"
+
+
+def movingai_dir(directory: str | os.PathLike | None = None, *, required: bool = True) -> Path | None:
+    """The folder of MovingAI ``.map`` / ``.scen`` files, the one place the library looks for it.
+
+    ``directory`` if given, else ``$SAMPLERGYM_MOVINGAI_DIR``, else ``../shared/maps/movingai``
+    relative to the current working directory. Never derived from where this file sits, so an
+    installed (non-editable) package finds the maps too.
+
+    Args:
+        directory: The folder, or None to look it up.
+        required: If False, a missing *default* folder gives None (callers that skip the MovingAI
+            maps then); a folder named by ``directory`` or the variable must still exist.
+
+    Raises:
+        InputError: The chosen folder does not exist or holds no ``.map`` file; the message names the
+            argument and the environment variable.
+    """
+    if directory is not None:
+        cand, origin = Path(directory), f"directory={str(directory)!r}"
+    elif os.environ.get(MOVINGAI_ENV):
+        cand, origin = Path(os.environ[MOVINGAI_ENV]), f"{MOVINGAI_ENV}={os.environ[MOVINGAI_ENV]!r}"
+    else:
+        cand = Path.cwd().parent / "shared" / "maps" / "movingai"
+        origin = f"the default ../shared/maps/movingai (from the working directory {Path.cwd()})"
+        if not required and not cand.is_dir():
+            return None
+    if not cand.is_dir() or not any(cand.glob("*.map")):
+        raise InputError(f"MovingAI maps not found: {origin} is not a folder of .map files; pass the folder "
+                         f"as the directory argument (source_kwargs={{'directory': ...}}, --movingai) or set "
+                         f"{MOVINGAI_ENV}")
+    return cand
+
+
+def load_movingai_scenarios(
+    path: str | os.PathLike,
+    *,
+    goal_tolerance: float = 1.0,
+    map_path: str | os.PathLike | None = None,
+    metric: str = "euclidean",
+    limit: int | None = None,
+) -> Iterator[Problem]:
+    """Yield one ``Problem`` per line of a MovingAI ``.scen`` file.
+
+    Start and goal are the centres of the scenario's cells (``x + 0.5, y + 0.5``); each problem's
+    ``reference_length`` is the published octile optimum. The map is found by the basename of the
+    scenario's map column next to the ``.scen`` file, unless ``map_path`` is given.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"MovingAI scenario file {path} does not exist")
+    raw = path.read_bytes()
+    try:
+        lines = raw.decode("ascii").splitlines()
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not an ASCII MovingAI scenario file (byte {exc.start} is "
+                         f"{raw[exc.start]:#x})") from None
+    grids: dict[Path, OccupancyGrid] = {}
+    count = 0
+    for lineno, line in enumerate(lines, start=1):
+        if not line.strip() or (lineno == 1 and line.lower().startswith("version")):
+            continue
+        fields = line.split("\t")
+        if len(fields) != 9:
+            raise InputError(f"{path}, line {lineno}: expected 9 tab-separated fields, got {len(fields)}: {line!r}")
+        try:
+            bucket = int(fields[0])
+            w, h, sx, sy, gx, gy = (int(v) for v in fields[2:8])
+            optimal = float(fields[8])
+        except ValueError:
+            raise InputError(f"{path}, line {lineno}: non-numeric field in {line!r}") from None
+        if not (math.isfinite(optimal) and optimal >= 0):
+            raise InputError(f"{path}, line {lineno}: optimal length must be a finite number >= 0, "
+                             f"got {fields[8]!r}")
+        mp = Path(map_path) if map_path is not None else path.parent / Path(fields[1].replace("\\", "/")).name
+        if mp not in grids:
+            if not mp.is_file():
+                raise InputError(f"{path}, line {lineno}: its map {fields[1]!r} is looked up as {str(mp)!r}, "
+                                 f"which does not exist; pass map_path=")
+            grids[mp] = OccupancyGrid.from_movingai(mp)
+        grid = grids[mp]
+        if (w, h) != (grid.width, grid.height):
+            raise InputError(f"{path}, line {lineno}: scenario size {w}x{h} does not match {mp} "
+                             f"({grid.width}x{grid.height})")
+        for label, (x, y) in (("start", (sx, sy)), ("goal", (gx, gy))):
+            if not (0 <= x < w and 0 <= y < h) or grid.obstacles[y, x]:
+                raise InputError(f"{path}, line {lineno}: {label} cell (x={x}, y={y}) is outside the map or blocked")
+        yield Problem(
+            grid,
+            start=grid.cell_center(sy, sx),
+            goal=grid.cell_center(gy, gx),
+            goal_tolerance=goal_tolerance,
+            metric=metric,
+            name=f"{mp.stem}#{lineno}",
+            reference_length=optimal,
+        )
+        _ = bucket
+        count += 1
+        if limit is not None and count >= limit:
+            return
