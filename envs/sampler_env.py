@@ -12,7 +12,7 @@ from envs.actions import ACTION_MODES, make_action_sampler
 from envs.observation import GridObservation, VectorObservation
 from envs.sources import MapSource, make_source, map_problem
 from planners import PRM, RRT, LazyPRM, OccupancyGrid, Planner, Problem, RRTConnect, RRTStar
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, check_int
 
 PLANNERS = {"rrt": RRT, "rrtstar": RRTStar, "prm": PRM, "rrtconnect": RRTConnect, "lazyprm": LazyPRM}
 
@@ -151,9 +151,7 @@ class SamplerEnv(gym.Env):
             raise InputError(f"reward must be 'iterations' or 'checks', got {reward!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise InputError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
-        if isinstance(max_iterations, bool) or not (isinstance(max_iterations, (int, np.integer))
-                                                    and max_iterations >= 1):
-            raise InputError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+        check_int(max_iterations, "max_iterations")
         step_size = _number("step_size", step_size, low=0.0, low_open=True)
         uniform_floor = _number("uniform_floor", uniform_floor, low=0.0, high=1.0)
         reach = _number("reach", reach, low=0.0, low_open=True)

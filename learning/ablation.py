@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from planners import SamplerBase
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, check_int
 from planners.guidance.guided import FRONTIER, GuidedSampling, ego_class
 
 #: Frontier probabilities the comparison chooses from on the tuning split (0 is left out: always
@@ -39,8 +39,7 @@ class ConstantGuidedSampler(SamplerBase):
         for name, v, lo, hi in (("frontier", frontier, 0.0, 1.0), ("uniform_floor", uniform_floor, 0.0, 1.0)):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo <= v <= hi:
                 raise InputError(f"{name} must be a number in [{lo:g}, {hi:g}], got {v!r}")
-        if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
-            raise InputError(f"batch must be a positive integer, got {batch!r}")
+        check_int(batch, "batch")
         if isinstance(step_size, bool) or not isinstance(step_size, (int, float)) or not step_size > 0:
             raise InputError(f"step_size must be a positive number, got {step_size!r}")
         self.frontier, self.step_size, self.batch = float(frontier), float(step_size), batch

@@ -1,15 +1,14 @@
 """Training a guided sampler policy: DAgger imitation of the expert, then PPO fine-tuning.
 
-Why this route: sparse-reward PPO from scratch learns nothing in a useful budget (the issue measured
-300k steps of nothing on 64x64 maps), while imitation of the privileged expert gives a policy that
-already beats goal bias after a few minutes. PPO (Stable-Baselines3) then optimises the real
+Why this route: sparse-reward PPO from scratch learns little in a useful budget (a policy rarely
+solves a map by chance, so it rarely sees a reward), while imitation of the privileged expert gives
+a policy that beats goal bias after a few minutes (README: how the sampler is learned, and why). PPO (Stable-Baselines3) then optimises the real
 objective, minus iterations-to-solution, starting from that policy; its critic is pre-trained during
 imitation and has its own feature extractor so fitting it cannot disturb the actor. The final
 checkpoint is whichever of the imitation and PPO policies does better on a validation split of maps.
 
-Map seeds: training draws from ``[0, 100_000)``, validation uses ``[200_000, ...)``; evaluation
-(``learning.evaluation``) uses ``[1_000_000, ...)`` and tunes goal bias on ``[300_000, ...)``, so no
-evaluated map was ever trained on.
+Map seeds: the splits of ``planners.maps.generators`` (``TRAIN_SEEDS``, ``VALIDATION_SEED0``;
+evaluation uses ``TUNING_SEED0`` and ``TEST_SEED0``), so no evaluated map was ever trained on.
 """
 
 from __future__ import annotations
@@ -26,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from stable_baselines3.common.logger import KVWriter
+from stable_baselines3.common.logger import KVWriter, Logger, make_output_format
+from tqdm.auto import tqdm
 
 from learning.checkpoint import read_sb3_zip
 from learning.fast_policy import FastActor
@@ -305,28 +305,26 @@ class _ResumableCSV(KVWriter):
         self.file.close()
 
 
-def _logger(run: Path, keep_rows: int | None, stdout: bool):
-    """SB3 logger writing TensorBoard events and ``progress.csv`` under ``<run>/tb``.
+class _RunLogger(Logger):
+    """SB3 logger whose ``step_offset`` is added to every step: SB3 counts each PPO segment's steps from zero."""
 
-    Its ``step_offset`` is added to every step: SB3 counts each PPO segment's steps from zero.
-    """
-    from stable_baselines3.common.logger import Logger, make_output_format
+    step_offset = 0
 
-    class RunLogger(Logger):
-        step_offset = 0
+    def dump(self, step: int = 0) -> None:
+        if self.step_offset:
+            self.record("time/run_timesteps", step + self.step_offset)
+        super().dump(step + self.step_offset)
 
-        def dump(self, step: int = 0) -> None:
-            if self.step_offset:
-                self.record("time/run_timesteps", step + self.step_offset)
-            super().dump(step + self.step_offset)
 
+def _logger(run: Path, keep_rows: int | None, stdout: bool) -> tuple[_RunLogger, _ResumableCSV]:
+    """The run's logger: TensorBoard events and ``progress.csv`` under ``<run>/tb`` (and stdout)."""
     folder = run / "tb"
     folder.mkdir(parents=True, exist_ok=True)
     csv_log = _ResumableCSV(folder / "progress.csv", keep_rows)
     formats = [make_output_format("tensorboard", str(folder)), csv_log]
     if stdout:
         formats.append(make_output_format("stdout", str(folder)))
-    return RunLogger(str(folder), formats), csv_log
+    return _RunLogger(str(folder), formats), csv_log
 
 
 def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False, progress: bool = True,
@@ -358,7 +356,10 @@ def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False,
     env = make_env(cfg, cfg.seed)
     logger, csv_log = _logger(run, state["log_rows"] if resume else None, log_stdout)
     try:
-        return _train_phases(cfg, run, state, env, logger, csv_log, resume=resume, progress=progress)
+        phases = _TrainingRun(cfg, run, state, env, logger, csv_log, resume=resume, progress=progress)
+        phases.dagger()
+        phases.ppo()
+        return phases.select()
     finally:  # a run that stops, however it stops, leaves no open log files
         logger.close()
         env.close()
@@ -373,95 +374,108 @@ def _segments(cfg: TrainConfig) -> list[tuple[int, int]]:
     return list(zip(bounds[:-1], bounds[1:], strict=True))
 
 
-def _train_phases(cfg: TrainConfig, run: Path, state: dict, env, logger, csv_log: _ResumableCSV, *, resume: bool,
-                  progress: bool) -> Path:
-    """DAgger, then PPO fine-tuning, then the choice between them on validation maps (see ``train``)."""
-    from stable_baselines3 import PPO
-    from tqdm.auto import tqdm
+class _TrainingRun:
+    """One training run's phases: DAgger, PPO fine-tuning, then the choice between them (see ``train``).
 
-    from learning.extractor import policy_kwargs
+    Each phase starts from ``self.state`` (the committed run state) and commits after every unit of
+    work, so a resumed run skips what is committed and redoes nothing else.
+    """
 
-    ckpt = run / "checkpoint.zip"
-    if resume:  # our own run's checkpoint: SB3's full load (it unpickles; never point it at others' files)
-        model = PPO.load(ckpt, env=env, device="cpu")
-    else:
-        arch = policy_kwargs(cfg.features_dim, cfg.hidden, cfg.conv_channels, cfg.vector_dim)
-        model = PPO("MultiInputPolicy", env, policy_kwargs=arch,
-                    learning_rate=cfg.ppo_lr, n_steps=cfg.ppo_n_steps, batch_size=cfg.ppo_batch,
-                    n_epochs=cfg.ppo_epochs, clip_range=cfg.ppo_clip, ent_coef=cfg.ppo_ent_coef, gamma=cfg.gamma,
-                    seed=cfg.seed, device="cpu", verbose=0)
-    model.set_logger(logger)
+    def __init__(self, cfg: TrainConfig, run: Path, state: dict, env, logger: _RunLogger, csv_log: _ResumableCSV, *,
+                 resume: bool, progress: bool) -> None:
+        from stable_baselines3 import PPO
 
-    def log(stats: dict, step: int) -> None:
+        from learning.extractor import policy_kwargs
+
+        self.cfg, self.run, self.state, self.resume, self.progress = cfg, run, state, resume, progress
+        self.logger, self.csv_log = logger, csv_log
+        if resume:  # our own run's checkpoint: SB3's full load (it unpickles; never point it at others' files)
+            self.model = PPO.load(run / "checkpoint.zip", env=env, device="cpu")
+        else:
+            arch = policy_kwargs(cfg.features_dim, cfg.hidden, cfg.conv_channels, cfg.vector_dim)
+            self.model = PPO("MultiInputPolicy", env, policy_kwargs=arch,
+                             learning_rate=cfg.ppo_lr, n_steps=cfg.ppo_n_steps, batch_size=cfg.ppo_batch,
+                             n_epochs=cfg.ppo_epochs, clip_range=cfg.ppo_clip, ent_coef=cfg.ppo_ent_coef,
+                             gamma=cfg.gamma, seed=cfg.seed, device="cpu", verbose=0)
+        self.model.set_logger(logger)
+
+    def log(self, stats: dict, step: int) -> None:
         for k, v in stats.items():
-            logger.record(k, v)
-        logger.dump(step)
+            self.logger.record(k, v)
+        self.logger.dump(step)
 
-    def commit(new_state: dict, data: Dataset | None = None) -> None:
-        _commit(model, cfg, run, new_state, csv_log, data)
+    def commit(self, state: dict, data: Dataset | None = None) -> None:
+        self.state = state
+        _commit(self.model, self.cfg, self.run, state, self.csv_log, data)
 
-    # --- phase 1: DAgger -----------------------------------------------------------------------
-    data = None
-    if resume and state["phase"] == "bc" and state["round"] >= 0:
-        data = Dataset.load(run / "dagger_data.npz").head(state["dagger_rows"])
-    rounds = range(state["round"] + 1, cfg.dagger_rounds) if state["phase"] == "bc" else range(0)
-    for k in tqdm(rounds, desc="DAgger", disable=not progress):
-        rng = np.random.default_rng([cfg.seed, k])
-        problems = _maps(cfg, rng, cfg.maps_per_round)
-        actor = FastActor(model.policy.state_dict()) if k > 0 else None
-        beta = cfg.dagger_betas[min(k, len(cfg.dagger_betas) - 1)]
-        t0 = time.perf_counter()
-        new, its = collect(problems, actor, beta, seed=cfg.seed * 1_000_003 + k * 10_007, batch=cfg.batch,
-                           step_size=cfg.step_size, stuck_threshold=cfg.stuck_threshold,
-                           uniform_floor=cfg.uniform_floor, max_iterations=cfg.max_iterations, gamma=cfg.gamma,
-                           reward_scale=cfg.reward_scale)
-        data = new if data is None else Dataset.concat([data, new])
-        # with shaping the critic must predict shaped returns: leave it to PPO's warm-up
-        stats = behaviour_cloning(model.policy, data, epochs=cfg.bc_epochs, batch_size=cfg.bc_batch, lr=cfg.bc_lr,
-                                  seed=cfg.seed + k, value_weight=0.0 if cfg.shaping else 0.5)
-        score, fam = validation_score(FastActor(model.policy.state_dict()), cfg)
-        log({**stats, "dagger/round": k, "dagger/beta": beta, "dagger/samples": len(data),
-             "dagger/median_iterations": float(np.median(its)), "dagger/collect_seconds": time.perf_counter() - t0,
-             "validation/score": score, **{f"validation/{f}": v for f, v in fam.items()}}, k)
-        state = {"phase": "bc", "round": k, "ppo_steps": 0, "bc_validation": score}
-        commit(state, data)
-    if state["phase"] == "bc":
-        _save_model(model, cfg, run / "imitation.zip", state)
-        state = {**state, "phase": "ppo", "ppo_steps": 0}
-        commit(state)
+    def dagger(self) -> None:
+        """Rounds of expert labelling and behaviour cloning; ends by saving ``imitation.zip``."""
+        cfg, model = self.cfg, self.model
+        data = None
+        if self.resume and self.state["phase"] == "bc" and self.state["round"] >= 0:
+            data = Dataset.load(self.run / "dagger_data.npz").head(self.state["dagger_rows"])
+        rounds = range(self.state["round"] + 1, cfg.dagger_rounds) if self.state["phase"] == "bc" else range(0)
+        for k in tqdm(rounds, desc="DAgger", disable=not self.progress):
+            rng = np.random.default_rng([cfg.seed, k])
+            problems = _maps(cfg, rng, cfg.maps_per_round)
+            actor = FastActor(model.policy.state_dict()) if k > 0 else None
+            beta = cfg.dagger_betas[min(k, len(cfg.dagger_betas) - 1)]
+            t0 = time.perf_counter()
+            new, its = collect(problems, actor, beta, seed=cfg.seed * 1_000_003 + k * 10_007, batch=cfg.batch,
+                               step_size=cfg.step_size, stuck_threshold=cfg.stuck_threshold,
+                               uniform_floor=cfg.uniform_floor, max_iterations=cfg.max_iterations, gamma=cfg.gamma,
+                               reward_scale=cfg.reward_scale)
+            data = new if data is None else Dataset.concat([data, new])
+            # with shaping the critic must predict shaped returns: leave it to PPO's warm-up
+            stats = behaviour_cloning(model.policy, data, epochs=cfg.bc_epochs, batch_size=cfg.bc_batch,
+                                      lr=cfg.bc_lr, seed=cfg.seed + k, value_weight=0.0 if cfg.shaping else 0.5)
+            score, fam = validation_score(FastActor(model.policy.state_dict()), cfg)
+            self.log({**stats, "dagger/round": k, "dagger/beta": beta, "dagger/samples": len(data),
+                      "dagger/median_iterations": float(np.median(its)),
+                      "dagger/collect_seconds": time.perf_counter() - t0,
+                      "validation/score": score, **{f"validation/{f}": v for f, v in fam.items()}}, k)
+            self.commit({"phase": "bc", "round": k, "ppo_steps": 0, "bc_validation": score}, data)
+        if self.state["phase"] == "bc":
+            _save_model(model, cfg, self.run / "imitation.zip", self.state)
+            self.commit({**self.state, "phase": "ppo", "ppo_steps": 0})
 
-    # --- phase 2: PPO fine-tuning, in segments that each start from a seeded reset -------------------
-    # the critic warms up first with the actor frozen, so early, noisy advantages cannot undo imitation
-    actor_params = [p for name, p in model.policy.named_parameters()
-                    if name.startswith(("pi_features_extractor", "mlp_extractor.policy_net", "action_net"))]
-    for start, end in _segments(cfg):
-        if end <= state["ppo_steps"]:
-            continue
+    def ppo(self) -> None:
+        """PPO fine-tuning in segments that each start from a seeded reset, with a checkpoint after each.
+
+        The critic warms up first with the actor frozen, so early, noisy advantages cannot undo imitation.
+        """
+        cfg, model = self.cfg, self.model
+        actor_params = [p for name, p in model.policy.named_parameters()
+                        if name.startswith(("pi_features_extractor", "mlp_extractor.policy_net", "action_net"))]
+        for start, end in _segments(cfg):
+            if end <= self.state["ppo_steps"]:
+                continue
+            for p in actor_params:
+                p.requires_grad_(start >= cfg.value_warmup)
+            # seeds every RNG PPO draws from (torch, SB3's use of numpy's global state, the env resets)
+            model.set_random_seed(int(np.random.SeedSequence([cfg.seed, start]).generate_state(1)[0]))
+            self.logger.step_offset = start
+            model.learn(total_timesteps=end - start, reset_num_timesteps=True, progress_bar=self.progress,
+                        tb_log_name="ppo")
+            self.logger.dump(model.num_timesteps)  # the last update's statistics, before the checkpoint, not after
+            self.commit({**self.state, "ppo_steps": end})
         for p in actor_params:
-            p.requires_grad_(start >= cfg.value_warmup)
-        # seeds every RNG PPO draws from (torch, SB3's use of numpy's global state, the env resets)
-        model.set_random_seed(int(np.random.SeedSequence([cfg.seed, start]).generate_state(1)[0]))
-        logger.step_offset = start
-        model.learn(total_timesteps=end - start, reset_num_timesteps=True, progress_bar=progress,
-                    tb_log_name="ppo")
-        logger.dump(model.num_timesteps)  # the last update's statistics, before the checkpoint, not after
-        state = {**state, "ppo_steps": end}
-        commit(state)
-    for p in actor_params:
-        p.requires_grad_(True)
-    logger.step_offset = 0
+            p.requires_grad_(True)
+        self.logger.step_offset = 0
 
-    # --- selection on validation maps ----------------------------------------------------------------
-    ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg)
-    _, imitation_params = read_sb3_zip(run / "imitation.zip")
-    bc_score, bc_fam = validation_score(FastActor(imitation_params), cfg)
-    chosen = "ppo" if ppo_score <= bc_score else "imitation"
-    summary = {"chosen": chosen, "validation_ppo": ppo_score, "validation_imitation": bc_score,
-               "validation_ppo_families": ppo_fam, "validation_imitation_families": bc_fam}
-    log({"validation/final_ppo": ppo_score, "validation/final_imitation": bc_score}, cfg.dagger_rounds + 1)
-    if chosen == "imitation":
-        model.policy.load_state_dict(imitation_params)
-    final = run / "final.zip"
-    _save_model(model, cfg, final, {**state, **summary, "log_rows": csv_log.rows})
-    atomic_write_text(run / "summary.json", json.dumps(summary, indent=2) + "\n")
-    return final
+    def select(self) -> Path:
+        """Keep PPO's or imitation's weights, whichever scores better on the validation maps; write ``final.zip``."""
+        cfg, model = self.cfg, self.model
+        ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg)
+        _, imitation_params = read_sb3_zip(self.run / "imitation.zip")
+        bc_score, bc_fam = validation_score(FastActor(imitation_params), cfg)
+        chosen = "ppo" if ppo_score <= bc_score else "imitation"
+        summary = {"chosen": chosen, "validation_ppo": ppo_score, "validation_imitation": bc_score,
+                   "validation_ppo_families": ppo_fam, "validation_imitation_families": bc_fam}
+        self.log({"validation/final_ppo": ppo_score, "validation/final_imitation": bc_score}, cfg.dagger_rounds + 1)
+        if chosen == "imitation":
+            model.policy.load_state_dict(imitation_params)
+        final = self.run / "final.zip"
+        _save_model(model, cfg, final, {**self.state, **summary, "log_rows": self.csv_log.rows})
+        atomic_write_text(self.run / "summary.json", json.dumps(summary, indent=2) + "\n")
+        return final

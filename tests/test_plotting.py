@@ -22,8 +22,8 @@ from planners import (
     Problem,
     Rectangle,
     RRTConnect,
-    plotting,
 )
+from planners.viz import plotting
 from planners.viz.plotting import (
     PATH_COLOR,
     TREE_COLORS,

@@ -56,6 +56,14 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     atomic_write_bytes(path, text.encode("utf-8"))
 
 
+def check_int(value, name: str, *, low: int = 1) -> int:
+    """``value`` as an ``int`` (bools refused) that is at least ``low``, or an ``InputError`` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
+        want = {0: "a non-negative integer", 1: "a positive integer"}.get(low, f"an integer >= {low}")
+        raise InputError(f"{name} must be {want}, got {value!r}")
+    return int(value)
+
+
 def check_number(source, key: str, value, *, integer: bool = False, low: float | None = None,
                  high: float | None = None, low_open: bool = False) -> float | int:
     """``value`` as a finite number within bounds, or an ``InputError`` naming ``source`` (file or flag) and ``key``."""

@@ -28,7 +28,7 @@ from planners.algorithms.prm import PRM, LazyPRM
 from planners.algorithms.rrt import RRT, RRTConnect
 from planners.algorithms.rrtstar import InformedRRTStar, RRTStar
 from planners.algorithms.smoothing import smooth as smooth_path
-from planners.base.fileio import InputError, atomic_path
+from planners.base.fileio import InputError, atomic_path, check_int
 from planners.base.planner import Planner, PlannerData, PlanResult, compile_seconds
 from planners.base.problem import Problem
 from planners.base.samplers import GoalBiasedSampler, Sampler, UniformSampler
@@ -159,8 +159,7 @@ def solve_recording(planner: Planner, max_iterations: int | None, time_limit: fl
     """
     if max_iterations is None and time_limit is None:
         raise ValueError("give max_iterations or time_limit (or both)")
-    if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or frames < 1:
-        raise ValueError(f"frames must be a positive integer, got {frames!r}")
+    check_int(frames, "frames")
     history = [(planner.iterations, _tag_counts(planner))]
     t0, c0 = time.perf_counter(), compile_seconds()
     done = 0
@@ -343,10 +342,8 @@ def write_animation(outcome: PlanOutcome, path: str | os.PathLike, *, max_frames
 
     if Path(path).suffix.lower() != ".gif":
         raise ValueError(f"write_animation writes .gif files, got {str(path)!r}")
-    if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 2:
-        raise ValueError(f"max_frames must be an integer >= 2, got {max_frames!r}")
-    if isinstance(max_px, bool) or not isinstance(max_px, (int, np.integer)) or max_px < 32:
-        raise ValueError(f"max_px must be an integer >= 32, got {max_px!r}")
+    check_int(max_frames, "max_frames", low=2)
+    check_int(max_px, "max_px", low=32)
     if not fps > 0:
         raise ValueError(f"fps must be positive, got {fps}")
     problem, world = outcome.problem, outcome.problem.world
@@ -543,13 +540,11 @@ def plan_on_image(map_source: str | os.PathLike | OccupancyGrid, start, goal, *,
         raise ValueError(f"unknown metric {metric!r}; choose from {', '.join(METRICS)}")
     if max_iterations is None and time_limit is None:
         raise ValueError("give max_iterations or time_limit (or both)")
-    if max_iterations is not None and (isinstance(max_iterations, bool) or max_iterations < 1
-                                       or not isinstance(max_iterations, (int, np.integer))):
-        raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    if max_iterations is not None:
+        check_int(max_iterations, "max_iterations")
     if time_limit is not None and not (math.isfinite(float(time_limit)) and float(time_limit) > 0):
         raise ValueError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
-    if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 2:
-        raise ValueError(f"max_frames must be an integer >= 2, got {max_frames!r}")
+    check_int(max_frames, "max_frames", low=2)
     if save_path is not None:
         check_path_file(save_path)
     if out_dir is not None:

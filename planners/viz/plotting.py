@@ -28,7 +28,7 @@ from matplotlib.patches import Circle as CirclePatch
 from matplotlib.patches import Polygon
 from matplotlib.patches import Rectangle as RectanglePatch
 
-from planners.base.fileio import atomic_path
+from planners.base.fileio import atomic_path, check_int
 from planners.base.planner import Planner, PlannerData, PlanResult
 from planners.base.problem import Problem
 from planners.worlds.grid import OccupancyGrid
@@ -379,10 +379,8 @@ def animate_planner(planner: Planner, path: str | os.PathLike, *, every: int = 1
     suffix = Path(path).suffix.lower()
     if suffix not in (".gif", ".mp4"):
         raise ValueError(f"animate_planner writes .gif or .mp4 files, got {str(path)!r}")
-    if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
-        raise ValueError(f"every must be a positive integer, got {every!r}")
-    if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 1:
-        raise ValueError(f"max_frames must be a positive integer, got {max_frames!r}")
+    check_int(every, "every")
+    check_int(max_frames, "max_frames")
     anim = PlannerAnimator(planner.problem, size, dpi)
 
     def frames() -> Iterator[np.ndarray]:

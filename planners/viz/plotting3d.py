@@ -17,6 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
+from planners.base.fileio import check_int
 from planners.base.planner import Planner
 from planners.base.problem import Problem
 from planners.kernels.space import interpolate
@@ -68,8 +69,7 @@ def resample_path(path, problem: Problem, n: int) -> np.ndarray:
     path = np.asarray(path, dtype=np.float64).reshape(-1, problem.dim)
     if len(path) == 0:
         raise ValueError("path is empty")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"n must be a positive integer, got {n!r}")
+    check_int(n, "n")
     if len(path) == 1 or n == 1:
         return np.repeat(path[:1], n, axis=0)
     seg = np.array([problem.distance(a, b) for a, b in zip(path[:-1], path[1:], strict=True)])

@@ -11,7 +11,7 @@ from pathlib import Path
 import numba as nb
 import numpy as np
 
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, check_int
 from planners.base.world import WorldBase
 from planners.kernels import geometry
 from planners.kernels.space import SPACE_RN
@@ -52,9 +52,7 @@ def max_pixels_limit(max_pixels: int | None = None) -> int:
         if value <= 0:
             raise InputError(f"environment variable {MAX_PIXELS_ENV}={env!r} must be a positive integer")
         return value
-    if isinstance(max_pixels, bool) or not isinstance(max_pixels, (int, np.integer)) or max_pixels <= 0:
-        raise InputError(f"max_pixels must be a positive integer, got {max_pixels!r}")
-    return int(max_pixels)
+    return check_int(max_pixels, "max_pixels")
 
 
 def check_map_size(path, width: int, height: int, max_pixels: int | None = None) -> None:

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planners.base.fileio import InputError, atomic_write_text
+from planners.base.fileio import InputError, atomic_write_text, check_int
 from planners.base.problem import Problem
 from planners.base.world import WorldBase
 from planners.kernels import geometry
@@ -527,8 +527,7 @@ def random_scene(seed: int, n_boxes: int = 30, *, size: float = 10.0, body=None,
         delta: Motion-check resolution, scaled by ``size / 10``.
         metric: ``"cossin"`` (default) or ``"se3"``.
     """
-    if isinstance(n_boxes, bool) or not isinstance(n_boxes, (int, np.integer)) or n_boxes < 0:
-        raise InputError(f"n_boxes must be a non-negative integer, got {n_boxes!r}")
+    check_int(n_boxes, "n_boxes", low=0)
     size = float(size)
     if not (math.isfinite(size) and size > 0):
         raise InputError(f"size must be a positive finite number, got {size}")
