@@ -5,13 +5,12 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Callable
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
 from planners import Planner, Problem
-from planners.viz.plotting import PlannerAnimator, save_gif, save_mp4
+from planners.viz.plotting import PlannerAnimator, planner_animator, save_animation
 
 
 def display_available() -> bool:
@@ -37,14 +36,7 @@ class EpisodeRenderer:
             self.human = False
 
     def reset(self, problem: Problem) -> None:
-        if problem.dim == 6:
-            from planners.viz.plotting3d import RigidPlannerAnimator
-
-            self._animator = RigidPlannerAnimator(problem)
-            return
-        if problem.dim != 2:
-            raise ValueError(f"the sampler environment renders 2-D and 6-DoF problems, got a {problem.dim}-D one")
-        self._animator = PlannerAnimator(problem)
+        self._animator = planner_animator(problem)
 
     def draw(self, planner: Planner, sample: np.ndarray | None) -> np.ndarray:
         if self._animator is None:
@@ -100,7 +92,5 @@ def record_episode(env: gym.Env, policy: Callable[[object], np.ndarray] | None, 
             if len(frames) > max_frames:  # keep long episodes bounded: drop every other frame
                 frames = frames[::2]
                 every *= 2
-    frames += [frames[-1]] * fps  # hold the final frame for a second
-    path = Path(path)
-    (save_mp4 if path.suffix == ".mp4" else save_gif)(frames, path, fps)
+    save_animation(frames, path, fps)
     return info

@@ -370,3 +370,17 @@ def test_gif_path_pixels_follow_the_resolution(tmp_path):
             for r, c in ((int(y * 2), int(x * 2)) for x, y in probes)]
     assert np.mean(hits) > 0.9
 
+
+
+def test_save_animation_holds_the_last_frame_and_refuses_other_suffixes(tmp_path):
+    frames = [np.full((8, 8, 3), v, dtype=np.uint8) for v in (0, 120, 240)]
+    out = plotting.save_animation(iter(frames), tmp_path / "a.gif", fps=10, hold_s=1.0)
+    with Image.open(out) as im:
+        durations = []
+        for i in range(im.n_frames):
+            im.seek(i)
+            durations.append(im.info["duration"])
+    assert durations == [100, 100, 1100]  # identical trailing frames merge into one long frame
+    with pytest.raises(ValueError, match=r"\.gif or \.mp4"):
+        plotting.save_animation(frames, tmp_path / "a.png")
+    assert not (tmp_path / "a.png").exists()

@@ -319,6 +319,41 @@ def save_mp4(frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float =
     return Path(path)
 
 
+def save_animation(frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float = 15, *,
+                   hold_s: float = 1.0) -> Path:
+    """Write frames as ``.gif`` (Pillow) or ``.mp4`` (ffmpeg), by suffix, holding the last one ``hold_s`` seconds.
+
+    The one writer behind every animation (``animate_planner``, ``plotting3d.animate_rigid``,
+    ``envs.record_episode``). Frames are consumed lazily. Returns the path written.
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"animations are written as .gif or .mp4 files, got {str(path)!r}")
+    if not fps > 0:
+        raise ValueError(f"fps must be positive, got {fps}")
+
+    def held() -> Iterator[np.ndarray]:
+        last = None
+        for last in frames:
+            yield last
+        if last is not None:
+            for _ in range(max(1, round(fps * hold_s))):
+                yield last
+
+    return (save_mp4 if suffix == ".mp4" else save_gif)(held(), path, fps)
+
+
+def planner_animator(problem: Problem, size: tuple[float, float] | None = None, dpi: float = 80):
+    """The frame renderer for ``problem``: ``PlannerAnimator`` (2-D) or ``plotting3d.RigidPlannerAnimator`` (6-DoF)."""
+    if problem.dim == 6:
+        from planners.viz.plotting3d import RigidPlannerAnimator
+
+        return RigidPlannerAnimator(problem, size, dpi)
+    if problem.dim != 2:
+        raise ValueError(f"animations are drawn for 2-D and 6-DoF problems, got a {problem.dim}-D one")
+    return PlannerAnimator(problem, size, dpi)
+
+
 class PlannerAnimator:
     """Renders frames of a growing planner into one reused Figure.
 
@@ -376,12 +411,11 @@ def animate_planner(planner: Planner, path: str | os.PathLike, *, every: int = 1
     Returns:
         The path written.
     """
-    suffix = Path(path).suffix.lower()
-    if suffix not in (".gif", ".mp4"):
-        raise ValueError(f"animate_planner writes .gif or .mp4 files, got {str(path)!r}")
+    if Path(path).suffix.lower() not in (".gif", ".mp4"):  # before any planning work
+        raise ValueError(f"animations are written as .gif or .mp4 files, got {str(path)!r}")
     check_int(every, "every")
     check_int(max_frames, "max_frames")
-    anim = PlannerAnimator(planner.problem, size, dpi)
+    anim = planner_animator(planner.problem, size, dpi)
 
     def frames() -> Iterator[np.ndarray]:
         # a generator: frames are rendered as the writer consumes them, never all held as RGB
@@ -396,8 +430,5 @@ def animate_planner(planner: Planner, path: str | os.PathLike, *, every: int = 1
                     break
             frame = anim.frame(planner, None if step.solved else step.sample)
             yield frame
-        for _ in range(max(1, round(fps))):
-            yield frame
 
-    save = save_mp4 if suffix == ".mp4" else save_gif
-    return save(frames(), path, fps)
+    return save_animation(frames(), path, fps)

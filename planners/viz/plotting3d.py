@@ -8,7 +8,6 @@ its points as dots.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -29,8 +28,7 @@ from planners.viz.plotting import (
     TREE_COLORS,
     figure_to_array,
     new_figure,
-    save_gif,
-    save_mp4,
+    save_animation,
 )
 from planners.worlds.rigid3d import RigidBodyWorld, rotation_matrix
 
@@ -168,9 +166,8 @@ def animate_rigid(problem: Problem, path, out_path: str | os.PathLike, *, fps: f
         The path written.
     """
     world = _require_rigid(problem)
-    suffix = Path(out_path).suffix.lower()
-    if suffix not in (".gif", ".mp4"):
-        raise ValueError(f"animate_rigid writes .gif or .mp4 files, got {str(out_path)!r}")
+    if Path(out_path).suffix.lower() not in (".gif", ".mp4"):  # before any drawing work
+        raise ValueError(f"animations are written as .gif or .mp4 files, got {str(out_path)!r}")
     path = np.asarray(path, dtype=np.float64).reshape(-1, 6)
     if len(path) == 0:
         raise ValueError("path is empty")
@@ -185,19 +182,14 @@ def animate_rigid(problem: Problem, path, out_path: str | os.PathLike, *, fps: f
     caption = ax.text2D(0.02, 0.97, "", transform=ax.transAxes, fontsize=9)
 
     def render() -> Iterator[np.ndarray]:
-        frame = None
         for k, q in enumerate(states):
             poly.set_verts(body_faces(world, q))
             p = world.body_points(q)
             dots.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
             caption.set_text(f"{problem.name}  {k + 1}/{len(states)}")
-            frame = figure_to_array(fig)
-            yield frame
-        for _ in range(max(1, math.ceil(fps))):
-            yield frame
+            yield figure_to_array(fig)
 
-    save = save_mp4 if suffix == ".mp4" else save_gif
-    return save(render(), out_path, fps)
+    return save_animation(render(), out_path, fps)
 
 
 class RigidPlannerAnimator:
@@ -207,9 +199,9 @@ class RigidPlannerAnimator:
     (once solved) as a line.
     """
 
-    def __init__(self, problem: Problem, size: tuple[float, float] = (5.0, 5.0), dpi: float = 80) -> None:
+    def __init__(self, problem: Problem, size: tuple[float, float] | None = None, dpi: float = 80) -> None:
         self.world = _require_rigid(problem)
-        self.fig = new_figure(size, dpi, layout=None)
+        self.fig = new_figure((5.0, 5.0) if size is None else size, dpi, layout=None)
         self.ax = _setup_axes(self.fig, self.world, 25.0, -60.0)
         self.fig.subplots_adjust(0, 0, 1, 1)
         plot_scene(problem, None, ax=self.ax, title="")
