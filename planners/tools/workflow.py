@@ -230,7 +230,7 @@ def _draw_map(ax, problem: Problem, max_px: int, markers: bool = True) -> None:
     else:
         plotting.draw_world(ax, world)
     if markers:
-        ax.add_patch(plotting._goal_region(problem))
+        ax.add_patch(plotting.goal_region_patch(problem))
         ax.plot(*problem.start[:2], "o", color=plotting.START_COLOR, markersize=8, markeredgecolor="white", zorder=7)
         ax.plot(*problem.goal[:2], "*", color=plotting.GOAL_COLOR, markersize=13, markeredgecolor="white", zorder=7)
 
@@ -270,8 +270,8 @@ def write_figure(outcome: PlanOutcome, path: str | os.PathLike, *, title: str | 
 
     problem = outcome.problem
     world = problem.world
-    w, h = plotting._extent(world)
-    ax = plotting.new_figure(plotting._figure_size(world, 8.0)).add_subplot()
+    w, h = plotting.world_extent(world)
+    ax = plotting.new_figure(plotting.figure_size(world, 8.0)).add_subplot()
     data = _subsample_edges(outcome.planner.planner_data(), MAX_FIGURE_EDGES)
     if isinstance(world, OccupancyGrid) and (len(data.edges) > RASTER_EDGES or max(world.shape) > RASTER_PX):
         # one RGB image of map and graph: the cheapest thing for matplotlib to resample
@@ -285,7 +285,7 @@ def write_figure(outcome: PlanOutcome, path: str | os.PathLike, *, title: str | 
             plotting.draw_graph(ax, data)
         ax.imshow(rgb, origin="upper", extent=plotting.image_extent(world), interpolation="auto", zorder=0)
         plotting.set_world_view(ax, world)
-        ax.add_patch(plotting._goal_region(problem))
+        ax.add_patch(plotting.goal_region_patch(problem))
         ax.plot(*problem.start[:2], "o", color=plotting.START_COLOR, markersize=8, markeredgecolor="white", zorder=7)
         ax.plot(*problem.goal[:2], "*", color=plotting.GOAL_COLOR, markersize=13, markeredgecolor="white", zorder=7)
     else:
@@ -347,7 +347,7 @@ def write_animation(outcome: PlanOutcome, path: str | os.PathLike, *, max_frames
     if not fps > 0:
         raise ValueError(f"fps must be positive, got {fps}")
     problem, world = outcome.problem, outcome.problem.world
-    w, h = plotting._extent(world)
+    w, h = plotting.world_extent(world)
     dpi = 100
     scale = max_px / max(w, h)
     fig = plotting.new_figure((max(0.32, w * scale / dpi), max(0.32, h * scale / dpi)), dpi, layout=None)

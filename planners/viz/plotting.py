@@ -51,7 +51,7 @@ def new_figure(size: tuple[float, float] = (6.0, 6.0), dpi: float = 100, layout:
     return fig
 
 
-def _extent(world) -> tuple[float, float]:
+def world_extent(world) -> tuple[float, float]:
     """Width and height of the world in world units."""
     x0, x1, y0, y1 = world_box(world)
     return x1 - x0, y1 - y0
@@ -120,7 +120,7 @@ def draw_world(ax, world: OccupancyGrid | GeometricWorld) -> None:
     set_world_view(ax, world)
 
 
-def _goal_region(problem: Problem):
+def goal_region_patch(problem: Problem):
     """The goal region's outline: the ball of radius goal_tolerance in the problem's metric."""
     (gx, gy), r = problem.goal[:2], problem.goal_tolerance
     style = dict(fill=False, linestyle="--", edgecolor=GOAL_COLOR, linewidth=1.2, zorder=4)
@@ -134,7 +134,7 @@ def _goal_region(problem: Problem):
 def draw_problem(ax, problem: Problem) -> None:
     """The world, the start (green dot), the goal (red star) and the goal region (dashed)."""
     draw_world(ax, problem.world)
-    ax.add_patch(_goal_region(problem))
+    ax.add_patch(goal_region_patch(problem))
     ax.plot(*problem.start[:2], "o", color=START_COLOR, markersize=8, markeredgecolor="white", zorder=7)
     ax.plot(*problem.goal[:2], "*", color=GOAL_COLOR, markersize=13, markeredgecolor="white", zorder=7)
 
@@ -188,8 +188,9 @@ def draw_path(ax, path, **kw):
     return ax.plot(path[:, 0], path[:, 1], **style)[0]
 
 
-def _figure_size(world, longer: float = 6.0) -> tuple[float, float]:
-    w, h = _extent(world)
+def figure_size(world, longer: float = 6.0) -> tuple[float, float]:
+    """Figure size in inches for ``world``: ``longer`` inches on its longer side, its aspect kept."""
+    w, h = world_extent(world)
     return (longer, max(2.0, longer * h / w)) if w >= h else (max(2.0, longer * w / h), longer)
 
 
@@ -210,7 +211,7 @@ def plot(problem: Problem, planner: Planner | None = None, result: PlanResult | 
         The Figure drawn into.
     """
     if ax is None:
-        ax = new_figure(_figure_size(problem.world)).add_subplot()
+        ax = new_figure(figure_size(problem.world)).add_subplot()
     if result is None and planner is not None:
         result = planner.result()
     draw_problem(ax, problem)
@@ -367,7 +368,7 @@ class PlannerAnimator:
     """
 
     def __init__(self, problem: Problem, size: tuple[float, float] | None = None, dpi: float = 80) -> None:
-        self.fig = new_figure(size or _figure_size(problem.world, 5.0), dpi, layout=None)
+        self.fig = new_figure(size or figure_size(problem.world, 5.0), dpi, layout=None)
         self.ax = self.fig.add_axes((0, 0, 1, 1))
         self.ax.set_axis_off()
         draw_problem(self.ax, problem)
