@@ -445,3 +445,25 @@ def test_non_ascii_movingai_map_names_the_file(tmp_path, data):
     p.write_bytes(data)
     with pytest.raises(InputError, match="bad.map.*not an ASCII"):
         OccupancyGrid.from_file(p)
+
+
+def test_a_new_map_format_plugs_in_by_registering_a_reader(tmp_path, monkeypatch):
+    from planners.maps import readers
+
+    monkeypatch.setattr(readers, "MAP_READERS", dict(readers.MAP_READERS))
+
+    @readers.register_reader(".txtmap", description="a text map")
+    def read_text(path, *, resolution=1.0, **_):
+        rows = path.read_text().split()
+        return OccupancyGrid(np.array([[c == "#" for c in r] for r in rows]), resolution, source=str(path))
+
+    f = tmp_path / "m.txtmap"
+    f.write_text("..#\n...\n")
+    grid = OccupancyGrid.from_file(f)
+    assert grid.obstacles.tolist() == [[False, False, True], [False, False, False]]
+    with pytest.raises(ValueError, match="already read by read_text"):
+        readers.register_reader(".txtmap", description="again")(read_text)
+    other = tmp_path / "m.xyz"
+    other.write_text("?")
+    with pytest.raises(InputError, match=r"unknown kind '\.xyz'.*a text map"):
+        OccupancyGrid.from_file(other)

@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from planners.base.fileio import InputError
-from planners.worlds.grid import OccupancyGrid, image_levels, open_image
+from planners.maps.readers import image_levels, open_image
+from planners.worlds.grid import OccupancyGrid
 
 MODES = ("trinary", "scale", "raw")
 UNKNOWN_CHOICES = ("blocked", "free")
@@ -236,7 +237,7 @@ def load_ros_map(path: str | os.PathLike, *, unknown: str = "blocked", max_pixel
     Args:
         path: The map.yaml; its ``image`` is read relative to the yaml's folder.
         unknown: ``"blocked"`` (default) or ``"free"``: how unknown cells are treated.
-        max_pixels: Largest image accepted, in pixels (see ``planners.worlds.grid.max_pixels_limit``).
+        max_pixels: Largest image accepted, in pixels (see ``planners.maps.readers.max_pixels_limit``).
 
     Raises:
         FileNotFoundError: ``path`` does not exist.
