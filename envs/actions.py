@@ -19,8 +19,6 @@ from gymnasium import spaces
 from planners import SamplerBase
 from planners.base.fileio import InputError
 
-ACTION_MODES = ("point", "bias", "mixture", "relative", "guided")
-
 
 class ActionSampler(SamplerBase):
     """Base of the action modes: one sample per ``draw``, computed from the last ``set_action``.
@@ -45,6 +43,9 @@ class ActionSampler(SamplerBase):
 
     def action_size(self, dim: int) -> int:
         return dim + self.dims
+
+    def set_guide(self, guide) -> None:
+        """Hand over the episode's ``GuidedSampling`` (or None); modes that do not sample through it ignore it."""
 
     def set_action(self, action) -> None:
         n = self.action_size(self.problem.dim)
@@ -160,10 +161,16 @@ class RelativeAction(ActionSampler):
 class GuidedAction(ActionSampler):
     """``guided``: ``Discrete(N_ACTIONS)``, a log-polar cell ahead of the progress vertex, or the frontier.
 
-    See ``planners.guidance.guided``. The environment attaches the episode's ``GuidedSampling`` as ``guide``.
+    See ``planners.guidance.guided``. Its samples come from the episode's ``GuidedSampling``, which the
+    environment passes with ``set_guide`` after binding.
     """
 
     guide = None
+
+    def set_guide(self, guide) -> None:
+        if guide is None:
+            raise ValueError("guided actions sample through the episode's GuidedSampling; got guide=None")
+        self.guide = guide
 
     def action_space(self, dim: int) -> spaces.Discrete:
         from planners.guidance.guided import N_ACTIONS
@@ -186,15 +193,18 @@ class GuidedAction(ActionSampler):
 
     def draw(self, rng, n, view):
         if self.action is None or self.guide is None:
-            raise RuntimeError("set_action must be called (and the guide attached) before the planner steps")
+            raise RuntimeError("set_action and set_guide must be called before the planner steps")
         self.guide.update(view)
         return self.guide.samples(np.array([self.action]), rng)
 
 
+#: Action modes by name; a new mode is an ``ActionSampler`` subclass above and its entry here.
+ACTION_MODES: dict[str, type[ActionSampler]] = {"point": PointAction, "bias": BiasAction, "mixture": MixtureAction,
+                                                "relative": RelativeAction, "guided": GuidedAction}
+
+
 def make_action_sampler(mode: str, step_size: float, uniform_floor: float = 0.05, **kwargs) -> ActionSampler:
-    """The ``ActionSampler`` for an action-mode name."""
-    classes = {"point": PointAction, "bias": BiasAction, "mixture": MixtureAction, "relative": RelativeAction,
-               "guided": GuidedAction}
-    if mode not in classes:
-        raise InputError(f"action_mode must be one of {ACTION_MODES}, got {mode!r}")
-    return classes[mode](step_size, uniform_floor, **kwargs)
+    """The ``ActionSampler`` for an action-mode name (a key of ``ACTION_MODES``)."""
+    if mode not in ACTION_MODES:
+        raise InputError(f"action_mode must be one of {tuple(ACTION_MODES)}, got {mode!r}")
+    return ACTION_MODES[mode](step_size, uniform_floor, **kwargs)

@@ -42,8 +42,6 @@ class EnvSampler(SamplerBase):
         act: ``act(obs, rng) -> action``; ``rng`` is the planner's generator, for stochastic choices.
     """
 
-    guide = None
-
     def __init__(self, env: SamplerEnv, act: Callable[[Any, np.random.Generator], Any]) -> None:
         self.env = env
         self.act = act
@@ -52,12 +50,11 @@ class EnvSampler(SamplerBase):
         if problem.dim != self.env.dim:
             raise ValueError(f"{self!r} is for {self.env.dim}-D problems, got a {problem.dim}-D one")
         bound = super().bind(problem)
-        bound.guide = self.env.new_guide(problem)
+        guide = self.env.new_guide(problem)  # shared by the observation and the action mode, as in the env
         bound.actions = self.env.new_action_sampler().bind(problem)
-        if bound.guide is not None:
-            bound.actions.guide = bound.guide
-        bound.observer = self.env.new_observation(bound)
-        bound.observer.reset(problem, self.env.max_iterations)
+        bound.actions.set_guide(guide)
+        bound.observer = self.env.new_observation()
+        bound.observer.reset(problem, self.env.max_iterations, guide)
         return bound
 
     def draw(self, rng, n, view):

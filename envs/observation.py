@@ -1,4 +1,11 @@
-"""Observations of a planning episode: fixed-size image stacks plus small vector features.
+"""Observations of a planning episode: what an agent sees of the map, the tree, start and goal.
+
+An observation builder has ``space``, ``reset(problem, max_iterations, guide)`` (once per query),
+``update(planner)`` (after every iteration) and ``build(planner)`` (the observation). ``guide`` is
+the episode's ``planners.guidance.GuidedSampling`` when the env makes one (egocentric observations,
+guided actions), else None. ``make_observation`` builds one by kind from ``OBSERVATIONS``: to add
+an observation type, write its class here and add it to that table; ``SamplerEnv(observation=...)``
+and ``EnvSampler`` then accept it.
 
 Building an observation must not dominate a step, so everything static (obstacle views, start and
 goal marks) is computed once per map in ``reset`` and the tree channels are updated incrementally
@@ -13,7 +20,8 @@ import numpy as np
 from gymnasium import spaces
 
 from planners import OccupancyGrid, Planner, Problem
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, check_int
+from planners.guidance import EGO_VECTOR, SCALES, WINDOW, GuidedSampling
 
 CHANNELS = ("obstacles", "tree", "start", "goal")
 VECTOR_FEATURES = (
@@ -38,8 +46,7 @@ class GridObservation:
 
     def __init__(self, size: int = 64, local_size: int = 48, local_scale: int = 1) -> None:
         for label, v in (("obs_size", size), ("local_size", local_size), ("local_scale", local_scale)):
-            if not isinstance(v, (int, np.integer)) or v < 1:
-                raise InputError(f"{label} must be a positive integer, got {v!r}")
+            check_int(v, label)
         if local_size % 2:
             raise InputError(f"local_size must be even, got {local_size}")
         self.size, self.local_size, self.local_scale = int(size), int(local_size), int(local_scale)
@@ -53,7 +60,7 @@ class GridObservation:
             "vector": spaces.Box(-1.0, 1.0, (len(VECTOR_FEATURES),), np.float32),
         })
 
-    def reset(self, problem: Problem, max_iterations: int) -> None:
+    def reset(self, problem: Problem, max_iterations: int, guide: GuidedSampling | None = None) -> None:
         grid = problem.world
         if not isinstance(grid, OccupancyGrid):
             raise TypeError("GridObservation needs an OccupancyGrid problem; use VectorObservation otherwise")
@@ -149,7 +156,7 @@ class VectorObservation:
     def space(self) -> spaces.Box:
         return spaces.Box(-1.0, 1.0, (3 * self.features + 3,), np.float32)
 
-    def reset(self, problem: Problem, max_iterations: int) -> None:
+    def reset(self, problem: Problem, max_iterations: int, guide: GuidedSampling | None = None) -> None:
         self.problem, self.max_iterations = problem, max_iterations
         self.low, self.high = (np.asarray(b, dtype=np.float64) for b in problem.world.bounds)
         self.diag = float(np.linalg.norm(self.high - self.low))
@@ -172,6 +179,58 @@ class VectorObservation:
              math.log1p(view.num_vertices) / math.log1p(self.max_iterations + 2)],
         ])
         return np.clip(v, -1.0, 1.0).astype(np.float32)
+
+
+class EgocentricObservation:
+    """``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``: egocentric windows and vector features.
+
+    Windows around the progress vertex at 1/4, 1 and 4 steps per pixel (obstacles and tree), turned
+    towards the goal, and vector features (see ``planners.guidance.egocentric``); the same on maps of
+    every size. The episode's ``GuidedSampling`` computes them, so ``reset`` needs it.
+    """
+
+    def __init__(self) -> None:
+        self.guide: GuidedSampling | None = None
+        self.space = spaces.Dict({
+            "local": spaces.Box(0, 255, (2 * len(SCALES), WINDOW, WINDOW), np.uint8),
+            "vector": spaces.Box(-1.0, 1.0, (len(EGO_VECTOR),), np.float32),
+        })
+
+    def reset(self, problem: Problem, max_iterations: int, guide: GuidedSampling | None = None) -> None:
+        if guide is None:
+            raise ValueError("egocentric observations are computed by the episode's GuidedSampling: pass it as guide")
+        self.guide = guide
+
+    def update(self, planner: Planner) -> None:
+        """Nothing: ``build`` brings the guide up to date from the same tree view it observes."""
+
+    def build(self, planner: Planner) -> dict:
+        view = planner.view()
+        self.guide.update(view)
+        obs = self.guide.observe(view)
+        obs["vector"] = np.clip(obs["vector"], -1.0, 1.0)
+        return obs
+
+
+def _map_observation(dim: int, obs_size: int, local_size: int, local_scale: int):
+    if dim == 2:
+        return GridObservation(obs_size, local_size, local_scale)
+    return VectorObservation(dim, angle_dims=3 if dim == 6 else 0)
+
+
+#: Observation kinds by name: a factory ``(dim, obs_size, local_size, local_scale) -> builder``.
+#: ``image``: ``GridObservation`` on 2-D grids, ``VectorObservation`` otherwise.
+OBSERVATIONS = {
+    "image": _map_observation,
+    "egocentric": lambda dim, obs_size, local_size, local_scale: EgocentricObservation(),
+}
+
+
+def make_observation(kind: str, dim: int, *, obs_size: int = 64, local_size: int = 48, local_scale: int = 1):
+    """A fresh observation builder of ``kind`` (a key of ``OBSERVATIONS``) for ``dim``-D problems."""
+    if kind not in OBSERVATIONS:
+        raise InputError(f"observation must be one of {tuple(OBSERVATIONS)}, got {kind!r}")
+    return OBSERVATIONS[kind](dim, obs_size, local_size, local_scale)
 
 
 def _area_fraction(obs: np.ndarray, S: int) -> np.ndarray:

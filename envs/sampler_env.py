@@ -9,44 +9,11 @@ import gymnasium as gym
 import numpy as np
 
 from envs.actions import ACTION_MODES, make_action_sampler
-from envs.observation import GridObservation, VectorObservation
+from envs.observation import OBSERVATIONS, make_observation
 from envs.sources import MapSource, make_source, map_problem
-from planners import PRM, RRT, LazyPRM, OccupancyGrid, Planner, Problem, RRTConnect, RRTStar
+from planners import OccupancyGrid, Planner, Problem, make_planner
 from planners.base.fileio import InputError, check_int
-
-PLANNERS = {"rrt": RRT, "rrtstar": RRTStar, "prm": PRM, "rrtconnect": RRTConnect, "lazyprm": LazyPRM}
-
-
-class EgocentricObservation:
-    """``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``: egocentric windows and vector features.
-
-    Windows around the progress vertex at 1/4, 1 and 4 steps per pixel (obstacles and tree), turned
-    towards the goal, and vector features (see ``planners.guidance.egocentric``); the same on maps of every size.
-    """
-
-    def __init__(self, owner) -> None:
-        from planners.guidance.egocentric import EGO_VECTOR
-        from planners.guidance.guided import SCALES, WINDOW
-
-        self.owner = owner  # the env or an ``EnvSampler``: whatever holds the episode's ``guide``
-        self.space = gym.spaces.Dict({
-            "local": gym.spaces.Box(0, 255, (2 * len(SCALES), WINDOW, WINDOW), np.uint8),
-            "vector": gym.spaces.Box(-1.0, 1.0, (len(EGO_VECTOR),), np.float32),
-        })
-
-    def reset(self, problem: Problem, max_iterations: int) -> None:
-        """The episode's ``GuidedSampling`` holds the state."""
-
-    def update(self, planner: Planner) -> None:
-        """Nothing: ``build`` brings the guide up to date from the same tree view it observes."""
-
-    def build(self, planner: Planner) -> dict:
-        view = planner.view()
-        guide = self.owner.guide
-        guide.update(view)
-        obs = guide.observe(view)
-        obs["vector"] = np.clip(obs["vector"], -1.0, 1.0)
-        return obs
+from planners.base.registry import planner_class
 
 
 class SamplerEnv(gym.Env):
@@ -104,7 +71,9 @@ class SamplerEnv(gym.Env):
     configure it. ``map`` (a map file, a 2-D boolean obstacle array or an ``OccupancyGrid``) with
     optional ``start`` and ``goal`` (world units) plans on the user's own map (random queries
     without ``start`` / ``goal``); it replaces ``map_source``.
-    ``planner``: ``rrt``, ``rrtstar``, ``prm``, ``rrtconnect``, ``lazyprm``. ``step_size``,
+    ``planner``: any registered planner (``planners.planner_names()``; default ``"rrt"``).
+    ``step_size`` is the extension length of the RRT family; roadmap planners keep their own edge
+    length. ``step_size``,
     ``max_iterations``, ``action_mode``, ``uniform_floor``, ``reach`` (relative mode),
     ``observation`` (``image`` or ``egocentric``), ``obs_size``, ``local_size``, ``local_scale``,
     ``reward``, ``checks_weight``, ``shaping``,
@@ -141,12 +110,14 @@ class SamplerEnv(gym.Env):
         goal: Any = None,
     ) -> None:
         super().__init__()
-        if planner not in PLANNERS:
-            raise InputError(f"planner must be one of {sorted(PLANNERS)}, got {planner!r}")
+        try:
+            planner = planner_class(planner).name
+        except ValueError as exc:
+            raise InputError(f"planner: {exc}") from None
         if action_mode not in ACTION_MODES:
-            raise InputError(f"action_mode must be one of {ACTION_MODES}, got {action_mode!r}")
-        if observation not in ("image", "egocentric"):
-            raise InputError(f"observation must be 'image' or 'egocentric', got {observation!r}")
+            raise InputError(f"action_mode must be one of {tuple(ACTION_MODES)}, got {action_mode!r}")
+        if observation not in OBSERVATIONS:
+            raise InputError(f"observation must be one of {tuple(OBSERVATIONS)}, got {observation!r}")
         if reward not in ("iterations", "checks"):
             raise InputError(f"reward must be 'iterations' or 'checks', got {reward!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -182,7 +153,7 @@ class SamplerEnv(gym.Env):
         self._guide = None
         if (observation == "egocentric" or action_mode == "guided") and self.dim != 2:
             raise InputError("egocentric observations and guided actions are defined for 2-D grid problems")
-        self._obs = self.new_observation(self)
+        self._obs = self.new_observation()
         self.observation_space = self._obs.space
         self.action_space = self._action_sampler.action_space(self.dim)
         self.problem: Problem | None = None
@@ -199,13 +170,11 @@ class SamplerEnv(gym.Env):
         if problem.dim != self.dim:
             raise ValueError(f"map source returned a {problem.dim}-D problem for a {self.dim}-D environment")
         self.problem = problem
-        cls = PLANNERS[self.planner_name]
-        kw = {} if cls in (PRM, LazyPRM) else {"step_size": self.step_size}
-        self.planner = cls(problem, sampler=self._action_sampler, seed=int(self.np_random.integers(2**63)), **kw)
+        self.planner = make_planner(self.planner_name, problem, extension_step=self.step_size,
+                                    sampler=self._action_sampler, seed=int(self.np_random.integers(2**63)))
         self._guide = self.new_guide(problem)
-        if self._guide is not None:
-            self.planner.sampler.guide = self._guide
-        self._obs.reset(problem, self.max_iterations)
+        self.planner.sampler.set_guide(self._guide)
+        self._obs.reset(problem, self.max_iterations, self._guide)
         self._obs.update(self.planner)
         self._potential = self._geodesic_potential_init() if self.shaping else 0.0
         self._last_sample = None
@@ -272,17 +241,10 @@ class SamplerEnv(gym.Env):
         return make_action_sampler(self.action_mode, self.step_size, self.uniform_floor,
                                    **({"reach": self.reach} if self.action_mode == "relative" else {}))
 
-    def new_observation(self, owner):
-        """A fresh observation builder of this env's kind.
-
-        It has ``space``, ``reset(problem, max_iterations)``, ``update(planner)`` and ``build(planner)``;
-        an egocentric one reads the guide from ``owner.guide``.
-        """
-        if self.observation == "egocentric":
-            return EgocentricObservation(owner)
-        if self.dim == 2:
-            return GridObservation(self.obs_size, self.local_size, self.local_scale)
-        return VectorObservation(self.dim, angle_dims=3 if self.dim == 6 else 0)
+    def new_observation(self):
+        """A fresh observation builder of this env's kind (``envs.observation.make_observation``)."""
+        return make_observation(self.observation, self.dim, obs_size=self.obs_size, local_size=self.local_size,
+                                local_scale=self.local_scale)
 
     def new_guide(self, problem: Problem):
         """The per-query ``GuidedSampling`` that egocentric observations and guided actions share, or None."""

@@ -18,30 +18,22 @@ import re
 import textwrap
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
-from planners import (
-    PRM,
-    RRT,
-    GoalBiasedSampler,
-    Problem,
-    RRTStar,
-    Sampler,
-    UniformSampler,
-    load_movingai_scenarios,
-)
-from planners.base.fileio import InputError, atomic_write_text
+from planners import GoalBiasedSampler, Problem, Sampler, UniformSampler, load_movingai_scenarios, make_planner
+from planners.base.fileio import InputError
+from planners.base.registry import planner_class
 from planners.maps.generators import TEST_SEED0, TUNING_SEED0, generate
+from planners.tools.benchmark import OMPL_RUN_PROPERTIES, Run, ompl_run_values
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
 GOAL_BIASES = (0.01, 0.05, 0.1, 0.2, 0.5)
 #: The grid the best goal bias is chosen from: uniform sampling (bias 0) and the sweep.
 TUNING_BIASES = (0.0, *GOAL_BIASES)
-PLANNERS = {"RRT": RRT, "RRTstar": RRTStar, "PRM": PRM}
 
 
 @dataclass(frozen=True)
@@ -139,27 +131,6 @@ def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: i
         out += [Query(m, i, 0, "test") for i in picks[0::2][:n_test]]
         out += [Query(m, i, 0, "tuning") for i in picks[1::2][:n_tune]]
     return out
-
-
-@dataclass
-class Run:
-    """One planning run (a row of the raw CSV)."""
-
-    family: str
-    query: str
-    split: str
-    planner: str
-    sampler: str
-    seed: int
-    solved: bool
-    iterations: int
-    lower_bound: int
-    candidates: int
-    collision_checks: int
-    wall_time: float
-    path_cost: float
-    forward_passes: int
-    vertices: int
 
 
 #: Sampler names the comparison defines itself; a user sampler takes another name.
@@ -264,21 +235,18 @@ def run_one(task: tuple) -> Run:
     query, planner_name, sampler_name, seed, cfg = task
     problem = query.problem(cfg["movingai_dir"], cfg["tolerance"])
     sampler = _sampler(sampler_name, cfg)
-    cls = PLANNERS[planner_name]
+    # iterations to the first solution: anytime planners stop there too
+    anytime = {"stop_on_first_solution": True} if planner_class(planner_name).anytime else {}
     t0 = time.perf_counter()  # wall time includes binding the sampler (the policy's per-map setup)
-    if cls is PRM:
-        planner = PRM(problem, sampler=sampler, seed=seed)
-    elif cls is RRTStar:
-        planner = RRTStar(problem, step_size=cfg["step"], sampler=sampler, seed=seed, stop_on_first_solution=True)
-    else:
-        planner = RRT(problem, step_size=cfg["step"], sampler=sampler, seed=seed)
+    planner = make_planner(planner_name, problem, extension_step=cfg["step"], sampler=sampler, seed=seed, **anytime)
     r = planner.solve(max_iterations=cfg["max_iterations"])
     wall = time.perf_counter() - t0
     its = r.first_solution_iteration if r.solved else r.iterations
-    return Run(query.family, problem.name, query.split, planner_name, sampler_name, seed, r.solved, int(its),
-               problem.iteration_lower_bound(cfg["step"]), r.candidates, r.collision_checks, wall,
-               r.cost if r.solved else math.inf, int(getattr(planner.sampler, "forward_passes", 0)),
-               int(r.num_vertices))
+    return Run(map=query.family, query=problem.name, split=query.split, planner=planner_name, sampler=sampler_name,
+               seed=seed, solved=r.solved, iterations=int(its), lower_bound=problem.iteration_lower_bound(cfg["step"]),
+               candidates=r.candidates, collision_checks=r.collision_checks, wall_time=wall,
+               us_per_iteration=wall / max(r.iterations, 1) * 1e6, path_cost=r.cost if r.solved else math.inf,
+               forward_passes=int(getattr(planner.sampler, "forward_passes", 0)), vertices=int(r.num_vertices))
 
 
 def run_all(tasks: list[tuple], processes: int, progress: bool = True) -> list[Run]:
@@ -323,7 +291,7 @@ def pooled(runs: Sequence[Run], name: str, families: Sequence[str]) -> list[Run]
     from dataclasses import replace
 
     keep = set(families)
-    return [replace(r, family=name) for r in runs if r.family in keep]
+    return [replace(r, map=name) for r in runs if r.map in keep]
 
 
 def best_bias(runs: Sequence[Run]) -> dict[tuple[str, str], float]:
@@ -346,7 +314,7 @@ def _best_on_tuning(runs: Sequence[Run], value_of) -> dict[tuple[str, str], floa
     for r in runs:
         b = value_of(r.sampler)
         if r.split == "tuning" and b is not None:
-            groups.setdefault((r.family, r.planner, b), []).append(r.iterations if r.solved else math.inf)
+            groups.setdefault((r.map, r.planner, b), []).append(r.iterations if r.solved else math.inf)
     # ascending bias: a tie keeps the smaller bias, the one nearer uniform
     for (fam, planner, b), its in sorted(groups.items(), key=lambda kv: kv[0][2]):
         med = float(np.median(its))
@@ -373,7 +341,7 @@ def summarize(runs: Sequence[Run], biases: dict, seed: int = 0) -> list[dict]:
     test = [r for r in runs if r.split == "test"]
     groups: dict = {}
     for r in test:
-        groups.setdefault((r.family, r.planner, r.sampler), []).append(r)
+        groups.setdefault((r.map, r.planner, r.sampler), []).append(r)
     rows = []
     for (fam, planner, sampler), rs in sorted(groups.items()):
         its = np.array([r.iterations for r in rs], dtype=float)
@@ -474,7 +442,7 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
     from planners.viz.plotting import new_figure
 
     test = [r for r in runs if r.split == "test" and r.planner == planner]
-    fams = sorted({r.family for r in test})
+    fams = sorted({r.map for r in test})
     cols = min(4, len(fams))
     nrows = math.ceil(len(fams) / cols)
     size = (4.2 * cols, 3.4 * nrows + 0.5)
@@ -489,7 +457,7 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
         colors.setdefault(best_s, "C2")
         colors.update({name: f"C{4 + i}" for i, name in enumerate(extra)})
         for s in dict.fromkeys(["uniform", "goal_bias=0.05", best_s, "policy", *extra, "expert (reference)"]):
-            its = np.sort([r.iterations if r.solved else math.inf for r in test if r.family == fam and r.sampler == s])
+            its = np.sort([r.iterations if r.solved else math.inf for r in test if r.map == fam and r.sampler == s])
             if len(its) == 0:
                 continue
             label = s.replace("goal_bias=", "goal bias ") + (" (best)" if s == best_s else "")
@@ -512,7 +480,7 @@ def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planne
     """
     from planners.viz.plotting import new_figure
 
-    fams = sorted({r.family for r in runs if r.split == "test" and r.planner == planner})
+    fams = sorted({r.map for r in runs if r.split == "test" and r.planner == planner})
     size = (max(6.0, 1.6 * len(fams)) + 1.6, 4.0)
     fig = new_figure(size)
     ax = fig.add_subplot(1, 1, 1)
@@ -541,33 +509,6 @@ def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planne
     return fig
 
 
-def write_csv(runs: Sequence[Run], path: Path) -> None:
-    """Every run as a CSV row, written whole or not at all."""
-    import csv
-    import io
-
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(asdict(runs[0])))
-    w.writeheader()
-    w.writerows(asdict(r) for r in runs)
-    atomic_write_text(path, buf.getvalue())
-
-
-#: Per-run properties of the OMPL logs: (OMPL property, type, ``Run`` field).
-OMPL_PROPERTIES = (
-    ("time", "REAL", "wall_time"),
-    ("solved", "BOOLEAN", "solved"),
-    ("iterations", "INTEGER", "iterations"),
-    ("graph states", "INTEGER", "vertices"),
-    ("collision checks", "INTEGER", "collision_checks"),
-    ("candidates", "INTEGER", "candidates"),
-    ("solution length", "REAL", "path_cost"),
-    ("lower bound", "INTEGER", "lower_bound"),
-    ("forward passes", "INTEGER", "forward_passes"),
-    ("seed", "INTEGER", "seed"),
-)
-
-
 def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict) -> list[Path]:
     """One OMPL benchmark log per family (map set) of the test split, under ``out_dir``.
 
@@ -579,7 +520,7 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict)
     test = [r for r in runs if r.split == "test"]
     fams: dict = {}
     for r in test:
-        fams.setdefault(r.family, {}).setdefault((r.planner, r.sampler), []).append(r)
+        fams.setdefault(r.map, {}).setdefault((r.planner, r.sampler), []).append(r)
     paths = []
     for fam, configs in sorted(fams.items()):
         planners = {}
@@ -594,7 +535,7 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict)
                 settings["policy"] = cfg["policy"]
             if sampler in cfg.get("user_samplers", {}):
                 settings["spec"] = cfg["user_samplers"][sampler]
-            planners[name] = PlannerRuns(settings, [{p: getattr(r, f) for p, _, f in OMPL_PROPERTIES} for r in rs])
+            planners[name] = PlannerRuns(settings, [ompl_run_values(r) for r in rs])
         queries = len({r.query for r in configs[next(iter(configs))]})
         setup = (f"SamplerGym comparison on {fam}, test split ({queries} queries, all runs of every sampler on the "
                  f"same queries and seeds). Iterations to first solution, capped at {cfg['max_iterations']}; "
@@ -602,7 +543,7 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict)
                  f"including binding the sampler to the map. The expert is a privileged reference.")
         stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", fam).strip("_") or "experiment"
         paths.append(write_log(
-            out_dir / f"{stem}.log", experiment_name(fam), planners, [(p, t) for p, t, _ in OMPL_PROPERTIES],
+            out_dir / f"{stem}.log", experiment_name(fam), planners, [(p, t) for p, t, _ in OMPL_RUN_PROPERTIES],
             setup=setup, total_time=sum(r.wall_time for rs in configs.values() for r in rs),
             experiment_properties={"step_size": ("REAL", cfg["step"]), "goal_tolerance": ("REAL", cfg["tolerance"]),
                                    "max_iterations": ("INTEGER", cfg["max_iterations"])}))

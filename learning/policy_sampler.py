@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -41,15 +42,39 @@ from learning.fast_policy import FastActor, actor_logits, softmax_cdf
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners.base.fileio import InputError, check_number
 from planners.base.planner import CHUNK, FIRST_REFILL, Planner
-from planners.guidance.egocentric import EGO_VECTOR, _add_vertices, _observe, build_pyramid
+from planners.guidance.egocentric import EGO_VECTOR, add_vertices, build_pyramid, observe_windows
 from planners.guidance.frontier import cdf_search, frontier_arrays, frontier_shape
 from planners.guidance.guided import FRONTIER, FRONTIER_TAU, N_ACTIONS, SCALES, WINDOW, fill_from_cdf, scale_cells
 from planners.kernels import rrt as rrt_kernels
 from planners.kernels.bitgen import bitgen_address, next_double
+from planners.kernels.state import F_BEST_D, I_BEST_V, I_ITER, I_N, I_SOLVED
 
 #: Keys of the training config a checkpoint must carry.
 CONFIG_KEYS = ("step_size", "uniform_floor", "batch", "obs_version")
 OBS_VERSION = 1
+
+class DrawState(NamedTuple):
+    """The bound sampler's mutable state: counters (``S_*`` slots), floats, the last forward pass, scratch."""
+
+    ints: np.ndarray  # S_* slots below
+    floats: np.ndarray  # best goal distance seen, total of the class CDF, the frontier class's share of it
+    logits: np.ndarray  # last forward pass: class logits
+    cdf: np.ndarray  # and their CDF
+    local: np.ndarray  # last observation: egocentric windows
+    vector: np.ndarray  # and vector features
+    u: np.ndarray  # uniforms of one batch
+    fcdf: np.ndarray  # frontier CDF scratch
+
+
+class PolicyKernel(NamedTuple):
+    """Everything ``policy_draw`` reads, as one struct (see ``PolicySampler._setup``)."""
+
+    ego: tuple  # pyramid levels, layout, window size, resolution, start, goal
+    frontier: tuple  # world, frontier arrays, cell size, goal preference
+    actor: tuple  # weights, scratch
+    params: tuple  # step, temperature, floors, patience, reuse, hold, max iterations, sampling box
+    state: DrawState
+
 
 # slots of the sampler's integer state
 S_SEEN = 0  # vertices already counted into the observation's tree pyramid
@@ -77,71 +102,74 @@ def sample_classes(logits, temperature, u):
 
 
 @nb.njit(cache=True)
-def policy_draw(X, n, best_v, best_d, iteration, m, rng, kern, pts, anch):
+def policy_draw(X, n, best_v, best_d, iteration, m, rng, kernel_state, pts, anch):
     """Run the policy if due and draw ``m`` samples from its action distribution into ``pts``/``anch``.
 
-    ``rng`` is the address of the planner's generator (see ``planners.kernels.bitgen``), ``kern`` the
+    ``rng`` is the address of the planner's generator (see ``planners.kernels.bitgen``), ``kernel_state`` the
     sampler's compiled state (see ``PolicySampler._setup``). The tree enters as its vertices
     ``X[:n]``, progress vertex and distance. The observation's tree counts are brought up to date
     only for a forward pass, the frontier only for a frontier sample.
     """
-    ego, front, actor, params, state = kern
+    ego, front, actor, params, state = kernel_state
     levels_obs, levels_tree, layout, size, res, start, goal = ego
     weights, scratch = actor
     step, temperature, floor0, max_floor, patience, reuse, hold, max_iterations, low, high = params
-    ist, fst, logits, cdf, local, vector, u, fcdf = state
-    if best_d < fst[0] - 1e-9:
-        fst[0] = best_d
-        ist[S_PROGRESS] = iteration
-    if (ist[S_FORWARD] == 0 or best_v != ist[S_ANCHOR]
-            or (iteration - ist[S_SINCE] >= reuse and fst[2] < hold)):
-        if n > ist[S_SEEN]:
-            _add_vertices(levels_tree, layout, X[ist[S_SEEN]:n], res)
-            ist[S_SEEN] = n
-        _observe(levels_obs, levels_tree, layout, size, res, step, X[best_v, :2], best_v == 0, start, goal, n,
-                 iteration, ist[S_PROGRESS], max_iterations, local, vector)
+    sampler_ints, sampler_floats, logits, cdf, local, vector, u, fcdf = state
+    if best_d < sampler_floats[0] - 1e-9:
+        sampler_floats[0] = best_d
+        sampler_ints[S_PROGRESS] = iteration
+    if (sampler_ints[S_FORWARD] == 0 or best_v != sampler_ints[S_ANCHOR]
+            or (iteration - sampler_ints[S_SINCE] >= reuse and sampler_floats[2] < hold)):
+        if n > sampler_ints[S_SEEN]:
+            add_vertices(levels_tree, layout, X[sampler_ints[S_SEEN]:n], res)
+            sampler_ints[S_SEEN] = n
+        observe_windows(levels_obs, levels_tree, layout, size, res, step, X[best_v, :2], best_v == 0, start, goal, n,
+                 iteration, sampler_ints[S_PROGRESS], max_iterations, local, vector)
         actor_logits(local, vector, *weights, scratch, logits)
-        fst[1] = softmax_cdf(logits, temperature, cdf)  # one softmax per forward pass, not per batch
-        fst[2] = (cdf[FRONTIER] - cdf[FRONTIER - 1]) / fst[1]  # the frontier's share
-        ist[S_ANCHOR] = best_v
-        ist[S_SINCE] = iteration
-        ist[S_FORWARD] += 1
-    stuck = iteration - ist[S_PROGRESS]
+        sampler_floats[1] = softmax_cdf(logits, temperature, cdf)  # one softmax per forward pass, not per batch
+        sampler_floats[2] = (cdf[FRONTIER] - cdf[FRONTIER - 1]) / sampler_floats[1]  # the frontier's share
+        sampler_ints[S_ANCHOR] = best_v
+        sampler_ints[S_SINCE] = iteration
+        sampler_ints[S_FORWARD] += 1
+    stuck = iteration - sampler_ints[S_PROGRESS]
     floor = floor0 if stuck < patience else max(floor0, min(max_floor, floor0 * stuck / patience))
     for k in range(m):  # row by row, as Generator.random((m, 6)) fills
         for j in range(6):
             u[k, j] = next_double(rng)
-    fill_from_cdf(cdf, fst[1], u[:m], low, high, step, floor, front, ist[S_FSEEN:S_FRONT + 1], X, n, fcdf, pts,
+    fill_from_cdf(cdf, sampler_floats[1], u[:m], low, high, step, floor, front, sampler_ints[S_FSEEN:S_FRONT + 1], X,
+                  n, fcdf, pts,
                   anch)
 
 
 @nb.njit(cache=True)
-def policy_rrt_run(budget, rng, kern, batch, pts, anch, tree, istate, fstate, last, world, space, goal, step, tol,
+def policy_rrt_run(budget, rng, kernel_state, batch, pts, anch, tree, istate, fstate, last, world, space, goal, step,
+                   tol,
                    low, high, st, sb):
     """Up to ``budget`` RRT iterations with samples from ``policy_draw``, never leaving compiled code.
 
     Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule would ask
     for, so the run matches a planner calling ``PolicySampler.draw`` sample for sample.
     """
-    ist = kern[4][0]
-    X = tree[0]
+    sampler_ints = kernel_state.state.ints
+    X = tree.X
     q = np.empty(X.shape[1])
-    qe_buf = np.empty(tree[1].shape[1])
+    qe_buf = np.empty(tree.E.shape[1])
     new = np.empty(X.shape[1])
     for s in range(budget):
-        if istate[rrt_kernels.I_SOLVED] or istate[rrt_kernels.I_N] >= X.shape[0]:
+        if istate[I_SOLVED] or istate[I_N] >= X.shape[0]:
             return s
-        if ist[S_POS] >= ist[S_COUNT]:
-            m = min(batch, CHUNK, FIRST_REFILL << min(ist[S_REFILLS], 16))  # 64 << 16 > CHUNK; no overflow
-            policy_draw(X, istate[rrt_kernels.I_N], istate[rrt_kernels.I_BEST_V], fstate[rrt_kernels.F_BEST_D], istate[rrt_kernels.I_ITER], m, rng, kern,
+        if sampler_ints[S_POS] >= sampler_ints[S_COUNT]:
+            m = min(batch, CHUNK, FIRST_REFILL << min(sampler_ints[S_REFILLS], 16))  # 64 << 16 > CHUNK; no overflow
+            policy_draw(X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], m, rng, kernel_state,
                         pts, anch)
-            ist[S_REFILLS] += 1
-            ist[S_COUNT] = m
-            ist[S_POS] = 0
-        p = ist[S_POS]
-        rrt_kernels.rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
+            sampler_ints[S_REFILLS] += 1
+            sampler_ints[S_COUNT] = m
+            sampler_ints[S_POS] = 0
+        p = sampler_ints[S_POS]
+        rrt_kernels.rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low,
+                                high, st, sb,
                       q, qe_buf, new)
-        ist[S_POS] = p + 1
+        sampler_ints[S_POS] = p + 1
     return budget
 
 
@@ -150,12 +178,13 @@ def _new_state(obstacles, factors, H, W, n_scratch, batch):
     """All arrays of a bound sampler in one compiled call: pyramid, frontier, draw state, actor scratch."""
     layout, levels_obs, levels_tree = build_pyramid(obstacles, factors)
     counts, free, cov, pos, front, dist = frontier_arrays(obstacles, H, W)
-    fst = np.empty(3)
-    fst[0] = np.inf  # best goal distance seen
-    fst[1] = 0.0  # total of the class CDF
-    fst[2] = 0.0  # the frontier class's share of it
+    sampler_floats = np.empty(3)
+    sampler_floats[0] = np.inf  # best goal distance seen
+    sampler_floats[1] = 0.0  # total of the class CDF
+    sampler_floats[2] = 0.0  # the frontier class's share of it
     return (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, np.zeros(N_STATE, dtype=np.int64),
-            fst, np.empty(N_ACTIONS), np.empty(N_ACTIONS), np.empty((2 * factors.shape[0], WINDOW, WINDOW), np.uint8),
+            sampler_floats, np.empty(N_ACTIONS), np.empty(N_ACTIONS), np.empty((2 * factors.shape[0], WINDOW,
+                                                                                WINDOW), np.uint8),
             np.empty(len(EGO_VECTOR), np.float32), np.empty(n_scratch, np.float32), np.empty((batch, 6)),
             np.empty(H * W))
 
@@ -244,7 +273,13 @@ class PolicySampler(SamplerBase):
     @property
     def forward_passes(self) -> int:
         """Forward passes since the sampler was bound."""
-        return 0 if self._kernel is None else int(self._kernel[4][0][S_FORWARD])
+        return 0 if self._kernel is None else int(self._kernel.state.ints[S_FORWARD])
+
+    def last_observation(self) -> dict[str, np.ndarray] | None:
+        """What the policy saw at its last forward pass (``local`` windows, ``vector``), copied; None before one."""
+        if self._kernel is None or self.forward_passes == 0:
+            return None
+        return {"local": self._kernel.state.local.copy(), "vector": self._kernel.state.vector.copy()}
 
     def _setup(self) -> None:
         # the guided geometry of planners.guidance.guided.GuidedSampling (the training environment's), built
@@ -259,16 +294,17 @@ class PolicySampler(SamplerBase):
             factors = np.array(scale_cells(self.step_size, grid.resolution), dtype=np.int64)
             geometry = self._geometry[key] = (factors, *frontier_shape(grid, self.step_size))
         factors, H, W = geometry
-        (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, ist, fst, logits, cdf, local, vector,
-         scratch, u, fcdf) = _new_state(grid.kernel[1], factors, H, W, self._n_scratch, self.batch)
+        (layout, levels_obs, levels_tree, counts, free, cov, pos, front, dist, sampler_ints, sampler_floats, logits,
+         cdf, local, vector,
+         scratch, u, fcdf) = _new_state(grid.kernel.grid, factors, H, W, self._n_scratch, self.batch)
         start = np.ascontiguousarray(self.problem.start[:2], dtype=np.float64)
         goal = np.ascontiguousarray(self.problem.goal[:2], dtype=np.float64)
-        self._kernel = (
+        self._kernel = PolicyKernel(
             (levels_obs, levels_tree, layout, WINDOW, grid.resolution, start, goal),
             (grid.kernel, counts, self.step_size, W, goal, free, cov, pos, front, dist, FRONTIER_TAU),
             (self.actor.weights, scratch),
             (*self._params, self.low, self.high),
-            (ist, fst, logits, cdf, local, vector, u, fcdf),
+            DrawState(sampler_ints, sampler_floats, logits, cdf, local, vector, u, fcdf),
         )
         self._pts = np.empty((self.batch, 2))
         self._anch = np.empty(self.batch, dtype=np.int8)

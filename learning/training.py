@@ -2,7 +2,8 @@
 
 Why this route: sparse-reward PPO from scratch learns little in a useful budget (a policy rarely
 solves a map by chance, so it rarely sees a reward), while imitation of the privileged expert gives
-a policy that beats goal bias after a few minutes (README: how the sampler is learned, and why). PPO (Stable-Baselines3) then optimises the real
+a policy that beats goal bias after a few minutes (README: how the sampler is learned,
+                                                   and why). PPO (Stable-Baselines3) then optimises the real
 objective, minus iterations-to-solution, starting from that policy; its critic is pre-trained during
 imitation and has its own feature extractor so fitting it cannot disturb the actor. The final
 checkpoint is whichever of the imitation and PPO policies does better on a validation split of maps.

@@ -7,6 +7,7 @@ from planners.algorithms.rrtstar import InformedRRTStar, RRTStar
 from planners.algorithms.smoothing import shortcut, simplify, smooth
 from planners.base.planner import Planner, PlannerData, PlanResult, StepResult, TreeView
 from planners.base.problem import Problem
+from planners.base.registry import make_planner, planner_names, register_planner
 from planners.base.samplers import (
     ANCHOR_GOAL,
     ANCHOR_NONE,
@@ -71,6 +72,9 @@ __all__ = [
     "save_scene",
     "thin_wall_scene",
     "load_movingai_scenarios",
+    "make_planner",
+    "planner_names",
+    "register_planner",
     "movingai_dir",
     "shortcut",
     "simplify",

@@ -11,7 +11,6 @@ benchmark log per map (ompl/<map>.log) that OMPL's ompl_benchmark_statistics.py 
 from __future__ import annotations
 
 import argparse
-import csv
 import io
 import platform
 import re
@@ -49,12 +48,13 @@ def map_set(args) -> dict[str, list[Problem]]:
     return maps
 
 
-def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[benchmark.Record]]:
+def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[benchmark.Run]]:
     """RRT per-iteration time, ours vs OMPL, uniform and goal-biased, on every map."""
     rows, records = [], []
     for name, problems in maps.items():
         for bias, ours_label in ((0.0, "RRT"), (0.05, "RRT+goal0.05")):
-            ours = [benchmark.run_one(p, ours_label, step=args.step, seed=i, max_iterations=args.max_iterations, map_name=name)
+            ours = [benchmark.run_one(p, ours_label, step=args.step, seed=i, max_iterations=args.max_iterations,
+                                      map_name=name)
                     for i, p in enumerate(problems)]
             records += ours
             row = {"map": name, "goal_bias": bias, "ours_us": _us(ours), "ours_solved": _rate(ours)}
@@ -63,8 +63,13 @@ def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[benchmark.R
                 for i, p in enumerate(problems):
                     o = ompl_bridge.OmplGridPlanner(p, "RRT", step_size=args.step, goal_bias=bias,
                                                     seed=i).run(args.max_iterations)
-                    om.append(benchmark.Record(name, p.name, f"OMPL RRT b={bias}", o.solved, o.iterations, o.time,
-                                       o.time / max(o.iterations, 1) * 1e6, o.cost, -1, o.num_vertices, i))
+                    bound = p.iteration_lower_bound(args.step)
+                    om.append(benchmark.Run(
+                        map=name, query=p.name, split="test", planner=f"OMPL RRT b={bias}", sampler="OMPL", seed=i,
+                        solved=o.solved, iterations=o.iterations, lower_bound=-1 if bound is None else bound,
+                        candidates=o.iterations, collision_checks=-1, wall_time=o.time,
+                        us_per_iteration=o.time / max(o.iterations, 1) * 1e6, path_cost=o.cost, forward_passes=0,
+                        vertices=o.num_vertices))
                 records += om
                 row |= {"ompl_us": _us(om), "ompl_solved": _rate(om), "ratio": _us(ours) / _us(om)}
             rows.append(row)
@@ -73,7 +78,7 @@ def throughput(maps, args, use_ompl: bool) -> tuple[list[dict], list[benchmark.R
 
 
 def _us(rs) -> float:
-    return sum(r.time for r in rs) / max(sum(r.iterations for r in rs), 1) * 1e6
+    return sum(r.wall_time for r in rs) / max(sum(r.iterations for r in rs), 1) * 1e6
 
 
 def _rate(rs) -> float:
@@ -112,44 +117,31 @@ def growth(args, use_ompl: bool, d: Path | None) -> tuple[list[dict], list[dict]
     return rows, nn_rows
 
 
-def all_planners(maps, args) -> list[benchmark.Record]:
+def all_planners(maps, args) -> list[benchmark.Run]:
     records = []
     for name, problems in maps.items():
-        for label in benchmark.PLANNERS:
-            records += [benchmark.run_one(p, label, step=args.step, seed=i, max_iterations=args.max_iterations, map_name=name)
+        for label in benchmark.SETUPS:
+            records += [benchmark.run_one(p, label, step=args.step, seed=i, max_iterations=args.max_iterations,
+                                          map_name=name)
                         for i, p in enumerate(problems)]
         print(f"  {name}: done", flush=True)
     return records
 
 
-#: Per-run properties of the OMPL logs: (OMPL property, type, ``Record`` field).
-OMPL_PROPERTIES = (
-    ("time", "REAL", "time"),
-    ("solved", "BOOLEAN", "solved"),
-    ("iterations", "INTEGER", "iterations"),
-    ("graph states", "INTEGER", "num_vertices"),
-    ("collision checks", "INTEGER", "collision_checks"),
-    ("solution length", "REAL", "cost"),
-    ("time per iteration", "REAL", "us_per_iteration"),
-    ("seed", "INTEGER", "seed"),
-)
-
-
-def write_ompl_logs(records: list[benchmark.Record], args, out_dir: Path) -> list[Path]:
+def write_ompl_logs(records: list[benchmark.Run], args, out_dir: Path) -> list[Path]:
     """One OMPL benchmark log per map: each planner label is one OMPL planner configuration.
 
     ``time`` is in seconds; ``time per iteration`` in microseconds. Counts a planner does not report
     (OMPL's collision checks, written as -1 in the CSV) are left empty, which the reader stores as NULL.
     """
-    by_map: dict[str, dict[str, list[benchmark.Record]]] = {}
+    by_map: dict[str, dict[str, list[benchmark.Run]]] = {}
     for r in records:
         by_map.setdefault(r.map, {}).setdefault(r.planner, []).append(r)
     paths = []
     for name, planners in by_map.items():
         entries = {}
         for label, rs in planners.items():
-            runs = [{p: (None if f == "collision_checks" and r.collision_checks < 0 else getattr(r, f))
-                     for p, _, f in OMPL_PROPERTIES} for r in rs]
+            runs = [benchmark.ompl_run_values(r) for r in rs]
             entries[label] = PlannerRuns({"planner": label, "step_size": args.step,
                                           "max_iterations": args.max_iterations}, runs)
         setup = (f"SamplerGym planner benchmark on {name}: {len(next(iter(planners.values())))} queries per planner, "
@@ -157,8 +149,8 @@ def write_ompl_logs(records: list[benchmark.Record], args, out_dir: Path) -> lis
                  f"{args.max_iterations} iterations. 'time' is the planner's own solve time in seconds.")
         stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "map"
         paths.append(write_log(out_dir / f"{stem}.log", experiment_name(name), entries,
-                               [(p, t) for p, t, _ in OMPL_PROPERTIES], setup=setup,
-                               total_time=sum(r.time for rs in planners.values() for r in rs),
+                               [(p, t) for p, t, _ in benchmark.OMPL_RUN_PROPERTIES], setup=setup,
+                               total_time=sum(r.wall_time for rs in planners.values() for r in rs),
                                experiment_properties={"step_size": ("REAL", args.step),
                                                       "max_iterations": ("INTEGER", args.max_iterations)}))
     return paths
@@ -184,7 +176,7 @@ def main(argv=None) -> int:
         print("OMPL not installed (pip install -c constraints.txt -e '.[bench]'); running without it", file=sys.stderr)
     maps = map_set(args)
     # load compiled kernels before any timing
-    for label in benchmark.PLANNERS:
+    for label in benchmark.SETUPS:
         benchmark.run_one(next(iter(maps.values()))[0], label, step=args.step, seed=0, max_iterations=200)
     out = io.StringIO()
     header = (f"# Planner benchmark\n\n{platform.processor() or platform.machine()}, "
@@ -209,7 +201,8 @@ def main(argv=None) -> int:
 
     print("## Tree growth (uniform RRT)\n", flush=True)
     g_rows, nn_rows = growth(args, use_ompl, movingai_dir(args.movingai, required=False))
-    gt = benchmark.markdown_table(g_rows, ["map", "planner", "from_vertices", "to_vertices", "iterations", "us_per_iteration"])
+    gt = benchmark.markdown_table(g_rows, ["map", "planner", "from_vertices", "to_vertices", "iterations",
+                                           "us_per_iteration"])
     nt = benchmark.markdown_table(nn_rows, ["map", "vertices", "index_us", "numpy_scan_us"])
     out.write("## Per-iteration time while the tree grows\n\n" + gt
               + "\n## Nearest-neighbour query time\n\n" + nt + "\n")
@@ -218,17 +211,13 @@ def main(argv=None) -> int:
     print("## Every planner on every map\n", flush=True)
     recs = all_planners(maps, args)
     summary = benchmark.summarize(recs)
-    st = benchmark.markdown_table(summary, ["map", "planner", "runs", "success", "median_iterations", "us_per_iteration",
+    st = benchmark.markdown_table(summary, ["map", "planner", "runs", "success", "median_iterations",
+                                            "us_per_iteration",
                                     "median_cost", "median_checks"])
     out.write("## Every planner on every map (iterations to first solution)\n\n" + st)
     print(st)
 
-    all_records = benchmark.records_to_dicts(records + recs)
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(all_records[0]))
-    w.writeheader()
-    w.writerows(all_records)
-    atomic_write_text(args.out / "runs.csv", buf.getvalue())
+    benchmark.write_runs_csv(records + recs, args.out / "runs.csv")
     atomic_write_text(args.out / "summary.md", out.getvalue())
     # our own runs of the throughput table repeat the all-planners runs (same queries, seeds and cap):
     # the logs take those once, plus OMPL's runs

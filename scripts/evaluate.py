@@ -25,10 +25,11 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 
 from learning import PolicySampler
 from learning import evaluation as E
-from planners import movingai_dir
+from planners import movingai_dir, planner_names
 from planners.base.fileio import InputError, atomic_write_text
+from planners.base.registry import planner_name_arg
 from planners.maps.generators import FAMILIES
-from planners.tools.benchmark import markdown_table
+from planners.tools.benchmark import markdown_table, write_runs_csv
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
@@ -55,7 +56,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--scenarios", type=int, default=10, help="test scenarios per MovingAI map")
     ap.add_argument("--tuning-scenarios", type=int, default=5,
                     help="scenarios per MovingAI map for choosing the best goal bias")
-    ap.add_argument("--other-planners", nargs="*", default=["RRTstar", "PRM"],
+    ap.add_argument("--other-planners", nargs="*", default=["RRTstar", "PRM"], type=planner_name_arg,
+                    choices=planner_names(),
                     help="also run these (uniform, goal bias 0.05 and best, policy) on the generated families")
     ap.add_argument("--step", type=float, default=4.0)
     ap.add_argument("--tolerance", type=float, default=4.0)
@@ -114,7 +116,8 @@ def main(argv=None) -> int:
     elif args.movingai_maps:
         print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); evaluating generated "
               "families only", file=sys.stderr)
-    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": args.tolerance, "policy": str(args.policy), "step": args.step,
+    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": args.tolerance,
+           "policy": str(args.policy), "step": args.step,
            "max_iterations": args.max_iterations, "user_samplers": args.user_samplers}
     users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
@@ -152,8 +155,8 @@ def main(argv=None) -> int:
         pool = []
     rows = E.summarize(runs + pool, best)
     head = E.headline(rows, best, users, constants)
-    E.write_csv(runs, args.out / "runs.csv")
-    plots = E.save_plots([r for r in runs if r.family not in mai] + pool, rows, best, args.out,
+    write_runs_csv(runs, args.out / "runs.csv")
+    plots = E.save_plots([r for r in runs if r.map not in mai] + pool, rows, best, args.out,
                          extra=[E.CONSTANT, *users])
     logs = E.write_ompl_logs(runs + pool, best, args.out / "ompl", cfg)
     # the log folder keeps this run's logs only, so `ompl/*.log` never mixes in an earlier run's map sets

@@ -28,10 +28,11 @@ import sys
 import time
 from pathlib import Path
 
+from planners import planner_names
 from planners.base.fileio import InputError
+from planners.base.registry import planner_class, planner_name_arg
 from planners.tools.workflow import (
     METRICS,
-    PLANNERS,
     SAMPLERS,
     OutputError,
     check_output_dir,
@@ -85,7 +86,8 @@ def pick_start_goal(grid) -> tuple[tuple[float, float], tuple[float, float]]:
             fig.canvas.draw_idle()
             return
         picks.append(q)
-        ax.plot(*q, "o" if len(picks) == 1 else "*", color=plotting.START_COLOR if len(picks) == 1 else plotting.GOAL_COLOR,
+        ax.plot(*q, "o" if len(picks) == 1 else "*",
+                color=plotting.START_COLOR if len(picks) == 1 else plotting.GOAL_COLOR,
                 markersize=10)
         ax.set_title("double-click the goal" if len(picks) == 1 else "planning...")
         fig.canvas.draw_idle()
@@ -138,7 +140,8 @@ def main(argv=None) -> int:
     ap.add_argument("--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal in map units")
     ap.add_argument("--radius", type=float, default=0.0, metavar="R",
                     help="robot radius in map units: obstacles are inflated by it (default 0: a point robot)")
-    ap.add_argument("--planner", choices=PLANNERS, default="rrt-connect")
+    ap.add_argument("--planner", type=planner_name_arg, choices=planner_names(), default="RRTConnect",
+                    help="a registered planner; case, '-' and '_' are ignored (rrt-connect = RRTConnect)")
     ap.add_argument("--sampler", choices=(*SAMPLERS, "policy"), default=None,
                     help="default: goal-bias for rrt and rrtstar, uniform otherwise; policy: the learned sampler")
     ap.add_argument("--policy", type=Path, default=None, metavar="ZIP",
@@ -218,7 +221,7 @@ def main(argv=None) -> int:
         w, h = grid.bounds[1] - grid.bounds[0]
         step = max(4.0 * grid.resolution, 0.02 * math.hypot(w, h))
     time_limit = args.time_limit
-    if time_limit is None and args.planner in ("rrtstar", "informed-rrtstar"):
+    if time_limit is None and planner_class(args.planner).anytime:  # it would run to the iteration cap
         time_limit = 10.0
     sampler = args.sampler
     try:

@@ -13,6 +13,13 @@ from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
 from planners import RRT
 from planners.base.fileio import InputError
 from planners.maps.generators import generate
+from planners.tools.benchmark import Run
+
+
+def _run(family, query, split, planner, sampler, seed, its) -> Run:
+    return Run(map=family, query=query, split=split, planner=planner, sampler=sampler, seed=seed, solved=True,
+               iterations=its, lower_bound=1, candidates=its, collision_checks=its, wall_time=0.001,
+               us_per_iteration=1.0, path_cost=1.0, forward_passes=0, vertices=its)
 
 
 @pytest.mark.parametrize("family", ["forest", "bugtrap", "maze"])
@@ -51,9 +58,8 @@ def test_the_ablation_is_tuned_on_the_tuning_split_only():
     runs = []
     for q, planner, name, seed, _ in tasks:
         its = 10 if name == "constant=0.5" else 100
-        runs.append(E.Run(q.family, str(q.key), "tuning", planner, name, seed, True, its, 1, its, its, 0.001, 1.0,
-                          0, its))
-    runs.append(E.Run("forest", "x", "test", "RRT", "constant=0.9", 0, True, 1, 1, 1, 1, 0.001, 1.0, 0, 1))
+        runs.append(_run(q.family, str(q.key), "tuning", planner, name, seed, its))
+    runs.append(_run("forest", "x", "test", "RRT", "constant=0.9", 0, 1))
     best = E.best_constant(runs)
     assert best == {("forest", "RRT"): 0.5}
     test = E.constant_test_tasks(qs, "RRT", {}, best, seeds=2)

@@ -260,7 +260,10 @@ def test_benchmark_planners_writes_a_log_per_map(tmp_path):
     recs = [benchmark.run_one(p, label, step=4.0, seed=i, max_iterations=3000, map_name="forest-64")
             for label in ("RRT", "PRM") for i, p in enumerate(problems)]
     # OMPL's runs report no collision checks (-1 in the CSV): NULL in the database
-    recs.append(benchmark.Record("forest-64", problems[0].name, "OMPL RRT b=0.0", True, 10, 0.01, 1000.0, 40.0, -1, 11, 0))
+    recs.append(benchmark.Run(map="forest-64", query=problems[0].name, split="test", planner="OMPL RRT b=0.0",
+                              sampler="OMPL", seed=0, solved=True, iterations=10, lower_bound=-1, candidates=10,
+                              collision_checks=-1, wall_time=0.01, us_per_iteration=1000.0, path_cost=40.0,
+                              forward_passes=0, vertices=11))
     paths = bp.write_ompl_logs(recs, args, tmp_path / "ompl")
     assert [p.name for p in paths] == ["forest-64.log"]
     assert stat.S_IMODE(paths[0].stat().st_mode) == 0o666 & ~_umask()
@@ -268,6 +271,6 @@ def test_benchmark_planners_writes_a_log_per_map(tmp_path):
     rows = runs_table(conn, read_benchmark_log(paths[0].read_text(), conn))
     assert [r["planner"] for r in rows] == ["RRT", "RRT", "PRM", "PRM", "OMPL RRT b=0.0"]
     assert [r["iterations"] for r in rows] == [r.iterations for r in recs]
-    assert [r["graph_states"] for r in rows] == [r.num_vertices for r in recs]
+    assert [r["graph_states"] for r in rows] == [r.vertices for r in recs]
     assert [r["collision_checks"] for r in rows] == [r.collision_checks for r in recs[:-1]] + [None]
-    assert [(r["solved"], r["time"]) for r in rows] == [(int(x.solved), pytest.approx(x.time)) for x in recs]
+    assert [(r["solved"], r["time"]) for r in rows] == [(int(x.solved), pytest.approx(x.wall_time)) for x in recs]

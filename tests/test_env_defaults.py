@@ -119,7 +119,8 @@ def test_movingai_dir_resolution(tmp_path, monkeypatch):
         d.mkdir()
         (d / "x.map").write_text("type octile\nheight 1\nwidth 1\nmap\n.\n")
     # simulate a non-editable install: the module sits in site-packages, far from any shared/ folder
-    monkeypatch.setattr(sources, "__file__", str(tmp_path / "venv" / "lib" / "site-packages" / "planners" / "maps" / "movingai.py"))
+    monkeypatch.setattr(sources, "__file__",
+                        str(tmp_path / "venv" / "lib" / "site-packages" / "planners" / "maps" / "movingai.py"))
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv(MOVINGAI_ENV, str(b))
     assert sources.movingai_dir() == b

@@ -286,7 +286,11 @@ def test_problem_option_and_lower_bound():
 
 @pytest.mark.parametrize("shape", [(128, 128), (37, 53), (5, 3)])
 def test_pyramid_levels_match_a_numpy_reference(shape):
-    from planners.guidance.egocentric import _pyramid_level
+    from planners.guidance.egocentric import build_pyramid
+
+    def level(grid, f):
+        layout, levels, _ = build_pyramid(grid, np.array([f], dtype=np.int64))
+        return levels.reshape(layout[0, 1], layout[0, 2])
 
     obstacles = np.random.default_rng(1).random(shape) < 0.3
     for f in (1, 2, 3, 4, 16):
@@ -294,7 +298,7 @@ def test_pyramid_levels_match_a_numpy_reference(shape):
         padded = np.ones((h * f, w * f), bool)  # the outside of the map counts as blocked
         padded[: shape[0], : shape[1]] = obstacles
         ref = np.round(255.0 * padded.reshape(h, f, w, f).mean(axis=(1, 3))).astype(np.uint8)
-        assert np.array_equal(_pyramid_level(obstacles.astype(np.uint8), f), ref), f
+        assert np.array_equal(level(obstacles.astype(np.uint8), f), ref), f
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -329,3 +333,29 @@ def test_frontier_is_the_visible_uncovered_free_neighbour_cells(seed):
             if any(motion_free(grid.kernel, v, centre) for v in near):
                 want.add(r * W + c)
     assert set(front.front[:len(front)].tolist()) == want and len(want) > 0
+
+
+def test_observations_come_from_one_factory_and_the_guide_is_passed_explicitly():
+    from envs.actions import make_action_sampler
+    from envs.observation import OBSERVATIONS, EgocentricObservation, make_observation
+    from planners.base.fileio import InputError
+    from planners.maps.generators import generate
+
+    with pytest.raises(InputError, match=r"observation must be one of \('image', 'egocentric'\), got 'pixels'"):
+        make_observation("pixels", 2)
+    for env_id in envs.ENV_IDS:
+        spec = gym.spec(env_id)
+        assert spec.kwargs.get("observation", "image") in OBSERVATIONS, env_id
+    p = generate("forest", 0, 64)
+    with pytest.raises(ValueError, match="pass it as guide"):
+        EgocentricObservation().reset(p, 100)
+    guided = make_action_sampler("guided", 4.0).bind(p)
+    guided.set_action(3)
+    with pytest.raises(RuntimeError, match="set_guide"):
+        guided.draw(np.random.default_rng(0), 1, None)
+    with pytest.raises(ValueError, match="guide=None"):
+        guided.set_guide(None)
+    # an egocentric, guided episode: the env hands one GuidedSampling to both
+    env = gym.make("SamplerGym/Planning-v0", observation="egocentric", action_mode="guided").unwrapped
+    env.reset(seed=0)
+    assert env.guide is not None and env.planner.sampler.guide is env.guide

@@ -14,6 +14,7 @@ import pytest
 
 from learning import evaluation as E
 from planners.maps.generators import TEST_SEED0
+from planners.tools.benchmark import Run, write_runs_csv
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -31,9 +32,10 @@ def _umask() -> int:
     return mask
 
 
-def _run(family, split, sampler, its, solved=True, planner="RRT", query="q", seed=0) -> E.Run:
-    return E.Run(family, query, split, planner, sampler, seed, solved, its, 10, its, 3 * its, its * 1e-5,
-                 40.0 if solved else math.inf, 0, its // 2)
+def _run(family, split, sampler, its, solved=True, planner="RRT", query="q", seed=0) -> Run:
+    return Run(map=family, query=query, split=split, planner=planner, sampler=sampler, seed=seed, solved=solved,
+               iterations=its, lower_bound=10, candidates=its, collision_checks=3 * its, wall_time=its * 1e-5,
+               us_per_iteration=10.0, path_cost=40.0 if solved else math.inf, forward_passes=0, vertices=its // 2)
 
 
 # --- point 7a: the best goal bias is chosen soundly, on the tuning split only -------------------------
@@ -89,9 +91,9 @@ def test_tuned_bias_beats_or_ties_uniform_on_real_tuning_maps():
 
 def test_runs_csv_has_umask_permissions(tmp_path):
     path = tmp_path / "out" / "runs.csv"
-    E.write_csv([_run("forest", "test", "uniform", 12)], path)
+    write_runs_csv([_run("forest", "test", "uniform", 12)], path)
     assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~_umask()
-    assert path.read_text().splitlines()[0].startswith("family,query,split,planner,sampler")
+    assert path.read_text().splitlines()[0].startswith("map,query,split,planner,sampler")
     assert [p.name for p in path.parent.iterdir()] == ["runs.csv"]
 
 

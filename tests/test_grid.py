@@ -467,3 +467,15 @@ def test_a_new_map_format_plugs_in_by_registering_a_reader(tmp_path, monkeypatch
     other.write_text("?")
     with pytest.raises(InputError, match=r"unknown kind '\.xyz'.*a text map"):
         OccupancyGrid.from_file(other)
+
+
+def test_an_unknown_world_kind_is_an_error_not_another_kinds_check():
+    from planners.kernels import geometry
+    from planners.kernels.state import WorldKernel
+
+    grid = OccupancyGrid(np.zeros((8, 8), dtype=bool))
+    k = grid.kernel
+    assert geometry.state_free(k, np.array([2.5, 2.5]))
+    alien = WorldKernel(7, k.grid, k.geom, k.body, k.params)
+    with pytest.raises(ValueError, match="unknown world kind"):
+        geometry.state_free(alien, np.array([2.5, 2.5]))

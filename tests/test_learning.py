@@ -13,7 +13,7 @@ import torch
 from learning import PolicySampler
 from learning.fast_policy import FastActor
 from learning.training import TrainConfig, train
-from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler
+from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler, make_planner
 from planners.maps.generators import TEST_SEED0, generate
 
 TINY = TrainConfig(name="tiny", families=("forest",), sizes=(64,), dagger_rounds=2, maps_per_round=32, bc_epochs=10,
@@ -120,9 +120,8 @@ def test_policy_sampler_on_other_maps_and_planners(trained, problem_fn):
     r = planner.solve(max_iterations=20000)
     assert r.solved and p.world.path_valid(r.path)
     assert planner.sampler.forward_passes >= 1
-    for cls in (RRTStar, PRM):
-        kw = {} if cls is PRM else {"step_size": 4.0}
-        assert cls(p, sampler=sampler, seed=1, **kw).solve(max_iterations=20000).solved
+    for name in ("RRTstar", "PRM"):
+        assert make_planner(name, p, extension_step=4.0, sampler=sampler, seed=1).solve(max_iterations=20000).solved
 
 
 SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
@@ -183,7 +182,8 @@ def test_policy_sampler_observes_what_the_training_environment_observes(family, 
                            max_iterations=sampler.config["max_iterations"])
     guide.update(view)
     obs = guide.observe(view)
-    local, vector = sampler._kernel[4][4], sampler._kernel[4][5]
+    seen = sampler.last_observation()
+    local, vector = seen["local"], seen["vector"]
     assert view.num_vertices > 30 and obs["local"][1].any()  # the tree shows in the window
     assert np.array_equal(obs["local"], local)
     assert np.array_equal(obs["vector"], vector)

@@ -62,3 +62,14 @@ def test_points_view_is_read_only():
     assert nn.points.tolist() == [[1.0, 2.0], [3.0, 4.0]]
     with pytest.raises(ValueError):
         nn.points[0, 0] = 5.0
+
+
+def test_nearest_many_matches_one_query_at_a_time():
+    rng = np.random.default_rng(5)
+    nn = NearestNeighbors(3)
+    nn.add(rng.random((500, 3)))
+    qs = rng.random((200, 3))
+    assert nn.nearest_many(qs).tolist() == [nn.nearest(q)[0] for q in qs]
+    with pytest.raises(ValueError, match=r"shape \(m, 3\)"):
+        nn.nearest_many(qs[:, :2])
+    assert NearestNeighbors(2).nearest_many(np.zeros((2, 2))).tolist() == [-1, -1]

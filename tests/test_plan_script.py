@@ -11,7 +11,7 @@ import pytest
 from conftest import REPO, fine_check_path
 from PIL import Image
 
-from planners.tools.workflow import load_map, make_planner, plan_on_image
+from planners.tools.workflow import load_map, picture_planner, plan_on_image
 
 SCRIPT = REPO / "scripts" / "plan.py"
 
@@ -125,7 +125,7 @@ def test_recording_leaves_the_run_unchanged(map_png):
         budget = 400 if planner == "rrtstar" else 100_000
         out = plan_on_image(grid, (5.5, 30.5), (90.5, 40.5), planner=planner, step=step, max_iterations=budget,
                             seed=2, max_frames=30)
-        p = make_planner(planner, out.problem, step=step, seed=2)
+        p = picture_planner(planner, out.problem, step=step, seed=2)
         r = p.solve(max_iterations=budget)
         assert (out.result.iterations, out.result.collision_checks, out.result.cost) == (
             r.iterations, r.collision_checks, r.cost)

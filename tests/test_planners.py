@@ -29,6 +29,7 @@ from planners import (
     UniformSampler,
 )
 from planners.kernels import rrt as rrt_kernels
+from planners.kernels.state import I_N, I_SOLVED
 
 ALL = [RRT, RRTConnect, RRTStar, InformedRRTStar, PRM, LazyPRM]
 
@@ -291,11 +292,12 @@ def _uniform_rrt_loop(budget, rng, tree, istate, fstate, last, world, space, goa
     q, qe, new = np.empty(2), np.empty(2), np.empty(2)
     sample = np.empty(2)
     for s in range(budget):
-        if istate[rrt_kernels.I_SOLVED] or istate[rrt_kernels.I_N] >= tree[0].shape[0]:
+        if istate[I_SOLVED] or istate[I_N] >= tree.X.shape[0]:
             return s
         for d in range(2):
             sample[d] = low[d] + (high[d] - low[d]) * rng.random()
-        rrt_kernels.rrt_iterate(sample, 0, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb, q, qe,
+        rrt_kernels.rrt_iterate(sample, 0, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st,
+                                sb, q, qe,
                       new)
     return budget
 

@@ -9,7 +9,7 @@ from conftest import fine_check_path
 
 from planners import GoalBiasedSampler, RRTStar, load_movingai_scenarios
 from planners.maps.generators import FAMILIES, generate
-from planners.tools.benchmark import PLANNERS, run_one
+from planners.tools.benchmark import SETUPS, run_one, setup_planner
 
 SEEDS = range(100)
 
@@ -20,11 +20,11 @@ def problems():
 
 
 @pytest.mark.parametrize("family", FAMILIES)
-@pytest.mark.parametrize("label", list(PLANNERS))
+@pytest.mark.parametrize("label", list(SETUPS))
 def test_success_rate_at_least_99_percent(problems, label, family):
     solved = 0
     for seed, p in enumerate(problems[family]):
-        planner = PLANNERS[label](p, 4.0, seed)
+        planner = setup_planner(label, p, step=4.0, seed=seed)
         r = planner.solve(max_iterations=20000)
         solved += r.solved
         if r.solved:
@@ -51,4 +51,4 @@ def test_rrtstar_within_5_percent_of_published_optimum(movingai, scen, n):
 def test_benchmark_record_fields():
     p = generate("forest", 0, 64)
     rec = run_one(p, "RRTConnect", step=4.0, seed=0, max_iterations=20000)
-    assert rec.solved and rec.iterations >= 1 and rec.us_per_iteration > 0 and np.isfinite(rec.cost)
+    assert rec.solved and rec.iterations >= 1 and rec.us_per_iteration > 0 and np.isfinite(rec.path_cost)

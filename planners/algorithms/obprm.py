@@ -21,10 +21,13 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from planners.algorithms.prm import DEFAULT_K, PRM, LazyPRM
+from planners.base.fileio import check_int
 from planners.base.planner import Planner
 from planners.base.problem import Problem
+from planners.base.registry import register_planner
 from planners.base.samplers import SampleBatch, Sampler, SamplerBase
 from planners.kernels import obprm as obprm_kernels
+from planners.kernels.state import N_STATE, S_CHECKS, S_PENDING, S_POS
 from planners.maps.generators import generate
 from planners.worlds.grid import OccupancyGrid
 
@@ -115,21 +118,22 @@ class ObstacleBasedSampler(SamplerBase):
         d = self.problem.dim
         out = np.empty((n, d))
         cand = np.zeros(n, dtype=np.int64)
-        state = np.zeros(obprm_kernels.N_STATE, dtype=np.int64)
+        state = np.zeros(N_STATE, dtype=np.int64)
         budget = MAX_ATTEMPTS_PER_SAMPLE * n
         m = attempts = 0
         while m < n and attempts < budget:
             pool = int(min(budget - attempts, max(64, math.ceil(1.25 * self._rate * (n - m)))))
             u = rng.random(pool * self._per)
-            state[obprm_kernels.S_POS] = 0
-            got = obprm_kernels.ob_samples(self._kernel, self.low, self.high, u, n - m, self.uniform_fraction, self._walk,
+            state[S_POS] = 0
+            got = obprm_kernels.ob_samples(self._kernel, self.low, self.high, u, n - m, self.uniform_fraction,
+                                           self._walk,
                                 self._refine, self._max_walk, out[m:], cand[m:], state)
-            attempts += int(state[obprm_kernels.S_POS]) // self._per
+            attempts += int(state[S_POS]) // self._per
             m += got
-        self.checks += int(state[obprm_kernels.S_CHECKS])
+        self.checks += int(state[S_CHECKS])
         if m:
             self._rate = 0.5 * self._rate + 0.5 * attempts / m
-        pending = int(state[obprm_kernels.S_PENDING])
+        pending = int(state[S_PENDING])
         if m == 0:  # nothing near an obstacle: fall back to one uniform sample
             out[0] = self._uniform(rng.random(d))
             cand[0] = pending + 1
@@ -142,6 +146,7 @@ class ObstacleBasedSampler(SamplerBase):
         return f"ObstacleBasedSampler(max_distance={dist}, uniform_fraction={self.uniform_fraction:g})"
 
 
+@register_planner
 class OBPRM(PRM):
     """Obstacle-based PRM: ``PRM`` sampling with ``ObstacleBasedSampler`` by default.
 
@@ -157,7 +162,7 @@ class OBPRM(PRM):
         max_distance: As ``ObstacleBasedSampler``.
         uniform_fraction: As ``ObstacleBasedSampler``.
         walk_step: As ``ObstacleBasedSampler``.
-        step_size, k, connection, radius: As ``PRM``.
+        max_edge_length, k, connection, radius: As ``PRM``.
         sampler: Another sampler instead (then the three sampler arguments must stay unset).
         seed: Seed of the planner's generator.
     """
@@ -165,15 +170,15 @@ class OBPRM(PRM):
     name = "OBPRM"
 
     def __init__(self, problem: Problem, *, max_distance: float | None = None, uniform_fraction: float = 0.1,
-                 walk_step: float | None = None, step_size: float | None = None, k: int = DEFAULT_K,
+                 walk_step: float | None = None, max_edge_length: float | None = None, k: int = DEFAULT_K,
                  connection: str = "knn", radius: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None) -> None:
         if sampler is None:
             sampler = ObstacleBasedSampler(max_distance, uniform_fraction=uniform_fraction, walk_step=walk_step)
         elif max_distance is not None or walk_step is not None or uniform_fraction != 0.1:
             raise ValueError("give either sampler or the ObstacleBasedSampler arguments, not both")
-        super().__init__(problem, step_size=step_size, k=k, connection=connection, radius=radius, sampler=sampler,
-                         seed=seed)
+        super().__init__(problem, max_edge_length=max_edge_length, k=k, connection=connection, radius=radius,
+                         sampler=sampler, seed=seed)
 
     def clear(self) -> None:
         """As ``Planner.clear``; the sampler's check count restarts too."""
@@ -203,8 +208,7 @@ def wall_with_gap(gap: int, size: int = 128, *, thickness: int | None = None, se
     start and goal are random free cell centres at least ``size / 8`` from the wall on opposite
     sides. Everything random comes from ``seed``.
     """
-    if isinstance(gap, bool) or not isinstance(gap, (int, np.integer)) or gap < 1:
-        raise ValueError(f"gap must be a positive integer number of cells, got {gap!r}")
+    check_int(gap, "gap")
     rng = np.random.default_rng(seed)
     t = thickness if thickness is not None else max(2, size // 16)
     obs = np.zeros((size, size), dtype=bool)

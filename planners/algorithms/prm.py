@@ -8,6 +8,7 @@ import time
 import numpy as np
 
 from planners.algorithms.rrtstar import unit_ball_volume
+from planners.base.fileio import check_int
 from planners.base.planner import (
     CHUNK,
     TIME_SLICE,
@@ -19,9 +20,10 @@ from planners.base.planner import (
     require_problem,
 )
 from planners.base.problem import Problem
+from planners.base.registry import register_planner
 from planners.base.samplers import Sampler
 from planners.kernels import prm as prm_kernels
-from planners.kernels import rrt as rrt_kernels
+from planners.kernels import state as slots
 
 #: OMPL's default number of nearest neighbours for PRM (magic::DEFAULT_NEAREST_NEIGHBORS).
 DEFAULT_K = 10
@@ -32,6 +34,7 @@ DEFAULT_K = 10
 #: call makes only as many as fit the call's time slice, by the measured time per search.
 LAZY_ROUNDS = 64
 
+@register_planner
 class PRM(Planner):
     """Probabilistic roadmap, multi-query.
 
@@ -51,8 +54,8 @@ class PRM(Planner):
 
     Args:
         problem: The planning problem (its start and goal are the first query).
-        step_size: Longest edge the roadmap may hold (None: no limit in knn mode). Also caps the
-            connection radius.
+        max_edge_length: Longest edge the roadmap may hold (None: no limit in knn mode). Also caps
+            the connection radius. (Not RRT's ``step_size``: a roadmap does not extend toward samples.)
         k: Neighbours per new vertex in knn mode (> 0).
         connection: ``"knn"`` or ``"radius"``.
         radius: Fixed connection radius in radius mode; None uses PRM*'s
@@ -64,9 +67,10 @@ class PRM(Planner):
     """
 
     name = "PRM"
+    step_parameter = "max_edge_length"
     lazy = False
 
-    def __init__(self, problem: Problem, *, step_size: float | None = None, k: int = DEFAULT_K,
+    def __init__(self, problem: Problem, *, max_edge_length: float | None = None, k: int = DEFAULT_K,
                  connection: str = "knn", radius: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None, search: str = "astar") -> None:
         require_problem(problem)
@@ -76,14 +80,14 @@ class PRM(Planner):
         self.search = search
         if connection not in ("knn", "radius"):
             raise ValueError(f"connection must be 'knn' or 'radius', got {connection!r}")
-        if connection == "knn" and (isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1):
-            raise ValueError(f"k must be a positive integer, got {k!r}")
-        for label, v in (("step_size", step_size), ("radius", radius)):
+        if connection == "knn":
+            check_int(k, "k")
+        for label, v in (("max_edge_length", max_edge_length), ("radius", radius)):
             if v is not None and not (isinstance(v, (int, float, np.number)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{label} must be a positive finite number or None, got {v!r}")
         self.connection = connection
         self.k = int(k) if connection == "knn" else 0
-        self.step_size = float(step_size) if step_size is not None else None
+        self.max_edge_length = float(max_edge_length) if max_edge_length is not None else None
         self.radius = float(radius) if radius is not None else None
         d = problem.dim
         mu = problem.world.free_volume()
@@ -128,49 +132,51 @@ class PRM(Planner):
         if need <= cap:
             return
         new_cap = max(need, 2 * cap)
-        e = int(self._istate[prm_kernels.I_E])
+        e = int(self._istate[slots.I_E])
         self._edges = tuple(np.concatenate([a[:e], np.zeros(new_cap - e, dtype=a.dtype)]) for a in self._edges)
 
     def _reserve(self, iterations: int) -> None:
-        n = int(self._istate[rrt_kernels.I_N])
+        n = int(self._istate[slots.I_N])
         if self._store.reserve(n, 3):
             self._grow_vertex_arrays()
         per = self.k if self.k else n + 3
-        self._grow_edges(int(self._istate[prm_kernels.I_E]) + 2 * per)
+        self._grow_edges(int(self._istate[slots.I_E]) + 2 * per)
 
     def _connect_radius(self) -> float:
         if self.k:
             return 0.0
-        n = int(self._istate[rrt_kernels.I_N])
+        n = int(self._istate[slots.I_N])
         if self.radius is not None:
             r = self.radius
         else:
             r = self.gamma * (math.log(n + 1.0) / (n + 1.0)) ** (1.0 / self.problem.dim)
-        return min(r, self.step_size) if self.step_size else r
+        return min(r, self.max_edge_length) if self.max_edge_length else r
 
     def _insert_query_state(self, q: np.ndarray) -> int:
         self._reserve(1)
-        return int(prm_kernels.insert_vertex(np.ascontiguousarray(q, dtype=np.float64), self._store.as_tuple(), self._edges,
+        return int(prm_kernels.insert_vertex(np.ascontiguousarray(q, dtype=np.float64), self._store.as_tree(),
+                                             self._edges,
                                     self._uf, self._vstat, self._istate, self.problem.world.kernel, self._space,
-                                    self._goal, self.k, self._connect_radius(), self.step_size or 0.0, self.lazy,
+                                    self._goal, self.k, self._connect_radius(), self.max_edge_length or 0.0, self.lazy,
                                     True, self._nbr, self._nbr_d, self._qe))
 
     def _start_query(self) -> None:
         """Add the problem's start and goal as vertices and check whether they are already joined."""
-        self._istate[rrt_kernels.I_SOLVED] = 0
-        self._istate[rrt_kernels.I_FIRST] = -1
-        self._fstate[rrt_kernels.F_BEST_COST] = np.inf
+        self._istate[slots.I_SOLVED] = 0
+        self._istate[slots.I_FIRST] = -1
+        self._fstate[slots.F_BEST_COST] = np.inf
         self._lazy_path = None
         self._iter0 = self.iterations
-        prm_kernels.rebuild_components(self._store.as_tuple(), self._edges, self._uf, self._vstat, self._istate, self._goal,
+        prm_kernels.rebuild_components(self._store.as_tree(), self._edges, self._uf, self._vstat, self._istate,
+                                       self._goal,
                               self._space)
-        self._istate[prm_kernels.I_QS] = self._insert_query_state(self.problem.start)
-        self._istate[prm_kernels.I_QG] = self._insert_query_state(self.problem.goal)
-        prm_kernels._refresh_anchor(self._uf, self._istate, self._fstate)
+        self._istate[slots.I_QS] = self._insert_query_state(self.problem.start)
+        self._istate[slots.I_QG] = self._insert_query_state(self.problem.goal)
+        prm_kernels.refresh_anchor(self._uf, self._istate, self._fstate)
         self._after_growth()
 
     def _joined(self) -> bool:
-        qs, qg = int(self._istate[prm_kernels.I_QS]), int(self._istate[prm_kernels.I_QG])
+        qs, qg = int(self._istate[slots.I_QS]), int(self._istate[slots.I_QG])
         return prm_kernels.uf_find(self._uf, qs) == prm_kernels.uf_find(self._uf, qg)
 
     def _after_growth(self) -> None:
@@ -182,7 +188,7 @@ class PRM(Planner):
                 rounds = 1 if self._round_s is None else int(
                     max(1, min(LAZY_ROUNDS, 2 * self._rounds, self._call_budget / max(self._round_s, 1e-9))))
             t0, c0 = time.perf_counter(), compile_seconds()
-            path = prm_kernels.lazy_resolve(self._store.as_tuple(), self._edges, self._uf, self._vstat, self._istate,
+            path = prm_kernels.lazy_resolve(self._store.as_tree(), self._edges, self._uf, self._vstat, self._istate,
                                    self._fstate, self.problem.world.kernel, self._space, self._goal, rounds)
             if len(path):
                 self._lazy_path = path
@@ -190,23 +196,23 @@ class PRM(Planner):
                 self._round_s = (time.perf_counter() - t0 - (compile_seconds() - c0)) / rounds
                 self._rounds = rounds
         else:
-            self._istate[rrt_kernels.I_SOLVED] = 1
-            if self._istate[rrt_kernels.I_FIRST] < 0:
-                self._istate[rrt_kernels.I_FIRST] = self.iterations
+            self._istate[slots.I_SOLVED] = 1
+            if self._istate[slots.I_FIRST] < 0:
+                self._istate[slots.I_FIRST] = self.iterations
 
     def _run(self, points, anchored) -> int:
-        used = prm_kernels.roadmap_run(points, anchored, self._store.as_tuple(), self._edges, self._uf, self._vstat,
+        used = prm_kernels.roadmap_run(points, anchored, self._store.as_tree(), self._edges, self._uf, self._vstat,
                               self._istate, self._fstate, self._last, self.problem.world.kernel, self._space,
                               self._goal, self._low, self._high, self.k, self.gamma, self.radius or 0.0,
-                              self.step_size or 0.0, float(self.problem.dim), self.lazy, not self._growing,
+                              self.max_edge_length or 0.0, float(self.problem.dim), self.lazy, not self._growing,
                               self._nbr, self._nbr_d)
         if not self._growing:
             self._after_growth()
         return used
 
     def _shortest(self, only_valid: bool) -> tuple[np.ndarray, np.ndarray]:
-        return prm_kernels.astar(self._store.as_tuple(), self._edges, self._vstat, int(self._istate[rrt_kernels.I_N]),
-                        int(self._istate[prm_kernels.I_E]), int(self._istate[prm_kernels.I_QS]), int(self._istate[prm_kernels.I_QG]),
+        return prm_kernels.astar(self._store.as_tree(), self._edges, self._vstat, int(self._istate[slots.I_N]),
+                        int(self._istate[slots.I_E]), int(self._istate[slots.I_QS]), int(self._istate[slots.I_QG]),
                         self._space, only_valid, self.search == "astar")
 
     def _path(self) -> np.ndarray:
@@ -220,8 +226,7 @@ class PRM(Planner):
 
     def grow(self, iterations: int) -> None:
         """Add ``iterations`` samples to the roadmap whatever the current query's state."""
-        if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
-            raise ValueError(f"iterations must be a non-negative integer, got {iterations!r}")
+        check_int(iterations, "iterations", low=0)
         t0 = time.perf_counter()
         self._growing = True
         try:
@@ -263,16 +268,17 @@ class PRM(Planner):
 
     @property
     def num_edges(self) -> int:
-        return int(self._istate[prm_kernels.I_E])
+        return int(self._istate[slots.I_E])
 
     def planner_data(self) -> PlannerData:
         n, e = self.num_vertices, self.num_edges
         eu, ev, _, es = self._edges
-        keep = es[:e] != prm_kernels.EDGE_INVALID
+        keep = es[:e] != slots.EDGE_INVALID
         edges = np.stack([eu[:e][keep], ev[:e][keep]], axis=1)
         return PlannerData(self._store.X[:n].copy(), edges, np.zeros(n, dtype=np.int64))
 
 
+@register_planner
 class LazyPRM(PRM):
     """Lazy PRM: build the roadmap without collision checks, check only candidate paths.
 

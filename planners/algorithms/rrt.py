@@ -8,8 +8,10 @@ import numpy as np
 
 from planners.base.planner import Planner, PlannerData, VertexStore, require_problem
 from planners.base.problem import Problem
+from planners.base.registry import register_planner
 from planners.base.samplers import Sampler
 from planners.kernels import rrt as rrt_kernels
+from planners.kernels import state as slots
 
 #: OMPL's default range: this fraction of the sampling box's diagonal (MAX_MOTION_DISTANCE_FRACTION).
 DEFAULT_RANGE_FRACTION = 0.2
@@ -29,6 +31,7 @@ def default_step(problem: Problem, step_size: float | None) -> float:
     return step
 
 
+@register_planner
 class RRT(Planner):
     """Rapidly-exploring random tree.
 
@@ -47,6 +50,7 @@ class RRT(Planner):
     """
 
     name = "RRT"
+    step_parameter = "step_size"
     fusable_loop = "rrt"
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
@@ -57,33 +61,33 @@ class RRT(Planner):
 
     def _reset(self) -> None:
         self._tree = VertexStore(self.problem, 1024, tree=True)
-        self._add_root(self._tree, self.problem.start, rrt_kernels.I_N)
+        self._add_root(self._tree, self.problem.start, slots.I_N)
         d = self.problem.distance(self.problem.start, self.problem.goal)
-        self._fstate[rrt_kernels.F_BEST_D] = d
-        self._istate[rrt_kernels.I_BEST_V] = 0
+        self._fstate[slots.F_BEST_D] = d
+        self._istate[slots.I_BEST_V] = 0
         if d <= self.problem.goal_tolerance:
-            self._istate[rrt_kernels.I_SOLVED] = 1
-            self._istate[rrt_kernels.I_GOAL_V] = 0
-            self._istate[rrt_kernels.I_FIRST] = 0
-            self._fstate[rrt_kernels.F_BEST_COST] = 0.0
+            self._istate[slots.I_SOLVED] = 1
+            self._istate[slots.I_GOAL_V] = 0
+            self._istate[slots.I_FIRST] = 0
+            self._fstate[slots.F_BEST_COST] = 0.0
 
     def _add_root(self, store: VertexStore, q: np.ndarray, slot: int) -> None:
         from planners.kernels.tree import add_vertex
 
         q = np.ascontiguousarray(q, dtype=np.float64)
-        self._istate[slot] = add_vertex(store.as_tuple(), 0, self._space, q, -1, 0.0)
+        self._istate[slot] = add_vertex(store.as_tree(), 0, self._space, q, -1, 0.0)
 
     def _reserve(self, iterations: int) -> None:
         self._tree.reserve(self.num_vertices, 1)
 
     def _run(self, points, anchored) -> int:
-        return rrt_kernels.rrt_run(points, anchored, self._tree.as_tuple(), self._istate, self._fstate, self._last,
+        return rrt_kernels.rrt_run(points, anchored, self._tree.as_tree(), self._istate, self._fstate, self._last,
                          self.problem.world.kernel, self._space, self._goal, self.step_size,
                          self.problem.goal_tolerance, self._low, self._high, True, self._stack, self._stack_b)
 
     def loop_args(self) -> tuple:
         """Arguments of ``rrt_iterate`` (``planners.kernels.rrt``) after the sample and its anchor code."""
-        return (self._tree.as_tuple(), self._istate, self._fstate, self._last, self.problem.world.kernel, self._space,
+        return (self._tree.as_tree(), self._istate, self._fstate, self._last, self.problem.world.kernel, self._space,
                 self._goal, self.step_size, self.problem.goal_tolerance, self._low, self._high, self._stack,
                 self._stack_b)
 
@@ -91,7 +95,7 @@ class RRT(Planner):
         return self._tree
 
     def _path(self) -> np.ndarray:
-        idx = rrt_kernels.path_to_root(self._tree.parent, int(self._istate[rrt_kernels.I_GOAL_V]))
+        idx = rrt_kernels.path_to_root(self._tree.parent, int(self._istate[slots.I_GOAL_V]))
         return self._tree.X[idx].copy()
 
     def planner_data(self) -> PlannerData:
@@ -101,6 +105,7 @@ class RRT(Planner):
         return PlannerData(self._tree.X[:n].copy(), edges, np.zeros(n, dtype=np.int64))
 
 
+@register_planner
 class RRTConnect(RRT):
     """Bidirectional RRT with greedy connection.
 
@@ -117,33 +122,37 @@ class RRTConnect(RRT):
     name = "RRTConnect"
     fusable_loop = None
 
+    def vertex_counts(self) -> tuple[int, ...]:
+        """Vertices of the start tree and of the goal tree (``PlannerData`` tags 0 and 1)."""
+        return int(self._istate[slots.I_N]), int(self._istate[slots.I_N_B])
+
     def _reset(self) -> None:
         super()._reset()
         self._gtree = VertexStore(self.problem, 1024, tree=True)
-        self._add_root(self._gtree, self.problem.goal, rrt_kernels.I_N_B)
+        self._add_root(self._gtree, self.problem.goal, slots.I_N_B)
         if self.solved:  # start within tolerance of the goal: the path is [start]
-            self._istate[rrt_kernels.I_JOIN_B] = -1
+            self._istate[slots.I_JOIN_B] = -1
         low, high = self.problem.world.bounds
         diag = self.problem.distance(np.asarray(low), np.asarray(high) - 1e-9)
         # the connect phase can add one vertex per step across the whole box
         self._max_connect = int(math.ceil(diag / self.step_size)) + 2
 
     def _reserve(self, iterations: int) -> None:
-        self._tree.reserve(int(self._istate[rrt_kernels.I_N]), self._max_connect + 1)
-        self._gtree.reserve(int(self._istate[rrt_kernels.I_N_B]), self._max_connect + 1)
+        self._tree.reserve(int(self._istate[slots.I_N]), self._max_connect + 1)
+        self._gtree.reserve(int(self._istate[slots.I_N_B]), self._max_connect + 1)
 
     def _run(self, points, anchored) -> int:
-        return rrt_kernels.connect_run(points, anchored, self._tree.as_tuple(), self._gtree.as_tuple(), self._istate,
+        return rrt_kernels.connect_run(points, anchored, self._tree.as_tree(), self._gtree.as_tree(), self._istate,
                              self._fstate, self._last, self.problem.world.kernel, self._space, self._goal,
                              self.step_size, self._low, self._high, self._max_connect, self._stack, self._stack_b)
 
     @property
     def num_vertices(self) -> int:
-        return int(self._istate[rrt_kernels.I_N] + self._istate[rrt_kernels.I_N_B])
+        return int(self._istate[slots.I_N] + self._istate[slots.I_N_B])
 
     def _path(self) -> np.ndarray:
-        a = self._tree.X[rrt_kernels.path_to_root(self._tree.parent, int(self._istate[rrt_kernels.I_GOAL_V]))]
-        jb = int(self._istate[rrt_kernels.I_JOIN_B])
+        a = self._tree.X[rrt_kernels.path_to_root(self._tree.parent, int(self._istate[slots.I_GOAL_V]))]
+        jb = int(self._istate[slots.I_JOIN_B])
         if jb < 0:
             return a.copy()
         b = self._gtree.X[rrt_kernels.path_to_root(self._gtree.parent, jb)][::-1]
@@ -152,7 +161,7 @@ class RRTConnect(RRT):
         return np.concatenate([a, b])
 
     def planner_data(self) -> PlannerData:
-        na, nb = int(self._istate[rrt_kernels.I_N]), int(self._istate[rrt_kernels.I_N_B])
+        na, nb = int(self._istate[slots.I_N]), int(self._istate[slots.I_N_B])
         V = np.concatenate([self._tree.X[:na], self._gtree.X[:nb]])
         ea = np.stack([self._tree.parent[1:na], np.arange(1, na)], axis=1)
         eb = np.stack([self._gtree.parent[1:nb], np.arange(1, nb)], axis=1) + na

@@ -9,8 +9,10 @@ import numpy as np
 from planners.algorithms.rrt import RRT
 from planners.base.planner import require_problem
 from planners.base.problem import Problem
+from planners.base.registry import register_planner
 from planners.base.samplers import InformedSampler, Sampler
 from planners.kernels import rrtstar as rrtstar_kernels
+from planners.kernels.state import I_N_GOAL
 
 
 def unit_ball_volume(d: int) -> float:
@@ -18,6 +20,7 @@ def unit_ball_volume(d: int) -> float:
     return math.pi ** (d / 2) / math.gamma(d / 2 + 1)
 
 
+@register_planner
 class RRTStar(RRT):
     """Asymptotically optimal RRT.
 
@@ -42,6 +45,7 @@ class RRTStar(RRT):
     """
 
     name = "RRTstar"
+    anytime = True  # per instance: False with stop_on_first_solution
     fusable_loop = None
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
@@ -63,7 +67,7 @@ class RRTStar(RRT):
         self._first_child[0] = -1
         if self.solved:  # start already in the goal region
             self._goal_nodes[0] = 0
-            self._istate[rrtstar_kernels.I_N_GOAL] = 1
+            self._istate[I_N_GOAL] = 1
 
     def _alloc_aux(self) -> None:
         cap = self._tree.capacity
@@ -92,7 +96,8 @@ class RRTStar(RRT):
 
     def _run(self, points, anchored) -> int:
         aux = (self._elen, self._first_child, self._next_sib, self._prev_sib, self._goal_nodes)
-        return rrtstar_kernels.rrtstar_run(points, anchored, self._tree.as_tuple(), aux, self._istate, self._fstate, self._last,
+        return rrtstar_kernels.rrtstar_run(points, anchored, self._tree.as_tree(), aux, self._istate, self._fstate,
+                                           self._last,
                               self.problem.world.kernel, self._space, self._goal, self.step_size,
                               self.problem.goal_tolerance, self._low, self._high, self.gamma,
                               float(self.problem.dim), self._nbr, self._nbr_cost, self._nbr_ok, self._dfs,
@@ -111,6 +116,7 @@ class RRTStar(RRT):
         return self._tree.parent[: self.num_vertices].copy()
 
 
+@register_planner
 class InformedRRTStar(RRTStar):
     """RRT* that, once a solution exists, samples only the informed set (no pruning).
 

@@ -11,10 +11,12 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 from numba.core import event as _nb_event
 
+from planners.base.fileio import check_int
 from planners.base.problem import Problem
 from planners.base.samplers import SampleBatch, Sampler, UniformSampler
-from planners.kernels import rrt as rrt_kernels
+from planners.kernels import state as slots
 from planners.kernels.space import embed_dim, uses_kd
+from planners.kernels.state import Tree
 
 #: Samples handed to a compiled kernel per call; bounds how late a time limit is noticed.
 CHUNK = 1024
@@ -200,8 +202,9 @@ class VertexStore:
         self._alloc(max(need, 2 * self.capacity), n_used)
         return True
 
-    def as_tuple(self) -> tuple:
-        return (self.X, self.E, self.parent, self.cost, self.perm, self.split, self.box)
+    def as_tree(self) -> Tree:
+        """The arrays as the kernels take them (valid until the next ``reserve`` reallocates them)."""
+        return Tree(self.X, self.E, self.parent, self.cost, self.perm, self.split, self.box)
 
 
 class Planner(abc.ABC):
@@ -218,7 +221,12 @@ class Planner(abc.ABC):
         seed: Seed of the planner's ``np.random.Generator``; None draws one (reported in results).
     """
 
+    #: The planner's name: its label in tables and logs (OMPL's spelling) and its key in
+    #: ``planners.base.registry`` (looked up ignoring case, ``-`` and ``_``).
     name: ClassVar[str] = "planner"
+    #: The constructor argument that sets the planner's step length: ``"step_size"`` (extension per
+    #: iteration, RRT family) or ``"max_edge_length"`` (longest roadmap edge, PRM family).
+    step_parameter: ClassVar[str | None] = None
     #: Anytime planners keep improving after the first solution until the budget is spent.
     anytime: ClassVar[bool] = False
     #: The compiled loop a sampler may fuse its draws into (see ``Sampler``); None: draws only.
@@ -265,11 +273,11 @@ class Planner(abc.ABC):
         self._last_used = 0
         self._candidates = 0
         self._stop_reason = "max_iterations"
-        self._istate = np.zeros(rrt_kernels.N_ISTATE, dtype=np.int64)
-        self._fstate = np.zeros(rrt_kernels.N_FSTATE)
-        self._fstate[rrt_kernels.F_BEST_COST] = np.inf
-        self._istate[rrt_kernels.I_ADDED] = -1
-        self._istate[rrt_kernels.I_FIRST] = -1
+        self._istate = np.zeros(slots.N_ISTATE, dtype=np.int64)
+        self._fstate = np.zeros(slots.N_FSTATE)
+        self._fstate[slots.F_BEST_COST] = np.inf
+        self._istate[slots.I_ADDED] = -1
+        self._istate[slots.I_FIRST] = -1
         self._last = np.zeros(self.problem.dim)
         self._reset()
         fuse = getattr(self.sampler, "fuse", None) if self.fusable_loop is not None else None
@@ -285,7 +293,7 @@ class Planner(abc.ABC):
             self._consume(1)  # no sample is drawn while a Lazy-PRM resolution is still pending
         self._compile += compile_seconds() - c0
         self._time += time.perf_counter() - t0
-        return StepResult(True, self.iterations, self._last.copy(), int(self._istate[rrt_kernels.I_ADDED]), self.solved)
+        return StepResult(True, self.iterations, self._last.copy(), int(self._istate[slots.I_ADDED]), self.solved)
 
     def solve(self, max_iterations: int | None = None, time_limit: float | None = None) -> PlanResult:
         """Run until solved (anytime planners: until the budget is spent) or a budget runs out.
@@ -307,9 +315,7 @@ class Planner(abc.ABC):
         if max_iterations is None and time_limit is None:
             raise ValueError("give max_iterations or time_limit (or both)")
         if max_iterations is not None:
-            if (isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer))
-                    or max_iterations < 0):
-                raise ValueError(f"max_iterations must be a non-negative integer, got {max_iterations!r}")
+            check_int(max_iterations, "max_iterations", low=0)
         if time_limit is not None:
             time_limit = float(time_limit)
             if not np.isfinite(time_limit) or time_limit <= 0:
@@ -366,11 +372,11 @@ class Planner(abc.ABC):
         """The current result (what the last ``solve`` returned, updated by any later ``step``)."""
         path = self._path() if self.solved else np.empty((0, self.problem.dim))
         path.flags.writeable = False
-        first = int(self._istate[rrt_kernels.I_FIRST])
+        first = int(self._istate[slots.I_FIRST])
         return PlanResult(
             solved=self.solved,
             path=path,
-            cost=float(self._fstate[rrt_kernels.F_BEST_COST]) if self.solved else float("inf"),
+            cost=float(self._fstate[slots.F_BEST_COST]) if self.solved else float("inf"),
             iterations=self.iterations,
             first_solution_iteration=first if first >= 0 else None,
             collision_checks=self.collision_checks,
@@ -384,19 +390,23 @@ class Planner(abc.ABC):
 
     @property
     def iterations(self) -> int:
-        return int(self._istate[rrt_kernels.I_ITER])
+        return int(self._istate[slots.I_ITER])
 
     @property
     def collision_checks(self) -> int:
-        return int(self._istate[rrt_kernels.I_CHECKS])
+        return int(self._istate[slots.I_CHECKS])
 
     @property
     def solved(self) -> bool:
-        return bool(self._istate[rrt_kernels.I_SOLVED])
+        return bool(self._istate[slots.I_SOLVED])
 
     @property
     def num_vertices(self) -> int:
-        return int(self._istate[rrt_kernels.I_N])
+        return int(self._istate[slots.I_N])
+
+    def vertex_counts(self) -> tuple[int, ...]:
+        """Vertices per ``PlannerData`` tag, in tag order (one graph: one count)."""
+        return (self.num_vertices,)
 
     @property
     def rng(self) -> np.random.Generator:
@@ -409,16 +419,16 @@ class Planner(abc.ABC):
 
     def view(self) -> TreeView:
         """Read-only snapshot for samplers and observers."""
-        n = int(self._istate[rrt_kernels.I_N])
+        n = int(self._istate[slots.I_N])
         vs = self._vertex_store()
         return TreeView(
             problem=self.problem,
             vertices=_readonly(vs.X[:n]),
             parents=_readonly(vs.parent[:n]) if vs.tree else None,
             num_vertices=n,
-            best_vertex=int(self._istate[rrt_kernels.I_BEST_V]),
-            best_distance=float(self._fstate[rrt_kernels.F_BEST_D]),
-            best_cost=float(self._fstate[rrt_kernels.F_BEST_COST]) if self.solved else float("inf"),
+            best_vertex=int(self._istate[slots.I_BEST_V]),
+            best_distance=float(self._fstate[slots.F_BEST_D]),
+            best_cost=float(self._fstate[slots.F_BEST_COST]) if self.solved else float("inf"),
             iteration=self.iterations,
         )
 

@@ -1,9 +1,15 @@
 """The collision interface every planner plans against (OMPL's SpaceInformation, in small).
 
 A ``World`` bundles the configuration space (dimension, sampling bounds, supported metrics) with
-exact collision checking. Planners only ever call it through the compiled tuple ``kernel``, so a new
-world kind plugs in without touching a planner. ``is_valid`` / ``check_motion`` are the same checks
-for Python callers (tests, smoothing, plotting).
+exact collision checking. Planners only ever call it through its ``kernel`` (a
+``planners.kernels.state.WorldKernel``), which the compiled checks dispatch on by ``kind``;
+``is_valid`` / ``check_motion`` are the same checks for Python callers (tests, smoothing, plotting).
+
+Adding a world kind touches two places and no planner: a ``WorldBase`` subclass in
+``planners/worlds/`` whose ``kernel`` carries a new kind code and its arrays, and that code's branch
+in ``planners.kernels.geometry.motion_free`` (plus ``space_kind`` in ``planners.kernels.space`` if
+its states are not real vectors). A kind the dispatch does not know is an error, never another
+kind's check.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from planners.kernels import geometry
+from planners.kernels.state import WorldKernel
 
 
 @runtime_checkable
@@ -29,8 +36,8 @@ class World(Protocol):
         ...
 
     @property
-    def kernel(self) -> tuple:
-        """``(kind, grid, geom, body, params)`` for the compiled checks in ``planners.kernels.geometry``."""
+    def kernel(self) -> WorldKernel:
+        """The world as the compiled checks in ``planners.kernels.geometry`` take it."""
         ...
 
     def free_volume(self) -> float:
@@ -52,7 +59,7 @@ class WorldBase:
     dim: int
 
     @property
-    def kernel(self) -> tuple:
+    def kernel(self) -> WorldKernel:
         return self._kernel
 
     def _state(self, q, name: str = "state") -> np.ndarray:

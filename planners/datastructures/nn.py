@@ -46,11 +46,13 @@ def rdist(metric, a, b):
 
 @nb.njit(cache=True, inline="always")
 def to_reduced(metric, d):
+    """A distance in the units the index compares (squared for L2, which saves the square roots)."""
     return d * d if metric == METRIC_L2 else d
 
 
 @nb.njit(cache=True, inline="always")
 def from_reduced(metric, r):
+    """The distance back from ``to_reduced``'s units."""
     return np.sqrt(r) if metric == METRIC_L2 else r
 
 
@@ -511,6 +513,15 @@ class NearestNeighbors:
         i, r = nearest(self._P, self._perm, self._split, self._box, self._n, self._q(q), self._m)
         return int(i), float(from_reduced(self._m, r)) if i >= 0 else float("inf")
 
+    def nearest_many(self, qs: np.ndarray) -> np.ndarray:
+        """Index of the nearest point to each row of ``qs`` (-1 when empty), all in one compiled loop."""
+        qs = np.ascontiguousarray(qs, dtype=np.float64)
+        if qs.ndim != 2 or qs.shape[1] != self.dim:
+            raise ValueError(f"queries must have shape (m, {self.dim}), got {qs.shape}")
+        out = np.empty(len(qs), dtype=np.int64)
+        nearest_many(self._P, self._perm, self._split, self._box, self._n, qs, self._m, out)
+        return out
+
     def nearest_k(self, q: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Indices and distances of the ``k`` nearest points, nearest first."""
         idx = np.empty(max(k, 0), dtype=np.int64)
@@ -526,12 +537,9 @@ class NearestNeighbors:
 
 
 @nb.njit(cache=True)
-def time_queries(P, perm, split, box, n, qs, metric):
-    """Run ``nearest`` for every row of ``qs`` inside compiled code (for benchmarks); returns a checksum."""
+def nearest_many(P, perm, split, box, n, qs, metric, out):
+    """``out[i]``: the nearest point to ``qs[i]``, every query in one compiled loop."""
     st = np.empty(2 * STACK, dtype=np.int64)
     sb = np.empty(STACK)
-    s = 0
     for i in range(qs.shape[0]):
-        j, _ = nearest_into(P, perm, split, box, n, qs[i], metric, st, sb)
-        s += j
-    return s
+        out[i], _ = nearest_into(P, perm, split, box, n, qs[i], metric, st, sb)

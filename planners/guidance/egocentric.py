@@ -52,8 +52,8 @@ def _window(levels_obs, levels_tree, layout, ax, ay, ux, uy, size, out):
 
 
 @nb.njit(cache=True)
-def _observe(levels_obs, levels_tree, layout, size, res, step, anchor, anchor_is_start, start, goal,
-             num_vertices, iteration, last_progress, max_iterations, local, vector):
+def observe_windows(levels_obs, levels_tree, layout, size, res, step, anchor, anchor_is_start, start, goal,
+                    num_vertices, iteration, last_progress, max_iterations, local, vector):
     """Window (into ``local``) and vector features (into ``vector``) at ``anchor``; see ``EGO_VECTOR``."""
     dx = goal[0] - anchor[0]
     dy = goal[1] - anchor[1]
@@ -140,14 +140,9 @@ def build_pyramid(obstacles, factors):
     return layout, levels, np.zeros(total, dtype=np.uint8)
 
 
-def _pyramid_level(obstacles: np.ndarray, f: int) -> np.ndarray:
-    """One pyramid level of a 0/1 grid, as a 2-D array (see ``_fill_level``)."""
-    layout, levels, _ = build_pyramid(obstacles, np.array([f], dtype=np.int64))
-    return levels.reshape(layout[0, 1], layout[0, 2])
-
-
 @nb.njit(cache=True)
-def _add_vertices(levels_tree, layout, V, res):
+def add_vertices(levels_tree, layout, V, res):
+    """Mark the pyramid blocks (every level) that hold one of the vertices ``V`` (world units, cell size ``res``)."""
     for n in range(V.shape[0]):
         x = V[n, 0] / res
         y = V[n, 1] / res
@@ -180,7 +175,7 @@ class EgocentricView:
         self.size = int(size)
         self.max_iterations = max_iterations
         self.factors = np.asarray(scales, dtype=np.int64)
-        self.layout, self.levels_obs, self.levels_tree = build_pyramid(grid.kernel[1], self.factors)
+        self.layout, self.levels_obs, self.levels_tree = build_pyramid(grid.kernel.grid, self.factors)
         self.start = np.ascontiguousarray(problem.start[:2], dtype=np.float64)
         self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
         self.seen = 0
@@ -194,7 +189,7 @@ class EgocentricView:
     def update(self, vertices: np.ndarray, num_vertices: int, best_distance: float, iteration: int) -> None:
         """Count the vertices added since the last call; note when the progress vertex improved."""
         if num_vertices > self.seen:
-            _add_vertices(self.levels_tree, self.layout, vertices[self.seen:num_vertices], self.res)
+            add_vertices(self.levels_tree, self.layout, vertices[self.seen:num_vertices], self.res)
             self.seen = num_vertices
         if best_distance < self.best_distance - 1e-9:
             self.best_distance = best_distance
@@ -210,7 +205,7 @@ class EgocentricView:
         """``{"local": (2 * scales, size, size) uint8, "vector": (8,) float32}`` at ``anchor``."""
         local = np.empty((self.channels, self.size, self.size), dtype=np.uint8)
         vector = np.empty(len(EGO_VECTOR), dtype=np.float32)
-        _observe(self.levels_obs, self.levels_tree, self.layout, self.size, self.res, self.step,
+        observe_windows(self.levels_obs, self.levels_tree, self.layout, self.size, self.res, self.step,
                  np.ascontiguousarray(anchor[:2], dtype=np.float64), anchor_index == 0, self.start, self.goal,
                  num_vertices, iteration, self.last_progress, self.max_iterations, local, vector)
         return {"local": local, "vector": vector}

@@ -79,15 +79,15 @@ UNKNOWN, FREE, BLOCKED = 0, 1, 2
 
 
 @nb.njit(cache=True)
-def _update(world, counts, vertices, cell, goal, free, cov, pos, front, dist, count):
+def update_frontier(world, counts, vertices, cell, goal, free, cov, pos, front, dist, count):
     """Mark new vertices' cells covered and add their visible uncovered neighbours; returns count.
 
     A cell's centre is checked, and its distance to the goal (in cells) computed, only when a vertex
     first looks at it: a solve that stays in one part of the map never pays for the rest.
     """
     H, W = cov.shape
-    grid = world[1]
-    inv = world[4][0]
+    grid = world.grid
+    inv = world.params[0]
     c_state = np.empty(2)
     for n in range(vertices.shape[0]):
         v = vertices[n]
@@ -201,14 +201,15 @@ class Frontier:
         self.H, self.W = frontier_shape(problem.world, self.cell)
         self.world = problem.world.kernel
         self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
-        self.counts, self.free, self.cov, self.pos, self.front, self.dist = frontier_arrays(self.world[1], self.H,
+        self.counts, self.free, self.cov, self.pos, self.front, self.dist = frontier_arrays(self.world.grid, self.H,
                                                                                           self.W)
         self.count = 0
         self.seen = 0
 
     def update(self, vertices: np.ndarray, num_vertices: int) -> None:
         if num_vertices > self.seen:
-            self.count = _update(self.world, self.counts, vertices[self.seen:num_vertices], self.cell, self.goal,
+            self.count = update_frontier(self.world, self.counts, vertices[self.seen:num_vertices], self.cell,
+                                         self.goal,
                                  self.free, self.cov, self.pos, self.front, self.dist, self.count)
             self.seen = num_vertices
 

@@ -1,8 +1,8 @@
 """Draw from a numpy ``Generator`` inside compiled code for the cost of passing an integer.
 
-numba accepts a ``np.random.Generator`` argument, but unboxing one costs 15-25 us per call and the
-first call on a new generator another 20 us (numpy builds ctypes wrappers for the bit generator's
-functions): more than a learned sampler spends drawing in a short solve. Instead the caller passes
+numba accepts a ``np.random.Generator`` argument, but unboxes it on every call (and numpy builds
+ctypes wrappers for the bit generator's functions on the first call with a new generator), which
+costs more than a learned sampler spends drawing in a short solve. Instead the caller passes
 ``bitgen_address(rng)``, the address of the generator's C ``bitgen_t`` (numpy's public C API,
 ``numpy/random/bitgen.h``, taken from the bit generator's capsule), and compiled code calls its
 ``next_double`` through ``next_double(address)``, which is exactly what ``Generator.random()`` does

@@ -1,8 +1,9 @@
 """Compiled collision checks for every world kind, behind one dispatch used by all planners.
 
-A world reaches the kernels as a tuple ``(kind, grid, geom, body, params)`` so that one cached
-compilation serves every world (numba cannot cache kernels that take other jitted functions as
-arguments). Unused slots hold 1x1 placeholder arrays.
+A world reaches the kernels as a ``planners.kernels.state.WorldKernel`` ``(kind, grid, geom, body,
+params)`` so that one cached compilation serves every world (numba cannot cache kernels that take
+other jitted functions as arguments); ``motion_free`` dispatches on ``kind``. Unused arrays are 1x1
+placeholders. A new kind needs a code here and a branch in ``motion_free``; an unknown code raises.
 
 * ``WORLD_GRID``: ``grid`` is the (H, W) uint8 obstacle grid, ``params = [1 / resolution, ox, oy]``
   with ``(ox, oy)`` the world coordinates of the corner of cell (0, 0).
@@ -153,8 +154,9 @@ def motion_free(world, a, b):
         return grid_segment_free(grid, params[0], a[0] - ox, a[1] - oy, b[0] - ox, b[1] - oy)
     elif kind == WORLD_SHAPES:
         return shapes_segment_free(geom, params, a[0], a[1], b[0], b[1])
-    else:
+    elif kind == WORLD_RIGID:
         return rigid_motion_free(geom, body, params, a, b)
+    raise ValueError("unknown world kind: add its check to planners.kernels.geometry.motion_free")
 
 
 @nb.njit(cache=True)
@@ -171,7 +173,7 @@ def motions_free(world, A, B, out):
 
 
 def placeholder_arrays():
-    """The 1x1 arrays that fill unused slots of a world tuple."""
+    """The 1x1 arrays that fill unused fields of a ``WorldKernel``."""
     return (
         np.zeros((1, 1), dtype=np.uint8),
         np.zeros((0, 5), dtype=np.float64),

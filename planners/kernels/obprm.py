@@ -13,12 +13,7 @@ import numba as nb
 import numpy as np
 
 from planners.kernels.geometry import state_free
-
-S_POS = 0  # uniforms consumed from the pool
-S_PENDING = 1  # attempts not yet charged to a returned sample
-S_CHECKS = 2  # state validity checks performed (accumulates across calls)
-S_SEEKING = 3  # 1 while the sample being made was chosen to be obstacle-based
-N_STATE = 4
+from planners.kernels.state import S_CHECKS, S_PENDING, S_POS, S_SEEKING
 
 
 @nb.njit(cache=True)

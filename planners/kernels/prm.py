@@ -16,33 +16,12 @@ import numba as nb
 import numpy as np
 
 from planners.datastructures import nn as nn_index
+from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free, state_free
-from planners.kernels.rrt import (
-    F_BEST_COST,
-    F_BEST_D,
-    I_ADDED,
-    I_BEST_V,
-    I_CHECKS,
-    I_FIRST,
-    I_ITER,
-    I_N,
-    I_SOLVED,
-    _embed_query,
-)
+from planners.kernels.rrt import embed_query
 from planners.kernels.rrtstar import near_vertices
 from planners.kernels.space import distance, kd_metric, uses_kd
 from planners.kernels.tree import add_vertex, resolve_sample
-
-I_E = 11  # edges stored
-I_QS = 12  # start vertex of the current query
-I_QG = 13  # goal vertex of the current query
-
-EDGE_VALID = 1
-EDGE_UNKNOWN = 0
-EDGE_INVALID = -1
-V_VALID = 1
-V_UNKNOWN = 0
-V_INVALID = -1
 
 
 @nb.njit(cache=True)
@@ -88,15 +67,15 @@ def uf_make(uf, v, dgoal):
 @nb.njit(cache=True)
 def neighbours(store, n, space, q, qe, k, radius, out, out_d):
     """The k nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices."""
-    X = store[0]
-    E, perm, split, box = store[1], store[4], store[5], store[6]
-    kind, metric, rw = space
+    X = store.X
+    E, perm, split, box = store.E, store.perm, store.split, store.box
+    kind, metric, rot_weight = space
     if k > 0:
         if uses_kd(kind, metric):
             return nn_index.nearest_k(E, perm, split, box, n, qe, kd_metric(metric), k, out, out_d)
         dd = np.empty(n)  # exact scan for metrics without a Euclidean embedding
         for i in range(n):
-            dd[i] = distance(kind, metric, rw, X[i], q)
+            dd[i] = distance(kind, metric, rot_weight, X[i], q)
         order = np.argsort(dd)
         m = min(k, n)
         for j in range(m):
@@ -107,10 +86,11 @@ def neighbours(store, n, space, q, qe, k, radius, out, out_d):
 
 
 @nb.njit(cache=True)
-def _refresh_anchor(uf, istate, fstate):
-    root = uf_find(uf, istate[I_QS])
-    istate[I_BEST_V] = uf[2][root]
-    fstate[F_BEST_D] = uf[3][root]
+def refresh_anchor(uf, istate, fstate):
+    """Make the query's progress anchor the start component's vertex nearest the goal (union-find root data)."""
+    root = uf_find(uf, istate[slots.I_QS])
+    istate[slots.I_BEST_V] = uf[2][root]
+    fstate[slots.F_BEST_D] = uf[3][root]
 
 
 @nb.njit(cache=True)
@@ -120,33 +100,33 @@ def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, rad
 
     ``valid``: the caller already knows ``q`` is collision-free (query states).
     """
-    X = store[0]
+    X = store.X
     eu, ev, ew, es = edges
-    kind, metric, rw = space
-    n = istate[I_N]
-    qe = _embed_query(space, q, qe_buf)
+    kind, metric, rot_weight = space
+    n = istate[slots.I_N]
+    qe = embed_query(space, q, qe_buf)
     m = neighbours(store, n, space, q, qe, k, radius, nbr, nbr_d)
     v = n
-    istate[I_N] = add_vertex(store, n, space, q, -1, 0.0)
-    vstat[v] = V_VALID if (valid or not lazy) else V_UNKNOWN
-    uf_make(uf, v, distance(kind, metric, rw, q, goal))
+    istate[slots.I_N] = add_vertex(store, n, space, q, -1, 0.0)
+    vstat[v] = slots.V_VALID if (valid or not lazy) else slots.V_UNKNOWN
+    uf_make(uf, v, distance(kind, metric, rot_weight, q, goal))
     for j in range(m):
         u = nbr[j]
-        if vstat[u] == V_INVALID:
+        if vstat[u] == slots.V_INVALID:
             continue
-        du = distance(kind, metric, rw, X[u], q)
+        du = distance(kind, metric, rot_weight, X[u], q)
         if max_edge > 0.0 and du > max_edge:
             continue
         if not lazy:
-            istate[I_CHECKS] += 1
+            istate[slots.I_CHECKS] += 1
             if not motion_free(world, X[u], q):
                 continue
-        e = istate[I_E]
+        e = istate[slots.I_E]
         eu[e] = u
         ev[e] = v
         ew[e] = du
-        es[e] = EDGE_UNKNOWN if lazy else EDGE_VALID
-        istate[I_E] = e + 1
+        es[e] = slots.EDGE_UNKNOWN if lazy else slots.EDGE_VALID
+        istate[slots.I_E] = e + 1
         uf_union(uf, u, v)
     return v
 
@@ -162,23 +142,23 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
     before the next sample once the query's start and goal share a component (PRM: solved;
     Lazy-PRM: time to search); without it, it grows the roadmap regardless.
     """
-    X = store[0]
+    X = store.X
     cap = X.shape[0]
     ecap = edges[0].shape[0]
     q = np.empty(X.shape[1])
-    qe_buf = np.empty(store[1].shape[1])
+    qe_buf = np.empty(store.E.shape[1])
     for s in range(samples.shape[0]):
-        if until_joined and uf_find(uf, istate[I_QS]) == uf_find(uf, istate[I_QG]):
+        if until_joined and uf_find(uf, istate[slots.I_QS]) == uf_find(uf, istate[slots.I_QG]):
             return s
-        n = istate[I_N]
-        if n >= cap or istate[I_E] + (k if k > 0 else n) > ecap:
+        n = istate[slots.I_N]
+        if n >= cap or istate[slots.I_E] + (k if k > 0 else n) > ecap:
             return s
-        istate[I_ITER] += 1
-        istate[I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], goal, low, high, q)
+        istate[slots.I_ITER] += 1
+        istate[slots.I_ADDED] = -1
+        resolve_sample(space, samples[s], anchored[s], X[istate[slots.I_BEST_V]], goal, low, high, q)
         last[:] = q
         if not lazy:
-            istate[I_CHECKS] += 1
+            istate[slots.I_CHECKS] += 1
             if not state_free(world, q):
                 continue
         radius = 0.0
@@ -189,26 +169,26 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
                 radius = radius_gamma * (math.log(n + 1.0) / (n + 1.0)) ** (1.0 / dim)
             if max_edge > 0.0 and radius > max_edge:
                 radius = max_edge
-        istate[I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius, max_edge,
-                                        lazy, False, nbr, nbr_d, qe_buf)
-        _refresh_anchor(uf, istate, fstate)
-        if not lazy and uf_find(uf, istate[I_QS]) == uf_find(uf, istate[I_QG]):
-            istate[I_SOLVED] = 1
-            if istate[I_FIRST] < 0:
-                istate[I_FIRST] = istate[I_ITER]
+        istate[slots.I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius,
+                                              max_edge, lazy, False, nbr, nbr_d, qe_buf)
+        refresh_anchor(uf, istate, fstate)
+        if not lazy and uf_find(uf, istate[slots.I_QS]) == uf_find(uf, istate[slots.I_QG]):
+            istate[slots.I_SOLVED] = 1
+            if istate[slots.I_FIRST] < 0:
+                istate[slots.I_FIRST] = istate[slots.I_ITER]
     return samples.shape[0]
 
 
 @nb.njit(cache=True)
 def rebuild_components(store, edges, uf, vstat, istate, goal, space):
     """Recompute the union-find from edges that are not known invalid between live vertices."""
-    X = store[0]
+    X = store.X
     eu, ev, ew, es = edges
-    kind, metric, rw = space
-    for v in range(istate[I_N]):
-        uf_make(uf, v, distance(kind, metric, rw, X[v], goal) if vstat[v] != V_INVALID else np.inf)
-    for e in range(istate[I_E]):
-        if es[e] != EDGE_INVALID and vstat[eu[e]] != V_INVALID and vstat[ev[e]] != V_INVALID:
+    kind, metric, rot_weight = space
+    for v in range(istate[slots.I_N]):
+        uf_make(uf, v, distance(kind, metric, rot_weight, X[v], goal) if vstat[v] != slots.V_INVALID else np.inf)
+    for e in range(istate[slots.I_E]):
+        if es[e] != slots.EDGE_INVALID and vstat[eu[e]] != slots.V_INVALID and vstat[ev[e]] != slots.V_INVALID:
             uf_union(uf, eu[e], ev[e])
 
 
@@ -246,7 +226,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
     the search Dijkstra's (same path length, more vertices expanded).
     """
     deg, adj_v, adj_e = csr
-    kind, metric, rw = space
+    kind, metric, rot_weight = space
     n = deg.shape[0] - 1
     g = np.full(n, np.inf)
     via_v = np.full(n, -1, dtype=np.int64)
@@ -255,7 +235,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
     hf = np.empty(deg[n] + 1)
     hv = np.empty(deg[n] + 1, dtype=np.int64)
     g[src] = 0.0
-    hf[0] = distance(kind, metric, rw, X[src], X[dst]) if heuristic else 0.0
+    hf[0] = distance(kind, metric, rot_weight, X[src], X[dst]) if heuristic else 0.0
     hv[0] = src
     hn = 1
     while hn > 0:
@@ -286,16 +266,16 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
         for j in range(deg[v], deg[v + 1]):
             u = adj_v[j]
             e = adj_e[j]
-            if closed[u] or vstat[u] == V_INVALID:
+            if closed[u] or vstat[u] == slots.V_INVALID:
                 continue
-            if es[e] == EDGE_INVALID or (only_valid and es[e] != EDGE_VALID):
+            if es[e] == slots.EDGE_INVALID or (only_valid and es[e] != slots.EDGE_VALID):
                 continue
             nd = g[v] + ew[e]
             if nd < g[u]:
                 g[u] = nd
                 via_v[u] = v
                 via_e[u] = e
-                f = nd + distance(kind, metric, rw, X[u], X[dst]) if heuristic else nd
+                f = nd + distance(kind, metric, rot_weight, X[u], X[dst]) if heuristic else nd
                 i = hn
                 hn += 1
                 while i > 0:
@@ -307,7 +287,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
                     i = p
                 hf[i] = f
                 hv[i] = u
-    if not closed[dst] or vstat[src] == V_INVALID:
+    if not closed[dst] or vstat[src] == slots.V_INVALID:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     k = 1
     v = dst
@@ -328,7 +308,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
 @nb.njit(cache=True)
 def astar(store, edges, vstat, n, ne, src, dst, space, only_valid, heuristic=True):
     """``astar_csr`` over a freshly built adjacency of the roadmap."""
-    return astar_csr(store[0], build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid,
+    return astar_csr(store.X, build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid,
                      heuristic)
 
 
@@ -341,41 +321,41 @@ def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, ma
     after ``max_rounds`` searches (the checks done so far are kept; the next call goes on), so the
     caller's time limit is looked at between bounded pieces of work.
     """
-    X = store[0]
+    X = store.X
     eu, ev, ew, es = edges
-    csr = build_csr(edges, istate[I_N], istate[I_E])
+    csr = build_csr(edges, istate[slots.I_N], istate[slots.I_E])
     rounds = 0
     while True:
         if rounds >= max_rounds:
             return np.empty(0, dtype=np.int64)
         rounds += 1
-        verts, eds = astar_csr(X, csr, ew, es, vstat, istate[I_QS], istate[I_QG], space, False)
+        verts, eds = astar_csr(X, csr, ew, es, vstat, istate[slots.I_QS], istate[slots.I_QG], space, False)
         if verts.shape[0] == 0:
             rebuild_components(store, edges, uf, vstat, istate, goal, space)
-            _refresh_anchor(uf, istate, fstate)
+            refresh_anchor(uf, istate, fstate)
             return verts
         ok = True
         for v in verts:
-            if vstat[v] == V_UNKNOWN:
-                istate[I_CHECKS] += 1
-                vstat[v] = V_VALID if state_free(world, X[v]) else V_INVALID
-            if vstat[v] == V_INVALID:
+            if vstat[v] == slots.V_UNKNOWN:
+                istate[slots.I_CHECKS] += 1
+                vstat[v] = slots.V_VALID if state_free(world, X[v]) else slots.V_INVALID
+            if vstat[v] == slots.V_INVALID:
                 ok = False
                 break
         if ok:
             for e in eds:
-                if es[e] == EDGE_UNKNOWN:
-                    istate[I_CHECKS] += 1
-                    es[e] = EDGE_VALID if motion_free(world, X[eu[e]], X[ev[e]]) else EDGE_INVALID
-                if es[e] == EDGE_INVALID:
+                if es[e] == slots.EDGE_UNKNOWN:
+                    istate[slots.I_CHECKS] += 1
+                    es[e] = slots.EDGE_VALID if motion_free(world, X[eu[e]], X[ev[e]]) else slots.EDGE_INVALID
+                if es[e] == slots.EDGE_INVALID:
                     ok = False
                     break
         if ok:
-            istate[I_SOLVED] = 1
-            if istate[I_FIRST] < 0:
-                istate[I_FIRST] = istate[I_ITER]
+            istate[slots.I_SOLVED] = 1
+            if istate[slots.I_FIRST] < 0:
+                istate[slots.I_FIRST] = istate[slots.I_ITER]
             c = 0.0
             for e in eds:
                 c += ew[e]
-            fstate[F_BEST_COST] = c
+            fstate[slots.F_BEST_COST] = c
             return verts

@@ -11,32 +11,15 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free
 from planners.kernels.space import SPACE_RN, distance, embed
 from planners.kernels.tree import add_vertex, nearest_vertex, resolve_sample, steer
 
-# integer state slots shared by all tree planners
-I_N = 0  # vertices in the (start) tree
-I_ITER = 1  # iterations (samples consumed)
-I_CHECKS = 2  # collision checks (one per motion or state validated)
-I_SOLVED = 3  # 1 once a solution exists
-I_GOAL_V = 4  # vertex that reached the goal region (RRT) / start-tree side of the join (Connect)
-I_BEST_V = 5  # start-tree vertex nearest the goal: the progress anchor
-I_ADDED = 6  # vertex added by the last iteration, -1 if none
-I_N_B = 7  # vertices in the goal tree (Connect)
-I_SWAP = 8  # which tree extends next (Connect)
-I_JOIN_B = 9  # goal-tree side of the join (Connect)
-I_FIRST = 10  # iteration at which the first solution was found
-N_ISTATE = 16
-
-F_BEST_D = 0  # distance from the anchor vertex to the goal
-F_BEST_COST = 1  # cost of the best solution so far
-N_FSTATE = 4
-
 
 @nb.njit(cache=True, inline="always")
-def _embed_query(space, q, qe):
-    kind, metric, rw = space
+def embed_query(space, q, qe):
+    kind, metric, rot_weight = space
     if kind == SPACE_RN:
         return q
     embed(kind, metric, q, qe)
@@ -49,11 +32,11 @@ def extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb):
 
     Returns that vertex, or -1 when the step is empty or its motion collides (a check is counted).
     """
-    X = tree[0]
-    near = nearest_vertex(tree, n, space, q, _embed_query(space, q, qe_buf), st, sb)
+    X = tree.X
+    near = nearest_vertex(tree, n, space, q, embed_query(space, q, qe_buf), st, sb)
     if steer(space, X[near], q, step, new) <= 1e-12:
         return -1
-    istate[I_CHECKS] += 1
+    istate[slots.I_CHECKS] += 1
     if not motion_free(world, X[near], new):
         return -1
     return near
@@ -69,42 +52,42 @@ def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal
     ``q``, ``qe_buf`` and ``new`` are scratch buffers.
     """
     X, E, parent, cost, perm, split, box = tree
-    kind, metric, rw = space
-    istate[I_ITER] += 1
-    istate[I_ADDED] = -1
-    resolve_sample(space, sample, anchored, X[istate[I_BEST_V]], goal, low, high, q)
+    kind, metric, rot_weight = space
+    istate[slots.I_ITER] += 1
+    istate[slots.I_ADDED] = -1
+    resolve_sample(space, sample, anchored, X[istate[slots.I_BEST_V]], goal, low, high, q)
     last[:] = q
-    n = istate[I_N]
+    n = istate[slots.I_N]
     near = extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb)
     if near < 0:
         return
-    c = cost[near] + distance(kind, metric, rw, X[near], new)
+    c = cost[near] + distance(kind, metric, rot_weight, X[near], new)
     n = add_vertex(tree, n, space, new, near, c)
-    istate[I_N] = n
-    istate[I_ADDED] = n - 1
-    dg = distance(kind, metric, rw, new, goal)
-    if dg < fstate[F_BEST_D]:
-        fstate[F_BEST_D] = dg
-        istate[I_BEST_V] = n - 1
-    if dg <= tol and not istate[I_SOLVED]:
-        istate[I_SOLVED] = 1
-        istate[I_GOAL_V] = n - 1
-        istate[I_FIRST] = istate[I_ITER]
-        fstate[F_BEST_COST] = c
+    istate[slots.I_N] = n
+    istate[slots.I_ADDED] = n - 1
+    dg = distance(kind, metric, rot_weight, new, goal)
+    if dg < fstate[slots.F_BEST_D]:
+        fstate[slots.F_BEST_D] = dg
+        istate[slots.I_BEST_V] = n - 1
+    if dg <= tol and not istate[slots.I_SOLVED]:
+        istate[slots.I_SOLVED] = 1
+        istate[slots.I_GOAL_V] = n - 1
+        istate[slots.I_FIRST] = istate[slots.I_ITER]
+        fstate[slots.F_BEST_COST] = c
 
 
 @nb.njit(cache=True)
 def rrt_run(samples, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high,
             stop_when_solved, st, sb):
     """RRT (LaValle 1998) over a batch of samples."""
-    X = tree[0]
+    X = tree.X
     q = np.empty(X.shape[1])
-    qe_buf = np.empty(tree[1].shape[1])
+    qe_buf = np.empty(tree.E.shape[1])
     new = np.empty(X.shape[1])
     for s in range(samples.shape[0]):
-        if stop_when_solved and istate[I_SOLVED]:
+        if stop_when_solved and istate[slots.I_SOLVED]:
             return s
-        if istate[I_N] >= X.shape[0]:
+        if istate[slots.I_N] >= X.shape[0]:
             return s
         rrt_iterate(samples[s], anchored[s], tree, istate, fstate, last, world, space, goal, step, tol, low, high,
                     st, sb, q, qe_buf, new)
@@ -117,26 +100,26 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
     """RRT-Connect (Kuffner & LaValle 2000): extend one tree, greedily connect the other, swap."""
     Xa = ta[0]
     Xb = tb[0]
-    kind, metric, rw = space
+    kind, metric, rot_weight = space
     q = np.empty(Xa.shape[1])
     qe_buf = np.empty(ta[1].shape[1])
     new = np.empty(Xa.shape[1])
     nxt = np.empty(Xa.shape[1])
     for s in range(samples.shape[0]):
-        if istate[I_SOLVED]:
+        if istate[slots.I_SOLVED]:
             return s
-        if istate[I_N] + max_connect >= Xa.shape[0] or istate[I_N_B] + max_connect >= Xb.shape[0]:
+        if istate[slots.I_N] + max_connect >= Xa.shape[0] or istate[slots.I_N_B] + max_connect >= Xb.shape[0]:
             return s
-        istate[I_ITER] += 1
-        istate[I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], Xa[istate[I_BEST_V]], goal, low, high, q)
+        istate[slots.I_ITER] += 1
+        istate[slots.I_ADDED] = -1
+        resolve_sample(space, samples[s], anchored[s], Xa[istate[slots.I_BEST_V]], goal, low, high, q)
         last[:] = q
-        from_start = istate[I_SWAP] == 0
-        istate[I_SWAP] = 1 - istate[I_SWAP]
+        from_start = istate[slots.I_SWAP] == 0
+        istate[slots.I_SWAP] = 1 - istate[slots.I_SWAP]
         if from_start:
-            t, o, it, io = ta, tb, I_N, I_N_B
+            t, o, it, io = ta, tb, slots.I_N, slots.I_N_B
         else:
-            t, o, it, io = tb, ta, I_N_B, I_N
+            t, o, it, io = tb, ta, slots.I_N_B, slots.I_N
         Xt, ct = t[0], t[3]
         Xo, co = o[0], o[3]
         # extend the active tree one step towards the sample
@@ -144,47 +127,48 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
         near = extend(t, n, space, q, qe_buf, step, new, world, istate, st, sb)
         if near < 0:
             continue
-        n = add_vertex(t, n, space, new, near, ct[near] + distance(kind, metric, rw, Xt[near], new))
+        n = add_vertex(t, n, space, new, near, ct[near] + distance(kind, metric, rot_weight, Xt[near], new))
         istate[it] = n
         vt = n - 1
         if from_start:
-            istate[I_ADDED] = vt
-            dg = distance(kind, metric, rw, new, goal)
-            if dg < fstate[F_BEST_D]:
-                fstate[F_BEST_D] = dg
-                istate[I_BEST_V] = vt
+            istate[slots.I_ADDED] = vt
+            dg = distance(kind, metric, rot_weight, new, goal)
+            if dg < fstate[slots.F_BEST_D]:
+                fstate[slots.F_BEST_D] = dg
+                istate[slots.I_BEST_V] = vt
         # greedily connect the other tree towards the new vertex
         target = Xt[vt]
         while True:
             m = istate[io]
-            near_o = nearest_vertex(o, m, space, target, _embed_query(space, target, qe_buf), st, sb)
+            near_o = nearest_vertex(o, m, space, target, embed_query(space, target, qe_buf), st, sb)
             d = steer(space, Xo[near_o], target, step, nxt)
             if d <= 1e-12:
                 vo = near_o
                 reached = True
             else:
-                istate[I_CHECKS] += 1
+                istate[slots.I_CHECKS] += 1
                 if not motion_free(world, Xo[near_o], nxt):
                     break
-                m = add_vertex(o, m, space, nxt, near_o, co[near_o] + distance(kind, metric, rw, Xo[near_o], nxt))
+                m = add_vertex(o, m, space, nxt, near_o, co[near_o] + distance(kind, metric, rot_weight, Xo[near_o],
+                                                                               nxt))
                 istate[io] = m
                 vo = m - 1
                 reached = d <= step
                 if not from_start:
-                    dg = distance(kind, metric, rw, nxt, goal)
-                    if dg < fstate[F_BEST_D]:
-                        fstate[F_BEST_D] = dg
-                        istate[I_BEST_V] = vo
+                    dg = distance(kind, metric, rot_weight, nxt, goal)
+                    if dg < fstate[slots.F_BEST_D]:
+                        fstate[slots.F_BEST_D] = dg
+                        istate[slots.I_BEST_V] = vo
             if reached:
-                istate[I_SOLVED] = 1
-                istate[I_FIRST] = istate[I_ITER]
+                istate[slots.I_SOLVED] = 1
+                istate[slots.I_FIRST] = istate[slots.I_ITER]
                 if from_start:
-                    istate[I_GOAL_V] = vt
-                    istate[I_JOIN_B] = vo
+                    istate[slots.I_GOAL_V] = vt
+                    istate[slots.I_JOIN_B] = vo
                 else:
-                    istate[I_GOAL_V] = vo
-                    istate[I_JOIN_B] = vt
-                fstate[F_BEST_COST] = ct[vt] + co[vo]
+                    istate[slots.I_GOAL_V] = vo
+                    istate[slots.I_JOIN_B] = vt
+                fstate[slots.F_BEST_COST] = ct[vt] + co[vo]
                 break
     return samples.shape[0]
 

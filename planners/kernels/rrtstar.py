@@ -15,37 +15,23 @@ import numba as nb
 import numpy as np
 
 from planners.datastructures import nn as nn_index
+from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free
-from planners.kernels.rrt import (
-    F_BEST_COST,
-    F_BEST_D,
-    I_ADDED,
-    I_BEST_V,
-    I_CHECKS,
-    I_FIRST,
-    I_GOAL_V,
-    I_ITER,
-    I_N,
-    I_SOLVED,
-    _embed_query,
-    extend,
-)
+from planners.kernels.rrt import embed_query, extend
 from planners.kernels.space import distance, kd_metric, uses_kd
 from planners.kernels.tree import add_vertex, resolve_sample
-
-I_N_GOAL = 11  # vertices in the goal region
 
 
 @nb.njit(cache=True)
 def near_vertices(tree, n, space, q, qe, radius, out):
     """All of the first ``n`` vertices within ``radius`` of ``q``; returns the count."""
     X, E, parent, cost, perm, split, box = tree
-    kind, metric, rw = space
+    kind, metric, rot_weight = space
     if uses_kd(kind, metric):
         return nn_index.nearest_r(E, perm, split, box, n, qe, kd_metric(metric), radius, out)
     cnt = 0
     for i in range(n):
-        if distance(kind, metric, rw, X[i], q) <= radius:
+        if distance(kind, metric, rot_weight, X[i], q) <= radius:
             out[cnt] = i
             cnt += 1
     return cnt
@@ -96,18 +82,18 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
     """RRT* (Karaman & Frazzoli 2011) with radius ``min(gamma * (log n / n)^(1/dim), step)``."""
     X, E, parent, cost, perm, split, box = tree
     elen, first_child, next_sib, prev_sib, goal_nodes = aux
-    kind, metric, rw = space
+    kind, metric, rot_weight = space
     cap = X.shape[0]
     q = np.empty(X.shape[1])
     qe_buf = np.empty(E.shape[1])
     new = np.empty(X.shape[1])
     for s in range(samples.shape[0]):
-        n = istate[I_N]
+        n = istate[slots.I_N]
         if n >= cap:
             return s
-        istate[I_ITER] += 1
-        istate[I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], X[istate[I_BEST_V]], goal, low, high, q)
+        istate[slots.I_ITER] += 1
+        istate[slots.I_ADDED] = -1
+        resolve_sample(space, samples[s], anchored[s], X[istate[slots.I_BEST_V]], goal, low, high, q)
         last[:] = q
         near = extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb)
         if near < 0:
@@ -115,11 +101,11 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
         # near set of the new state
         card = n + 1.0
         radius = min(gamma * (math.log(card) / card) ** (1.0 / dim), step)
-        ne = _embed_query(space, new, qe_buf)
+        ne = embed_query(space, new, qe_buf)
         k = near_vertices(tree, n, space, new, ne, radius, nbr)
         # choose parent: cheapest neighbour with a valid motion, checked lazily in cost order
         best_p = near
-        best_len = distance(kind, metric, rw, X[near], new)
+        best_len = distance(kind, metric, rot_weight, X[near], new)
         best_c = cost[near] + best_len
         for j in range(k):
             u = nbr[j]
@@ -128,25 +114,25 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
                 nbr_ok[j] = 1
                 nbr_cost[j] = np.inf
                 continue
-            nbr_cost[j] = cost[u] + distance(kind, metric, rw, X[u], new)
+            nbr_cost[j] = cost[u] + distance(kind, metric, rot_weight, X[u], new)
         order = np.argsort(nbr_cost[:k])
         for jj in range(k):
             j = order[jj]
             if nbr_cost[j] >= best_c:
                 break
             u = nbr[j]
-            istate[I_CHECKS] += 1
+            istate[slots.I_CHECKS] += 1
             ok = motion_free(world, X[u], new)
             nbr_ok[j] = 1 if ok else 0
             if ok:
                 best_p = u
-                best_len = distance(kind, metric, rw, X[u], new)
+                best_len = distance(kind, metric, rot_weight, X[u], new)
                 best_c = cost[u] + best_len
                 break
         n = add_vertex(tree, n, space, new, best_p, best_c)
         v = n - 1
-        istate[I_N] = n
-        istate[I_ADDED] = v
+        istate[slots.I_N] = n
+        istate[slots.I_ADDED] = v
         elen[v] = best_len
         first_child[v] = -1
         _link(v, best_p, first_child, next_sib, prev_sib)
@@ -156,12 +142,12 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
             u = nbr[j]
             if u == best_p:
                 continue
-            el = distance(kind, metric, rw, new, X[u])
+            el = distance(kind, metric, rot_weight, new, X[u])
             c_new = best_c + el
             if c_new >= cost[u]:
                 continue
             if nbr_ok[j] == -1:
-                istate[I_CHECKS] += 1
+                istate[slots.I_CHECKS] += 1
                 nbr_ok[j] = 1 if motion_free(world, new, X[u]) else 0
             if nbr_ok[j] == 0:
                 continue
@@ -173,21 +159,21 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
             propagate_costs(u, cost, elen, parent, first_child, next_sib, stack)
             rewired = True
         # goal region bookkeeping
-        dg = distance(kind, metric, rw, new, goal)
-        if dg < fstate[F_BEST_D]:
-            fstate[F_BEST_D] = dg
-            istate[I_BEST_V] = v
+        dg = distance(kind, metric, rot_weight, new, goal)
+        if dg < fstate[slots.F_BEST_D]:
+            fstate[slots.F_BEST_D] = dg
+            istate[slots.I_BEST_V] = v
         if dg <= tol:
-            goal_nodes[istate[I_N_GOAL]] = v
-            istate[I_N_GOAL] += 1
-            if not istate[I_SOLVED]:
-                istate[I_SOLVED] = 1
-                istate[I_FIRST] = istate[I_ITER]
+            goal_nodes[istate[slots.I_N_GOAL]] = v
+            istate[slots.I_N_GOAL] += 1
+            if not istate[slots.I_SOLVED]:
+                istate[slots.I_SOLVED] = 1
+                istate[slots.I_FIRST] = istate[slots.I_ITER]
             rewired = True
-        if rewired and istate[I_SOLVED]:
-            for i in range(istate[I_N_GOAL]):
+        if rewired and istate[slots.I_SOLVED]:
+            for i in range(istate[slots.I_N_GOAL]):
                 g = goal_nodes[i]
-                if cost[g] < fstate[F_BEST_COST]:
-                    fstate[F_BEST_COST] = cost[g]
-                    istate[I_GOAL_V] = g
+                if cost[g] < fstate[slots.F_BEST_COST]:
+                    fstate[slots.F_BEST_COST] = cost[g]
+                    istate[slots.I_GOAL_V] = g
     return samples.shape[0]

@@ -19,14 +19,14 @@ from planners.kernels.space import SPACE_RN, distance, embed, interpolate, kd_me
 def nearest_vertex(tree, n, space, q, qe, st, sb):
     """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n``."""
     X, E, parent, cost, perm, split, box = tree
-    kind, metric, rw = space
+    kind, metric, rot_weight = space
     if uses_kd(kind, metric):
         i, _ = nn_index.nearest_into(E, perm, split, box, n, qe, kd_metric(metric), st, sb)
         return i
     best = np.inf
     bi = -1
     for i in range(n):
-        d = distance(kind, metric, rw, X[i], q)
+        d = distance(kind, metric, rot_weight, X[i], q)
         if d < best:
             best = d
             bi = i
@@ -36,8 +36,8 @@ def nearest_vertex(tree, n, space, q, qe, st, sb):
 @nb.njit(cache=True, inline="always")
 def steer(space, a, b, step, out):
     """Write into ``out`` the state at most ``step`` from ``a`` towards ``b``; returns the distance a-b."""
-    kind, metric, rw = space
-    d = distance(kind, metric, rw, a, b)
+    kind, metric, rot_weight = space
+    d = distance(kind, metric, rot_weight, a, b)
     if d <= step:
         for i in range(a.shape[0]):
             out[i] = b[i]
@@ -50,7 +50,7 @@ def steer(space, a, b, step, out):
 def add_vertex(tree, n, space, q, par, c):
     """Append state ``q`` with parent ``par`` and cost ``c``; returns the new vertex count."""
     X, E, parent, cost, perm, split, box = tree
-    kind, metric, rw = space
+    kind, metric, rot_weight = space
     for i in range(q.shape[0]):
         X[n, i] = q[i]
     if kind != SPACE_RN:
@@ -71,7 +71,7 @@ def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
     left), so an offset like "two steps ahead, slightly left" follows the tree wherever it goes.
     Anchored results are clipped to the bounds (rigid-body angles are wrapped first, not clipped).
     """
-    kind, metric, rw = space
+    kind, metric, rot_weight = space
     if anchored == 0:
         for i in range(raw.shape[0]):
             out[i] = raw[i]

@@ -2,59 +2,114 @@
 
 from __future__ import annotations
 
+import csv
+import io
+import os
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from planners.algorithms.prm import PRM, LazyPRM
-from planners.algorithms.rrt import RRT, RRTConnect
-from planners.algorithms.rrtstar import RRTStar
+from planners.algorithms.rrt import RRT
+from planners.base.fileio import atomic_write_text
 from planners.base.planner import Planner
 from planners.base.problem import Problem
+from planners.base.registry import make_planner
 from planners.base.samplers import GoalBiasedSampler, UniformSampler
-from planners.datastructures import nn as nn_index
 from planners.datastructures.nn import NearestNeighbors
 
 
 @dataclass
-class Record:
-    """One planning run."""
+class Run:
+    """One planning run: a row of every ``runs.csv`` (evaluation and planner benchmark) and of every OMPL log.
 
-    map: str
-    query: str
-    planner: str
-    solved: bool
-    iterations: int
-    time: float
-    us_per_iteration: float
-    cost: float
-    collision_checks: int
-    num_vertices: int
+    Counts a planner does not report are -1 (OMPL's collision checks, a benchmark's lower bound).
+    """
+
+    map: str  # the map set: a generated family, a MovingAI map, a benchmark map
+    query: str  # the problem's name
+    split: str  # "test" or "tuning"
+    planner: str  # the configuration's label in tables and logs
+    sampler: str
     seed: int
+    solved: bool
+    iterations: int  # to the first solution; the cap when unsolved
+    lower_bound: int  # ``Problem.iteration_lower_bound``, -1 when unknown
+    candidates: int  # samples drawn (a planner may draw several per iteration)
+    collision_checks: int
+    wall_time: float  # seconds: the solve (benchmarks), or the solve and binding the sampler (evaluation)
+    us_per_iteration: float
+    path_cost: float  # inf when unsolved
+    forward_passes: int  # a learned sampler's network evaluations
+    vertices: int
 
 
-#: The planners the benchmark compares, by label: a factory (problem, step, seed) -> Planner.
-PLANNERS: dict[str, Callable[[Problem, float, int], Planner]] = {
-    "RRT": lambda p, step, seed: RRT(p, step_size=step, sampler=UniformSampler(), seed=seed),
-    "RRT+goal0.05": lambda p, step, seed: RRT(p, step_size=step, sampler=GoalBiasedSampler(0.05), seed=seed),
-    "RRTConnect": lambda p, step, seed: RRTConnect(p, step_size=step, seed=seed),
-    "RRTstar": lambda p, step, seed: RRTStar(p, step_size=step, sampler=GoalBiasedSampler(0.05), seed=seed,
-                                             stop_on_first_solution=True),
-    "PRM": lambda p, step, seed: PRM(p, seed=seed),
-    "LazyPRM": lambda p, step, seed: LazyPRM(p, seed=seed),
+#: Per-run properties of the OMPL logs: (OMPL property, type, ``Run`` field).
+OMPL_RUN_PROPERTIES = (
+    ("time", "REAL", "wall_time"),
+    ("solved", "BOOLEAN", "solved"),
+    ("iterations", "INTEGER", "iterations"),
+    ("graph states", "INTEGER", "vertices"),
+    ("collision checks", "INTEGER", "collision_checks"),
+    ("candidates", "INTEGER", "candidates"),
+    ("solution length", "REAL", "path_cost"),
+    ("lower bound", "INTEGER", "lower_bound"),
+    ("forward passes", "INTEGER", "forward_passes"),
+    ("time per iteration", "REAL", "us_per_iteration"),
+    ("seed", "INTEGER", "seed"),
+)
+
+
+def ompl_run_values(run: Run) -> dict:
+    """``run``'s OMPL log properties; an unreported count (-1) and an unsolved run's length are left empty."""
+    values = {p: getattr(run, f) for p, _, f in OMPL_RUN_PROPERTIES}
+    for p, kind, _ in OMPL_RUN_PROPERTIES:
+        if kind == "INTEGER" and values[p] is not None and values[p] < 0:
+            values[p] = None
+    return values
+
+
+def write_runs_csv(runs: Sequence[Run], path: str | os.PathLike) -> None:
+    """Every run as a CSV row (the ``Run`` fields), written whole or not at all."""
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=[f.name for f in fields(Run)])
+    w.writeheader()
+    w.writerows(asdict(r) for r in runs)
+    atomic_write_text(path, buf.getvalue())
+
+
+#: The set-ups the benchmark compares, by label: a registered planner and a factory of its arguments
+#: (fresh samplers per run). The step is each run's extension length; roadmaps keep their own.
+SETUPS: dict[str, tuple[str, Callable[[], dict]]] = {
+    "RRT": ("RRT", lambda: {"sampler": UniformSampler()}),
+    "RRT+goal0.05": ("RRT", lambda: {"sampler": GoalBiasedSampler(0.05)}),
+    "RRTConnect": ("RRTConnect", dict),
+    "RRTstar": ("RRTstar", lambda: {"sampler": GoalBiasedSampler(0.05), "stop_on_first_solution": True}),
+    "PRM": ("PRM", dict),
+    "LazyPRM": ("LazyPRM", dict),
 }
 
 
+def setup_planner(label: str, problem: Problem, *, step: float, seed: int) -> Planner:
+    """A fresh planner of the set-up ``label`` of ``SETUPS`` (``step``: the extension length)."""
+    name, arguments = SETUPS[label]
+    return make_planner(name, problem, extension_step=step, seed=seed, **arguments())
+
+
 def run_one(problem: Problem, label: str, *, step: float, seed: int, max_iterations: int,
-            map_name: str = "") -> Record:
-    """Solve ``problem`` with planner ``label`` of ``PLANNERS`` and record the run."""
-    planner = PLANNERS[label](problem, step, seed)
+            map_name: str = "") -> Run:
+    """Solve ``problem`` with the set-up ``label`` of ``SETUPS`` and record the run."""
+    planner = setup_planner(label, problem, step=step, seed=seed)
     r = planner.solve(max_iterations=max_iterations)
     its = r.first_solution_iteration if r.solved and r.first_solution_iteration is not None else r.iterations
-    return Record(map_name or problem.name, problem.name, label, r.solved, int(its), r.time,
-                  r.time / max(r.iterations, 1) * 1e6, r.cost, r.collision_checks, r.num_vertices, seed)
+    bound = problem.iteration_lower_bound(step)
+    return Run(map=map_name or problem.name, query=problem.name, split="test", planner=label,
+               sampler=type(planner.sampler).__name__, seed=seed, solved=r.solved, iterations=int(its),
+               lower_bound=-1 if bound is None else bound, candidates=r.candidates,
+               collision_checks=r.collision_checks, wall_time=r.time, us_per_iteration=r.time / max(r.iterations,
+                                                                                                    1) * 1e6,
+               path_cost=r.cost, forward_passes=0, vertices=r.num_vertices)
 
 
 def growth_profile(step_fn: Callable[[int], tuple[int, float]], checkpoints: Sequence[int],
@@ -106,10 +161,9 @@ def nn_scaling(points: np.ndarray, sizes: Iterable[int], low: np.ndarray, high: 
         nn = NearestNeighbors(points.shape[1])
         nn.add(points[:n])
         qs = low + (high - low) * rng.random((queries, points.shape[1]))
-        args = (nn._P, nn._perm, nn._split, nn._box, len(nn))
-        nn_index.time_queries(*args, qs[:10], nn._m)
+        nn.nearest_many(qs[:10])  # compiled before the clock starts
         t = time.perf_counter()
-        nn_index.time_queries(*args, qs, nn._m)
+        nn.nearest_many(qs)
         t_index = (time.perf_counter() - t) / queries
         P = points[:n]
         t = time.perf_counter()
@@ -120,9 +174,9 @@ def nn_scaling(points: np.ndarray, sizes: Iterable[int], low: np.ndarray, high: 
     return rows
 
 
-def summarize(records: Sequence[Record], by: Sequence[str] = ("map", "planner")) -> list[dict]:
+def summarize(records: Sequence[Run], by: Sequence[str] = ("map", "planner")) -> list[dict]:
     """Aggregate runs per group: success rate, medians, total time per iteration."""
-    groups: dict[tuple, list[Record]] = {}
+    groups: dict[tuple, list[Run]] = {}
     for r in records:
         groups.setdefault(tuple(getattr(r, k) for k in by), []).append(r)
     rows = []
@@ -134,8 +188,8 @@ def summarize(records: Sequence[Record], by: Sequence[str] = ("map", "planner"))
             "runs": len(rs),
             "success": len(solved) / len(rs),
             "median_iterations": float(np.median([r.iterations for r in solved])) if solved else float("nan"),
-            "us_per_iteration": sum(r.time for r in rs) / max(its, 1) * 1e6,
-            "median_cost": float(np.median([r.cost for r in solved])) if solved else float("nan"),
+            "us_per_iteration": sum(r.wall_time for r in rs) / max(its, 1) * 1e6,
+            "median_cost": float(np.median([r.path_cost for r in solved])) if solved else float("nan"),
             "median_checks": float(np.median([r.collision_checks for r in rs])),
         })
     return rows
@@ -155,8 +209,3 @@ def markdown_table(rows: Sequence[dict], columns: Sequence[str] | None = None, f
     lines = ["| " + " | ".join(columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]
     lines += ["| " + " | ".join(fmt(r.get(c, "")) for c in columns) + " |" for r in rows]
     return "\n".join(lines) + "\n"
-
-
-def records_to_dicts(records: Iterable[Record]) -> list[dict]:
-    """The records as plain dicts (one per run), e.g. for a CSV writer."""
-    return [asdict(r) for r in records]

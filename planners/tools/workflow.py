@@ -23,26 +23,21 @@ from pathlib import Path
 
 import numpy as np
 
-from planners.algorithms.obprm import OBPRM
-from planners.algorithms.prm import PRM, LazyPRM
-from planners.algorithms.rrt import RRT, RRTConnect
-from planners.algorithms.rrtstar import InformedRRTStar, RRTStar
 from planners.algorithms.smoothing import smooth as smooth_path
 from planners.base.fileio import InputError, atomic_path, check_int
 from planners.base.planner import Planner, PlannerData, PlanResult, compile_seconds
 from planners.base.problem import Problem
+from planners.base.registry import make_planner, planner_class
 from planners.base.samplers import GoalBiasedSampler, Sampler, UniformSampler
 from planners.kernels import raster
-from planners.kernels import rrt as rrt_kernels
 from planners.worlds.grid import OccupancyGrid
 
-PLANNERS = ("rrt", "rrt-connect", "rrtstar", "informed-rrtstar", "prm", "lazy-prm", "obprm")
 SAMPLERS = ("uniform", "goal-bias")
 METRICS = ("euclidean", "manhattan", "chebyshev")
-#: Planners that keep improving their path until the budget is spent.
-ANYTIME = ("rrtstar", "informed-rrtstar")
+#: Planners the workflow gives a goal-biased sampler by default (the others: uniform).
+GOAL_BIASED = ("RRT", "RRTstar")
 #: Planners whose sampler is fixed (``sampler`` must stay None for them).
-OWN_SAMPLER = ("informed-rrtstar", "obprm")
+OWN_SAMPLER = ("InformedRRTstar", "OBPRM")
 #: Formats ``export_path`` writes, by suffix.
 PATH_FORMATS = (".csv", ".json", ".npy")
 
@@ -69,53 +64,35 @@ def load_map(path: str | os.PathLike, threshold: float = 0.5, *, invert: bool = 
     return OccupancyGrid.from_file(path, threshold, invert=invert)
 
 
-def make_planner(name: str, problem: Problem, *, sampler: str | None = None, goal_bias: float = 0.05,
-                 step: float | None = None, seed: int = 0) -> Planner:
-    """A planner of ``PLANNERS`` by name.
+def picture_planner(name: str, problem: Problem, *, sampler: str | Sampler | None = None, goal_bias: float = 0.05,
+                    step: float | None = None, seed: int = 0) -> Planner:
+    """A registered planner (``planners.base.registry``) with the picture workflow's sampler defaults.
 
     Args:
-        name: One of ``PLANNERS``.
+        name: A registered planner name (``planner_names()``; ``"rrt-connect"`` works too).
         problem: The problem.
         sampler: ``"uniform"``, ``"goal-bias"``, any ``Sampler`` (a learned ``PolicySampler``, say)
-            or None: goal bias for RRT and RRT*, uniform for the others. ``informed-rrtstar`` and
-            ``obprm`` bring their own sampler.
+            or None: goal bias for RRT and RRT*, uniform for the others. Informed RRT* and OB-PRM
+            bring their own sampler.
         goal_bias: Goal probability of the goal-biased sampler.
-        step: Step size (RRT family: extension length; PRM family: longest roadmap edge); None
-            takes each planner's default.
+        step: The planner's step length (RRT family: extension length; PRM family: longest roadmap
+            edge); None takes each planner's default.
         seed: Planner seed.
     """
-    if name not in PLANNERS:
-        raise ValueError(f"unknown planner {name!r}; choose from {', '.join(PLANNERS)}")
+    cls = planner_class(name)
     if sampler is not None and not isinstance(sampler, Sampler) and sampler not in SAMPLERS:
         raise ValueError(f"unknown sampler {sampler!r}; choose from {', '.join(SAMPLERS)}")
-    if sampler is not None and name in OWN_SAMPLER:
-        raise ValueError(f"planner {name!r} uses its own sampler; leave the sampler unset")
-    if sampler is None:
-        sampler = "goal-bias" if name in ("rrt", "rrtstar") else "uniform"
-    if isinstance(sampler, Sampler):
-        s = sampler
-    else:
-        s = GoalBiasedSampler(goal_bias) if sampler == "goal-bias" else UniformSampler()
-    if name == "rrt":
-        return RRT(problem, step_size=step, sampler=s, seed=seed)
-    if name == "rrt-connect":
-        return RRTConnect(problem, step_size=step, sampler=s, seed=seed)
-    if name == "rrtstar":
-        return RRTStar(problem, step_size=step, sampler=s, seed=seed)
-    if name == "informed-rrtstar":
-        if problem.metric != "euclidean":
+    if cls.name in OWN_SAMPLER:
+        if sampler is not None:
+            raise ValueError(f"planner {name!r} uses its own sampler; leave the sampler unset")
+        if cls.name == "InformedRRTstar" and problem.metric != "euclidean":
             raise ValueError(f"informed-rrtstar needs the euclidean metric, got {problem.metric!r}")
-        return InformedRRTStar(problem, step_size=step, seed=seed)
-    cls = {"prm": PRM, "lazy-prm": LazyPRM, "obprm": OBPRM}[name]
-    return cls(problem, step_size=step, seed=seed) if name == "obprm" else cls(problem, step_size=step, sampler=s,
-                                                                             seed=seed)
-
-
-def _tag_counts(planner: Planner) -> tuple[int, ...]:
-    """Vertices per ``PlannerData`` tag, in tag order (RRT-Connect: start tree, goal tree)."""
-    if isinstance(planner, RRTConnect):
-        return int(planner._istate[rrt_kernels.I_N]), int(planner._istate[rrt_kernels.I_N_B])
-    return (planner.num_vertices,)
+        return make_planner(cls.name, problem, step=step, seed=seed)
+    if sampler is None:
+        sampler = "goal-bias" if cls.name in GOAL_BIASED else "uniform"
+    if not isinstance(sampler, Sampler):
+        sampler = GoalBiasedSampler(goal_bias) if sampler == "goal-bias" else UniformSampler()
+    return make_planner(cls.name, problem, step=step, sampler=sampler, seed=seed)
 
 
 @dataclass
@@ -160,7 +137,7 @@ def solve_recording(planner: Planner, max_iterations: int | None, time_limit: fl
     if max_iterations is None and time_limit is None:
         raise ValueError("give max_iterations or time_limit (or both)")
     check_int(frames, "frames")
-    history = [(planner.iterations, _tag_counts(planner))]
+    history = [(planner.iterations, planner.vertex_counts())]
     t0, c0 = time.perf_counter(), compile_seconds()
     done = 0
     result = planner.result()
@@ -179,7 +156,7 @@ def solve_recording(planner: Planner, max_iterations: int | None, time_limit: fl
         before = planner.iterations
         result = planner.solve(max_iterations=piece, time_limit=left)
         done += planner.iterations - before
-        history.append((planner.iterations, _tag_counts(planner)))
+        history.append((planner.iterations, planner.vertex_counts()))
         if result.stop_reason in ("solved", "time_limit"):
             reason = result.stop_reason
     if result.stop_reason != reason:
@@ -223,7 +200,8 @@ def _draw_map(ax, problem: Problem, max_px: int, markers: bool = True) -> None:
 
     world = problem.world
     if isinstance(world, OccupancyGrid):
-        ax.imshow(plotting.display_rows(world, _background(world, max_px)), cmap=ListedColormap(["white", plotting.OBSTACLE_COLOR]),
+        ax.imshow(plotting.display_rows(world, _background(world, max_px)),
+                  cmap=ListedColormap(["white", plotting.OBSTACLE_COLOR]),
                   vmin=0, vmax=1, origin="upper", extent=plotting.image_extent(world), interpolation="auto",
                   interpolation_stage="rgba", zorder=0)
         plotting.set_world_view(ax, world)
@@ -246,7 +224,8 @@ def _edge_pixels(data: PlannerData, size: tuple[int, int], world) -> tuple[np.nd
     from planners.viz import plotting
 
     edges = np.asarray(data.edges, dtype=np.int64).reshape(-1, 2)
-    V = plotting.world_to_pixels(world, np.asarray(data.vertices, dtype=np.float64).reshape(-1, data.vertices.shape[-1]),
+    V = plotting.world_to_pixels(world, np.asarray(data.vertices, dtype=np.float64).reshape(-1,
+                                                                                            data.vertices.shape[-1]),
                           size)
     seg = V[edges].reshape(-1, 4)
     palette = np.array([_rgb(c) for c in plotting.TREE_COLORS])
@@ -362,7 +341,7 @@ def write_animation(outcome: PlanOutcome, path: str | os.PathLike, *, max_frames
 
     # when does each edge appear: vertices are stored per tag in insertion order
     data = _subsample_edges(outcome.planner.planner_data(), MAX_FRAME_EDGES)
-    history = outcome.history or [(outcome.result.iterations, _tag_counts(outcome.planner))]
+    history = outcome.history or [(outcome.result.iterations, outcome.planner.vertex_counts())]
     picks = _frame_indices(history, max_frames)
     counts = np.array([list(history[i][1]) for i in picks], dtype=np.int64)  # (frames, tags)
     tags = np.asarray(data.tags, dtype=np.int64)
@@ -511,8 +490,8 @@ def plan_on_image(map_source: str | os.PathLike | OccupancyGrid, start, goal, *,
         map_source: An image, ``.map`` or ``.npy`` file (see ``load_map``), or a ready grid.
         start: ``(x, y)`` start.
         goal: ``(x, y)`` goal.
-        planner: One of ``PLANNERS``.
-        sampler: One of ``SAMPLERS``, a ``Sampler``, or None (see ``make_planner``).
+        planner: A registered planner name (``planners.planner_names()``; ``"rrt-connect"`` works too).
+        sampler: One of ``SAMPLERS``, a ``Sampler``, or None (see ``picture_planner``).
         goal_bias: Goal probability of the goal-biased sampler.
         metric: One of ``METRICS``: path length, nearest neighbours and the goal region use it.
         step: Step size; None takes the planner's default.
@@ -568,7 +547,7 @@ def plan_on_image(map_source: str | os.PathLike | OccupancyGrid, start, goal, *,
             raise ValueError(f"{label} ({q[0]:g}, {q[1]:g}){where} is not a free position: it {why}")
     problem = Problem(grid, start, goal, goal_tolerance=tolerance, metric=metric,
                       name=Path(grid.source).name if grid.source else "map")
-    p = make_planner(planner, problem, sampler=sampler, goal_bias=goal_bias, step=step, seed=seed)
+    p = picture_planner(planner, problem, sampler=sampler, goal_bias=goal_bias, step=step, seed=seed)
     t0 = time.perf_counter()
     result, history = solve_recording(p, max_iterations, time_limit, frames=max_frames)
     t_plan = time.perf_counter() - t0

@@ -1,4 +1,7 @@
-"""The 2-D occupancy map (a world of square cells), built from a numpy array; file formats are read by ``planners.maps.readers``."""
+"""The 2-D occupancy map: a world of square cells, built from a numpy array.
+
+File formats (images, MovingAI ``.map``, ``.npy``, ROS ``map.yaml``) are read by ``planners.maps.readers``.
+"""
 
 from __future__ import annotations
 
@@ -12,6 +15,7 @@ from planners.base.fileio import InputError
 from planners.base.world import WorldBase
 from planners.kernels import geometry
 from planners.kernels.space import SPACE_RN
+from planners.kernels.state import WorldKernel
 
 
 class OccupancyGrid(WorldBase):
@@ -81,7 +85,8 @@ class OccupancyGrid(WorldBase):
         self.y_up = bool(y_up)
         _, geom, body = geometry.placeholder_arrays()
         grid_u8 = np.ascontiguousarray(self._obstacles, dtype=np.uint8)
-        self._kernel = (geometry.WORLD_GRID, grid_u8, geom, body, np.array([1.0 / resolution, org[0], org[1]]))
+        self._kernel = WorldKernel(geometry.WORLD_GRID, grid_u8, geom, body, np.array([1.0 / resolution, org[0],
+                                                                                       org[1]]))
         self._origin = org
         self._low = org.copy()
         self._high = org + np.array([self.width * resolution, self.height * resolution])

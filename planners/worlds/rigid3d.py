@@ -39,6 +39,7 @@ from planners.kernels import geometry
 from planners.kernels import rigid as rigid_kernels
 from planners.kernels.rigid import body_points_world
 from planners.kernels.space import SPACE_RIGID, interpolate
+from planners.kernels.state import WorldKernel
 
 #: The scene shipped with the package (see ``load_scene`` for the format).
 EXAMPLE_SCENE = Path(__file__).resolve().parents[1] / "scenes" / "example.scene"
@@ -190,8 +191,8 @@ class RigidBodyWorld(WorldBase):
             a.flags.writeable = False
         params = np.concatenate([lo, hi, [delta, self.radius]])
         grid, _, _ = geometry.placeholder_arrays()
-        self._kernel = (geometry.WORLD_RIGID, grid, np.ascontiguousarray(self.boxes), np.ascontiguousarray(self.body),
-                        params)
+        self._kernel = WorldKernel(geometry.WORLD_RIGID, grid, np.ascontiguousarray(self.boxes),
+                                   np.ascontiguousarray(self.body), params)
         self._low = np.concatenate([lo, [-math.pi] * 3])
         self._high = np.concatenate([hi, [math.pi] * 3])
         self._low.flags.writeable = False
@@ -239,7 +240,7 @@ class RigidBodyWorld(WorldBase):
         q = self._state(q)
         if not np.all(np.isfinite(q)):
             return "is not finite"
-        pts = np.asarray(body_points_world(self._kernel[3], np.ascontiguousarray(q)))
+        pts = np.asarray(body_points_world(self._kernel.body, np.ascontiguousarray(q)))
         for i, p in enumerate(pts):
             if not np.all((self.low3 < p) & (p < self.high3)):
                 return (f"puts body point {i} at {tuple(np.round(p, 4).tolist())} outside the workspace interior "

@@ -1,0 +1,81 @@
+"""The planner registry: every planner by its own ``name``, one way to build any of them.
+
+``make_planner("RRTConnect", problem, seed=0)`` builds a planner by name; names are matched ignoring
+case, ``-`` and ``_``, so ``"rrt-connect"`` and ``"RRTConnect"`` are the same planner. The planner
+classes register themselves with ``@register_planner`` where they are defined (``planners.algorithms``);
+to add a planner, subclass ``Planner`` there, give it a ``name`` and a ``step_parameter``, decorate it,
+and import it in ``planners/__init__.py``: the environments, ``scripts/plan.py``, the evaluation and
+the benchmarks then accept its name.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from planners.base.planner import Planner
+    from planners.base.problem import Problem
+
+_PLANNERS: dict[str, type[Planner]] = {}
+
+
+def _key(name: str) -> str:
+    return name.lower().replace("-", "").replace("_", "")
+
+
+def register_planner(cls: type[Planner]) -> type[Planner]:
+    """Class decorator: make ``cls`` buildable by its ``name``; a name is registered once."""
+    key = _key(cls.name)
+    if key in _PLANNERS and _PLANNERS[key] is not cls:
+        raise ValueError(f"planner name {cls.name!r} is already taken by {_PLANNERS[key].__name__}")
+    if cls.step_parameter is None:
+        raise ValueError(f"{cls.__name__} must say which argument sets its step length (step_parameter)")
+    _PLANNERS[key] = cls
+    return cls
+
+
+def planner_names() -> tuple[str, ...]:
+    """Every registered planner's name, sorted."""
+    return tuple(sorted(cls.name for cls in _PLANNERS.values()))
+
+
+def planner_class(name: str) -> type[Planner]:
+    """The planner class registered under ``name`` (case, ``-`` and ``_`` ignored)."""
+    cls = _PLANNERS.get(_key(name)) if isinstance(name, str) else None
+    if cls is None:
+        raise ValueError(f"unknown planner {name!r}; choose from {', '.join(planner_names())}")
+    return cls
+
+
+def planner_name_arg(text: str) -> str:
+    """For argparse's ``type=``: the registered spelling of ``text``, or an error naming the valid names."""
+    import argparse
+
+    try:
+        return planner_class(text).name
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def make_planner(name: str, problem: Problem, *, step: float | None = None, extension_step: float | None = None,
+                 **kwargs) -> Planner:
+    """Build the planner registered under ``name`` for ``problem``.
+
+    Args:
+        name: A registered name (``planner_names()``).
+        problem: The planning problem.
+        step: The planner's step length, whatever it means for it: RRT's extension per iteration,
+            PRM's longest roadmap edge (passed as the class's ``step_parameter``); None: its default.
+        extension_step: An extension length for planners that extend toward samples (the RRT
+            family); roadmap planners keep their default edge length. What a comparison of
+            samplers across planners passes.
+        **kwargs: The class's own constructor arguments (``sampler``, ``seed``, ...).
+    """
+    cls = planner_class(name)
+    if step is not None and extension_step is not None:
+        raise ValueError("give step or extension_step, not both")
+    if step is not None:
+        kwargs[cls.step_parameter] = step
+    elif extension_step is not None and cls.step_parameter == "step_size":
+        kwargs["step_size"] = extension_step
+    return cls(problem, **kwargs)

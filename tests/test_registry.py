@@ -1,0 +1,86 @@
+"""One planner registry: every planner by its own name, used by the env, workflow, evaluation and benchmark."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from conftest import fine_check_path
+
+import envs
+import planners
+from planners import OccupancyGrid, Problem, make_planner, planner_names, register_planner
+from planners.base.planner import Planner
+from planners.base.registry import planner_class, planner_name_arg
+
+gym.register_envs(envs)
+
+
+def _problem() -> Problem:
+    obstacles = np.zeros((40, 40), dtype=bool)
+    obstacles[10:30, 18:22] = True
+    return Problem(OccupancyGrid(obstacles), (5.5, 20.5), (34.5, 20.5), goal_tolerance=2.0)
+
+
+def test_every_planner_is_registered_under_its_own_name():
+    exported = {getattr(planners, n) for n in planners.__all__}
+    classes = {c for c in exported if isinstance(c, type) and issubclass(c, Planner) and c is not Planner}
+    assert {c.name for c in classes} == set(planner_names())
+    assert len(set(planner_names())) == len(planner_names())
+    for cls in classes:
+        assert planner_class(cls.name) is cls
+        assert cls.step_parameter in ("step_size", "max_edge_length")
+
+
+@pytest.mark.parametrize("name", planner_names())
+def test_every_name_builds_a_seeded_planner_that_solves(name):
+    problem = _problem()
+    runs = [make_planner(name, problem, step=3.0, seed=7).solve(max_iterations=5000) for _ in range(2)]
+    assert runs[0].solved
+    assert runs[0].iterations == runs[1].iterations and np.array_equal(runs[0].path, runs[1].path)
+    path = runs[0].path
+    assert np.allclose(path[0], problem.start) and problem.in_goal(path[-1])
+    fine_check_path(problem.world, path)
+
+
+@pytest.mark.parametrize("alias,name", [("rrt-connect", "RRTConnect"), ("rrtconnect", "RRTConnect"),
+                                        ("lazy_prm", "LazyPRM"), ("RRTSTAR", "RRTstar"),
+                                        ("informed-rrtstar", "InformedRRTstar"), ("ob-prm", "OBPRM")])
+def test_aliases_ignore_case_dashes_and_underscores(alias, name):
+    assert planner_class(alias).name == name
+    assert planner_name_arg(alias) == name
+
+
+def test_unknown_name_lists_the_valid_ones():
+    with pytest.raises(ValueError, match="unknown planner 'RRT-Sharp'.*LazyPRM.*RRTConnect"):
+        make_planner("RRT-Sharp", _problem())
+    with pytest.raises(envs.sampler_env.InputError, match="planner: unknown planner"):
+        gym.make("SamplerGym/Planning-v0", planner="RRT-Sharp")
+
+
+def test_step_goes_to_each_planners_own_parameter():
+    problem = _problem()
+    assert make_planner("RRT", problem, step=3.0).step_size == 3.0
+    assert make_planner("PRM", problem, step=3.0).max_edge_length == 3.0
+    # an extension step is for planners that extend; a roadmap keeps its own edge length
+    assert make_planner("PRM", problem, extension_step=3.0).max_edge_length is None
+    assert make_planner("RRTConnect", problem, extension_step=3.0).step_size == 3.0
+    with pytest.raises(ValueError, match="not both"):
+        make_planner("RRT", problem, step=1.0, extension_step=1.0)
+
+
+def test_a_name_is_taken_once():
+    class Another(Planner):
+        name = "rrt"  # the same key as RRT
+        step_parameter = "step_size"
+
+    with pytest.raises(ValueError, match="already taken by RRT"):
+        register_planner(Another)
+
+
+@pytest.mark.parametrize("name", ["RRTConnect", "LazyPRM", "InformedRRTstar"])
+def test_the_env_builds_any_registered_planner(name):
+    env = gym.make("SamplerGym/Planning-v0", planner=name.lower(), max_iterations=50)
+    env.reset(seed=0)
+    assert env.unwrapped.planner.name == name
+    env.step(env.action_space.sample())
