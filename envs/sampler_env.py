@@ -111,9 +111,13 @@ class SamplerEnv(gym.Env):
     ) -> None:
         super().__init__()
         try:
-            planner = planner_class(planner).name
+            cls = planner_class(planner)
         except ValueError as exc:
             raise InputError(f"planner: {exc}") from None
+        if cls.own_sampler:  # the agent is the sampler: a planner whose sampler is its algorithm cannot host it
+            raise InputError(f"planner {cls.name} brings its own sampler; the env's agent samples for RRT, RRTConnect, "
+                             "RRTstar, PRM or LazyPRM")
+        planner = cls.name
         if action_mode not in ACTION_MODES:
             raise InputError(f"action_mode must be one of {tuple(ACTION_MODES)}, got {action_mode!r}")
         if observation not in OBSERVATIONS:

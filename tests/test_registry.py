@@ -78,9 +78,16 @@ def test_a_name_is_taken_once():
         register_planner(Another)
 
 
-@pytest.mark.parametrize("name", ["RRTConnect", "LazyPRM", "InformedRRTstar"])
-def test_the_env_builds_any_registered_planner(name):
+@pytest.mark.parametrize("name", ["RRTConnect", "LazyPRM", "RRTstar"])
+def test_the_env_builds_registered_planners(name):
     env = gym.make("SamplerGym/Planning-v0", planner=name.lower(), max_iterations=50)
     env.reset(seed=0)
     assert env.unwrapped.planner.name == name
     env.step(env.action_space.sample())
+
+
+@pytest.mark.parametrize("name", ["InformedRRTstar", "OBPRM"])
+def test_the_env_refuses_planners_whose_sampler_is_their_algorithm(name):
+    assert planner_class(name).own_sampler
+    with pytest.raises(envs.sampler_env.InputError, match="brings its own sampler"):
+        gym.make("SamplerGym/Planning-v0", planner=name)

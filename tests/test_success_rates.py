@@ -9,7 +9,7 @@ from conftest import fine_check_path
 
 from planners import GoalBiasedSampler, RRTStar, load_movingai_scenarios
 from planners.maps.generators import FAMILIES, generate
-from planners.tools.benchmark import SETUPS, run_one, setup_planner
+from planners.tools.benchmark import SETUPS, make_setup, run_one
 
 SEEDS = range(100)
 
@@ -24,7 +24,7 @@ def problems():
 def test_success_rate_at_least_99_percent(problems, label, family):
     solved = 0
     for seed, p in enumerate(problems[family]):
-        planner = setup_planner(label, p, step=4.0, seed=seed)
+        planner = make_setup(label, p, step=4.0, seed=seed)
         r = planner.solve(max_iterations=20000)
         solved += r.solved
         if r.solved:

@@ -20,11 +20,10 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from planners.algorithms.prm import DEFAULT_K, PRM, LazyPRM
+from planners.algorithms.prm import DEFAULT_K, PRM
 from planners.base.fileio import check_int
-from planners.base.planner import Planner
 from planners.base.problem import Problem
-from planners.base.registry import register_planner
+from planners.base.registry import make_planner, planner_class, register_planner
 from planners.base.samplers import SampleBatch, Sampler, SamplerBase
 from planners.kernels import obprm as obprm_kernels
 from planners.kernels.state import N_STATE, S_CHECKS, S_PENDING, S_POS
@@ -168,6 +167,7 @@ class OBPRM(PRM):
     """
 
     name = "OBPRM"
+    own_sampler = True
 
     def __init__(self, problem: Problem, *, max_distance: float | None = None, uniform_fraction: float = 0.1,
                  walk_step: float | None = None, max_edge_length: float | None = None, k: int = DEFAULT_K,
@@ -234,12 +234,8 @@ def wall_with_gap(gap: int, size: int = 128, *, thickness: int | None = None, se
                    name=f"wall-gap{gap}-{size}-{seed}")
 
 
-#: The planners ``compare_prm_variants`` runs, by label: a factory (problem, seed) -> Planner.
-PRM_VARIANTS: dict[str, Callable[[Problem, int], Planner]] = {
-    "PRM": lambda p, seed: PRM(p, seed=seed),
-    "LazyPRM": lambda p, seed: LazyPRM(p, seed=seed),
-    "OBPRM": lambda p, seed: OBPRM(p, seed=seed),
-}
+#: The roadmap planners ``compare_prm_variants`` runs (registered names).
+PRM_VARIANTS = ("PRM", "LazyPRM", "OBPRM")
 
 
 def prm_comparison_maps(seeds: int, size: int = 128, gaps: Sequence[int] = (1, 2, 4, 8)) -> dict[str, list[Problem]]:
@@ -251,7 +247,7 @@ def prm_comparison_maps(seeds: int, size: int = 128, gaps: Sequence[int] = (1, 2
 
 def compare_prm_variants(maps: dict[str, list[Problem]] | None = None, *, seeds: int = 10, size: int = 128,
                          gaps: Sequence[int] = (1, 2, 4, 8), max_iterations: int = 20000,
-                         planners: Sequence[str] = tuple(PRM_VARIANTS),
+                         planners: Sequence[str] = PRM_VARIANTS,
                          progress: Callable[[str], None] | None = None) -> tuple[list[dict], list[dict]]:
     """PRM, Lazy-PRM and OB-PRM on narrow-passage maps of several gap widths and an open forest map.
 
@@ -266,7 +262,7 @@ def compare_prm_variants(maps: dict[str, list[Problem]] | None = None, *, seeds:
         size: Map side when ``maps`` is None.
         gaps: Gap widths (cells) when ``maps`` is None.
         max_iterations: Sample budget per run.
-        planners: Labels of ``PRM_VARIANTS`` to run.
+        planners: Registered roadmap planner names to run (default ``PRM_VARIANTS``).
         progress: Called with a line of text after each map.
 
     Returns:
@@ -277,19 +273,18 @@ def compare_prm_variants(maps: dict[str, list[Problem]] | None = None, *, seeds:
     if maps is None:
         maps = prm_comparison_maps(seeds, size, gaps)
     for label in planners:
-        if label not in PRM_VARIANTS:
-            raise ValueError(f"unknown planner {label!r}; choose from {', '.join(PRM_VARIANTS)}")
+        planner_class(label)  # an unknown name fails here, before any planning
     # load compiled kernels before anything is timed
     first = next(iter(maps.values()))[0]
     for label in planners:
-        PRM_VARIANTS[label](first, 0).solve(max_iterations=50)
+        make_planner(label, first, seed=0).solve(max_iterations=50)
     runs: list[dict] = []
     rows: list[dict] = []
     for name, problems in maps.items():
         for label in planners:
             mine = []
             for i, p in enumerate(problems):
-                planner = PRM_VARIANTS[label](p, i)
+                planner = make_planner(label, p, seed=i)
                 t0 = time.perf_counter()
                 r = planner.solve(max_iterations=max_iterations)
                 wall = time.perf_counter() - t0

@@ -126,6 +126,7 @@ class InformedRRTStar(RRTStar):
     """
 
     name = "InformedRRTstar"
+    own_sampler = True
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None, rewire_factor: float = 1.1, stop_on_first_solution: bool = False) -> None:

@@ -227,6 +227,9 @@ class Planner(abc.ABC):
     #: The constructor argument that sets the planner's step length: ``"step_size"`` (extension per
     #: iteration, RRT family) or ``"max_edge_length"`` (longest roadmap edge, PRM family).
     step_parameter: ClassVar[str | None] = None
+    #: True for planners whose sampler is part of the algorithm (Informed RRT*, OB-PRM): giving them
+    #: another sampler makes them a different planner.
+    own_sampler: ClassVar[bool] = False
     #: Anytime planners keep improving after the first solution until the budget is spent.
     anytime: ClassVar[bool] = False
     #: The compiled loop a sampler may fuse its draws into (see ``Sampler``); None: draws only.

@@ -91,7 +91,7 @@ SETUPS: dict[str, tuple[str, Callable[[], dict]]] = {
 }
 
 
-def setup_planner(label: str, problem: Problem, *, step: float, seed: int) -> Planner:
+def make_setup(label: str, problem: Problem, *, step: float, seed: int) -> Planner:
     """A fresh planner of the set-up ``label`` of ``SETUPS`` (``step``: the extension length)."""
     name, arguments = SETUPS[label]
     return make_planner(name, problem, extension_step=step, seed=seed, **arguments())
@@ -100,7 +100,7 @@ def setup_planner(label: str, problem: Problem, *, step: float, seed: int) -> Pl
 def run_one(problem: Problem, label: str, *, step: float, seed: int, max_iterations: int,
             map_name: str = "") -> Run:
     """Solve ``problem`` with the set-up ``label`` of ``SETUPS`` and record the run."""
-    planner = setup_planner(label, problem, step=step, seed=seed)
+    planner = make_setup(label, problem, step=step, seed=seed)
     r = planner.solve(max_iterations=max_iterations)
     its = r.first_solution_iteration if r.solved and r.first_solution_iteration is not None else r.iterations
     bound = problem.iteration_lower_bound(step)

@@ -36,8 +36,6 @@ SAMPLERS = ("uniform", "goal-bias")
 METRICS = ("euclidean", "manhattan", "chebyshev")
 #: Planners the workflow gives a goal-biased sampler by default (the others: uniform).
 GOAL_BIASED = ("RRT", "RRTstar")
-#: Planners whose sampler is fixed (``sampler`` must stay None for them).
-OWN_SAMPLER = ("InformedRRTstar", "OBPRM")
 #: Formats ``export_path`` writes, by suffix.
 PATH_FORMATS = (".csv", ".json", ".npy")
 
@@ -82,7 +80,7 @@ def picture_planner(name: str, problem: Problem, *, sampler: str | Sampler | Non
     cls = planner_class(name)
     if sampler is not None and not isinstance(sampler, Sampler) and sampler not in SAMPLERS:
         raise ValueError(f"unknown sampler {sampler!r}; choose from {', '.join(SAMPLERS)}")
-    if cls.name in OWN_SAMPLER:
+    if cls.own_sampler:
         if sampler is not None:
             raise ValueError(f"planner {name!r} uses its own sampler; leave the sampler unset")
         if cls.name == "InformedRRTstar" and problem.metric != "euclidean":
