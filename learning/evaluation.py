@@ -3,7 +3,9 @@
 Every run is one planner on one query with one sampler and one seed. Goal bias is swept; the bias
 reported as "best" for a family is chosen on a separate tuning split (other map seeds, or other
 MovingAI scenarios of the same maps), never on the evaluated queries, from a grid that includes
-uniform sampling (bias 0), so the "best" bias is never worse than uniform on the tuning split. The
+uniform sampling (bias 0), so the "best" bias is never worse than uniform on the tuning split. Shifted
+map sets (each family's ``generate(..., shifted=True)`` maps) are test-only: they keep the settings
+tuned on their family's tuning split. The
 privileged expert is a reference, not a competitor: it reads the map's geodesic distance field.
 
 Results are written as a CSV of runs, a Markdown summary, plots, and OMPL benchmark logs
@@ -27,7 +29,7 @@ from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
 from planners import GoalBiasedSampler, Problem, Sampler, UniformSampler, load_movingai_scenarios, make_planner
 from planners.base.fileio import InputError
 from planners.base.registry import planner_class
-from planners.maps.generators import TEST_SEED0, TUNING_SEED0, generate
+from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, TUNING_SEED0, generate
 from planners.tools.benchmark import OMPL_RUN_PROPERTIES, Run, ompl_run_values
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
@@ -44,11 +46,22 @@ class Query:
     key: int  # generator seed, or scenario index
     size: int  # generated size (0 for MovingAI)
     split: str  # "test" or "tuning"
+    shifted: bool = False  # the family's shifted generator (test split only)
+
+    @property
+    def map_set(self) -> str:
+        """The map set this query is reported under: the family, its shifted variant, or the MovingAI map."""
+        return shifted_name(self.family) if self.shifted else self.family
 
     def problem(self, movingai_dir: str | None, tolerance: float) -> Problem:
         if self.size:
-            return generate(self.family, self.key, self.size, goal_tolerance=tolerance)
+            return generate(self.family, self.key, self.size, goal_tolerance=tolerance, shifted=self.shifted)
         return _scenarios(movingai_dir, self.family, tolerance)[self.key]
+
+
+def shifted_name(family: str) -> str:
+    """The map-set name of ``family``'s shifted test maps."""
+    return f"{family} (shifted)"
 
 
 _SCEN_CACHE: dict = {}
@@ -102,8 +115,8 @@ def constant_tuning_tasks(queries: Sequence[Query], planner: str, cfg: dict) -> 
 
 def constant_test_tasks(queries: Sequence[Query], planner: str, cfg: dict, best: dict, seeds: int) -> list[tuple]:
     """The ablation on the test split, at the frontier probability tuned for each query's map set."""
-    return [(q, planner, constant_sampler(best[(q.family, planner)]), seed, cfg) for q in queries
-            if q.split == "test" and (q.family, planner) in best for seed in range(seeds)]
+    return [(q, planner, constant_sampler(best[(q.map_set, planner)]), seed, cfg) for q in queries
+            if q.split == "test" and (q.map_set, planner) in best for seed in range(seeds)]
 
 
 def tuning_tasks(queries: Sequence[Query], planner: str, cfg: dict) -> list[tuple]:
@@ -115,6 +128,26 @@ def generated_queries(families: Sequence[str], size: int, n_test: int, n_tune: i
     """``n_test`` test and ``n_tune`` tuning maps per family, on their disjoint seed ranges."""
     return ([Query(f, TEST_SEED0 + i, size, "test") for f in families for i in range(n_test)]
             + [Query(f, TUNING_SEED0 + i, size, "tuning") for f in families for i in range(n_tune)])
+
+
+def shifted_queries(families: Sequence[str], n_test: int) -> list[Query]:
+    """``n_test`` test maps per family from its shifted generator, sides cycling through ``SHIFTED_SIZES``.
+
+    There is no shifted tuning split: baselines keep the setting tuned on the family's own tuning
+    maps (:func:`tuned_for_shifted`), as the policy keeps what it learned on the family's training maps.
+    """
+    return [Query(f, SHIFTED_SEED0 + i, SHIFTED_SIZES[i % len(SHIFTED_SIZES)], "test", shifted=True)
+            for f in families for i in range(n_test)]
+
+
+def tuned_for_shifted(tuned: dict[tuple[str, str], float], queries: Sequence[Query]) -> dict[tuple[str, str], float]:
+    """``tuned`` (per (map set, planner)) with each shifted map set given its family's tuned setting."""
+    out = dict(tuned)
+    for fam in {q.family for q in queries if q.shifted}:
+        for (map_set, planner), value in tuned.items():
+            if map_set == fam:
+                out[(shifted_name(fam), planner)] = value
+    return out
 
 
 def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: int, tolerance: float) -> list[Query]:
@@ -242,7 +275,7 @@ def run_one(task: tuple) -> Run:
     r = planner.solve(max_iterations=cfg["max_iterations"])
     wall = time.perf_counter() - t0
     its = r.first_solution_iteration if r.solved else r.iterations
-    return Run(map=query.family, query=problem.name, split=query.split, planner=planner_name, sampler=sampler_name,
+    return Run(map=query.map_set, query=problem.name, split=query.split, planner=planner_name, sampler=sampler_name,
                seed=seed, solved=r.solved, iterations=int(its), lower_bound=problem.iteration_lower_bound(cfg["step"]),
                candidates=r.candidates, collision_checks=r.collision_checks, wall_time=wall,
                us_per_iteration=wall / max(r.iterations, 1) * 1e6, path_cost=r.cost if r.solved else math.inf,
@@ -393,6 +426,8 @@ def headline(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
             "uniform_median": uni["median_iterations"] if uni else math.nan,
             "best_bias_median": gb["median_iterations"], "policy_median": pol["median_iterations"],
             "expert_median": ref["median_iterations"] if ref else math.nan,
+            "policy/lower_bound": pol["ratio_to_lower_bound"],
+            "expert/lower_bound": ref["ratio_to_lower_bound"] if ref else math.nan,
             "policy/best_bias": pol["median_iterations"] / max(gb["median_iterations"], 1e-9),
             "policy_success": pol["success"], "best_bias_success": gb["success"],
             "policy_wall_ms": pol["median_wall_ms"], "best_bias_wall_ms": gb["median_wall_ms"],
@@ -539,7 +574,8 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict)
         queries = len({r.query for r in configs[next(iter(configs))]})
         setup = (f"SamplerGym comparison on {fam}, test split ({queries} queries, all runs of every sampler on the "
                  f"same queries and seeds). Iterations to first solution, capped at {cfg['max_iterations']}; "
-                 f"the best goal bias was chosen on a separate tuning split. 'time' is wall time in seconds, "
+                 f"the best goal bias was chosen on a separate tuning split (for shifted maps, their family's). "
+                 f"'time' is wall time in seconds, "
                  f"including binding the sampler to the map. The expert is a privileged reference.")
         stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", fam).strip("_") or "experiment"
         paths.append(write_log(

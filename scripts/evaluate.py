@@ -6,7 +6,8 @@
     python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v0   # your SB3 model too
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
 
-Default map set: the five generated families at 128x128 on test seeds (never trained on) and the
+Default map set: the five generated families at 128x128 on test seeds (never trained on), each family's
+shifted variant (other generators, sides 64 to 256, never used for training, validation or tuning) and the
 MovingAI maps in ../shared/maps/movingai (or --movingai / SAMPLERGYM_MOVINGAI_DIR). Writes
 runs.csv (every run), summary.md (tables), ecdf.png, means.png and OMPL benchmark logs
 (ompl/<map set>.log; open them with OMPL's ompl_benchmark_statistics.py and Planner Arena) under --out.
@@ -39,7 +40,7 @@ MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", 
 #: 6 maps, the "best" bias was worse than uniform on the test maps and flattered the policy), and
 #: 25 maps x 2 seeds keep the quick ratios near the full ones (10 x 1 put narrow passage at 0.12
 #: of the best bias against 0.39 in full).
-QUICK = {"maps": 25, "scenarios": 4, "seeds": 2, "other_planners": []}
+QUICK = {"maps": 25, "shifted_maps": 25, "scenarios": 4, "seeds": 2, "other_planners": []}
 
 
 def parse_args(argv=None) -> argparse.Namespace:
@@ -50,6 +51,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--maps", type=int, default=50, help="test maps per family")
     ap.add_argument("--tuning-maps", type=int, default=20, help="maps per family for choosing the best goal bias")
+    ap.add_argument("--shifted-maps", type=int, default=50,
+                    help="test maps per family from its shifted generator, sides 64 to 256 (0: none)")
     ap.add_argument("--seeds", type=int, default=3, help="planner seeds per query")
     ap.add_argument("--movingai", type=Path, default=None)
     ap.add_argument("--movingai-maps", nargs="*", default=list(MOVINGAI_MAPS))
@@ -65,7 +68,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--processes", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--no-expert", action="store_true", help="skip the privileged reference")
     ap.add_argument("--quick", action="store_true",
-                    help="25 test maps, 4 test scenarios, 2 seeds, no other planners; tuning as in the full run")
+                    help="25 test and 25 shifted maps, 4 test scenarios, 2 seeds, no other planners; tuning as in "
+                         "the full run")
     ap.add_argument("--sampler", action="append", default=[], metavar="NAME=SPEC",
                     help="also compare this sampler (repeatable): NAME=MODEL.zip@ENV_ID[@stochastic][@key=value...] "
                          "for a Stable-Baselines3 model trained on that SamplerGym id (deterministic actions unless "
@@ -79,6 +83,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     for k in ("maps", "tuning_maps", "seeds", "scenarios", "tuning_scenarios", "max_iterations", "processes"):
         if getattr(args, k) < 1:
             ap.error(f"--{k.replace('_', '-')} must be at least 1, got {getattr(args, k)}")
+    if args.shifted_maps < 0:
+        ap.error(f"--shifted-maps must be at least 0, got {args.shifted_maps}")
     if not args.policy.is_file():
         ap.error(f"policy checkpoint {args.policy} not found (train one with scripts/train.py --export ...)")
     try:  # refused here, by name, rather than as a traceback in every worker
@@ -110,6 +116,7 @@ def main(argv=None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     queries = E.generated_queries(args.families, args.size, args.maps, args.tuning_maps)
+    queries += E.shifted_queries(args.families, args.shifted_maps)
     if mdir is not None:
         queries += E.movingai_queries(str(mdir), args.movingai_maps, args.scenarios, args.tuning_scenarios,
                                       args.tolerance)
@@ -128,17 +135,18 @@ def main(argv=None) -> int:
     print(f"{len(tasks)} RRT runs on {len(queries)} queries ({args.processes} processes)", flush=True)
     t0 = time.perf_counter()
     runs = E.run_all(tasks, args.processes)
-    best = E.best_bias(runs)
+    # a shifted map set has no tuning split of its own: it keeps its family's tuned settings
+    best = E.tuned_for_shifted(E.best_bias(runs), queries)
     # the ablation (the policy's action classes, constant distribution) on the test split, at the frontier
     # probability its tuning runs chose for each map set; named as one sampler whatever that probability
-    constants = E.best_constant(runs)
+    constants = E.tuned_for_shifted(E.best_constant(runs), queries)
     ablation_tasks = E.constant_test_tasks(queries, "RRT", cfg, constants, args.seeds)
     print(f"{len(ablation_tasks)} RRT runs of the constant-distribution ablation at its tuned settings", flush=True)
     ablation = E.run_all(ablation_tasks, args.processes)
     runs += [dataclasses.replace(r, sampler=E.CONSTANT) for r in ablation]
-    # other planners: uniform, default and best goal bias, policy, on the generated families
+    # other planners: uniform, default and best goal bias, policy, on the generated families (not shifted)
     extra = []
-    generated = [q for q in queries if q.size]
+    generated = [q for q in queries if q.size and not q.shifted]
     for planner in args.other_planners:
         extra += E.tuning_tasks(generated, planner, cfg)
         extra += [(q, planner, s, 0, cfg) for q in generated if q.split == "test"
@@ -146,11 +154,11 @@ def main(argv=None) -> int:
     if extra:
         print(f"{len(extra)} runs of {', '.join(args.other_planners)}", flush=True)
         runs += E.run_all(extra, args.processes)
-        best = E.best_bias(runs)
+        best = E.tuned_for_shifted(E.best_bias(runs), queries)
     mai = sorted({q.family for q in queries if not q.size})
     if len(mai) > 1:  # one pooled row over every MovingAI map, beside the per-map rows
         pool = E.pooled(runs, "MovingAI (all)", mai)
-        best = E.best_bias(runs + pool)
+        best = E.tuned_for_shifted(E.best_bias(runs + pool), queries)
     else:
         pool = []
     rows = E.summarize(runs + pool, best)
@@ -167,11 +175,14 @@ def main(argv=None) -> int:
             "median_cost", "median_forward_passes"]
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
              "policy_success", "best_bias_success", "policy_wall_ms", "best_bias_wall_ms", "expert_median",
+             "policy/lower_bound", "expert/lower_bound",
              "best_constant", "constant_median", "policy/constant", "constant_success", "constant_wall_ms"]
     hcols += [f"{n}{c}" for n in users for c in ("_median", "/best_bias", "_success", "_wall_ms")]
     named = "".join(f"`{n}`: `{spec}`; " for n, spec in args.user_samplers.items())
     text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {(time.perf_counter() - t0) / 60:.1f} "
-            f"min; generated maps {args.size}x{args.size} on test seeds, best goal bias chosen on a tuning split. "
+            f"min; generated maps {args.size}x{args.size} on test seeds, and shifted variants (other generators, sides "
+            f"64 to 256) tested with the settings tuned on their family's tuning split; best goal bias chosen on a "
+            f"tuning split. "
             f"Iterations to first solution (cap {args.max_iterations}); the expert is a privileged reference.\n\n"
             + (f"User samplers: {named.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
                if users else "") +

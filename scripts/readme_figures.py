@@ -1,9 +1,11 @@
 """Regenerate the README's pictures (docs/*.png) from the library and the shipped checkpoint.
 
-    python scripts/readme_figures.py                  # writes docs/samplers.png and docs/rigid.png
+    python scripts/readme_figures.py                  # writes docs/samplers.png, docs/shifted.png, docs/rigid.png
 
 samplers.png: one held-out map per family, RRT with goal bias 0.05, the tuned best goal bias and the
 learned policy, same planner seed; each panel's title gives the iterations it took.
+shifted.png: one test map per family (top) beside two of its shifted variant (below: 128x128, and
+the first 256x256 one), the maps evaluate.py reports as "<family> (shifted)".
 rigid.png: RRT-Connect moving a box body through the window of the example 6-DoF scene.
 """
 
@@ -27,7 +29,7 @@ def main(argv=None) -> int:
 
     from learning import PolicySampler
     from planners import RRT, GoalBiasedSampler, RRTConnect, load_scene
-    from planners.maps.generators import TEST_SEED0, generate
+    from planners.maps.generators import FAMILIES, SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, generate
     from planners.viz.plotting import new_figure, plot, save_figure
     from planners.viz.plotting3d import plot_scene
 
@@ -47,12 +49,24 @@ def main(argv=None) -> int:
             ax.title.set_fontsize(8)
     p1 = save_figure(fig, args.out / "samplers.png", dpi=90)
 
+    fig = new_figure((2.6 * len(FAMILIES), 2.7 * 3))
+    big = SHIFTED_SIZES.index(256)
+    for j, fam in enumerate(FAMILIES):
+        maps = (generate(fam, TEST_SEED0 + args.seed, 128),
+                generate(fam, SHIFTED_SEED0 + SHIFTED_SIZES.index(128), 128, shifted=True),
+                generate(fam, SHIFTED_SEED0 + big, 256, shifted=True))
+        for i, problem in enumerate(maps):
+            ax = fig.add_subplot(3, len(FAMILIES), i * len(FAMILIES) + j + 1)
+            plot(problem, ax=ax, title=problem.name)
+            ax.title.set_fontsize(8)
+    p3 = save_figure(fig, args.out / "shifted.png", dpi=80)
+
     problem = load_scene(ROOT / "planners" / "scenes" / "example.scene")
     r = RRTConnect(problem, step_size=0.5, seed=args.seed).solve(max_iterations=20000)
     fig = plot_scene(problem, r.path if r.solved else None,
                      title=f"6-DoF box, RRT-Connect: {r.iterations} iterations")
     p2 = save_figure(fig, args.out / "rigid.png", dpi=90)
-    print(p1, p2)
+    print(p1, p3, p2)
     return 0
 
 

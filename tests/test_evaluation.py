@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from learning import evaluation as E
-from planners.maps.generators import TEST_SEED0
+from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0
 from planners.tools.benchmark import Run, write_runs_csv
 
 REPO = Path(__file__).resolve().parents[1]
@@ -63,6 +63,30 @@ def test_tuning_runs_cover_uniform_and_every_bias_on_tuning_queries_only():
     assert all(t[0].key < TEST_SEED0 for t in tasks)
     assert sorted({t[2] for t in tasks}) == sorted(["uniform", *(f"goal_bias={b:g}" for b in E.GOAL_BIASES)])
     assert len(tasks) == 3 * (1 + len(E.GOAL_BIASES))
+
+
+def test_shifted_maps_are_test_only_with_their_own_seeds_and_sizes():
+    qs = E.shifted_queries(["forest", "maze"], n_test=7)
+    assert len(qs) == 14 and {q.split for q in qs} == {"test"} and all(q.shifted for q in qs)
+    assert {q.map_set for q in qs} == {"forest (shifted)", "maze (shifted)"}
+    assert [q.size for q in qs if q.family == "maze"] == [SHIFTED_SIZES[i % len(SHIFTED_SIZES)] for i in range(7)]
+    assert all(q.key >= SHIFTED_SEED0 for q in qs)
+    # nothing tunes on them: neither goal bias nor the ablation
+    assert E.tuning_tasks(qs, "RRT", {}) == [] and E.constant_tuning_tasks(qs, "RRT", {}) == []
+    problem = qs[1].problem(None, 4.0)
+    assert problem.name == f"forest-shifted-{SHIFTED_SIZES[1]}-{SHIFTED_SEED0 + 1}"
+    assert problem.world.shape == (SHIFTED_SIZES[1],) * 2
+
+
+def test_shifted_map_sets_keep_their_familys_tuned_settings():
+    qs = E.generated_queries(["forest", "rooms"], 64, 1, 1) + E.shifted_queries(["forest"], 1)
+    tuned = {("forest", "RRT"): 0.2, ("forest", "PRM"): 0.05, ("rooms", "RRT"): 0.01}
+    assert E.tuned_for_shifted(tuned, qs) == tuned | {("forest (shifted)", "RRT"): 0.2,
+                                                      ("forest (shifted)", "PRM"): 0.05}
+    # and the ablation's test runs on the shifted maps take that setting
+    tasks = E.constant_test_tasks(qs, "RRT", {}, E.tuned_for_shifted({("forest", "RRT"): 0.7}, qs), seeds=2)
+    assert [(t[0].map_set, t[2], t[3]) for t in tasks] == [("forest", "constant=0.7", s) for s in (0, 1)] + [
+        ("forest (shifted)", "constant=0.7", s) for s in (0, 1)]
 
 
 def test_quick_run_tunes_on_the_full_runs_tuning_split():
@@ -150,11 +174,11 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     (out / "ompl").mkdir(parents=True)
     (out / "ompl" / "stale.log").write_text("an earlier run's map set")
     rc = ev.main(["--families", "forest", "--size", "64", "--maps", "2", "--tuning-maps", "2", "--seeds", "1",
-                  "--movingai-maps", "--other-planners", "--processes", "1", "--max-iterations", "3000",
-                  "--out", str(out)])
+                  "--shifted-maps", "1", "--movingai-maps", "--other-planners", "--processes", "1",
+                  "--max-iterations", "3000", "--out", str(out)])
     assert rc == 0
     files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
-    assert files == ["ecdf.png", "means.png", "ompl/forest.log", "runs.csv", "summary.md"]
+    assert files == ["ecdf.png", "means.png", "ompl/forest.log", "ompl/forest_shifted.log", "runs.csv", "summary.md"]
     mode = 0o666 & ~_umask()
     assert {p: stat.S_IMODE((out / p).stat().st_mode) for p in files} == dict.fromkeys(files, mode)
     conn = sqlite3.connect(":memory:")
@@ -164,7 +188,12 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
     assert len(rows) == 2 * len(samplers)  # the test split only: 2 maps x 1 seed per sampler
     csv_runs = [ln.split(",") for ln in (out / "runs.csv").read_text().splitlines()[1:]]
-    test_its = sorted(int(r[7]) for r in csv_runs if r[2] == "test")
+    test_its = sorted(int(r[7]) for r in csv_runs if r[2] == "test" and r[0] == "forest")
     assert sorted(r["iterations"] for r in rows) == test_its
     assert all(r["graph_states"] >= 1 and r["time"] > 0 for r in rows)
     assert conn.execute("SELECT runcount FROM experiments").fetchone()[0] == 2
+    # the shifted maps have a log of their own, with every sampler (the baselines at the family's tuning)
+    shifted = runs_table(conn, read_benchmark_log((out / "ompl" / "forest_shifted.log").read_text(), conn))
+    assert sorted({r["planner"] for r in shifted}) == sorted(f"RRT {s}" for s in samplers)
+    assert sorted(r["iterations"] for r in shifted) == sorted(
+        int(r[7]) for r in csv_runs if r[0] == "forest (shifted)")

@@ -9,7 +9,7 @@ import pytest
 from scipy import ndimage
 
 from planners import Problem
-from planners.maps.generators import FAMILIES, generate
+from planners.maps.generators import FAMILIES, SHIFTED_SIZES, generate
 from planners.maps.gridsearch import connected, free_components, shortest_path_length
 
 SIZES_AND_SEEDS = [(32, range(5)), (64, range(10)), (128, range(30)), (256, range(3))]
@@ -31,6 +31,21 @@ def runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return [(int(a), int(b - a)) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
+def widest_free_square(free: np.ndarray) -> int:
+    """Side of the largest all-free axis-aligned square (binary search over a summed-area table)."""
+    sat = np.pad(free.astype(np.int64).cumsum(0).cumsum(1), ((1, 0), (1, 0)))
+
+    def fits(w: int) -> bool:
+        sums = sat[w:, w:] - sat[:-w, w:] - sat[w:, :-w] + sat[:-w, :-w]
+        return bool((sums == w * w).any())
+
+    lo, hi = 0, min(free.shape)
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        lo, hi = (mid, hi) if fits(mid) else (lo, mid - 1)
+    return lo
+
+
 def wall_bands(obs: np.ndarray, axis: int, cover: float) -> list[tuple[int, int]]:
     """Runs of rows (axis=1) or columns (axis=0) whose obstacle fraction exceeds ``cover``."""
     return runs(obs.mean(axis=axis) > cover)
@@ -50,19 +65,30 @@ def test_same_seed_same_problem_and_seeds_differ(family):
     assert d.name == f"{family}-64"
 
 
+@pytest.mark.parametrize("family", FAMILIES)
+def test_shifted_variant_is_seeded_named_apart_and_differs_from_training(family):
+    a, b = generate(family, 7, shifted=True), generate(family, 7, shifted=True)
+    assert np.array_equal(a.world.obstacles, b.world.obstacles) and np.array_equal(a.start, b.start)
+    assert a.name == f"{family}-shifted-128-7"
+    assert not np.array_equal(a.world.obstacles, generate(family, 7).world.obstacles)
+    assert generate(family, np.random.default_rng(1), 64, shifted=True).name == f"{family}-shifted-64"
+
+
 def test_generators_leave_global_random_state_alone():
     state = np.random.get_state()
     for family in FAMILIES:
         generate(family, 0, 64)
+        generate(family, 0, 64, shifted=True)
     after = np.random.get_state()
     assert all(np.array_equal(x, y) for x, y in zip(state, after, strict=True))
 
 
+@pytest.mark.parametrize("shifted", [False, True], ids=["training", "shifted"])
 @pytest.mark.parametrize("size, seeds", SIZES_AND_SEEDS)
 @pytest.mark.parametrize("family", FAMILIES)
-def test_queries_are_free_connected_and_far_apart(family, size, seeds):
+def test_queries_are_free_connected_and_far_apart(family, size, seeds, shifted):
     for seed in seeds:
-        p = generate(family, seed, size)
+        p = generate(family, seed, size, shifted=shifted)
         g = p.world
         assert isinstance(p, Problem) and g.shape == (size, size) and g.resolution == 1.0
         s, t = g.cell_of(p.start), g.cell_of(p.goal)
@@ -185,6 +211,83 @@ def test_rooms_have_doors_and_far_apart_start_and_goal(size, seeds):
         hops = abs(room_index(sr, rows) - room_index(gr, rows)) + abs(room_index(sc, cols) - room_index(gc, cols))
         assert hops >= k - 1, f"{p.name}: start and goal rooms only {hops} apart"
     assert loops > 0, "no map has a door beyond the spanning tree"
+
+
+# The shifted variants: each differs from its training family in the way its docstring says.
+
+
+def test_shifted_forest_is_denser_than_training():
+    fractions = [generate("forest", seed, size, shifted=True).world.obstacles.mean()
+                 for size in SHIFTED_SIZES for seed in range(4)]
+    assert 0.25 <= min(fractions) and max(fractions) <= 0.40
+    assert np.mean(fractions) > 0.27  # training draws 15-25%
+
+
+@pytest.mark.parametrize("size", SHIFTED_SIZES)
+def test_shifted_narrow_passage_has_thick_walls_each_with_one_gap(size):
+    counts = set()
+    for seed in range(12):
+        p = generate("narrow_passage", seed, size, shifted=True)
+        obs = p.world.obstacles
+        vertical, horizontal = wall_bands(obs, 0, 0.8), wall_bands(obs, 1, 0.8)
+        assert not (vertical and horizontal), f"{p.name}: walls in both directions"
+        bands, view = (vertical, obs) if vertical else (horizontal, obs.T)
+        counts.add(len(bands))
+        closed = view.copy()
+        for c0, thick in bands:
+            assert scaled(6, size, 3) <= thick <= scaled(12, size, 3), f"{p.name}: wall {thick} thick"
+            band = view[:, c0 : c0 + thick]
+            gaps = runs(~band.any(axis=1))
+            assert len(gaps) == 1 and scaled(2, size, 2) <= gaps[0][1] <= scaled(4, size, 2), f"{p.name}: {gaps}"
+            closed[:, c0 : c0 + thick] = True
+        s, g = p.world.cell_of(p.start), p.world.cell_of(p.goal)
+        labels = free_components(closed if vertical else closed.T)
+        assert labels[s] != labels[g], f"{p.name}: start and goal connected with every wall closed"
+    assert counts == {1, 2}
+
+
+@pytest.mark.parametrize("size", SHIFTED_SIZES)
+def test_shifted_bugtrap_encloses_the_start_but_for_a_small_opening(size):
+    k = scaled(6, size, 2) + 1  # a square one cell wider than the widest opening cannot leave the trap
+    for seed in range(12):
+        p = generate("bugtrap", seed, size, shifted=True)
+        s, g = p.world.cell_of(p.start), p.world.cell_of(p.goal)
+        assert not p.world.check_motion(p.start, p.goal)
+        # the union of every free k x k square: the trap's inside is cut off from everything else
+        roomy = ndimage.binary_opening(~p.world.obstacles, np.ones((k, k)))
+        labels, _ = ndimage.label(roomy)
+        assert roomy[s], f"{p.name}: the start is not inside a box of side >= {k}"
+        assert (labels == labels[s]).sum() < (0.45 * size) ** 2, f"{p.name}: the trap is open"
+        if roomy[g]:
+            assert labels[s] != labels[g], f"{p.name}: a wide way out of the trap"
+
+
+@pytest.mark.parametrize("size", [64, 128, 256])
+def test_shifted_maze_has_other_corridor_widths_and_loops(size):
+    widths, loops = set(), 0
+    for seed in range(12):
+        p = generate("maze", seed, size, shifted=True)
+        free = ~p.world.obstacles
+        assert free_components(p.world.obstacles).max() == 0
+        w = widest_free_square(free)
+        assert w in {scaled(x, size, 2) for x in (8, 10, 12, 20)} and w != scaled(16, size, 2), f"{p.name}: {w}"
+        widths.add(w)
+        walls = np.pad(p.world.obstacles, 1, constant_values=True)
+        loops += ndimage.label(walls, structure=np.ones((3, 3)))[1] > 1
+    assert len(widths) >= 3 and loops >= 6
+
+
+@pytest.mark.parametrize("size", [64, 128, 256])
+def test_shifted_rooms_have_other_room_counts(size):
+    ks = set()
+    for seed in range(20):
+        p = generate("rooms", seed, size, shifted=True)
+        obs = p.world.obstacles
+        rows, cols = wall_bands(obs, 1, 0.5), wall_bands(obs, 0, 0.5)
+        assert len(rows) == len(cols), p.name
+        ks.add(len(rows) + 1)
+        assert free_components(obs).max() == 0
+    assert ks == {2, 5, 6}
 
 
 @pytest.mark.parametrize(

@@ -295,11 +295,13 @@ def test_evaluate_script_writes_tables_csv_and_plots(trained, tmp_path, movingai
     out = tmp_path / "eval"
     rc = _script("evaluate").main([
         "--policy", str(final), "--families", "forest", "--size", "64", "--maps", "3", "--tuning-maps", "2",
-        "--seeds", "1", "--movingai", str(movingai), "--movingai-maps", "maze-32-32-2", "room-32-32-4",
+        "--seeds", "1", "--shifted-maps", "1", "--movingai", str(movingai), "--movingai-maps", "maze-32-32-2",
+        "room-32-32-4",
         "--scenarios", "2", "--other-planners", "PRM", "--processes", "1", "--out", str(out)])
     assert rc == 0
     text = (out / "summary.md").read_text()
-    for needle in ("forest", "MovingAI (all)", "policy", "goal bias 0.05 (default", "expert (reference)", "PRM"):
+    for needle in ("forest", "forest (shifted)", "MovingAI (all)", "policy", "goal bias 0.05 (default",
+                   "expert (reference)", "PRM"):
         assert needle in text, needle
     rows = list(csv.DictReader((out / "runs.csv").open()))
     samplers = {r["sampler"] for r in rows}

@@ -28,6 +28,11 @@ TRAIN_SEEDS = (0, 100_000)
 VALIDATION_SEED0 = 200_000
 TUNING_SEED0 = 300_000
 TEST_SEED0 = 1_000_000
+#: Seeds of the shifted test maps (``generate(..., shifted=True)``): generators of their own, never used
+#: for training, validation or tuning; the range only keeps their names apart from the others.
+SHIFTED_SEED0 = 2_000_000
+#: Map sides of the shifted test set, one per map in turn (training draws 64 and 128).
+SHIFTED_SIZES = (64, 96, 128, 192, 256)
 
 #: Smallest map side ``generate`` accepts: below it the narrowest features would be under 2 cells.
 MIN_SIZE = 32
@@ -120,6 +125,16 @@ def _found(problem: Problem | None, name: str, goal_tolerance: float) -> Problem
     return problem
 
 
+def _across(rng: np.random.Generator, obs: np.ndarray, side_a: np.ndarray, side_b: np.ndarray, *,
+            goal_tolerance: float, name: str) -> Problem | None:
+    """A query from one side to the other (which is the goal's, at random), under a random symmetry."""
+    sides = [side_a, side_b]
+    if rng.integers(2):
+        sides.reverse()
+    turn = _symmetry(rng)
+    return _query(rng, turn(obs), turn(sides[0]), turn(sides[1]), goal_tolerance=goal_tolerance, name=name)
+
+
 def _clutter(rng: np.random.Generator, obs: np.ndarray, count: int, lo: int, hi: int, keep_clear: np.ndarray) -> None:
     """Adds up to ``count`` random rectangles with sides in ``[lo, hi]`` that avoid ``keep_clear``."""
     size = obs.shape[0]
@@ -201,12 +216,9 @@ def narrow_passage(
     clear = _scaled(size, 3, 2)
     near_wall = _box(size, 0, size, x0 - clear, x1 + clear)
     _clutter(rng, obs, _between(rng, 3, 8), _scaled(size, 3), _scaled(size, 10), near_wall)
-    sides = [_box(size, 0, size, 0, x0 - size // 8), _box(size, 0, size, x1 + size // 8, size)]
-    if rng.integers(2):
-        sides.reverse()
-    turn = _symmetry(rng)
     name = name or f"narrow_passage-{size}"
-    problem = _query(rng, turn(obs), turn(sides[0]), turn(sides[1]), goal_tolerance=goal_tolerance, name=name)
+    problem = _across(rng, obs, _box(size, 0, size, 0, x0 - size // 8), _box(size, 0, size, x1 + size // 8, size),
+                      goal_tolerance=goal_tolerance, name=name)
     return _found(problem, name, goal_tolerance)
 
 
@@ -257,6 +269,16 @@ def maze(
     """
     w = _scaled(size, 16, 2)
     t = _between(rng, _scaled(size, 1), _scaled(size, 2))
+    return _maze(rng, size, w, t, 0.0, goal_tolerance=goal_tolerance, name=name or f"maze-{size}")
+
+
+def _maze(rng: np.random.Generator, size: int, w: int, t: int, braid: float, *, goal_tolerance: float,
+          name: str) -> Problem:
+    """A maze of corridors ``w`` wide and walls ``t`` thick, carved by randomised depth-first search.
+
+    With ``braid > 0`` each wall the search left standing is then removed with that probability (loops).
+    Start and goal are at the centres of two maze cells.
+    """
     n = (size - t) // (w + t)  # maze cells per side
     margin = (size - t - n * (w + t)) // 2  # the leftover band is solid wall
     obs = np.ones((size, size), dtype=bool)
@@ -264,11 +286,19 @@ def maze(
     def corner(i: int, j: int) -> tuple[int, int]:
         return margin + t + i * (w + t), margin + t + j * (w + t)
 
+    def open_wall(i: int, j: int, a: int, b: int) -> None:
+        r, c = corner(min(i, a), min(j, b))
+        if a != i:  # the wall below the upper of two vertically adjacent cells
+            obs[r + w : r + w + t, c : c + w] = False
+        else:
+            obs[r : r + w, c + w : c + w + t] = False
+
     for i in range(n):
         for j in range(n):
             r, c = corner(i, j)
             obs[r : r + w, c : c + w] = False
     seen = np.zeros((n, n), dtype=bool)
+    opened = set()
     stack = [(_between(rng, 0, n - 1), _between(rng, 0, n - 1))]
     seen[stack[0]] = True
     while stack:
@@ -279,17 +309,19 @@ def maze(
             stack.pop()
             continue
         a, b = nbrs[int(rng.integers(len(nbrs)))]
-        r, c = corner(min(i, a), min(j, b))
-        if a != i:  # open the wall below the upper of two vertically adjacent cells
-            obs[r + w : r + w + t, c : c + w] = False
-        else:
-            obs[r : r + w, c + w : c + w + t] = False
+        open_wall(i, j, a, b)
+        opened.add((min(i, a), min(j, b), a != i))
         seen[a, b] = True
         stack.append((a, b))
+    if braid > 0:
+        for i in range(n):
+            for j in range(n):
+                for a, b in ((i + 1, j), (i, j + 1)):
+                    if a < n and b < n and (i, j, a != i) not in opened and rng.random() < braid:
+                        open_wall(i, j, a, b)
     centres = np.zeros((size, size), dtype=bool)
     first = margin + t + w // 2
     centres[first : first + n * (w + t) : w + t, first : first + n * (w + t) : w + t] = True
-    name = name or f"maze-{size}"
     problem = _query(rng, obs, centres, centres, goal_tolerance=goal_tolerance, name=name)
     return _found(problem, name, goal_tolerance)
 
@@ -305,6 +337,18 @@ def rooms(
     """
     k = _between(rng, 3, 4)
     t = _between(rng, _scaled(size, 1), _scaled(size, 2))
+    return _room_grid(rng, size, k, t, (_scaled(size, 4, 2), _scaled(size, 6, 2)), 0.25,
+                      goal_tolerance=goal_tolerance, name=name or f"rooms-{size}")
+
+
+def _room_grid(rng: np.random.Generator, size: int, k: int, t: int, doors: tuple[int, int], loops: float, *,
+               goal_tolerance: float, name: str) -> Problem:
+    """``k x k`` rooms behind jittered walls ``t`` thick, doors ``doors[0]``-``doors[1]`` cells wide.
+
+    Doors follow a random spanning tree of the room grid, so every room is reachable, and each remaining
+    wall gets a door with probability ``loops``. A door is never wider than its room side less 2 cells.
+    Start and goal lie in rooms at least ``k - 1`` steps apart, away from the walls.
+    """
     span = size / k
     jitter = int(span / 8)
     walls = [int(round(i * span)) + _between(rng, -jitter, jitter) for i in range(1, k)]
@@ -315,7 +359,6 @@ def rooms(
     # free extent [lo[i], hi[i]) of room i along either axis
     lo = [0] + [e + t for e in walls]
     hi = walls + [size]
-    door_lo, door_hi = _scaled(size, 4, 2), _scaled(size, 6, 2)
     parent = list(range(k * k))
 
     def root(a: int) -> int:
@@ -332,15 +375,16 @@ def rooms(
         ra, rb = root(i * k + j), root(a * k + b)
         if ra != rb:
             parent[ra] = rb
-        elif rng.random() >= 0.25:
+        elif rng.random() >= loops:
             continue
-        door = _between(rng, door_lo, door_hi)
-        if a != i:  # in the wall below room (i, j), within its columns, a cell clear of the crossing walls
-            x = _between(rng, lo[j] + 1, hi[j] - 1 - door)
+        # in the wall between the two rooms, within their shared side, a cell clear of the crossing walls
+        side = j if a != i else i
+        door = _between(rng, doors[0], max(doors[0], min(doors[1], hi[side] - lo[side] - 2)))
+        x = _between(rng, lo[side] + 1, hi[side] - 1 - door)
+        if a != i:
             obs[walls[i] : walls[i] + t, x : x + door] = False
         else:
-            y = _between(rng, lo[i] + 1, hi[i] - 1 - door)
-            obs[y : y + door, walls[j] : walls[j] + t] = False
+            obs[x : x + door, walls[j] : walls[j] + t] = False
     gap = _scaled(size, 2)
 
     def interior(i: int, j: int) -> np.ndarray:
@@ -352,16 +396,170 @@ def rooms(
         for j in range(k):
             if abs(i - gi) + abs(j - gj) >= k - 1:
                 far |= interior(i, j)
-    name = name or f"rooms-{size}"
     problem = _query(rng, obs, interior(gi, gj), far, goal_tolerance=goal_tolerance, name=name)
     return _found(problem, name, goal_tolerance)
 
 
+# Shifted variants: the same five kinds of problem, drawn differently from the training generators
+# above, so a sampler tuned or trained on those is tested on layouts it never saw. Each docstring says
+# what differs from its training family.
+
+
+def forest_shifted(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """Forest, shifted: denser, with thin bars among the blocks, start and goal at opposite edges.
+
+    Cover 25-35% (training 15-25%); thin bars 1-3 cells thick and 8-40 long beside blocks 2-16 across
+    (training: blocks and discs 3-12 across). Start and goal lie in opposite edge bands of width
+    ``size / 8`` (training: opposite corners).
+    """
+    name = name or f"forest-shifted-{size}"
+    band = size // 8
+    problem = None
+    for _ in range(_MAP_TRIES):
+        obs = np.zeros((size, size), dtype=bool)
+        target = rng.uniform(0.25, 0.35) * size * size
+        covered = 0
+        while covered < target:
+            if rng.random() < 0.5:
+                thin = _between(rng, _scaled(size, 1), _scaled(size, 3))
+                long = _between(rng, _scaled(size, 8, 2), _scaled(size, 40, 3))
+                h, w = (thin, long) if rng.integers(2) else (long, thin)
+            else:
+                lo, hi = _scaled(size, 2), _scaled(size, 16, 2)
+                h, w = _between(rng, lo, hi), _between(rng, lo, hi)
+            r, c = _between(rng, 1 - h, size - 1), _between(rng, 1 - w, size - 1)
+            patch = obs[max(r, 0) : r + h, max(c, 0) : c + w]
+            covered += int((~patch).sum())
+            patch[...] = True
+        problem = _across(rng, obs, _box(size, 0, size, 0, band), _box(size, 0, size, size - band, size),
+                          goal_tolerance=goal_tolerance, name=name)
+        if problem is not None:
+            break
+    return _found(problem, name, goal_tolerance)
+
+
+def narrow_passage_shifted(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """Narrow passage, shifted: one or two thick walls, each gap a short corridor, more clutter.
+
+    Walls 6-12 cells thick (training: one wall, 2-4); each gap 2-4 cells wide (training 2-3) anywhere
+    along its wall (training: not in the outer eighths); 6-14 blocks of clutter (training 3-8). Start
+    and goal lie beyond the outermost walls, at least ``size / 16`` from them.
+    """
+    obs = np.zeros((size, size), dtype=bool)
+    n_walls = _between(rng, 1, 2)
+    spans = [(0.3, 0.7)] if n_walls == 1 else [(0.2, 0.4), (0.6, 0.8)]
+    walls = []
+    for lo, hi in spans:  # drawn as vertical walls at columns [x0, x1); turned below
+        thick = _between(rng, _scaled(size, 6, 3), _scaled(size, 12, 3))
+        x0 = _between(rng, int(lo * size), int(hi * size) - thick)
+        gap = _between(rng, _scaled(size, 2, 2), _scaled(size, 4, 2))
+        y0 = _between(rng, 0, size - gap)
+        obs[:, x0 : x0 + thick] = True
+        obs[y0 : y0 + gap, x0 : x0 + thick] = False
+        walls.append((x0, x0 + thick))
+    clear = _scaled(size, 3, 2)
+    near_walls = np.zeros((size, size), dtype=bool)
+    for x0, x1 in walls:
+        near_walls |= _box(size, 0, size, x0 - clear, x1 + clear)
+    _clutter(rng, obs, _between(rng, 6, 14), _scaled(size, 2), _scaled(size, 12), near_walls)
+    margin = size // 16
+    name = name or f"narrow_passage-shifted-{size}"
+    problem = _across(rng, obs, _box(size, 0, size, 0, walls[0][0] - margin),
+                      _box(size, 0, size, walls[-1][1] + margin, size), goal_tolerance=goal_tolerance, name=name)
+    return _found(problem, name, goal_tolerance)
+
+
+def bugtrap_shifted(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """Bugtrap, shifted: a box closed on all sides but for one small opening.
+
+    The opening is 3-6 cells wide, in one of the three walls that do not face the goal (training: a U
+    open over its whole width, facing away from the goal); walls 2-4 thick (training 2), inside
+    ``size / 6`` to ``size / 2.5`` wide and deep (training ``size / 4`` to ``size / 3``).
+
+    The start lies anywhere inside, clear of the walls; the goal beyond the back wall, as in training,
+    so the straight segment from start to goal crosses it. The box is redrawn in the rare case that no
+    start is half the map side from the goal along the shortest path.
+    """
+    name = name or f"bugtrap-shifted-{size}"
+    problem = None
+    for _ in range(_MAP_TRIES):
+        obs = np.zeros((size, size), dtype=bool)
+        t = _between(rng, _scaled(size, 2), _scaled(size, 4))
+        inner = _between(rng, size // 6, int(size / 2.5))
+        depth = _between(rng, size // 6, int(size / 2.5))
+        outer = inner + 2 * t
+        # drawn with the back wall east at columns [xb, xb + t) and the goal further east; turned below
+        x0 = _between(rng, size // 16, size - size // 4 - depth - 2 * t)
+        xb = x0 + t + depth
+        y0 = _between(rng, size // 16, size - size // 16 - outer)
+        obs[y0 : y0 + outer, x0 : xb + t] = True
+        obs[y0 + t : y0 + outer - t, x0 + t : xb] = False
+        width = _between(rng, _scaled(size, 3, 2), _scaled(size, 6, 2))
+        wall = _between(rng, 0, 2)  # north, south or west; never the back wall
+        if wall < 2:
+            a = _between(rng, x0 + t + 1, xb - 1 - width)
+            r = y0 if wall == 0 else y0 + outer - t
+            obs[r : r + t, a : a + width] = False
+        else:
+            a = _between(rng, y0 + t + 1, y0 + outer - t - 1 - width)
+            obs[a : a + width, x0 : x0 + t] = False
+        clear = _scaled(size, 6, 3)
+        around = _box(size, y0 - clear, y0 + outer + clear, x0 - clear, xb + t + clear)
+        _clutter(rng, obs, _between(rng, 2, 6), _scaled(size, 3), _scaled(size, 8), around)
+        side = max(1, inner // 8)
+        inside = _box(size, y0 + t + side, y0 + outer - t - side, x0 + t + side, xb - side)
+        beyond = _box(size, y0, y0 + outer, xb + t + size // 8, size)
+        turn = _symmetry(rng)
+        problem = _query(rng, turn(obs), turn(beyond), turn(inside), goal_tolerance=goal_tolerance, name=name)
+        if problem is not None:
+            break
+    return _found(problem, name, goal_tolerance)
+
+
+def maze_shifted(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """Maze, shifted: braided (with loops), other corridor widths, thicker walls.
+
+    Corridors 8, 10, 12 or 20 cells wide (training 16), walls 2-4 thick (training 1-2), and each wall
+    left standing by the depth-first search removed with probability 0.1 (training: a perfect maze).
+    """
+    w = _scaled(size, float(rng.choice([8, 10, 12, 20])), 2)
+    t = _between(rng, _scaled(size, 2), _scaled(size, 4))
+    return _maze(rng, size, w, t, 0.1, goal_tolerance=goal_tolerance, name=name or f"maze-shifted-{size}")
+
+
+def rooms_shifted(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str | None = None
+) -> Problem:
+    """Rooms, shifted: other room counts and door widths, more doors.
+
+    A 2x2, 5x5 or 6x6 grid of rooms (training 3x3 or 4x4), walls 1-3 thick (training 1-2), doors 3-8
+    cells wide (training 4-6), and each wall beyond the spanning tree given a door with probability 1/2
+    (training 1/4), so there are more doors and more loops. Start and goal lie in rooms at least ``k - 1``
+    steps apart in the room grid, as in training.
+    """
+    k = int(rng.choice([2, 5, 6]))
+    t = _between(rng, _scaled(size, 1), _scaled(size, 3))
+    return _room_grid(rng, size, k, t, (_scaled(size, 3, 2), _scaled(size, 8, 2)), 0.5,
+                      goal_tolerance=goal_tolerance, name=name or f"rooms-shifted-{size}")
+
+
 _GENERATORS = {"forest": forest, "narrow_passage": narrow_passage, "bugtrap": bugtrap, "maze": maze, "rooms": rooms}
+_SHIFTED = {"forest": forest_shifted, "narrow_passage": narrow_passage_shifted, "bugtrap": bugtrap_shifted,
+            "maze": maze_shifted, "rooms": rooms_shifted}
 
 
-def generate(family: str, seed: int | np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0) -> Problem:
-    """A seeded problem of one family; the same family, seed and size always give the same problem.
+def generate(
+    family: str, seed: int | np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, shifted: bool = False
+) -> Problem:
+    """A seeded problem of one family; the same family, seed, size and variant always give the same problem.
 
     Args:
         family: One of ``FAMILIES``.
@@ -369,6 +567,9 @@ def generate(family: str, seed: int | np.random.Generator, size: int = 128, *, g
             ``np.random.Generator`` to draw from (the name is then ``f"{family}-{size}"``).
         size: Map side in cells, an integer >= ``MIN_SIZE``.
         goal_tolerance: Goal radius (cells), a positive number.
+        shifted: Draw the family's shifted variant (other wall thicknesses, trap shapes, gap widths,
+            door counts, densities; see ``forest_shifted`` and its siblings), which training, validation
+            and tuning never use; names then read ``f"{family}-shifted-{size}-{seed}"``.
 
     Raises:
         ValueError: For an unknown family, a size below ``MIN_SIZE``, a negative seed or a
@@ -384,12 +585,13 @@ def generate(family: str, seed: int | np.random.Generator, size: int = 128, *, g
     if not (np.isfinite(tol) and tol > 0):
         raise ValueError(f"goal_tolerance must be a positive finite number, got {goal_tolerance!r}")
     size = int(size)
+    label = f"{family}-shifted" if shifted else family
     if isinstance(seed, np.random.Generator):
-        rng, name = seed, f"{family}-{size}"
+        rng, name = seed, f"{label}-{size}"
     elif isinstance(seed, numbers.Integral) and not isinstance(seed, bool):
         if seed < 0:
             raise ValueError(f"seed must be a non-negative integer or a np.random.Generator, got {seed!r}")
-        rng, name = np.random.default_rng(int(seed)), f"{family}-{size}-{seed}"
+        rng, name = np.random.default_rng(int(seed)), f"{label}-{size}-{seed}"
     else:
         raise TypeError(f"seed must be an int or a np.random.Generator, got {type(seed).__name__} {seed!r}")
-    return _GENERATORS[family](rng, size, goal_tolerance=tol, name=name)
+    return (_SHIFTED if shifted else _GENERATORS)[family](rng, size, goal_tolerance=tol, name=name)
