@@ -15,7 +15,6 @@ Results are written as a CSV of runs, a Markdown summary, plots, and OMPL benchm
 from __future__ import annotations
 
 import math
-import os
 import re
 import textwrap
 import time
@@ -32,6 +31,7 @@ from planners.base.registry import planner_class
 from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, TUNING_SEED0, generate
 from planners.tools.benchmark import OMPL_RUN_PROPERTIES, Run, ompl_run_values
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
+from planners.tools.parallel import Backend, make_backend
 
 GOAL_BIASES = (0.01, 0.05, 0.1, 0.2, 0.5)
 #: The grid the best goal bias is chosen from: uniform sampling (bias 0) and the sweep.
@@ -263,9 +263,16 @@ def _policy(path: str):
     return _POLICY[path]
 
 
-def run_one(task: tuple) -> Run:
-    """Execute one run (a top-level function so worker processes can receive it)."""
+def run_one(task: tuple, context: dict | None = None) -> Run:
+    """Execute one run (a top-level function so workers can receive it).
+
+    ``context`` (:func:`shared_context`) holds what every run needs loaded (the policy, MovingAI
+    scenarios); without it they are loaded here, once per process.
+    """
     query, planner_name, sampler_name, seed, cfg = task
+    if context:
+        _POLICY.update(context.get("policies", {}))
+        _SCEN_CACHE.update(context.get("scenarios", {}))
     problem = query.problem(cfg["movingai_dir"], cfg["tolerance"])
     sampler = _sampler(sampler_name, cfg)
     # iterations to the first solution: anytime planners stop there too
@@ -282,38 +289,35 @@ def run_one(task: tuple) -> Run:
                forward_passes=int(getattr(planner.sampler, "forward_passes", 0)), vertices=int(r.num_vertices))
 
 
-def run_all(tasks: list[tuple], processes: int, progress: bool = True) -> list[Run]:
-    """Run tasks, in parallel over local processes when ``processes > 1``, with a progress bar."""
-    from tqdm.auto import tqdm
+def shared_context(tasks: Sequence[tuple]) -> dict:
+    """What the runs of ``tasks`` need loaded, loaded once here and shipped once to each worker.
 
-    if processes <= 1:
-        return [run_one(t) for t in tqdm(tasks, desc="runs", disable=not progress)]
-    import multiprocessing as mp
-
-    ctx = mp.get_context("spawn")  # fresh interpreters: no inherited locks or thread pools
-    # one thread per worker: BLAS and OpenMP pools started in every worker would spin on the cores the
-    # other workers are timing runs on; the variables must be set before a worker imports numpy
-    saved = {k: os.environ.get(k) for k in _THREAD_VARS}
-    os.environ.update(dict.fromkeys(_THREAD_VARS, "1"))
-    try:
-        with ctx.Pool(processes, initializer=_worker_init) as pool:
-            return list(tqdm(pool.imap(run_one, tasks, chunksize=4), total=len(tasks), desc="runs",
-                             disable=not progress))
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+    The policy checkpoint and the MovingAI scenarios travel as loaded objects, so workers on other
+    machines need neither file; generated maps travel as (family, seed, size) and are rebuilt.
+    """
+    policies, scenarios = {}, {}
+    for query, _, sampler, _, cfg in tasks:
+        if sampler == "policy":
+            policies[cfg["policy"]] = _policy(cfg["policy"])
+        if not query.size:
+            key = (cfg["movingai_dir"], query.family, cfg["tolerance"])
+            scenarios[key] = _scenarios(*key)
+    return {"policies": policies, "scenarios": scenarios}
 
 
-_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-def _worker_init() -> None:
+def worker_init() -> None:
+    """One torch thread per worker: the workers share the machine's cores between them."""
     import torch
 
     torch.set_num_threads(1)
+
+
+def run_all(tasks: list[tuple], backend: Backend | int = 1, progress: bool = True) -> list[Run]:
+    """Run tasks on ``backend`` (or on that many local processes), in task order, with a progress bar."""
+    if isinstance(backend, int):
+        backend = make_backend("local", processes=backend, worker_init=worker_init)
+    context = shared_context(tasks) if backend.workers > 1 else None
+    return backend.map(run_one, tasks, context=context, progress=progress, desc="runs")
 
 
 def pooled(runs: Sequence[Run], name: str, families: Sequence[str]) -> list[Run]:

@@ -20,6 +20,7 @@ from learning.fast_policy import FastActor
 from learning.policy_sampler import sample_classes
 from planners import RRT, Problem, SamplerBase
 from planners.guidance.guided import FRONTIER, GuidedSampling
+from planners.tools.parallel import Backend
 
 
 @dataclass
@@ -100,24 +101,39 @@ class DaggerSampler(SamplerBase):
 
 def collect(problems: Sequence[Problem], actor: FastActor | None, beta: float, *, seed: int, batch: int,
             step_size: float, stuck_threshold: int, uniform_floor: float, max_iterations: int,
-            gamma: float, reward_scale: float) -> tuple[Dataset, list[int]]:
-    """Run RRT with a ``DaggerSampler`` on each problem; returns the data and each run's iterations."""
-    parts, iterations = [], []
-    for i, p in enumerate(problems):
-        s = DaggerSampler(actor, beta, batch, step_size, stuck_threshold, uniform_floor, max_iterations)
-        planner = RRT(p, step_size=step_size, sampler=s, seed=seed + i)
-        r = planner.solve(max_iterations=max_iterations)
-        recs = planner.sampler.records
-        iterations.append(r.iterations)
-        if not recs:
-            continue
-        it = np.array([x[3] for x in recs], dtype=np.float64)
-        # return-to-go of -reward_scale per remaining iteration, discounted as PPO will
-        k = r.iterations - it
-        value = -reward_scale * (1.0 - gamma**k) / (1.0 - gamma)
-        parts.append(Dataset(np.stack([x[0] for x in recs]), np.stack([x[1] for x in recs]).astype(np.float32),
-                             np.array([x[2] for x in recs], dtype=np.int64), value.astype(np.float32)))
-    return Dataset.concat(parts), iterations
+            gamma: float, reward_scale: float, backend: Backend | None = None) -> tuple[Dataset, list[int]]:
+    """Run RRT with a ``DaggerSampler`` on each problem; returns the data and each run's iterations.
+
+    The rollouts run on ``backend`` (default: this process); the actor goes to each worker once, and
+    the data comes back in problem order, so the result does not depend on the backend.
+    """
+    context = {"actor": actor, "beta": beta, "seed": seed, "batch": batch, "step_size": step_size,
+               "stuck_threshold": stuck_threshold, "uniform_floor": uniform_floor,
+               "max_iterations": max_iterations, "gamma": gamma, "reward_scale": reward_scale}
+    tasks = list(enumerate(problems))
+    results = backend.map(_rollout, tasks, context=context) if backend is not None else [
+        _rollout(t, context) for t in tasks]
+    parts = [data for data, _ in results if data is not None]
+    return Dataset.concat(parts), [its for _, its in results]
+
+
+def _rollout(task: tuple[int, Problem], c: dict) -> tuple[Dataset | None, int]:
+    """One DAgger rollout: the expert-labelled records of problem ``i`` and its iterations."""
+    i, p = task
+    s = DaggerSampler(c["actor"], c["beta"], c["batch"], c["step_size"], c["stuck_threshold"], c["uniform_floor"],
+                      c["max_iterations"])
+    planner = RRT(p, step_size=c["step_size"], sampler=s, seed=c["seed"] + i)
+    r = planner.solve(max_iterations=c["max_iterations"])
+    recs = planner.sampler.records
+    if not recs:
+        return None, r.iterations
+    it = np.array([x[3] for x in recs], dtype=np.float64)
+    # return-to-go of -reward_scale per remaining iteration, discounted as PPO will
+    k = r.iterations - it
+    gamma = c["gamma"]
+    value = -c["reward_scale"] * (1.0 - gamma**k) / (1.0 - gamma)
+    return Dataset(np.stack([x[0] for x in recs]), np.stack([x[1] for x in recs]).astype(np.float32),
+                   np.array([x[2] for x in recs], dtype=np.int64), value.astype(np.float32)), r.iterations
 
 
 def behaviour_cloning(policy, data: Dataset, *, epochs: int, batch_size: int, lr: float, seed: int,

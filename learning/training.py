@@ -36,6 +36,7 @@ from learning.policy_sampler import OBS_VERSION, PolicySampler
 from planners import RRT
 from planners.base.fileio import InputError, atomic_path, atomic_write_text, check_number
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
+from planners.tools.parallel import Backend
 
 
 @dataclass
@@ -159,18 +160,28 @@ def _maps(cfg: TrainConfig, rng: np.random.Generator, per_family: int, seed0: in
     return out
 
 
-def validation_score(actor: FastActor, cfg: TrainConfig) -> tuple[float, dict]:
-    """Geometric mean over families of the median iterations / lower bound on validation maps."""
-    sampler = PolicySampler(actor, cfg.sampler_config())
-    per_family = {}
-    for f in cfg.families:
-        ratios = []
-        for i in range(cfg.validation_maps):
-            p = generate(f, VALIDATION_SEED0 + i, cfg.sizes[i % len(cfg.sizes)], goal_tolerance=cfg.goal_tolerance)
-            r = RRT(p, step_size=cfg.step_size, sampler=sampler, seed=i).solve(max_iterations=20000)
-            ratios.append(r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0)
-        per_family[f] = float(np.median(ratios))
+def validation_score(actor: FastActor, cfg: TrainConfig, backend: Backend | None = None) -> tuple[float, dict]:
+    """Geometric mean over families of the median iterations / lower bound on validation maps.
+
+    The runs go to ``backend`` (default: this process) with the actor shipped once per worker.
+    """
+    tasks = [(f, i) for f in cfg.families for i in range(cfg.validation_maps)]
+    context = {"actor": actor, "cfg": cfg}
+    ratios = backend.map(_validation_run, tasks, context=context) if backend is not None else [
+        _validation_run(t, context) for t in tasks]
+    per_family = {f: float(np.median([r for (g, _), r in zip(tasks, ratios, strict=True) if g == f]))
+                  for f in cfg.families}
     return float(np.exp(np.mean(np.log(list(per_family.values()))))), per_family
+
+
+def _validation_run(task: tuple[str, int], context: dict) -> float:
+    """Iterations / lower bound of the policy on validation map ``i`` of a family (20,000 if unsolved)."""
+    f, i = task
+    cfg = context["cfg"]
+    sampler = PolicySampler(context["actor"], cfg.sampler_config())
+    p = generate(f, VALIDATION_SEED0 + i, cfg.sizes[i % len(cfg.sizes)], goal_tolerance=cfg.goal_tolerance)
+    r = RRT(p, step_size=cfg.step_size, sampler=sampler, seed=i).solve(max_iterations=20000)
+    return r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0
 
 
 class _MixedFamilies:
@@ -329,8 +340,11 @@ def _logger(run: Path, keep_rows: int | None, stdout: bool) -> tuple[_RunLogger,
 
 
 def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False, progress: bool = True,
-          log_stdout: bool = True) -> Path:
+          log_stdout: bool = True, backend: Backend | None = None) -> Path:
     """Run (or resume) training; returns the path of the final checkpoint ``<run>/final.zip``.
+
+    DAgger's rollouts and the validation runs go to ``backend`` (default: this process); the weights
+    do not depend on it.
 
     A resumed run ends with the same weights, bit for bit, as one that was never interrupted:
     each DAgger round depends only on the committed weights and data, and each PPO segment
@@ -357,7 +371,8 @@ def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False,
     env = make_env(cfg, cfg.seed)
     logger, csv_log = _logger(run, state["log_rows"] if resume else None, log_stdout)
     try:
-        phases = _TrainingRun(cfg, run, state, env, logger, csv_log, resume=resume, progress=progress)
+        phases = _TrainingRun(cfg, run, state, env, logger, csv_log, resume=resume, progress=progress,
+                              backend=backend)
         phases.dagger()
         phases.ppo()
         return phases.select()
@@ -383,12 +398,13 @@ class _TrainingRun:
     """
 
     def __init__(self, cfg: TrainConfig, run: Path, state: dict, env, logger: _RunLogger, csv_log: _ResumableCSV, *,
-                 resume: bool, progress: bool) -> None:
+                 resume: bool, progress: bool, backend: Backend | None = None) -> None:
         from stable_baselines3 import PPO
 
         from learning.extractor import policy_kwargs
 
         self.cfg, self.run, self.state, self.resume, self.progress = cfg, run, state, resume, progress
+        self.backend = backend
         self.logger, self.csv_log = logger, csv_log
         if resume:  # our own run's checkpoint: SB3's full load (it unpickles; never point it at others' files)
             self.model = PPO.load(run / "checkpoint.zip", env=env, device="cpu")
@@ -425,12 +441,12 @@ class _TrainingRun:
             new, its = collect(problems, actor, beta, seed=cfg.seed * 1_000_003 + k * 10_007, batch=cfg.batch,
                                step_size=cfg.step_size, stuck_threshold=cfg.stuck_threshold,
                                uniform_floor=cfg.uniform_floor, max_iterations=cfg.max_iterations, gamma=cfg.gamma,
-                               reward_scale=cfg.reward_scale)
+                               reward_scale=cfg.reward_scale, backend=self.backend)
             data = new if data is None else Dataset.concat([data, new])
             # with shaping the critic must predict shaped returns: leave it to PPO's warm-up
             stats = behaviour_cloning(model.policy, data, epochs=cfg.bc_epochs, batch_size=cfg.bc_batch,
                                       lr=cfg.bc_lr, seed=cfg.seed + k, value_weight=0.0 if cfg.shaping else 0.5)
-            score, fam = validation_score(FastActor(model.policy.state_dict()), cfg)
+            score, fam = validation_score(FastActor(model.policy.state_dict()), cfg, self.backend)
             self.log({**stats, "dagger/round": k, "dagger/beta": beta, "dagger/samples": len(data),
                       "dagger/median_iterations": float(np.median(its)),
                       "dagger/collect_seconds": time.perf_counter() - t0,
@@ -467,9 +483,9 @@ class _TrainingRun:
     def select(self) -> Path:
         """Keep PPO's or imitation's weights, whichever scores better on the validation maps; write ``final.zip``."""
         cfg, model = self.cfg, self.model
-        ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg)
+        ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg, self.backend)
         _, imitation_params = read_sb3_zip(self.run / "imitation.zip")
-        bc_score, bc_fam = validation_score(FastActor(imitation_params), cfg)
+        bc_score, bc_fam = validation_score(FastActor(imitation_params), cfg, self.backend)
         chosen = "ppo" if ppo_score <= bc_score else "imitation"
         summary = {"chosen": chosen, "validation_ppo": ppo_score, "validation_imitation": bc_score,
                    "validation_ppo_families": ppo_fam, "validation_imitation_families": bc_fam}

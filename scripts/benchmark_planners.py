@@ -29,6 +29,7 @@ from planners.base.fileio import atomic_write_text
 from planners.maps.generators import FAMILIES, generate
 from planners.tools import benchmark, ompl_bridge
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
+from planners.tools.parallel import BACKENDS, make_backend
 
 
 def map_set(args) -> dict[str, list[Problem]]:
@@ -118,14 +119,11 @@ def growth(args, use_ompl: bool, d: Path | None) -> tuple[list[dict], list[dict]
 
 
 def all_planners(maps, args) -> list[benchmark.Run]:
-    records = []
-    for name, problems in maps.items():
-        for label in benchmark.SETUPS:
-            records += [benchmark.run_one(p, label, step=args.step, seed=i, max_iterations=args.max_iterations,
-                                          map_name=name)
-                        for i, p in enumerate(problems)]
-        print(f"  {name}: done", flush=True)
-    return records
+    backend = make_backend(args.backend, processes=args.processes, address=args.address)
+    try:
+        return benchmark.run_all_setups(maps, step=args.step, max_iterations=args.max_iterations, backend=backend)
+    finally:
+        backend.close()
 
 
 def write_ompl_logs(records: list[benchmark.Run], args, out_dir: Path) -> list[Path]:
@@ -168,7 +166,16 @@ def main(argv=None) -> int:
     ap.add_argument("--no-ompl", action="store_true")
     ap.add_argument("--quick", action="store_true", help="3 seeds, 2 scenarios, growth to 10k only")
     ap.add_argument("--out", type=Path, default=Path("results/benchmark_planners"))
+    ap.add_argument("--backend", choices=BACKENDS, default="local",
+                    help="where the all-planner comparison runs (the timed ours-vs-OMPL sections stay serial)")
+    ap.add_argument("--processes", type=int, default=1,
+                    help="workers for it (1: serial; more share the cores, so times are not comparable)")
+    ap.add_argument("--address", default=None, help="ray backend: the cluster to join (default: start a local one)")
     args = ap.parse_args(argv)
+    if args.processes < 1:
+        ap.error(f"--processes must be at least 1, got {args.processes}")
+    if args.address is not None and args.backend != "ray":
+        ap.error("--address needs --backend ray")
     if args.quick:
         args.seeds, args.scenarios = 3, 2
     use_ompl = not args.no_ompl and ompl_bridge.available()

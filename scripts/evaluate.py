@@ -3,6 +3,7 @@
     python scripts/evaluate.py                       # default map set, shipped checkpoint
     python scripts/evaluate.py --quick               # fewer test queries, same tuning: about a minute
     python scripts/evaluate.py --policy runs/guided/final.zip --processes 2
+    python scripts/evaluate.py --backend ray --address auto                        # on your Ray cluster
     python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v0   # your SB3 model too
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
 
@@ -31,6 +32,7 @@ from planners.base.fileio import InputError, atomic_write_text
 from planners.base.registry import planner_name_arg
 from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table, write_runs_csv
+from planners.tools.parallel import BACKENDS, make_backend
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
@@ -65,7 +67,11 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--step", type=float, default=4.0)
     ap.add_argument("--tolerance", type=float, default=4.0)
     ap.add_argument("--max-iterations", type=int, default=20000)
-    ap.add_argument("--processes", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--processes", type=int, default=os.cpu_count() or 1,
+                    help="local workers (local backend, or a local Ray instance)")
+    ap.add_argument("--backend", choices=BACKENDS, default="local",
+                    help="where runs execute: a local process pool (default) or Ray (pip install -e '.[distributed]')")
+    ap.add_argument("--address", default=None, help="ray backend: the cluster to join (default: start a local one)")
     ap.add_argument("--no-expert", action="store_true", help="skip the privileged reference")
     ap.add_argument("--quick", action="store_true",
                     help="25 test and 25 shifted maps, 4 test scenarios, 2 seeds, no other planners; tuning as in "
@@ -101,6 +107,8 @@ def parse_args(argv=None) -> argparse.Namespace:
         if name in args.user_samplers:
             ap.error(f"--sampler name {name!r} is given twice")
         args.user_samplers[name] = spec
+    if args.address is not None and args.backend != "ray":
+        ap.error("--address needs --backend ray")
     unknown = set(args.families) - set(FAMILIES)
     if unknown:
         ap.error(f"unknown families {sorted(unknown)}; choose from {FAMILIES}")
@@ -126,15 +134,29 @@ def main(argv=None) -> int:
     cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": args.tolerance,
            "policy": str(args.policy), "step": args.step,
            "max_iterations": args.max_iterations, "user_samplers": args.user_samplers}
+    try:
+        backend = make_backend(args.backend, processes=args.processes, address=args.address,
+                               worker_init=E.worker_init)
+    except ImportError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        return _compare(args, queries, cfg, backend, t0=time.perf_counter())
+    finally:
+        backend.close()
+
+
+def _compare(args, queries, cfg, backend, t0: float) -> int:
+    """The runs, tables, plots and logs of the comparison, executed on ``backend``."""
     users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
     main_samplers = ["uniform", *biases, "policy", *users] + ([] if args.no_expert else ["expert (reference)"])
     tasks = E.tuning_tasks(queries, "RRT", cfg) + E.constant_tuning_tasks(queries, "RRT", cfg)
     tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in main_samplers
               for seed in range(args.seeds)]
-    print(f"{len(tasks)} RRT runs on {len(queries)} queries ({args.processes} processes)", flush=True)
-    t0 = time.perf_counter()
-    runs = E.run_all(tasks, args.processes)
+    print(f"{len(tasks)} RRT runs on {len(queries)} queries ({args.backend} backend, {backend.workers} workers)",
+          flush=True)
+    runs = E.run_all(tasks, backend)
     # a shifted map set has no tuning split of its own: it keeps its family's tuned settings
     best = E.tuned_for_shifted(E.best_bias(runs), queries)
     # the ablation (the policy's action classes, constant distribution) on the test split, at the frontier
@@ -142,7 +164,7 @@ def main(argv=None) -> int:
     constants = E.tuned_for_shifted(E.best_constant(runs), queries)
     ablation_tasks = E.constant_test_tasks(queries, "RRT", cfg, constants, args.seeds)
     print(f"{len(ablation_tasks)} RRT runs of the constant-distribution ablation at its tuned settings", flush=True)
-    ablation = E.run_all(ablation_tasks, args.processes)
+    ablation = E.run_all(ablation_tasks, backend)
     runs += [dataclasses.replace(r, sampler=E.CONSTANT) for r in ablation]
     # other planners: uniform, default and best goal bias, policy, on the generated families (not shifted)
     extra = []
@@ -153,7 +175,7 @@ def main(argv=None) -> int:
                   for s in ("uniform", *biases, "policy", *users)]
     if extra:
         print(f"{len(extra)} runs of {', '.join(args.other_planners)}", flush=True)
-        runs += E.run_all(extra, args.processes)
+        runs += E.run_all(extra, backend)
         best = E.tuned_for_shifted(E.best_bias(runs), queries)
     mai = sorted({q.family for q in queries if not q.size})
     if len(mai) > 1:  # one pooled row over every MovingAI map, beside the per-map rows

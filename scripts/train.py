@@ -3,6 +3,7 @@
     python scripts/train.py                                   # the shipped checkpoint's recipe
     python scripts/train.py --name mine --ppo-steps 100000    # variations
     python scripts/train.py --resume                          # continue an interrupted run
+    python scripts/train.py --backend ray --address auto      # rollouts and validation on your Ray cluster
     tensorboard --logdir runs/                                # curves
 
 Writes runs/<name>/{config.json, checkpoint.zip, imitation.zip, final.zip, state.json, tb/}. A crash,
@@ -23,8 +24,10 @@ import sys
 import time
 from pathlib import Path
 
+from learning.evaluation import worker_init
 from learning.training import TrainConfig, read_state, train
 from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text
+from planners.tools.parallel import BACKENDS, make_backend
 
 
 def _where(state: dict, cfg: TrainConfig) -> str:
@@ -40,6 +43,10 @@ def main(argv=None) -> int:
     ap.add_argument("--resume", action="store_true")
     ap.add_argument("--export", type=Path, help="copy final.zip here (and its config as .json beside it)")
     ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--backend", choices=BACKENDS, default="local",
+                    help="where DAgger's rollouts and the validation runs execute (the weights do not depend on it)")
+    ap.add_argument("--processes", type=int, default=1, help="workers for them (1: this process)")
+    ap.add_argument("--address", default=None, help="ray backend: the cluster to join (default: start a local one)")
     for f in dataclasses.fields(TrainConfig):
         if f.name == "extra":
             continue
@@ -53,6 +60,10 @@ def main(argv=None) -> int:
             typ = {"int": int, "float": float, "str": str}[f.type]
             ap.add_argument(flag, type=typ, help=f"default {f.default!r}")
     args = ap.parse_args(argv)
+    if args.processes < 1:
+        ap.error(f"--processes must be at least 1, got {args.processes}")
+    if args.address is not None and args.backend != "ray":
+        ap.error("--address needs --backend ray")
     try:
         cfg = TrainConfig.from_json(args.config) if args.config else TrainConfig()
         changes = {}
@@ -68,7 +79,13 @@ def main(argv=None) -> int:
     run = args.out / cfg.name
     t0 = time.perf_counter()
     try:
-        final = train(cfg, args.out, resume=args.resume, progress=not args.no_progress, log_stdout=False)
+        backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=worker_init)
+    except ImportError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        final = train(cfg, args.out, resume=args.resume, progress=not args.no_progress, log_stdout=False,
+                      backend=backend)
     except KeyboardInterrupt:
         try:
             state = read_state(run)
@@ -84,6 +101,8 @@ def main(argv=None) -> int:
     except (InputError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        backend.close()
     minutes = (time.perf_counter() - t0) / 60
     summary = json.loads((final.parent / "summary.json").read_text())
     print(f"trained in {minutes:.1f} min; kept the {summary['chosen']} policy "

@@ -101,7 +101,7 @@ def test_tuned_bias_beats_or_ties_uniform_on_real_tuning_maps():
     cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": "", "step": 4.0, "max_iterations": 20000}
     n_tune = _load_evaluate().parse_args(["--quick"]).tuning_maps
     qs = E.generated_queries(["narrow_passage"], 128, n_test=0, n_tune=n_tune)
-    runs = E.run_all(E.tuning_tasks(qs, "RRT", cfg), processes=1, progress=False)
+    runs = E.run_all(E.tuning_tasks(qs, "RRT", cfg), 1, progress=False)
     b = E.best_bias(runs)[("narrow_passage", "RRT")]
 
     def median(sampler):

@@ -45,6 +45,15 @@ def test_seeded_training_is_reproducible(trained, tmp_path):
     assert not torch.equal(_weights(other)["action_net.weight"], a["action_net.weight"])
 
 
+def test_training_on_ray_reaches_the_same_weights(trained, tmp_path, ray_backend):
+    """DAgger's rollouts and the validation runs on Ray workers: the weights do not depend on the backend."""
+    final, _ = trained
+    on_ray = train(TINY, tmp_path, progress=False, log_stdout=False, backend=ray_backend)
+    a, b = _weights(final), _weights(on_ray)
+    assert a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
+    assert (final.parent / "summary.json").read_text() == (on_ray.parent / "summary.json").read_text()
+
+
 def test_training_writes_config_checkpoints_and_logs(trained):
     final, out = trained
     run = out / "tiny"

@@ -1,0 +1,152 @@
+"""Searches over the training recipe and over the baselines' parameters, on Ray Tune.
+
+Every trial is scored on the validation maps (seeds from ``VALIDATION_SEED0``): a recipe trial trains
+a policy and scores it as training's own model selection does (:func:`learning.training.validation_score`);
+a baseline trial scores goal bias or the constant-distribution ablation at one setting the same way.
+Tuning and test maps are never looked at, so a chosen config can be evaluated honestly afterwards.
+Tune keeps the experiment's state on disk: an interrupted sweep resumes (:func:`run_sweep` with
+``resume=True``) and reruns only the trials that had not finished. Each trial's config and score go to
+TensorBoard (``tensorboard --logdir <out>/<name>``).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, replace
+from pathlib import Path
+
+import numpy as np
+
+from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
+from learning.training import TrainConfig, train
+from planners import RRT, GoalBiasedSampler
+from planners.base.fileio import InputError, atomic_write_text
+from planners.maps.generators import VALIDATION_SEED0, generate
+
+METRIC = "validation_score"  # geometric mean over families of median iterations / lower bound (lower is better)
+
+#: The recipe search space: values per ``TrainConfig`` field, drawn at random per trial.
+RECIPE_SPACE = {
+    "dagger_rounds": [4, 6, 8, 10],
+    "maps_per_round": [50, 100, 150],
+    "bc_epochs": [4, 6, 8],
+    "bc_lr": [3e-4, 1e-3, 3e-3],
+    "uniform_floor": [0.02, 0.05, 0.1],
+    "stuck_threshold": [8, 16, 32],
+}
+#: Goal biases and ablation frontier probabilities a baseline sweep tries (a grid, every value once).
+BASELINE_GRID = [("goal_bias", b) for b in (0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5)] + [
+    ("constant", p) for p in FRONTIER_GRID]
+
+
+def baseline_score(kind: str, value: float, cfg: TrainConfig) -> tuple[float, dict]:
+    """The validation score of goal bias ``value`` or of the ablation at frontier probability ``value``.
+
+    Same maps, seeds and metric as a trained policy's validation score under ``cfg``.
+    """
+    per_family = {}
+    for f in cfg.families:
+        ratios = []
+        for i in range(cfg.validation_maps):
+            sampler = GoalBiasedSampler(value) if kind == "goal_bias" else ConstantGuidedSampler(
+                value, step_size=cfg.step_size)
+            p = generate(f, VALIDATION_SEED0 + i, cfg.sizes[i % len(cfg.sizes)], goal_tolerance=cfg.goal_tolerance)
+            r = RRT(p, step_size=cfg.step_size, sampler=sampler, seed=i).solve(max_iterations=20000)
+            ratios.append(r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0)
+        per_family[f] = float(np.median(ratios))
+    return float(np.exp(np.mean(np.log(list(per_family.values()))))), per_family
+
+
+def _config(base: dict) -> TrainConfig:
+    d = dict(base)
+    for k in ("families", "sizes", "dagger_betas", "conv_channels"):
+        d[k] = tuple(d[k])
+    return TrainConfig(**d)
+
+
+def _recipe_trial(params: dict, base: dict) -> None:
+    from ray import tune
+
+    cfg = replace(_config(base), name="trial", **params)
+    cfg.check("sweep trial")
+    run_dir = Path(tune.get_context().get_trial_dir())
+    final = train(cfg, run_dir, progress=False, log_stdout=False)
+    summary = json.loads((final.parent / "summary.json").read_text())
+    score = min(summary["validation_ppo"], summary["validation_imitation"])
+    tune.report({METRIC: score, "kept": summary["chosen"], "checkpoint": str(final)})
+
+
+def _baseline_trial(params: dict, base: dict) -> None:
+    from ray import tune
+
+    kind, value = params["baseline"]
+    score, per_family = baseline_score(kind, float(value), _config(base))
+    tune.report({METRIC: score, **{f"validation_{f}": v for f, v in per_family.items()}})
+
+
+def run_sweep(kind: str, out_dir: str | Path, *, name: str | None = None, samples: int = 20, seed: int = 0,
+              base: TrainConfig | None = None, space: dict | None = None, resume: bool = False,
+              address: str | None = None, processes: int | None = None) -> dict:
+    """Run (or resume) a sweep and return the chosen trial: ``{"config": ..., "score": ...}``.
+
+    Args:
+        kind: ``"recipe"`` (random search over ``space``) or ``"baselines"`` (every setting of ``BASELINE_GRID``).
+        out_dir: Tune's storage folder; the sweep lives in ``out_dir/name``, the choice in ``name.chosen.json``.
+        name: The sweep's folder name; default ``"<kind>-sweep"``.
+        samples: Recipe trials.
+        seed: Seeds the recipe search's draws.
+        base: The recipe the search varies (and whose validation maps score every trial).
+        space: Values per ``TrainConfig`` field for a recipe search; default ``RECIPE_SPACE``.
+        resume: Continue the sweep stored at ``out_dir/name`` (finished trials are kept, not rerun).
+        address: A Ray cluster to join; default a local instance.
+        processes: CPUs of that local instance; default ``os.cpu_count()``.
+    """
+    import os
+
+    import ray
+    from ray import tune
+    from ray.tune.logger import CSVLoggerCallback, JsonLoggerCallback, TBXLoggerCallback
+    from ray.tune.search.basic_variant import BasicVariantGenerator
+
+    if kind not in ("recipe", "baselines"):
+        raise ValueError(f"unknown sweep {kind!r}; choose recipe or baselines")
+    base = base or TrainConfig()
+    base.check("sweep base config")
+    name = name or f"{kind}-sweep"
+    storage = Path(out_dir).resolve()
+    path = storage / name
+    if not ray.is_initialized():
+        kwargs = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
+        if address is None:
+            kwargs.update(num_cpus=processes or os.cpu_count() or 1, _node_ip_address="127.0.0.1")
+        ray.init(address=address, **kwargs)
+    fn = _recipe_trial if kind == "recipe" else _baseline_trial
+    trainable = tune.with_resources(tune.with_parameters(fn, base=asdict(base)), {"cpu": 1})
+    if resume:
+        if not tune.Tuner.can_restore(str(path)):
+            raise InputError(f"nothing to resume in {path}: no Tune experiment there (start it without --resume)")
+        tuner = tune.Tuner.restore(str(path), trainable=trainable, resume_unfinished=True, resume_errored=True)
+    else:
+        if kind == "recipe":
+            space = {k: tune.choice(list(v)) for k, v in (space or RECIPE_SPACE).items()}
+            search = BasicVariantGenerator(random_state=np.random.RandomState(seed))  # Tune's API takes this type
+            tune_config = tune.TuneConfig(metric=METRIC, mode="min", num_samples=samples, search_alg=search)
+        else:
+            space = {"baseline": tune.grid_search([list(b) for b in BASELINE_GRID])}
+            tune_config = tune.TuneConfig(metric=METRIC, mode="min", num_samples=1)
+        callbacks = [CSVLoggerCallback(), JsonLoggerCallback(), TBXLoggerCallback()]
+        tuner = tune.Tuner(trainable, param_space=space, tune_config=tune_config,
+                           run_config=tune.RunConfig(name=name, storage_path=str(storage), callbacks=callbacks,
+                                                     verbose=0))
+    results = tuner.fit()
+    errors = [r.error for r in results if r.error is not None]
+    if errors:
+        raise RuntimeError(f"{len(errors)} of {len(results)} trials failed; the first: {errors[0]!r}")
+    best = results.get_best_result(metric=METRIC, mode="min")
+    chosen = {"kind": kind, "config": best.config, "score": best.metrics[METRIC], "trials": len(results),
+              "scores": sorted(float(r.metrics[METRIC]) for r in results),
+              "picked_on": f"validation maps: seeds {VALIDATION_SEED0}+, {base.validation_maps} per family"}
+    if kind == "recipe":
+        chosen["recipe"] = {**asdict(base), **best.config}
+    atomic_write_text(storage / f"{name}.chosen.json", json.dumps(chosen, indent=2, default=str) + "\n")
+    return chosen

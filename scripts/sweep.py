@@ -1,0 +1,72 @@
+"""Search the training recipe, or the baselines' parameters, on Ray Tune; pick on validation maps only.
+
+    python scripts/sweep.py recipe --samples 100            # random search over learning.sweep.RECIPE_SPACE
+    python scripts/sweep.py baselines                        # goal bias and the ablation's p, every setting
+    python scripts/sweep.py recipe --samples 100 --resume    # continue an interrupted sweep
+    python scripts/sweep.py recipe --address auto            # on your Ray cluster
+    tensorboard --logdir results/sweeps                      # every trial's config and validation score
+
+Needs the distributed extra: pip install -c constraints.txt -e ".[distributed]". Writes Tune's
+experiment to <out>/<name>/ and the chosen trial to <out>/<name>.chosen.json (for a recipe sweep, the
+whole recipe: pass it to scripts/train.py --config after removing the non-recipe keys, or read it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from learning.training import TrainConfig
+from planners.base.fileio import InputError
+
+#: --quick: a tiny recipe (one family, 64x64, two DAgger rounds, a short PPO) and two validation maps per
+#: family, so a whole sweep runs in about a minute; the same code as a full sweep.
+QUICK_BASE = dict(name="quick", families=("forest",), sizes=(64,), dagger_rounds=2, maps_per_round=16, bc_epochs=4,
+                  ppo_steps=1024, value_warmup=512, ppo_n_steps=256, ppo_batch=128, ppo_epochs=2,
+                  validation_maps=2, checkpoint_every=10**9, max_iterations=1500)
+QUICK_SPACE = {"bc_lr": [3e-4, 1e-3, 3e-3], "uniform_floor": [0.02, 0.05, 0.1]}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("kind", choices=("recipe", "baselines"))
+    ap.add_argument("--samples", type=int, default=20, help="recipe trials (random search)")
+    ap.add_argument("--seed", type=int, default=0, help="seeds the recipe search's draws")
+    ap.add_argument("--config", type=Path, help="JSON file of TrainConfig fields: the recipe the search varies")
+    ap.add_argument("--name", default=None, help="the sweep's folder under --out (default <kind>-sweep)")
+    ap.add_argument("--out", type=Path, default=Path("results/sweeps"))
+    ap.add_argument("--resume", action="store_true", help="continue the sweep stored under --out/--name")
+    ap.add_argument("--address", default=None, help="a Ray cluster to join (default: start a local one)")
+    ap.add_argument("--processes", type=int, default=None, help="CPUs of the local Ray instance")
+    ap.add_argument("--quick", action="store_true", help="a tiny recipe and space: the whole sweep in about a minute")
+    args = ap.parse_args(argv)
+    if args.samples < 1:
+        ap.error(f"--samples must be at least 1, got {args.samples}")
+    try:
+        from learning.sweep import run_sweep
+    except ImportError as exc:
+        print(f'error: sweeps need Ray Tune: pip install -c constraints.txt -e ".[distributed]" ({exc})',
+              file=sys.stderr)
+        return 2
+    try:
+        base = TrainConfig.from_json(args.config) if args.config else TrainConfig(**QUICK_BASE) if args.quick \
+            else TrainConfig()
+        t0 = time.perf_counter()
+        chosen = run_sweep(args.kind, args.out, name=args.name, samples=args.samples, seed=args.seed, base=base,
+                           space=QUICK_SPACE if args.quick else None, resume=args.resume, address=args.address,
+                           processes=args.processes)
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    name = args.name or f"{args.kind}-sweep"
+    print(f"{chosen['trials']} trials in {(time.perf_counter() - t0) / 60:.1f} min; chosen on {chosen['picked_on']}: "
+          f"{json.dumps(chosen['config'])} (validation score {chosen['score']:.3g}); "
+          f"{args.out / (name + '.chosen.json')}; TensorBoard: tensorboard --logdir {args.out / name}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
