@@ -54,3 +54,36 @@ def test_baseline_score_is_the_validation_metric():
         assert per_family[f] == pytest.approx(np.median(ratios))
     assert score == pytest.approx(np.sqrt(per_family["forest"] * per_family["maze"]))
     assert ("goal_bias", 0.0) in BASELINE_GRID and any(k == "constant" for k, _ in BASELINE_GRID)
+
+
+def test_an_interrupted_sweep_resumes_and_keeps_its_finished_trials(tmp_path):
+    """Ctrl-C in the middle of a sweep, then --resume: every trial ends finished, none run twice."""
+    import signal
+    import subprocess
+    import time
+
+    script = Path(__file__).resolve().parents[1] / "scripts" / "sweep.py"
+    args = [sys.executable, str(script), "recipe", "--quick", "--samples", "2", "--processes", "1",
+            "--out", str(tmp_path)]
+    sweep_dir = tmp_path / "recipe-sweep"
+
+    def finished() -> list[Path]:
+        return [p for p in sweep_dir.glob("_recipe*/result.json") if p.stat().st_size > 0] if sweep_dir.is_dir() \
+            else []
+
+    proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 240
+    while not finished() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.2)
+    first = finished()
+    assert first, "no trial finished before the deadline"
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=120)
+    assert len(finished()) < 2, "the sweep ended before it could be interrupted"
+    first_result = first[0].read_text()
+    done = subprocess.run([*args, "--resume"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    results = finished()
+    assert len(results) == 2 and all(len(p.read_text().splitlines()) == 1 for p in results)
+    assert first[0].read_text() == first_result  # the trial finished before the interruption was kept
+    assert json.loads((tmp_path / "recipe-sweep.chosen.json").read_text())["trials"] == 2
