@@ -22,6 +22,7 @@ from learning.training import TrainConfig, train
 from planners import RRT, GoalBiasedSampler
 from planners.base.fileio import InputError, atomic_write_text
 from planners.maps.generators import VALIDATION_SEED0, generate
+from planners.tools.parallel import make_backend
 
 METRIC = "validation_score"  # geometric mean over families of median iterations / lower bound (lower is better)
 
@@ -101,25 +102,26 @@ def run_sweep(kind: str, out_dir: str | Path, *, name: str | None = None, sample
         address: A Ray cluster to join; default a local instance.
         processes: CPUs of that local instance; default ``os.cpu_count()``.
     """
-    import os
-
-    import ray
-    from ray import tune
-    from ray.tune.logger import CSVLoggerCallback, JsonLoggerCallback, TBXLoggerCallback
-    from ray.tune.search.basic_variant import BasicVariantGenerator
-
     if kind not in ("recipe", "baselines"):
         raise ValueError(f"unknown sweep {kind!r}; choose recipe or baselines")
     base = base or TrainConfig()
     base.check("sweep base config")
     name = name or f"{kind}-sweep"
     storage = Path(out_dir).resolve()
+    cluster = make_backend("ray", processes=processes, address=address)  # joins, or starts a local instance
+    try:
+        return _tune(kind, storage, name, samples, seed, base, space, resume)
+    finally:
+        cluster.close()
+
+
+def _tune(kind: str, storage: Path, name: str, samples: int, seed: int, base: TrainConfig, space: dict | None,
+          resume: bool) -> dict:
+    from ray import tune
+    from ray.tune.logger import CSVLoggerCallback, JsonLoggerCallback, TBXLoggerCallback
+    from ray.tune.search.basic_variant import BasicVariantGenerator
+
     path = storage / name
-    if not ray.is_initialized():
-        kwargs = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
-        if address is None:
-            kwargs.update(num_cpus=processes or os.cpu_count() or 1, _node_ip_address="127.0.0.1")
-        ray.init(address=address, **kwargs)
     fn = _recipe_trial if kind == "recipe" else _baseline_trial
     trainable = tune.with_resources(tune.with_parameters(fn, base=asdict(base)), {"cpu": 1})
     if resume:

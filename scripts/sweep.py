@@ -45,12 +45,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.samples < 1:
         ap.error(f"--samples must be at least 1, got {args.samples}")
-    try:
-        from learning.sweep import run_sweep
-    except ImportError as exc:
-        print(f'error: sweeps need Ray Tune: pip install -c constraints.txt -e ".[distributed]" ({exc})',
-              file=sys.stderr)
-        return 2
+    from learning.sweep import run_sweep
+
     try:
         base = TrainConfig.from_json(args.config) if args.config else TrainConfig(**QUICK_BASE) if args.quick \
             else TrainConfig()
@@ -58,7 +54,7 @@ def main(argv=None) -> int:
         chosen = run_sweep(args.kind, args.out, name=args.name, samples=args.samples, seed=args.seed, base=base,
                            space=QUICK_SPACE if args.quick else None, resume=args.resume, address=args.address,
                            processes=args.processes)
-    except InputError as exc:
+    except (InputError, ImportError) as exc:  # ImportError: Ray is not installed (the distributed extra)
         print(f"error: {exc}", file=sys.stderr)
         return 2
     name = args.name or f"{args.kind}-sweep"

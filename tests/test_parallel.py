@@ -121,3 +121,11 @@ def test_evaluate_script_takes_backend_flags(capsys):
         ev.parse_args(["--address", "auto"])
     assert "--address needs --backend ray" in capsys.readouterr().err
     assert ev.parse_args(["--backend", "ray", "--address", "auto"]).backend == "ray"
+
+
+def test_without_ray_the_error_names_the_extra(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "ray", None)  # what a core install sees
+    with pytest.raises(ImportError, match=r'pip install -c constraints.txt -e "\.\[distributed\]"'):
+        make_backend("ray")
