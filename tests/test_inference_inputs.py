@@ -1,0 +1,72 @@
+"""Issue 18.4: at inference the learned sampler sees only what a planner has (map, tree, start, goal).
+
+No grid search, distance field or shortest path: those are the privileged expert's (training only).
+Checked twice: statically, no module on the inference path imports the grid search or the expert; and
+at run time, with every grid-search entry point and the expert made to raise, the policy plans the
+same runs as before, fused into RRT's loop and not.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from learning import PolicySampler
+from planners import RRT
+from planners.maps.generators import TEST_SEED0, generate
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = ROOT / "checkpoints" / "guided.zip"
+INFERENCE = ["learning/policy_sampler.py", "learning/fast_policy.py", "learning/checkpoint.py",
+             *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "guidance").glob("*.py"))),
+             *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "kernels").glob("*.py")))]
+PRIVILEGED = ("planners.maps.gridsearch", "planners.maps.generators", "learning.expert")
+
+
+def _imports(path: Path) -> set[str]:
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            names.add(node.module)
+            names.update(f"{node.module}.{a.name}" for a in node.names)
+    return names
+
+
+@pytest.mark.parametrize("module", INFERENCE)
+def test_no_inference_module_imports_a_privileged_one(module):
+    bad = {n for n in _imports(ROOT / module) if n.startswith(PRIVILEGED)}
+    assert not bad, f"{module} imports {sorted(bad)}, which inference must not use"
+
+
+def test_the_policy_plans_the_same_runs_with_grid_search_and_expert_disabled(monkeypatch):
+    from learning import expert
+    from planners.maps import gridsearch
+
+    problems = [generate(f, TEST_SEED0 + 3, 96) for f in ("bugtrap", "maze", "narrow_passage")]
+
+    def runs():
+        out = []
+        for fuse in (True, False):
+            sampler = PolicySampler.load(SHIPPED, fuse=fuse)
+            for p in problems:
+                r = RRT(p, step_size=4.0, sampler=sampler, seed=0).solve(max_iterations=3000)
+                out.append((r.iterations, r.num_vertices, r.path.tobytes()))
+        return out
+
+    before = runs()
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("inference used the privileged grid search or expert")
+
+    for name in ("distance_field", "shortest_path", "shortest_path_length", "connected", "free_components",
+                 "_dijkstra", "_search", "_flood", "_components"):
+        monkeypatch.setattr(gridsearch, name, forbidden)
+    monkeypatch.setattr(expert.GeodesicExpert, "__init__", forbidden)
+    after = runs()
+    assert after == before
+    assert np.mean([b[0] for b in before]) < 3000  # the runs solve, so the policy did its work
