@@ -1,0 +1,97 @@
+"""How far can imitation take the learned sampler? Its teacher's own labels, executed, on validation maps.
+
+    python scripts/imitation_ceiling.py                  # 5 families, 40 validation maps each, 128x128
+    python scripts/imitation_ceiling.py --maps 10 --families bugtrap maze
+
+The policy is trained to imitate labels: the guided class holding the privileged expert's target, or
+the frontier once the tree has been stuck for ``stuck_threshold`` iterations (``learning.imitation``).
+A policy that imitated them perfectly would plan as the labels do when executed; that is the recipe's
+ceiling. Rows (RRT, step and tolerance 4, median iterations-to-solution, unsolved runs at the cap):
+
+- ``constant``: the ablation at the best frontier probability *on these maps* (the strongest ablation);
+- ``policy``: the checkpoint;
+- ``labels``: the expert's labels executed (the imitation target, stuck threshold as in training);
+- ``labels, no frontier fallback``: the same without the stuck rule (the action space given the route);
+- ``expert``: the privileged expert itself (samples along the shortest path, not through the classes).
+
+Each is also given over the iteration lower bound (grid shortest path / step, per run) and over the
+constant. Validation maps only: these numbers choose what to try next, never what to ship.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from learning import PolicySampler
+from learning import evaluation as E
+from learning.ablation import FRONTIER_GRID
+from learning.imitation import collect
+from planners.maps.generators import FAMILIES, VALIDATION_SEED0, generate
+from planners.tools.benchmark import markdown_table
+from planners.tools.parallel import BACKENDS, make_backend
+
+DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--policy", type=Path, default=DEFAULT_POLICY)
+    ap.add_argument("--families", nargs="+", default=list(FAMILIES))
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--maps", type=int, default=40, help="validation maps per family (one planner seed each)")
+    ap.add_argument("--max-iterations", type=int, default=20000)
+    ap.add_argument("--backend", choices=BACKENDS, default="local")
+    ap.add_argument("--processes", type=int, default=2)
+    ap.add_argument("--address", default=None)
+    args = ap.parse_args(argv)
+
+    config = PolicySampler.load(args.policy).config
+    step, tol = float(config["step_size"]), 4.0
+    stuck = int(config.get("stuck_threshold", 16))
+    cfg = {"movingai_dir": "", "tolerance": tol, "policy": str(args.policy), "step": step,
+           "max_iterations": args.max_iterations, "user_samplers": {}}
+    queries = [E.Query(f, VALIDATION_SEED0 + i, args.size, "validation") for f in args.families
+               for i in range(args.maps)]
+    samplers = ["policy", "expert (reference)", *(E.constant_sampler(p) for p in FRONTIER_GRID)]
+    tasks = [(q, "RRT", s, i, cfg) for s in samplers for i, q in enumerate(queries)]
+    backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
+    t0 = time.perf_counter()
+    its: dict[tuple[str, str], np.ndarray] = {}
+    lb: dict[str, np.ndarray] = {}
+    runs = E.run_all(tasks, backend, progress=False)
+    for s in samplers:
+        for f in args.families:
+            rs = [r for r in runs if r.sampler == s and r.map == f]
+            its[(f, s)] = np.array([r.iterations for r in rs], dtype=float)
+            lb[f] = np.array([r.lower_bound for r in rs], dtype=float)
+    labelled = {"labels": stuck, "labels, no frontier fallback": 10**9}
+    for name, threshold in labelled.items():
+        for f in args.families:
+            problems = [q.problem(None, tol) for q in queries if q.family == f]
+            # RRT seeds 0.. per problem, as the runs above (collect seeds problem i with seed + i)
+            _, n = collect(problems, None, 1.0, seed=0, batch=int(config["batch"]), step_size=step,
+                           stuck_threshold=threshold, uniform_floor=float(config["uniform_floor"]),
+                           max_iterations=args.max_iterations, gamma=0.99, reward_scale=1.0, backend=backend)
+            its[(f, name)] = np.array(n, dtype=float)
+    rows = []
+    for f in args.families:
+        best_p = min(FRONTIER_GRID, key=lambda p: np.median(its[(f, E.constant_sampler(p))]))
+        const = its[(f, E.constant_sampler(best_p))]
+        for label, key in (("constant (p=%g, best here)" % best_p, E.constant_sampler(best_p)), ("policy", "policy"),
+                           ("labels", "labels"), ("labels, no frontier fallback", "labels, no frontier fallback"),
+                           ("expert (reference)", "expert (reference)")):
+            x = its[(f, key)]
+            rows.append({"family": f, "sampler": label, "median iterations": f"{np.median(x):,.0f}",
+                         "solved": f"{np.mean(x < args.max_iterations):.2f}",
+                         "/ lower bound": f"{np.median(x / np.maximum(lb[f], 1.0)):.1f}",
+                         "/ constant": f"{np.median(x) / np.median(const):.2f}"})
+    print(markdown_table(rows))
+    print(f"\n{len(queries)} validation maps, {time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
