@@ -15,7 +15,10 @@ ceiling. Rows (RRT, step and tolerance 4, median iterations-to-solution, unsolve
 - ``expert``: the privileged expert itself (samples along the shortest path, not through the classes).
 
 Each is also given over the iteration lower bound (grid shortest path / step, per run) and over the
-constant. Validation maps only: these numbers choose what to try next, never what to ship.
+constant. A second table shows where the policy departs from its labels, in the states it visits
+itself (DAgger with the policy in control): the share of decisions labelled "frontier", the policy's
+probability of the label, and how often its most likely cell points within one of the 16 directions
+of the labelled cell. Validation maps only: these numbers choose what to try next, never what to ship.
 """
 
 from __future__ import annotations
@@ -30,7 +33,8 @@ from learning import PolicySampler
 from learning import evaluation as E
 from learning.ablation import FRONTIER_GRID
 from learning.imitation import collect
-from planners.maps.generators import FAMILIES, VALIDATION_SEED0, generate
+from planners.guidance.guided import ANGLES, FRONTIER
+from planners.maps.generators import FAMILIES, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import BACKENDS, make_backend
 
@@ -90,7 +94,34 @@ def main(argv=None) -> None:
                          "/ lower bound": f"{np.median(x / np.maximum(lb[f], 1.0)):.1f}",
                          "/ constant": f"{np.median(x) / np.median(const):.2f}"})
     print(markdown_table(rows))
+    print(markdown_table(departures(queries, args, config, backend)))
     print(f"\n{len(queries)} validation maps, {time.perf_counter() - t0:.0f} s")
+
+
+def departures(queries, args, config, backend) -> list[dict]:
+    """Per family: how the policy's decisions differ from the expert's labels in the policy's own states."""
+    actor = PolicySampler.load(args.policy).actor
+    rows = []
+    for f in args.families:
+        problems = [q.problem(None, 4.0) for q in queries if q.family == f]
+        data, _ = collect(problems, actor, 0.0, seed=0, batch=int(config["batch"]), step_size=float(config["step_size"]),
+                          stuck_threshold=int(config.get("stuck_threshold", 16)),
+                          uniform_floor=float(config["uniform_floor"]), max_iterations=args.max_iterations,
+                          gamma=0.99, reward_scale=1.0, backend=backend)
+        logits = np.stack([actor.logits(loc, vec) for loc, vec in zip(data.local, data.vector)]).astype(np.float64)
+        p = np.exp(logits - logits.max(1, keepdims=True))
+        p /= p.sum(1, keepdims=True)
+        label = data.label
+        ego = label != FRONTIER
+        top = p[:, :FRONTIER].argmax(1)
+        turn = np.abs(top % ANGLES - label % ANGLES)
+        turn = np.minimum(turn, ANGLES - turn)
+        p_label = p[np.arange(len(label)), label]
+        rows.append({"family": f, "decisions": len(label), "labelled frontier": f"{1 - ego.mean():.2f}",
+                     "p(label), frontier labels": f"{p_label[~ego].mean():.2f}",
+                     "p(label), cell labels": f"{p_label[ego].mean():.2f}",
+                     "top cell within 1 direction of the label": f"{(turn[ego] <= 1).mean():.2f}"})
+    return rows
 
 
 if __name__ == "__main__":

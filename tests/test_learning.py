@@ -328,6 +328,15 @@ def test_benchmark_policy_script_times_passes_and_queries(capsys):
         assert needle in out, needle
 
 
+def test_imitation_ceiling_script_reports_labels_beside_the_policy(capsys):
+    _script("imitation_ceiling").main(["--families", "forest", "--maps", "2", "--processes", "1",
+                                       "--max-iterations", "3000"])
+    out = capsys.readouterr().out
+    for needle in ("constant (p=", "| forest | policy |", "| forest | labels |", "labels, no frontier fallback",
+                   "expert (reference)", "top cell within 1 direction of the label"):
+        assert needle in out, needle
+
+
 def test_actor_with_other_convolution_kernels_is_refused():
     from stable_baselines3.common.save_util import load_from_zip_file
 
