@@ -85,7 +85,7 @@ def main(argv=None) -> None:
     for f in args.families:
         best_p = min(FRONTIER_GRID, key=lambda p: np.median(its[(f, E.constant_sampler(p))]))
         const = its[(f, E.constant_sampler(best_p))]
-        for label, key in (("constant (p=%g, best here)" % best_p, E.constant_sampler(best_p)), ("policy", "policy"),
+        for label, key in ((f"constant (p={best_p:g}, best here)", E.constant_sampler(best_p)), ("policy", "policy"),
                            ("labels", "labels"), ("labels, no frontier fallback", "labels, no frontier fallback"),
                            ("expert (reference)", "expert (reference)")):
             x = its[(f, key)]
@@ -104,11 +104,13 @@ def departures(queries, args, config, backend) -> list[dict]:
     rows = []
     for f in args.families:
         problems = [q.problem(None, 4.0) for q in queries if q.family == f]
-        data, _ = collect(problems, actor, 0.0, seed=0, batch=int(config["batch"]), step_size=float(config["step_size"]),
+        data, _ = collect(problems, actor, 0.0, seed=0, batch=int(config["batch"]),
+                          step_size=float(config["step_size"]),
                           stuck_threshold=int(config.get("stuck_threshold", 16)),
                           uniform_floor=float(config["uniform_floor"]), max_iterations=args.max_iterations,
                           gamma=0.99, reward_scale=1.0, backend=backend)
-        logits = np.stack([actor.logits(loc, vec) for loc, vec in zip(data.local, data.vector)]).astype(np.float64)
+        pairs = zip(data.local, data.vector, strict=True)
+        logits = np.stack([actor.logits(loc, vec) for loc, vec in pairs]).astype(np.float64)
         p = np.exp(logits - logits.max(1, keepdims=True))
         p /= p.sum(1, keepdims=True)
         label = data.label
