@@ -89,13 +89,17 @@ class GridObservation:
         self.full[0] = 255
         self.full[0, p:p + H, p:p + W] = np.where(grid.obstacles, 255, 0)
         tol_cells = problem.goal_tolerance / self.res
-        self.full[2, p:p + H, p:p + W] = _disc((H, W), problem.start / self.res, max(tol_cells, 0.75))
-        self.full[3, p:p + H, p:p + W] = _disc((H, W), problem.goal / self.res, max(tol_cells, 0.75))
+        self.full[2, p:p + H, p:p + W] = _disc((H, W), self._cells(problem.start), max(tol_cells, 0.75))
+        self.full[3, p:p + H, p:p + W] = _disc((H, W), self._cells(problem.goal), max(tol_cells, 0.75))
         self.seen = 0
+
+    def _cells(self, q: np.ndarray) -> np.ndarray:
+        """Continuous (x, y) cell coordinates of world points, counted from the grid's corner (a ROS map's origin)."""
+        return (np.asarray(q)[..., :2] - self.low) / self.res
 
     def _px(self, q: np.ndarray) -> np.ndarray:
         """Continuous (x, y) pixel coordinates of a world point in the global view."""
-        return np.asarray(q) / (self.res * self.cells_per_px)
+        return (np.asarray(q)[..., :2] - self.low) / (self.res * self.cells_per_px)
 
     def update(self, planner: Planner) -> None:
         """Mark the vertices added since the last call."""
@@ -105,19 +109,20 @@ class GridObservation:
             return
         new = view.vertices[self.seen:n]
         S = self.size
-        gx = np.clip((new[:, 0] / (self.res * self.cells_per_px)).astype(np.int64), 0, S - 1)
-        gy = np.clip((new[:, 1] / (self.res * self.cells_per_px)).astype(np.int64), 0, S - 1)
-        self.image[1, gy, gx] = 255
+        px = np.clip(self._px(new).astype(np.int64), 0, S - 1)
+        self.image[1, px[:, 1], px[:, 0]] = 255
         p = self.pad
-        self.full[1, (new[:, 1] / self.res).astype(np.int64) + p, (new[:, 0] / self.res).astype(np.int64) + p] = 255
+        cells = self._cells(new).astype(np.int64)
+        self.full[1, cells[:, 1] + p, cells[:, 0] + p] = 255
         self.seen = n
 
     def build(self, planner: Planner) -> dict[str, np.ndarray]:
         view = planner.view()
         anchor = view.vertices[view.best_vertex]
         L, s, p = self.local_size, self.local_scale, self.pad
-        r = int(anchor[1] / self.res) + p - L * s // 2
-        c = int(anchor[0] / self.res) + p - L * s // 2
+        ac = self._cells(anchor)
+        r = int(ac[1]) + p - L * s // 2
+        c = int(ac[0]) + p - L * s // 2
         crop = self.full[:, r:r + L * s, c:c + L * s]
         if s > 1:
             crop = crop.reshape(len(CHANNELS), L, s, L, s).max(axis=(2, 4))

@@ -59,11 +59,11 @@ def _walk(nxt, W, cell, length):
 
 
 @nb.njit(cache=True)
-def _best_cell(field, vertices, res, best, best_cell):
+def _best_cell(field, vertices, res, origin, best, best_cell):
     W = field.shape[1]
     for i in range(vertices.shape[0]):
-        r = int(vertices[i, 1] / res)
-        c = int(vertices[i, 0] / res)
+        r = int((vertices[i, 1] - origin[1]) / res)
+        c = int((vertices[i, 0] - origin[0]) / res)
         d = field[r, c]
         if d < best:
             best = d
@@ -86,6 +86,7 @@ class GeodesicExpert:
             raise TypeError("the geodesic expert needs an OccupancyGrid problem")
         self.problem, self.step, self.lookahead = problem, float(step_size), float(lookahead)
         self.res = grid.resolution
+        self.origin = np.ascontiguousarray(grid.origin, dtype=np.float64)
         self.field = distance_field(grid.obstacles, grid.cell_of(problem.goal))
         self.nxt = _descent(self.field, np.ascontiguousarray(grid.obstacles))
         self.W = grid.width
@@ -96,13 +97,13 @@ class GeodesicExpert:
     def update(self, vertices: np.ndarray, num_vertices: int) -> None:
         if num_vertices > self.seen:
             self.best, self.best_cell = _best_cell(self.field, np.ascontiguousarray(vertices[self.seen:num_vertices]),
-                                                   self.res, self.best, self.best_cell)
+                                                   self.res, self.origin, self.best, self.best_cell)
             self.seen = num_vertices
 
     def target(self, scale: float = 1.0) -> np.ndarray:
         """World point ``scale * lookahead`` steps ahead of the progress vertex along the shortest path."""
         v = _walk(self.nxt, self.W, self.best_cell, self.lookahead * scale * self.step / self.res)
-        return np.array([(v % self.W + 0.5) * self.res, (v // self.W + 0.5) * self.res])
+        return self.origin + np.array([(v % self.W + 0.5) * self.res, (v // self.W + 0.5) * self.res])
 
 
 class ExpertSampler(SamplerBase):

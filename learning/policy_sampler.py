@@ -69,7 +69,7 @@ class DrawState(NamedTuple):
 class PolicyKernel(NamedTuple):
     """Everything ``policy_draw`` reads, as one struct (see ``PolicySampler._setup``)."""
 
-    ego: tuple  # pyramid levels, layout, window size, resolution, start, goal
+    ego: tuple  # pyramid levels, layout, window size, resolution, grid origin, start, goal
     frontier: tuple  # world, frontier arrays, cell size, goal preference
     actor: tuple  # weights, scratch
     params: tuple  # step, temperature, floors, patience, reuse, hold, max iterations, sampling box
@@ -111,7 +111,7 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kernel_state, pts, anch
     only for a forward pass, the frontier only for a frontier sample.
     """
     ego, front, actor, params, state = kernel_state
-    levels_obs, levels_tree, layout, size, res, start, goal = ego
+    levels_obs, levels_tree, layout, size, res, origin, start, goal = ego
     weights, scratch = actor
     step, temperature, floor0, max_floor, patience, reuse, hold, max_iterations, low, high = params
     sampler_ints, sampler_floats, logits, cdf, local, vector, u, fcdf = state
@@ -121,10 +121,10 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kernel_state, pts, anch
     if (sampler_ints[S_FORWARD] == 0 or best_v != sampler_ints[S_ANCHOR]
             or (iteration - sampler_ints[S_SINCE] >= reuse and sampler_floats[2] < hold)):
         if n > sampler_ints[S_SEEN]:
-            add_vertices(levels_tree, layout, X[sampler_ints[S_SEEN]:n], res)
+            add_vertices(levels_tree, layout, X[sampler_ints[S_SEEN]:n], res, origin)
             sampler_ints[S_SEEN] = n
-        observe_windows(levels_obs, levels_tree, layout, size, res, step, X[best_v, :2], best_v == 0, start, goal, n,
-                 iteration, sampler_ints[S_PROGRESS], max_iterations, local, vector)
+        observe_windows(levels_obs, levels_tree, layout, size, res, origin, step, X[best_v, :2], best_v == 0, start,
+                        goal, n, iteration, sampler_ints[S_PROGRESS], max_iterations, local, vector)
         actor_logits(local, vector, *weights, scratch, logits)
         sampler_floats[1] = softmax_cdf(logits, temperature, cdf)  # one softmax per forward pass, not per batch
         sampler_floats[2] = (cdf[FRONTIER] - cdf[FRONTIER - 1]) / sampler_floats[1]  # the frontier's share
@@ -300,7 +300,8 @@ class PolicySampler(SamplerBase):
         start = np.ascontiguousarray(self.problem.start[:2], dtype=np.float64)
         goal = np.ascontiguousarray(self.problem.goal[:2], dtype=np.float64)
         self._kernel = PolicyKernel(
-            (levels_obs, levels_tree, layout, WINDOW, grid.resolution, start, goal),
+            (levels_obs, levels_tree, layout, WINDOW, grid.resolution,
+             np.ascontiguousarray(grid.origin, dtype=np.float64), start, goal),
             (grid.kernel, counts, self.step_size, W, goal, free, cov, pos, front, dist, FRONTIER_TAU),
             (self.actor.weights, scratch),
             (*self._params, self.low, self.high),

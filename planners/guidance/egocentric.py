@@ -52,14 +52,18 @@ def _window(levels_obs, levels_tree, layout, ax, ay, ux, uy, size, out):
 
 
 @nb.njit(cache=True)
-def observe_windows(levels_obs, levels_tree, layout, size, res, step, anchor, anchor_is_start, start, goal,
+def observe_windows(levels_obs, levels_tree, layout, size, res, origin, step, anchor, anchor_is_start, start, goal,
                     num_vertices, iteration, last_progress, max_iterations, local, vector):
-    """Window (into ``local``) and vector features (into ``vector``) at ``anchor``; see ``EGO_VECTOR``."""
+    """Window (into ``local``) and vector features (into ``vector``) at ``anchor``; see ``EGO_VECTOR``.
+
+    Points are world coordinates; ``origin`` is the world point of the grid's corner (a ROS map's).
+    """
     dx = goal[0] - anchor[0]
     dy = goal[1] - anchor[1]
     n = math.sqrt(dx * dx + dy * dy)
     ux, uy = (1.0, 0.0) if n < 1e-12 else (dx / n, dy / n)
-    _window(levels_obs, levels_tree, layout, anchor[0] / res, anchor[1] / res, ux, uy, size, local)
+    _window(levels_obs, levels_tree, layout, (anchor[0] - origin[0]) / res, (anchor[1] - origin[1]) / res, ux, uy,
+            size, local)
     dg = n / step
     d0 = math.sqrt((goal[0] - start[0]) ** 2 + (goal[1] - start[1]) ** 2) / step
     ds = math.sqrt((anchor[0] - start[0]) ** 2 + (anchor[1] - start[1]) ** 2) / step
@@ -141,11 +145,14 @@ def build_pyramid(obstacles, factors):
 
 
 @nb.njit(cache=True)
-def add_vertices(levels_tree, layout, V, res):
-    """Mark the pyramid blocks (every level) that hold one of the vertices ``V`` (world units, cell size ``res``)."""
+def add_vertices(levels_tree, layout, V, res, origin):
+    """Mark the pyramid blocks (every level) that hold one of the vertices ``V``.
+
+    ``V`` holds world points; cells are ``res`` wide, counted from the grid's corner ``origin``.
+    """
     for n in range(V.shape[0]):
-        x = V[n, 0] / res
-        y = V[n, 1] / res
+        x = (V[n, 0] - origin[0]) / res
+        y = (V[n, 1] - origin[1]) / res
         for k in range(layout.shape[0]):
             off, H, W, f = layout[k, 0], layout[k, 1], layout[k, 2], layout[k, 3]
             r = int(y / f)
@@ -172,6 +179,7 @@ class EgocentricView:
             raise TypeError("egocentric observations need an OccupancyGrid problem")
         self.problem, self.step = problem, float(step_size)
         self.res = grid.resolution
+        self.origin = np.ascontiguousarray(grid.origin, dtype=np.float64)
         self.size = int(size)
         self.max_iterations = max_iterations
         self.factors = np.asarray(scales, dtype=np.int64)
@@ -189,7 +197,7 @@ class EgocentricView:
     def update(self, vertices: np.ndarray, num_vertices: int, best_distance: float, iteration: int) -> None:
         """Count the vertices added since the last call; note when the progress vertex improved."""
         if num_vertices > self.seen:
-            add_vertices(self.levels_tree, self.layout, vertices[self.seen:num_vertices], self.res)
+            add_vertices(self.levels_tree, self.layout, vertices[self.seen:num_vertices], self.res, self.origin)
             self.seen = num_vertices
         if best_distance < self.best_distance - 1e-9:
             self.best_distance = best_distance
@@ -205,7 +213,7 @@ class EgocentricView:
         """``{"local": (2 * scales, size, size) uint8, "vector": (8,) float32}`` at ``anchor``."""
         local = np.empty((self.channels, self.size, self.size), dtype=np.uint8)
         vector = np.empty(len(EGO_VECTOR), dtype=np.float32)
-        observe_windows(self.levels_obs, self.levels_tree, self.layout, self.size, self.res, self.step,
+        observe_windows(self.levels_obs, self.levels_tree, self.layout, self.size, self.res, self.origin, self.step,
                  np.ascontiguousarray(anchor[:2], dtype=np.float64), anchor_index == 0, self.start, self.goal,
                  num_vertices, iteration, self.last_progress, self.max_iterations, local, vector)
         return {"local": local, "vector": vector}

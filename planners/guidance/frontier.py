@@ -83,14 +83,20 @@ def update_frontier(world, counts, vertices, cell, goal, free, cov, pos, front, 
     """Mark new vertices' cells covered and add their visible uncovered neighbours; returns count.
 
     A cell's centre is checked, and its distance to the goal (in cells) computed, only when a vertex
-    first looks at it: a solve that stays in one part of the map never pays for the rest.
+    first looks at it: a solve that stays in one part of the map never pays for the rest. Vertices and
+    goal are world points; cells are counted from the grid's corner (``world.params[1:3]``, a ROS map's
+    origin), in whose frame the grid's collision checks work.
     """
     H, W = cov.shape
     grid = world.grid
     inv = world.params[0]
+    ox, oy = world.params[1], world.params[2]
+    gx, gy = goal[0] - ox, goal[1] - oy
     c_state = np.empty(2)
+    v = np.empty(2)
     for n in range(vertices.shape[0]):
-        v = vertices[n]
+        v[0] = vertices[n, 0] - ox
+        v[1] = vertices[n, 1] - oy
         r = int(v[1] / cell)
         c = int(v[0] / cell)
         if r < 0 or r >= H or c < 0 or c >= W:
@@ -121,8 +127,8 @@ def update_frontier(world, counts, vertices, cell, goal, free, cov, pos, front, 
                     free[rr, cc] = BLOCKED
                     continue
                 free[rr, cc] = FREE
-                dx = c_state[0] - goal[0]
-                dy = c_state[1] - goal[1]
+                dx = c_state[0] - gx
+                dy = c_state[1] - gy
                 dist[rr * W + cc] = math.sqrt(dx * dx + dy * dy) / cell  # not ** 2: numba calls pow for that
             if (_box_clear(grid, inv, counts, v, c_state)
                     or grid_segment_free(grid, inv, v[0], v[1], c_state[0], c_state[1])):
@@ -148,16 +154,16 @@ def frontier_cdf(front, count, dist, tau, cdf):
 
 
 @nb.njit(cache=True)
-def _sample(front, count, W, cell, dist, tau, u_pick, u_xy, out):
-    """Frontier cells drawn with weight exp(-(d - d_min) / tau), a uniform point in each."""
+def _sample(front, count, W, cell, origin, dist, tau, u_pick, u_xy, out):
+    """Frontier cells drawn with weight exp(-(d - d_min) / tau), a uniform (world) point in each."""
     if count == 0:
         return 0
     cdf = np.empty(count)
     acc = frontier_cdf(front, count, dist, tau, cdf)
     for k in range(u_pick.shape[0]):
         f = front[cdf_search(cdf, count, u_pick[k] * acc)]
-        out[k, 0] = (f % W + u_xy[k, 0]) * cell
-        out[k, 1] = (f // W + u_xy[k, 1]) * cell
+        out[k, 0] = origin[0] + (f % W + u_xy[k, 0]) * cell
+        out[k, 1] = origin[1] + (f // W + u_xy[k, 1]) * cell
     return u_pick.shape[0]
 
 
@@ -221,5 +227,6 @@ class Frontier:
         u_pick = rng.random(m)
         u_xy = rng.random((m, 2))
         out = np.empty((m, 2))
-        k = _sample(self.front, self.count, self.W, self.cell, self.dist, self.tau, u_pick, u_xy, out)
+        k = _sample(self.front, self.count, self.W, self.cell, self.world.params[1:3], self.dist, self.tau, u_pick,
+                    u_xy, out)
         return out[:k]

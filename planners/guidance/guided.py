@@ -98,8 +98,8 @@ def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, f
             anch[k] = 0
         elif c >= n_ego:
             f = front[cdf_search(fcdf, fstate[1], u[k, 1] * facc)]
-            pts[k, 0] = (f % fW + u[k, 4]) * cell
-            pts[k, 1] = (f // fW + u[k, 5]) * cell
+            pts[k, 0] = world.params[1] + (f % fW + u[k, 4]) * cell  # the grid's corner: a ROS map's origin
+            pts[k, 1] = world.params[2] + (f // fW + u[k, 5]) * cell
             anch[k] = 0
         else:
             _ego_offset(c, u[k, 1], u[k, 2], _RINGS, ANGLES, step, pts, anch, k)
