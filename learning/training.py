@@ -248,13 +248,41 @@ def _commit(model, cfg: TrainConfig, run: Path, state: dict, log: _ResumableCSV,
     it belongs to the checkpoint; log rows after ``log_rows`` are dropped on resume the same way.
     ``state.json`` is a copy for people, written last and never read back.
     """
-    state = {**state, "log_rows": log.rows}
+    state = {**state, "log_rows": log.rows, "log_time": time.time()}
     if data is not None:
         with atomic_path(run / "dagger_data.npz") as tmp:
             data.save(tmp)
         state["dagger_rows"] = len(data)
     _save_model(model, cfg, run / "checkpoint.zip", state)
     atomic_write_text(run / "state.json", json.dumps(state, indent=2) + "\n")
+
+
+def _trim_events(folder: Path, until: float | None) -> None:
+    """Drop the TensorBoard events written after wall time ``until`` (a killed run's, after its checkpoint).
+
+    The redone steps are logged again on resume; kept, TensorBoard would draw each of them twice.
+    Each events file is rewritten whole (temporary file, then rename); a file left with nothing after
+    its header is removed.
+    """
+    if until is None or not folder.is_dir():
+        return
+    from tensorboard.backend.event_processing.event_file_loader import RawEventFileLoader
+    from tensorboard.compat.proto import event_pb2
+    from tensorboard.summary.writer.record_writer import RecordWriter
+
+    for path in sorted(folder.glob("events.out.tfevents.*")):
+        records = list(RawEventFileLoader(str(path)).Load())
+        kept = [r for r in records if event_pb2.Event.FromString(r).wall_time <= until]
+        if len(kept) == len(records):
+            continue
+        if len(kept) <= 1:  # at most the file-version header: the whole file came after the checkpoint
+            path.unlink()
+            continue
+        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+            writer = RecordWriter(f)
+            for r in kept:
+                writer.write(r)
+            writer.flush()
 
 
 def read_state(run: str | os.PathLike) -> dict | None:
@@ -369,6 +397,8 @@ def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False,
     torch.set_num_threads(cfg.torch_threads)
     torch.manual_seed(cfg.seed)
     env = make_env(cfg, cfg.seed)
+    # a resumed run keeps its events up to the checkpoint; a fresh one in an old run's folder, none
+    _trim_events(run / "tb", state.get("log_time") if resume else 0.0)
     logger, csv_log = _logger(run, state["log_rows"] if resume else None, log_stdout)
     try:
         phases = _TrainingRun(cfg, run, state, env, logger, csv_log, resume=resume, progress=progress,

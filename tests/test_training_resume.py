@@ -70,6 +70,14 @@ def _log(path: Path) -> list[dict]:
     return [{k: v for k, v in r.items() if not k.startswith("time/") and k != "dagger/collect_seconds"} for r in rows]
 
 
+def _events(folder: Path) -> list[tuple[str, int]]:
+    """Every (tag, step) of the run's TensorBoard scalars, over all its events files, sorted."""
+    from tensorboard.backend.event_processing.event_file_loader import EventFileLoader
+
+    return sorted((v.tag, e.step) for path in folder.glob("events.out.tfevents.*")
+                  for e in EventFileLoader(str(path)).Load() for v in e.summary.value)
+
+
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("reference")
@@ -77,11 +85,11 @@ def reference(tmp_path_factory):
     assert done.returncode == 0, done.stderr
     replacements = int(done.stdout.split()[-1])
     run = tmp / "runs" / CFG.name
-    return replacements, _weights(run / "final.zip"), _log(run / "tb" / "progress.csv")
+    return replacements, _weights(run / "final.zip"), _log(run / "tb" / "progress.csv"), _events(run / "tb")
 
 
 def _kill_and_resume(tmp: Path, kill_at: int, reference) -> None:
-    _, weights, log = reference
+    _, weights, log, events = reference
     out = tmp / "runs"
     killed = _run(tmp, out, kill_at, resume=False)
     assert killed.returncode == -9, (kill_at, killed.stderr[-2000:])
@@ -93,6 +101,8 @@ def _kill_and_resume(tmp: Path, kill_at: int, reference) -> None:
     for k in weights:
         assert torch.equal(got[k], weights[k]), (kill_at, k)
     assert _log(run / "tb" / "progress.csv") == log, kill_at
+    # TensorBoard shows each step once: what the killed run logged after its checkpoint was dropped
+    assert _events(run / "tb") == events, kill_at
     assert not list(run.rglob(".*.tmp*")), "the resumed run removes the temporary files the kill left"
 
 
