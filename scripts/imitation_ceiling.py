@@ -33,8 +33,9 @@ from learning import PolicySampler
 from learning import evaluation as E
 from learning.ablation import FRONTIER_GRID
 from learning.imitation import collect
+from planners.base.fileio import InputError, check_int
 from planners.guidance.guided import ANGLES, FRONTIER
-from planners.maps.generators import FAMILIES, VALIDATION_SEED0
+from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import BACKENDS, make_backend
 
@@ -44,7 +45,7 @@ DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.z
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--policy", type=Path, default=DEFAULT_POLICY)
-    ap.add_argument("--families", nargs="+", default=list(FAMILIES))
+    ap.add_argument("--families", nargs="+", choices=FAMILIES, default=list(FAMILIES))
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--maps", type=int, default=40, help="validation maps per family (one planner seed each)")
     ap.add_argument("--max-iterations", type=int, default=20000)
@@ -52,6 +53,13 @@ def main(argv=None) -> None:
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--address", default=None)
     args = ap.parse_args(argv)
+    try:
+        for name in ("size", "maps", "max_iterations", "processes"):
+            check_int(getattr(args, name), f"--{name.replace('_', '-')}")
+        if args.size < MIN_SIZE:
+            raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
+    except InputError as exc:
+        ap.error(str(exc))
 
     config = PolicySampler.load(args.policy).config
     step, tol = float(config["step_size"]), 4.0

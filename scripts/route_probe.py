@@ -25,7 +25,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from planners.maps.generators import FAMILIES, TRAIN_SEEDS, VALIDATION_SEED0, generate
+from planners.base.fileio import InputError, check_int
+from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
 from planners.maps.gridsearch import distance_field
 from planners.tools.benchmark import markdown_table
 
@@ -125,6 +126,15 @@ def main(argv=None) -> list[dict]:
     ap.add_argument("--ahead", type=int, default=8, help="cells along the route that give its direction")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
+    try:
+        for name in ("maps", "val_maps", "epochs", "size", "block", "ahead"):
+            check_int(getattr(args, name), f"--{name.replace('_', '-')}")
+        if args.size < MIN_SIZE:
+            raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
+        if args.size < 2 * args.block:
+            raise InputError(f"--size {args.size} holds fewer than two blocks of --block {args.block} cells")
+    except InputError as exc:
+        ap.error(str(exc))
     torch.manual_seed(args.seed)
     t0 = time.perf_counter()
     train = [example(f, TRAIN_SEEDS[0] + s, args.size, args.block, args.ahead) for f in FAMILIES

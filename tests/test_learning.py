@@ -346,6 +346,16 @@ def test_route_probe_script_trains_and_reports(model, capsys):
     assert "parameters; forward on a 128x128 map" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("script, argv, flag", [("imitation_ceiling", ["--maps", "0"], "--maps"),
+                                               ("imitation_ceiling", ["--size", "8"], "--size"),
+                                               ("route_probe", ["--epochs", "0"], "--epochs"),
+                                               ("route_probe", ["--block", "40", "--size", "64"], "--block")])
+def test_probe_scripts_refuse_bad_flags_by_name(script, argv, flag, capsys):
+    with pytest.raises(SystemExit) as exc:
+        _script(script).main(argv)
+    assert exc.value.code == 2 and flag in capsys.readouterr().err
+
+
 def test_actor_with_other_convolution_kernels_is_refused():
     from stable_baselines3.common.save_util import load_from_zip_file
 
