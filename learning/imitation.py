@@ -20,7 +20,7 @@ from learning.fast_policy import FastActor
 from learning.policy_sampler import sample_classes
 from planners import RRT, Problem, SamplerBase
 from planners.guidance.guided import FRONTIER, GuidedSampling
-from planners.tools.parallel import Backend
+from planners.tools.parallel import Backend, LocalBackend
 
 
 @dataclass
@@ -111,8 +111,7 @@ def collect(problems: Sequence[Problem], actor: FastActor | None, beta: float, *
                "stuck_threshold": stuck_threshold, "uniform_floor": uniform_floor,
                "max_iterations": max_iterations, "gamma": gamma, "reward_scale": reward_scale}
     tasks = list(enumerate(problems))
-    results = backend.map(_rollout, tasks, context=context) if backend is not None else [
-        _rollout(t, context) for t in tasks]
+    results = (backend or LocalBackend()).map(_rollout, tasks, context=context)
     parts = [data for data, _ in results if data is not None]
     return Dataset.concat(parts), [its for _, its in results]
 

@@ -36,7 +36,7 @@ from learning.policy_sampler import OBS_VERSION, PolicySampler
 from planners import RRT
 from planners.base.fileio import InputError, atomic_path, atomic_write_text, check_number
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
-from planners.tools.parallel import Backend
+from planners.tools.parallel import Backend, LocalBackend
 
 
 @dataclass
@@ -167,8 +167,7 @@ def validation_score(actor: FastActor, cfg: TrainConfig, backend: Backend | None
     """
     tasks = [(f, i) for f in cfg.families for i in range(cfg.validation_maps)]
     context = {"actor": actor, "cfg": cfg}
-    ratios = backend.map(_validation_run, tasks, context=context) if backend is not None else [
-        _validation_run(t, context) for t in tasks]
+    ratios = (backend or LocalBackend()).map(_validation_run, tasks, context=context)
     per_family = {f: float(np.median([r for (g, _), r in zip(tasks, ratios, strict=True) if g == f]))
                   for f in cfg.families}
     return float(np.exp(np.mean(np.log(list(per_family.values()))))), per_family

@@ -29,7 +29,7 @@ from planners.base.fileio import atomic_write_text
 from planners.maps.generators import FAMILIES, generate
 from planners.tools import benchmark, ompl_bridge
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
-from planners.tools.parallel import BACKENDS, make_backend
+from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 
 def map_set(args) -> dict[str, list[Problem]]:
@@ -166,16 +166,13 @@ def main(argv=None) -> int:
     ap.add_argument("--no-ompl", action="store_true")
     ap.add_argument("--quick", action="store_true", help="3 seeds, 2 scenarios, growth to 10k only")
     ap.add_argument("--out", type=Path, default=Path("results/benchmark_planners"))
-    ap.add_argument("--backend", choices=BACKENDS, default="local",
-                    help="where the all-planner comparison runs (the timed ours-vs-OMPL sections stay serial)")
-    ap.add_argument("--processes", type=int, default=1,
-                    help="workers for it (1: serial; more share the cores, so times are not comparable)")
-    ap.add_argument("--address", default=None, help="ray backend: the cluster to join (default: start a local one)")
+    add_backend_arguments(ap, processes=1,
+                          backend_help="where the all-planner comparison runs (the timed ours-vs-OMPL sections stay "
+                                       "serial)",
+                          processes_help="workers for it (1: serial; more share the cores, so times are not "
+                                         "comparable)")
     args = ap.parse_args(argv)
-    if args.processes < 1:
-        ap.error(f"--processes must be at least 1, got {args.processes}")
-    if args.address is not None and args.backend != "ray":
-        ap.error("--address needs --backend ray")
+    check_backend_arguments(ap, args)
     if args.quick:
         args.seeds, args.scenarios = 3, 2
     use_ompl = not args.no_ompl and ompl_bridge.available()

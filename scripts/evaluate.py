@@ -32,7 +32,7 @@ from planners.base.fileio import InputError, atomic_write_text
 from planners.base.registry import planner_name_arg
 from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table, write_runs_csv
-from planners.tools.parallel import BACKENDS, make_backend
+from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
@@ -67,11 +67,10 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--step", type=float, default=4.0)
     ap.add_argument("--tolerance", type=float, default=4.0)
     ap.add_argument("--max-iterations", type=int, default=20000)
-    ap.add_argument("--processes", type=int, default=os.cpu_count() or 1,
-                    help="local workers (local backend, or a local Ray instance)")
-    ap.add_argument("--backend", choices=BACKENDS, default="local",
-                    help="where runs execute: a local process pool (default) or Ray (pip install -e '.[distributed]')")
-    ap.add_argument("--address", default=None, help="ray backend: the cluster to join (default: start a local one)")
+    add_backend_arguments(ap, processes=os.cpu_count() or 1,
+                          processes_help="local workers (local backend, or a local Ray instance)",
+                          backend_help="where runs execute: a local process pool (default) or Ray "
+                                       "(pip install -e '.[distributed]')")
     ap.add_argument("--no-expert", action="store_true", help="skip the privileged reference")
     ap.add_argument("--quick", action="store_true",
                     help="25 test and 25 shifted maps, 4 test scenarios, 2 seeds, no other planners; tuning as in "
@@ -86,7 +85,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     if args.quick:
         for k, v in QUICK.items():
             setattr(args, k, v)
-    for k in ("maps", "tuning_maps", "seeds", "scenarios", "tuning_scenarios", "max_iterations", "processes"):
+    check_backend_arguments(ap, args)
+    for k in ("maps", "tuning_maps", "seeds", "scenarios", "tuning_scenarios", "max_iterations"):
         if getattr(args, k) < 1:
             ap.error(f"--{k.replace('_', '-')} must be at least 1, got {getattr(args, k)}")
     if args.shifted_maps < 0:
@@ -107,8 +107,6 @@ def parse_args(argv=None) -> argparse.Namespace:
         if name in args.user_samplers:
             ap.error(f"--sampler name {name!r} is given twice")
         args.user_samplers[name] = spec
-    if args.address is not None and args.backend != "ray":
-        ap.error("--address needs --backend ray")
     unknown = set(args.families) - set(FAMILIES)
     if unknown:
         ap.error(f"unknown families {sorted(unknown)}; choose from {FAMILIES}")

@@ -37,7 +37,7 @@ from planners.base.fileio import InputError, check_int
 from planners.guidance.guided import ANGLES, FRONTIER
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
-from planners.tools.parallel import BACKENDS, make_backend
+from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 
@@ -49,12 +49,11 @@ def main(argv=None) -> None:
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--maps", type=int, default=40, help="validation maps per family (one planner seed each)")
     ap.add_argument("--max-iterations", type=int, default=20000)
-    ap.add_argument("--backend", choices=BACKENDS, default="local")
-    ap.add_argument("--processes", type=int, default=2)
-    ap.add_argument("--address", default=None)
+    add_backend_arguments(ap, processes=2, backend_help="where the runs execute", processes_help="workers for them")
     args = ap.parse_args(argv)
+    check_backend_arguments(ap, args)
     try:
-        for name in ("size", "maps", "max_iterations", "processes"):
+        for name in ("size", "maps", "max_iterations"):
             check_int(getattr(args, name), f"--{name.replace('_', '-')}")
         if args.size < MIN_SIZE:
             raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")

@@ -27,7 +27,7 @@ from pathlib import Path
 from learning.evaluation import worker_init
 from learning.training import TrainConfig, read_state, train
 from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text
-from planners.tools.parallel import BACKENDS, make_backend
+from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 
 def _where(state: dict, cfg: TrainConfig) -> str:
@@ -43,10 +43,9 @@ def main(argv=None) -> int:
     ap.add_argument("--resume", action="store_true")
     ap.add_argument("--export", type=Path, help="copy final.zip here (and its config as .json beside it)")
     ap.add_argument("--no-progress", action="store_true")
-    ap.add_argument("--backend", choices=BACKENDS, default="local",
-                    help="where DAgger's rollouts and the validation runs execute (the weights do not depend on it)")
-    ap.add_argument("--processes", type=int, default=1, help="workers for them (1: this process)")
-    ap.add_argument("--address", default=None, help="ray backend: the cluster to join (default: start a local one)")
+    add_backend_arguments(ap, processes=1, processes_help="workers for them (1: this process)",
+                          backend_help="where DAgger's rollouts and the validation runs execute (the weights do not "
+                                       "depend on it)")
     for f in dataclasses.fields(TrainConfig):
         if f.name == "extra":
             continue
@@ -60,10 +59,7 @@ def main(argv=None) -> int:
             typ = {"int": int, "float": float, "str": str}[f.type]
             ap.add_argument(flag, type=typ, help=f"default {f.default!r}")
     args = ap.parse_args(argv)
-    if args.processes < 1:
-        ap.error(f"--processes must be at least 1, got {args.processes}")
-    if args.address is not None and args.backend != "ray":
-        ap.error("--address needs --backend ray")
+    check_backend_arguments(ap, args)
     try:
         cfg = TrainConfig.from_json(args.config) if args.config else TrainConfig()
         changes = {}

@@ -18,7 +18,7 @@ from planners.base.problem import Problem
 from planners.base.registry import make_planner
 from planners.base.samplers import GoalBiasedSampler, UniformSampler
 from planners.datastructures.nn import NearestNeighbors
-from planners.tools.parallel import Backend
+from planners.tools.parallel import Backend, LocalBackend
 
 
 @dataclass
@@ -113,15 +113,11 @@ def run_one(problem: Problem, label: str, *, step: float, seed: int, max_iterati
                path_cost=r.cost, forward_passes=0, vertices=r.num_vertices)
 
 
-def run_task(task: tuple[str, int, str], maps: dict[str, list[Problem]], *, step: float,
-             max_iterations: int) -> Run:
-    """``run_one`` for ``(map name, query index, set-up label)`` on ``maps``: the form a backend ships."""
+def _run_task(task: tuple[str, int, str], context: dict) -> Run:
+    """``run_one`` for ``(map name, query index, set-up label)`` on ``context["maps"]``: the form a backend ships."""
     name, i, label = task
-    return run_one(maps[name][i], label, step=step, seed=i, max_iterations=max_iterations, map_name=name)
-
-
-def _run_task(task: tuple, context: dict) -> Run:
-    return run_task(task, context["maps"], step=context["step"], max_iterations=context["max_iterations"])
+    return run_one(context["maps"][name][i], label, step=context["step"], seed=i,
+                   max_iterations=context["max_iterations"], map_name=name)
 
 
 def run_all_setups(maps: dict[str, list[Problem]], *, step: float, max_iterations: int,
@@ -133,9 +129,7 @@ def run_all_setups(maps: dict[str, list[Problem]], *, step: float, max_iteration
     """
     tasks = [(name, i, label) for name, problems in maps.items() for label in SETUPS for i in range(len(problems))]
     context = {"maps": maps, "step": step, "max_iterations": max_iterations}
-    if backend is None:
-        return [_run_task(t, context) for t in tasks]
-    return backend.map(_run_task, tasks, context=context, desc="runs")
+    return (backend or LocalBackend()).map(_run_task, tasks, context=context, desc="runs")
 
 
 def growth_profile(step_fn: Callable[[int], tuple[int, float]], checkpoints: Sequence[int],

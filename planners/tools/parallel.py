@@ -68,6 +68,21 @@ def make_backend(name: str = "local", *, processes: int | None = None, address: 
     raise ValueError(f"unknown backend {name!r}; choose from {', '.join(BACKENDS)}")
 
 
+def add_backend_arguments(ap, *, processes: int | None, backend_help: str, processes_help: str) -> None:
+    """``--backend``, ``--processes`` and ``--address`` on an ``argparse`` parser, as every script spells them."""
+    ap.add_argument("--backend", choices=BACKENDS, default="local", help=backend_help)
+    ap.add_argument("--processes", type=int, default=processes, help=processes_help)
+    ap.add_argument("--address", default=None, help="ray backend: the cluster to join (default: start a local one)")
+
+
+def check_backend_arguments(ap, args) -> None:
+    """Refuse, through ``ap.error``, a ``--processes`` below 1 and an ``--address`` without ``--backend ray``."""
+    if args.processes < 1:
+        ap.error(f"--processes must be at least 1, got {args.processes}")
+    if args.address is not None and args.backend != "ray":
+        ap.error("--address needs --backend ray")
+
+
 # --- local: this process, or a spawned pool -------------------------------------------------------
 
 _LOCAL: dict = {}  # in a pool worker: the context and the function the pool serves
