@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
-from learning.training import TrainConfig, train
-from planners import RRT, GoalBiasedSampler
+from learning.training import TrainConfig, sampler_validation_score, train
+from planners import GoalBiasedSampler
 from planners.base.fileio import InputError, atomic_write_text
-from planners.maps.generators import VALIDATION_SEED0, generate
+from planners.maps.generators import VALIDATION_SEED0
 from planners.tools.parallel import make_backend
 
 METRIC = "validation_score"  # geometric mean over families of median iterations / lower bound (lower is better)
@@ -45,17 +45,8 @@ def baseline_score(kind: str, value: float, cfg: TrainConfig) -> tuple[float, di
 
     Same maps, seeds and metric as a trained policy's validation score under ``cfg``.
     """
-    per_family = {}
-    for f in cfg.families:
-        ratios = []
-        for i in range(cfg.validation_maps):
-            sampler = GoalBiasedSampler(value) if kind == "goal_bias" else ConstantGuidedSampler(
-                value, step_size=cfg.step_size)
-            p = generate(f, VALIDATION_SEED0 + i, cfg.sizes[i % len(cfg.sizes)], goal_tolerance=cfg.goal_tolerance)
-            r = RRT(p, step_size=cfg.step_size, sampler=sampler, seed=i).solve(max_iterations=20000)
-            ratios.append(r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0)
-        per_family[f] = float(np.median(ratios))
-    return float(np.exp(np.mean(np.log(list(per_family.values()))))), per_family
+    sampler = GoalBiasedSampler(value) if kind == "goal_bias" else ConstantGuidedSampler(value, step_size=cfg.step_size)
+    return sampler_validation_score(sampler, cfg)
 
 
 def _config(base: dict) -> TrainConfig:

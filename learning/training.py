@@ -33,7 +33,7 @@ from learning.checkpoint import read_sb3_zip
 from learning.fast_policy import FastActor
 from learning.imitation import Dataset, behaviour_cloning, collect
 from learning.policy_sampler import OBS_VERSION, PolicySampler
-from planners import RRT
+from planners import RRT, Sampler
 from planners.base.fileio import InputError, atomic_path, atomic_write_text, check_number
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
 from planners.tools.parallel import Backend, LocalBackend
@@ -161,12 +161,18 @@ def _maps(cfg: TrainConfig, rng: np.random.Generator, per_family: int, seed0: in
 
 
 def validation_score(actor: FastActor, cfg: TrainConfig, backend: Backend | None = None) -> tuple[float, dict]:
-    """Geometric mean over families of the median iterations / lower bound on validation maps.
+    """The policy ``actor``'s :func:`sampler_validation_score`."""
+    return sampler_validation_score(PolicySampler(actor, cfg.sampler_config()), cfg, backend)
 
-    The runs go to ``backend`` (default: this process) with the actor shipped once per worker.
+
+def sampler_validation_score(sampler: Sampler, cfg: TrainConfig,
+                             backend: Backend | None = None) -> tuple[float, dict]:
+    """Geometric mean over families of ``sampler``'s median iterations / lower bound on validation maps.
+
+    The runs go to ``backend`` (default: this process) with the sampler shipped once per worker.
     """
     tasks = [(f, i) for f in cfg.families for i in range(cfg.validation_maps)]
-    context = {"actor": actor, "cfg": cfg}
+    context = {"sampler": sampler, "cfg": cfg}
     ratios = (backend or LocalBackend()).map(_validation_run, tasks, context=context)
     per_family = {f: float(np.median([r for (g, _), r in zip(tasks, ratios, strict=True) if g == f]))
                   for f in cfg.families}
@@ -174,12 +180,11 @@ def validation_score(actor: FastActor, cfg: TrainConfig, backend: Backend | None
 
 
 def _validation_run(task: tuple[str, int], context: dict) -> float:
-    """Iterations / lower bound of the policy on validation map ``i`` of a family (20,000 if unsolved)."""
+    """Iterations / lower bound of the sampler on validation map ``i`` of a family (20,000 if unsolved)."""
     f, i = task
     cfg = context["cfg"]
-    sampler = PolicySampler(context["actor"], cfg.sampler_config())
     p = generate(f, VALIDATION_SEED0 + i, cfg.sizes[i % len(cfg.sizes)], goal_tolerance=cfg.goal_tolerance)
-    r = RRT(p, step_size=cfg.step_size, sampler=sampler, seed=i).solve(max_iterations=20000)
+    r = RRT(p, step_size=cfg.step_size, sampler=context["sampler"], seed=i).solve(max_iterations=20000)
     return r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0
 
 
