@@ -220,7 +220,9 @@ class PolicySampler(SamplerBase):
         reuse: Longest stretch of iterations one forward pass may serve (1: a pass per batch).
         hold: Frontier share at or above which a pass serves until the progress vertex moves (> 1: never).
         patience: Iterations without progress after which the uniform share starts to grow.
-        max_floor: The largest uniform share that growth reaches.
+        max_floor: The largest uniform share that growth reaches. It matters only for trees stuck for
+            thousands of iterations (large MovingAI maps), and trades one map for another there:
+            ``scripts/tune_stuck_floor.py`` and the README have the figures.
         fuse: Run inside RRT's compiled loop (same samples, less time); False keeps ``draw`` calls.
         source: Where ``config`` and ``actor`` came from, for error messages.
     """

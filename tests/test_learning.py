@@ -349,11 +349,30 @@ def test_route_probe_script_trains_and_reports(model, capsys):
 @pytest.mark.parametrize("script, argv, flag", [("imitation_ceiling", ["--maps", "0"], "--maps"),
                                                ("imitation_ceiling", ["--size", "8"], "--size"),
                                                ("route_probe", ["--epochs", "0"], "--epochs"),
-                                               ("route_probe", ["--block", "40", "--size", "64"], "--block")])
+                                               ("route_probe", ["--block", "40", "--size", "64"], "--block"),
+                                               ("tune_stuck_floor", ["--floors", "2"], "--floors"),
+                                               ("tune_stuck_floor", ["--seeds", "0"], "--seeds")])
 def test_probe_scripts_refuse_bad_flags_by_name(script, argv, flag, capsys):
     with pytest.raises(SystemExit) as exc:
         _script(script).main(argv)
     assert exc.value.code == 2 and flag in capsys.readouterr().err
+
+
+def test_stuck_floor_rule_prefers_the_worst_map_then_the_mean_then_the_median():
+    choose = _script("tune_stuck_floor").choose
+    success = {0.1: {"a": 0.5, "b": 1.0, "never": 0.0}, 0.3: {"a": 0.9, "b": 0.9, "never": 0.0},
+               0.5: {"a": 0.9, "b": 1.0, "never": 0.0}}
+    assert choose(success, {0.1: 10.0, 0.3: 5.0, 0.5: 50.0}) == 0.5  # a map none solves does not decide
+    success[0.3]["b"] = 1.0
+    assert choose(success, {0.1: 10.0, 0.3: 5.0, 0.5: 50.0}) == 0.3
+
+
+def test_stuck_floor_script_runs_on_the_movingai_tuning_scenarios(movingai, capsys):
+    best = _script("tune_stuck_floor").main(["--movingai", str(movingai), "--floors", "0.1", "0.5", "--scenarios", "1",
+                                             "--seeds", "1", "--maps", "1", "--max-iterations", "300",
+                                             "--processes", "1"])
+    out = capsys.readouterr().out
+    assert best in (0.1, 0.5) and "| maze512-32-0 |" in out and "| forest (validation) |" in out
 
 
 def test_actor_with_other_convolution_kernels_is_refused():
