@@ -456,6 +456,59 @@ def headline(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
     return out
 
 
+#: Name of the row that pools every MovingAI map.
+MOVINGAI_POOL = "MovingAI (all)"
+
+#: Issue 18's targets for the learned sampler (RRT, test split): its median iterations at most these
+#: multiples of the tuned ablation's, the best goal bias's and the iteration lower bound; and on every
+#: MovingAI map at least this success rate.
+TARGETS = {"policy/constant": 0.5, "policy/best_bias": 0.5, "policy/lower_bound": 4.0, "movingai_success": 0.9}
+
+
+def target_check(head: Sequence[dict], movingai_maps: Sequence[str]) -> tuple[list[dict], int, int]:
+    """Which of :data:`TARGETS` the policy meets, per map set of ``headline`` rows; (rows, met, total).
+
+    Generated map sets (in-distribution and shifted) and the pooled MovingAI row are checked against
+    the ablation, the best goal bias (a ratio counts only with success at least as high as the
+    baseline's) and wall time; generated sets also against the lower bound; every MovingAI map against
+    the success floor.
+    """
+    t = TARGETS
+    c_const = f"policy / constant <= {t['policy/constant']:g}"
+    c_bias = f"policy / best bias <= {t['policy/best_bias']:g}"
+    c_lb, c_wall = f"policy / lower bound <= {t['policy/lower_bound']:g}", "wall time / best bias's <= 1"
+    c_maps = f"every map solved in >= {t['movingai_success']:.0%}"
+
+    def ratio(value: float, limit: float, ok_success: bool = True) -> tuple[str, bool]:
+        ok = value <= limit and ok_success
+        return f"{value:.2f} " + ("yes" if ok else "no" if value > limit else "no (success)"), ok
+
+    rows, met, total = [], 0, 0
+    for h in sorted(head, key=lambda h: h["family"] == MOVINGAI_POOL):
+        fam = h["family"]
+        if fam in movingai_maps:
+            continue
+        cells: dict[str, tuple[str, bool]] = {}
+        if not math.isnan(h.get("policy/constant", math.nan)):
+            cells[c_const] = ratio(h["policy/constant"], t["policy/constant"],
+                                   h["policy_success"] >= h["constant_success"])
+        cells[c_bias] = ratio(h["policy/best_bias"], t["policy/best_bias"],
+                              h["policy_success"] >= h["best_bias_success"])
+        if fam != MOVINGAI_POOL:
+            cells[c_lb] = ratio(h["policy/lower_bound"], t["policy/lower_bound"])
+        cells[c_wall] = ratio(h["policy_wall_ms"] / max(h["best_bias_wall_ms"], 1e-12), 1.0)
+        if fam == MOVINGAI_POOL:
+            by_map = {r["family"]: r["policy_success"] for r in head if r["family"] in movingai_maps}
+            short = sorted(m for m, v in by_map.items() if v < t["movingai_success"])
+            cells[c_maps] = ("yes" if not short else "no: " + ", ".join(f"{m} {by_map[m]:.2f}" for m in short),
+                             not short)
+        rows.append({"map set": fam, **{k: text for k, (text, _) in cells.items()}})
+        met += sum(ok for _, ok in cells.values())
+        total += len(cells)
+    columns = ["map set", *(c for c in (c_const, c_bias, c_lb, c_wall, c_maps) if any(c in r for r in rows))]
+    return [{c: r.get(c, "") for c in columns} for r in rows], met, total
+
+
 def _wrap(text: str, width_in: float, fontsize: float) -> str:
     """``text`` wrapped to lines that fit ``width_in`` inches at ``fontsize`` points."""
     # a character of the default sans-serif font averages well under 0.6 em wide

@@ -19,7 +19,7 @@ from learning.expert import GeodesicExpert
 from learning.fast_policy import FastActor
 from learning.policy_sampler import sample_classes
 from planners import RRT, Problem, SamplerBase
-from planners.guidance.guided import FRONTIER, GuidedSampling
+from planners.guidance.guided import ANGLES, FRONTIER, GuidedSampling
 from planners.tools.parallel import Backend, LocalBackend
 
 
@@ -135,9 +135,21 @@ def _rollout(task: tuple[int, Problem], c: dict) -> tuple[Dataset | None, int]:
                    np.array([x[2] for x in recs], dtype=np.int64), value.astype(np.float32)), r.iterations
 
 
+def mirror_labels(label: torch.Tensor) -> torch.Tensor:
+    """Guided classes reflected across the goal axis: angle bin b -> 15 - b in its ring; the frontier stays."""
+    ego = label < FRONTIER
+    flipped = (label // ANGLES) * ANGLES + (ANGLES - 1 - label % ANGLES)
+    return torch.where(ego, flipped, label)
+
+
 def behaviour_cloning(policy, data: Dataset, *, epochs: int, batch_size: int, lr: float, seed: int,
-                      value_weight: float = 0.5, log=None) -> dict:
-    """Fit an SB3 ``ActorCriticPolicy`` to expert labels (cross-entropy) and value targets (MSE)."""
+                      value_weight: float = 0.5, mirror: bool = False, log=None) -> dict:
+    """Fit an SB3 ``ActorCriticPolicy`` to expert labels (cross-entropy) and value targets (MSE).
+
+    ``mirror``: reflect a random half of each batch across the goal axis (windows' rows reversed,
+    labels by :func:`mirror_labels`): the goal frame's one symmetry, free data. The vector features
+    do not change under it.
+    """
     gen = torch.Generator().manual_seed(seed)
     opt = torch.optim.Adam(policy.parameters(), lr=lr)
     local = torch.as_tensor(data.local)
@@ -152,7 +164,12 @@ def behaviour_cloning(policy, data: Dataset, *, epochs: int, batch_size: int, lr
         for b in range(0, len(data), batch_size):
             idx = perm[b:b + batch_size]
             obs = {"local": local[idx], "vector": vector[idx]}
-            values, log_prob, _ = policy.evaluate_actions(obs, label[idx])
+            target = label[idx]
+            if mirror:
+                flip = torch.rand(len(idx), generator=gen) < 0.5
+                obs["local"] = torch.where(flip[:, None, None, None], obs["local"].flip(2), obs["local"])
+                target = torch.where(flip, mirror_labels(target), target)
+            values, log_prob, _ = policy.evaluate_actions(obs, target)
             ce = -log_prob.mean()
             v_loss = torch.nn.functional.mse_loss(values.flatten(), value[idx])
             loss = ce + value_weight * v_loss
@@ -162,7 +179,7 @@ def behaviour_cloning(policy, data: Dataset, *, epochs: int, batch_size: int, lr
             tot_ce += ce.item() * len(idx)
             tot_v += v_loss.item() * len(idx)
             with torch.no_grad():
-                correct += (policy.get_distribution(obs).distribution.logits.argmax(1) == label[idx]).sum().item()
+                correct += (policy.get_distribution(obs).distribution.logits.argmax(1) == target).sum().item()
         stats = {"bc/cross_entropy": tot_ce / len(data), "bc/value_mse": tot_v / len(data),
                  "bc/accuracy": correct / len(data), "bc/epoch": epoch}
         if log is not None:

@@ -66,6 +66,7 @@ class TrainConfig:
     bc_epochs: int = 6
     bc_lr: float = 1e-3
     bc_batch: int = 512
+    mirror: bool = False
     ppo_steps: int = 300_000
     value_warmup: int = 40_000
     shaping: bool = True
@@ -479,7 +480,8 @@ class _TrainingRun:
             data = new if data is None else Dataset.concat([data, new])
             # with shaping the critic must predict shaped returns: leave it to PPO's warm-up
             stats = behaviour_cloning(model.policy, data, epochs=cfg.bc_epochs, batch_size=cfg.bc_batch,
-                                      lr=cfg.bc_lr, seed=cfg.seed + k, value_weight=0.0 if cfg.shaping else 0.5)
+                                      lr=cfg.bc_lr, seed=cfg.seed + k, value_weight=0.0 if cfg.shaping else 0.5,
+                                      mirror=cfg.mirror)
             score, fam = validation_score(FastActor(model.policy.state_dict()), cfg, self.backend)
             self.log({**stats, "dagger/round": k, "dagger/beta": beta, "dagger/samples": len(data),
                       "dagger/median_iterations": float(np.median(its)),

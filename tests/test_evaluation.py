@@ -197,3 +197,28 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     assert sorted({r["planner"] for r in shifted}) == sorted(f"RRT {s}" for s in samplers)
     assert sorted(r["iterations"] for r in shifted) == sorted(
         int(r[7]) for r in csv_runs if r[0] == "forest (shifted)")
+
+
+def _head(family, **kw):
+    row = {"family": family, "policy/constant": 0.4, "policy/best_bias": 0.3, "policy/lower_bound": 3.0,
+           "policy_success": 1.0, "constant_success": 1.0, "best_bias_success": 1.0, "policy_wall_ms": 1.0,
+           "best_bias_wall_ms": 2.0}
+    return {**row, **kw}
+
+
+def test_target_check_counts_each_target_and_names_what_misses():
+    head = [_head("forest"),
+            _head("maze", **{"policy/constant": 1.08, "policy/lower_bound": 10.8}),
+            _head("rooms", policy_success=0.9),  # a ratio met with lower success does not count
+            _head("32room_000", policy_success=0.0), _head(E.MOVINGAI_POOL, policy_wall_ms=3.0),
+            _head("arena", policy_success=1.0)]
+    rows, met, total = E.target_check(head, ["arena", "32room_000"])
+    assert [r["map set"] for r in rows] == ["forest", "maze", "rooms", E.MOVINGAI_POOL]
+    assert total == 4 + 4 + 4 + 4 and met == 4 + 2 + 2 + 2
+    assert rows[1]["policy / constant <= 0.5"] == "1.08 no"
+    assert rows[2]["policy / best bias <= 0.5"] == "0.30 no (success)"
+    assert rows[3]["wall time / best bias's <= 1"] == "1.50 no"
+    assert rows[3]["every map solved in >= 90%"] == "no: 32room_000 0.00"
+    assert rows[3]["policy / lower bound <= 4"] == "" and list(rows[0]) == [
+        "map set", "policy / constant <= 0.5", "policy / best bias <= 0.5", "policy / lower bound <= 4",
+        "wall time / best bias's <= 1", "every map solved in >= 90%"]

@@ -384,3 +384,47 @@ def test_actor_with_other_convolution_kernels_is_refused():
     weights["pi_features_extractor.cnn.0.weight"] = w.repeat(1, 1, 2, 2)[:, :, :8, :8]
     with pytest.raises(ValueError, match="kernels"):
         FastActor(weights)
+
+
+def test_mirror_augmentation_is_the_goal_frames_reflection():
+    """A map reflected across the start-goal line observes the reversed window rows and mirrored labels."""
+    from learning.imitation import mirror_labels
+    from planners.guidance.egocentric import EgocentricView
+    from planners.guidance.guided import FRONTIER, ego_class
+
+    rng = np.random.default_rng(0)
+    grid = (rng.random((64, 64)) < 0.2).astype(np.uint8)
+    grid[30:34, :] = 0
+    mirrored = grid[::-1].copy()  # row r -> 63 - r: y -> 64 - y, and the line y = 32 stays put
+    start, goal = np.array([8.5, 32.0]), np.array([56.5, 32.0])
+    views = [EgocentricView(Problem(OccupancyGrid(g, 1.0), start=start, goal=goal, goal_tolerance=2.0), 4.0)
+             for g in (grid, mirrored)]
+    anchor = np.array([20.25, 32.0])
+    a, b = (v.observe(anchor, 1, 2, 10) for v in views)
+    np.testing.assert_array_equal(a["local"][:, ::-1, :], b["local"])
+    np.testing.assert_array_equal(a["vector"], b["vector"])
+    for dx, dy in rng.uniform(-90.0, 90.0, (200, 2)):
+        assert mirror_labels(torch.tensor([ego_class(dx, dy, 4.0)])).item() == ego_class(dx, -dy, 4.0)
+    assert mirror_labels(torch.tensor([FRONTIER])).item() == FRONTIER
+
+
+def test_mirrored_cloning_splits_a_label_between_its_reflections(trained):
+    """On windows that look the same both ways, mirrored batches teach bin b and bin 15 - b equally."""
+    from stable_baselines3 import PPO
+
+    from learning.imitation import Dataset, behaviour_cloning
+    from planners.guidance.guided import ANGLES
+
+    n, label = 512, 3 * ANGLES + 2  # ring 3, bin 2; its reflection is bin 13
+    data = Dataset(np.zeros((n, 6, 16, 16), np.uint8), np.zeros((n, 8), np.float32),
+                   np.full(n, label, np.int64), np.zeros(n, np.float32))
+    probs = {}
+    for mirror in (False, True):
+        policy = PPO.load(trained[0], device="cpu").policy
+        behaviour_cloning(policy, data, epochs=30, batch_size=128, lr=1e-2, seed=0, mirror=mirror)
+        obs = {"local": torch.as_tensor(data.local[:1]), "vector": torch.as_tensor(data.vector[:1])}
+        with torch.no_grad():
+            probs[mirror] = policy.get_distribution(obs).distribution.probs[0]
+    plain, mirrored = probs[False], probs[True]
+    assert plain[label] > 0.9 and plain[label + 11] < 0.05
+    assert abs(mirrored[label] - mirrored[label + 11]) < 0.1 and mirrored[label] + mirrored[label + 11] > 0.9
