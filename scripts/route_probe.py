@@ -2,6 +2,7 @@
 
     python scripts/route_probe.py                          # dilated CNN, 200 maps per family, 20 epochs
     python scripts/route_probe.py --model recurrent        # one shared 3x3 update applied 40 times (VIN-like)
+    python scripts/route_probe.py --model recurrent --channels 8 --iterations 20   # cheaper
 
 The learned sampler fails where the route turns away from the goal (``scripts/imitation_ceiling.py``).
 This measures whether a network that sees the whole map once per query, with no search at
@@ -124,10 +125,12 @@ def main(argv=None) -> list[dict]:
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--block", type=int, default=4, help="cells per block (the planner's step)")
     ap.add_argument("--ahead", type=int, default=8, help="cells along the route that give its direction")
+    ap.add_argument("--channels", type=int, default=24, help="recurrent model: channels of its state")
+    ap.add_argument("--iterations", type=int, default=40, help="recurrent model: times its 3x3 update is applied")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     try:
-        for name in ("maps", "val_maps", "epochs", "size", "block", "ahead"):
+        for name in ("maps", "val_maps", "epochs", "size", "block", "ahead", "channels", "iterations"):
             check_int(getattr(args, name), f"--{name.replace('_', '-')}")
         if args.size < MIN_SIZE:
             raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
@@ -141,7 +144,7 @@ def main(argv=None) -> list[dict]:
              for s in range(args.maps)]
     X = torch.tensor(np.stack([e[0] for e in train]))
     Y = torch.tensor(np.stack([e[1] for e in train]))
-    model = Recurrent() if args.model == "recurrent" else dilated()
+    model = Recurrent(args.channels, args.iterations) if args.model == "recurrent" else dilated()
     opt = torch.optim.Adam(model.parameters(), 1e-3)
     order = torch.Generator().manual_seed(args.seed)
     for epoch in range(args.epochs):
