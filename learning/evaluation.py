@@ -104,6 +104,10 @@ def constant_sampler(frontier: float) -> str:
     return f"constant={frontier:g}"
 
 
+#: Name prefix of the privileged ablation whose frontier knows the geodesic distance (``learning.expert``).
+GEODESIC_FRONTIER = "geodesic frontier="
+
+
 def _sampler_constant(name: str) -> float | None:
     return float(name.split("=")[1]) if name.startswith("constant=") else None
 
@@ -249,6 +253,10 @@ def _sampler(name: str, cfg: dict):
         from learning.expert import ExpertSampler
 
         return ExpertSampler(step)
+    if name.startswith(GEODESIC_FRONTIER):
+        from learning.expert import GeodesicFrontierSampler
+
+        return GeodesicFrontierSampler(float(name.split("=")[1]), step_size=step)
     raise ValueError(f"unknown sampler {name!r}")
 
 

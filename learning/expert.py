@@ -15,6 +15,7 @@ import math
 import numba as nb
 import numpy as np
 
+from learning.ablation import ConstantGuidedSampler
 from planners import OccupancyGrid, Problem, SamplerBase
 from planners.maps.gridsearch import distance_field
 
@@ -128,3 +129,45 @@ class ExpertSampler(SamplerBase):
 
     def __repr__(self) -> str:
         return f"ExpertSampler(lookahead={self.lookahead:g}, sigma={self.sigma:g})"
+
+
+class GeodesicFrontierSampler(ConstantGuidedSampler):
+    """The ablation with route knowledge in its frontier: a reference, not a competitor (it runs a grid search).
+
+    It draws the constant ablation's classes (``learning.ablation``), but its frontier prefers cells
+    by their geodesic distance to the goal instead of the straight-line one: what the frontier class
+    could do if a network knew the cost-to-go of every cell exactly. ``scripts/imitation_ceiling.py``
+    reports it beside the expert.
+
+    Args:
+        frontier: Probability of the frontier class; the rest goes to the cell straight ahead.
+        step_size: The planner's step.
+    """
+
+    def __init__(self, frontier: float = 0.7, *, step_size: float = 4.0) -> None:
+        super().__init__(frontier, step_size=step_size)
+
+    def _setup(self) -> None:
+        super()._setup()
+        grid, f = self.problem.world, self.guide.frontier
+        field = distance_field(grid.obstacles, grid.cell_of(self.problem.goal))
+        k = max(1, int(round(f.cell / grid.resolution)))  # grid cells per frontier cell
+        padded = np.full((f.H * k, f.W * k), np.inf)
+        h, w = min(field.shape[0], f.H * k), min(field.shape[1], f.W * k)
+        padded[:h, :w] = field[:h, :w]
+        blocks = padded.reshape(f.H, k, f.W, k)
+        centre = blocks[:, k // 2, :, k // 2]
+        # a frontier cell's centre is free (the frontier checks it), so its grid cell has a distance
+        # unless the goal cannot be reached from it; the block's best cell stands in then
+        cost = np.where(np.isfinite(centre), centre, blocks.min((1, 3))) * grid.resolution / f.cell
+        self._cost = np.where(np.isfinite(cost), cost, 1e9).reshape(-1)
+
+    def draw(self, rng, n, view):
+        f = self.guide.frontier
+        f.update(view.vertices, view.num_vertices)
+        cells = f.front[:len(f)]
+        f.dist[cells] = self._cost[cells]  # the frontier draws by these weights from now on
+        return super().draw(rng, n, view)
+
+    def __repr__(self) -> str:
+        return f"GeodesicFrontierSampler(frontier={self.frontier:g})"

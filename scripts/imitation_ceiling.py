@@ -12,6 +12,8 @@ ceiling. Rows (RRT, step and tolerance 4, median iterations-to-solution, unsolve
 - ``policy``: the checkpoint;
 - ``labels``: the expert's labels executed (the imitation target, stuck threshold as in training);
 - ``labels, no frontier fallback``: the same without the stuck rule (the action space given the route);
+- ``constant, frontier by geodesic distance``: the ablation with its frontier ranked by exact cost-to-go
+  (best frontier probability here): what the frontier class gains from knowing the route;
 - ``expert``: the privileged expert itself (samples along the shortest path, not through the classes).
 
 Each is also given over the iteration lower bound (grid shortest path / step, per run) and over the
@@ -67,7 +69,8 @@ def main(argv=None) -> None:
            "max_iterations": args.max_iterations, "user_samplers": {}}
     queries = [E.Query(f, VALIDATION_SEED0 + i, args.size, "validation") for f in args.families
                for i in range(args.maps)]
-    samplers = ["policy", "expert (reference)", *(E.constant_sampler(p) for p in FRONTIER_GRID)]
+    geodesic = {p: f"{E.GEODESIC_FRONTIER}{p:g}" for p in FRONTIER_GRID}
+    samplers = ["policy", "expert (reference)", *(E.constant_sampler(p) for p in FRONTIER_GRID), *geodesic.values()]
     tasks = [(q, "RRT", s, i, cfg) for s in samplers for i, q in enumerate(queries)]
     backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
     t0 = time.perf_counter()
@@ -92,8 +95,10 @@ def main(argv=None) -> None:
     for f in args.families:
         best_p = min(FRONTIER_GRID, key=lambda p: np.median(its[(f, E.constant_sampler(p))]))
         const = its[(f, E.constant_sampler(best_p))]
+        geo_p = min(FRONTIER_GRID, key=lambda p: np.median(its[(f, geodesic[p])]))
         for label, key in ((f"constant (p={best_p:g}, best here)", E.constant_sampler(best_p)), ("policy", "policy"),
                            ("labels", "labels"), ("labels, no frontier fallback", "labels, no frontier fallback"),
+                           (f"constant, frontier by geodesic distance (reference, p={geo_p:g})", geodesic[geo_p]),
                            ("expert (reference)", "expert (reference)")):
             x = its[(f, key)]
             rows.append({"family": f, "sampler": label, "median iterations": f"{np.median(x):,.0f}",

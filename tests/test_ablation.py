@@ -64,3 +64,22 @@ def test_the_ablation_is_tuned_on_the_tuning_split_only():
     assert best == {("forest", "RRT"): 0.5}
     test = E.constant_test_tasks(qs, "RRT", {}, best, seeds=2)
     assert {t[2] for t in test} == {"constant=0.5"} and {t[0].split for t in test} == {"test"} and len(test) == 4
+
+
+def test_the_geodesic_frontier_reference_ranks_its_frontier_by_cost_to_go():
+    """Its frontier weights are geodesic distances: never below the straight line, well above it in a trap."""
+    from learning.expert import GeodesicFrontierSampler
+
+    p = generate("bugtrap", 1_000_003, 128, goal_tolerance=4.0)
+    planner = RRT(p, step_size=4.0, sampler=GeodesicFrontierSampler(0.7), seed=0)
+    planner.solve(max_iterations=150)
+    f = planner.sampler.guide.frontier  # the planner binds its own copy
+    cells = f.front[:len(f)]
+    centres = np.stack([(cells % f.W + 0.5) * f.cell, (cells // f.W + 0.5) * f.cell], 1)
+    euclid = np.linalg.norm(centres - p.goal, axis=1) / f.cell
+    assert len(cells) > 10
+    assert np.all(f.dist[cells] >= euclid - 1.0)  # grid distances are octile, and measured from the centre cell
+    assert np.max(f.dist[cells] - euclid) > 5.0  # somewhere the way round the trap is longer than the line
+    r = RRT(p, step_size=4.0, sampler=GeodesicFrontierSampler(0.7), seed=1).solve(max_iterations=5000)
+    assert r.solved and fine_check_path(p.world, r.path) and np.allclose(r.path[0], p.start)
+    assert np.linalg.norm(r.path[-1] - p.goal) <= p.goal_tolerance + 1e-9

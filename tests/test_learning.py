@@ -333,7 +333,8 @@ def test_imitation_ceiling_script_reports_labels_beside_the_policy(capsys):
                                        "--max-iterations", "3000"])
     out = capsys.readouterr().out
     for needle in ("constant (p=", "| forest | policy |", "| forest | labels |", "labels, no frontier fallback",
-                   "expert (reference)", "top cell within 1 direction of the label"):
+                   "expert (reference)", "frontier by geodesic distance (reference, p=",
+                   "top cell within 1 direction of the label"):
         assert needle in out, needle
 
 
