@@ -2,6 +2,7 @@
 
     python scripts/tune_stuck_floor.py                       # MovingAI tuning scenarios + validation maps
     python scripts/tune_stuck_floor.py --scenarios 5 --floors 0.2 0.3 0.5
+    python scripts/evaluate.py --sampler cap=tune_stuck_floor:policy_with_cap_0_3   # 0.3 on the test split
 
 ``PolicySampler`` raises its uniform share when the tree has made no progress for ``patience``
 iterations, up to ``max_floor``. That choice only matters for runs stuck for thousands of
@@ -30,6 +31,11 @@ from planners.tools.parallel import add_backend_arguments, check_backend_argumen
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 FLOORS = (0.05, 0.1, 0.2, 0.3, 0.4, 0.5)
+
+
+def policy_with_cap_0_3() -> PolicySampler:
+    """The shipped policy with the cap the rule picks (``evaluate.py --sampler``, see the module docstring)."""
+    return PolicySampler.load(DEFAULT_POLICY, max_floor=0.3)
 
 
 def _run(task: tuple, context: dict) -> int:

@@ -366,6 +366,7 @@ def test_stuck_floor_rule_prefers_the_worst_map_then_the_mean_then_the_median():
     assert choose(success, {0.1: 10.0, 0.3: 5.0, 0.5: 50.0}) == 0.5  # a map none solves does not decide
     success[0.3]["b"] = 1.0
     assert choose(success, {0.1: 10.0, 0.3: 5.0, 0.5: 50.0}) == 0.3
+    assert _script("tune_stuck_floor").policy_with_cap_0_3().max_floor == 0.3  # evaluate.py --sampler loads it
 
 
 def test_stuck_floor_script_runs_on_the_movingai_tuning_scenarios(movingai, capsys):
