@@ -492,9 +492,11 @@ def target_check(head: Sequence[dict], movingai_maps: Sequence[str]) -> tuple[li
         return f"{value:.2f} " + ("yes" if ok else "no" if value > limit else "no (success)"), ok
 
     rows, met, total = [], 0, 0
-    for h in sorted(head, key=lambda h: h["family"] == MOVINGAI_POOL):
+    for h in sorted(head, key=lambda h: h["family"] == MOVINGAI_POOL or h["family"] in movingai_maps):
         fam = h["family"]
-        if fam in movingai_maps:
+        # a single MovingAI map has no pooled row (``evaluate.py`` pools two or more): it stands for the set
+        real_world = fam == MOVINGAI_POOL or (fam in movingai_maps and len(movingai_maps) == 1)
+        if fam in movingai_maps and not real_world:
             continue
         cells: dict[str, tuple[str, bool]] = {}
         if not math.isnan(h.get("policy/constant", math.nan)):
@@ -502,10 +504,10 @@ def target_check(head: Sequence[dict], movingai_maps: Sequence[str]) -> tuple[li
                                    h["policy_success"] >= h["constant_success"])
         cells[c_bias] = ratio(h["policy/best_bias"], t["policy/best_bias"],
                               h["policy_success"] >= h["best_bias_success"])
-        if fam != MOVINGAI_POOL:
+        if not real_world:
             cells[c_lb] = ratio(h["policy/lower_bound"], t["policy/lower_bound"])
         cells[c_wall] = ratio(h["policy_wall_ms"] / max(h["best_bias_wall_ms"], 1e-12), 1.0)
-        if fam == MOVINGAI_POOL:
+        if real_world:
             by_map = {r["family"]: r["policy_success"] for r in head if r["family"] in movingai_maps}
             short = sorted(m for m, v in by_map.items() if v < t["movingai_success"])
             cells[c_maps] = ("yes" if not short else "no: " + ", ".join(f"{m} {by_map[m]:.2f}" for m in short),

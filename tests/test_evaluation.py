@@ -222,3 +222,11 @@ def test_target_check_counts_each_target_and_names_what_misses():
     assert rows[3]["policy / lower bound <= 4"] == "" and list(rows[0]) == [
         "map set", "policy / constant <= 0.5", "policy / best bias <= 0.5", "policy / lower bound <= 4",
         "wall time / best bias's <= 1", "every map solved in >= 90%"]
+
+
+def test_target_check_takes_a_single_movingai_map_for_the_set():
+    head = [_head("forest"), _head("den312d", policy_success=0.8, constant_success=0.5, best_bias_success=0.5)]
+    rows, met, total = E.target_check(head, ["den312d"])
+    assert [r["map set"] for r in rows] == ["forest", "den312d"]
+    assert rows[1]["every map solved in >= 90%"] == "no: den312d 0.80" and rows[1]["policy / lower bound <= 4"] == ""
+    assert total == 4 + 4 and met == 4 + 3
