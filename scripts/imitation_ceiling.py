@@ -35,7 +35,7 @@ from learning import PolicySampler
 from learning import evaluation as E
 from learning.ablation import FRONTIER_GRID
 from learning.imitation import collect
-from planners.base.fileio import InputError, check_int
+from planners.base.fileio import InputError, check_int_flags
 from planners.guidance.guided import ANGLES, FRONTIER
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
@@ -55,8 +55,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
     try:
-        for name in ("size", "maps", "max_iterations"):
-            check_int(getattr(args, name), f"--{name.replace('_', '-')}")
+        check_int_flags(args, ("size", "maps", "max_iterations"))
         if args.size < MIN_SIZE:
             raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
     except InputError as exc:

@@ -26,7 +26,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from planners.base.fileio import InputError, check_int
+from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
 from planners.maps.gridsearch import distance_field
 from planners.tools.benchmark import markdown_table
@@ -130,8 +130,7 @@ def main(argv=None) -> list[dict]:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     try:
-        for name in ("maps", "val_maps", "epochs", "size", "block", "ahead", "channels", "iterations"):
-            check_int(getattr(args, name), f"--{name.replace('_', '-')}")
+        check_int_flags(args, ("maps", "val_maps", "epochs", "size", "block", "ahead", "channels", "iterations"))
         if args.size < MIN_SIZE:
             raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
         if args.size < 2 * args.block:

@@ -24,7 +24,7 @@ import numpy as np
 from learning import PolicySampler
 from learning import evaluation as E
 from planners import make_planner, movingai_dir
-from planners.base.fileio import InputError, check_int
+from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
@@ -69,8 +69,7 @@ def main(argv=None) -> float:
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
     try:
-        for name in ("scenarios", "seeds", "maps", "max_iterations"):
-            check_int(getattr(args, name), f"--{name.replace('_', '-')}")
+        check_int_flags(args, ("scenarios", "seeds", "maps", "max_iterations"))
         for f in args.floors:
             if not 0.0 <= f <= 1.0:
                 raise InputError(f"--floors must lie in [0, 1], got {f}")

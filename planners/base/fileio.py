@@ -64,6 +64,12 @@ def check_int(value, name: str, *, low: int = 1) -> int:
     return int(value)
 
 
+def check_int_flags(args, names, *, low: int = 1) -> None:
+    """:func:`check_int` on each named attribute of parsed ``argparse`` args, naming its flag (``a_b`` -> ``--a-b``)."""
+    for name in names:
+        check_int(getattr(args, name), f"--{name.replace('_', '-')}", low=low)
+
+
 def check_number(source, key: str, value, *, integer: bool = False, low: float | None = None,
                  high: float | None = None, low_open: bool = False) -> float | int:
     """``value`` as a finite number within bounds, or an ``InputError`` naming ``source`` (file or flag) and ``key``."""
