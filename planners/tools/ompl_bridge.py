@@ -6,6 +6,9 @@ the cell containing the point, blocked outside the grid) and checks motions by s
 every half cell (``setStateValidityCheckingResolution``), which OMPL's default of 1% of the map
 extent would exceed on any map wider than 50 cells. Iterations are counted exactly through the
 planner termination condition, which OMPL's planners query once per iteration.
+
+Maps with an origin (ROS ``map.yaml``) plan in their world frame: states, bounds and the returned
+path are world coordinates, as everywhere in SamplerGym (``tests/test_ompl_bridge.py``).
 """
 
 from __future__ import annotations
@@ -53,6 +56,7 @@ class OmplRun:
     time: float
     cost: float
     num_vertices: int
+    path: np.ndarray  # (n, 2) world points of OMPL's solution, start first; (0, 2) if unsolved
 
 
 class OmplGridPlanner:
@@ -75,7 +79,11 @@ class OmplGridPlanner:
             raise TypeError("the OMPL bridge handles OccupancyGrid problems only")
         if planner not in OMPL_PLANNERS:
             raise ValueError(f"planner must be one of {OMPL_PLANNERS}, got {planner!r}")
+        # OMPL logs an error on every reseed after its first RNG exists, yet the planner built next
+        # does draw from the new seed (the same seed gives the same run, tested), so it is silenced
+        ou.setLogLevel(ou.LogLevel.LOG_NONE)
         ou.RNG.setSeed(int(seed) + 1)  # OMPL rejects seed 0
+        ou.setLogLevel(ou.LogLevel.LOG_ERROR)
         H, W = grid.shape
         res = grid.resolution
         blocked = grid.obstacles.tolist()
@@ -133,7 +141,11 @@ class OmplGridPlanner:
         dt = time.perf_counter() - t0
         self.iterations = min(self.iterations, limit)
         solved = bool(self._pdef.hasExactSolution()) and str(status) == "Exact solution"
-        cost = float(self._pdef.getSolutionPath().length()) if solved else float("inf")
+        cost, path = float("inf"), np.empty((0, 2))
+        if solved:
+            solution = self._pdef.getSolutionPath()
+            cost = float(solution.length())
+            path = np.array([(st[0], st[1]) for st in solution.getStates()], dtype=np.float64)
         data = ob.PlannerData(self._si)
         self._planner.getPlannerData(data)
-        return OmplRun(solved, self.iterations, dt, cost, int(data.numVertices()))
+        return OmplRun(solved, self.iterations, dt, cost, int(data.numVertices()), path)
