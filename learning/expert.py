@@ -10,70 +10,16 @@ descent of the distance field), and samples scatter around it with a spread of `
 
 from __future__ import annotations
 
-import math
-
-import numba as nb
 import numpy as np
 
 from learning.ablation import ConstantGuidedSampler
 from planners import OccupancyGrid, Problem, SamplerBase
+from planners.guidance.follow import FieldFollower, frontier_costs
 from planners.maps.gridsearch import distance_field
 
 
-@nb.njit(cache=True)
-def _descent(field, blocked):
-    """For every cell, the neighbour one octile step closer to the goal (-1 where none)."""
-    H, W = field.shape
-    nxt = np.full((H, W), -1, dtype=np.int64)
-    for r in range(H):
-        for c in range(W):
-            best = field[r, c]
-            if not np.isfinite(best):
-                continue
-            for dr in (-1, 0, 1):
-                for dc in (-1, 0, 1):
-                    rr, cc = r + dr, c + dc
-                    if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
-                        continue
-                    if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
-                        continue
-                    if field[rr, cc] < best:
-                        best = field[rr, cc]
-                        nxt[r, c] = rr * W + cc
-    return nxt
-
-
-@nb.njit(cache=True)
-def _walk(nxt, W, cell, length):
-    """Follow the descent for ``length`` cells of path from ``cell``; returns the cell reached."""
-    acc = 0.0
-    v = cell
-    while acc < length:
-        u = nxt[v // W, v % W]
-        if u < 0:
-            break
-        dr = u // W - v // W
-        dc = u % W - v % W
-        acc += math.sqrt(float(dr * dr + dc * dc))
-        v = u
-    return v
-
-
-@nb.njit(cache=True)
-def _best_cell(field, vertices, res, origin, best, best_cell):
-    W = field.shape[1]
-    for i in range(vertices.shape[0]):
-        r = int((vertices[i, 1] - origin[1]) / res)
-        c = int((vertices[i, 0] - origin[0]) / res)
-        d = field[r, c]
-        if d < best:
-            best = d
-            best_cell = r * W + c
-    return best, best_cell
-
-
-class GeodesicExpert:
-    """Tracks the tree's geodesic progress and proposes targets ahead of it.
+class GeodesicExpert(FieldFollower):
+    """Tracks the tree's geodesic progress and proposes targets ahead of it (the grid search's field).
 
     Args:
         problem: An ``OccupancyGrid`` problem.
@@ -85,26 +31,7 @@ class GeodesicExpert:
         grid = problem.world
         if not isinstance(grid, OccupancyGrid):
             raise TypeError("the geodesic expert needs an OccupancyGrid problem")
-        self.problem, self.step, self.lookahead = problem, float(step_size), float(lookahead)
-        self.res = grid.resolution
-        self.origin = np.ascontiguousarray(grid.origin, dtype=np.float64)
-        self.field = distance_field(grid.obstacles, grid.cell_of(problem.goal))
-        self.nxt = _descent(self.field, np.ascontiguousarray(grid.obstacles))
-        self.W = grid.width
-        self.seen = 0
-        r, c = grid.cell_of(problem.start)
-        self.best, self.best_cell = float(self.field[r, c]), r * self.W + c
-
-    def update(self, vertices: np.ndarray, num_vertices: int) -> None:
-        if num_vertices > self.seen:
-            self.best, self.best_cell = _best_cell(self.field, np.ascontiguousarray(vertices[self.seen:num_vertices]),
-                                                   self.res, self.origin, self.best, self.best_cell)
-            self.seen = num_vertices
-
-    def target(self, scale: float = 1.0) -> np.ndarray:
-        """World point ``scale * lookahead`` steps ahead of the progress vertex along the shortest path."""
-        v = _walk(self.nxt, self.W, self.best_cell, self.lookahead * scale * self.step / self.res)
-        return self.origin + np.array([(v % self.W + 0.5) * self.res, (v // self.W + 0.5) * self.res])
+        super().__init__(problem, step_size, distance_field(grid.obstacles, grid.cell_of(problem.goal)), lookahead)
 
 
 class ExpertSampler(SamplerBase):
@@ -149,18 +76,9 @@ class GeodesicFrontierSampler(ConstantGuidedSampler):
 
     def _setup(self) -> None:
         super()._setup()
-        grid, f = self.problem.world, self.guide.frontier
-        field = distance_field(grid.obstacles, grid.cell_of(self.problem.goal))
-        k = max(1, int(round(f.cell / grid.resolution)))  # grid cells per frontier cell
-        padded = np.full((f.H * k, f.W * k), np.inf)
-        h, w = min(field.shape[0], f.H * k), min(field.shape[1], f.W * k)
-        padded[:h, :w] = field[:h, :w]
-        blocks = padded.reshape(f.H, k, f.W, k)
-        centre = blocks[:, k // 2, :, k // 2]
-        # a frontier cell's centre is free (the frontier checks it), so its grid cell has a distance
-        # unless the goal cannot be reached from it; the block's best cell stands in then
-        cost = np.where(np.isfinite(centre), centre, blocks.min((1, 3))) * grid.resolution / f.cell
-        self._cost = np.where(np.isfinite(cost), cost, 1e9).reshape(-1)
+        grid = self.problem.world
+        self._cost = frontier_costs(distance_field(grid.obstacles, grid.cell_of(self.problem.goal)), grid,
+                                    self.guide.frontier)
 
     def draw(self, rng, n, view):
         f = self.guide.frontier
