@@ -3,13 +3,15 @@
     python scripts/route_probe.py                          # dilated CNN, 200 maps per family, 20 epochs
     python scripts/route_probe.py --model recurrent        # one shared 3x3 update applied 40 times (VIN-like)
     python scripts/route_probe.py --model recurrent --channels 8 --iterations 20   # cheaper
+    python scripts/route_probe.py --model unet --input cells   # multiscale, sees every cell of each block
 
 The learned sampler fails where the route turns away from the goal (``scripts/imitation_ceiling.py``).
 This measures whether a network that sees the whole map once per query, with no search at
 inference, could supply that: per block of ``--block`` cells (one planner step), it predicts the
 direction (16 bins) in which the shortest path leaves the block's best cell, ``--ahead`` cells along.
 Training targets come from the grid search (allowed at training time); the network's input is the
-map's blocked fraction per block, the goal's block and the offset to the goal.
+map's blocked fraction per block (``--input cells``: every cell of the block, one channel each, so a
+gap or a wall inside a block is not averaged away), the goal's block and the offset to the goal.
 
 Printed per family, on validation maps: how often "straight at the goal" and the network are within one
 bin of the route's direction, on all blocks and on the blocks where the route turns away from the goal;
@@ -59,20 +61,26 @@ def _bin(dr: float, dc: float) -> int:
     return int((math.atan2(dr, dc) % (2 * math.pi)) / (2 * math.pi) * ANGLES + 0.5) % ANGLES
 
 
-def example(family: str, seed: int, size: int, block: int, ahead: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(input (4, h, w), route direction per block (-1: none), straight-at-the-goal direction per block)."""
+def example(family: str, seed: int, size: int, block: int, ahead: int,
+            cells: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(input (c, h, w), route direction per block (-1: none), straight-at-the-goal direction per block).
+
+    The input's first channels are the blocked fraction per block (one channel) or, with ``cells``,
+    each cell of the block (``block**2`` channels); the last three mark the goal's block and the
+    offset to it.
+    """
     p = generate(family, seed, size)
     obs = p.world.obstacles
     gr, gc = p.world.cell_of(p.goal)
     D = distance_field(obs, (gr, gc))
     nr, nc = _descent(D)
     h, w = obs.shape[0] // block, obs.shape[1] // block
-    cells = D[:h * block, :w * block].reshape(h, block, w, block).transpose(0, 2, 1, 3).reshape(h, w, -1)
-    k = cells.argmin(2)
+    per_block = D[:h * block, :w * block].reshape(h, block, w, block).transpose(0, 2, 1, 3).reshape(h, w, -1)
+    k = per_block.argmin(2)
     route, goalward = np.full((h, w), -1), np.full((h, w), -1)
     for i in range(h):
         for j in range(w):
-            d = cells[i, j, k[i, j]]
+            d = per_block[i, j, k[i, j]]
             if not np.isfinite(d) or d < ahead:
                 continue
             r0, c0 = i * block + k[i, j] // block, j * block + k[i, j] % block
@@ -80,18 +88,19 @@ def example(family: str, seed: int, size: int, block: int, ahead: int) -> tuple[
             for _ in range(ahead):
                 r, c = nr[r, c], nc[r, c]
             route[i, j], goalward[i, j] = _bin(r - r0, c - c0), _bin(gr - r0, gc - c0)
-    frac = obs[:h * block, :w * block].reshape(h, block, w, block).mean((1, 3))
+    blocks = obs[:h * block, :w * block].reshape(h, block, w, block)
+    first = list(blocks.transpose(1, 3, 0, 2).reshape(-1, h, w)) if cells else [blocks.mean((1, 3))]
     ys, xs = np.mgrid[0:h, 0:w]
-    x = np.stack([frac, (ys == gr // block) & (xs == gc // block), (gc // block - xs) / w, (gr // block - ys) / h])
+    x = np.stack([*first, (ys == gr // block) & (xs == gc // block), (gc // block - xs) / w, (gr // block - ys) / h])
     return x.astype(np.float32), route, goalward
 
 
 class Recurrent(nn.Module):
     """Value-iteration-like: one shared 3x3 update applied ``k`` times over the block grid."""
 
-    def __init__(self, channels: int = 24, k: int = 40) -> None:
+    def __init__(self, channels: int = 24, k: int = 40, inputs: int = 4) -> None:
         super().__init__()
-        self.inp = nn.Conv2d(4, channels, 3, padding=1)
+        self.inp = nn.Conv2d(inputs, channels, 3, padding=1)
         self.step = nn.Conv2d(channels, channels, 3, padding=1)
         self.out = nn.Conv2d(2 * channels, ANGLES, 3, padding=1)
         self.k = k
@@ -104,8 +113,34 @@ class Recurrent(nn.Module):
         return self.out(torch.cat([h, torch.relu(e)], 1))
 
 
-def dilated(channels: int = 32, dilations=(1, 2, 4, 8, 16, 1)) -> nn.Module:
-    layers: list[nn.Module] = [nn.Conv2d(4, channels, 3, padding=1), nn.ReLU()]
+class UNet(nn.Module):
+    """Multiscale: halve the grid ``depth`` times, then come back up with skip connections.
+
+    Every block sees the whole map after ``2 * depth + 2`` convolutions, most of them on small grids,
+    so a pass costs a few times one full-resolution convolution, not ``k`` of them.
+    """
+
+    def __init__(self, channels: int = 24, depth: int = 4, inputs: int = 4) -> None:
+        super().__init__()
+        self.inp = nn.Conv2d(inputs, channels, 3, padding=1)
+        self.down = nn.ModuleList(nn.Conv2d(channels, channels, 3, stride=2, padding=1) for _ in range(depth))
+        self.up = nn.ModuleList(nn.Conv2d(2 * channels, channels, 3, padding=1) for _ in range(depth))
+        self.out = nn.Conv2d(channels, ANGLES, 3, padding=1)
+
+    def forward(self, x):
+        h = torch.relu(self.inp(x))
+        skips = []
+        for conv in self.down:
+            skips.append(h)
+            h = torch.relu(conv(h))
+        for conv, skip in zip(self.up, reversed(skips), strict=True):
+            h = nn.functional.interpolate(h, size=skip.shape[-2:], mode="nearest")
+            h = torch.relu(conv(torch.cat([h, skip], 1)))
+        return self.out(h)
+
+
+def dilated(channels: int = 32, dilations=(1, 2, 4, 8, 16, 1), inputs: int = 4) -> nn.Module:
+    layers: list[nn.Module] = [nn.Conv2d(inputs, channels, 3, padding=1), nn.ReLU()]
     for d in dilations:
         layers += [nn.Conv2d(channels, channels, 3, padding=d, dilation=d), nn.ReLU()]
     return nn.Sequential(*layers, nn.Conv2d(channels, ANGLES, 1))
@@ -118,7 +153,9 @@ def _near(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def main(argv=None) -> list[dict]:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--model", choices=("dilated", "recurrent"), default="dilated")
+    ap.add_argument("--model", choices=("dilated", "recurrent", "unet"), default="dilated")
+    ap.add_argument("--input", choices=("fraction", "cells"), default="fraction",
+                    help="per block: its blocked fraction, or each of its cells")
     ap.add_argument("--maps", type=int, default=200, help="training maps per family")
     ap.add_argument("--val-maps", type=int, default=40, help="validation maps per family")
     ap.add_argument("--epochs", type=int, default=20)
@@ -127,10 +164,12 @@ def main(argv=None) -> list[dict]:
     ap.add_argument("--ahead", type=int, default=8, help="cells along the route that give its direction")
     ap.add_argument("--channels", type=int, default=24, help="recurrent model: channels of its state")
     ap.add_argument("--iterations", type=int, default=40, help="recurrent model: times its 3x3 update is applied")
+    ap.add_argument("--depth", type=int, default=4, help="unet model: times the grid is halved")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     try:
-        check_int_flags(args, ("maps", "val_maps", "epochs", "size", "block", "ahead", "channels", "iterations"))
+        check_int_flags(args, ("maps", "val_maps", "epochs", "size", "block", "ahead", "channels", "iterations",
+                                "depth"))
         if args.size < MIN_SIZE:
             raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
         if args.size < 2 * args.block:
@@ -139,11 +178,18 @@ def main(argv=None) -> list[dict]:
         ap.error(str(exc))
     torch.manual_seed(args.seed)
     t0 = time.perf_counter()
-    train = [example(f, TRAIN_SEEDS[0] + s, args.size, args.block, args.ahead) for f in FAMILIES
+    cells = args.input == "cells"
+    train = [example(f, TRAIN_SEEDS[0] + s, args.size, args.block, args.ahead, cells) for f in FAMILIES
              for s in range(args.maps)]
     X = torch.tensor(np.stack([e[0] for e in train]))
     Y = torch.tensor(np.stack([e[1] for e in train]))
-    model = Recurrent(args.channels, args.iterations) if args.model == "recurrent" else dilated()
+    inputs = X.shape[1]
+    if args.model == "recurrent":
+        model = Recurrent(args.channels, args.iterations, inputs)
+    elif args.model == "unet":
+        model = UNet(args.channels, args.depth, inputs)
+    else:
+        model = dilated(inputs=inputs)
     opt = torch.optim.Adam(model.parameters(), 1e-3)
     order = torch.Generator().manual_seed(args.seed)
     for epoch in range(args.epochs):
@@ -161,7 +207,7 @@ def main(argv=None) -> list[dict]:
     rows = []
     with torch.no_grad():
         for f in FAMILIES:
-            val = [example(f, VALIDATION_SEED0 + 100 + s, args.size, args.block, args.ahead)
+            val = [example(f, VALIDATION_SEED0 + 100 + s, args.size, args.block, args.ahead, cells)
                    for s in range(args.val_maps)]
             pred = model(torch.tensor(np.stack([e[0] for e in val]))).argmax(1).numpy()
             route, goalward = np.stack([e[1] for e in val]), np.stack([e[2] for e in val])
@@ -172,7 +218,7 @@ def main(argv=None) -> list[dict]:
                          "network": f"{_near(pred, route)[known].mean():.2f}",
                          "blocks where the route turns away": f"{turns.sum() / max(known.sum(), 1):.2f}",
                          "network there": f"{_near(pred, route)[turns].mean():.2f}" if turns.any() else "-"})
-        one = torch.zeros(1, 4, 128 // args.block, 128 // args.block)
+        one = torch.zeros(1, inputs, 128 // args.block, 128 // args.block)
         t1 = time.perf_counter()
         for _ in range(20):
             model(one)
