@@ -1,4 +1,4 @@
-"""Issue 18.4: at inference the learned sampler sees only what a planner has (map, tree, start, goal).
+"""Issue 18.4: at inference the learned samplers see only what a planner has (map, tree, start, goal).
 
 No grid search, distance field or shortest path: those are the privileged expert's (training only).
 Checked twice: statically, no module on the inference path imports the grid search or the expert; and
@@ -20,7 +20,7 @@ from planners.maps.generators import TEST_SEED0, generate
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "checkpoints" / "guided.zip"
-INFERENCE = ["learning/policy_sampler.py", "learning/fast_policy.py", "learning/checkpoint.py",
+INFERENCE = ["learning/policy_sampler.py", "learning/fast_policy.py", "learning/checkpoint.py", "learning/route.py",
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "guidance").glob("*.py"))),
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "kernels").glob("*.py")))]
 PRIVILEGED = ("planners.maps.gridsearch", "planners.maps.generators", "learning.expert")
@@ -43,16 +43,24 @@ def test_no_inference_module_imports_a_privileged_one(module):
     assert not bad, f"{module} imports {sorted(bad)}, which inference must not use"
 
 
-def test_the_policy_plans_the_same_runs_with_grid_search_and_expert_disabled(monkeypatch):
+@pytest.mark.parametrize("learned", ["policy", "route"])
+def test_the_learned_samplers_plan_the_same_runs_with_grid_search_and_expert_disabled(monkeypatch, learned):
     from learning import expert
+    from learning.route import RouteSampler
+    from learning.route_training import train_route_net
     from planners.maps import gridsearch
 
     problems = [generate(f, TEST_SEED0 + 3, 96) for f in ("bugtrap", "maze", "narrow_passage")]
+    if learned == "policy":
+        samplers = [PolicySampler.load(SHIPPED, fuse=fuse) for fuse in (True, False)]
+    else:  # no encoder is shipped: a small one, trained (with the grid search's targets) before it is disabled
+        net = train_route_net([generate(f, 1, 64) for f in ("bugtrap", "maze")], channels=4, depth=2, epochs=1,
+                              log=lambda _: None)
+        samplers = [RouteSampler(net), RouteSampler(None)]
 
     def runs():
         out = []
-        for fuse in (True, False):
-            sampler = PolicySampler.load(SHIPPED, fuse=fuse)
+        for sampler in samplers:
             for p in problems:
                 r = RRT(p, step_size=4.0, sampler=sampler, seed=0).solve(max_iterations=3000)
                 out.append((r.iterations, r.num_vertices, r.path.tobytes()))

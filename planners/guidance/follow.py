@@ -15,7 +15,7 @@ from planners import OccupancyGrid, Problem
 
 
 @nb.njit(cache=True)
-def _descent(field, blocked):
+def descent(field, blocked):
     """For every cell, the neighbour one octile step closer to the goal (-1 where none)."""
     H, W = field.shape
     nxt = np.full((H, W), -1, dtype=np.int64)
@@ -38,7 +38,7 @@ def _descent(field, blocked):
 
 
 @nb.njit(cache=True)
-def _walk(nxt, W, cell, length):
+def walk_down(nxt, W, cell, length):
     """Follow the descent for ``length`` cells of path from ``cell``; returns the cell reached."""
     acc = 0.0
     v = cell
@@ -54,7 +54,8 @@ def _walk(nxt, W, cell, length):
 
 
 @nb.njit(cache=True)
-def _best_cell(field, vertices, res, origin, best, best_cell):
+def lowest_vertex_cell(field, vertices, res, origin, best, best_cell):
+    """The lower of ``best`` and the field at the cells of ``vertices``, with its flat cell index."""
     W = field.shape[1]
     for i in range(vertices.shape[0]):
         r = int((vertices[i, 1] - origin[1]) / res)
@@ -90,7 +91,7 @@ class FieldFollower:
         self.res = grid.resolution
         self.origin = np.ascontiguousarray(grid.origin, dtype=np.float64)
         self.field = np.ascontiguousarray(field, dtype=np.float64)
-        self.nxt = _descent(self.field, np.ascontiguousarray(grid.obstacles))
+        self.nxt = descent(self.field, np.ascontiguousarray(grid.obstacles))
         self.W = grid.width
         self.seen = 0
         r, c = grid.cell_of(problem.start)
@@ -98,15 +99,15 @@ class FieldFollower:
 
     def update(self, vertices: np.ndarray, num_vertices: int) -> None:
         if num_vertices > self.seen:
-            self.best, self.best_cell = _best_cell(self.field, np.ascontiguousarray(vertices[self.seen:num_vertices]),
-                                                   self.res, self.origin, self.best, self.best_cell)
+            self.best, self.best_cell = lowest_vertex_cell(self.field,
+                                                           np.ascontiguousarray(vertices[self.seen:num_vertices]),
+                                                           self.res, self.origin, self.best, self.best_cell)
             self.seen = num_vertices
 
     def target(self, scale: float = 1.0) -> np.ndarray:
         """World point ``scale * lookahead`` steps ahead of the progress vertex along the shortest path."""
-        v = _walk(self.nxt, self.W, self.best_cell, self.lookahead * scale * self.step / self.res)
+        v = walk_down(self.nxt, self.W, self.best_cell, self.lookahead * scale * self.step / self.res)
         return self.origin + np.array([(v % self.W + 0.5) * self.res, (v // self.W + 0.5) * self.res])
-
 
 
 def frontier_costs(field: np.ndarray, grid: OccupancyGrid, frontier) -> np.ndarray:

@@ -154,7 +154,7 @@ def frontier_cdf(front, count, dist, tau, cdf):
 
 
 @nb.njit(cache=True)
-def _sample(front, count, W, cell, origin, dist, tau, u_pick, u_xy, out):
+def frontier_sample(front, count, W, cell, origin, dist, tau, u_pick, u_xy, out):
     """Frontier cells drawn with weight exp(-(d - d_min) / tau), a uniform (world) point in each."""
     if count == 0:
         return 0
@@ -227,6 +227,6 @@ class Frontier:
         u_pick = rng.random(m)
         u_xy = rng.random((m, 2))
         out = np.empty((m, 2))
-        k = _sample(self.front, self.count, self.W, self.cell, self.world.params[1:3], self.dist, self.tau, u_pick,
-                    u_xy, out)
+        k = frontier_sample(self.front, self.count, self.W, self.cell, self.world.params[1:3], self.dist, self.tau,
+                            u_pick, u_xy, out)
         return out[:k]

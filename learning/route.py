@@ -1,0 +1,324 @@
+"""Route context: a map encoder that tells the sampler where the route runs, and a sampler that follows it.
+
+The learned policy fails where the route turns away from the goal: its windows do not show which
+gap, door or maze branch leads on (``scripts/imitation_ceiling.py``). ``RouteNet`` looks at the whole
+map once per query and predicts the cost-to-go of every cell. It works on blocks of one planner
+step; its input is every cell of each block (so a 1-cell gap is not averaged away) and the goal, and
+there is no search at inference. The grid search only makes its training targets, as it does the
+expert's (``learning.route_training``).
+
+``RouteSampler`` uses the prediction as the expert (``learning.expert``) uses the distance field:
+its progress vertex is the tree vertex of lowest predicted cost-to-go, and it samples about one step
+ahead of it down the predicted field. Where the prediction is wrong the tree stops making progress;
+after ``stuck`` iterations the sampler turns to the tree's frontier until it does again, so a wrong
+prediction costs iterations, not the solution.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numba as nb
+import numpy as np
+import torch
+from torch import nn
+
+from planners import OccupancyGrid, SamplerBase
+from planners.base.fileio import InputError
+from planners.base.planner import CHUNK, FIRST_REFILL, Planner
+from planners.guidance.follow import FieldFollower, lowest_vertex_cell, walk_down
+from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
+from planners.kernels import rrt as rrt_kernels
+from planners.kernels.bitgen import bitgen_address, next_double
+from planners.kernels.state import F_BEST_D, I_ITER, I_N, I_SOLVED
+
+GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
+
+
+def route_input(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -> np.ndarray:
+    """The encoder's input, (block**2 + 3, h, w) float32: each cell of each block, then the goal channels.
+
+    The map is padded with blocked cells to whole blocks.
+    """
+    H, W = obstacles.shape
+    h, w = -(-H // block), -(-W // block)
+    pad = np.ones((h * block, w * block), dtype=np.float32)
+    pad[:H, :W] = obstacles
+    cells = pad.reshape(h, block, w, block).transpose(1, 3, 0, 2).reshape(block * block, h, w)
+    gr, gc = goal_cell[0] // block, goal_cell[1] // block
+    ys, xs = np.mgrid[0:h, 0:w]
+    goal = np.stack([(ys == gr) & (xs == gc), (gc - xs) / w, (gr - ys) / h]).astype(np.float32)
+    return np.concatenate([cells, goal])
+
+
+class RouteNet(nn.Module):
+    """A small U-Net over the block grid that predicts the cost-to-go of every cell, in steps.
+
+    It halves the grid ``depth`` times and comes back up with skip connections, so every block sees
+    the whole of a 128-cell map after ``2 * depth + 2`` convolutions, most of them on small grids.
+    """
+
+    def __init__(self, block: int = 4, channels: int = 24, depth: int = 4) -> None:
+        super().__init__()
+        self.block, self.channels, self.depth = block, channels, depth
+        self.inp = nn.Conv2d(block * block + GOAL_CHANNELS, channels, 3, padding=1)
+        self.down = nn.ModuleList(nn.Conv2d(channels, channels, 3, stride=2, padding=1) for _ in range(depth))
+        self.up = nn.ModuleList(nn.Conv2d(2 * channels, channels, 3, padding=1) for _ in range(depth))
+        self.out = nn.Conv2d(channels, block * block, 3, padding=1)  # cost-to-go of each cell of the block
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        h = torch.relu(self.inp(x))
+        skips = []
+        for conv in self.down:
+            skips.append(h)
+            h = torch.relu(conv(h))
+        for conv, skip in zip(self.up, reversed(skips), strict=True):
+            h = nn.functional.interpolate(h, size=skip.shape[-2:], mode="nearest")
+            h = torch.relu(conv(torch.cat([h, skip], 1)))
+        return nn.functional.pixel_shuffle(self.out(h), self.block)[:, 0]
+
+    @torch.no_grad()
+    def predict(self, obstacles: np.ndarray, goal_cell: tuple[int, int]) -> np.ndarray:
+        """Predicted cost-to-go of every cell, in blocks (steps), for one map: (H, W) float64."""
+        x = torch.from_numpy(route_input(obstacles, goal_cell, self.block))[None]
+        H, W = obstacles.shape
+        return self(x)[0, :H, :W].numpy().astype(np.float64)
+
+
+def save_route_net(net: RouteNet, path: str | os.PathLike) -> None:
+    """Write ``net`` to ``path`` as tensors and plain numbers only (``load_route_net`` reads it safely)."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    torch.save({"config": {"block": net.block, "channels": net.channels, "depth": net.depth},
+                "state": net.state_dict()}, tmp)
+    os.replace(tmp, path)  # whole or not at all
+
+
+def load_route_net(path: str | os.PathLike) -> RouteNet:
+    """Read a ``save_route_net`` file: ``torch.load(weights_only=True)``, so nothing in it can run.
+
+    Every problem with the file is an ``InputError`` naming it.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"route encoder {path} does not exist")
+    try:
+        blob = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - whatever torch raises on a bad file, name the file
+        raise InputError(f"{path} is not a route encoder file: {type(exc).__name__}: {exc}") from None
+    if not (isinstance(blob, dict) and isinstance(blob.get("config"), dict) and isinstance(blob.get("state"), dict)):
+        raise InputError(f"{path}: expected {{'config': {{...}}, 'state': {{...}}}} as save_route_net writes")
+    config = blob["config"]
+    for key in ("block", "channels", "depth"):
+        v = config.get(key)
+        if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 64:
+            raise InputError(f"{path}: config {key} = {v!r}, expected an integer in [1, 64]")
+    net = RouteNet(config["block"], config["channels"], config["depth"])
+    try:
+        net.load_state_dict(blob["state"])
+    except (RuntimeError, TypeError, ValueError) as exc:
+        raise InputError(f"{path}: the weights do not fit RouteNet{tuple(config.values())}: {exc}") from None
+    return net.eval()
+
+
+#: Where ``scripts/train_route.py`` writes the encoder. None is shipped: on the test maps it did not beat
+#: its ablation (README), so it does not earn a place in the repository; training takes about 5 minutes.
+TRAINED = Path(__file__).resolve().parents[1] / "runs" / "route" / "route.pt"
+
+
+# slots of RouteSampler's integer state; the last three are the fused loop's batch buffer (as the planner's)
+R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT, R_POS, R_COUNT, R_REFILLS = range(9)
+
+
+@nb.njit(cache=True)
+def route_draw(X, n, best_distance, iteration, rng, field, nxt, res, origin, step, frontier, ints, floats, params,
+               low, high, pts):
+    """Fill ``pts`` with samples of ``RouteSampler`` (see its docstring), in one compiled call per batch.
+
+    ``rng`` is the address of the planner's generator (``planners.kernels.bitgen``); every sample
+    takes 7 of its doubles whatever its kind, so the stream does not depend on the branch taken.
+    ``ints`` and ``floats`` hold the progress state (``R_*`` slots; lowest predicted cost, closest
+    straight-line distance to the goal).
+    """
+    world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin = frontier
+    lookahead, sigma, stuck, floor0, max_floor, patience = params
+    W = field.shape[1]
+    if n > ints[R_SEEN]:
+        best, c = lowest_vertex_cell(field, X[ints[R_SEEN]:n], res, origin, floats[0], ints[R_CELL])
+        if best < floats[0] - 1e-9:
+            floats[0], ints[R_CELL], ints[R_PROGRESS] = best, c, iteration
+        ints[R_SEEN] = n
+    if best_distance < floats[1] - 1e-9:
+        floats[1], ints[R_CLOSER] = best_distance, iteration
+    stalled = iteration - ints[R_CLOSER]
+    floor = floor0 if stalled < patience else max(floor0, min(max_floor, floor0 * stalled / patience))
+    frontier_mode = iteration - ints[R_PROGRESS] >= stuck
+    if frontier_mode and n > ints[R_FSEEN]:
+        ints[R_FCOUNT] = update_frontier(world, counts, X[ints[R_FSEEN]:n], cell, fgoal, free, cov, pos, front, dist,
+                                         ints[R_FCOUNT])
+        ints[R_FSEEN] = n
+    m = pts.shape[0]
+    U = np.empty((m, 7))
+    for k in range(m):  # row by row, as Generator.random((m, 7)) fills
+        for j in range(7):
+            U[k, j] = next_double(rng)
+    F = np.empty((m, 2))
+    if frontier_mode and ints[R_FCOUNT] > 0:  # one frontier CDF for the whole batch
+        frontier_sample(front, ints[R_FCOUNT], fw, cell, forigin, dist, tau, U[:, 3].copy(), U[:, 1:3].copy(), F)
+    for k in range(m):
+        u = U[k]
+        if frontier_mode and u[0] >= floor and ints[R_FCOUNT] > 0:
+            x, y = F[k, 0], F[k, 1]
+        elif frontier_mode or u[0] < floor:
+            x, y = low[0] + (high[0] - low[0]) * u[1], low[1] + (high[1] - low[1]) * u[2]
+        else:
+            v = walk_down(nxt, W, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res)
+            r = sigma * step * math.sqrt(-2.0 * math.log(1.0 - u[5]))  # Box-Muller: two normals from two uniforms
+            x = origin[0] + (v % W + 0.5) * res + r * math.cos(2.0 * math.pi * u[6])
+            y = origin[1] + (v // W + 0.5) * res + r * math.sin(2.0 * math.pi * u[6])
+        pts[k, 0] = min(max(x, low[0]), np.nextafter(high[0], low[0]))
+        pts[k, 1] = min(max(y, low[1]), np.nextafter(high[1], low[1]))
+
+
+@nb.njit(cache=True)
+def route_rrt_run(budget, rng, draw_args, batch, pts, tree, istate, fstate, last, world, space, goal, step, tol, low,
+                  high, st, sb):
+    """Up to ``budget`` RRT iterations with samples from ``route_draw``, never leaving compiled code.
+
+    Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule asks for,
+    so the run matches a planner calling ``RouteSampler.draw`` sample for sample.
+    """
+    field, nxt, res, origin, rstep, frontier, ints, floats, params = draw_args
+    X = tree.X
+    q = np.empty(X.shape[1])
+    qe_buf = np.empty(tree.E.shape[1])
+    new = np.empty(X.shape[1])
+    for s in range(budget):
+        if istate[I_SOLVED] or istate[I_N] >= X.shape[0]:
+            return s
+        if ints[R_POS] >= ints[R_COUNT]:
+            m = min(batch, CHUNK, FIRST_REFILL << min(ints[R_REFILLS], 16))
+            route_draw(X, istate[I_N], fstate[F_BEST_D], istate[I_ITER], rng, field, nxt, res, origin, rstep, frontier,
+                       ints, floats, params, low, high, pts[:m])
+            ints[R_REFILLS] += 1
+            ints[R_COUNT] = m
+            ints[R_POS] = 0
+        p = ints[R_POS]
+        rrt_kernels.rrt_iterate(pts[p], 0, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
+                                q, qe_buf, new)
+        ints[R_POS] = p + 1
+    return budget
+
+
+class RouteSampler(SamplerBase):
+    """Samples one step ahead of the tree along a ``RouteNet``'s predicted cost-to-go; the frontier when stuck.
+
+    The progress vertex is the tree vertex of lowest predicted cost-to-go; the target is ``lookahead``
+    steps (jittered 0.5-1.5x) further down the predicted field, and samples scatter ``sigma`` steps
+    around it. When progress has stalled for ``stuck`` iterations, samples go to the tree's frontier
+    (``planners.guidance.frontier``; cells near the goal preferred) until the tree makes progress
+    again. A ``uniform_floor`` share of samples is uniform; it grows, as the policy's does, once the
+    tree has come no closer to the goal for ``patience`` iterations (up to ``max_floor``): a wrong
+    prediction can keep the tree busy in a dead end that looks like progress on the predicted field.
+
+    With ``net=None`` the field is the straight-line distance to the goal: the same sampler with the
+    learning removed, its ablation (``straight_line_sampler``).
+
+    Args:
+        net: The trained encoder (``load_route_net``); its block must be the planner's step in cells.
+        step_size: The planner's step.
+        lookahead, sigma: Target distance ahead and spread, in steps.
+        stuck: Iterations without progress before the frontier takes over.
+        uniform_floor: Share of uniform samples.
+        batch: Samples per draw. The target moves with every new vertex only at 1; at 8, samples of a
+            batch chase a target the tree has already reached, and validation runs took 2-3x the iterations.
+        patience, max_floor: Iterations without coming closer to the goal after which the uniform share
+            grows, and the largest share it reaches.
+    """
+
+    def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 1.0, sigma: float = 0.5,
+                 stuck: int = 4, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
+                 max_floor: float = 0.5) -> None:
+        if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
+                and 0 <= uniform_floor <= max_floor <= 1):
+            raise InputError(f"need step_size, lookahead, stuck, patience, batch > 0, sigma >= 0 and "
+                             f"0 <= uniform_floor <= max_floor <= 1; got {step_size}, {lookahead}, {stuck}, "
+                             f"{patience}, {batch}, {sigma}, {uniform_floor}, {max_floor}")
+        self.net, self.step_size, self.lookahead, self.sigma = net, float(step_size), float(lookahead), float(sigma)
+        self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
+        self.patience, self.max_floor = int(patience), float(max_floor)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike = TRAINED, **kwargs) -> RouteSampler:
+        """A sampler over the encoder saved at ``path`` (default: where ``scripts/train_route.py`` writes it)."""
+        return cls(load_route_net(path), **kwargs)
+
+    def _setup(self) -> None:
+        grid = self.problem.world
+        if not isinstance(grid, OccupancyGrid):
+            raise InputError("RouteSampler plans on OccupancyGrid problems")
+        if self.net is None:
+            rows, cols = np.indices(grid.shape)
+            gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
+            field = np.hypot(cols + 0.5 - gx, rows + 0.5 - gy) * grid.resolution / self.step_size
+        elif round(self.step_size / grid.resolution) != self.net.block:
+            raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is "
+                             f"{self.step_size / grid.resolution:g} cells of this map")
+        else:
+            field = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal))
+        field[grid.obstacles] = np.inf
+        self.follower = FieldFollower(self.problem, self.step_size, field, self.lookahead)
+        f = Frontier(self.problem, self.step_size)
+        self._frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
+                          np.ascontiguousarray(f.world.params[1:3]))
+        e = self.follower
+        self._ints = np.array([0, e.best_cell, 0, 0, 0, 0, 0, 0, 0], dtype=np.int64)
+        self._pts = np.empty((self.batch, 2))
+        self._floats = np.array([e.best, np.inf])
+        self._params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor,
+                                 self.patience], dtype=np.float64)
+
+    def draw(self, rng, n, view):
+        m = min(n, self.batch)
+        pts = np.empty((m, 2))
+        e = self.follower
+        route_draw(view.vertices, view.num_vertices, view.best_distance, view.iteration, bitgen_address(rng),
+                   e.field, e.nxt, e.res, e.origin, self.step_size, self._frontier, self._ints, self._floats,
+                   self._params, self.low, self.high, pts)
+        return pts
+
+    def fuse(self, planner: Planner) -> Callable[[Planner, int], int] | None:
+        """RRT's loop with this sampler's draws compiled in (same samples, less time); None for other planners."""
+        if planner.fusable_loop != "rrt":
+            return None
+        return self._run_fused
+
+    def _run_fused(self, planner: Planner, n: int) -> int:
+        e = self.follower
+        args = (e.field, e.nxt, e.res, e.origin, self.step_size, self._frontier, self._ints, self._floats,
+                self._params)
+        return route_rrt_run(n, bitgen_address(planner.rng), args, self.batch, self._pts, *planner.loop_args())
+
+    def __repr__(self) -> str:
+        if self.net is None:
+            return f"RouteSampler(None, lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck})"
+        return f"RouteSampler(lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck})"
+
+
+def trained_sampler() -> RouteSampler:
+    """The trained encoder as a sampler: ``evaluate.py --sampler route=learning.route:trained_sampler``."""
+    if not TRAINED.is_file():
+        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
+    return RouteSampler.load()
+
+
+def straight_line_sampler() -> RouteSampler:
+    """The ablation: ``RouteSampler`` with the encoder replaced by the straight-line distance to the goal.
+
+    ``evaluate.py`` runs it as the "straight-line follower"; with ``--sampler
+    route=learning.route:trained_sampler`` beside it, what the encoder adds is the difference.
+    """
+    return RouteSampler(None)

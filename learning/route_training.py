@@ -1,0 +1,71 @@
+"""Training the route encoder: the grid search's cost-to-go as targets (training only, never at inference)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+import numpy as np
+import torch
+from torch import nn
+
+from learning.route import RouteNet, route_input
+from planners.maps.gridsearch import distance_field
+
+
+def cost_targets(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -> np.ndarray:
+    """The grid search's cost-to-go of every cell in steps (``block`` cells), padded to whole blocks.
+
+    NaN where a cell is blocked or cut off from the goal. Training only: inference never searches.
+    """
+    D = distance_field(obstacles, goal_cell)
+    H, W = D.shape
+    pad = np.full((-(-H // block) * block, -(-W // block) * block), np.nan)
+    pad[:H, :W] = np.where(np.isfinite(D), D / block, np.nan)
+    return pad
+
+
+def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, epochs: int = 40,
+                    batch: int = 32, lr: float = 1e-3, grad_weight: float = 0.0, seed: int = 0, log=print) -> RouteNet:
+    """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
+
+    The loss is the smooth-L1 error of the predicted cost-to-go, in steps, over the free cells that reach
+    the goal, plus ``grad_weight`` times the L1 error of its differences between neighbouring cells
+    (the sampler walks down the field, so its slope matters more than its level far from the
+    goal). Same seed, same machine: the same weights.
+    """
+    torch.manual_seed(seed)
+    by_size: dict[tuple[int, int], list] = {}
+    for p in problems:
+        goal = p.world.cell_of(p.goal)
+        obs = p.world.obstacles
+        by_size.setdefault(obs.shape, []).append((route_input(obs, goal, block), cost_targets(obs, goal, block)))
+    data = [(torch.tensor(np.stack([e[0] for e in v])), None,
+             torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]
+    net = RouteNet(block, channels, depth)
+    opt = torch.optim.Adam(net.parameters(), lr)
+    order = torch.Generator().manual_seed(seed)
+    t0 = time.perf_counter()
+    for epoch in range(epochs):
+        batches = [(i, idx) for i, (X, _, _) in enumerate(data)
+                   for idx in torch.randperm(len(X), generator=order).split(batch)]
+        total = 0.0
+        for j in torch.randperm(len(batches), generator=order).tolist():
+            i, idx = batches[j]
+            X, _, Yc = data[i]
+            out = net(X[idx])
+            yc = Yc[idx]
+            known = torch.isfinite(yc)
+            loss = nn.functional.smooth_l1_loss(out[known], yc[known])
+            if grad_weight:
+                for dim in (1, 2):
+                    dy, do = yc.diff(dim=dim), out.diff(dim=dim)
+                    both = torch.isfinite(dy)
+                    if both.any():
+                        loss = loss + grad_weight * (do[both] - dy[both]).abs().mean()
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            total += loss.item() * len(idx)
+        log(f"epoch {epoch}: loss {total / sum(len(d[0]) for d in data):.3f} ({time.perf_counter() - t0:.0f} s)")
+    return net.eval()

@@ -1,0 +1,184 @@
+"""The route encoder and its sampler (``learning.route``): inputs, targets, files, planning."""
+
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from conftest import fine_check_path, load_script
+
+from learning.route import (
+    RouteNet,
+    RouteSampler,
+    load_route_net,
+    route_input,
+    save_route_net,
+    straight_line_sampler,
+    trained_sampler,
+)
+from learning.route_training import cost_targets, train_route_net
+from planners import RRT, GeometricWorld, OccupancyGrid, Problem
+from planners.base.fileio import InputError
+from planners.maps.generators import TEST_SEED0, generate
+from planners.maps.gridsearch import distance_field
+
+
+def test_the_input_holds_every_cell_of_each_block_and_pads_with_blocked_cells():
+    obs = np.zeros((6, 10), bool)
+    obs[1, 2] = True  # block (0, 0), cell (1, 2) of it
+    x = route_input(obs, (5, 9), 4)
+    assert x.shape == (16 + 3, 2, 3)
+    assert x[1 * 4 + 2, 0, 0] == 1 and x[:16, 0, 0].sum() == 1
+    assert x[:16, 1, 2].reshape(4, 4)[2:, :].all()  # rows 6, 7 lie outside the map: blocked
+    assert x[:16, 1, 2].reshape(4, 4)[:, 2:].all()  # and so do columns 10, 11
+    assert x[16].sum() == 1 and x[16, 1, 2] == 1  # the goal's block
+
+
+def test_cost_targets_are_the_distance_field_in_steps():
+    p = generate("bugtrap", TEST_SEED0, 64)
+    goal = p.world.cell_of(p.goal)
+    t = cost_targets(p.world.obstacles, goal, 4)
+    D = distance_field(p.world.obstacles, goal)
+    assert t.shape == (64, 64)
+    assert np.array_equal(np.isnan(t), ~np.isfinite(D))
+    assert np.allclose(t[np.isfinite(D)], D[np.isfinite(D)] / 4)
+
+
+def test_the_encoder_predicts_a_cost_per_cell_on_maps_of_any_size():
+    net = RouteNet(4, 8, 3).eval()
+    obs = np.zeros((50, 70), bool)
+    assert net.predict(obs, (3, 4)).shape == (50, 70)
+
+
+def test_training_is_seeded_and_learns():
+    problems = [generate(f, 7, 64) for f in ("forest", "maze")]
+    losses: list[str] = []
+    a = train_route_net(problems, channels=8, depth=2, epochs=3, seed=1, log=losses.append)
+    b = train_route_net(problems, channels=8, depth=2, epochs=3, seed=1, log=lambda _: None)
+    assert all(torch.equal(x, y) for x, y in zip(a.state_dict().values(), b.state_dict().values(), strict=True))
+    first, last = (float(s.split("loss ")[1].split()[0]) for s in (losses[0], losses[-1]))
+    assert last < first
+
+
+def test_a_saved_encoder_loads_with_the_same_predictions(tmp_path):
+    net = RouteNet(4, 8, 2).eval()
+    save_route_net(net, tmp_path / "r.pt")
+    back = load_route_net(tmp_path / "r.pt")
+    obs = generate("rooms", 3, 64).world.obstacles
+    assert np.array_equal(net.predict(obs, (5, 5)), back.predict(obs, (5, 5)))
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+class _Boom:
+    def __reduce__(self):
+        return (exec, ("open('PWNED', 'w').write('x')",))
+
+
+@pytest.mark.filterwarnings("ignore:Detected pickle protocol")
+@pytest.mark.parametrize("content, needle", [
+    (b"not a torch file", "is not a route encoder file"),
+    ("pickle", "is not a route encoder file"),
+    ({"config": {"block": 4, "channels": 8}, "state": {}}, "config depth"),
+    ({"config": {"block": 4, "channels": 8, "depth": 2}, "state": {"inp.weight": torch.zeros(1)}}, "do not fit"),
+    ([1, 2], "expected {'config'"),
+])
+def test_a_bad_encoder_file_is_refused_by_name_and_runs_nothing(tmp_path, monkeypatch, content, needle):
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "bad.pt"
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    elif content == "pickle":
+        path.write_bytes(pickle.dumps(_Boom()))
+    else:
+        torch.save(content, path)
+    with pytest.raises(InputError, match=needle) as exc:
+        load_route_net(path)
+    assert "bad.pt" in str(exc.value)
+    assert not (tmp_path / "PWNED").exists()
+    with pytest.raises(FileNotFoundError):
+        load_route_net(tmp_path / "missing.pt")
+
+
+@pytest.fixture(scope="module")
+def small_net(tmp_path_factory) -> Path:
+    """A small encoder trained in seconds (no encoder is shipped), saved as train_route.py saves one."""
+    problems = [generate(f, s, 96) for f in ("forest", "narrow_passage", "bugtrap", "maze", "rooms")
+                for s in range(4)]
+    path = tmp_path_factory.mktemp("route") / "route.pt"
+    save_route_net(train_route_net(problems, channels=8, depth=3, epochs=4, seed=0, log=lambda _: None), path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def shipped(small_net) -> RouteSampler:
+    return RouteSampler.load(small_net)
+
+
+def test_trained_sampler_says_how_to_train_an_encoder_when_there_is_none(monkeypatch, tmp_path):
+    import learning.route
+
+    monkeypatch.setattr(learning.route, "TRAINED", tmp_path / "none.pt")
+    with pytest.raises(FileNotFoundError, match="scripts/train_route.py"):
+        trained_sampler()
+
+
+@pytest.mark.parametrize("learned", [True, False])
+@pytest.mark.parametrize("family", ["forest", "narrow_passage", "bugtrap", "maze", "rooms"])
+def test_the_route_sampler_and_its_ablation_plan_valid_seeded_paths(shipped, family, learned):
+    p = generate(family, TEST_SEED0 + 11, 96)
+    sampler = shipped if learned else straight_line_sampler()
+    runs = [RRT(p, step_size=4.0, sampler=sampler, seed=s).solve(max_iterations=20000) for s in (0, 0, 1)]
+    assert all(r.solved for r in runs)
+    assert runs[0].iterations == runs[1].iterations and np.array_equal(runs[0].path, runs[1].path)
+    for r in runs:
+        assert np.allclose(r.path[0], p.start) and np.linalg.norm(r.path[-1] - p.goal) <= p.goal_tolerance
+        assert fine_check_path(p.world, r.path)
+
+
+@pytest.mark.parametrize("batch", [1, 8])
+def test_the_fused_loop_plans_the_same_runs_as_draw(small_net, batch):
+    runs = []
+    for fuse in (True, False):
+        sampler = RouteSampler.load(small_net, batch=batch)
+        if not fuse:
+            sampler.fuse = lambda planner: None
+        for family in ("narrow_passage", "rooms"):
+            p = generate(family, TEST_SEED0 + 5, 128)
+            r = RRT(p, step_size=4.0, sampler=sampler, seed=2).solve(max_iterations=20000)
+            runs.append((r.iterations, r.num_vertices, r.path.tobytes()))
+    assert runs[:2] == runs[2:]
+
+
+def test_the_ablation_follows_the_straight_line_distance_to_the_goal():
+    p = generate("forest", TEST_SEED0, 64)
+    sampler = straight_line_sampler().bind(p)
+    field = sampler.follower.field
+    free = ~p.world.obstacles
+    r, c = np.argwhere(free)[0]
+    centre = p.world.cell_center(r, c)
+    assert field[r, c] == pytest.approx(np.linalg.norm(centre - p.goal) / 4.0)
+    assert np.isinf(field[p.world.obstacles]).all()
+
+
+def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
+    with pytest.raises(InputError, match="OccupancyGrid"):
+        RRT(Problem(GeometricWorld(10, 10, []), [1, 1], [9, 9]), step_size=4.0, sampler=shipped, seed=0)
+    grid = OccupancyGrid(np.zeros((64, 64), bool), 0.5)
+    with pytest.raises(InputError, match="blocks are 4 cells"):
+        RRT(Problem(grid, [2, 2], [30, 30]), step_size=4.0, sampler=shipped, seed=0)
+    with pytest.raises(InputError, match="stuck"):
+        RouteSampler(shipped.net, stuck=0)
+
+
+def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, capsys):
+    script = load_script("train_route")
+    path = script.main(["--maps", "1", "--epochs", "1", "--size", "64", "--channels", "4", "--depth", "2",
+                        "--out", str(tmp_path / "run"), "--export", str(tmp_path / "r.pt")])
+    assert load_route_net(path).channels == 4 and load_route_net(tmp_path / "r.pt").depth == 2
+    assert (tmp_path / "r.json").is_file()
+    with pytest.raises(SystemExit) as exc:
+        script.main(["--epochs", "0"])
+    assert exc.value.code == 2 and "--epochs" in capsys.readouterr().err
