@@ -171,7 +171,10 @@ def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: i
 
 
 #: Sampler names the comparison defines itself; a user sampler takes another name.
-BUILTIN_SAMPLERS = ("uniform", "policy", "expert (reference)")
+#: The strongest sampler without learning we know: ``learning.route.RouteSampler`` on the straight-line
+#: distance (one step ahead of the vertex nearest the goal; the frontier after 4 iterations without progress).
+FOLLOWER = "straight-line follower"
+BUILTIN_SAMPLERS = ("uniform", "policy", FOLLOWER, "expert (reference)")
 
 
 def parse_user_sampler(arg: str) -> tuple[str, str]:
@@ -249,6 +252,10 @@ def _sampler(name: str, cfg: dict):
         return GoalBiasedSampler(float(name.split("=")[1]))
     if name == "policy":
         return _policy(policy_path)
+    if name == FOLLOWER:
+        from learning.route import RouteSampler
+
+        return RouteSampler(None, step_size=step)
     if name == "expert (reference)":
         from learning.expert import ExpertSampler
 
@@ -458,6 +465,8 @@ def headline(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
             out[-1].update({
                 f"{name}_median": u["median_iterations"] if u else math.nan,
                 f"{name}/best_bias": u["median_iterations"] / max(gb["median_iterations"], 1e-9) if u else math.nan,
+                f"policy/{name}": pol["median_iterations"] / max(u["median_iterations"], 1e-9) if u else math.nan,
+                f"{name}/lower_bound": u["ratio_to_lower_bound"] if u else math.nan,
                 f"{name}_success": u["success"] if u else math.nan,
                 f"{name}_wall_ms": u["median_wall_ms"] if u else math.nan,
             })

@@ -148,7 +148,8 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     """The runs, tables, plots and logs of the comparison, executed on ``backend``."""
     users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
-    main_samplers = ["uniform", *biases, "policy", *users] + ([] if args.no_expert else ["expert (reference)"])
+    main_samplers = ["uniform", *biases, "policy", E.FOLLOWER, *users] + ([] if args.no_expert else
+                                                                          ["expert (reference)"])
     tasks = E.tuning_tasks(queries, "RRT", cfg) + E.constant_tuning_tasks(queries, "RRT", cfg)
     tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in main_samplers
               for seed in range(args.seeds)]
@@ -182,11 +183,11 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     else:
         pool = []
     rows = E.summarize(runs + pool, best)
-    head = E.headline(rows, best, users, constants)
+    head = E.headline(rows, best, [E.FOLLOWER, *users], constants)
     targets, met, total = E.target_check(head, mai)
     write_runs_csv(runs, args.out / "runs.csv")
     plots = E.save_plots([r for r in runs if r.map not in mai] + pool, rows, best, args.out,
-                         extra=[E.CONSTANT, *users])
+                         extra=[E.CONSTANT, E.FOLLOWER, *users])
     logs = E.write_ompl_logs(runs + pool, best, args.out / "ompl", cfg)
     # the log folder keeps this run's logs only, so `ompl/*.log` never mixes in an earlier run's map sets
     for old in set((args.out / "ompl").glob("*.log")) - set(logs):
@@ -198,7 +199,8 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
              "policy_success", "best_bias_success", "policy_wall_ms", "best_bias_wall_ms", "expert_median",
              "policy/lower_bound", "expert/lower_bound",
              "best_constant", "constant_median", "policy/constant", "constant_success", "constant_wall_ms"]
-    hcols += [f"{n}{c}" for n in users for c in ("_median", "/best_bias", "_success", "_wall_ms")]
+    for n in (E.FOLLOWER, *users):
+        hcols += [f"{n}_median", f"{n}/best_bias", f"policy/{n}", f"{n}/lower_bound", f"{n}_success", f"{n}_wall_ms"]
     named = "".join(f"`{n}`: `{spec}`; " for n, spec in args.user_samplers.items())
     text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {(time.perf_counter() - t0) / 60:.1f} "
             f"min; generated maps {args.size}x{args.size} on test seeds, and shifted variants (other generators, sides "
@@ -209,7 +211,9 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
                if users else "") +
             "## RRT: learned policy vs best-tuned goal bias and vs the tuned constant-distribution ablation\n\n"
             "The ablation draws the policy's own action classes (frontier, or the cell straight ahead) with a "
-            "constant distribution and no network; its frontier probability is tuned on the tuning split.\n\n"
+            "constant distribution and no network; its frontier probability is tuned on the tuning split. The "
+            f"{E.FOLLOWER} has no learning either: it samples a step ahead of the vertex nearest the goal, "
+            "straight at the goal, and turns to the frontier after 4 iterations without progress.\n\n"
             + markdown_table(head, hcols) +
             f"\n## Issue 18's targets for the learned sampler: {met} of {total} met\n\n"
             + markdown_table(targets) +

@@ -183,9 +183,11 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     assert {p: stat.S_IMODE((out / p).stat().st_mode) for p in files} == dict.fromkeys(files, mode)
     conn = sqlite3.connect(":memory:")
     rows = runs_table(conn, read_benchmark_log((out / "ompl" / "forest.log").read_text(), conn))
-    samplers = ["uniform", *(f"goal bias {b:g}" for b in E.GOAL_BIASES), "policy", "expert (reference)",
+    samplers = ["uniform", *(f"goal bias {b:g}" for b in E.GOAL_BIASES), "policy", E.FOLLOWER, "expert (reference)",
                 E.CONSTANT]
     assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
+    summary = (out / "summary.md").read_text()
+    assert f"policy/{E.FOLLOWER}" in summary and f"{E.FOLLOWER}/lower_bound" in summary
     assert len(rows) == 2 * len(samplers)  # the test split only: 2 maps x 1 seed per sampler
     csv_runs = [ln.split(",") for ln in (out / "runs.csv").read_text().splitlines()[1:]]
     test_its = sorted(int(r[7]) for r in csv_runs if r[2] == "test" and r[0] == "forest")
