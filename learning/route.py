@@ -54,20 +54,19 @@ def route_input(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -
     return np.concatenate([cells, goal])
 
 
-class RouteNet(nn.Module):
-    """A small U-Net over the block grid that predicts the cost-to-go of every cell, in steps.
+class UNet(nn.Module):
+    """A small U-Net over a grid: halve it ``depth`` times, then come back up with skip connections.
 
-    It halves the grid ``depth`` times and comes back up with skip connections, so every block sees
-    the whole of a 128-cell map after ``2 * depth + 2`` convolutions, most of them on small grids.
+    Every pixel sees the whole of a 32-pixel grid after ``2 * depth + 2`` convolutions, most of them on
+    small grids, so a pass costs a few times one full-resolution convolution.
     """
 
-    def __init__(self, block: int = 4, channels: int = 24, depth: int = 4) -> None:
+    def __init__(self, inputs: int, outputs: int, channels: int = 24, depth: int = 4) -> None:
         super().__init__()
-        self.block, self.channels, self.depth = block, channels, depth
-        self.inp = nn.Conv2d(block * block + GOAL_CHANNELS, channels, 3, padding=1)
+        self.inp = nn.Conv2d(inputs, channels, 3, padding=1)
         self.down = nn.ModuleList(nn.Conv2d(channels, channels, 3, stride=2, padding=1) for _ in range(depth))
         self.up = nn.ModuleList(nn.Conv2d(2 * channels, channels, 3, padding=1) for _ in range(depth))
-        self.out = nn.Conv2d(channels, block * block, 3, padding=1)  # cost-to-go of each cell of the block
+        self.out = nn.Conv2d(channels, outputs, 3, padding=1)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         h = torch.relu(self.inp(x))
@@ -78,7 +77,18 @@ class RouteNet(nn.Module):
         for conv, skip in zip(self.up, reversed(skips), strict=True):
             h = nn.functional.interpolate(h, size=skip.shape[-2:], mode="nearest")
             h = torch.relu(conv(torch.cat([h, skip], 1)))
-        return nn.functional.pixel_shuffle(self.out(h), self.block)[:, 0]
+        return self.out(h)
+
+
+class RouteNet(UNet):
+    """A ``UNet`` over the block grid that predicts the cost-to-go of every cell, in steps."""
+
+    def __init__(self, block: int = 4, channels: int = 24, depth: int = 4) -> None:
+        super().__init__(block * block + GOAL_CHANNELS, block * block, channels, depth)  # a cost per cell of the block
+        self.block, self.channels, self.depth = block, channels, depth
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return nn.functional.pixel_shuffle(super().forward(x), self.block)[:, 0]
 
     @torch.no_grad()
     def predict(self, obstacles: np.ndarray, goal_cell: tuple[int, int]) -> np.ndarray:

@@ -28,6 +28,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from learning.route import UNet
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
 from planners.maps.gridsearch import distance_field
@@ -113,32 +114,6 @@ class Recurrent(nn.Module):
         return self.out(torch.cat([h, torch.relu(e)], 1))
 
 
-class UNet(nn.Module):
-    """Multiscale: halve the grid ``depth`` times, then come back up with skip connections.
-
-    Every block sees the whole map after ``2 * depth + 2`` convolutions, most of them on small grids,
-    so a pass costs a few times one full-resolution convolution, not ``k`` of them.
-    """
-
-    def __init__(self, channels: int = 24, depth: int = 4, inputs: int = 4) -> None:
-        super().__init__()
-        self.inp = nn.Conv2d(inputs, channels, 3, padding=1)
-        self.down = nn.ModuleList(nn.Conv2d(channels, channels, 3, stride=2, padding=1) for _ in range(depth))
-        self.up = nn.ModuleList(nn.Conv2d(2 * channels, channels, 3, padding=1) for _ in range(depth))
-        self.out = nn.Conv2d(channels, ANGLES, 3, padding=1)
-
-    def forward(self, x):
-        h = torch.relu(self.inp(x))
-        skips = []
-        for conv in self.down:
-            skips.append(h)
-            h = torch.relu(conv(h))
-        for conv, skip in zip(self.up, reversed(skips), strict=True):
-            h = nn.functional.interpolate(h, size=skip.shape[-2:], mode="nearest")
-            h = torch.relu(conv(torch.cat([h, skip], 1)))
-        return self.out(h)
-
-
 def dilated(channels: int = 32, dilations=(1, 2, 4, 8, 16, 1), inputs: int = 4) -> nn.Module:
     layers: list[nn.Module] = [nn.Conv2d(inputs, channels, 3, padding=1), nn.ReLU()]
     for d in dilations:
@@ -187,7 +162,7 @@ def main(argv=None) -> list[dict]:
     if args.model == "recurrent":
         model = Recurrent(args.channels, args.iterations, inputs)
     elif args.model == "unet":
-        model = UNet(args.channels, args.depth, inputs)
+        model = UNet(inputs, ANGLES, args.channels, args.depth)
     else:
         model = dilated(inputs=inputs)
     opt = torch.optim.Adam(model.parameters(), 1e-3)

@@ -338,10 +338,10 @@ def test_imitation_ceiling_script_reports_labels_beside_the_policy(capsys):
         assert needle in out, needle
 
 
-@pytest.mark.parametrize("model", ["dilated", "recurrent"])
-def test_route_probe_script_trains_and_reports(model, capsys):
-    rows = _script("route_probe").main(["--model", model, "--maps", "1", "--val-maps", "1", "--epochs", "1",
-                                        "--size", "64"])
+@pytest.mark.parametrize("model, inputs", [("dilated", "fraction"), ("recurrent", "fraction"), ("unet", "cells")])
+def test_route_probe_script_trains_and_reports(model, inputs, capsys):
+    rows = _script("route_probe").main(["--model", model, "--input", inputs, "--maps", "1", "--val-maps", "1",
+                                        "--epochs", "1", "--size", "64"])
     assert [r["family"] for r in rows] == ["forest", "narrow_passage", "bugtrap", "maze", "rooms"]
     assert all(r["blocks"] > 0 and 0.0 <= float(r["network"]) <= 1.0 for r in rows)
     assert "parameters; forward on a 128x128 map" in capsys.readouterr().out
