@@ -29,7 +29,7 @@ from torch import nn
 from planners import OccupancyGrid, SamplerBase
 from planners.base.fileio import InputError
 from planners.base.planner import CHUNK, FIRST_REFILL, Planner
-from planners.guidance.follow import FieldFollower, lowest_vertex_cell, walk_down
+from planners.guidance.follow import lowest_vertex_cell, walk_field
 from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
 from planners.kernels import rrt as rrt_kernels
 from planners.kernels.bitgen import bitgen_address, next_double
@@ -144,8 +144,8 @@ R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT, R_POS, R_COUNT, R_REFIL
 
 
 @nb.njit(cache=True)
-def route_draw(X, n, best_distance, iteration, rng, field, nxt, res, origin, step, frontier, ints, floats, params,
-               low, high, pts):
+def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin, step, frontier, ints, floats,
+               params, low, high, pts):
     """Fill ``pts`` with samples of ``RouteSampler`` (see its docstring), in one compiled call per batch.
 
     ``rng`` is the address of the planner's generator (``planners.kernels.bitgen``); every sample
@@ -185,7 +185,7 @@ def route_draw(X, n, best_distance, iteration, rng, field, nxt, res, origin, ste
         elif frontier_mode or u[0] < floor:
             x, y = low[0] + (high[0] - low[0]) * u[1], low[1] + (high[1] - low[1]) * u[2]
         else:
-            v = walk_down(nxt, W, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res)
+            v = walk_field(field, blocked, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res)
             r = sigma * step * math.sqrt(-2.0 * math.log(1.0 - u[5]))  # Box-Muller: two normals from two uniforms
             x = origin[0] + (v % W + 0.5) * res + r * math.cos(2.0 * math.pi * u[6])
             y = origin[1] + (v // W + 0.5) * res + r * math.sin(2.0 * math.pi * u[6])
@@ -201,7 +201,7 @@ def route_rrt_run(budget, rng, draw_args, batch, pts, tree, istate, fstate, last
     Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule asks for,
     so the run matches a planner calling ``RouteSampler.draw`` sample for sample.
     """
-    field, nxt, res, origin, rstep, frontier, ints, floats, params = draw_args
+    field, blocked, res, origin, rstep, frontier, ints, floats, params = draw_args
     X = tree.X
     q = np.empty(X.shape[1])
     qe_buf = np.empty(tree.E.shape[1])
@@ -211,8 +211,8 @@ def route_rrt_run(budget, rng, draw_args, batch, pts, tree, istate, fstate, last
             return s
         if ints[R_POS] >= ints[R_COUNT]:
             m = min(batch, CHUNK, FIRST_REFILL << min(ints[R_REFILLS], 16))
-            route_draw(X, istate[I_N], fstate[F_BEST_D], istate[I_ITER], rng, field, nxt, res, origin, rstep, frontier,
-                       ints, floats, params, low, high, pts[:m])
+            route_draw(X, istate[I_N], fstate[F_BEST_D], istate[I_ITER], rng, field, blocked, res, origin, rstep,
+                       frontier, ints, floats, params, low, high, pts[:m])
             ints[R_REFILLS] += 1
             ints[R_COUNT] = m
             ints[R_POS] = 0
@@ -271,33 +271,33 @@ class RouteSampler(SamplerBase):
         if not isinstance(grid, OccupancyGrid):
             raise InputError("RouteSampler plans on OccupancyGrid problems")
         if self.net is None:
-            rows, cols = np.indices(grid.shape)
             gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
-            field = np.hypot(cols + 0.5 - gx, rows + 0.5 - gy) * grid.resolution / self.step_size
+            field = (np.hypot(np.arange(grid.width)[None, :] + 0.5 - gx, np.arange(grid.height)[:, None] + 0.5 - gy)
+                     * grid.resolution / self.step_size)
         elif round(self.step_size / grid.resolution) != self.net.block:
             raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is "
                              f"{self.step_size / grid.resolution:g} cells of this map")
         else:
             field = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal))
         field[grid.obstacles] = np.inf
-        self.follower = FieldFollower(self.problem, self.step_size, field, self.lookahead)
+        self.field, self.blocked = field, grid.kernel.grid
+        self.res, self.origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
+        r, c = grid.cell_of(self.problem.start)
         f = Frontier(self.problem, self.step_size)
         self._frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
                           np.ascontiguousarray(f.world.params[1:3]))
-        e = self.follower
-        self._ints = np.array([0, e.best_cell, 0, 0, 0, 0, 0, 0, 0], dtype=np.int64)
+        self._ints = np.array([0, r * grid.width + c, 0, 0, 0, 0, 0, 0, 0], dtype=np.int64)
         self._pts = np.empty((self.batch, 2))
-        self._floats = np.array([e.best, np.inf])
+        self._floats = np.array([field[r, c], np.inf])
         self._params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor,
                                  self.patience], dtype=np.float64)
 
     def draw(self, rng, n, view):
         m = min(n, self.batch)
         pts = np.empty((m, 2))
-        e = self.follower
         route_draw(view.vertices, view.num_vertices, view.best_distance, view.iteration, bitgen_address(rng),
-                   e.field, e.nxt, e.res, e.origin, self.step_size, self._frontier, self._ints, self._floats,
-                   self._params, self.low, self.high, pts)
+                   self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
+                   self._floats, self._params, self.low, self.high, pts)
         return pts
 
     def fuse(self, planner: Planner) -> Callable[[Planner, int], int] | None:
@@ -307,9 +307,8 @@ class RouteSampler(SamplerBase):
         return self._run_fused
 
     def _run_fused(self, planner: Planner, n: int) -> int:
-        e = self.follower
-        args = (e.field, e.nxt, e.res, e.origin, self.step_size, self._frontier, self._ints, self._floats,
-                self._params)
+        args = (self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
+                self._floats, self._params)
         return route_rrt_run(n, bitgen_address(planner.rng), args, self.batch, self._pts, *planner.loop_args())
 
     def __repr__(self) -> str:

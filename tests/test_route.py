@@ -155,7 +155,7 @@ def test_the_fused_loop_plans_the_same_runs_as_draw(small_net, batch):
 def test_the_ablation_follows_the_straight_line_distance_to_the_goal():
     p = generate("forest", TEST_SEED0, 64)
     sampler = straight_line_sampler().bind(p)
-    field = sampler.follower.field
+    field = sampler.field
     free = ~p.world.obstacles
     r, c = np.argwhere(free)[0]
     centre = p.world.cell_center(r, c)

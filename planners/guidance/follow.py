@@ -14,27 +14,57 @@ import numpy as np
 from planners import OccupancyGrid, Problem
 
 
+@nb.njit(cache=True, inline="always")
+def next_cell(field, blocked, r, c):
+    """The neighbour of cell (r, c) one octile step down ``field`` (flat index; -1 where none).
+
+    The lowest free neighbour that is strictly lower, first in row-major order on ties, with no
+    corner cutting; none from a cell whose cost is infinite.
+    """
+    H, W = field.shape
+    best = field[r, c]
+    out = -1
+    if not np.isfinite(best):
+        return out
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            rr, cc = r + dr, c + dc
+            if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
+                continue
+            if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
+                continue
+            if field[rr, cc] < best:
+                best = field[rr, cc]
+                out = rr * W + cc
+    return out
+
+
 @nb.njit(cache=True)
 def descent(field, blocked):
-    """For every cell, the neighbour one octile step closer to the goal (-1 where none)."""
+    """For every cell, the neighbour one octile step closer to the goal (-1 where none): ``next_cell``'s table."""
     H, W = field.shape
-    nxt = np.full((H, W), -1, dtype=np.int64)
+    nxt = np.empty((H, W), dtype=np.int64)
     for r in range(H):
         for c in range(W):
-            best = field[r, c]
-            if not np.isfinite(best):
-                continue
-            for dr in (-1, 0, 1):
-                for dc in (-1, 0, 1):
-                    rr, cc = r + dr, c + dc
-                    if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
-                        continue
-                    if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
-                        continue
-                    if field[rr, cc] < best:
-                        best = field[rr, cc]
-                        nxt[r, c] = rr * W + cc
+            nxt[r, c] = next_cell(field, blocked, r, c)
     return nxt
+
+
+@nb.njit(cache=True)
+def walk_field(field, blocked, cell, length):
+    """``walk_down`` without the table: each step found when taken (for fields walked a few steps per query)."""
+    W = field.shape[1]
+    acc = 0.0
+    v = cell
+    while acc < length:
+        u = next_cell(field, blocked, v // W, v % W)
+        if u < 0:
+            break
+        dr = u // W - v // W
+        dc = u % W - v % W
+        acc += math.sqrt(float(dr * dr + dc * dc))
+        v = u
+    return v
 
 
 @nb.njit(cache=True)
