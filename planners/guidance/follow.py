@@ -40,40 +40,16 @@ def next_cell(field, blocked, r, c):
 
 
 @nb.njit(cache=True)
-def descent(field, blocked):
-    """For every cell, the neighbour one octile step closer to the goal (-1 where none): ``next_cell``'s table."""
-    H, W = field.shape
-    nxt = np.empty((H, W), dtype=np.int64)
-    for r in range(H):
-        for c in range(W):
-            nxt[r, c] = next_cell(field, blocked, r, c)
-    return nxt
-
-
-@nb.njit(cache=True)
 def walk_field(field, blocked, cell, length):
-    """``walk_down`` without the table: each step found when taken (for fields walked a few steps per query)."""
+    """Follow ``next_cell`` down ``field`` for ``length`` cells of path from ``cell``; returns the cell reached.
+
+    Each step is found when taken: a query walks a few steps at a time, far fewer than the map has cells.
+    """
     W = field.shape[1]
     acc = 0.0
     v = cell
     while acc < length:
         u = next_cell(field, blocked, v // W, v % W)
-        if u < 0:
-            break
-        dr = u // W - v // W
-        dc = u % W - v % W
-        acc += math.sqrt(float(dr * dr + dc * dc))
-        v = u
-    return v
-
-
-@nb.njit(cache=True)
-def walk_down(nxt, W, cell, length):
-    """Follow the descent for ``length`` cells of path from ``cell``; returns the cell reached."""
-    acc = 0.0
-    v = cell
-    while acc < length:
-        u = nxt[v // W, v % W]
         if u < 0:
             break
         dr = u // W - v // W
@@ -121,7 +97,7 @@ class FieldFollower:
         self.res = grid.resolution
         self.origin = np.ascontiguousarray(grid.origin, dtype=np.float64)
         self.field = np.ascontiguousarray(field, dtype=np.float64)
-        self.nxt = descent(self.field, np.ascontiguousarray(grid.obstacles))
+        self.blocked = grid.kernel.grid
         self.W = grid.width
         self.seen = 0
         r, c = grid.cell_of(problem.start)
@@ -136,7 +112,7 @@ class FieldFollower:
 
     def target(self, scale: float = 1.0) -> np.ndarray:
         """World point ``scale * lookahead`` steps ahead of the progress vertex along the shortest path."""
-        v = walk_down(self.nxt, self.W, self.best_cell, self.lookahead * scale * self.step / self.res)
+        v = walk_field(self.field, self.blocked, self.best_cell, self.lookahead * scale * self.step / self.res)
         return self.origin + np.array([(v % self.W + 0.5) * self.res, (v // self.W + 0.5) * self.res])
 
 
