@@ -430,3 +430,8 @@ def test_mirrored_cloning_splits_a_label_between_its_reflections(trained):
     plain, mirrored = probs[False], probs[True]
     assert plain[label] > 0.9 and plain[label + 11] < 0.05
     assert abs(mirrored[label] - mirrored[label + 11]) < 0.1 and mirrored[label] + mirrored[label + 11] > 0.9
+
+
+def test_policy_variants_load_the_shipped_policy_at_other_batches():
+    variants = _script("policy_variants")
+    assert (variants.batch_1().batch, variants.batch_2().batch) == (1, 2)  # evaluate.py --sampler loads them
