@@ -1,5 +1,5 @@
 """Maps whose corner is not at (0, 0), as every ROS map_server map: guidance, the learned sampler, the
-ablation, the expert and the environments' observations see a translated map as the same map.
+ablation, the follower, the expert and the environments' observations see a translated map as the same map.
 
 Each is run on a generated map and on the same grid with ``origin`` moved; what each sees must agree
 (observations equal, world points translated), and planning must cost the same.
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from envs.observation import GridObservation
-from learning import ConstantGuidedSampler, PolicySampler
+from learning import ConstantGuidedSampler, PolicySampler, RouteSampler
 from learning.expert import ExpertSampler, GeodesicExpert
 from planners import RRT, OccupancyGrid, Problem
 from planners.base.planner import TreeView
@@ -103,7 +103,8 @@ def test_expert_and_grid_observation_are_translation_invariant(pair):
 
 
 @pytest.mark.parametrize("make", [lambda: PolicySampler.load(SHIPPED), lambda: ConstantGuidedSampler(0.8),
-                                  lambda: ExpertSampler(4.0)], ids=["policy", "constant", "expert"])
+                                  lambda: ExpertSampler(4.0), lambda: RouteSampler(None)],
+                         ids=["policy", "constant", "expert", "follower"])
 def test_planning_costs_the_same_on_a_translated_map(make):
     its = {0: [], 1: []}
     for i, family in enumerate(("bugtrap", "maze", "narrow_passage", "rooms") * 2):

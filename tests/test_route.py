@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 import torch
 from conftest import fine_check_path, load_script
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from learning.route import (
     RouteNet,
@@ -22,7 +24,7 @@ from learning.route import (
 from learning.route_training import cost_targets, train_route_net
 from planners import RRT, GeometricWorld, OccupancyGrid, Problem
 from planners.base.fileio import InputError
-from planners.maps.generators import TEST_SEED0, generate
+from planners.maps.generators import FAMILIES, TEST_SEED0, generate
 from planners.maps.gridsearch import distance_field
 
 
@@ -182,3 +184,14 @@ def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, ca
     with pytest.raises(SystemExit) as exc:
         script.main(["--epochs", "0"])
     assert exc.value.code == 2 and "--epochs" in capsys.readouterr().err
+
+
+@given(family=st.sampled_from(FAMILIES), seed=st.integers(0, 10**6), size=st.sampled_from([32, 64, 96]))
+@settings(max_examples=25)
+def test_every_path_of_the_follower_is_valid_starts_at_start_and_ends_at_the_goal(family, seed, size):
+    p = generate(family, seed, size)
+    r = RRT(p, step_size=4.0, sampler=RouteSampler(None), seed=seed).solve(max_iterations=5000)
+    assert r.solved or r.iterations == 5000
+    if r.solved:
+        assert np.allclose(r.path[0], p.start) and np.linalg.norm(r.path[-1] - p.goal) <= p.goal_tolerance
+        assert fine_check_path(p.world, r.path)
