@@ -435,3 +435,16 @@ def test_mirrored_cloning_splits_a_label_between_its_reflections(trained):
 def test_policy_variants_load_the_shipped_policy_at_other_batches():
     variants = _script("policy_variants")
     assert (variants.batch_1().batch, variants.batch_2().batch) == (1, 2)  # evaluate.py --sampler loads them
+
+
+def test_tune_policy_batch_names_a_batch_from_the_tuning_maps(capsys):
+    best = _script("tune_policy_batch").main(["--batches", "8", "1", "--maps", "1", "--seeds", "1",
+                                              "--processes", "1"])
+    out = capsys.readouterr().out
+    assert best in (8, 1) and "sum of log medians" in out and f"chosen batch: {best}" in out
+
+
+def test_tune_policy_batch_refuses_a_batch_below_one(capsys):
+    with pytest.raises(SystemExit) as exc:
+        _script("tune_policy_batch").main(["--batches", "0"])
+    assert exc.value.code == 2 and "--batches" in capsys.readouterr().err
