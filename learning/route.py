@@ -145,13 +145,14 @@ R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT, R_POS, R_COUNT, R_REFIL
 
 @nb.njit(cache=True)
 def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin, step, frontier, ints, floats,
-               params, low, high, pts):
+               params, scratch, low, high, pts):
     """Fill ``pts`` with samples of ``RouteSampler`` (see its docstring), in one compiled call per batch.
 
     ``rng`` is the address of the planner's generator (``planners.kernels.bitgen``); every sample
     takes 7 of its doubles whatever its kind, so the stream does not depend on the branch taken.
     ``ints`` and ``floats`` hold the progress state (``R_*`` slots; lowest predicted cost, closest
-    straight-line distance to the goal).
+    straight-line distance to the goal); ``scratch`` the sampler's buffers for a batch's uniforms and
+    frontier points, allocated once per query rather than once per iteration.
     """
     world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin = frontier
     lookahead, sigma, stuck, floor0, max_floor, patience = params
@@ -171,13 +172,14 @@ def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin,
                                          ints[R_FCOUNT])
         ints[R_FSEEN] = n
     m = pts.shape[0]
-    U = np.empty((m, 7))
+    U, F, u_pick, u_xy = scratch[0][:m], scratch[1][:m], scratch[2][:m], scratch[3][:m]
     for k in range(m):  # row by row, as Generator.random((m, 7)) fills
         for j in range(7):
             U[k, j] = next_double(rng)
-    F = np.empty((m, 2))
     if frontier_mode and ints[R_FCOUNT] > 0:  # one frontier CDF for the whole batch
-        frontier_sample(front, ints[R_FCOUNT], fw, cell, forigin, dist, tau, U[:, 3].copy(), U[:, 1:3].copy(), F)
+        u_pick[:] = U[:, 3]
+        u_xy[:] = U[:, 1:3]
+        frontier_sample(front, ints[R_FCOUNT], fw, cell, forigin, dist, tau, u_pick, u_xy, F)
     for k in range(m):
         u = U[k]
         if frontier_mode and u[0] >= floor and ints[R_FCOUNT] > 0:
@@ -201,7 +203,7 @@ def route_rrt_run(budget, rng, draw_args, batch, pts, tree, istate, fstate, last
     Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule asks for,
     so the run matches a planner calling ``RouteSampler.draw`` sample for sample.
     """
-    field, blocked, res, origin, rstep, frontier, ints, floats, params = draw_args
+    field, blocked, res, origin, rstep, frontier, ints, floats, params, scratch = draw_args
     X = tree.X
     q = np.empty(X.shape[1])
     qe_buf = np.empty(tree.E.shape[1])
@@ -212,7 +214,7 @@ def route_rrt_run(budget, rng, draw_args, batch, pts, tree, istate, fstate, last
         if ints[R_POS] >= ints[R_COUNT]:
             m = min(batch, CHUNK, FIRST_REFILL << min(ints[R_REFILLS], 16))
             route_draw(X, istate[I_N], fstate[F_BEST_D], istate[I_ITER], rng, field, blocked, res, origin, rstep,
-                       frontier, ints, floats, params, low, high, pts[:m])
+                       frontier, ints, floats, params, scratch, low, high, pts[:m])
             ints[R_REFILLS] += 1
             ints[R_COUNT] = m
             ints[R_POS] = 0
@@ -288,6 +290,8 @@ class RouteSampler(SamplerBase):
                           np.ascontiguousarray(f.world.params[1:3]))
         self._ints = np.array([0, r * grid.width + c, 0, 0, 0, 0, 0, 0, 0], dtype=np.int64)
         self._pts = np.empty((self.batch, 2))
+        b = self.batch
+        self._scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)))
         self._floats = np.array([field[r, c], np.inf])
         self._params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor,
                                  self.patience], dtype=np.float64)
@@ -297,7 +301,7 @@ class RouteSampler(SamplerBase):
         pts = np.empty((m, 2))
         route_draw(view.vertices, view.num_vertices, view.best_distance, view.iteration, bitgen_address(rng),
                    self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
-                   self._floats, self._params, self.low, self.high, pts)
+                   self._floats, self._params, self._scratch, self.low, self.high, pts)
         return pts
 
     def fuse(self, planner: Planner) -> Callable[[Planner, int], int] | None:
@@ -308,7 +312,7 @@ class RouteSampler(SamplerBase):
 
     def _run_fused(self, planner: Planner, n: int) -> int:
         args = (self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
-                self._floats, self._params)
+                self._floats, self._params, self._scratch)
         return route_rrt_run(n, bitgen_address(planner.rng), args, self.batch, self._pts, *planner.loop_args())
 
     def __repr__(self) -> str:
