@@ -123,6 +123,52 @@ def constant_test_tasks(queries: Sequence[Query], planner: str, cfg: dict, best:
             if q.split == "test" and (q.map_set, planner) in best for seed in range(seeds)]
 
 
+#: The policy's batches (samples per decision; the training batch is 8) tried on the tuning split.
+POLICY_BATCHES = (8, 2, 1)
+#: Planner seeds per tuning query for the batch: one choice for every map set deserves more than one seed.
+POLICY_TUNING_SEEDS = 3
+#: In the sum of log medians: batches within 1% of one family's median of the lowest count as tied.
+BATCH_TIE = 0.01
+
+
+def policy_sampler(batch: int) -> str:
+    """The sampler name of the policy deciding every ``batch`` samples (a tuning run)."""
+    return f"policy batch={batch}"
+
+
+def _sampler_policy_batch(name: str) -> int | None:
+    return int(name.split("=")[1]) if name.startswith("policy batch=") else None
+
+
+def policy_tuning_tasks(queries: Sequence[Query], planner: str, cfg: dict,
+                        batches: Sequence[int] = POLICY_BATCHES, seeds: int = POLICY_TUNING_SEEDS) -> list[tuple]:
+    """Runs that choose the policy's batch: every batch on every generated family's tuning query.
+
+    MovingAI scenarios are left out, so the choice does not depend on whether those maps are at hand.
+    """
+    return [(q, planner, policy_sampler(b), s, cfg) for q in queries if q.split == "tuning" and q.size
+            for b in batches for s in range(seeds)]
+
+
+def best_policy_batch(runs: Sequence[Run]) -> tuple[int, dict[int, float]]:
+    """(chosen batch, sum of log median iterations per batch) from ``policy_tuning_tasks``' runs.
+
+    The score sums, over map sets, the log of the median iterations (unsolved runs count as the cap),
+    so every family weighs the same whatever its scale. Batches within :data:`BATCH_TIE` of the lowest
+    score are tied and the largest of them wins: it takes fewer forward passes.
+    """
+    groups: dict = {}
+    for r in runs:
+        b = _sampler_policy_batch(r.sampler)
+        if r.split == "tuning" and b is not None:
+            groups.setdefault(b, {}).setdefault(r.map, []).append(r.iterations)
+    if not groups:
+        raise ValueError("no tuning runs of the policy's batches")
+    score = {b: float(sum(np.log(np.median(its)) for its in fams.values())) for b, fams in groups.items()}
+    low = min(score.values())
+    return max(b for b, v in score.items() if v <= low + BATCH_TIE), score
+
+
 def tuning_tasks(queries: Sequence[Query], planner: str, cfg: dict) -> list[tuple]:
     """Runs that choose the best goal bias: every bias of :data:`TUNING_BIASES` on every tuning query."""
     return [(q, planner, bias_sampler(b), 0, cfg) for q in queries if q.split == "tuning" for b in TUNING_BIASES]
@@ -246,12 +292,14 @@ def _sampler(name: str, cfg: dict):
     policy_path, step = cfg["policy"], cfg["step"]
     if name == "uniform":
         return UniformSampler()
-    if name.startswith("constant="):
-        return ConstantGuidedSampler(float(name.split("=")[1]), step_size=step)
+    if name.startswith("constant="):  # decides as often as the policy does: only the distribution differs
+        return ConstantGuidedSampler(float(name.split("=")[1]), step_size=step, batch=cfg.get("policy_batch", 8))
     if name.startswith("goal_bias="):
         return GoalBiasedSampler(float(name.split("=")[1]))
-    if name == "policy":
-        return _policy(policy_path)
+    if name == "policy":  # at the batch tuned on the tuning split (the checkpoint's own before tuning)
+        return _policy(policy_path, cfg.get("policy_batch"))
+    if name.startswith("policy batch="):
+        return _policy(policy_path, int(name.split("=")[1]))
     if name == FOLLOWER:
         from learning.route import RouteSampler
 
@@ -270,12 +318,12 @@ def _sampler(name: str, cfg: dict):
 _POLICY: dict = {}
 
 
-def _policy(path: str):
-    if path not in _POLICY:
+def _policy(path: str, batch: int | None = None):
+    if (path, batch) not in _POLICY:
         from learning.policy_sampler import PolicySampler
 
-        _POLICY[path] = PolicySampler.load(path)
-    return _POLICY[path]
+        _POLICY[path, batch] = PolicySampler.load(path, batch=batch)
+    return _POLICY[path, batch]
 
 
 def run_one(task: tuple, context: dict | None = None) -> Run:
@@ -312,8 +360,9 @@ def shared_context(tasks: Sequence[tuple]) -> dict:
     """
     policies, scenarios = {}, {}
     for query, _, sampler, _, cfg in tasks:
-        if sampler == "policy":
-            policies[cfg["policy"]] = _policy(cfg["policy"])
+        if sampler == "policy" or sampler.startswith("policy batch="):
+            batch = cfg.get("policy_batch") if sampler == "policy" else _sampler_policy_batch(sampler)
+            policies[cfg["policy"], batch] = _policy(cfg["policy"], batch)
         if not query.size:
             key = (cfg["movingai_dir"], query.family, cfg["tolerance"])
             scenarios[key] = _scenarios(*key)

@@ -9,7 +9,9 @@
 
 Default map set: the five generated families at 128x128 on test seeds (never trained on), each family's
 shifted variant (other generators, sides 64 to 256, never used for training, validation or tuning) and the
-MovingAI maps in ../shared/maps/movingai (or --movingai / SAMPLERGYM_MOVINGAI_DIR). Writes
+MovingAI maps in ../shared/maps/movingai (or --movingai / SAMPLERGYM_MOVINGAI_DIR). Goal bias, the
+ablation's frontier probability and the policy's batch (samples per decision, 8, 2 or 1) are tuned on a
+tuning split first; the test runs use what was chosen there. Writes
 runs.csv (every run), summary.md (tables), ecdf.png, means.png and OMPL benchmark logs
 (ompl/<map set>.log; open them with OMPL's ompl_benchmark_statistics.py and Planner Arena) under --out.
 """
@@ -148,14 +150,22 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     """The runs, tables, plots and logs of the comparison, executed on ``backend``."""
     users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
-    main_samplers = ["uniform", *biases, "policy", E.FOLLOWER, *users] + ([] if args.no_expert else
-                                                                          ["expert (reference)"])
-    tasks = E.tuning_tasks(queries, "RRT", cfg) + E.constant_tuning_tasks(queries, "RRT", cfg)
-    tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in main_samplers
+    fixed = ["uniform", *biases, E.FOLLOWER, *users] + ([] if args.no_expert else ["expert (reference)"])
+    # first what needs no tuned setting, beside the tuning runs of goal bias and of the policy's batch
+    tasks = E.tuning_tasks(queries, "RRT", cfg) + E.policy_tuning_tasks(queries, "RRT", cfg)
+    tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in fixed
               for seed in range(args.seeds)]
     print(f"{len(tasks)} RRT runs on {len(queries)} queries ({args.backend} backend, {backend.workers} workers)",
           flush=True)
     runs = E.run_all(tasks, backend)
+    batch, batch_scores = E.best_policy_batch(runs)
+    cfg = {**cfg, "policy_batch": batch}
+    # then the policy at its tuned batch, and the ablation's tuning at that batch (it decides as often)
+    tasks = E.constant_tuning_tasks(queries, "RRT", cfg)
+    tasks += [(q, "RRT", "policy", seed, cfg) for q in queries if q.split == "test" for seed in range(args.seeds)]
+    print(f"policy batch {batch} (tuned); {len(tasks)} RRT runs of the policy and of the ablation's tuning",
+          flush=True)
+    runs += E.run_all(tasks, backend)
     # a shifted map set has no tuning split of its own: it keeps its family's tuned settings
     best = E.tuned_for_shifted(E.best_bias(runs), queries)
     # the ablation (the policy's action classes, constant distribution) on the test split, at the frontier
@@ -215,11 +225,18 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
             f"{E.FOLLOWER} has no learning either: it samples a step ahead of the vertex nearest the goal, "
             "straight at the goal, and turns to the frontier after 4 iterations without progress.\n\n"
             + markdown_table(head, hcols) +
+            f"\n## The policy's batch, tuned\n\nSamples per decision, chosen on the generated families' tuning "
+            f"maps ({E.POLICY_TUNING_SEEDS} seeds each) by the lowest sum of log median iterations; scores within "
+            f"{E.BATCH_TIE:g} of it count as tied and the largest batch among them wins. Chosen: **{batch}**. The "
+            "ablation decides as often.\n\n"
+            + markdown_table([{"batch": b, "sum of log medians": f"{v:.3f}"}
+                              for b, v in sorted(batch_scores.items())]) +
             f"\n## Issue 18's targets for the learned sampler: {met} of {total} met\n\n"
             + markdown_table(targets) +
             "\n## All cells\n\n" + markdown_table([{k: r[k] for k in cols} for r in rows], cols))
     atomic_write_text(args.out / "summary.md", text)
     print("\n" + markdown_table(head, hcols))
+    print(f"\npolicy batch {batch}, tuned: " + ", ".join(f"{b}: {v:.3f}" for b, v in sorted(batch_scores.items())))
     print(f"\nIssue 18's targets for the learned sampler: {met} of {total} met (summary.md has which)")
     print(f"full table: {args.out / 'summary.md'}; raw runs: {args.out / 'runs.csv'}; plots: "
           f"{', '.join(str(p) for p in plots)}; OMPL benchmark logs ({len(logs)}): {args.out / 'ompl'}")

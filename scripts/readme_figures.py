@@ -1,6 +1,6 @@
 """Regenerate the README's pictures (docs/*.png) from the library and the shipped checkpoint.
 
-    python scripts/readme_figures.py                  # writes docs/samplers.png, docs/shifted.png, docs/rigid.png
+    python scripts/readme_figures.py --policy-batch 2   # writes docs/samplers.png, docs/shifted.png, docs/rigid.png
 
 samplers.png: one held-out map per family, RRT with goal bias 0.05, the tuned best goal bias and the
 learned policy, same planner seed; each panel's title gives the iterations it took.
@@ -24,8 +24,12 @@ def main(argv=None) -> int:
     ap.add_argument("--families", nargs="+", default=["bugtrap", "maze", "rooms"])
     ap.add_argument("--best-bias", nargs="+", type=float, default=None,
                     help="best goal bias per family (from evaluate.py's summary); default 0.2 for all")
+    ap.add_argument("--policy-batch", type=int, default=None,
+                    help="the policy's samples per decision (evaluate.py's tuned batch); default: the checkpoint's")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
+    if args.policy_batch is not None and args.policy_batch < 1:
+        ap.error(f"--policy-batch must be at least 1, got {args.policy_batch}")
 
     from learning import PolicySampler
     from planners import RRT, GoalBiasedSampler, RRTConnect, load_scene
@@ -33,7 +37,7 @@ def main(argv=None) -> int:
     from planners.viz.plotting import new_figure, plot, save_figure
     from planners.viz.plotting3d import plot_scene
 
-    policy = PolicySampler.load(args.policy)
+    policy = PolicySampler.load(args.policy, batch=args.policy_batch)
     best = args.best_bias or [0.2] * len(args.families)
     fams = args.families
     fig = new_figure((3.3 * 3, 3.4 * len(fams)))

@@ -1,13 +1,12 @@
 """Choose how often the policy decides (``PolicySampler(batch=...)``) on the tuning split.
 
-    python scripts/tune_policy_batch.py                  # batches 8 (shipped), 2 and 1; 20 maps per family, 3 seeds
+    python scripts/tune_policy_batch.py                  # batches 8 (trained), 2 and 1; 20 maps per family, 3 seeds
     python scripts/tune_policy_batch.py --batches 8 4 2 1 --maps 10
 
-Runs RRT with the shipped policy at each batch on the generated families' tuning maps (the split on
-which ``evaluate.py`` tunes goal bias and the ablation; never its test maps) and names the batch with
-the lowest sum over families of log median iterations; batches within ``TIE`` of it count as tied,
-and the largest of them wins (it costs less time).
-``scripts/policy_variants.py`` has the batches 1 and 2 for ``evaluate.py --sampler``.
+The tuning step of ``evaluate.py`` on its own (``learning.evaluation.policy_tuning_tasks`` and
+``best_policy_batch``): RRT with the policy at each batch on the generated families' tuning maps,
+never the test maps. It names the batch with the lowest sum over families of log median iterations;
+batches within ``BATCH_TIE`` of it count as tied, and the largest of them wins (it costs less time).
 """
 
 from __future__ import annotations
@@ -20,39 +19,20 @@ import numpy as np
 
 from learning import PolicySampler
 from learning import evaluation as E
-from planners import make_planner
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
-TIE = 0.01  # in the sum of log medians: 1% of one family's median
-
-
-_SAMPLERS: dict[int, PolicySampler] = {}  # one per batch and process: binding reuses its per-map geometry
-
-
-def _run(task: tuple, context: dict) -> tuple[int, float]:
-    """(iterations to solution or the cap, wall seconds of binding and solving) of the policy at one batch."""
-    query, batch, seed = task
-    base = context["policy"]
-    if batch not in _SAMPLERS:
-        _SAMPLERS[batch] = PolicySampler(base.actor, base.config, batch=batch)
-    sampler = _SAMPLERS[batch]
-    problem = query.problem(None, 4.0)
-    t0 = time.perf_counter()
-    r = make_planner("RRT", problem, extension_step=base.step_size, sampler=sampler,
-                     seed=seed).solve(max_iterations=context["max_iterations"])
-    return (r.first_solution_iteration if r.solved else context["max_iterations"]), time.perf_counter() - t0
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--policy", type=Path, default=DEFAULT_POLICY)
-    ap.add_argument("--batches", type=int, nargs="+", default=[8, 2, 1])
+    ap.add_argument("--batches", type=int, nargs="+", default=list(E.POLICY_BATCHES))
     ap.add_argument("--maps", type=int, default=20, help="tuning maps per family (evaluate.py's --tuning-maps)")
-    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--seeds", type=int, default=E.POLICY_TUNING_SEEDS)
     ap.add_argument("--max-iterations", type=int, default=20000)
     add_backend_arguments(ap, processes=2, backend_help="where the runs execute", processes_help="workers for them")
     args = ap.parse_args(argv)
@@ -62,35 +42,29 @@ def main(argv=None) -> int:
         for b in args.batches:
             if b < 1:
                 raise InputError(f"--batches must be positive integers, got {b}")
-    except InputError as exc:
+        PolicySampler.load(args.policy)
+    except (InputError, FileNotFoundError) as exc:
         ap.error(str(exc))
-    policy = PolicySampler.load(args.policy)
-    queries = [q for q in E.generated_queries(FAMILIES, 128, 0, args.maps) if q.split == "tuning"]
-    tasks = [(q, b, s) for b in args.batches for q in queries for s in range(args.seeds)]
+    cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": str(args.policy), "step": 4.0,
+           "max_iterations": args.max_iterations}
+    queries = E.generated_queries(FAMILIES, 128, 0, args.maps)
+    tasks = E.policy_tuning_tasks(queries, "RRT", cfg, args.batches, args.seeds)
     backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
     t0 = time.perf_counter()
     try:
-        out = backend.map(_run, tasks, context={"policy": policy, "max_iterations": args.max_iterations},
-                          progress=False)
+        runs = E.run_all(tasks, backend, progress=False)
     finally:
         backend.close()
-    rows, score = [], {}
+    best, score = E.best_policy_batch(runs)
+    rows = []
     for b in args.batches:
-        row = {"batch": b}
-        logs = []
-        for f in FAMILIES:
-            its = [n for (q, bb, _), (n, _) in zip(tasks, out, strict=True) if bb == b and q.family == f]
-            row[f] = f"{np.median(its):,.0f}"
-            logs.append(np.log(np.median(its)))
-        score[b] = float(np.sum(logs))
-        row["sum of log medians"] = f"{score[b]:.3f}"
-        walls = [w for (_, bb, _), (_, w) in zip(tasks, out, strict=True) if bb == b]
-        row["median wall ms"] = f"{np.median(walls) * 1e3:.2f}"
-        rows.append(row)
-    low = min(score.values())
-    best = max(b for b in score if score[b] <= low + TIE)
+        mine = [r for r in runs if r.sampler == E.policy_sampler(b)]
+        rows.append({"batch": b, **{f: f"{np.median([r.iterations for r in mine if r.map == f]):,.0f}"
+                                    for f in FAMILIES},
+                     "sum of log medians": f"{score[b]:.3f}",
+                     "median wall ms": f"{np.median([r.wall_time for r in mine]) * 1e3:.2f}"})
     print(markdown_table(rows))
-    print(f"\nchosen batch: {best} ({len(tasks)} runs on the tuning maps, {time.perf_counter() - t0:.0f} s)")
+    print(f"\nchosen batch: {best} ({len(runs)} runs on the tuning maps, {time.perf_counter() - t0:.0f} s)")
     return best
 
 

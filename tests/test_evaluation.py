@@ -65,6 +65,30 @@ def test_tuning_runs_cover_uniform_and_every_bias_on_tuning_queries_only():
     assert len(tasks) == 3 * (1 + len(E.GOAL_BIASES))
 
 
+def test_policy_batch_is_tuned_on_generated_tuning_queries_only():
+    qs = E.generated_queries(["forest", "maze"], 64, n_test=2, n_tune=3) + E.shifted_queries(["forest"], 2)
+    tasks = E.policy_tuning_tasks(qs, "RRT", {})
+    assert {t[0].split for t in tasks} == {"tuning"} and not any(t[0].shifted for t in tasks)
+    assert sorted({t[2] for t in tasks}) == sorted(E.policy_sampler(b) for b in E.POLICY_BATCHES)
+    assert len(tasks) == 2 * 3 * len(E.POLICY_BATCHES) * E.POLICY_TUNING_SEEDS
+
+
+def test_best_policy_batch_sums_log_medians_and_breaks_ties_towards_the_larger_batch():
+    def runs(batch, forest, maze, split="tuning"):
+        return [_run(f, split, E.policy_sampler(batch), its) for f, its in (("forest", forest), ("maze", maze))]
+
+    # batch 2 halves forest and loses a little on maze: the log sum weighs both families alike
+    best, score = E.best_policy_batch(runs(8, 100, 400) + runs(2, 50, 500) + runs(1, 50, 800))
+    assert best == 2 and score[2] == pytest.approx(np.log(50) + np.log(500))
+    # within the tie margin the larger batch wins (fewer forward passes); beyond it, the lower score
+    assert E.best_policy_batch(runs(8, 100, 400) + runs(2, 100, 399))[0] == 8
+    assert E.best_policy_batch(runs(8, 100, 400) + runs(2, 100, 390))[0] == 2
+    # test-split runs are never looked at
+    assert E.best_policy_batch(runs(8, 100, 400) + runs(2, 10, 10, split="test"))[0] == 8
+    with pytest.raises(ValueError, match="no tuning runs"):
+        E.best_policy_batch(runs(2, 10, 10, split="test"))
+
+
 def test_shifted_maps_are_test_only_with_their_own_seeds_and_sizes():
     qs = E.shifted_queries(["forest", "maze"], n_test=7)
     assert len(qs) == 14 and {q.split for q in qs} == {"test"} and all(q.shifted for q in qs)
@@ -187,6 +211,7 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
                 E.CONSTANT]
     assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
     summary = (out / "summary.md").read_text()
+    assert "## The policy's batch, tuned" in summary and "Chosen: **" in summary
     assert f"policy/{E.FOLLOWER}" in summary and f"{E.FOLLOWER}/lower_bound" in summary
     assert len(rows) == 2 * len(samplers)  # the test split only: 2 maps x 1 seed per sampler
     csv_runs = [ln.split(",") for ln in (out / "runs.csv").read_text().splitlines()[1:]]

@@ -432,9 +432,9 @@ def test_mirrored_cloning_splits_a_label_between_its_reflections(trained):
     assert abs(mirrored[label] - mirrored[label + 11]) < 0.1 and mirrored[label] + mirrored[label + 11] > 0.9
 
 
-def test_policy_variants_load_the_shipped_policy_at_other_batches():
-    variants = _script("policy_variants")
-    assert (variants.batch_1().batch, variants.batch_2().batch) == (1, 2)  # evaluate.py --sampler loads them
+def test_policy_variants_load_the_shipped_policy_at_each_batch():
+    variants = _script("policy_variants")  # evaluate.py --sampler loads them
+    assert (variants.batch_1().batch, variants.batch_2().batch, variants.batch_8().batch) == (1, 2, 8)
 
 
 def test_tune_policy_batch_names_a_batch_from_the_tuning_maps(capsys):
