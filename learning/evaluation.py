@@ -108,6 +108,12 @@ def constant_sampler(frontier: float) -> str:
 GEODESIC_FRONTIER = "geodesic frontier="
 
 
+#: Name prefixes of the privileged corridor references (``learning.expert.CorridorSampler``): the share of
+#: samples drawn from the exact near-shortest-path corridor follows, the rest come from uniform sampling or
+#: the straight-line follower.
+CORRIDOR_UNIFORM, CORRIDOR_FOLLOWER = "corridor+uniform=", "corridor+follower="
+
+
 def _sampler_constant(name: str) -> float | None:
     return float(name.split("=")[1]) if name.startswith("constant=") else None
 
@@ -308,6 +314,12 @@ def _sampler(name: str, cfg: dict):
         from learning.expert import ExpertSampler
 
         return ExpertSampler(step)
+    if name.startswith((CORRIDOR_UNIFORM, CORRIDOR_FOLLOWER)):
+        from learning.expert import CorridorSampler
+        from learning.route import RouteSampler
+
+        base = UniformSampler() if name.startswith(CORRIDOR_UNIFORM) else RouteSampler(None, step_size=step)
+        return CorridorSampler(float(name.split("=")[1]), base)
     if name.startswith(GEODESIC_FRONTIER):
         from learning.expert import GeodesicFrontierSampler
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from learning.ablation import ConstantGuidedSampler
-from planners import OccupancyGrid, Problem, SamplerBase
+from planners import OccupancyGrid, Problem, Sampler, SamplerBase
 from planners.guidance.follow import FieldFollower, frontier_costs
 from planners.maps.gridsearch import distance_field
 
@@ -89,3 +89,46 @@ class GeodesicFrontierSampler(ConstantGuidedSampler):
 
     def __repr__(self) -> str:
         return f"GeodesicFrontierSampler(frontier={self.frontier:g})"
+
+
+class CorridorSampler(SamplerBase):
+    """Samples the exact corridor of near-shortest paths: a reference, not a competitor (two grid searches).
+
+    With probability ``q`` a sample is uniform over the free cells through which some path from start
+    to goal is at most ``slack`` longer than the shortest; otherwise ``base`` draws it. This is what a
+    network that predicts the region a path runs through (NEXT, Neural RRT*, Motion Planning
+    Transformers) could give a planner at best. ``scripts/imitation_ceiling.py`` reports it with uniform
+    sampling and with the straight-line follower as ``base``.
+
+    Args:
+        q: Share of samples from the corridor.
+        base: Sampler of the other samples.
+        slack: How much longer than the shortest a path through a corridor cell may be (0.1: 10%).
+    """
+
+    def __init__(self, q: float, base: Sampler, slack: float = 0.1) -> None:
+        if not (0.0 <= q <= 1.0 and slack >= 0.0):
+            raise ValueError(f"need 0 <= q <= 1 and slack >= 0, got q={q}, slack={slack}")
+        self.q, self.base, self.slack = float(q), base, float(slack)
+
+    def _setup(self) -> None:
+        grid = self.problem.world
+        if not isinstance(grid, OccupancyGrid):
+            raise TypeError("the corridor reference needs an OccupancyGrid problem")
+        start, goal = grid.cell_of(self.problem.start), grid.cell_of(self.problem.goal)
+        through = distance_field(grid.obstacles, start) + distance_field(grid.obstacles, goal)
+        self._cells = np.flatnonzero(np.isfinite(through) & (through <= through[start] * (1.0 + self.slack)))
+        self._bound = self.base.bind(self.problem)
+
+    def draw(self, rng, n, view):
+        pts = np.array(self._bound.draw(rng, n, view), dtype=np.float64)
+        u = rng.random((len(pts), 4))  # one row per sample, whichever source it takes
+        grid = self.problem.world
+        pick = (u[:, 0] < self.q) & (len(self._cells) > 0)  # no corridor when the goal is cut off
+        cells = self._cells[(u[pick, 1] * len(self._cells)).astype(np.int64)]
+        pts[pick, 0] = grid.origin[0] + (cells % grid.width + u[pick, 2]) * grid.resolution
+        pts[pick, 1] = grid.origin[1] + (cells // grid.width + u[pick, 3]) * grid.resolution
+        return np.clip(pts, self.low, np.nextafter(self.high, self.low))
+
+    def __repr__(self) -> str:
+        return f"CorridorSampler(q={self.q:g}, base={self.base!r}, slack={self.slack:g})"

@@ -15,6 +15,10 @@ ceiling. Rows (RRT, step and tolerance 4, median iterations-to-solution, unsolve
 - ``constant, frontier by geodesic distance``: the ablation with its frontier ranked by exact cost-to-go
   (best frontier probability here): what the frontier class gains from knowing the route;
 - ``expert``: the privileged expert itself (samples along the shortest path, not through the classes).
+- ``straight-line follower``: ``RouteSampler(None)``, the rule without learning that ``evaluate.py`` runs;
+- ``exact corridor + uniform`` / ``+ follower``: a share q (best here) of samples uniform over the cells
+  of near-shortest paths (``learning.expert.CorridorSampler``), the rest uniform or from the follower:
+  the best that a network predicting the region the path runs through could give.
 
 Each is also given over the iteration lower bound (grid shortest path / step, per run) and over the
 constant. A second table shows where the policy departs from its labels, in the states it visits
@@ -42,6 +46,8 @@ from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+#: Shares of corridor samples tried per base sampler; the best on these maps is reported.
+CORRIDOR_Q = {"uniform": (0.5, 0.8, 0.95), "follower": (0.1, 0.3, 0.5)}
 
 
 def main(argv=None) -> None:
@@ -69,7 +75,10 @@ def main(argv=None) -> None:
     queries = [E.Query(f, VALIDATION_SEED0 + i, args.size, "validation") for f in args.families
                for i in range(args.maps)]
     geodesic = {p: f"{E.GEODESIC_FRONTIER}{p:g}" for p in FRONTIER_GRID}
-    samplers = ["policy", "expert (reference)", *(E.constant_sampler(p) for p in FRONTIER_GRID), *geodesic.values()]
+    corridor = {"uniform": {q: f"{E.CORRIDOR_UNIFORM}{q:g}" for q in CORRIDOR_Q["uniform"]},
+                "follower": {q: f"{E.CORRIDOR_FOLLOWER}{q:g}" for q in CORRIDOR_Q["follower"]}}
+    samplers = ["policy", "expert (reference)", *(E.constant_sampler(p) for p in FRONTIER_GRID), *geodesic.values(),
+                E.FOLLOWER, *corridor["uniform"].values(), *corridor["follower"].values()]
     tasks = [(q, "RRT", s, i, cfg) for s in samplers for i, q in enumerate(queries)]
     backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
     t0 = time.perf_counter()
@@ -95,10 +104,13 @@ def main(argv=None) -> None:
         best_p = min(FRONTIER_GRID, key=lambda p: np.median(its[(f, E.constant_sampler(p))]))
         const = its[(f, E.constant_sampler(best_p))]
         geo_p = min(FRONTIER_GRID, key=lambda p: np.median(its[(f, geodesic[p])]))
+        cor = {base: min(qs.items(), key=lambda kv: np.median(its[(f, kv[1])])) for base, qs in corridor.items()}
         for label, key in ((f"constant (p={best_p:g}, best here)", E.constant_sampler(best_p)), ("policy", "policy"),
                            ("labels", "labels"), ("labels, no frontier fallback", "labels, no frontier fallback"),
                            (f"constant, frontier by geodesic distance (reference, p={geo_p:g})", geodesic[geo_p]),
-                           ("expert (reference)", "expert (reference)")):
+                           ("expert (reference)", "expert (reference)"), (E.FOLLOWER, E.FOLLOWER),
+                           *((f"exact corridor + {base} (reference, q={q:g})", name)
+                             for base, (q, name) in cor.items())):
             x = its[(f, key)]
             rows.append({"family": f, "sampler": label, "median iterations": f"{np.median(x):,.0f}",
                          "solved": f"{np.mean(x < args.max_iterations):.2f}",

@@ -83,3 +83,27 @@ def test_the_geodesic_frontier_reference_ranks_its_frontier_by_cost_to_go():
     r = RRT(p, step_size=4.0, sampler=GeodesicFrontierSampler(0.7), seed=1).solve(max_iterations=5000)
     assert r.solved and fine_check_path(p.world, r.path) and np.allclose(r.path[0], p.start)
     assert np.linalg.norm(r.path[-1] - p.goal) <= p.goal_tolerance + 1e-9
+
+
+def test_the_corridor_reference_samples_near_shortest_paths_and_plans():
+    """q=1: every sample lies in a free cell through which a path is at most 10% longer than the shortest."""
+    from learning.expert import CorridorSampler
+    from learning.route import RouteSampler
+    from planners import UniformSampler
+    from planners.maps.gridsearch import distance_field
+
+    p = generate("maze", 1_000_004, 128, goal_tolerance=4.0)
+    grid = p.world
+    bound = CorridorSampler(1.0, UniformSampler()).bind(p)
+    pts = bound.draw(np.random.default_rng(0), 2000, None)
+    s, g = grid.cell_of(p.start), grid.cell_of(p.goal)
+    through = distance_field(grid.obstacles, s) + distance_field(grid.obstacles, g)
+    cells = np.array([grid.cell_of(q) for q in pts])
+    assert np.all(through[cells[:, 0], cells[:, 1]] <= 1.1 * through[s] + 1e-9)
+    assert len({tuple(c) for c in cells}) > 200  # spread over the corridor, not a few cells
+    for q, base in ((0.3, RouteSampler(None)), (0.8, UniformSampler())):
+        r = RRT(p, step_size=4.0, sampler=CorridorSampler(q, base), seed=2).solve(max_iterations=20000)
+        assert r.solved and fine_check_path(p.world, r.path) and np.allclose(r.path[0], p.start)
+        assert np.linalg.norm(r.path[-1] - p.goal) <= p.goal_tolerance + 1e-9
+    with pytest.raises(ValueError, match="0 <= q <= 1"):
+        CorridorSampler(1.5, UniformSampler())

@@ -14,7 +14,7 @@ import pytest
 
 from envs.observation import GridObservation
 from learning import ConstantGuidedSampler, PolicySampler, RouteSampler
-from learning.expert import ExpertSampler, GeodesicExpert
+from learning.expert import CorridorSampler, ExpertSampler, GeodesicExpert
 from planners import RRT, OccupancyGrid, Problem
 from planners.base.planner import TreeView
 from planners.guidance.frontier import Frontier
@@ -103,8 +103,9 @@ def test_expert_and_grid_observation_are_translation_invariant(pair):
 
 
 @pytest.mark.parametrize("make", [lambda: PolicySampler.load(SHIPPED), lambda: ConstantGuidedSampler(0.8),
-                                  lambda: ExpertSampler(4.0), lambda: RouteSampler(None)],
-                         ids=["policy", "constant", "expert", "follower"])
+                                  lambda: ExpertSampler(4.0), lambda: RouteSampler(None),
+                                  lambda: CorridorSampler(0.3, RouteSampler(None))],
+                         ids=["policy", "constant", "expert", "follower", "corridor"])
 def test_planning_costs_the_same_on_a_translated_map(make):
     its = {0: [], 1: []}
     for i, family in enumerate(("bugtrap", "maze", "narrow_passage", "rooms") * 2):
