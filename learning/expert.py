@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from learning.ablation import ConstantGuidedSampler
+from learning.route import RouteSampler
 from planners import OccupancyGrid, Problem, Sampler, SamplerBase
 from planners.guidance.follow import FieldFollower, frontier_costs
 from planners.maps.gridsearch import distance_field
@@ -78,7 +79,7 @@ class GeodesicFrontierSampler(ConstantGuidedSampler):
         super()._setup()
         grid = self.problem.world
         self._cost = frontier_costs(distance_field(grid.obstacles, grid.cell_of(self.problem.goal)), grid,
-                                    self.guide.frontier)
+                                    self.guide.frontier.cell)
 
     def draw(self, rng, n, view):
         f = self.guide.frontier
@@ -132,3 +133,25 @@ class CorridorSampler(SamplerBase):
 
     def __repr__(self) -> str:
         return f"CorridorSampler(q={self.q:g}, base={self.base!r}, slack={self.slack:g})"
+
+
+class GeodesicRouteSampler(RouteSampler):
+    """The route sampler with the exact cost-to-go in place of an encoder: a reference (a grid search).
+
+    ``uses="frontier"`` (the default) is the straight-line follower whose frontier prefers cells by
+    their geodesic distance to the goal: what a perfect cost-to-go encoder could give the follower's
+    frontier. ``"progress"`` and ``"both"`` put the exact field where ``RouteSampler`` puts the encoder's.
+    Keyword arguments are ``RouteSampler``'s.
+    """
+
+    def __init__(self, **kwargs) -> None:
+        kwargs.setdefault("uses", "frontier")
+        super().__init__(None, **kwargs)
+
+    def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
+        straight, _ = super()._fields(grid)
+        exact = distance_field(grid.obstacles, grid.cell_of(self.problem.goal)) * grid.resolution / self.step_size
+        return (straight if self.uses == "frontier" else exact), (None if self.uses == "progress" else exact)
+
+    def __repr__(self) -> str:
+        return f"GeodesicRouteSampler(stuck={self.stuck}, tau={self.tau:g}, uses={self.uses!r})"

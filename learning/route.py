@@ -29,7 +29,7 @@ from torch import nn
 from planners import OccupancyGrid, SamplerBase
 from planners.base.fileio import InputError
 from planners.base.planner import CHUNK, FIRST_REFILL, Planner
-from planners.guidance.follow import lowest_vertex_cell, walk_field
+from planners.guidance.follow import frontier_costs, lowest_vertex_cell, walk_field
 from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
 from planners.kernels import rrt as rrt_kernels
 from planners.kernels.bitgen import bitgen_address, next_double
@@ -154,7 +154,7 @@ def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin,
     straight-line distance to the goal); ``scratch`` the sampler's buffers for a batch's uniforms and
     frontier points, allocated once per query rather than once per iteration.
     """
-    world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin = frontier
+    world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost = frontier
     lookahead, sigma, stuck, floor0, max_floor, patience = params
     W = field.shape[1]
     if n > ints[R_SEEN]:
@@ -169,7 +169,7 @@ def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin,
     frontier_mode = iteration - ints[R_PROGRESS] >= stuck
     if frontier_mode and n > ints[R_FSEEN]:
         ints[R_FCOUNT] = update_frontier(world, counts, X[ints[R_FSEEN]:n], cell, fgoal, free, cov, pos, front, dist,
-                                         ints[R_FCOUNT])
+                                         ints[R_FCOUNT], fcost)
         ints[R_FSEEN] = n
     m = pts.shape[0]
     U, F, u_pick, u_xy = scratch[0][:m], scratch[1][:m], scratch[2][:m], scratch[3][:m]
@@ -237,7 +237,9 @@ class RouteSampler(SamplerBase):
     prediction can keep the tree busy in a dead end that looks like progress on the predicted field.
 
     With ``net=None`` the field is the straight-line distance to the goal: the same sampler with the
-    learning removed, its ablation (``straight_line_sampler``).
+    learning removed, its ablation (``straight_line_sampler``). ``uses`` says which of the two
+    rankings the encoder's field replaces: the progress and the target ("progress"), the frontier's
+    preference among its cells ("frontier"; the progress stays on the straight line), or "both".
 
     Args:
         net: The trained encoder (``load_route_net``); its block must be the planner's step in cells.
@@ -249,45 +251,62 @@ class RouteSampler(SamplerBase):
             batch chase a target the tree has already reached, and validation runs took 2-3x the iterations.
         patience, max_floor: Iterations without coming closer to the goal after which the uniform share
             grows, and the largest share it reaches.
+        tau: Temperature of the frontier's preference, in steps (``planners.guidance.frontier``).
+        uses: "progress", "frontier" or "both": where the encoder's field replaces the straight line.
     """
+
+    USES = ("progress", "frontier", "both")
 
     def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 1.0, sigma: float = 0.5,
                  stuck: int = 4, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
-                 max_floor: float = 0.5) -> None:
+                 max_floor: float = 0.5, tau: float = 1.0, uses: str = "progress") -> None:
         if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
-                and 0 <= uniform_floor <= max_floor <= 1):
-            raise InputError(f"need step_size, lookahead, stuck, patience, batch > 0, sigma >= 0 and "
+                and 0 <= uniform_floor <= max_floor <= 1 and tau > 0):
+            raise InputError(f"need step_size, lookahead, stuck, patience, batch, tau > 0, sigma >= 0 and "
                              f"0 <= uniform_floor <= max_floor <= 1; got {step_size}, {lookahead}, {stuck}, "
-                             f"{patience}, {batch}, {sigma}, {uniform_floor}, {max_floor}")
+                             f"{patience}, {batch}, {tau}, {sigma}, {uniform_floor}, {max_floor}")
+        if uses not in self.USES:
+            raise InputError(f"uses must be one of {self.USES}, got {uses!r}")
         self.net, self.step_size, self.lookahead, self.sigma = net, float(step_size), float(lookahead), float(sigma)
         self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
         self.patience, self.max_floor = int(patience), float(max_floor)
+        self.tau, self.uses = float(tau), uses
 
     @classmethod
     def load(cls, path: str | os.PathLike = TRAINED, **kwargs) -> RouteSampler:
         """A sampler over the encoder saved at ``path`` (default: where ``scripts/train_route.py`` writes it)."""
         return cls(load_route_net(path), **kwargs)
 
+    def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
+        """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
+        gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
+        straight = (np.hypot(np.arange(grid.width)[None, :] + 0.5 - gx, np.arange(grid.height)[:, None] + 0.5 - gy)
+                    * grid.resolution / self.step_size)
+        if self.net is None:
+            return straight, None
+        if round(self.step_size / grid.resolution) != self.net.block:
+            raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is "
+                             f"{self.step_size / grid.resolution:g} cells of this map")
+        learned = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal))
+        return (straight if self.uses == "frontier" else learned), (None if self.uses == "progress" else learned)
+
     def _setup(self) -> None:
         grid = self.problem.world
         if not isinstance(grid, OccupancyGrid):
             raise InputError("RouteSampler plans on OccupancyGrid problems")
-        if self.net is None:
-            gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
-            field = (np.hypot(np.arange(grid.width)[None, :] + 0.5 - gx, np.arange(grid.height)[:, None] + 0.5 - gy)
-                     * grid.resolution / self.step_size)
-        elif round(self.step_size / grid.resolution) != self.net.block:
-            raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is "
-                             f"{self.step_size / grid.resolution:g} cells of this map")
-        else:
-            field = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal))
+        field, ranking = self._fields(grid)
+        field = np.array(field, dtype=np.float64)
         field[grid.obstacles] = np.inf
         self.field, self.blocked = field, grid.kernel.grid
         self.res, self.origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
         r, c = grid.cell_of(self.problem.start)
-        f = Frontier(self.problem, self.step_size)
+        cost = None
+        if ranking is not None:
+            cost = frontier_costs(np.where(grid.obstacles, np.inf, ranking) * self.step_size / grid.resolution, grid,
+                                  self.step_size)
+        f = Frontier(self.problem, self.step_size, self.tau, cost)
         self._frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
-                          np.ascontiguousarray(f.world.params[1:3]))
+                          np.ascontiguousarray(f.world.params[1:3]), f.cost)
         self._ints = np.array([0, r * grid.width + c, 0, 0, 0, 0, 0, 0, 0], dtype=np.int64)
         self._pts = np.empty((self.batch, 2))
         b = self.batch
@@ -316,9 +335,10 @@ class RouteSampler(SamplerBase):
         return route_rrt_run(n, bitgen_address(planner.rng), args, self.batch, self._pts, *planner.loop_args())
 
     def __repr__(self) -> str:
+        rest = f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}"
         if self.net is None:
-            return f"RouteSampler(None, lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck})"
-        return f"RouteSampler(lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck})"
+            return f"RouteSampler(None, {rest})"
+        return f"RouteSampler({rest}, uses={self.uses!r})"
 
 
 def trained_sampler() -> RouteSampler:

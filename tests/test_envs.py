@@ -335,6 +335,28 @@ def test_frontier_is_the_visible_uncovered_free_neighbour_cells(seed):
     assert set(front.front[:len(front)].tolist()) == want and len(want) > 0
 
 
+def test_a_frontier_given_costs_ranks_its_cells_by_them():
+    from planners import OccupancyGrid, Problem
+    from planners.guidance.frontier import Frontier
+
+    grid = OccupancyGrid(np.zeros((32, 32), bool))
+    problem = Problem(grid, [2.0, 2.0], [30.0, 30.0])
+    straight = Frontier(problem, 4.0)
+    cost = np.arange(64, dtype=float)  # cells nearer the origin, away from the goal, are cheaper
+    ranked = Frontier(problem, 4.0, cost=cost)
+    V = np.array([[14.0, 14.0]])
+    for f in (straight, ranked):
+        f.update(V, 1)
+    cells = ranked.front[:len(ranked)]
+    assert np.array_equal(ranked.dist[cells], cost[cells])
+    assert straight.dist[cells].argmin() != ranked.dist[cells].argmin()
+    pts = ranked.sample(np.random.default_rng(0), 200)
+    best = cells[cost[cells].argmin()]
+    assert np.mean((pts[:, 1] // 4) * 8 + pts[:, 0] // 4 == best) > 0.5  # tau 1: the cheapest cell dominates
+    with pytest.raises(ValueError, match="one value per frontier cell"):
+        Frontier(problem, 4.0, cost=np.zeros(10))
+
+
 def test_observations_come_from_one_factory_and_the_guide_is_passed_explicitly():
     from envs.actions import make_action_sampler
     from envs.observation import OBSERVATIONS, EgocentricObservation, make_observation

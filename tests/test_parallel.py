@@ -53,9 +53,10 @@ def test_the_context_travels_loaded_so_workers_need_no_files(ray_backend, tmp_pa
     # a checkpoint path that does not exist where the runs execute: the policy comes from the context
     tasks = _tasks(movingai=False)[:8]
     context = E.shared_context(tasks)
-    assert set(context["policies"]) == {CHECKPOINT}
+    assert set(context["policies"]) == {(CHECKPOINT, None)}  # (path, batch): the checkpoint's own batch here
     moved = [(q, p, s, seed, {**cfg, "policy": str(tmp_path / "elsewhere.zip")}) for q, p, s, seed, cfg in tasks]
-    context = {"policies": {str(tmp_path / "elsewhere.zip"): context["policies"][CHECKPOINT]}, "scenarios": {}}
+    context = {"policies": {(str(tmp_path / "elsewhere.zip"), None): context["policies"][CHECKPOINT, None]},
+               "scenarios": {}}
     got = ray_backend.map(E.run_one, moved, context=context, chunksize=3)
     assert _runs(got) == _runs(E.run_all(tasks, 1, progress=False))
 

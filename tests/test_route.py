@@ -140,11 +140,12 @@ def test_the_route_sampler_and_its_ablation_plan_valid_seeded_paths(shipped, fam
         assert fine_check_path(p.world, r.path)
 
 
+@pytest.mark.parametrize("uses", ["progress", "frontier", "both"])
 @pytest.mark.parametrize("batch", [1, 8])
-def test_the_fused_loop_plans_the_same_runs_as_draw(small_net, batch):
+def test_the_fused_loop_plans_the_same_runs_as_draw(small_net, batch, uses):
     runs = []
     for fuse in (True, False):
-        sampler = RouteSampler.load(small_net, batch=batch)
+        sampler = RouteSampler.load(small_net, batch=batch, uses=uses, stuck=1)
         if not fuse:
             sampler.fuse = lambda planner: None
         for family in ("narrow_passage", "rooms"):
@@ -165,6 +166,39 @@ def test_the_ablation_follows_the_straight_line_distance_to_the_goal():
     assert np.isinf(field[p.world.obstacles]).all()
 
 
+def test_the_encoder_ranks_the_frontier_where_uses_says(shipped):
+    """"frontier": the progress stays on the straight line and the frontier's distances are the encoder's."""
+    p = generate("bugtrap", TEST_SEED0 + 3, 96)
+    straight = straight_line_sampler().bind(p)
+    learned = shipped.net.predict(p.world.obstacles, p.world.cell_of(p.goal))
+    for uses in ("progress", "frontier", "both"):
+        s = RouteSampler(shipped.net, uses=uses).bind(p)
+        free = np.isfinite(s.field)
+        expected = straight.field if uses == "frontier" else learned
+        assert np.allclose(s.field[free], expected[free])
+        cost = s._frontier[-1]
+        assert (cost.size == 0) == (uses == "progress")
+        if cost.size:  # frontier cells of one step: the encoder's steps, at each cell's centre
+            r, c = np.argwhere(free[2:-2:4, 2:-2:4])[0] * 4 + 2
+            assert cost[(r // 4) * (96 // 4) + c // 4] == pytest.approx(learned[r, c])
+        r = RRT(p, step_size=4.0, sampler=RouteSampler(shipped.net, uses=uses), seed=0).solve(max_iterations=20000)
+        assert r.solved and fine_check_path(p.world, r.path)
+
+
+def test_the_geodesic_route_reference_ranks_the_frontier_by_the_exact_cost_to_go():
+    """The follower whose frontier knows the route: a reference that must beat the follower on traps and mazes."""
+    from learning.expert import GeodesicRouteSampler
+
+    its = {"follower": [], "geodesic": []}
+    for i, family in enumerate(("bugtrap", "maze") * 3):
+        p = generate(family, TEST_SEED0 + 20 + i, 128)
+        for name, sampler in (("follower", RouteSampler(None, stuck=1)), ("geodesic", GeodesicRouteSampler(stuck=1))):
+            r = RRT(p, step_size=4.0, sampler=sampler, seed=i).solve(max_iterations=20000)
+            assert r.solved and fine_check_path(p.world, r.path) and np.allclose(r.path[0], p.start)
+            its[name].append(r.iterations)
+    assert np.median(its["geodesic"]) < 0.8 * np.median(its["follower"]), its
+
+
 def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
     with pytest.raises(InputError, match="OccupancyGrid"):
         RRT(Problem(GeometricWorld(10, 10, []), [1, 1], [9, 9]), step_size=4.0, sampler=shipped, seed=0)
@@ -173,6 +207,10 @@ def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
         RRT(Problem(grid, [2, 2], [30, 30]), step_size=4.0, sampler=shipped, seed=0)
     with pytest.raises(InputError, match="stuck"):
         RouteSampler(shipped.net, stuck=0)
+    with pytest.raises(InputError, match="uses must be one of"):
+        RouteSampler(shipped.net, uses="everything")
+    with pytest.raises(InputError, match="tau"):
+        RouteSampler(None, tau=0.0)
 
 
 def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, capsys):
@@ -195,3 +233,18 @@ def test_every_path_of_the_follower_is_valid_starts_at_start_and_ends_at_the_goa
     if r.solved:
         assert np.allclose(r.path[0], p.start) and np.linalg.norm(r.path[-1] - p.goal) <= p.goal_tolerance
         assert fine_check_path(p.world, r.path)
+
+
+def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(monkeypatch, small_net):
+    import learning.route
+    from learning.expert import GeodesicRouteSampler
+
+    variants = load_script("route_variants")
+    monkeypatch.setattr(variants, "TRAINED", small_net)
+    ranked, ablation, exact = variants.ranked(), variants.ranked_ablation(), variants.ranked_exact()
+    assert ranked.net is not None and ranked.uses == "frontier" and ablation.net is None
+    assert isinstance(exact, GeodesicRouteSampler)
+    assert {(s.stuck, s.tau) for s in (ranked, ablation, exact)} == {(1, 0.5)}  # one rule, three rankings
+    monkeypatch.setattr(variants, "TRAINED", learning.route.TRAINED.with_name("missing.pt"))
+    with pytest.raises(FileNotFoundError, match="train_route.py"):
+        variants.ranked()

@@ -12,6 +12,7 @@ import numba as nb
 import numpy as np
 
 from planners import OccupancyGrid, Problem
+from planners.guidance.frontier import frontier_shape
 
 
 @nb.njit(cache=True, inline="always")
@@ -116,18 +117,19 @@ class FieldFollower:
         return self.origin + np.array([(v % self.W + 0.5) * self.res, (v // self.W + 0.5) * self.res])
 
 
-def frontier_costs(field: np.ndarray, grid: OccupancyGrid, frontier) -> np.ndarray:
-    """Cost-to-go of each frontier cell (flat, in frontier cells) read from a per-grid-cell ``field``.
+def frontier_costs(field: np.ndarray, grid: OccupancyGrid, cell: float) -> np.ndarray:
+    """Cost-to-go of each frontier cell (flat, in frontier cells) read from a per-grid-cell ``field`` (in cells).
 
-    A frontier cell's cost is the field at its centre cell (the frontier checks that it is free),
-    or the block's best cell where the centre has none; 1e9 where neither has one.
+    ``cell`` is the frontier's cell width (``planners.guidance.frontier.Frontier``). A frontier cell's
+    cost is the field at its centre cell (the frontier checks that it is free), or the block's best
+    cell where the centre has none; 1e9 where neither has one.
     """
-    f = frontier
-    k = max(1, int(round(f.cell / grid.resolution)))  # grid cells per frontier cell
-    padded = np.full((f.H * k, f.W * k), np.inf)
-    h, w = min(field.shape[0], f.H * k), min(field.shape[1], f.W * k)
+    H, W = frontier_shape(grid, cell)
+    k = max(1, int(round(cell / grid.resolution)))  # grid cells per frontier cell
+    padded = np.full((H * k, W * k), np.inf)
+    h, w = min(field.shape[0], H * k), min(field.shape[1], W * k)
     padded[:h, :w] = field[:h, :w]
-    blocks = padded.reshape(f.H, k, f.W, k)
+    blocks = padded.reshape(H, k, W, k)
     centre = blocks[:, k // 2, :, k // 2]
-    cost = np.where(np.isfinite(centre), centre, blocks.min((1, 3))) * grid.resolution / f.cell
+    cost = np.where(np.isfinite(centre), centre, blocks.min((1, 3))) * grid.resolution / cell
     return np.where(np.isfinite(cost), cost, 1e9).reshape(-1)

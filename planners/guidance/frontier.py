@@ -76,14 +76,18 @@ def _box_clear(grid, inv, counts, a, b):
 
 # states of a cell centre in ``Frontier.free``: checked lazily, when a vertex first sees the cell
 UNKNOWN, FREE, BLOCKED = 0, 1, 2
+#: ``update_frontier``'s ``cost`` for ranking by the straight-line distance to the goal.
+NO_COST = np.empty(0)
 
 
 @nb.njit(cache=True)
-def update_frontier(world, counts, vertices, cell, goal, free, cov, pos, front, dist, count):
+def update_frontier(world, counts, vertices, cell, goal, free, cov, pos, front, dist, count, cost):
     """Mark new vertices' cells covered and add their visible uncovered neighbours; returns count.
 
     A cell's centre is checked, and its distance to the goal (in cells) computed, only when a vertex
-    first looks at it: a solve that stays in one part of the map never pays for the rest. Vertices and
+    first looks at it: a solve that stays in one part of the map never pays for the rest. That
+    distance is the straight line, or ``cost`` (per frontier cell, in cells) when it is not empty: a
+    cost-to-go from elsewhere ranks the frontier instead. Vertices and
     goal are world points; cells are counted from the grid's corner (``world.params[1:3]``, a ROS map's
     origin), in whose frame the grid's collision checks work.
     """
@@ -127,9 +131,12 @@ def update_frontier(world, counts, vertices, cell, goal, free, cov, pos, front, 
                     free[rr, cc] = BLOCKED
                     continue
                 free[rr, cc] = FREE
-                dx = c_state[0] - gx
-                dy = c_state[1] - gy
-                dist[rr * W + cc] = math.sqrt(dx * dx + dy * dy) / cell  # not ** 2: numba calls pow for that
+                if cost.shape[0] > 0:
+                    dist[rr * W + cc] = cost[rr * W + cc]
+                else:
+                    dx = c_state[0] - gx
+                    dy = c_state[1] - gy
+                    dist[rr * W + cc] = math.sqrt(dx * dx + dy * dy) / cell  # not ** 2: numba calls pow for that
             if (_box_clear(grid, inv, counts, v, c_state)
                     or grid_segment_free(grid, inv, v[0], v[1], c_state[0], c_state[1])):
                 front[count] = rr * W + cc
@@ -196,9 +203,11 @@ class Frontier:
         cell: Cell width in world units (e.g. the planner's step).
         tau: Temperature of the goal preference, in cells: frontier cells closer to the goal are
             drawn more often (``tau -> inf``: uniform over the frontier).
+        cost: Cost-to-go of every frontier cell (flat, ``H * W``, in cells) to rank by instead of the
+            straight-line distance to the goal.
     """
 
-    def __init__(self, problem: Problem, cell: float, tau: float = 1.0) -> None:
+    def __init__(self, problem: Problem, cell: float, tau: float = 1.0, cost: np.ndarray | None = None) -> None:
         if not isinstance(problem.world, OccupancyGrid):
             raise TypeError("the frontier is defined on OccupancyGrid problems")
         if not (math.isfinite(cell) and cell > 0 and math.isfinite(tau) and tau > 0):
@@ -209,14 +218,17 @@ class Frontier:
         self.goal = np.ascontiguousarray(problem.goal[:2], dtype=np.float64)
         self.counts, self.free, self.cov, self.pos, self.front, self.dist = frontier_arrays(self.world.grid, self.H,
                                                                                           self.W)
+        self.cost = NO_COST if cost is None else np.ascontiguousarray(cost, dtype=np.float64)
+        if cost is not None and self.cost.shape != (self.H * self.W,):
+            raise ValueError(f"cost must hold one value per frontier cell ({self.H * self.W}), got {self.cost.shape}")
         self.count = 0
         self.seen = 0
 
     def update(self, vertices: np.ndarray, num_vertices: int) -> None:
         if num_vertices > self.seen:
             self.count = update_frontier(self.world, self.counts, vertices[self.seen:num_vertices], self.cell,
-                                         self.goal,
-                                 self.free, self.cov, self.pos, self.front, self.dist, self.count)
+                                         self.goal, self.free, self.cov, self.pos, self.front, self.dist, self.count,
+                                         self.cost)
             self.seen = num_vertices
 
     def __len__(self) -> int:

@@ -24,7 +24,7 @@ import numpy as np
 
 from planners import Problem, SampleBatch, TreeView
 from planners.guidance.egocentric import EgocentricView
-from planners.guidance.frontier import Frontier, cdf_search, frontier_cdf, update_frontier
+from planners.guidance.frontier import NO_COST, Frontier, cdf_search, frontier_cdf, update_frontier
 
 ANGLES = 16
 RINGS = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0)  # in steps
@@ -89,7 +89,7 @@ def fill_from_cdf(cdf, acc, u, low, high, step, floor, frontier, fstate, X, n, f
         if c >= n_ego and u[k, 3] >= floor and facc < 0.0:
             if n > fstate[0]:
                 fstate[1] = update_frontier(world, counts, X[fstate[0]:n], cell, fgoal, free, cov, fpos, front,
-                                            fdist, fstate[1])
+                                            fdist, fstate[1], NO_COST)
                 fstate[0] = n
             facc = frontier_cdf(front, fstate[1], fdist, tau, fcdf)
         if u[k, 3] < floor or (c >= n_ego and fstate[1] == 0):

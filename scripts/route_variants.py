@@ -1,0 +1,36 @@
+"""Route samplers whose encoder (or the exact cost-to-go) ranks the frontier, for ``evaluate.py --sampler``.
+
+    python scripts/train_route.py --epochs 80
+    python scripts/evaluate.py --other-planners --sampler "ranked=route_variants:ranked" \\
+        --sampler "ranked-ablation=route_variants:ranked_ablation" --sampler "ranked-exact=route_variants:ranked_exact"
+
+``RouteSampler(..., uses="frontier")`` keeps the follower's progress on the straight line and lets the
+encoder's predicted cost-to-go choose among the frontier's cells when the tree is stuck; these
+settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
+``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
+``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search).
+"""
+
+from __future__ import annotations
+
+from learning.expert import GeodesicRouteSampler
+from learning.route import TRAINED, RouteSampler
+
+SETTINGS = {"stuck": 1, "tau": 0.5}
+
+
+def ranked() -> RouteSampler:
+    """The trained encoder (``runs/route/route.pt``) ranking the follower's frontier."""
+    if not TRAINED.is_file():
+        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
+    return RouteSampler.load(TRAINED, uses="frontier", **SETTINGS)
+
+
+def ranked_ablation() -> RouteSampler:
+    """The same sampler without the encoder: the frontier ranked by the straight-line distance."""
+    return RouteSampler(None, **SETTINGS)
+
+
+def ranked_exact() -> GeodesicRouteSampler:
+    """The reference: the frontier ranked by the exact cost-to-go (runs a grid search)."""
+    return GeodesicRouteSampler(**SETTINGS)
