@@ -3,7 +3,9 @@
 Every run is one planner on one query with one sampler and one seed. Goal bias is swept; the bias
 reported as "best" for a family is chosen on a separate tuning split (other map seeds, or other
 MovingAI scenarios of the same maps), never on the evaluated queries, from a grid that includes
-uniform sampling (bias 0), so the "best" bias is never worse than uniform on the tuning split. Shifted
+uniform sampling (bias 0), so the "best" bias is never worse than uniform on the tuning split. The
+policy's batch (samples per decision) is chosen on the generated families' tuning maps too
+(:func:`best_policy_batch`), and the constant-distribution ablation decides as often. Shifted
 map sets (each family's ``generate(..., shifted=True)`` maps) are test-only: they keep the settings
 tuned on their family's tuning split. The
 privileged expert is a reference, not a competitor: it reads the map's geodesic distance field.

@@ -25,20 +25,37 @@ def cost_targets(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) 
     return pad
 
 
+def symmetry(obstacles: np.ndarray, goal_cell: tuple[int, int], k: int) -> tuple[np.ndarray, tuple[int, int]]:
+    """The map and goal cell under the square's symmetry ``k`` (0-7).
+
+    ``k % 4`` quarter turns, then a transpose if ``k >= 4``.
+    """
+    mark = np.zeros(obstacles.shape, dtype=bool)
+    mark[goal_cell] = True
+    obs, mark = np.rot90(obstacles, k % 4), np.rot90(mark, k % 4)
+    if k >= 4:
+        obs, mark = obs.T, mark.T
+    r, c = np.argwhere(mark)[0]
+    return np.ascontiguousarray(obs), (int(r), int(c))
+
+
 def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, epochs: int = 40,
-                    batch: int = 32, lr: float = 1e-3, grad_weight: float = 0.0, seed: int = 0, log=print) -> RouteNet:
+                    batch: int = 32, lr: float = 1e-3, grad_weight: float = 0.0, augment: bool = False, seed: int = 0,
+                    log=print) -> RouteNet:
     """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
     The loss is the smooth-L1 error of the predicted cost-to-go, in steps, over the free cells that reach
     the goal, plus ``grad_weight`` times the L1 error of its differences between neighbouring cells
     (the sampler walks down the field, so its slope matters more than its level far from the
-    goal). Same seed, same machine: the same weights.
+    goal). With ``augment`` every map is first turned by one of the square's 8 symmetries, drawn from
+    ``seed``: the generators' fixed orientations (start and goal corners, trap openings) stop being
+    something to learn. Same seed, same machine: the same weights.
     """
     torch.manual_seed(seed)
+    turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
     by_size: dict[tuple[int, int], list] = {}
-    for p in problems:
-        goal = p.world.cell_of(p.goal)
-        obs = p.world.obstacles
+    for p, k in zip(problems, turns, strict=True):
+        obs, goal = symmetry(p.world.obstacles, p.world.cell_of(p.goal), int(k))
         by_size.setdefault(obs.shape, []).append((route_input(obs, goal, block), cost_targets(obs, goal, block)))
     data = [(torch.tensor(np.stack([e[0] for e in v])), None,
              torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]

@@ -28,20 +28,22 @@ from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, generate
 def main(argv=None) -> Path:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--maps", type=int, default=400, help="training maps per family")
-    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--size", type=int, nargs="+", default=[128], help="map sides; --maps maps of each")
     ap.add_argument("--epochs", type=int, default=40)
     ap.add_argument("--channels", type=int, default=24)
     ap.add_argument("--depth", type=int, default=4, help="times the encoder halves the block grid")
     ap.add_argument("--step", type=int, default=4, help="the planner's step in cells: the encoder's block")
     ap.add_argument("--grad-weight", type=float, default=0.0, help="weight of the slope error in the loss")
+    ap.add_argument("--augment", action="store_true", help="turn each map by one of the square's 8 symmetries")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=Path("runs/route"))
     ap.add_argument("--export", type=Path, help="also copy the encoder (and its .json) here")
     args = ap.parse_args(argv)
     try:
-        check_int_flags(args, ("maps", "size", "epochs", "channels", "depth", "step"))
-        if args.size < MIN_SIZE:
-            raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
+        check_int_flags(args, ("maps", "epochs", "channels", "depth", "step"))
+        for size in args.size:
+            if size < MIN_SIZE:
+                raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {size}")
         if args.seed < 0:
             raise InputError(f"--seed must be 0 or more, got {args.seed}")
         if not args.grad_weight >= 0:
@@ -52,7 +54,7 @@ def main(argv=None) -> Path:
         ap.error(f"--maps {args.maps}: the training split holds {TRAIN_SEEDS[1] - TRAIN_SEEDS[0]} maps per family")
     torch.set_num_threads(1)
     t0 = time.perf_counter()
-    problems = [generate(f, TRAIN_SEEDS[0] + s, args.size) for f in FAMILIES for s in range(args.maps)]
+    problems = [generate(f, TRAIN_SEEDS[0] + s, size) for size in args.size for f in FAMILIES for s in range(args.maps)]
     losses: list[str] = []
 
     def log(line: str) -> None:
@@ -60,7 +62,7 @@ def main(argv=None) -> Path:
         print(line, flush=True)
 
     net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth, epochs=args.epochs,
-                          grad_weight=args.grad_weight, seed=args.seed, log=log)
+                          grad_weight=args.grad_weight, augment=args.augment, seed=args.seed, log=log)
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "route.pt"
     save_route_net(net, path)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import pickle
 from pathlib import Path
 
@@ -219,9 +220,15 @@ def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, ca
                         "--out", str(tmp_path / "run"), "--export", str(tmp_path / "r.pt")])
     assert load_route_net(path).channels == 4 and load_route_net(tmp_path / "r.pt").depth == 2
     assert (tmp_path / "r.json").is_file()
-    with pytest.raises(SystemExit) as exc:
-        script.main(["--epochs", "0"])
-    assert exc.value.code == 2 and "--epochs" in capsys.readouterr().err
+    # two sizes and the symmetries: one recipe, recorded as given
+    path = script.main(["--maps", "1", "--epochs", "1", "--size", "32", "64", "--channels", "4", "--depth", "2",
+                        "--augment", "--out", str(tmp_path / "aug")])
+    recipe = json.loads((tmp_path / "aug" / "route.json").read_text())["recipe"]
+    assert recipe["size"] == [32, 64] and recipe["augment"] is True and load_route_net(path).channels == 4
+    for bad, flag in ((["--epochs", "0"], "--epochs"), (["--size", "64", "8"], "--size")):
+        with pytest.raises(SystemExit) as exc:
+            script.main(bad)
+        assert exc.value.code == 2 and flag in capsys.readouterr().err
 
 
 @given(family=st.sampled_from(FAMILIES), seed=st.integers(0, 10**6), size=st.sampled_from([32, 64, 96]))
@@ -248,3 +255,18 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     monkeypatch.setattr(variants, "TRAINED", learning.route.TRAINED.with_name("missing.pt"))
     with pytest.raises(FileNotFoundError, match="train_route.py"):
         variants.ranked()
+
+
+@pytest.mark.parametrize("k", range(8))
+def test_augmentation_turns_the_map_and_its_goal_together(k):
+    """Under each of the square's symmetries the cost-to-go targets turn with the map: nothing else changes."""
+    from learning.route_training import symmetry
+
+    p = generate("bugtrap", 17, 64)
+    goal = p.world.cell_of(p.goal)
+    obs, g = symmetry(p.world.obstacles, goal, k)
+    turned = np.rot90(distance_field(p.world.obstacles, goal), k % 4)
+    turned = turned.T if k >= 4 else turned
+    assert obs.shape == p.world.obstacles.shape[::-1] if k % 2 else obs.shape == p.world.obstacles.shape
+    assert np.array_equal(distance_field(obs, g), turned)
+    assert (k == 0) == (np.array_equal(obs, p.world.obstacles) and g == goal)
