@@ -8,7 +8,9 @@
 encoder's predicted cost-to-go choose among the frontier's cells when the tree is stuck; these
 settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
-``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search).
+``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
+``ranked_exact_tau1`` the same at the follower's temperature of one step.
+Settings are chosen with ``scripts/validate_samplers.py`` (validation maps).
 """
 
 from __future__ import annotations
@@ -34,3 +36,8 @@ def ranked_ablation() -> RouteSampler:
 def ranked_exact() -> GeodesicRouteSampler:
     """The reference: the frontier ranked by the exact cost-to-go (runs a grid search)."""
     return GeodesicRouteSampler(**SETTINGS)
+
+
+def ranked_exact_tau1() -> GeodesicRouteSampler:
+    """The reference at the follower's frontier temperature (one step): what first showed the room."""
+    return GeodesicRouteSampler(stuck=SETTINGS["stuck"])

@@ -252,6 +252,7 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     assert ranked.net is not None and ranked.uses == "frontier" and ablation.net is None
     assert isinstance(exact, GeodesicRouteSampler)
     assert {(s.stuck, s.tau) for s in (ranked, ablation, exact)} == {(1, 0.5)}  # one rule, three rankings
+    assert (variants.ranked_exact_tau1().stuck, variants.ranked_exact_tau1().tau) == (1, 1.0)
     monkeypatch.setattr(variants, "TRAINED", learning.route.TRAINED.with_name("missing.pt"))
     with pytest.raises(FileNotFoundError, match="train_route.py"):
         variants.ranked()
@@ -270,3 +271,19 @@ def test_augmentation_turns_the_map_and_its_goal_together(k):
     assert obs.shape == p.world.obstacles.shape[::-1] if k % 2 else obs.shape == p.world.obstacles.shape
     assert np.array_equal(distance_field(obs, g), turned)
     assert (k == 0) == (np.array_equal(obs, p.world.obstacles) and g == goal)
+
+
+def test_validate_samplers_reports_validation_medians_and_refuses_bad_specs(capsys, monkeypatch):
+    script = load_script("validate_samplers")
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "scripts"))  # as `python scripts/...`
+    rows = script.main(["--sampler", "ablation=route_variants:ranked_ablation", "--families", "forest", "bugtrap",
+                        "--maps", "2", "--seeds", "1", "--size", "64", "--processes", "1"])
+    assert [r["sampler"] for r in rows] == ["ablation"] and set(rows[0]) == {"sampler", "forest", "bugtrap"}
+    assert "validation maps" in capsys.readouterr().out
+    for bad, needle in ((["--sampler", "x=route_variants:nothing"], "nothing"),
+                        (["--sampler", "a=route_variants:ranked_ablation", "--sampler",
+                          "a=route_variants:ranked_ablation"], "given twice"),
+                        (["--sampler", "a=route_variants:ranked_ablation", "--maps", "0"], "--maps")):
+        with pytest.raises(SystemExit) as exc:
+            script.main(bad)
+        assert exc.value.code == 2 and needle in capsys.readouterr().err

@@ -1,0 +1,85 @@
+"""Samplers on the validation maps: where their settings are chosen, never the test maps.
+
+    python scripts/validate_samplers.py --sampler ranked=route_variants:ranked \
+        --sampler ablation=route_variants:ranked_ablation          # 20 maps per family, 3 seeds, 128x128
+    python scripts/validate_samplers.py --sampler exact=route_variants:ranked_exact --families narrow_passage --maps 100
+
+Each ``--sampler`` is a spec as ``evaluate.py`` takes it (``NAME=module:callable`` or an SB3 model).
+RRT, step and tolerance 4, on the generated families' validation seeds; per family the median
+iterations-to-solution (unsolved runs at the cap), its median ratio to the iteration lower bound, the
+success rate and the median wall time per query.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
+
+from learning import evaluation as E
+from planners.base.fileio import InputError, check_int_flags
+from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
+from planners.tools.benchmark import markdown_table
+from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
+
+DEFAULT_POLICY = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "checkpoints", "guided.zip")
+
+
+def main(argv=None) -> list[dict]:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sampler", action="append", required=True, metavar="NAME=SPEC", help="repeatable")
+    ap.add_argument("--families", nargs="+", choices=FAMILIES, default=list(FAMILIES))
+    ap.add_argument("--maps", type=int, default=20, help="validation maps per family")
+    ap.add_argument("--seeds", type=int, default=3, help="planner seeds per map")
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--max-iterations", type=int, default=20000)
+    add_backend_arguments(ap, processes=2, backend_help="where the runs execute", processes_help="workers for them")
+    args = ap.parse_args(argv)
+    check_backend_arguments(ap, args)
+    samplers: dict[str, str] = {}
+    try:
+        check_int_flags(args, ("maps", "seeds", "size", "max_iterations"))
+        if args.size < MIN_SIZE:
+            raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
+        for arg in args.sampler:  # each built once here: a bad spec is refused before any run
+            name, spec = E.parse_user_sampler(arg)
+            if name in samplers:
+                raise InputError(f"--sampler name {name!r} is given twice")
+            E.user_sampler(spec)
+            samplers[name] = spec
+    except (ValueError, FileNotFoundError) as exc:
+        ap.error(str(exc))
+    cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": DEFAULT_POLICY, "step": 4.0,
+           "max_iterations": args.max_iterations, "user_samplers": samplers}
+    queries = [E.Query(f, VALIDATION_SEED0 + i, args.size, "validation") for f in args.families
+               for i in range(args.maps)]
+    tasks = [(q, "RRT", name, seed, cfg) for name in samplers for q in queries for seed in range(args.seeds)]
+    backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
+    t0 = time.perf_counter()
+    try:
+        runs = E.run_all(tasks, backend, progress=False)
+    finally:
+        backend.close()
+    rows = []
+    for name in samplers:
+        row = {"sampler": name}
+        for f in args.families:
+            rs = [r for r in runs if r.sampler == name and r.map == f]
+            its = np.array([r.iterations for r in rs], dtype=float)
+            lb = np.array([max(r.lower_bound, 1) for r in rs], dtype=float)
+            row[f] = (f"{np.median(its):,.0f} ({np.median(its / lb):.1f}x, {np.mean([r.solved for r in rs]):.2f}, "
+                      f"{np.median([r.wall_time for r in rs]) * 1e3:.2f} ms)")
+        rows.append(row)
+    print(markdown_table(rows))
+    print(f"\nper family: median iterations (/ lower bound, success, median wall per query); {len(runs)} runs on "
+          f"{len(queries)} validation maps, {time.perf_counter() - t0:.0f} s")
+    return rows
+
+
+if __name__ == "__main__":
+    main()
