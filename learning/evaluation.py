@@ -398,6 +398,18 @@ def run_all(tasks: list[tuple], backend: Backend | int = 1, progress: bool = Tru
     return backend.map(run_one, tasks, context=context, progress=progress, desc="runs")
 
 
+def run_on_backend_args(tasks: list[tuple], args) -> list[Run]:
+    """A script's one batch of runs: ``run_all`` on a backend made from its ``add_backend_arguments`` flags.
+
+    No progress bar; the backend is closed afterwards.
+    """
+    backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=worker_init)
+    try:
+        return run_all(tasks, backend, progress=False)
+    finally:
+        backend.close()
+
+
 def pooled(runs: Sequence[Run], name: str, families: Sequence[str]) -> list[Run]:
     """Copies of the runs on ``families`` relabelled as one family ``name`` (e.g. all MovingAI maps).
 

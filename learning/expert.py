@@ -149,9 +149,9 @@ class GeodesicRouteSampler(RouteSampler):
         super().__init__(None, **kwargs)
 
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
-        straight, _ = super()._fields(grid)
         exact = distance_field(grid.obstacles, grid.cell_of(self.problem.goal)) * grid.resolution / self.step_size
-        return (straight if self.uses == "frontier" else exact), (None if self.uses == "progress" else exact)
+        progress = self._straight(grid) if self.uses == "frontier" else exact
+        return progress, (None if self.uses == "progress" else exact)
 
     def __repr__(self) -> str:
         return f"GeodesicRouteSampler(stuck={self.stuck}, tau={self.tau:g}, uses={self.uses!r})"

@@ -277,25 +277,28 @@ class RouteSampler(SamplerBase):
         """A sampler over the encoder saved at ``path`` (default: where ``scripts/train_route.py`` writes it)."""
         return cls(load_route_net(path), **kwargs)
 
+    def _straight(self, grid: OccupancyGrid) -> np.ndarray:
+        """The straight-line distance to the goal of every grid cell's centre, in steps."""
+        gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
+        return (np.hypot(np.arange(grid.width)[None, :] + 0.5 - gx, np.arange(grid.height)[:, None] + 0.5 - gy)
+                * grid.resolution / self.step_size)
+
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
         """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
-        gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
-        straight = (np.hypot(np.arange(grid.width)[None, :] + 0.5 - gx, np.arange(grid.height)[:, None] + 0.5 - gy)
-                    * grid.resolution / self.step_size)
         if self.net is None:
-            return straight, None
+            return self._straight(grid), None
         if round(self.step_size / grid.resolution) != self.net.block:
             raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is "
                              f"{self.step_size / grid.resolution:g} cells of this map")
         learned = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal))
-        return (straight if self.uses == "frontier" else learned), (None if self.uses == "progress" else learned)
+        progress = self._straight(grid) if self.uses == "frontier" else learned
+        return progress, (None if self.uses == "progress" else learned)
 
     def _setup(self) -> None:
         grid = self.problem.world
         if not isinstance(grid, OccupancyGrid):
             raise InputError("RouteSampler plans on OccupancyGrid problems")
         field, ranking = self._fields(grid)
-        field = np.array(field, dtype=np.float64)
         field[grid.obstacles] = np.inf
         self.field, self.blocked = field, grid.kernel.grid
         self.res, self.origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)

@@ -22,7 +22,7 @@ from learning import evaluation as E
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table
-from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
+from planners.tools.parallel import add_backend_arguments, check_backend_arguments
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
 
@@ -49,12 +49,8 @@ def main(argv=None) -> int:
            "max_iterations": args.max_iterations}
     queries = E.generated_queries(FAMILIES, 128, 0, args.maps)
     tasks = E.policy_tuning_tasks(queries, "RRT", cfg, args.batches, args.seeds)
-    backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
     t0 = time.perf_counter()
-    try:
-        runs = E.run_all(tasks, backend, progress=False)
-    finally:
-        backend.close()
+    runs = E.run_on_backend_args(tasks, args)
     best, score = E.best_policy_batch(runs)
     rows = []
     for b in args.batches:

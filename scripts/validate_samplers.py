@@ -25,7 +25,7 @@ from learning import evaluation as E
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
-from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
+from planners.tools.parallel import add_backend_arguments, check_backend_arguments
 
 DEFAULT_POLICY = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "checkpoints", "guided.zip")
 
@@ -59,12 +59,8 @@ def main(argv=None) -> list[dict]:
     queries = [E.Query(f, VALIDATION_SEED0 + i, args.size, "validation") for f in args.families
                for i in range(args.maps)]
     tasks = [(q, "RRT", name, seed, cfg) for name in samplers for q in queries for seed in range(args.seeds)]
-    backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
     t0 = time.perf_counter()
-    try:
-        runs = E.run_all(tasks, backend, progress=False)
-    finally:
-        backend.close()
+    runs = E.run_on_backend_args(tasks, args)
     rows = []
     for name in samplers:
         row = {"sampler": name}
