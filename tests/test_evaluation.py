@@ -251,6 +251,20 @@ def test_target_check_counts_each_target_and_names_what_misses():
         "wall time / best bias's <= 1", "every map solved in >= 90%"]
 
 
+def test_target_check_holds_the_expert_to_the_iteration_targets_only():
+    expert = {"expert/constant": 0.65, "expert/best_bias": 0.2, "expert/lower_bound": 1.5, "expert_success": 1.0}
+    head = [_head("forest", **expert), _head("maze", **{**expert, "expert/constant": 0.3}),
+            _head("rooms"),  # no expert run there: not counted
+            _head("arena", **{**expert, "expert_success": 0.8}), _head(E.MOVINGAI_POOL, **expert)]
+    rows, met, total = E.target_check(head, ["arena", "den312d"], "expert")
+    assert [r["map set"] for r in rows] == ["forest", "maze", E.MOVINGAI_POOL]
+    assert list(rows[0]) == ["map set", "expert / constant <= 0.5", "expert / best bias <= 0.5",
+                             "expert / lower bound <= 4", "every map solved in >= 90%"]  # no wall time
+    assert rows[0]["expert / constant <= 0.5"] == "0.65 no" and rows[1]["expert / constant <= 0.5"] == "0.30 yes"
+    assert rows[2]["every map solved in >= 90%"] == "no: arena 0.80"
+    assert total == 3 + 3 + 3 and met == 2 + 3 + 1
+
+
 def test_target_check_takes_a_single_movingai_map_for_the_set():
     head = [_head("forest"), _head("den312d", policy_success=0.8, constant_success=0.5, best_bias_success=0.5)]
     rows, met, total = E.target_check(head, ["den312d"])
