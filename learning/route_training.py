@@ -9,7 +9,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from learning.route import RouteNet, route_input
+from learning.route import RouteNet, route_input, symmetry
 from planners.maps.gridsearch import distance_field
 
 
@@ -25,21 +25,8 @@ def cost_targets(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) 
     return pad
 
 
-def symmetry(obstacles: np.ndarray, goal_cell: tuple[int, int], k: int) -> tuple[np.ndarray, tuple[int, int]]:
-    """The map and goal cell under the square's symmetry ``k`` (0-7).
-
-    ``k % 4`` quarter turns, then a transpose if ``k >= 4``.
-    """
-    mark = np.zeros(obstacles.shape, dtype=bool)
-    mark[goal_cell] = True
-    obs, mark = np.rot90(obstacles, k % 4), np.rot90(mark, k % 4)
-    if k >= 4:
-        obs, mark = obs.T, mark.T
-    r, c = np.argwhere(mark)[0]
-    return np.ascontiguousarray(obs), (int(r), int(c))
-
-
-def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, epochs: int = 40,
+def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0,
+                    epochs: int = 40,
                     batch: int = 32, lr: float = 1e-3, grad_weight: float = 0.0, augment: bool = False, seed: int = 0,
                     log=print) -> RouteNet:
     """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
@@ -59,7 +46,7 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
         by_size.setdefault(obs.shape, []).append((route_input(obs, goal, block), cost_targets(obs, goal, block)))
     data = [(torch.tensor(np.stack([e[0] for e in v])), None,
              torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]
-    net = RouteNet(block, channels, depth)
+    net = RouteNet(block, channels, depth, attention)
     opt = torch.optim.Adam(net.parameters(), lr)
     order = torch.Generator().manual_seed(seed)
     t0 = time.perf_counter()

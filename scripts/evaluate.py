@@ -29,6 +29,7 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 
 from learning import PolicySampler
 from learning import evaluation as E
+from learning.route import load_route_net
 from planners import movingai_dir, planner_names
 from planners.base.fileio import InputError, atomic_write_text
 from planners.base.registry import planner_name_arg
@@ -37,6 +38,7 @@ from planners.tools.benchmark import markdown_table, write_runs_csv
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_ROUTE = Path(__file__).resolve().parents[1] / "checkpoints" / "route.pt"
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
                  "maze-32-32-2", "room-32-32-4", "room-64-64-8", "random-32-32-10", "random-64-64-20")
 #: What --quick changes: fewer test queries and planner seeds, no other planners. The tuning split is
@@ -57,6 +59,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--tuning-maps", type=int, default=20, help="maps per family for choosing the best goal bias")
     ap.add_argument("--shifted-maps", type=int, default=50,
                     help="test maps per family from its shifted generator, sides 64 to 256 (0: none)")
+    ap.add_argument("--route", type=Path, default=DEFAULT_ROUTE,
+                    help="route encoder checkpoint (scripts/train_route.py), run as the 'route encoder' sampler")
     ap.add_argument("--seeds", type=int, default=3, help="planner seeds per query")
     ap.add_argument("--movingai", type=Path, default=None)
     ap.add_argument("--movingai-maps", nargs="*", default=list(MOVINGAI_MAPS))
@@ -99,6 +103,10 @@ def parse_args(argv=None) -> argparse.Namespace:
         PolicySampler.load(args.policy)
     except ValueError as exc:
         ap.error(str(exc))
+    try:
+        load_route_net(args.route)
+    except (InputError, FileNotFoundError) as exc:
+        ap.error(f"--route: {exc}")
     args.user_samplers = {}
     for arg in args.sampler:  # each built once here, so a bad file or spec is refused before any run
         try:
@@ -132,7 +140,7 @@ def main(argv=None) -> int:
         print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); evaluating generated "
               "families only", file=sys.stderr)
     cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": args.tolerance,
-           "policy": str(args.policy), "step": args.step,
+           "policy": str(args.policy), "route": str(args.route), "step": args.step,
            "max_iterations": args.max_iterations, "user_samplers": args.user_samplers}
     try:
         backend = make_backend(args.backend, processes=args.processes, address=args.address,
@@ -150,7 +158,8 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     """The runs, tables, plots and logs of the comparison, executed on ``backend``."""
     users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
-    fixed = ["uniform", *biases, E.FOLLOWER, *users] + ([] if args.no_expert else ["expert (reference)"])
+    learned = [E.ROUTE, E.ROUTE_ABLATION]  # the route encoder, beside its ablation
+    fixed = ["uniform", *biases, E.FOLLOWER, *learned, *users] + ([] if args.no_expert else ["expert (reference)"])
     # first what needs no tuned setting, beside the tuning runs of goal bias and of the policy's batch
     tasks = E.tuning_tasks(queries, "RRT", cfg) + E.policy_tuning_tasks(queries, "RRT", cfg)
     tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in fixed
@@ -193,12 +202,13 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     else:
         pool = []
     rows = E.summarize(runs + pool, best)
-    head = E.headline(rows, best, [E.FOLLOWER, *users], constants)
+    head = E.headline(rows, best, [E.FOLLOWER, *learned, *users], constants)
     targets, met, total = E.target_check(head, mai)
+    route_targets, route_met, route_total = E.target_check(head, mai, E.ROUTE, E.ROUTE_ABLATION)
     reach, reach_met, reach_total = E.target_check(head, mai, "expert")
     write_runs_csv(runs, args.out / "runs.csv")
     plots = E.save_plots([r for r in runs if r.map not in mai] + pool, rows, best, args.out,
-                         extra=[E.CONSTANT, E.FOLLOWER, *users])
+                         extra=[E.CONSTANT, E.FOLLOWER, E.ROUTE, *users])
     logs = E.write_ompl_logs(runs + pool, best, args.out / "ompl", cfg)
     # the log folder keeps this run's logs only, so `ompl/*.log` never mixes in an earlier run's map sets
     for old in set((args.out / "ompl").glob("*.log")) - set(logs):
@@ -209,8 +219,9 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
              "policy_success", "best_bias_success", "policy_wall_ms", "best_bias_wall_ms", "expert_median",
              "policy/lower_bound", "expert/lower_bound", "expert/best_bias", "expert_success",
-             "best_constant", "constant_median", "policy/constant", "expert/constant", "constant_success", "constant_wall_ms"]
-    for n in (E.FOLLOWER, *users):
+             "best_constant", "constant_median", "policy/constant", "expert/constant", "constant_success",
+             "constant_wall_ms"]
+    for n in (E.FOLLOWER, *learned, *users):
         hcols += [f"{n}_median", f"{n}/best_bias", f"policy/{n}", f"{n}/lower_bound", f"{n}_success", f"{n}_wall_ms"]
     named = "".join(f"`{n}`: `{spec}`; " for n, spec in args.user_samplers.items())
     text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {(time.perf_counter() - t0) / 60:.1f} "
@@ -224,7 +235,10 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
             "The ablation draws the policy's own action classes (frontier, or the cell straight ahead) with a "
             "constant distribution and no network; its frontier probability is tuned on the tuning split. The "
             f"{E.FOLLOWER} has no learning either: it samples a step ahead of the vertex nearest the goal, "
-            "straight at the goal, and turns to the frontier after 4 iterations without progress.\n\n"
+            "straight at the goal, and turns to the frontier after 4 iterations without progress. The "
+            f"{E.ROUTE} ({args.route}) follows its predicted cost-to-go the same way (settings chosen on "
+            f"validation maps); the {E.ROUTE_ABLATION} is that sampler with the straight-line distance in place "
+            "of the prediction.\n\n"
             + markdown_table(head, hcols) +
             f"\n## The policy's batch, tuned\n\nSamples per decision, chosen on the generated families' tuning "
             f"maps ({E.POLICY_TUNING_SEEDS} seeds each) by the lowest sum of log median iterations; scores within "
@@ -234,6 +248,9 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
                               for b, v in sorted(batch_scores.items())]) +
             f"\n## Issue 18's targets for the learned sampler: {met} of {total} met\n\n"
             + markdown_table(targets) +
+            f"\n## Issue 18's targets for the {E.ROUTE}: {route_met} of {route_total} met\n\n"
+            f"Its ablation is the {E.ROUTE_ABLATION}: the same sampler without the encoder.\n\n"
+            + markdown_table(route_targets) +
             f"\n## Which targets can be reached: the privileged expert meets {reach_met} of {reach_total}\n\n"
             "The expert knows the shortest path (a grid search the learned sampler may not run); held to the same "
             "iteration and success targets, it shows which of them perfect route knowledge reaches at all.\n\n"
@@ -242,8 +259,8 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     atomic_write_text(args.out / "summary.md", text)
     print("\n" + markdown_table(head, hcols))
     print(f"\npolicy batch {batch}, tuned: " + ", ".join(f"{b}: {v:.3f}" for b, v in sorted(batch_scores.items())))
-    print(f"\nIssue 18's targets for the learned sampler: {met} of {total} met; the privileged expert meets "
-          f"{reach_met} of its {reach_total} (summary.md has which)")
+    print(f"\nIssue 18's targets: the learned policy meets {met} of {total}, the {E.ROUTE} {route_met} of "
+          f"{route_total}; the privileged expert meets {reach_met} of its {reach_total} (summary.md has which)")
     print(f"full table: {args.out / 'summary.md'}; raw runs: {args.out / 'runs.csv'}; plots: "
           f"{', '.join(str(p) for p in plots)}; OMPL benchmark logs ({len(logs)}): {args.out / 'ompl'}")
     return 0

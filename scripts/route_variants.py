@@ -7,6 +7,7 @@
 ``RouteSampler(..., uses="frontier")`` keeps the follower's progress on the straight line and lets the
 encoder's predicted cost-to-go choose among the frontier's cells when the tree is stuck; these
 settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
+``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries;
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
@@ -26,6 +27,13 @@ def ranked() -> RouteSampler:
     if not TRAINED.is_file():
         raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
     return RouteSampler.load(TRAINED, uses="frontier", **SETTINGS)
+
+
+def ranked_symmetric() -> RouteSampler:
+    """``ranked`` with the encoder's prediction averaged over the square's 8 symmetries (8 passes per query)."""
+    if not TRAINED.is_file():
+        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
+    return RouteSampler.load(TRAINED, uses="frontier", symmetries=8, **SETTINGS)
 
 
 def ranked_ablation() -> RouteSampler:

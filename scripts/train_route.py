@@ -19,7 +19,7 @@ from pathlib import Path
 
 import torch
 
-from learning.route import save_route_net
+from learning.route import AxialAttention, save_route_net
 from learning.route_training import train_route_net
 from planners.base.fileio import InputError, atomic_write_text, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, generate
@@ -32,6 +32,8 @@ def main(argv=None) -> Path:
     ap.add_argument("--epochs", type=int, default=40)
     ap.add_argument("--channels", type=int, default=24)
     ap.add_argument("--depth", type=int, default=4, help="times the encoder halves the block grid")
+    ap.add_argument("--attention", type=int, default=0,
+                    help="axial attention layers (a row then a column each) at full resolution before the output")
     ap.add_argument("--step", type=int, default=4, help="the planner's step in cells: the encoder's block")
     ap.add_argument("--grad-weight", type=float, default=0.0, help="weight of the slope error in the loss")
     ap.add_argument("--augment", action="store_true", help="turn each map by one of the square's 8 symmetries")
@@ -41,6 +43,9 @@ def main(argv=None) -> Path:
     args = ap.parse_args(argv)
     try:
         check_int_flags(args, ("maps", "epochs", "channels", "depth", "step"))
+        if args.attention < 0 or (args.attention and args.channels % AxialAttention.HEADS):
+            raise InputError(f"--attention must be 0 or more, and with attention --channels a multiple of "
+                             f"{AxialAttention.HEADS}; got {args.attention}, {args.channels}")
         for size in args.size:
             if size < MIN_SIZE:
                 raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {size}")
@@ -61,7 +66,8 @@ def main(argv=None) -> Path:
         losses.append(line)
         print(line, flush=True)
 
-    net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth, epochs=args.epochs,
+    net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth,
+                          attention=args.attention, epochs=args.epochs,
                           grad_weight=args.grad_weight, augment=args.augment, seed=args.seed, log=log)
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "route.pt"

@@ -120,6 +120,15 @@ def test_quick_run_tunes_on_the_full_runs_tuning_split():
     assert quick.maps < full.maps  # it is still the quick form
 
 
+def test_a_missing_or_bad_route_encoder_is_refused_before_any_run(tmp_path, capsys):
+    ev = _load_evaluate()
+    (tmp_path / "bad.pt").write_bytes(b"not a torch file")
+    for path, needle in ((tmp_path / "missing.pt", "does not exist"), (tmp_path / "bad.pt", "bad.pt")):
+        with pytest.raises(SystemExit) as exc:
+            ev.parse_args(["--route", str(path)])
+        assert exc.value.code == 2 and "--route" in (err := capsys.readouterr().err) and needle in err
+
+
 def test_tuned_bias_beats_or_ties_uniform_on_real_tuning_maps():
     """The real tuning runs of the quick form, on narrow passages: the choice is not worse than uniform."""
     cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": "", "step": 4.0, "max_iterations": 20000}
@@ -207,12 +216,13 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     assert {p: stat.S_IMODE((out / p).stat().st_mode) for p in files} == dict.fromkeys(files, mode)
     conn = sqlite3.connect(":memory:")
     rows = runs_table(conn, read_benchmark_log((out / "ompl" / "forest.log").read_text(), conn))
-    samplers = ["uniform", *(f"goal bias {b:g}" for b in E.GOAL_BIASES), "policy", E.FOLLOWER, "expert (reference)",
-                E.CONSTANT]
+    samplers = ["uniform", *(f"goal bias {b:g}" for b in E.GOAL_BIASES), "policy", E.FOLLOWER, E.ROUTE,
+                E.ROUTE_ABLATION, "expert (reference)", E.CONSTANT]
     assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
     summary = (out / "summary.md").read_text()
     assert "## The policy's batch, tuned" in summary and "Chosen: **" in summary
     assert f"policy/{E.FOLLOWER}" in summary and f"{E.FOLLOWER}/lower_bound" in summary
+    assert f"## Issue 18's targets for the {E.ROUTE}" in summary and f"{E.ROUTE} / {E.ROUTE_ABLATION} <= 0.5" in summary
     assert len(rows) == 2 * len(samplers)  # the test split only: 2 maps x 1 seed per sampler
     csv_runs = [ln.split(",") for ln in (out / "runs.csv").read_text().splitlines()[1:]]
     test_its = sorted(int(r[7]) for r in csv_runs if r[2] == "test" and r[0] == "forest")
@@ -227,15 +237,15 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
 
 
 def _head(family, **kw):
-    row = {"family": family, "policy/constant": 0.4, "policy/best_bias": 0.3, "policy/lower_bound": 3.0,
-           "policy_success": 1.0, "constant_success": 1.0, "best_bias_success": 1.0, "policy_wall_ms": 1.0,
-           "best_bias_wall_ms": 2.0}
+    row = {"family": family, "policy_median": 40.0, "constant_median": 100.0, "policy/best_bias": 0.3,
+           "policy/lower_bound": 3.0, "policy_success": 1.0, "constant_success": 1.0, "best_bias_success": 1.0,
+           "policy_wall_ms": 1.0, "best_bias_wall_ms": 2.0}
     return {**row, **kw}
 
 
 def test_target_check_counts_each_target_and_names_what_misses():
     head = [_head("forest"),
-            _head("maze", **{"policy/constant": 1.08, "policy/lower_bound": 10.8}),
+            _head("maze", policy_median=108.0, **{"policy/lower_bound": 10.8}),
             _head("rooms", policy_success=0.9),  # a ratio met with lower success does not count
             _head("32room_000", policy_success=0.0), _head(E.MOVINGAI_POOL, policy_wall_ms=3.0),
             _head("arena", policy_success=1.0)]
@@ -252,8 +262,8 @@ def test_target_check_counts_each_target_and_names_what_misses():
 
 
 def test_target_check_holds_the_expert_to_the_iteration_targets_only():
-    expert = {"expert/constant": 0.65, "expert/best_bias": 0.2, "expert/lower_bound": 1.5, "expert_success": 1.0}
-    head = [_head("forest", **expert), _head("maze", **{**expert, "expert/constant": 0.3}),
+    expert = {"expert_median": 65.0, "expert/best_bias": 0.2, "expert/lower_bound": 1.5, "expert_success": 1.0}
+    head = [_head("forest", **expert), _head("maze", **{**expert, "expert_median": 30.0}),
             _head("rooms"),  # no expert run there: not counted
             _head("arena", **{**expert, "expert_success": 0.8}), _head(E.MOVINGAI_POOL, **expert)]
     rows, met, total = E.target_check(head, ["arena", "den312d"], "expert")
@@ -263,6 +273,18 @@ def test_target_check_holds_the_expert_to_the_iteration_targets_only():
     assert rows[0]["expert / constant <= 0.5"] == "0.65 no" and rows[1]["expert / constant <= 0.5"] == "0.30 yes"
     assert rows[2]["every map solved in >= 90%"] == "no: arena 0.80"
     assert total == 3 + 3 + 3 and met == 2 + 3 + 1
+
+
+def test_target_check_holds_a_learned_sampler_to_its_own_ablation():
+    route = {"route_median": 50.0, "route/best_bias": 0.1, "route/lower_bound": 2.0, "route_success": 1.0,
+             "route_wall_ms": 30.0, "ablation_median": 120.0, "ablation_success": 1.0}
+    head = [_head("bugtrap", **route), _head("maze", **{**route, "ablation_median": 80.0, "ablation_success": 0.9})]
+    rows, met, total = E.target_check(head, [], "route", "ablation")
+    assert list(rows[0]) == ["map set", "route / ablation <= 0.5", "route / best bias <= 0.5",
+                             "route / lower bound <= 4", "wall time / best bias's <= 1"]
+    assert rows[0]["route / ablation <= 0.5"] == "0.42 yes" and rows[1]["route / ablation <= 0.5"] == "0.62 no"
+    assert rows[0]["wall time / best bias's <= 1"] == "15.00 no"
+    assert total == 4 + 4 and met == 3 + 2
 
 
 def test_target_check_takes_a_single_movingai_map_for_the_set():

@@ -14,11 +14,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from learning.route import (
+    SHIPPED,
+    SHIPPED_SETTINGS,
     RouteNet,
     RouteSampler,
     load_route_net,
     route_input,
     save_route_net,
+    shipped_ablation,
+    shipped_sampler,
     straight_line_sampler,
     trained_sampler,
 )
@@ -56,6 +60,24 @@ def test_the_encoder_predicts_a_cost_per_cell_on_maps_of_any_size():
     assert net.predict(obs, (3, 4)).shape == (50, 70)
 
 
+@pytest.mark.parametrize("k", range(8))
+def test_the_prediction_averaged_over_the_symmetries_turns_with_the_map(k):
+    """At 8 symmetries the predicted cost-to-go is equivariant, as the true one is; at 1 it is one pass."""
+    from learning.route import symmetry, unturn
+
+    net = RouteNet(4, 8, 2).eval()  # untrained: nothing about its weights is symmetric
+    p = generate("bugtrap", 3, 64)
+    obs = np.pad(p.world.obstacles, ((0, 0), (0, 6)), constant_values=True)  # 64x70: the turns change its shape
+    goal = p.world.cell_of(p.goal)
+    turned, g = symmetry(obs, goal, k)
+    assert np.allclose(unturn(net.predict(turned, g, 8), k), net.predict(obs, goal, 8), atol=1e-5)
+    one = net.predict(turned, g)
+    assert np.array_equal(one, net.predict(turned, g, 1))
+    assert (k == 0) == np.allclose(unturn(one, k), net.predict(obs, goal), atol=1e-5)
+    with pytest.raises(InputError, match="symmetries"):
+        net.predict(obs, goal, 9)
+
+
 def test_training_is_seeded_and_learns():
     problems = [generate(f, 7, 64) for f in ("forest", "maze")]
     losses: list[str] = []
@@ -66,13 +88,29 @@ def test_training_is_seeded_and_learns():
     assert last < first
 
 
-def test_a_saved_encoder_loads_with_the_same_predictions(tmp_path):
-    net = RouteNet(4, 8, 2).eval()
+@pytest.mark.parametrize("attention", [0, 2])
+def test_a_saved_encoder_loads_with_the_same_predictions(tmp_path, attention):
+    net = RouteNet(4, 8, 2, attention).eval()
     save_route_net(net, tmp_path / "r.pt")
     back = load_route_net(tmp_path / "r.pt")
+    assert back.attention_layers == attention
+    # a file written before attention existed holds no such key, and still loads
+    assert ("attention" in torch.load(tmp_path / "r.pt", weights_only=True)["config"]) == bool(attention)
     obs = generate("rooms", 3, 64).world.obstacles
     assert np.array_equal(net.predict(obs, (5, 5)), back.predict(obs, (5, 5)))
     assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_axial_attention_lets_one_cell_reach_the_whole_grid_at_full_resolution():
+    """After a row pass and a column pass, the output at one pixel depends on a pixel in another row and column."""
+    from learning.route import AxialAttention
+
+    torch.manual_seed(0)
+    layer = AxialAttention(8).eval()
+    x = torch.randn(1, 8, 6, 7, requires_grad=True)
+    layer(x)[0, :, 5, 6].sum().backward()
+    assert x.grad[0, :, 0, 0].abs().sum() > 0  # another row and another column
+    assert layer(x).shape == x.shape
 
 
 class _Boom:
@@ -86,6 +124,8 @@ class _Boom:
     ("pickle", "is not a route encoder file"),
     ({"config": {"block": 4, "channels": 8}, "state": {}}, "config depth"),
     ({"config": {"block": 4, "channels": 8, "depth": 2}, "state": {"inp.weight": torch.zeros(1)}}, "do not fit"),
+    ({"config": {"block": 4, "channels": 8, "depth": 2, "attention": -1}, "state": {}}, "config attention"),
+    ({"config": {"block": 4, "channels": 7, "depth": 2, "attention": 1}, "state": {}}, "multiple of 2"),
     ([1, 2], "expected {'config'"),
 ])
 def test_a_bad_encoder_file_is_refused_by_name_and_runs_nothing(tmp_path, monkeypatch, content, needle):
@@ -212,6 +252,9 @@ def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
         RouteSampler(shipped.net, uses="everything")
     with pytest.raises(InputError, match="tau"):
         RouteSampler(None, tau=0.0)
+    for bad in (0, 9, True, 2.0):
+        with pytest.raises(InputError, match="symmetries"):
+            RouteSampler(shipped.net, symmetries=bad)
 
 
 def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, capsys):
@@ -225,7 +268,8 @@ def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, ca
                         "--augment", "--out", str(tmp_path / "aug")])
     recipe = json.loads((tmp_path / "aug" / "route.json").read_text())["recipe"]
     assert recipe["size"] == [32, 64] and recipe["augment"] is True and load_route_net(path).channels == 4
-    for bad, flag in ((["--epochs", "0"], "--epochs"), (["--size", "64", "8"], "--size")):
+    for bad, flag in ((["--epochs", "0"], "--epochs"), (["--size", "64", "8"], "--size"),
+                      (["--attention", "1", "--channels", "5"], "--attention")):
         with pytest.raises(SystemExit) as exc:
             script.main(bad)
         assert exc.value.code == 2 and flag in capsys.readouterr().err
@@ -261,7 +305,7 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
 @pytest.mark.parametrize("k", range(8))
 def test_augmentation_turns_the_map_and_its_goal_together(k):
     """Under each of the square's symmetries the cost-to-go targets turn with the map: nothing else changes."""
-    from learning.route_training import symmetry
+    from learning.route import symmetry
 
     p = generate("bugtrap", 17, 64)
     goal = p.world.cell_of(p.goal)
@@ -287,3 +331,21 @@ def test_validate_samplers_reports_validation_medians_and_refuses_bad_specs(caps
         with pytest.raises(SystemExit) as exc:
             script.main(bad)
         assert exc.value.code == 2 and needle in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_the_shipped_encoder_and_its_ablation_plan_valid_paths(family):
+    """The shipped checkpoint loads safely, at its recorded recipe, and both samplers plan valid seeded paths."""
+    recipe = json.loads(SHIPPED.with_suffix(".json").read_text())["recipe"]
+    net = load_route_net(SHIPPED)
+    assert (net.channels, net.depth, net.attention_layers) == (recipe["channels"], recipe["depth"], recipe["attention"])
+    learned, ablation = shipped_sampler(), shipped_ablation()
+    assert learned.symmetries == SHIPPED_SETTINGS["symmetries"] and learned.uses == "both"
+    assert ablation.net is None and (ablation.stuck, ablation.tau) == (learned.stuck, learned.tau)
+    p = generate(family, TEST_SEED0 + 3, 64)
+    for sampler in (learned, ablation):
+        runs = [RRT(p, step_size=4.0, sampler=sampler, seed=1).solve(max_iterations=20000) for _ in range(2)]
+        assert runs[0].solved and runs[0].iterations == runs[1].iterations
+        assert np.allclose(runs[0].path[0], p.start)
+        assert np.linalg.norm(runs[0].path[-1] - p.goal) <= p.goal_tolerance
+        assert fine_check_path(p.world, runs[0].path)
