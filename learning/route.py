@@ -12,6 +12,10 @@ its progress vertex is the tree vertex of lowest predicted cost-to-go, and it sa
 ahead of it down the predicted field. Where the prediction is wrong the tree stops making progress;
 after ``stuck`` iterations the sampler turns to the tree's frontier until it does again, so a wrong
 prediction costs iterations, not the solution.
+
+The shipped encoder (``checkpoints/route.pt``, ``shipped_sampler``) adds axial attention after the
+U-Net and is read as the mean over the square's 8 symmetries; ``shipped_ablation`` is the same sampler
+on the straight-line distance, which is what its learning is measured against.
 """
 
 from __future__ import annotations

@@ -7,7 +7,9 @@
 ``RouteSampler(..., uses="frontier")`` keeps the follower's progress on the straight line and lets the
 encoder's predicted cost-to-go choose among the frontier's cells when the tree is stuck; these
 settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
-``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries;
+``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries; ``both_symmetric``
+uses the field everywhere, as the shipped encoder is used (``learning.route.SHIPPED_SETTINGS``), ``both``
+does so with one pass, and ``exact_both`` is the reference at those settings;
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
@@ -17,7 +19,7 @@ Settings are chosen with ``scripts/validate_samplers.py`` (validation maps).
 from __future__ import annotations
 
 from learning.expert import GeodesicRouteSampler
-from learning.route import TRAINED, RouteSampler
+from learning.route import SHIPPED_SETTINGS, TRAINED, RouteSampler
 
 SETTINGS = {"stuck": 1, "tau": 0.5}
 
@@ -34,6 +36,25 @@ def ranked_symmetric() -> RouteSampler:
     if not TRAINED.is_file():
         raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
     return RouteSampler.load(TRAINED, uses="frontier", symmetries=8, **SETTINGS)
+
+
+def both_symmetric() -> RouteSampler:
+    """The trained encoder at the shipped settings (``learning.route.SHIPPED_SETTINGS``): its field everywhere."""
+    if not TRAINED.is_file():
+        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
+    return RouteSampler.load(TRAINED, **SHIPPED_SETTINGS)
+
+
+def both() -> RouteSampler:
+    """``both_symmetric`` with one pass of the encoder per query instead of 8."""
+    if not TRAINED.is_file():
+        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
+    return RouteSampler.load(TRAINED, **{**SHIPPED_SETTINGS, "symmetries": 1})
+
+
+def exact_both() -> GeodesicRouteSampler:
+    """The reference at the shipped settings: the exact cost-to-go everywhere the encoder's field goes."""
+    return GeodesicRouteSampler(**{k: v for k, v in SHIPPED_SETTINGS.items() if k != "symmetries"})
 
 
 def ranked_ablation() -> RouteSampler:

@@ -297,6 +297,10 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     assert isinstance(exact, GeodesicRouteSampler)
     assert {(s.stuck, s.tau) for s in (ranked, ablation, exact)} == {(1, 0.5)}  # one rule, three rankings
     assert (variants.ranked_exact_tau1().stuck, variants.ranked_exact_tau1().tau) == (1, 1.0)
+    both8, both1, exact_both = variants.both_symmetric(), variants.both(), variants.exact_both()
+    assert (both8.uses, both8.symmetries, both1.symmetries, exact_both.uses) == ("both", 8, 1, "both")
+    assert {(s.stuck, s.tau) for s in (both8, both1, exact_both)} == {(1, 0.5)}
+    assert variants.ranked_symmetric().symmetries == 8
     monkeypatch.setattr(variants, "TRAINED", learning.route.TRAINED.with_name("missing.pt"))
     with pytest.raises(FileNotFoundError, match="train_route.py"):
         variants.ranked()
