@@ -46,17 +46,17 @@ def test_no_inference_module_imports_a_privileged_one(module):
 @pytest.mark.parametrize("learned", ["policy", "route"])
 def test_the_learned_samplers_plan_the_same_runs_with_grid_search_and_expert_disabled(monkeypatch, learned):
     from learning import expert
-    from learning.route import RouteSampler
+    from learning.route import RouteSampler, shipped_sampler
     from learning.route_training import train_route_net
     from planners.maps import gridsearch
 
     problems = [generate(f, TEST_SEED0 + 3, 96) for f in ("bugtrap", "maze", "narrow_passage")]
     if learned == "policy":
         samplers = [PolicySampler.load(SHIPPED, fuse=fuse) for fuse in (True, False)]
-    else:  # no encoder is shipped: a small one, trained (with the grid search's targets) before it is disabled
+    else:  # the shipped encoder, and a small one trained (with the grid search's targets) before it is disabled
         net = train_route_net([generate(f, 1, 64) for f in ("bugtrap", "maze")], channels=4, depth=2, epochs=1,
                               log=lambda _: None)
-        samplers = [RouteSampler(net), RouteSampler(None)]
+        samplers = [shipped_sampler(), RouteSampler(net), RouteSampler(None)]
 
     def runs():
         out = []
