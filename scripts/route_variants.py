@@ -24,32 +24,30 @@ from learning.route import SHIPPED_SETTINGS, TRAINED, RouteSampler
 SETTINGS = {"stuck": 1, "tau": 0.5}
 
 
-def ranked() -> RouteSampler:
-    """The trained encoder (``runs/route/route.pt``) ranking the follower's frontier."""
+def _trained():
     if not TRAINED.is_file():
         raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
-    return RouteSampler.load(TRAINED, uses="frontier", **SETTINGS)
+    return TRAINED
+
+
+def ranked() -> RouteSampler:
+    """The trained encoder (``runs/route/route.pt``) ranking the follower's frontier."""
+    return RouteSampler.load(_trained(), uses="frontier", **SETTINGS)
 
 
 def ranked_symmetric() -> RouteSampler:
     """``ranked`` with the encoder's prediction averaged over the square's 8 symmetries (8 passes per query)."""
-    if not TRAINED.is_file():
-        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
-    return RouteSampler.load(TRAINED, uses="frontier", symmetries=8, **SETTINGS)
+    return RouteSampler.load(_trained(), uses="frontier", symmetries=8, **SETTINGS)
 
 
 def both_symmetric() -> RouteSampler:
     """The trained encoder at the shipped settings (``learning.route.SHIPPED_SETTINGS``): its field everywhere."""
-    if not TRAINED.is_file():
-        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
-    return RouteSampler.load(TRAINED, **SHIPPED_SETTINGS)
+    return RouteSampler.load(_trained(), **SHIPPED_SETTINGS)
 
 
 def both() -> RouteSampler:
     """``both_symmetric`` with one pass of the encoder per query instead of 8."""
-    if not TRAINED.is_file():
-        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
-    return RouteSampler.load(TRAINED, **{**SHIPPED_SETTINGS, "symmetries": 1})
+    return RouteSampler.load(_trained(), **{**SHIPPED_SETTINGS, "symmetries": 1})
 
 
 def exact_both() -> GeodesicRouteSampler:
