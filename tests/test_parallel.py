@@ -17,6 +17,7 @@ from planners import movingai_dir
 from planners.tools.parallel import BACKENDS, LocalBackend, default_chunksize, make_backend
 
 CHECKPOINT = str(Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip")
+ROUTE = str(Path(__file__).resolve().parents[1] / "checkpoints" / "route.pt")
 
 
 def _tasks(max_iterations: int = 3000, movingai: bool = True) -> list[tuple]:
@@ -24,10 +25,10 @@ def _tasks(max_iterations: int = 3000, movingai: bool = True) -> list[tuple]:
     qs = E.generated_queries(["forest", "maze"], 64, 3, 0) + E.shifted_queries(["bugtrap"], 2)
     if mdir is not None:
         qs += E.movingai_queries(str(mdir), ["arena"], 2, 0, 4.0)
-    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": 4.0, "policy": CHECKPOINT, "step": 4.0,
-           "max_iterations": max_iterations, "user_samplers": {}}
-    return [(q, "RRT", s, seed, cfg) for q in qs for s in ("uniform", "goal_bias=0.1", "policy", "constant=0.7")
-            for seed in range(2)]
+    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": 4.0, "policy": CHECKPOINT, "route": ROUTE,
+           "step": 4.0, "max_iterations": max_iterations, "user_samplers": {}}
+    samplers = ("uniform", "goal_bias=0.1", "policy", "constant=0.7", E.ROUTE)
+    return [(q, "RRT", s, seed, cfg) for q in qs for s in samplers for seed in range(2)]
 
 
 def _runs(runs) -> list[dict]:
@@ -50,13 +51,15 @@ def test_every_backend_gives_the_same_runs_in_task_order(ray_backend):
 
 
 def test_the_context_travels_loaded_so_workers_need_no_files(ray_backend, tmp_path):
-    # a checkpoint path that does not exist where the runs execute: the policy comes from the context
-    tasks = _tasks(movingai=False)[:8]
+    # checkpoint paths that do not exist where the runs execute: the policy and encoder come from the context
+    tasks = _tasks(movingai=False)[:10]
     context = E.shared_context(tasks)
     assert set(context["policies"]) == {(CHECKPOINT, None)}  # (path, batch): the checkpoint's own batch here
-    moved = [(q, p, s, seed, {**cfg, "policy": str(tmp_path / "elsewhere.zip")}) for q, p, s, seed, cfg in tasks]
-    context = {"policies": {(str(tmp_path / "elsewhere.zip"), None): context["policies"][CHECKPOINT, None]},
-               "scenarios": {}}
+    assert set(context["routes"]) == {ROUTE}
+    elsewhere = {"policy": str(tmp_path / "elsewhere.zip"), "route": str(tmp_path / "elsewhere.pt")}
+    moved = [(q, p, s, seed, {**cfg, **elsewhere}) for q, p, s, seed, cfg in tasks]
+    context = {"policies": {(elsewhere["policy"], None): context["policies"][CHECKPOINT, None]},
+               "routes": {elsewhere["route"]: context["routes"][ROUTE]}, "scenarios": {}}
     got = ray_backend.map(E.run_one, moved, context=context, chunksize=3)
     assert _runs(got) == _runs(E.run_all(tasks, 1, progress=False))
 
