@@ -316,9 +316,9 @@ def _sampler(name: str, cfg: dict):
 
         return RouteSampler(None, step_size=step)
     if name == ROUTE:
-        from learning.route import SHIPPED_SETTINGS, RouteSampler
+        from learning.route import shipped_sampler
 
-        return RouteSampler(_route_net(cfg["route"]), step_size=step, **SHIPPED_SETTINGS)
+        return shipped_sampler(_route_net(cfg["route"]), step)
     if name == ROUTE_ABLATION:
         from learning.route import shipped_ablation
 

@@ -142,6 +142,8 @@ class RouteNet(UNet):
     """A ``UNet`` over the block grid that predicts the cost-to-go of every cell, in steps."""
 
     def __init__(self, block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0) -> None:
+        if attention and channels % AxialAttention.HEADS:
+            raise ValueError(f"channels = {channels} with attention, expected a multiple of {AxialAttention.HEADS}")
         # a cost per cell of the block
         super().__init__(block * block + GOAL_CHANNELS, block * block, channels, depth, attention)
         self.block, self.channels, self.depth, self.attention_layers = block, channels, depth, attention
@@ -202,10 +204,10 @@ def load_route_net(path: str | os.PathLike) -> RouteNet:
         v = config.get(key)
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= 64:
             raise InputError(f"{path}: config {key} = {v!r}, expected an integer in [{lo}, 64]")
-    if config["attention"] and config["channels"] % AxialAttention.HEADS:
-        raise InputError(f"{path}: config channels = {config['channels']} with attention, expected a multiple of "
-                         f"{AxialAttention.HEADS}")
-    net = RouteNet(config["block"], config["channels"], config["depth"], config["attention"])
+    try:
+        net = RouteNet(config["block"], config["channels"], config["depth"], config["attention"])
+    except ValueError as exc:
+        raise InputError(f"{path}: config {exc}") from None
     try:
         net.load_state_dict(blob["state"])
     except (RuntimeError, TypeError, ValueError) as exc:
@@ -434,9 +436,13 @@ class RouteSampler(SamplerBase):
         return f"RouteSampler({rest}, uses={self.uses!r}, symmetries={self.symmetries})"
 
 
-def shipped_sampler(path: str | os.PathLike = SHIPPED, step_size: float = 4.0) -> RouteSampler:
-    """The shipped route encoder at its validated settings (``SHIPPED_SETTINGS``); ``evaluate.py``'s "route encoder"."""
-    return RouteSampler.load(path, step_size=step_size, **SHIPPED_SETTINGS)
+def shipped_sampler(encoder: RouteNet | str | os.PathLike = SHIPPED, step_size: float = 4.0) -> RouteSampler:
+    """An encoder (loaded, or a file; default the shipped one) at the validated ``SHIPPED_SETTINGS``.
+
+    ``evaluate.py``'s "route encoder".
+    """
+    net = encoder if isinstance(encoder, RouteNet) else load_route_net(encoder)
+    return RouteSampler(net, step_size=step_size, **SHIPPED_SETTINGS)
 
 
 def shipped_ablation(step_size: float = 4.0) -> RouteSampler:

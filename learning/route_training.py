@@ -26,9 +26,8 @@ def cost_targets(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) 
 
 
 def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0,
-                    epochs: int = 40,
-                    batch: int = 32, lr: float = 1e-3, grad_weight: float = 0.0, augment: bool = False, seed: int = 0,
-                    log=print) -> RouteNet:
+                    epochs: int = 40, batch: int = 32, lr: float = 1e-3, grad_weight: float = 0.0,
+                    augment: bool = False, seed: int = 0, log=print) -> RouteNet:
     """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
     The loss is the smooth-L1 error of the predicted cost-to-go, in steps, over the free cells that reach

@@ -29,7 +29,7 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 
 from learning import PolicySampler
 from learning import evaluation as E
-from learning.route import load_route_net
+from learning.route import SHIPPED, load_route_net
 from planners import movingai_dir, planner_names
 from planners.base.fileio import InputError, atomic_write_text
 from planners.base.registry import planner_name_arg
@@ -38,7 +38,6 @@ from planners.tools.benchmark import markdown_table, write_runs_csv
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
-DEFAULT_ROUTE = Path(__file__).resolve().parents[1] / "checkpoints" / "route.pt"
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
                  "maze-32-32-2", "room-32-32-4", "room-64-64-8", "random-32-32-10", "random-64-64-20")
 #: What --quick changes: fewer test queries and planner seeds, no other planners. The tuning split is
@@ -59,7 +58,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--tuning-maps", type=int, default=20, help="maps per family for choosing the best goal bias")
     ap.add_argument("--shifted-maps", type=int, default=50,
                     help="test maps per family from its shifted generator, sides 64 to 256 (0: none)")
-    ap.add_argument("--route", type=Path, default=DEFAULT_ROUTE,
+    ap.add_argument("--route", type=Path, default=SHIPPED,
                     help="route encoder checkpoint (scripts/train_route.py), run as the 'route encoder' sampler")
     ap.add_argument("--seeds", type=int, default=3, help="planner seeds per query")
     ap.add_argument("--movingai", type=Path, default=None)

@@ -19,7 +19,7 @@ Settings are chosen with ``scripts/validate_samplers.py`` (validation maps).
 from __future__ import annotations
 
 from learning.expert import GeodesicRouteSampler
-from learning.route import SHIPPED_SETTINGS, TRAINED, RouteSampler
+from learning.route import SHIPPED_SETTINGS, TRAINED, RouteSampler, shipped_sampler
 
 SETTINGS = {"stuck": 1, "tau": 0.5}
 
@@ -42,7 +42,7 @@ def ranked_symmetric() -> RouteSampler:
 
 def both_symmetric() -> RouteSampler:
     """The trained encoder at the shipped settings (``learning.route.SHIPPED_SETTINGS``): its field everywhere."""
-    return RouteSampler.load(_trained(), **SHIPPED_SETTINGS)
+    return shipped_sampler(_trained())
 
 
 def both() -> RouteSampler:
