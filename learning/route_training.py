@@ -26,8 +26,8 @@ def cost_targets(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) 
 
 
 def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0,
-                    epochs: int = 40, batch: int = 32, lr: float = 1e-3, grad_weight: float = 0.0,
-                    augment: bool = False, seed: int = 0, log=print) -> RouteNet:
+                    attention_level: int = 0, epochs: int = 40, batch: int = 32, lr: float = 1e-3,
+                    grad_weight: float = 0.0, augment: bool = False, seed: int = 0, log=print) -> RouteNet:
     """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
     The loss is the smooth-L1 error of the predicted cost-to-go, in steps, over the free cells that reach
@@ -45,7 +45,7 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
         by_size.setdefault(obs.shape, []).append((route_input(obs, goal, block), cost_targets(obs, goal, block)))
     data = [(torch.tensor(np.stack([e[0] for e in v])), None,
              torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]
-    net = RouteNet(block, channels, depth, attention)
+    net = RouteNet(block, channels, depth, attention, attention_level)
     opt = torch.optim.Adam(net.parameters(), lr)
     order = torch.Generator().manual_seed(seed)
     t0 = time.perf_counter()

@@ -33,7 +33,9 @@ def main(argv=None) -> Path:
     ap.add_argument("--channels", type=int, default=24)
     ap.add_argument("--depth", type=int, default=4, help="times the encoder halves the block grid")
     ap.add_argument("--attention", type=int, default=0,
-                    help="axial attention layers (a row then a column each) at full resolution before the output")
+                    help="axial attention layers (a row then a column each)")
+    ap.add_argument("--attention-level", type=int, default=0,
+                    help="times the block grid is halved where the attention runs (0: full resolution)")
     ap.add_argument("--step", type=int, default=4, help="the planner's step in cells: the encoder's block")
     ap.add_argument("--grad-weight", type=float, default=0.0, help="weight of the slope error in the loss")
     ap.add_argument("--augment", action="store_true", help="turn each map by one of the square's 8 symmetries")
@@ -46,6 +48,9 @@ def main(argv=None) -> Path:
         if args.attention < 0 or (args.attention and args.channels % AxialAttention.HEADS):
             raise InputError(f"--attention must be 0 or more, and with attention --channels a multiple of "
                              f"{AxialAttention.HEADS}; got {args.attention}, {args.channels}")
+        if not 0 <= args.attention_level < args.depth:
+            raise InputError(f"--attention-level must be 0 to --depth - 1 = {args.depth - 1}, "
+                             f"got {args.attention_level}")
         for size in args.size:
             if size < MIN_SIZE:
                 raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {size}")
@@ -67,7 +72,7 @@ def main(argv=None) -> Path:
         print(line, flush=True)
 
     net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth,
-                          attention=args.attention, epochs=args.epochs,
+                          attention=args.attention, attention_level=args.attention_level, epochs=args.epochs,
                           grad_weight=args.grad_weight, augment=args.augment, seed=args.seed, log=log)
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "route.pt"

@@ -101,6 +101,24 @@ def test_a_saved_encoder_loads_with_the_same_predictions(tmp_path, attention):
     assert not list(tmp_path.glob("*.tmp"))
 
 
+def test_attention_at_a_coarser_level_round_trips_and_still_reaches_the_whole_grid(tmp_path):
+    torch.manual_seed(0)
+    net = RouteNet(4, 8, 3, 1, attention_level=1).eval()
+    save_route_net(net, tmp_path / "r.pt")
+    back = load_route_net(tmp_path / "r.pt")
+    assert (back.attention_layers, back.attention_level) == (1, 1)
+    obs = generate("maze", 3, 64).world.obstacles
+    assert np.array_equal(net.predict(obs, (5, 5)), back.predict(obs, (5, 5)))
+    # level 0 writes no key, as files before levels existed
+    save_route_net(RouteNet(4, 8, 3, 1), tmp_path / "r0.pt")
+    assert "attention_level" not in torch.load(tmp_path / "r0.pt", weights_only=True)["config"]
+    x = torch.randn(1, 19, 16, 16, requires_grad=True)
+    net(x)[0, 60, 60].backward()  # a cell of the last block
+    assert x.grad[0, :, 0, 0].abs().sum() > 0
+    with pytest.raises(ValueError, match="attention_level = 3"):
+        RouteNet(4, 8, 3, 1, attention_level=3)
+
+
 def test_axial_attention_lets_one_cell_reach_the_whole_grid_at_full_resolution():
     """After a row pass and a column pass, the output at one pixel depends on a pixel in another row and column."""
     from learning.route import AxialAttention
@@ -126,6 +144,8 @@ class _Boom:
     ({"config": {"block": 4, "channels": 8, "depth": 2}, "state": {"inp.weight": torch.zeros(1)}}, "do not fit"),
     ({"config": {"block": 4, "channels": 8, "depth": 2, "attention": -1}, "state": {}}, "config attention"),
     ({"config": {"block": 4, "channels": 7, "depth": 2, "attention": 1}, "state": {}}, "multiple of 2"),
+    ({"config": {"block": 4, "channels": 8, "depth": 2, "attention": 1, "attention_level": 2}, "state": {}},
+     "attention_level = 2"),
     ([1, 2], "expected {'config'"),
 ])
 def test_a_bad_encoder_file_is_refused_by_name_and_runs_nothing(tmp_path, monkeypatch, content, needle):
@@ -201,10 +221,41 @@ def test_the_ablation_follows_the_straight_line_distance_to_the_goal():
     sampler = straight_line_sampler().bind(p)
     field = sampler.field
     free = ~p.world.obstacles
-    r, c = np.argwhere(free)[0]
-    centre = p.world.cell_center(r, c)
-    assert field[r, c] == pytest.approx(np.linalg.norm(centre - p.goal) / 4.0)
+    rows, cols = np.nonzero(free)
+    centres = p.world.origin + (np.stack([cols, rows], axis=1) + 0.5) * p.world.resolution
+    assert np.allclose(field[free], np.linalg.norm(centres - p.goal, axis=-1) / 4.0, rtol=1e-14, atol=0)
     assert np.isinf(field[p.world.obstacles]).all()
+
+
+def test_a_lazy_encoder_follows_the_straight_line_until_its_iteration_then_its_own_field(shipped):
+    p = generate("bugtrap", TEST_SEED0 + 1, 128)
+
+    def run(sampler, split=False):
+        planner = RRT(p, step_size=4.0, sampler=sampler, seed=3)
+        if split:  # steps, then solves in pieces: the switch lands on the same iteration
+            for _ in range(13):
+                planner.step()
+            for _ in range(5):
+                planner.solve(max_iterations=7)
+        r = planner.solve(max_iterations=20000)
+        return (r.iterations, r.path.tobytes()), planner.sampler.forward_passes
+
+    never, passes = run(RouteSampler(shipped.net, lazy=10**6, **SHIPPED_SETTINGS))
+    assert never == run(shipped_ablation())[0] and passes == 0  # never switched: the ablation, sample for sample
+    eager, passes = run(RouteSampler(shipped.net, **SHIPPED_SETTINGS))
+    assert passes == 8
+    lazy = RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS)
+    switched, passes = run(lazy)
+    assert passes == 8 and switched[0] > 40 and switched not in (never, eager)
+    assert run(lazy, split=True) == (switched, 8)
+    draws = RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS)
+    draws.fuse = lambda planner: None
+    assert run(draws) == (switched, 8)
+    bound = RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS).bind(p)
+    assert bound.forward_passes == 0 and np.array_equal(bound.field, shipped_ablation().bind(p).field)
+    for bad in (-1, True, 2.5):
+        with pytest.raises(InputError, match="lazy"):
+            RouteSampler(shipped.net, lazy=bad)
 
 
 def test_the_encoder_ranks_the_frontier_where_uses_says(shipped):
@@ -269,7 +320,8 @@ def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, ca
     recipe = json.loads((tmp_path / "aug" / "route.json").read_text())["recipe"]
     assert recipe["size"] == [32, 64] and recipe["augment"] is True and load_route_net(path).channels == 4
     for bad, flag in ((["--epochs", "0"], "--epochs"), (["--size", "64", "8"], "--size"),
-                      (["--attention", "1", "--channels", "5"], "--attention")):
+                      (["--attention", "1", "--channels", "5"], "--attention"),
+                      (["--attention", "1", "--attention-level", "4"], "--attention-level")):
         with pytest.raises(SystemExit) as exc:
             script.main(bad)
         assert exc.value.code == 2 and flag in capsys.readouterr().err
