@@ -25,9 +25,20 @@ def cost_targets(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) 
     return pad
 
 
+def thicken(obstacles: np.ndarray, radius: int) -> np.ndarray:
+    """The obstacles grown by ``radius`` cells (a square neighbourhood): thicker walls, narrower gaps."""
+    if radius == 0:
+        return obstacles
+    H, W = obstacles.shape
+    pad = np.pad(obstacles, radius)
+    return np.logical_or.reduce([pad[radius + dy:radius + dy + H, radius + dx:radius + dx + W]
+                                 for dy in range(-radius, radius + 1) for dx in range(-radius, radius + 1)])
+
+
 def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0,
                     attention_level: int = 0, epochs: int = 40, batch: int = 32, lr: float = 1e-3,
-                    grad_weight: float = 0.0, augment: bool = False, seed: int = 0, log=print) -> RouteNet:
+                    grad_weight: float = 0.0, augment: bool = False, thicken_radius: int = 0, seed: int = 0,
+                    log=print) -> RouteNet:
     """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
     The loss is the smooth-L1 error of the predicted cost-to-go, in steps, over the free cells that reach
@@ -35,13 +46,21 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
     (the sampler walks down the field, so its slope matters more than its level far from the
     goal). With ``augment`` every map is first turned by one of the square's 8 symmetries, drawn from
     ``seed``: the generators' fixed orientations (start and goal corners, trap openings) stop being
-    something to learn. Same seed, same machine: the same weights.
+    something to learn. With ``thicken_radius`` R every map's obstacles are first grown by a radius drawn
+    from 0..R (``thicken``; kept as generated where that would block the goal): wall thicknesses and
+    gap widths the generators never make. Same seed, same machine: the same weights.
     """
     torch.manual_seed(seed)
     turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
+    # a stream of its own: recipes without it draw the same turns as before
+    radii = np.random.default_rng([seed, 1]).integers(0, thicken_radius + 1, len(problems))
     by_size: dict[tuple[int, int], list] = {}
-    for p, k in zip(problems, turns, strict=True):
-        obs, goal = symmetry(p.world.obstacles, p.world.cell_of(p.goal), int(k))
+    for p, k, radius in zip(problems, turns, radii, strict=True):
+        goal = p.world.cell_of(p.goal)
+        obs = thicken(p.world.obstacles, int(radius))
+        if obs[goal]:
+            obs = p.world.obstacles
+        obs, goal = symmetry(obs, goal, int(k))
         by_size.setdefault(obs.shape, []).append((route_input(obs, goal, block), cost_targets(obs, goal, block)))
     data = [(torch.tensor(np.stack([e[0] for e in v])), None,
              torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]

@@ -9,7 +9,8 @@ encoder's predicted cost-to-go choose among the frontier's cells when the tree i
 settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
 ``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries; ``both_symmetric``
 uses the field everywhere, as the shipped encoder is used (``learning.route.SHIPPED_SETTINGS``), ``both``
-does so with one pass, and ``exact_both`` is the reference at those settings;
+does so with one pass, ``both_lazy25`` / ``50`` / ``100`` run the encoder only after that many
+iterations on the straight line, and ``exact_both`` is the reference at those settings;
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
@@ -48,6 +49,25 @@ def both_symmetric() -> RouteSampler:
 def both() -> RouteSampler:
     """``both_symmetric`` with one pass of the encoder per query instead of 8."""
     return RouteSampler.load(_trained(), **{**SHIPPED_SETTINGS, "symmetries": 1})
+
+
+def _lazy(k: int) -> RouteSampler:
+    return RouteSampler.load(_trained(), **SHIPPED_SETTINGS, lazy=k)
+
+
+def both_lazy25() -> RouteSampler:
+    """``both_symmetric`` that follows the straight line for 25 iterations before it runs the encoder."""
+    return _lazy(25)
+
+
+def both_lazy50() -> RouteSampler:
+    """``both_symmetric`` that follows the straight line for 50 iterations before it runs the encoder."""
+    return _lazy(50)
+
+
+def both_lazy100() -> RouteSampler:
+    """``both_symmetric`` that follows the straight line for 100 iterations before it runs the encoder."""
+    return _lazy(100)
 
 
 def exact_both() -> GeodesicRouteSampler:

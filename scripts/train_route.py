@@ -39,6 +39,8 @@ def main(argv=None) -> Path:
     ap.add_argument("--step", type=int, default=4, help="the planner's step in cells: the encoder's block")
     ap.add_argument("--grad-weight", type=float, default=0.0, help="weight of the slope error in the loss")
     ap.add_argument("--augment", action="store_true", help="turn each map by one of the square's 8 symmetries")
+    ap.add_argument("--thicken", type=int, default=0, metavar="R",
+                    help="grow each map's obstacles by 0 to R cells (drawn per map): thicker walls, narrower gaps")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=Path("runs/route"))
     ap.add_argument("--export", type=Path, help="also copy the encoder (and its .json) here")
@@ -54,6 +56,8 @@ def main(argv=None) -> Path:
         for size in args.size:
             if size < MIN_SIZE:
                 raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {size}")
+        if args.thicken < 0:
+            raise InputError(f"--thicken must be 0 or more (cells), got {args.thicken}")
         if args.seed < 0:
             raise InputError(f"--seed must be 0 or more, got {args.seed}")
         if not args.grad_weight >= 0:
@@ -73,7 +77,8 @@ def main(argv=None) -> Path:
 
     net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth,
                           attention=args.attention, attention_level=args.attention_level, epochs=args.epochs,
-                          grad_weight=args.grad_weight, augment=args.augment, seed=args.seed, log=log)
+                          grad_weight=args.grad_weight, augment=args.augment, thicken_radius=args.thicken,
+                          seed=args.seed, log=log)
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "route.pt"
     save_route_net(net, path)

@@ -88,6 +88,23 @@ def test_training_is_seeded_and_learns():
     assert last < first
 
 
+def test_thickening_grows_every_obstacle_by_its_radius_and_training_with_it_is_seeded():
+    from learning.route_training import thicken
+
+    obs = np.zeros((9, 11), bool)
+    obs[4, 5] = True
+    assert thicken(obs, 0) is obs
+    assert np.array_equal(np.argwhere(thicken(obs, 2)), np.argwhere(np.pad(np.ones((5, 5), bool), ((2, 2), (3, 3)))))
+    wall = generate("maze", 3, 64).world.obstacles
+    assert (thicken(wall, 1) >= wall).all() and thicken(wall, 1).sum() > wall.sum()
+    problems = [generate(f, 7, 64) for f in ("narrow_passage", "maze")]
+    nets = [train_route_net(problems, channels=8, depth=2, epochs=1, seed=1, thicken_radius=r, log=lambda _: None)
+            for r in (0, 2, 2)]
+    weights = [list(n.state_dict().values()) for n in nets]
+    assert all(torch.equal(x, y) for x, y in zip(weights[1], weights[2], strict=True))
+    assert not all(torch.equal(x, y) for x, y in zip(weights[0], weights[1], strict=True))
+
+
 @pytest.mark.parametrize("attention", [0, 2])
 def test_a_saved_encoder_loads_with_the_same_predictions(tmp_path, attention):
     net = RouteNet(4, 8, 2, attention).eval()
@@ -321,7 +338,8 @@ def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, ca
     assert recipe["size"] == [32, 64] and recipe["augment"] is True and load_route_net(path).channels == 4
     for bad, flag in ((["--epochs", "0"], "--epochs"), (["--size", "64", "8"], "--size"),
                       (["--attention", "1", "--channels", "5"], "--attention"),
-                      (["--attention", "1", "--attention-level", "4"], "--attention-level")):
+                      (["--attention", "1", "--attention-level", "4"], "--attention-level"),
+                      (["--thicken", "-1"], "--thicken")):
         with pytest.raises(SystemExit) as exc:
             script.main(bad)
         assert exc.value.code == 2 and flag in capsys.readouterr().err
@@ -353,6 +371,8 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     assert (both8.uses, both8.symmetries, both1.symmetries, exact_both.uses) == ("both", 8, 1, "both")
     assert {(s.stuck, s.tau) for s in (both8, both1, exact_both)} == {(1, 0.5)}
     assert variants.ranked_symmetric().symmetries == 8
+    lazy = (variants.both_lazy25(), variants.both_lazy50(), variants.both_lazy100())
+    assert [(s.lazy, s.uses, s.symmetries) for s in lazy] == [(25, "both", 8), (50, "both", 8), (100, "both", 8)]
     monkeypatch.setattr(variants, "TRAINED", learning.route.TRAINED.with_name("missing.pt"))
     with pytest.raises(FileNotFoundError, match="train_route.py"):
         variants.ranked()
