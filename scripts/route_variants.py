@@ -11,6 +11,8 @@ settings (stuck after 1 iteration, frontier temperature half a step) were chosen
 uses the field everywhere, as the shipped encoder is used (``learning.route.SHIPPED_SETTINGS``), ``both``
 does so with one pass, ``both_lazy25`` / ``50`` / ``100`` run the encoder only after that many
 iterations on the straight line, and ``exact_both`` is the reference at those settings;
+``grid_encoder_l<lookahead>_s<sigma>`` and ``grid_ablation_l<lookahead>_s<sigma>`` are the grid the
+shipped lookahead and spread were chosen on;
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
@@ -19,8 +21,10 @@ Settings are chosen with ``scripts/validate_samplers.py`` (validation maps).
 
 from __future__ import annotations
 
+import re
+
 from learning.expert import GeodesicRouteSampler
-from learning.route import SHIPPED_SETTINGS, TRAINED, RouteSampler, shipped_sampler
+from learning.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, TRAINED, RouteSampler, shipped_sampler
 
 SETTINGS = {"stuck": 1, "tau": 0.5}
 
@@ -88,3 +92,18 @@ def ranked_exact() -> GeodesicRouteSampler:
 def ranked_exact_tau1() -> GeodesicRouteSampler:
     """The reference at the follower's frontier temperature (one step): what first showed the room."""
     return GeodesicRouteSampler(stuck=SETTINGS["stuck"])
+
+
+_GRID = re.compile(r"grid_(encoder|ablation)_l([0-9.]+)_s([0-9.]+)")
+
+
+def __getattr__(name: str):
+    """``grid_encoder_l3_s0.5`` / ``grid_ablation_l2.5_s0.5``: the lookahead and spread grid the shipped
+    settings were chosen on (``--sampler e=route_variants:grid_encoder_l3_s0.5``); the rest as shipped."""
+    match = _GRID.fullmatch(name)
+    if match is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    kind, lookahead, sigma = match.group(1), float(match.group(2)), float(match.group(3))
+    if kind == "encoder":
+        return lambda: RouteSampler.load(_trained(), **{**SHIPPED_SETTINGS, "lookahead": lookahead, "sigma": sigma})
+    return lambda: RouteSampler(None, **{**ABLATION_SETTINGS, "lookahead": lookahead, "sigma": sigma})

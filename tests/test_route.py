@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from learning.route import (
+    ABLATION_SETTINGS,
     SHIPPED,
     SHIPPED_SETTINGS,
     RouteNet,
@@ -258,7 +259,8 @@ def test_a_lazy_encoder_follows_the_straight_line_until_its_iteration_then_its_o
         return (r.iterations, r.path.tobytes()), planner.sampler.forward_passes
 
     never, passes = run(RouteSampler(shipped.net, lazy=10**6, **SHIPPED_SETTINGS))
-    assert never == run(shipped_ablation())[0] and passes == 0  # never switched: the ablation, sample for sample
+    straight = {k: v for k, v in SHIPPED_SETTINGS.items() if k not in ("uses", "symmetries")}
+    assert never == run(RouteSampler(None, **straight))[0] and passes == 0  # never switched: the straight line
     eager, passes = run(RouteSampler(shipped.net, **SHIPPED_SETTINGS))
     assert passes == 8
     lazy = RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS)
@@ -371,6 +373,11 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     assert (both8.uses, both8.symmetries, both1.symmetries, exact_both.uses) == ("both", 8, 1, "both")
     assert {(s.stuck, s.tau) for s in (both8, both1, exact_both)} == {(1, 0.5)}
     assert variants.ranked_symmetric().symmetries == 8
+    grid = getattr(variants, "grid_encoder_l2.5_s0.25")(), variants.grid_ablation_l3_s1()
+    assert [(s.net is None, s.lookahead, s.sigma, s.uses) for s in grid] == [(False, 2.5, 0.25, "both"),
+                                                                           (True, 3.0, 1.0, "progress")]
+    with pytest.raises(AttributeError, match="grid_encoder_l2"):
+        getattr(variants, "grid_encoder_l2")  # noqa: B009 - the name is what is tested
     lazy = (variants.both_lazy25(), variants.both_lazy50(), variants.both_lazy100())
     assert [(s.lazy, s.uses, s.symmetries) for s in lazy] == [(25, "both", 8), (50, "both", 8), (100, "both", 8)]
     monkeypatch.setattr(variants, "TRAINED", learning.route.TRAINED.with_name("missing.pt"))
@@ -418,6 +425,7 @@ def test_the_shipped_encoder_and_its_ablation_plan_valid_paths(family):
     learned, ablation = shipped_sampler(), shipped_ablation()
     assert learned.symmetries == SHIPPED_SETTINGS["symmetries"] and learned.uses == "both"
     assert ablation.net is None and (ablation.stuck, ablation.tau) == (learned.stuck, learned.tau)
+    assert (ablation.lookahead, learned.lookahead) == (ABLATION_SETTINGS["lookahead"], SHIPPED_SETTINGS["lookahead"])
     p = generate(family, TEST_SEED0 + 3, 64)
     for sampler in (learned, ablation):
         runs = [RRT(p, step_size=4.0, sampler=sampler, seed=1).solve(max_iterations=20000) for _ in range(2)]
