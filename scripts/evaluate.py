@@ -237,7 +237,7 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
             "straight at the goal, and turns to the frontier after 4 iterations without progress. The "
             f"{E.ROUTE} ({args.route}) follows its predicted cost-to-go the same way (settings chosen on "
             f"validation maps); the {E.ROUTE_ABLATION} is that sampler with the straight-line distance in place "
-            "of the prediction.\n\n"
+            "of the prediction, its target distance ahead and spread tuned for it on the same maps.\n\n"
             + markdown_table(head, hcols) +
             f"\n## The policy's batch, tuned\n\nSamples per decision, chosen on the generated families' tuning "
             f"maps ({E.POLICY_TUNING_SEEDS} seeds each) by the lowest sum of log median iterations; scores within "
@@ -248,7 +248,7 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
             f"\n## Issue 18's targets for the learned sampler: {met} of {total} met\n\n"
             + markdown_table(targets) +
             f"\n## Issue 18's targets for the {E.ROUTE}: {route_met} of {route_total} met\n\n"
-            f"Its ablation is the {E.ROUTE_ABLATION}: the same sampler without the encoder.\n\n"
+            f"Its ablation is the {E.ROUTE_ABLATION}: the same sampler without the encoder (tuned for itself).\n\n"
             + markdown_table(route_targets) +
             f"\n## Which targets can be reached: the privileged expert meets {reach_met} of {reach_total}\n\n"
             "The expert knows the shortest path (a grid search the learned sampler may not run); held to the same "
