@@ -401,7 +401,7 @@ class RouteSampler(SamplerBase):
         self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
         self.patience, self.max_floor = int(patience), float(max_floor)
         self.tau, self.uses, self.symmetries, self.lazy = float(tau), uses, symmetries, lazy
-        self.forward_passes = 0
+        self.forward_passes, self._pending = 0, False
 
     @classmethod
     def load(cls, path: str | os.PathLike = TRAINED, **kwargs) -> RouteSampler:
@@ -414,8 +414,11 @@ class RouteSampler(SamplerBase):
         return straight_field(grid.height, grid.width, gx, gy, grid.resolution, self.step_size)
 
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
-        """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
-        if self.net is None:
+        """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line).
+
+        The straight line alone without an encoder, or while a ``lazy`` one waits.
+        """
+        if self.net is None or self._pending:
             return self._straight(grid), None
         if round(self.step_size / grid.resolution) != self.net.block:
             raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is "
@@ -425,14 +428,20 @@ class RouteSampler(SamplerBase):
         progress = self._straight(grid) if self.uses == "frontier" else learned
         return progress, (None if self.uses == "progress" else learned)
 
+    def _progress_and_ranking(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """``_fields`` on the problem's map, the progress field inf where the map is blocked."""
+        grid = self.problem.world
+        field, ranking = self._fields(grid)
+        field[grid.obstacles] = np.inf
+        return field, ranking
+
     def _setup(self) -> None:
         grid = self.problem.world
         if not isinstance(grid, OccupancyGrid):
             raise InputError("RouteSampler plans on OccupancyGrid problems")
         self.forward_passes = 0
         self._pending = self.net is not None and self.lazy > 0
-        field, ranking = (self._straight(grid), None) if self._pending else self._fields(grid)
-        field[grid.obstacles] = np.inf
+        field, ranking = self._progress_and_ranking()
         self.field, self.blocked = field, grid.kernel.grid
         self.res, self.origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
         r, c = grid.cell_of(self.problem.start)
@@ -457,10 +466,8 @@ class RouteSampler(SamplerBase):
 
     def _wake(self) -> None:
         """``lazy``'s switch: run the encoder, and rank the tree and the frontier seen so far by its field."""
-        grid = self.problem.world
-        field, ranking = self._fields(grid)
-        field[grid.obstacles] = np.inf
-        self.field, self._pending = field, False
+        self._pending = False
+        self.field, ranking = self._progress_and_ranking()
         cost = self._ranking(ranking)
         if cost is not None:
             free, dist = self._frontier[4], self._frontier[8]

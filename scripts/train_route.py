@@ -19,7 +19,7 @@ from pathlib import Path
 
 import torch
 
-from learning.route import AxialAttention, save_route_net
+from learning.route import RouteNet, save_route_net
 from learning.route_training import train_route_net
 from planners.base.fileio import InputError, atomic_write_text, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, generate
@@ -47,12 +47,11 @@ def main(argv=None) -> Path:
     args = ap.parse_args(argv)
     try:
         check_int_flags(args, ("maps", "epochs", "channels", "depth", "step"))
-        if args.attention < 0 or (args.attention and args.channels % AxialAttention.HEADS):
-            raise InputError(f"--attention must be 0 or more, and with attention --channels a multiple of "
-                             f"{AxialAttention.HEADS}; got {args.attention}, {args.channels}")
-        if not 0 <= args.attention_level < args.depth:
-            raise InputError(f"--attention-level must be 0 to --depth - 1 = {args.depth - 1}, "
-                             f"got {args.attention_level}")
+        check_int_flags(args, ("attention", "attention_level"), low=0)
+        try:  # the encoder's own rules, checked before any map is generated
+            RouteNet(args.step, args.channels, args.depth, args.attention, args.attention_level)
+        except ValueError as exc:
+            raise InputError(f"--channels / --depth / --attention / --attention-level: {exc}") from None
         for size in args.size:
             if size < MIN_SIZE:
                 raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {size}")
