@@ -35,10 +35,17 @@ def thicken(obstacles: np.ndarray, radius: int) -> np.ndarray:
                                  for dy in range(-radius, radius + 1) for dx in range(-radius, radius + 1)])
 
 
+def speckled(obstacles: np.ndarray, goal: tuple[int, int], density: float, rng: np.random.Generator) -> np.ndarray:
+    """The obstacles with each cell also blocked with probability ``density``; the goal cell stays as it was."""
+    out = obstacles | (rng.random(obstacles.shape) < density)
+    out[goal] = obstacles[goal]
+    return out
+
+
 def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0,
                     attention_level: int = 0, epochs: int = 40, batch: int = 32, lr: float = 1e-3,
-                    grad_weight: float = 0.0, augment: bool = False, thicken_radius: int = 0, seed: int = 0,
-                    log=print) -> RouteNet:
+                    grad_weight: float = 0.0, augment: bool = False, thicken_radius: int = 0, speckle: float = 0.0,
+                    seed: int = 0, log=print) -> RouteNet:
     """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
     The loss is the smooth-L1 error of the predicted cost-to-go, in steps, over the free cells that reach
@@ -48,18 +55,25 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
     ``seed``: the generators' fixed orientations (start and goal corners, trap openings) stop being
     something to learn. With ``thicken_radius`` R every map's obstacles are first grown by a radius drawn
     from 0..R (``thicken``; kept as generated where that would block the goal): wall thicknesses and
-    gap widths the generators never make. Same seed, same machine: the same weights.
+    gap widths the generators never make. With ``speckle`` P every map then gets single blocked cells
+    at a density drawn from [0, P) per map (``speckle``; never on the goal): cell-level clutter, which
+    the generators draw only as whole blocks. Same seed, same machine: the same weights.
     """
+    if not 0.0 <= speckle < 1.0:
+        raise ValueError(f"speckle = {speckle}, expected a density in [0, 1)")
     torch.manual_seed(seed)
     turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
     # a stream of its own: recipes without it draw the same turns as before
     radii = np.random.default_rng([seed, 1]).integers(0, thicken_radius + 1, len(problems))
+    clutter = np.random.default_rng([seed, 2])  # and another, drawn from only when speckle > 0
     by_size: dict[tuple[int, int], list] = {}
     for p, k, radius in zip(problems, turns, radii, strict=True):
         goal = p.world.cell_of(p.goal)
         obs = thicken(p.world.obstacles, int(radius))
         if obs[goal]:
             obs = p.world.obstacles
+        if speckle > 0:
+            obs = speckled(obs, goal, clutter.uniform(0.0, speckle), clutter)
         obs, goal = symmetry(obs, goal, int(k))
         by_size.setdefault(obs.shape, []).append((route_input(obs, goal, block), cost_targets(obs, goal, block)))
     data = [(torch.tensor(np.stack([e[0] for e in v])), None,

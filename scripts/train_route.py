@@ -41,6 +41,8 @@ def main(argv=None) -> Path:
     ap.add_argument("--augment", action="store_true", help="turn each map by one of the square's 8 symmetries")
     ap.add_argument("--thicken", type=int, default=0, metavar="R",
                     help="grow each map's obstacles by 0 to R cells (drawn per map): thicker walls, narrower gaps")
+    ap.add_argument("--speckle", type=float, default=0.0, metavar="P",
+                    help="block single cells of each map at a density drawn from [0, P) per map")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=Path("runs/route"))
     ap.add_argument("--export", type=Path, help="also copy the encoder (and its .json) here")
@@ -57,6 +59,8 @@ def main(argv=None) -> Path:
                 raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {size}")
         if args.thicken < 0:
             raise InputError(f"--thicken must be 0 or more (cells), got {args.thicken}")
+        if not 0.0 <= args.speckle < 1.0:
+            raise InputError(f"--speckle must be a density in [0, 1), got {args.speckle}")
         if args.seed < 0:
             raise InputError(f"--seed must be 0 or more, got {args.seed}")
         if not args.grad_weight >= 0:
@@ -77,7 +81,7 @@ def main(argv=None) -> Path:
     net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth,
                           attention=args.attention, attention_level=args.attention_level, epochs=args.epochs,
                           grad_weight=args.grad_weight, augment=args.augment, thicken_radius=args.thicken,
-                          seed=args.seed, log=log)
+                          speckle=args.speckle, seed=args.seed, log=log)
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "route.pt"
     save_route_net(net, path)

@@ -106,6 +106,27 @@ def test_thickening_grows_every_obstacle_by_its_radius_and_training_with_it_is_s
     assert not all(torch.equal(x, y) for x, y in zip(weights[0], weights[1], strict=True))
 
 
+def test_speckle_blocks_single_cells_at_its_density_spares_the_goal_and_training_with_it_is_seeded():
+    from learning.route_training import speckled
+
+    obs = np.zeros((200, 200), bool)
+    obs[:, 100] = True
+    out = speckled(obs, (5, 5), 0.2, np.random.default_rng(0))
+    assert (out >= obs).all() and not out[5, 5]
+    assert abs(out[:, :100].mean() - 0.2) < 0.01  # the density asked for, on cells that were free
+    goal_blocked = obs.copy()
+    goal_blocked[5, 5] = True
+    assert speckled(goal_blocked, (5, 5), 0.5, np.random.default_rng(0))[5, 5]  # the goal's cell as it was
+    problems = [generate(f, 7, 64) for f in ("narrow_passage", "maze")]
+    nets = [train_route_net(problems, channels=8, depth=2, epochs=1, seed=1, speckle=p, log=lambda _: None)
+            for p in (0.0, 0.1, 0.1)]
+    weights = [list(n.state_dict().values()) for n in nets]
+    assert all(torch.equal(x, y) for x, y in zip(weights[1], weights[2], strict=True))
+    assert not all(torch.equal(x, y) for x, y in zip(weights[0], weights[1], strict=True))
+    with pytest.raises(ValueError, match="speckle"):
+        train_route_net(problems, speckle=1.0)
+
+
 @pytest.mark.parametrize("attention", [0, 2])
 def test_a_saved_encoder_loads_with_the_same_predictions(tmp_path, attention):
     net = RouteNet(4, 8, 2, attention).eval()
@@ -341,7 +362,8 @@ def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, ca
     for bad, flag in ((["--epochs", "0"], "--epochs"), (["--size", "64", "8"], "--size"),
                       (["--attention", "1", "--channels", "5"], "--attention"),
                       (["--attention", "1", "--attention-level", "4"], "--attention-level"),
-                      (["--thicken", "-1"], "--thicken")):
+                      (["--thicken", "-1"], "--thicken"), (["--speckle", "1"], "--speckle"),
+                      (["--speckle", "nan"], "--speckle")):
         with pytest.raises(SystemExit) as exc:
             script.main(bad)
         assert exc.value.code == 2 and flag in capsys.readouterr().err
