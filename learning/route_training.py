@@ -78,7 +78,8 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
         by_size.setdefault(obs.shape, []).append((route_input(obs, goal, block), cost_targets(obs, goal, block)))
     data = [(torch.tensor(np.stack([e[0] for e in v])), None,
              torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]
-    net = RouteNet(block, channels, depth, attention, attention_level)
+    net = RouteNet(block, channels, depth, attention, attention_level,
+                   trained_side=max(max(p.world.obstacles.shape) for p in problems))
     opt = torch.optim.Adam(net.parameters(), lr)
     order = torch.Generator().manual_seed(seed)
     t0 = time.perf_counter()

@@ -120,3 +120,16 @@ def test_a_zip_bomb_is_refused_from_its_header(tmp_path, monkeypatch):
     monkeypatch.setattr(learning.checkpoint, "MAX_ENTRY_BYTES", 1000)
     with pytest.raises(InputError, match="guided.zip.*unpacks to"):
         PolicySampler.load(SHIPPED)
+
+
+def test_the_shipped_route_encoder_matches_its_recipe():
+    # the recipe in route.json is what checkpoints/README.md says reproduces the file: the file must agree
+    import json
+
+    from learning.route import SHIPPED, load_route_net
+
+    recipe = json.loads(SHIPPED.with_suffix(".json").read_text())["recipe"]
+    net = load_route_net(SHIPPED)
+    assert (net.channels, net.depth, net.attention_layers, net.block) == (
+        recipe["channels"], recipe["depth"], recipe["attention"], recipe["step"])
+    assert net.trained_side == max(recipe["size"])  # fields on larger maps are scaled from this side

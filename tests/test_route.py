@@ -158,6 +158,26 @@ def test_attention_at_a_coarser_level_round_trips_and_still_reaches_the_whole_gr
         RouteNet(4, 8, 3, 1, attention_level=3)
 
 
+def test_the_field_is_scaled_up_on_maps_larger_than_the_training_ones_and_the_side_round_trips(tmp_path):
+    torch.manual_seed(0)
+    net = RouteNet(4, 8, 2).eval()
+    obs = generate("rooms", 3, 128).world.obstacles
+    plain = net.predict(obs, (5, 5), 2)
+    net.trained_side = 128  # the map's own side: nothing changes
+    assert np.array_equal(net.predict(obs, (5, 5), 2), plain)
+    net.trained_side = 64
+    assert np.allclose(net.predict(obs, (5, 5), 2), 2 * plain, rtol=1e-12)
+    save_route_net(net, tmp_path / "r.pt")
+    assert load_route_net(tmp_path / "r.pt").trained_side == 64
+    net.trained_side = 0  # unknown: written as before, never scaled
+    save_route_net(net, tmp_path / "r0.pt")
+    assert "trained_side" not in torch.load(tmp_path / "r0.pt", weights_only=True)["config"]
+    assert load_route_net(tmp_path / "r0.pt").trained_side == 0
+    # training records the largest side it saw
+    problems = [generate("maze", 7, 64), generate("forest", 7, 96)]
+    assert train_route_net(problems, channels=4, depth=2, epochs=1, log=lambda _: None).trained_side == 96
+
+
 def test_axial_attention_lets_one_cell_reach_the_whole_grid_at_full_resolution():
     """After a row pass and a column pass, the output at one pixel depends on a pixel in another row and column."""
     from learning.route import AxialAttention
@@ -185,6 +205,8 @@ class _Boom:
     ({"config": {"block": 4, "channels": 7, "depth": 2, "attention": 1}, "state": {}}, "multiple of 2"),
     ({"config": {"block": 4, "channels": 8, "depth": 2, "attention": 1, "attention_level": 2}, "state": {}},
      "attention_level = 2"),
+    ({"config": {"block": 4, "channels": 8, "depth": 2, "trained_side": -1}, "state": {}}, "config trained_side"),
+    ({"config": {"block": 4, "channels": 8, "depth": 2, "trained_side": 12.5}, "state": {}}, "config trained_side"),
     ([1, 2], "expected {'config'"),
 ])
 def test_a_bad_encoder_file_is_refused_by_name_and_runs_nothing(tmp_path, monkeypatch, content, needle):
