@@ -89,6 +89,16 @@ def test_training_is_seeded_and_learns():
     assert last < first
 
 
+def _training_option_is_seeded_and_used(option, off, on):
+    """Two trainings with ``option=on`` give the same weights, and not those of ``option=off``."""
+    problems = [generate(f, 7, 64) for f in ("narrow_passage", "maze")]
+    nets = [train_route_net(problems, channels=8, depth=2, epochs=1, seed=1, log=lambda _: None, **{option: v})
+            for v in (off, on, on)]
+    weights = [list(n.state_dict().values()) for n in nets]
+    assert all(torch.equal(x, y) for x, y in zip(weights[1], weights[2], strict=True))
+    assert not all(torch.equal(x, y) for x, y in zip(weights[0], weights[1], strict=True))
+
+
 def test_thickening_grows_every_obstacle_by_its_radius_and_training_with_it_is_seeded():
     from learning.route_training import thicken
 
@@ -98,12 +108,7 @@ def test_thickening_grows_every_obstacle_by_its_radius_and_training_with_it_is_s
     assert np.array_equal(np.argwhere(thicken(obs, 2)), np.argwhere(np.pad(np.ones((5, 5), bool), ((2, 2), (3, 3)))))
     wall = generate("maze", 3, 64).world.obstacles
     assert (thicken(wall, 1) >= wall).all() and thicken(wall, 1).sum() > wall.sum()
-    problems = [generate(f, 7, 64) for f in ("narrow_passage", "maze")]
-    nets = [train_route_net(problems, channels=8, depth=2, epochs=1, seed=1, thicken_radius=r, log=lambda _: None)
-            for r in (0, 2, 2)]
-    weights = [list(n.state_dict().values()) for n in nets]
-    assert all(torch.equal(x, y) for x, y in zip(weights[1], weights[2], strict=True))
-    assert not all(torch.equal(x, y) for x, y in zip(weights[0], weights[1], strict=True))
+    _training_option_is_seeded_and_used("thicken_radius", 0, 2)
 
 
 def test_speckle_blocks_single_cells_at_its_density_spares_the_goal_and_training_with_it_is_seeded():
@@ -117,14 +122,9 @@ def test_speckle_blocks_single_cells_at_its_density_spares_the_goal_and_training
     goal_blocked = obs.copy()
     goal_blocked[5, 5] = True
     assert speckled(goal_blocked, (5, 5), 0.5, np.random.default_rng(0))[5, 5]  # the goal's cell as it was
-    problems = [generate(f, 7, 64) for f in ("narrow_passage", "maze")]
-    nets = [train_route_net(problems, channels=8, depth=2, epochs=1, seed=1, speckle=p, log=lambda _: None)
-            for p in (0.0, 0.1, 0.1)]
-    weights = [list(n.state_dict().values()) for n in nets]
-    assert all(torch.equal(x, y) for x, y in zip(weights[1], weights[2], strict=True))
-    assert not all(torch.equal(x, y) for x, y in zip(weights[0], weights[1], strict=True))
+    _training_option_is_seeded_and_used("speckle", 0.0, 0.1)
     with pytest.raises(ValueError, match="speckle"):
-        train_route_net(problems, speckle=1.0)
+        train_route_net([generate("maze", 7, 64)], speckle=1.0)
 
 
 @pytest.mark.parametrize("attention", [0, 2])
