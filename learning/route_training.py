@@ -35,6 +35,12 @@ def thicken(obstacles: np.ndarray, radius: int) -> np.ndarray:
                                  for dy in range(-radius, radius + 1) for dx in range(-radius, radius + 1)])
 
 
+def check_speckle(speckle: float) -> None:
+    """``train_route_net``'s rule for ``speckle``: a density in [0, 1) (ValueError otherwise)."""
+    if not 0.0 <= speckle < 1.0:
+        raise ValueError(f"speckle = {speckle}, expected a density in [0, 1)")
+
+
 def speckled(obstacles: np.ndarray, goal: tuple[int, int], density: float, rng: np.random.Generator) -> np.ndarray:
     """The obstacles with each cell also blocked with probability ``density``; the goal cell stays as it was."""
     out = obstacles | (rng.random(obstacles.shape) < density)
@@ -56,11 +62,10 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
     something to learn. With ``thicken_radius`` R every map's obstacles are first grown by a radius drawn
     from 0..R (``thicken``; kept as generated where that would block the goal): wall thicknesses and
     gap widths the generators never make. With ``speckle`` P every map then gets single blocked cells
-    at a density drawn from [0, P) per map (``speckle``; never on the goal): cell-level clutter, which
+    at a density drawn from [0, P) per map (``speckled``; never on the goal): cell-level clutter, which
     the generators draw only as whole blocks. Same seed, same machine: the same weights.
     """
-    if not 0.0 <= speckle < 1.0:
-        raise ValueError(f"speckle = {speckle}, expected a density in [0, 1)")
+    check_speckle(speckle)
     torch.manual_seed(seed)
     turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
     # a stream of its own: recipes without it draw the same turns as before

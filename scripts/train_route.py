@@ -20,7 +20,7 @@ from pathlib import Path
 import torch
 
 from learning.route import RouteNet, save_route_net
-from learning.route_training import train_route_net
+from learning.route_training import check_speckle, train_route_net
 from planners.base.fileio import InputError, atomic_write_text, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, generate
 
@@ -59,8 +59,10 @@ def main(argv=None) -> Path:
                 raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {size}")
         if args.thicken < 0:
             raise InputError(f"--thicken must be 0 or more (cells), got {args.thicken}")
-        if not 0.0 <= args.speckle < 1.0:
-            raise InputError(f"--speckle must be a density in [0, 1), got {args.speckle}")
+        try:
+            check_speckle(args.speckle)
+        except ValueError as exc:
+            raise InputError(f"--speckle: {exc}") from None
         if args.seed < 0:
             raise InputError(f"--seed must be 0 or more, got {args.seed}")
         if not args.grad_weight >= 0:
