@@ -207,7 +207,7 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     reach, reach_met, reach_total = E.target_check(head, mai, "expert")
     write_runs_csv(runs, args.out / "runs.csv")
     plots = E.save_plots([r for r in runs if r.map not in mai] + pool, rows, best, args.out,
-                         extra=[E.CONSTANT, E.FOLLOWER, E.ROUTE, *users])
+                         extra=[E.CONSTANT, E.FOLLOWER, E.ROUTE, E.ROUTE_ABLATION, *users])
     logs = E.write_ompl_logs(runs + pool, best, args.out / "ompl", cfg)
     # the log folder keeps this run's logs only, so `ompl/*.log` never mixes in an earlier run's map sets
     for old in set((args.out / "ompl").glob("*.log")) - set(logs):
