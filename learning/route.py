@@ -191,8 +191,9 @@ class RouteNet(UNet):
             for (k, _), field in zip(group, out, strict=True):
                 total += unturn(field, k)
         total /= symmetries
-        if self.trained_side and max(H, W) > self.trained_side:
-            total *= max(H, W) / self.trained_side
+        side = max(H, W)
+        if self.trained_side and side > self.trained_side:
+            total *= side / self.trained_side
         return total
 
 
@@ -226,16 +227,14 @@ def load_route_net(path: str | os.PathLike) -> RouteNet:
     if not (isinstance(blob, dict) and isinstance(blob.get("config"), dict) and isinstance(blob.get("state"), dict)):
         raise InputError(f"{path}: expected {{'config': {{...}}, 'state': {{...}}}} as save_route_net writes")
     config = {"attention": 0, "attention_level": 0, "trained_side": 0, **blob["config"]}
-    for key, lo in (("block", 1), ("channels", 1), ("depth", 1), ("attention", 0), ("attention_level", 0)):
+    for key, lo, hi in (("block", 1, 64), ("channels", 1, 64), ("depth", 1, 64), ("attention", 0, 64),
+                        ("attention_level", 0, 64), ("trained_side", 0, 1 << 20)):  # a side in cells, 0: unknown
         v = config.get(key)
-        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= 64:
-            raise InputError(f"{path}: config {key} = {v!r}, expected an integer in [{lo}, 64]")
-    side = config["trained_side"]
-    if isinstance(side, bool) or not isinstance(side, int) or not 0 <= side <= 1 << 20:
-        raise InputError(f"{path}: config trained_side = {side!r}, expected a map side in cells (0: unknown)")
+        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+            raise InputError(f"{path}: config {key} = {v!r}, expected an integer in [{lo}, {hi}]")
     try:
-        net = RouteNet(*(config[k] for k in ("block", "channels", "depth", "attention", "attention_level")),
-                       trained_side=side)
+        net = RouteNet(*(config[k] for k in ("block", "channels", "depth", "attention", "attention_level",
+                                             "trained_side")))
     except ValueError as exc:
         raise InputError(f"{path}: config {exc}") from None
     try:
