@@ -334,12 +334,14 @@ def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin,
 
 
 @nb.njit(cache=True)
-def route_rrt_run(budget, rng, draw_args, batch, pts, tree, istate, fstate, last, world, space, goal, step, tol, low,
-                  high, st, sb):
+def route_rrt_run(budget, rng, draw_args, batch, pts, wake, tree, istate, fstate, last, world, space, goal, step,
+                  tol, low, high, st, sb):
     """Up to ``budget`` RRT iterations with samples from ``route_draw``, never leaving compiled code.
 
     Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule asks for,
-    so the run matches a planner calling ``RouteSampler.draw`` sample for sample.
+    so the run matches a planner calling ``RouteSampler.draw`` sample for sample. With ``wake`` > 0
+    it returns before a draw once the tree has come no closer to the goal for ``wake`` iterations
+    (``RouteSampler``'s ``stall`` switch).
     """
     field, blocked, res, origin, rstep, frontier, ints, floats, params, scratch = draw_args
     X = tree.X
@@ -350,6 +352,8 @@ def route_rrt_run(budget, rng, draw_args, batch, pts, tree, istate, fstate, last
         if istate[I_SOLVED] or istate[I_N] >= X.shape[0]:
             return s
         if ints[R_POS] >= ints[R_COUNT]:
+            if wake > 0 and istate[I_ITER] - ints[R_CLOSER] >= wake:
+                return s
             m = min(batch, CHUNK, FIRST_REFILL << min(ints[R_REFILLS], 16))
             route_draw(X, istate[I_N], fstate[F_BEST_D], istate[I_ITER], rng, field, blocked, res, origin, rstep,
                        frontier, ints, floats, params, scratch, low, high, pts[:m])
@@ -397,6 +401,8 @@ class RouteSampler(SamplerBase):
             once). A query solved sooner never pays for the encoder; one that is not switches to its
             field at that iteration, on every planner and however the budget is split.
             ``forward_passes`` says how many passes a query used.
+        stall: Run the encoder once the tree has come no closer to the goal for this many iterations
+            (0: never on this account). With ``lazy`` too, whichever comes first.
     """
 
     USES = ("progress", "frontier", "both")
@@ -404,7 +410,7 @@ class RouteSampler(SamplerBase):
     def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 1.0, sigma: float = 0.5,
                  stuck: int = 4, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
                  max_floor: float = 0.5, tau: float = 1.0, uses: str = "progress", symmetries: int = 1,
-                 lazy: int = 0) -> None:
+                 lazy: int = 0, stall: int = 0) -> None:
         if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
                 and 0 <= uniform_floor <= max_floor <= 1 and tau > 0):
             raise InputError(f"need step_size, lookahead, stuck, patience, batch, tau > 0, sigma >= 0 and "
@@ -414,12 +420,13 @@ class RouteSampler(SamplerBase):
             raise InputError(f"uses must be one of {self.USES}, got {uses!r}")
         if isinstance(symmetries, bool) or not isinstance(symmetries, int) or not 1 <= symmetries <= 8:
             raise InputError(f"symmetries must be an integer from 1 to 8, got {symmetries!r}")
-        if isinstance(lazy, bool) or not isinstance(lazy, int) or lazy < 0:
-            raise InputError(f"lazy must be an integer of 0 or more (iterations), got {lazy!r}")
+        for name, v in (("lazy", lazy), ("stall", stall)):
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise InputError(f"{name} must be an integer of 0 or more (iterations), got {v!r}")
         self.net, self.step_size, self.lookahead, self.sigma = net, float(step_size), float(lookahead), float(sigma)
         self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
         self.patience, self.max_floor = int(patience), float(max_floor)
-        self.tau, self.uses, self.symmetries, self.lazy = float(tau), uses, symmetries, lazy
+        self.tau, self.uses, self.symmetries, self.lazy, self.stall = float(tau), uses, symmetries, lazy, stall
         self.forward_passes, self._pending = 0, False
 
     @classmethod
@@ -459,7 +466,7 @@ class RouteSampler(SamplerBase):
         if not isinstance(grid, OccupancyGrid):
             raise InputError("RouteSampler plans on OccupancyGrid problems")
         self.forward_passes = 0
-        self._pending = self.net is not None and self.lazy > 0
+        self._pending = self.net is not None and (self.lazy > 0 or self.stall > 0)
         field, ranking = self._progress_and_ranking()
         self.field, self.blocked = field, grid.kernel.grid
         self.res, self.origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
@@ -483,6 +490,11 @@ class RouteSampler(SamplerBase):
         return frontier_costs(np.where(grid.obstacles, np.inf, ranking) * self.step_size / grid.resolution, grid,
                               self.step_size)
 
+    def _due(self, iteration: int) -> bool:
+        """Whether a waiting encoder runs now: ``lazy``'s iteration, or ``stall`` iterations without coming closer."""
+        return ((self.lazy > 0 and iteration >= self.lazy)
+                or (self.stall > 0 and iteration - self._ints[R_CLOSER] >= self.stall))
+
     def _wake(self) -> None:
         """``lazy``'s switch: run the encoder, and rank the tree and the frontier seen so far by its field."""
         self._pending = False
@@ -498,7 +510,7 @@ class RouteSampler(SamplerBase):
         self._floats[0] = np.inf
 
     def draw(self, rng, n, view):
-        if self._pending and view.iteration >= self.lazy:
+        if self._pending and self._due(view.iteration):
             self._wake()
         m = min(n, self.batch)
         pts = np.empty((m, 2))
@@ -515,20 +527,22 @@ class RouteSampler(SamplerBase):
 
     def _run_fused(self, planner: Planner, n: int) -> int:
         if self._pending:  # stop at the switch, so it happens at the same iteration as with draws
-            if planner.iterations >= self.lazy:
+            if self._due(planner.iterations):
                 self._wake()
-            else:
+            elif self.lazy > 0:
                 n = min(n, self.lazy - planner.iterations)
+        wake = self.stall if self._pending else 0
         args = (self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
                 self._floats, self._params, self._scratch)
-        return route_rrt_run(n, bitgen_address(planner.rng), args, self.batch, self._pts, *planner.loop_args())
+        return route_rrt_run(n, bitgen_address(planner.rng), args, self.batch, self._pts, wake, *planner.loop_args())
 
     def __repr__(self) -> str:
         rest = f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}"
         if self.net is None:
             return f"RouteSampler(None, {rest})"
         lazy = f", lazy={self.lazy}" if self.lazy else ""
-        return f"RouteSampler({rest}, uses={self.uses!r}, symmetries={self.symmetries}{lazy})"
+        stall = f", stall={self.stall}" if self.stall else ""
+        return f"RouteSampler({rest}, uses={self.uses!r}, symmetries={self.symmetries}{lazy}{stall})"
 
 
 def shipped_sampler(encoder: RouteNet | str | os.PathLike = SHIPPED, step_size: float = 4.0) -> RouteSampler:

@@ -10,7 +10,9 @@ settings (stuck after 1 iteration, frontier temperature half a step) were chosen
 ``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries; ``both_symmetric``
 uses the field everywhere, as the shipped encoder is used (``learning.route.SHIPPED_SETTINGS``), ``both``
 does so with one pass, ``both_lazy25`` / ``50`` / ``100`` run the encoder only after that many
-iterations on the straight line, and ``exact_both`` is the reference at those settings;
+iterations on the straight line, ``both_stall<k>`` once the tree has come no closer to the goal for k
+iterations, ``both_sym<k>`` averages over the first k symmetries (1-8), and ``exact_both`` is the
+reference at those settings;
 ``grid_encoder_l<lookahead>_s<sigma>`` and ``grid_ablation_l<lookahead>_s<sigma>`` are the grid the
 shipped lookahead and spread were chosen on;
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
@@ -95,11 +97,20 @@ def ranked_exact_tau1() -> GeodesicRouteSampler:
 
 
 _GRID = re.compile(r"grid_(encoder|ablation)_l([0-9.]+)_s([0-9.]+)")
+_STALL = re.compile(r"both_stall(\d+)")
+_SYM = re.compile(r"both_sym(\d)")
 
 
 def __getattr__(name: str):
     """``grid_encoder_l3_s0.5`` / ``grid_ablation_l2.5_s0.5``: the lookahead and spread grid the shipped
-    settings were chosen on (``--sampler e=route_variants:grid_encoder_l3_s0.5``); the rest as shipped."""
+    settings were chosen on (``--sampler e=route_variants:grid_encoder_l3_s0.5``); the rest as shipped.
+    ``both_stall6``, ``both_sym4``: the module docstring."""
+    stall = _STALL.fullmatch(name)
+    if stall is not None:
+        return lambda: RouteSampler.load(_trained(), **SHIPPED_SETTINGS, stall=int(stall.group(1)))
+    sym = _SYM.fullmatch(name)
+    if sym is not None:
+        return lambda: RouteSampler.load(_trained(), **{**SHIPPED_SETTINGS, "symmetries": int(sym.group(1))})
     match = _GRID.fullmatch(name)
     if match is None:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -320,6 +320,37 @@ def test_a_lazy_encoder_follows_the_straight_line_until_its_iteration_then_its_o
             RouteSampler(shipped.net, lazy=bad)
 
 
+def test_a_stall_switch_runs_the_encoder_once_the_tree_comes_no_closer(shipped):
+    """``stall``: the straight line until the tree has come no closer to the goal for that many iterations."""
+    p = generate("narrow_passage", TEST_SEED0 + 2, 128)
+
+    def run(sampler, split=False, fused=True):
+        if not fused:
+            sampler.fuse = lambda planner: None
+        planner = RRT(p, step_size=4.0, sampler=sampler, seed=1)
+        if split:
+            for _ in range(9):
+                planner.step()
+            for _ in range(6):
+                planner.solve(max_iterations=5)
+        r = planner.solve(max_iterations=20000)
+        return (r.iterations, r.path.tobytes()), planner.sampler.forward_passes
+
+    straight = {k: v for k, v in SHIPPED_SETTINGS.items() if k not in ("uses", "symmetries")}
+    never, passes = run(RouteSampler(shipped.net, stall=10**6, **SHIPPED_SETTINGS))
+    assert never == run(RouteSampler(None, **straight))[0] and passes == 0
+    eager = run(RouteSampler(shipped.net, **SHIPPED_SETTINGS))[0]
+    switched, passes = run(RouteSampler(shipped.net, stall=6, **SHIPPED_SETTINGS))
+    assert passes == 8 and switched not in (never, eager)
+    assert run(RouteSampler(shipped.net, stall=6, **SHIPPED_SETTINGS), split=True) == (switched, 8)
+    assert run(RouteSampler(shipped.net, stall=6, **SHIPPED_SETTINGS), fused=False) == (switched, 8)
+    both = RouteSampler(shipped.net, stall=10**6, lazy=40, **SHIPPED_SETTINGS)  # whichever comes first
+    assert run(both) == run(RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS))
+    for bad in (-1, True, 2.5):
+        with pytest.raises(InputError, match="stall"):
+            RouteSampler(shipped.net, stall=bad)
+
+
 def test_the_encoder_ranks_the_frontier_where_uses_says(shipped):
     """"frontier": the progress stays on the straight line and the frontier's distances are the encoder's."""
     p = generate("bugtrap", TEST_SEED0 + 3, 96)
@@ -424,6 +455,8 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
         getattr(variants, "grid_encoder_l2")  # noqa: B009 - the name is what is tested
     lazy = (variants.both_lazy25(), variants.both_lazy50(), variants.both_lazy100())
     assert [(s.lazy, s.uses, s.symmetries) for s in lazy] == [(25, "both", 8), (50, "both", 8), (100, "both", 8)]
+    assert (variants.both_stall6().stall, variants.both_stall6().symmetries) == (6, 8)
+    assert [getattr(variants, f"both_sym{k}")().symmetries for k in (1, 4)] == [1, 4]
     monkeypatch.setattr(variants, "TRAINED", learning.route.TRAINED.with_name("missing.pt"))
     with pytest.raises(FileNotFoundError, match="train_route.py"):
         variants.ranked()
