@@ -247,8 +247,8 @@ def load_route_net(path: str | os.PathLike) -> RouteNet:
 
 #: Where ``scripts/train_route.py`` writes the encoder.
 TRAINED = Path(__file__).resolve().parents[1] / "runs" / "route" / "route.pt"
-#: The shipped encoder: ``python scripts/train_route.py --epochs 60 --augment --size 64 128 --attention 2
-#: --export checkpoints/route.pt`` (its recipe and time are in ``checkpoints/route.json``).
+#: The shipped encoder: ``python scripts/train_route.py --epochs 30 --maps 1600 --augment --size 64 128
+#: --attention 2 --export checkpoints/route.pt`` (its recipe and time are in ``checkpoints/route.json``).
 SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "route.pt"
 #: How the shipped encoder is used, chosen on the validation maps (README): its field ranks the tree's
 #: vertices and places the target 3 steps ahead (spread half a step), and ranks the frontier, which
