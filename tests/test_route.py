@@ -288,18 +288,28 @@ def test_the_ablation_follows_the_straight_line_distance_to_the_goal():
     assert np.isinf(field[p.world.obstacles]).all()
 
 
+def _run_switching(p, sampler, seed, split=None, fused=True):
+    """((iterations, path bytes), forward passes) of RRT on ``p``. ``split`` = (steps, pieces, piece size):
+    single steps, then solves in pieces, before the rest (a switch must land on the same iteration);
+    ``fused=False``: sample by sample through ``draw``."""
+    if not fused:
+        sampler.fuse = lambda planner: None
+    planner = RRT(p, step_size=4.0, sampler=sampler, seed=seed)
+    if split:
+        steps, pieces, size = split
+        for _ in range(steps):
+            planner.step()
+        for _ in range(pieces):
+            planner.solve(max_iterations=size)
+    r = planner.solve(max_iterations=20000)
+    return (r.iterations, r.path.tobytes()), planner.sampler.forward_passes
+
+
 def test_a_lazy_encoder_follows_the_straight_line_until_its_iteration_then_its_own_field(shipped):
     p = generate("bugtrap", TEST_SEED0 + 1, 128)
 
     def run(sampler, split=False):
-        planner = RRT(p, step_size=4.0, sampler=sampler, seed=3)
-        if split:  # steps, then solves in pieces: the switch lands on the same iteration
-            for _ in range(13):
-                planner.step()
-            for _ in range(5):
-                planner.solve(max_iterations=7)
-        r = planner.solve(max_iterations=20000)
-        return (r.iterations, r.path.tobytes()), planner.sampler.forward_passes
+        return _run_switching(p, sampler, 3, (13, 5, 7) if split else None)
 
     never, passes = run(RouteSampler(shipped.net, lazy=10**6, **SHIPPED_SETTINGS))
     straight = {k: v for k, v in SHIPPED_SETTINGS.items() if k not in ("uses", "symmetries")}
@@ -310,9 +320,7 @@ def test_a_lazy_encoder_follows_the_straight_line_until_its_iteration_then_its_o
     switched, passes = run(lazy)
     assert passes == 8 and switched[0] > 40 and switched not in (never, eager)
     assert run(lazy, split=True) == (switched, 8)
-    draws = RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS)
-    draws.fuse = lambda planner: None
-    assert run(draws) == (switched, 8)
+    assert _run_switching(p, RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS), 3, fused=False) == (switched, 8)
     bound = RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS).bind(p)
     assert bound.forward_passes == 0 and np.array_equal(bound.field, shipped_ablation().bind(p).field)
     for bad in (-1, True, 2.5):
@@ -325,16 +333,7 @@ def test_a_stall_switch_runs_the_encoder_once_the_tree_comes_no_closer(shipped):
     p = generate("narrow_passage", TEST_SEED0 + 2, 128)
 
     def run(sampler, split=False, fused=True):
-        if not fused:
-            sampler.fuse = lambda planner: None
-        planner = RRT(p, step_size=4.0, sampler=sampler, seed=1)
-        if split:
-            for _ in range(9):
-                planner.step()
-            for _ in range(6):
-                planner.solve(max_iterations=5)
-        r = planner.solve(max_iterations=20000)
-        return (r.iterations, r.path.tobytes()), planner.sampler.forward_passes
+        return _run_switching(p, sampler, 1, (9, 6, 5) if split else None, fused)
 
     straight = {k: v for k, v in SHIPPED_SETTINGS.items() if k not in ("uses", "symmetries")}
     never, passes = run(RouteSampler(shipped.net, stall=10**6, **SHIPPED_SETTINGS))
