@@ -496,7 +496,7 @@ class RouteSampler(SamplerBase):
                 or (self.stall > 0 and iteration - self._ints[R_CLOSER] >= self.stall))
 
     def _wake(self) -> None:
-        """``lazy``'s switch: run the encoder, and rank the tree and the frontier seen so far by its field."""
+        """The ``lazy`` or ``stall`` switch: run the encoder; rank the tree and frontier seen so far by its field."""
         self._pending = False
         self.field, ranking = self._progress_and_ranking()
         cost = self._ranking(ranking)
