@@ -296,7 +296,8 @@ class FileMapSet(MapSet):
 
     A folder: every file under it (sub-folders included) with a suffix a reader knows
     (``planners.maps.readers.MAP_READERS``) is a map, named by its path relative to the folder
-    without the suffix; images a ROS ``.yaml`` names are part of that map. ``.md``, ``.txt``,
+    without the suffix (``<folder>/map.yaml``, map_saver's name, is named ``<folder>``); images a
+    ROS ``.yaml`` names are part of that map. ``.md``, ``.txt``,
     ``.csv``, ``.scen``, ``.json`` files and hidden files are skipped; any other file is refused.
     Queries: ``queries.csv`` in the folder if there is one, else the ``.scen`` files if there are
     any, else drawn.
@@ -536,9 +537,16 @@ def _folder_entries(folder: Path) -> list[dict]:
         if suffix not in MAP_READERS:
             raise InputError(f"map set {folder}: {p} is not a map file a reader knows (suffix {suffix or '(none)'!r}; "
                              f"known: {', '.join(sorted(MAP_READERS))}); move it out of the folder")
-        entries.append({"path": str(p.relative_to(folder)),
-                        "name": p.relative_to(folder).with_suffix("").as_posix()})
+        entries.append({"path": str(p.relative_to(folder)), "name": _default_name(p.relative_to(folder))})
     return entries
+
+
+def _default_name(relative: Path) -> str:
+    """A map's name from its relative path: without the suffix, and ``<folder>/map.yaml`` is ``<folder>``."""
+    stem = relative.with_suffix("")
+    if stem.name == "map" and stem.parent != Path("."):
+        stem = stem.parent
+    return stem.as_posix()
 
 
 def _manifest(path: Path) -> tuple[list[dict], dict]:
@@ -573,7 +581,7 @@ def _load_entry(entry: dict, root: Path, opts: dict, robot_radius: float, tolera
     path = Path(entry["path"])
     if not path.is_absolute():
         path = root / path
-    name = str(entry.get("name") or path.with_suffix("").name)
+    name = str(entry.get("name") or _default_name(Path(entry["path"])))
     where = entry.get("where", f"map set {root}")
     ros = path.suffix.lower() in ROS_SUFFIXES
     if ros and ("resolution" in entry or "origin" in entry):
