@@ -213,8 +213,8 @@ class MapSet:
         path = Path(text)
         if path.is_dir() or path.suffix.lower() == ".json":
             return FileMapSet(path, **kwargs)
-        raise InputError(f"map set {text!r}: expected a folder of maps, a manifest .json, 'generated[:FAMILIES[@SIZE]]', "
-                         f"'shifted[:FAMILIES]' or 'movingai[:DIR]'"
+        raise InputError(f"map set {text!r}: expected a folder of maps, a manifest .json, "
+                         f"'generated[:FAMILIES[@SIZE]]', 'shifted[:FAMILIES]' or 'movingai[:DIR]'"
                          + ("" if path.exists() else f"; {text!r} does not exist"))
 
     # --- the interface -------------------------------------------------------------------------
