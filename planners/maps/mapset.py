@@ -259,8 +259,11 @@ class MapSet:
         for p in wanted:
             _check_part(p)
             if not self._has_queries(p):
-                raise InputError(f"map set {self.name}: the {p!r} part is empty ({self.split.describe()}); "
-                                 f"add maps, change the fractions, or assign parts in a manifest")
+                maps = self.split.parts.get(p, ())
+                what = (f"is empty: its maps {list(maps)} have no queries ({getattr(self, 'query_rule', '')})" if maps
+                        else "is empty")
+                raise InputError(f"map set {self.name}: the {p!r} part {what} ({self.split.describe()}); "
+                                 f"add maps or queries, change the fractions, or assign parts in a manifest")
 
     def _has_queries(self, part: str) -> bool:
         return bool(self.split.parts.get(part)) and bool(self.queries(part))
