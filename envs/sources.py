@@ -227,7 +227,7 @@ class MapSetSource:
         else:
             raise InputError(f"map_set must be a folder, a manifest .json, a map set name or a MapSet, "
                              f"got {type(map_set).__name__}")
-        map_set.validate([split] if isinstance(map_set, MapSet) else split)
+        map_set.validate([split])
         self.map_set, self.split = map_set, split
 
     def __call__(self, np_random: np.random.Generator) -> Problem:

@@ -167,6 +167,19 @@ def test_queries_file_errors_name_file_line_and_value(tmp_path, row, message):
     assert "queries.csv" in str(info.value)
 
 
+def test_manifest_queries_file_and_parts_without_queries(tmp_path):
+    folder = _queries_folder(tmp_path, ["left,1.5,1.5,3.5,8.5"])
+    manifest = {"maps": [{"path": "left.npy", "part": "train"}, {"path": "right.npy", "part": "test"}],
+                "queries": "queries.csv"}
+    (folder / "set.json").write_text(json.dumps(manifest))
+    with pytest.raises(InputError, match=r"'test' part is empty: its maps \['right'\] have no queries"):
+        MapSet.open(folder / "set.json")
+    manifest["maps"].pop()
+    (folder / "set.json").write_text(json.dumps(manifest))
+    ms = MapSet.open(folder / "set.json")  # read relative to the manifest, whatever the working directory
+    assert [q.map for q in ms.queries("train")] == ["left"] and ms.sample("train", np.random.default_rng(0))
+
+
 def test_queries_file_needs_its_header(tmp_path):
     folder = _queries_folder(tmp_path, [])
     (folder / "queries.csv").write_text("map,x0,y0,x1,y1\n")

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, check_int
 from planners.base.problem import Problem
 from planners.maps.generators import (
     FAMILIES,
@@ -361,8 +361,8 @@ class FileMapSet(MapSet):
         self.source = source
         self.name = str(opts.get("name", source.stem if source.is_file() else source.name))
         self.options = {k: opts[k] for k in self._OPTIONS if k in opts and k != "name"}
-        self.seed = _whole(opts.get("seed", 0), "seed", source)
-        self.per_map = _whole(opts.get("per_map", DEFAULT_PER_MAP), "per_map", source, low=1)
+        self.seed = check_int(opts.get("seed", 0), f"map set {source}: seed", low=0)
+        self.per_map = check_int(opts.get("per_map", DEFAULT_PER_MAP), f"map set {source}: per_map", low=1)
         self.min_distance = _positive(opts.get("min_distance"), "min_distance", source)
         robot_radius = _positive(opts.get("robot_radius", 0.0), "robot_radius", source, zero=True)
         tolerance = _positive(opts.get("goal_tolerance"), "goal_tolerance", source)
@@ -385,9 +385,10 @@ class FileMapSet(MapSet):
             self.split = Split(parts, {"rule": "manifest", "fractions": {p: float(bool(parts[p])) for p in PARTS},
                                        "how": f"each map's 'part' in {source.name}"})
         else:
-            self.split = split_by_hash(list(self.maps_by_name), _whole(opts.get("split_seed", 0), "split_seed", source),
-                                       opts.get("fractions"))
-        self._queries = self._read_queries(opts.get("queries"), root)
+            split_seed = check_int(opts.get("split_seed", 0), f"map set {source}: split_seed", low=0)
+            self.split = split_by_hash(list(self.maps_by_name), split_seed, opts.get("fractions"))
+        self._drawn_queries: dict[str, list[MapQuery]] = {}
+        self._queries = self._read_queries(opts.get("queries"), root if "queries" not in given else Path.cwd())
         self.validate()
 
     # --- queries -------------------------------------------------------------------------------
@@ -406,10 +407,7 @@ class FileMapSet(MapSet):
             return None
         if rule == "scen":
             return self._scen_queries()
-        path = Path(rule)
-        if not path.is_absolute() and not path.exists():
-            path = root / path
-        return self._file_queries(path)
+        return self._file_queries(root / Path(rule))  # relative to the manifest, or as given
 
     def _part_of(self, name: str) -> str:
         return next(p for p in PARTS if name in self.split.parts[p])
@@ -429,6 +427,8 @@ class FileMapSet(MapSet):
     def _scen_queries(self) -> dict[str, list[MapQuery]]:
         out: dict[str, list[MapQuery]] = {n: [] for n in self.maps_by_name}
         for name, m in self.maps_by_name.items():
+            if m.path.suffix.lower() != ".map":
+                continue
             scens = sorted(p for p in m.path.parent.glob(f"{m.path.stem}*.scen")
                            if p.name.split(".")[0].replace("-random-1", "") == m.path.stem)
             for scen in scens:
@@ -443,13 +443,17 @@ class FileMapSet(MapSet):
                                               where, ref))
         return out
 
-    def _drawn(self, m: _Map, part: str) -> list[MapQuery]:
-        rng = np.random.default_rng([self.seed, _name_key(m.name)])
-        out = []
-        for i in range(self.per_map):
-            start, goal = draw_query(m.grid, m.labels, rng, self._min_distance(m), m.tolerance)
-            out.append(MapQuery(self.name, m.name, i, part, start, goal, f"drawn, seed {self.seed}"))
-        return out
+    def _drawn(self, m: _Map) -> list[MapQuery]:
+        """The map's ``per_map`` drawn queries: from ``seed`` and the map's name only, drawn once."""
+        if m.name not in self._drawn_queries:
+            rng = np.random.default_rng([self.seed, _name_key(m.name)])
+            part = self._part_of(m.name)
+            out = []
+            for i in range(self.per_map):
+                start, goal = draw_query(m.grid, m.labels, rng, self._min_distance(m), m.tolerance)
+                out.append(MapQuery(self.name, m.name, i, part, start, goal, f"drawn, seed {self.seed}"))
+            self._drawn_queries[m.name] = out
+        return self._drawn_queries[m.name]
 
     def _min_distance(self, m: _Map) -> float:
         if self.min_distance is not None:
@@ -461,7 +465,7 @@ class FileMapSet(MapSet):
     def queries(self, part: str) -> list[MapQuery]:
         out = []
         for name in self.maps(part):
-            out += self._queries[name] if self._queries is not None else self._drawn(self.maps_by_name[name], part)
+            out += self._queries[name] if self._queries is not None else self._drawn(self.maps_by_name[name])
         return out
 
     def problem(self, query: MapQuery) -> Problem:
@@ -496,23 +500,16 @@ class FileMapSet(MapSet):
         return any(self._queries[n] for n in self.maps(part))
 
     def validate(self, parts: Sequence[str] | None = None) -> None:
-        """Refuse an empty part; for drawn queries, a map where no query of the least distance fits."""
+        """Refuse an empty part; for drawn queries, a map where the queries of the least distance do not fit."""
         super().validate(parts)
         if self._queries is None:
             for m in self.maps_by_name.values():
-                draw_query(m.grid, m.labels, np.random.default_rng([self.seed, _name_key(m.name)]),
-                           self._min_distance(m), m.tolerance)
+                self._drawn(m)
 
 
 def _name_key(name: str) -> int:
     """A stable 63-bit integer of a map name (seeds its drawn queries)."""
     return int.from_bytes(hashlib.sha256(name.encode()).digest()[:8], "little") >> 1
-
-
-def _whole(value, what: str, source: Path, low: int = 0) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise InputError(f"map set {source}: {what} must be an integer >= {low}, got {value!r}")
-    return int(value)
 
 
 def _positive(value, what: str, source: Path, zero: bool = False) -> float | None:
@@ -734,7 +731,8 @@ class GeneratedMapSet(MapSet):
                  train_sizes: Sequence[int] = (64, 128), goal_tolerance: float = 4.0) -> None:
         self.families = _families(families)
         self.size, self.goal_tolerance = int(size), float(goal_tolerance)
-        self.n = {"test": int(n_test), "tuning": int(n_tune), "validation": int(n_validation)}
+        self.n = {"test": check_int(n_test, "n_test", low=0), "tuning": check_int(n_tune, "n_tune", low=0),
+                  "validation": check_int(n_validation, "n_validation", low=0)}
         self.validation_sizes, self.train_sizes = tuple(validation_sizes), tuple(train_sizes)
         self.name = "generated"
         seeds = {"test": TEST_SEED0, "tuning": TUNING_SEED0, "validation": VALIDATION_SEED0}
@@ -786,7 +784,7 @@ class ShiftedMapSet(MapSet):
 
     def __init__(self, families: Sequence[str] = FAMILIES, n_test: int = 25, goal_tolerance: float = 4.0) -> None:
         self.families = _families(families)
-        self.n_test, self.goal_tolerance = int(n_test), float(goal_tolerance)
+        self.n_test, self.goal_tolerance = check_int(n_test, "n_test"), float(goal_tolerance)
         self.name = "shifted"
         self._test = [MapQuery(f"{f} (shifted)", f"{f}-shifted-{SHIFTED_SIZES[i % len(SHIFTED_SIZES)]}-"
                                f"{SHIFTED_SEED0 + i}", SHIFTED_SEED0 + i, "test")
@@ -841,7 +839,8 @@ class MovingAIMapSet(MapSet):
         missing = sorted(set(self.names) - set(scen_maps))
         if missing:
             raise InputError(f"MovingAI map set: no scenario file for maps {missing} in {self.directory}")
-        self.n_test, self.n_tune, self.goal_tolerance = int(n_test), int(n_tune), float(goal_tolerance)
+        self.n_test, self.n_tune = check_int(n_test, "n_test", low=0), check_int(n_tune, "n_tune", low=0)
+        self.goal_tolerance = float(goal_tolerance)
         self.name = "movingai"
         self._problems = {m: self._scenarios(m) for m in self.names}
         self._queries: dict[str, list[MapQuery]] = {p: [] for p in PARTS}
@@ -904,7 +903,7 @@ class MixedMapSet:
 
     Raises:
         InputError: No sets, a weight count that differs, a weight that is not positive, or a set
-            whose part is empty (checked by ``validate(part)``).
+            whose part is empty (checked by ``validate(parts)``).
     """
 
     def __init__(self, sets: Sequence[MapSet], weights: Sequence[float] | None = None) -> None:
@@ -920,10 +919,10 @@ class MixedMapSet:
         self.weights = np.asarray(w, dtype=float) / float(sum(w))
         self.name = "+".join(s.name for s in self.sets)
 
-    def validate(self, part: str) -> None:
-        """Refuse a mixture where a set has nothing in ``part``."""
+    def validate(self, parts: Sequence[str] | None = None) -> None:
+        """Refuse a mixture where a set has nothing in one of ``parts`` (default: the train part)."""
         for s in self.sets:
-            s.validate([part])
+            s.validate(["train"] if parts is None else parts)
 
     def sample(self, part: str, rng: np.random.Generator) -> Problem:
         i = int(rng.choice(len(self.sets), p=self.weights))
