@@ -238,8 +238,11 @@ class MapSet:
         return (self.problem(q) for q in self.queries(part))
 
     def sample(self, part: str, rng: np.random.Generator) -> Problem:
-        """A problem of ``part`` drawn with ``rng``: training episodes."""
-        raise NotImplementedError
+        """A problem of ``part`` drawn with ``rng`` (training episodes): here one of its fixed queries, uniformly."""
+        qs = self.queries(part)
+        if not qs:
+            raise InputError(f"map set {self.name} has no queries in its {part!r} part ({self.split.describe()})")
+        return self.problem(qs[int(rng.integers(len(qs)))])
 
     def record(self) -> dict:
         """A JSON-able record of the set: what it holds, its query rule and its split (with the map names)."""
@@ -476,11 +479,8 @@ class FileMapSet(MapSet):
     def sample(self, part: str, rng: np.random.Generator) -> Problem:
         """A query of ``part`` drawn with ``rng``: a fresh drawn query on a random map, or a random fixed query."""
         names = self.maps(part)
-        if not names:
-            raise InputError(f"map set {self.name}: the {part!r} part holds no maps")
-        if self._queries is not None:
-            qs = self.queries(part)
-            return self.problem(qs[int(rng.integers(len(qs)))])
+        if self._queries is not None or not names:
+            return super().sample(part, rng)
         m = self.maps_by_name[names[int(rng.integers(len(names)))]]
         start, goal = draw_query(m.grid, m.labels, rng, self._min_distance(m), m.tolerance)
         return Problem(m.grid, start, goal, goal_tolerance=m.tolerance, name=m.name)
@@ -759,8 +759,7 @@ class GeneratedMapSet(MapSet):
 
     def sample(self, part: str, rng: np.random.Generator) -> Problem:
         if part != "train":
-            qs = self.queries(part)
-            return self.problem(qs[int(rng.integers(len(qs)))])
+            return super().sample(part, rng)
         choices = [(f, s) for f in self.families for s in self.train_sizes]
         family, size = choices[int(rng.integers(len(choices)))]
         return generate(family, int(rng.integers(*TRAIN_SEEDS)), size, goal_tolerance=self.goal_tolerance)
@@ -802,12 +801,6 @@ class ShiftedMapSet(MapSet):
         family = query.group.removesuffix(" (shifted)")
         size = int(query.map.rsplit("-", 2)[1])
         return generate(family, query.key, size, goal_tolerance=self.goal_tolerance, shifted=True)
-
-    def sample(self, part: str, rng: np.random.Generator) -> Problem:
-        qs = self.queries(part)
-        if not qs:
-            raise InputError(f"map set {self.name} is test-only; it has no {part!r} part")
-        return self.problem(qs[int(rng.integers(len(qs)))])
 
     def record(self) -> dict:
         return {"kind": "shifted", "name": self.name, "families": list(self.families), "per_family": self.n_test,
@@ -870,12 +863,6 @@ class MovingAIMapSet(MapSet):
 
     def problem(self, query: MapQuery) -> Problem:
         return self._problems[query.map][query.key]
-
-    def sample(self, part: str, rng: np.random.Generator) -> Problem:
-        qs = self.queries(part)
-        if not qs:
-            raise InputError(f"map set {self.name} has no {part!r} part (its parts: test, tuning)")
-        return self.problem(qs[int(rng.integers(len(qs)))])
 
     def record(self) -> dict:
         return {"kind": "movingai", "name": self.name, "directory": str(self.directory), "maps": list(self.names),
