@@ -19,7 +19,8 @@ Registered ids:
   observations, step 0.5, 5,000 iterations.
 * ``SamplerGym/Planning-v0``: everything by kwargs (``planner``, ``map_source``, ``step_size``,
   ``max_iterations``, ``action_mode``, ...); ``map=array_or_path, start=(x, y), goal=(x, y)`` plans on
-  your own map.
+  your own map; ``map_set=DIR, split="train"`` draws episodes from a part of a map set
+  (``planners.maps.mapset``, ``docs/map-sets.md``).
 
 Every id trains with Stable-Baselines3's defaults: ``PPO("MultiInputPolicy", env)`` (Dict
 observations) or ``PPO("MlpPolicy", env)`` (``RRT-RigidBody-v0``'s Box observations).
@@ -36,14 +37,15 @@ from envs.sampler_env import SamplerEnv
 from envs.sources import (
     FamilySource,
     FileSource,
+    MapSetSource,
     MovingAISource,
     ProblemListSource,
     RigidSceneSource,
     sample_map_paths,
 )
 
-__all__ = ["ACTION_MODES", "ENV_IDS", "EnvSampler", "FamilySource", "FileSource", "MovingAISource", "ProblemListSource",
-           "RigidSceneSource", "SamplerEnv", "record_episode", "sample_map_paths"]
+__all__ = ["ACTION_MODES", "ENV_IDS", "EnvSampler", "FamilySource", "FileSource", "MapSetSource", "MovingAISource",
+           "ProblemListSource", "RigidSceneSource", "SamplerEnv", "record_episode", "sample_map_paths"]
 
 _FAMILY_IDS = {
     "Forest": "forest",

@@ -10,7 +10,7 @@ import numpy as np
 
 from envs.actions import ACTION_MODES, make_action_sampler
 from envs.observation import OBSERVATIONS, make_observation
-from envs.sources import MapSource, make_source, map_problem
+from envs.sources import MapSetSource, MapSource, make_source, map_problem
 from planners import OccupancyGrid, Planner, Problem, make_planner
 from planners.base.fileio import InputError, check_int
 from planners.base.registry import planner_class
@@ -70,7 +70,10 @@ class SamplerEnv(gym.Env):
     (array, ``OccupancyGrid`` or path) or a callable ``np_random -> Problem``; ``source_kwargs``
     configure it. ``map`` (a map file, a 2-D boolean obstacle array or an ``OccupancyGrid``) with
     optional ``start`` and ``goal`` (world units) plans on the user's own map (random queries
-    without ``start`` / ``goal``); it replaces ``map_source``.
+    without ``start`` / ``goal``); it replaces ``map_source``. ``map_set`` (a folder of maps, a
+    manifest, ``"generated"``, ``"movingai"`` or a ``planners.maps.mapset.MapSet``) draws episodes
+    from its ``split`` part (default ``"train"``; ``source_kwargs`` go to ``MapSet.open``); it
+    replaces ``map_source`` too.
     ``planner``: any registered planner (``planners.planner_names()``; default ``"rrt"``).
     ``step_size`` is the extension length of the RRT family; roadmap planners keep their own edge
     length. ``step_size``,
@@ -108,6 +111,8 @@ class SamplerEnv(gym.Env):
         map: Any = None,  # noqa: A002 (the Gymnasium-style keyword users expect)
         start: Any = None,
         goal: Any = None,
+        map_set: Any = None,
+        split: str = "train",
     ) -> None:
         super().__init__()
         try:
@@ -132,6 +137,8 @@ class SamplerEnv(gym.Env):
         reach = _number("reach", reach, low=0.0, low_open=True)
         checks_weight = _number("checks_weight", checks_weight, low=0.0)
         shaping_gamma = _number("shaping_gamma", shaping_gamma, low=0.0, high=1.0)
+        if map is not None and map_set is not None:
+            raise InputError("give map= (one map) or map_set= (a set of maps), not both")
         if map is not None:
             if source_kwargs:
                 raise InputError(f"source_kwargs {sorted(source_kwargs)} given with map=; pass map options "
@@ -139,6 +146,8 @@ class SamplerEnv(gym.Env):
             self.source = map_problem(map, start, goal)
         elif start is not None or goal is not None:
             raise InputError("start and goal need map= (the map they are points of)")
+        elif map_set is not None:
+            self.source = MapSetSource(map_set, split, **(source_kwargs or {}))
         else:
             self.source = make_source(map_source, **(source_kwargs or {}))
         self.planner_name = planner

@@ -1,4 +1,4 @@
-"""Where environments get their planning problems: generated families, MovingAI, files, lists, 6-DoF scenes.
+"""Where environments get their planning problems: generated families, MovingAI, files, map sets, lists, 6-DoF scenes.
 
 A map source is any callable ``source(np_random) -> Problem``; the environment calls it in
 ``reset`` with its own ``np_random``, so a seeded reset always draws the same problem.
@@ -16,6 +16,7 @@ from planners import OccupancyGrid, Problem, load_movingai_scenarios, movingai_d
 from planners.base.fileio import InputError
 from planners.maps.generators import FAMILIES, generate
 from planners.maps.gridsearch import free_components
+from planners.maps.mapset import PARTS, MapSet, MixedMapSet
 
 MapSource = Callable[[np.random.Generator], Problem]
 
@@ -199,6 +200,41 @@ def map_problem(map, start=None, goal=None, goal_tolerance: float = 4.0, thresho
     if kwargs:
         raise InputError(f"options {sorted(kwargs)} apply to random queries only, not with start and goal")
     return ProblemListSource([Problem(grid, start, goal, goal_tolerance=goal_tolerance)])
+
+
+class MapSetSource:
+    """Problems from one part of a map set (``planners.maps.mapset``), drawn with the env's ``np_random``.
+
+    Args:
+        map_set: A ``MapSet`` or ``MixedMapSet``, or what ``MapSet.open`` takes: a folder of maps, a
+            manifest ``.json``, ``"generated"``, ``"shifted"`` or ``"movingai"`` (with options).
+        split: The part episodes come from: ``"train"`` (default), ``"validation"``, ``"tuning"`` or ``"test"``.
+        **kwargs: ``MapSet.open`` options (``split_seed``, ``fractions``, ``robot_radius``, ...) when
+            ``map_set`` is not yet a map set.
+
+    Raises:
+        InputError: The set fails its checks, or ``split`` is not a part or is empty in it.
+    """
+
+    def __init__(self, map_set, split: str = "train", **kwargs) -> None:
+        if split not in PARTS:
+            raise InputError(f"split must be one of {PARTS}, got {split!r}")
+        if isinstance(map_set, (MapSet, MixedMapSet)):
+            if kwargs:
+                raise InputError(f"map set options {sorted(kwargs)} given with a map set that is already open")
+        elif isinstance(map_set, (str, os.PathLike)):
+            map_set = MapSet.open(map_set, **kwargs)
+        else:
+            raise InputError(f"map_set must be a folder, a manifest .json, a map set name or a MapSet, "
+                             f"got {type(map_set).__name__}")
+        map_set.validate([split])
+        self.map_set, self.split = map_set, split
+
+    def __call__(self, np_random: np.random.Generator) -> Problem:
+        return self.map_set.sample(self.split, np_random)
+
+    def __repr__(self) -> str:
+        return f"MapSetSource({self.map_set.name!r}, split={self.split!r})"
 
 
 class RigidSceneSource:
