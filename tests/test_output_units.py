@@ -31,9 +31,13 @@ from planners.base.fileio import (
 ROOT = Path(__file__).resolve().parents[1]
 
 WRITER = """
-import os, signal, sys
+import importlib.util, os, signal, sys
 from pathlib import Path
-import planners.base.fileio as fileio
+
+# the module alone, without the planners package (stdlib only: a fast start for each of the many kills)
+spec = importlib.util.spec_from_file_location("fileio", sys.argv[5])
+fileio = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(fileio)
 
 target, tag, kill_at, exchange = Path(sys.argv[1]), sys.argv[2], int(sys.argv[3]), sys.argv[4] == "exchange"
 real_rename, real_exchange, count = os.rename, fileio._exchange, 0
@@ -65,7 +69,8 @@ def _write(tmp_path: Path, target: Path, tag: str, kill_at: int, exchange: bool)
     driver = tmp_path / "writer.py"
     driver.write_text(WRITER)
     return subprocess.run([sys.executable, str(driver), str(target), tag, str(kill_at),
-                           "exchange" if exchange else "renames"], cwd=ROOT, capture_output=True, text=True,
+                           "exchange" if exchange else "renames",
+                           str(ROOT / "planners" / "base" / "fileio.py")], cwd=ROOT, capture_output=True, text=True,
                           timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)})
 
 
