@@ -23,7 +23,9 @@ from hypothesis import strategies as st
 from planners import OccupancyGrid, Problem, load_movingai_scenarios, load_scene
 from planners.base.fileio import InputError
 
-FUZZ = settings(max_examples=40, deadline=2000, suppress_health_check=[HealthCheck.function_scoped_fixture])
+# The deadline catches hangs, not slowness: 10 s per example holds on a loaded CI machine, and each reader
+# runs once before its timed examples so that imports and compilation are not timed.
+FUZZ = settings(max_examples=40, deadline=10_000, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 def _scratch(tmp_path_factory, name: str) -> Path:
@@ -252,14 +254,91 @@ def damaged_checkpoint(draw) -> bytes:
     return buf.getvalue()
 
 
+@pytest.fixture(scope="module")
+def policy_loader():
+    """``PolicySampler.load``, run once on the shipped checkpoint so that its imports are not timed."""
+    from learning import PolicySampler
+
+    PolicySampler.load(SHIPPED)
+    return PolicySampler.load
+
+
 @FUZZ
 @given(blob=st.one_of(damaged_checkpoint(), st.binary(max_size=200)))
-def test_checkpoint_reader(tmp_path_factory, blob):
+def test_checkpoint_reader(tmp_path_factory, policy_loader, blob):
     from learning import PolicySampler
 
     path = _scratch(tmp_path_factory, "policy.zip")
     path.write_bytes(blob)
-    _loads_or_names(PolicySampler.load, path, lambda s: isinstance(s, PolicySampler))
+    _loads_or_names(policy_loader, path, lambda s: isinstance(s, PolicySampler))
+
+
+def _zip(entries: dict[str, bytes]) -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        for name, blob in entries.items():
+            zf.writestr(name, blob)
+    return buf.getvalue()
+
+
+def _shipped_entries() -> dict[str, bytes]:
+    with zipfile.ZipFile(SHIPPED) as zf:
+        return {name: zf.read(name) for name in zf.namelist()}
+
+
+@pytest.mark.parametrize("case", ["nested data", "data bomb", "weights bomb"])
+def test_hostile_checkpoints_are_refused_before_the_work(tmp_path, case):
+    """Deep JSON is an InputError, not RecursionError; a zip bomb is refused on its declared sizes."""
+    import tracemalloc
+
+    from learning import PolicySampler
+    from learning.sb3_sampler import load_sb3_policy
+
+    entries = _shipped_entries()
+    if case == "nested data":
+        entries["data"] = b"[" * 200_000 + b"]" * 200_000
+    elif case == "data bomb":
+        entries["data"] = b'{"a": "' + b" " * (20 << 20) + b'"}'
+    else:
+        entries["policy.pth"] = b"\0" * (100 << 20)
+    path = tmp_path / "hostile.zip"
+    path.write_bytes(_zip(entries))
+    assert path.stat().st_size < 1 << 20
+    tracemalloc.start()
+    try:
+        with pytest.raises(InputError, match="hostile.zip.*(nested|unpacks|claims)"):
+            PolicySampler.load(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 64 << 20, f"{peak / 2**20:.0f} MiB spent before refusing"
+    with pytest.raises(InputError, match="hostile.zip"):
+        load_sb3_policy(path, None)
+
+
+def test_nested_training_configs_and_resume_states_are_named(tmp_path):
+    from learning.training import STATE_KEY, TrainConfig, read_state
+
+    path = tmp_path / "deep.json"
+    path.write_text('{"extra": ' + "[" * 10_000 + "]" * 10_000 + "}")
+    with pytest.raises(InputError, match="deep.json.*nested"):
+        TrainConfig.from_json(path)
+    path.write_text('{"n' + "a" * 100_000 + '": 1}')
+    with pytest.raises(InputError, match="unknown config keys") as err:
+        TrainConfig.from_json(path)
+    assert len(str(err.value)) < 400
+    good = {"phase": "ppo", "round": 3, "ppo_steps": 0, "log_rows": 4, "dagger_rows": 10, "log_time": 1.0}
+    for key, bad in (("phase", "x" * 10_000), ("round", "3"), ("ppo_steps", -1), ("log_rows", 1.5),
+                     ("dagger_rows", None), ("log_time", float("nan"))):
+        entries = _shipped_entries()
+        data = json.loads(entries["data"])
+        data[STATE_KEY] = {**good, key: bad}
+        entries["data"] = json.dumps(data).encode()
+        (tmp_path / "run").mkdir(exist_ok=True)
+        (tmp_path / "run" / "checkpoint.zip").write_bytes(_zip(entries))
+        with pytest.raises(InputError, match=f"checkpoint.zip.*{key}") as err:
+            read_state(tmp_path / "run")
+        assert len(str(err.value)) < 400
 
 
 # --- environment actions --------------------------------------------------------------------------------

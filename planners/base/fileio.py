@@ -70,7 +70,7 @@ def check_int(value, name: str, *, low: int = 1) -> int:
     """``value`` as an ``int`` (bools refused) that is at least ``low``, or an ``InputError`` naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
         want = {0: "a non-negative integer", 1: "a positive integer"}.get(low, f"an integer >= {low}")
-        raise InputError(f"{name} must be {want}, got {value!r}")
+        raise InputError(f"{name} must be {want}, got {short_repr(value)}")
     return int(value)
 
 
@@ -85,11 +85,13 @@ def check_number(source, key: str, value, *, integer: bool = False, low: float |
     """``value`` as a finite number within bounds, or an ``InputError`` naming ``source`` (file or flag) and ``key``."""
     ok = isinstance(value, numbers.Integral if integer else numbers.Real)
     if isinstance(value, bool) or not ok or not math.isfinite(value):
-        raise InputError(f"{source}: {key} = {value!r}, expected a finite {'integer' if integer else 'number'}")
+        raise InputError(f"{source}: {key} = {short_repr(value)}, expected a finite "
+                         f"{'integer' if integer else 'number'}")
     if (low is not None and (value <= low if low_open else value < low)) or (high is not None and value > high):
         lo = "" if low is None else f"{'>' if low_open else '>='} {low:g}"
         hi = "" if high is None else f"<= {high:g}"
-        raise InputError(f"{source}: {key} = {value!r}, expected a number {' and '.join(s for s in (lo, hi) if s)}")
+        raise InputError(f"{source}: {key} = {short_repr(value)}, expected a number "
+                         f"{' and '.join(s for s in (lo, hi) if s)}")
     return value
 
 
