@@ -43,7 +43,7 @@ from planners.base.fileio import (
     run_lock,
     short_repr,
 )
-from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
+from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, check_size, generate
 from planners.tools.parallel import Backend, LocalBackend
 
 
@@ -148,6 +148,8 @@ class TrainConfig:
                 raise InputError(f"{source}: {key} is empty")
             for v in values:
                 check_number(source, key, v, integer=integer, low=low, high=high)
+        for v in self.sizes:
+            check_size(v, f"{source}: sizes")
         if len(self.conv_channels) != 2:
             raise InputError(f"{source}: conv_channels = {list(self.conv_channels)!r}, expected two widths")
         if not isinstance(self.extra, dict):

@@ -381,3 +381,41 @@ def test_env_actions(env_id, kwargs):
 
     run()
     env.close()
+
+
+# --- bounded work ----------------------------------------------------------------------------------
+
+
+def test_generated_sizes_have_a_limit_that_names_how_to_raise_it(monkeypatch, tmp_path):
+    from learning.training import TrainConfig
+    from planners.maps.generators import MAX_SIZE_ENV, generate
+
+    monkeypatch.delenv(MAX_SIZE_ENV, raising=False)
+    for size in (100_000, 10**6):
+        with pytest.raises(InputError, match=rf"size = {size}: .*at most 4096 .*{MAX_SIZE_ENV}={size}"):
+            generate("forest", 0, size)
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps({"sizes": [64, 10**6]}))
+    with pytest.raises(InputError, match=f"big.json.*sizes = 1000000.*{MAX_SIZE_ENV}"):
+        TrainConfig.from_json(path)
+    monkeypatch.setenv(MAX_SIZE_ENV, "40")
+    with pytest.raises(InputError, match="at most 40"):
+        generate("forest", 0, 64)
+    assert generate("forest", 0, 40).world.obstacles.shape == (40, 40)
+    monkeypatch.setenv(MAX_SIZE_ENV, "many")
+    with pytest.raises(InputError, match=f"{MAX_SIZE_ENV}='many'"):
+        generate("forest", 0, 64)
+
+
+@pytest.mark.parametrize("step", [1e-5, 1e-9, 1e-300])
+def test_tiny_steps_are_refused_relative_to_the_map(monkeypatch, step):
+    from planners import RRT
+    from planners.algorithms.rrt import MAX_STEPS_ENV, RRTConnect
+    from planners.maps.generators import generate
+
+    monkeypatch.delenv(MAX_STEPS_ENV, raising=False)
+    problem = generate("forest", 0, 64)
+    for planner in (RRT, RRTConnect):
+        with pytest.raises(InputError, match=rf"step_size = {step:g} .*at least 0.000905.*{MAX_STEPS_ENV}="):
+            planner(problem, step_size=step)
+    assert RRTConnect(problem, step_size=0.001).step_size == 0.001
