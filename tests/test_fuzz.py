@@ -419,3 +419,34 @@ def test_tiny_steps_are_refused_relative_to_the_map(monkeypatch, step):
         with pytest.raises(InputError, match=rf"step_size = {step:g} .*at least 0.000905.*{MAX_STEPS_ENV}="):
             planner(problem, step_size=step)
     assert RRTConnect(problem, step_size=0.001).step_size == 0.001
+
+
+@pytest.mark.parametrize("lines, line, match", [
+    (["bounds 0 0 0 1e308 1e308 1e308"], 1, "workspace bounds .* too large"),
+    (["bounds -1e308 0 0 1e308 10 10"], 1, "workspace bounds .* too large"),
+    (["bounds 0 0 0 10 10 10", "delta 1e9"], 2, "delta 1e\\+09 leaves no valid state"),
+    (["bounds 0 0 0 10 10 10", "delta 10"], 2, "delta 10 leaves no valid state"),
+], ids=["huge bounds", "huge span", "delta 1e9", "delta = side"])
+def test_scene_values_are_blamed_on_their_own_line(tmp_path, lines, line, match):
+    path = tmp_path / "odd.scene"
+    body = lines + ["start 1 1 1 0 0 0", "goal 9 9 9 0 0 0"]
+    path.write_text("\n".join(body) + "\n")
+    with pytest.raises(InputError, match=rf"odd.scene, line {line}: {match}"):
+        load_scene(path)
+
+
+def test_scene_angles_out_of_range_are_refused(tmp_path):
+    path = tmp_path / "angles.scene"
+    path.write_text("bounds 0 0 0 10 10 10\nstart 1 1 1 0 0 0\ngoal 9 9 9 1e300 0 0\n")
+    with pytest.raises(InputError, match=r"angles.scene, line 3: goal angles .*within \+-2 pi"):
+        load_scene(path)
+
+
+def test_the_box_count_has_a_limit_that_names_how_to_raise_it(monkeypatch):
+    from planners.worlds.rigid3d import MAX_BOXES_ENV, RigidBodyWorld
+
+    monkeypatch.setenv(MAX_BOXES_ENV, "3")
+    boxes = [(i, 0, 0, i + 0.5, 1, 1) for i in range(4)]
+    with pytest.raises(InputError, match=f"4 boxes, more than the limit of 3.*{MAX_BOXES_ENV}=4"):
+        RigidBodyWorld(boxes)
+    assert len(RigidBodyWorld(boxes[:3]).boxes) == 3
