@@ -80,6 +80,15 @@ def check_int_flags(args, names, *, low: int = 1) -> None:
         check_int(getattr(args, name), f"--{name.replace('_', '-')}", low=low)
 
 
+def check_flags(check) -> None:
+    """Run a command's argument checks (``check()``); an ``InputError`` becomes one ``error:`` line and exit 2."""
+    try:
+        check()
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+
+
 def check_number(source, key: str, value, *, integer: bool = False, low: float | None = None,
                  high: float | None = None, low_open: bool = False) -> float | int:
     """``value`` as a finite number within bounds, or an ``InputError`` naming ``source`` (file or flag) and ``key``."""
