@@ -450,3 +450,15 @@ def test_the_box_count_has_a_limit_that_names_how_to_raise_it(monkeypatch):
     with pytest.raises(InputError, match=f"4 boxes, more than the limit of 3.*{MAX_BOXES_ENV}=4"):
         RigidBodyWorld(boxes)
     assert len(RigidBodyWorld(boxes[:3]).boxes) == 3
+
+
+@pytest.mark.parametrize("image, says", [(".", "which is a folder"), ("/dev/null", "not a regular file"),
+                                         ("missing.png", "does not exist")])
+def test_ros_image_that_is_not_a_file_is_named_for_what_it_is(tmp_path, image, says):
+    from planners.maps.rosmap import load_ros_map
+
+    path = tmp_path / "map.yaml"
+    path.write_text(f"image: {image}\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\n"
+                    "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    with pytest.raises(InputError, match=f"map.yaml: 'image' names .*{says}"):
+        load_ros_map(path)
