@@ -462,3 +462,23 @@ def test_ros_image_that_is_not_a_file_is_named_for_what_it_is(tmp_path, image, s
                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
     with pytest.raises(InputError, match=f"map.yaml: 'image' names .*{says}"):
         load_ros_map(path)
+
+
+def test_time_limits_hold_on_a_scene_at_the_box_limit():
+    """5,000 boxes (the default limit): PRM, RRT and RRT-Connect stop within about their time limit."""
+    import time
+
+    from planners import PRM, RRT, Problem, RRTConnect
+    from planners.worlds.rigid3d import DEFAULT_MAX_BOXES, RigidBodyWorld, random_scene
+
+    rng = np.random.default_rng(0)
+    corners = np.column_stack([rng.uniform(3, 7, DEFAULT_MAX_BOXES), rng.uniform(0, 10, (DEFAULT_MAX_BOXES, 2))])
+    world = RigidBodyWorld(np.hstack([corners, corners + 0.05]))
+    problem = Problem(world, [1, 5, 5, 0, 0, 0], [9, 5, 5, 0, 0, 0], goal_tolerance=0.5)
+    for planner in (PRM, RRT, RRTConnect):
+        planner(random_scene(1, 5), seed=0).solve(max_iterations=20)  # compile outside the timing
+        t0 = time.perf_counter()
+        result = planner(problem, seed=0).solve(time_limit=0.5)
+        took = time.perf_counter() - t0
+        assert result.solved or result.stop_reason == "time_limit"
+        assert took < 0.5 + 1.5, f"{planner.__name__}: {took:.2f} s under a 0.5 s limit"
