@@ -18,8 +18,8 @@ from planners.kernels import state as slots
 #: OMPL's default range: this fraction of the sampling box's diagonal (MAX_MOTION_DISTANCE_FRACTION).
 DEFAULT_RANGE_FRACTION = 0.2
 #: Most steps across the sampling box's diagonal a planner accepts unless raised: RRT-Connect reserves
-#: room for one connect across the whole box (two trees x (diagonal / step) vertices x 8 bytes per
-#: coordinate): 10^5 steps is 1.6 MB in 2-D and 4.8 MB in 6-DoF, and one connect stays within milliseconds.
+#: room for one connect across the whole box (two trees x (diagonal / step) vertices of 80 bytes in 2-D,
+#: about 300 in 6-DoF): 10^5 steps is 16 MB in 2-D and 60 MB in 6-DoF (twice that while an array grows).
 DEFAULT_MAX_STEPS = 100_000
 #: The environment variable that raises (or lowers) ``DEFAULT_MAX_STEPS``.
 MAX_STEPS_ENV = "SAMPLERGYM_MAX_STEPS"

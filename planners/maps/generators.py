@@ -38,7 +38,7 @@ SHIFTED_SIZES = (64, 96, 128, 192, 256)
 #: Smallest map side ``generate`` accepts: below it the narrowest features would be under 2 cells.
 MIN_SIZE = 32
 #: Largest generated map side unless raised: a map of side N holds N*N cells, and planning on it (the
-#: grid, its distance field and the search's arrays) takes about 40 bytes per cell: 4096 -> about 0.7 GB.
+#: grid, its distance field and the search's arrays) takes about 35 bytes per cell: 4096 -> about 0.6 GB (docs/limits.md).
 DEFAULT_MAX_SIZE = 4096
 #: The environment variable that raises (or lowers) ``DEFAULT_MAX_SIZE``.
 MAX_SIZE_ENV = "SAMPLERGYM_MAX_MAP_SIDE"
@@ -64,7 +64,7 @@ def check_size(size, name: str = "size") -> int:
     limit = max_size_limit()
     if size > limit:
         raise InputError(f"{name} = {size}: generated maps are at most {limit} cells a side (about "
-                         f"{40 * size * size / 1e9:.1f} GB to plan on this one); if that is intended, set "
+                         f"{35 * size * size / 1e9:.1f} GB to plan on this one); if that is intended, set "
                          f"{MAX_SIZE_ENV}={size}")
     return size
 
