@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, env_limit
 from planners.base.planner import Planner, PlannerData, VertexStore, require_problem
 from planners.base.problem import Problem
 from planners.base.registry import register_planner
@@ -27,16 +26,7 @@ MAX_STEPS_ENV = "SAMPLERGYM_MAX_STEPS"
 
 def max_steps_limit() -> int:
     """Most steps across the diagonal in force: ``$SAMPLERGYM_MAX_STEPS`` if set, else ``DEFAULT_MAX_STEPS``."""
-    env = os.environ.get(MAX_STEPS_ENV, "").strip()
-    if not env:
-        return DEFAULT_MAX_STEPS
-    try:
-        value = int(env.replace("_", ""))
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise InputError(f"environment variable {MAX_STEPS_ENV}={env!r} must be a positive integer")
-    return value
+    return env_limit(MAX_STEPS_ENV, DEFAULT_MAX_STEPS)
 
 
 def default_step(problem: Problem, step_size: float | None) -> float:

@@ -80,6 +80,23 @@ def check_int_flags(args, names, *, low: int = 1) -> None:
         check_int(getattr(args, name), f"--{name.replace('_', '-')}", low=low)
 
 
+def env_limit(name: str, default: int, *, low: int = 1) -> int:
+    """The integer limit in environment variable ``name`` (``_`` separators allowed), else ``default``.
+
+    A value that is not an integer >= ``low`` is an ``InputError`` naming the variable.
+    """
+    env = os.environ.get(name, "").strip()
+    if not env:
+        return default
+    try:
+        value = int(env.replace("_", ""))
+    except ValueError:
+        value = low - 1
+    if value < low:
+        raise InputError(f"environment variable {name}={env!r} must be an integer >= {low}")
+    return value
+
+
 def check_flags(check) -> None:
     """Run a command's argument checks (``check()``); an ``InputError`` becomes one ``error:`` line and exit 2."""
     try:

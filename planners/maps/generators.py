@@ -12,11 +12,10 @@ shortest-path length. All randomness comes from the generator passed in.
 from __future__ import annotations
 
 import numbers
-import os
 
 import numpy as np
 
-from planners.base.fileio import InputError, check_int
+from planners.base.fileio import InputError, check_int, env_limit
 from planners.base.problem import Problem
 from planners.maps.gridsearch import distance_field, free_components
 from planners.worlds.grid import OccupancyGrid
@@ -38,7 +37,8 @@ SHIFTED_SIZES = (64, 96, 128, 192, 256)
 #: Smallest map side ``generate`` accepts: below it the narrowest features would be under 2 cells.
 MIN_SIZE = 32
 #: Largest generated map side unless raised: a map of side N holds N*N cells, and planning on it (the
-#: grid, its distance field and the search's arrays) takes about 35 bytes per cell: 4096 -> about 0.6 GB (docs/limits.md).
+#: grid, its distance field and the search's arrays) takes about 35 bytes per cell: 4096 -> about 0.6 GB
+#: (docs/limits.md).
 DEFAULT_MAX_SIZE = 4096
 #: The environment variable that raises (or lowers) ``DEFAULT_MAX_SIZE``.
 MAX_SIZE_ENV = "SAMPLERGYM_MAX_MAP_SIDE"
@@ -46,16 +46,7 @@ MAX_SIZE_ENV = "SAMPLERGYM_MAX_MAP_SIDE"
 
 def max_size_limit() -> int:
     """The largest generated map side in force: ``$SAMPLERGYM_MAX_MAP_SIDE`` if set, else ``DEFAULT_MAX_SIZE``."""
-    env = os.environ.get(MAX_SIZE_ENV, "").strip()
-    if not env:
-        return DEFAULT_MAX_SIZE
-    try:
-        value = int(env.replace("_", ""))
-    except ValueError:
-        value = 0
-    if value < MIN_SIZE:
-        raise InputError(f"environment variable {MAX_SIZE_ENV}={env!r} must be an integer >= {MIN_SIZE} (cells)")
-    return value
+    return env_limit(MAX_SIZE_ENV, DEFAULT_MAX_SIZE, low=MIN_SIZE)
 
 
 def check_size(size, name: str = "size") -> int:

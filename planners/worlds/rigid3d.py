@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planners.base.fileio import InputError, atomic_write_text, check_int
+from planners.base.fileio import InputError, atomic_write_text, check_int, env_limit
 from planners.base.problem import Problem
 from planners.base.world import WorldBase
 from planners.kernels import geometry
@@ -73,16 +73,7 @@ MAX_BOXES_ENV = "SAMPLERGYM_MAX_BOXES"
 
 def max_boxes_limit() -> int:
     """The box limit in force: ``$SAMPLERGYM_MAX_BOXES`` if set, else ``DEFAULT_MAX_BOXES``."""
-    env = os.environ.get(MAX_BOXES_ENV, "").strip()
-    if not env:
-        return DEFAULT_MAX_BOXES
-    try:
-        value = int(env.replace("_", ""))
-    except ValueError:
-        value = -1
-    if value < 0:
-        raise InputError(f"environment variable {MAX_BOXES_ENV}={env!r} must be a non-negative integer")
-    return value
+    return env_limit(MAX_BOXES_ENV, DEFAULT_MAX_BOXES, low=0)
 
 
 #: Point-box tests the free-volume estimate (PRM's and RRT*'s radius) may spend: about 0.1 s. Scenes of
