@@ -50,7 +50,7 @@ def max_size_limit() -> int:
 
 
 def check_size(size, name: str = "size") -> int:
-    """``size`` as a map side in [``MIN_SIZE``, the limit in force], or an ``InputError`` naming ``name`` and the limit."""
+    """``size`` as a map side in [``MIN_SIZE``, the limit in force], or an ``InputError`` naming ``name``."""
     size = check_int(size, name, low=MIN_SIZE)
     limit = max_size_limit()
     if size > limit:
