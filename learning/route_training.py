@@ -74,7 +74,8 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
 
     With ``checkpoint`` (a file path) the weights, the optimiser and the batch order's generator are
     committed there after every epoch; with ``resume`` a run continues from that file to the same
-    weights an uninterrupted run reaches (a checkpoint of another recipe is refused).
+    weights an uninterrupted run reaches (a checkpoint of another recipe is refused; more ``epochs``
+    than the interrupted run asked for continue it further).
     """
     torch.manual_seed(seed)
     turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
@@ -90,8 +91,8 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
     opt = torch.optim.Adam(net.parameters(), lr)
     order = torch.Generator().manual_seed(seed)
     recipe = {"block": block, "channels": channels, "depth": depth, "attention": attention,
-              "attention_level": attention_level, "epochs": epochs, "batch": batch, "lr": lr, "augment": augment,
-              "seed": seed, "maps": [p.name for p in problems]}
+              "attention_level": attention_level, "batch": batch, "lr": lr, "augment": augment, "seed": seed,
+              "maps": [p.name for p in problems]}  # not the epochs: each epoch's weights do not depend on them
     lines: list[str] = []
     first = 0
     if resume and checkpoint is not None and Path(checkpoint).is_file():
@@ -104,6 +105,8 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
         except (RuntimeError, TypeError, ValueError, KeyError) as exc:
             raise InputError(f"{checkpoint}: its state does not fit this recipe: {short_repr(str(exc))}") from None
         first, lines = state["epoch"], [str(s) for s in state["log"]]
+        if first > epochs:
+            raise InputError(f"{checkpoint} holds {first} epochs, more than the {epochs} asked for")
         for line in lines:
             log(line)
     t0 = time.perf_counter()

@@ -161,3 +161,26 @@ def test_output_places_and_the_lock_are_checked_before_the_work(tmp_path, capsys
     err = capsys.readouterr().err
     assert "in use by pid" in err and "the other training" in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
+
+
+def test_ctrl_c_says_what_was_kept_and_exits_130(tmp_path, capsys, monkeypatch):
+    from importlib import util
+
+    spec = util.spec_from_file_location("train_route_script", ROOT / "scripts" / "train_route.py")
+    script = util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    real = script.train_route_net
+
+    def interrupted_after_one_epoch(problems, **kwargs):
+        real(problems, **{**kwargs, "epochs": 1})
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(script, "train_route_net", interrupted_after_one_epoch)
+    out = tmp_path / "o"
+    assert script.main([*TINY, "--out", str(out)]) == 130
+    err = capsys.readouterr().err.strip()
+    assert err == f"interrupted: {out / 'checkpoint.pt'} holds the last finished epoch; continue with --resume"
+    assert not (tmp_path / ".o.lock").exists(), "the lock is released"
+    monkeypatch.undo()
+    assert script.main([*TINY, "--out", str(out), "--resume"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "route.json", "route.pt"]
