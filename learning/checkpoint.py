@@ -11,17 +11,21 @@ anything but tensors and plain containers. Every failure is an ``InputError`` na
 from __future__ import annotations
 
 import io
-import json
 import os
 import zipfile
 from pathlib import Path
 
 import torch
 
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, loads_json
 
 #: Largest entry the reader decompresses: a policy of a few MB is the norm; this stops zip bombs.
 MAX_ENTRY_BYTES = 256 * 1024 * 1024
+#: Largest ratio of unpacked to packed size accepted for an entry over 1 MiB: tensors and JSON compress
+#: by a few times at most, while a zip bomb's entries claim hundreds or a thousand times their size.
+MAX_RATIO = 50
+#: Largest ``data`` entry (JSON): Stable-Baselines3 writes tens of KB; parsed JSON takes several times its size.
+MAX_DATA_BYTES = 16 * 1024 * 1024
 
 
 def read_sb3_zip(path: str | os.PathLike, *, weights: str = "policy.pth") -> tuple[dict, dict]:
@@ -36,16 +40,13 @@ def read_sb3_zip(path: str | os.PathLike, *, weights: str = "policy.pth") -> tup
         raise FileNotFoundError(f"policy checkpoint {path} does not exist")
     try:
         with zipfile.ZipFile(path) as zf:
-            data_blob = _entry(zf, path, "data")
-            weights_blob = _entry(zf, path, weights)
+            data_blob = _entry(zf, path, "data", MAX_DATA_BYTES)
+            weights_blob = _entry(zf, path, weights, MAX_ENTRY_BYTES)
     except InputError:
         raise
     except Exception as exc:  # noqa: BLE001 - zipfile, zlib and OSError all signal a damaged archive
         raise InputError(f"{path} is not a readable checkpoint zip: {type(exc).__name__}: {exc}") from None
-    try:
-        data = json.loads(data_blob.decode("utf-8"))
-    except ValueError as exc:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
-        raise InputError(f"{path}: its 'data' entry is not JSON: {exc}") from None
+    data = loads_json(data_blob, f"{path}: its 'data' entry")
     if not isinstance(data, dict):
         raise InputError(f"{path}: its 'data' entry is a {type(data).__name__}, expected a JSON object")
     try:
@@ -59,16 +60,20 @@ def read_sb3_zip(path: str | os.PathLike, *, weights: str = "policy.pth") -> tup
     return data, state
 
 
-def _entry(zf: zipfile.ZipFile, path: Path, name: str) -> bytes:
+def _entry(zf: zipfile.ZipFile, path: Path, name: str, limit: int) -> bytes:
     try:
         info = zf.getinfo(name)
     except KeyError:
         raise InputError(f"{path} has no '{name}' entry: not a Stable-Baselines3 checkpoint") from None
-    if info.file_size > MAX_ENTRY_BYTES:
+    # every check on the declared sizes comes before anything is decompressed
+    if info.file_size > limit:
         raise InputError(f"{path}: entry '{name}' unpacks to {info.file_size} bytes, more than the "
-                         f"{MAX_ENTRY_BYTES} a policy checkpoint needs")
+                         f"{limit} a policy checkpoint needs")
+    if info.file_size > 1 << 20 and info.file_size > MAX_RATIO * max(info.compress_size, 1):
+        raise InputError(f"{path}: entry '{name}' claims to unpack {info.compress_size} bytes to {info.file_size} "
+                         f"(more than {MAX_RATIO} times): not a checkpoint (a zip bomb?)")
     with zf.open(info) as f:
-        blob = f.read(MAX_ENTRY_BYTES + 1)
-    if len(blob) > MAX_ENTRY_BYTES:  # the header lied about the size
-        raise InputError(f"{path}: entry '{name}' unpacks to more than {MAX_ENTRY_BYTES} bytes")
+        blob = f.read(info.file_size + 1)  # never more than the declared size, however the data lies
+    if len(blob) != info.file_size:
+        raise InputError(f"{path}: entry '{name}' unpacks to another size than its header's {info.file_size} bytes")
     return blob

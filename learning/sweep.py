@@ -7,6 +7,13 @@ Tuning and test maps are never looked at, so a chosen config can be evaluated ho
 Tune keeps the experiment's state on disk: an interrupted sweep resumes (:func:`run_sweep` with
 ``resume=True``) and reruns only the trials that had not finished. Each trial's config and score go to
 TensorBoard (``tensorboard --logdir <out>/<name>``).
+
+Resuming trusts the folder: Ray Tune stores its experiment state pickled (``tuner.pkl`` and the
+trials' state), and restoring it unpickles, which can run code placed there. A sweep folder
+therefore carries :data:`MANIFEST`, written by :func:`run_sweep` when it starts the sweep, and a
+folder without it (or of another kind of sweep) is refused. The manifest is a guard against
+resuming the wrong folder, not a signature: resume only sweeps you started yourself, never a folder
+someone handed you (read its ``*.chosen.json`` and ``result.json`` files instead: plain JSON).
 """
 
 from __future__ import annotations
@@ -20,9 +27,12 @@ import numpy as np
 from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
 from learning.training import TrainConfig, sampler_validation_score, train
 from planners import GoalBiasedSampler
-from planners.base.fileio import InputError, atomic_write_text
+from planners.base.fileio import InputError, atomic_write_text, read_json, run_lock
 from planners.maps.generators import VALIDATION_SEED0
 from planners.tools.parallel import make_backend
+
+#: The file :func:`run_sweep` writes into every sweep folder it starts; ``resume`` refuses a folder without it.
+MANIFEST = "samplergym-sweep.json"
 
 METRIC = "validation_score"  # geometric mean over families of median iterations / lower bound (lower is better)
 
@@ -99,11 +109,36 @@ def run_sweep(kind: str, out_dir: str | Path, *, name: str | None = None, sample
     base.check("sweep base config")
     name = name or f"{kind}-sweep"
     storage = Path(out_dir).resolve()
-    cluster = make_backend("ray", processes=processes, address=address)  # joins, or starts a local instance
-    try:
-        return _tune(kind, storage, name, samples, seed, base, space, resume)
-    finally:
-        cluster.close()
+    if resume:
+        check_resumable(storage / name, kind)
+    with run_lock(storage / name, f"{kind} sweep {name}"):
+        cluster = make_backend("ray", processes=processes, address=address)  # joins, or starts a local instance
+        try:
+            return _tune(kind, storage, name, samples, seed, base, space, resume)
+        finally:  # however the sweep ends (an interrupt included), the workers stop with the instance
+            cluster.close()
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Tune stopped the sweep on an interrupt before every trial finished; ``finished`` of ``total`` are kept."""
+
+    def __init__(self, finished: int, total: int) -> None:
+        super().__init__(f"{finished} of {total} trials finished")
+        self.finished, self.total = finished, total
+
+
+def check_resumable(path: Path, kind: str) -> None:
+    """Refuse to resume ``path`` unless this project started a ``kind`` sweep there (see the module docs)."""
+    if not path.is_dir():
+        raise InputError(f"nothing to resume in {path}: no sweep there (start it without --resume)")
+    manifest = path / MANIFEST
+    if not manifest.is_file():
+        raise InputError(f"{path} was not started by scripts/sweep.py (no {MANIFEST}); resuming unpickles Ray "
+                         "Tune's state, which can run code, so only sweeps started here are resumed")
+    info = read_json(manifest, "sweep manifest")
+    if not isinstance(info, dict) or info.get("kind") != kind:
+        got = info.get("kind") if isinstance(info, dict) else None
+        raise InputError(f"{manifest}: a {got!r} sweep, not a {kind!r} one; resume it with its own kind")
 
 
 def _tune(kind: str, storage: Path, name: str, samples: int, seed: int, base: TrainConfig, space: dict | None,
@@ -127,11 +162,17 @@ def _tune(kind: str, storage: Path, name: str, samples: int, seed: int, base: Tr
         else:
             space = {"baseline": tune.grid_search([list(b) for b in BASELINE_GRID])}
             tune_config = tune.TuneConfig(metric=METRIC, mode="min", num_samples=1)
+        path.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(path / MANIFEST, json.dumps({"kind": kind, "name": name, "written_by": "learning.sweep",
+                                                       "base": asdict(base)}, indent=1, default=list) + "\n")
         callbacks = [CSVLoggerCallback(), JsonLoggerCallback(), TBXLoggerCallback()]
         tuner = tune.Tuner(trainable, param_space=space, tune_config=tune_config,
                            run_config=tune.RunConfig(name=name, storage_path=str(storage), callbacks=callbacks,
                                                      verbose=0))
     results = tuner.fit()
+    unfinished = [r for r in results if r.error is None and METRIC not in (r.metrics or {})]
+    if unfinished:  # Tune stops gracefully on Ctrl-C and returns what it has
+        raise SweepInterrupted(len(results) - len(unfinished), len(results))
     errors = [r.error for r in results if r.error is not None]
     if errors:
         raise RuntimeError(f"{len(errors)} of {len(results)} trials failed; the first: {errors[0]!r}")

@@ -34,8 +34,16 @@ from learning.fast_policy import FastActor
 from learning.imitation import Dataset, behaviour_cloning, collect
 from learning.policy_sampler import OBS_VERSION, PolicySampler
 from planners import RRT, Sampler
-from planners.base.fileio import InputError, atomic_path, atomic_write_text, check_number
-from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
+from planners.base.fileio import (
+    InputError,
+    atomic_path,
+    atomic_write_text,
+    check_number,
+    read_json,
+    run_lock,
+    short_repr,
+)
+from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, check_size, generate
 from planners.tools.parallel import Backend, LocalBackend
 
 
@@ -97,17 +105,12 @@ class TrainConfig:
     @classmethod
     def from_json(cls, path) -> TrainConfig:
         """A config from a JSON file of ``TrainConfig`` fields, every value checked (``InputError`` naming the file)."""
-        try:
-            raw = json.loads(Path(path).read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise InputError(f"cannot read training config {path}: {exc.strerror or exc}") from None
-        except ValueError as exc:
-            raise InputError(f"training config {path} is not JSON: {exc}") from None
+        raw = read_json(path, "training config")
         if not isinstance(raw, dict):
             raise InputError(f"training config {path} holds a {type(raw).__name__}, expected a JSON object")
         unknown = set(raw) - set(cls.__dataclass_fields__)
         if unknown:
-            raise InputError(f"{path}: unknown config keys {sorted(unknown)}")
+            raise InputError(f"{path}: unknown config keys {short_repr(sorted(unknown))}")
         for k in ("families", "sizes", "dagger_betas", "conv_channels"):
             if k in raw:
                 if not isinstance(raw[k], list):
@@ -145,6 +148,8 @@ class TrainConfig:
                 raise InputError(f"{source}: {key} is empty")
             for v in values:
                 check_number(source, key, v, integer=integer, low=low, high=high)
+        for v in self.sizes:
+            check_size(v, f"{source}: sizes")
         if len(self.conv_channels) != 2:
             raise InputError(f"{source}: conv_channels = {list(self.conv_channels)!r}, expected two widths")
         if not isinstance(self.extra, dict):
@@ -300,6 +305,15 @@ def read_state(run: str | os.PathLike) -> dict | None:
     if not isinstance(state, dict) or not {"phase", "round", "ppo_steps", "log_rows"} <= state.keys():
         raise InputError(f"{ckpt} carries no training state: it was not written by this version of "
                          "scripts/train.py; start the run again without --resume")
+    if state["phase"] not in ("bc", "ppo"):
+        raise InputError(f"{ckpt}: training state phase = {short_repr(state['phase'])}, expected 'bc' or 'ppo'")
+    for key, low in (("round", -1), ("ppo_steps", 0), ("log_rows", 0), ("dagger_rows", 0)):
+        if key in state:
+            check_number(f"{ckpt}: training state", key, state[key], integer=True, low=low)
+    if "log_time" in state:
+        check_number(f"{ckpt}: training state", "log_time", state["log_time"])
+    if state["phase"] == "bc" and state["round"] >= 0 and "dagger_rows" not in state:
+        raise InputError(f"{ckpt}: training state in DAgger round {state['round']} has no dagger_rows")
     return state
 
 
@@ -379,12 +393,22 @@ def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False,
     DAgger's rollouts and the validation runs go to ``backend`` (default: this process); the weights
     do not depend on it.
 
+    The run folder ``<out_dir>/<name>`` is locked while the run writes it (:func:`run_lock`): a second
+    run on the same folder gets a ``LockedError`` naming the first.
+
     A resumed run ends with the same weights, bit for bit, as one that was never interrupted:
     each DAgger round depends only on the committed weights and data, and each PPO segment
     (``checkpoint_every`` steps) starts from a fresh, seeded environment reset and RNG state.
     """
     cfg.check()
     run = Path(out_dir) / cfg.name
+    with run_lock(run, f"training {cfg.name} (seed {cfg.seed})"):
+        return _train(cfg, run, resume=resume, progress=progress, log_stdout=log_stdout, backend=backend)
+
+
+def _train(cfg: TrainConfig, run: Path, *, resume: bool, progress: bool, log_stdout: bool,
+           backend: Backend | None) -> Path:
+    """``train``'s work, with the run folder's lock held."""
     for stale in (*run.glob(".*.tmp*"), *run.glob("tb/.*.tmp*")):  # half-written files of a killed run
         stale.unlink()
     if resume:

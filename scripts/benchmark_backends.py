@@ -22,6 +22,7 @@ from dataclasses import asdict
 
 from learning import evaluation as E
 from planners import movingai_dir
+from planners.base.fileio import check_flags, check_int_flags
 from planners.maps.generators import FAMILIES
 from planners.tools.parallel import make_backend
 
@@ -39,6 +40,7 @@ def main(argv=None) -> int:
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--empty-tasks", type=int, default=2000)
     args = ap.parse_args(argv)
+    check_flags(lambda: check_int_flags(args, ("processes", "empty_tasks")))
     n = args.processes
     mdir = movingai_dir(None, required=False)
     cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": 4.0, "policy": "checkpoints/guided.zip",

@@ -14,6 +14,7 @@ import gymnasium as gym
 import numpy as np
 
 import envs
+from planners.base.fileio import InputError, check_flags, check_int_flags
 from planners.tools.benchmark import markdown_table
 
 gym.register_envs(envs)
@@ -39,6 +40,17 @@ def main(argv=None) -> int:
     ap.add_argument("--modes", default=",".join(envs.ACTION_MODES))
     ap.add_argument("--files", nargs="*", help="map images for SamplerGym/RRT-Files-v0 (default: a generated PNG)")
     args = ap.parse_args(argv)
+
+    def check() -> None:
+        check_int_flags(args, ("steps",))
+        for mode in args.modes.split(","):
+            if mode not in envs.ACTION_MODES:
+                raise InputError(f"--modes: {mode!r} is not an action mode; choose from {','.join(envs.ACTION_MODES)}")
+        for f in args.files or ():
+            if not Path(f).is_file():
+                raise InputError(f"--files: {f} is not a file")
+
+    check_flags(check)
     files = args.files
     if not files:
         import tempfile

@@ -25,8 +25,15 @@ from planners import (
     load_movingai_scenarios,
     movingai_dir,
 )
-from planners.base.fileio import atomic_write_text
-from planners.maps.generators import FAMILIES, generate
+from planners.base.fileio import (
+    InputError,
+    atomic_write_text,
+    check_flags,
+    check_int_flags,
+    check_number,
+    check_output_place,
+)
+from planners.maps.generators import FAMILIES, check_size, generate
 from planners.tools import benchmark, ompl_bridge
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
@@ -173,6 +180,17 @@ def main(argv=None) -> int:
                                          "comparable)")
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
+
+    def check() -> None:
+        check_int_flags(args, ("seeds", "scenarios", "max_iterations"))
+        check_size(args.size, "--size")
+        check_number("command line", "--step", args.step, low=0.0, low_open=True)
+        check_number("command line", "--tolerance", args.tolerance, low=0.0, low_open=True)
+        if args.movingai and not Path(args.movingai).is_dir():
+            raise InputError(f"--movingai {args.movingai}: not a folder")
+        check_output_place(args.out, "--out")
+
+    check_flags(check)
     if args.quick:
         args.seeds, args.scenarios = 3, 2
     use_ompl = not args.no_ompl and ompl_bridge.available()

@@ -19,6 +19,7 @@ from pathlib import Path
 from learning import evaluation as E
 from learning.benchmark import forward_pass_us, observations, query_times
 from learning.policy_sampler import PolicySampler
+from planners.base.fileio import check_flags, check_int_flags, check_number
 from planners.maps.generators import (
     FAMILIES,
     TEST_SEED0,
@@ -39,6 +40,12 @@ def main(argv=None) -> int:
     ap.add_argument("--sampler", action="append", default=[], metavar="NAME=SPEC",
                     help="also time this sampler (repeatable; specs as in scripts/evaluate.py --sampler)")
     args = ap.parse_args(argv)
+
+    def check() -> None:
+        check_int_flags(args, ("maps", "seeds"))
+        check_number("command line", "--bias", args.bias, low=0.0, high=1.0)
+
+    check_flags(check)
     extra = {}
     for arg in args.sampler:
         try:

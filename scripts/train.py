@@ -6,7 +6,9 @@
     python scripts/train.py --backend ray --address auto      # rollouts and validation on your Ray cluster
     tensorboard --logdir runs/                                # curves
 
-Writes runs/<name>/{config.json, checkpoint.zip, imitation.zip, final.zip, state.json, tb/}. A crash,
+Writes runs/<name>/{config.json, checkpoint.zip, imitation.zip, final.zip, state.json, tb/}; the run folder
+is locked while a run writes it (runs/.<name>.lock: a second run on the same name exits 2 naming the
+first; the lock of a run that was killed is taken over). A crash,
 Ctrl-C or a kill leaves the last checkpoint (after each DAgger round and every --checkpoint-every PPO
 steps) whole, and --resume continues from it to the same weights an uninterrupted run reaches.
 --resume reads your own run's checkpoint with Stable-Baselines3's full loader, which unpickles: never
@@ -26,8 +28,12 @@ from pathlib import Path
 
 from learning.evaluation import worker_init
 from learning.training import TrainConfig, read_state, train
-from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text
+from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, check_output_place
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
+
+
+#: Free disk a run needs: checkpoints of a few MB, DAgger data of tens of MB, TensorBoard events.
+NEED_BYTES = 200 * 2**20
 
 
 def _where(state: dict, cfg: TrainConfig) -> str:
@@ -69,6 +75,10 @@ def main(argv=None) -> int:
                 changes[f.name] = tuple(type(getattr(cfg, f.name)[0])(x) for x in v) if isinstance(v, list) else v
         cfg = dataclasses.replace(cfg, **changes)
         cfg.check("command line" if not args.config else f"{args.config} with the command line's flags")
+        check_output_place(args.out / cfg.name, "--out", need_bytes=NEED_BYTES)
+        if args.export:
+            check_output_place(args.export, "--export", folder=False)
+            check_output_place(args.export.with_suffix(".json"), "--export (its .json)", folder=False)
     except (InputError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

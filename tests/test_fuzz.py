@@ -23,7 +23,9 @@ from hypothesis import strategies as st
 from planners import OccupancyGrid, Problem, load_movingai_scenarios, load_scene
 from planners.base.fileio import InputError
 
-FUZZ = settings(max_examples=40, deadline=2000, suppress_health_check=[HealthCheck.function_scoped_fixture])
+# The deadline catches hangs, not slowness: 10 s per example holds on a loaded CI machine, and each reader
+# runs once before its timed examples so that imports and compilation are not timed.
+FUZZ = settings(max_examples=40, deadline=10_000, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 def _scratch(tmp_path_factory, name: str) -> Path:
@@ -252,14 +254,91 @@ def damaged_checkpoint(draw) -> bytes:
     return buf.getvalue()
 
 
+@pytest.fixture(scope="module")
+def policy_loader():
+    """``PolicySampler.load``, run once on the shipped checkpoint so that its imports are not timed."""
+    from learning import PolicySampler
+
+    PolicySampler.load(SHIPPED)
+    return PolicySampler.load
+
+
 @FUZZ
 @given(blob=st.one_of(damaged_checkpoint(), st.binary(max_size=200)))
-def test_checkpoint_reader(tmp_path_factory, blob):
+def test_checkpoint_reader(tmp_path_factory, policy_loader, blob):
     from learning import PolicySampler
 
     path = _scratch(tmp_path_factory, "policy.zip")
     path.write_bytes(blob)
-    _loads_or_names(PolicySampler.load, path, lambda s: isinstance(s, PolicySampler))
+    _loads_or_names(policy_loader, path, lambda s: isinstance(s, PolicySampler))
+
+
+def _zip(entries: dict[str, bytes]) -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        for name, blob in entries.items():
+            zf.writestr(name, blob)
+    return buf.getvalue()
+
+
+def _shipped_entries() -> dict[str, bytes]:
+    with zipfile.ZipFile(SHIPPED) as zf:
+        return {name: zf.read(name) for name in zf.namelist()}
+
+
+@pytest.mark.parametrize("case", ["nested data", "data bomb", "weights bomb"])
+def test_hostile_checkpoints_are_refused_before_the_work(tmp_path, case):
+    """Deep JSON is an InputError, not RecursionError; a zip bomb is refused on its declared sizes."""
+    import tracemalloc
+
+    from learning import PolicySampler
+    from learning.sb3_sampler import load_sb3_policy
+
+    entries = _shipped_entries()
+    if case == "nested data":
+        entries["data"] = b"[" * 200_000 + b"]" * 200_000
+    elif case == "data bomb":
+        entries["data"] = b'{"a": "' + b" " * (20 << 20) + b'"}'
+    else:
+        entries["policy.pth"] = b"\0" * (100 << 20)
+    path = tmp_path / "hostile.zip"
+    path.write_bytes(_zip(entries))
+    assert path.stat().st_size < 1 << 20
+    tracemalloc.start()
+    try:
+        with pytest.raises(InputError, match="hostile.zip.*(nested|unpacks|claims)"):
+            PolicySampler.load(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 64 << 20, f"{peak / 2**20:.0f} MiB spent before refusing"
+    with pytest.raises(InputError, match="hostile.zip"):
+        load_sb3_policy(path, None)
+
+
+def test_nested_training_configs_and_resume_states_are_named(tmp_path):
+    from learning.training import STATE_KEY, TrainConfig, read_state
+
+    path = tmp_path / "deep.json"
+    path.write_text('{"extra": ' + "[" * 10_000 + "]" * 10_000 + "}")
+    with pytest.raises(InputError, match="deep.json.*nested"):
+        TrainConfig.from_json(path)
+    path.write_text('{"n' + "a" * 100_000 + '": 1}')
+    with pytest.raises(InputError, match="unknown config keys") as err:
+        TrainConfig.from_json(path)
+    assert len(str(err.value)) < 400
+    good = {"phase": "ppo", "round": 3, "ppo_steps": 0, "log_rows": 4, "dagger_rows": 10, "log_time": 1.0}
+    for key, bad in (("phase", "x" * 10_000), ("round", "3"), ("ppo_steps", -1), ("log_rows", 1.5),
+                     ("dagger_rows", None), ("log_time", float("nan"))):
+        entries = _shipped_entries()
+        data = json.loads(entries["data"])
+        data[STATE_KEY] = {**good, key: bad}
+        entries["data"] = json.dumps(data).encode()
+        (tmp_path / "run").mkdir(exist_ok=True)
+        (tmp_path / "run" / "checkpoint.zip").write_bytes(_zip(entries))
+        with pytest.raises(InputError, match=f"checkpoint.zip.*{key}") as err:
+            read_state(tmp_path / "run")
+        assert len(str(err.value)) < 400
 
 
 # --- environment actions --------------------------------------------------------------------------------
@@ -302,3 +381,104 @@ def test_env_actions(env_id, kwargs):
 
     run()
     env.close()
+
+
+# --- bounded work ----------------------------------------------------------------------------------
+
+
+def test_generated_sizes_have_a_limit_that_names_how_to_raise_it(monkeypatch, tmp_path):
+    from learning.training import TrainConfig
+    from planners.maps.generators import MAX_SIZE_ENV, generate
+
+    monkeypatch.delenv(MAX_SIZE_ENV, raising=False)
+    for size in (100_000, 10**6):
+        with pytest.raises(InputError, match=rf"size = {size}: .*at most 4096 .*{MAX_SIZE_ENV}={size}"):
+            generate("forest", 0, size)
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps({"sizes": [64, 10**6]}))
+    with pytest.raises(InputError, match=f"big.json.*sizes = 1000000.*{MAX_SIZE_ENV}"):
+        TrainConfig.from_json(path)
+    monkeypatch.setenv(MAX_SIZE_ENV, "40")
+    with pytest.raises(InputError, match="at most 40"):
+        generate("forest", 0, 64)
+    assert generate("forest", 0, 40).world.obstacles.shape == (40, 40)
+    monkeypatch.setenv(MAX_SIZE_ENV, "many")
+    with pytest.raises(InputError, match=f"{MAX_SIZE_ENV}='many'"):
+        generate("forest", 0, 64)
+
+
+@pytest.mark.parametrize("step", [1e-5, 1e-9, 1e-300])
+def test_tiny_steps_are_refused_relative_to_the_map(monkeypatch, step):
+    from planners import RRT
+    from planners.algorithms.rrt import MAX_STEPS_ENV, RRTConnect
+    from planners.maps.generators import generate
+
+    monkeypatch.delenv(MAX_STEPS_ENV, raising=False)
+    problem = generate("forest", 0, 64)
+    for planner in (RRT, RRTConnect):
+        with pytest.raises(InputError, match=rf"step_size = {step:g} .*at least 0.000905.*{MAX_STEPS_ENV}="):
+            planner(problem, step_size=step)
+    assert RRTConnect(problem, step_size=0.001).step_size == 0.001
+
+
+@pytest.mark.parametrize("lines, line, match", [
+    (["bounds 0 0 0 1e308 1e308 1e308"], 1, "workspace bounds .* too large"),
+    (["bounds -1e308 0 0 1e308 10 10"], 1, "workspace bounds .* too large"),
+    (["bounds 0 0 0 10 10 10", "delta 1e9"], 2, "delta 1e\\+09 leaves no valid state"),
+    (["bounds 0 0 0 10 10 10", "delta 10"], 2, "delta 10 leaves no valid state"),
+], ids=["huge bounds", "huge span", "delta 1e9", "delta = side"])
+def test_scene_values_are_blamed_on_their_own_line(tmp_path, lines, line, match):
+    path = tmp_path / "odd.scene"
+    body = lines + ["start 1 1 1 0 0 0", "goal 9 9 9 0 0 0"]
+    path.write_text("\n".join(body) + "\n")
+    with pytest.raises(InputError, match=rf"odd.scene, line {line}: {match}"):
+        load_scene(path)
+
+
+def test_scene_angles_out_of_range_are_refused(tmp_path):
+    path = tmp_path / "angles.scene"
+    path.write_text("bounds 0 0 0 10 10 10\nstart 1 1 1 0 0 0\ngoal 9 9 9 1e300 0 0\n")
+    with pytest.raises(InputError, match=r"angles.scene, line 3: goal angles .*within \+-2 pi"):
+        load_scene(path)
+
+
+def test_the_box_count_has_a_limit_that_names_how_to_raise_it(monkeypatch):
+    from planners.worlds.rigid3d import MAX_BOXES_ENV, RigidBodyWorld
+
+    monkeypatch.setenv(MAX_BOXES_ENV, "3")
+    boxes = [(i, 0, 0, i + 0.5, 1, 1) for i in range(4)]
+    with pytest.raises(InputError, match=f"4 boxes, more than the limit of 3.*{MAX_BOXES_ENV}=4"):
+        RigidBodyWorld(boxes)
+    assert len(RigidBodyWorld(boxes[:3]).boxes) == 3
+
+
+@pytest.mark.parametrize("image, says", [(".", "which is a folder"), ("/dev/null", "not a regular file"),
+                                         ("missing.png", "does not exist")])
+def test_ros_image_that_is_not_a_file_is_named_for_what_it_is(tmp_path, image, says):
+    from planners.maps.rosmap import load_ros_map
+
+    path = tmp_path / "map.yaml"
+    path.write_text(f"image: {image}\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\n"
+                    "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    with pytest.raises(InputError, match=f"map.yaml: 'image' names .*{says}"):
+        load_ros_map(path)
+
+
+def test_time_limits_hold_on_a_scene_at_the_box_limit():
+    """5,000 boxes (the default limit): PRM, RRT and RRT-Connect stop within about their time limit."""
+    import time
+
+    from planners import PRM, RRT, Problem, RRTConnect
+    from planners.worlds.rigid3d import DEFAULT_MAX_BOXES, RigidBodyWorld, random_scene
+
+    rng = np.random.default_rng(0)
+    corners = np.column_stack([rng.uniform(3, 7, DEFAULT_MAX_BOXES), rng.uniform(0, 10, (DEFAULT_MAX_BOXES, 2))])
+    world = RigidBodyWorld(np.hstack([corners, corners + 0.05]))
+    problem = Problem(world, [1, 5, 5, 0, 0, 0], [9, 5, 5, 0, 0, 0], goal_tolerance=0.5)
+    for planner in (PRM, RRT, RRTConnect):
+        planner(random_scene(1, 5), seed=0).solve(max_iterations=20)  # compile outside the timing
+        t0 = time.perf_counter()
+        result = planner(problem, seed=0).solve(time_limit=0.5)
+        took = time.perf_counter() - t0
+        assert result.solved or result.stop_reason == "time_limit"
+        assert took < 0.5 + 1.5, f"{planner.__name__}: {took:.2f} s under a 0.5 s limit"

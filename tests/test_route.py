@@ -89,44 +89,6 @@ def test_training_is_seeded_and_learns():
     assert last < first
 
 
-def _training_option_is_seeded_and_used(option, off, on):
-    """Two trainings with ``option=on`` give the same weights, and not those of ``option=off``."""
-    problems = [generate(f, 7, 64) for f in ("narrow_passage", "maze")]
-    nets = [train_route_net(problems, channels=8, depth=2, epochs=1, seed=1, log=lambda _: None, **{option: v})
-            for v in (off, on, on)]
-    weights = [list(n.state_dict().values()) for n in nets]
-    assert all(torch.equal(x, y) for x, y in zip(weights[1], weights[2], strict=True))
-    assert not all(torch.equal(x, y) for x, y in zip(weights[0], weights[1], strict=True))
-
-
-def test_thickening_grows_every_obstacle_by_its_radius_and_training_with_it_is_seeded():
-    from learning.route_training import thicken
-
-    obs = np.zeros((9, 11), bool)
-    obs[4, 5] = True
-    assert thicken(obs, 0) is obs
-    assert np.array_equal(np.argwhere(thicken(obs, 2)), np.argwhere(np.pad(np.ones((5, 5), bool), ((2, 2), (3, 3)))))
-    wall = generate("maze", 3, 64).world.obstacles
-    assert (thicken(wall, 1) >= wall).all() and thicken(wall, 1).sum() > wall.sum()
-    _training_option_is_seeded_and_used("thicken_radius", 0, 2)
-
-
-def test_speckle_blocks_single_cells_at_its_density_spares_the_goal_and_training_with_it_is_seeded():
-    from learning.route_training import speckled
-
-    obs = np.zeros((200, 200), bool)
-    obs[:, 100] = True
-    out = speckled(obs, (5, 5), 0.2, np.random.default_rng(0))
-    assert (out >= obs).all() and not out[5, 5]
-    assert abs(out[:, :100].mean() - 0.2) < 0.01  # the density asked for, on cells that were free
-    goal_blocked = obs.copy()
-    goal_blocked[5, 5] = True
-    assert speckled(goal_blocked, (5, 5), 0.5, np.random.default_rng(0))[5, 5]  # the goal's cell as it was
-    _training_option_is_seeded_and_used("speckle", 0.0, 0.1)
-    with pytest.raises(ValueError, match="speckle"):
-        train_route_net([generate("maze", 7, 64)], speckle=1.0)
-
-
 @pytest.mark.parametrize("attention", [0, 2])
 def test_a_saved_encoder_loads_with_the_same_predictions(tmp_path, attention):
     net = RouteNet(4, 8, 2, attention).eval()
@@ -398,27 +360,6 @@ def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
     for bad in (0, 9, True, 2.0):
         with pytest.raises(InputError, match="symmetries"):
             RouteSampler(shipped.net, symmetries=bad)
-
-
-def test_train_route_script_writes_an_encoder_and_refuses_bad_flags(tmp_path, capsys):
-    script = load_script("train_route")
-    path = script.main(["--maps", "1", "--epochs", "1", "--size", "64", "--channels", "4", "--depth", "2",
-                        "--out", str(tmp_path / "run"), "--export", str(tmp_path / "r.pt")])
-    assert load_route_net(path).channels == 4 and load_route_net(tmp_path / "r.pt").depth == 2
-    assert (tmp_path / "r.json").is_file()
-    # two sizes and the symmetries: one recipe, recorded as given
-    path = script.main(["--maps", "1", "--epochs", "1", "--size", "32", "64", "--channels", "4", "--depth", "2",
-                        "--augment", "--out", str(tmp_path / "aug")])
-    recipe = json.loads((tmp_path / "aug" / "route.json").read_text())["recipe"]
-    assert recipe["size"] == [32, 64] and recipe["augment"] is True and load_route_net(path).channels == 4
-    for bad, flag in ((["--epochs", "0"], "--epochs"), (["--size", "64", "8"], "--size"),
-                      (["--attention", "1", "--channels", "5"], "--attention"),
-                      (["--attention", "1", "--attention-level", "4"], "--attention-level"),
-                      (["--thicken", "-1"], "--thicken"), (["--speckle", "1"], "--speckle"),
-                      (["--speckle", "nan"], "--speckle")):
-        with pytest.raises(SystemExit) as exc:
-            script.main(bad)
-        assert exc.value.code == 2 and flag in capsys.readouterr().err
 
 
 @given(family=st.sampled_from(FAMILIES), seed=st.integers(0, 10**6), size=st.sampled_from([32, 64, 96]))

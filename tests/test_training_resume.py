@@ -168,3 +168,21 @@ def test_unreadable_config_files_are_named(tmp_path):
         (tmp_path / name).write_text(text)
         with pytest.raises(InputError, match=name):
             TrainConfig.from_json(tmp_path / name)
+
+
+def test_a_second_run_on_a_locked_folder_exits_2_naming_the_holder(tmp_path, capsys):
+    import importlib.util
+
+    from planners.base.fileio import run_lock
+
+    spec = importlib.util.spec_from_file_location("train_script", ROOT / "scripts" / "train.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    flags = ["--out", str(tmp_path), "--name", "kill", "--no-progress"]
+    with run_lock(tmp_path / "kill", "the first training run"):
+        assert script.main(flags) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "in use by pid" in err and "the first training run" in err, err
+    (tmp_path / "file").write_text("x")
+    assert script.main(["--out", str(tmp_path / "file"), "--no-progress"]) == 2
+    assert "--out" in capsys.readouterr().err

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from planners.base.fileio import InputError, env_limit
 from planners.base.planner import Planner, PlannerData, VertexStore, require_problem
 from planners.base.problem import Problem
 from planners.base.registry import register_planner
@@ -15,6 +16,17 @@ from planners.kernels import state as slots
 
 #: OMPL's default range: this fraction of the sampling box's diagonal (MAX_MOTION_DISTANCE_FRACTION).
 DEFAULT_RANGE_FRACTION = 0.2
+#: Most steps across the sampling box's diagonal a planner accepts unless raised: RRT-Connect reserves
+#: room for one connect across the whole box (two trees x (diagonal / step) vertices of 80 bytes in 2-D,
+#: about 300 in 6-DoF): 10^5 steps is 16 MB in 2-D and 60 MB in 6-DoF (twice that while an array grows).
+DEFAULT_MAX_STEPS = 100_000
+#: The environment variable that raises (or lowers) ``DEFAULT_MAX_STEPS``.
+MAX_STEPS_ENV = "SAMPLERGYM_MAX_STEPS"
+
+
+def max_steps_limit() -> int:
+    """Most steps across the diagonal in force: ``$SAMPLERGYM_MAX_STEPS`` if set, else ``DEFAULT_MAX_STEPS``."""
+    return env_limit(MAX_STEPS_ENV, DEFAULT_MAX_STEPS)
 
 
 def default_step(problem: Problem, step_size: float | None) -> float:
@@ -28,6 +40,13 @@ def default_step(problem: Problem, step_size: float | None) -> float:
         raise ValueError(f"step_size must be a positive number, got {step_size!r}") from None
     if not math.isfinite(step) or step <= 0:
         raise ValueError(f"step_size must be a positive finite number, got {step_size!r}")
+    low, high = problem.world.bounds
+    diag = float(np.linalg.norm(np.asarray(high, dtype=float) - np.asarray(low, dtype=float)))
+    limit = max_steps_limit()
+    if diag / step > limit:
+        raise InputError(f"step_size = {step:g} is {diag / step:.3g} steps across the map's diagonal ({diag:g}); "
+                         f"at most {limit} are accepted (RRT-Connect reserves memory for one connect across it). "
+                         f"Use a step of at least {diag / limit:.3g}, or set {MAX_STEPS_ENV}={math.ceil(diag / step)}")
     return step
 
 

@@ -15,7 +15,7 @@ import numbers
 
 import numpy as np
 
-from planners.base.fileio import check_int
+from planners.base.fileio import InputError, check_int, env_limit
 from planners.base.problem import Problem
 from planners.maps.gridsearch import distance_field, free_components
 from planners.worlds.grid import OccupancyGrid
@@ -36,6 +36,28 @@ SHIFTED_SIZES = (64, 96, 128, 192, 256)
 
 #: Smallest map side ``generate`` accepts: below it the narrowest features would be under 2 cells.
 MIN_SIZE = 32
+#: Largest generated map side unless raised: a map of side N holds N*N cells, and planning on it (the
+#: grid, its distance field and the search's arrays) takes about 35 bytes per cell: 4096 -> about 0.6 GB
+#: (docs/limits.md).
+DEFAULT_MAX_SIZE = 4096
+#: The environment variable that raises (or lowers) ``DEFAULT_MAX_SIZE``.
+MAX_SIZE_ENV = "SAMPLERGYM_MAX_MAP_SIDE"
+
+
+def max_size_limit() -> int:
+    """The largest generated map side in force: ``$SAMPLERGYM_MAX_MAP_SIDE`` if set, else ``DEFAULT_MAX_SIZE``."""
+    return env_limit(MAX_SIZE_ENV, DEFAULT_MAX_SIZE, low=MIN_SIZE)
+
+
+def check_size(size, name: str = "size") -> int:
+    """``size`` as a map side in [``MIN_SIZE``, the limit in force], or an ``InputError`` naming ``name``."""
+    size = check_int(size, name, low=MIN_SIZE)
+    limit = max_size_limit()
+    if size > limit:
+        raise InputError(f"{name} = {size}: generated maps are at most {limit} cells a side (about "
+                         f"{35 * size * size / 1e9:.1f} GB to plan on this one); if that is intended, set "
+                         f"{MAX_SIZE_ENV}={size}")
+    return size
 
 # rejection budget for a query's goal: every family leaves a large pool of valid starts per goal, so
 # in practice the first try succeeds; the bound only turns a broken design into a clear error
@@ -572,12 +594,12 @@ def generate(
             and tuning never use; names then read ``f"{family}-shifted-{size}-{seed}"``.
 
     Raises:
-        ValueError: For an unknown family, a size below ``MIN_SIZE``, a negative seed or a
-            non-positive goal tolerance.
+        ValueError: For an unknown family, a size below ``MIN_SIZE`` or above ``max_size_limit()``, a
+            negative seed or a non-positive goal tolerance.
     """
     if not isinstance(family, str) or family not in _GENERATORS:
         raise ValueError(f"unknown map family {family!r}; choose from {', '.join(FAMILIES)}")
-    check_int(size, "size", low=MIN_SIZE)
+    check_size(size)
     try:
         tol = float(goal_tolerance)
     except (TypeError, ValueError):

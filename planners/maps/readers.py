@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planners.base.fileio import InputError, check_int
+from planners.base.fileio import InputError, check_int, env_limit
 from planners.worlds.grid import OccupancyGrid
 
 #: Image suffixes ``OccupancyGrid.from_file`` reads with Pillow.
@@ -46,17 +46,7 @@ _PIL_LOCK = threading.Lock()
 def max_pixels_limit(max_pixels: int | None = None) -> int:
     """The cell limit in force: ``max_pixels`` if given, else ``$SAMPLERGYM_MAX_PIXELS``, else the default."""
     if max_pixels is None:
-        env = os.environ.get(MAX_PIXELS_ENV)
-        if env is None or not env.strip():
-            return DEFAULT_MAX_PIXELS
-        try:
-            value = int(env.strip().replace("_", ""))
-        except ValueError:
-            raise InputError(f"environment variable {MAX_PIXELS_ENV}={env!r} must be a positive integer "
-                             f"number of pixels") from None
-        if value <= 0:
-            raise InputError(f"environment variable {MAX_PIXELS_ENV}={env!r} must be a positive integer")
-        return value
+        return env_limit(MAX_PIXELS_ENV, DEFAULT_MAX_PIXELS)
     return check_int(max_pixels, "max_pixels")
 
 

@@ -171,8 +171,13 @@ def ros_occupancy(path: str | os.PathLike, *, max_pixels: int | None = None) -> 
     fields = read_ros_yaml(path)
     image = fields["image"]
     if not image.is_file():
-        raise InputError(f"{path}: 'image' names {str(image)!r}, which does not exist"
-                         + ("" if image.exists() else " (relative names are read from the yaml's folder)"))
+        if image.is_dir():
+            raise InputError(f"{path}: 'image' names {str(image)!r}, which is a folder, expected an image file")
+        if image.exists():
+            raise InputError(f"{path}: 'image' names {str(image)!r}, which is not a regular file (a device or a "
+                             "pipe?), expected an image file")
+        raise InputError(f"{path}: 'image' names {str(image)!r}, which does not exist "
+                         "(relative names are read from the yaml's folder)")
     apply, alpha = _pixels(image, max_pixels)
     negate, mode = fields["negate"], fields["mode"]
     occ, free = fields["occupied_thresh"], fields["free_thresh"]

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planners.base.fileio import InputError, atomic_write_text, check_int
+from planners.base.fileio import InputError, atomic_write_text, check_int, env_limit
 from planners.base.problem import Problem
 from planners.base.world import WorldBase
 from planners.kernels import geometry
@@ -62,6 +62,23 @@ DEFAULT_DELTA = 0.05
 #: pieces is refused. This bounds the work of one check (0.4 us per pose for a 16-point body among six
 #: boxes: about 40 ms at the limit), and so how late a planner can notice its time limit.
 MAX_MOTION_POSES = 100_000
+#: Largest coordinate of a workspace corner: beyond it distances and volumes lose their precision.
+MAX_COORDINATE = 1e12
+#: Most boxes a world accepts unless raised: one pose of the default 16-point body among 5,000 boxes costs
+#: about 0.3 ms, and a time limit is looked at between iterations (each a few motion checks).
+DEFAULT_MAX_BOXES = 5_000
+#: The environment variable that raises (or lowers) ``DEFAULT_MAX_BOXES``.
+MAX_BOXES_ENV = "SAMPLERGYM_MAX_BOXES"
+
+
+def max_boxes_limit() -> int:
+    """The box limit in force: ``$SAMPLERGYM_MAX_BOXES`` if set, else ``DEFAULT_MAX_BOXES``."""
+    return env_limit(MAX_BOXES_ENV, DEFAULT_MAX_BOXES, low=0)
+
+
+#: Point-box tests the free-volume estimate (PRM's and RRT*'s radius) may spend: about 0.1 s. Scenes of
+#: up to ~80 boxes with the default 16-point body keep the full 16,384 samples.
+MAX_VOLUME_TESTS = 20_000_000
 
 
 def rotation_matrix(tx: float, ty: float, tz: float) -> np.ndarray:
@@ -160,7 +177,19 @@ class RigidBodyWorld(WorldBase):
             if not lo[j] < hi[j]:
                 raise InputError(f"workspace bounds need low < high on every axis; "
                                  f"on {ax}: low {lo[j]:g}, high {hi[j]:g}")
+        with np.errstate(over="ignore"):
+            extent = hi - lo
+            diagonal = float(np.linalg.norm(extent))
+        if not (np.all(np.isfinite(extent)) and math.isfinite(diagonal)) or np.abs(np.concatenate([lo, hi])).max() > \
+                MAX_COORDINATE:
+            raise InputError(f"workspace bounds {tuple(lo.tolist())} - {tuple(hi.tolist())} are too large: "
+                             f"coordinates must lie within +-{MAX_COORDINATE:g}")
         self.boxes = _boxes(boxes)
+        limit = max_boxes_limit()
+        if len(self.boxes) > limit:
+            raise InputError(f"the scene has {len(self.boxes):,} boxes, more than the limit of {limit:,} (every check "
+                             f"tests each body point against each box); if that is intended, set "
+                             f"{MAX_BOXES_ENV}={len(self.boxes)}")
         self.body = box_body(1.0, 0.5, 0.25) if body is None else _body(body)
         try:
             delta = float(delta)
@@ -168,6 +197,10 @@ class RigidBodyWorld(WorldBase):
             raise InputError(f"delta must be a positive number, got {delta!r}") from None
         if not (math.isfinite(delta) and delta > 0):
             raise InputError(f"delta must be a positive finite number, got {delta}")
+        if delta >= float(extent.min()):
+            raise InputError(f"delta {delta:g} leaves no valid state: every checked position needs a clearance of "
+                             f"delta / 2 = {delta / 2:g}, and no point is that far from the walls of a workspace "
+                             f"whose smallest side is {float(extent.min()):g}; use delta < {float(extent.min()):g}")
         with np.errstate(over="ignore"):  # a huge workspace or body gives inf here, refused just below
             self.radius = float(np.linalg.norm(self.body, axis=1).max())
             longest = float(np.linalg.norm(hi - lo)) + 3.0 * math.pi * self.radius
@@ -225,13 +258,15 @@ class RigidBodyWorld(WorldBase):
     def free_volume(self) -> float:
         """Measure of the free states in ``(x, y, z, tx, ty, tz)`` coordinates (for RRT*/PRM* radii).
 
-        Monte-Carlo estimate over 16,384 states drawn with a fixed seed: the free fraction times
-        the workspace volume times ``(2 pi)^3``; computed once.
+        Monte-Carlo estimate over 16,384 states drawn with a fixed seed (fewer, down to 256, where
+        the scene is so large that 16,384 checks would exceed ``MAX_VOLUME_TESTS`` point-box tests):
+        the free fraction times the workspace volume times ``(2 pi)^3``; computed once.
         """
         if self._free_volume is None:
             rng = np.random.default_rng(0)
-            Q = self._low + (self._high - self._low) * rng.random((16384, 6))
-            frac = max(float(self.check_motions(Q, Q).mean()), 1.0 / 16384)
+            n = int(min(16384, max(256, MAX_VOLUME_TESTS // max(1, len(self.boxes) * len(self.body)))))
+            Q = self._low + (self._high - self._low) * rng.random((n, 6))
+            frac = max(float(self.check_motions(Q, Q).mean()), 1.0 / n)
             self._free_volume = frac * float(np.prod(self.high3 - self.low3)) * (2.0 * math.pi) ** 3
         return self._free_volume
 
@@ -454,6 +489,10 @@ def load_scene(path: str | os.PathLike) -> Problem:
     for key in ("bounds", "start", "goal"):
         if key not in spec:
             raise InputError(f"{path}: missing required {key!r} line")
+    for key in ("start", "goal"):
+        angles = spec[key][3:]
+        if max(abs(a) for a in angles) > 2 * math.pi:
+            raise InputError(f"{path}, line {where[key]}: {key} angles {angles} must lie within +-2 pi (radians)")
     if "body" in spec and spec["points"]:
         raise InputError(f"{path}, line {where['point']}: give either a 'body box' line or 'point' lines, not both")
     body = spec.get("body", np.array(spec["points"]) if spec["points"] else None)

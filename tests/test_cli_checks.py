@@ -1,0 +1,37 @@
+"""The benchmark commands check every argument before their first run: exit 2 with one line naming the flag."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from conftest import load_script  # noqa: E402
+
+
+@pytest.mark.parametrize("script, flags, named", [
+    ("benchmark_planners", ["--seeds", "0"], "--seeds"),
+    ("benchmark_planners", ["--size", "100000"], "--size = 100000"),
+    ("benchmark_planners", ["--step", "nan"], "--step"),
+    ("benchmark_planners", ["--tolerance", "-1"], "--tolerance"),
+    ("benchmark_planners", ["--max-iterations", "0"], "--max-iterations"),
+    ("benchmark_planners", ["--movingai", "/nonexistent/maps"], "--movingai"),
+    ("benchmark_planners", ["--out", "FILE"], "--out"),
+    ("benchmark_backends", ["--processes", "0"], "--processes"),
+    ("benchmark_backends", ["--empty-tasks", "-3"], "--empty-tasks"),
+    ("benchmark_envs", ["--steps", "0"], "--steps"),
+    ("benchmark_envs", ["--modes", "bias,nope"], "--modes"),
+    ("benchmark_envs", ["--files", "/nonexistent.png"], "--files"),
+    ("benchmark_policy", ["--maps", "0"], "--maps"),
+    ("benchmark_policy", ["--bias", "2"], "--bias"),
+])
+def test_bad_flags_exit_2_with_one_line(tmp_path, capsys, script, flags, named):
+    (tmp_path / "FILE").write_text("x")
+    flags = [str(tmp_path / "FILE") if f == "FILE" else f for f in flags]
+    with pytest.raises(SystemExit) as exc:
+        load_script(script).main(flags)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert named in err and err.count("\n") == 1, err
