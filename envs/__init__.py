@@ -1,9 +1,10 @@
 """SamplerGym environments; importing this package registers them under ``SamplerGym/``.
 
     import gymnasium as gym
-    import envs
-    gym.register_envs(envs)
-    env = gym.make("SamplerGym/RRT-Maze-v0", action_mode="relative")
+    env = gym.make("samplergym:SamplerGym/RRT-Maze-v0", action_mode="relative")
+
+(``samplergym:`` makes Gymnasium import ``samplergym``, which registers the ids even when a project's
+own ``envs/`` folder shadows this package; ``import envs`` registers them too.)
 
 Registered ids:
 
@@ -30,11 +31,13 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-from envs.actions import ACTION_MODES
-from envs.env_sampler import EnvSampler
-from envs.render import record_episode
-from envs.sampler_env import SamplerEnv
-from envs.sources import (
+# relative imports: the package works under another name too (``samplergym`` loads it so when a
+# user's own ``envs/`` folder shadows this one)
+from .actions import ACTION_MODES
+from .env_sampler import EnvSampler, NoExplorationWarning
+from .render import record_episode
+from .sampler_env import SamplerEnv, make_sampler_env
+from .sources import (
     FamilySource,
     FileSource,
     MapSetSource,
@@ -45,7 +48,8 @@ from envs.sources import (
 )
 
 __all__ = ["ACTION_MODES", "ENV_IDS", "EnvSampler", "FamilySource", "FileSource", "MapSetSource", "MovingAISource",
-           "ProblemListSource", "RigidSceneSource", "SamplerEnv", "record_episode", "sample_map_paths"]
+           "NoExplorationWarning", "ProblemListSource", "RigidSceneSource", "SamplerEnv", "make_sampler_env",
+           "record_episode", "sample_map_paths"]
 
 _FAMILY_IDS = {
     "Forest": "forest",
@@ -66,7 +70,8 @@ def _register_all() -> None:
     for env_id, kwargs in ENV_IDS.items():
         if env_id in registry:  # re-import (e.g. importlib.reload, or a second package path)
             continue
-        register(id=env_id, entry_point="envs.sampler_env:SamplerEnv", kwargs=kwargs)
+        # a factory, not the class: it adds TimeLimit at the env's own max_iterations (see make_sampler_env)
+        register(id=env_id, entry_point=f"{__name__}.sampler_env:make_sampler_env", kwargs=kwargs)
 
 
 _register_all()

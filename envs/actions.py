@@ -26,10 +26,12 @@ class ActionSampler(SamplerBase):
     Args:
         step_size: The planner's step, which sets the scale of Gaussian spreads and offsets.
         uniform_floor: Probability of a uniform sample whatever the action, so probabilistic
-            completeness is never lost (``mixture`` and ``relative``).
+            completeness is never lost (``bias``, ``mixture``, ``relative`` and ``guided``; ``point``
+            has none: its action is the sample).
     """
 
     dims = 0  # action dimensions beyond the state dimension
+    has_floor = True  # the mode honours uniform_floor (``point`` does not)
 
     def __init__(self, step_size: float, uniform_floor: float = 0.05) -> None:
         if not 0.0 <= uniform_floor <= 1.0:
@@ -37,6 +39,15 @@ class ActionSampler(SamplerBase):
         self.step_size = float(step_size)
         self.uniform_floor = float(uniform_floor)
         self.action: np.ndarray | None = None
+
+    @property
+    def explores(self) -> bool:
+        """Whether every action leaves a positive chance of a uniform sample (a floor above zero).
+
+        Without it, a deterministic policy that answers the same action each time samples one point
+        forever and the planner never covers the map.
+        """
+        return self.has_floor and self.uniform_floor > 0.0
 
     def action_space(self, dim: int) -> spaces.Box:
         return spaces.Box(-1.0, 1.0, (self.action_size(dim),), np.float32)
@@ -82,21 +93,30 @@ class ActionSampler(SamplerBase):
 
 
 class PointAction(ActionSampler):
-    """``point``: the action is the sample itself, ``Box(-1, 1, (d,))`` mapped to the map bounds."""
+    """``point``: the action is the sample itself, ``Box(-1, 1, (d,))`` mapped to the map bounds.
+
+    It has no uniform floor: a deterministic policy that has not learned to move its point samples the
+    same place every iteration (``EnvSampler`` warns when it is built so).
+    """
+
+    has_floor = False
 
     def _sample(self, rng, view):
         return self._to_state(self.action)
 
 
 class BiasAction(ActionSampler):
-    """``bias``: the action sets this iteration's goal bias p = (a + 1) / 2; ``Box(-1, 1, (1,))``."""
+    """``bias``: the action sets this iteration's goal bias p = (a + 1) / 2; ``Box(-1, 1, (1,))``.
+
+    p is capped at ``1 - uniform_floor``, so the sample is uniform at least that often.
+    """
 
     def action_size(self, dim: int) -> int:
         return 1
 
     def _sample(self, rng, view):
         u = rng.random(self.problem.dim + 1)  # the same stream layout as GoalBiasedSampler
-        if u[0] < (self.action[0] + 1.0) * 0.5:
+        if u[0] < min((self.action[0] + 1.0) * 0.5, 1.0 - self.uniform_floor):
             return np.array(self.problem.goal, dtype=np.float64)
         return self._uniform(u[1:])
 

@@ -9,6 +9,7 @@ planner using it and a rollout of the env on the same query and planner seed are
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -17,8 +18,24 @@ import numpy as np
 from planners import SamplerBase
 
 if TYPE_CHECKING:
-    from envs.sampler_env import SamplerEnv
     from planners import Problem
+
+    from .sampler_env import SamplerEnv
+
+
+class NoExplorationWarning(UserWarning):
+    """A sampler that may never sample outside its policy's choices: deterministic, with no uniform floor."""
+
+
+def no_exploration_message(env: SamplerEnv, who: str) -> str:
+    """Why a deterministic sampler on ``env``'s action mode cannot explore, and what to change."""
+    why = ("has no uniform floor" if env.action_mode == "point"
+           else f"has uniform_floor={env.uniform_floor:g}")
+    return (f"{who} with action_mode={env.action_mode!r}, which {why}: a policy that answers the same action "
+            "for similar observations samples the same place every iteration and the planner may never reach the "
+            "goal. Train with an action mode that keeps a uniform floor (action_mode='mixture', the default, or "
+            "'bias', 'relative', 'guided', with uniform_floor > 0), or draw actions from the policy "
+            "(deterministic=False)")
 
 
 class _ViewHolder:
@@ -40,11 +57,22 @@ class EnvSampler(SamplerBase):
         env: The (unwrapped) ``SamplerEnv`` whose observation kind, action mode, step size, uniform
             floor and ``max_iterations`` (which scales the iteration feature) define the sampler.
         act: ``act(obs, rng) -> action``; ``rng`` is the planner's generator, for stochastic choices.
+        deterministic: Whether ``act`` answers the same action for the same observation. A
+            deterministic ``act`` in an action mode without a uniform floor (``point``, or
+            ``uniform_floor=0``) may sample one place forever; that combination warns when the
+            sampler is built, naming what to change.
+
+    Warns:
+        NoExplorationWarning: ``deterministic`` and the env's action mode has no uniform floor.
     """
 
-    def __init__(self, env: SamplerEnv, act: Callable[[Any, np.random.Generator], Any]) -> None:
+    def __init__(self, env: SamplerEnv, act: Callable[[Any, np.random.Generator], Any], *,
+                 deterministic: bool = True) -> None:
         self.env = env
         self.act = act
+        if deterministic and not env.new_action_sampler().explores:
+            warnings.warn(no_exploration_message(env, f"{type(self).__name__} (deterministic)"),
+                          NoExplorationWarning, stacklevel=2)
 
     def bind(self, problem: Problem) -> EnvSampler:
         if problem.dim != self.env.dim:

@@ -8,12 +8,13 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from envs.actions import ACTION_MODES, make_action_sampler
-from envs.observation import OBSERVATIONS, make_observation
-from envs.sources import MapSetSource, MapSource, make_source, map_problem
 from planners import OccupancyGrid, Planner, Problem, make_planner
 from planners.base.fileio import InputError, check_int
 from planners.base.registry import planner_class
+
+from .actions import ACTION_MODES, make_action_sampler
+from .observation import OBSERVATIONS, make_observation
+from .sources import MapSetSource, MapSource, make_source, map_problem
 
 
 class SamplerEnv(gym.Env):
@@ -27,10 +28,12 @@ class SamplerEnv(gym.Env):
 
     ## Action Space
     ``Box(-1, 1, (k,), float32)``, by ``action_mode`` (see ``envs.actions``):
-    ``point`` (k = d): the sample itself, mapped to the map bounds; ``bias`` (k = 1): this
-    iteration's goal-bias probability; ``mixture`` (k = d + 2): a Gaussian's mean, spread and weight
-    against uniform sampling (with a uniform floor); ``relative`` (k = d + 1): an offset and spread
-    from the tree vertex nearest the goal. ``guided``: ``Discrete(177)``, a log-polar cell in the
+    ``mixture`` (k = d + 2, the default): a Gaussian's mean, spread and weight against uniform
+    sampling; ``point`` (k = d): the sample itself, mapped to the map bounds (no uniform floor);
+    ``bias`` (k = 1): this iteration's goal-bias probability; ``relative`` (k = d + 1): an offset and
+    spread from the tree vertex nearest the goal. Every mode but ``point`` samples uniformly at least a
+    ``uniform_floor`` share of the time (default 0.05), so a policy trained briefly with SB3's
+    defaults still plans. ``guided``: ``Discrete(177)``, a log-polar cell in the
     frame from the tree's progress vertex towards the goal, or the tree's frontier (``planners.guidance.guided``).
     Out-of-range continuous actions are clipped to [-1, 1]; NaN, non-numeric, wrongly shaped or
     out-of-range discrete actions raise ``planners.base.fileio.InputError`` (a ``ValueError``) naming the
@@ -57,7 +60,9 @@ class SamplerEnv(gym.Env):
 
     ## Episode End
     ``terminated`` when the planner has a solution; ``truncated`` after ``max_iterations`` steps.
-    Stepping after either raises ``RuntimeError`` until ``reset()``.
+    Stepping after either raises ``RuntimeError`` until ``reset()``. ``gym.make`` wraps the env in
+    Gymnasium's ``TimeLimit`` at the same ``max_iterations`` (``make_sampler_env``), so
+    ``env.spec.max_episode_steps`` is the episode's length whatever ``max_iterations`` is given.
 
     ## Info
     ``iterations``, ``solved``, ``path_cost``, ``collision_checks``, ``tree_size``, ``sample``,
@@ -95,7 +100,7 @@ class SamplerEnv(gym.Env):
         planner: str = "rrt",
         step_size: float = 4.0,
         max_iterations: int = 2000,
-        action_mode: str = "point",
+        action_mode: str = "mixture",
         uniform_floor: float = 0.05,
         reach: float = 3.0,
         observation: str = "image",
@@ -232,7 +237,7 @@ class SamplerEnv(gym.Env):
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' or 'human'")
             return None
         if self._renderer is None:
-            from envs.render import EpisodeRenderer
+            from .render import EpisodeRenderer
 
             self._renderer = EpisodeRenderer(human=self.render_mode == "human", fps=self.metadata["render_fps"])
             if self.problem is not None:
@@ -268,11 +273,15 @@ class SamplerEnv(gym.Env):
         return GuidedSampling(problem, self.step_size, max_iterations=self.max_iterations,
                               uniform_floor=self.uniform_floor)
 
-    def as_sampler(self, act):
-        """This env's observation and action code as a planner ``Sampler`` driven by ``act(obs, rng)``."""
-        from envs.env_sampler import EnvSampler
+    def as_sampler(self, act, *, deterministic: bool = True):
+        """This env's observation and action code as a planner ``Sampler`` driven by ``act(obs, rng)``.
 
-        return EnvSampler(self, act)
+        ``deterministic``: whether ``act`` ignores ``rng`` (see ``EnvSampler``, which warns about a
+        deterministic ``act`` in an action mode without a uniform floor).
+        """
+        from .env_sampler import EnvSampler
+
+        return EnvSampler(self, act, deterministic=deterministic)
 
     # --- helpers ---------------------------------------------------------------------------
 
@@ -321,6 +330,20 @@ class SamplerEnv(gym.Env):
         state = self.__dict__.copy()
         state["_renderer"] = None  # matplotlib figures do not pickle
         return state
+
+
+def make_sampler_env(**kwargs) -> gym.Env:
+    """What ``gym.make`` builds for every ``SamplerGym/`` id: a ``SamplerEnv`` in ``TimeLimit(max_iterations)``.
+
+    The limit follows the env's own ``max_iterations`` (a registered ``max_episode_steps`` could not:
+    ``gym.make(id, max_iterations=5000)`` would be cut at the registered number), so both truncate at
+    the same step and ``env.spec.max_episode_steps`` reports it.
+    """
+    env = SamplerEnv(**kwargs)
+    return gym.wrappers.TimeLimit(env, env.max_iterations)
+
+
+make_sampler_env.metadata = SamplerEnv.metadata  # gym.make reads the render modes from the entry point
 
 
 def _number(name: str, value, low: float | None = None, high: float | None = None, low_open: bool = False) -> float:

@@ -82,7 +82,9 @@ class SB3Sampler(EnvSampler):
             They fix the observation and action code; the maps come from the planner's problem.
         deterministic: Take the policy's most likely action (the default). Otherwise draw the action
             from the policy's distribution with the planner's generator, so runs stay seeded
-            (actor-critic policies: PPO, A2C).
+            (actor-critic policies: PPO, A2C). Deterministic in an action mode with no uniform floor
+            (``point``, or ``uniform_floor=0``) warns (``envs.NoExplorationWarning``): such a
+            sampler may sample one place forever.
         algo: For a path: the algorithm (``PPO``, ``A2C``, ``DQN``, ``SAC``, ``TD3``), guessed from the
             weight names if omitted. ``policy_kwargs``: those the model was trained with, if any.
     """
@@ -119,7 +121,7 @@ class SB3Sampler(EnvSampler):
         self.policy = policy
         self.deterministic = bool(deterministic)
         self.env_id = env_id
-        super().__init__(env, self._act)
+        super().__init__(env, self._act, deterministic=self.deterministic)
 
     def _act(self, obs, rng: np.random.Generator):
         if self.deterministic:

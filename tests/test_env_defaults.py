@@ -89,7 +89,8 @@ def test_planning_id_plans_on_the_users_map(kind, tmp_path):
     else:
         m = tmp_path / "mine.npy"
         np.save(m, obstacles)
-    env = gym.make("SamplerGym/Planning-v0", map=m, start=(4.5, 20.5), goal=(44.5, 20.5), max_iterations=3000)
+    env = gym.make("SamplerGym/Planning-v0", map=m, start=(4.5, 20.5), goal=(44.5, 20.5), max_iterations=3000,
+                   action_mode="point")
     env.reset(seed=0)
     p = env.unwrapped.problem
     assert np.array_equal(p.world.obstacles, obstacles)
@@ -199,3 +200,126 @@ def test_stepping_after_the_episode_ended_is_refused_alike(end):
     assert env.planner.iterations == iterations
     env.reset(seed=0)
     env.step(np.ones(1, np.float32))
+
+
+# --- defaults that learn: every id's default action mode keeps a uniform floor -------------------------
+
+TWO_D_IDS = [i for i in ALL_IDS if not i.endswith("RigidBody-v0")]
+
+
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_every_ids_default_action_mode_explores(env_id, shared_cwd):
+    _needs_movingai(env_id)
+    env = gym.make(env_id).unwrapped
+    assert env.new_action_sampler().explores, f"{env_id}: default action mode {env.action_mode!r} has no floor"
+    assert not SamplerEnv(action_mode="point").new_action_sampler().explores
+    assert not SamplerEnv(action_mode="mixture", uniform_floor=0.0).new_action_sampler().explores
+
+
+def test_bias_mode_keeps_its_floor_at_full_bias():
+    """A bias action of 1 (goal bias 1) still samples uniformly a uniform_floor share of the time."""
+    env = SamplerEnv("forest", action_mode="bias", uniform_floor=0.2)
+    env.reset(seed=3)
+    at_goal = []
+    for _ in range(400):
+        *_, term, trunc, info = env.step(np.ones(1, np.float32))
+        at_goal.append(bool(np.array_equal(info["sample"], env.problem.goal)))
+        if term or trunc:
+            env.reset()
+    share = 1 - np.mean(at_goal)
+    assert 0.12 < share < 0.3  # binomial(400, 0.2): far outside these bounds only by a bug
+
+
+def _ppo_then_plan(env_id: str, learn_steps: int, **ppo_kwargs):
+    """PPO with SB3's defaults (``ppo_kwargs`` only shrink the rollout) on ``env_id``'s defaults, then plan.
+
+    The model plans through ``SB3Sampler(model, env_id)`` (deterministic, the default) on a query of the
+    id's family that training never saw, within 20,000 iterations.
+    """
+    import torch
+    from stable_baselines3 import PPO
+
+    from learning import SB3Sampler
+    from planners import RRT
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        env = gym.make(env_id)
+        policy = "MultiInputPolicy" if isinstance(env.observation_space, gym.spaces.Dict) else "MlpPolicy"
+        model = PPO(policy, env, seed=0, **ppo_kwargs).learn(learn_steps)
+        base = env.unwrapped
+        problem = base.source(np.random.default_rng(2**40 + 17))  # a seed outside the training stream
+        sampler = SB3Sampler(model, env_id)
+        result = RRT(problem, step_size=base.step_size, sampler=sampler, seed=5).solve(max_iterations=20_000)
+    finally:
+        torch.set_num_threads(threads)
+    assert result.solved, f"{env_id}: not solved in {result.iterations} iterations"
+
+
+def test_ppo_with_sb3_defaults_on_a_default_id_plans():
+    """The fast representative: SB3's PPO on RRT-Forest-v0's defaults, a rollout shrunk to 128 steps."""
+    _ppo_then_plan("SamplerGym/RRT-Forest-v0", 256, n_steps=128, batch_size=64, n_epochs=2)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("env_id", TWO_D_IDS)
+def test_ppo_with_sb3_defaults_on_every_2d_id_plans(env_id, shared_cwd):
+    """PPO exactly as SB3 builds it (one 2,048-step rollout for 300 steps), then a held-out query."""
+    _needs_movingai(env_id)
+    _ppo_then_plan(env_id, 300)
+
+
+def test_a_sampler_that_cannot_explore_warns_and_says_what_to_change():
+    from stable_baselines3 import PPO
+
+    from learning import SB3Sampler
+
+    kw = {"action_mode": "point", "obs_size": 36, "local_size": 36}
+    model = PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v0", **kw), n_steps=8, batch_size=8, seed=0)
+    with pytest.warns(envs.NoExplorationWarning, match=r"action_mode='point'.*mixture.*deterministic=False"):
+        SB3Sampler(model, "SamplerGym/RRT-Forest-v0", **kw)
+    with pytest.warns(envs.NoExplorationWarning, match="uniform_floor=0"):
+        SB3Sampler(PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v0", **{**kw, "action_mode": "mixture",
+                                                                                   "uniform_floor": 0.0}),
+                       n_steps=8, batch_size=8, seed=0),
+                   "SamplerGym/RRT-Forest-v0", **{**kw, "action_mode": "mixture", "uniform_floor": 0.0})
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", envs.NoExplorationWarning)
+        SB3Sampler(model, "SamplerGym/RRT-Forest-v0", deterministic=False, **kw)  # draws: explores
+        envs.EnvSampler(SamplerEnv(**kw), lambda obs, rng: rng.uniform(-1, 1, 2), deterministic=False)
+    with pytest.warns(envs.NoExplorationWarning, match="EnvSampler"):
+        envs.EnvSampler(SamplerEnv(**kw), lambda obs, rng: np.zeros(2))
+
+
+# --- the spec's max_episode_steps: truncation through Gymnasium's TimeLimit -----------------------------
+
+@pytest.mark.parametrize("env_id, steps", [("SamplerGym/RRT-Forest-v0", 2000), ("SamplerGym/RRT-RigidBody-v0", 5000)])
+def test_time_limit_follows_max_iterations(env_id, steps):
+    from gymnasium.wrappers import TimeLimit
+
+    env = gym.make(env_id)
+    assert env.spec.max_episode_steps == steps
+    env = gym.make(env_id, max_iterations=7, action_mode="bias")
+    assert env.spec.max_episode_steps == 7
+    wrapper = env
+    while not isinstance(wrapper, TimeLimit):
+        wrapper = wrapper.env
+    assert wrapper._max_episode_steps == 7
+    env.reset(seed=0)
+    for i in range(7):
+        _, _, term, trunc, _ = env.step(np.full(1, -1.0, np.float32))  # goal bias 0: not solved in 7
+        assert not term and trunc == (i == 6)
+    env.reset(seed=1)  # a new episode after truncation
+    env.step(np.zeros(1, np.float32))
+
+
+def test_registered_envs_pass_the_env_checkers():
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    env = gym.make("SamplerGym/RRT-Forest-v0", max_iterations=50)
+    check_env(env.unwrapped, skip_render_check=True)
+    sb3_check_env(env, warn=False)

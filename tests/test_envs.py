@@ -222,7 +222,7 @@ def test_rewards_and_potential_based_shaping():
             done = term or trunc
         assert term and rp == -i1["iterations"]  # the return is minus the iterations-to-solution
         assert rs - rp == pytest.approx(-phi0)  # gamma = 1: shaping telescopes to Phi(end) - Phi(start), Phi(end) = 0
-    checks = SamplerEnv("forest", reward="checks", checks_weight=0.5)
+    checks = SamplerEnv("forest", reward="checks", checks_weight=0.5, action_mode="point")
     checks.reset(seed=0)
     _, r, _, _, info = checks.step(np.zeros(2))
     assert r == -1.0 - 0.5 * info["collision_checks"]
@@ -270,7 +270,7 @@ def test_render_and_record(tmp_path):
     assert "iterations" in info
     with Image.open(tmp_path / "ep.gif") as img:
         assert img.n_frames > 2
-    human = SamplerEnv("forest", render_mode="human")
+    human = SamplerEnv("forest", render_mode="human", action_mode="point")
     human.reset(seed=0)
     human.step(np.zeros(2))  # no display here: warns once, never crashes
     human.close()

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from matplotlib.collections import LineCollection, PathCollection
 from matplotlib.colors import to_rgba, to_rgba_array
+from matplotlib.contour import ContourSet
 from PIL import Image
 
 from planners import (
@@ -384,3 +385,84 @@ def test_save_animation_holds_the_last_frame_and_refuses_other_suffixes(tmp_path
     with pytest.raises(ValueError, match=r"\.gif or \.mp4"):
         plotting.save_animation(frames, tmp_path / "a.png")
     assert not (tmp_path / "a.png").exists()
+
+
+def _figure_texts(fig):
+    """Every text in the figure: titles, tick labels, legend entries."""
+    from matplotlib.text import Text
+
+    return [t.get_text() for t in fig.findobj(Text)]
+
+
+def test_inflated_map_shows_its_own_walls_outlined_and_the_zone_shaded():
+    obs = np.zeros((40, 60), bool)
+    obs[18:22, 28:32] = True  # a pillar
+    grid = OccupancyGrid(obs).inflate(4.0)
+    levels = plotting.map_levels(grid)
+    assert np.array_equal(levels == 2, obs)  # the walls are the map's own
+    assert np.array_equal(levels >= 1, grid.obstacles) and (levels == 1).sum() > 0  # the zone is the rest
+    ax = new_figure((6, 4)).add_subplot()
+    plotting.draw_world(ax, grid)
+    img = figure_to_array(ax.figure)
+
+    def at(x, y):
+        dx, dy = ax.transData.transform((x, y))
+        return img[int(img.shape[0] - dy), int(dx)]
+
+    assert _near(at(30.0, 20.0), plotting.OBSTACLE_COLOR)  # inside the pillar
+    assert _near(at(30.0, 15.5), plotting.INFLATED_COLOR)  # inside the zone, above it
+    assert _near(at(10.0, 30.0), "white")  # free (the zone also lines the map's edge, 4 cells deep)
+    assert any(isinstance(c, ContourSet) for c in ax.collections), "no outline drawn around the walls"
+    # a map without a robot radius: obstacles as before, no zone, no outline
+    plain = OccupancyGrid(obs)
+    assert plotting.map_levels(plain).max() == 2 and not (plotting.map_levels(plain) == 1).any()
+    ax = new_figure((6, 4)).add_subplot()
+    plotting.draw_world(ax, plain)
+    assert not any(isinstance(c, ContourSet) for c in ax.collections)
+
+
+def test_plan_figure_has_a_legend_and_a_title_that_fits_a_tall_map(tmp_path, monkeypatch):
+    from planners.tools.workflow import load_map, plan_on_image, write_figure
+
+    obs = np.zeros((420, 60), bool)  # tall and narrow
+    obs[200:204, 0:45] = True
+    img = tmp_path / "tall.png"
+    Image.fromarray(np.where(obs, 0, 255).astype(np.uint8)).save(img)
+    grid = load_map(img, robot_radius=2.0)
+    out = plan_on_image(grid, (10.5, 10.5), (10.5, 400.5), planner="rrt-connect", seed=0, gif=False)
+    assert out.result.solved
+    title = ("RRTConnect: a deliberately long title naming the planner, iterations, length and smoothed length "
+             "that is wider than a narrow figure")
+    captured = {}
+    real_save = plotting.save_figure
+
+    def keep(fig, path, **kw):
+        captured["fig"] = fig
+        return real_save(fig, path, **kw)
+
+    monkeypatch.setattr(plotting, "save_figure", keep)
+    write_figure(out, tmp_path / "plan.png", title=title)
+    fig = captured["fig"]
+    texts = _figure_texts(fig)
+    for label in ("start tree", "goal tree", "raw path", "smoothed path", "start", "goal", "walls (the map's own)",
+                  "robot radius zone (2)"):
+        assert label in texts, f"legend misses {label!r}: {texts}"
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    box = ax.title.get_window_extent(renderer)
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.width and box.y1 <= fig.bbox.height  # the whole title shows
+    assert "\n" in ax.get_title()
+
+
+def test_rows_in_messages_are_the_map_images_rows(tmp_path):
+    """A ROS map's rows are flipped on loading; a message names the row of the image the user opens."""
+    from planners.tools.workflow import plan_on_image
+
+    grid = _ros_like_grid()
+    r, c = np.argwhere(grid.obstacles)[0]
+    q = grid.cell_center(r, c)
+    image_row = grid.height - 1 - r
+    with pytest.raises(ValueError, match=rf"start .* blocked cell \(row {image_row}, col {c} of the map image"):
+        plan_on_image(grid, q, (1.8, -0.2))
+    assert grid.image_row(r) == image_row and OccupancyGrid(grid.obstacles).image_row(r) == r

@@ -117,7 +117,8 @@ def test_problem_in_a_world_frame():
     g = OccupancyGrid(a, 0.1, origin=(-0.5, 2.0), y_up=True)
     p = Problem(g, start=(-0.45, 2.05), goal=(0.45, 2.95), goal_tolerance=0.05)
     assert p.start.tolist() == [-0.45, 2.05]
-    with pytest.raises(InputError, match=r"start \(0.05, 2.55\).*blocked cell \(row 5, col 5\)"):
+    # y_up: array row 5 is drawn as row 4 of the map image (row 0 at the top), the row messages name
+    with pytest.raises(InputError, match=r"start \(0.05, 2.55\).*blocked cell \(row 4, col 5 of the map image"):
         Problem(g, start=(0.05, 2.55), goal=(0.45, 2.95))
     with pytest.raises(InputError, match=r"goal \(0.55, 1.0\).*outside the map interior \(-0.5, 0.5\) x \(2, 3\)"):
         Problem(g, start=(-0.45, 2.05), goal=(0.55, 1.0))

@@ -91,3 +91,33 @@ def test_the_env_refuses_planners_whose_sampler_is_their_algorithm(name):
     assert planner_class(name).own_sampler
     with pytest.raises(envs.sampler_env.InputError, match="brings its own sampler"):
         gym.make("SamplerGym/Planning-v0", planner=name)
+
+
+@pytest.mark.parametrize("alias,name", [("RRTStar", "RRTstar"), ("RRT*", "RRTstar"), ("rrt-star", "RRTstar"),
+                                        ("InformedRRTStar", "InformedRRTstar"), ("Informed RRT*", "InformedRRTstar")])
+def test_one_canonical_spelling_and_the_class_name_as_alias(alias, name):
+    assert planner_class(alias).name == name
+    assert planner_name_arg(alias) == name
+    assert planner_class(name).__name__ in ("RRTStar", "InformedRRTStar")
+
+
+def test_step_size_is_the_one_step_name_and_its_aliases_never_conflict_silently():
+    problem = _problem()
+    assert make_planner("RRT", problem, step_size=3.0).step_size == 3.0
+    assert make_planner("PRM", problem, step_size=3.0).max_edge_length == 3.0
+    assert make_planner("PRM", problem, max_edge_length=2.5).max_edge_length == 2.5
+    assert make_planner("RRT", problem, max_edge_length=2.5).step_size == 2.5  # an alias, whatever the planner
+    for a, b in (("step_size", "step"), ("step", "max_edge_length"), ("step_size", "max_edge_length"),
+                 ("step_size", "extension_step")):
+        with pytest.raises(ValueError, match=rf"give one step length, not both {a}=1.0 and {b}=1.0"):
+            make_planner("PRM", problem, **{a: 1.0, b: 1.0})
+
+
+def test_the_picture_workflow_takes_step_size_and_step():
+    from planners.tools.workflow import picture_planner
+
+    problem = _problem()
+    assert picture_planner("rrt", problem, step_size=2.0).step_size == 2.0
+    assert picture_planner("rrt", problem, step=2.0).step_size == 2.0
+    with pytest.raises(ValueError, match="picture_planner: give one step length"):
+        picture_planner("rrt", problem, step_size=2.0, step=3.0)

@@ -27,7 +27,7 @@ from planners.algorithms.smoothing import smooth as smooth_path
 from planners.base.fileio import InputError, atomic_path, check_int
 from planners.base.planner import Planner, PlannerData, PlanResult, compile_seconds
 from planners.base.problem import Problem
-from planners.base.registry import make_planner, planner_class
+from planners.base.registry import make_planner, one_step_size, planner_class
 from planners.base.samplers import GoalBiasedSampler, Sampler, UniformSampler
 from planners.kernels import raster
 from planners.worlds.grid import OccupancyGrid
@@ -63,7 +63,7 @@ def load_map(path: str | os.PathLike, threshold: float = 0.5, *, invert: bool = 
 
 
 def picture_planner(name: str, problem: Problem, *, sampler: str | Sampler | None = None, goal_bias: float = 0.05,
-                    step: float | None = None, seed: int = 0) -> Planner:
+                    step_size: float | None = None, seed: int = 0, step: float | None = None) -> Planner:
     """A registered planner (``planners.base.registry``) with the picture workflow's sampler defaults.
 
     Args:
@@ -73,11 +73,13 @@ def picture_planner(name: str, problem: Problem, *, sampler: str | Sampler | Non
             or None: goal bias for RRT and RRT*, uniform for the others. Informed RRT* and OB-PRM
             bring their own sampler.
         goal_bias: Goal probability of the goal-biased sampler.
-        step: The planner's step length (RRT family: extension length; PRM family: longest roadmap
+        step_size: The planner's step length (RRT family: extension length; PRM family: longest roadmap
             edge); None takes each planner's default.
         seed: Planner seed.
+        step: Alias of ``step_size`` (not both).
     """
     cls = planner_class(name)
+    step = one_step_size("picture_planner", step_size=step_size, step=step)
     if sampler is not None and not isinstance(sampler, Sampler) and sampler not in SAMPLERS:
         raise ValueError(f"unknown sampler {sampler!r}; choose from {', '.join(SAMPLERS)}")
     if cls.own_sampler:
@@ -85,12 +87,12 @@ def picture_planner(name: str, problem: Problem, *, sampler: str | Sampler | Non
             raise ValueError(f"planner {name!r} uses its own sampler; leave the sampler unset")
         if cls.name == "InformedRRTstar" and problem.metric != "euclidean":
             raise ValueError(f"informed-rrtstar needs the euclidean metric, got {problem.metric!r}")
-        return make_planner(cls.name, problem, step=step, seed=seed)
+        return make_planner(cls.name, problem, step_size=step, seed=seed)
     if sampler is None:
         sampler = "goal-bias" if cls.name in GOAL_BIASED else "uniform"
     if not isinstance(sampler, Sampler):
         sampler = GoalBiasedSampler(goal_bias) if sampler == "goal-bias" else UniformSampler()
-    return make_planner(cls.name, problem, step=step, sampler=sampler, seed=seed)
+    return make_planner(cls.name, problem, step_size=step, sampler=sampler, seed=seed)
 
 
 @dataclass
@@ -178,31 +180,13 @@ def _frame_indices(history: list, max_frames: int) -> list[int]:
     return picks
 
 
-def _background(grid: OccupancyGrid, max_px: int) -> np.ndarray:
-    """The obstacle map reduced to at most ``max_px`` per side by max-pooling (thin walls survive)."""
-    obs = grid.obstacles
-    f = max(1, math.ceil(max(obs.shape) / max_px))
-    if f == 1:
-        return obs
-    H, W = obs.shape
-    pad = np.zeros((math.ceil(H / f) * f, math.ceil(W / f) * f), dtype=bool)
-    pad[:H, :W] = obs
-    return pad.reshape(pad.shape[0] // f, f, pad.shape[1] // f, f).any(axis=(1, 3))
-
-
 def _draw_map(ax, problem: Problem, max_px: int, markers: bool = True) -> None:
     """The world (a big grid pre-reduced to ``max_px`` per side) and, optionally, start, goal and goal region."""
-    from matplotlib.colors import ListedColormap
-
     from planners.viz import plotting
 
     world = problem.world
     if isinstance(world, OccupancyGrid):
-        ax.imshow(plotting.display_rows(world, _background(world, max_px)),
-                  cmap=ListedColormap(["white", plotting.OBSTACLE_COLOR]),
-                  vmin=0, vmax=1, origin="upper", extent=plotting.image_extent(world), interpolation="auto",
-                  interpolation_stage="rgba", zorder=0)
-        plotting.set_world_view(ax, world)
+        plotting.draw_grid(ax, world, max_px)
     else:
         plotting.draw_world(ax, world)
     if markers:
@@ -237,31 +221,41 @@ def _draw_edges(img: np.ndarray, seg: np.ndarray, cols: np.ndarray) -> None:
     raster.draw_segments(img, np.ascontiguousarray(seg, dtype=np.float64), np.ascontiguousarray(cols, dtype=np.uint8))
 
 
+#: Narrowest plan figure in inches: a tall map's title and legend need the room.
+MIN_FIGURE_WIDTH = 5.5
+
+
 def write_figure(outcome: PlanOutcome, path: str | os.PathLike, *, title: str | None = None) -> Path:
     """The map, the final tree or roadmap, the raw path (thin) and the smoothed one (thick), atomically.
 
-    Graphs of more than ``RASTER_EDGES`` edges are rasterised into an image layer (at ``RASTER_PX``
-    pixels per side) instead of drawn as vector lines, which keeps huge trees fast.
+    The map's own walls are dark; on a map inflated by a robot radius (``OccupancyGrid.inflate``) the
+    added zone is shaded and the walls are outlined. A legend under the map names the trees, paths,
+    start and goal; the title wraps to the figure's width. Graphs of more than ``RASTER_EDGES`` edges
+    are rasterised into an image layer (at ``RASTER_PX`` pixels per side) instead of drawn as vector
+    lines, which keeps huge trees fast.
     """
     from planners.viz import plotting
 
     problem = outcome.problem
     world = problem.world
     w, h = plotting.world_extent(world)
-    ax = plotting.new_figure(plotting.figure_size(world, 8.0)).add_subplot()
+    fw, fh = plotting.figure_size(world, 8.0)
+    fig = plotting.new_figure((max(fw, MIN_FIGURE_WIDTH), fh + 1.0))  # + room for the legend
+    ax = fig.add_subplot()
     data = _subsample_edges(outcome.planner.planner_data(), MAX_FIGURE_EDGES)
     if isinstance(world, OccupancyGrid) and (len(data.edges) > RASTER_EDGES or max(world.shape) > RASTER_PX):
         # one RGB image of map and graph: the cheapest thing for matplotlib to resample
-        bg = plotting.display_rows(world, _background(world, RASTER_PX))
-        rep = max(1, RASTER_PX // max(bg.shape))
-        bg = np.repeat(np.repeat(bg, rep, axis=0), rep, axis=1)
-        rgb = np.where(bg[..., None], np.array(_rgb(plotting.OBSTACLE_COLOR), np.uint8), np.uint8(255)).astype(np.uint8)
+        levels = plotting.display_rows(world, plotting.pool_levels(plotting.map_levels(world), RASTER_PX))
+        rep = max(1, RASTER_PX // max(levels.shape))
+        big = np.repeat(np.repeat(levels, rep, axis=0), rep, axis=1)
+        palette = np.array([_rgb(c) for c in plotting.LEVEL_COLORS], np.uint8)
+        rgb = palette[big]
         if len(data.edges) > RASTER_EDGES:
             _draw_edges(rgb, *_edge_pixels(data, (rgb.shape[1], rgb.shape[0]), world))
         else:
             plotting.draw_graph(ax, data)
         ax.imshow(rgb, origin="upper", extent=plotting.image_extent(world), interpolation="auto", zorder=0)
-        plotting.set_world_view(ax, world)
+        plotting.draw_wall_outline(ax, world, levels, zorder=2.5)
         ax.add_patch(plotting.goal_region_patch(problem))
         ax.plot(*problem.start[:2], "o", color=plotting.START_COLOR, markersize=8, markeredgecolor="white", zorder=7)
         ax.plot(*problem.goal[:2], "*", color=plotting.GOAL_COLOR, markersize=13, markeredgecolor="white", zorder=7)
@@ -277,12 +271,12 @@ def write_figure(outcome: PlanOutcome, path: str | os.PathLike, *, title: str | 
             plotting.set_world_view(ax, world)
         else:
             plotting.draw_graph(ax, data)
-    if outcome.result.solved:
-        if outcome.smoothed is not None:
-            plotting.draw_path(ax, outcome.path, linewidth=1.2, alpha=0.8, color="#7a0045")
-            plotting.draw_path(ax, outcome.smoothed)
-        else:
-            plotting.draw_path(ax, outcome.path)
+    solved, smoothed = outcome.result.solved, outcome.result.solved and outcome.smoothed is not None
+    if smoothed:
+        plotting.draw_path(ax, outcome.path, linewidth=1.2, alpha=0.8, color=plotting.RAW_PATH_COLOR)
+        plotting.draw_path(ax, outcome.smoothed)
+    elif solved:
+        plotting.draw_path(ax, outcome.path)
     if title is None:
         r = outcome.result
         if r.solved:
@@ -291,8 +285,20 @@ def write_figure(outcome: PlanOutcome, path: str | os.PathLike, *, title: str | 
                 title += f" (smoothed {outcome.smoothed_length:.1f})"
         else:
             title = f"{r.planner}: not solved after {r.iterations} iterations"
-    ax.set_title(title)
-    return plotting.save_figure(ax.figure, path, pil_kwargs={"compress_level": 3})
+    ax.set_title(plotting.wrap_title(ax, title))
+    handles = plotting.map_legend_handles(world, trees=_graph_labels(outcome.planner, data), raw_path=smoothed,
+                                          smoothed_path=smoothed, path=solved and not smoothed)
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(4, len(handles)), frameon=False, fontsize=8)
+    return plotting.save_figure(fig, path, pil_kwargs={"compress_level": 3})
+
+
+def _graph_labels(planner: Planner, data: PlannerData) -> tuple[str, ...]:
+    """Legend labels of the graphs by tag: a roadmap, one tree, or RRT-Connect's start and goal trees."""
+    if planner.step_parameter == "max_edge_length":
+        return ("roadmap",)
+    if len(data.tags) and int(np.max(data.tags)) >= 1:
+        return ("start tree", "goal tree")
+    return ("tree",)
 
 
 def _font(size: int):
@@ -473,11 +479,11 @@ def _write(what: str, dest: Path, writer):
 
 def plan_on_image(map_source: str | os.PathLike | OccupancyGrid, start, goal, *, planner: str = "rrt-connect",
                   sampler: str | None = None, goal_bias: float = 0.05, metric: str = "euclidean",
-                  step: float | None = None, tolerance: float | None = None, max_iterations: int | None = 2_000_000,
-                  time_limit: float | None = None, seed: int = 0, smooth: bool = True, threshold: float = 0.5,
-                  invert: bool = False, out_dir: str | os.PathLike | None = None, gif: bool = True,
-                  max_frames: int = 60, gif_px: int = 480, save_path: str | os.PathLike | None = None
-                  ) -> PlanOutcome:
+                  step_size: float | None = None, tolerance: float | None = None,
+                  max_iterations: int | None = 2_000_000, time_limit: float | None = None, seed: int = 0,
+                  smooth: bool = True, threshold: float = 0.5, invert: bool = False,
+                  out_dir: str | os.PathLike | None = None, gif: bool = True, max_frames: int = 60, gif_px: int = 480,
+                  save_path: str | os.PathLike | None = None, step: float | None = None) -> PlanOutcome:
     """Plan from ``start`` to ``goal`` on a picture map; optionally write ``plan.png``, ``plan.gif``, the path.
 
     Coordinates are the map's world coordinates: for pictures, pixels with ``x`` to the right and
@@ -492,7 +498,7 @@ def plan_on_image(map_source: str | os.PathLike | OccupancyGrid, start, goal, *,
         sampler: One of ``SAMPLERS``, a ``Sampler``, or None (see ``picture_planner``).
         goal_bias: Goal probability of the goal-biased sampler.
         metric: One of ``METRICS``: path length, nearest neighbours and the goal region use it.
-        step: Step size; None takes the planner's default.
+        step_size: Step size; None takes the planner's default. ``step`` is an alias (not both).
         tolerance: Goal radius; None is 1% of the map diagonal (at least one pixel).
         max_iterations: Iteration budget (None: only the time limit).
         time_limit: Seconds of planning (None: only the iteration budget).
@@ -515,6 +521,7 @@ def plan_on_image(map_source: str | os.PathLike | OccupancyGrid, start, goal, *,
     """
     if metric not in METRICS:
         raise ValueError(f"unknown metric {metric!r}; choose from {', '.join(METRICS)}")
+    step_size = one_step_size("plan_on_image", step_size=step_size, step=step)
     if max_iterations is None and time_limit is None:
         raise ValueError("give max_iterations or time_limit (or both)")
     if max_iterations is not None:
@@ -545,7 +552,7 @@ def plan_on_image(map_source: str | os.PathLike | OccupancyGrid, start, goal, *,
             raise ValueError(f"{label} ({q[0]:g}, {q[1]:g}){where} is not a free position: it {why}")
     problem = Problem(grid, start, goal, goal_tolerance=tolerance, metric=metric,
                       name=Path(grid.source).name if grid.source else "map")
-    p = picture_planner(planner, problem, sampler=sampler, goal_bias=goal_bias, step=step, seed=seed)
+    p = picture_planner(planner, problem, sampler=sampler, goal_bias=goal_bias, step_size=step_size, seed=seed)
     t0 = time.perf_counter()
     result, history = solve_recording(p, max_iterations, time_limit, frames=max_frames)
     t_plan = time.perf_counter() - t0

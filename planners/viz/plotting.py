@@ -35,9 +35,17 @@ from planners.worlds.grid import OccupancyGrid
 from planners.worlds.shapes import Circle, GeometricWorld
 
 OBSTACLE_COLOR = "#3a3a3a"
+#: The zone an inflated map (``OccupancyGrid.inflate``, a robot radius) adds around the map's own walls.
+INFLATED_COLOR = "#c8c2d6"
+#: The outline drawn around the map's own walls on inflated maps.
+WALL_OUTLINE_COLOR = "#000000"
+#: Cell colours of ``map_levels``: free, inflated zone, wall.
+LEVEL_COLORS = ("white", INFLATED_COLOR, OBSTACLE_COLOR)
 START_COLOR = "#2ca02c"
 GOAL_COLOR = "#d62728"
 PATH_COLOR = "#e6007e"
+#: The raw (unsmoothed) path, drawn thin under the smoothed one.
+RAW_PATH_COLOR = "#7a0045"
 #: Edge and vertex colours by ``PlannerData.tags``: start tree (and roadmaps), goal tree.
 TREE_COLORS = ("#4a90d9", "#f29e38")
 #: Above this many vertices ``draw_graph`` leaves out the vertex dots unless asked for them.
@@ -101,14 +109,114 @@ def set_world_view(ax, world) -> None:
     ax.set_aspect("equal")
 
 
+def map_levels(world: OccupancyGrid) -> np.ndarray:
+    """Per cell (rows as stored): 0 free, 1 inflated zone (blocked only by a robot radius), 2 the map's own wall."""
+    levels = world.obstacles.astype(np.uint8)
+    levels[world.walls] = 2
+    return levels
+
+
+def pool_levels(levels: np.ndarray, max_px: int) -> np.ndarray:
+    """``levels`` reduced to at most ``max_px`` per side by max-pooling (walls win, so thin walls survive)."""
+    f = max(1, -(-max(levels.shape) // max_px))
+    if f == 1:
+        return levels
+    H, W = levels.shape
+    pad = np.zeros((-(-H // f) * f, -(-W // f) * f), dtype=levels.dtype)
+    pad[:H, :W] = levels
+    return pad.reshape(pad.shape[0] // f, f, pad.shape[1] // f, f).max(axis=(1, 3))
+
+
+def draw_grid(ax, world: OccupancyGrid, max_px: int | None = None, *, zorder: float = 0) -> np.ndarray:
+    """Draw a grid's walls (dark), inflated zone (shaded) and, on inflated maps, the walls' outline.
+
+    Args:
+        ax: Target axes (fitted to the world, see ``set_world_view``).
+        world: The grid.
+        max_px: Reduce the map to at most this many cells per side first (max-pooling); None: full size.
+        zorder: Of the map image; the outline goes just above it.
+
+    Returns:
+        The drawn levels (rows as shown), for callers that paint into an image of their own.
+    """
+    levels = display_rows(world, map_levels(world) if max_px is None else pool_levels(map_levels(world), max_px))
+    # rgba-stage antialiasing keeps one-cell walls visible (grey) when a big map is shrunk
+    ax.imshow(levels, cmap=ListedColormap(LEVEL_COLORS), vmin=0, vmax=2, origin="upper", extent=image_extent(world),
+              interpolation="auto", interpolation_stage="rgba", zorder=zorder)
+    draw_wall_outline(ax, world, levels, zorder=zorder + 0.5)
+    set_world_view(ax, world)
+    return levels
+
+
+def draw_wall_outline(ax, world: OccupancyGrid, levels: np.ndarray, *, zorder: float = 0.5) -> None:
+    """Outline the map's own walls (``levels == 2``, rows as shown) where the map is inflated; else nothing."""
+    if not (levels == 1).any():
+        return
+    x0, x1, bottom, top = image_extent(world)
+    h, w = levels.shape
+    # cell centres of the shown image: row 0 at the extent's top (origin="upper")
+    dx, dy = (x1 - x0) / w, (bottom - top) / h
+    xs = x0 + (np.arange(w) + 0.5) * dx
+    ys = top + (np.arange(h) + 0.5) * dy
+    walls = np.pad(levels == 2, 1).astype(np.float32)  # closed contours at the map's edge
+    xs = np.concatenate([[xs[0] - dx], xs, [xs[-1] + dx]])
+    ys = np.concatenate([[ys[0] - dy], ys, [ys[-1] + dy]])
+    ax.contour(xs, ys, walls, levels=[0.5], colors=WALL_OUTLINE_COLOR, linewidths=0.7, zorder=zorder)
+    set_world_view(ax, world)
+
+
+def map_legend_handles(world, *, trees: tuple[str, ...] = (), raw_path: bool = False, smoothed_path: bool = False,
+                       path: bool = False) -> list:
+    """Legend entries for a plan figure: walls (and inflated zone), each tree, the paths, start and goal.
+
+    Args:
+        world: The world drawn (an inflated grid adds the inflated zone).
+        trees: Labels of the graphs drawn, in ``TREE_COLORS`` order (e.g. ``("start tree", "goal tree")``).
+        raw_path: The raw path is drawn thin beside a smoothed one.
+        smoothed_path: The smoothed path is drawn.
+        path: One path is drawn (unsmoothed).
+    """
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    inflated = isinstance(world, OccupancyGrid) and world.inflation > 0
+    handles = [Patch(facecolor=OBSTACLE_COLOR, edgecolor=WALL_OUTLINE_COLOR if inflated else "none",
+                     label="walls (the map's own)" if inflated else "obstacles")]
+    if inflated:
+        handles.append(Patch(facecolor=INFLATED_COLOR, label=f"robot radius zone ({world.inflation:g})"))
+    handles += [Line2D([], [], color=c, linewidth=1.5, label=t) for t, c in zip(trees, TREE_COLORS)]
+    if raw_path:
+        handles.append(Line2D([], [], color=RAW_PATH_COLOR, linewidth=1.2, label="raw path"))
+    if smoothed_path:
+        handles.append(Line2D([], [], color=PATH_COLOR, linewidth=2.8, label="smoothed path"))
+    if path:
+        handles.append(Line2D([], [], color=PATH_COLOR, linewidth=2.8, label="path"))
+    handles += [Line2D([], [], marker="o", linestyle="none", color=START_COLOR, markersize=8, label="start"),
+                Line2D([], [], marker="*", linestyle="none", color=GOAL_COLOR, markersize=12, label="goal"),
+                Line2D([], [], color=GOAL_COLOR, linestyle="--", linewidth=1.2, label="goal region")]
+    return handles
+
+
+def wrap_title(ax, title: str, fontsize: float | None = None) -> str:
+    """``title`` broken into lines that fit the figure's width (so a narrow, tall map's title is not cut)."""
+    import textwrap
+
+    from matplotlib import rcParams
+    from matplotlib.font_manager import FontProperties
+
+    size = fontsize or FontProperties(size=rcParams["axes.titlesize"]).get_size_in_points()
+    chars = max(12, int(ax.figure.get_figwidth() * 72 / (0.6 * size)))
+    return "\n".join(textwrap.fill(line, chars) for line in title.splitlines())
+
+
 def draw_world(ax, world: OccupancyGrid | GeometricWorld) -> None:
-    """Draw a world's obstacles (dark) on white and fit the axes to it (see ``set_world_view``)."""
+    """Draw a world's obstacles (dark) on white and fit the axes to it (see ``set_world_view``).
+
+    Inflated grids show the map's own walls dark and outlined, the robot-radius zone shaded (``draw_grid``).
+    """
     world_box(world)
     if isinstance(world, OccupancyGrid):
-        # rgba-stage antialiasing keeps one-cell walls visible (grey) when a big map is shrunk
-        ax.imshow(display_rows(world, world.obstacles), cmap=ListedColormap(["white", OBSTACLE_COLOR]), vmin=0,
-                  vmax=1, origin="upper", extent=image_extent(world), interpolation="auto",
-                  interpolation_stage="rgba", zorder=0)
+        draw_grid(ax, world)
     else:
         ax.set_facecolor("white")
         for ob in world.obstacles:

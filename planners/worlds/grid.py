@@ -92,6 +92,8 @@ class OccupancyGrid(WorldBase):
         self._high = org + np.array([self.width * resolution, self.height * resolution])
         for a in (self._origin, self._low, self._high):
             a.flags.writeable = False
+        self._walls: np.ndarray | None = None  # the map's own obstacles when this grid is an inflated copy
+        self.inflation = 0.0
 
     # --- construction from files -------------------------------------------------------------
 
@@ -155,7 +157,21 @@ class OccupancyGrid(WorldBase):
                 # the per-row distances are capped at widths[0] + 1, so 16 bits do for any practical radius
                 near = np.empty(padded.shape, dtype=np.int16 if widths[0] < 32000 else np.int32)
                 obs = _dilate(padded, widths, near)[1:-1, 1:-1]
-        return OccupancyGrid(obs, self.resolution, origin=self._origin, y_up=self.y_up, source=self.source)
+        out = OccupancyGrid(obs, self.resolution, origin=self._origin, y_up=self.y_up, source=self.source)
+        out._walls, out.inflation = self.walls, self.inflation + r
+        return out
+
+    @property
+    def walls(self) -> np.ndarray:
+        """The map's own obstacles (read-only): before ``inflate``, which records them; else ``obstacles``."""
+        return self._obstacles if self._walls is None else self._walls
+
+    def image_row(self, row: int) -> int:
+        """The row of the map's image (row 0 at the top, as a viewer shows it) that grid row ``row`` comes from.
+
+        The same row for images and MovingAI maps; ROS maps (``y_up``) are flipped on loading.
+        """
+        return self.height - 1 - int(row) if self.y_up else int(row)
 
     # --- geometry ------------------------------------------------------------------------------
 
@@ -208,9 +224,13 @@ class OccupancyGrid(WorldBase):
         if self.is_valid(q):
             return ""
         r, c = self.cell_of(q)
+        # rows as in the map's image (row 0 at the top), which ROS maps (y_up) flip on loading
+        cell = f"(row {self.image_row(r)}, col {c}{' of the map image, row 0 at its top' if self.y_up else ''})"
         if 0 <= r < self.height and 0 <= c < self.width and self._obstacles[r, c]:
-            return f"lies in blocked cell (row {r}, col {c})"
-        return f"touches a blocked cell or the map edge at the boundary of cell (row {r}, col {c})"
+            if self._walls is not None and not self._walls[r, c]:
+                return f"lies within the robot radius ({self.inflation:g}) of a wall, in inflated cell {cell}"
+            return f"lies in blocked cell {cell}"
+        return f"touches a blocked cell or the map edge at the boundary of cell {cell}"
 
     def __repr__(self) -> str:
         src = f", source={self.source!r}" if self.source else ""
