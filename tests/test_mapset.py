@@ -190,7 +190,7 @@ def test_queries_file_needs_its_header(tmp_path):
 def test_query_inside_an_inflated_obstacle_is_refused(tmp_path):
     folder = _queries_folder(tmp_path, ["left,4.5,1.5,1.5,8.5"])
     assert FileMapSet(folder, fractions={"test": 1}).queries("test")
-    with pytest.raises(InputError, match="line 3: start .* blocked"):
+    with pytest.raises(InputError, match="line 3: start .* (blocked|robot radius)"):
         FileMapSet(folder, fractions={"test": 1}, robot_radius=0.6)
 
 
