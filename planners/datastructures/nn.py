@@ -25,7 +25,7 @@ LEAF = 16
 STACK = 256
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def rdist(metric, a, b):
     """Reduced distance: squared for L2, plain for L1 and L-infinity."""
     s = 0.0
@@ -44,19 +44,19 @@ def rdist(metric, a, b):
     return s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def to_reduced(metric, d):
     """A distance in the units the index compares (squared for L2, which saves the square roots)."""
     return d * d if metric == METRIC_L2 else d
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def from_reduced(metric, r):
     """The distance back from ``to_reduced``'s units."""
     return np.sqrt(r) if metric == METRIC_L2 else r
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def box_rdist(metric, q, box, i):
     """Reduced distance from ``q`` to the bounding box stored at position ``i``."""
     dim = q.shape[0]
@@ -75,7 +75,7 @@ def box_rdist(metric, q, box, i):
     return s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def child_bound(metric, q, box, a, b, plane, parent):
     """Lower bound for subtree [a, b): its box distance if it has one, else the split-plane bound."""
     if b - a > LEAF:
@@ -178,7 +178,7 @@ def insert(P, perm, split, box, n):
     return n
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _heap_push(hd, hi, cnt, k, d, idx):
     """Bounded max-heap of (reduced distance, index) with at most k entries; returns the count."""
     if cnt < k:
@@ -218,7 +218,7 @@ MODE_KNN = 1
 MODE_RADIUS = 2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _offer(mode, d, idx, hd, hi, cnt, k, r):
     """Record candidate ``idx`` at reduced distance ``d``; returns the updated count."""
     if mode == MODE_NEAREST:
@@ -235,7 +235,7 @@ def _offer(mode, d, idx, hd, hi, cnt, k, r):
     return cnt
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _prune_at(mode, hd, cnt, k, r):
     """Bounds strictly above this (radius: above r) cannot contribute."""
     if mode == MODE_NEAREST:

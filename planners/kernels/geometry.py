@@ -154,7 +154,7 @@ def world_motion_free(world, a, b):
     raise NotImplementedError("world_motion_free runs in compiled code only")
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _grid_motion_free(world, a, b):
     kind, grid, geom, body, params = world
     # x - 0.0 is x exactly, so maps at the origin check bit-identically to the frame-free kernel
@@ -163,13 +163,13 @@ def _grid_motion_free(world, a, b):
     return grid_segment_free(grid, params[0], a[0] - ox, a[1] - oy, b[0] - ox, b[1] - oy)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _shapes_motion_free(world, a, b):
     kind, grid, geom, body, params = world
     return shapes_segment_free(geom, params, a[0], a[1], b[0], b[1])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _rigid_motion_free(world, a, b):
     kind, grid, geom, body, params = world
     return rigid_motion_free(geom, body, params, a, b)
@@ -186,7 +186,7 @@ def _any_motion_free(world, a, b):
     raise ValueError("unknown world kind: add its check to planners.kernels.geometry.motion_free")
 
 
-@overload(world_motion_free, jit_options={"cache": True})
+@overload(world_motion_free, jit_options={"cache": True}, inline="always")
 def _world_motion_free(world, a, b):
     kind = static_code(world, "KIND")
     if kind is None:
@@ -195,7 +195,7 @@ def _world_motion_free(world, a, b):
     return lambda world, a, b: check(world, a, b)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def motion_free(world, a, b):
     """True if the straight motion from state ``a`` to state ``b`` is collision-free."""
     return world_motion_free(world, a, b)

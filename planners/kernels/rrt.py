@@ -17,7 +17,7 @@ from planners.kernels.space import SPACE_RN, copy_into, embed, space_distance
 from planners.kernels.tree import add_vertex, nearest_vertex, resolve_sample, steer
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def embed_query(space, q, qe):
     kind, metric, rot_weight = space
     if kind == SPACE_RN:
@@ -26,7 +26,7 @@ def embed_query(space, q, qe):
     return qe
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb):
     """Nearest of the first ``n`` vertices to ``q``, steered at most ``step`` into ``new``.
 
@@ -42,7 +42,7 @@ def extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb):
     return near
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
                 q, qe_buf, new):
     """One RRT iteration on one sample: resolve -> nearest -> steer -> check motion -> add.

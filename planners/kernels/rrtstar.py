@@ -27,7 +27,7 @@ def near_vertices(tree, n, space, q, qe, radius, out):
     return space_within(tree, n, space, q, qe, radius, out)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _link(v, p, first_child, next_sib, prev_sib):
     next_sib[v] = first_child[p]
     prev_sib[v] = -1
@@ -36,7 +36,7 @@ def _link(v, p, first_child, next_sib, prev_sib):
     first_child[p] = v
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _unlink(v, p, first_child, next_sib, prev_sib):
     if prev_sib[v] >= 0:
         next_sib[prev_sib[v]] = next_sib[v]

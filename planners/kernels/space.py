@@ -42,13 +42,13 @@ METRIC_NAMES = {
 TWO_PI = 2.0 * math.pi
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def wrap_angle(a):
     """Map an angle to [-pi, pi)."""
     return (a + math.pi) % TWO_PI - math.pi
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def embed_dim(kind, metric, dim):
     if kind == SPACE_RIGID and metric == METRIC_COSSIN:
         return 9
@@ -101,7 +101,7 @@ def rotation_angle_between(a, b):
     return 2.0 * math.acos(dot)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _l2(a, b):
     s = 0.0
     for i in range(a.shape[0]):
@@ -110,7 +110,7 @@ def _l2(a, b):
     return math.sqrt(s)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _l1(a, b):
     s = 0.0
     for i in range(a.shape[0]):
@@ -118,7 +118,7 @@ def _l1(a, b):
     return s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _linf(a, b):
     s = 0.0
     for i in range(a.shape[0]):
@@ -128,7 +128,7 @@ def _linf(a, b):
     return s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _cossin(a, b):
     t = 0.0
     for i in range(3):
@@ -173,7 +173,7 @@ def interpolate(kind, a, b, t, out):
             out[i] = wrap_angle(a[i] + t * wrap_angle(b[i] - a[i]))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def kd_metric(metric):
     """Lp metric code the k-d index uses on the embedding (COSSIN embeds into L2)."""
     if metric == METRIC_L1 or metric == METRIC_LINF:
@@ -181,7 +181,7 @@ def kd_metric(metric):
     return METRIC_L2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def uses_kd(kind, metric):
     return metric != METRIC_SE3
 
@@ -259,7 +259,7 @@ def _space_distance(space, a, b):
     return lambda space, a, b: distance(space[0], space[1], space[2], a, b)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def copy_into(out, q):
     """``out[:] = q`` for two vectors of one length. (The slice assignment compiles numba's shape-mismatch
     message formatting, seconds of compilation per kernel that uses it.)"""

@@ -159,13 +159,13 @@ def _space_knn(tree, n, space, q, qe, k, out, out_d):
     return impl
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def nearest_vertex(tree, n, space, q, qe, st, sb):
     """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n``."""
     return space_nearest(tree, n, space, q, qe, st, sb)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def steer(space, a, b, step, out):
     """Write into ``out`` the state at most ``step`` from ``a`` towards ``b``; returns the distance a-b."""
     kind, metric, rot_weight = space
@@ -178,7 +178,7 @@ def steer(space, a, b, step, out):
     return d
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def add_vertex(tree, n, space, q, par, c):
     """Append state ``q`` with parent ``par`` and cost ``c``; returns the new vertex count."""
     X, E, parent, cost, perm, split, box = tree
@@ -194,7 +194,7 @@ def add_vertex(tree, n, space, q, par, c):
     return n + 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
     """The sample a planner uses, by ``anchored`` code.
 
