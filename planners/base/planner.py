@@ -15,6 +15,7 @@ from planners.base.fileio import check_int
 from planners.base.problem import Problem
 from planners.base.samplers import SampleBatch, Sampler, UniformSampler
 from planners.kernels import state as slots
+from planners.kernels.cache import announce as announce_compile
 from planners.kernels.space import embed_dim, uses_kd
 from planners.kernels.state import Tree
 
@@ -254,6 +255,7 @@ class Planner(abc.ABC):
         self._goal = np.ascontiguousarray(problem.goal, dtype=np.float64)
         self._stack = np.empty(2 * 256, dtype=np.int64)
         self._stack_b = np.empty(256)
+        announce_compile(self.name, problem.world.kernel, self._space)
         self.clear()
 
     # --- public API ------------------------------------------------------------------------

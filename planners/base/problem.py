@@ -9,7 +9,7 @@ import numpy as np
 
 from planners.base.fileio import InputError
 from planners.base.world import World
-from planners.kernels.space import METRIC_NAMES
+from planners.kernels.space import METRIC_NAMES, make_space
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,8 +78,8 @@ class Problem:
     @property
     def space(self) -> tuple[int, int, float]:
         """``(kind, metric, rot_weight)`` for the compiled kernels."""
-        return (int(self.world.space_kind), int(METRIC_NAMES[self.metric]),
-                float(getattr(self.world, "rot_weight", 1.0)))
+        return make_space(int(self.world.space_kind), int(METRIC_NAMES[self.metric]),
+                          float(getattr(self.world, "rot_weight", 1.0)))
 
     def distance(self, a, b) -> float:
         """Distance between two states in this problem's metric."""

@@ -398,9 +398,29 @@ def nearest_into(P, perm, split, box, n, q, metric, st, sb):
     distance loops keep their branches and queries run 3-5x slower.
     """
     if metric == METRIC_L2:
-        return _nearest_impl(P, perm, split, box, n, q, METRIC_L2, st, sb)
+        return nearest_l2(P, perm, split, box, n, q, st, sb)
     if metric == METRIC_L1:
-        return _nearest_impl(P, perm, split, box, n, q, METRIC_L1, st, sb)
+        return nearest_l1(P, perm, split, box, n, q, st, sb)
+    return nearest_linf(P, perm, split, box, n, q, st, sb)
+
+
+# One compiled function per metric, so a kernel that knows its metric when it is compiled (see
+# ``planners.kernels.space.Space``) compiles the traversal once rather than three times.
+@nb.njit(cache=True)
+def nearest_l2(P, perm, split, box, n, q, st, sb):
+    """``nearest_into`` for the L2 metric."""
+    return _nearest_impl(P, perm, split, box, n, q, METRIC_L2, st, sb)
+
+
+@nb.njit(cache=True)
+def nearest_l1(P, perm, split, box, n, q, st, sb):
+    """``nearest_into`` for the L1 metric."""
+    return _nearest_impl(P, perm, split, box, n, q, METRIC_L1, st, sb)
+
+
+@nb.njit(cache=True)
+def nearest_linf(P, perm, split, box, n, q, st, sb):
+    """``nearest_into`` for the L-infinity metric."""
     return _nearest_impl(P, perm, split, box, n, q, METRIC_LINF, st, sb)
 
 
@@ -415,18 +435,22 @@ def nearest(P, perm, split, box, n, q, metric):
 @nb.njit(cache=True)
 def nearest_k(P, perm, split, box, n, q, metric, k, out_idx, out_d):
     """The ``min(k, n)`` nearest points, nearest first; returns how many were written."""
+    if metric == METRIC_L2:
+        return nearest_k_l2(P, perm, split, box, n, q, k, out_idx, out_d)
+    if metric == METRIC_L1:
+        return nearest_k_l1(P, perm, split, box, n, q, k, out_idx, out_d)
+    return nearest_k_linf(P, perm, split, box, n, q, k, out_idx, out_d)
+
+
+@nb.njit(cache=True, inline="always")
+def _nearest_k_impl(P, perm, split, box, n, q, metric, k, out_idx, out_d):
     if k <= 0 or n == 0:
         return 0
     hd = np.empty(k)
     hi = np.empty(k, dtype=np.int64)
     st = np.empty(2 * STACK, dtype=np.int64)
     sb = np.empty(STACK)
-    if metric == METRIC_L2:
-        cnt = query(P, perm, split, box, n, q, METRIC_L2, MODE_KNN, k, 0.0, hd, hi, st, sb)
-    elif metric == METRIC_L1:
-        cnt = query(P, perm, split, box, n, q, METRIC_L1, MODE_KNN, k, 0.0, hd, hi, st, sb)
-    else:
-        cnt = query(P, perm, split, box, n, q, METRIC_LINF, MODE_KNN, k, 0.0, hd, hi, st, sb)
+    cnt = query(P, perm, split, box, n, q, metric, MODE_KNN, k, 0.0, hd, hi, st, sb)
     order = np.argsort(hd[:cnt], kind="mergesort")
     for j in range(cnt):
         out_idx[j] = hi[order[j]]
@@ -435,17 +459,65 @@ def nearest_k(P, perm, split, box, n, q, metric, k, out_idx, out_d):
 
 
 @nb.njit(cache=True)
+def nearest_k_l2(P, perm, split, box, n, q, k, out_idx, out_d):
+    """``nearest_k`` for the L2 metric (one compiled function per metric, as ``nearest_l2``)."""
+    return _nearest_k_impl(P, perm, split, box, n, q, METRIC_L2, k, out_idx, out_d)
+
+
+@nb.njit(cache=True)
+def nearest_k_l1(P, perm, split, box, n, q, k, out_idx, out_d):
+    """``nearest_k`` for the L1 metric."""
+    return _nearest_k_impl(P, perm, split, box, n, q, METRIC_L1, k, out_idx, out_d)
+
+
+@nb.njit(cache=True)
+def nearest_k_linf(P, perm, split, box, n, q, k, out_idx, out_d):
+    """``nearest_k`` for the L-infinity metric."""
+    return _nearest_k_impl(P, perm, split, box, n, q, METRIC_LINF, k, out_idx, out_d)
+
+
+@nb.njit(cache=True)
 def nearest_r(P, perm, split, box, n, q, metric, radius, out_idx):
     """Indices of all points within ``radius`` (inclusive), unordered; ``out_idx`` holds >= n."""
+    if metric == METRIC_L2:
+        return nearest_r_l2(P, perm, split, box, n, q, radius, out_idx)
+    if metric == METRIC_L1:
+        return nearest_r_l1(P, perm, split, box, n, q, radius, out_idx)
+    return nearest_r_linf(P, perm, split, box, n, q, radius, out_idx)
+
+
+@nb.njit(cache=True, inline="always")
+def _nearest_r_impl(P, perm, split, box, n, q, metric, radius, out_idx):
     hd = np.empty(1)
     st = np.empty(2 * STACK, dtype=np.int64)
     sb = np.empty(STACK)
-    r = to_reduced(metric, radius)
-    if metric == METRIC_L2:
-        return query(P, perm, split, box, n, q, METRIC_L2, MODE_RADIUS, 0, r, hd, out_idx, st, sb)
-    if metric == METRIC_L1:
-        return query(P, perm, split, box, n, q, METRIC_L1, MODE_RADIUS, 0, r, hd, out_idx, st, sb)
-    return query(P, perm, split, box, n, q, METRIC_LINF, MODE_RADIUS, 0, r, hd, out_idx, st, sb)
+    return query(P, perm, split, box, n, q, metric, MODE_RADIUS, 0, to_reduced(metric, radius), hd, out_idx, st, sb)
+
+
+@nb.njit(cache=True)
+def nearest_r_l2(P, perm, split, box, n, q, radius, out_idx):
+    """``nearest_r`` for the L2 metric."""
+    return _nearest_r_impl(P, perm, split, box, n, q, METRIC_L2, radius, out_idx)
+
+
+@nb.njit(cache=True)
+def nearest_r_l1(P, perm, split, box, n, q, radius, out_idx):
+    """``nearest_r`` for the L1 metric."""
+    return _nearest_r_impl(P, perm, split, box, n, q, METRIC_L1, radius, out_idx)
+
+
+@nb.njit(cache=True)
+def nearest_r_linf(P, perm, split, box, n, q, radius, out_idx):
+    """``nearest_r`` for the L-infinity metric."""
+    return _nearest_r_impl(P, perm, split, box, n, q, METRIC_LINF, radius, out_idx)
+
+
+#: Per-metric entry points by metric code, for callers that pick one when they are compiled.
+BY_METRIC = {
+    METRIC_L2: (nearest_l2, nearest_k_l2, nearest_r_l2),
+    METRIC_L1: (nearest_l1, nearest_k_l1, nearest_r_l1),
+    METRIC_LINF: (nearest_linf, nearest_k_linf, nearest_r_linf),
+}
 
 
 _METRICS = {"euclidean": METRIC_L2, "manhattan": METRIC_L1, "chebyshev": METRIC_LINF}

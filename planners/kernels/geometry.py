@@ -1,9 +1,12 @@
 """Compiled collision checks for every world kind, behind one dispatch used by all planners.
 
 A world reaches the kernels as a ``planners.kernels.state.WorldKernel`` ``(kind, grid, geom, body,
-params)`` so that one cached compilation serves every world (numba cannot cache kernels that take
-other jitted functions as arguments); ``motion_free`` dispatches on ``kind``. Unused arrays are 1x1
-placeholders. A new kind needs a code here and a branch in ``motion_free``; an unknown code raises.
+params)`` (numba cannot cache kernels that take other jitted functions as arguments). Worlds hand out
+the subclass of their kind (``GridKernel``, ``ShapesKernel``, ``RigidKernel``; see ``world_kernel``),
+which numba types separately, so ``motion_free`` compiles only that kind's check into a kernel; a
+plain ``WorldKernel`` is dispatched on ``kind`` at run time. Unused arrays are 1x1 placeholders. A
+new kind needs a code and a class here and a branch in ``_any_motion_free`` and ``_world_motion_free``;
+an unknown code raises.
 
 * ``WORLD_GRID``: ``grid`` is the (H, W) uint8 obstacle grid, ``params = [1 / resolution, ox, oy]``
   with ``(ox, oy)`` the world coordinates of the corner of cell (0, 0).
@@ -23,8 +26,11 @@ import math
 
 import numba as nb
 import numpy as np
+from numba.extending import overload
 
 from planners.kernels.rigid import rigid_motion_free
+from planners.kernels.space import static_code
+from planners.kernels.state import WorldKernel
 
 WORLD_GRID = 0
 WORLD_SHAPES = 1
@@ -143,20 +149,56 @@ def shapes_segment_free(geom, params, ax, ay, bx, by):
     return True
 
 
+def world_motion_free(world, a, b):
+    """``motion_free`` (compiled code only): typed per ``WorldKernel`` class, see ``world_kernel``."""
+    raise NotImplementedError("world_motion_free runs in compiled code only")
+
+
+@nb.njit(cache=True, inline="always")
+def _grid_motion_free(world, a, b):
+    kind, grid, geom, body, params = world
+    # x - 0.0 is x exactly, so maps at the origin check bit-identically to the frame-free kernel
+    ox = params[1]
+    oy = params[2]
+    return grid_segment_free(grid, params[0], a[0] - ox, a[1] - oy, b[0] - ox, b[1] - oy)
+
+
+@nb.njit(cache=True, inline="always")
+def _shapes_motion_free(world, a, b):
+    kind, grid, geom, body, params = world
+    return shapes_segment_free(geom, params, a[0], a[1], b[0], b[1])
+
+
+@nb.njit(cache=True, inline="always")
+def _rigid_motion_free(world, a, b):
+    kind, grid, geom, body, params = world
+    return rigid_motion_free(geom, body, params, a, b)
+
+
+def _any_motion_free(world, a, b):
+    kind = world[0]
+    if kind == WORLD_GRID:
+        return _grid_motion_free(world, a, b)
+    elif kind == WORLD_SHAPES:
+        return _shapes_motion_free(world, a, b)
+    elif kind == WORLD_RIGID:
+        return _rigid_motion_free(world, a, b)
+    raise ValueError("unknown world kind: add its check to planners.kernels.geometry.motion_free")
+
+
+@overload(world_motion_free, jit_options={"cache": True}, inline="always")
+def _world_motion_free(world, a, b):
+    kind = static_code(world, "KIND")
+    if kind is None:
+        return _any_motion_free  # a plain WorldKernel: the kind is known at run time only
+    check = {WORLD_GRID: _grid_motion_free, WORLD_SHAPES: _shapes_motion_free, WORLD_RIGID: _rigid_motion_free}[kind]
+    return lambda world, a, b: check(world, a, b)
+
+
 @nb.njit(cache=True, inline="always")
 def motion_free(world, a, b):
     """True if the straight motion from state ``a`` to state ``b`` is collision-free."""
-    kind, grid, geom, body, params = world
-    if kind == WORLD_GRID:
-        # x - 0.0 is x exactly, so maps at the origin check bit-identically to the frame-free kernel
-        ox = params[1]
-        oy = params[2]
-        return grid_segment_free(grid, params[0], a[0] - ox, a[1] - oy, b[0] - ox, b[1] - oy)
-    elif kind == WORLD_SHAPES:
-        return shapes_segment_free(geom, params, a[0], a[1], b[0], b[1])
-    elif kind == WORLD_RIGID:
-        return rigid_motion_free(geom, body, params, a, b)
-    raise ValueError("unknown world kind: add its check to planners.kernels.geometry.motion_free")
+    return world_motion_free(world, a, b)
 
 
 @nb.njit(cache=True)
@@ -170,6 +212,36 @@ def motions_free(world, A, B, out):
     """Batched ``motion_free`` over rows of ``A`` and ``B``."""
     for i in range(A.shape[0]):
         out[i] = motion_free(world, A[i], B[i])
+
+
+class GridKernel(WorldKernel):
+    """A ``WorldKernel`` of kind ``WORLD_GRID``, typed as such: kernels compile only the grid check."""
+
+    __slots__ = ()
+    KIND = WORLD_GRID
+
+
+class ShapesKernel(WorldKernel):
+    """A ``WorldKernel`` of kind ``WORLD_SHAPES``, typed as such."""
+
+    __slots__ = ()
+    KIND = WORLD_SHAPES
+
+
+class RigidKernel(WorldKernel):
+    """A ``WorldKernel`` of kind ``WORLD_RIGID``, typed as such."""
+
+    __slots__ = ()
+    KIND = WORLD_RIGID
+
+
+def world_kernel(kind: int, grid: np.ndarray, geom: np.ndarray, body: np.ndarray, params: np.ndarray) -> WorldKernel:
+    """The ``WorldKernel`` a world hands the planners: of its kind's class, so kernels compiled for it
+    contain that kind's collision check only (a plain ``WorldKernel`` dispatches at run time)."""
+    for cls in (GridKernel, ShapesKernel, RigidKernel):
+        if cls.KIND == kind:
+            return cls(kind, grid, geom, body, params)
+    return WorldKernel(kind, grid, geom, body, params)
 
 
 def placeholder_arrays():

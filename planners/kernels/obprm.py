@@ -13,6 +13,7 @@ import numba as nb
 import numpy as np
 
 from planners.kernels.geometry import state_free
+from planners.kernels.space import copy_into
 from planners.kernels.state import S_CHECKS, S_PENDING, S_POS, S_SEEKING
 
 
@@ -84,7 +85,7 @@ def ob_samples(world, low, high, u, n, uniform_fraction, walk_step, refine, max_
         for k in range(d):
             direction[k] *= inv
         # walk out of the obstacle to the first free state
-        lo[:] = q
+        copy_into(lo, q)
         found = False
         for j in range(1, max_walk + 1):
             inside = True
@@ -98,19 +99,19 @@ def ob_samples(world, low, high, u, n, uniform_fraction, walk_step, refine, max_
             if state_free(world, p):
                 found = True
                 break
-            lo[:] = p
+            copy_into(lo, p)
         if not found:
             continue
         # bisect the last colliding / first free pair: hi stays free, lo colliding
-        hi[:] = p
+        copy_into(hi, p)
         for _ in range(refine):
             for k in range(d):
                 mid[k] = 0.5 * (lo[k] + hi[k])
             checks += 1
             if state_free(world, mid):
-                hi[:] = mid
+                copy_into(hi, mid)
             else:
-                lo[:] = mid
+                copy_into(lo, mid)
         out[m, :] = hi
         cand[m] = pending
         pending = 0

@@ -15,13 +15,12 @@ import math
 import numba as nb
 import numpy as np
 
-from planners.datastructures import nn as nn_index
 from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free, state_free
 from planners.kernels.rrt import embed_query
 from planners.kernels.rrtstar import near_vertices
-from planners.kernels.space import distance, kd_metric, uses_kd
-from planners.kernels.tree import add_vertex, resolve_sample
+from planners.kernels.space import copy_into, space_distance
+from planners.kernels.tree import add_vertex, resolve_sample, space_knn
 
 
 @nb.njit(cache=True)
@@ -67,21 +66,8 @@ def uf_make(uf, v, dgoal):
 @nb.njit(cache=True)
 def neighbours(store, n, space, q, qe, k, radius, out, out_d):
     """The k nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices."""
-    X = store.X
-    E, perm, split, box = store.E, store.perm, store.split, store.box
-    kind, metric, rot_weight = space
     if k > 0:
-        if uses_kd(kind, metric):
-            return nn_index.nearest_k(E, perm, split, box, n, qe, kd_metric(metric), k, out, out_d)
-        dd = np.empty(n)  # exact scan for metrics without a Euclidean embedding
-        for i in range(n):
-            dd[i] = distance(kind, metric, rot_weight, X[i], q)
-        order = np.argsort(dd)
-        m = min(k, n)
-        for j in range(m):
-            out[j] = order[j]
-            out_d[j] = dd[order[j]]
-        return m
+        return space_knn(store, n, space, q, qe, k, out, out_d)
     return near_vertices(store, n, space, q, qe, radius, out)
 
 
@@ -109,12 +95,12 @@ def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, rad
     v = n
     istate[slots.I_N] = add_vertex(store, n, space, q, -1, 0.0)
     vstat[v] = slots.V_VALID if (valid or not lazy) else slots.V_UNKNOWN
-    uf_make(uf, v, distance(kind, metric, rot_weight, q, goal))
+    uf_make(uf, v, space_distance(space, q, goal))
     for j in range(m):
         u = nbr[j]
         if vstat[u] == slots.V_INVALID:
             continue
-        du = distance(kind, metric, rot_weight, X[u], q)
+        du = space_distance(space, X[u], q)
         if max_edge > 0.0 and du > max_edge:
             continue
         if not lazy:
@@ -156,7 +142,7 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
         istate[slots.I_ITER] += 1
         istate[slots.I_ADDED] = -1
         resolve_sample(space, samples[s], anchored[s], X[istate[slots.I_BEST_V]], goal, low, high, q)
-        last[:] = q
+        copy_into(last, q)
         if not lazy:
             istate[slots.I_CHECKS] += 1
             if not state_free(world, q):
@@ -186,7 +172,7 @@ def rebuild_components(store, edges, uf, vstat, istate, goal, space):
     eu, ev, ew, es = edges
     kind, metric, rot_weight = space
     for v in range(istate[slots.I_N]):
-        uf_make(uf, v, distance(kind, metric, rot_weight, X[v], goal) if vstat[v] != slots.V_INVALID else np.inf)
+        uf_make(uf, v, space_distance(space, X[v], goal) if vstat[v] != slots.V_INVALID else np.inf)
     for e in range(istate[slots.I_E]):
         if es[e] != slots.EDGE_INVALID and vstat[eu[e]] != slots.V_INVALID and vstat[ev[e]] != slots.V_INVALID:
             uf_union(uf, eu[e], ev[e])
@@ -235,7 +221,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
     hf = np.empty(deg[n] + 1)
     hv = np.empty(deg[n] + 1, dtype=np.int64)
     g[src] = 0.0
-    hf[0] = distance(kind, metric, rot_weight, X[src], X[dst]) if heuristic else 0.0
+    hf[0] = space_distance(space, X[src], X[dst]) if heuristic else 0.0
     hv[0] = src
     hn = 1
     while hn > 0:
@@ -275,7 +261,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
                 g[u] = nd
                 via_v[u] = v
                 via_e[u] = e
-                f = nd + distance(kind, metric, rot_weight, X[u], X[dst]) if heuristic else nd
+                f = nd + space_distance(space, X[u], X[dst]) if heuristic else nd
                 i = hn
                 hn += 1
                 while i > 0:

@@ -13,7 +13,7 @@ import numpy as np
 
 from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free
-from planners.kernels.space import SPACE_RN, distance, embed
+from planners.kernels.space import SPACE_RN, copy_into, embed, space_distance
 from planners.kernels.tree import add_vertex, nearest_vertex, resolve_sample, steer
 
 
@@ -56,16 +56,16 @@ def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal
     istate[slots.I_ITER] += 1
     istate[slots.I_ADDED] = -1
     resolve_sample(space, sample, anchored, X[istate[slots.I_BEST_V]], goal, low, high, q)
-    last[:] = q
+    copy_into(last, q)
     n = istate[slots.I_N]
     near = extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb)
     if near < 0:
         return
-    c = cost[near] + distance(kind, metric, rot_weight, X[near], new)
+    c = cost[near] + space_distance(space, X[near], new)
     n = add_vertex(tree, n, space, new, near, c)
     istate[slots.I_N] = n
     istate[slots.I_ADDED] = n - 1
-    dg = distance(kind, metric, rot_weight, new, goal)
+    dg = space_distance(space, new, goal)
     if dg < fstate[slots.F_BEST_D]:
         fstate[slots.F_BEST_D] = dg
         istate[slots.I_BEST_V] = n - 1
@@ -113,7 +113,7 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
         istate[slots.I_ITER] += 1
         istate[slots.I_ADDED] = -1
         resolve_sample(space, samples[s], anchored[s], Xa[istate[slots.I_BEST_V]], goal, low, high, q)
-        last[:] = q
+        copy_into(last, q)
         from_start = istate[slots.I_SWAP] == 0
         istate[slots.I_SWAP] = 1 - istate[slots.I_SWAP]
         if from_start:
@@ -127,12 +127,12 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
         near = extend(t, n, space, q, qe_buf, step, new, world, istate, st, sb)
         if near < 0:
             continue
-        n = add_vertex(t, n, space, new, near, ct[near] + distance(kind, metric, rot_weight, Xt[near], new))
+        n = add_vertex(t, n, space, new, near, ct[near] + space_distance(space, Xt[near], new))
         istate[it] = n
         vt = n - 1
         if from_start:
             istate[slots.I_ADDED] = vt
-            dg = distance(kind, metric, rot_weight, new, goal)
+            dg = space_distance(space, new, goal)
             if dg < fstate[slots.F_BEST_D]:
                 fstate[slots.F_BEST_D] = dg
                 istate[slots.I_BEST_V] = vt
@@ -149,13 +149,13 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
                 istate[slots.I_CHECKS] += 1
                 if not motion_free(world, Xo[near_o], nxt):
                     break
-                m = add_vertex(o, m, space, nxt, near_o, co[near_o] + distance(kind, metric, rot_weight, Xo[near_o],
+                m = add_vertex(o, m, space, nxt, near_o, co[near_o] + space_distance(space, Xo[near_o],
                                                                                nxt))
                 istate[io] = m
                 vo = m - 1
                 reached = d <= step
                 if not from_start:
-                    dg = distance(kind, metric, rot_weight, nxt, goal)
+                    dg = space_distance(space, nxt, goal)
                     if dg < fstate[slots.F_BEST_D]:
                         fstate[slots.F_BEST_D] = dg
                         istate[slots.I_BEST_V] = vo

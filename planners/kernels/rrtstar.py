@@ -14,27 +14,17 @@ import math
 import numba as nb
 import numpy as np
 
-from planners.datastructures import nn as nn_index
 from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free
 from planners.kernels.rrt import embed_query, extend
-from planners.kernels.space import distance, kd_metric, uses_kd
-from planners.kernels.tree import add_vertex, resolve_sample
+from planners.kernels.space import copy_into, space_distance
+from planners.kernels.tree import add_vertex, resolve_sample, space_within
 
 
 @nb.njit(cache=True)
 def near_vertices(tree, n, space, q, qe, radius, out):
     """All of the first ``n`` vertices within ``radius`` of ``q``; returns the count."""
-    X, E, parent, cost, perm, split, box = tree
-    kind, metric, rot_weight = space
-    if uses_kd(kind, metric):
-        return nn_index.nearest_r(E, perm, split, box, n, qe, kd_metric(metric), radius, out)
-    cnt = 0
-    for i in range(n):
-        if distance(kind, metric, rot_weight, X[i], q) <= radius:
-            out[cnt] = i
-            cnt += 1
-    return cnt
+    return space_within(tree, n, space, q, qe, radius, out)
 
 
 @nb.njit(cache=True, inline="always")
@@ -94,7 +84,7 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
         istate[slots.I_ITER] += 1
         istate[slots.I_ADDED] = -1
         resolve_sample(space, samples[s], anchored[s], X[istate[slots.I_BEST_V]], goal, low, high, q)
-        last[:] = q
+        copy_into(last, q)
         near = extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb)
         if near < 0:
             continue
@@ -105,7 +95,7 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
         k = near_vertices(tree, n, space, new, ne, radius, nbr)
         # choose parent: cheapest neighbour with a valid motion, checked lazily in cost order
         best_p = near
-        best_len = distance(kind, metric, rot_weight, X[near], new)
+        best_len = space_distance(space, X[near], new)
         best_c = cost[near] + best_len
         for j in range(k):
             u = nbr[j]
@@ -114,7 +104,7 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
                 nbr_ok[j] = 1
                 nbr_cost[j] = np.inf
                 continue
-            nbr_cost[j] = cost[u] + distance(kind, metric, rot_weight, X[u], new)
+            nbr_cost[j] = cost[u] + space_distance(space, X[u], new)
         order = np.argsort(nbr_cost[:k])
         for jj in range(k):
             j = order[jj]
@@ -126,7 +116,7 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
             nbr_ok[j] = 1 if ok else 0
             if ok:
                 best_p = u
-                best_len = distance(kind, metric, rot_weight, X[u], new)
+                best_len = space_distance(space, X[u], new)
                 best_c = cost[u] + best_len
                 break
         n = add_vertex(tree, n, space, new, best_p, best_c)
@@ -142,7 +132,7 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
             u = nbr[j]
             if u == best_p:
                 continue
-            el = distance(kind, metric, rot_weight, new, X[u])
+            el = space_distance(space, new, X[u])
             c_new = best_c + el
             if c_new >= cost[u]:
                 continue
@@ -159,7 +149,7 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
             propagate_costs(u, cost, elen, parent, first_child, next_sib, stack)
             rewired = True
         # goal region bookkeeping
-        dg = distance(kind, metric, rot_weight, new, goal)
+        dg = space_distance(space, new, goal)
         if dg < fstate[slots.F_BEST_D]:
             fstate[slots.F_BEST_D] = dg
             istate[slots.I_BEST_V] = v

@@ -16,9 +16,11 @@ Angles are interpolated along the shorter arc, so a motion from 3.1 to -3.1 rad 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
+from numba.extending import overload
 
 SPACE_RN = 0
 SPACE_RIGID = 1
@@ -99,39 +101,62 @@ def rotation_angle_between(a, b):
     return 2.0 * math.acos(dot)
 
 
+@nb.njit(cache=True, inline="always")
+def _l2(a, b):
+    s = 0.0
+    for i in range(a.shape[0]):
+        d = a[i] - b[i]
+        s += d * d
+    return math.sqrt(s)
+
+
+@nb.njit(cache=True, inline="always")
+def _l1(a, b):
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += abs(a[i] - b[i])
+    return s
+
+
+@nb.njit(cache=True, inline="always")
+def _linf(a, b):
+    s = 0.0
+    for i in range(a.shape[0]):
+        d = abs(a[i] - b[i])
+        if d > s:
+            s = d
+    return s
+
+
+@nb.njit(cache=True, inline="always")
+def _cossin(a, b):
+    t = 0.0
+    for i in range(3):
+        d = a[i] - b[i]
+        t += d * d
+    # |(cos a, sin a) - (cos b, sin b)|^2 = 4 sin^2((a - b) / 2)
+    for i in range(3, 6):
+        s = math.sin(0.5 * (a[i] - b[i]))
+        t += 4.0 * s * s
+    return math.sqrt(t)
+
+
 @nb.njit(cache=True)
 def distance(kind, metric, rot_weight, a, b):
     """Distance between two states under ``(kind, metric)``."""
     if kind == SPACE_RN:
         if metric == METRIC_L2:
-            s = 0.0
-            for i in range(a.shape[0]):
-                d = a[i] - b[i]
-                s += d * d
-            return math.sqrt(s)
+            return _l2(a, b)
         elif metric == METRIC_L1:
-            s = 0.0
-            for i in range(a.shape[0]):
-                s += abs(a[i] - b[i])
-            return s
-        else:
-            s = 0.0
-            for i in range(a.shape[0]):
-                d = abs(a[i] - b[i])
-                if d > s:
-                    s = d
-            return s
-    # rigid body
+            return _l1(a, b)
+        return _linf(a, b)
+    if metric == METRIC_COSSIN:
+        return _cossin(a, b)
+    # rigid body, SE3
     t = 0.0
     for i in range(3):
         d = a[i] - b[i]
         t += d * d
-    if metric == METRIC_COSSIN:
-        # |(cos a, sin a) - (cos b, sin b)|^2 = 4 sin^2((a - b) / 2)
-        for i in range(3, 6):
-            s = math.sin(0.5 * (a[i] - b[i]))
-            t += 4.0 * s * s
-        return math.sqrt(t)
     return math.sqrt(t) + rot_weight * rotation_angle_between(a, b)
 
 
@@ -159,3 +184,84 @@ def kd_metric(metric):
 @nb.njit(cache=True, inline="always")
 def uses_kd(kind, metric):
     return metric != METRIC_SE3
+
+
+# --- spaces whose kind and metric are part of the type ----------------------------------------------
+# ``Problem.space`` hands the kernels one of the classes below. They are ``Space`` tuples like any
+# other, but numba types each class separately, so the helpers that take ``space`` whole
+# (``space_distance``, ``space_nearest`` in ``planners.kernels.tree``) compile only the branch of
+# that kind and metric: a 2-D Euclidean run never compiles the rigid-body or L1 code. A plain
+# ``(kind, metric, rot_weight)`` tuple still works everywhere, dispatched at run time.
+
+
+class Space(NamedTuple):
+    """``(kind, metric, rot_weight)`` as the kernels take it (see the module docstring)."""
+
+    kind: int
+    metric: int
+    rot_weight: float
+
+
+class SpaceRnL2(Space):
+    __slots__ = ()
+    KIND, METRIC = SPACE_RN, METRIC_L2
+
+
+class SpaceRnL1(Space):
+    __slots__ = ()
+    KIND, METRIC = SPACE_RN, METRIC_L1
+
+
+class SpaceRnLinf(Space):
+    __slots__ = ()
+    KIND, METRIC = SPACE_RN, METRIC_LINF
+
+
+class SpaceRigidCossin(Space):
+    __slots__ = ()
+    KIND, METRIC = SPACE_RIGID, METRIC_COSSIN
+
+
+class SpaceRigidSE3(Space):
+    __slots__ = ()
+    KIND, METRIC = SPACE_RIGID, METRIC_SE3
+
+
+SPACE_CLASSES = (SpaceRnL2, SpaceRnL1, SpaceRnLinf, SpaceRigidCossin, SpaceRigidSE3)
+
+
+def make_space(kind: int, metric: int, rot_weight: float) -> Space:
+    """The ``Space`` of that kind and metric, typed so the kernels compile only its branch."""
+    for cls in SPACE_CLASSES:
+        if cls.KIND == kind and cls.METRIC == metric:
+            return cls(int(kind), int(metric), float(rot_weight))
+    return Space(int(kind), int(metric), float(rot_weight))
+
+
+def static_code(tup, name):
+    """The class constant ``name`` (``KIND``, ``METRIC``) of a typed tuple's class, or None (known at run time only)."""
+    return getattr(getattr(tup, "instance_class", None), name, None)
+
+
+def space_distance(space, a, b):
+    """Distance between two states in ``space`` (compiled code only; see ``distance``)."""
+    raise NotImplementedError("space_distance runs in compiled code only")
+
+
+@overload(space_distance, jit_options={"cache": True})
+def _space_distance(space, a, b):
+    kind, metric = static_code(space, "KIND"), static_code(space, "METRIC")
+    if kind == SPACE_RN:
+        impl = {METRIC_L2: _l2, METRIC_L1: _l1, METRIC_LINF: _linf}[metric]
+        return lambda space, a, b: impl(a, b)
+    if kind == SPACE_RIGID and metric == METRIC_COSSIN:
+        return lambda space, a, b: _cossin(a, b)
+    return lambda space, a, b: distance(space[0], space[1], space[2], a, b)
+
+
+@nb.njit(cache=True, inline="always")
+def copy_into(out, q):
+    """``out[:] = q`` for two vectors of one length. (The slice assignment compiles numba's shape-mismatch
+    message formatting, seconds of compilation per kernel that uses it.)"""
+    for i in range(q.shape[0]):
+        out[i] = q[i]

@@ -3,41 +3,173 @@
 A tree reaches the kernels as ``(X, E, parent, cost, perm, split, box)``: states ``X``, their
 nearest-neighbour embedding ``E`` (the same array as ``X`` for real-vector spaces), parent index,
 cost-to-come and the k-d forest arrays of ``planners.datastructures.nn``. ``space`` is ``(kind, metric,
-rot_weight)``.
+rot_weight)``, normally a typed ``planners.kernels.space.Space`` subclass: then ``space_nearest``,
+``space_knn`` and ``space_within`` compile only the k-d traversal of its metric.
 """
 
 from __future__ import annotations
 
 import numba as nb
 import numpy as np
+from numba.extending import overload
 
 from planners.datastructures import nn as nn_index
-from planners.kernels.space import SPACE_RN, distance, embed, interpolate, kd_metric, uses_kd
+from planners.kernels.space import (
+    METRIC_L1,
+    METRIC_L2,
+    METRIC_LINF,
+    METRIC_SE3,
+    SPACE_RN,
+    embed,
+    interpolate,
+    kd_metric,
+    space_distance,
+    static_code,
+    uses_kd,
+)
 
 
-@nb.njit(cache=True, inline="always")
-def nearest_vertex(tree, n, space, q, qe, st, sb):
-    """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n``."""
+def space_nearest(tree, n, space, q, qe, st, sb):
+    """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n`` (compiled code only)."""
+    raise NotImplementedError("space_nearest runs in compiled code only")
+
+
+def _any_space_nearest(tree, n, space, q, qe, st, sb):
     X, E, parent, cost, perm, split, box = tree
     kind, metric, rot_weight = space
     if uses_kd(kind, metric):
         i, _ = nn_index.nearest_into(E, perm, split, box, n, qe, kd_metric(metric), st, sb)
         return i
+    return _scan_nearest(tree, n, space, q)
+
+
+@nb.njit(cache=True)
+def _scan_nearest(tree, n, space, q):
+    X = tree.X
     best = np.inf
     bi = -1
     for i in range(n):
-        d = distance(kind, metric, rot_weight, X[i], q)
+        d = space_distance(space, X[i], q)
         if d < best:
             best = d
             bi = i
     return bi
 
 
+@overload(space_nearest, jit_options={"cache": True})
+def _space_nearest(tree, n, space, q, qe, st, sb):
+    kind, metric = static_code(space, "KIND"), static_code(space, "METRIC")
+    if metric is None:
+        return _any_space_nearest  # kind and metric known at run time only: every branch
+    if metric == METRIC_SE3:
+        return lambda tree, n, space, q, qe, st, sb: _scan_nearest(tree, n, space, q)
+    kd = nn_index.BY_METRIC[_kd_metric(metric)][0]
+
+    def impl(tree, n, space, q, qe, st, sb):
+        X, E, parent, cost, perm, split, box = tree
+        i, _ = kd(E, perm, split, box, n, qe, st, sb)
+        return i
+
+    return impl
+
+
+def _kd_metric(metric):
+    """``kd_metric`` at compile time: the k-d index's metric on the embedding (COSSIN embeds into L2)."""
+    return metric if metric in (METRIC_L1, METRIC_LINF) else METRIC_L2
+
+
+def space_within(tree, n, space, q, qe, radius, out):
+    """All of the first ``n`` vertices within ``radius`` of ``q`` into ``out``; the count (compiled code only)."""
+    raise NotImplementedError("space_within runs in compiled code only")
+
+
+def _scan_within(tree, n, space, q, qe, radius, out):
+    X = tree[0]
+    cnt = 0
+    for i in range(n):
+        if space_distance(space, X[i], q) <= radius:
+            out[cnt] = i
+            cnt += 1
+    return cnt
+
+
+def _any_space_within(tree, n, space, q, qe, radius, out):
+    X, E, parent, cost, perm, split, box = tree
+    kind, metric, rot_weight = space
+    if uses_kd(kind, metric):
+        return nn_index.nearest_r(E, perm, split, box, n, qe, kd_metric(metric), radius, out)
+    return _scan_within(tree, n, space, q, qe, radius, out)
+
+
+@overload(space_within, jit_options={"cache": True})
+def _space_within(tree, n, space, q, qe, radius, out):
+    metric = static_code(space, "METRIC")
+    if metric is None:
+        return _any_space_within
+    if metric == METRIC_SE3:
+        return _scan_within
+    kd = nn_index.BY_METRIC[_kd_metric(metric)][2]
+
+    def impl(tree, n, space, q, qe, radius, out):
+        X, E, parent, cost, perm, split, box = tree
+        return kd(E, perm, split, box, n, qe, radius, out)
+
+    return impl
+
+
+def space_knn(tree, n, space, q, qe, k, out, out_d):
+    """The ``min(k, n)`` vertices nearest ``q``, nearest first, into ``out`` / ``out_d``; the count (compiled only)."""
+    raise NotImplementedError("space_knn runs in compiled code only")
+
+
+def _scan_knn(tree, n, space, q, qe, k, out, out_d):
+    X = tree[0]
+    dd = np.empty(n)  # exact scan for metrics without a Euclidean embedding
+    for i in range(n):
+        dd[i] = space_distance(space, X[i], q)
+    order = np.argsort(dd)
+    m = min(k, n)
+    for j in range(m):
+        out[j] = order[j]
+        out_d[j] = dd[order[j]]
+    return m
+
+
+def _any_space_knn(tree, n, space, q, qe, k, out, out_d):
+    X, E, parent, cost, perm, split, box = tree
+    kind, metric, rot_weight = space
+    if uses_kd(kind, metric):
+        return nn_index.nearest_k(E, perm, split, box, n, qe, kd_metric(metric), k, out, out_d)
+    return _scan_knn(tree, n, space, q, qe, k, out, out_d)
+
+
+@overload(space_knn, jit_options={"cache": True})
+def _space_knn(tree, n, space, q, qe, k, out, out_d):
+    metric = static_code(space, "METRIC")
+    if metric is None:
+        return _any_space_knn
+    if metric == METRIC_SE3:
+        return _scan_knn
+    kd = nn_index.BY_METRIC[_kd_metric(metric)][1]
+
+    def impl(tree, n, space, q, qe, k, out, out_d):
+        X, E, parent, cost, perm, split, box = tree
+        return kd(E, perm, split, box, n, qe, k, out, out_d)
+
+    return impl
+
+
+@nb.njit(cache=True, inline="always")
+def nearest_vertex(tree, n, space, q, qe, st, sb):
+    """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n``."""
+    return space_nearest(tree, n, space, q, qe, st, sb)
+
+
 @nb.njit(cache=True, inline="always")
 def steer(space, a, b, step, out):
     """Write into ``out`` the state at most ``step`` from ``a`` towards ``b``; returns the distance a-b."""
     kind, metric, rot_weight = space
-    d = distance(kind, metric, rot_weight, a, b)
+    d = space_distance(space, a, b)
     if d <= step:
         for i in range(a.shape[0]):
             out[i] = b[i]

@@ -15,7 +15,6 @@ from planners.base.fileio import InputError
 from planners.base.world import WorldBase
 from planners.kernels import geometry
 from planners.kernels.space import SPACE_RN
-from planners.kernels.state import WorldKernel
 
 
 class OccupancyGrid(WorldBase):
@@ -85,8 +84,8 @@ class OccupancyGrid(WorldBase):
         self.y_up = bool(y_up)
         _, geom, body = geometry.placeholder_arrays()
         grid_u8 = np.ascontiguousarray(self._obstacles, dtype=np.uint8)
-        self._kernel = WorldKernel(geometry.WORLD_GRID, grid_u8, geom, body, np.array([1.0 / resolution, org[0],
-                                                                                       org[1]]))
+        self._kernel = geometry.world_kernel(geometry.WORLD_GRID, grid_u8, geom, body,
+                                             np.array([1.0 / resolution, org[0], org[1]]))
         self._origin = org
         self._low = org.copy()
         self._high = org + np.array([self.width * resolution, self.height * resolution])

@@ -39,7 +39,6 @@ from planners.kernels import geometry
 from planners.kernels import rigid as rigid_kernels
 from planners.kernels.rigid import body_points_world
 from planners.kernels.space import SPACE_RIGID, interpolate
-from planners.kernels.state import WorldKernel
 
 #: The scene shipped with the package (see ``load_scene`` for the format).
 EXAMPLE_SCENE = Path(__file__).resolve().parents[1] / "scenes" / "example.scene"
@@ -224,8 +223,8 @@ class RigidBodyWorld(WorldBase):
             a.flags.writeable = False
         params = np.concatenate([lo, hi, [delta, self.radius]])
         grid, _, _ = geometry.placeholder_arrays()
-        self._kernel = WorldKernel(geometry.WORLD_RIGID, grid, np.ascontiguousarray(self.boxes),
-                                   np.ascontiguousarray(self.body), params)
+        self._kernel = geometry.world_kernel(geometry.WORLD_RIGID, grid, np.ascontiguousarray(self.boxes),
+                                             np.ascontiguousarray(self.body), params)
         self._low = np.concatenate([lo, [-math.pi] * 3])
         self._high = np.concatenate([hi, [math.pi] * 3])
         self._low.flags.writeable = False

@@ -10,7 +10,6 @@ import numpy as np
 from planners.base.world import WorldBase
 from planners.kernels import geometry
 from planners.kernels.space import SPACE_RN
-from planners.kernels.state import WorldKernel
 
 
 @dataclass(frozen=True)
@@ -72,7 +71,8 @@ class GeometricWorld(WorldBase):
         self.obstacles: tuple[Circle | Rectangle, ...] = tuple(obstacles)
         geom = np.array(rows, dtype=np.float64).reshape(-1, 5)
         grid, _, body = geometry.placeholder_arrays()
-        self._kernel = WorldKernel(geometry.WORLD_SHAPES, grid, geom, body, np.array([0.0, 0.0, width, height]))
+        self._kernel = geometry.world_kernel(geometry.WORLD_SHAPES, grid, geom, body,
+                                             np.array([0.0, 0.0, width, height]))
         self._low = np.zeros(2)
         self._high = np.array([width, height])
         self._low.flags.writeable = False

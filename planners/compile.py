@@ -1,0 +1,128 @@
+"""Compile every planner's kernels into the cache ahead of use: ``python -m planners.compile``.
+
+For each registered planner and each world kind (occupancy grid, circles and rectangles, 6-DoF rigid
+body) and metric, one short seeded solve on a small problem runs every kernel that kind of run
+uses, so a later first solve loads them from the cache in a fraction of a second. The cache folder
+and how it stays honest are described in ``docs/compiling.md`` (``planners.kernels.cache``).
+
+    python -m planners.compile               # everything, with a progress bar
+    python -m planners.compile --planners RRT RRTConnect --worlds grid
+    python -m planners.compile --list        # what would be compiled, and where
+
+A combination the planner refuses (Informed RRT* on the rigid body) is skipped.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from planners.base.problem import Problem
+from planners.base.registry import make_planner, planner_names
+from planners.kernels import cache
+from planners.worlds.grid import OccupancyGrid
+from planners.worlds.rigid3d import thin_wall_scene
+from planners.worlds.shapes import Circle, GeometricWorld, Rectangle
+
+
+def _grid(metric: str) -> Problem:
+    obs = np.zeros((24, 32), dtype=bool)
+    obs[4:20, 14:17] = True
+    return Problem(OccupancyGrid(obs), (2.5, 2.5), (29.5, 21.5), goal_tolerance=1.5, metric=metric)
+
+
+def _shapes(metric: str) -> Problem:
+    world = GeometricWorld(32.0, 24.0, [Circle(10.0, 12.0, 4.0), Rectangle(18.0, 4.0, 21.0, 20.0)])
+    return Problem(world, (2.5, 2.5), (29.5, 21.5), goal_tolerance=1.5, metric=metric)
+
+
+def _rigid(metric: str) -> Problem:
+    return thin_wall_scene(hole=4.0, metric=metric)
+
+
+#: world kind -> (problem maker, metrics compiled by default)
+WORLDS: dict[str, tuple[Callable[[str], Problem], tuple[str, ...]]] = {
+    "grid": (_grid, ("euclidean",)),
+    "shapes": (_shapes, ("euclidean",)),
+    "rigid": (_rigid, ("cossin", "se3")),
+}
+#: Samples per solve: enough to reach a first solution (path extraction compiles then) on these maps.
+ITERATIONS = 400
+
+
+def jobs(planners: list[str], worlds: list[str], metrics: list[str] | None = None) -> list[tuple[str, str, str]]:
+    """(planner, world kind, metric) triples to compile; ``metrics`` None: each world's defaults."""
+    out = []
+    for w in worlds:
+        for m in metrics if metrics is not None else WORLDS[w][1]:
+            out += [(p, w, m) for p in planners]
+    return out
+
+
+def compile_one(planner: str, world: str, metric: str) -> float | None:
+    """Run one short solve so its kernels compile into the cache; the seconds it took, or None if the
+    planner does not run on that world (Informed RRT* needs a Euclidean real-vector space)."""
+    t0 = time.perf_counter()
+    problem = WORLDS[world][0](metric)
+    try:
+        p = make_planner(planner, problem, seed=0)
+    except ValueError:
+        return None
+    p.solve(max_iterations=ITERATIONS)
+    return time.perf_counter() - t0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line entry point."""
+    names = list(planner_names())
+    ap = argparse.ArgumentParser(prog="python -m planners.compile", description=__doc__.split("\n")[0])
+    ap.add_argument("--planners", nargs="+", default=names, metavar="NAME", help=f"default: all ({', '.join(names)})")
+    ap.add_argument("--worlds", nargs="+", default=list(WORLDS), metavar="KIND",
+                    help=f"default: all ({', '.join(WORLDS)})")
+    ap.add_argument("--metrics", nargs="+", default=None, metavar="METRIC",
+                    help="default: each world's own (grid, shapes: euclidean; rigid: cossin, se3)")
+    ap.add_argument("--list", action="store_true", help="print what would be compiled and the cache folder, then exit")
+    ap.add_argument("--no-progress", action="store_true", help="no progress bar (one line per job instead)")
+    args = ap.parse_args(argv)
+    for label, given, allowed in (("--planners", args.planners, names), ("--worlds", args.worlds, list(WORLDS))):
+        bad = [v for v in given if v not in allowed]
+        if bad:
+            print(f"{label}: unknown value {bad[0]!r}; expected one of {', '.join(allowed)}", file=sys.stderr)
+            return 2
+    todo = jobs(args.planners, args.worlds, args.metrics)
+    for p, w, m in todo:  # checked before any compiling starts
+        try:
+            WORLDS[w][0](m)
+        except ValueError as e:
+            print(f"--metrics: {m!r} does not fit the {w} world ({e})", file=sys.stderr)
+            return 2
+    print(f"compiled kernels are cached in {cache.cache_dir()}", file=sys.stderr)
+    if args.list:
+        for job in todo:
+            print(" ".join(job))
+        return 0
+    cache.set_compile_notice(False)  # the progress bar says it
+    t0 = time.perf_counter()
+    if args.no_progress:
+        for i, job in enumerate(todo):
+            s = compile_one(*job)
+            took = "does not run there, skipped" if s is None else f"{s:.1f} s"
+            print(f"[{i + 1}/{len(todo)}] {' '.join(job)}: {took}", file=sys.stderr, flush=True)
+    else:
+        from tqdm import tqdm
+
+        with tqdm(todo, desc="compiling kernels", unit="job", file=sys.stderr) as bar:
+            for job in bar:
+                bar.set_postfix_str(" ".join(job))
+                compile_one(*job)
+    print(f"compiled {len(todo)} planner/world/metric combinations in {time.perf_counter() - t0:.0f} s",
+          file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

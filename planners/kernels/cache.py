@@ -1,0 +1,140 @@
+"""Where compiled kernels are cached, and the one-line notice when a first call has to compile.
+
+The cache folder is keyed by a hash of every ``planners`` source file, so an edited kernel, or an
+edited helper another kernel imports from a different file (which numba's own per-file timestamp
+check misses), lands in a fresh folder and is recompiled: a stale cache cannot be loaded. The folder
+is ``planners/__pycache__/numba/<hash>`` next to the sources; when that is not writable (a
+read-only install) it is ``$XDG_CACHE_HOME/samplergym/numba/<hash>`` (``~/.cache`` by default),
+and a line on stderr says so once. A ``NUMBA_CACHE_DIR`` set by the user is left alone (numba's own
+staleness rules then apply).
+
+Before a planner's first compiled call with a world kind and space it has not run on this install,
+one line on stderr says that its kernels are compiling. ``SAMPLERGYM_COMPILE_NOTICE=0`` or
+``set_compile_notice(False)`` silences it. ``python -m planners.compile`` fills the cache ahead.
+See ``docs/compiling.md``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numba
+
+#: The environment variable that silences the compile notice when set to 0, "false", "no" or "off".
+NOTICE_ENV = "SAMPLERGYM_COMPILE_NOTICE"
+
+_PACKAGE = Path(__file__).resolve().parent.parent  # planners/
+_state = {"dir": None, "notice": None, "user_dir": False}
+_seen: set[tuple[str, str, str]] = set()
+
+#: Rough compile seconds of each planner's kernels on a 2-core machine, 2-D and 6-DoF, only used
+#: to word the notice (``scripts/benchmark_first_call.py`` measures the real figures).
+_ROUGH_SECONDS = {"RRT": (4, 8), "RRTConnect": (4, 8)}
+
+
+def source_hash(package: Path = _PACKAGE) -> str:
+    """Hash of every source file under ``package`` (paths and contents) and numba's version: the cache folder's key."""
+    h = hashlib.sha256(numba.__version__.encode())
+    for p in sorted(package.rglob("*.py")):
+        h.update(str(p.relative_to(package)).encode())
+        h.update(b"\0")
+        h.update(p.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()[:16]
+
+
+def _writable(d: Path) -> bool:
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=d):
+            pass
+        return True
+    except OSError:
+        return False
+
+
+def choose_dir(key: str, package: Path = _PACKAGE) -> Path:
+    """``package/__pycache__/numba/<key>`` if writable, else the user cache folder (said on stderr)."""
+    local = package / "__pycache__" / "numba" / key
+    if _writable(local):
+        return local
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    d = base / "samplergym" / "numba" / key
+    if not _writable(d):
+        raise OSError(f"no writable folder for compiled kernels: neither {local} nor {d}; set NUMBA_CACHE_DIR to one")
+    print(f"samplergym: {local.parent} is not writable; compiled kernels are cached in {d}", file=sys.stderr)
+    return d
+
+
+def configure() -> Path | None:
+    """Point numba's cache at the source-hash folder (once per process); the folder, or None if the user set one.
+
+    Runs when ``planners.kernels`` is imported, before any kernel is defined.
+    """
+    if _state["dir"] is not None or _state["user_dir"]:
+        return _state["dir"]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        _state["user_dir"] = True
+        return None
+    d = choose_dir(source_hash())
+    numba.config.CACHE_DIR = str(d)
+    _state["dir"] = d
+    return d
+
+
+def cache_dir() -> Path:
+    """The folder compiled kernels are cached in."""
+    return _state["dir"] if _state["dir"] is not None else Path(os.environ["NUMBA_CACHE_DIR"])
+
+
+def set_compile_notice(on: bool) -> None:
+    """Show (True) or silence (False) the one-line stderr notice before a first compilation."""
+    _state["notice"] = bool(on)
+
+
+def _notice_on() -> bool:
+    if _state["notice"] is not None:
+        return _state["notice"]
+    return os.environ.get(NOTICE_ENV, "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+def _stamp(key: tuple[str, str, str]) -> Path:
+    return cache_dir() / "compiled" / "-".join(key)
+
+
+def is_compiled(label: str, world, space) -> bool:
+    """True if this install has compiled ``label``'s kernels for this world kind and space."""
+    return _stamp(_key(label, world, space)).exists()
+
+
+def _key(label: str, world, space) -> tuple[str, str, str]:
+    return (label, type(world).__name__, type(space).__name__)
+
+
+def announce(label: str, world, space) -> None:
+    """Before a planner's first run on a (world kind, space) this install has not compiled: say so on stderr.
+
+    Called when a planner is made; costs one set lookup once the key has been seen in this process.
+    The key is marked compiled at once (the compilation follows), so the notice shows once per install.
+    """
+    key = _key(label, world, space)
+    if key in _seen:
+        return
+    _seen.add(key)
+    stamp = _stamp(key)
+    if stamp.exists():
+        return
+    if _notice_on():
+        lo, hi = _ROUGH_SECONDS.get(label, (5, 15))
+        rough = f"{lo}-{hi} s" if key[2].startswith("SpaceRn") else f"up to {2 * hi} s"
+        print(f"samplergym: compiling the {label} kernels once for this install, about {rough} "
+              f"(python -m planners.compile does it ahead; {NOTICE_ENV}=0 silences this)", file=sys.stderr, flush=True)
+    try:
+        stamp.parent.mkdir(parents=True, exist_ok=True)
+        stamp.touch()
+    except OSError:
+        pass  # a notice too many next time, nothing worse

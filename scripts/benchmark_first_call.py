@@ -1,0 +1,120 @@
+"""First-call benchmark: how long a new user waits for a first plan, with an empty and with a filled kernel cache.
+
+Each planner runs in a fresh interpreter (``python -c``) with ``NUMBA_CACHE_DIR`` pointing at a new,
+empty folder: ``make_planner(name, problem, seed=0).solve(max_iterations=2000)`` on a 96x64 map (the
+6-DoF rows: a thin-wall scene). "start to solved" is the whole process, interpreter start and imports
+included; the same run is then repeated in another fresh interpreter with the folder now filled.
+"compiling" is the time the first process spent in numba's compiler (``compile_seconds``); its CPU
+time (the process's own) says what the wall time would be on an idle machine when others share it.
+
+    python scripts/benchmark_first_call.py                    # every row, this checkout
+    python scripts/benchmark_first_call.py --rows rrt-goal rrt-connect --repeat 3
+    python scripts/benchmark_first_call.py --code /path/to/other/checkout   # the same rows on other code
+
+Prints a Markdown table (the minimum over ``--repeat`` runs of each figure: other load on the machine
+only ever adds time). Targets: goal-biased RRT and RRT-Connect within 5 s cold; every planner within
+15 s cold; a first solve within 0.3 s warm.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+#: row -> (label, planner name, problem, sampler): "grid" is the 96x64 map, "rigid" the 6-DoF scene
+ROWS = {
+    "rrt-goal": ("RRT (goal-biased 0.05)", "RRT", "grid", "goal"),
+    "rrt-connect": ("RRT-Connect", "RRTConnect", "grid", None),
+    "rrtstar": ("RRT*", "RRTstar", "grid", None),
+    "informed": ("Informed RRT*", "InformedRRTstar", "grid", None),
+    "prm": ("PRM", "PRM", "grid", None),
+    "lazyprm": ("Lazy-PRM", "LazyPRM", "grid", None),
+    "obprm": ("OB-PRM", "OBPRM", "grid", None),
+    "rrt-6dof": ("6-DoF RRT", "RRT", "rigid", None),
+    "prm-6dof": ("6-DoF PRM", "PRM", "rigid", None),
+}
+
+# Only public names that every version of the library has, so --code can point at older checkouts.
+CHILD = r"""
+import json, sys, time
+t_start = float(sys.argv[4])
+import numpy as np
+from planners import GoalBiasedSampler, OccupancyGrid, Problem, make_planner, thin_wall_scene
+from planners.base.planner import compile_seconds
+name, world, sampler = sys.argv[1], sys.argv[2], sys.argv[3]
+if world == "grid":
+    obs = np.zeros((64, 96), dtype=bool)
+    obs[12:52, 30:34] = True
+    obs[0:30, 62:66] = True
+    obs[40:64, 62:66] = True
+    problem = Problem(OccupancyGrid(obs), (5.5, 5.5), (90.5, 58.5), goal_tolerance=2.0)
+else:
+    problem = thin_wall_scene(hole=4.0)
+kw = {"sampler": GoalBiasedSampler(0.05)} if sampler == "goal" else {}
+t0 = time.time()
+r = make_planner(name, problem, seed=0, **kw).solve(max_iterations=2000)
+t1 = time.time()
+print(json.dumps({"total": t1 - t_start, "cpu": time.process_time(), "first_solve": t1 - t0,
+                  "compile": compile_seconds(), "solved": bool(r.solved), "iterations": int(r.iterations)}))
+"""
+
+
+def run_child(code: Path, row: str, cache: str) -> dict:
+    """One fresh interpreter running one row against ``cache``; its figures."""
+    _, name, world, sampler = ROWS[row]
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=str(code), SAMPLERGYM_COMPILE_NOTICE="0")
+    t = time.time()
+    out = subprocess.run([sys.executable, "-c", CHILD, name, world, sampler or "-", repr(t)], env=env,
+                         capture_output=True, text=True, cwd=code)
+    if out.returncode != 0:
+        raise RuntimeError(f"row {row} failed on {code}:\n{out.stderr[-2000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line entry point."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rows", nargs="+", default=list(ROWS), metavar="ROW", help=f"default: all ({', '.join(ROWS)})")
+    ap.add_argument("--code", type=Path, default=ROOT,
+                    help="checkout whose planners package is timed (default: this one)")
+    ap.add_argument("--repeat", type=int, default=1, help="runs per row; the table shows the minimum of each figure")
+    args = ap.parse_args(argv)
+    bad = [r for r in args.rows if r not in ROWS]
+    if bad:
+        print(f"--rows: unknown row {bad[0]!r}; expected one of {', '.join(ROWS)}", file=sys.stderr)
+        return 2
+    if not (args.code / "planners" / "__init__.py").is_file():
+        print(f"--code: {args.code} holds no planners package", file=sys.stderr)
+        return 2
+    if args.repeat < 1:
+        print(f"--repeat: must be at least 1, got {args.repeat}", file=sys.stderr)
+        return 2
+    print(f"code: {args.code.resolve()}  python: {sys.executable}  cpus: {os.cpu_count()}  repeat: {args.repeat}")
+    print()
+    print("| planner | start to solved, empty cache | its CPU time | of it compiling | start to solved, filled cache "
+          "| first solve, filled cache | iterations |")
+    print("|---|---|---|---|---|---|---|")
+    for row in args.rows:
+        cold, warm = [], []
+        for _ in range(args.repeat):
+            with tempfile.TemporaryDirectory(prefix="first-call-") as d:
+                cold.append(run_child(args.code, row, d))
+                warm.append(run_child(args.code, row, d))
+        c = {k: min(r[k] for r in cold) for k in ("total", "cpu", "compile")}
+        w = {k: min(r[k] for r in warm) for k in ("total", "first_solve")}
+        its = cold[0]["iterations"] if cold[0]["solved"] else f"unsolved after {cold[0]['iterations']}"
+        print(f"| {ROWS[row][0]} | {c['total']:.1f} s | {c['cpu']:.1f} s | {c['compile']:.1f} s | {w['total']:.1f} s "
+              f"| {w['first_solve']:.2f} s | {its} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,148 @@
+"""The kernel cache (its folder keyed by the sources, the read-only fallback), the first-call notice,
+``python -m planners.compile``, and the typed world/space dispatch agreeing with the run-time one."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from planners import OccupancyGrid
+from planners.kernels import cache, geometry
+from planners.kernels.space import (
+    METRIC_COSSIN,
+    METRIC_L1,
+    METRIC_L2,
+    METRIC_SE3,
+    SPACE_RIGID,
+    SPACE_RN,
+    Space,
+    SpaceRigidCossin,
+    SpaceRnL2,
+    make_space,
+)
+from planners.kernels.state import WorldKernel
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_the_cache_key_changes_with_any_source_file(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "a.py").write_text("x = 1\n")
+    (pkg / "sub" / "helper.py").write_text("def f():\n    return 1\n")
+    before = cache.source_hash(pkg)
+    assert cache.source_hash(pkg) == before
+    (pkg / "sub" / "helper.py").write_text("def f():\n    return 2\n")  # a helper another file imports
+    edited = cache.source_hash(pkg)
+    assert edited != before
+    (pkg / "sub" / "new.py").write_text("")
+    assert cache.source_hash(pkg) not in (before, edited)
+
+
+def test_a_read_only_install_falls_back_to_the_user_cache_and_says_where(tmp_path, monkeypatch, capsys):
+    blocker = tmp_path / "site-packages"
+    blocker.write_text("")  # a file where the folder would go: nothing can be created under it
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    d = cache.choose_dir("abc123", package=blocker / "planners")
+    assert d == tmp_path / "xdg" / "samplergym" / "numba" / "abc123" and d.is_dir()
+    err = capsys.readouterr().err
+    assert "not writable" in err and str(d) in err
+
+
+def test_a_writable_install_caches_next_to_its_sources(tmp_path, capsys):
+    d = cache.choose_dir("abc123", package=tmp_path / "planners")
+    assert d == tmp_path / "planners" / "__pycache__" / "numba" / "abc123" and d.is_dir()
+    assert capsys.readouterr().err == ""
+
+
+def test_numba_caches_in_the_keyed_folder_unless_the_user_chose_one():
+    code = "import numba, planners; from planners.kernels import cache; print(numba.config.CACHE_DIR)"
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = str(ROOT)
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip().endswith(os.path.join("numba", cache.source_hash()))
+    env["NUMBA_CACHE_DIR"] = "/tmp/somewhere-else"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "/tmp/somewhere-else"
+
+
+@pytest.fixture
+def fresh_notice(tmp_path, monkeypatch):
+    monkeypatch.setitem(cache._state, "dir", tmp_path)
+    monkeypatch.setitem(cache._state, "notice", None)
+    monkeypatch.setattr(cache, "_seen", set())
+    monkeypatch.delenv(cache.NOTICE_ENV, raising=False)
+    return tmp_path
+
+
+def test_the_notice_shows_once_per_install(fresh_notice, monkeypatch, capsys):
+    world, space = OccupancyGrid(np.zeros((4, 4), dtype=bool)).kernel, make_space(SPACE_RN, METRIC_L2, 1.0)
+    assert not cache.is_compiled("RRT", world, space)
+    cache.announce("RRT", world, space)
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "compiling the RRT kernels once for this install, about" in err
+    assert cache.is_compiled("RRT", world, space)
+    cache.announce("RRT", world, space)
+    monkeypatch.setattr(cache, "_seen", set())  # a new process: the stamp is on disk
+    cache.announce("RRT", world, space)
+    assert capsys.readouterr().err == ""
+    cache.announce("PRM", world, space)  # another planner has its own kernels
+    assert "compiling the PRM kernels" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("how", ["env", "function"])
+def test_the_notice_can_be_silenced(fresh_notice, monkeypatch, capsys, how):
+    if how == "env":
+        monkeypatch.setenv(cache.NOTICE_ENV, "0")
+    else:
+        cache.set_compile_notice(False)
+    cache.announce("RRT", OccupancyGrid(np.zeros((4, 4), dtype=bool)).kernel, make_space(SPACE_RN, METRIC_L2, 1.0))
+    assert capsys.readouterr().err == ""
+
+
+def test_spaces_and_worlds_carry_their_kind_in_their_class():
+    assert type(make_space(SPACE_RN, METRIC_L2, 1.0)) is SpaceRnL2
+    assert type(make_space(SPACE_RIGID, METRIC_COSSIN, 1.0)) is SpaceRigidCossin
+    assert type(make_space(SPACE_RN, METRIC_SE3, 1.0)) is Space  # no such space: dispatched at run time
+    assert make_space(SPACE_RN, METRIC_L1, 2.0) == (SPACE_RN, METRIC_L1, 2.0)
+    k = OccupancyGrid(np.zeros((4, 4), dtype=bool)).kernel
+    assert type(k) is geometry.GridKernel and isinstance(k, WorldKernel)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(0.0, 16.0), min_size=4, max_size=4))
+def test_the_typed_grid_check_agrees_with_the_run_time_dispatch(xy):
+    obs = np.zeros((16, 16), dtype=bool)
+    obs[4:12, 7:9] = True
+    typed = OccupancyGrid(obs).kernel
+    plain = WorldKernel(*typed)
+    a, b = np.array(xy[:2]), np.array(xy[2:])
+    out = np.zeros((2, 1), dtype=np.bool_)
+    geometry.motions_free(typed, a[None], b[None], out[0])
+    geometry.motions_free(plain, a[None], b[None], out[1])
+    assert out[0, 0] == out[1, 0]
+
+
+def test_the_compile_command_checks_its_arguments_first():
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    for args, what in ((["--worlds", "cube"], "--worlds: unknown value 'cube'"),
+                       (["--planners", "RRR"], "--planners: unknown value 'RRR'"),
+                       (["--worlds", "grid", "--metrics", "se3"], "--metrics: 'se3' does not fit the grid world")):
+        out = subprocess.run([sys.executable, "-m", "planners.compile", *args], env=env, capture_output=True, text=True)
+        assert out.returncode == 2 and what in out.stderr, out.stderr
+
+
+def test_the_compile_command_lists_its_jobs_and_the_folder():
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, "-m", "planners.compile", "--list", "--planners", "RRT", "PRM",
+                          "--worlds", "grid", "rigid"], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split("\n")[:-1] == ["RRT grid euclidean", "PRM grid euclidean", "RRT rigid cossin",
+                                           "PRM rigid cossin", "RRT rigid se3", "PRM rigid se3"]
+    assert "compiled kernels are cached in" in out.stderr
