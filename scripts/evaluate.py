@@ -28,8 +28,8 @@ from pathlib import Path
 sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
 from learning import PolicySampler
-from learning import evaluation as E
-from learning.route import SHIPPED, load_route_net
+from learning.evaluation import comparison as E
+from learning.samplers.route import SHIPPED, load_route_net
 from planners import movingai_dir, planner_names
 from planners.base.fileio import InputError, atomic_write_text
 from planners.base.registry import planner_name_arg

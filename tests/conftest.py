@@ -23,12 +23,15 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def load_script(name: str):
-    """``scripts/<name>.py`` imported as a module (scripts are not a package), registered in ``sys.modules``."""
+    """``scripts/<name>.py`` imported as a module (scripts are not a package), registered in ``sys.modules``.
+
+    ``name`` may name a subfolder, e.g. ``"experiments/route_variants"``.
+    """
     import importlib.util
     import sys
 
-    spec = importlib.util.spec_from_file_location(f"_script_{name}", Path(__file__).resolve().parents[1] / "scripts"
-                                                  / f"{name}.py")
+    spec = importlib.util.spec_from_file_location(f"_script_{name.replace('/', '_')}",
+                                                  Path(__file__).resolve().parents[1] / "scripts" / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod
     spec.loader.exec_module(mod)
@@ -131,7 +134,7 @@ def _segment_meets_box(ax, ay, bx, by, x0, y0, x1, y1) -> bool:
 @pytest.fixture(scope="session")
 def ray_backend():
     """One local Ray instance (loopback, 2 CPUs) for every test in this process that runs on Ray."""
-    from learning.evaluation import worker_init
+    from learning.evaluation.comparison import worker_init
     from planners.tools.parallel import make_backend
 
     backend = make_backend("ray", processes=2, worker_init=worker_init)

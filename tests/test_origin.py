@@ -14,7 +14,7 @@ import pytest
 
 from envs.observation import GridObservation
 from learning import ConstantGuidedSampler, PolicySampler, RouteSampler
-from learning.expert import CorridorSampler, ExpertSampler, GeodesicExpert
+from learning.references.expert import CorridorSampler, ExpertSampler, GeodesicExpert
 from planners import RRT, OccupancyGrid, Problem
 from planners.base.planner import TreeView
 from planners.guidance.frontier import Frontier

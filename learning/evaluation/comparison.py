@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
+from learning.samplers.ablation import FRONTIER_GRID, ConstantGuidedSampler
 from planners import GoalBiasedSampler, Problem, Sampler, UniformSampler, load_movingai_scenarios, make_planner
 from planners.base.fileio import InputError
 from planners.base.registry import planner_class
@@ -106,11 +106,11 @@ def constant_sampler(frontier: float) -> str:
     return f"constant={frontier:g}"
 
 
-#: Name prefix of the privileged ablation whose frontier knows the geodesic distance (``learning.expert``).
+#: Name prefix of the privileged ablation whose frontier knows the geodesic distance (``learning.references.expert``).
 GEODESIC_FRONTIER = "geodesic frontier="
 
 
-#: Name prefixes of the privileged corridor references (``learning.expert.CorridorSampler``): the share of
+#: Name prefixes of the privileged corridor references (``learning.references.expert.CorridorSampler``): the share of
 #: samples drawn from the exact near-shortest-path corridor follows, the rest come from uniform sampling or
 #: the straight-line follower.
 CORRIDOR_UNIFORM, CORRIDOR_FOLLOWER = "corridor+uniform=", "corridor+follower="
@@ -225,11 +225,11 @@ def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: i
 
 
 #: Sampler names the comparison defines itself; a user sampler takes another name.
-#: The strongest sampler without learning we know: ``learning.route.RouteSampler`` on the straight-line
+#: The strongest sampler without learning we know: ``learning.samplers.route.RouteSampler`` on the straight-line
 #: distance (one step ahead of the vertex nearest the goal; the frontier after 4 iterations without progress).
 FOLLOWER = "straight-line follower"
-#: The shipped route encoder (``learning.route.shipped_sampler``) and its ablation, the same sampler
-#: with the straight-line distance in place of the encoder's field (``learning.route.shipped_ablation``).
+#: The shipped route encoder (``learning.samplers.route.shipped_sampler``) and its ablation, the same sampler
+#: with the straight-line distance in place of the encoder's field (``learning.samplers.route.shipped_ablation``).
 ROUTE, ROUTE_ABLATION = "route encoder", "route ablation"
 BUILTIN_SAMPLERS = ("uniform", "policy", FOLLOWER, ROUTE, ROUTE_ABLATION, "expert (reference)")
 
@@ -258,7 +258,7 @@ def user_sampler(spec: str):
     import json
 
     if "@" in spec:
-        from learning.sb3_sampler import SB3Sampler
+        from learning.samplers.sb3 import SB3Sampler
 
         path, env_id, *options = spec.split("@")
         kwargs: dict = {"deterministic": True}
@@ -312,29 +312,29 @@ def _sampler(name: str, cfg: dict):
     if name.startswith("policy batch="):
         return _policy(policy_path, int(name.split("=")[1]))
     if name == FOLLOWER:
-        from learning.route import RouteSampler
+        from learning.samplers.route import RouteSampler
 
         return RouteSampler(None, step_size=step)
     if name == ROUTE:
-        from learning.route import shipped_sampler
+        from learning.samplers.route import shipped_sampler
 
         return shipped_sampler(_route_net(cfg["route"]), step)
     if name == ROUTE_ABLATION:
-        from learning.route import shipped_ablation
+        from learning.samplers.route import shipped_ablation
 
         return shipped_ablation(step)
     if name == "expert (reference)":
-        from learning.expert import ExpertSampler
+        from learning.references.expert import ExpertSampler
 
         return ExpertSampler(step)
     if name.startswith((CORRIDOR_UNIFORM, CORRIDOR_FOLLOWER)):
-        from learning.expert import CorridorSampler
-        from learning.route import RouteSampler
+        from learning.references.expert import CorridorSampler
+        from learning.samplers.route import RouteSampler
 
         base = UniformSampler() if name.startswith(CORRIDOR_UNIFORM) else RouteSampler(None, step_size=step)
         return CorridorSampler(float(name.split("=")[1]), base)
     if name.startswith(GEODESIC_FRONTIER):
-        from learning.expert import GeodesicFrontierSampler
+        from learning.references.expert import GeodesicFrontierSampler
 
         return GeodesicFrontierSampler(float(name.split("=")[1]), step_size=step)
     raise ValueError(f"unknown sampler {name!r}")
@@ -346,7 +346,7 @@ _ROUTE: dict = {}
 
 def _route_net(path: str):
     if path not in _ROUTE:
-        from learning.route import load_route_net
+        from learning.samplers.route import load_route_net
 
         _ROUTE[path] = load_route_net(path)
     return _ROUTE[path]
@@ -354,7 +354,7 @@ def _route_net(path: str):
 
 def _policy(path: str, batch: int | None = None):
     if (path, batch) not in _POLICY:
-        from learning.policy_sampler import PolicySampler
+        from learning.samplers.policy import PolicySampler
 
         _POLICY[path, batch] = PolicySampler.load(path, batch=batch)
     return _POLICY[path, batch]

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from learning import PolicySampler
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = Path(__file__).resolve().parents[2] / "checkpoints" / "guided.zip"
 
 
 def batch_8() -> PolicySampler:

@@ -8,7 +8,7 @@
 encoder's predicted cost-to-go choose among the frontier's cells when the tree is stuck; these
 settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
 ``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries; ``both_symmetric``
-uses the field everywhere, as the shipped encoder is used (``learning.route.SHIPPED_SETTINGS``), ``both``
+uses the field everywhere, as the shipped encoder is used (``learning.samplers.route.SHIPPED_SETTINGS``), ``both``
 does so with one pass, ``both_lazy25`` / ``50`` / ``100`` run the encoder only after that many
 iterations on the straight line, ``both_stall<k>`` once the tree has come no closer to the goal for k
 iterations, ``both_sym<k>`` averages over the first k symmetries (1-8), and ``exact_both`` is the
@@ -18,15 +18,15 @@ shipped lookahead and spread were chosen on;
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
-Settings are chosen with ``scripts/validate_samplers.py`` (validation maps).
+Settings are chosen with ``scripts/experiments/validate_samplers.py`` (validation maps).
 """
 
 from __future__ import annotations
 
 import re
 
-from learning.expert import GeodesicRouteSampler
-from learning.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, TRAINED, RouteSampler, shipped_sampler
+from learning.references.expert import GeodesicRouteSampler
+from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, TRAINED, RouteSampler, shipped_sampler
 
 SETTINGS = {"stuck": 1, "tau": 0.5}
 
@@ -48,7 +48,7 @@ def ranked_symmetric() -> RouteSampler:
 
 
 def both_symmetric() -> RouteSampler:
-    """The trained encoder at the shipped settings (``learning.route.SHIPPED_SETTINGS``): its field everywhere."""
+    """The trained encoder at the shipped settings (``SHIPPED_SETTINGS``): its field everywhere."""
     return shipped_sampler(_trained())
 
 

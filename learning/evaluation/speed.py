@@ -2,7 +2,7 @@
 
 Two figures: the time of one forward pass of the compiled actor on observations taken from real
 planning runs (their sparsity is what a pass sees in use), and per-query wall time of RRT with the
-policy against goal bias, timed as ``learning.evaluation`` times a run (binding included), with the
+policy against goal bias, timed as ``learning.evaluation.comparison`` times a run (binding included), with the
 forward passes each query took with and without the frontier hold.
 """
 
@@ -14,8 +14,8 @@ from collections.abc import Sequence
 import numba as nb
 import numpy as np
 
-from learning.fast_policy import FastActor, actor_logits
-from learning.policy_sampler import PolicySampler
+from learning.models.fast_policy import FastActor, actor_logits
+from learning.samplers.policy import PolicySampler
 from planners import RRT, GoalBiasedSampler, Problem, Sampler
 from planners.guidance.guided import GuidedSampling
 

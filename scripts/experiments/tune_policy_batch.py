@@ -1,9 +1,9 @@
 """Choose how often the policy decides (``PolicySampler(batch=...)``) on the tuning split.
 
-    python scripts/tune_policy_batch.py                  # batches 8 (trained), 2 and 1; 20 maps per family, 3 seeds
-    python scripts/tune_policy_batch.py --batches 8 4 2 1 --maps 10
+    python scripts/experiments/tune_policy_batch.py  # batches 8 (trained), 2 and 1; 20 maps per family, 3 seeds
+    python scripts/experiments/tune_policy_batch.py --batches 8 4 2 1 --maps 10
 
-The tuning step of ``evaluate.py`` on its own (``learning.evaluation.policy_tuning_tasks`` and
+The tuning step of ``evaluate.py`` on its own (``learning.evaluation.comparison.policy_tuning_tasks`` and
 ``best_policy_batch``): RRT with the policy at each batch on the generated families' tuning maps,
 never the test maps. It names the batch with the lowest sum over families of log median iterations;
 batches within ``BATCH_TIE`` of it count as tied, and the largest of them wins (it costs less time).
@@ -18,13 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from learning import PolicySampler
-from learning import evaluation as E
+from learning.evaluation import comparison as E
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = Path(__file__).resolve().parents[2] / "checkpoints" / "guided.zip"
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,578 @@
+"""Route context: a map encoder that tells the sampler where the route runs, and a sampler that follows it.
+
+The learned policy fails where the route turns away from the goal: its windows do not show which
+gap, door or maze branch leads on (``scripts/experiments/imitation_ceiling.py``). ``RouteNet`` looks at the whole
+map once per query and predicts the cost-to-go of every cell. It works on blocks of one planner
+step; its input is every cell of each block (so a 1-cell gap is not averaged away) and the goal, and
+there is no search at inference. The grid search only makes its training targets, as it does the
+expert's (``learning.route_training``).
+
+``RouteSampler`` uses the prediction as the expert (``learning.references.expert``) uses the distance field:
+its progress vertex is the tree vertex of lowest predicted cost-to-go, and it samples about one step
+ahead of it down the predicted field. Where the prediction is wrong the tree stops making progress;
+after ``stuck`` iterations the sampler turns to the tree's frontier until it does again, so a wrong
+prediction costs iterations, not the solution.
+
+The shipped encoder (``checkpoints/route.pt``, ``shipped_sampler``) adds axial attention after the
+U-Net and is read as the mean over the square's 8 symmetries; ``shipped_ablation`` is the same sampler
+on the straight-line distance, which is what its learning is measured against.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numba as nb
+import numpy as np
+import torch
+from torch import nn
+
+from planners import OccupancyGrid, SamplerBase
+from planners.base.fileio import InputError
+from planners.base.planner import CHUNK, FIRST_REFILL, Planner
+from planners.guidance.follow import frontier_costs, lowest_vertex_cell, walk_field
+from planners.guidance.frontier import FREE, Frontier, frontier_sample, update_frontier
+from planners.kernels import rrt as rrt_kernels
+from planners.kernels.bitgen import bitgen_address, next_double
+from planners.kernels.state import F_BEST_D, I_ITER, I_N, I_SOLVED
+
+GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
+
+
+def route_input(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -> np.ndarray:
+    """The encoder's input, (block**2 + 3, h, w) float32: each cell of each block, then the goal channels.
+
+    The map is padded with blocked cells to whole blocks.
+    """
+    H, W = obstacles.shape
+    h, w = -(-H // block), -(-W // block)
+    pad = np.ones((h * block, w * block), dtype=np.float32)
+    pad[:H, :W] = obstacles
+    cells = pad.reshape(h, block, w, block).transpose(1, 3, 0, 2).reshape(block * block, h, w)
+    gr, gc = goal_cell[0] // block, goal_cell[1] // block
+    ys, xs = np.mgrid[0:h, 0:w]
+    goal = np.stack([(ys == gr) & (xs == gc), (gc - xs) / w, (gr - ys) / h]).astype(np.float32)
+    return np.concatenate([cells, goal])
+
+
+def symmetry(obstacles: np.ndarray, goal_cell: tuple[int, int], k: int) -> tuple[np.ndarray, tuple[int, int]]:
+    """The map and goal cell under the square's symmetry ``k`` (0-7).
+
+    ``k % 4`` quarter turns, then a transpose if ``k >= 4``.
+    """
+    mark = np.zeros(obstacles.shape, dtype=bool)
+    mark[goal_cell] = True
+    obs, mark = np.rot90(obstacles, k % 4), np.rot90(mark, k % 4)
+    if k >= 4:
+        obs, mark = obs.T, mark.T
+    r, c = np.argwhere(mark)[0]
+    return np.ascontiguousarray(obs), (int(r), int(c))
+
+
+def unturn(field: np.ndarray, k: int) -> np.ndarray:
+    """A field computed on ``symmetry(..., k)``'s map, turned back onto the original map."""
+    return np.rot90(field.T if k >= 4 else field, -(k % 4))
+
+
+class AxialAttention(nn.Module):
+    """Attention along each row of a grid, then along each column, each followed by a 1x1 MLP (residual).
+
+    After one of these every pixel has read every pixel of its row and of its column, and after two
+    every pixel of the grid, at full resolution: where a long wall is open, or which door of a room
+    leads on, is read off across the map instead of surviving a U-Net's coarse middle (which keeps
+    24 numbers for a quarter of a map).
+    """
+
+    HEADS = 2
+
+    def __init__(self, channels: int) -> None:
+        super().__init__()
+        self.row, self.col = (nn.MultiheadAttention(channels, self.HEADS, batch_first=True) for _ in range(2))
+        self.norms = nn.ModuleList(nn.LayerNorm(channels) for _ in range(4))
+        self.mlps = nn.ModuleList(nn.Sequential(nn.Linear(channels, 2 * channels), nn.ReLU(),
+                                                nn.Linear(2 * channels, channels)) for _ in range(2))
+
+    def _along(self, x: torch.Tensor, attn: nn.MultiheadAttention, i: int) -> torch.Tensor:
+        y = self.norms[2 * i](x)
+        x = x + attn(y, y, y, need_weights=False)[0]
+        return x + self.mlps[i](self.norms[2 * i + 1](x))
+
+    def forward(self, h: torch.Tensor) -> torch.Tensor:
+        B, C, H, W = h.shape
+        x = self._along(h.permute(0, 2, 3, 1).reshape(B * H, W, C), self.row, 0)  # each row a sequence
+        x = x.reshape(B, H, W, C).transpose(1, 2).reshape(B * W, H, C)
+        x = self._along(x, self.col, 1)  # each column a sequence
+        return x.reshape(B, W, H, C).permute(0, 3, 2, 1)
+
+
+class UNet(nn.Module):
+    """A small U-Net over a grid: halve it ``depth`` times, then come back up with skip connections.
+
+    Every pixel sees the whole of a 32-pixel grid after ``2 * depth + 2`` convolutions, most of them on
+    small grids, so a pass costs a few times one full-resolution convolution. ``attention`` axial
+    attention layers (``AxialAttention``) are optional; they run on the way up, at the grid halved
+    ``attention_level`` times (0: full resolution, before the output). At level 1 they cost about a
+    quarter as much, and the full-resolution skip connection still brings back each cell.
+    """
+
+    def __init__(self, inputs: int, outputs: int, channels: int = 24, depth: int = 4, attention: int = 0,
+                 attention_level: int = 0) -> None:
+        super().__init__()
+        if not 0 <= attention_level < depth:
+            raise ValueError(f"attention_level = {attention_level}, expected 0 to depth - 1 = {depth - 1}")
+        self.attention_level = attention_level
+        self.inp = nn.Conv2d(inputs, channels, 3, padding=1)
+        self.down = nn.ModuleList(nn.Conv2d(channels, channels, 3, stride=2, padding=1) for _ in range(depth))
+        self.up = nn.ModuleList(nn.Conv2d(2 * channels, channels, 3, padding=1) for _ in range(depth))
+        self.attention = nn.ModuleList(AxialAttention(channels) for _ in range(attention))
+        self.out = nn.Conv2d(channels, outputs, 3, padding=1)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        h = torch.relu(self.inp(x))
+        skips = []
+        for conv in self.down:
+            skips.append(h)
+            h = torch.relu(conv(h))
+        for level, conv, skip in zip(range(len(skips) - 1, -1, -1), self.up, reversed(skips), strict=True):
+            h = nn.functional.interpolate(h, size=skip.shape[-2:], mode="nearest")
+            h = torch.relu(conv(torch.cat([h, skip], 1)))
+            if level == self.attention_level:
+                for layer in self.attention:
+                    h = layer(h)
+        return self.out(h)
+
+
+class RouteNet(UNet):
+    """A ``UNet`` over the block grid that predicts the cost-to-go of every cell, in steps.
+
+    ``trained_side`` is the largest map side (cells) it was trained on, 0 if unknown: ``predict``
+    scales its field up on larger maps (see there).
+    """
+
+    def __init__(self, block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0,
+                 attention_level: int = 0, trained_side: int = 0) -> None:
+        if attention and channels % AxialAttention.HEADS:
+            raise ValueError(f"channels = {channels} with attention, expected a multiple of {AxialAttention.HEADS}")
+        # a cost per cell of the block
+        super().__init__(block * block + GOAL_CHANNELS, block * block, channels, depth, attention, attention_level)
+        self.block, self.channels, self.depth, self.attention_layers = block, channels, depth, attention
+        self.trained_side = trained_side
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return nn.functional.pixel_shuffle(super().forward(x), self.block)[:, 0]
+
+    @torch.no_grad()
+    def predict(self, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int = 1) -> np.ndarray:
+        """Predicted cost-to-go of every cell, in blocks (steps), for one map: (H, W) float64.
+
+        With ``symmetries`` > 1 the prediction is the mean over the map turned by the first that many of
+        the square's symmetries (``symmetry``), each turned back: at 8 it is exactly equivariant, as the
+        true cost-to-go is, at 8 times the cost. Those of one shape run as one batch.
+
+        On a map whose larger side exceeds ``trained_side`` the field is multiplied by their ratio. The
+        goal offsets it reads are fractions of the map, so beyond its training sizes it predicts the
+        route's shape at the training scale: on MovingAI's random512-10-0 the start, 126 steps out,
+        came out at 35. Only the order of the field steers the sampler's progress and target; its
+        scale sets how sharply the frontier prefers its best cells.
+        """
+        if not 1 <= symmetries <= 8:
+            raise InputError(f"symmetries must be 1 to 8, got {symmetries}")
+        H, W = obstacles.shape
+        by_shape: dict[tuple[int, int], list[tuple[int, np.ndarray]]] = {}
+        for k in range(symmetries):
+            obs, goal = symmetry(obstacles, goal_cell, k)
+            by_shape.setdefault(obs.shape, []).append((k, route_input(obs, goal, self.block)))
+        total = np.zeros((H, W))
+        for (h, w), group in by_shape.items():
+            out = self(torch.from_numpy(np.stack([x for _, x in group])))[:, :h, :w].numpy().astype(np.float64)
+            for (k, _), field in zip(group, out, strict=True):
+                total += unturn(field, k)
+        total /= symmetries
+        side = max(H, W)
+        if self.trained_side and side > self.trained_side:
+            total *= side / self.trained_side
+        return total
+
+
+def save_route_net(net: RouteNet, path: str | os.PathLike) -> None:
+    """Write ``net`` to ``path`` as tensors and plain numbers only (``load_route_net`` reads it safely)."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    config = {"block": net.block, "channels": net.channels, "depth": net.depth}
+    if net.attention_layers:  # files of encoders without attention stay as they were
+        config["attention"] = net.attention_layers
+    if net.attention_level:
+        config["attention_level"] = net.attention_level
+    if net.trained_side:
+        config["trained_side"] = net.trained_side
+    torch.save({"config": config, "state": net.state_dict()}, tmp)
+    os.replace(tmp, path)  # whole or not at all
+
+
+def load_route_net(path: str | os.PathLike) -> RouteNet:
+    """Read a ``save_route_net`` file: ``torch.load(weights_only=True)``, so nothing in it can run.
+
+    Every problem with the file is an ``InputError`` naming it.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"route encoder {path} does not exist")
+    try:
+        blob = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - whatever torch raises on a bad file, name the file
+        raise InputError(f"{path} is not a route encoder file: {type(exc).__name__}: {exc}") from None
+    if not (isinstance(blob, dict) and isinstance(blob.get("config"), dict) and isinstance(blob.get("state"), dict)):
+        raise InputError(f"{path}: expected {{'config': {{...}}, 'state': {{...}}}} as save_route_net writes")
+    config = {"attention": 0, "attention_level": 0, "trained_side": 0, **blob["config"]}
+    for key, lo, hi in (("block", 1, 64), ("channels", 1, 64), ("depth", 1, 64), ("attention", 0, 64),
+                        ("attention_level", 0, 64), ("trained_side", 0, 1 << 20)):  # a side in cells, 0: unknown
+        v = config.get(key)
+        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+            raise InputError(f"{path}: config {key} = {v!r}, expected an integer in [{lo}, {hi}]")
+    try:
+        net = RouteNet(*(config[k] for k in ("block", "channels", "depth", "attention", "attention_level",
+                                             "trained_side")))
+    except ValueError as exc:
+        raise InputError(f"{path}: config {exc}") from None
+    try:
+        net.load_state_dict(blob["state"])
+    except (RuntimeError, TypeError, ValueError) as exc:
+        shape = tuple(config[k] for k in ("block", "channels", "depth", "attention", "attention_level"))
+        raise InputError(f"{path}: the weights do not fit RouteNet{shape}: {exc}") from None
+    return net.eval()
+
+
+#: Where ``scripts/train_route.py`` writes the encoder.
+TRAINED = Path(__file__).resolve().parents[2] / "runs" / "route" / "route.pt"
+#: The shipped encoder: ``python scripts/train_route.py --epochs 30 --maps 1600 --augment --size 64 128
+#: --attention 2 --export checkpoints/route.pt`` (its recipe and time are in ``checkpoints/route.json``).
+SHIPPED = Path(__file__).resolve().parents[2] / "checkpoints" / "route.pt"
+#: How the shipped encoder is used, chosen on the validation maps (README): its field ranks the tree's
+#: vertices and places the target 3 steps ahead (spread half a step), and ranks the frontier, which
+#: takes over after one iteration without progress at a temperature of half a step; the prediction is
+#: averaged over the 8 symmetries.
+SHIPPED_SETTINGS = {"uses": "both", "stuck": 1, "tau": 0.5, "symmetries": 8, "lookahead": 3.0, "sigma": 0.5}
+#: The ablation's own settings: the same rule, its lookahead and spread tuned on the same validation
+#: grid as the encoder's (a baseline tuned as carefully as what it is compared with).
+ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5}
+
+
+# slots of RouteSampler's integer state; the last three are the fused loop's batch buffer (as the planner's)
+R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT, R_POS, R_COUNT, R_REFILLS = range(9)
+
+
+@nb.njit(cache=True)
+def straight_field(H, W, gx, gy, res, step):
+    """The distance from ``(gx, gy)`` to every cell centre of an ``H x W`` grid, times ``res / step``.
+
+    Compiled, and a square root rather than ``hypot`` (which guards against overflow these distances
+    cannot reach), because it was most of a straight-line query's set-up: 0.13 ms at 128 x 128 with
+    numpy's ``hypot``, against goal bias's whole 0.3 ms query.
+    """
+    out = np.empty((H, W))
+    for r in range(H):
+        dy = r + 0.5 - gy
+        for c in range(W):
+            dx = c + 0.5 - gx
+            out[r, c] = math.sqrt(dx * dx + dy * dy) * res / step
+    return out
+
+
+@nb.njit(cache=True)
+def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin, step, frontier, ints, floats,
+               params, scratch, low, high, pts):
+    """Fill ``pts`` with samples of ``RouteSampler`` (see its docstring), in one compiled call per batch.
+
+    ``rng`` is the address of the planner's generator (``planners.kernels.bitgen``); every sample
+    takes 7 of its doubles whatever its kind, so the stream does not depend on the branch taken.
+    ``ints`` and ``floats`` hold the progress state (``R_*`` slots; lowest predicted cost, closest
+    straight-line distance to the goal); ``scratch`` the sampler's buffers for a batch's uniforms and
+    frontier points, allocated once per query rather than once per iteration.
+    """
+    world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost = frontier
+    lookahead, sigma, stuck, floor0, max_floor, patience = params
+    W = field.shape[1]
+    if n > ints[R_SEEN]:
+        best, c = lowest_vertex_cell(field, X[ints[R_SEEN]:n], res, origin, floats[0], ints[R_CELL])
+        if best < floats[0] - 1e-9:
+            floats[0], ints[R_CELL], ints[R_PROGRESS] = best, c, iteration
+        ints[R_SEEN] = n
+    if best_distance < floats[1] - 1e-9:
+        floats[1], ints[R_CLOSER] = best_distance, iteration
+    stalled = iteration - ints[R_CLOSER]
+    floor = floor0 if stalled < patience else max(floor0, min(max_floor, floor0 * stalled / patience))
+    frontier_mode = iteration - ints[R_PROGRESS] >= stuck
+    if frontier_mode and n > ints[R_FSEEN]:
+        ints[R_FCOUNT] = update_frontier(world, counts, X[ints[R_FSEEN]:n], cell, fgoal, free, cov, pos, front, dist,
+                                         ints[R_FCOUNT], fcost)
+        ints[R_FSEEN] = n
+    m = pts.shape[0]
+    U, F, u_pick, u_xy = scratch[0][:m], scratch[1][:m], scratch[2][:m], scratch[3][:m]
+    for k in range(m):  # row by row, as Generator.random((m, 7)) fills
+        for j in range(7):
+            U[k, j] = next_double(rng)
+    if frontier_mode and ints[R_FCOUNT] > 0:  # one frontier CDF for the whole batch
+        u_pick[:] = U[:, 3]
+        u_xy[:] = U[:, 1:3]
+        frontier_sample(front, ints[R_FCOUNT], fw, cell, forigin, dist, tau, u_pick, u_xy, F)
+    for k in range(m):
+        u = U[k]
+        if frontier_mode and u[0] >= floor and ints[R_FCOUNT] > 0:
+            x, y = F[k, 0], F[k, 1]
+        elif frontier_mode or u[0] < floor:
+            x, y = low[0] + (high[0] - low[0]) * u[1], low[1] + (high[1] - low[1]) * u[2]
+        else:
+            v = walk_field(field, blocked, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res)
+            r = sigma * step * math.sqrt(-2.0 * math.log(1.0 - u[5]))  # Box-Muller: two normals from two uniforms
+            x = origin[0] + (v % W + 0.5) * res + r * math.cos(2.0 * math.pi * u[6])
+            y = origin[1] + (v // W + 0.5) * res + r * math.sin(2.0 * math.pi * u[6])
+        pts[k, 0] = min(max(x, low[0]), np.nextafter(high[0], low[0]))
+        pts[k, 1] = min(max(y, low[1]), np.nextafter(high[1], low[1]))
+
+
+@nb.njit(cache=True)
+def route_rrt_run(budget, rng, draw_args, batch, pts, wake, tree, istate, fstate, last, world, space, goal, step,
+                  tol, low, high, st, sb):
+    """Up to ``budget`` RRT iterations with samples from ``route_draw``, never leaving compiled code.
+
+    Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule asks for,
+    so the run matches a planner calling ``RouteSampler.draw`` sample for sample. With ``wake`` > 0
+    it returns before a draw once the tree has come no closer to the goal for ``wake`` iterations
+    (``RouteSampler``'s ``stall`` switch).
+    """
+    field, blocked, res, origin, rstep, frontier, ints, floats, params, scratch = draw_args
+    X = tree.X
+    q = np.empty(X.shape[1])
+    qe_buf = np.empty(tree.E.shape[1])
+    new = np.empty(X.shape[1])
+    for s in range(budget):
+        if istate[I_SOLVED] or istate[I_N] >= X.shape[0]:
+            return s
+        if ints[R_POS] >= ints[R_COUNT]:
+            if wake > 0 and istate[I_ITER] - ints[R_CLOSER] >= wake:
+                return s
+            m = min(batch, CHUNK, FIRST_REFILL << min(ints[R_REFILLS], 16))
+            route_draw(X, istate[I_N], fstate[F_BEST_D], istate[I_ITER], rng, field, blocked, res, origin, rstep,
+                       frontier, ints, floats, params, scratch, low, high, pts[:m])
+            ints[R_REFILLS] += 1
+            ints[R_COUNT] = m
+            ints[R_POS] = 0
+        p = ints[R_POS]
+        rrt_kernels.rrt_iterate(pts[p], 0, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
+                                q, qe_buf, new)
+        ints[R_POS] = p + 1
+    return budget
+
+
+class RouteSampler(SamplerBase):
+    """Samples one step ahead of the tree along a ``RouteNet``'s predicted cost-to-go; the frontier when stuck.
+
+    The progress vertex is the tree vertex of lowest predicted cost-to-go; the target is ``lookahead``
+    steps (jittered 0.5-1.5x) further down the predicted field, and samples scatter ``sigma`` steps
+    around it. When progress has stalled for ``stuck`` iterations, samples go to the tree's frontier
+    (``planners.guidance.frontier``; cells near the goal preferred) until the tree makes progress
+    again. A ``uniform_floor`` share of samples is uniform; it grows, as the policy's does, once the
+    tree has come no closer to the goal for ``patience`` iterations (up to ``max_floor``): a wrong
+    prediction can keep the tree busy in a dead end that looks like progress on the predicted field.
+
+    With ``net=None`` the field is the straight-line distance to the goal: the same sampler with the
+    learning removed, its ablation (``straight_line_sampler``). ``uses`` says which of the two
+    rankings the encoder's field replaces: the progress and the target ("progress"), the frontier's
+    preference among its cells ("frontier"; the progress stays on the straight line), or "both".
+
+    Args:
+        net: The trained encoder (``load_route_net``); its block must be the planner's step in cells.
+        step_size: The planner's step.
+        lookahead, sigma: Target distance ahead and spread, in steps.
+        stuck: Iterations without progress before the frontier takes over.
+        uniform_floor: Share of uniform samples.
+        batch: Samples per draw. The target moves with every new vertex only at 1; at 8, samples of a
+            batch chase a target the tree has already reached, and validation runs took 2-3x the iterations.
+        patience, max_floor: Iterations without coming closer to the goal after which the uniform share
+            grows, and the largest share it reaches.
+        tau: Temperature of the frontier's preference, in steps (``planners.guidance.frontier``).
+        uses: "progress", "frontier" or "both": where the encoder's field replaces the straight line.
+        symmetries: How many of the square's symmetries the encoder's prediction is averaged over
+            (``RouteNet.predict``): 8 costs 8 passes per query.
+        lazy: Iterations the sampler follows the straight line before it runs the encoder (0: at
+            once). A query solved sooner never pays for the encoder; one that is not switches to its
+            field at that iteration, on every planner and however the budget is split.
+            ``forward_passes`` says how many passes a query used.
+        stall: Run the encoder once the tree has come no closer to the goal for this many iterations
+            (0: never on this account). With ``lazy`` too, whichever comes first.
+    """
+
+    USES = ("progress", "frontier", "both")
+
+    def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 1.0, sigma: float = 0.5,
+                 stuck: int = 4, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
+                 max_floor: float = 0.5, tau: float = 1.0, uses: str = "progress", symmetries: int = 1,
+                 lazy: int = 0, stall: int = 0) -> None:
+        if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
+                and 0 <= uniform_floor <= max_floor <= 1 and tau > 0):
+            raise InputError(f"need step_size, lookahead, stuck, patience, batch, tau > 0, sigma >= 0 and "
+                             f"0 <= uniform_floor <= max_floor <= 1; got {step_size}, {lookahead}, {stuck}, "
+                             f"{patience}, {batch}, {tau}, {sigma}, {uniform_floor}, {max_floor}")
+        if uses not in self.USES:
+            raise InputError(f"uses must be one of {self.USES}, got {uses!r}")
+        if isinstance(symmetries, bool) or not isinstance(symmetries, int) or not 1 <= symmetries <= 8:
+            raise InputError(f"symmetries must be an integer from 1 to 8, got {symmetries!r}")
+        for name, v in (("lazy", lazy), ("stall", stall)):
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise InputError(f"{name} must be an integer of 0 or more (iterations), got {v!r}")
+        self.net, self.step_size, self.lookahead, self.sigma = net, float(step_size), float(lookahead), float(sigma)
+        self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
+        self.patience, self.max_floor = int(patience), float(max_floor)
+        self.tau, self.uses, self.symmetries, self.lazy, self.stall = float(tau), uses, symmetries, lazy, stall
+        self.forward_passes, self._pending = 0, False
+
+    @classmethod
+    def load(cls, path: str | os.PathLike = TRAINED, **kwargs) -> RouteSampler:
+        """A sampler over the encoder saved at ``path`` (default: where ``scripts/train_route.py`` writes it)."""
+        return cls(load_route_net(path), **kwargs)
+
+    def _straight(self, grid: OccupancyGrid) -> np.ndarray:
+        """The straight-line distance to the goal of every grid cell's centre, in steps."""
+        gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
+        return straight_field(grid.height, grid.width, gx, gy, grid.resolution, self.step_size)
+
+    def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
+        """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line).
+
+        The straight line alone without an encoder, or while a ``lazy`` one waits.
+        """
+        if self.net is None or self._pending:
+            return self._straight(grid), None
+        if round(self.step_size / grid.resolution) != self.net.block:
+            raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is "
+                             f"{self.step_size / grid.resolution:g} cells of this map")
+        learned = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal), self.symmetries)
+        self.forward_passes = self.symmetries
+        progress = self._straight(grid) if self.uses == "frontier" else learned
+        return progress, (None if self.uses == "progress" else learned)
+
+    def _progress_and_ranking(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """``_fields`` on the problem's map, the progress field inf where the map is blocked."""
+        grid = self.problem.world
+        field, ranking = self._fields(grid)
+        field[grid.obstacles] = np.inf
+        return field, ranking
+
+    def _setup(self) -> None:
+        grid = self.problem.world
+        if not isinstance(grid, OccupancyGrid):
+            raise InputError("RouteSampler plans on OccupancyGrid problems")
+        self.forward_passes = 0
+        self._pending = self.net is not None and (self.lazy > 0 or self.stall > 0)
+        field, ranking = self._progress_and_ranking()
+        self.field, self.blocked = field, grid.kernel.grid
+        self.res, self.origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
+        r, c = grid.cell_of(self.problem.start)
+        f = Frontier(self.problem, self.step_size, self.tau, self._ranking(ranking))
+        self._frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
+                          np.ascontiguousarray(f.world.params[1:3]), f.cost)
+        self._ints = np.array([0, r * grid.width + c, 0, 0, 0, 0, 0, 0, 0], dtype=np.int64)
+        self._pts = np.empty((self.batch, 2))
+        b = self.batch
+        self._scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)))
+        self._floats = np.array([field[r, c], np.inf])
+        self._params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor,
+                                 self.patience], dtype=np.float64)
+
+    def _ranking(self, ranking: np.ndarray | None) -> np.ndarray | None:
+        """The frontier's cost per frontier cell from a per-grid-cell field in steps (None: the straight line)."""
+        if ranking is None:
+            return None
+        grid = self.problem.world
+        return frontier_costs(np.where(grid.obstacles, np.inf, ranking) * self.step_size / grid.resolution, grid,
+                              self.step_size)
+
+    def _due(self, iteration: int) -> bool:
+        """Whether a waiting encoder runs now: ``lazy``'s iteration, or ``stall`` iterations without coming closer."""
+        return ((self.lazy > 0 and iteration >= self.lazy)
+                or (self.stall > 0 and iteration - self._ints[R_CLOSER] >= self.stall))
+
+    def _wake(self) -> None:
+        """The ``lazy`` or ``stall`` switch: run the encoder; rank the tree and frontier seen so far by its field."""
+        self._pending = False
+        self.field, ranking = self._progress_and_ranking()
+        cost = self._ranking(ranking)
+        if cost is not None:
+            free, dist = self._frontier[4], self._frontier[8]
+            seen = np.flatnonzero(free.reshape(-1) == FREE)  # cells ranked so far, by the straight line
+            dist[seen] = cost[seen]
+            self._frontier = (*self._frontier[:12], cost)
+        # the progress vertex is found again on the new field (every vertex), and counts as progress
+        self._ints[R_SEEN] = 0
+        self._floats[0] = np.inf
+
+    def draw(self, rng, n, view):
+        if self._pending and self._due(view.iteration):
+            self._wake()
+        m = min(n, self.batch)
+        pts = np.empty((m, 2))
+        route_draw(view.vertices, view.num_vertices, view.best_distance, view.iteration, bitgen_address(rng),
+                   self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
+                   self._floats, self._params, self._scratch, self.low, self.high, pts)
+        return pts
+
+    def fuse(self, planner: Planner) -> Callable[[Planner, int], int] | None:
+        """RRT's loop with this sampler's draws compiled in (same samples, less time); None for other planners."""
+        if planner.fusable_loop != "rrt":
+            return None
+        return self._run_fused
+
+    def _run_fused(self, planner: Planner, n: int) -> int:
+        if self._pending:  # stop at the switch, so it happens at the same iteration as with draws
+            if self._due(planner.iterations):
+                self._wake()
+            elif self.lazy > 0:
+                n = min(n, self.lazy - planner.iterations)
+        wake = self.stall if self._pending else 0
+        args = (self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
+                self._floats, self._params, self._scratch)
+        return route_rrt_run(n, bitgen_address(planner.rng), args, self.batch, self._pts, wake, *planner.loop_args())
+
+    def __repr__(self) -> str:
+        rest = f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}"
+        if self.net is None:
+            return f"RouteSampler(None, {rest})"
+        lazy = f", lazy={self.lazy}" if self.lazy else ""
+        stall = f", stall={self.stall}" if self.stall else ""
+        return f"RouteSampler({rest}, uses={self.uses!r}, symmetries={self.symmetries}{lazy}{stall})"
+
+
+def shipped_sampler(encoder: RouteNet | str | os.PathLike = SHIPPED, step_size: float = 4.0) -> RouteSampler:
+    """An encoder (loaded, or a file; default the shipped one) at the validated ``SHIPPED_SETTINGS``.
+
+    ``evaluate.py``'s "route encoder".
+    """
+    net = encoder if isinstance(encoder, RouteNet) else load_route_net(encoder)
+    return RouteSampler(net, step_size=step_size, **SHIPPED_SETTINGS)
+
+
+def shipped_ablation(step_size: float = 4.0) -> RouteSampler:
+    """``shipped_sampler`` with the encoder replaced by the straight-line distance: what its learning adds over.
+
+    At ``ABLATION_SETTINGS``, tuned for it on validation as the encoder's settings were.
+    """
+    return RouteSampler(None, step_size=step_size, **ABLATION_SETTINGS)
+
+
+def trained_sampler() -> RouteSampler:
+    """The trained encoder as a sampler: ``evaluate.py --sampler route=learning.samplers.route:trained_sampler``."""
+    if not TRAINED.is_file():
+        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
+    return RouteSampler.load()
+
+
+def straight_line_sampler() -> RouteSampler:
+    """The ablation: ``RouteSampler`` with the encoder replaced by the straight-line distance to the goal.
+
+    ``evaluate.py`` runs it as the "straight-line follower"; with ``--sampler
+    route=learning.samplers.route:trained_sampler`` beside it, what the encoder adds is the difference.
+    """
+    return RouteSampler(None)
