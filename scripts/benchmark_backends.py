@@ -20,7 +20,7 @@ import pickle
 import time
 from dataclasses import asdict
 
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from planners import movingai_dir
 from planners.maps.generators import FAMILIES
 from planners.tools.parallel import make_backend

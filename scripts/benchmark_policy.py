@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from learning.evaluation.speed import forward_pass_us, observations, query_times
 from learning.samplers.policy import PolicySampler
 from planners.maps.generators import (

@@ -28,8 +28,9 @@ from pathlib import Path
 sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
 from learning import PolicySampler
-from learning.evaluation import comparison as E
-from learning.samplers.route import SHIPPED, load_route_net
+from learning import evaluation as E
+from learning.models.route_net import load_route_net
+from learning.samplers.route import SHIPPED
 from planners import movingai_dir, planner_names
 from planners.base.fileio import InputError, atomic_write_text
 from planners.base.registry import planner_name_arg

@@ -134,7 +134,7 @@ def _segment_meets_box(ax, ay, bx, by, x0, y0, x1, y1) -> bool:
 @pytest.fixture(scope="session")
 def ray_backend():
     """One local Ray instance (loopback, 2 CPUs) for every test in this process that runs on Ray."""
-    from learning.evaluation.comparison import worker_init
+    from learning.evaluation import worker_init
     from planners.tools.parallel import make_backend
 
     backend = make_backend("ray", processes=2, worker_init=worker_init)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from conftest import fine_check_path
 
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from learning.samplers.ablation import FRONTIER_GRID, ConstantGuidedSampler
 from planners import RRT
 from planners.base.fileio import InputError

@@ -126,7 +126,8 @@ def test_the_shipped_route_encoder_matches_its_recipe():
     # the recipe in route.json is what checkpoints/README.md says reproduces the file: the file must agree
     import json
 
-    from learning.samplers.route import SHIPPED, load_route_net
+    from learning.models.route_net import load_route_net
+    from learning.samplers.route import SHIPPED
 
     recipe = json.loads(SHIPPED.with_suffix(".json").read_text())["recipe"]
     net = load_route_net(SHIPPED)

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0
 from planners.tools.benchmark import Run, write_runs_csv
 

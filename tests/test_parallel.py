@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from planners import movingai_dir
 from planners.tools.parallel import BACKENDS, LocalBackend, default_chunksize, make_backend
 

@@ -13,15 +13,12 @@ from conftest import fine_check_path, load_script
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from learning.models.route_net import RouteNet, load_route_net, route_input, save_route_net
 from learning.samplers.route import (
     ABLATION_SETTINGS,
     SHIPPED,
     SHIPPED_SETTINGS,
-    RouteNet,
     RouteSampler,
-    load_route_net,
-    route_input,
-    save_route_net,
     shipped_ablation,
     shipped_sampler,
     straight_line_sampler,
@@ -64,7 +61,7 @@ def test_the_encoder_predicts_a_cost_per_cell_on_maps_of_any_size():
 @pytest.mark.parametrize("k", range(8))
 def test_the_prediction_averaged_over_the_symmetries_turns_with_the_map(k):
     """At 8 symmetries the predicted cost-to-go is equivariant, as the true one is; at 1 it is one pass."""
-    from learning.samplers.route import symmetry, unturn
+    from learning.models.route_net import symmetry, unturn
 
     net = RouteNet(4, 8, 2).eval()  # untrained: nothing about its weights is symmetric
     p = generate("bugtrap", 3, 64)
@@ -180,7 +177,7 @@ def test_the_field_is_scaled_up_on_maps_larger_than_the_training_ones_and_the_si
 
 def test_axial_attention_lets_one_cell_reach_the_whole_grid_at_full_resolution():
     """After a row pass and a column pass, the output at one pixel depends on a pixel in another row and column."""
-    from learning.samplers.route import AxialAttention
+    from learning.models.route_net import AxialAttention
 
     torch.manual_seed(0)
     layer = AxialAttention(8).eval()
@@ -465,7 +462,7 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
 @pytest.mark.parametrize("k", range(8))
 def test_augmentation_turns_the_map_and_its_goal_together(k):
     """Under each of the square's symmetries the cost-to-go targets turn with the map: nothing else changes."""
-    from learning.samplers.route import symmetry
+    from learning.models.route_net import symmetry
 
     p = generate("bugtrap", 17, 64)
     goal = p.world.cell_of(p.goal)

@@ -2,7 +2,7 @@
 
 Two figures: the time of one forward pass of the compiled actor on observations taken from real
 planning runs (their sparsity is what a pass sees in use), and per-query wall time of RRT with the
-policy against goal bias, timed as ``learning.evaluation.comparison`` times a run (binding included), with the
+policy against goal bias, timed as ``learning.evaluation`` times a run (binding included), with the
 forward passes each query took with and without the frontier hold.
 """
 

@@ -6,7 +6,7 @@ frontier. ``ConstantGuidedSampler`` draws from the same classes, through the sam
 (``GuidedSampling.samples``), with a fixed distribution and no network: the frontier with probability
 ``frontier``, otherwise the cell 1.5 to 2 steps straight ahead of the progress vertex; a
 ``uniform_floor`` share of samples is uniform, as for the policy. What the policy gains over the best
-such constant is what learning adds; ``learning.evaluation.comparison`` tunes ``frontier`` on the tuning split
+such constant is what learning adds; ``learning.evaluation`` tunes ``frontier`` on the tuning split
 exactly as it tunes goal bias.
 """
 

@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from learning import PolicySampler
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from learning.samplers.ablation import FRONTIER_GRID
 from learning.imitation import collect
 from planners.base.fileio import InputError, check_int_flags

@@ -28,7 +28,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from learning.samplers.route import UNet
+from learning.models.route_net import UNet
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
 from planners.maps.gridsearch import distance_field

@@ -8,7 +8,7 @@
 encoder's predicted cost-to-go choose among the frontier's cells when the tree is stuck; these
 settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
 ``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries; ``both_symmetric``
-uses the field everywhere, as the shipped encoder is used (``learning.samplers.route.SHIPPED_SETTINGS``), ``both``
+uses the field everywhere, as the shipped encoder is used (``SHIPPED_SETTINGS``), ``both``
 does so with one pass, ``both_lazy25`` / ``50`` / ``100`` run the encoder only after that many
 iterations on the straight line, ``both_stall<k>`` once the tree has come no closer to the goal for k
 iterations, ``both_sym<k>`` averages over the first k symmetries (1-8), and ``exact_both`` is the

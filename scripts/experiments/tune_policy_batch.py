@@ -3,7 +3,7 @@
     python scripts/experiments/tune_policy_batch.py  # batches 8 (trained), 2 and 1; 20 maps per family, 3 seeds
     python scripts/experiments/tune_policy_batch.py --batches 8 4 2 1 --maps 10
 
-The tuning step of ``evaluate.py`` on its own (``learning.evaluation.comparison.policy_tuning_tasks`` and
+The tuning step of ``evaluate.py`` on its own (``learning.evaluation.policy_tuning_tasks`` and
 ``best_policy_batch``): RRT with the policy at each batch on the generated families' tuning maps,
 never the test maps. It names the batch with the lowest sum over families of log median iterations;
 batches within ``BATCH_TIE`` of it count as tied, and the largest of them wins (it costs less time).
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from learning import PolicySampler
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from learning import PolicySampler
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from planners import make_planner, movingai_dir
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, VALIDATION_SEED0

@@ -22,7 +22,7 @@ import numpy as np
 
 sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
-from learning.evaluation import comparison as E
+from learning import evaluation as E
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
