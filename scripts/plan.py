@@ -28,6 +28,7 @@ import sys
 import time
 from pathlib import Path
 
+from learning.models.shipped import SHIPPED_POLICY
 from planners import planner_names
 from planners.base.fileio import InputError
 from planners.base.registry import planner_class, planner_name_arg
@@ -44,7 +45,7 @@ from planners.tools.workflow import (
 #: Exit statuses (documented in the module docstring and --help).
 EXIT_SOLVED, EXIT_UNSOLVED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
 #: The learned sampler ``--sampler policy`` loads unless --policy says otherwise.
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 #: Set to 1 to print, once the picking window is drawn, how map coordinates map to window pixels.
 PICK_DEBUG_ENV = "SAMPLERGYM_PICK_DEBUG"
 
@@ -145,7 +146,7 @@ def main(argv=None) -> int:
     ap.add_argument("--sampler", choices=(*SAMPLERS, "policy"), default=None,
                     help="default: goal-bias for rrt and rrtstar, uniform otherwise; policy: the learned sampler")
     ap.add_argument("--policy", type=Path, default=None, metavar="ZIP",
-                    help="checkpoint for --sampler policy (default: checkpoints/guided.zip of this repository)")
+                    help="checkpoint for --sampler policy (default: the shipped policy)")
     ap.add_argument("--goal-bias", type=float, default=0.05, metavar="P", help="goal probability of goal-bias")
     ap.add_argument("--metric", choices=METRICS, default="euclidean")
     ap.add_argument("--step", type=float, default=None,

@@ -14,9 +14,10 @@ import pytest
 import torch
 
 from learning import PolicySampler
+from learning.models.shipped import SHIPPED_POLICY
 from planners.base.fileio import InputError
 
-SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+SHIPPED = SHIPPED_POLICY
 
 
 class _Mkdir:

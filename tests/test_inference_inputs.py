@@ -15,11 +15,12 @@ import numpy as np
 import pytest
 
 from learning import PolicySampler
+from learning.models.shipped import SHIPPED_POLICY
 from planners import RRT
 from planners.maps.generators import TEST_SEED0, generate
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ROOT / "checkpoints" / "guided.zip"
+SHIPPED = SHIPPED_POLICY
 INFERENCE = ["learning/policy_sampler.py", "learning/fast_policy.py", "learning/checkpoint.py", "learning/route.py",
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "guidance").glob("*.py"))),
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "kernels").glob("*.py")))]

@@ -12,6 +12,7 @@ import torch
 
 from learning import PolicySampler
 from learning.models.fast_policy import FastActor
+from learning.models.shipped import SHIPPED_POLICY
 from learning.training import TrainConfig, train
 from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler, make_planner
 from planners.maps.generators import TEST_SEED0, generate
@@ -133,7 +134,7 @@ def test_policy_sampler_on_other_maps_and_planners(trained, problem_fn):
         assert make_planner(name, p, extension_step=4.0, sampler=sampler, seed=1).solve(max_iterations=20000).solved
 
 
-SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+SHIPPED = SHIPPED_POLICY
 
 
 @pytest.mark.parametrize("family", ["bugtrap", "maze", "narrow_passage"])

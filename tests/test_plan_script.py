@@ -11,6 +11,7 @@ import pytest
 from conftest import REPO, fine_check_path
 from PIL import Image
 
+from learning.models.shipped import SHIPPED_POLICY
 from planners.tools.workflow import load_map, picture_planner, plan_on_image
 
 SCRIPT = REPO / "scripts" / "plan.py"
@@ -149,7 +150,7 @@ def test_policy_sampler_from_the_command_line(map_png, tmp_path):
 
 def test_policy_sampler_plans_with_the_learned_policy(map_png):
     learning = pytest.importorskip("learning")
-    sampler = learning.PolicySampler.load(REPO / "checkpoints" / "guided.zip", step_size=3.0)
+    sampler = learning.PolicySampler.load(SHIPPED_POLICY, step_size=3.0)
     out = plan_on_image(load_map(map_png), (5.5, 30.5), (90.5, 40.5), planner="rrt", sampler=sampler, step=3.0,
                         seed=0, smooth=False)
     assert out.result.solved

@@ -1,6 +1,6 @@
 """``PolicySampler``: a trained sampler policy as a planner ``Sampler``, outside any environment.
 
-    sampler = PolicySampler.load("checkpoints/guided.zip")
+    sampler = PolicySampler.load()  # the shipped policy
     RRT(problem, step_size=4.0, sampler=sampler, seed=0).solve(max_iterations=20000)
 
 One forward pass of the policy (compiled, see ``learning.models.fast_policy``) yields a distribution over
@@ -39,6 +39,7 @@ import numpy as np
 
 from learning.checkpoint import read_sb3_zip
 from learning.models.fast_policy import FastActor, actor_logits, softmax_cdf
+from learning.models.shipped import SHIPPED_POLICY, SHIPPED_POLICY_BATCH
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners.base.fileio import InputError, check_number
 from planners.base.planner import CHUNK, FIRST_REFILL, Planner
@@ -255,12 +256,18 @@ class PolicySampler(SamplerBase):
         self._kernel = None
 
     @classmethod
-    def load(cls, path: str | os.PathLike, **kwargs) -> PolicySampler:
+    def load(cls, path: str | os.PathLike | None = None, **kwargs) -> PolicySampler:
         """Load a checkpoint written by ``scripts/train.py`` (an SB3 zip carrying the SamplerGym config).
+
+        Without ``path``, the shipped policy at the batch it was validated at (``SHIPPED_POLICY_BATCH``
+        unless ``batch`` is given); with a path, the checkpoint's own settings unless overridden.
 
         Safe for files from anyone: only JSON and tensors are read (``learning.checkpoint``), nothing
         in the file is unpickled. Every problem with the file is an ``InputError`` naming it.
         """
+        if path is None:
+            path = SHIPPED_POLICY
+            kwargs.setdefault("batch", SHIPPED_POLICY_BATCH)
         data, state = read_sb3_zip(path)
         config = data.get("samplergym_config")
         if not isinstance(config, dict):

@@ -13,7 +13,7 @@ ahead of it down the predicted field. Where the prediction is wrong the tree sto
 after ``stuck`` iterations the sampler turns to the tree's frontier until it does again, so a wrong
 prediction costs iterations, not the solution.
 
-The shipped encoder (``checkpoints/route.pt``, ``shipped_sampler``) adds axial attention after the
+The shipped encoder (``learning/data/route.pt``, ``shipped_sampler``) adds axial attention after the
 U-Net and is read as the mean over the square's 8 symmetries; ``shipped_ablation`` is the same sampler
 on the straight-line distance, which is what its learning is measured against.
 """
@@ -29,6 +29,7 @@ import numba as nb
 import numpy as np
 
 from learning.models.route_net import RouteNet, load_route_net
+from learning.models.shipped import SHIPPED_ROUTE
 from planners import OccupancyGrid, SamplerBase
 from planners.base.fileio import InputError
 from planners.base.planner import CHUNK, FIRST_REFILL, Planner
@@ -43,9 +44,8 @@ from planners.kernels.state import F_BEST_D, I_ITER, I_N, I_SOLVED
 TRAINED = Path(__file__).resolve().parents[2] / "runs" / "route" / "route.pt"
 
 
-#: The shipped encoder: ``python scripts/train_route.py --epochs 30 --maps 1600 --augment --size 64 128
-#: --attention 2 --export checkpoints/route.pt`` (its recipe and time are in ``checkpoints/route.json``).
-SHIPPED = Path(__file__).resolve().parents[2] / "checkpoints" / "route.pt"
+#: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
+SHIPPED = SHIPPED_ROUTE
 
 
 #: How the shipped encoder is used, chosen on the validation maps (README): its field ranks the tree's

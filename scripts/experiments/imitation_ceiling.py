@@ -37,6 +37,7 @@ import numpy as np
 
 from learning import PolicySampler
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY
 from learning.samplers.ablation import FRONTIER_GRID
 from learning.imitation import collect
 from planners.base.fileio import InputError, check_int_flags
@@ -45,7 +46,7 @@ from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[2] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 #: Shares of corridor samples tried per base sampler; the best on these maps is reported.
 CORRIDOR_Q = {"uniform": (0.5, 0.8, 0.95), "follower": (0.1, 0.3, 0.5)}
 

@@ -19,12 +19,13 @@ import numpy as np
 
 from learning import PolicySampler
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[2] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 
 
 def main(argv=None) -> int:

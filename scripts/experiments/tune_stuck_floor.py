@@ -23,13 +23,14 @@ import numpy as np
 
 from learning import PolicySampler
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY
 from planners import make_planner, movingai_dir
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[2] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 FLOORS = (0.05, 0.1, 0.2, 0.3, 0.4, 0.5)
 
 

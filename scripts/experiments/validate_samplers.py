@@ -23,13 +23,13 @@ import numpy as np
 sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments
 
-DEFAULT_POLICY = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, os.pardir, "checkpoints",
-                              "guided.zip")
+DEFAULT_POLICY = str(SHIPPED_POLICY)
 
 
 def main(argv=None) -> list[dict]:
