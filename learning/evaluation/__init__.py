@@ -42,7 +42,6 @@ from learning.evaluation.roster import (
     sampler_bias,
     sampler_constant,
     sampler_policy_batch,
-    user_sampler,
 )
 from learning.evaluation.runner import run_all, run_on_backend_args, run_one, shared_context, worker_init
 from learning.evaluation.tables import MOVINGAI_POOL, TARGETS, bootstrap_mean_ci, headline, summarize, target_check
@@ -61,6 +60,7 @@ from learning.evaluation.tuning import (
     pooled,
     tuning_tasks,
 )
+from learning.samplers.registry import user_sampler
 
 
 __all__ = [

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from planners import Sampler
-from planners.base.fileio import InputError
+from learning.samplers import registry
 
 
 def bias_sampler(bias: float) -> str:
@@ -67,57 +66,8 @@ BUILTIN_SAMPLERS = ("uniform", "policy", FOLLOWER, ROUTE, ROUTE_ABLATION, "exper
 
 
 def parse_user_sampler(arg: str) -> tuple[str, str]:
-    """``NAME=SPEC`` from the command line, checked: the name and the spec (see :func:`user_sampler`)."""
-    name, sep, spec = arg.partition("=")
-    name, spec = name.strip(), spec.strip()
-    if not sep or not name or not spec:
-        raise InputError(f"--sampler {arg!r}: expected NAME=SPEC, e.g. mine=user_ppo.zip@SamplerGym/RRT-Forest-v0 "
-                         "or mine=my_module:make_sampler")
-    if name in BUILTIN_SAMPLERS or name.startswith("goal_bias=") or "," in name:
-        raise InputError(f"--sampler {arg!r}: the name {name!r} is taken or has a comma; choose another")
-    return name, spec
+    """``NAME=SPEC`` from the command line, checked: the name and the spec (``user_sampler``).
 
-
-def user_sampler(spec: str):
-    """The sampler a spec names.
-
-    ``MODEL.zip@ENV_ID[@OPTION...]``: an SB3 model trained on that SamplerGym id (``SB3Sampler``);
-    options are ``stochastic`` (draw actions from the policy's distribution; default deterministic),
-    ``algo=NAME``, or env kwargs ``key=value`` (the ones the model was trained with; values read as
-    JSON where they parse, else as strings). ``module:callable``: ``callable()`` returns a ``Sampler``.
+    The name may be neither a registered sampler nor one of the comparison's labels.
     """
-    import importlib
-    import json
-
-    if "@" in spec:
-        from learning.samplers.sb3 import SB3Sampler
-
-        path, env_id, *options = spec.split("@")
-        kwargs: dict = {"deterministic": True}
-        for opt in options:
-            key, sep, value = opt.partition("=")
-            if opt in ("stochastic", "deterministic"):
-                kwargs["deterministic"] = opt == "deterministic"
-            elif sep and key:
-                try:
-                    kwargs[key] = json.loads(value)
-                except ValueError:
-                    kwargs[key] = value
-            else:
-                raise InputError(f"sampler spec {spec!r}: option {opt!r} is not stochastic, deterministic or key=value")
-        return SB3Sampler(path, env_id, **kwargs)
-    module, sep, attr = spec.partition(":")
-    if not sep or not module or not attr:
-        raise InputError(f"sampler spec {spec!r}: expected MODEL.zip@ENV_ID or module:callable")
-    try:
-        factory = getattr(importlib.import_module(module), attr)
-    except (ImportError, AttributeError) as exc:
-        raise InputError(f"sampler spec {spec!r}: {type(exc).__name__}: {exc}") from None
-    try:
-        sampler = factory()
-    except Exception as exc:  # noqa: BLE001 - the user's code: whatever it raises, name the spec
-        raise InputError(f"sampler spec {spec!r}: {attr}() raised {type(exc).__name__}: {exc}") from None
-    if not isinstance(sampler, Sampler):
-        raise InputError(f"sampler spec {spec!r}: {attr}() returned a {type(sampler).__name__}, not a Sampler "
-                         "(an object with bind(problem) and draw(rng, n, view))")
-    return sampler
+    return registry.parse_user_sampler(arg, taken=BUILTIN_SAMPLERS)

@@ -15,10 +15,9 @@ from learning.evaluation.roster import (
     ROUTE,
     ROUTE_ABLATION,
     sampler_policy_batch,
-    user_sampler,
 )
-from learning.samplers.ablation import ConstantGuidedSampler
-from planners import GoalBiasedSampler, UniformSampler, make_planner
+from learning.samplers.registry import make_sampler, user_sampler
+from planners import make_planner
 from planners.base.registry import planner_class
 from planners.tools.benchmark import Run
 from planners.tools.parallel import Backend, make_backend
@@ -28,6 +27,7 @@ _USER: dict = {}
 
 
 def _sampler(name: str, cfg: dict):
+    """The sampler a task names, built from the registry (``learning.samplers.registry``) with the run's step."""
     if name in cfg.get("user_samplers", {}):
         spec = cfg["user_samplers"][name]
         if spec not in _USER:  # once per process: a model is loaded once, not per run
@@ -35,36 +35,31 @@ def _sampler(name: str, cfg: dict):
         return _USER[spec]
     policy_path, step = cfg["policy"], cfg["step"]
     if name == "uniform":
-        return UniformSampler()
+        return make_sampler("uniform")
     if name.startswith("constant="):  # decides as often as the policy does: only the distribution differs
-        return ConstantGuidedSampler(float(name.split("=")[1]), step_size=step, batch=cfg.get("policy_batch", 8))
+        return make_sampler("policy_ablation", frontier=float(name.split("=")[1]), step_size=step,
+                            batch=cfg.get("policy_batch", 8))
     if name.startswith("goal_bias="):
-        return GoalBiasedSampler(float(name.split("=")[1]))
+        return make_sampler("goal_bias", bias=float(name.split("=")[1]))
     if name == "policy":  # at the batch tuned on the tuning split (the checkpoint's own before tuning)
         return _policy(policy_path, cfg.get("policy_batch"))
     if name.startswith("policy batch="):
         return _policy(policy_path, int(name.split("=")[1]))
     if name == FOLLOWER:
-        from learning.samplers.route import RouteSampler
-
-        return RouteSampler(None, step_size=step)
+        return make_sampler("follower", step_size=step)
     if name == ROUTE:
         from learning.samplers.route import shipped_sampler
 
-        return shipped_sampler(_route_net(cfg["route"]), step)
+        return shipped_sampler(_route_net(cfg["route"]), step)  # the encoder loaded once per process
     if name == ROUTE_ABLATION:
-        from learning.samplers.route import shipped_ablation
-
-        return shipped_ablation(step)
+        return make_sampler("route_ablation", step_size=step)
     if name == "expert (reference)":
-        from learning.references.expert import ExpertSampler
-
-        return ExpertSampler(step)
+        return make_sampler("expert", step_size=step)
     if name.startswith((CORRIDOR_UNIFORM, CORRIDOR_FOLLOWER)):
         from learning.references.expert import CorridorSampler
-        from learning.samplers.route import RouteSampler
 
-        base = UniformSampler() if name.startswith(CORRIDOR_UNIFORM) else RouteSampler(None, step_size=step)
+        base = make_sampler("uniform" if name.startswith(CORRIDOR_UNIFORM) else "follower",
+                            **({} if name.startswith(CORRIDOR_UNIFORM) else {"step_size": step}))
         return CorridorSampler(float(name.split("=")[1]), base)
     if name.startswith(GEODESIC_FRONTIER):
         from learning.references.expert import GeodesicFrontierSampler

@@ -58,6 +58,9 @@ SHIPPED_SETTINGS = {"uses": "both", "stuck": 1, "tau": 0.5, "symmetries": 8, "lo
 #: The ablation's own settings: the same rule, its lookahead and spread tuned on the same validation
 #: grid as the encoder's (a baseline tuned as carefully as what it is compared with).
 ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5}
+#: The straight-line follower of the comparison (``make_sampler("follower")``): one step ahead of the
+#: vertex nearest the goal, the frontier after 4 iterations without progress, at a temperature of a step.
+FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0}
 
 
 # slots of RouteSampler's integer state; the last three are the fused loop's batch buffer (as the planner's)
@@ -183,6 +186,10 @@ class RouteSampler(SamplerBase):
     rankings the encoder's field replaces: the progress and the target ("progress"), the frontier's
     preference among its cells ("frontier"; the progress stays on the straight line), or "both".
 
+    The defaults are the shipped configuration, chosen on the validation maps (``SHIPPED_SETTINGS``):
+    ``RouteSampler(RouteSampler.load().net)`` and ``RouteSampler.load()`` are ``shipped_sampler()``.
+    The comparison's straight-line follower pins its own settings (``FOLLOWER_SETTINGS``).
+
     Args:
         net: The trained encoder (``load_route_net``); its block must be the planner's step in cells.
         step_size: The planner's step.
@@ -207,9 +214,9 @@ class RouteSampler(SamplerBase):
 
     USES = ("progress", "frontier", "both")
 
-    def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 1.0, sigma: float = 0.5,
-                 stuck: int = 4, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
-                 max_floor: float = 0.5, tau: float = 1.0, uses: str = "progress", symmetries: int = 1,
+    def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 3.0, sigma: float = 0.5,
+                 stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
+                 max_floor: float = 0.5, tau: float = 0.5, uses: str = "both", symmetries: int = 8,
                  lazy: int = 0, stall: int = 0) -> None:
         if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
                 and 0 <= uniform_floor <= max_floor <= 1 and tau > 0):
@@ -230,8 +237,8 @@ class RouteSampler(SamplerBase):
         self.forward_passes, self._pending = 0, False
 
     @classmethod
-    def load(cls, path: str | os.PathLike = TRAINED, **kwargs) -> RouteSampler:
-        """A sampler over the encoder saved at ``path`` (default: where ``scripts/train_route.py`` writes it)."""
+    def load(cls, path: str | os.PathLike = SHIPPED_ROUTE, **kwargs) -> RouteSampler:
+        """A sampler over the encoder saved at ``path`` (default: the shipped one), at the validated settings."""
         return cls(load_route_net(path), **kwargs)
 
     def _straight(self, grid: OccupancyGrid) -> np.ndarray:
@@ -366,7 +373,7 @@ def trained_sampler() -> RouteSampler:
     """The trained encoder as a sampler: ``evaluate.py --sampler route=learning.samplers.route:trained_sampler``."""
     if not TRAINED.is_file():
         raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
-    return RouteSampler.load()
+    return RouteSampler.load(TRAINED)
 
 
 def straight_line_sampler() -> RouteSampler:
@@ -375,4 +382,4 @@ def straight_line_sampler() -> RouteSampler:
     ``evaluate.py`` runs it as the "straight-line follower"; with ``--sampler
     route=learning.samplers.route:trained_sampler`` beside it, what the encoder adds is the difference.
     """
-    return RouteSampler(None)
+    return RouteSampler(None, **FOLLOWER_SETTINGS)
