@@ -14,7 +14,7 @@ import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
-from learning.fast_policy import KERNELS
+from learning.models.fast_policy import KERNELS
 
 
 class EgocentricExtractor(BaseFeaturesExtractor):

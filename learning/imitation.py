@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from learning.expert import GeodesicExpert
-from learning.fast_policy import FastActor
-from learning.policy_sampler import sample_classes
+from learning.references.expert import GeodesicExpert
+from learning.models.fast_policy import FastActor
+from learning.samplers.policy import sample_classes
 from planners import RRT, Problem, SamplerBase
 from planners.guidance.guided import ANGLES, FRONTIER, GuidedSampling
 from planners.tools.parallel import Backend, LocalBackend

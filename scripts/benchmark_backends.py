@@ -21,6 +21,7 @@ import time
 from dataclasses import asdict
 
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY
 from planners import movingai_dir
 from planners.base.fileio import check_flags, check_int_flags
 from planners.maps.generators import FAMILIES
@@ -43,7 +44,7 @@ def main(argv=None) -> int:
     check_flags(lambda: check_int_flags(args, ("processes", "empty_tasks")))
     n = args.processes
     mdir = movingai_dir(None, required=False)
-    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": 4.0, "policy": "checkpoints/guided.zip",
+    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": 4.0, "policy": str(SHIPPED_POLICY),
            "step": 4.0, "max_iterations": 20000, "user_samplers": {}}
     queries = E.generated_queries(list(FAMILIES), 128, 25, 0)
     samplers = ["uniform", *(f"goal_bias={b:g}" for b in E.GOAL_BIASES), "policy"]

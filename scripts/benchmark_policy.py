@@ -1,7 +1,7 @@
 """What a learned sampler costs: forward-pass time and per-query wall time against goal bias.
 
     python scripts/benchmark_policy.py                                   # the shipped checkpoint
-    python scripts/benchmark_policy.py --policy old.zip checkpoints/guided.zip --family bugtrap --bias 0.05
+    python scripts/benchmark_policy.py --policy old.zip learning/data/guided.zip --family bugtrap --bias 0.05
     python scripts/benchmark_policy.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v0 --family forest
 
 For each checkpoint: its actor's parameters, microseconds per forward pass on observations taken
@@ -17,8 +17,9 @@ import argparse
 from pathlib import Path
 
 from learning import evaluation as E
-from learning.benchmark import forward_pass_us, observations, query_times
-from learning.policy_sampler import PolicySampler
+from learning.evaluation.speed import forward_pass_us, observations, query_times
+from learning.models.shipped import SHIPPED_POLICY
+from learning.samplers.policy import PolicySampler
 from planners.base.fileio import check_flags, check_int_flags, check_number
 from planners.maps.generators import (
     FAMILIES,
@@ -27,7 +28,7 @@ from planners.maps.generators import (
 )
 from planners.tools.benchmark import markdown_table
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 
 
 def main(argv=None) -> int:

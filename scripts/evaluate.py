@@ -29,7 +29,9 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 
 from learning import PolicySampler
 from learning import evaluation as E
-from learning.route import SHIPPED, load_route_net
+from learning.models.route_net import load_route_net
+from learning.models.shipped import SHIPPED_POLICY
+from learning.samplers.route import SHIPPED
 from planners import movingai_dir, planner_names
 from planners.base.fileio import InputError, atomic_write_text
 from planners.base.registry import planner_name_arg
@@ -37,7 +39,7 @@ from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table, write_runs_csv
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
                  "maze-32-32-2", "room-32-32-4", "room-64-64-8", "random-32-32-10", "random-64-64-20")
 #: What --quick changes: fewer test queries and planner seeds, no other planners. The tuning split is

@@ -6,6 +6,8 @@
         --goal-bias 0.1 --metric manhattan --step 25 --no-smooth --out results/maze --headless
     python scripts/plan.py map.yaml --start 0.5 -1.2 --goal 2 1.5 --radius 0.1 --save-path path.csv
     python scripts/plan.py floor.png --start 40 60 --goal 900 700 --sampler policy   # the learned sampler
+    python scripts/plan.py floor.png --start 40 60 --goal 900 700 --sampler route    # the shipped route encoder
+    python scripts/plan.py floor.png --start 40 60 --goal 900 700 --sampler mine=my_module:make_sampler
 
 Dark pixels (gray below --threshold) are obstacles. Coordinates are the map's world units: for
 pictures, pixels with x to the right and y downwards, as image viewers show them; for a ROS
@@ -43,8 +45,8 @@ from planners.tools.workflow import (
 
 #: Exit statuses (documented in the module docstring and --help).
 EXIT_SOLVED, EXIT_UNSOLVED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
-#: The learned sampler ``--sampler policy`` loads unless --policy says otherwise.
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+#: Cells per block of the shipped route encoder: its samplers' default step is one block.
+ROUTE_BLOCK = 4
 #: Set to 1 to print, once the picking window is drawn, how map coordinates map to window pixels.
 PICK_DEBUG_ENV = "SAMPLERGYM_PICK_DEBUG"
 
@@ -116,19 +118,30 @@ def pick_start_goal(grid) -> tuple[tuple[float, float], tuple[float, float]]:
     return picks[0], picks[1]
 
 
-def load_policy(path: Path, step: float):
-    """The learned sampler from a checkpoint (``learning`` is imported only here: plan.py runs without it)."""
+def learned_sampler(arg: str, step: float, goal_bias: float, policy: Path | None):
+    """``--sampler``'s sampler from ``learning``'s registry, or a user's ``NAME=SPEC`` (``learning`` is imported
+    only here: plan.py runs without it for the planners' own samplers)."""
     try:
-        from learning import PolicySampler
+        from learning import make_sampler, user_sampler
+        from learning.samplers.registry import REGISTRY, parse_user_sampler
     except ImportError as exc:
-        raise InputError(f"--sampler policy needs the learning package and its dependencies (torch, "
+        raise InputError(f"--sampler {arg}: needs the learning package and its dependencies (torch, "
                          f"stable-baselines3): {exc}") from None
-    try:
-        return PolicySampler.load(path, step_size=step)
-    except FileNotFoundError:
-        raise InputError(f"--policy {str(path)!r} does not exist") from None
-    except ValueError as exc:
-        raise InputError(f"--policy {str(path)!r}: {exc}") from None
+    if "=" in arg:
+        return user_sampler(parse_user_sampler(arg)[1])
+    if arg not in REGISTRY:
+        names = ", ".join(dict.fromkeys((*SAMPLERS, *REGISTRY)))
+        raise InputError(f"--sampler {arg!r}: choose from {names} or give NAME=SPEC (MODEL.zip@ENV_ID or "
+                         "module:callable)")
+    if arg == "goal_bias":
+        return make_sampler(arg, bias=goal_bias)
+    if arg == "uniform":
+        return make_sampler(arg)
+    if arg == "policy" and policy is not None:
+        if not policy.is_file():
+            raise InputError(f"--policy {str(policy)!r} does not exist")
+        return make_sampler(arg, path=str(policy), step_size=step)
+    return make_sampler(arg, step_size=step)
 
 
 def main(argv=None) -> int:
@@ -142,10 +155,14 @@ def main(argv=None) -> int:
                     help="robot radius in map units: obstacles are inflated by it (default 0: a point robot)")
     ap.add_argument("--planner", type=planner_name_arg, choices=planner_names(), default="RRTConnect",
                     help="a registered planner; case, '-' and '_' are ignored (rrt-connect = RRTConnect)")
-    ap.add_argument("--sampler", choices=(*SAMPLERS, "policy"), default=None,
-                    help="default: goal-bias for rrt and rrtstar, uniform otherwise; policy: the learned sampler")
+    ap.add_argument("--sampler", default=None, metavar="NAME",
+                    help=f"{', '.join(SAMPLERS)} (the planners' own), or a sampler of learning's registry: follower "
+                         "(the straight-line follower), route (the shipped route encoder; default step: its block), "
+                         "route_ablation, policy (the learned policy), policy_ablation, goal_bias, expert and "
+                         "exact_route (privileged references), or NAME=SPEC (MODEL.zip@ENV_ID or module:callable). "
+                         "Default: goal-bias for rrt and rrtstar, uniform otherwise")
     ap.add_argument("--policy", type=Path, default=None, metavar="ZIP",
-                    help="checkpoint for --sampler policy (default: checkpoints/guided.zip of this repository)")
+                    help="checkpoint for --sampler policy (default: the shipped policy)")
     ap.add_argument("--goal-bias", type=float, default=0.05, metavar="P", help="goal probability of goal-bias")
     ap.add_argument("--metric", choices=METRICS, default="euclidean")
     ap.add_argument("--step", type=float, default=None,
@@ -191,6 +208,15 @@ def main(argv=None) -> int:
         return fail(f"--radius must be a non-negative number, got {args.radius}")
     if args.policy is not None and args.sampler != "policy":
         return fail("--policy is used with --sampler policy only")
+    if args.sampler is not None and args.sampler not in SAMPLERS and "=" not in args.sampler:
+        try:  # a name that is not a sampler is refused before the map is read
+            from learning import sampler_names
+        except ImportError as exc:
+            return fail(f"--sampler {args.sampler}: needs the learning package and its dependencies: {exc}")
+        if args.sampler not in sampler_names():
+            names = ", ".join(dict.fromkeys((*SAMPLERS, *sampler_names())))
+            return fail(f"--sampler {args.sampler!r}: choose from {names} or give NAME=SPEC (MODEL.zip@ENV_ID or "
+                        "module:callable)")
     # output locations are checked before anything slow happens
     try:
         if args.save_path is not None:
@@ -217,6 +243,8 @@ def main(argv=None) -> int:
             return fail(str(exc))
         start, goal = picked
     step = args.step
+    if step is None and args.sampler in ("route", "route_ablation", "exact_route"):
+        step = ROUTE_BLOCK * grid.resolution  # the encoder works on blocks of one step
     if step is None:
         w, h = grid.bounds[1] - grid.bounds[0]
         step = max(4.0 * grid.resolution, 0.02 * math.hypot(w, h))
@@ -225,8 +253,8 @@ def main(argv=None) -> int:
         time_limit = 10.0
     sampler = args.sampler
     try:
-        if sampler == "policy":
-            sampler = load_policy(args.policy or DEFAULT_POLICY, step)
+        if sampler is not None and sampler not in SAMPLERS:
+            sampler = learned_sampler(sampler, step, args.goal_bias, args.policy)
         out = plan_on_image(grid, start, goal, planner=args.planner, sampler=sampler, goal_bias=args.goal_bias,
                             metric=args.metric, step=step, tolerance=args.tolerance,
                             max_iterations=args.max_iterations, time_limit=time_limit, seed=args.seed,
@@ -244,7 +272,7 @@ def main(argv=None) -> int:
           f"tolerance {out.problem.goal_tolerance:g}, metric {args.metric}")
     sampler_name = args.sampler or "default"
     if args.sampler == "policy":
-        sampler_name = f"policy {args.policy or DEFAULT_POLICY}"
+        sampler_name = f"policy {args.policy or 'shipped'}"
     print(f"planner:          {r.planner} (step {step:g}, seed {args.seed}, sampler {sampler_name})")
     print(f"solved:           {r.solved} ({r.stop_reason})")
     print(f"iterations:       {r.iterations}")

@@ -14,12 +14,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from learning.models.shipped import SHIPPED_POLICY
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--policy", type=Path, default=ROOT / "checkpoints" / "guided.zip")
+    ap.add_argument("--policy", type=Path, default=SHIPPED_POLICY)
     ap.add_argument("--out", type=Path, default=ROOT / "docs")
     ap.add_argument("--families", nargs="+", default=["bugtrap", "maze", "rooms"])
     ap.add_argument("--best-bias", nargs="+", type=float, default=None,

@@ -23,12 +23,15 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def load_script(name: str):
-    """``scripts/<name>.py`` imported as a module (scripts are not a package), registered in ``sys.modules``."""
+    """``scripts/<name>.py`` imported as a module (scripts are not a package), registered in ``sys.modules``.
+
+    ``name`` may name a subfolder, e.g. ``"experiments/route_variants"``.
+    """
     import importlib.util
     import sys
 
-    spec = importlib.util.spec_from_file_location(f"_script_{name}", Path(__file__).resolve().parents[1] / "scripts"
-                                                  / f"{name}.py")
+    spec = importlib.util.spec_from_file_location(f"_script_{name.replace('/', '_')}",
+                                                  Path(__file__).resolve().parents[1] / "scripts" / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod
     spec.loader.exec_module(mod)

@@ -9,7 +9,7 @@ import pytest
 from conftest import fine_check_path
 
 from learning import evaluation as E
-from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
+from learning.samplers.ablation import FRONTIER_GRID, ConstantGuidedSampler
 from planners import RRT
 from planners.base.fileio import InputError
 from planners.maps.generators import generate
@@ -68,7 +68,7 @@ def test_the_ablation_is_tuned_on_the_tuning_split_only():
 
 def test_the_geodesic_frontier_reference_ranks_its_frontier_by_cost_to_go():
     """Its frontier weights are geodesic distances: never below the straight line, well above it in a trap."""
-    from learning.expert import GeodesicFrontierSampler
+    from learning.references.expert import GeodesicFrontierSampler
 
     p = generate("bugtrap", 1_000_003, 128, goal_tolerance=4.0)
     planner = RRT(p, step_size=4.0, sampler=GeodesicFrontierSampler(0.7), seed=0)
@@ -87,8 +87,8 @@ def test_the_geodesic_frontier_reference_ranks_its_frontier_by_cost_to_go():
 
 def test_the_corridor_reference_samples_near_shortest_paths_and_plans():
     """q=1: every sample lies in a free cell through which a path is at most 10% longer than the shortest."""
-    from learning.expert import CorridorSampler
-    from learning.route import RouteSampler
+    from learning.references.expert import CorridorSampler
+    from learning.samplers.route import RouteSampler
     from planners import UniformSampler
     from planners.maps.gridsearch import distance_field
 

@@ -14,9 +14,10 @@ import pytest
 import torch
 
 from learning import PolicySampler
+from learning.models.shipped import SHIPPED_POLICY
 from planners.base.fileio import InputError
 
-SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+SHIPPED = SHIPPED_POLICY
 
 
 class _Mkdir:
@@ -126,7 +127,8 @@ def test_the_shipped_route_encoder_matches_its_recipe():
     # the recipe in route.json is what checkpoints/README.md says reproduces the file: the file must agree
     import json
 
-    from learning.route import SHIPPED, load_route_net
+    from learning.models.route_net import load_route_net
+    from learning.samplers.route import SHIPPED
 
     recipe = json.loads(SHIPPED.with_suffix(".json").read_text())["recipe"]
     net = load_route_net(SHIPPED)

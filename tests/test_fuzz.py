@@ -20,6 +20,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from learning.models.shipped import SHIPPED_POLICY
 from planners import OccupancyGrid, Problem, load_movingai_scenarios, load_scene
 from planners.base.fileio import InputError
 
@@ -218,7 +219,7 @@ def test_scene_reader(tmp_path_factory, text, encoding):
 
 # --- sampler checkpoints ------------------------------------------------------------------------------
 
-SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+SHIPPED = SHIPPED_POLICY
 
 
 @st.composite

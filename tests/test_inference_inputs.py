@@ -15,15 +15,16 @@ import numpy as np
 import pytest
 
 from learning import PolicySampler
+from learning.models.shipped import SHIPPED_POLICY
 from planners import RRT
 from planners.maps.generators import TEST_SEED0, generate
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ROOT / "checkpoints" / "guided.zip"
+SHIPPED = SHIPPED_POLICY
 INFERENCE = ["learning/policy_sampler.py", "learning/fast_policy.py", "learning/checkpoint.py", "learning/route.py",
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "guidance").glob("*.py"))),
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "kernels").glob("*.py")))]
-PRIVILEGED = ("planners.maps.gridsearch", "planners.maps.generators", "learning.expert")
+PRIVILEGED = ("planners.maps.gridsearch", "planners.maps.generators", "learning.references.expert")
 
 
 def _imports(path: Path) -> set[str]:
@@ -45,8 +46,8 @@ def test_no_inference_module_imports_a_privileged_one(module):
 
 @pytest.mark.parametrize("learned", ["policy", "route"])
 def test_the_learned_samplers_plan_the_same_runs_with_grid_search_and_expert_disabled(monkeypatch, learned):
-    from learning import expert
-    from learning.route import RouteSampler, shipped_sampler
+    from learning.references import expert
+    from learning.samplers.route import RouteSampler, shipped_sampler
     from learning.route_training import train_route_net
     from planners.maps import gridsearch
 

@@ -11,7 +11,8 @@ import pytest
 import torch
 
 from learning import PolicySampler
-from learning.fast_policy import FastActor
+from learning.models.fast_policy import FastActor
+from learning.models.shipped import SHIPPED_POLICY
 from learning.training import TrainConfig, train
 from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler, make_planner
 from planners.maps.generators import TEST_SEED0, generate
@@ -133,7 +134,7 @@ def test_policy_sampler_on_other_maps_and_planners(trained, problem_fn):
         assert make_planner(name, p, extension_step=4.0, sampler=sampler, seed=1).solve(max_iterations=20000).solved
 
 
-SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+SHIPPED = SHIPPED_POLICY
 
 
 @pytest.mark.parametrize("family", ["bugtrap", "maze", "narrow_passage"])
@@ -291,7 +292,7 @@ def _script(name):
     from pathlib import Path
 
     script = Path(__file__).resolve().parents[1] / "scripts" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"{name}_script", script)
+    spec = importlib.util.spec_from_file_location(f"{name.replace('/', '_')}_script", script)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
@@ -328,8 +329,9 @@ def test_benchmark_policy_script_times_passes_and_queries(capsys):
         assert needle in out, needle
 
 
+@pytest.mark.experiments
 def test_imitation_ceiling_script_reports_labels_beside_the_policy(capsys):
-    _script("imitation_ceiling").main(["--families", "forest", "--maps", "2", "--processes", "1",
+    _script("experiments/imitation_ceiling").main(["--families", "forest", "--maps", "2", "--processes", "1",
                                        "--max-iterations", "3000"])
     out = capsys.readouterr().out
     for needle in ("constant (p=", "| forest | policy |", "| forest | labels |", "labels, no frontier fallback",
@@ -338,15 +340,17 @@ def test_imitation_ceiling_script_reports_labels_beside_the_policy(capsys):
         assert needle in out, needle
 
 
+@pytest.mark.experiments
 @pytest.mark.parametrize("model, inputs", [("dilated", "fraction"), ("recurrent", "fraction"), ("unet", "cells")])
 def test_route_probe_script_trains_and_reports(model, inputs, capsys):
-    rows = _script("route_probe").main(["--model", model, "--input", inputs, "--maps", "1", "--val-maps", "1",
-                                        "--epochs", "1", "--size", "64"])
+    rows = _script("experiments/route_probe").main(["--model", model, "--input", inputs, "--maps", "1",
+                                                    "--val-maps", "1", "--epochs", "1", "--size", "64"])
     assert [r["family"] for r in rows] == ["forest", "narrow_passage", "bugtrap", "maze", "rooms"]
     assert all(r["blocks"] > 0 and 0.0 <= float(r["network"]) <= 1.0 for r in rows)
     assert "parameters; forward on a 128x128 map" in capsys.readouterr().out
 
 
+@pytest.mark.experiments
 @pytest.mark.parametrize("script, argv, flag", [("imitation_ceiling", ["--maps", "0"], "--maps"),
                                                ("imitation_ceiling", ["--size", "8"], "--size"),
                                                ("route_probe", ["--epochs", "0"], "--epochs"),
@@ -355,24 +359,27 @@ def test_route_probe_script_trains_and_reports(model, inputs, capsys):
                                                ("tune_stuck_floor", ["--seeds", "0"], "--seeds")])
 def test_probe_scripts_refuse_bad_flags_by_name(script, argv, flag, capsys):
     with pytest.raises(SystemExit) as exc:
-        _script(script).main(argv)
+        _script(f"experiments/{script}").main(argv)
     assert exc.value.code == 2 and flag in capsys.readouterr().err
 
 
+@pytest.mark.experiments
 def test_stuck_floor_rule_prefers_the_worst_map_then_the_mean_then_the_median():
-    choose = _script("tune_stuck_floor").choose
+    choose = _script("experiments/tune_stuck_floor").choose
     success = {0.1: {"a": 0.5, "b": 1.0, "never": 0.0}, 0.3: {"a": 0.9, "b": 0.9, "never": 0.0},
                0.5: {"a": 0.9, "b": 1.0, "never": 0.0}}
     assert choose(success, {0.1: 10.0, 0.3: 5.0, 0.5: 50.0}) == 0.5  # a map none solves does not decide
     success[0.3]["b"] = 1.0
     assert choose(success, {0.1: 10.0, 0.3: 5.0, 0.5: 50.0}) == 0.3
-    assert _script("tune_stuck_floor").policy_with_cap_0_3().max_floor == 0.3  # evaluate.py --sampler loads it
+    # evaluate.py --sampler loads it
+    assert _script("experiments/tune_stuck_floor").policy_with_cap_0_3().max_floor == 0.3
 
 
+@pytest.mark.experiments
 def test_stuck_floor_script_runs_on_the_movingai_tuning_scenarios(movingai, capsys):
-    best = _script("tune_stuck_floor").main(["--movingai", str(movingai), "--floors", "0.1", "0.5", "--scenarios", "1",
-                                             "--seeds", "1", "--maps", "1", "--max-iterations", "300",
-                                             "--processes", "1"])
+    best = _script("experiments/tune_stuck_floor").main(["--movingai", str(movingai), "--floors", "0.1", "0.5",
+                                                         "--scenarios", "1", "--seeds", "1", "--maps", "1",
+                                                         "--max-iterations", "300", "--processes", "1"])
     out = capsys.readouterr().out
     assert best in (0.1, 0.5) and "| maze512-32-0 |" in out and "| forest (validation) |" in out
 
@@ -432,19 +439,22 @@ def test_mirrored_cloning_splits_a_label_between_its_reflections(trained):
     assert abs(mirrored[label] - mirrored[label + 11]) < 0.1 and mirrored[label] + mirrored[label + 11] > 0.9
 
 
+@pytest.mark.experiments
 def test_policy_variants_load_the_shipped_policy_at_each_batch():
-    variants = _script("policy_variants")  # evaluate.py --sampler loads them
+    variants = _script("experiments/policy_variants")  # evaluate.py --sampler loads them
     assert (variants.batch_1().batch, variants.batch_2().batch, variants.batch_8().batch) == (1, 2, 8)
 
 
+@pytest.mark.experiments
 def test_tune_policy_batch_names_a_batch_from_the_tuning_maps(capsys):
-    best = _script("tune_policy_batch").main(["--batches", "8", "1", "--maps", "1", "--seeds", "1",
+    best = _script("experiments/tune_policy_batch").main(["--batches", "8", "1", "--maps", "1", "--seeds", "1",
                                               "--processes", "1"])
     out = capsys.readouterr().out
     assert best in (8, 1) and "sum of log medians" in out and f"chosen batch: {best}" in out
 
 
+@pytest.mark.experiments
 def test_tune_policy_batch_refuses_a_batch_below_one(capsys):
     with pytest.raises(SystemExit) as exc:
-        _script("tune_policy_batch").main(["--batches", "0"])
+        _script("experiments/tune_policy_batch").main(["--batches", "0"])
     assert exc.value.code == 2 and "--batches" in capsys.readouterr().err

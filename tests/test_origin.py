@@ -7,21 +7,20 @@ Each is run on a generated map and on the same grid with ``origin`` moved; what 
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from envs.observation import GridObservation
 from learning import ConstantGuidedSampler, PolicySampler, RouteSampler
-from learning.expert import CorridorSampler, ExpertSampler, GeodesicExpert
+from learning.models.shipped import SHIPPED_POLICY
+from learning.references.expert import CorridorSampler, ExpertSampler, GeodesicExpert
 from planners import RRT, OccupancyGrid, Problem
 from planners.base.planner import TreeView
 from planners.guidance.frontier import Frontier
 from planners.guidance.guided import GuidedSampling
 from planners.maps.generators import TEST_SEED0, generate
 
-SHIPPED = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+SHIPPED = SHIPPED_POLICY
 ORIGIN = np.array([-64.0, -32.0])
 
 

@@ -13,11 +13,12 @@ from pathlib import Path
 import pytest
 
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY, SHIPPED_ROUTE
 from planners import movingai_dir
 from planners.tools.parallel import BACKENDS, LocalBackend, default_chunksize, make_backend
 
-CHECKPOINT = str(Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip")
-ROUTE = str(Path(__file__).resolve().parents[1] / "checkpoints" / "route.pt")
+CHECKPOINT = str(SHIPPED_POLICY)
+ROUTE = str(SHIPPED_ROUTE)
 
 
 def _tasks(max_iterations: int = 3000, movingai: bool = True) -> list[tuple]:

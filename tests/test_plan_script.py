@@ -11,6 +11,7 @@ import pytest
 from conftest import REPO, fine_check_path
 from PIL import Image
 
+from learning.models.shipped import SHIPPED_POLICY
 from planners.tools.workflow import load_map, picture_planner, plan_on_image
 
 SCRIPT = REPO / "scripts" / "plan.py"
@@ -140,16 +141,32 @@ def test_policy_sampler_from_the_command_line(map_png, tmp_path):
     p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--planner", "rrt", "--sampler", "policy",
             "--out", out, "--headless", "--no-gif")
     assert p.returncode == 0, p.stderr
-    assert "sampler policy" in p.stdout and "guided.zip" in p.stdout
+    assert "sampler policy shipped" in p.stdout
     p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--sampler", "policy", "--policy",
             tmp_path / "none.zip", "--out", out / "x", "--headless")
     assert p.returncode == 2 and "none.zip" in p.stderr and "Traceback" not in p.stderr
     assert not (out / "x").exists()
 
 
+@pytest.mark.parametrize("sampler", ["follower", "route"])
+def test_registry_samplers_from_the_command_line(map_png, tmp_path, sampler):
+    pytest.importorskip("torch")
+    p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--planner", "rrt", "--sampler", sampler,
+            "--out", tmp_path / "out", "--headless", "--no-gif")
+    assert p.returncode in (0, 1), p.stderr
+    assert f"sampler {sampler})" in p.stdout
+
+
+def test_an_unknown_sampler_is_refused_before_the_map_is_read(tmp_path):
+    pytest.importorskip("torch")
+    p = run(tmp_path / "missing.png", "--start", 5, 5, "--goal", 9, 9, "--sampler", "nope", "--out", tmp_path / "o")
+    assert p.returncode == 2 and "--sampler 'nope'" in p.stderr and "follower" in p.stderr
+    assert "Traceback" not in p.stderr
+
+
 def test_policy_sampler_plans_with_the_learned_policy(map_png):
     learning = pytest.importorskip("learning")
-    sampler = learning.PolicySampler.load(REPO / "checkpoints" / "guided.zip", step_size=3.0)
+    sampler = learning.PolicySampler.load(SHIPPED_POLICY, step_size=3.0)
     out = plan_on_image(load_map(map_png), (5.5, 30.5), (90.5, 40.5), planner="rrt", sampler=sampler, step=3.0,
                         seed=0, smooth=False)
     assert out.result.solved

@@ -1,4 +1,4 @@
-"""The route encoder and its sampler (``learning.route``): inputs, targets, files, planning."""
+"""The route encoder and its sampler (``learning.samplers.route``): inputs, targets, files, planning."""
 
 from __future__ import annotations
 
@@ -13,15 +13,12 @@ from conftest import fine_check_path, load_script
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from learning.route import (
+from learning.models.route_net import RouteNet, load_route_net, route_input, save_route_net
+from learning.samplers.route import (
     ABLATION_SETTINGS,
     SHIPPED,
     SHIPPED_SETTINGS,
-    RouteNet,
     RouteSampler,
-    load_route_net,
-    route_input,
-    save_route_net,
     shipped_ablation,
     shipped_sampler,
     straight_line_sampler,
@@ -64,7 +61,7 @@ def test_the_encoder_predicts_a_cost_per_cell_on_maps_of_any_size():
 @pytest.mark.parametrize("k", range(8))
 def test_the_prediction_averaged_over_the_symmetries_turns_with_the_map(k):
     """At 8 symmetries the predicted cost-to-go is equivariant, as the true one is; at 1 it is one pass."""
-    from learning.route import symmetry, unturn
+    from learning.models.route_net import symmetry, unturn
 
     net = RouteNet(4, 8, 2).eval()  # untrained: nothing about its weights is symmetric
     p = generate("bugtrap", 3, 64)
@@ -142,7 +139,7 @@ def test_the_field_is_scaled_up_on_maps_larger_than_the_training_ones_and_the_si
 
 def test_axial_attention_lets_one_cell_reach_the_whole_grid_at_full_resolution():
     """After a row pass and a column pass, the output at one pixel depends on a pixel in another row and column."""
-    from learning.route import AxialAttention
+    from learning.models.route_net import AxialAttention
 
     torch.manual_seed(0)
     layer = AxialAttention(8).eval()
@@ -204,9 +201,9 @@ def shipped(small_net) -> RouteSampler:
 
 
 def test_trained_sampler_says_how_to_train_an_encoder_when_there_is_none(monkeypatch, tmp_path):
-    import learning.route
+    import learning.samplers.route
 
-    monkeypatch.setattr(learning.route, "TRAINED", tmp_path / "none.pt")
+    monkeypatch.setattr(learning.samplers.route, "TRAINED", tmp_path / "none.pt")
     with pytest.raises(FileNotFoundError, match="scripts/train_route.py"):
         trained_sampler()
 
@@ -318,7 +315,7 @@ def test_the_encoder_ranks_the_frontier_where_uses_says(shipped):
     straight = straight_line_sampler().bind(p)
     learned = shipped.net.predict(p.world.obstacles, p.world.cell_of(p.goal))
     for uses in ("progress", "frontier", "both"):
-        s = RouteSampler(shipped.net, uses=uses).bind(p)
+        s = RouteSampler(shipped.net, uses=uses, symmetries=1).bind(p)
         free = np.isfinite(s.field)
         expected = straight.field if uses == "frontier" else learned
         assert np.allclose(s.field[free], expected[free])
@@ -333,7 +330,7 @@ def test_the_encoder_ranks_the_frontier_where_uses_says(shipped):
 
 def test_the_geodesic_route_reference_ranks_the_frontier_by_the_exact_cost_to_go():
     """The follower whose frontier knows the route: a reference that must beat the follower on traps and mazes."""
-    from learning.expert import GeodesicRouteSampler
+    from learning.references.expert import GeodesicRouteSampler
 
     its = {"follower": [], "geodesic": []}
     for i, family in enumerate(("bugtrap", "maze") * 3):
@@ -373,11 +370,12 @@ def test_every_path_of_the_follower_is_valid_starts_at_start_and_ends_at_the_goa
         assert fine_check_path(p.world, r.path)
 
 
+@pytest.mark.experiments
 def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(monkeypatch, small_net):
-    import learning.route
-    from learning.expert import GeodesicRouteSampler
+    import learning.samplers.route
+    from learning.references.expert import GeodesicRouteSampler
 
-    variants = load_script("route_variants")
+    variants = load_script("experiments/route_variants")
     monkeypatch.setattr(variants, "TRAINED", small_net)
     ranked, ablation, exact = variants.ranked(), variants.ranked_ablation(), variants.ranked_exact()
     assert ranked.net is not None and ranked.uses == "frontier" and ablation.net is None
@@ -397,7 +395,7 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     assert [(s.lazy, s.uses, s.symmetries) for s in lazy] == [(25, "both", 8), (50, "both", 8), (100, "both", 8)]
     assert (variants.both_stall6().stall, variants.both_stall6().symmetries) == (6, 8)
     assert [getattr(variants, f"both_sym{k}")().symmetries for k in (1, 4)] == [1, 4]
-    monkeypatch.setattr(variants, "TRAINED", learning.route.TRAINED.with_name("missing.pt"))
+    monkeypatch.setattr(variants, "TRAINED", learning.samplers.route.TRAINED.with_name("missing.pt"))
     with pytest.raises(FileNotFoundError, match="train_route.py"):
         variants.ranked()
 
@@ -405,7 +403,7 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
 @pytest.mark.parametrize("k", range(8))
 def test_augmentation_turns_the_map_and_its_goal_together(k):
     """Under each of the square's symmetries the cost-to-go targets turn with the map: nothing else changes."""
-    from learning.route import symmetry
+    from learning.models.route_net import symmetry
 
     p = generate("bugtrap", 17, 64)
     goal = p.world.cell_of(p.goal)
@@ -417,9 +415,11 @@ def test_augmentation_turns_the_map_and_its_goal_together(k):
     assert (k == 0) == (np.array_equal(obs, p.world.obstacles) and g == goal)
 
 
+@pytest.mark.experiments
 def test_validate_samplers_reports_validation_medians_and_refuses_bad_specs(capsys, monkeypatch):
-    script = load_script("validate_samplers")
-    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "scripts"))  # as `python scripts/...`
+    script = load_script("experiments/validate_samplers")
+    # as `python scripts/experiments/...`
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "scripts" / "experiments"))
     rows = script.main(["--sampler", "ablation=route_variants:ranked_ablation", "--families", "forest", "bugtrap",
                         "--maps", "2", "--seeds", "1", "--size", "64", "--processes", "1"])
     assert [r["sampler"] for r in rows] == ["ablation"] and set(rows[0]) == {"sampler", "forest", "bugtrap"}

@@ -1,8 +1,9 @@
 """Samplers on the validation maps: where their settings are chosen, never the test maps.
 
-    python scripts/validate_samplers.py --sampler ranked=route_variants:ranked \
+    python scripts/experiments/validate_samplers.py --sampler ranked=route_variants:ranked \
         --sampler ablation=route_variants:ranked_ablation          # 20 maps per family, 3 seeds, 128x128
-    python scripts/validate_samplers.py --sampler exact=route_variants:ranked_exact --families narrow_passage --maps 100
+    python scripts/experiments/validate_samplers.py --sampler exact=route_variants:ranked_exact \
+        --families narrow_passage --maps 100
 
 Each ``--sampler`` is a spec as ``evaluate.py`` takes it (``NAME=module:callable`` or an SB3 model).
 RRT, step and tolerance 4, on the generated families' validation seeds; per family the median
@@ -22,12 +23,13 @@ import numpy as np
 sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments
 
-DEFAULT_POLICY = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "checkpoints", "guided.zip")
+DEFAULT_POLICY = str(SHIPPED_POLICY)
 
 
 def main(argv=None) -> list[dict]:

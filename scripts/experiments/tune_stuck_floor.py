@@ -1,7 +1,7 @@
 """Choose the learned sampler's ``max_floor`` on tuning queries: how far the uniform share grows when stuck.
 
-    python scripts/tune_stuck_floor.py                       # MovingAI tuning scenarios + validation maps
-    python scripts/tune_stuck_floor.py --scenarios 5 --floors 0.2 0.3 0.5
+    python scripts/experiments/tune_stuck_floor.py                       # MovingAI tuning scenarios + validation maps
+    python scripts/experiments/tune_stuck_floor.py --scenarios 5 --floors 0.2 0.3 0.5
     python scripts/evaluate.py --sampler cap=tune_stuck_floor:policy_with_cap_0_3   # 0.3 on the test split
 
 ``PolicySampler`` raises its uniform share when the tree has made no progress for ``patience``
@@ -23,13 +23,14 @@ import numpy as np
 
 from learning import PolicySampler
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY
 from planners import make_planner, movingai_dir
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 FLOORS = (0.05, 0.1, 0.2, 0.3, 0.4, 0.5)
 
 

@@ -1,7 +1,7 @@
 """How far can imitation take the learned sampler? Its teacher's own labels, executed, on validation maps.
 
-    python scripts/imitation_ceiling.py                  # 5 families, 40 validation maps each, 128x128
-    python scripts/imitation_ceiling.py --maps 10 --families bugtrap maze
+    python scripts/experiments/imitation_ceiling.py                  # 5 families, 40 validation maps each, 128x128
+    python scripts/experiments/imitation_ceiling.py --maps 10 --families bugtrap maze
 
 The policy is trained to imitate labels: the guided class holding the privileged expert's target, or
 the frontier once the tree has been stuck for ``stuck_threshold`` iterations (``learning.imitation``).
@@ -17,7 +17,7 @@ ceiling. Rows (RRT, step and tolerance 4, median iterations-to-solution, unsolve
 - ``expert``: the privileged expert itself (samples along the shortest path, not through the classes).
 - ``straight-line follower``: ``RouteSampler(None)``, the rule without learning that ``evaluate.py`` runs;
 - ``exact corridor + uniform`` / ``+ follower``: a share q (best here) of samples uniform over the cells
-  of near-shortest paths (``learning.expert.CorridorSampler``), the rest uniform or from the follower:
+  of near-shortest paths (``learning.references.expert.CorridorSampler``), the rest uniform or from the follower:
   the best that a network predicting the region the path runs through could give.
 
 Each is also given over the iteration lower bound (grid shortest path / step, per run) and over the
@@ -37,7 +37,8 @@ import numpy as np
 
 from learning import PolicySampler
 from learning import evaluation as E
-from learning.ablation import FRONTIER_GRID
+from learning.models.shipped import SHIPPED_POLICY
+from learning.samplers.ablation import FRONTIER_GRID
 from learning.imitation import collect
 from planners.base.fileio import InputError, check_int_flags
 from planners.guidance.guided import ANGLES, FRONTIER
@@ -45,7 +46,7 @@ from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 #: Shares of corridor samples tried per base sampler; the best on these maps is reported.
 CORRIDOR_Q = {"uniform": (0.5, 0.8, 0.95), "follower": (0.1, 0.3, 0.5)}
 

@@ -1,11 +1,11 @@
 """Probe for issue 18's route context: can a small learned map encoder tell where the route runs?
 
-    python scripts/route_probe.py                          # dilated CNN, 200 maps per family, 20 epochs
-    python scripts/route_probe.py --model recurrent        # one shared 3x3 update applied 40 times (VIN-like)
-    python scripts/route_probe.py --model recurrent --channels 8 --iterations 20   # cheaper
-    python scripts/route_probe.py --model unet --input cells   # multiscale, sees every cell of each block
+    python scripts/experiments/route_probe.py                          # dilated CNN, 200 maps per family, 20 epochs
+    python scripts/experiments/route_probe.py --model recurrent  # one shared 3x3 update applied 40 times (VIN-like)
+    python scripts/experiments/route_probe.py --model recurrent --channels 8 --iterations 20   # cheaper
+    python scripts/experiments/route_probe.py --model unet --input cells   # multiscale, sees every cell of each block
 
-The learned sampler fails where the route turns away from the goal (``scripts/imitation_ceiling.py``).
+The learned sampler fails where the route turns away from the goal (``scripts/experiments/imitation_ceiling.py``).
 This measures whether a network that sees the whole map once per query, with no search at
 inference, could supply that: per block of ``--block`` cells (one planner step), it predicts the
 direction (16 bins) in which the shortest path leaves the block's best cell, ``--ahead`` cells along.
@@ -28,7 +28,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from learning.route import UNet
+from learning.models.route_net import UNet
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, generate
 from planners.maps.gridsearch import distance_field

@@ -10,11 +10,10 @@ policy at each batch beside the tuned one on the test maps.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from learning import PolicySampler
+from learning.models.shipped import SHIPPED_POLICY
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 
 
 def batch_8() -> PolicySampler:

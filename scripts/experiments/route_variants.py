@@ -8,7 +8,7 @@
 encoder's predicted cost-to-go choose among the frontier's cells when the tree is stuck; these
 settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
 ``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries; ``both_symmetric``
-uses the field everywhere, as the shipped encoder is used (``learning.route.SHIPPED_SETTINGS``), ``both``
+uses the field everywhere, as the shipped encoder is used (``SHIPPED_SETTINGS``), ``both``
 does so with one pass, ``both_lazy25`` / ``50`` / ``100`` run the encoder only after that many
 iterations on the straight line, ``both_stall<k>`` once the tree has come no closer to the goal for k
 iterations, ``both_sym<k>`` averages over the first k symmetries (1-8), and ``exact_both`` is the
@@ -18,17 +18,24 @@ shipped lookahead and spread were chosen on;
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
-Settings are chosen with ``scripts/validate_samplers.py`` (validation maps).
+Settings are chosen with ``scripts/experiments/validate_samplers.py`` (validation maps).
 """
 
 from __future__ import annotations
 
 import re
 
-from learning.expert import GeodesicRouteSampler
-from learning.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, TRAINED, RouteSampler, shipped_sampler
+from learning.references.expert import GeodesicRouteSampler
+from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, TRAINED, RouteSampler, shipped_sampler
 
-SETTINGS = {"stuck": 1, "tau": 0.5}
+#: ``RouteSampler``'s defaults when these variants were measured (before the validated ones became the defaults).
+MEASURED = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "uses": "progress", "symmetries": 1}
+SETTINGS = {**MEASURED, "stuck": 1, "tau": 0.5}
+
+
+def _exact(**kwargs) -> GeodesicRouteSampler:
+    """The geodesic reference at ``kwargs`` over ``MEASURED`` (its own ``uses``: the frontier, unless given)."""
+    return GeodesicRouteSampler(**{**{k: v for k, v in MEASURED.items() if k != "uses"}, **kwargs})
 
 
 def _trained():
@@ -39,16 +46,16 @@ def _trained():
 
 def ranked() -> RouteSampler:
     """The trained encoder (``runs/route/route.pt``) ranking the follower's frontier."""
-    return RouteSampler.load(_trained(), uses="frontier", **SETTINGS)
+    return RouteSampler.load(_trained(), **{**SETTINGS, "uses": "frontier"})
 
 
 def ranked_symmetric() -> RouteSampler:
     """``ranked`` with the encoder's prediction averaged over the square's 8 symmetries (8 passes per query)."""
-    return RouteSampler.load(_trained(), uses="frontier", symmetries=8, **SETTINGS)
+    return RouteSampler.load(_trained(), **{**SETTINGS, "uses": "frontier", "symmetries": 8})
 
 
 def both_symmetric() -> RouteSampler:
-    """The trained encoder at the shipped settings (``learning.route.SHIPPED_SETTINGS``): its field everywhere."""
+    """The trained encoder at the shipped settings (``SHIPPED_SETTINGS``): its field everywhere."""
     return shipped_sampler(_trained())
 
 
@@ -88,12 +95,12 @@ def ranked_ablation() -> RouteSampler:
 
 def ranked_exact() -> GeodesicRouteSampler:
     """The reference: the frontier ranked by the exact cost-to-go (runs a grid search)."""
-    return GeodesicRouteSampler(**SETTINGS)
+    return _exact(stuck=SETTINGS["stuck"], tau=SETTINGS["tau"])
 
 
 def ranked_exact_tau1() -> GeodesicRouteSampler:
     """The reference at the follower's frontier temperature (one step): what first showed the room."""
-    return GeodesicRouteSampler(stuck=SETTINGS["stuck"])
+    return _exact(stuck=SETTINGS["stuck"])
 
 
 _GRID = re.compile(r"grid_(encoder|ablation)_l([0-9.]+)_s([0-9.]+)")
@@ -117,4 +124,4 @@ def __getattr__(name: str):
     kind, lookahead, sigma = match.group(1), float(match.group(2)), float(match.group(3))
     if kind == "encoder":
         return lambda: RouteSampler.load(_trained(), **{**SHIPPED_SETTINGS, "lookahead": lookahead, "sigma": sigma})
-    return lambda: RouteSampler(None, **{**ABLATION_SETTINGS, "lookahead": lookahead, "sigma": sigma})
+    return lambda: RouteSampler(None, **{**MEASURED, **ABLATION_SETTINGS, "lookahead": lookahead, "sigma": sigma})

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from learning.ablation import ConstantGuidedSampler
-from learning.route import RouteSampler
+from learning.samplers.ablation import ConstantGuidedSampler
+from learning.samplers.route import RouteSampler
 from planners import OccupancyGrid, Problem, Sampler, SamplerBase
 from planners.guidance.follow import FieldFollower, frontier_costs
 from planners.maps.gridsearch import distance_field
@@ -62,9 +62,9 @@ class ExpertSampler(SamplerBase):
 class GeodesicFrontierSampler(ConstantGuidedSampler):
     """The ablation with route knowledge in its frontier: a reference, not a competitor (it runs a grid search).
 
-    It draws the constant ablation's classes (``learning.ablation``), but its frontier prefers cells
+    It draws the constant ablation's classes (``learning.samplers.ablation``), but its frontier prefers cells
     by their geodesic distance to the goal instead of the straight-line one: what the frontier class
-    could do if a network knew the cost-to-go of every cell exactly. ``scripts/imitation_ceiling.py``
+    could do if a network knew the cost-to-go of every cell exactly. ``scripts/experiments/imitation_ceiling.py``
     reports it beside the expert.
 
     Args:
@@ -98,7 +98,7 @@ class CorridorSampler(SamplerBase):
     With probability ``q`` a sample is uniform over the free cells through which some path from start
     to goal is at most ``slack`` longer than the shortest; otherwise ``base`` draws it. This is what a
     network that predicts the region a path runs through (NEXT, Neural RRT*, Motion Planning
-    Transformers) could give a planner at best. ``scripts/imitation_ceiling.py`` reports it with uniform
+    Transformers) could give a planner at best. ``scripts/experiments/imitation_ceiling.py`` reports it with uniform
     sampling and with the straight-line follower as ``base``.
 
     Args:

@@ -1,7 +1,7 @@
 """Choose how often the policy decides (``PolicySampler(batch=...)``) on the tuning split.
 
-    python scripts/tune_policy_batch.py                  # batches 8 (trained), 2 and 1; 20 maps per family, 3 seeds
-    python scripts/tune_policy_batch.py --batches 8 4 2 1 --maps 10
+    python scripts/experiments/tune_policy_batch.py  # batches 8 (trained), 2 and 1; 20 maps per family, 3 seeds
+    python scripts/experiments/tune_policy_batch.py --batches 8 4 2 1 --maps 10
 
 The tuning step of ``evaluate.py`` on its own (``learning.evaluation.policy_tuning_tasks`` and
 ``best_policy_batch``): RRT with the policy at each batch on the generated families' tuning maps,
@@ -19,12 +19,13 @@ import numpy as np
 
 from learning import PolicySampler
 from learning import evaluation as E
+from learning.models.shipped import SHIPPED_POLICY
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments
 
-DEFAULT_POLICY = Path(__file__).resolve().parents[1] / "checkpoints" / "guided.zip"
+DEFAULT_POLICY = SHIPPED_POLICY
 
 
 def main(argv=None) -> int:

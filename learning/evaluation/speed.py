@@ -14,8 +14,8 @@ from collections.abc import Sequence
 import numba as nb
 import numpy as np
 
-from learning.fast_policy import FastActor, actor_logits
-from learning.policy_sampler import PolicySampler
+from learning.models.fast_policy import FastActor, actor_logits
+from learning.samplers.policy import PolicySampler
 from planners import RRT, GoalBiasedSampler, Problem, Sampler
 from planners.guidance.guided import GuidedSampling
 

@@ -1,0 +1,149 @@
+"""The comparison's figures (ECDF, means) and OMPL benchmark logs for Planner Arena."""
+
+from __future__ import annotations
+
+import math
+import re
+import textwrap
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from learning.evaluation.roster import bias_sampler, sampler_bias
+from planners.tools.benchmark import OMPL_RUN_PROPERTIES, Run, ompl_run_values
+from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
+
+
+def _wrap(text: str, width_in: float, fontsize: float) -> str:
+    """``text`` wrapped to lines that fit ``width_in`` inches at ``fontsize`` points."""
+    # a character of the default sans-serif font averages well under 0.6 em wide
+    return textwrap.fill(text, max(12, int(width_in * 72 / (0.6 * fontsize))))
+
+
+def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path,
+               planner: str = "RRT", extra: Sequence[str] = ()) -> list[Path]:
+    """Write ``ecdf.png`` (:func:`ecdf_figure`) and ``means.png`` (:func:`means_figure`); returns their paths."""
+    from planners.viz.plotting import save_figure
+
+    if not any(r.split == "test" and r.planner == planner for r in runs):
+        return []
+    return [save_figure(ecdf_figure(runs, biases, planner, extra), out_dir / "ecdf.png", dpi=110),
+            save_figure(means_figure(runs, rows, biases, planner, extra), out_dir / "means.png", dpi=110)]
+
+
+def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: Sequence[str] = ()):
+    """ECDF of iterations-to-solution per sampler, one panel per family (test split).
+
+    Titles are wrapped to the figure's width and the layout is constrained, so no text is cut off.
+    """
+    from planners.viz.plotting import new_figure
+
+    test = [r for r in runs if r.split == "test" and r.planner == planner]
+    fams = sorted({r.map for r in test})
+    cols = min(4, len(fams))
+    nrows = math.ceil(len(fams) / cols)
+    size = (4.2 * cols, 3.4 * nrows + 0.5)
+    fig = new_figure(size)
+    fig.suptitle(_wrap(f"{planner} on the test split: fraction of queries solved within n iterations (unsolved "
+                       "runs never reach 1); best goal bias tuned on a separate split", size[0], 11), fontsize=11)
+    for i, fam in enumerate(fams):
+        ax = fig.add_subplot(nrows, cols, i + 1)
+        best_s = bias_sampler(biases.get((fam, planner), 0.05))
+        # fixed colours per role, so panels where the best bias is the default 0.05 read the same
+        colors = {"uniform": "C0", "goal_bias=0.05": "C1", "policy": "C3", "expert (reference)": "0.4"}
+        colors.setdefault(best_s, "C2")
+        colors.update({name: f"C{4 + i}" for i, name in enumerate(extra)})
+        for s in dict.fromkeys(["uniform", "goal_bias=0.05", best_s, "policy", *extra, "expert (reference)"]):
+            its = np.sort([r.iterations if r.solved else math.inf for r in test if r.map == fam and r.sampler == s])
+            if len(its) == 0:
+                continue
+            label = s.replace("goal_bias=", "goal bias ") + (" (best)" if s == best_s else "")
+            style = {"linestyle": "--"} if s.startswith("expert") else {}
+            ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=label, color=colors[s], **style)
+        ax.set_xscale("log")
+        ax.set_title(_wrap(fam, 4.0, 12))
+        ax.set_xlabel("iterations to solution")
+        ax.set_ylabel("fraction solved")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=6)
+    return fig
+
+
+def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT",
+                 extra: Sequence[str] = ()):
+    """Mean iterations-to-solution with 95% bootstrap intervals per family: uniform, best bias, policy.
+
+    The legend sits beside the bars, never over them; the title is wrapped to the figure's width.
+    """
+    from planners.viz.plotting import new_figure
+
+    fams = sorted({r.map for r in runs if r.split == "test" and r.planner == planner})
+    size = (max(6.0, 1.6 * len(fams)) + 1.6, 4.0)
+    fig = new_figure(size)
+    ax = fig.add_subplot(1, 1, 1)
+    ax.set_title(_wrap(f"{planner} on the test split: mean iterations to solution with 95% bootstrap intervals "
+                       "(unsolved runs count as the cap)", size[0] - 1.6, 11), fontsize=11)
+    sel = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy"), *((n, n) for n in extra)]
+    width = 0.8 / len(sel)
+    for j, (label, s) in enumerate(sel):
+        means, errs = [], []
+        for fam in fams:
+            key = s or bias_sampler(biases.get((fam, planner), 0.05))
+            r = next((x for x in rows if x["family"] == fam and x["planner"] == planner and x["_sampler"] == key), None)
+            if r is None:
+                means.append(math.nan)
+                errs.append((0, 0))
+                continue
+            lo, hi = (float(v) for v in r["mean_ci95"].split("-"))
+            means.append(r["mean_iterations"])
+            errs.append((r["mean_iterations"] - lo, hi - r["mean_iterations"]))
+        x = np.arange(len(fams)) + (j - (len(sel) - 1) / 2) * width
+        ax.bar(x, means, width, yerr=np.array(errs).T, capsize=3, label=label)
+    ax.set_xticks(np.arange(len(fams)), fams, rotation=30, ha="right")
+    ax.set_yscale("log")
+    ax.set_ylabel("mean iterations (95% CI)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    return fig
+
+
+def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict) -> list[Path]:
+    """One OMPL benchmark log per family (map set) of the test split, under ``out_dir``.
+
+    Each planner and sampler pair is one OMPL planner configuration (e.g. ``RRT goal bias 0.05``);
+    ``time`` is the run's wall time, including binding the sampler. Unsolved runs have no solution
+    length. The logs open with ``ompl_benchmark_statistics.py out_dir/*.log -d db`` and Planner Arena.
+    Tuning-split runs are left out: they choose the best bias, they are not the comparison.
+    """
+    test = [r for r in runs if r.split == "test"]
+    fams: dict = {}
+    for r in test:
+        fams.setdefault(r.map, {}).setdefault((r.planner, r.sampler), []).append(r)
+    paths = []
+    for fam, configs in sorted(fams.items()):
+        planners = {}
+        for (planner, sampler), rs in sorted(configs.items()):
+            b = sampler_bias(sampler)
+            name = f"{planner} " + (sampler if b is None else "uniform" if b == 0 else f"goal bias {b:g}")
+            settings = {"planner": planner, "sampler": sampler, "step_size": cfg["step"],
+                        "goal_tolerance": cfg["tolerance"], "max_iterations": cfg["max_iterations"]}
+            if b is not None:
+                settings["best_goal_bias_on_tuning_split"] = "yes" if biases.get((fam, planner)) == b else "no"
+            if sampler == "policy":
+                settings["policy"] = cfg["policy"]
+            if sampler in cfg.get("user_samplers", {}):
+                settings["spec"] = cfg["user_samplers"][sampler]
+            planners[name] = PlannerRuns(settings, [ompl_run_values(r) for r in rs])
+        queries = len({r.query for r in configs[next(iter(configs))]})
+        setup = (f"SamplerGym comparison on {fam}, test split ({queries} queries, all runs of every sampler on the "
+                 f"same queries and seeds). Iterations to first solution, capped at {cfg['max_iterations']}; "
+                 f"the best goal bias was chosen on a separate tuning split (for shifted maps, their family's). "
+                 f"'time' is wall time in seconds, "
+                 f"including binding the sampler to the map. The expert is a privileged reference.")
+        stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", fam).strip("_") or "experiment"
+        paths.append(write_log(
+            out_dir / f"{stem}.log", experiment_name(fam), planners, [(p, t) for p, t, _ in OMPL_RUN_PROPERTIES],
+            setup=setup, total_time=sum(r.wall_time for rs in configs.values() for r in rs),
+            experiment_properties={"step_size": ("REAL", cfg["step"]), "goal_tolerance": ("REAL", cfg["tolerance"]),
+                                   "max_iterations": ("INTEGER", cfg["max_iterations"])}))
+    return paths

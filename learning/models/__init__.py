@@ -1,0 +1,1 @@
+"""The networks behind the learned samplers, their safe file I/O, and the policy's compiled actor."""

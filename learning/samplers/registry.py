@@ -1,0 +1,188 @@
+"""Samplers by name, as planners are: ``make_sampler(name, **params)``, ``sampler_names()``, ``SamplerSpec``.
+
+Every sampler of the comparison is built here from its name and its parameters (plain numbers and
+strings), never from a string parsed back. A user's sampler is a spec on the command line
+(``user_sampler``): ``MODEL.zip@ENV_ID[@OPTION...]`` for a Stable-Baselines3 model, or
+``module:callable`` for a factory returning a ``Sampler``.
+
+The references (``REFERENCES``) read the map's exact geodesic distance (a grid search): they say what
+perfect route knowledge reaches, they are not competitors.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from planners import GoalBiasedSampler, Sampler, UniformSampler
+from planners.base.fileio import InputError
+
+
+def _uniform() -> Sampler:
+    return UniformSampler()
+
+
+def _goal_bias(bias: float = 0.05) -> Sampler:
+    return GoalBiasedSampler(bias)
+
+
+def _follower(step_size: float = 4.0) -> Sampler:
+    from learning.samplers.route import FOLLOWER_SETTINGS, RouteSampler
+
+    return RouteSampler(None, step_size=step_size, **FOLLOWER_SETTINGS)
+
+
+def _route(step_size: float = 4.0, path: str | None = None) -> Sampler:
+    from learning.samplers.route import shipped_sampler
+
+    return shipped_sampler(step_size=step_size) if path is None else shipped_sampler(path, step_size)
+
+
+def _route_ablation(step_size: float = 4.0) -> Sampler:
+    from learning.samplers.route import shipped_ablation
+
+    return shipped_ablation(step_size)
+
+
+def _policy(batch: int | None = None, path: str | None = None, step_size: float | None = None) -> Sampler:
+    from learning.samplers.policy import PolicySampler
+
+    kwargs = {} if step_size is None else {"step_size": step_size}
+    if path is None:  # the shipped policy at its validated batch unless one is given
+        return PolicySampler.load(**({} if batch is None else {"batch": batch}), **kwargs)
+    return PolicySampler.load(path, batch=batch, **kwargs)
+
+
+def _policy_ablation(frontier: float = 0.7, step_size: float = 4.0, batch: int = 8) -> Sampler:
+    from learning.samplers.ablation import ConstantGuidedSampler
+
+    return ConstantGuidedSampler(frontier, step_size=step_size, batch=batch)
+
+
+def _expert(step_size: float = 4.0) -> Sampler:
+    from learning.references.expert import ExpertSampler
+
+    return ExpertSampler(step_size)
+
+
+def _exact_route(step_size: float = 4.0) -> Sampler:
+    from learning.references.expert import GeodesicRouteSampler
+    from learning.samplers.route import SHIPPED_SETTINGS
+
+    return GeodesicRouteSampler(step_size=step_size, **SHIPPED_SETTINGS)
+
+
+#: name -> (factory, one line for help texts).
+REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
+    "uniform": (_uniform, "uniform sampling"),
+    "goal_bias": (_goal_bias, "uniform sampling with the goal drawn with probability bias"),
+    "follower": (_follower, "the straight-line follower: the route sampler on the straight-line distance"),
+    "route": (_route, "the shipped route encoder at its validated settings"),
+    "route_ablation": (_route_ablation, "the route sampler without its encoder, tuned for itself"),
+    "policy": (_policy, "the learned sampler policy (shipped at its validated batch, or path=)"),
+    "policy_ablation": (_policy_ablation, "the policy's action classes at a constant distribution (frontier=)"),
+    "expert": (_expert, "reference: the privileged expert on the exact geodesic distance"),
+    "exact_route": (_exact_route, "reference: the route sampler on the exact cost-to-go"),
+}
+#: Names that are privileged references, not competitors.
+REFERENCES = ("expert", "exact_route")
+
+
+def sampler_names() -> tuple[str, ...]:
+    """Every registered sampler name."""
+    return tuple(REGISTRY)
+
+
+def make_sampler(name: str, **params: Any) -> Sampler:
+    """The sampler registered as ``name`` with ``params``; an unknown name or parameter is an ``InputError``."""
+    if name not in REGISTRY:
+        raise InputError(f"unknown sampler {name!r}; choose from {', '.join(REGISTRY)}")
+    factory = REGISTRY[name][0]
+    allowed = inspect.signature(factory).parameters
+    unknown = sorted(set(params) - set(allowed))
+    if unknown:
+        raise InputError(f"sampler {name!r} takes no parameter {', '.join(unknown)}; it takes "
+                         f"{', '.join(allowed) or 'none'}")
+    return factory(**params)
+
+
+@dataclass(frozen=True)
+class SamplerSpec:
+    """A sampler as data: a registered name and its parameters (``make_sampler(name, **params)``)."""
+
+    name: str
+    params: tuple[tuple[str, Any], ...] = ()
+
+    @classmethod
+    def of(cls, name: str, **params: Any) -> SamplerSpec:
+        """The spec of ``make_sampler(name, **params)``, its parameters in a fixed order."""
+        return cls(name, tuple(sorted(params.items())))
+
+    def build(self) -> Sampler:
+        """A new sampler of this spec."""
+        return make_sampler(self.name, **dict(self.params))
+
+    def to_json(self) -> str:
+        """``{"name": ..., "params": {...}}`` as one line of JSON."""
+        return json.dumps({"name": self.name, "params": dict(self.params)}, sort_keys=True)
+
+
+def parse_user_sampler(arg: str, taken: tuple[str, ...] = ()) -> tuple[str, str]:
+    """``NAME=SPEC`` from the command line, checked: the name and the spec (see :func:`user_sampler`).
+
+    The name may not be one of ``taken`` (the caller's own labels) or a registered name.
+    """
+    name, sep, spec = arg.partition("=")
+    name, spec = name.strip(), spec.strip()
+    if not sep or not name or not spec:
+        raise InputError(f"--sampler {arg!r}: expected NAME=SPEC, e.g. mine=user_ppo.zip@SamplerGym/RRT-Forest-v0 "
+                         "or mine=my_module:make_sampler")
+    if name in taken or name in REGISTRY or name.startswith("goal_bias=") or "," in name:
+        raise InputError(f"--sampler {arg!r}: the name {name!r} is taken or has a comma; choose another")
+    return name, spec
+
+
+def user_sampler(spec: str) -> Sampler:
+    """The sampler a spec names.
+
+    ``MODEL.zip@ENV_ID[@OPTION...]``: an SB3 model trained on that SamplerGym id (``SB3Sampler``);
+    options are ``stochastic`` (draw actions from the policy's distribution; default deterministic),
+    ``algo=NAME``, or env kwargs ``key=value`` (the ones the model was trained with; values read as
+    JSON where they parse, else as strings). ``module:callable``: ``callable()`` returns a ``Sampler``.
+    """
+    if "@" in spec:
+        from learning.samplers.sb3 import SB3Sampler
+
+        path, env_id, *options = spec.split("@")
+        kwargs: dict = {"deterministic": True}
+        for opt in options:
+            key, sep, value = opt.partition("=")
+            if opt in ("stochastic", "deterministic"):
+                kwargs["deterministic"] = opt == "deterministic"
+            elif sep and key:
+                try:
+                    kwargs[key] = json.loads(value)
+                except ValueError:
+                    kwargs[key] = value
+            else:
+                raise InputError(f"sampler spec {spec!r}: option {opt!r} is not stochastic, deterministic or key=value")
+        return SB3Sampler(path, env_id, **kwargs)
+    module, sep, attr = spec.partition(":")
+    if not sep or not module or not attr:
+        raise InputError(f"sampler spec {spec!r}: expected MODEL.zip@ENV_ID or module:callable")
+    try:
+        factory = getattr(importlib.import_module(module), attr)
+    except (ImportError, AttributeError) as exc:
+        raise InputError(f"sampler spec {spec!r}: {type(exc).__name__}: {exc}") from None
+    try:
+        sampler = factory()
+    except Exception as exc:  # noqa: BLE001 - the user's code: whatever it raises, name the spec
+        raise InputError(f"sampler spec {spec!r}: {attr}() raised {type(exc).__name__}: {exc}") from None
+    if not isinstance(sampler, Sampler):
+        raise InputError(f"sampler spec {spec!r}: {attr}() returned a {type(sampler).__name__}, not a Sampler "
+                         "(an object with bind(problem) and draw(rng, n, view))")
+    return sampler

@@ -1,0 +1,74 @@
+"""The sampler registry (``learning.samplers.registry``) and the validated defaults it hands out."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import learning
+from learning.models.shipped import SHIPPED_POLICY_BATCH
+from learning.samplers.registry import REFERENCES, SamplerSpec, make_sampler, parse_user_sampler, sampler_names
+from learning.samplers.route import FOLLOWER_SETTINGS, SHIPPED_SETTINGS, RouteSampler, shipped_sampler
+from planners import RRT, GoalBiasedSampler, Sampler, UniformSampler
+from planners.base.fileio import InputError
+from planners.maps.generators import TEST_SEED0, generate
+
+
+def test_every_registered_name_builds_a_sampler_and_the_references_are_marked():
+    assert set(sampler_names()) == {"uniform", "goal_bias", "follower", "route", "route_ablation", "policy",
+                                    "policy_ablation", "expert", "exact_route"}
+    assert set(REFERENCES) == {"expert", "exact_route"}
+    for name in sampler_names():
+        assert isinstance(make_sampler(name), Sampler), name
+    assert learning.sampler_names() == sampler_names() and learning.make_sampler is make_sampler
+
+
+def test_parameters_reach_the_sampler_and_bad_ones_are_refused_by_name():
+    assert isinstance(make_sampler("uniform"), UniformSampler)
+    gb = make_sampler("goal_bias", bias=0.2)
+    assert isinstance(gb, GoalBiasedSampler) and gb.p == 0.2
+    assert make_sampler("policy_ablation", frontier=0.3, batch=2).frontier == 0.3
+    assert make_sampler("policy", batch=1).batch == 1
+    with pytest.raises(InputError, match="unknown sampler 'nope'.*goal_bias"):
+        make_sampler("nope")
+    with pytest.raises(InputError, match="takes no parameter colour"):
+        make_sampler("goal_bias", colour=1)
+
+
+def test_defaults_are_the_validated_settings():
+    shipped = RouteSampler.load()
+    assert all(getattr(shipped, k) == v for k, v in SHIPPED_SETTINGS.items())
+    assert repr(shipped) == repr(shipped_sampler()) == repr(make_sampler("route"))
+    assert repr(RouteSampler(shipped.net)) == repr(shipped)
+    assert learning.PolicySampler.load().batch == SHIPPED_POLICY_BATCH == make_sampler("policy").batch
+    # the comparison's follower keeps the settings it was measured at
+    follower = make_sampler("follower")
+    assert follower.net is None and (follower.lookahead, follower.stuck, follower.tau) == (1.0, 4, 1.0)
+    assert FOLLOWER_SETTINGS == {"lookahead": 1.0, "stuck": 4, "tau": 1.0}
+
+
+def test_the_follower_plans_as_the_route_sampler_at_its_settings():
+    p = generate("bugtrap", TEST_SEED0, 64, goal_tolerance=4.0)
+    runs = [RRT(p, step_size=4.0, sampler=s, seed=3).solve(max_iterations=3000)
+            for s in (make_sampler("follower"), RouteSampler(None, **FOLLOWER_SETTINGS))]
+    assert runs[0].iterations == runs[1].iterations and runs[0].solved == runs[1].solved
+
+
+@given(name=st.sampled_from(["uniform", "goal_bias", "policy_ablation"]),
+       value=st.floats(0.0, 1.0, allow_nan=False))
+def test_a_spec_is_data_that_builds_its_sampler(name, value):
+    params = {} if name == "uniform" else {"bias": value} if name == "goal_bias" else {"frontier": value}
+    spec = SamplerSpec.of(name, **params)
+    assert spec == SamplerSpec.of(name, **dict(reversed(list(params.items())))) and hash(spec) == hash(spec)
+    assert json.loads(spec.to_json()) == {"name": name, "params": params}
+    assert type(spec.build()) is type(make_sampler(name, **params))
+
+
+def test_user_names_may_not_shadow_registered_samplers():
+    assert parse_user_sampler("mine=my_module:make") == ("mine", "my_module:make")
+    for arg in ("route=x:y", "follower=x:y", "policy=a.zip@SamplerGym/RRT-Forest-v0", "nospec"):
+        with pytest.raises(InputError):
+            parse_user_sampler(arg)
