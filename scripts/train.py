@@ -14,7 +14,7 @@ steps) whole, and --resume continues from it to the same weights an uninterrupte
 --resume reads your own run's checkpoint with Stable-Baselines3's full loader, which unpickles: never
 resume from a run someone else sent you (load their policy with learning.PolicySampler.load, which
 reads JSON and tensors only). --export copies final.zip to a path of your choice (e.g.
-checkpoints/guided.zip, with its config beside it as JSON).
+learning/data/guided.zip, with its config beside it as JSON).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@
     python scripts/train_route.py --epochs 5 --maps 100     # a quicker variation
     python scripts/evaluate.py --sampler route=learning.route:trained_sampler   # compare it
 
-With no options it trains the shipped encoder's recipe (``checkpoints/route.json``: 30 epochs, 1600
+With no options it trains the shipped encoder's recipe (``learning/data/route.json``: 30 epochs, 1600
 maps per family at sides 64 and 128, the 8 symmetries, 2 axial attention layers). Maps come from the
 training seeds only (validation, tuning and test seeds are never seen). The encoder learns the grid
 search's cost-to-go of every cell; ``RouteSampler`` follows its prediction.

@@ -121,7 +121,7 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
     script = util.module_from_spec(spec)
     spec.loader.exec_module(script)
     defaults = vars(script._parser().parse_args([]))
-    shipped = json.loads((ROOT / "checkpoints" / "route.json").read_text())["recipe"]
+    shipped = json.loads((ROOT / "learning" / "data" / "route.json").read_text())["recipe"]
     for key, value in shipped.items():
         if key in defaults and key not in ("out", "export"):
             assert defaults[key] == value, key
