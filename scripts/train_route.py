@@ -109,7 +109,8 @@ def _check(args) -> None:
     for flag, value in (("--map-set-weight", args.map_set_weight), ("--split-seed", args.split_seed),
                         ("--step-size", args.step_size)):
         if value is not None and not args.map_set:
-            raise InputError(f"{flag} {value}: it applies to --map-set, and none is given")
+            shown = " ".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
+            raise InputError(f"{flag} {shown}: it applies to --map-set, and none is given")
     args.sets = _open_sets(args) if args.map_set else None
     try:  # the encoder's own rules
         RouteNet(args.step, args.channels, args.depth, args.attention, args.attention_level)
