@@ -21,7 +21,8 @@ checkpoints/guided.zip, with its config beside it as JSON).
 training parts of map sets (docs/map-sets.md) instead of the generated families: each DAgger round
 draws --maps-per-round queries from them, PPO's episodes come from them, and the validation runs use
 the first --validation-maps queries of each set's validation part. --step-size is then in the maps'
-world units (it must span at least one cell of every map); runs/<name>/map_sets.json records the
+world units (it must span at least one cell of every map), and each map's goal tolerance is its
+set's (--goal-tolerance applies to the generated families); runs/<name>/map_sets.json records the
 sets' split rule and parts. --device auto|cpu|cuda (Stable-Baselines3's convention; default auto:
 CUDA when torch sees it) says where the networks train; rollouts and validation stay on the CPU.
 """

@@ -118,6 +118,11 @@ def _check(args) -> None:
         raise InputError(f"--channels / --depth / --attention / --attention-level: {exc}") from None
     for size in args.size:
         check_size(size, "--size")
+        if args.sets is None:
+            try:
+                check_route_map(f"generated {size} x {size}", (size, size), args.step)
+            except InputError as exc:
+                raise InputError(f"--size {size}: {exc}") from None
     if args.sets is None and args.maps > TRAIN_SEEDS[1] - TRAIN_SEEDS[0]:
         raise InputError(f"--maps {args.maps}: the training split holds {TRAIN_SEEDS[1] - TRAIN_SEEDS[0]} maps "
                          "per family")

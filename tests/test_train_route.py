@@ -133,6 +133,7 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
     (["--attention", "1", "--channels", "5"], "--attention"), (["--attention", "1", "--attention-level", "4"],
                                                                 "--attention-level"),
     (["--seed", "-1"], "--seed"), (["--maps", "10000000"], "--maps"), (["--resume"], "--resume"),
+    (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 512 blocks"),
 ])
 def test_bad_flags_exit_2_with_one_line_naming_them(tmp_path, capsys, flags, named):
     from importlib import util
