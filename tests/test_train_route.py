@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 import torch
 
+from conftest import load_script, npy_map_folder
 from learning.route import load_route_net
 from planners.base.fileio import MANIFEST, run_lock
 
@@ -190,24 +191,10 @@ def test_ctrl_c_says_what_was_kept_and_exits_130(tmp_path, capsys, monkeypatch):
 # --- map sets, workers and devices ------------------------------------------------------------------
 
 def _script():
-    from importlib import util
-
-    spec = util.spec_from_file_location("train_route_script", ROOT / "scripts" / "train_route.py")
-    script = util.module_from_spec(spec)
-    spec.loader.exec_module(script)
-    return script
+    return load_script("train_route")
 
 
-def _npy_maps(folder: Path, count: int, side: int = 24, seed: int = 0) -> Path:
-    import numpy as np
-
-    rng = np.random.default_rng(seed)
-    folder.mkdir(parents=True, exist_ok=True)
-    for i in range(count):
-        obs = rng.random((side, side)) < 0.15
-        obs[side // 2, 2:-2] = True
-        np.save(folder / f"m{i}.npy", obs)
-    return folder
+_npy_maps = npy_map_folder
 
 
 SMALL = ["--maps", "6", "--epochs", "2", "--channels", "4", "--depth", "1", "--attention", "0", "--workers", "1"]
@@ -216,14 +203,14 @@ SMALL = ["--maps", "6", "--epochs", "2", "--channels", "4", "--depth", "1", "--a
 def test_map_set_training_writes_a_loadable_encoder_whose_json_records_the_sets(tmp_path, capsys):
     from planners.maps.mapset import MapSet
 
-    a, b = _npy_maps(tmp_path / "a", 6), _npy_maps(tmp_path / "b", 5, side=32, seed=1)
+    a, b = _npy_maps(tmp_path / "a", 6), _npy_maps(tmp_path / "b", 5, side=48, family="maze")
     out = tmp_path / "run"
     assert _script().main([*SMALL, "--map-set", str(a), "--map-set", str(b), "--map-set-weight", "3",
                            "--map-set-weight", "1", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "split sha256-rank" in printed and "validation" in printed
     net = load_route_net(out / "route.pt")
-    assert net.channels == 4 and net.trained_side == 32
+    assert net.channels == 4 and net.trained_side in (32, 48)
     meta = json.loads((out / "route.json").read_text())
     sets = meta["map_sets"]
     assert sets["kind"] == "mixed" and sets["weights"] == [0.75, 0.25]
@@ -289,7 +276,7 @@ def test_bad_map_set_inputs_exit_2_before_any_work_naming_the_value(tmp_path, ca
     elif case == "negative_weight":
         flags += ["--map-set-weight", "-1"]
     elif case == "too_large":
-        monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "4")  # 24 cells at a block of 4 are 6 blocks
+        monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "4")  # 32 cells at a block of 4 are 8 blocks
     elif case == "step_size":
         flags += ["--step-size", "0.3"]  # 0.3 cells of a map of resolution 1
     elif case == "cuda":

@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 import torch
 
+from conftest import load_script, npy_map_folder
 from learning.checkpoint import read_sb3_zip
 from learning.training import TrainConfig, read_state, train
 from planners.base.fileio import InputError
@@ -191,24 +192,10 @@ def test_a_second_run_on_a_locked_folder_exits_2_naming_the_holder(tmp_path, cap
 # --- map sets and devices ---------------------------------------------------------------------------
 
 def _train_script():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("train_script", ROOT / "scripts" / "train.py")
-    script = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(script)
-    return script
+    return load_script("train")
 
 
-def _npy_maps(folder: Path, count: int, side: int = 32) -> Path:
-    import numpy as np
-
-    rng = np.random.default_rng(0)
-    folder.mkdir(parents=True, exist_ok=True)
-    for i in range(count):
-        obs = rng.random((side, side)) < 0.1
-        obs[side // 2, 2:-2] = True
-        np.save(folder / f"m{i}.npy", obs)
-    return folder
+_npy_maps = npy_map_folder
 
 
 TINY_SET = ["--dagger-rounds", "1", "--maps-per-round", "4", "--bc-epochs", "1", "--ppo-steps", "64",
