@@ -28,8 +28,8 @@ def resolve_device(name: str, flag: str = "--device") -> torch.device:
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
     if name.startswith("cuda"):
         if not torch.cuda.is_available():
-            raise InputError(f"{flag} {name}: torch sees no CUDA GPU on this machine "
-                             f"(torch {torch.__version__}, built for CUDA {torch.version.cuda}); use --device cpu or auto")
+            raise InputError(f"{flag} {name}: torch sees no CUDA GPU on this machine (torch {torch.__version__}, "
+                             f"built for CUDA {torch.version.cuda}); use --device cpu or auto")
         index = int(name[5:]) if ":" in name else 0
         if index >= torch.cuda.device_count():
             raise InputError(f"{flag} {name}: torch sees {torch.cuda.device_count()} CUDA GPU(s)")

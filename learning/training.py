@@ -200,7 +200,7 @@ def open_map_sets(cfg: TrainConfig) -> MixedMapSet | None:
 
 def _maps(cfg: TrainConfig, rng: np.random.Generator, per_family: int, seed0: int | None = None,
           sets: MixedMapSet | None = None):
-    """DAgger's maps of a round: ``per_family`` of each family, or ``per_family`` drawn from ``sets``' training parts."""
+    """DAgger's maps of a round: ``per_family`` of each family, or ``per_family`` drawn from ``sets``' train parts."""
     if sets is not None:
         return [sets.sample("train", rng) for _ in range(per_family)]
     out = []

@@ -36,7 +36,7 @@ def load_script(name: str):
 
 
 def npy_map_folder(folder: Path, count: int, side: int = 32, family: str = "forest") -> Path:
-    """``folder`` filled with ``count`` generated maps (seeds 0, 1, ...) as ``.npy`` files ``m0.npy``, ...: a map set."""
+    """``folder`` filled with ``count`` generated maps (seeds 0, 1, ...) as ``m0.npy``, ``m1.npy``, ...: a map set."""
     from planners.maps.generators import generate
 
     folder.mkdir(parents=True, exist_ok=True)
