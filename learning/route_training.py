@@ -113,6 +113,20 @@ def _tensors(examples) -> list[tuple[torch.Tensor, None, torch.Tensor]]:
              torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]
 
 
+def _on_device(data: list, device: torch.device) -> list:
+    """The example tensors moved to a GPU once, where they take less than half its free memory; else as they are.
+
+    Batches are then cut on the GPU; otherwise each batch is copied there when it is used.
+    """
+    if device.type != "cuda":
+        return data
+    need = sum(X.nbytes + Y.nbytes for X, _, Y in data)
+    free, _ = torch.cuda.mem_get_info(device)
+    if need >= free / 2:
+        return data
+    return [(X.to(device), None, Y.to(device)) for X, _, Y in data]
+
+
 def _group_batch(X: torch.Tensor, batch: int) -> int:
     """Maps per batch for a group of maps of one shape: ``batch``, fewer where the maps are large."""
     return max(1, min(batch, MAX_BATCH_BLOCKS // (X.shape[-1] * X.shape[-2])))
@@ -213,6 +227,8 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     del examples
     held_out = _tensors(make_examples(validation, [0] * len(validation), block, workers)) if validation else None
     deterministic(device)
+    data = _on_device(data, device)
+    held_out = _on_device(held_out, device) if held_out is not None else None
     net = RouteNet(block, channels, depth, attention, attention_level, trained_side=trained_side).to(device)
     opt = torch.optim.Adam(net.parameters(), lr)
     order = torch.Generator().manual_seed(seed)
