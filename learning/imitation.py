@@ -148,9 +148,10 @@ def behaviour_cloning(policy, data: Dataset, *, epochs: int, batch_size: int, lr
 
     ``mirror``: reflect a random half of each batch across the goal axis (windows' rows reversed,
     labels by :func:`mirror_labels`): the goal frame's one symmetry, free data. The vector features
-    do not change under it.
+    do not change under it. The data stays on the CPU; each batch moves to the policy's device.
     """
     gen = torch.Generator().manual_seed(seed)
+    device = policy.device
     opt = torch.optim.Adam(policy.parameters(), lr=lr)
     local = torch.as_tensor(data.local)
     vector = torch.as_tensor(data.vector)
@@ -169,9 +170,11 @@ def behaviour_cloning(policy, data: Dataset, *, epochs: int, batch_size: int, lr
                 flip = torch.rand(len(idx), generator=gen) < 0.5
                 obs["local"] = torch.where(flip[:, None, None, None], obs["local"].flip(2), obs["local"])
                 target = torch.where(flip, mirror_labels(target), target)
+            obs = {k: v.to(device) for k, v in obs.items()}
+            target = target.to(device)
             values, log_prob, _ = policy.evaluate_actions(obs, target)
             ce = -log_prob.mean()
-            v_loss = torch.nn.functional.mse_loss(values.flatten(), value[idx])
+            v_loss = torch.nn.functional.mse_loss(values.flatten(), value[idx].to(device))
             loss = ce + value_weight * v_loss
             opt.zero_grad()
             loss.backward()

@@ -1,20 +1,62 @@
-"""Training the route encoder: the grid search's cost-to-go as targets (training only, never at inference)."""
+"""Training the route encoder: the grid search's cost-to-go as targets (training only, never at inference).
+
+The targets are made on CPU worker processes (``workers``), map by map in a fixed order, so the
+tensors do not depend on how many workers made them; the encoder then trains on ``device`` (the CPU
+by default, a GPU where one is asked for).
+"""
 
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 import torch
 from torch import nn
 
+from learning.device import deterministic
 from learning.route import RouteNet, route_input, symmetry
-from planners.base.fileio import InputError, atomic_path, short_repr
+from planners.base.fileio import InputError, atomic_path, env_limit, short_repr
+from planners.base.problem import Problem
 from planners.maps.gridsearch import distance_field
+
+#: Environment variable that raises the largest map side, in blocks of one step, the encoder trains on.
+MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
+#: Default of that limit: 256 blocks (1,024 cells at the shipped block of 4). The axial attention's
+#: memory grows with the cube of the side; a 256-block map takes a few hundred MB a map in training.
+DEFAULT_MAX_BLOCKS = 256
+#: Most blocks one training batch holds (maps x blocks a map): 32 maps of 256 cells at a block of 4.
+#: Batches of larger maps hold fewer maps, down to one; the shipped recipe's batches (32 maps of 64
+#: and 128 cells) are below it.
+MAX_BATCH_BLOCKS = 32 * 64 * 64
+
+
+def max_blocks() -> int:
+    """The largest map side in blocks the encoder trains on (``SAMPLERGYM_MAX_ROUTE_BLOCKS``, default 256)."""
+    return env_limit(MAX_BLOCKS_ENV, DEFAULT_MAX_BLOCKS)
+
+
+def check_route_map(name: str, shape: tuple[int, int], block: int) -> None:
+    """Refuse a training map larger than ``max_blocks()`` blocks of ``block`` cells a side (``InputError``)."""
+    side = -(-max(shape) // block)
+    limit = max_blocks()
+    if side > limit:
+        raise InputError(f"map {name!r} is {shape[0]} x {shape[1]} cells: {side} blocks of {block} cells on its longer "
+                         f"side, more than the {limit} the route encoder trains on ({MAX_BLOCKS_ENV}); take a larger "
+                         f"step, downsample the map, or raise the limit")
+
+
+def default_workers() -> int:
+    """``min(cores this process may use, 8)``: the default number of target-making processes."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, 8))
 
 
 def cost_targets(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -> np.ndarray:
@@ -29,16 +71,83 @@ def cost_targets(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) 
     return pad
 
 
+def _example(task: tuple) -> tuple[str, int, np.ndarray, np.ndarray]:
+    """One training example: (problem name, larger map side, encoder input, float32 targets).
+
+    ``task`` is ``(problem, turn, block)``; the problem may be a zero-argument callable that makes
+    it (a generated map is then made in the worker, not sent to it).
+    """
+    problem, k, block = task
+    if not isinstance(problem, Problem):
+        problem = problem()
+    goal = problem.world.cell_of(problem.goal)
+    obs, goal = symmetry(problem.world.obstacles, goal, int(k))
+    check_route_map(problem.name, obs.shape, block)
+    return (problem.name, max(obs.shape), route_input(obs, goal, block),
+            cost_targets(obs, goal, block).astype(np.float32))
+
+
+def make_examples(problems: Sequence[Problem | Callable[[], Problem]], turns: Sequence[int], block: int,
+                  workers: int = 1) -> list[tuple[str, int, np.ndarray, np.ndarray]]:
+    """``_example`` of every problem under its turn, in the problems' order, on ``workers`` processes.
+
+    Each example depends only on its problem, turn and block, and they come back in order, so the
+    result is the same for any number of workers. With more than one, a pool of forked processes
+    makes them; it is started before any GPU work (a forked process must not inherit a CUDA context).
+    """
+    tasks = [(p, int(k), block) for p, k in zip(problems, turns, strict=True)]
+    if workers <= 1 or len(tasks) < 2:
+        return [_example(t) for t in tasks]
+    methods = multiprocessing.get_all_start_methods()
+    ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    with ctx.Pool(min(workers, len(tasks))) as pool:
+        return list(pool.imap(_example, tasks, chunksize=max(1, min(64, len(tasks) // (4 * workers)))))
+
+
+def _tensors(examples) -> list[tuple[torch.Tensor, None, torch.Tensor]]:
+    """Examples grouped by shape, in order of first appearance: (inputs, None, targets) per shape."""
+    by_size: dict[tuple[int, ...], list] = {}
+    for _, _, x, y in examples:
+        by_size.setdefault(y.shape, []).append((x, y))
+    return [(torch.tensor(np.stack([e[0] for e in v])), None,
+             torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]
+
+
+def _on_device(data: list, device: torch.device) -> list:
+    """The example tensors moved to a GPU once, where they take less than half its free memory; else as they are.
+
+    Batches are then cut on the GPU; otherwise each batch is copied there when it is used.
+    """
+    if device.type != "cuda":
+        return data
+    need = sum(X.nbytes + Y.nbytes for X, _, Y in data)
+    free, _ = torch.cuda.mem_get_info(device)
+    if need >= free / 2:
+        return data
+    return [(X.to(device), None, Y.to(device)) for X, _, Y in data]
+
+
+def _group_batch(X: torch.Tensor, batch: int) -> int:
+    """Maps per batch for a group of maps of one shape: ``batch``, fewer where the maps are large."""
+    return max(1, min(batch, MAX_BATCH_BLOCKS // (X.shape[-1] * X.shape[-2])))
+
+
 #: What a route training checkpoint holds besides tensors: the recipe it belongs to and how far it got.
 CHECKPOINT_VERSION = 1
+_CHECKPOINT_KEYS = {"version", "epoch", "recipe", "log", "net", "optimizer", "order", "torch_rng"}
 
 
 def _save_checkpoint(path: Path, net: RouteNet, opt: torch.optim.Optimizer, order: torch.Generator, epoch: int,
-                     recipe: dict, log_lines: list[str]) -> None:
-    """Commit the state after ``epoch`` (atomically: a unique temporary name, renamed into place)."""
+                     recipe: dict, log_lines: list[str], best: dict | None = None) -> None:
+    """Commit the state after ``epoch`` (atomically: a unique temporary name, renamed into place).
+
+    ``best`` (runs with validation maps): the epoch, validation loss and weights of the best epoch so far.
+    """
     blob = {"version": CHECKPOINT_VERSION, "epoch": epoch, "recipe": json.dumps(recipe, sort_keys=True),
             "log": list(log_lines), "net": net.state_dict(), "optimizer": opt.state_dict(),
             "order": order.get_state(), "torch_rng": torch.get_rng_state()}
+    if best is not None:
+        blob["best"] = best
     with atomic_path(path) as tmp:
         torch.save(blob, tmp)
 
@@ -50,50 +159,88 @@ def _load_checkpoint(path: Path, recipe: dict) -> dict:
     except Exception as exc:  # noqa: BLE001 - whatever torch raises on a bad file, name the file
         raise InputError(f"{path} is not a route training checkpoint: {type(exc).__name__}: "
                          f"{short_repr(str(exc))}") from None
-    keys = {"version", "epoch", "recipe", "log", "net", "optimizer", "order", "torch_rng"}
-    if not isinstance(blob, dict) or set(blob) != keys or blob["version"] != CHECKPOINT_VERSION:
+    if not isinstance(blob, dict) or set(blob) - {"best"} != _CHECKPOINT_KEYS or blob["version"] != CHECKPOINT_VERSION:
         raise InputError(f"{path} is not a route training checkpoint of this version; start again without --resume")
     if blob["recipe"] != json.dumps(recipe, sort_keys=True):
         raise InputError(f"{path} belongs to another recipe ({short_repr(blob['recipe'], 200)}); resume with the "
                          "same options, or start again without --resume")
     if not isinstance(blob["epoch"], int) or blob["epoch"] < 0 or not isinstance(blob["log"], list):
         raise InputError(f"{path}: its epoch or log is damaged; start again without --resume")
+    best = blob.get("best")
+    if best is not None and not (isinstance(best, dict) and isinstance(best.get("epoch"), int)
+                                 and isinstance(best.get("loss"), float) and isinstance(best.get("net"), dict)):
+        raise InputError(f"{path}: its best epoch is damaged; start again without --resume")
     return blob
 
 
-def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0,
-                    attention_level: int = 0, epochs: int = 40, batch: int = 32, lr: float = 1e-3,
-                    augment: bool = False, seed: int = 0, log=print, checkpoint: str | os.PathLike | None = None,
-                    resume: bool = False) -> RouteNet:
+@torch.no_grad()
+def _validation_loss(net: RouteNet, data, batch: int, device: torch.device) -> float:
+    """Mean smooth-L1 error per map on the validation examples (as the training loss, no turns)."""
+    net.eval()
+    total, count = 0.0, 0
+    for X, _, Yc in data:
+        step = _group_batch(X, batch)
+        for i in range(0, len(X), step):
+            out = net(X[i:i + step].to(device))
+            yc = Yc[i:i + step].to(device)
+            known = torch.isfinite(yc)
+            total += nn.functional.smooth_l1_loss(out[known], yc[known]).item() * len(out)
+            count += len(out)
+    return total / count
+
+
+def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, block: int = 4, channels: int = 24,
+                    depth: int = 4, attention: int = 0, attention_level: int = 0, epochs: int = 40, batch: int = 32,
+                    lr: float = 1e-3, augment: bool = False, seed: int = 0, log=print,
+                    checkpoint: str | os.PathLike | None = None, resume: bool = False,
+                    validation: Sequence[Problem] | None = None, recipe_extra: dict | None = None,
+                    workers: int = 1, device: str | torch.device = "cpu") -> RouteNet:
     """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
     The loss is the smooth-L1 error of the predicted cost-to-go, in steps, over the free cells that reach
     the goal. With ``augment`` every map is first turned by one of the square's 8 symmetries, drawn from
     ``seed``: the generators' fixed orientations (start and goal corners, trap openings) stop being
-    something to learn. Same seed, same machine: the same weights.
+    something to learn. Same seed, same machine, same device: the same weights, whatever ``workers``.
+
+    A problem may be given as a zero-argument callable that makes it (on a worker). Batches hold
+    ``batch`` maps of one padded shape, fewer where the maps are large (``MAX_BATCH_BLOCKS``); a map
+    larger than ``max_blocks()`` blocks a side is refused before training.
+
+    With ``validation`` problems the loss on them (unturned) is measured after every epoch, logged,
+    and the weights of the epoch with the lowest validation loss are returned (``net.chosen_epoch``).
+    Without, the last epoch's. ``recipe_extra`` joins the recipe a checkpoint must match (what the
+    problems were drawn from). ``device``: where the encoder trains; the targets are made on
+    ``workers`` CPU processes first (``make_examples``).
 
     With ``checkpoint`` (a file path) the weights, the optimiser and the batch order's generator are
     committed there after every epoch; with ``resume`` a run continues from that file to the same
     weights an uninterrupted run reaches (a checkpoint of another recipe is refused; more ``epochs``
     than the interrupted run asked for continue it further).
     """
+    device = torch.device(device)
     torch.manual_seed(seed)
     turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
-    by_size: dict[tuple[int, int], list] = {}
-    for p, k in zip(problems, turns, strict=True):
-        goal = p.world.cell_of(p.goal)
-        obs, goal = symmetry(p.world.obstacles, goal, int(k))
-        by_size.setdefault(obs.shape, []).append((route_input(obs, goal, block), cost_targets(obs, goal, block)))
-    data = [(torch.tensor(np.stack([e[0] for e in v])), None,
-             torch.tensor(np.stack([e[1] for e in v]), dtype=torch.float32)) for v in by_size.values()]
-    net = RouteNet(block, channels, depth, attention, attention_level,
-                   trained_side=max(max(p.world.obstacles.shape) for p in problems))
+    examples = make_examples(problems, turns, block, workers)
+    names = [e[0] for e in examples]
+    trained_side = max(e[1] for e in examples)
+    data = _tensors(examples)
+    del examples
+    held_out = _tensors(make_examples(validation, [0] * len(validation), block, workers)) if validation else None
+    deterministic(device)
+    data = _on_device(data, device)
+    held_out = _on_device(held_out, device) if held_out is not None else None
+    net = RouteNet(block, channels, depth, attention, attention_level, trained_side=trained_side).to(device)
     opt = torch.optim.Adam(net.parameters(), lr)
     order = torch.Generator().manual_seed(seed)
     recipe = {"block": block, "channels": channels, "depth": depth, "attention": attention,
               "attention_level": attention_level, "batch": batch, "lr": lr, "augment": augment, "seed": seed,
-              "maps": [p.name for p in problems]}  # not the epochs: each epoch's weights do not depend on them
+              "maps": names}  # not the epochs: each epoch's weights do not depend on them
+    if validation:
+        recipe["validation"] = [p.name for p in validation]
+    if recipe_extra:
+        recipe.update(recipe_extra)
     lines: list[str] = []
+    best: dict | None = None
     first = 0
     if resume and checkpoint is not None and Path(checkpoint).is_file():
         state = _load_checkpoint(Path(checkpoint), recipe)
@@ -104,7 +251,7 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
             torch.set_rng_state(state["torch_rng"])
         except (RuntimeError, TypeError, ValueError, KeyError) as exc:
             raise InputError(f"{checkpoint}: its state does not fit this recipe: {short_repr(str(exc))}") from None
-        first, lines = state["epoch"], [str(s) for s in state["log"]]
+        first, lines, best = state["epoch"], [str(s) for s in state["log"]], state.get("best")
         if first > epochs:
             raise InputError(f"{checkpoint} holds {first} epochs, more than the {epochs} asked for")
         for line in lines:
@@ -113,22 +260,35 @@ def train_route_net(problems: Sequence, *, block: int = 4, channels: int = 24, d
     for epoch in range(first, epochs):
         net.train()
         batches = [(i, idx) for i, (X, _, _) in enumerate(data)
-                   for idx in torch.randperm(len(X), generator=order).split(batch)]
+                   for idx in torch.randperm(len(X), generator=order).split(_group_batch(X, batch))]
         total = 0.0
         for j in torch.randperm(len(batches), generator=order).tolist():
             i, idx = batches[j]
             X, _, Yc = data[i]
-            out = net(X[idx])
-            yc = Yc[idx]
+            out = net(X[idx].to(device))
+            yc = Yc[idx].to(device)
             known = torch.isfinite(yc)
             loss = nn.functional.smooth_l1_loss(out[known], yc[known])
             opt.zero_grad()
             loss.backward()
             opt.step()
             total += loss.item() * len(idx)
-        line = f"epoch {epoch}: loss {total / sum(len(d[0]) for d in data):.3f} ({time.perf_counter() - t0:.0f} s)"
+        line = f"epoch {epoch}: loss {total / sum(len(d[0]) for d in data):.3f}"
+        if held_out is not None:
+            score = _validation_loss(net, held_out, batch, device)
+            line += f", validation {score:.3f}"
+            if best is None or score < best["loss"]:
+                best = {"epoch": epoch, "loss": score,
+                        "net": {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}}
+        line += f" ({time.perf_counter() - t0:.0f} s)"
         lines.append(line)
         log(line)
         if checkpoint is not None:
-            _save_checkpoint(Path(checkpoint), net, opt, order, epoch + 1, recipe, lines)
+            _save_checkpoint(Path(checkpoint), net, opt, order, epoch + 1, recipe, lines, best)
+    net = net.cpu()
+    net.chosen_epoch = epochs - 1
+    if best is not None:
+        net.load_state_dict(best["net"])
+        net.chosen_epoch = best["epoch"]
+        log(f"chose epoch {best['epoch']}: validation loss {best['loss']:.3f}")
     return net.eval()

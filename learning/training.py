@@ -10,11 +10,14 @@ checkpoint is whichever of the imitation and PPO policies does better on a valid
 
 Map seeds: the splits of ``planners.maps.generators`` (``TRAIN_SEEDS``, ``VALIDATION_SEED0``;
 evaluation uses ``TUNING_SEED0`` and ``TEST_SEED0``), so no evaluated map was ever trained on.
+With ``map_set`` (map sets, ``planners.maps.mapset``) the training maps come from the sets' training
+parts (mixed by ``map_set_weight``) and the validation maps from their validation parts instead.
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import os
@@ -30,6 +33,7 @@ from stable_baselines3.common.logger import KVWriter, Logger, make_output_format
 from tqdm.auto import tqdm
 
 from learning.checkpoint import read_sb3_zip
+from learning.device import deterministic
 from learning.fast_policy import FastActor
 from learning.imitation import Dataset, behaviour_cloning, collect
 from learning.policy_sampler import OBS_VERSION, PolicySampler
@@ -44,6 +48,8 @@ from planners.base.fileio import (
     short_repr,
 )
 from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, check_size, generate
+from planners.maps.gridsearch import distance_field
+from planners.maps.mapset import MapSet, MixedMapSet
 from planners.tools.parallel import Backend, LocalBackend
 
 
@@ -94,6 +100,8 @@ class TrainConfig:
     conv_channels: tuple[int, ...] = (8, 16)
     vector_dim: int = 16
     torch_threads: int = 1
+    map_set: tuple[str, ...] = ()
+    map_set_weight: tuple[float, ...] = ()
     extra: dict = field(default_factory=dict)
 
     def sampler_config(self) -> dict:
@@ -111,7 +119,7 @@ class TrainConfig:
         unknown = set(raw) - set(cls.__dataclass_fields__)
         if unknown:
             raise InputError(f"{path}: unknown config keys {short_repr(sorted(unknown))}")
-        for k in ("families", "sizes", "dagger_betas", "conv_channels"):
+        for k in ("families", "sizes", "dagger_betas", "conv_channels", "map_set", "map_set_weight"):
             if k in raw:
                 if not isinstance(raw[k], list):
                     raise InputError(f"{path}: {k} = {raw[k]!r}, expected a list")
@@ -150,13 +158,51 @@ class TrainConfig:
                 check_number(source, key, v, integer=integer, low=low, high=high)
         for v in self.sizes:
             check_size(v, f"{source}: sizes")
+        if not isinstance(self.map_set, tuple) or any(not isinstance(m, str) or not m for m in self.map_set):
+            raise InputError(f"{source}: map_set = {self.map_set!r}, expected folders, manifests or map set names")
+        if self.map_set_weight and len(self.map_set_weight) != len(self.map_set):
+            raise InputError(f"{source}: map_set_weight = {list(self.map_set_weight)!r}: {len(self.map_set_weight)} "
+                             f"weights for {len(self.map_set)} map sets; give one per map set, in the same order")
+        for v in self.map_set_weight:
+            check_number(source, "map_set_weight", v, low=0.0, low_open=True)
         if len(self.conv_channels) != 2:
             raise InputError(f"{source}: conv_channels = {list(self.conv_channels)!r}, expected two widths")
         if not isinstance(self.extra, dict):
             raise InputError(f"{source}: extra = {self.extra!r}, expected an object")
 
 
-def _maps(cfg: TrainConfig, rng: np.random.Generator, per_family: int, seed0: int | None = None):
+def open_map_sets(cfg: TrainConfig) -> MixedMapSet | None:
+    """``cfg.map_set`` opened and mixed by ``cfg.map_set_weight`` (None without map sets), checked for training.
+
+    Each set needs a training and a validation part, and the planner's step (``step_size``, world
+    units) must span at least one cell of every map in them.
+
+    Raises:
+        InputError: Naming the set, the map and the value.
+    """
+    if not cfg.map_set:
+        return None
+    sets = []
+    for spec in cfg.map_set:
+        try:
+            ms = MapSet.open(spec)
+            ms.validate(["train", "validation"])
+        except InputError as exc:
+            raise InputError(f"map_set {spec}: {exc}") from None
+        rec = ms.record()
+        for name, m in (rec.get("maps") or {}).items():
+            if name in (*ms.maps("train"), *ms.maps("validation")) and cfg.step_size < m["resolution"]:
+                raise InputError(f"map_set {spec}: step_size {cfg.step_size:g} (world units) is less than one cell "
+                                 f"of map {name!r} ({m['resolution']:g} world units); give a step of at least a cell")
+        sets.append(ms)
+    return MixedMapSet(sets, cfg.map_set_weight or None)
+
+
+def _maps(cfg: TrainConfig, rng: np.random.Generator, per_family: int, seed0: int | None = None,
+          sets: MixedMapSet | None = None):
+    """DAgger's maps of a round: ``per_family`` of each family, or ``per_family`` drawn from ``sets``' train parts."""
+    if sets is not None:
+        return [sets.sample("train", rng) for _ in range(per_family)]
     out = []
     for f in cfg.families:
         for i in range(per_family):
@@ -166,17 +212,22 @@ def _maps(cfg: TrainConfig, rng: np.random.Generator, per_family: int, seed0: in
     return out
 
 
-def validation_score(actor: FastActor, cfg: TrainConfig, backend: Backend | None = None) -> tuple[float, dict]:
+def validation_score(actor: FastActor, cfg: TrainConfig, backend: Backend | None = None,
+                     sets: MixedMapSet | None = None) -> tuple[float, dict]:
     """The policy ``actor``'s :func:`sampler_validation_score`."""
-    return sampler_validation_score(PolicySampler(actor, cfg.sampler_config()), cfg, backend)
+    return sampler_validation_score(PolicySampler(actor, cfg.sampler_config()), cfg, backend, sets)
 
 
-def sampler_validation_score(sampler: Sampler, cfg: TrainConfig,
-                             backend: Backend | None = None) -> tuple[float, dict]:
+def sampler_validation_score(sampler: Sampler, cfg: TrainConfig, backend: Backend | None = None,
+                             sets: MixedMapSet | None = None) -> tuple[float, dict]:
     """Geometric mean over families of ``sampler``'s median iterations / lower bound on validation maps.
 
-    The runs go to ``backend`` (default: this process) with the sampler shipped once per worker.
+    With ``sets`` (``open_map_sets``): over the groups of the sets' validation queries (a folder set
+    is one group), the first ``validation_maps`` queries of each. The runs go to ``backend``
+    (default: this process) with the sampler shipped once per worker.
     """
+    if sets is not None:
+        return _set_validation_score(sampler, cfg, backend, sets)
     tasks = [(f, i) for f in cfg.families for i in range(cfg.validation_maps)]
     context = {"sampler": sampler, "cfg": cfg}
     ratios = (backend or LocalBackend()).map(_validation_run, tasks, context=context)
@@ -194,6 +245,36 @@ def _validation_run(task: tuple[str, int], context: dict) -> float:
     return r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0
 
 
+def _set_validation_score(sampler: Sampler, cfg: TrainConfig, backend: Backend | None,
+                          sets: MixedMapSet) -> tuple[float, dict]:
+    """``sampler_validation_score`` on the validation parts of map sets."""
+    tasks, taken = [], {}
+    for j, ms in enumerate(sets.sets):
+        for q in ms.queries("validation"):
+            group = q.group if len(sets.sets) == 1 else f"{ms.name}: {q.group}"
+            if taken.get(group, 0) < cfg.validation_maps:
+                taken[group] = taken.get(group, 0) + 1
+                tasks.append((group, j, q))
+    ratios = (backend or LocalBackend()).map(_set_validation_run, tasks,
+                                             context={"sampler": sampler, "cfg": cfg, "sets": sets})
+    per_group = {g: float(np.median([r for (h, _, _), r in zip(tasks, ratios, strict=True) if h == g]))
+                 for g in taken}
+    return float(np.exp(np.mean(np.log(list(per_group.values()))))), per_group
+
+
+def _set_validation_run(task: tuple, context: dict) -> float:
+    """Iterations / lower bound of the sampler on one validation query of a map set (20,000 if unsolved)."""
+    _, j, q = task
+    cfg = context["cfg"]
+    p = context["sets"].sets[j].problem(q)
+    if p.reference_length is None:  # a drawn query or a queries file: the grid search's octile length
+        grid = p.world
+        length = distance_field(grid.obstacles, grid.cell_of(p.goal))[grid.cell_of(p.start)] * grid.resolution
+        p = dataclasses.replace(p, reference_length=float(length))
+    r = RRT(p, step_size=cfg.step_size, sampler=context["sampler"], seed=q.key).solve(max_iterations=20000)
+    return r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0
+
+
 class _MixedFamilies:
     """Training map source: a random family and size each episode, seeds from the training range."""
 
@@ -208,16 +289,21 @@ class _MixedFamilies:
         return generate(family, int(np_random.integers(*TRAIN_SEEDS)), size, goal_tolerance=self.goal_tolerance)
 
 
-def make_env(cfg: TrainConfig, seed: int):
-    """The vectorised training environment (guided actions, egocentric observations, scaled reward)."""
+def make_env(cfg: TrainConfig, seed: int, sets: MixedMapSet | None = None):
+    """The vectorised training environment (guided actions, egocentric observations, scaled reward).
+
+    Episodes come from the generated families, or from ``sets``' training parts.
+    """
     import gymnasium as gym
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv
 
     from envs import SamplerEnv
+    from envs.sources import MapSetSource
 
     def factory():
-        env = SamplerEnv(_MixedFamilies(cfg), planner="rrt", step_size=cfg.step_size,
+        source = _MixedFamilies(cfg) if sets is None else MapSetSource(sets, "train")
+        env = SamplerEnv(source, planner="rrt", step_size=cfg.step_size,
                          max_iterations=cfg.max_iterations, action_mode="guided", observation="egocentric",
                          uniform_floor=cfg.uniform_floor, shaping=cfg.shaping, shaping_gamma=cfg.gamma)
         return gym.wrappers.TransformReward(env, lambda r: r * cfg.reward_scale)
@@ -387,11 +473,14 @@ def _logger(run: Path, keep_rows: int | None, stdout: bool) -> tuple[_RunLogger,
 
 
 def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False, progress: bool = True,
-          log_stdout: bool = True, backend: Backend | None = None) -> Path:
+          log_stdout: bool = True, backend: Backend | None = None, device: str | torch.device = "cpu") -> Path:
     """Run (or resume) training; returns the path of the final checkpoint ``<run>/final.zip``.
 
     DAgger's rollouts and the validation runs go to ``backend`` (default: this process); the weights
-    do not depend on it.
+    do not depend on it. The networks train on ``device`` (a torch device; ``learning.device.resolve_device``
+    turns ``"auto"`` into one); the same seed gives the same weights on the same machine and device.
+    With ``cfg.map_set`` the sets are opened and checked (``open_map_sets``) before the lock is
+    taken, and their record (split rule and parts) is written to ``<run>/map_sets.json``.
 
     The run folder ``<out_dir>/<name>`` is locked while the run writes it (:func:`run_lock`): a second
     run on the same folder gets a ``LockedError`` naming the first.
@@ -401,13 +490,15 @@ def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False,
     (``checkpoint_every`` steps) starts from a fresh, seeded environment reset and RNG state.
     """
     cfg.check()
+    sets = open_map_sets(cfg)
     run = Path(out_dir) / cfg.name
     with run_lock(run, f"training {cfg.name} (seed {cfg.seed})"):
-        return _train(cfg, run, resume=resume, progress=progress, log_stdout=log_stdout, backend=backend)
+        return _train(cfg, run, resume=resume, progress=progress, log_stdout=log_stdout, backend=backend,
+                      sets=sets, device=torch.device(device))
 
 
 def _train(cfg: TrainConfig, run: Path, *, resume: bool, progress: bool, log_stdout: bool,
-           backend: Backend | None) -> Path:
+           backend: Backend | None, sets: MixedMapSet | None, device: torch.device) -> Path:
     """``train``'s work, with the run folder's lock held."""
     for stale in (*run.glob(".*.tmp*"), *run.glob("tb/.*.tmp*")):  # half-written files of a killed run
         stale.unlink()
@@ -423,15 +514,18 @@ def _train(cfg: TrainConfig, run: Path, *, resume: bool, progress: bool, log_std
         state = {"phase": "bc", "round": -1, "ppo_steps": 0, "log_rows": 0}
         run.mkdir(parents=True, exist_ok=True)
         atomic_write_text(run / "config.json", json.dumps(asdict(cfg), indent=2) + "\n")
+        if sets is not None:
+            atomic_write_text(run / "map_sets.json", json.dumps(sets.record(), indent=1) + "\n")
     torch.set_num_threads(cfg.torch_threads)
     torch.manual_seed(cfg.seed)
-    env = make_env(cfg, cfg.seed)
+    deterministic(device)
+    env = make_env(cfg, cfg.seed, sets)
     # a resumed run keeps its events up to the checkpoint; a fresh one in an old run's folder, none
     _trim_events(run / "tb", state.get("log_time") if resume else 0.0)
     logger, csv_log = _logger(run, state["log_rows"] if resume else None, log_stdout)
     try:
         phases = _TrainingRun(cfg, run, state, env, logger, csv_log, resume=resume, progress=progress,
-                              backend=backend)
+                              backend=backend, sets=sets, device=device)
         phases.dagger()
         phases.ppo()
         return phases.select()
@@ -457,22 +551,23 @@ class _TrainingRun:
     """
 
     def __init__(self, cfg: TrainConfig, run: Path, state: dict, env, logger: _RunLogger, csv_log: _ResumableCSV, *,
-                 resume: bool, progress: bool, backend: Backend | None = None) -> None:
+                 resume: bool, progress: bool, backend: Backend | None = None, sets: MixedMapSet | None = None,
+                 device: torch.device = torch.device("cpu")) -> None:
         from stable_baselines3 import PPO
 
         from learning.extractor import policy_kwargs
 
         self.cfg, self.run, self.state, self.resume, self.progress = cfg, run, state, resume, progress
-        self.backend = backend
+        self.backend, self.sets = backend, sets
         self.logger, self.csv_log = logger, csv_log
         if resume:  # our own run's checkpoint: SB3's full load (it unpickles; never point it at others' files)
-            self.model = PPO.load(run / "checkpoint.zip", env=env, device="cpu")
+            self.model = PPO.load(run / "checkpoint.zip", env=env, device=device)
         else:
             arch = policy_kwargs(cfg.features_dim, cfg.hidden, cfg.conv_channels, cfg.vector_dim)
             self.model = PPO("MultiInputPolicy", env, policy_kwargs=arch,
                              learning_rate=cfg.ppo_lr, n_steps=cfg.ppo_n_steps, batch_size=cfg.ppo_batch,
                              n_epochs=cfg.ppo_epochs, clip_range=cfg.ppo_clip, ent_coef=cfg.ppo_ent_coef,
-                             gamma=cfg.gamma, seed=cfg.seed, device="cpu", verbose=0)
+                             gamma=cfg.gamma, seed=cfg.seed, device=device, verbose=0)
         self.model.set_logger(logger)
 
     def log(self, stats: dict, step: int) -> None:
@@ -493,7 +588,7 @@ class _TrainingRun:
         rounds = range(self.state["round"] + 1, cfg.dagger_rounds) if self.state["phase"] == "bc" else range(0)
         for k in tqdm(rounds, desc="DAgger", disable=not self.progress):
             rng = np.random.default_rng([cfg.seed, k])
-            problems = _maps(cfg, rng, cfg.maps_per_round)
+            problems = _maps(cfg, rng, cfg.maps_per_round, sets=self.sets)
             actor = FastActor(model.policy.state_dict()) if k > 0 else None
             beta = cfg.dagger_betas[min(k, len(cfg.dagger_betas) - 1)]
             t0 = time.perf_counter()
@@ -506,7 +601,7 @@ class _TrainingRun:
             stats = behaviour_cloning(model.policy, data, epochs=cfg.bc_epochs, batch_size=cfg.bc_batch,
                                       lr=cfg.bc_lr, seed=cfg.seed + k, value_weight=0.0 if cfg.shaping else 0.5,
                                       mirror=cfg.mirror)
-            score, fam = validation_score(FastActor(model.policy.state_dict()), cfg, self.backend)
+            score, fam = validation_score(FastActor(model.policy.state_dict()), cfg, self.backend, self.sets)
             self.log({**stats, "dagger/round": k, "dagger/beta": beta, "dagger/samples": len(data),
                       "dagger/median_iterations": float(np.median(its)),
                       "dagger/collect_seconds": time.perf_counter() - t0,
@@ -543,9 +638,9 @@ class _TrainingRun:
     def select(self) -> Path:
         """Keep PPO's or imitation's weights, whichever scores better on the validation maps; write ``final.zip``."""
         cfg, model = self.cfg, self.model
-        ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg, self.backend)
+        ppo_score, ppo_fam = validation_score(FastActor(model.policy.state_dict()), cfg, self.backend, self.sets)
         _, imitation_params = read_sb3_zip(self.run / "imitation.zip")
-        bc_score, bc_fam = validation_score(FastActor(imitation_params), cfg, self.backend)
+        bc_score, bc_fam = validation_score(FastActor(imitation_params), cfg, self.backend, self.sets)
         chosen = "ppo" if ppo_score <= bc_score else "imitation"
         summary = {"chosen": chosen, "validation_ppo": ppo_score, "validation_imitation": bc_score,
                    "validation_ppo_families": ppo_fam, "validation_imitation_families": bc_fam}

@@ -4,6 +4,7 @@
     python scripts/train.py --name mine --ppo-steps 100000    # variations
     python scripts/train.py --resume                          # continue an interrupted run
     python scripts/train.py --backend ray --address auto      # rollouts and validation on your Ray cluster
+    python scripts/train.py --map-set my_maps --step-size 0.2 # your maps (docs/map-sets.md)
     tensorboard --logdir runs/                                # curves
 
 Writes runs/<name>/{config.json, checkpoint.zip, imitation.zip, final.zip, state.json, tb/}; the run folder
@@ -15,6 +16,15 @@ steps) whole, and --resume continues from it to the same weights an uninterrupte
 resume from a run someone else sent you (load their policy with learning.PolicySampler.load, which
 reads JSON and tensors only). --export copies final.zip to a path of your choice (e.g.
 learning/data/guided.zip, with its config beside it as JSON).
+
+--map-set DIR_OR_SPEC (repeatable, mixed by --map-set-weight, one weight per set) trains on the
+training parts of map sets (docs/map-sets.md) instead of the generated families: each DAgger round
+draws --maps-per-round queries from them, PPO's episodes come from them, and the validation runs use
+the first --validation-maps queries of each set's validation part. --step-size is then in the maps'
+world units (it must span at least one cell of every map), and each map's goal tolerance is its
+set's (--goal-tolerance applies to the generated families); runs/<name>/map_sets.json records the
+sets' split rule and parts. --device auto|cpu|cuda (Stable-Baselines3's convention; default auto:
+CUDA when torch sees it) says where the networks train; rollouts and validation stay on the CPU.
 """
 
 from __future__ import annotations
@@ -26,8 +36,9 @@ import sys
 import time
 from pathlib import Path
 
+from learning.device import DEVICES, resolve_device
 from learning.evaluation import worker_init
-from learning.training import TrainConfig, read_state, train
+from learning.training import TrainConfig, open_map_sets, read_state, train
 from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, check_output_place
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
@@ -49,6 +60,8 @@ def main(argv=None) -> int:
     ap.add_argument("--resume", action="store_true")
     ap.add_argument("--export", type=Path, help="copy final.zip here (and its config as .json beside it)")
     ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--device", default="auto", metavar="|".join(DEVICES),
+                    help="where the networks train (default auto: CUDA when torch sees it, else the CPU)")
     add_backend_arguments(ap, processes=1, processes_help="workers for them (1: this process)",
                           backend_help="where DAgger's rollouts and the validation runs execute (the weights do not "
                                        "depend on it)")
@@ -56,7 +69,11 @@ def main(argv=None) -> int:
         if f.name == "extra":
             continue
         flag = "--" + f.name.replace("_", "-")
-        if f.type in ("tuple[str, ...]", "tuple[int, ...]", "tuple[float, ...]"):
+        if f.name in ("map_set", "map_set_weight"):  # repeatable: one set (and weight) a flag
+            ap.add_argument(flag, action="append", type=float if f.name == "map_set_weight" else str,
+                            help="a map set to train on (repeat to mix)" if f.name == "map_set" else
+                            "one weight per --map-set (default equal)")
+        elif f.type in ("tuple[str, ...]", "tuple[int, ...]", "tuple[float, ...]"):
             ap.add_argument(flag, nargs="+",
                             help=f"default {f.default!r}" if f.default is not dataclasses.MISSING else None)
         elif f.type == "bool":
@@ -71,10 +88,16 @@ def main(argv=None) -> int:
         changes = {}
         for f in dataclasses.fields(TrainConfig):
             v = getattr(args, f.name, None)
-            if v is not None and f.name != "extra":
+            if v is not None and f.name in ("map_set", "map_set_weight"):
+                changes[f.name] = tuple(v)
+            elif v is not None and f.name != "extra":
                 changes[f.name] = tuple(type(getattr(cfg, f.name)[0])(x) for x in v) if isinstance(v, list) else v
         cfg = dataclasses.replace(cfg, **changes)
         cfg.check("command line" if not args.config else f"{args.config} with the command line's flags")
+        device = resolve_device(args.device)
+        sets = open_map_sets(cfg)
+        if sets is not None:
+            print(sets.describe(), flush=True)
         check_output_place(args.out / cfg.name, "--out", need_bytes=NEED_BYTES)
         if args.export:
             check_output_place(args.export, "--export", folder=False)
@@ -91,7 +114,7 @@ def main(argv=None) -> int:
         return 2
     try:
         final = train(cfg, args.out, resume=args.resume, progress=not args.no_progress, log_stdout=False,
-                      backend=backend)
+                      backend=backend, device=device)
     except KeyboardInterrupt:
         try:
             state = read_state(run)

@@ -15,21 +15,39 @@ built beside ``<out>`` and swapped into place whole, so a kill leaves the old pa
 While it trains, ``<out>/checkpoint.pt`` holds the state after the last finished epoch, and
 ``--resume`` continues from it to the same weights an uninterrupted run reaches. ``<out>`` is locked
 while a run writes it (``.<out>.lock`` beside it): a second run on it exits 2 naming the first.
-One torch thread: the same seed on the same machine gives the same weights.
+One torch thread: the same seed on the same machine and device gives the same weights.
+
+Your own maps: ``--map-set DIR`` (a folder of maps, a manifest ``.json`` or a built-in set such as
+``generated``; see docs/map-sets.md) trains on the training part of the set and keeps the epoch with
+the lowest loss on its validation part; several ``--map-set`` flags mix sets, drawn by
+``--map-set-weight`` (one per set, default equal). ``--maps`` queries are drawn from the training
+parts, seeded by ``--seed``; route.json records each set's split rule and parts. One planner step is
+``--step`` cells of every map (in world units, ``--step`` times the map's resolution), or give
+``--step-size`` in world units: it must come to the same whole number of cells on every map.
+
+    python scripts/train_route.py --map-set tests/data/ros --maps 200 --epochs 5 --out runs/ros
+
+``--device auto|cpu|cuda`` (Stable-Baselines3's convention: ``auto`` takes a GPU when torch sees one)
+says where the encoder trains; the targets (grid searches) are made first on ``--workers`` CPU
+processes, map by map in a fixed order, so the weights do not depend on the worker count.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
+import math
 import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import torch
 
+from learning.device import DEVICES, resolve_device
 from learning.route import RouteNet, save_route_net
-from learning.route_training import train_route_net
+from learning.route_training import check_route_map, default_workers, train_route_net
 from planners.base.fileio import (
     InputError,
     atomic_write_bytes,
@@ -40,6 +58,7 @@ from planners.base.fileio import (
     run_lock,
 )
 from planners.maps.generators import FAMILIES, TRAIN_SEEDS, check_size, generate
+from planners.maps.mapset import MapSet, MixedMapSet
 
 #: Free disk a run needs: the encoder and its checkpoint are a few MB each.
 NEED_BYTES = 50 * 2**20
@@ -59,6 +78,19 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--augment", action=argparse.BooleanOptionalAction, default=True,
                     help="turn each map by one of the square's 8 symmetries (default on)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--map-set", action="append", metavar="DIR_OR_SPEC",
+                    help="train on this map set's training part, choose on its validation part (repeat to mix "
+                         "sets); default the generated families at --size")
+    ap.add_argument("--map-set-weight", type=float, action="append", metavar="W",
+                    help="one weight per --map-set: how often a training query comes from it (default equal)")
+    ap.add_argument("--split-seed", type=int, help="split seed of folder and manifest map sets (default theirs: 0)")
+    ap.add_argument("--step-size", type=float, metavar="WORLD_UNITS",
+                    help="with --map-set: the planner's step in world units; it sets --step to the cells it "
+                         "comes to on every map (one number for all of them)")
+    ap.add_argument("--device", default="auto", metavar="|".join(DEVICES),
+                    help="where the encoder trains (default auto: CUDA when torch sees it, else the CPU)")
+    ap.add_argument("--workers", type=int, default=default_workers(),
+                    help="CPU processes that make the training targets (default min(cores, 8))")
     ap.add_argument("--out", type=Path, default=Path("runs/route"))
     ap.add_argument("--resume", action="store_true", help="continue the run in --out from its last finished epoch")
     ap.add_argument("--export", type=Path, help="also copy the encoder here (and its .json beside it)")
@@ -66,16 +98,32 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _check(args) -> None:
-    """Every argument and output place, before any map is generated (``InputError`` naming the flag)."""
-    check_int_flags(args, ("maps", "epochs", "channels", "depth", "step"))
+    """Every argument and output place, before any map is generated (``InputError`` naming the flag).
+
+    Opens the map sets (each checks its maps and queries) into ``args.sets``, sets ``args.step`` from
+    ``--step-size`` and resolves ``--device`` into ``args.torch_device``.
+    """
+    check_int_flags(args, ("maps", "epochs", "channels", "depth", "step", "workers"))
     check_int_flags(args, ("attention", "attention_level", "seed"), low=0)
+    args.torch_device = resolve_device(args.device)
+    for flag, value in (("--map-set-weight", args.map_set_weight), ("--split-seed", args.split_seed),
+                        ("--step-size", args.step_size)):
+        if value is not None and not args.map_set:
+            shown = " ".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
+            raise InputError(f"{flag} {shown}: it applies to --map-set, and none is given")
+    args.sets = _open_sets(args) if args.map_set else None
     try:  # the encoder's own rules
         RouteNet(args.step, args.channels, args.depth, args.attention, args.attention_level)
     except ValueError as exc:
         raise InputError(f"--channels / --depth / --attention / --attention-level: {exc}") from None
     for size in args.size:
         check_size(size, "--size")
-    if args.maps > TRAIN_SEEDS[1] - TRAIN_SEEDS[0]:
+        if args.sets is None:
+            try:
+                check_route_map(f"generated {size} x {size}", (size, size), args.step)
+            except InputError as exc:
+                raise InputError(f"--size {size}: {exc}") from None
+    if args.sets is None and args.maps > TRAIN_SEEDS[1] - TRAIN_SEEDS[0]:
         raise InputError(f"--maps {args.maps}: the training split holds {TRAIN_SEEDS[1] - TRAIN_SEEDS[0]} maps "
                          "per family")
     check_output_place(args.out, "--out", need_bytes=NEED_BYTES)
@@ -84,6 +132,73 @@ def _check(args) -> None:
         check_output_place(args.export.with_suffix(".json"), "--export (its .json)", folder=False)
     if args.resume and not (args.out / "checkpoint.pt").is_file():
         raise InputError(f"--resume: nothing to resume in {args.out} (no checkpoint.pt); start without --resume")
+
+
+def _open_sets(args) -> MixedMapSet:
+    """The ``--map-set`` sets, mixed by ``--map-set-weight``, checked for the encoder (``InputError`` naming flags).
+
+    Each set needs a training and a validation part; every map of those parts must fit the
+    encoder's size limit at the block ``--step`` (set here from ``--step-size`` when given).
+    """
+    weights = args.map_set_weight
+    if weights is not None and len(weights) != len(args.map_set):
+        raise InputError(f"--map-set-weight: {len(weights)} weights {weights} for {len(args.map_set)} --map-set; "
+                         "give one weight per map set, in the same order")
+    for w in weights or ():
+        if not math.isfinite(w) or w <= 0:
+            raise InputError(f"--map-set-weight {w:g}: expected a positive number")
+    if args.step_size is not None and not (math.isfinite(args.step_size) and args.step_size > 0):
+        raise InputError(f"--step-size {args.step_size:g}: expected a positive number of world units")
+    if args.split_seed is not None and args.split_seed < 0:
+        raise InputError(f"--split-seed {args.split_seed}: expected a non-negative integer")
+    sets = []
+    for spec in args.map_set:
+        options = {} if args.split_seed is None else {"split_seed": args.split_seed}
+        try:
+            ms = MapSet.open(spec, **options)
+        except TypeError:  # a built-in set splits by its own rule
+            raise InputError(f"--split-seed: map set {spec!r} splits by its own rule; give --split-seed only "
+                             "with folders and manifests") from None
+        except InputError as exc:
+            raise InputError(f"--map-set {spec}: {exc}") from None
+        try:
+            ms.validate(["train", "validation"])
+        except InputError as exc:
+            raise InputError(f"--map-set {spec}: {exc}") from None
+        sets.append(ms)
+    grids = [(ms, name, shape, resolution) for ms in sets for name, shape, resolution in _training_grids(ms)]
+    if args.step_size is not None:
+        cells = {}
+        for ms, name, _, resolution in grids:
+            c = args.step_size / resolution
+            if abs(c - round(c)) > 1e-6 * max(1.0, c) or round(c) < 1:
+                raise InputError(f"--step-size {args.step_size:g}: map {name!r} of {ms.name} has cells of "
+                                 f"{resolution:g} world units, so a step is {c:g} cells; the encoder's block must be "
+                                 "a whole number of cells")
+            cells[name] = round(c)
+        if len(set(cells.values())) > 1:
+            raise InputError(f"--step-size {args.step_size:g} comes to different cell counts on the maps "
+                             f"({', '.join(f'{n}: {c}' for n, c in sorted(cells.items()))}); the encoder's block is "
+                             "one number of cells: give maps of one resolution, or --step in cells")
+        args.step = next(iter(cells.values()))
+    for ms, name, shape, _ in grids:
+        try:
+            check_route_map(name, shape, args.step)
+        except InputError as exc:
+            raise InputError(f"--map-set {ms.name}: {exc}") from None
+    return MixedMapSet(sets, weights)
+
+
+def _training_grids(ms: MapSet) -> list[tuple[str, tuple[int, int], float]]:
+    """(name, shape in cells, resolution) of every map in ``ms``'s training and validation parts."""
+    rec = ms.record()
+    if rec.get("kind") == "generated":
+        sides = sorted({*rec["train_sizes"], *rec["validation_sizes"]})
+        return [(f"generated {s} x {s}", (s, s), 1.0) for s in sides]
+    if rec.get("kind") != "files":
+        return []  # built-in test-only sets have no training part: validate refused them
+    used = {*ms.maps("train"), *ms.maps("validation")}
+    return [(name, tuple(m["shape"]), float(m["resolution"])) for name, m in rec["maps"].items() if name in used]
 
 
 def main(argv=None) -> int:
@@ -107,7 +222,16 @@ def main(argv=None) -> int:
 def _train(args) -> int:
     torch.set_num_threads(1)
     t0 = time.perf_counter()
-    problems = [generate(f, TRAIN_SEEDS[0] + s, size) for size in args.size for f in FAMILIES for s in range(args.maps)]
+    extra, validation, sets = {}, None, args.sets
+    if sets is None:  # the generated families: each map made on a worker
+        problems = [functools.partial(generate, f, TRAIN_SEEDS[0] + s, size)
+                    for size in args.size for f in FAMILIES for s in range(args.maps)]
+    else:
+        print(sets.describe(), flush=True)
+        rng = np.random.default_rng(args.seed)
+        problems = [sets.sample("train", rng) for _ in range(args.maps)]
+        validation = [p for ms in sets.sets for p in ms.problems("validation")]
+        extra = {"map_sets": sets.record()}
     args.out.mkdir(parents=True, exist_ok=True)
     ckpt = args.out / "checkpoint.pt"
     lines: list[str] = []
@@ -118,10 +242,22 @@ def _train(args) -> int:
 
     net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth,
                           attention=args.attention, attention_level=args.attention_level, epochs=args.epochs,
-                          augment=args.augment, seed=args.seed, log=log, checkpoint=ckpt, resume=args.resume)
-    recipe = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if k != "resume"}
-    meta = json.dumps({"recipe": recipe, "parameters": sum(p.numel() for p in net.parameters()),
-                       "last_epoch": lines[-1], "minutes": round((time.perf_counter() - t0) / 60, 1)}, indent=1) + "\n"
+                          augment=args.augment, seed=args.seed, log=log, checkpoint=ckpt, resume=args.resume,
+                          validation=validation, recipe_extra=extra, workers=args.workers, device=args.torch_device)
+    skip = {"resume", "sets", "torch_device"}
+    recipe = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if k not in skip}
+    info = {"recipe": recipe, "parameters": sum(p.numel() for p in net.parameters()),
+            "last_epoch": next(line for line in reversed(lines) if line.startswith("epoch")),
+            "minutes": round((time.perf_counter() - t0) / 60, 1), "device": str(args.torch_device)}
+    if sets is not None:
+        recipe["size"] = None  # the maps bring their sizes
+        info["chosen_epoch"] = net.chosen_epoch
+        info["chosen"] = lines[-1]
+        info["step"] = {"cells": args.step, "world_units": {
+            name: args.step * m["resolution"] for ms in sets.sets if ms.record().get("kind") == "files"
+            for name, m in ms.record()["maps"].items()}}
+        info["map_sets"] = extra["map_sets"]
+    meta = json.dumps(info, indent=1) + "\n"
     with output_set(args.out) as folder:  # route.pt and route.json replace the old pair together
         save_route_net(net, folder / "route.pt")
         (folder / "route.json").write_text(meta, encoding="utf-8")

@@ -38,6 +38,16 @@ def load_script(name: str):
     return mod
 
 
+def npy_map_folder(folder: Path, count: int, side: int = 32, family: str = "forest") -> Path:
+    """``folder`` filled with ``count`` generated maps (seeds 0, 1, ...) as ``m0.npy``, ``m1.npy``, ...: a map set."""
+    from planners.maps.generators import generate
+
+    folder.mkdir(parents=True, exist_ok=True)
+    for i in range(count):
+        np.save(folder / f"m{i}.npy", generate(family, i, side).world.obstacles)
+    return folder
+
+
 def movingai_dir() -> Path | None:
     """The shared MovingAI maps (the library's lookup, anchored at the repo rather than the working directory)."""
     try:

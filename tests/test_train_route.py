@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 import torch
 
+from conftest import load_script, npy_map_folder
 from learning.route import load_route_net
 from planners.base.fileio import MANIFEST, run_lock
 
@@ -133,6 +134,7 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
     (["--attention", "1", "--channels", "5"], "--attention"), (["--attention", "1", "--attention-level", "4"],
                                                                 "--attention-level"),
     (["--seed", "-1"], "--seed"), (["--maps", "10000000"], "--maps"), (["--resume"], "--resume"),
+    (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 512 blocks"),
 ])
 def test_bad_flags_exit_2_with_one_line_naming_them(tmp_path, capsys, flags, named):
     from importlib import util
@@ -184,3 +186,166 @@ def test_ctrl_c_says_what_was_kept_and_exits_130(tmp_path, capsys, monkeypatch):
     monkeypatch.undo()
     assert script.main([*TINY, "--out", str(out), "--resume"]) == 0
     assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "route.json", "route.pt"]
+
+
+# --- map sets, workers and devices ------------------------------------------------------------------
+
+def _script():
+    return load_script("train_route")
+
+
+_npy_maps = npy_map_folder
+
+
+SMALL = ["--maps", "6", "--epochs", "2", "--channels", "4", "--depth", "1", "--attention", "0", "--workers", "1"]
+
+
+def test_map_set_training_writes_a_loadable_encoder_whose_json_records_the_sets(tmp_path, capsys):
+    from planners.maps.mapset import MapSet
+
+    a, b = _npy_maps(tmp_path / "a", 6), _npy_maps(tmp_path / "b", 5, side=48, family="maze")
+    out = tmp_path / "run"
+    assert _script().main([*SMALL, "--map-set", str(a), "--map-set", str(b), "--map-set-weight", "3",
+                           "--map-set-weight", "1", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "split sha256-rank" in printed and "validation" in printed
+    net = load_route_net(out / "route.pt")
+    assert net.channels == 4 and net.trained_side in (32, 48)
+    meta = json.loads((out / "route.json").read_text())
+    sets = meta["map_sets"]
+    assert sets["kind"] == "mixed" and sets["weights"] == [0.75, 0.25]
+    for rec, folder in zip(sets["sets"], (a, b), strict=True):
+        ms = MapSet.open(folder)
+        assert rec["split"]["rule"] == "sha256-rank" and rec["split"]["parts"]["train"] == list(ms.maps("train"))
+    assert meta["step"]["cells"] == 4 and meta["step"]["world_units"]["m0"] == 4.0
+    assert meta["chosen_epoch"] in (0, 1) and meta["chosen"].startswith("chose epoch")
+    assert "validation" in meta["last_epoch"] and meta["recipe"]["size"] is None
+
+
+def test_map_set_training_resumes_to_the_weights_of_an_uninterrupted_run(tmp_path, monkeypatch):
+    folder = _npy_maps(tmp_path / "maps", 6)
+    script = _script()
+    flags = [*SMALL, "--map-set", str(folder)]
+    assert script.main([*flags, "--out", str(tmp_path / "whole")]) == 0
+    real = script.train_route_net
+
+    def interrupted_after_one_epoch(problems, **kwargs):
+        real(problems, **{**kwargs, "epochs": 1})
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(script, "train_route_net", interrupted_after_one_epoch)
+    assert script.main([*flags, "--out", str(tmp_path / "cut")]) == 130
+    monkeypatch.undo()
+    assert script.main([*flags, "--out", str(tmp_path / "cut"), "--resume"]) == 0
+    whole, cut = _weights(tmp_path / "whole"), _weights(tmp_path / "cut")
+    assert all(torch.equal(whole[k], cut[k]) for k in whole)
+    meta = [json.loads((tmp_path / d / "route.json").read_text()) for d in ("whole", "cut")]
+    assert meta[0]["chosen"] == meta[1]["chosen"] and meta[0]["map_sets"] == meta[1]["map_sets"]
+
+
+def _manifest_all_test(tmp_path: Path) -> Path:
+    folder = _npy_maps(tmp_path / "m", 2)
+    manifest = tmp_path / "all_test.json"
+    manifest.write_text(json.dumps({"maps": [{"path": str(p), "part": "test"} for p in sorted(folder.glob("*.npy"))]}))
+    return manifest
+
+
+@pytest.mark.parametrize("case, named", [
+    ("unreadable", "broken.png"),
+    ("empty_train", "'train' part is empty"),
+    ("weights", "--map-set-weight: 1 weights"),
+    ("weight_alone", "--map-set-weight 2: it applies to --map-set"),
+    ("negative_weight", "--map-set-weight -1"),
+    ("too_large", "SAMPLERGYM_MAX_ROUTE_BLOCKS"),
+    ("step_size", "--step-size 0.3"),
+    ("cuda", "--device cuda"),
+    ("device", "--device 'gpu'"),
+    ("workers", "--workers"),
+])
+def test_bad_map_set_inputs_exit_2_before_any_work_naming_the_value(tmp_path, capsys, monkeypatch, case, named):
+    folder = _npy_maps(tmp_path / "maps", 6)
+    flags = ["--map-set", str(folder)]
+    if case == "unreadable":
+        (folder / "broken.png").write_bytes(b"not a png")
+    elif case == "empty_train":
+        flags = ["--map-set", str(_manifest_all_test(tmp_path))]
+    elif case == "weights":
+        flags += ["--map-set", str(folder), "--map-set-weight", "1"]
+    elif case == "weight_alone":
+        flags = ["--map-set-weight", "2"]
+    elif case == "negative_weight":
+        flags += ["--map-set-weight", "-1"]
+    elif case == "too_large":
+        monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "4")  # 32 cells at a block of 4 are 8 blocks
+    elif case == "step_size":
+        flags += ["--step-size", "0.3"]  # 0.3 cells of a map of resolution 1
+    elif case == "cuda":
+        if torch.cuda.is_available():
+            pytest.skip("this machine has a GPU")
+        flags += ["--device", "cuda"]
+    elif case == "device":
+        flags += ["--device", "gpu"]
+    elif case == "workers":
+        flags += ["--workers", "0"]
+    script = _script()
+    monkeypatch.setattr(script, "train_route_net", lambda *a, **k: pytest.fail("training started"))
+    assert script.main([*SMALL, "--out", str(tmp_path / "o"), *flags]) == 2
+    err = capsys.readouterr().err
+    assert named in err and err.count("\n") == 1, err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_step_size_must_come_to_one_block_on_every_map(tmp_path, capsys):
+    import numpy as np
+
+    folder = _npy_maps(tmp_path / "maps", 6)
+    manifest = tmp_path / "mixed.json"
+    maps = [{"path": str(p), "resolution": 0.5 if i % 2 else 0.25} for i, p in enumerate(sorted(folder.glob("*.npy")))]
+    manifest.write_text(json.dumps({"maps": maps, "fractions": {"train": 0.5, "validation": 0.5}}))
+    script = _script()
+    assert script.main([*SMALL, "--map-set", str(manifest), "--step-size", "1", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "different cell counts" in err and "m0: 4" in err and "m1: 2" in err
+    even = tmp_path / "even.json"
+    even.write_text(json.dumps({"maps": [{"path": str(p), "resolution": 0.5} for p in sorted(folder.glob("*.npy"))]}))
+    args = script._parser().parse_args([*SMALL, "--map-set", str(even), "--step-size", "1", "--out", str(tmp_path)])
+    script._check(args)
+    assert args.step == 2 and np.isclose(args.step * 0.5, 1.0)
+
+
+def test_one_and_two_workers_make_the_same_tensors(tmp_path):
+    import functools
+
+    import numpy as np
+
+    from learning.route_training import make_examples, train_route_net
+    from planners.maps.generators import generate
+    from planners.maps.mapset import MapSet
+
+    ms = MapSet.open(_npy_maps(tmp_path / "maps", 6))
+    rng = np.random.default_rng(3)
+    problems = [functools.partial(generate, f, 7, 32) for f in ("forest", "maze", "rooms")]
+    problems += [ms.sample("train", rng) for _ in range(5)]
+    turns = np.random.default_rng(0).integers(0, 8, len(problems))
+    one, two = make_examples(problems, turns, 4, workers=1), make_examples(problems, turns, 4, workers=2)
+    assert [e[0] for e in one] == [e[0] for e in two]
+    for a, b in zip(one, two, strict=True):
+        assert a[1] == b[1] and np.array_equal(a[2], b[2]) and np.array_equal(a[3], b[3], equal_nan=True)
+    kwargs = dict(channels=4, depth=1, epochs=1, augment=True, seed=2, log=lambda _: None,
+                  validation=[ms.problem(q) for q in ms.queries("validation")])
+    w1 = train_route_net(problems, workers=1, **kwargs).state_dict()
+    w2 = train_route_net(problems, workers=2, **kwargs).state_dict()
+    assert all(torch.equal(w1[k], w2[k]) for k in w1)
+
+
+def test_device_auto_is_the_cpu_without_a_gpu_and_cuda_is_refused_by_name():
+    from learning.device import resolve_device
+    from planners.base.fileio import InputError
+
+    assert resolve_device("cpu").type == "cpu"
+    assert resolve_device("auto").type == ("cuda" if torch.cuda.is_available() else "cpu")
+    if not torch.cuda.is_available():
+        with pytest.raises(InputError, match="--device cuda: torch sees no CUDA GPU"):
+            resolve_device("cuda")
+    with pytest.raises(InputError, match="--device 'tpu'"):
+        resolve_device("tpu")

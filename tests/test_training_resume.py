@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 import torch
 
+from conftest import load_script, npy_map_folder
 from learning.checkpoint import read_sb3_zip
 from learning.training import TrainConfig, read_state, train
 from planners.base.fileio import InputError
@@ -186,3 +187,55 @@ def test_a_second_run_on_a_locked_folder_exits_2_naming_the_holder(tmp_path, cap
     (tmp_path / "file").write_text("x")
     assert script.main(["--out", str(tmp_path / "file"), "--no-progress"]) == 2
     assert "--out" in capsys.readouterr().err
+
+
+# --- map sets and devices ---------------------------------------------------------------------------
+
+def _train_script():
+    return load_script("train")
+
+
+_npy_maps = npy_map_folder
+
+
+TINY_SET = ["--dagger-rounds", "1", "--maps-per-round", "4", "--bc-epochs", "1", "--ppo-steps", "64",
+            "--ppo-n-steps", "32", "--ppo-batch", "32", "--value-warmup", "0", "--checkpoint-every", "64",
+            "--validation-maps", "2", "--max-iterations", "300", "--step-size", "2", "--goal-tolerance", "2",
+            "--no-progress", "--device", "auto"]
+
+
+def test_train_script_trains_on_a_map_set_and_records_it(tmp_path, capsys):
+    from planners.maps.mapset import MapSet
+
+    folder = _npy_maps(tmp_path / "maps", 6)
+    assert _train_script().main(["--out", str(tmp_path), "--name", "mine", "--map-set", str(folder),
+                                 *TINY_SET]) == 0
+    run = tmp_path / "mine"
+    assert "split sha256-rank" in capsys.readouterr().out
+    assert TrainConfig.from_json(run / "config.json").map_set == (str(folder),)
+    record = json.loads((run / "map_sets.json").read_text())
+    assert record["sets"][0]["split"]["parts"]["validation"] == list(MapSet.open(folder).maps("validation"))
+    summary = json.loads((run / "summary.json").read_text())
+    assert set(summary["validation_ppo_families"]) == {"maps"}  # the folder set's one group
+    assert (run / "final.zip").is_file()
+
+
+@pytest.mark.parametrize("flags, named", [
+    (["--map-set", "MAPS", "--map-set-weight", "1", "--map-set-weight", "2"], "map_set_weight"),
+    (["--map-set", "MAPS", "--map-set-weight", "0"], "map_set_weight"),
+    (["--map-set", "NOWHERE"], "NOWHERE"),
+    (["--map-set", "MAPS", "--step-size", "0.5"], "less than one cell of map 'm0'"),
+    (["--device", "cuda"], "--device cuda"),
+    (["--device", "gpu"], "--device 'gpu'"),
+])
+def test_train_script_refuses_bad_map_sets_and_devices_before_any_work(tmp_path, capsys, monkeypatch, flags, named):
+    if "cuda" in flags and torch.cuda.is_available():
+        pytest.skip("this machine has a GPU")
+    folder = _npy_maps(tmp_path / "maps", 6)
+    script = _train_script()
+    monkeypatch.setattr(script, "train", lambda *a, **k: pytest.fail("training started"))
+    flags = [str(folder) if f == "MAPS" else str(tmp_path / f) if f == "NOWHERE" else f for f in flags]
+    assert script.main(["--out", str(tmp_path / "o"), "--no-progress", *flags]) == 2
+    err = capsys.readouterr().err
+    assert named in err and err.count("\n") == 1, err
+    assert not (tmp_path / "o").exists()

@@ -1,0 +1,47 @@
+"""Where training runs: ``--device auto|cpu|cuda`` (Stable-Baselines3's convention) turned into a torch device.
+
+``auto`` takes CUDA when torch sees a GPU and the CPU otherwise; ``cuda`` on a machine without one is
+refused by name before any work. The CPU is the default of every training command and gives the same
+weights as before the option existed.
+"""
+
+from __future__ import annotations
+
+import torch
+
+from planners.base.fileio import InputError
+
+#: What ``--device`` accepts.
+DEVICES = ("auto", "cpu", "cuda")
+
+
+def resolve_device(name: str, flag: str = "--device") -> torch.device:
+    """The torch device ``name`` (``"auto"``, ``"cpu"``, ``"cuda"`` or ``"cuda:N"``) stands for here.
+
+    Raises:
+        InputError: An unknown name, or CUDA asked for where torch sees no GPU (or not GPU ``N``);
+            the message names ``flag`` and the value.
+    """
+    if not isinstance(name, str) or not (name in DEVICES or (name.startswith("cuda:") and name[5:].isdigit())):
+        raise InputError(f"{flag} {name!r}: expected one of {', '.join(DEVICES)} (or cuda:N)")
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    if name.startswith("cuda"):
+        if not torch.cuda.is_available():
+            raise InputError(f"{flag} {name}: torch sees no CUDA GPU on this machine (torch {torch.__version__}, "
+                             f"built for CUDA {torch.version.cuda}); use --device cpu or auto")
+        index = int(name[5:]) if ":" in name else 0
+        if index >= torch.cuda.device_count():
+            raise InputError(f"{flag} {name}: torch sees {torch.cuda.device_count()} CUDA GPU(s)")
+    return torch.device(name)
+
+
+def deterministic(device: torch.device) -> None:
+    """Ask torch for deterministic kernels on ``device`` (cuDNN's autotuner off, deterministic convolutions).
+
+    On the CPU this changes nothing; on a GPU the same seed then gives the same weights on the same
+    machine, as on the CPU (a few GPU operations have no deterministic kernel and stay as they are).
+    """
+    if device.type == "cuda":
+        torch.backends.cudnn.deterministic = True
+        torch.backends.cudnn.benchmark = False
