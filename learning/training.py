@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.logger import KVWriter, Logger, make_output_format
 from tqdm.auto import tqdm
 
@@ -543,6 +544,18 @@ def _segments(cfg: TrainConfig) -> list[tuple[int, int]]:
     return list(zip(bounds[:-1], bounds[1:], strict=True))
 
 
+class _StepBar(BaseCallback):
+    """Advances a progress bar by the environment steps PPO takes (it draws no random numbers)."""
+
+    def __init__(self, bar) -> None:
+        super().__init__()
+        self.bar = bar
+
+    def _on_step(self) -> bool:
+        self.bar.update(self.training_env.num_envs)
+        return True
+
+
 class _TrainingRun:
     """One training run's phases: DAgger, PPO fine-tuning, then the choice between them (see ``train``).
 
@@ -619,18 +632,23 @@ class _TrainingRun:
         cfg, model = self.cfg, self.model
         actor_params = [p for name, p in model.policy.named_parameters()
                         if name.startswith(("pi_features_extractor", "mlp_extractor.policy_net", "action_net"))]
-        for start, end in _segments(cfg):
-            if end <= self.state["ppo_steps"]:
-                continue
+        todo = [(start, end) for start, end in _segments(cfg) if end > self.state["ppo_steps"]]
+        # PPO collects whole rollouts, so a segment of s steps runs ceil(s / rollout) rollouts: the bar
+        # counts the environment steps PPO really takes, over the whole phase
+        rollout = model.n_steps * model.get_env().num_envs
+        bar = tqdm(total=sum(-(-(end - start) // rollout) * rollout for start, end in todo), desc="PPO",
+                   unit="step", disable=not self.progress)
+        for start, end in todo:
             for p in actor_params:
                 p.requires_grad_(start >= cfg.value_warmup)
             # seeds every RNG PPO draws from (torch, SB3's use of numpy's global state, the env resets)
             model.set_random_seed(int(np.random.SeedSequence([cfg.seed, start]).generate_state(1)[0]))
             self.logger.step_offset = start
-            model.learn(total_timesteps=end - start, reset_num_timesteps=True, progress_bar=self.progress,
+            model.learn(total_timesteps=end - start, reset_num_timesteps=True, callback=_StepBar(bar),
                         tb_log_name="ppo")
             self.logger.dump(model.num_timesteps)  # the last update's statistics, before the checkpoint, not after
             self.commit({**self.state, "ppo_steps": end})
+        bar.close()
         for p in actor_params:
             p.requires_grad_(True)
         self.logger.step_offset = 0
