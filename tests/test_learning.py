@@ -317,7 +317,7 @@ def test_evaluate_script_writes_tables_csv_and_plots(trained, tmp_path, movingai
     samplers = {r["sampler"] for r in rows}
     assert {"uniform", "policy", "goal_bias=0.01", "goal_bias=0.5", "expert (reference)"} <= samplers
     assert all(int(r["candidates"]) >= int(r["iterations"]) for r in rows if r["solved"] == "True")
-    for png in ("ecdf.png", "means.png"):
+    for png in ("ecdf.png", "medians.png"):
         assert (out / png).stat().st_size > 10_000
 
 
