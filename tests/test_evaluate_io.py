@@ -161,8 +161,9 @@ def test_one_colour_per_sampler_in_both_figures():
     bars = {c.get_label(): c.patches[0].get_facecolor() for c in med.axes[0].containers if hasattr(c, "patches")}
     from matplotlib.colors import to_hex
 
-    for name in ("uniform", "policy", "route encoder", "expert (reference)"):
-        assert lines[name] == E.PALETTE[name] and to_hex(bars[name]) == E.PALETTE[name]
+    for name, label in (("uniform", "uniform"), ("policy", "policy"), ("route encoder", "route encoder"),
+                        ("expert (reference)", "expert")):
+        assert lines[label] == E.PALETTE[name] and to_hex(bars[label]) == E.PALETTE[name]
     assert len(set(E.PALETTE.values())) == len(E.PALETTE)
     assert not any(ax.get_legend() for ax in ecdf.axes) and ecdf.legends  # one legend, outside the panels
 

@@ -29,6 +29,8 @@ PALETTE = {
     "route ablation": "#c5b0d5", "exact_route": "#17becf", "expert (reference)": "#000000",
 }
 EXTRA_COLORS = ("#e377c2", "#bcbd22", "#7f7f7f", "#aec7e8", "#98df8a", "#c49c94")
+#: Legend names where a sampler's name in the runs is not the tables' word for it.
+LEGEND = {"constant (tuned)": "policy ablation", "exact_route": "exact route reference", "expert (reference)": "expert"}
 #: Samplers drawn dashed: the privileged references.
 REFERENCES = ("exact_route", "expert (reference)")
 
@@ -90,9 +92,9 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
             if len(its) == 0:
                 continue
             style = {"linestyle": "--"} if s in REFERENCES else {}
-            (line,) = ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=role,
+            (line,) = ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=LEGEND.get(role, role),
                               color=colors.get(role, "#7f7f7f"), **style)
-            handles.setdefault(role, line)
+            handles.setdefault(LEGEND.get(role, role), line)
         ax.set_xscale("log")
         ax.set_title(_wrap(fam, 4.0, 12))
         ax.set_xlabel("iterations to solution")
@@ -137,7 +139,8 @@ def medians_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, plan
             meds.append(med)
             errs.append((max(med - q1, 0.0), max(q3 - med, 0.0)))
         x = np.arange(len(fams)) + (j - (len(sel) - 1) / 2) * width
-        ax.bar(x, meds, width, yerr=np.array(errs).T, capsize=3, label=label, color=colors.get(label, "#7f7f7f"),
+        ax.bar(x, meds, width, yerr=np.array(errs).T, capsize=3, label=LEGEND.get(label, label),
+               color=colors.get(label, "#7f7f7f"),
                **({"hatch": "//", "edgecolor": "white"} if s in REFERENCES else {}))
     ax.set_xticks(np.arange(len(fams)), fams, rotation=30, ha="right")
     ax.set_yscale("log")

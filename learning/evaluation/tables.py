@@ -197,7 +197,11 @@ CLOSE_SHARE, WORSE_MARGIN = 0.5, 0.05
 
 def _order(fams, movingai_maps: Sequence[str]) -> list[str]:
     """Generated, shifted and unseen map sets first, then the MovingAI maps and their pooled row."""
-    return sorted(fams, key=lambda f: (f == MOVINGAI_POOL or f in movingai_maps, f == MOVINGAI_POOL, f))
+    def group(f: str) -> int:
+        return (5 if f == MOVINGAI_POOL else 4 if f in movingai_maps else 1 if f.endswith("(shifted)")
+                else 2 if f.endswith("(unseen)") else 0)
+
+    return sorted(fams, key=lambda f: (group(f), f))
 
 
 def glance_table(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
