@@ -6,21 +6,33 @@
     python scripts/evaluate.py --backend ray --address auto                        # on your Ray cluster
     python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v0   # your SB3 model too
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
+    python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
+    python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments
 
 Default map set: the five generated families at 128x128 on test seeds (never trained on), each family's
 shifted variant (other generators, sides 64 to 256, never used for training, validation or tuning) and the
-MovingAI maps in ../shared/maps/movingai (or --movingai / SAMPLERGYM_MOVINGAI_DIR). Goal bias, the
+MovingAI maps in ../shared/maps/movingai (or --movingai / SAMPLERGYM_MOVINGAI_DIR), and three unseen families
+(planners/maps/unseen.py: generators used for nothing but testing, tested with the settings tuned on the generated
+families' tuning maps pooled; --no-unseen leaves them out). Goal bias, the
 ablation's frontier probability and the policy's batch (samples per decision, 8, 2 or 1) are tuned on a
-tuning split first; the test runs use what was chosen there. Writes
-runs.csv (every run), summary.md (tables), ecdf.png, means.png and OMPL benchmark logs
-(ompl/<map set>.log; open them with OMPL's ompl_benchmark_statistics.py and Planner Arena) under --out.
+tuning split first; the test runs use what was chosen there. With --map-set, a map set of your own
+(a folder or manifest of maps, see docs/map-sets.md) replaces the default ones: tuned on its tuning part,
+tested on its test part, its split printed and recorded.
+
+Writes runs.csv (every run), summary.md (tables), ecdf.png, medians.png, map-sets.json and OMPL benchmark
+logs (ompl/<map set>.log; open them with OMPL's ompl_benchmark_statistics.py and Planner Arena) as one set:
+--out is replaced as a whole when every run is done (MANIFEST.json lists its files), and is locked while a run
+writes it. Finished runs go to a journal in <out>.partial/ as they arrive: Ctrl-C or SIGTERM stops every worker
+and keeps them, and --resume continues from there.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -32,10 +44,24 @@ from learning import evaluation as E
 from learning.models.route_net import load_route_net
 from learning.models.shipped import SHIPPED_POLICY
 from learning.samplers.route import SHIPPED
+from learning.evaluation.journal import JOURNAL, Interrupted, Journal, run_phase, stop_on_sigterm, work_folder
+from learning.evaluation.mapsets import UnseenQuery, map_set_queries, pooled_tuned, unseen_queries
 from planners import movingai_dir, planner_names
-from planners.base.fileio import InputError, atomic_write_text
+from planners.algorithms.rrt import MAX_STEPS_ENV, max_steps_limit
+from planners.base.fileio import (
+    MANIFEST,
+    InputError,
+    atomic_write_text,
+    check_flags,
+    check_int_flags,
+    check_number,
+    check_output_place,
+    output_set,
+    run_lock,
+)
 from planners.base.registry import planner_name_arg
-from planners.maps.generators import FAMILIES
+from planners.maps.generators import FAMILIES, SHIFTED_SIZES, check_size
+from planners.maps.unseen import UNSEEN_MIN_SIZE, UNSEEN_SEED0
 from planners.tools.benchmark import markdown_table, write_runs_csv
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
@@ -47,11 +73,17 @@ MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", 
 #: 6 maps, the "best" bias was worse than uniform on the test maps and flattered the policy), and
 #: 25 maps x 2 seeds keep the quick ratios near the full ones (10 x 1 put narrow passage at 0.12
 #: of the best bias against 0.39 in full).
-QUICK = {"maps": 25, "shifted_maps": 25, "scenarios": 4, "seeds": 2, "other_planners": []}
+QUICK = {"maps": 25, "shifted_maps": 25, "unseen_maps": 8, "scenarios": 4, "seeds": 2, "other_planners": []}
+
+
+def _fail(message: str):
+    """One ``error:`` line and exit 2: a bad argument is refused before any run."""
+    print(f"error: {message}", file=sys.stderr)
+    raise SystemExit(2)
 
 
 def parse_args(argv=None) -> argparse.Namespace:
-    """The command line, with --quick's settings applied."""
+    """The command line, with --quick's settings applied and every value checked (exit 2 naming a bad one)."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--policy", type=Path, default=DEFAULT_POLICY)
     ap.add_argument("--families", nargs="+", default=list(FAMILIES))
@@ -60,6 +92,15 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--tuning-maps", type=int, default=20, help="maps per family for choosing the best goal bias")
     ap.add_argument("--shifted-maps", type=int, default=50,
                     help="test maps per family from its shifted generator, sides 64 to 256 (0: none)")
+    ap.add_argument("--unseen-maps", type=int, default=None,
+                    help="test maps per unseen family (generators used only for testing; default: --maps, at most "
+                         "25; 0: none)")
+    ap.add_argument("--no-unseen", action="store_true", help="leave the unseen families out (--unseen-maps 0)")
+    ap.add_argument("--map-set", default=None, metavar="DIR_OR_SPEC",
+                    help="evaluate on this map set instead of the default ones: a folder or manifest .json of maps "
+                         "(docs/map-sets.md); tuned on its tuning part, tested on its test part. --step and "
+                         "--tolerance are in its world units")
+    ap.add_argument("--split-seed", type=int, default=0, help="--map-set: the seed of its split into parts")
     ap.add_argument("--route", type=Path, default=SHIPPED,
                     help="route encoder checkpoint (scripts/train_route.py), run as the 'route encoder' sampler")
     ap.add_argument("--seeds", type=int, default=3, help="planner seeds per query")
@@ -80,94 +121,195 @@ def parse_args(argv=None) -> argparse.Namespace:
                                        "(pip install -e '.[distributed]')")
     ap.add_argument("--no-expert", action="store_true", help="skip the privileged reference")
     ap.add_argument("--quick", action="store_true",
-                    help="25 test and 25 shifted maps, 4 test scenarios, 2 seeds, no other planners; tuning as in "
-                         "the full run")
+                    help="25 test and 25 shifted maps, 8 unseen maps per family, 4 test scenarios, 2 seeds, no other "
+                         "planners; tuning as in the full run")
     ap.add_argument("--sampler", action="append", default=[], metavar="NAME=SPEC",
                     help="also compare this sampler (repeatable): NAME=MODEL.zip@ENV_ID[@stochastic][@key=value...] "
                          "for a Stable-Baselines3 model trained on that SamplerGym id (deterministic actions unless "
                          "@stochastic; key=value: the env kwargs it was trained with), or NAME=module:callable "
                          "for a factory returning a Sampler")
-    ap.add_argument("--out", type=Path, default=Path("results/evaluation"))
+    ap.add_argument("--out", type=Path, default=Path("results/evaluation"),
+                    help="output folder, replaced as a whole when the run is done")
+    ap.add_argument("--resume", action="store_true",
+                    help="continue an interrupted run (same arguments) from its journal in <out>.partial/")
     args = ap.parse_args(argv)
     if args.quick:
         for k, v in QUICK.items():
             setattr(args, k, v)
+    if args.unseen_maps is None:
+        args.unseen_maps = min(args.maps, 25) if isinstance(args.maps, int) else 0
+    if args.no_unseen:
+        args.unseen_maps = 0
     check_backend_arguments(ap, args)
-    for k in ("maps", "tuning_maps", "seeds", "scenarios", "tuning_scenarios", "max_iterations"):
-        if getattr(args, k) < 1:
-            ap.error(f"--{k.replace('_', '-')} must be at least 1, got {getattr(args, k)}")
-    if args.shifted_maps < 0:
-        ap.error(f"--shifted-maps must be at least 0, got {args.shifted_maps}")
+    check_flags(lambda: _check_values(args))
+    _check_models(args)
+    return args
+
+
+def _check_values(args) -> None:
+    """Counts, sizes, step and tolerance, families and the output place: an ``InputError`` naming the flag."""
+    check_int_flags(args, ("maps", "tuning_maps", "seeds", "scenarios", "tuning_scenarios", "max_iterations",
+                           "processes"))
+    check_int_flags(args, ("shifted_maps", "unseen_maps", "split_seed"), low=0)
+    check_size(args.size, "--size")
+    if args.unseen_maps and args.size < UNSEEN_MIN_SIZE and args.map_set is None:
+        raise InputError(f"--size = {args.size}: the unseen families need at least {UNSEEN_MIN_SIZE} cells a side "
+                         "(or pass --no-unseen)")
+    check_number("--step", "step", args.step, low=0, low_open=True)
+    check_number("--tolerance", "tolerance", args.tolerance, low=0, low_open=True)
+    if args.map_set is None:  # the largest default map: a MovingAI 512x512 map, or a generated or shifted one
+        side = max(args.size, max(SHIFTED_SIZES) if args.shifted_maps else 0, 512 if args.movingai_maps else 0)
+        diag = side * 2 ** 0.5
+        if diag / args.step > max_steps_limit():
+            raise InputError(f"--step = {args.step:g} is {diag / args.step:.3g} steps across the diagonal of a "
+                             f"{side}x{side} map; at most {max_steps_limit()} are accepted "
+                             f"(a step of at least {diag / max_steps_limit():.3g}, or set {MAX_STEPS_ENV})")
+        if args.tolerance >= side:
+            raise InputError(f"--tolerance = {args.tolerance:g} covers the whole of a {side}x{side} map")
+    unknown = sorted(set(args.families) - set(FAMILIES))
+    if unknown:
+        raise InputError(f"--families: unknown {unknown}; choose from {', '.join(FAMILIES)}")
+    check_output_place(args.out, "--out", need_bytes=OUTPUT_BYTES)
+    check_output_place(work_folder(args.out), "--out's work folder", need_bytes=OUTPUT_BYTES)
+    foreign = sorted(p.name for p in args.out.iterdir() if p.name not in OUTPUT_NAMES) if args.out.is_dir() else []
+    if foreign:
+        raise InputError(f"--out {args.out}: the folder holds {', '.join(foreign[:3])}"
+                         f"{' and more' if len(foreign) > 3 else ''}, which this command does not write, and the "
+                         "outputs replace the folder as a whole; choose an empty or new folder")
+
+
+def _check_models(args) -> None:
+    """The policy, the route encoder, the user samplers and the map set, each loaded once here (exit 2 naming it)."""
     if not args.policy.is_file():
-        ap.error(f"policy checkpoint {args.policy} not found (train one with scripts/train.py --export ...)")
+        _fail(f"--policy {args.policy}: not found (train one with scripts/train.py --export ...)")
     try:  # refused here, by name, rather than as a traceback in every worker
         PolicySampler.load(args.policy)
-    except ValueError as exc:
-        ap.error(str(exc))
+    except (ValueError, OSError) as exc:
+        _fail(f"--policy {args.policy}: {exc}")
     try:
         load_route_net(args.route)
-    except (InputError, FileNotFoundError) as exc:
-        ap.error(f"--route: {exc}")
+    except (InputError, OSError) as exc:
+        _fail(f"--route: {exc}")
     args.user_samplers = {}
     for arg in args.sampler:  # each built once here, so a bad file or spec is refused before any run
         try:
             name, spec = E.parse_user_sampler(arg)
             E.user_sampler(spec)
-        except (ValueError, FileNotFoundError) as exc:
-            ap.error(str(exc))
+        except (ValueError, OSError) as exc:
+            _fail(f"--sampler {arg!r}: {exc}" if arg not in str(exc) else str(exc))
+        except Exception as exc:  # noqa: BLE001 - e.g. an env kwarg the env does not take (TypeError)
+            _fail(f"--sampler {arg!r}: {type(exc).__name__}: {exc}")
         if name in args.user_samplers:
-            ap.error(f"--sampler name {name!r} is given twice")
+            _fail(f"--sampler name {name!r} is given twice")
         args.user_samplers[name] = spec
-    unknown = set(args.families) - set(FAMILIES)
-    if unknown:
-        ap.error(f"unknown families {sorted(unknown)}; choose from {FAMILIES}")
-    return args
+    args.map_set_queries, args.map_set_obj = [], None
+    if args.map_set is not None:
+        try:
+            args.map_set_queries, args.map_set_obj = map_set_queries(args.map_set, args.split_seed)
+        except InputError as exc:
+            _fail(f"--map-set {args.map_set}: {exc}")
+
+
+#: What the outputs may hold (``means.png``: the figure's name in earlier versions); --out holding more is refused.
+OUTPUT_NAMES = frozenset({MANIFEST, "summary.md", "runs.csv", "ecdf.png", "medians.png", "means.png", "map-sets.json",
+                          "ompl"})
+#: Free disk space the outputs need (tables, a few plots, one OMPL log per map set), with room to spare.
+OUTPUT_BYTES = 64 * 2**20
+
+
+def _settings(args) -> dict:
+    """What decides the runs (for the journal: --resume refuses a journal of other settings)."""
+    skip = {"out", "resume", "processes", "backend", "address", "quick", "no_unseen", "map_set_queries",
+            "map_set_obj", "sampler"}
+    return {k: v for k, v in vars(args).items() if k not in skip}
 
 
 def main(argv=None) -> int:
     """Run the comparison and write its results; returns the exit status."""
     args = parse_args(argv)
-    try:  # a folder the user named must exist; the default one may be absent
-        mdir = movingai_dir(args.movingai, required=False) if args.movingai_maps else None
-    except InputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    queries = E.generated_queries(args.families, args.size, args.maps, args.tuning_maps)
-    queries += E.shifted_queries(args.families, args.shifted_maps)
-    if mdir is not None:
-        queries += E.movingai_queries(str(mdir), args.movingai_maps, args.scenarios, args.tuning_scenarios,
-                                      args.tolerance)
-    elif args.movingai_maps:
-        print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); evaluating generated "
-              "families only", file=sys.stderr)
+    if args.map_set is not None:
+        mdir = None
+        queries = list(args.map_set_queries)
+        print(args.map_set_obj.describe(), flush=True)
+    else:
+        try:  # a folder the user named must exist; the default one may be absent
+            mdir = movingai_dir(args.movingai, required=False) if args.movingai_maps else None
+        except InputError as exc:
+            _fail(f"--movingai: {exc}")
+        queries = E.generated_queries(args.families, args.size, args.maps, args.tuning_maps)
+        queries += E.shifted_queries(args.families, args.shifted_maps)
+        if mdir is not None:
+            queries += E.movingai_queries(str(mdir), args.movingai_maps, args.scenarios, args.tuning_scenarios,
+                                          args.tolerance)
+        elif args.movingai_maps:
+            print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); evaluating generated "
+                  "families only", file=sys.stderr)
+        queries += unseen_queries(args.size, args.unseen_maps)
     cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": args.tolerance,
            "policy": str(args.policy), "route": str(args.route), "step": args.step,
            "max_iterations": args.max_iterations, "user_samplers": args.user_samplers}
     try:
+        lock = run_lock(args.out)
+        lock.__enter__()
+    except InputError as exc:
+        _fail(f"--out: {exc}")
+    stop_on_sigterm()
+    backend = journal = None
+    try:
+        journal = Journal(work_folder(args.out), _settings(args), resume=args.resume)
+        if journal.resumed:
+            print(f"resuming: {journal.resumed} finished runs from {journal.path}", flush=True)
         backend = make_backend(args.backend, processes=args.processes, address=args.address,
                                worker_init=E.worker_init)
-    except ImportError as exc:
+        status = _compare(args, queries, cfg, backend, journal, t0=time.perf_counter())
+        journal.remove()
+        return status
+    except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    try:
-        return _compare(args, queries, cfg, backend, t0=time.perf_counter())
+    except ImportError as exc:
+        print(f"error: --backend {args.backend}: {exc}", file=sys.stderr)
+        return 2
+    except (KeyboardInterrupt, Interrupted) as exc:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C does not cut the message short
+        status = exc.status if isinstance(exc, Interrupted) else 130
+        kept = len(journal.done) if journal is not None else 0
+        print(f"\ninterrupted: {kept} of {PLANNED[0] or kept} runs planned so far are kept in "
+              f"{work_folder(args.out) / JOURNAL}; {args.out} is unchanged; rerun with the same arguments and "
+              f"--resume to continue", file=sys.stderr, flush=True)
+        return status
     finally:
-        backend.close()
+        if backend is not None:
+            backend.close()
+        if journal is not None:
+            journal.close()
+        lock.__exit__(None, None, None)
 
 
-def _compare(args, queries, cfg, backend, t0: float) -> int:
-    """The runs, tables, plots and logs of the comparison, executed on ``backend``."""
+#: Runs of the phases started so far (for the interrupt message).
+PLANNED = [0]
+
+
+def _phase(tasks, backend, journal, name: str):
+    """One phase of runs, journaled; announces itself."""
+    PLANNED[0] += len(tasks)
+    return run_phase(tasks, backend, journal, name)
+
+
+def _compare(args, queries, cfg, backend, journal, t0: float) -> int:
+    """The runs, tables, plots and logs of the comparison, executed on ``backend`` and journaled."""
     users = list(args.user_samplers)
     biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
     learned = [E.ROUTE, E.ROUTE_ABLATION]  # the route encoder, beside its ablation
     fixed = ["uniform", *biases, E.FOLLOWER, *learned, *users] + ([] if args.no_expert else ["expert (reference)"])
+    unseen = sorted({q.map_set for q in queries if isinstance(q, UnseenQuery)})
     # first what needs no tuned setting, beside the tuning runs of goal bias and of the policy's batch
     tasks = E.tuning_tasks(queries, "RRT", cfg) + E.policy_tuning_tasks(queries, "RRT", cfg)
     tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in fixed
               for seed in range(args.seeds)]
     print(f"{len(tasks)} RRT runs on {len(queries)} queries ({args.backend} backend, {backend.workers} workers)",
           flush=True)
-    runs = E.run_all(tasks, backend)
+    runs = _phase(tasks, backend, journal, "tuning and fixed samplers")
     batch, batch_scores = E.best_policy_batch(runs)
     cfg = {**cfg, "policy_batch": batch}
     # then the policy at its tuned batch, and the ablation's tuning at that batch (it decides as often)
@@ -175,26 +317,28 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
     tasks += [(q, "RRT", "policy", seed, cfg) for q in queries if q.split == "test" for seed in range(args.seeds)]
     print(f"policy batch {batch} (tuned); {len(tasks)} RRT runs of the policy and of the ablation's tuning",
           flush=True)
-    runs += E.run_all(tasks, backend)
-    # a shifted map set has no tuning split of its own: it keeps its family's tuned settings
+    runs += _phase(tasks, backend, journal, "policy and ablation tuning")
+    # a shifted map set has no tuning split of its own: it keeps its family's tuned settings; an unseen
+    # family takes those tuned on the generated families' tuning maps pooled
     best = E.tuned_for_shifted(E.best_bias(runs), queries)
+    constants = E.tuned_for_shifted(E.best_constant(runs), queries)
+    constants.update(pooled_tuned(runs, args.families, E.best_constant, unseen))
     # the ablation (the policy's action classes, constant distribution) on the test split, at the frontier
     # probability its tuning runs chose for each map set; named as one sampler whatever that probability
-    constants = E.tuned_for_shifted(E.best_constant(runs), queries)
     ablation_tasks = E.constant_test_tasks(queries, "RRT", cfg, constants, args.seeds)
     print(f"{len(ablation_tasks)} RRT runs of the constant-distribution ablation at its tuned settings", flush=True)
-    ablation = E.run_all(ablation_tasks, backend)
+    ablation = _phase(ablation_tasks, backend, journal, "policy ablation")
     runs += [dataclasses.replace(r, sampler=E.CONSTANT) for r in ablation]
     # other planners: uniform, default and best goal bias, policy, on the generated families (not shifted)
     extra = []
-    generated = [q for q in queries if q.size and not q.shifted]
+    generated = [q for q in queries if isinstance(q, E.Query) and q.size and not q.shifted]
     for planner in args.other_planners:
         extra += E.tuning_tasks(generated, planner, cfg)
         extra += [(q, planner, s, 0, cfg) for q in generated if q.split == "test"
                   for s in ("uniform", *biases, "policy", *users)]
     if extra:
         print(f"{len(extra)} runs of {', '.join(args.other_planners)}", flush=True)
-        runs += E.run_all(extra, backend)
+        runs += _phase(extra, backend, journal, "other planners")
         best = E.tuned_for_shifted(E.best_bias(runs), queries)
     mai = sorted({q.family for q in queries if not q.size})
     if len(mai) > 1:  # one pooled row over every MovingAI map, beside the per-map rows
@@ -202,21 +346,16 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
         best = E.tuned_for_shifted(E.best_bias(runs + pool), queries)
     else:
         pool = []
+    best.update(pooled_tuned(runs, args.families, E.best_bias, unseen))
+    minutes = (time.perf_counter() - t0) / 60
     rows = E.summarize(runs + pool, best)
     head = E.headline(rows, best, [E.FOLLOWER, *learned, *users], constants)
     targets, met, total = E.target_check(head, mai)
     route_targets, route_met, route_total = E.target_check(head, mai, E.ROUTE, E.ROUTE_ABLATION)
     reach, reach_met, reach_total = E.target_check(head, mai, "expert")
-    write_runs_csv(runs, args.out / "runs.csv")
-    plots = E.save_plots([r for r in runs if r.map not in mai] + pool, rows, best, args.out,
-                         extra=[E.CONSTANT, E.FOLLOWER, E.ROUTE, E.ROUTE_ABLATION, *users])
-    logs = E.write_ompl_logs(runs + pool, best, args.out / "ompl", cfg)
-    # the log folder keeps this run's logs only, so `ompl/*.log` never mixes in an earlier run's map sets
-    for old in set((args.out / "ompl").glob("*.log")) - set(logs):
-        old.unlink()
-    cols = ["family", "planner", "sampler", "runs", "success", "median_iterations", "iqr", "mean_iterations",
-            "mean_ci95", "ratio_to_lower_bound", "median_candidates", "median_checks", "median_wall_ms",
-            "median_cost", "median_forward_passes"]
+    glance = E.glance_table(rows, best, users, mai)
+    room = E.room_table(rows, mai)
+    goals = E.carry_targets(rows, mai) + E.carry_targets(rows, mai, "policy", E.CONSTANT)
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
              "policy_success", "best_bias_success", "policy_wall_ms", "best_bias_wall_ms", "expert_median",
              "policy/lower_bound", "expert/lower_bound", "expert/best_bias", "expert_success",
@@ -224,15 +363,30 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
              "constant_wall_ms"]
     for n in (E.FOLLOWER, *learned, *users):
         hcols += [f"{n}_median", f"{n}/best_bias", f"policy/{n}", f"{n}/lower_bound", f"{n}_success", f"{n}_wall_ms"]
+    cols = ["family", "planner", "sampler", "runs", "success", "median_iterations", "iqr", "mean_iterations",
+            "mean_ci95", "ratio_to_lower_bound", "median_candidates", "median_checks", "median_wall_ms",
+            "median_cost", "median_forward_passes"]
     named = "".join(f"`{n}`: `{spec}`; " for n, spec in args.user_samplers.items())
-    text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {(time.perf_counter() - t0) / 60:.1f} "
-            f"min; generated maps {args.size}x{args.size} on test seeds, and shifted variants (other generators, sides "
-            f"64 to 256) tested with the settings tuned on their family's tuning split; best goal bias chosen on a "
-            f"tuning split. "
+    where = (f"map set {args.map_set_obj.name} ({args.map_set}): tuned on its tuning part, tested on its test part "
+             f"({args.map_set_obj.split.describe()})" if args.map_set_obj is not None else
+             f"generated maps {args.size}x{args.size} on test seeds, and shifted variants (other generators, sides "
+             f"64 to 256) tested with the settings tuned on their family's tuning split"
+             + (", and unseen families (generators used only for testing) tested with the settings tuned on the "
+                "generated families' tuning maps pooled" if unseen else "")
+             + "; best goal bias chosen on a tuning split")
+    text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {minutes:.1f} min; {where}. "
             f"Iterations to first solution (cap {args.max_iterations}); the expert is a privileged reference.\n\n"
             + (f"User samplers: {named.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
                if users else "") +
-            "## RRT: learned policy vs best-tuned goal bias and vs the tuned constant-distribution ablation\n\n"
+            "## Results at a glance\n\nRRT on the test split: median iterations to the first solution (success "
+            "rate in brackets). Best goal bias: the bias tuned for the map set. Ablations: the learned sampler "
+            "with its learning removed.\n\n" + markdown_table(glance) +
+            "\n## How much of the room learning closes\n\nThe room is what separates a sampler's ablation from "
+            "the exact reference (the same sampler on the exact cost-to-go); the share closed is (ablation - learned) "
+            "/ (ablation - exact). Below 20% of the ablation's median the room is too small to judge.\n\n"
+            + (markdown_table(room) if room else "No exact reference ran, so the room cannot be shown.\n")
+            + "\n## Targets for carrying the gain to unlike maps\n\n" + "".join(f"- {g}\n" for g in goals) +
+            "\n## RRT: learned policy vs best-tuned goal bias and vs the tuned constant-distribution ablation\n\n"
             "The ablation draws the policy's own action classes (frontier, or the cell straight ahead) with a "
             "constant distribution and no network; its frontier probability is tuned on the tuning split. The "
             f"{E.FOLLOWER} has no learning either: it samples a step ahead of the vertex nearest the goal, "
@@ -241,15 +395,15 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
             f"validation maps); the {E.ROUTE_ABLATION} is that sampler with the straight-line distance in place "
             "of the prediction, its target distance ahead and spread tuned for it on the same maps.\n\n"
             + markdown_table(head, hcols) +
-            f"\n## The policy's batch, tuned\n\nSamples per decision, chosen on the generated families' tuning "
-            f"maps ({E.POLICY_TUNING_SEEDS} seeds each) by the lowest sum of log median iterations; scores within "
+            f"\n## The policy's batch, tuned\n\nSamples per decision, chosen on the tuning maps "
+            f"({E.POLICY_TUNING_SEEDS} seeds each) by the lowest sum of log median iterations; scores within "
             f"{E.BATCH_TIE:g} of it count as tied and the largest batch among them wins. Chosen: **{batch}**. The "
             "ablation decides as often.\n\n"
             + markdown_table([{"batch": b, "sum of log medians": f"{v:.3f}"}
                               for b, v in sorted(batch_scores.items())]) +
-            f"\n## Issue 18's targets for the learned sampler: {met} of {total} met\n\n"
+            f"\n## Targets for the learned policy: {met} of {total} met\n\n"
             + markdown_table(targets) +
-            f"\n## Issue 18's targets for the {E.ROUTE}: {route_met} of {route_total} met\n\n"
+            f"\n## Targets for the {E.ROUTE}: {route_met} of {route_total} met\n\n"
             f"Its ablation is the {E.ROUTE_ABLATION}: the same sampler without the encoder (tuned for itself).\n\n"
             + markdown_table(route_targets) +
             f"\n## Which targets can be reached: the privileged expert meets {reach_met} of {reach_total}\n\n"
@@ -257,13 +411,33 @@ def _compare(args, queries, cfg, backend, t0: float) -> int:
             "iteration and success targets, it shows which of them perfect route knowledge reaches at all.\n\n"
             + markdown_table(reach) +
             "\n## All cells\n\n" + markdown_table([{k: r[k] for k in cols} for r in rows], cols))
-    atomic_write_text(args.out / "summary.md", text)
+    record = {"map sets": sorted({q.map_set for q in queries}), "settings": _settings(args) | {"out": str(args.out)},
+              "policy_batch": batch,
+              "tuned goal bias": {f"{m} / {p}": v for (m, p), v in sorted(best.items())},
+              "tuned ablation frontier": {f"{m} / {p}": v for (m, p), v in sorted(constants.items())}}
+    if args.map_set_obj is not None:
+        record["map set"] = args.map_set_obj.record()
+    if unseen:
+        record["unseen"] = {"families": unseen, "size": args.size, "maps per family": args.unseen_maps,
+                            "seeds from": UNSEEN_SEED0, "generator": "planners.maps.unseen.generate_unseen",
+                            "settings": "tuned on the generated families' tuning maps pooled"}
+    with output_set(args.out) as tmp:  # every file of the set, swapped into place together
+        write_runs_csv(runs, tmp / "runs.csv")
+        plots = E.save_plots([r for r in runs if r.map not in mai] + pool, rows, best, tmp,
+                             extra=[E.CONSTANT, E.FOLLOWER, E.ROUTE, E.ROUTE_ABLATION, *users])
+        logs = E.write_ompl_logs(runs + pool, best, tmp / "ompl", cfg)
+        atomic_write_text(tmp / "map-sets.json", json.dumps(record, indent=1, default=str) + "\n")
+        atomic_write_text(tmp / "summary.md", text)
+    print("\n" + markdown_table(glance))
+    if room:
+        print("How much of the room between ablation and exact reference learning closes:\n" + markdown_table(room))
+    print("\n".join(goals))
     print("\n" + markdown_table(head, hcols))
     print(f"\npolicy batch {batch}, tuned: " + ", ".join(f"{b}: {v:.3f}" for b, v in sorted(batch_scores.items())))
-    print(f"\nIssue 18's targets: the learned policy meets {met} of {total}, the {E.ROUTE} {route_met} of "
+    print(f"\nTargets: the learned policy meets {met} of {total}, the {E.ROUTE} {route_met} of "
           f"{route_total}; the privileged expert meets {reach_met} of its {reach_total} (summary.md has which)")
     print(f"full table: {args.out / 'summary.md'}; raw runs: {args.out / 'runs.csv'}; plots: "
-          f"{', '.join(str(p) for p in plots)}; OMPL benchmark logs ({len(logs)}): {args.out / 'ompl'}")
+          f"{', '.join(str(args.out / p.name) for p in plots)}; OMPL benchmark logs ({len(logs)}): {args.out / 'ompl'}")
     return 0
 
 

@@ -188,7 +188,7 @@ def test_plot_text_is_inside_the_figure_and_legend_off_the_bars(families):
     from matplotlib.patches import Rectangle
 
     runs, rows, biases = _plot_runs(families)
-    for fig in (E.ecdf_figure(runs, biases), E.means_figure(runs, rows, biases)):
+    for fig in (E.ecdf_figure(runs, biases), E.medians_figure(runs, rows, biases)):
         fig.canvas.draw()
         assert _clipped(fig) == []
         assert fig.get_suptitle() or all(ax.get_title() for ax in fig.axes)
@@ -207,11 +207,12 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     (out / "ompl").mkdir(parents=True)
     (out / "ompl" / "stale.log").write_text("an earlier run's map set")
     rc = ev.main(["--families", "forest", "--size", "64", "--maps", "2", "--tuning-maps", "2", "--seeds", "1",
-                  "--shifted-maps", "1", "--movingai-maps", "--other-planners", "--processes", "1",
+                  "--shifted-maps", "1", "--no-unseen", "--movingai-maps", "--other-planners", "--processes", "1",
                   "--max-iterations", "3000", "--out", str(out)])
     assert rc == 0
     files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
-    assert files == ["ecdf.png", "means.png", "ompl/forest.log", "ompl/forest_shifted.log", "runs.csv", "summary.md"]
+    assert files == ["MANIFEST.json", "ecdf.png", "map-sets.json", "medians.png", "ompl/forest.log",
+                     "ompl/forest_shifted.log", "runs.csv", "summary.md"]
     mode = 0o666 & ~_umask()
     assert {p: stat.S_IMODE((out / p).stat().st_mode) for p in files} == dict.fromkeys(files, mode)
     conn = sqlite3.connect(":memory:")
@@ -222,7 +223,7 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     summary = (out / "summary.md").read_text()
     assert "## The policy's batch, tuned" in summary and "Chosen: **" in summary
     assert f"policy/{E.FOLLOWER}" in summary and f"{E.FOLLOWER}/lower_bound" in summary
-    assert f"## Issue 18's targets for the {E.ROUTE}" in summary and f"{E.ROUTE} / {E.ROUTE_ABLATION} <= 0.5" in summary
+    assert f"## Targets for the {E.ROUTE}" in summary and f"{E.ROUTE} / {E.ROUTE_ABLATION} <= 0.5" in summary
     assert len(rows) == 2 * len(samplers)  # the test split only: 2 maps x 1 seed per sampler
     csv_runs = [ln.split(",") for ln in (out / "runs.csv").read_text().splitlines()[1:]]
     test_its = sorted(int(r[7]) for r in csv_runs if r[2] == "test" and r[0] == "forest")

@@ -16,7 +16,7 @@ Results are written as a CSV of runs, a Markdown summary, plots, and OMPL benchm
 
 from __future__ import annotations
 
-from learning.evaluation.outputs import ecdf_figure, means_figure, save_plots, write_ompl_logs
+from learning.evaluation.outputs import PALETTE, ecdf_figure, medians_figure, save_plots, write_ompl_logs
 from learning.evaluation.protocol import (
     Query,
     generated_queries,
@@ -44,7 +44,17 @@ from learning.evaluation.roster import (
     sampler_policy_batch,
 )
 from learning.evaluation.runner import run_all, run_on_backend_args, run_one, shared_context, worker_init
-from learning.evaluation.tables import MOVINGAI_POOL, TARGETS, bootstrap_mean_ci, headline, summarize, target_check
+from learning.evaluation.tables import (
+    MOVINGAI_POOL,
+    TARGETS,
+    bootstrap_mean_ci,
+    carry_targets,
+    glance_table,
+    headline,
+    room_table,
+    summarize,
+    target_check,
+)
 from learning.evaluation.tuning import (
     BATCH_TIE,
     GOAL_BIASES,
@@ -65,11 +75,12 @@ from learning.samplers.registry import user_sampler
 
 __all__ = [
     "BATCH_TIE", "BUILTIN_SAMPLERS", "CONSTANT", "CORRIDOR_FOLLOWER", "CORRIDOR_UNIFORM", "FOLLOWER",
-    "GEODESIC_FRONTIER", "GOAL_BIASES", "MOVINGAI_POOL", "POLICY_BATCHES", "POLICY_TUNING_SEEDS", "Query", "ROUTE",
-    "ROUTE_ABLATION", "TARGETS", "TUNING_BIASES", "best_bias", "best_constant", "best_policy_batch", "bias_sampler",
-    "bootstrap_mean_ci", "constant_sampler", "constant_test_tasks", "constant_tuning_tasks", "ecdf_figure",
-    "generated_queries", "headline", "means_figure", "movingai_queries", "parse_user_sampler", "policy_sampler",
-    "policy_tuning_tasks", "pooled", "run_all", "run_on_backend_args", "run_one", "sampler_bias", "sampler_constant",
-    "sampler_policy_batch", "save_plots", "scenarios", "shared_context", "shifted_name", "shifted_queries",
-    "summarize", "target_check", "tuned_for_shifted", "tuning_tasks", "user_sampler", "worker_init", "write_ompl_logs",
+    "GEODESIC_FRONTIER", "GOAL_BIASES", "MOVINGAI_POOL", "PALETTE", "POLICY_BATCHES", "POLICY_TUNING_SEEDS", "Query",
+    "ROUTE", "ROUTE_ABLATION", "TARGETS", "TUNING_BIASES", "best_bias", "best_constant", "best_policy_batch",
+    "bias_sampler", "bootstrap_mean_ci", "carry_targets", "constant_sampler", "constant_test_tasks",
+    "constant_tuning_tasks", "ecdf_figure", "generated_queries", "glance_table", "headline", "medians_figure",
+    "movingai_queries", "parse_user_sampler", "policy_sampler", "policy_tuning_tasks", "pooled", "room_table",
+    "run_all", "run_on_backend_args", "run_one", "sampler_bias", "sampler_constant", "sampler_policy_batch",
+    "save_plots", "scenarios", "shared_context", "shifted_name", "shifted_queries", "summarize", "target_check",
+    "tuned_for_shifted", "tuning_tasks", "user_sampler", "worker_init", "write_ompl_logs"
 ]

@@ -1,4 +1,4 @@
-"""The comparison's figures (ECDF, means) and OMPL benchmark logs for Planner Arena."""
+"""The comparison's figures (ECDF, medians) and OMPL benchmark logs for Planner Arena."""
 
 from __future__ import annotations
 
@@ -21,21 +21,57 @@ def _wrap(text: str, width_in: float, fontsize: float) -> str:
     return textwrap.fill(text, max(12, int(width_in * 72 / (0.6 * fontsize))))
 
 
+#: One colour per sampler role in every figure (tab10 and tab20 colours far apart; references in dark greys,
+#: dashed). User samplers take the colours of :data:`EXTRA_COLORS` in the order given.
+PALETTE = {
+    "uniform": "#1f77b4", "goal bias 0.05": "#ff7f0e", "best goal bias": "#2ca02c", "policy": "#d62728",
+    "constant (tuned)": "#ff9896", "straight-line follower": "#8c564b", "route encoder": "#9467bd",
+    "route ablation": "#c5b0d5", "exact_route": "#17becf", "expert (reference)": "#000000",
+}
+EXTRA_COLORS = ("#e377c2", "#bcbd22", "#7f7f7f", "#aec7e8", "#98df8a", "#c49c94")
+#: Legend names where a sampler's name in the runs is not the tables' word for it.
+LEGEND = {"constant (tuned)": "policy ablation", "exact_route": "exact route reference", "expert (reference)": "expert"}
+#: Samplers drawn dashed: the privileged references.
+REFERENCES = ("exact_route", "expert (reference)")
+
+
+def sampler_colors(extra: Sequence[str] = ()) -> dict[str, str]:
+    """:data:`PALETTE` with a colour for every name in ``extra`` that has none (user samplers)."""
+    colors = dict(PALETTE)
+    free = iter(c for c in EXTRA_COLORS if c not in colors.values())
+    for name in extra:
+        if name not in colors:
+            colors[name] = next(free, "#7f7f7f")
+    return colors
+
+
+def _roles(biases: dict, fam: str, planner: str, extra: Sequence[str]) -> list[tuple[str, str]]:
+    """(role, sampler name) per curve of one map set: the role names the colour and the legend entry."""
+    best = bias_sampler(biases.get((fam, planner), 0.05))
+    roles = [("uniform", "uniform"), ("goal bias 0.05", "goal_bias=0.05")]
+    if best not in ("uniform", "goal_bias=0.05"):
+        roles.append(("best goal bias", best))
+    roles += [("policy", "policy"), *((n, n) for n in extra if n not in REFERENCES)]
+    return roles + [(n, n) for n in REFERENCES]
+
+
 def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path,
                planner: str = "RRT", extra: Sequence[str] = ()) -> list[Path]:
-    """Write ``ecdf.png`` (:func:`ecdf_figure`) and ``means.png`` (:func:`means_figure`); returns their paths."""
+    """Write ``ecdf.png`` (:func:`ecdf_figure`) and ``medians.png`` (:func:`medians_figure`); returns their paths."""
     from planners.viz.plotting import save_figure
 
     if not any(r.split == "test" and r.planner == planner for r in runs):
         return []
     return [save_figure(ecdf_figure(runs, biases, planner, extra), out_dir / "ecdf.png", dpi=110),
-            save_figure(means_figure(runs, rows, biases, planner, extra), out_dir / "means.png", dpi=110)]
+            save_figure(medians_figure(runs, rows, biases, planner, extra), out_dir / "medians.png", dpi=110)]
 
 
 def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: Sequence[str] = ()):
     """ECDF of iterations-to-solution per sampler, one panel per family (test split).
 
-    Titles are wrapped to the figure's width and the layout is constrained, so no text is cut off.
+    Colours follow :data:`PALETTE` (the same in every figure); one legend for all panels sits below
+    them, so no legend hides a curve. Titles are wrapped to the figure's width and the layout is
+    constrained, so no text is cut off.
     """
     from planners.viz.plotting import new_figure
 
@@ -43,66 +79,72 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
     fams = sorted({r.map for r in test})
     cols = min(4, len(fams))
     nrows = math.ceil(len(fams) / cols)
-    size = (4.2 * cols, 3.4 * nrows + 0.5)
+    size = (4.2 * cols, 3.4 * nrows + 1.4)
     fig = new_figure(size)
     fig.suptitle(_wrap(f"{planner} on the test split: fraction of queries solved within n iterations (unsolved "
                        "runs never reach 1); best goal bias tuned on a separate split", size[0], 11), fontsize=11)
+    colors = sampler_colors(extra)
+    handles: dict = {}
     for i, fam in enumerate(fams):
         ax = fig.add_subplot(nrows, cols, i + 1)
-        best_s = bias_sampler(biases.get((fam, planner), 0.05))
-        # fixed colours per role, so panels where the best bias is the default 0.05 read the same
-        colors = {"uniform": "C0", "goal_bias=0.05": "C1", "policy": "C3", "expert (reference)": "0.4"}
-        colors.setdefault(best_s, "C2")
-        colors.update({name: f"C{4 + i}" for i, name in enumerate(extra)})
-        for s in dict.fromkeys(["uniform", "goal_bias=0.05", best_s, "policy", *extra, "expert (reference)"]):
+        for role, s in _roles(biases, fam, planner, extra):
             its = np.sort([r.iterations if r.solved else math.inf for r in test if r.map == fam and r.sampler == s])
             if len(its) == 0:
                 continue
-            label = s.replace("goal_bias=", "goal bias ") + (" (best)" if s == best_s else "")
-            style = {"linestyle": "--"} if s.startswith("expert") else {}
-            ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=label, color=colors[s], **style)
+            style = {"linestyle": "--"} if s in REFERENCES else {}
+            (line,) = ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=LEGEND.get(role, role),
+                              color=colors.get(role, "#7f7f7f"), **style)
+            handles.setdefault(LEGEND.get(role, role), line)
         ax.set_xscale("log")
         ax.set_title(_wrap(fam, 4.0, 12))
         ax.set_xlabel("iterations to solution")
         ax.set_ylabel("fraction solved")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6)
+    fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncols=min(6, len(handles)),
+               fontsize=8)
     return fig
 
 
-def means_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT",
-                 extra: Sequence[str] = ()):
-    """Mean iterations-to-solution with 95% bootstrap intervals per family: uniform, best bias, policy.
+def medians_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT",
+                   extra: Sequence[str] = ()):
+    """Median iterations-to-solution with the interquartile range per map set, as the tables report them.
 
-    The legend sits beside the bars, never over them; the title is wrapped to the figure's width.
+    One bar per sampler role, coloured as in :func:`ecdf_figure`; the legend sits beside the bars,
+    never over them; the title is wrapped to the figure's width.
     """
     from planners.viz.plotting import new_figure
 
     fams = sorted({r.map for r in runs if r.split == "test" and r.planner == planner})
-    size = (max(6.0, 1.6 * len(fams)) + 1.6, 4.0)
+    colors = sampler_colors(extra)
+    present = {r["_sampler"] for r in rows if r["planner"] == planner}
+    sel = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy"),
+           *((n, n) for n in extra if n not in REFERENCES), *((n, n) for n in REFERENCES if n in present)]
+    width = 0.8 / len(sel)
+    size = (max(6.0, 0.25 * len(sel) * len(fams) + 1.0) + 2.2, 4.4)
     fig = new_figure(size)
     ax = fig.add_subplot(1, 1, 1)
-    ax.set_title(_wrap(f"{planner} on the test split: mean iterations to solution with 95% bootstrap intervals "
-                       "(unsolved runs count as the cap)", size[0] - 1.6, 11), fontsize=11)
-    sel = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy"), *((n, n) for n in extra)]
-    width = 0.8 / len(sel)
+    ax.set_title(_wrap(f"{planner} on the test split: median iterations to solution, bars from the first to the third "
+                       "quartile (unsolved runs count as the cap)", size[0] - 2.2, 11), fontsize=11)
     for j, (label, s) in enumerate(sel):
-        means, errs = [], []
+        meds, errs = [], []
         for fam in fams:
             key = s or bias_sampler(biases.get((fam, planner), 0.05))
             r = next((x for x in rows if x["family"] == fam and x["planner"] == planner and x["_sampler"] == key), None)
             if r is None:
-                means.append(math.nan)
+                meds.append(math.nan)
                 errs.append((0, 0))
                 continue
-            lo, hi = (float(v) for v in r["mean_ci95"].split("-"))
-            means.append(r["mean_iterations"])
-            errs.append((r["mean_iterations"] - lo, hi - r["mean_iterations"]))
+            q1, q3 = (float(v) for v in r["iqr"].split("-"))
+            med = r["median_iterations"]
+            meds.append(med)
+            errs.append((max(med - q1, 0.0), max(q3 - med, 0.0)))
         x = np.arange(len(fams)) + (j - (len(sel) - 1) / 2) * width
-        ax.bar(x, means, width, yerr=np.array(errs).T, capsize=3, label=label)
+        ax.bar(x, meds, width, yerr=np.array(errs).T, capsize=3, label=LEGEND.get(label, label),
+               color=colors.get(label, "#7f7f7f"),
+               **({"hatch": "//", "edgecolor": "white"} if s in REFERENCES else {}))
     ax.set_xticks(np.arange(len(fams)), fams, rotation=30, ha="right")
     ax.set_yscale("log")
-    ax.set_ylabel("mean iterations (95% CI)")
+    ax.set_ylabel("median iterations (quartiles)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     return fig
 

@@ -171,3 +171,157 @@ def target_check(head: Sequence[dict], movingai_maps: Sequence[str], sampler: st
         total += len(cells)
     columns = ["map set", *(c for c in (c_const, c_bias, c_lb, c_wall, c_maps) if any(c in r for r in rows))]
     return [{c: r.get(c, "") for c in columns} for r in rows], met, total
+
+
+# --- results at a glance, the room, and the targets for carrying the gain ---------------------------
+
+#: The privileged expert's and the exact route reference's sampler names (the latter runs where the roster has it).
+EXPERT_NAME = "expert (reference)"
+
+
+def _exact_name() -> str:
+    from learning.evaluation import roster
+
+    return getattr(roster, "EXACT_ROUTE", "exact_route")
+
+
+#: Share of the ablation's median below which the room to the exact reference is too small to judge.
+ROOM_FLOOR = 0.2
+
+#: In-distribution families where the learned sampler must keep its gain, and the most of its ablation it may need.
+KEEP_GAIN = {"families": ("narrow_passage", "bugtrap", "maze", "rooms"), "ratio": 0.55}
+
+#: The share of the room the learned sampler must close on unlike maps, and how much worse than its ablation it may be.
+CLOSE_SHARE, WORSE_MARGIN = 0.5, 0.05
+
+
+def _order(fams, movingai_maps: Sequence[str]) -> list[str]:
+    """Generated, shifted and unseen map sets first, then the MovingAI maps and their pooled row."""
+    def group(f: str) -> int:
+        return (5 if f == MOVINGAI_POOL else 4 if f in movingai_maps else 1 if f.endswith("(shifted)")
+                else 2 if f.endswith("(unseen)") else 0)
+
+    return sorted(fams, key=lambda f: (group(f), f))
+
+
+def glance_table(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
+                 movingai_maps: Sequence[str] = ()) -> list[dict]:
+    """Per map set (RRT, test split): each sampler's median iterations with its success rate, a few columns.
+
+    Uniform, the best goal bias, the policy and its ablation, the route encoder and its ablation, the
+    exact route reference (where it ran), the expert, and ``extra`` (user) samplers. A sampler that did
+    not run on a set shows a dash; a column no set has is left out.
+    """
+    from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
+
+    by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
+    cols = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy"), ("policy ablation", CONSTANT),
+            (ROUTE, ROUTE), (ROUTE_ABLATION, ROUTE_ABLATION), ("exact route reference", _exact_name()),
+            ("expert", EXPERT_NAME), *((n, n) for n in extra)]
+    out = []
+    for fam in _order({f for f, _ in by}, movingai_maps):
+        b = biases.get((fam, "RRT"))
+        row = {"map set": fam, "tuned bias": "-" if b is None else f"{b:g}"}
+        for label, name in cols:
+            r = by.get((fam, name if name is not None else bias_sampler(b) if b is not None else ""))
+            row[label] = "-" if r is None else f"{r['median_iterations']:.0f} ({r['success']:.0%})"
+        out.append(row)
+    keep = [c for c in out[0] if c in ("map set", "tuned bias") or any(r[c] != "-" for r in out)] if out else []
+    return [{c: r[c] for c in keep} for r in out]
+
+
+def _median(by: dict, fam: str, name: str) -> float:
+    r = by.get((fam, name))
+    return math.nan if r is None else float(r["median_iterations"])
+
+
+def room(ablation: float, learned: float, exact: float) -> tuple[float, float]:
+    """(room as a share of the ablation's median, share of it closed); the share is NaN where the room is too small."""
+    if any(math.isnan(v) for v in (ablation, learned, exact)) or ablation <= 0:
+        return math.nan, math.nan
+    gap = ablation - exact
+    share = (ablation - learned) / gap if gap >= ROOM_FLOOR * ablation else math.nan
+    return gap / ablation, share
+
+
+def room_table(rows: Sequence[dict], movingai_maps: Sequence[str] = ()) -> list[dict]:
+    """Per map set where the exact route reference ran: the room to it and the share closed, route encoder and policy.
+
+    Empty when the exact reference ran nowhere.
+    """
+    from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
+
+    exact = _exact_name()
+    by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
+    out = []
+    for fam in _order({f for f, s in by if s == exact}, movingai_maps):
+        x = _median(by, fam, exact)
+        row = {"map set": fam, "exact reference": f"{x:.0f}"}
+        for label, learned, abl in (("route encoder", ROUTE, ROUTE_ABLATION), ("policy", "policy", CONSTANT)):
+            a, v = _median(by, fam, abl), _median(by, fam, learned)
+            gap, share = room(a, v, x)
+            row[f"{label}: ablation / learned"] = "-" if math.isnan(a) or math.isnan(v) else f"{a:.0f} / {v:.0f}"
+            row[f"{label}: room"] = "-" if math.isnan(gap) else f"{gap:.0%}"
+            row[f"{label}: share closed"] = ("-" if math.isnan(gap) else "no room" if math.isnan(share)
+                                             else f"{share:.2f}")
+        out.append(row)
+    return out
+
+
+def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: str | None = None,
+                  ablation: str | None = None) -> list[str]:
+    """The targets for carrying the learned sampler's gain, in words: which hold, which fail, which cannot be reached.
+
+    On every shifted and unseen set and on the MovingAI maps pooled, where the room to the exact
+    reference is at least :data:`ROOM_FLOOR` of the ablation's median: at least :data:`CLOSE_SHARE`
+    of it closed (where the room is smaller, the target cannot be reached). On the in-distribution
+    narrow passage, bugtrap, maze and rooms maps: at most :data:`KEEP_GAIN` of the ablation's median.
+    On no set more than :data:`WORSE_MARGIN` worse than the ablation; success at least the ablation's
+    on every set and every MovingAI map. Default sampler: the route encoder against its ablation.
+    """
+    from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
+
+    learned, ablation = learned or ROUTE, ablation or ROUTE_ABLATION
+    exact = _exact_name()
+    by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
+    fams = _order({f for f, s in by if s == learned and (f, ablation) in by}, movingai_maps)
+    if not fams:
+        return [f"The {learned} and its ablation ran on no common map set: no targets to check."]
+    lines = []
+    unlike = [f for f in fams if f.endswith(("(shifted)", "(unseen)")) or f == MOVINGAI_POOL
+              or (f in movingai_maps and len(movingai_maps) == 1)]
+    held, failed, unreachable, unknown = [], [], [], []
+    for f in unlike:
+        gap, share = room(_median(by, f, ablation), _median(by, f, learned), _median(by, f, exact))
+        if math.isnan(gap):
+            unknown.append(f)
+        elif math.isnan(share):
+            unreachable.append(f"{f} (room {gap:.0%} of the ablation's median)")
+        else:
+            (held if share >= CLOSE_SHARE else failed).append(f"{f} {share:.2f}")
+    if unlike:
+        lines.append("closing at least half the room to the exact reference on maps unlike the training maps: "
+                     + (f"holds on {len(held)} of {len(held) + len(failed)} sets where there is room" if held or failed
+                        else "no set with room measured")
+                     + (f" ({', '.join(held)})" if held else "")
+                     + (f"; fails on {', '.join(failed)}" if failed else "")
+                     + (f"; cannot be reached where the exact reference has no room: {', '.join(unreachable)}"
+                        if unreachable else "")
+                     + (f"; not measured (no exact reference ran) on {', '.join(unknown)}" if unknown else "") + ".")
+    keep = [f for f in fams if f in KEEP_GAIN["families"]]
+    if keep:
+        ratios = {f: _median(by, f, learned) / max(_median(by, f, ablation), 1e-9) for f in keep}
+        bad = [f"{f} {v:.2f}" for f, v in ratios.items() if v > KEEP_GAIN["ratio"]]
+        lines.append(f"keeping the gain on the training distribution (at most {KEEP_GAIN['ratio']:g} of the "
+                     f"ablation's median on {', '.join(keep)}): "
+                     + ("holds" if not bad else f"fails on {', '.join(bad)}")
+                     + f" (ratios: {', '.join(f'{f} {v:.2f}' for f, v in ratios.items())}).")
+    worse = [f"{f} {_median(by, f, learned) / max(_median(by, f, ablation), 1e-9):.2f}" for f in fams
+             if _median(by, f, learned) > (1 + WORSE_MARGIN) * _median(by, f, ablation)]
+    lines.append(f"never more than {WORSE_MARGIN:.0%} worse than the ablation: "
+                 + ("holds on every set." if not worse else f"fails on {', '.join(worse)} (learned / ablation)."))
+    short = [f"{f} {by[(f, learned)]['success']:.2f} against {by[(f, ablation)]['success']:.2f}" for f in fams
+             if by[(f, learned)]["success"] < by[(f, ablation)]["success"]]
+    lines.append("success at least the ablation's on every set and every MovingAI map: "
+                 + ("holds." if not short else f"fails on {', '.join(short)}."))
+    return [f"{learned} against its ablation: {line}" for line in lines]

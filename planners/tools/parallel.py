@@ -38,7 +38,8 @@ class Backend(Protocol):
     workers: int
 
     def map(self, fn: Callable[[Any, Any], Any], tasks: Sequence, *, context: Any = None,
-            chunksize: int | None = None, progress: bool = False, desc: str = "tasks") -> list: ...
+            chunksize: int | None = None, progress: bool = False, desc: str = "tasks",
+            on_result: Callable[[int, Any], None] | None = None) -> list: ...
 
     def close(self) -> None: ...
 
@@ -89,6 +90,10 @@ _LOCAL: dict = {}  # in a pool worker: the context and the function the pool ser
 
 
 def _pool_init(fn, context, worker_init) -> None:
+    import signal
+
+    # Ctrl-C reaches the whole process group: the parent stops the pool, the workers stay quiet
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     if worker_init is not None:
         worker_init()
     _LOCAL["fn"], _LOCAL["context"] = fn, context
@@ -106,7 +111,11 @@ class LocalBackend:
         self.worker_init = worker_init
         self._init_done = False
 
-    def map(self, fn, tasks, *, context=None, chunksize=None, progress=False, desc="tasks") -> list:
+    def map(self, fn, tasks, *, context=None, chunksize=None, progress=False, desc="tasks", on_result=None) -> list:
+        """``fn(task, context)`` for every task, in order; ``on_result(index, result)`` as each one arrives.
+
+        An exception in the caller (Ctrl-C, a signal turned into one) terminates the pool's workers.
+        """
         from tqdm.auto import tqdm
 
         tasks = list(tasks)
@@ -114,7 +123,12 @@ class LocalBackend:
             if self.worker_init is not None and not self._init_done:
                 self.worker_init()
                 self._init_done = True
-            return [fn(t, context) for t in tqdm(tasks, desc=desc, disable=not progress)]
+            out = []
+            for i, t in enumerate(tqdm(tasks, desc=desc, disable=not progress)):
+                out.append(fn(t, context))
+                if on_result is not None:
+                    on_result(i, out[-1])
+            return out
         import multiprocessing as mp
 
         ctx = mp.get_context("spawn")  # fresh interpreters: no inherited locks or thread pools
@@ -124,7 +138,12 @@ class LocalBackend:
             # the context is pickled once per worker (initializer), not once per task
             with ctx.Pool(self.workers, initializer=_pool_init, initargs=(fn, context, self.worker_init)) as pool:
                 it = pool.imap(_pool_call, tasks, chunksize=chunksize or 4)
-                return list(tqdm(it, total=len(tasks), desc=desc, disable=not progress))
+                out = []
+                for i, r in enumerate(tqdm(it, total=len(tasks), desc=desc, disable=not progress)):
+                    out.append(r)
+                    if on_result is not None:
+                        on_result(i, r)
+                return out
         finally:
             for k, v in saved.items():
                 if v is None:
@@ -178,7 +197,8 @@ class RayBackend:
         self.worker_init = worker_init
         self._task = ray.remote(num_cpus=1, max_retries=max_retries)(_ray_chunk)
 
-    def map(self, fn, tasks, *, context=None, chunksize=None, progress=False, desc="tasks") -> list:
+    def map(self, fn, tasks, *, context=None, chunksize=None, progress=False, desc="tasks", on_result=None) -> list:
+        """As ``LocalBackend.map``; ``on_result`` is called chunk by chunk, in the order chunks finish."""
         from tqdm.auto import tqdm
 
         ray = self._ray
@@ -190,10 +210,16 @@ class RayBackend:
         chunks = [tasks[i : i + size] for i in range(0, len(tasks), size)]
         futures = [self._task.remote(fn, c, [ref], self.worker_init) for c in chunks]
         with tqdm(total=len(tasks), desc=desc, disable=not progress) as bar:
-            pending, sizes = list(futures), {f.hex(): len(c) for f, c in zip(futures, chunks, strict=True)}
+            pending = list(futures)
+            first = {f.hex(): i * size for i, f in enumerate(futures)}
+            sizes = {f.hex(): len(c) for f, c in zip(futures, chunks, strict=True)}
             while pending:  # what finished in the last moment, not one at a time: wait() scans all it is given
                 done, pending = ray.wait(pending, num_returns=len(pending), timeout=0.2)
                 bar.update(sum(sizes[f.hex()] for f in done))
+                if on_result is not None:
+                    for f in done:
+                        for j, r in enumerate(ray.get(f)):
+                            on_result(first[f.hex()] + j, r)
         out = []
         for part in ray.get(futures):
             out.extend(part)

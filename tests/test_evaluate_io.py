@@ -1,0 +1,334 @@
+"""scripts/evaluate.py at its edges: checks before work, the lock, one output set, the journal, interrupts, map sets."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from learning import evaluation as E
+from learning.evaluation.journal import JOURNAL, Journal, task_key, work_folder
+from learning.evaluation.mapsets import UnseenQuery, pooled_tuned, unseen_name, unseen_queries
+from planners.base.fileio import MANIFEST, run_lock
+from planners.tools.benchmark import Run
+from conftest import load_script
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The smallest comparison: one forest map per split, one seed, no other map sets or planners.
+TINY = ["--families", "forest", "--size", "64", "--maps", "1", "--tuning-maps", "1", "--seeds", "1",
+        "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "--no-expert",
+        "--max-iterations", "2000"]
+
+
+def _ev():
+    return load_script("evaluate")
+
+
+# --- checks before work ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--step", "0"], "--step"), (["--step", "nan"], "--step"), (["--step", "1e-9"], "--step = 1e-09"),
+    (["--tolerance", "-1"], "--tolerance"), (["--tolerance", "inf"], "--tolerance"),
+    (["--size", "10"], "--size"), (["--size", "100000"], "--size = 100000"),
+    (["--maps", "0"], "--maps"), (["--seeds", "-2"], "--seeds"), (["--processes", "0"], "--processes"),
+    (["--unseen-maps", "-1"], "--unseen-maps"), (["--families", "lava"], "lava"),
+    (["--sampler", "mine=missing.zip@SamplerGym/RRT-Forest-v0@bogus=1"], "bogus"),
+    (["--sampler", "mine=no_such_module:make"], "no_such_module"),
+    (["--map-set", "/no/such/maps"], "/no/such/maps"),
+])
+def test_bad_arguments_exit_2_with_one_line_naming_them(argv, needle, capsys, tmp_path):
+    with pytest.raises(SystemExit) as exc:
+        _ev().main([*argv, "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err and needle in err[-1] and "Traceback" not in "\n".join(err)
+    assert not (tmp_path / "out").exists()
+
+
+def test_output_places_are_checked_before_work(tmp_path, capsys):
+    ev = _ev()
+    a_file = tmp_path / "file"
+    a_file.write_text("x")
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "thesis.tex").write_text("keep me")
+    for out, needle in ((a_file, "a file is there"), (a_file / "below", "is a file"), (foreign, "thesis.tex")):
+        with pytest.raises(SystemExit) as exc:
+            ev.main([*TINY, "--out", str(out)])
+        assert exc.value.code == 2
+        assert needle in capsys.readouterr().err
+    assert (foreign / "thesis.tex").read_text() == "keep me"
+    if os.geteuid() != 0:  # root writes anywhere
+        ro = tmp_path / "ro"
+        ro.mkdir(mode=0o500)
+        with pytest.raises(SystemExit):
+            ev.main([*TINY, "--out", str(ro / "out")])
+        assert "not writable" in capsys.readouterr().err
+
+
+def test_a_second_run_on_a_locked_folder_exits_2_naming_the_holder(tmp_path, capsys):
+    out = tmp_path / "out"
+    with run_lock(out, "the first run"), pytest.raises(SystemExit) as exc:
+        _ev().main([*TINY, "--out", str(out)])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"pid {os.getpid()}" in err and "the first run" in err
+
+
+# --- the journal ----------------------------------------------------------------------------------
+
+def _run(i: int, sampler: str = "uniform") -> Run:
+    return Run(map="forest", query=f"q{i}", split="test", planner="RRT", sampler=sampler, seed=0, solved=i % 2 == 0,
+               iterations=100 + i, lower_bound=10, candidates=100 + i, collision_checks=200, wall_time=0.01,
+               us_per_iteration=5.0, path_cost=float("inf") if i % 2 else 12.5, forward_passes=0, vertices=50)
+
+
+def test_the_journal_keeps_runs_across_a_torn_line_and_refuses_other_settings(tmp_path):
+    folder = tmp_path / "out.partial"
+    j = Journal(folder, {"step": 4.0}, resume=False)
+    runs = [_run(i) for i in range(5)]
+    for i, r in enumerate(runs):
+        j.add(task_key(("task", i)), r)
+    j.close()
+    with open(folder / JOURNAL, "a") as f:
+        f.write('{"key": "torn", "run": {"map": "fo')  # a kill in the middle of a line
+    again = Journal(folder, {"step": 4.0}, resume=True)
+    assert again.resumed == 5 and [again.done[task_key(("task", i))] for i in range(5)] == runs
+    again.close()
+    with pytest.raises(ValueError, match="other settings.*step"):
+        Journal(folder, {"step": 2.0}, resume=True)
+    fresh = Journal(folder, {"step": 2.0}, resume=False)  # without --resume: start over
+    assert fresh.done == {}
+    fresh.remove()
+    assert not folder.exists()
+    assert work_folder(tmp_path / "out") == (tmp_path / "out.partial").absolute()
+
+
+# --- tables and figures -----------------------------------------------------------------------------
+
+def _rows(medians: dict[str, float], fam: str = "maze (shifted)") -> list[dict]:
+    runs = []
+    for s, m in medians.items():
+        runs += [dataclass_run(fam, s, m + d) for d in (-1, 0, 1)]
+    return E.summarize(runs, {(fam, "RRT"): 0.05})
+
+
+def dataclass_run(fam: str, sampler: str, its: float) -> Run:
+    r = _run(0, sampler)
+    return Run(**{**r.__dict__, "map": fam, "iterations": int(its), "solved": True, "query": f"{its}"})
+
+
+def test_room_and_share_closed_and_targets_in_words():
+    rows = _rows({"route ablation": 400, "route encoder": 250, "exact_route": 100, "policy": 390,
+                  "constant (tuned)": 400, "uniform": 900, "goal_bias=0.05": 800})
+    room = E.room_table(rows)
+    assert room[0]["route encoder: room"] == "75%" and room[0]["route encoder: share closed"] == "0.50"
+    assert room[0]["policy: share closed"] == "0.03"
+    words = " ".join(E.carry_targets(rows, []))
+    assert "holds on 1 of 1" in words and "issue" not in words.lower()
+    # where the exact reference is within 20% of the ablation, the target cannot be reached
+    rows = _rows({"route ablation": 100, "route encoder": 90, "exact_route": 90})
+    words = " ".join(E.carry_targets(rows, []))
+    assert "cannot be reached" in words and "10%" in words
+    assert E.room_table(_rows({"route ablation": 100, "route encoder": 90})) == []  # no exact reference: no table
+
+
+def test_the_glance_table_has_a_few_columns_and_dashes_for_missing_samplers():
+    rows = _rows({"uniform": 900, "goal_bias=0.05": 800, "policy": 300, "route encoder": 200})
+    table = E.glance_table(rows, {("maze (shifted)", "RRT"): 0.05})
+    assert list(table[0]) == ["map set", "tuned bias", "uniform", "best goal bias", "policy", "route encoder"]
+    assert table[0]["best goal bias"] == "800 (100%)"
+
+
+def test_one_colour_per_sampler_in_both_figures():
+    runs = []
+    for s, base in (("uniform", 900), ("goal_bias=0.05", 700), ("goal_bias=0.2", 500), ("policy", 300),
+                    ("route encoder", 200), ("expert (reference)", 60)):
+        runs += [dataclass_run(f, s, base + 13 * i) for f in ("forest", "maze") for i in range(4)]
+    biases = {("forest", "RRT"): 0.2, ("maze", "RRT"): 0.05}
+    rows = E.summarize(runs, biases)
+    ecdf = E.ecdf_figure(runs, biases, extra=["route encoder"])
+    med = E.medians_figure(runs, rows, biases, extra=["route encoder"])
+    lines = {ln.get_label(): ln.get_color() for ax in ecdf.axes for ln in ax.get_lines()}
+    bars = {c.get_label(): c.patches[0].get_facecolor() for c in med.axes[0].containers if hasattr(c, "patches")}
+    from matplotlib.colors import to_hex
+
+    for name, label in (("uniform", "uniform"), ("policy", "policy"), ("route encoder", "route encoder"),
+                        ("expert (reference)", "expert")):
+        assert lines[label] == E.PALETTE[name] and to_hex(bars[label]) == E.PALETTE[name]
+    assert len(set(E.PALETTE.values())) == len(E.PALETTE)
+    assert not any(ax.get_legend() for ax in ecdf.axes) and ecdf.legends  # one legend, outside the panels
+
+
+# --- map sets ---------------------------------------------------------------------------------------
+
+def test_unseen_families_take_the_pooled_generated_tuning():
+    qs = unseen_queries(64, 2)
+    assert {q.map_set for q in qs} == {unseen_name(f) for f in ("spiral", "warehouse", "baffles")}
+    assert all(q.split == "test" for q in qs) and qs[0].problem(None, 4.0).name.startswith("spiral-64-")
+    runs = [Run(**{**_run(0).__dict__, "map": fam, "split": "tuning", "sampler": s, "iterations": its,
+                   "solved": True}) for fam, s, its in (("forest", "uniform", 100), ("forest", "goal_bias=0.1", 50),
+                                                         ("maze", "uniform", 300), ("maze", "goal_bias=0.1", 400),
+                                                         ("maze", "goal_bias=0.1", 60), ("maze", "uniform", 200))]
+    tuned = pooled_tuned(runs, ["forest", "maze"], E.best_bias, [unseen_name("spiral")])
+    # pooled medians: uniform [100, 300, 200] -> 200, bias 0.1 [50, 400, 60] -> 60
+    assert tuned == {(unseen_name("spiral"), "RRT"): 0.1}
+    assert isinstance(qs[0], UnseenQuery)
+
+
+@pytest.mark.slow
+def test_a_map_set_is_tuned_on_its_tuning_part_and_tested_on_its_test_part(tmp_path, capsys):
+    out = tmp_path / "out"
+    rc = _ev().main(["--map-set", str(ROOT / "tests" / "data" / "ros"), "--step", "0.2", "--tolerance", "0.2",
+                     "--seeds", "1", "--no-expert", "--processes", "1", "--max-iterations", "2000",
+                     "--out", str(out)])
+    assert rc == 0
+    printed = capsys.readouterr().out
+    assert "split sha256-rank" in printed
+    record = json.loads((out / "map-sets.json").read_text())
+    assert record["map set"]["split"]["parts"]["test"] and record["map sets"] == ["ros"]
+    rows = list(csv.DictReader((out / "runs.csv").open()))
+    parts = record["map set"]["split"]["parts"]
+    for r in rows:
+        assert r["query"].split("#")[0] in parts["tuning" if r["split"] == "tuning" else "test"]
+    summary = (out / "summary.md").read_text()
+    assert summary.index("## Results at a glance") < summary.index("## All cells") and "| ros |" in summary
+    assert (out / "ompl" / "ros.log").is_file()
+
+
+# --- interrupts, resume and kills, in a subprocess -----------------------------------------------------
+
+SLOW = '''
+import time
+from planners.base.samplers import SamplerBase
+
+
+class Slow(SamplerBase):
+    """Uniform, a few milliseconds per draw: long enough to interrupt the comparison mid-run."""
+
+    def draw(self, rng, n, view):
+        time.sleep(0.004)
+        return self._uniform(rng.random((n, self.problem.dim)))
+
+
+def make():
+    return Slow()
+'''
+
+
+def _start(tmp_path: Path, out: Path, *extra: str) -> subprocess.Popen:
+    (tmp_path / "slow_sampler.py").write_text(SLOW)
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.Popen([sys.executable, str(ROOT / "scripts" / "evaluate.py"), *TINY, "--processes", "2",
+                             "--sampler", "slow=slow_sampler:make", "--out", str(out), *extra],
+                            cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for d in Path("/proc").iterdir():
+        try:
+            if d.name.isdigit() and f"PPid:\t{pid}\n" in (d / "status").read_text():
+                out.append(int(d.name))
+        except OSError:
+            continue
+    return out
+
+
+def _wait_for_runs(out: Path, n: int, proc: subprocess.Popen, limit: float = 240) -> None:
+    journal = work_folder(out) / JOURNAL
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < limit:
+        assert proc.poll() is None, proc.communicate()
+        if journal.is_file() and len(journal.read_text().splitlines()) > n:
+            return
+        time.sleep(0.2)
+    raise AssertionError("no runs journaled in time")
+
+
+def _csv_without_times(path: Path) -> list[dict]:
+    return [{k: v for k, v in r.items() if k not in ("wall_time", "us_per_iteration")}
+            for r in csv.DictReader(path.open())]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_an_interrupt_stops_every_worker_keeps_the_journal_and_resume_finishes(tmp_path, sig, status):
+    out = tmp_path / "out"
+    proc = _start(tmp_path, out)
+    _wait_for_runs(out, 2, proc)
+    workers = _children(proc.pid)
+    t0 = time.monotonic()
+    if sig == signal.SIGINT:  # Ctrl-C in a terminal reaches the whole process group, workers included
+        os.killpg(proc.pid, sig)
+    else:  # kill PID: the main process only
+        proc.send_signal(sig)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == status and time.monotonic() - t0 < 10
+    lines = [ln for ln in err.splitlines() if ln.strip() and "it/s" not in ln and "s/it" not in ln]
+    assert "Traceback" not in err and sum("interrupted:" in ln for ln in lines) == 1, err
+    assert "--resume" in err and not out.exists()
+    time.sleep(1)
+    assert not [w for w in workers if Path(f"/proc/{w}").exists() and "zombie" not in
+                (Path(f"/proc/{w}/status").read_text() if Path(f"/proc/{w}").exists() else "zombie").lower()]
+    kept = len((work_folder(out) / JOURNAL).read_text().splitlines()) - 1
+    assert kept >= 2
+    resumed = _start(tmp_path, out, "--resume")
+    so, se = resumed.communicate(timeout=600)
+    assert resumed.returncode == 0, se
+    assert f"resuming: {kept}" in so or "resuming:" in so
+    assert not work_folder(out).exists() and (out / MANIFEST).is_file()
+    whole = tmp_path / "whole"
+    full = _start(tmp_path, whole)
+    full.communicate(timeout=600)
+    assert full.returncode == 0
+    assert _csv_without_times(out / "runs.csv") == _csv_without_times(whole / "runs.csv")
+
+
+@pytest.mark.slow
+def test_a_kill_leaves_the_old_output_set_whole(tmp_path):
+    out = tmp_path / "out"
+    first = _start(tmp_path, out)
+    first.communicate(timeout=600)
+    assert first.returncode == 0
+    before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    manifest = json.loads((out / MANIFEST).read_text())
+    assert set(manifest["files"]) == {str(p) for p in before if str(p) != MANIFEST}
+    second = _start(tmp_path, out)
+    _wait_for_runs(out, 2, second)
+    second.kill()
+    second.communicate()
+    after = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert after == before
+    # the dead run's lock is taken over, and --resume finishes from its journal
+    third = _start(tmp_path, out, "--resume")
+    so, se = third.communicate(timeout=600)
+    assert third.returncode == 0, se
+    assert "took over the lock" in se and "resuming:" in so
+
+
+def test_progress_names_the_phase_and_the_cost_per_sampler(tmp_path, capsys):
+    from learning.evaluation.journal import run_phase
+    from planners.tools.parallel import make_backend
+
+    q = E.generated_queries(["forest"], 64, 1, 0)[0]
+    cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": "", "route": "", "step": 4.0, "max_iterations": 500,
+           "user_samplers": {}}
+    tasks = [(q, "RRT", s, seed, cfg) for s in ("uniform", "goal_bias=0.05") for seed in range(4)]
+    j = Journal(tmp_path / "w", {}, resume=False)
+    runs = run_phase(tasks, make_backend("local", processes=1), j, "a phase")
+    err = capsys.readouterr().err
+    assert "a phase" in err and "ms/run" in err and "goal bias" in err
+    assert [r.sampler for r in runs] == [t[2] for t in tasks] and len(j.done) == 8
+    again = run_phase(tasks, make_backend("local", processes=1), j, "again")  # all from the journal
+    assert again == runs
+    assert np.all([r.iterations > 0 for r in runs])
