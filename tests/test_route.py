@@ -166,6 +166,14 @@ class _Boom:
     ({"config": {"block": 4, "channels": 8, "depth": 2, "trained_side": -1}, "state": {}}, "config trained_side"),
     ({"config": {"block": 4, "channels": 8, "depth": 2, "trained_side": 12.5}, "state": {}}, "config trained_side"),
     ([1, 2], "expected {'config'"),
+    ({"config": {"block": 4, "channels": 8, "depth": 2, "x" * 60000: 1}, "state": {}}, r"unknown keys \['xxx"),
+    ({"config": {"block": list(range(20000)), "channels": 8, "depth": 2}, "state": {}}, "config block"),
+    ({"config": {"block": 2, "channels": 4, "depth": 1},
+      "state": {**RouteNet(2, 4, 1).state_dict(), "inp.bias": torch.tensor([0.0, float("nan"), 0.0, 0.0])}},
+     "tensor 'inp.bias' holds NaN or infinite"),
+    ({"config": {"block": 2, "channels": 4, "depth": 1},
+      "state": {**RouteNet(2, 4, 1).state_dict(), "out.weight": torch.full((4, 4, 3, 3), float("inf"))}},
+     "tensor 'out.weight' holds NaN or infinite"),
 ])
 def test_a_bad_encoder_file_is_refused_by_name_and_runs_nothing(tmp_path, monkeypatch, content, needle):
     monkeypatch.chdir(tmp_path)
@@ -178,7 +186,7 @@ def test_a_bad_encoder_file_is_refused_by_name_and_runs_nothing(tmp_path, monkey
         torch.save(content, path)
     with pytest.raises(InputError, match=needle) as exc:
         load_route_net(path)
-    assert "bad.pt" in str(exc.value)
+    assert "bad.pt" in str(exc.value) and len(str(exc.value)) < 600  # one short line, whatever the file holds
     assert not (tmp_path / "PWNED").exists()
     with pytest.raises(FileNotFoundError):
         load_route_net(tmp_path / "missing.pt")
@@ -297,6 +305,68 @@ def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
     for gone in ("uses", "symmetries", "lazy", "stall"):  # experiments' knobs, not the product's
         with pytest.raises(TypeError, match=gone):
             RouteSampler(shipped.net, **{gone: 1})
+
+
+def test_a_map_above_the_encoders_limit_is_refused_naming_its_size_the_limit_and_the_variable(shipped, monkeypatch):
+    monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", str(16 * 16))
+    big = generate("forest", TEST_SEED0, 68)  # 17 x 17 blocks
+    with pytest.raises(InputError, match=r"68 x 68 map is 17 x 17 = 289 blocks.*limit of 256.*MAX_ROUTE_BLOCKS"):
+        RRT(big, step_size=4.0, sampler=shipped, seed=0)
+    assert RRT(generate("forest", TEST_SEED0, 64), step_size=4.0, sampler=shipped, seed=0).solve(
+        max_iterations=20000).solved
+    monkeypatch.delenv("SAMPLERGYM_MAX_ROUTE_BLOCKS")
+    assert RRT(big, step_size=4.0, sampler=shipped, seed=0).solve(max_iterations=20000).solved
+    monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "lots")
+    with pytest.raises(InputError, match="SAMPLERGYM_MAX_ROUTE_BLOCKS = 'lots'"):
+        RRT(big, step_size=4.0, sampler=shipped, seed=0)
+
+
+def test_batched_passes_for_many_queries_give_each_querys_prediction(shipped, monkeypatch):
+    import learning.models.route_net as route_net
+
+    maps = [generate(f, TEST_SEED0 + i, 64) for i, f in enumerate(("forest", "maze", "rooms"))]
+    queries = [(p.world.obstacles, p.world.cell_of(p.goal)) for p in maps] + [(maps[0].world.obstacles[:, :40], (3, 5))]
+    one = [shipped.net.predict(obs, goal, 8) for obs, goal in queries]
+    many = shipped.net.predict_many(queries, 8)
+    assert all(np.allclose(a, b, rtol=1e-5, atol=1e-5) for a, b in zip(one, many, strict=True))
+    monkeypatch.setattr(route_net, "BATCH_BYTES", 1)  # one symmetry per batch: bounded memory, same field
+    assert np.allclose(shipped.net.predict(*queries[0], 8), one[0], rtol=1e-5, atol=1e-5)
+
+
+def test_the_encoder_runs_at_the_planning_thread_count_and_restores_the_callers(small_net, shipped, monkeypatch):
+    from learning.models.threads import planning_thread_count
+
+    seen = []
+    forward = type(shipped.net).forward
+    monkeypatch.setattr(type(shipped.net), "forward", lambda self, x: seen.append(torch.get_num_threads()) or
+                        forward(self, x))
+    before = torch.get_num_threads()
+    p = generate("forest", TEST_SEED0, 64)
+    RouteSampler.load(small_net, device="cpu").bind(p)
+    monkeypatch.setenv("SAMPLERGYM_TORCH_THREADS", "2")
+    RouteSampler.load(small_net).bind(p)
+    RouteSampler.load(small_net, threads=3).bind(p)
+    assert seen == [1, 2, 3] and torch.get_num_threads() == before
+    for bad in (0, "two", 2.5, True):
+        with pytest.raises(InputError, match="thread"):
+            planning_thread_count(bad)
+    with pytest.raises(InputError, match="threads = 0"):
+        RouteSampler(None, threads=0)
+
+
+def test_the_device_follows_sb3s_convention_and_the_cpu_gives_the_validated_runs(small_net):
+    p = generate("bugtrap", TEST_SEED0 + 4, 96)
+    runs = [RRT(p, step_size=4.0, sampler=RouteSampler.load(small_net, device=d), seed=1).solve(max_iterations=20000)
+            for d in ("cpu", "auto")]
+    assert runs[0].iterations == runs[1].iterations
+    with pytest.raises(InputError, match="device = 'gpu'"):
+        RouteSampler(None, device="gpu")
+    if not torch.cuda.is_available():
+        with pytest.raises(InputError, match="no CUDA device"):
+            RouteSampler.load(small_net, device="cuda")
+    from learning.samplers.registry import make_sampler
+
+    assert make_sampler("route", path=str(small_net), device="cpu").device == torch.device("cpu")
 
 
 @given(family=st.sampled_from(FAMILIES), seed=st.integers(0, 10**6), size=st.sampled_from([32, 64, 96]))

@@ -83,6 +83,10 @@ S_FORWARD = 4  # forward passes so far
 S_FSEEN = 5  # vertices already added to the frontier
 S_FRONT = 6  # frontier cells
 N_STATE = 7
+#: The smallest step a checkpoint's config may carry, in world units: a step that small would need
+#: millions of iterations on any map and windows of millions of cells (the map's cell is the judge of
+#: a step, and no reader map's cell is this small).
+MIN_STEP = 1e-3
 #: Softmax temperature of the action distribution: the policy's own (1), as trained.
 TEMPERATURE = 1.0
 
@@ -171,7 +175,7 @@ def check_config(config, source: str = "policy config") -> dict:
         raise InputError(f"{source}: obs_version = {config['obs_version']!r}: the policy was trained on another "
                          f"observation, this SamplerGym builds version {OBS_VERSION}")
     out = dict(config)
-    out["step_size"] = check_number(source, "step_size", config["step_size"], low=0.0, low_open=True)
+    out["step_size"] = check_number(source, "step_size", config["step_size"], low=MIN_STEP)
     out["uniform_floor"] = check_number(source, "uniform_floor", config["uniform_floor"], low=0.0, high=1.0)
     out["batch"] = check_number(source, "batch", config["batch"], integer=True, low=1, high=CHUNK)
     out["max_iterations"] = check_number(source, "max_iterations", config.get("max_iterations", 20000),

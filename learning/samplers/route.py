@@ -26,7 +26,8 @@ import os
 import numba as nb
 import numpy as np
 
-from learning.models.route_net import RouteNet, load_route_net
+from learning.models.route_net import RouteNet, load_route_net, resolve_device
+from learning.models.threads import planning_thread_count
 from learning.models.shipped import SHIPPED_ROUTE
 from planners import OccupancyGrid, SamplerBase
 from planners.base.fileio import InputError
@@ -164,6 +165,10 @@ class RouteSampler(SamplerBase):
         patience, max_floor: Iterations without coming closer to the goal after which the uniform share
             grows, and the largest share it reaches.
         tau: Temperature of the frontier's preference, in steps (``planners.guidance.frontier``).
+        device: Where the encoder runs: "auto" (CUDA when torch sees it, else the CPU), "cpu" or "cuda";
+            the encoder is moved there. On the CPU the iteration counts are the validated ones.
+        threads: torch threads for the encoder's passes (``learning.models.threads``): default
+            ``SAMPLERGYM_TORCH_THREADS`` or 1; the caller's setting is restored after each pass.
     """
 
     #: Where the encoder's field replaces the straight line: the progress and the frontier's ranking.
@@ -174,7 +179,7 @@ class RouteSampler(SamplerBase):
 
     def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 3.0, sigma: float = 0.5,
                  stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
-                 max_floor: float = 0.5, tau: float = 0.5) -> None:
+                 max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None) -> None:
         if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
                 and 0 <= uniform_floor <= max_floor <= 1 and tau > 0):
             raise InputError(f"need step_size, lookahead, stuck, patience, batch, tau > 0, sigma >= 0 and "
@@ -183,11 +188,20 @@ class RouteSampler(SamplerBase):
         self.net, self.step_size, self.lookahead, self.sigma = net, float(step_size), float(lookahead), float(sigma)
         self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
         self.patience, self.max_floor, self.tau = int(patience), float(max_floor), float(tau)
+        self.device = resolve_device(device)
+        if threads is not None:
+            planning_thread_count(threads)  # refused now, by name, rather than at the first query
+        self.threads = threads
+        if net is not None:
+            net.to(self.device)
         self.forward_passes = 0
 
     @classmethod
     def load(cls, path: str | os.PathLike = SHIPPED_ROUTE, **kwargs) -> RouteSampler:
-        """A sampler over the encoder saved at ``path`` (default: the shipped one), at the validated settings."""
+        """A sampler over the encoder saved at ``path`` (default: the shipped one), at the validated settings.
+
+        ``kwargs`` are the constructor's (``device``, ``threads``, ...).
+        """
         return cls(load_route_net(path), **kwargs)
 
     def _straight(self, grid: OccupancyGrid) -> np.ndarray:
@@ -204,7 +218,8 @@ class RouteSampler(SamplerBase):
             raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is {cells:g} cells "
                              f"of this map (resolution {grid.resolution:g}): pass "
                              f"step_size={self.net.block * grid.resolution:g}")
-        learned = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal), self._symmetries)
+        learned = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal), self._symmetries,
+                                   threads=self.threads)
         self.forward_passes = self._symmetries
         progress = self._straight(grid) if self._uses == "frontier" else learned
         return progress, (None if self._uses == "progress" else learned)
@@ -258,13 +273,14 @@ class RouteSampler(SamplerBase):
 _NO_ANCHORS = np.zeros(0, dtype=np.int8)
 
 
-def shipped_sampler(encoder: RouteNet | str | os.PathLike = SHIPPED, step_size: float = 4.0) -> RouteSampler:
+def shipped_sampler(encoder: RouteNet | str | os.PathLike = SHIPPED, step_size: float = 4.0, *, device: str = "auto",
+                    threads: int | None = None) -> RouteSampler:
     """An encoder (loaded, or a file; default the shipped one) at the validated ``SHIPPED_SETTINGS``.
 
-    ``evaluate.py``'s "route encoder".
+    ``evaluate.py``'s "route encoder"; ``device`` and ``threads`` as for ``RouteSampler``.
     """
     net = encoder if isinstance(encoder, RouteNet) else load_route_net(encoder)
-    return RouteSampler(net, step_size=step_size, **SHIPPED_SETTINGS)
+    return RouteSampler(net, step_size=step_size, device=device, threads=threads, **SHIPPED_SETTINGS)
 
 
 def shipped_ablation(step_size: float = 4.0) -> RouteSampler:
