@@ -187,8 +187,8 @@ class RouteNet(UNet):
         if h * w > limit:
             raise InputError(f"the route encoder's input for this {shape[0]} x {shape[1]} map is {h} x {w} = "
                              f"{h * w} blocks of {self.block} x {self.block} cells, above the limit of {limit} "
-                             f"blocks (about {BYTES_PER_BLOCK * limit / 2**30:.1f} GB of working memory); "
-                             f"set {MAX_BLOCKS_ENV} to raise it")
+                             f"blocks (a pass over it needs about {BYTES_PER_BLOCK * h * w / 2**30:.1f} GB per "
+                             f"symmetry); set {MAX_BLOCKS_ENV} to raise it")
         return h, w
 
     def predict(self, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int = 1, *,
