@@ -15,6 +15,7 @@ from learning.models.fast_policy import FastActor
 from learning.models.shipped import SHIPPED_POLICY
 from learning.training import TrainConfig, train
 from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler, make_planner
+from planners.base.fileio import InputError
 from planners.maps.generators import TEST_SEED0, generate
 
 TINY = TrainConfig(name="tiny", families=("forest",), sizes=(64,), dagger_rounds=2, maps_per_round=32, bc_epochs=10,
@@ -260,6 +261,16 @@ def test_bad_checkpoints_get_clear_errors(tmp_path, trained):
             dst.writestr(item, data[: len(data) // 2] if item.filename == "policy.pth" else data)
     with pytest.raises(ValueError, match="broken.zip"):
         PolicySampler.load(broken)
+
+
+def test_a_checkpoint_config_with_a_vanishing_step_is_refused_by_the_reader():
+    from learning.samplers.policy import MIN_STEP, OBS_VERSION, check_config
+
+    good = {"step_size": 4.0, "uniform_floor": 0.05, "batch": 8, "obs_version": OBS_VERSION}
+    assert check_config(good, "ckpt.zip")["step_size"] == 4.0
+    for bad in (1e-9, 0.0, -4.0, float("nan"), float("inf")):
+        with pytest.raises(InputError, match=f"ckpt.zip: step_size = .*{MIN_STEP:g}|ckpt.zip: step_size = .*finite"):
+            check_config({**good, "step_size": bad}, "ckpt.zip")
 
 
 def test_short_training_beats_uniform_sampling(trained):

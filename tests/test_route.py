@@ -22,7 +22,6 @@ from learning.samplers.route import (
     shipped_ablation,
     shipped_sampler,
     straight_line_sampler,
-    trained_sampler,
 )
 from learning.route_training import cost_targets, train_route_net
 from planners import RRT, GeometricWorld, OccupancyGrid, Problem
@@ -167,6 +166,14 @@ class _Boom:
     ({"config": {"block": 4, "channels": 8, "depth": 2, "trained_side": -1}, "state": {}}, "config trained_side"),
     ({"config": {"block": 4, "channels": 8, "depth": 2, "trained_side": 12.5}, "state": {}}, "config trained_side"),
     ([1, 2], "expected {'config'"),
+    ({"config": {"block": 4, "channels": 8, "depth": 2, "x" * 60000: 1}, "state": {}}, r"unknown keys \['xxx"),
+    ({"config": {"block": list(range(20000)), "channels": 8, "depth": 2}, "state": {}}, "config block"),
+    ({"config": {"block": 2, "channels": 4, "depth": 1},
+      "state": {**RouteNet(2, 4, 1).state_dict(), "inp.bias": torch.tensor([0.0, float("nan"), 0.0, 0.0])}},
+     "tensor 'inp.bias' holds NaN or infinite"),
+    ({"config": {"block": 2, "channels": 4, "depth": 1},
+      "state": {**RouteNet(2, 4, 1).state_dict(), "out.weight": torch.full((4, 4, 3, 3), float("inf"))}},
+     "tensor 'out.weight' holds NaN or infinite"),
 ])
 def test_a_bad_encoder_file_is_refused_by_name_and_runs_nothing(tmp_path, monkeypatch, content, needle):
     monkeypatch.chdir(tmp_path)
@@ -179,7 +186,7 @@ def test_a_bad_encoder_file_is_refused_by_name_and_runs_nothing(tmp_path, monkey
         torch.save(content, path)
     with pytest.raises(InputError, match=needle) as exc:
         load_route_net(path)
-    assert "bad.pt" in str(exc.value)
+    assert "bad.pt" in str(exc.value) and len(str(exc.value)) < 600  # one short line, whatever the file holds
     assert not (tmp_path / "PWNED").exists()
     with pytest.raises(FileNotFoundError):
         load_route_net(tmp_path / "missing.pt")
@@ -200,14 +207,6 @@ def shipped(small_net) -> RouteSampler:
     return RouteSampler.load(small_net)
 
 
-def test_trained_sampler_says_how_to_train_an_encoder_when_there_is_none(monkeypatch, tmp_path):
-    import learning.samplers.route
-
-    monkeypatch.setattr(learning.samplers.route, "TRAINED", tmp_path / "none.pt")
-    with pytest.raises(FileNotFoundError, match="scripts/train_route.py"):
-        trained_sampler()
-
-
 @pytest.mark.parametrize("learned", [True, False])
 @pytest.mark.parametrize("family", ["forest", "narrow_passage", "bugtrap", "maze", "rooms"])
 def test_the_route_sampler_and_its_ablation_plan_valid_seeded_paths(shipped, family, learned):
@@ -221,12 +220,12 @@ def test_the_route_sampler_and_its_ablation_plan_valid_seeded_paths(shipped, fam
         assert fine_check_path(p.world, r.path)
 
 
-@pytest.mark.parametrize("uses", ["progress", "frontier", "both"])
+@pytest.mark.parametrize("learned", [True, False])
 @pytest.mark.parametrize("batch", [1, 8])
-def test_the_fused_loop_plans_the_same_runs_as_draw(small_net, batch, uses):
+def test_the_fused_loop_plans_the_same_runs_as_draw(small_net, batch, learned):
     runs = []
     for fuse in (True, False):
-        sampler = RouteSampler.load(small_net, batch=batch, uses=uses, stuck=1)
+        sampler = RouteSampler.load(small_net, batch=batch) if learned else RouteSampler(None, batch=batch)
         if not fuse:
             sampler.fuse = lambda planner: None
         for family in ("narrow_passage", "rooms"):
@@ -234,6 +233,20 @@ def test_the_fused_loop_plans_the_same_runs_as_draw(small_net, batch, uses):
             r = RRT(p, step_size=4.0, sampler=sampler, seed=2).solve(max_iterations=20000)
             runs.append((r.iterations, r.num_vertices, r.path.tobytes()))
     assert runs[:2] == runs[2:]
+
+
+def test_a_fused_run_in_pieces_is_the_run_in_one_piece(shipped):
+    """Single steps, then solves in pieces of odd sizes across the refill boundaries: the same run as one solve."""
+    p = generate("bugtrap", TEST_SEED0 + 1, 128)
+    whole = RRT(p, step_size=4.0, sampler=shipped, seed=3).solve(max_iterations=20000)
+    planner = RRT(p, step_size=4.0, sampler=shipped, seed=3)
+    for _ in range(13):
+        planner.step()
+    for size in (5, 51, 7, 130):
+        planner.solve(max_iterations=size)
+    r = planner.solve(max_iterations=20000)
+    assert whole.solved and (r.iterations, r.path.tobytes()) == (whole.iterations, whole.path.tobytes())
+    assert planner.sampler.forward_passes == 8
 
 
 def test_the_ablation_follows_the_straight_line_distance_to_the_goal():
@@ -247,85 +260,19 @@ def test_the_ablation_follows_the_straight_line_distance_to_the_goal():
     assert np.isinf(field[p.world.obstacles]).all()
 
 
-def _run_switching(p, sampler, seed, split=None, fused=True):
-    """((iterations, path bytes), forward passes) of RRT on ``p``. ``split`` = (steps, pieces, piece size):
-    single steps, then solves in pieces, before the rest (a switch must land on the same iteration);
-    ``fused=False``: sample by sample through ``draw``."""
-    if not fused:
-        sampler.fuse = lambda planner: None
-    planner = RRT(p, step_size=4.0, sampler=sampler, seed=seed)
-    if split:
-        steps, pieces, size = split
-        for _ in range(steps):
-            planner.step()
-        for _ in range(pieces):
-            planner.solve(max_iterations=size)
-    r = planner.solve(max_iterations=20000)
-    return (r.iterations, r.path.tobytes()), planner.sampler.forward_passes
-
-
-def test_a_lazy_encoder_follows_the_straight_line_until_its_iteration_then_its_own_field(shipped):
-    p = generate("bugtrap", TEST_SEED0 + 1, 128)
-
-    def run(sampler, split=False):
-        return _run_switching(p, sampler, 3, (13, 5, 7) if split else None)
-
-    never, passes = run(RouteSampler(shipped.net, lazy=10**6, **SHIPPED_SETTINGS))
-    straight = {k: v for k, v in SHIPPED_SETTINGS.items() if k not in ("uses", "symmetries")}
-    assert never == run(RouteSampler(None, **straight))[0] and passes == 0  # never switched: the straight line
-    eager, passes = run(RouteSampler(shipped.net, **SHIPPED_SETTINGS))
-    assert passes == 8
-    lazy = RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS)
-    switched, passes = run(lazy)
-    assert passes == 8 and switched[0] > 40 and switched not in (never, eager)
-    assert run(lazy, split=True) == (switched, 8)
-    assert _run_switching(p, RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS), 3, fused=False) == (switched, 8)
-    bound = RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS).bind(p)
-    assert bound.forward_passes == 0 and np.array_equal(bound.field, shipped_ablation().bind(p).field)
-    for bad in (-1, True, 2.5):
-        with pytest.raises(InputError, match="lazy"):
-            RouteSampler(shipped.net, lazy=bad)
-
-
-def test_a_stall_switch_runs_the_encoder_once_the_tree_comes_no_closer(shipped):
-    """``stall``: the straight line until the tree has come no closer to the goal for that many iterations."""
-    p = generate("narrow_passage", TEST_SEED0 + 2, 128)
-
-    def run(sampler, split=False, fused=True):
-        return _run_switching(p, sampler, 1, (9, 6, 5) if split else None, fused)
-
-    straight = {k: v for k, v in SHIPPED_SETTINGS.items() if k not in ("uses", "symmetries")}
-    never, passes = run(RouteSampler(shipped.net, stall=10**6, **SHIPPED_SETTINGS))
-    assert never == run(RouteSampler(None, **straight))[0] and passes == 0
-    eager = run(RouteSampler(shipped.net, **SHIPPED_SETTINGS))[0]
-    switched, passes = run(RouteSampler(shipped.net, stall=6, **SHIPPED_SETTINGS))
-    assert passes == 8 and switched not in (never, eager)
-    assert run(RouteSampler(shipped.net, stall=6, **SHIPPED_SETTINGS), split=True) == (switched, 8)
-    assert run(RouteSampler(shipped.net, stall=6, **SHIPPED_SETTINGS), fused=False) == (switched, 8)
-    both = RouteSampler(shipped.net, stall=10**6, lazy=40, **SHIPPED_SETTINGS)  # whichever comes first
-    assert run(both) == run(RouteSampler(shipped.net, lazy=40, **SHIPPED_SETTINGS))
-    for bad in (-1, True, 2.5):
-        with pytest.raises(InputError, match="stall"):
-            RouteSampler(shipped.net, stall=bad)
-
-
-def test_the_encoder_ranks_the_frontier_where_uses_says(shipped):
-    """"frontier": the progress stays on the straight line and the frontier's distances are the encoder's."""
+def test_the_encoders_field_leads_the_progress_and_ranks_the_frontier(shipped):
+    """The encoder's field (mean over the 8 symmetries) is the progress field and the frontier's ranking."""
     p = generate("bugtrap", TEST_SEED0 + 3, 96)
-    straight = straight_line_sampler().bind(p)
-    learned = shipped.net.predict(p.world.obstacles, p.world.cell_of(p.goal))
-    for uses in ("progress", "frontier", "both"):
-        s = RouteSampler(shipped.net, uses=uses, symmetries=1).bind(p)
-        free = np.isfinite(s.field)
-        expected = straight.field if uses == "frontier" else learned
-        assert np.allclose(s.field[free], expected[free])
-        cost = s._frontier[-1]
-        assert (cost.size == 0) == (uses == "progress")
-        if cost.size:  # frontier cells of one step: the encoder's steps, at each cell's centre
-            r, c = np.argwhere(free[2:-2:4, 2:-2:4])[0] * 4 + 2
-            assert cost[(r // 4) * (96 // 4) + c // 4] == pytest.approx(learned[r, c])
-        r = RRT(p, step_size=4.0, sampler=RouteSampler(shipped.net, uses=uses), seed=0).solve(max_iterations=20000)
-        assert r.solved and fine_check_path(p.world, r.path)
+    learned = shipped.net.predict(p.world.obstacles, p.world.cell_of(p.goal), 8)
+    s = shipped.bind(p)
+    free = np.isfinite(s.field)
+    assert np.allclose(s.field[free], learned[free]) and np.array_equal(free, ~p.world.obstacles)
+    cost = s._state[5][-1]  # the frontier's cost per frontier cell of one step, at each cell's centre
+    r, c = np.argwhere(free[2:-2:4, 2:-2:4])[0] * 4 + 2
+    assert cost[(r // 4) * (96 // 4) + c // 4] == pytest.approx(learned[r, c])
+    assert straight_line_sampler().bind(p)._state[5][-1].size == 0  # the follower ranks by the straight line
+    r = RRT(p, step_size=4.0, sampler=shipped, seed=0).solve(max_iterations=20000)
+    assert r.solved and fine_check_path(p.world, r.path)
 
 
 def test_the_geodesic_route_reference_ranks_the_frontier_by_the_exact_cost_to_go():
@@ -346,17 +293,80 @@ def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
     with pytest.raises(InputError, match="OccupancyGrid"):
         RRT(Problem(GeometricWorld(10, 10, []), [1, 1], [9, 9]), step_size=4.0, sampler=shipped, seed=0)
     grid = OccupancyGrid(np.zeros((64, 64), bool), 0.5)
-    with pytest.raises(InputError, match="blocks are 4 cells"):
+    with pytest.raises(InputError, match=r"blocks are 4 cells.*pass step_size=2\b"):
         RRT(Problem(grid, [2, 2], [30, 30]), step_size=4.0, sampler=shipped, seed=0)
+    metres = OccupancyGrid(np.zeros((64, 64), bool), 0.03)  # a ROS map in metres, the step given in cells
+    with pytest.raises(InputError, match=r"pass step_size=0\.12\b"):
+        RRT(Problem(metres, [0.2, 0.2], [1.5, 1.5]), step_size=4.0, sampler=shipped, seed=0)
     with pytest.raises(InputError, match="stuck"):
         RouteSampler(shipped.net, stuck=0)
-    with pytest.raises(InputError, match="uses must be one of"):
-        RouteSampler(shipped.net, uses="everything")
     with pytest.raises(InputError, match="tau"):
         RouteSampler(None, tau=0.0)
-    for bad in (0, 9, True, 2.0):
-        with pytest.raises(InputError, match="symmetries"):
-            RouteSampler(shipped.net, symmetries=bad)
+    for gone in ("uses", "symmetries", "lazy", "stall"):  # experiments' knobs, not the product's
+        with pytest.raises(TypeError, match=gone):
+            RouteSampler(shipped.net, **{gone: 1})
+
+
+def test_a_map_above_the_encoders_limit_is_refused_naming_its_size_the_limit_and_the_variable(shipped, monkeypatch):
+    monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", str(16 * 16))
+    big = generate("forest", TEST_SEED0, 68)  # 17 x 17 blocks
+    with pytest.raises(InputError, match=r"68 x 68 map is 17 x 17 = 289 blocks.*limit of 256.*MAX_ROUTE_BLOCKS"):
+        RRT(big, step_size=4.0, sampler=shipped, seed=0)
+    assert RRT(generate("forest", TEST_SEED0, 64), step_size=4.0, sampler=shipped, seed=0).solve(
+        max_iterations=20000).solved
+    monkeypatch.delenv("SAMPLERGYM_MAX_ROUTE_BLOCKS")
+    assert RRT(big, step_size=4.0, sampler=shipped, seed=0).solve(max_iterations=20000).solved
+    monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "lots")
+    with pytest.raises(InputError, match="SAMPLERGYM_MAX_ROUTE_BLOCKS = 'lots'"):
+        RRT(big, step_size=4.0, sampler=shipped, seed=0)
+
+
+def test_batched_passes_for_many_queries_give_each_querys_prediction(shipped, monkeypatch):
+    import learning.models.route_net as route_net
+
+    maps = [generate(f, TEST_SEED0 + i, 64) for i, f in enumerate(("forest", "maze", "rooms"))]
+    queries = [(p.world.obstacles, p.world.cell_of(p.goal)) for p in maps] + [(maps[0].world.obstacles[:, :40], (3, 5))]
+    one = [shipped.net.predict(obs, goal, 8) for obs, goal in queries]
+    many = shipped.net.predict_many(queries, 8)
+    assert all(np.allclose(a, b, rtol=1e-5, atol=1e-5) for a, b in zip(one, many, strict=True))
+    monkeypatch.setattr(route_net, "BATCH_BYTES", 1)  # one symmetry per batch: bounded memory, same field
+    assert np.allclose(shipped.net.predict(*queries[0], 8), one[0], rtol=1e-5, atol=1e-5)
+
+
+def test_the_encoder_runs_at_the_planning_thread_count_and_restores_the_callers(small_net, shipped, monkeypatch):
+    from learning.models.threads import planning_thread_count
+
+    seen = []
+    forward = type(shipped.net).forward
+    monkeypatch.setattr(type(shipped.net), "forward", lambda self, x: seen.append(torch.get_num_threads()) or
+                        forward(self, x))
+    before = torch.get_num_threads()
+    p = generate("forest", TEST_SEED0, 64)
+    RouteSampler.load(small_net, device="cpu").bind(p)
+    monkeypatch.setenv("SAMPLERGYM_TORCH_THREADS", "2")
+    RouteSampler.load(small_net).bind(p)
+    RouteSampler.load(small_net, threads=3).bind(p)
+    assert seen == [1, 2, 3] and torch.get_num_threads() == before
+    for bad in (0, "two", 2.5, True):
+        with pytest.raises(InputError, match="thread"):
+            planning_thread_count(bad)
+    with pytest.raises(InputError, match="threads = 0"):
+        RouteSampler(None, threads=0)
+
+
+def test_the_device_follows_sb3s_convention_and_the_cpu_gives_the_validated_runs(small_net):
+    p = generate("bugtrap", TEST_SEED0 + 4, 96)
+    runs = [RRT(p, step_size=4.0, sampler=RouteSampler.load(small_net, device=d), seed=1).solve(max_iterations=20000)
+            for d in ("cpu", "auto")]
+    assert runs[0].iterations == runs[1].iterations
+    with pytest.raises(InputError, match="device = 'gpu'"):
+        RouteSampler(None, device="gpu")
+    if not torch.cuda.is_available():
+        with pytest.raises(InputError, match="no CUDA device"):
+            RouteSampler.load(small_net, device="cuda")
+    from learning.samplers.registry import make_sampler
+
+    assert make_sampler("route", path=str(small_net), device="cpu").device == torch.device("cpu")
 
 
 @given(family=st.sampled_from(FAMILIES), seed=st.integers(0, 10**6), size=st.sampled_from([32, 64, 96]))
@@ -371,8 +381,7 @@ def test_every_path_of_the_follower_is_valid_starts_at_start_and_ends_at_the_goa
 
 
 @pytest.mark.experiments
-def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(monkeypatch, small_net):
-    import learning.samplers.route
+def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(monkeypatch, small_net, tmp_path):
     from learning.references.expert import GeodesicRouteSampler
 
     variants = load_script("experiments/route_variants")
@@ -383,7 +392,7 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     assert {(s.stuck, s.tau) for s in (ranked, ablation, exact)} == {(1, 0.5)}  # one rule, three rankings
     assert (variants.ranked_exact_tau1().stuck, variants.ranked_exact_tau1().tau) == (1, 1.0)
     both8, both1, exact_both = variants.both_symmetric(), variants.both(), variants.exact_both()
-    assert (both8.uses, both8.symmetries, both1.symmetries, exact_both.uses) == ("both", 8, 1, "both")
+    assert type(both8) is RouteSampler and (both1.uses, both1.symmetries, exact_both.uses) == ("both", 1, "both")
     assert {(s.stuck, s.tau) for s in (both8, both1, exact_both)} == {(1, 0.5)}
     assert variants.ranked_symmetric().symmetries == 8
     grid = getattr(variants, "grid_encoder_l2.5_s0.25")(), variants.grid_ablation_l3_s1()
@@ -391,11 +400,14 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
                                                                            (True, 3.0, 1.0, "progress")]
     with pytest.raises(AttributeError, match="grid_encoder_l2"):
         getattr(variants, "grid_encoder_l2")  # noqa: B009 - the name is what is tested
-    lazy = (variants.both_lazy25(), variants.both_lazy50(), variants.both_lazy100())
-    assert [(s.lazy, s.uses, s.symmetries) for s in lazy] == [(25, "both", 8), (50, "both", 8), (100, "both", 8)]
-    assert (variants.both_stall6().stall, variants.both_stall6().symmetries) == (6, 8)
     assert [getattr(variants, f"both_sym{k}")().symmetries for k in (1, 4)] == [1, 4]
-    monkeypatch.setattr(variants, "TRAINED", learning.samplers.route.TRAINED.with_name("missing.pt"))
+    p = generate("bugtrap", TEST_SEED0 + 3, 64)
+    one = variants.both().bind(p)
+    assert one.forward_passes == 1 and np.allclose(one.field[~p.world.obstacles],
+                                                   one.net.predict(p.world.obstacles, p.world.cell_of(p.goal))[
+                                                       ~p.world.obstacles])
+    assert (variants.ranked_exact().uses, variants.exact_both().uses) == ("frontier", "both")
+    monkeypatch.setattr(variants, "TRAINED", tmp_path / "missing.pt")
     with pytest.raises(FileNotFoundError, match="train_route.py"):
         variants.ranked()
 
@@ -440,7 +452,7 @@ def test_the_shipped_encoder_and_its_ablation_plan_valid_paths(family):
     net = load_route_net(SHIPPED)
     assert (net.channels, net.depth, net.attention_layers) == (recipe["channels"], recipe["depth"], recipe["attention"])
     learned, ablation = shipped_sampler(), shipped_ablation()
-    assert learned.symmetries == SHIPPED_SETTINGS["symmetries"] and learned.uses == "both"
+    assert {k: getattr(learned, k) for k in SHIPPED_SETTINGS} == SHIPPED_SETTINGS
     assert ablation.net is None and (ablation.stuck, ablation.tau) == (learned.stuck, learned.tau)
     assert (ablation.lookahead, learned.lookahead) == (ABLATION_SETTINGS["lookahead"], SHIPPED_SETTINGS["lookahead"])
     p = generate(family, TEST_SEED0 + 3, 64)

@@ -26,6 +26,7 @@ import envs
 from learning import SB3Sampler
 from planners import RRT, OccupancyGrid, RRTConnect, RRTStar
 from planners.base.fileio import InputError
+from planners.maps.generators import generate
 
 gym.register_envs(envs)
 REPO = Path(__file__).resolve().parents[1]
@@ -219,3 +220,19 @@ def test_bad_sampler_specs_exit_2_naming_them(arg, match, capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert any(part in err for part in match.split("|"))
+
+
+def test_the_policy_acts_at_the_planning_thread_count_and_restores_the_callers(ppo_forest, monkeypatch):
+    from learning.models.threads import planning_thread_count
+
+    model, _ = ppo_forest
+    seen = []
+    sampler = SB3Sampler(model, "SamplerGym/RRT-Forest-v0", threads=2, **FOREST)
+    act = sampler._act_now
+    monkeypatch.setattr(sampler, "_act_now", lambda obs, rng: seen.append(torch.get_num_threads()) or act(obs, rng))
+    torch.set_num_threads(1)
+    RRT(generate("forest", 3, 64), step_size=4.0, sampler=sampler, seed=0).solve(max_iterations=20)
+    assert set(seen) == {2} and torch.get_num_threads() == 1
+    assert planning_thread_count() == 1
+    with pytest.raises(InputError, match="threads = 0"):
+        SB3Sampler(model, "SamplerGym/RRT-Forest-v0", threads=0, **FOREST)

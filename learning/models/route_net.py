@@ -14,10 +14,48 @@ import numpy as np
 import torch
 from torch import nn
 
-from planners.base.fileio import InputError
+from learning.models.threads import planning_threads
+from planners.base.fileio import InputError, short_repr
 
 
 GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
+
+#: The largest encoder input, in blocks (cells of the block grid), and the variable that raises it. A pass
+#: holds about ``BYTES_PER_BLOCK`` per block per map in flight; at the default, one map of 1024 x 1024
+#: cells at 4 cells per block (65,536 blocks).
+MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
+MAX_BLOCKS = 256 * 256
+#: Working memory of one pass per block of one map (activations and attention, measured on the shipped
+#: encoder), and how much of it ``predict`` lets one batch of symmetries take: larger maps run their
+#: symmetries in smaller batches (one at a time at the largest), so memory stays bounded.
+BYTES_PER_BLOCK = 5_000
+BATCH_BYTES = 1 << 30
+DEVICES = ("auto", "cpu", "cuda")
+
+
+def max_blocks() -> int:
+    """``SAMPLERGYM_MAX_ROUTE_BLOCKS`` if set (a positive integer), else ``MAX_BLOCKS``."""
+    value = os.environ.get(MAX_BLOCKS_ENV)
+    if value is None or value == "":
+        return MAX_BLOCKS
+    try:
+        n = int(value)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise InputError(f"{MAX_BLOCKS_ENV} = {short_repr(value)}: expected a positive whole number of blocks")
+    return n
+
+
+def resolve_device(device: str) -> torch.device:
+    """``"auto"`` (CUDA when torch sees it, else the CPU), ``"cpu"`` or ``"cuda"``: Stable-Baselines3's convention."""
+    if device not in DEVICES:
+        raise InputError(f"device = {short_repr(device)}: expected one of {', '.join(DEVICES)}")
+    if device == "auto":
+        device = "cuda" if torch.cuda.is_available() else "cpu"
+    if device == "cuda" and not torch.cuda.is_available():
+        raise InputError("device = 'cuda': torch sees no CUDA device here (use 'auto' or 'cpu')")
+    return torch.device(device)
 
 
 def route_input(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -> np.ndarray:
@@ -142,13 +180,26 @@ class RouteNet(UNet):
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return nn.functional.pixel_shuffle(super().forward(x), self.block)[:, 0]
 
-    @torch.no_grad()
-    def predict(self, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int = 1) -> np.ndarray:
+    def check_size(self, shape: tuple[int, int]) -> tuple[int, int]:
+        """The block grid of a map of ``shape`` cells, or an ``InputError`` naming the size and the limit."""
+        h, w = -(-shape[0] // self.block), -(-shape[1] // self.block)
+        limit = max_blocks()
+        if h * w > limit:
+            raise InputError(f"the route encoder's input for this {shape[0]} x {shape[1]} map is {h} x {w} = "
+                             f"{h * w} blocks of {self.block} x {self.block} cells, above the limit of {limit} "
+                             f"blocks (a pass over it needs about {BYTES_PER_BLOCK * h * w / 2**30:.1f} GB per "
+                             f"symmetry); set {MAX_BLOCKS_ENV} to raise it")
+        return h, w
+
+    def predict(self, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int = 1, *,
+                threads: int | None = None) -> np.ndarray:
         """Predicted cost-to-go of every cell, in blocks (steps), for one map: (H, W) float64.
 
         With ``symmetries`` > 1 the prediction is the mean over the map turned by the first that many of
         the square's symmetries (``symmetry``), each turned back: at 8 it is exactly equivariant, as the
-        true cost-to-go is, at 8 times the cost. Those of one shape run as one batch.
+        true cost-to-go is, at 8 times the cost. Those of one shape run as one batch, in smaller ones
+        where a batch would take more than ``BATCH_BYTES``; a map above ``max_blocks()`` is refused
+        before any work. Runs on the device the encoder is on (``to``), at ``planning_threads(threads)``.
 
         On a map whose larger side exceeds ``trained_side`` the field is multiplied by their ratio. The
         goal offsets it reads are fractions of the map, so beyond its training sizes it predicts the
@@ -156,23 +207,42 @@ class RouteNet(UNet):
         came out at 35. Only the order of the field steers the sampler's progress and target; its
         scale sets how sharply the frontier prefers its best cells.
         """
-        if not 1 <= symmetries <= 8:
-            raise InputError(f"symmetries must be 1 to 8, got {symmetries}")
-        H, W = obstacles.shape
-        by_shape: dict[tuple[int, int], list[tuple[int, np.ndarray]]] = {}
-        for k in range(symmetries):
-            obs, goal = symmetry(obstacles, goal_cell, k)
-            by_shape.setdefault(obs.shape, []).append((k, route_input(obs, goal, self.block)))
-        total = np.zeros((H, W))
-        for (h, w), group in by_shape.items():
-            out = self(torch.from_numpy(np.stack([x for _, x in group])))[:, :h, :w].numpy().astype(np.float64)
-            for (k, _), field in zip(group, out, strict=True):
-                total += unturn(field, k)
-        total /= symmetries
-        side = max(H, W)
-        if self.trained_side and side > self.trained_side:
-            total *= side / self.trained_side
-        return total
+        return self.predict_many([(obstacles, goal_cell)], symmetries, threads=threads)[0]
+
+    def predict_many(self, queries: list[tuple[np.ndarray, tuple[int, int]]], symmetries: int = 1, *,
+                     threads: int | None = None) -> list[np.ndarray]:
+        """``predict`` for many (obstacles, goal cell) queries, the passes of same-shaped inputs batched together.
+
+        On a GPU one batch of many queries costs little more than one query; the results are those of
+        ``predict`` one query at a time up to floating-point rounding.
+        """
+        if isinstance(symmetries, bool) or not isinstance(symmetries, int) or not 1 <= symmetries <= 8:
+            raise InputError(f"symmetries must be 1 to 8, got {short_repr(symmetries)}")
+        for obstacles, _ in queries:
+            self.check_size(obstacles.shape)
+        by_shape: dict[tuple[int, int], list[tuple[int, int, np.ndarray]]] = {}
+        for i, (obstacles, goal_cell) in enumerate(queries):
+            for k in range(symmetries):
+                obs, goal = symmetry(obstacles, goal_cell, k)
+                by_shape.setdefault(obs.shape, []).append((i, k, route_input(obs, goal, self.block)))
+        totals = [np.zeros(obstacles.shape) for obstacles, _ in queries]
+        device = next(self.parameters()).device
+        with planning_threads(threads), torch.inference_mode():
+            for (h, w), group in by_shape.items():
+                blocks = group[0][2].shape[1] * group[0][2].shape[2]
+                size = max(1, min(len(group), BATCH_BYTES // (BYTES_PER_BLOCK * blocks)))
+                for at in range(0, len(group), size):
+                    part = group[at:at + size]
+                    x = torch.from_numpy(np.stack([x for _, _, x in part])).to(device)
+                    out = self(x)[:, :h, :w].cpu().numpy().astype(np.float64)
+                    for (i, k, _), field in zip(part, out, strict=True):
+                        totals[i] += unturn(field, k)
+        for total in totals:
+            total /= symmetries
+            side = max(total.shape)
+            if self.trained_side and side > self.trained_side:
+                total *= side / self.trained_side
+        return totals
 
 
 def save_route_net(net: RouteNet, path: str | os.PathLike) -> None:
@@ -201,23 +271,31 @@ def load_route_net(path: str | os.PathLike) -> RouteNet:
     try:
         blob = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - whatever torch raises on a bad file, name the file
-        raise InputError(f"{path} is not a route encoder file: {type(exc).__name__}: {exc}") from None
+        raise InputError(f"{path} is not a route encoder file: {type(exc).__name__}: {short_repr(str(exc), 300)}") \
+            from None
     if not (isinstance(blob, dict) and isinstance(blob.get("config"), dict) and isinstance(blob.get("state"), dict)):
         raise InputError(f"{path}: expected {{'config': {{...}}, 'state': {{...}}}} as save_route_net writes")
+    known = ("block", "channels", "depth", "attention", "attention_level", "trained_side")
+    unknown = [k for k in blob["config"] if k not in known]
+    if unknown:
+        raise InputError(f"{path}: config has unknown keys {short_repr(unknown)}, expected some of {known}")
     config = {"attention": 0, "attention_level": 0, "trained_side": 0, **blob["config"]}
     for key, lo, hi in (("block", 1, 64), ("channels", 1, 64), ("depth", 1, 64), ("attention", 0, 64),
                         ("attention_level", 0, 64), ("trained_side", 0, 1 << 20)):  # a side in cells, 0: unknown
         v = config.get(key)
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-            raise InputError(f"{path}: config {key} = {v!r}, expected an integer in [{lo}, {hi}]")
+            raise InputError(f"{path}: config {key} = {short_repr(v)}, expected an integer in [{lo}, {hi}]")
     try:
         net = RouteNet(*(config[k] for k in ("block", "channels", "depth", "attention", "attention_level",
                                              "trained_side")))
     except ValueError as exc:
         raise InputError(f"{path}: config {exc}") from None
+    for name, tensor in blob["state"].items():
+        if isinstance(tensor, torch.Tensor) and tensor.is_floating_point() and not torch.isfinite(tensor).all():
+            raise InputError(f"{path}: tensor {short_repr(name)} holds NaN or infinite weights")
     try:
         net.load_state_dict(blob["state"])
     except (RuntimeError, TypeError, ValueError) as exc:
         shape = tuple(config[k] for k in ("block", "channels", "depth", "attention", "attention_level"))
-        raise InputError(f"{path}: the weights do not fit RouteNet{shape}: {exc}") from None
+        raise InputError(f"{path}: the weights do not fit RouteNet{shape}: {short_repr(str(exc), 300)}") from None
     return net.eval()

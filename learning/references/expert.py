@@ -15,6 +15,7 @@ import numpy as np
 from learning.samplers.ablation import ConstantGuidedSampler
 from learning.samplers.route import RouteSampler
 from planners import OccupancyGrid, Problem, Sampler, SamplerBase
+from planners.base.fileio import InputError
 from planners.guidance.follow import FieldFollower, frontier_costs
 from planners.maps.gridsearch import distance_field
 
@@ -138,15 +139,19 @@ class CorridorSampler(SamplerBase):
 class GeodesicRouteSampler(RouteSampler):
     """The route sampler with the exact cost-to-go in place of an encoder: a reference (a grid search).
 
-    ``uses="frontier"`` (the default) is the straight-line follower whose frontier prefers cells by
-    their geodesic distance to the goal: what a perfect cost-to-go encoder could give the follower's
-    frontier. ``"progress"`` and ``"both"`` put the exact field where ``RouteSampler`` puts the encoder's.
-    Keyword arguments are ``RouteSampler``'s.
+    ``uses="both"`` (the default) puts the exact field where ``RouteSampler`` puts the encoder's;
+    ``"frontier"`` is the straight-line follower whose frontier prefers cells by their geodesic
+    distance to the goal (what a perfect cost-to-go encoder could give the follower's frontier), and
+    ``"progress"`` the exact field for the progress only. Other keyword arguments are ``RouteSampler``'s.
     """
 
-    def __init__(self, **kwargs) -> None:
-        kwargs.setdefault("uses", "frontier")
+    USES = ("progress", "frontier", "both")
+
+    def __init__(self, *, uses: str = "both", **kwargs) -> None:
+        if uses not in self.USES:
+            raise InputError(f"uses must be one of {self.USES}, got {uses!r}")
         super().__init__(None, **kwargs)
+        self.uses = uses
 
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
         exact = distance_field(grid.obstacles, grid.cell_of(self.problem.goal)) * grid.resolution / self.step_size

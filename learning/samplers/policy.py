@@ -31,7 +31,6 @@ from the same generator, so results do not depend on which path ran.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from typing import NamedTuple
 
 import numba as nb
@@ -42,13 +41,11 @@ from learning.models.fast_policy import FastActor, actor_logits, softmax_cdf
 from learning.models.shipped import SHIPPED_POLICY, SHIPPED_POLICY_BATCH
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners.base.fileio import InputError, check_number
-from planners.base.planner import CHUNK, FIRST_REFILL, Planner
+from planners.base.planner import Planner
+from planners.fused import CHUNK, FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.egocentric import EGO_VECTOR, add_vertices, build_pyramid, observe_windows
 from planners.guidance.frontier import cdf_search, frontier_arrays, frontier_shape
 from planners.guidance.guided import FRONTIER, FRONTIER_TAU, N_ACTIONS, SCALES, WINDOW, fill_from_cdf, scale_cells
-from planners.kernels import rrt as rrt_kernels
-from planners.kernels.bitgen import bitgen_address, next_double
-from planners.kernels.state import F_BEST_D, I_BEST_V, I_ITER, I_N, I_SOLVED
 
 #: Keys of the training config a checkpoint must carry.
 CONFIG_KEYS = ("step_size", "uniform_floor", "batch", "obs_version")
@@ -83,12 +80,15 @@ S_PROGRESS = 1  # iteration at which the progress vertex last came closer to the
 S_ANCHOR = 2  # progress vertex of the last forward pass
 S_SINCE = 3  # iteration of the last forward pass
 S_FORWARD = 4  # forward passes so far
-S_POS = 5  # next unused row of the fused loop's batch buffer
-S_COUNT = 6  # rows in that buffer
-S_REFILLS = 7  # batches drawn by the fused loop (mirrors the planner's refill schedule)
-S_FSEEN = 8  # vertices already added to the frontier
-S_FRONT = 9  # frontier cells
-N_STATE = 10
+S_FSEEN = 5  # vertices already added to the frontier
+S_FRONT = 6  # frontier cells
+N_STATE = 7
+#: The smallest step a checkpoint's config may carry, in world units: a step that small would need
+#: millions of iterations on any map and windows of millions of cells (the map's cell is the judge of
+#: a step, and no reader map's cell is this small).
+MIN_STEP = 1e-3
+#: Softmax temperature of the action distribution: the policy's own (1), as trained.
+TEMPERATURE = 1.0
 
 
 @nb.njit(cache=True)
@@ -103,19 +103,21 @@ def sample_classes(logits, temperature, u):
 
 
 @nb.njit(cache=True)
-def policy_draw(X, n, best_v, best_d, iteration, m, rng, kernel_state, pts, anch):
-    """Run the policy if due and draw ``m`` samples from its action distribution into ``pts``/``anch``.
+def policy_draw(kernel_state, X, n, best_v, best_d, iteration, rng, pts, anch):
+    """Run the policy if due and draw ``len(pts)`` samples from its action distribution into ``pts``/``anch``.
 
-    ``rng`` is the address of the planner's generator (see ``planners.kernels.bitgen``), ``kernel_state`` the
-    sampler's compiled state (see ``PolicySampler._setup``). The tree enters as its vertices
-    ``X[:n]``, progress vertex and distance. The observation's tree counts are brought up to date
-    only for a forward pass, the frontier only for a frontier sample.
+    The draw of ``planners.fused``'s contract: ``rng`` is the address of the planner's generator
+    (``planners.fused.rng_address``), ``kernel_state`` the sampler's compiled state (see
+    ``PolicySampler._setup``). The tree enters as its vertices ``X[:n]``, progress vertex and
+    distance. The observation's tree counts are brought up to date only for a forward pass, the
+    frontier only for a frontier sample.
     """
     ego, front, actor, params, state = kernel_state
     levels_obs, levels_tree, layout, size, res, origin, start, goal = ego
     weights, scratch = actor
     step, temperature, floor0, max_floor, patience, reuse, hold, max_iterations, low, high = params
     sampler_ints, sampler_floats, logits, cdf, local, vector, u, fcdf = state
+    m = pts.shape[0]
     if best_d < sampler_floats[0] - 1e-9:
         sampler_floats[0] = best_d
         sampler_ints[S_PROGRESS] = iteration
@@ -132,46 +134,18 @@ def policy_draw(X, n, best_v, best_d, iteration, m, rng, kernel_state, pts, anch
         sampler_ints[S_ANCHOR] = best_v
         sampler_ints[S_SINCE] = iteration
         sampler_ints[S_FORWARD] += 1
-    stuck = iteration - sampler_ints[S_PROGRESS]
-    floor = floor0 if stuck < patience else max(floor0, min(max_floor, floor0 * stuck / patience))
+    floor = growing_floor(floor0, max_floor, patience, iteration - sampler_ints[S_PROGRESS])
     for k in range(m):  # row by row, as Generator.random((m, 6)) fills
         for j in range(6):
             u[k, j] = next_double(rng)
     fill_from_cdf(cdf, sampler_floats[1], u[:m], low, high, step, floor, front, sampler_ints[S_FSEEN:S_FRONT + 1], X,
-                  n, fcdf, pts,
-                  anch)
+                  n, fcdf, pts, anch)
 
 
 @nb.njit(cache=True)
-def policy_rrt_run(budget, rng, kernel_state, batch, pts, anch, tree, istate, fstate, last, world, space, goal, step,
-                   tol,
-                   low, high, st, sb):
-    """Up to ``budget`` RRT iterations with samples from ``policy_draw``, never leaving compiled code.
-
-    Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule would ask
-    for, so the run matches a planner calling ``PolicySampler.draw`` sample for sample.
-    """
-    sampler_ints = kernel_state.state.ints
-    X = tree.X
-    q = np.empty(X.shape[1])
-    qe_buf = np.empty(tree.E.shape[1])
-    new = np.empty(X.shape[1])
-    for s in range(budget):
-        if istate[I_SOLVED] or istate[I_N] >= X.shape[0]:
-            return s
-        if sampler_ints[S_POS] >= sampler_ints[S_COUNT]:
-            m = min(batch, CHUNK, FIRST_REFILL << min(sampler_ints[S_REFILLS], 16))  # 64 << 16 > CHUNK; no overflow
-            policy_draw(X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], m, rng, kernel_state,
-                        pts, anch)
-            sampler_ints[S_REFILLS] += 1
-            sampler_ints[S_COUNT] = m
-            sampler_ints[S_POS] = 0
-        p = sampler_ints[S_POS]
-        rrt_kernels.rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low,
-                                high, st, sb,
-                      q, qe_buf, new)
-        sampler_ints[S_POS] = p + 1
-    return budget
+def policy_rrt_loop(budget, kernel_state, buffers, rng, loop):
+    """RRT's compiled loop drawing from ``policy_draw`` (``planners.fused``)."""
+    return rrt_loop(budget, policy_draw, kernel_state, buffers, rng, loop)
 
 
 @nb.njit(cache=True)
@@ -201,7 +175,7 @@ def check_config(config, source: str = "policy config") -> dict:
         raise InputError(f"{source}: obs_version = {config['obs_version']!r}: the policy was trained on another "
                          f"observation, this SamplerGym builds version {OBS_VERSION}")
     out = dict(config)
-    out["step_size"] = check_number(source, "step_size", config["step_size"], low=0.0, low_open=True)
+    out["step_size"] = check_number(source, "step_size", config["step_size"], low=MIN_STEP)
     out["uniform_floor"] = check_number(source, "uniform_floor", config["uniform_floor"], low=0.0, high=1.0)
     out["batch"] = check_number(source, "batch", config["batch"], integer=True, low=1, high=CHUNK)
     out["max_iterations"] = check_number(source, "max_iterations", config.get("max_iterations", 20000),
@@ -217,7 +191,6 @@ class PolicySampler(SamplerBase):
         config: Training config (``step_size``, ``uniform_floor``, ``batch``, ...).
         step_size: The planner's step in world units; default: the training step.
         batch: Samples per batch; default: the training batch.
-        temperature: Softmax temperature of the action distribution.
         reuse: Longest stretch of iterations one forward pass may serve (1: a pass per batch).
         hold: Frontier share at or above which a pass serves until the progress vertex moves (> 1: never).
         patience: Iterations without progress after which the uniform share starts to grow.
@@ -229,7 +202,7 @@ class PolicySampler(SamplerBase):
     """
 
     def __init__(self, actor: FastActor, config: dict, *, step_size: float | None = None, batch: int | None = None,
-                 temperature: float = 1.0, reuse: int = 32, hold: float = 0.9, patience: int = 200,
+                 reuse: int = 32, hold: float = 0.9, patience: int = 200,
                  max_floor: float = 0.5, fuse: bool = True, source: str = "policy config") -> None:
         config = check_config(config, source)
         problem = actor.check_input(2 * len(SCALES), WINDOW, len(EGO_VECTOR), N_ACTIONS)
@@ -238,18 +211,17 @@ class PolicySampler(SamplerBase):
         self.actor, self.config = actor, dict(config)
         self.step_size = float(step_size if step_size is not None else config["step_size"])
         self.batch = int(batch if batch is not None else config["batch"])
-        self.temperature = float(temperature)
         self.reuse = int(reuse)
         self.hold = float(hold)
         self.patience, self.max_floor = int(patience), float(max_floor)
         self.fused = bool(fuse)
-        if not (self.step_size > 0 and self.batch >= 1 and self.temperature > 0 and self.reuse >= 1
-                and self.hold > 0 and self.patience >= 1 and 0.0 <= self.max_floor <= 1.0):
-            raise InputError(f"need step_size, batch, temperature, reuse, hold, patience > 0 and 0 <= max_floor <= 1, "
-                             f"got {self.step_size}, {self.batch}, {self.temperature}, {self.reuse}, {self.hold}, "
+        if not (self.step_size > 0 and self.batch >= 1 and self.reuse >= 1 and self.hold > 0 and self.patience >= 1
+                and 0.0 <= self.max_floor <= 1.0):
+            raise InputError(f"need step_size, batch, reuse, hold, patience > 0 and 0 <= max_floor <= 1, "
+                             f"got {self.step_size}, {self.batch}, {self.reuse}, {self.hold}, "
                              f"{self.patience}, {self.max_floor}")
         # per-query constants, prepared once: a bind runs on every query
-        self._params = (self.step_size, self.temperature, float(self.config["uniform_floor"]), self.max_floor,
+        self._params = (self.step_size, TEMPERATURE, float(self.config["uniform_floor"]), self.max_floor,
                         self.patience, self.reuse, self.hold, int(self.config["max_iterations"]))
         self._n_scratch = actor.scratch_size(2 * len(SCALES), WINDOW)
         self._geometry: dict = {}  # (resolution, map shape) -> (cells per pixel per scale, frontier rows, columns)
@@ -316,26 +288,18 @@ class PolicySampler(SamplerBase):
             (*self._params, self.low, self.high),
             DrawState(sampler_ints, sampler_floats, logits, cdf, local, vector, u, fcdf),
         )
-        self._pts = np.empty((self.batch, 2))
-        self._anch = np.empty(self.batch, dtype=np.int8)
 
     def draw(self, rng, n, view):
         m = min(n, self.batch)
         pts = np.empty((m, 2))
         anch = np.empty(m, dtype=np.int8)
-        policy_draw(view.vertices, view.num_vertices, view.best_vertex, view.best_distance, view.iteration, m,
-                    bitgen_address(rng), self._kernel, pts, anch)
+        policy_draw(self._kernel, view.vertices, view.num_vertices, view.best_vertex, view.best_distance,
+                    view.iteration, rng_address(rng), pts, anch)
         return SampleBatch(pts, anch)
 
-    def fuse(self, planner: Planner) -> Callable[[Planner, int], int] | None:
+    def fuse(self, planner: Planner) -> FusedRRT | None:
         """The planner's loop with this sampler's draws compiled in, for RRT; None for other planners."""
-        if not self.fused or planner.fusable_loop != "rrt":
-            return None
-        return self._run_fused
-
-    def _run_fused(self, planner: Planner, n: int) -> int:
-        return policy_rrt_run(n, bitgen_address(planner.rng), self._kernel, self.batch, self._pts, self._anch,
-                              *planner.loop_args())
+        return fuse_rrt(planner, policy_rrt_loop, self._kernel, self.batch) if self.fused else None
 
     def __repr__(self) -> str:
         return f"PolicySampler(step_size={self.step_size:g}, batch={self.batch})"

@@ -36,10 +36,10 @@ def _follower(step_size: float = 4.0) -> Sampler:
     return RouteSampler(None, step_size=step_size, **FOLLOWER_SETTINGS)
 
 
-def _route(step_size: float = 4.0, path: str | None = None) -> Sampler:
-    from learning.samplers.route import shipped_sampler
+def _route(step_size: float = 4.0, path: str | None = None, device: str = "auto") -> Sampler:
+    from learning.samplers.route import SHIPPED, shipped_sampler
 
-    return shipped_sampler(step_size=step_size) if path is None else shipped_sampler(path, step_size)
+    return shipped_sampler(SHIPPED if path is None else path, step_size, device=device)
 
 
 def _route_ablation(step_size: float = 4.0) -> Sampler:

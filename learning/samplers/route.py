@@ -22,26 +22,19 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
-from pathlib import Path
 
 import numba as nb
 import numpy as np
 
-from learning.models.route_net import RouteNet, load_route_net
+from learning.models.route_net import RouteNet, load_route_net, resolve_device
+from learning.models.threads import planning_thread_count
 from learning.models.shipped import SHIPPED_ROUTE
 from planners import OccupancyGrid, SamplerBase
 from planners.base.fileio import InputError
-from planners.base.planner import CHUNK, FIRST_REFILL, Planner
+from planners.base.planner import Planner
+from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, lowest_vertex_cell, walk_field
-from planners.guidance.frontier import FREE, Frontier, frontier_sample, update_frontier
-from planners.kernels import rrt as rrt_kernels
-from planners.kernels.bitgen import bitgen_address, next_double
-from planners.kernels.state import F_BEST_D, I_ITER, I_N, I_SOLVED
-
-
-#: Where ``scripts/train_route.py`` writes the encoder.
-TRAINED = Path(__file__).resolve().parents[2] / "runs" / "route" / "route.pt"
+from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
 
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
@@ -52,7 +45,7 @@ SHIPPED = SHIPPED_ROUTE
 #: vertices and places the target 3 steps ahead (spread half a step), and ranks the frontier, which
 #: takes over after one iteration without progress at a temperature of half a step; the prediction is
 #: averaged over the 8 symmetries.
-SHIPPED_SETTINGS = {"uses": "both", "stuck": 1, "tau": 0.5, "symmetries": 8, "lookahead": 3.0, "sigma": 0.5}
+SHIPPED_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 3.0, "sigma": 0.5}
 
 
 #: The ablation's own settings: the same rule, its lookahead and spread tuned on the same validation
@@ -63,8 +56,8 @@ ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5}
 FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0}
 
 
-# slots of RouteSampler's integer state; the last three are the fused loop's batch buffer (as the planner's)
-R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT, R_POS, R_COUNT, R_REFILLS = range(9)
+# slots of RouteSampler's integer state
+R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT = range(6)
 
 
 @nb.njit(cache=True)
@@ -85,16 +78,17 @@ def straight_field(H, W, gx, gy, res, step):
 
 
 @nb.njit(cache=True)
-def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin, step, frontier, ints, floats,
-               params, scratch, low, high, pts):
-    """Fill ``pts`` with samples of ``RouteSampler`` (see its docstring), in one compiled call per batch.
+def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
+    """Fill ``pts`` with samples of ``RouteSampler`` (see its docstring): the draw of ``planners.fused``'s contract.
 
-    ``rng`` is the address of the planner's generator (``planners.kernels.bitgen``); every sample
+    ``rng`` is the address of the planner's generator (``planners.fused.rng_address``); every sample
     takes 7 of its doubles whatever its kind, so the stream does not depend on the branch taken.
-    ``ints`` and ``floats`` hold the progress state (``R_*`` slots; lowest predicted cost, closest
-    straight-line distance to the goal); ``scratch`` the sampler's buffers for a batch's uniforms and
-    frontier points, allocated once per query rather than once per iteration.
+    ``state`` is ``RouteSampler._state``: the fields, the frontier, the progress state (``ints``:
+    ``R_*`` slots; ``floats``: lowest predicted cost, closest straight-line distance to the goal),
+    the parameters, and scratch buffers for a batch's uniforms and frontier points, allocated once
+    per query rather than once per iteration. Samples are absolute: ``anchored`` is left alone.
     """
+    field, blocked, res, origin, step, frontier, ints, floats, params, scratch, low, high = state
     world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost = frontier
     lookahead, sigma, stuck, floor0, max_floor, patience = params
     W = field.shape[1]
@@ -105,8 +99,7 @@ def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin,
         ints[R_SEEN] = n
     if best_distance < floats[1] - 1e-9:
         floats[1], ints[R_CLOSER] = best_distance, iteration
-    stalled = iteration - ints[R_CLOSER]
-    floor = floor0 if stalled < patience else max(floor0, min(max_floor, floor0 * stalled / patience))
+    floor = growing_floor(floor0, max_floor, patience, iteration - ints[R_CLOSER])
     frontier_mode = iteration - ints[R_PROGRESS] >= stuck
     if frontier_mode and n > ints[R_FSEEN]:
         ints[R_FCOUNT] = update_frontier(world, counts, X[ints[R_FSEEN]:n], cell, fgoal, free, cov, pos, front, dist,
@@ -137,37 +130,9 @@ def route_draw(X, n, best_distance, iteration, rng, field, blocked, res, origin,
 
 
 @nb.njit(cache=True)
-def route_rrt_run(budget, rng, draw_args, batch, pts, wake, tree, istate, fstate, last, world, space, goal, step,
-                  tol, low, high, st, sb):
-    """Up to ``budget`` RRT iterations with samples from ``route_draw``, never leaving compiled code.
-
-    Batches are drawn when the buffer runs dry, at the sizes the planner's refill schedule asks for,
-    so the run matches a planner calling ``RouteSampler.draw`` sample for sample. With ``wake`` > 0
-    it returns before a draw once the tree has come no closer to the goal for ``wake`` iterations
-    (``RouteSampler``'s ``stall`` switch).
-    """
-    field, blocked, res, origin, rstep, frontier, ints, floats, params, scratch = draw_args
-    X = tree.X
-    q = np.empty(X.shape[1])
-    qe_buf = np.empty(tree.E.shape[1])
-    new = np.empty(X.shape[1])
-    for s in range(budget):
-        if istate[I_SOLVED] or istate[I_N] >= X.shape[0]:
-            return s
-        if ints[R_POS] >= ints[R_COUNT]:
-            if wake > 0 and istate[I_ITER] - ints[R_CLOSER] >= wake:
-                return s
-            m = min(batch, CHUNK, FIRST_REFILL << min(ints[R_REFILLS], 16))
-            route_draw(X, istate[I_N], fstate[F_BEST_D], istate[I_ITER], rng, field, blocked, res, origin, rstep,
-                       frontier, ints, floats, params, scratch, low, high, pts[:m])
-            ints[R_REFILLS] += 1
-            ints[R_COUNT] = m
-            ints[R_POS] = 0
-        p = ints[R_POS]
-        rrt_kernels.rrt_iterate(pts[p], 0, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
-                                q, qe_buf, new)
-        ints[R_POS] = p + 1
-    return budget
+def route_rrt_loop(budget, state, buffers, rng, loop):
+    """RRT's compiled loop drawing from ``route_draw`` (``planners.fused``)."""
+    return rrt_loop(budget, route_draw, state, buffers, rng, loop)
 
 
 class RouteSampler(SamplerBase):
@@ -176,15 +141,14 @@ class RouteSampler(SamplerBase):
     The progress vertex is the tree vertex of lowest predicted cost-to-go; the target is ``lookahead``
     steps (jittered 0.5-1.5x) further down the predicted field, and samples scatter ``sigma`` steps
     around it. When progress has stalled for ``stuck`` iterations, samples go to the tree's frontier
-    (``planners.guidance.frontier``; cells near the goal preferred) until the tree makes progress
-    again. A ``uniform_floor`` share of samples is uniform; it grows, as the policy's does, once the
-    tree has come no closer to the goal for ``patience`` iterations (up to ``max_floor``): a wrong
-    prediction can keep the tree busy in a dead end that looks like progress on the predicted field.
+    (``planners.guidance.frontier``; cells of lower predicted cost-to-go preferred) until the tree
+    makes progress again. A ``uniform_floor`` share of samples is uniform; it grows, as the policy's
+    does, once the tree has come no closer to the goal for ``patience`` iterations (up to
+    ``max_floor``): a wrong prediction can keep the tree busy in a dead end that looks like progress
+    on the predicted field. The prediction is the mean over the square's 8 symmetries.
 
     With ``net=None`` the field is the straight-line distance to the goal: the same sampler with the
-    learning removed, its ablation (``straight_line_sampler``). ``uses`` says which of the two
-    rankings the encoder's field replaces: the progress and the target ("progress"), the frontier's
-    preference among its cells ("frontier"; the progress stays on the straight line), or "both".
+    learning removed, its ablation (``straight_line_sampler``).
 
     The defaults are the shipped configuration, chosen on the validation maps (``SHIPPED_SETTINGS``):
     ``RouteSampler(RouteSampler.load().net)`` and ``RouteSampler.load()`` are ``shipped_sampler()``.
@@ -201,44 +165,43 @@ class RouteSampler(SamplerBase):
         patience, max_floor: Iterations without coming closer to the goal after which the uniform share
             grows, and the largest share it reaches.
         tau: Temperature of the frontier's preference, in steps (``planners.guidance.frontier``).
-        uses: "progress", "frontier" or "both": where the encoder's field replaces the straight line.
-        symmetries: How many of the square's symmetries the encoder's prediction is averaged over
-            (``RouteNet.predict``): 8 costs 8 passes per query.
-        lazy: Iterations the sampler follows the straight line before it runs the encoder (0: at
-            once). A query solved sooner never pays for the encoder; one that is not switches to its
-            field at that iteration, on every planner and however the budget is split.
-            ``forward_passes`` says how many passes a query used.
-        stall: Run the encoder once the tree has come no closer to the goal for this many iterations
-            (0: never on this account). With ``lazy`` too, whichever comes first.
+        device: Where the encoder runs: "auto" (CUDA when torch sees it, else the CPU), "cpu" or "cuda";
+            the encoder is moved there. On the CPU the iteration counts are the validated ones.
+        threads: torch threads for the encoder's passes (``learning.models.threads``): default
+            ``SAMPLERGYM_TORCH_THREADS`` or 1; the caller's setting is restored after each pass.
     """
 
-    USES = ("progress", "frontier", "both")
+    #: Where the encoder's field replaces the straight line: the progress and the frontier's ranking.
+    #: (Experiments that place it elsewhere subclass, ``scripts/experiments/route_variants.py``.)
+    _uses = "both"
+    #: How many of the square's symmetries the prediction is averaged over (``RouteNet.predict``).
+    _symmetries = 8
 
     def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 3.0, sigma: float = 0.5,
                  stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
-                 max_floor: float = 0.5, tau: float = 0.5, uses: str = "both", symmetries: int = 8,
-                 lazy: int = 0, stall: int = 0) -> None:
+                 max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None) -> None:
         if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
                 and 0 <= uniform_floor <= max_floor <= 1 and tau > 0):
             raise InputError(f"need step_size, lookahead, stuck, patience, batch, tau > 0, sigma >= 0 and "
                              f"0 <= uniform_floor <= max_floor <= 1; got {step_size}, {lookahead}, {stuck}, "
                              f"{patience}, {batch}, {tau}, {sigma}, {uniform_floor}, {max_floor}")
-        if uses not in self.USES:
-            raise InputError(f"uses must be one of {self.USES}, got {uses!r}")
-        if isinstance(symmetries, bool) or not isinstance(symmetries, int) or not 1 <= symmetries <= 8:
-            raise InputError(f"symmetries must be an integer from 1 to 8, got {symmetries!r}")
-        for name, v in (("lazy", lazy), ("stall", stall)):
-            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-                raise InputError(f"{name} must be an integer of 0 or more (iterations), got {v!r}")
         self.net, self.step_size, self.lookahead, self.sigma = net, float(step_size), float(lookahead), float(sigma)
         self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
-        self.patience, self.max_floor = int(patience), float(max_floor)
-        self.tau, self.uses, self.symmetries, self.lazy, self.stall = float(tau), uses, symmetries, lazy, stall
-        self.forward_passes, self._pending = 0, False
+        self.patience, self.max_floor, self.tau = int(patience), float(max_floor), float(tau)
+        self.device = resolve_device(device)
+        if threads is not None:
+            planning_thread_count(threads)  # refused now, by name, rather than at the first query
+        self.threads = threads
+        if net is not None:
+            net.to(self.device)
+        self.forward_passes = 0
 
     @classmethod
     def load(cls, path: str | os.PathLike = SHIPPED_ROUTE, **kwargs) -> RouteSampler:
-        """A sampler over the encoder saved at ``path`` (default: the shipped one), at the validated settings."""
+        """A sampler over the encoder saved at ``path`` (default: the shipped one), at the validated settings.
+
+        ``kwargs`` are the constructor's (``device``, ``threads``, ...).
+        """
         return cls(load_route_net(path), **kwargs)
 
     def _straight(self, grid: OccupancyGrid) -> np.ndarray:
@@ -247,47 +210,41 @@ class RouteSampler(SamplerBase):
         return straight_field(grid.height, grid.width, gx, gy, grid.resolution, self.step_size)
 
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
-        """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line).
-
-        The straight line alone without an encoder, or while a ``lazy`` one waits.
-        """
-        if self.net is None or self._pending:
+        """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
+        if self.net is None:
             return self._straight(grid), None
         if round(self.step_size / grid.resolution) != self.net.block:
-            raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is "
-                             f"{self.step_size / grid.resolution:g} cells of this map")
-        learned = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal), self.symmetries)
-        self.forward_passes = self.symmetries
-        progress = self._straight(grid) if self.uses == "frontier" else learned
-        return progress, (None if self.uses == "progress" else learned)
-
-    def _progress_and_ranking(self) -> tuple[np.ndarray, np.ndarray | None]:
-        """``_fields`` on the problem's map, the progress field inf where the map is blocked."""
-        grid = self.problem.world
-        field, ranking = self._fields(grid)
-        field[grid.obstacles] = np.inf
-        return field, ranking
+            cells = self.step_size / grid.resolution
+            raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is {cells:g} cells "
+                             f"of this map (resolution {grid.resolution:g}): pass "
+                             f"step_size={self.net.block * grid.resolution:g}")
+        learned = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal), self._symmetries,
+                                   threads=self.threads)
+        self.forward_passes = self._symmetries
+        progress = self._straight(grid) if self._uses == "frontier" else learned
+        return progress, (None if self._uses == "progress" else learned)
 
     def _setup(self) -> None:
         grid = self.problem.world
         if not isinstance(grid, OccupancyGrid):
             raise InputError("RouteSampler plans on OccupancyGrid problems")
         self.forward_passes = 0
-        self._pending = self.net is not None and (self.lazy > 0 or self.stall > 0)
-        field, ranking = self._progress_and_ranking()
-        self.field, self.blocked = field, grid.kernel.grid
-        self.res, self.origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
+        field, ranking = self._fields(grid)
+        field[grid.obstacles] = np.inf
+        self.field = field
+        res, origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
         r, c = grid.cell_of(self.problem.start)
         f = Frontier(self.problem, self.step_size, self.tau, self._ranking(ranking))
-        self._frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
-                          np.ascontiguousarray(f.world.params[1:3]), f.cost)
-        self._ints = np.array([0, r * grid.width + c, 0, 0, 0, 0, 0, 0, 0], dtype=np.int64)
-        self._pts = np.empty((self.batch, 2))
+        frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
+                    np.ascontiguousarray(f.world.params[1:3]), f.cost)
+        ints = np.array([0, r * grid.width + c, 0, 0, 0, 0], dtype=np.int64)
         b = self.batch
-        self._scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)))
-        self._floats = np.array([field[r, c], np.inf])
-        self._params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor,
-                                 self.patience], dtype=np.float64)
+        scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)))
+        floats = np.array([field[r, c], np.inf])
+        params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor, self.patience],
+                          dtype=np.float64)
+        self._state = (field, grid.kernel.grid, res, origin, self.step_size, frontier, ints, floats, params, scratch,
+                       self.low, self.high)
 
     def _ranking(self, ranking: np.ndarray | None) -> np.ndarray | None:
         """The frontier's cost per frontier cell from a per-grid-cell field in steps (None: the straight line)."""
@@ -297,68 +254,33 @@ class RouteSampler(SamplerBase):
         return frontier_costs(np.where(grid.obstacles, np.inf, ranking) * self.step_size / grid.resolution, grid,
                               self.step_size)
 
-    def _due(self, iteration: int) -> bool:
-        """Whether a waiting encoder runs now: ``lazy``'s iteration, or ``stall`` iterations without coming closer."""
-        return ((self.lazy > 0 and iteration >= self.lazy)
-                or (self.stall > 0 and iteration - self._ints[R_CLOSER] >= self.stall))
-
-    def _wake(self) -> None:
-        """The ``lazy`` or ``stall`` switch: run the encoder; rank the tree and frontier seen so far by its field."""
-        self._pending = False
-        self.field, ranking = self._progress_and_ranking()
-        cost = self._ranking(ranking)
-        if cost is not None:
-            free, dist = self._frontier[4], self._frontier[8]
-            seen = np.flatnonzero(free.reshape(-1) == FREE)  # cells ranked so far, by the straight line
-            dist[seen] = cost[seen]
-            self._frontier = (*self._frontier[:12], cost)
-        # the progress vertex is found again on the new field (every vertex), and counts as progress
-        self._ints[R_SEEN] = 0
-        self._floats[0] = np.inf
-
     def draw(self, rng, n, view):
-        if self._pending and self._due(view.iteration):
-            self._wake()
-        m = min(n, self.batch)
-        pts = np.empty((m, 2))
-        route_draw(view.vertices, view.num_vertices, view.best_distance, view.iteration, bitgen_address(rng),
-                   self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
-                   self._floats, self._params, self._scratch, self.low, self.high, pts)
+        pts = np.empty((min(n, self.batch), 2))
+        route_draw(self._state, view.vertices, view.num_vertices, view.best_vertex, view.best_distance,
+                   view.iteration, rng_address(rng), pts, _NO_ANCHORS)
         return pts
 
-    def fuse(self, planner: Planner) -> Callable[[Planner, int], int] | None:
+    def fuse(self, planner: Planner) -> FusedRRT | None:
         """RRT's loop with this sampler's draws compiled in (same samples, less time); None for other planners."""
-        if planner.fusable_loop != "rrt":
-            return None
-        return self._run_fused
-
-    def _run_fused(self, planner: Planner, n: int) -> int:
-        if self._pending:  # stop at the switch, so it happens at the same iteration as with draws
-            if self._due(planner.iterations):
-                self._wake()
-            elif self.lazy > 0:
-                n = min(n, self.lazy - planner.iterations)
-        wake = self.stall if self._pending else 0
-        args = (self.field, self.blocked, self.res, self.origin, self.step_size, self._frontier, self._ints,
-                self._floats, self._params, self._scratch)
-        return route_rrt_run(n, bitgen_address(planner.rng), args, self.batch, self._pts, wake, *planner.loop_args())
+        return fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
 
     def __repr__(self) -> str:
         rest = f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}"
-        if self.net is None:
-            return f"RouteSampler(None, {rest})"
-        lazy = f", lazy={self.lazy}" if self.lazy else ""
-        stall = f", stall={self.stall}" if self.stall else ""
-        return f"RouteSampler({rest}, uses={self.uses!r}, symmetries={self.symmetries}{lazy}{stall})"
+        return f"RouteSampler({'None, ' if self.net is None else ''}{rest})"
 
 
-def shipped_sampler(encoder: RouteNet | str | os.PathLike = SHIPPED, step_size: float = 4.0) -> RouteSampler:
+#: ``route_draw``'s anchor codes in ``RouteSampler.draw``: it never anchors, so it never writes them.
+_NO_ANCHORS = np.zeros(0, dtype=np.int8)
+
+
+def shipped_sampler(encoder: RouteNet | str | os.PathLike = SHIPPED, step_size: float = 4.0, *, device: str = "auto",
+                    threads: int | None = None) -> RouteSampler:
     """An encoder (loaded, or a file; default the shipped one) at the validated ``SHIPPED_SETTINGS``.
 
-    ``evaluate.py``'s "route encoder".
+    ``evaluate.py``'s "route encoder"; ``device`` and ``threads`` as for ``RouteSampler``.
     """
     net = encoder if isinstance(encoder, RouteNet) else load_route_net(encoder)
-    return RouteSampler(net, step_size=step_size, **SHIPPED_SETTINGS)
+    return RouteSampler(net, step_size=step_size, device=device, threads=threads, **SHIPPED_SETTINGS)
 
 
 def shipped_ablation(step_size: float = 4.0) -> RouteSampler:
@@ -369,17 +291,9 @@ def shipped_ablation(step_size: float = 4.0) -> RouteSampler:
     return RouteSampler(None, step_size=step_size, **ABLATION_SETTINGS)
 
 
-def trained_sampler() -> RouteSampler:
-    """The trained encoder as a sampler: ``evaluate.py --sampler route=learning.samplers.route:trained_sampler``."""
-    if not TRAINED.is_file():
-        raise FileNotFoundError(f"no route encoder at {TRAINED}: train one first with python scripts/train_route.py")
-    return RouteSampler.load(TRAINED)
-
-
 def straight_line_sampler() -> RouteSampler:
-    """The ablation: ``RouteSampler`` with the encoder replaced by the straight-line distance to the goal.
+    """The straight-line follower: ``RouteSampler`` with the encoder replaced by the straight-line distance.
 
-    ``evaluate.py`` runs it as the "straight-line follower"; with ``--sampler
-    route=learning.samplers.route:trained_sampler`` beside it, what the encoder adds is the difference.
+    ``evaluate.py`` runs it as the "straight-line follower" (``make_sampler("follower")``).
     """
     return RouteSampler(None, **FOLLOWER_SETTINGS)

@@ -24,6 +24,7 @@ from gymnasium import spaces
 from envs.env_sampler import EnvSampler
 from envs.sampler_env import SamplerEnv
 from learning.checkpoint import read_sb3_zip
+from learning.models.threads import planning_thread_count, planning_threads
 from planners.base.fileio import InputError
 
 
@@ -87,10 +88,12 @@ class SB3Sampler(EnvSampler):
             sampler may sample one place forever.
         algo: For a path: the algorithm (``PPO``, ``A2C``, ``DQN``, ``SAC``, ``TD3``), guessed from the
             weight names if omitted. ``policy_kwargs``: those the model was trained with, if any.
+        threads: torch threads for the policy's passes while planning (``learning.models.threads``):
+            default ``SAMPLERGYM_TORCH_THREADS`` or 1; the caller's setting is restored after each pass.
     """
 
     def __init__(self, model: Any, env_id: str, *, deterministic: bool = True, algo: str | None = None,
-                 policy_kwargs: dict | None = None, **env_kwargs) -> None:
+                 policy_kwargs: dict | None = None, threads: int | None = None, **env_kwargs) -> None:
         import gymnasium as gym
 
         import envs
@@ -122,12 +125,19 @@ class SB3Sampler(EnvSampler):
         # about a third of a small CNN policy's time per decision (no module here trains)
         if hasattr(policy, "set_training_mode"):
             policy.set_training_mode(False)
+        if threads is not None:
+            planning_thread_count(threads)  # refused now, by name, rather than at the first draw
+        self.threads = threads
         self.policy = policy
         self.deterministic = bool(deterministic)
         self.env_id = env_id
         super().__init__(env, self._act, deterministic=self.deterministic)
 
     def _act(self, obs, rng: np.random.Generator):
+        with planning_threads(self.threads):
+            return self._act_now(obs, rng)
+
+    def _act_now(self, obs, rng: np.random.Generator):
         if self.deterministic:
             return self._predict(obs)
         with torch.no_grad():

@@ -16,13 +16,10 @@ from planners.base.problem import Problem
 from planners.base.samplers import SampleBatch, Sampler, UniformSampler
 from planners.kernels import state as slots
 from planners.kernels.cache import announce as announce_compile
+from planners.kernels.fused import CHUNK, refill_size  # the batch and refill schedule (planners.fused)
 from planners.kernels.space import embed_dim, uses_kd
 from planners.kernels.state import Tree
 
-#: Samples handed to a compiled kernel per call; bounds how late a time limit is noticed.
-CHUNK = 1024
-#: Size of the first sample refill; refills double up to CHUNK, so short solves draw few samples.
-FIRST_REFILL = 64
 #: Under a time limit, one compiled call is sized from the measured time per sample (growing at most
 #: twofold) to end by the deadline and to last at most this many seconds, so the deadline is looked
 #: at every TIME_SLICE seconds at least, and overrun by about one iteration (an iteration can be slow:
@@ -513,7 +510,7 @@ class Planner(abc.ABC):
         # sampler sees) must not depend on how the caller splits its budget, so that
         # step() x N == solve(N) == solve in pieces
         if self._pos >= len(self._buf_pts):
-            self._refill(min(CHUNK, FIRST_REFILL << self._refills))
+            self._refill(refill_size(self._refills))
             self._refills += 1
         end = min(self._pos + n, len(self._buf_pts))
         self._reserve(end - self._pos)

@@ -1,0 +1,69 @@
+"""Drawing inside RRT's compiled loop: the one way for a compiled sampler to fuse its draws with the planner.
+
+A sampler whose draws are a numba function can run them inside RRT's compiled loop, so a solve
+never returns to Python between batches (``Sampler.fuse`` in ``planners.base.samplers``). The
+sampler provides three things:
+
+1. a compiled ``draw(state, vertices, n, best_vertex, best_distance, iteration, rng, pts, anchored)``
+   that fills ``pts`` (m, dim) with m samples and, where it anchors them, ``anchored`` (m,) with
+   ``ANCHOR_*`` codes (it starts at zeros; a sampler that never anchors leaves it alone). The tree
+   enters as ``vertices[:n]``, the vertex nearest the goal and its distance, and the planner's
+   iteration; ``rng`` is the planner generator's address (``rng_address``), drawn from with
+   ``next_double(rng)``, value for value what ``Generator.random()`` gives. ``state`` is anything
+   numba can type (a tuple of arrays, a ``NamedTuple``): the sampler's per-query state.
+2. a cached entry in its own module that hands that ``draw`` to the loop::
+
+       @numba.njit(cache=True)
+       def my_loop(budget, state, buffers, rng, loop):
+           return rrt_loop(budget, my_draw, state, buffers, rng, loop)
+
+   (numba compiles ``rrt_loop`` for ``my_draw``, with a direct call to it; the cache of ``my_loop``
+   holds the whole loop and is renewed when the sampler's file changes);
+3. ``fuse``: ``return fuse_rrt(planner, my_loop, state, batch)``.
+
+The loop asks for ``min(batch, refill_size(k))`` samples at its ``k``-th refill, the planner's own
+schedule, so a fused run draws exactly what the same sampler's ``draw`` method (called by the
+planner with that many) would: fusing changes the speed, never the run. ``growing_floor`` is the
+uniform share a guided sampler keeps, growing while the tree comes no closer to the goal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from planners.kernels.bitgen import bitgen_address as rng_address
+from planners.kernels.bitgen import next_double
+from planners.kernels.fused import CHUNK, FIRST_REFILL, growing_floor, refill_size, rrt_loop
+
+if TYPE_CHECKING:
+    from planners.base.planner import Planner
+
+__all__ = ["CHUNK", "FIRST_REFILL", "FusedRRT", "fuse_rrt", "growing_floor", "next_double", "refill_size",
+           "rng_address", "rrt_loop"]
+
+
+class FusedRRT:
+    """The callable ``Sampler.fuse`` returns for RRT: runs ``entry`` on the planner's loop with ``state``.
+
+    It owns the loop's sample buffer (``batch`` rows of ``dim``) and its counters (position, rows,
+    refills so far), fresh for each planner (re)start, as the planner's own buffer is.
+    """
+
+    __slots__ = ("entry", "state", "buffers")
+
+    def __init__(self, entry: Callable, state: Any, batch: int, dim: int) -> None:
+        self.entry, self.state = entry, state
+        self.buffers = (np.zeros(3, dtype=np.int64), np.empty((batch, dim)), np.zeros(batch, dtype=np.int8))
+
+    def __call__(self, planner: Planner, n: int) -> int:
+        return self.entry(n, self.state, self.buffers, rng_address(planner.rng), planner.loop_args())
+
+
+def fuse_rrt(planner: Planner, entry: Callable, state: Any, batch: int) -> FusedRRT | None:
+    """``entry`` (a cached wrapper of ``rrt_loop``, see the module) as ``planner``'s loop; None if it is not RRT's."""
+    if planner.fusable_loop != "rrt":
+        return None
+    return FusedRRT(entry, state, int(batch), planner.problem.dim)

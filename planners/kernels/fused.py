@@ -1,0 +1,83 @@
+"""RRT's loop with a sampler's compiled draws inside it, the refill schedule and the growing uniform floor.
+
+Internal: ``planners.fused`` is the public way in (it documents the draw function's contract).
+``rrt_loop`` takes the sampler's ``draw`` as an argument, so numba compiles one loop per draw
+function with the draw called directly, as if the loop had been written for it. A loop specialised
+on a function argument cannot be cached on its own, so the sampler wraps it in a small cached entry
+in its own module (``planners.fused`` shows how): that entry's cache then holds the whole loop, and
+an edit to the sampler's file recompiles it. ``rrt_loop`` is inlined into that entry (numba's
+``inline="always"``): a call that passed the draw function across a call boundary would carry the
+function object's address in the machine code, which numba cannot cache.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from planners.kernels.rrt import rrt_iterate
+from planners.kernels.state import F_BEST_D, I_BEST_V, I_ITER, I_N, I_SOLVED
+
+#: Samples handed to a compiled kernel per call; bounds how late a time limit is noticed.
+CHUNK = 1024
+#: Size of the first sample refill; refills double up to CHUNK, so short solves draw few samples.
+FIRST_REFILL = 64
+
+# slots of the fused loop's buffer counters (``FusedRRT.counters``)
+B_POS, B_COUNT, B_REFILLS = range(3)
+
+
+def refill_size(refills: int) -> int:
+    """Samples the planner asks for at its ``refills``-th refill (0-based): 64, 128, ... doubling up to ``CHUNK``.
+
+    When refills happen, and so what a tree-dependent sampler sees, must not depend on how a caller
+    splits its budget; this schedule is the planner's, and the fused loop follows it exactly.
+    """
+    return min(CHUNK, FIRST_REFILL << min(refills, 16))  # 64 << 16 > CHUNK: no overflow however many refills
+
+
+refill_size_compiled = nb.njit(cache=True, inline="always")(refill_size)
+
+
+@nb.njit(cache=True, inline="always")
+def growing_floor(floor0, max_floor, patience, stalled):
+    """The uniform share after ``stalled`` iterations without coming closer to the goal.
+
+    ``floor0`` until ``patience`` iterations have passed, then growing in proportion to the time
+    stalled, up to ``max_floor``: a tree pinned by its own biased samples gets RRT's Voronoi bias back.
+    """
+    if stalled < patience:
+        return floor0
+    return max(floor0, min(max_floor, floor0 * stalled / patience))
+
+
+@nb.njit(inline="always")
+def rrt_loop(budget, draw, state, buffers, rng, loop):
+    """Up to ``budget`` RRT iterations with samples from ``draw``, never leaving compiled code.
+
+    ``buffers`` is (counters, points, anchor codes) (``planners.fused.FusedRRT``); ``loop`` is the
+    planner's ``loop_args()``. Batches are drawn when the buffer runs dry, at ``min(batch,
+    refill_size(refills))`` samples, so the run matches a planner calling the sampler's ``draw``
+    sample for sample.
+    """
+    counters, pts, anch = buffers
+    tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb = loop
+    X = tree.X
+    q = np.empty(X.shape[1])
+    qe_buf = np.empty(tree.E.shape[1])
+    new = np.empty(X.shape[1])
+    batch = pts.shape[0]
+    for s in range(budget):
+        if istate[I_SOLVED] or istate[I_N] >= X.shape[0]:
+            return s
+        if counters[B_POS] >= counters[B_COUNT]:
+            m = min(batch, refill_size_compiled(counters[B_REFILLS]))
+            draw(state, X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], rng, pts[:m], anch[:m])
+            counters[B_REFILLS] += 1
+            counters[B_COUNT] = m
+            counters[B_POS] = 0
+        p = counters[B_POS]
+        rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb, q,
+                    qe_buf, new)
+        counters[B_POS] = p + 1
+    return budget
