@@ -46,7 +46,7 @@ class SamplerEnv(gym.Env):
     SB3's default CNN, so ``PPO("MultiInputPolicy", env)`` trains with SB3's defaults; smaller
     ``obs_size`` / ``local_size`` (below 36) need a custom extractor. ``observation="egocentric"``:
     ``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``, multi-scale windows around the progress
-    vertex turned towards the goal (``EgocentricObservation``), for ``learning.extractor`` (too
+    vertex turned towards the goal (``EgocentricObservation``), for ``learning.models.extractor`` (too
     small for SB3's default CNN). Other worlds (geometric, 6-DoF rigid body): a ``Box`` vector
     (``VectorObservation``), for SB3's ``MlpPolicy``.
 

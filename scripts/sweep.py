@@ -1,6 +1,6 @@
 """Search the training recipe, or the baselines' parameters, on Ray Tune; pick on validation maps only.
 
-    python scripts/sweep.py recipe --samples 100            # random search over learning.sweep.RECIPE_SPACE
+    python scripts/sweep.py recipe --samples 100            # random search over learning.training.sweep.RECIPE_SPACE
     python scripts/sweep.py baselines                        # goal bias and the ablation's p, every setting
     python scripts/sweep.py recipe --samples 100 --resume    # continue an interrupted sweep
     python scripts/sweep.py recipe --address auto            # on your Ray cluster
@@ -30,7 +30,7 @@ import sys
 import time
 from pathlib import Path
 
-from learning.training import TrainConfig
+from learning.training.policy import TrainConfig
 from planners.base.fileio import InputError, check_output_place
 
 #: --quick: a tiny recipe (one family, 64x64, two DAgger rounds, a short PPO) and two validation maps per
@@ -70,14 +70,14 @@ def main(argv=None) -> int:
             else TrainConfig()
         check_output_place(args.out / name, "--out")
         check_output_place(args.out / f"{name}.chosen.json", "--out (its .chosen.json)", folder=False)
-        from learning.sweep import check_resumable
+        from learning.training.sweep import check_resumable
 
         if args.resume:
             check_resumable(args.out.resolve() / name, args.kind)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    from learning.sweep import SweepInterrupted, run_sweep
+    from learning.training.sweep import SweepInterrupted, run_sweep
 
     signals = {"SIGINT": 130, "SIGTERM": 143}
     received: list[str] = []

@@ -38,7 +38,7 @@ from pathlib import Path
 
 from learning.device import DEVICES, resolve_device
 from learning.evaluation import worker_init
-from learning.training import TrainConfig, open_map_sets, read_state, train
+from learning.training.policy import TrainConfig, open_map_sets, read_state, train
 from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, check_output_place
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 

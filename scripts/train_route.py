@@ -1,9 +1,9 @@
-"""Train the route encoder (``learning.route.RouteNet``) on the generated training maps.
+"""Train the route encoder (``learning.models.route_net.RouteNet``) on the generated training maps.
 
     python scripts/train_route.py                           # the shipped encoder's recipe (about an hour)
     python scripts/train_route.py --resume                  # continue an interrupted run from its last epoch
     python scripts/train_route.py --epochs 5 --maps 100     # a quicker variation
-    python scripts/evaluate.py --sampler route=learning.route:trained_sampler   # compare it
+    python scripts/evaluate.py --route runs/route/route.pt  # the comparison with it as the route encoder
 
 With no options it trains the shipped encoder's recipe (``learning/data/route.json``: 30 epochs, 1600
 maps per family at sides 64 and 128, the 8 symmetries, 2 axial attention layers). Maps come from the
@@ -46,8 +46,8 @@ import numpy as np
 import torch
 
 from learning.device import DEVICES, resolve_device
-from learning.route import RouteNet, save_route_net
-from learning.route_training import check_route_map, default_workers, train_route_net
+from learning.models.route_net import RouteNet, save_route_net
+from learning.training.route import check_route_map, default_workers, train_route_net
 from planners.base.fileio import (
     InputError,
     atomic_write_bytes,

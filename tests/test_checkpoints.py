@@ -116,9 +116,9 @@ def test_weights_of_the_wrong_shape_are_refused(tmp_path):
 
 
 def test_a_zip_bomb_is_refused_from_its_header(tmp_path, monkeypatch):
-    import learning.checkpoint
+    import learning.models.checkpoint
 
-    monkeypatch.setattr(learning.checkpoint, "MAX_ENTRY_BYTES", 1000)
+    monkeypatch.setattr(learning.models.checkpoint, "MAX_ENTRY_BYTES", 1000)
     with pytest.raises(InputError, match="guided.zip.*unpacks to"):
         PolicySampler.load(SHIPPED)
 

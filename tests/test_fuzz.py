@@ -293,7 +293,7 @@ def test_hostile_checkpoints_are_refused_before_the_work(tmp_path, case):
     import tracemalloc
 
     from learning import PolicySampler
-    from learning.sb3_sampler import load_sb3_policy
+    from learning.samplers.sb3 import load_sb3_policy
 
     entries = _shipped_entries()
     if case == "nested data":
@@ -318,7 +318,7 @@ def test_hostile_checkpoints_are_refused_before_the_work(tmp_path, case):
 
 
 def test_nested_training_configs_and_resume_states_are_named(tmp_path):
-    from learning.training import STATE_KEY, TrainConfig, read_state
+    from learning.training.policy import STATE_KEY, TrainConfig, read_state
 
     path = tmp_path / "deep.json"
     path.write_text('{"extra": ' + "[" * 10_000 + "]" * 10_000 + "}")
@@ -388,7 +388,7 @@ def test_env_actions(env_id, kwargs):
 
 
 def test_generated_sizes_have_a_limit_that_names_how_to_raise_it(monkeypatch, tmp_path):
-    from learning.training import TrainConfig
+    from learning.training.policy import TrainConfig
     from planners.maps.generators import MAX_SIZE_ENV, generate
 
     monkeypatch.delenv(MAX_SIZE_ENV, raising=False)

@@ -21,7 +21,7 @@ from planners.maps.generators import TEST_SEED0, generate
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = SHIPPED_POLICY
-INFERENCE = ["learning/policy_sampler.py", "learning/fast_policy.py", "learning/checkpoint.py", "learning/route.py",
+INFERENCE = ["learning/policy_sampler.py", "learning/fast_policy.py", "learning/models/checkpoint.py", "learning/route.py",
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "guidance").glob("*.py"))),
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "kernels").glob("*.py")))]
 PRIVILEGED = ("planners.maps.gridsearch", "planners.maps.generators", "learning.references.expert")
@@ -48,7 +48,7 @@ def test_no_inference_module_imports_a_privileged_one(module):
 def test_the_learned_samplers_plan_the_same_runs_with_grid_search_and_expert_disabled(monkeypatch, learned):
     from learning.references import expert
     from learning.samplers.route import RouteSampler, shipped_sampler
-    from learning.route_training import train_route_net
+    from learning.training.route import train_route_net
     from planners.maps import gridsearch
 
     problems = [generate(f, TEST_SEED0 + 3, 96) for f in ("bugtrap", "maze", "narrow_passage")]

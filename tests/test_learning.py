@@ -13,7 +13,7 @@ import torch
 from learning import PolicySampler
 from learning.models.fast_policy import FastActor
 from learning.models.shipped import SHIPPED_POLICY
-from learning.training import TrainConfig, train
+from learning.training.policy import TrainConfig, train
 from planners import PRM, RRT, OccupancyGrid, Problem, RRTStar, UniformSampler, make_planner
 from planners.base.fileio import InputError
 from planners.maps.generators import TEST_SEED0, generate
@@ -409,7 +409,7 @@ def test_actor_with_other_convolution_kernels_is_refused():
 
 def test_mirror_augmentation_is_the_goal_frames_reflection():
     """A map reflected across the start-goal line observes the reversed window rows and mirrored labels."""
-    from learning.imitation import mirror_labels
+    from learning.training.imitation import mirror_labels
     from planners.guidance.egocentric import EgocentricView
     from planners.guidance.guided import FRONTIER, ego_class
 
@@ -433,7 +433,7 @@ def test_mirrored_cloning_splits_a_label_between_its_reflections(trained):
     """On windows that look the same both ways, mirrored batches teach bin b and bin 15 - b equally."""
     from stable_baselines3 import PPO
 
-    from learning.imitation import Dataset, behaviour_cloning
+    from learning.training.imitation import Dataset, behaviour_cloning
     from planners.guidance.guided import ANGLES
 
     n, label = 512, 3 * ANGLES + 2  # ring 3, bin 2; its reflection is bin 13

@@ -23,7 +23,7 @@ from learning.samplers.route import (
     shipped_sampler,
     straight_line_sampler,
 )
-from learning.route_training import cost_targets, train_route_net
+from learning.training.route import cost_targets, train_route_net
 from planners import RRT, GeometricWorld, OccupancyGrid, Problem
 from planners.base.fileio import InputError
 from planners.maps.generators import FAMILIES, TEST_SEED0, generate

@@ -15,7 +15,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from conftest import load_script  # noqa: E402
 
-import learning.sweep  # noqa: E402
+import learning.training.sweep  # noqa: E402
 
 
 class _Bomb:
@@ -30,7 +30,7 @@ class _Bomb:
 def test_bad_flags_exit_2_before_ray_starts(tmp_path, capsys, monkeypatch, flags, named):
     (tmp_path / "FILE").write_text("x")
     flags = [str(tmp_path / "FILE") if f == "FILE" else f for f in flags]
-    monkeypatch.setattr(learning.sweep, "run_sweep", lambda *a, **k: pytest.fail("the sweep started"))
+    monkeypatch.setattr(learning.training.sweep, "run_sweep", lambda *a, **k: pytest.fail("the sweep started"))
     assert load_script("sweep").main(["recipe", "--quick", "--out", str(tmp_path / "o"), *flags]) == 2
     err = capsys.readouterr().err
     assert named in err and err.count("\n") == 1, err
@@ -41,10 +41,10 @@ def test_resume_refuses_a_folder_it_did_not_start_without_unpickling(tmp_path, c
     folder = tmp_path / "o" / "recipe-sweep"
     folder.mkdir(parents=True)
     (folder / "tuner.pkl").write_bytes(pickle.dumps(_Bomb()))
-    monkeypatch.setattr(learning.sweep, "run_sweep", lambda *a, **k: pytest.fail("the sweep started"))
+    monkeypatch.setattr(learning.training.sweep, "run_sweep", lambda *a, **k: pytest.fail("the sweep started"))
     assert load_script("sweep").main(["recipe", "--out", str(tmp_path / "o"), "--resume"]) == 2
     assert "not started by scripts/sweep.py" in capsys.readouterr().err
-    (folder / learning.sweep.MANIFEST).write_text(json.dumps({"kind": "baselines"}))
+    (folder / learning.training.sweep.MANIFEST).write_text(json.dumps({"kind": "baselines"}))
     assert load_script("sweep").main(["recipe", "--out", str(tmp_path / "o"), "--resume"]) == 2
     assert "'baselines' sweep, not a 'recipe' one" in capsys.readouterr().err
     assert not (tmp_path / "PWNED").exists()
@@ -57,10 +57,10 @@ def test_interrupts_print_one_line_and_exit_130_or_143(tmp_path, capsys, monkeyp
         if how == "sigterm":
             os.kill(os.getpid(), signal.SIGTERM)
         if how == "tune":
-            raise learning.sweep.SweepInterrupted(1, 3)
+            raise learning.training.sweep.SweepInterrupted(1, 3)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(learning.sweep, "run_sweep", interrupted)
+    monkeypatch.setattr(learning.training.sweep, "run_sweep", interrupted)
     before = signal.getsignal(signal.SIGTERM)
     assert load_script("sweep").main(["recipe", "--quick", "--out", str(tmp_path)]) == code
     err = capsys.readouterr().err.strip()

@@ -16,7 +16,7 @@ import pytest
 import torch
 
 from conftest import load_script, npy_map_folder
-from learning.route import load_route_net
+from learning.models.route_net import load_route_net
 from planners.base.fileio import MANIFEST, run_lock
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -318,7 +318,7 @@ def test_one_and_two_workers_make_the_same_tensors(tmp_path):
 
     import numpy as np
 
-    from learning.route_training import make_examples, train_route_net
+    from learning.training.route import make_examples, train_route_net
     from planners.maps.generators import generate
     from planners.maps.mapset import MapSet
 

@@ -19,8 +19,8 @@ import pytest
 import torch
 
 from conftest import load_script, npy_map_folder
-from learning.checkpoint import read_sb3_zip
-from learning.training import TrainConfig, read_state, train
+from learning.models.checkpoint import read_sb3_zip
+from learning.training.policy import TrainConfig, read_state, train
 from planners.base.fileio import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,7 +32,7 @@ CFG = TrainConfig(name="kill", families=("forest",), sizes=(64,), dagger_rounds=
 DRIVER = """
 import json, os, signal, sys
 from pathlib import Path
-from learning.training import TrainConfig, train
+from learning.training.policy import TrainConfig, train
 
 out, kill_at, resume = Path(sys.argv[1]).resolve(), int(sys.argv[2]), sys.argv[3] == "resume"
 real, count = os.replace, 0

@@ -13,7 +13,7 @@ import math
 import numba as nb
 import numpy as np
 
-#: Kernel sizes (= strides) of the extractor's two convolutions (``learning.extractor``).
+#: Kernel sizes (= strides) of the extractor's two convolutions (``learning.models.extractor``).
 KERNELS = (4, 2)
 
 #: State-dict keys of the actor, in evaluation order (SB3 ActorCriticPolicy with EgocentricExtractor).

@@ -36,7 +36,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from learning.checkpoint import read_sb3_zip
+from learning.models.checkpoint import read_sb3_zip
 from learning.models.fast_policy import FastActor, actor_logits, softmax_cdf
 from learning.models.shipped import SHIPPED_POLICY, SHIPPED_POLICY_BATCH
 from planners import OccupancyGrid, SampleBatch, SamplerBase
@@ -234,7 +234,7 @@ class PolicySampler(SamplerBase):
         Without ``path``, the shipped policy at the batch it was validated at (``SHIPPED_POLICY_BATCH``
         unless ``batch`` is given); with a path, the checkpoint's own settings unless overridden.
 
-        Safe for files from anyone: only JSON and tensors are read (``learning.checkpoint``), nothing
+        Safe for files from anyone: only JSON and tensors are read (``learning.models.checkpoint``), nothing
         in the file is unpickled. Every problem with the file is an ``InputError`` naming it.
         """
         if path is None:

@@ -6,7 +6,7 @@
 
 The model sees what it saw in training and its actions become samples through the environment's own
 code (``envs.EnvSampler``): same observation builder, same action mode, same step size. A file is read
-with ``learning.checkpoint.read_sb3_zip`` (JSON and ``weights_only`` tensors; nothing is unpickled) and
+with ``learning.models.checkpoint.read_sb3_zip`` (JSON and ``weights_only`` tensors; nothing is unpickled) and
 its weights are loaded into the default policy of the algorithm they belong to (PPO / A2C, DQN, SAC,
 TD3), built for the environment's spaces; pass ``policy_kwargs`` if the model was trained with others.
 """
@@ -23,7 +23,7 @@ from gymnasium import spaces
 
 from envs.env_sampler import EnvSampler
 from envs.sampler_env import SamplerEnv
-from learning.checkpoint import read_sb3_zip
+from learning.models.checkpoint import read_sb3_zip
 from learning.models.threads import planning_thread_count, planning_threads
 from planners.base.fileio import InputError
 

@@ -1,7 +1,7 @@
 """Following a cost-to-go field: progress of a tree on it, targets down it, and costs of frontier cells.
 
-Shared by the privileged expert (``learning.expert``, the grid search's exact field) and the learned
-route sampler (``learning.route``, a predicted field); nothing here searches the map.
+Shared by the privileged expert (``learning.references.expert``, the grid search's exact field) and the learned
+route sampler (``learning.samplers.route``, a predicted field); nothing here searches the map.
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ class FieldFollower:
 
     Progress is the tree vertex in the cell of lowest cost; the target lies ``lookahead`` steps
     further along the field's steepest descent (octile moves, no corner cutting). The field may be
-    exact (the expert's grid search, ``learning.expert``) or learned (``learning.route``).
+    exact (the expert's grid search, ``learning.references.expert``) or learned (``learning.samplers.route``).
 
     Args:
         problem: An ``OccupancyGrid`` problem.

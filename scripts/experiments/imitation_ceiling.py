@@ -4,7 +4,7 @@
     python scripts/experiments/imitation_ceiling.py --maps 10 --families bugtrap maze
 
 The policy is trained to imitate labels: the guided class holding the privileged expert's target, or
-the frontier once the tree has been stuck for ``stuck_threshold`` iterations (``learning.imitation``).
+the frontier once the tree has been stuck for ``stuck_threshold`` iterations (``learning.training.imitation``).
 A policy that imitated them perfectly would plan as the labels do when executed; that is the recipe's
 ceiling. Rows (RRT, step and tolerance 4, median iterations-to-solution, unsolved runs at the cap):
 
@@ -39,7 +39,7 @@ from learning import PolicySampler
 from learning import evaluation as E
 from learning.models.shipped import SHIPPED_POLICY
 from learning.samplers.ablation import FRONTIER_GRID
-from learning.imitation import collect
+from learning.training.imitation import collect
 from planners.base.fileio import InputError, check_int_flags
 from planners.guidance.guided import ANGLES, FRONTIER
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0

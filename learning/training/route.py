@@ -19,7 +19,7 @@ import torch
 from torch import nn
 
 from learning.device import deterministic
-from learning.route import RouteNet, route_input, symmetry
+from learning.models.route_net import RouteNet, route_input, symmetry
 from planners.base.fileio import InputError, atomic_path, env_limit, short_repr
 from planners.base.problem import Problem
 from planners.maps.gridsearch import distance_field

@@ -33,11 +33,11 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.logger import KVWriter, Logger, make_output_format
 from tqdm.auto import tqdm
 
-from learning.checkpoint import read_sb3_zip
+from learning.models.checkpoint import read_sb3_zip
 from learning.device import deterministic
-from learning.fast_policy import FastActor
-from learning.imitation import Dataset, behaviour_cloning, collect
-from learning.policy_sampler import OBS_VERSION, PolicySampler
+from learning.models.fast_policy import FastActor
+from learning.training.imitation import Dataset, behaviour_cloning, collect
+from learning.samplers.policy import OBS_VERSION, PolicySampler
 from planners import RRT, Sampler
 from planners.base.fileio import (
     InputError,
@@ -568,7 +568,7 @@ class _TrainingRun:
                  device: torch.device = torch.device("cpu")) -> None:
         from stable_baselines3 import PPO
 
-        from learning.extractor import policy_kwargs
+        from learning.models.extractor import policy_kwargs
 
         self.cfg, self.run, self.state, self.resume, self.progress = cfg, run, state, resume, progress
         self.backend, self.sets = backend, sets

@@ -1,7 +1,7 @@
 """Searches over the training recipe and over the baselines' parameters, on Ray Tune.
 
 Every trial is scored on the validation maps (seeds from ``VALIDATION_SEED0``): a recipe trial trains
-a policy and scores it as training's own model selection does (:func:`learning.training.validation_score`);
+a policy and scores it as training's own model selection does (:func:`learning.training.policy.validation_score`);
 a baseline trial scores goal bias or the constant-distribution ablation at one setting the same way.
 Tuning and test maps are never looked at, so a chosen config can be evaluated honestly afterwards.
 Tune keeps the experiment's state on disk: an interrupted sweep resumes (:func:`run_sweep` with
@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from learning.ablation import FRONTIER_GRID, ConstantGuidedSampler
-from learning.training import TrainConfig, sampler_validation_score, train
+from learning.samplers.ablation import FRONTIER_GRID, ConstantGuidedSampler
+from learning.training.policy import TrainConfig, sampler_validation_score, train
 from planners import GoalBiasedSampler
 from planners.base.fileio import InputError, atomic_write_text, read_json, run_lock
 from planners.maps.generators import VALIDATION_SEED0
@@ -163,8 +163,8 @@ def _tune(kind: str, storage: Path, name: str, samples: int, seed: int, base: Tr
             space = {"baseline": tune.grid_search([list(b) for b in BASELINE_GRID])}
             tune_config = tune.TuneConfig(metric=METRIC, mode="min", num_samples=1)
         path.mkdir(parents=True, exist_ok=True)
-        atomic_write_text(path / MANIFEST, json.dumps({"kind": kind, "name": name, "written_by": "learning.sweep",
-                                                       "base": asdict(base)}, indent=1, default=list) + "\n")
+        record = {"kind": kind, "name": name, "written_by": "learning.training.sweep", "base": asdict(base)}
+        atomic_write_text(path / MANIFEST, json.dumps(record, indent=1, default=list) + "\n")
         callbacks = [CSVLoggerCallback(), JsonLoggerCallback(), TBXLoggerCallback()]
         tuner = tune.Tuner(trainable, param_space=space, tune_config=tune_config,
                            run_config=tune.RunConfig(name=name, storage_path=str(storage), callbacks=callbacks,
