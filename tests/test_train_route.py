@@ -134,7 +134,7 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
     (["--attention", "1", "--channels", "5"], "--attention"), (["--attention", "1", "--attention-level", "4"],
                                                                 "--attention-level"),
     (["--seed", "-1"], "--seed"), (["--maps", "10000000"], "--maps"), (["--resume"], "--resume"),
-    (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 512 blocks"),
+    (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 512 x 512 = 262144 blocks"),
 ])
 def test_bad_flags_exit_2_with_one_line_naming_them(tmp_path, capsys, flags, named):
     from importlib import util
@@ -276,7 +276,7 @@ def test_bad_map_set_inputs_exit_2_before_any_work_naming_the_value(tmp_path, ca
     elif case == "negative_weight":
         flags += ["--map-set-weight", "-1"]
     elif case == "too_large":
-        monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "4")  # 32 cells at a block of 4 are 8 blocks
+        monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "4")  # 32 x 32 cells at a block of 4 are 64 blocks
     elif case == "step_size":
         flags += ["--step-size", "0.3"]  # 0.3 cells of a map of resolution 1
     elif case == "cuda":

@@ -19,35 +19,29 @@ import torch
 from torch import nn
 
 from learning.device import deterministic
-from learning.models.route_net import RouteNet, route_input, symmetry
-from planners.base.fileio import InputError, atomic_path, env_limit, short_repr
+from learning.models.route_net import MAX_BLOCKS_ENV, RouteNet, max_blocks, route_input, symmetry
+from planners.base.fileio import InputError, atomic_path, short_repr
 from planners.base.problem import Problem
 from planners.maps.gridsearch import distance_field
 
-#: Environment variable that raises the largest map side, in blocks of one step, the encoder trains on.
-MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
-#: Default of that limit: 256 blocks (1,024 cells at the shipped block of 4). The axial attention's
-#: memory grows with the cube of the side; a 256-block map takes a few hundred MB a map in training.
-DEFAULT_MAX_BLOCKS = 256
 #: Most blocks one training batch holds (maps x blocks a map): 32 maps of 256 cells at a block of 4.
 #: Batches of larger maps hold fewer maps, down to one; the shipped recipe's batches (32 maps of 64
 #: and 128 cells) are below it.
 MAX_BATCH_BLOCKS = 32 * 64 * 64
 
 
-def max_blocks() -> int:
-    """The largest map side in blocks the encoder trains on (``SAMPLERGYM_MAX_ROUTE_BLOCKS``, default 256)."""
-    return env_limit(MAX_BLOCKS_ENV, DEFAULT_MAX_BLOCKS)
-
-
 def check_route_map(name: str, shape: tuple[int, int], block: int) -> None:
-    """Refuse a training map larger than ``max_blocks()`` blocks of ``block`` cells a side (``InputError``)."""
-    side = -(-max(shape) // block)
+    """Refuse a training map of more blocks of ``block`` cells than the encoder takes (``max_blocks()``).
+
+    The same limit as at planning time (``learning.models.route_net.max_blocks``), so an encoder is never
+    trained on maps it would refuse to plan on.
+    """
+    rows, cols = -(-shape[0] // block), -(-shape[1] // block)
     limit = max_blocks()
-    if side > limit:
-        raise InputError(f"map {name!r} is {shape[0]} x {shape[1]} cells: {side} blocks of {block} cells on its longer "
-                         f"side, more than the {limit} the route encoder trains on ({MAX_BLOCKS_ENV}); take a larger "
-                         f"step, downsample the map, or raise the limit")
+    if rows * cols > limit:
+        raise InputError(f"map {name!r} is {shape[0]} x {shape[1]} cells: {rows} x {cols} = {rows * cols} blocks of "
+                         f"{block} cells, more than the {limit} the route encoder takes ({MAX_BLOCKS_ENV}); take a "
+                         f"larger step, downsample the map, or raise the limit")
 
 
 def default_workers() -> int:
