@@ -578,6 +578,22 @@ _SHIFTED = {"forest": forest_shifted, "narrow_passage": narrow_passage_shifted, 
             "maze": maze_shifted, "rooms": rooms_shifted}
 
 
+def seeded_map(seed: int | np.random.Generator, label: str, size: int) -> tuple[np.random.Generator, str]:
+    """The generator and the map name of a seed: ``label-size-seed`` for an int seed, ``label-size`` for a Generator.
+
+    Raises:
+        ValueError: If an int seed is negative.
+        TypeError: If the seed is neither an int nor a ``np.random.Generator``.
+    """
+    if isinstance(seed, np.random.Generator):
+        return seed, f"{label}-{size}"
+    if isinstance(seed, numbers.Integral) and not isinstance(seed, bool):
+        if seed < 0:
+            raise ValueError(f"seed must be a non-negative integer or a np.random.Generator, got {seed!r}")
+        return np.random.default_rng(int(seed)), f"{label}-{size}-{seed}"
+    raise TypeError(f"seed must be an int or a np.random.Generator, got {type(seed).__name__} {seed!r}")
+
+
 def generate(
     family: str, seed: int | np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, shifted: bool = False
 ) -> Problem:
@@ -607,13 +623,5 @@ def generate(
     if not (np.isfinite(tol) and tol > 0):
         raise ValueError(f"goal_tolerance must be a positive finite number, got {goal_tolerance!r}")
     size = int(size)
-    label = f"{family}-shifted" if shifted else family
-    if isinstance(seed, np.random.Generator):
-        rng, name = seed, f"{label}-{size}"
-    elif isinstance(seed, numbers.Integral) and not isinstance(seed, bool):
-        if seed < 0:
-            raise ValueError(f"seed must be a non-negative integer or a np.random.Generator, got {seed!r}")
-        rng, name = np.random.default_rng(int(seed)), f"{label}-{size}-{seed}"
-    else:
-        raise TypeError(f"seed must be an int or a np.random.Generator, got {type(seed).__name__} {seed!r}")
+    rng, name = seeded_map(seed, f"{family}-shifted" if shifted else family, size)
     return (_SHIFTED if shifted else _GENERATORS)[family](rng, size, goal_tolerance=tol, name=name)

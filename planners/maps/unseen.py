@@ -34,6 +34,7 @@ import numpy as np
 from planners.base.fileio import check_int
 from planners.base.problem import Problem
 from planners.maps.gridsearch import distance_field, free_components
+from planners.maps.generators import seeded_map
 from planners.worlds.grid import OccupancyGrid
 
 UNSEEN_FAMILIES = ("spiral", "warehouse", "baffles")
@@ -256,14 +257,7 @@ def generate_unseen(family: str, seed: int | np.random.Generator, size: int = 12
     tol = goal_tolerance if isinstance(goal_tolerance, numbers.Real) and not isinstance(goal_tolerance, bool) else None
     if tol is None or not (math.isfinite(tol) and tol > 0):
         raise ValueError(f"goal_tolerance must be a positive finite number, got {goal_tolerance!r}")
-    if isinstance(seed, np.random.Generator):
-        rng, name = seed, f"{family}-{size}"
-    elif isinstance(seed, numbers.Integral) and not isinstance(seed, bool):
-        if seed < 0:
-            raise ValueError(f"seed must be a non-negative integer or a np.random.Generator, got {seed!r}")
-        rng, name = np.random.default_rng(int(seed)), f"{family}-{size}-{seed}"
-    else:
-        raise TypeError(f"seed must be an int or a np.random.Generator, got {type(seed).__name__} {seed!r}")
+    rng, name = seeded_map(seed, family, size)
     for _ in range(_MAP_TRIES):
         problem = _FAMILIES[family](rng, size, float(tol), name)
         if problem is not None:
