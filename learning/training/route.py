@@ -86,14 +86,16 @@ def make_examples(problems: Sequence[Problem | Callable[[], Problem]], turns: Se
     """``_example`` of every problem under its turn, in the problems' order, on ``workers`` processes.
 
     Each example depends only on its problem, turn and block, and they come back in order, so the
-    result is the same for any number of workers. With more than one, a pool of forked processes
-    makes them; it is started before any GPU work (a forked process must not inherit a CUDA context).
+    result is the same for any number of workers. With more than one, a pool makes them, its processes
+    forked from a fresh single-threaded server ("forkserver"; "spawn" where there is none): forking
+    this process itself could copy a lock held by one of its threads (torch's, Ray's) and hang, and a
+    child must not inherit a CUDA context.
     """
     tasks = [(p, int(k), block) for p, k in zip(problems, turns, strict=True)]
     if workers <= 1 or len(tasks) < 2:
         return [_example(t) for t in tasks]
     methods = multiprocessing.get_all_start_methods()
-    ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
     with ctx.Pool(min(workers, len(tasks))) as pool:
         return list(pool.imap(_example, tasks, chunksize=max(1, min(64, len(tasks) // (4 * workers)))))
 
