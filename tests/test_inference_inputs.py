@@ -21,7 +21,9 @@ from planners.maps.generators import TEST_SEED0, generate
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = SHIPPED_POLICY
-INFERENCE = ["learning/policy_sampler.py", "learning/fast_policy.py", "learning/models/checkpoint.py", "learning/route.py",
+INFERENCE = ["learning/samplers/policy.py", "learning/samplers/route.py", "learning/samplers/ablation.py",
+             "learning/models/fast_policy.py", "learning/models/checkpoint.py", "learning/models/route_net.py",
+             "learning/models/threads.py", "planners/fused.py",
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "guidance").glob("*.py"))),
              *(str(p.relative_to(ROOT)) for p in sorted((ROOT / "planners" / "kernels").glob("*.py")))]
 PRIVILEGED = ("planners.maps.gridsearch", "planners.maps.generators", "learning.references.expert")
