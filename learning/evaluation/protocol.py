@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
-from planners import Problem, load_movingai_scenarios
+from planners import Problem
 from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, TUNING_SEED0, generate
+from planners.maps.movingai import benchmark_scenarios
 
 
 @dataclass(frozen=True)
@@ -42,14 +42,7 @@ SCENARIO_CACHE: dict = {}
 def scenarios(directory: str, name: str, tolerance: float) -> list[Problem]:
     key = (directory, name, tolerance)
     if key not in SCENARIO_CACHE:
-        d = Path(directory)
-        scen = next((p for p in sorted(d.glob(f"{name}*.scen"))
-                     if p.name.split(".")[0].replace("-random-1", "") == name), None)
-        if scen is None:
-            raise FileNotFoundError(f"no scenario file for MovingAI map {name!r} in {d}")
-        ps = [p for p in load_movingai_scenarios(scen, goal_tolerance=tolerance)
-              if p.distance(p.start, p.goal) > tolerance]
-        SCENARIO_CACHE[key] = sorted(ps, key=lambda p: (-p.reference_length, p.name))
+        SCENARIO_CACHE[key] = benchmark_scenarios(directory, name, tolerance)
     return SCENARIO_CACHE[key]
 
 

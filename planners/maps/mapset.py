@@ -43,7 +43,7 @@ from planners.maps.generators import (
     generate,
 )
 from planners.maps.gridsearch import free_components
-from planners.maps.movingai import load_movingai_scenarios, movingai_dir
+from planners.maps.movingai import benchmark_scenarios, load_movingai_scenarios, movingai_dir
 from planners.maps.readers import MAP_READERS, ROS_SUFFIXES, read_map
 from planners.maps.rosmap import read_ros_yaml
 from planners.worlds.grid import OccupancyGrid
@@ -852,11 +852,7 @@ class MovingAIMapSet(MapSet):
         self.validate()
 
     def _scenarios(self, name: str) -> list[Problem]:
-        scen = next(p for p in sorted(self.directory.glob(f"{name}*.scen"))
-                    if p.name.split(".")[0].replace("-random-1", "") == name)
-        ps = [p for p in load_movingai_scenarios(scen, goal_tolerance=self.goal_tolerance)
-              if p.distance(p.start, p.goal) > self.goal_tolerance]
-        return sorted(ps, key=lambda p: (-p.reference_length, p.name))
+        return benchmark_scenarios(self.directory, name, self.goal_tolerance)
 
     def queries(self, part: str) -> list[MapQuery]:
         return list(self._queries[_check_part(part)])

@@ -117,3 +117,23 @@ def load_movingai_scenarios(
         count += 1
         if limit is not None and count >= limit:
             return
+
+
+def benchmark_scenarios(directory: str | os.PathLike, name: str, goal_tolerance: float) -> list[Problem]:
+    """The scenarios of MovingAI map ``name`` in ``directory`` that the comparison uses, longest first.
+
+    The scenario file is ``<name>*.scen`` (``-random-1`` suffixes of the MAPF sets dropped); scenarios
+    whose start already lies within ``goal_tolerance`` of the goal are left out; ties in length are
+    broken by name, so the order is fixed.
+
+    Raises:
+        FileNotFoundError: If the directory holds no scenario file for the map.
+    """
+    d = Path(directory)
+    scen = next((p for p in sorted(d.glob(f"{name}*.scen"))
+                 if p.name.split(".")[0].replace("-random-1", "") == name), None)
+    if scen is None:
+        raise FileNotFoundError(f"no scenario file for MovingAI map {name!r} in {d}")
+    ps = [p for p in load_movingai_scenarios(scen, goal_tolerance=goal_tolerance)
+          if p.distance(p.start, p.goal) > goal_tolerance]
+    return sorted(ps, key=lambda p: (-p.reference_length, p.name))
