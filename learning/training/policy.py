@@ -12,465 +12,41 @@ Map seeds: the splits of ``planners.maps.generators`` (``TRAIN_SEEDS``, ``VALIDA
 evaluation uses ``TUNING_SEED0`` and ``TEST_SEED0``), so no evaluated map was ever trained on.
 With ``map_set`` (map sets, ``planners.maps.mapset``) the training maps come from the sets' training
 parts (mixed by ``map_set_weight``) and the validation maps from their validation parts instead.
+
+This module holds the training loop (:func:`train`); the pieces it runs live beside it and are
+importable from here too: the configuration (``learning.training.config``), the maps and the training
+environment (``learning.training.maps``), the validation score (``learning.training.validation``), the
+checkpoints and run state (``learning.training.checkpoints``) and the logs (``learning.training.logs``).
 """
 
 from __future__ import annotations
 
-import csv
-import dataclasses
-import io
 import json
 import os
-import re
 import time
-import zipfile
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 import torch
 from stable_baselines3.common.callbacks import BaseCallback
-from stable_baselines3.common.logger import KVWriter, Logger, make_output_format
 from tqdm.auto import tqdm
 
-from learning.models.checkpoint import read_sb3_zip
 from learning.device import deterministic
+from learning.models.checkpoint import read_sb3_zip
 from learning.models.fast_policy import FastActor
+from learning.training.checkpoints import CONFIG_KEY, STATE_KEY, commit_checkpoint, read_state, save_model
+from learning.training.config import TrainConfig
 from learning.training.imitation import Dataset, behaviour_cloning, collect
-from learning.samplers.policy import OBS_VERSION, PolicySampler
-from planners import RRT, Sampler
-from planners.base.fileio import (
-    InputError,
-    atomic_path,
-    atomic_write_text,
-    check_number,
-    read_json,
-    run_lock,
-    short_repr,
-)
-from planners.maps.generators import FAMILIES, MIN_SIZE, TRAIN_SEEDS, VALIDATION_SEED0, check_size, generate
-from planners.maps.gridsearch import distance_field
-from planners.maps.mapset import MapSet, MixedMapSet
-from planners.tools.parallel import Backend, LocalBackend
+from learning.training.logs import ResumableCSV, RunLogger, run_logger, trim_events
+from learning.training.maps import dagger_maps, make_env, open_map_sets
+from learning.training.validation import sampler_validation_score, validation_score
+from planners.base.fileio import InputError, atomic_write_text, run_lock
+from planners.maps.mapset import MixedMapSet
+from planners.tools.parallel import Backend
 
-
-@dataclass
-class TrainConfig:
-    """Everything that determines a training run (saved next to the weights).
-
-    The actor is small on purpose: it runs at every sampler decision, inside the planner's loop, so
-    its size is paid in planning time. On the validation maps, convolutions of 8 and 16 channels and
-    32-wide layers imitated the expert as well as 16/32 channels and 128-wide layers, at less than
-    half the cost per forward pass. ``torch_threads=1`` keeps the weights bit-identical for a seed: with
-    several threads the linear algebra may split its sums differently from run to run.
-    """
-
-    name: str = "guided"
-    seed: int = 0
-    families: tuple[str, ...] = FAMILIES
-    sizes: tuple[int, ...] = (64, 128)
-    step_size: float = 4.0
-    goal_tolerance: float = 4.0
-    batch: int = 8
-    uniform_floor: float = 0.05
-    stuck_threshold: int = 16
-    max_iterations: int = 3000
-    dagger_rounds: int = 8
-    dagger_betas: tuple[float, ...] = (1.0, 0.5, 0.25, 0.0)
-    maps_per_round: int = 100
-    bc_epochs: int = 6
-    bc_lr: float = 1e-3
-    bc_batch: int = 512
-    mirror: bool = False
-    ppo_steps: int = 300_000
-    value_warmup: int = 40_000
-    shaping: bool = True
-    ppo_lr: float = 5e-5
-    ppo_n_steps: int = 1024
-    ppo_batch: int = 256
-    ppo_epochs: int = 4
-    ppo_clip: float = 0.1
-    ppo_ent_coef: float = 0.0
-    gamma: float = 0.995
-    reward_scale: float = 0.01
-    n_envs: int = 2
-    checkpoint_every: int = 50_000
-    validation_maps: int = 20
-    features_dim: int = 32
-    hidden: int = 32
-    conv_channels: tuple[int, ...] = (8, 16)
-    vector_dim: int = 16
-    torch_threads: int = 1
-    map_set: tuple[str, ...] = ()
-    map_set_weight: tuple[float, ...] = ()
-    extra: dict = field(default_factory=dict)
-
-    def sampler_config(self) -> dict:
-        """What a ``PolicySampler`` needs, embedded in the checkpoint."""
-        return {"step_size": self.step_size, "uniform_floor": self.uniform_floor, "batch": self.batch,
-                "obs_version": OBS_VERSION, "max_iterations": 20000, "stuck_threshold": self.stuck_threshold,
-                "families": list(self.families), "sizes": list(self.sizes), "seed": self.seed}
-
-    @classmethod
-    def from_json(cls, path) -> TrainConfig:
-        """A config from a JSON file of ``TrainConfig`` fields, every value checked (``InputError`` naming the file)."""
-        raw = read_json(path, "training config")
-        if not isinstance(raw, dict):
-            raise InputError(f"training config {path} holds a {type(raw).__name__}, expected a JSON object")
-        unknown = set(raw) - set(cls.__dataclass_fields__)
-        if unknown:
-            raise InputError(f"{path}: unknown config keys {short_repr(sorted(unknown))}")
-        for k in ("families", "sizes", "dagger_betas", "conv_channels", "map_set", "map_set_weight"):
-            if k in raw:
-                if not isinstance(raw[k], list):
-                    raise InputError(f"{path}: {k} = {raw[k]!r}, expected a list")
-                raw[k] = tuple(raw[k])
-        cfg = cls(**raw)
-        cfg.check(str(path))
-        return cfg
-
-    def check(self, source: str = "training config") -> None:
-        """Refuse any value training cannot use, naming ``source`` and the field (``InputError``)."""
-        if not isinstance(self.name, str) or not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", self.name):
-            raise InputError(f"{source}: name = {self.name!r}, expected letters, digits, '_', '-' or '.' "
-                             "(it names the run's folder)")
-        for key, low in (("seed", 0), ("stuck_threshold", 0), ("max_iterations", 1), ("batch", 1),
-                         ("dagger_rounds", 1), ("maps_per_round", 1), ("bc_epochs", 1), ("bc_batch", 1),
-                         ("ppo_steps", 0), ("value_warmup", 0), ("ppo_n_steps", 2), ("ppo_batch", 2),
-                         ("ppo_epochs", 1), ("n_envs", 1), ("checkpoint_every", 1), ("validation_maps", 1),
-                         ("features_dim", 1), ("hidden", 1), ("vector_dim", 1), ("torch_threads", 1)):
-            check_number(source, key, getattr(self, key), integer=True, low=low)
-        for key, low, high in (("step_size", 0.0, None), ("goal_tolerance", 0.0, None), ("bc_lr", 0.0, None),
-                               ("ppo_lr", 0.0, None), ("ppo_clip", 0.0, None), ("reward_scale", 0.0, None),
-                               ("gamma", 0.0, 1.0)):
-            check_number(source, key, getattr(self, key), low=low, high=high, low_open=True)
-        check_number(source, "uniform_floor", self.uniform_floor, low=0.0, high=1.0)
-        check_number(source, "ppo_ent_coef", self.ppo_ent_coef, low=0.0)
-        if not isinstance(self.shaping, bool):
-            raise InputError(f"{source}: shaping = {self.shaping!r}, expected true or false")
-        if not self.families or any(f not in FAMILIES for f in self.families):
-            raise InputError(f"{source}: families = {list(self.families)!r}, expected some of {list(FAMILIES)}")
-        for key, values, low, high, integer in (("sizes", self.sizes, MIN_SIZE, None, True),
-                                                ("dagger_betas", self.dagger_betas, 0.0, 1.0, False),
-                                                ("conv_channels", self.conv_channels, 1, None, True)):
-            if not values:
-                raise InputError(f"{source}: {key} is empty")
-            for v in values:
-                check_number(source, key, v, integer=integer, low=low, high=high)
-        for v in self.sizes:
-            check_size(v, f"{source}: sizes")
-        if not isinstance(self.map_set, tuple) or any(not isinstance(m, str) or not m for m in self.map_set):
-            raise InputError(f"{source}: map_set = {self.map_set!r}, expected folders, manifests or map set names")
-        if self.map_set_weight and len(self.map_set_weight) != len(self.map_set):
-            raise InputError(f"{source}: map_set_weight = {list(self.map_set_weight)!r}: {len(self.map_set_weight)} "
-                             f"weights for {len(self.map_set)} map sets; give one per map set, in the same order")
-        for v in self.map_set_weight:
-            check_number(source, "map_set_weight", v, low=0.0, low_open=True)
-        if len(self.conv_channels) != 2:
-            raise InputError(f"{source}: conv_channels = {list(self.conv_channels)!r}, expected two widths")
-        if not isinstance(self.extra, dict):
-            raise InputError(f"{source}: extra = {self.extra!r}, expected an object")
-
-
-def open_map_sets(cfg: TrainConfig) -> MixedMapSet | None:
-    """``cfg.map_set`` opened and mixed by ``cfg.map_set_weight`` (None without map sets), checked for training.
-
-    Each set needs a training and a validation part, and the planner's step (``step_size``, world
-    units) must span at least one cell of every map in them.
-
-    Raises:
-        InputError: Naming the set, the map and the value.
-    """
-    if not cfg.map_set:
-        return None
-    sets = []
-    for spec in cfg.map_set:
-        try:
-            ms = MapSet.open(spec)
-            ms.validate(["train", "validation"])
-        except InputError as exc:
-            raise InputError(f"map_set {spec}: {exc}") from None
-        rec = ms.record()
-        for name, m in (rec.get("maps") or {}).items():
-            if name in (*ms.maps("train"), *ms.maps("validation")) and cfg.step_size < m["resolution"]:
-                raise InputError(f"map_set {spec}: step_size {cfg.step_size:g} (world units) is less than one cell "
-                                 f"of map {name!r} ({m['resolution']:g} world units); give a step of at least a cell")
-        sets.append(ms)
-    return MixedMapSet(sets, cfg.map_set_weight or None)
-
-
-def _maps(cfg: TrainConfig, rng: np.random.Generator, per_family: int, seed0: int | None = None,
-          sets: MixedMapSet | None = None):
-    """DAgger's maps of a round: ``per_family`` of each family, or ``per_family`` drawn from ``sets``' train parts."""
-    if sets is not None:
-        return [sets.sample("train", rng) for _ in range(per_family)]
-    out = []
-    for f in cfg.families:
-        for i in range(per_family):
-            size = cfg.sizes[int(rng.integers(len(cfg.sizes)))] if seed0 is None else cfg.sizes[i % len(cfg.sizes)]
-            seed = int(rng.integers(*TRAIN_SEEDS)) if seed0 is None else seed0 + i
-            out.append(generate(f, seed, size, goal_tolerance=cfg.goal_tolerance))
-    return out
-
-
-def validation_score(actor: FastActor, cfg: TrainConfig, backend: Backend | None = None,
-                     sets: MixedMapSet | None = None) -> tuple[float, dict]:
-    """The policy ``actor``'s :func:`sampler_validation_score`."""
-    return sampler_validation_score(PolicySampler(actor, cfg.sampler_config()), cfg, backend, sets)
-
-
-def sampler_validation_score(sampler: Sampler, cfg: TrainConfig, backend: Backend | None = None,
-                             sets: MixedMapSet | None = None) -> tuple[float, dict]:
-    """Geometric mean over families of ``sampler``'s median iterations / lower bound on validation maps.
-
-    With ``sets`` (``open_map_sets``): over the groups of the sets' validation queries (a folder set
-    is one group), the first ``validation_maps`` queries of each. The runs go to ``backend``
-    (default: this process) with the sampler shipped once per worker.
-    """
-    if sets is not None:
-        return _set_validation_score(sampler, cfg, backend, sets)
-    tasks = [(f, i) for f in cfg.families for i in range(cfg.validation_maps)]
-    context = {"sampler": sampler, "cfg": cfg}
-    ratios = (backend or LocalBackend()).map(_validation_run, tasks, context=context)
-    per_family = {f: float(np.median([r for (g, _), r in zip(tasks, ratios, strict=True) if g == f]))
-                  for f in cfg.families}
-    return float(np.exp(np.mean(np.log(list(per_family.values()))))), per_family
-
-
-def _validation_run(task: tuple[str, int], context: dict) -> float:
-    """Iterations / lower bound of the sampler on validation map ``i`` of a family (20,000 if unsolved)."""
-    f, i = task
-    cfg = context["cfg"]
-    p = generate(f, VALIDATION_SEED0 + i, cfg.sizes[i % len(cfg.sizes)], goal_tolerance=cfg.goal_tolerance)
-    r = RRT(p, step_size=cfg.step_size, sampler=context["sampler"], seed=i).solve(max_iterations=20000)
-    return r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0
-
-
-def _set_validation_score(sampler: Sampler, cfg: TrainConfig, backend: Backend | None,
-                          sets: MixedMapSet) -> tuple[float, dict]:
-    """``sampler_validation_score`` on the validation parts of map sets."""
-    tasks, taken = [], {}
-    for j, ms in enumerate(sets.sets):
-        for q in ms.queries("validation"):
-            group = q.group if len(sets.sets) == 1 else f"{ms.name}: {q.group}"
-            if taken.get(group, 0) < cfg.validation_maps:
-                taken[group] = taken.get(group, 0) + 1
-                tasks.append((group, j, q))
-    ratios = (backend or LocalBackend()).map(_set_validation_run, tasks,
-                                             context={"sampler": sampler, "cfg": cfg, "sets": sets})
-    per_group = {g: float(np.median([r for (h, _, _), r in zip(tasks, ratios, strict=True) if h == g]))
-                 for g in taken}
-    return float(np.exp(np.mean(np.log(list(per_group.values()))))), per_group
-
-
-def _set_validation_run(task: tuple, context: dict) -> float:
-    """Iterations / lower bound of the sampler on one validation query of a map set (20,000 if unsolved)."""
-    _, j, q = task
-    cfg = context["cfg"]
-    p = context["sets"].sets[j].problem(q)
-    if p.reference_length is None:  # a drawn query or a queries file: the grid search's octile length
-        grid = p.world
-        length = distance_field(grid.obstacles, grid.cell_of(p.goal))[grid.cell_of(p.start)] * grid.resolution
-        p = dataclasses.replace(p, reference_length=float(length))
-    r = RRT(p, step_size=cfg.step_size, sampler=context["sampler"], seed=q.key).solve(max_iterations=20000)
-    return r.iterations / p.iteration_lower_bound(cfg.step_size) if r.solved else 20000.0
-
-
-class _MixedFamilies:
-    """Training map source: a random family and size each episode, seeds from the training range."""
-
-    dim = 2
-
-    def __init__(self, cfg: TrainConfig) -> None:
-        self.choices = [(f, s) for f in cfg.families for s in cfg.sizes]
-        self.goal_tolerance = cfg.goal_tolerance
-
-    def __call__(self, np_random):
-        family, size = self.choices[int(np_random.integers(len(self.choices)))]
-        return generate(family, int(np_random.integers(*TRAIN_SEEDS)), size, goal_tolerance=self.goal_tolerance)
-
-
-def make_env(cfg: TrainConfig, seed: int, sets: MixedMapSet | None = None):
-    """The vectorised training environment (guided actions, egocentric observations, scaled reward).
-
-    Episodes come from the generated families, or from ``sets``' training parts.
-    """
-    import gymnasium as gym
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import DummyVecEnv
-
-    from envs import SamplerEnv
-    from envs.sources import MapSetSource
-
-    def factory():
-        source = _MixedFamilies(cfg) if sets is None else MapSetSource(sets, "train")
-        env = SamplerEnv(source, planner="rrt", step_size=cfg.step_size,
-                         max_iterations=cfg.max_iterations, action_mode="guided", observation="egocentric",
-                         uniform_floor=cfg.uniform_floor, shaping=cfg.shaping, shaping_gamma=cfg.gamma)
-        return gym.wrappers.TransformReward(env, lambda r: r * cfg.reward_scale)
-
-    return make_vec_env(factory, n_envs=cfg.n_envs, seed=seed, vec_env_cls=DummyVecEnv)
-
-
-#: Key of the run state inside a checkpoint's ``data`` entry.
-STATE_KEY = "samplergym_state"
-#: Key of the sampler config inside a checkpoint's ``data`` entry (read by ``PolicySampler.load``).
-CONFIG_KEY = "samplergym_config"
-
-
-def _save_model(model, cfg: TrainConfig, path: Path, state: dict) -> None:
-    """Write ``model`` as an SB3 zip whose ``data`` also carries the sampler config and the run state.
-
-    The two entries are added to the zip SB3 writes rather than set on the model, so nothing of
-    ours lives in SB3's object; the file appears whole or not at all.
-    """
-    buf = io.BytesIO()
-    model.save(buf)
-    buf.seek(0)
-    with atomic_path(path) as tmp, zipfile.ZipFile(buf) as src, zipfile.ZipFile(tmp, "w") as dst:
-        for item in src.infolist():
-            blob = src.read(item.filename)
-            if item.filename == "data":
-                data = json.loads(blob)
-                data[CONFIG_KEY], data[STATE_KEY] = cfg.sampler_config(), state
-                blob = json.dumps(data, indent=4).encode()
-            dst.writestr(item, blob)
-
-
-def _commit(model, cfg: TrainConfig, run: Path, state: dict, log: _ResumableCSV, data: Dataset | None = None) -> None:
-    """One checkpoint, written so that a kill at any instant leaves the previous one or this one.
-
-    ``checkpoint.zip`` is the commit point: it holds the weights, the optimiser and the run state.
-    The DAgger data is written before it and only grows, so the state's row count tells how much of
-    it belongs to the checkpoint; log rows after ``log_rows`` are dropped on resume the same way.
-    ``state.json`` is a copy for people, written last and never read back.
-    """
-    state = {**state, "log_rows": log.rows, "log_time": time.time()}
-    if data is not None:
-        with atomic_path(run / "dagger_data.npz") as tmp:
-            data.save(tmp)
-        state["dagger_rows"] = len(data)
-    _save_model(model, cfg, run / "checkpoint.zip", state)
-    atomic_write_text(run / "state.json", json.dumps(state, indent=2) + "\n")
-
-
-def _trim_events(folder: Path, until: float | None) -> None:
-    """Drop the TensorBoard events written after wall time ``until`` (a killed run's, after its checkpoint).
-
-    The redone steps are logged again on resume; kept, TensorBoard would draw each of them twice.
-    Each events file is rewritten whole (temporary file, then rename); a file left with nothing after
-    its header is removed.
-    """
-    if until is None or not folder.is_dir():
-        return
-    from tensorboard.backend.event_processing.event_file_loader import RawEventFileLoader
-    from tensorboard.compat.proto import event_pb2
-    from tensorboard.summary.writer.record_writer import RecordWriter
-
-    for path in sorted(folder.glob("events.out.tfevents.*")):
-        records = list(RawEventFileLoader(str(path)).Load())
-        kept = [r for r in records if event_pb2.Event.FromString(r).wall_time <= until]
-        if len(kept) == len(records):
-            continue
-        if len(kept) <= 1:  # at most the file-version header: the whole file came after the checkpoint
-            path.unlink()
-            continue
-        with atomic_path(path) as tmp, open(tmp, "wb") as f:
-            writer = RecordWriter(f)
-            for r in kept:
-                writer.write(r)
-            writer.flush()
-
-
-def read_state(run: str | os.PathLike) -> dict | None:
-    """The run state committed in ``<run>/checkpoint.zip``, or None if the run has no checkpoint yet."""
-    ckpt = Path(run) / "checkpoint.zip"
-    if not ckpt.is_file():
-        return None
-    data, _ = read_sb3_zip(ckpt)
-    state = data.get(STATE_KEY)
-    if not isinstance(state, dict) or not {"phase", "round", "ppo_steps", "log_rows"} <= state.keys():
-        raise InputError(f"{ckpt} carries no training state: it was not written by this version of "
-                         "scripts/train.py; start the run again without --resume")
-    if state["phase"] not in ("bc", "ppo"):
-        raise InputError(f"{ckpt}: training state phase = {short_repr(state['phase'])}, expected 'bc' or 'ppo'")
-    for key, low in (("round", -1), ("ppo_steps", 0), ("log_rows", 0), ("dagger_rows", 0)):
-        if key in state:
-            check_number(f"{ckpt}: training state", key, state[key], integer=True, low=low)
-    if "log_time" in state:
-        check_number(f"{ckpt}: training state", "log_time", state["log_time"])
-    if state["phase"] == "bc" and state["round"] >= 0 and "dagger_rows" not in state:
-        raise InputError(f"{ckpt}: training state in DAgger round {state['round']} has no dagger_rows")
-    return state
-
-
-class _ResumableCSV(KVWriter):
-    """``progress.csv`` that a resumed run continues: rows after the checkpoint are dropped, not the rest.
-
-    A Stable-Baselines3 ``KVWriter``. SB3's own CSV writer truncates the file when it opens it and
-    rewrites it in place when a new column appears; this one rewrites atomically and appends otherwise.
-    """
-
-    def __init__(self, path: Path, keep_rows: int | None) -> None:
-        self.path = path
-        self.keys: list[str] = []
-        self.table: list[list[str]] = []
-        if keep_rows is not None and path.is_file():
-            with open(path, newline="", encoding="utf-8") as f:
-                rows = list(csv.reader(f))
-            if rows:
-                self.keys, self.table = rows[0], rows[1:keep_rows + 1]
-        self._rewrite()
-
-    @property
-    def rows(self) -> int:
-        return len(self.table)
-
-    def _rewrite(self) -> None:
-        with atomic_path(self.path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as f:
-            w = csv.writer(f)
-            if self.keys:
-                w.writerow(self.keys)
-            w.writerows(row + [""] * (len(self.keys) - len(row)) for row in self.table)
-        self.file = open(self.path, "a", newline="", encoding="utf-8")  # noqa: SIM115 - closed in close()
-
-    def write(self, key_values: dict, key_excluded: dict, step: int = 0) -> None:
-        values = {k: v for k, v in key_values.items() if "csv" not in (key_excluded.get(k) or ())}
-        new = [k for k in values if k not in self.keys]
-        row = ["" if values.get(k) is None else str(values[k]) for k in self.keys + new]
-        self.table.append(row)
-        if new:
-            self.keys += new
-            self.file.close()
-            self._rewrite()
-        else:
-            csv.writer(self.file).writerow(row)
-            self.file.flush()
-
-    def close(self) -> None:
-        self.file.close()
-
-
-class _RunLogger(Logger):
-    """SB3 logger whose ``step_offset`` is added to every step: SB3 counts each PPO segment's steps from zero."""
-
-    step_offset = 0
-
-    def dump(self, step: int = 0) -> None:
-        if self.step_offset:
-            self.record("time/run_timesteps", step + self.step_offset)
-        super().dump(step + self.step_offset)
-
-
-def _logger(run: Path, keep_rows: int | None, stdout: bool) -> tuple[_RunLogger, _ResumableCSV]:
-    """The run's logger: TensorBoard events and ``progress.csv`` under ``<run>/tb`` (and stdout)."""
-    folder = run / "tb"
-    folder.mkdir(parents=True, exist_ok=True)
-    csv_log = _ResumableCSV(folder / "progress.csv", keep_rows)
-    formats = [make_output_format("tensorboard", str(folder)), csv_log]
-    if stdout:
-        formats.append(make_output_format("stdout", str(folder)))
-    return _RunLogger(str(folder), formats), csv_log
+__all__ = ["CONFIG_KEY", "STATE_KEY", "TrainConfig", "make_env", "open_map_sets", "read_state",
+           "sampler_validation_score", "train", "validation_score"]
 
 
 def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False, progress: bool = True,
@@ -522,8 +98,8 @@ def _train(cfg: TrainConfig, run: Path, *, resume: bool, progress: bool, log_std
     deterministic(device)
     env = make_env(cfg, cfg.seed, sets)
     # a resumed run keeps its events up to the checkpoint; a fresh one in an old run's folder, none
-    _trim_events(run / "tb", state.get("log_time") if resume else 0.0)
-    logger, csv_log = _logger(run, state["log_rows"] if resume else None, log_stdout)
+    trim_events(run / "tb", state.get("log_time") if resume else 0.0)
+    logger, csv_log = run_logger(run, state["log_rows"] if resume else None, log_stdout)
     try:
         phases = _TrainingRun(cfg, run, state, env, logger, csv_log, resume=resume, progress=progress,
                               backend=backend, sets=sets, device=device)
@@ -563,7 +139,7 @@ class _TrainingRun:
     work, so a resumed run skips what is committed and redoes nothing else.
     """
 
-    def __init__(self, cfg: TrainConfig, run: Path, state: dict, env, logger: _RunLogger, csv_log: _ResumableCSV, *,
+    def __init__(self, cfg: TrainConfig, run: Path, state: dict, env, logger: RunLogger, csv_log: ResumableCSV, *,
                  resume: bool, progress: bool, backend: Backend | None = None, sets: MixedMapSet | None = None,
                  device: torch.device = torch.device("cpu")) -> None:
         from stable_baselines3 import PPO
@@ -590,7 +166,7 @@ class _TrainingRun:
 
     def commit(self, state: dict, data: Dataset | None = None) -> None:
         self.state = state
-        _commit(self.model, self.cfg, self.run, state, self.csv_log, data)
+        commit_checkpoint(self.model, self.cfg, self.run, state, self.csv_log, data)
 
     def dagger(self) -> None:
         """Rounds of expert labelling and behaviour cloning; ends by saving ``imitation.zip``."""
@@ -601,7 +177,7 @@ class _TrainingRun:
         rounds = range(self.state["round"] + 1, cfg.dagger_rounds) if self.state["phase"] == "bc" else range(0)
         for k in tqdm(rounds, desc="DAgger", disable=not self.progress):
             rng = np.random.default_rng([cfg.seed, k])
-            problems = _maps(cfg, rng, cfg.maps_per_round, sets=self.sets)
+            problems = dagger_maps(cfg, rng, cfg.maps_per_round, sets=self.sets)
             actor = FastActor(model.policy.state_dict()) if k > 0 else None
             beta = cfg.dagger_betas[min(k, len(cfg.dagger_betas) - 1)]
             t0 = time.perf_counter()
@@ -621,7 +197,7 @@ class _TrainingRun:
                       "validation/score": score, **{f"validation/{f}": v for f, v in fam.items()}}, k)
             self.commit({"phase": "bc", "round": k, "ppo_steps": 0, "bc_validation": score}, data)
         if self.state["phase"] == "bc":
-            _save_model(model, cfg, self.run / "imitation.zip", self.state)
+            save_model(model, cfg, self.run / "imitation.zip", self.state)
             self.commit({**self.state, "phase": "ppo", "ppo_steps": 0})
 
     def ppo(self) -> None:
@@ -666,6 +242,6 @@ class _TrainingRun:
         if chosen == "imitation":
             model.policy.load_state_dict(imitation_params)
         final = self.run / "final.zip"
-        _save_model(model, cfg, final, {**self.state, **summary, "log_rows": self.csv_log.rows})
+        save_model(model, cfg, final, {**self.state, **summary, "log_rows": self.csv_log.rows})
         atomic_write_text(self.run / "summary.json", json.dumps(summary, indent=2) + "\n")
         return final
