@@ -119,10 +119,11 @@ class AxialAttention(nn.Module):
         return x + self.mlps[i](self.norms[2 * i + 1](x))
 
     def _chunked(self, x: torch.Tensor, attn: nn.MultiheadAttention, i: int) -> torch.Tensor:
-        """``_along`` without gradients, a few sequences at a time (``CHUNK_FLOATS``): each sequence's result is
-        the same bit for bit, and the attention weights of a chunk stay in the cache instead of all of them
-        going through memory (at 128 x 128 blocks, 8 symmetries: 537 MB at once)."""
-        if torch.is_grad_enabled():
+        """``_along`` without gradients on the CPU, a few sequences at a time (``CHUNK_FLOATS``): each sequence's
+        result is the same bit for bit, and the attention weights of a chunk stay in the cache instead of all of
+        them going through memory (at 128 x 128 blocks, 8 symmetries: 537 MB at once). A GPU takes the whole
+        pass at once: there each chunk would cost kernel launches, not save memory traffic."""
+        if torch.is_grad_enabled() or x.device.type != "cpu":
             return self._along(x, attn, i)
         n = max(1, self.CHUNK_FLOATS // (self.HEADS * x.shape[1] * x.shape[1]))
         if n >= len(x):
