@@ -337,7 +337,10 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     tolerance = args.tolerance
     if query is not None:
-        problem = ms.problem(query)
+        try:
+            problem = ms.problem(query)
+        except (FileNotFoundError, ValueError) as exc:
+            return fail(f"--map-set {args.map_set}, {query.part} query {args.query or 0}: {exc}")
         grid, start, goal = problem.world, tuple(map(float, problem.start)), tuple(map(float, problem.goal))
         tolerance = tolerance or problem.goal_tolerance
     else:
