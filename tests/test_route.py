@@ -378,7 +378,7 @@ def test_the_device_follows_sb3s_convention_and_the_cpu_gives_the_validated_runs
     with pytest.raises(InputError, match="device = 'gpu'"):
         RouteSampler(None, device="gpu")
     if not torch.cuda.is_available():
-        with pytest.raises(InputError, match="no CUDA device"):
+        with pytest.raises(InputError, match="device = cuda: torch sees no CUDA GPU"):
             RouteSampler.load(small_net, device="cuda")
     from learning.samplers.registry import make_sampler
 

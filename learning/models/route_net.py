@@ -30,7 +30,6 @@ MAX_BLOCKS = 256 * 256
 #: symmetries in smaller batches (one at a time at the largest), so memory stays bounded.
 BYTES_PER_BLOCK = 5_000
 BATCH_BYTES = 1 << 30
-DEVICES = ("auto", "cpu", "cuda")
 
 
 def max_blocks() -> int:
@@ -45,17 +44,6 @@ def max_blocks() -> int:
     if n < 1:
         raise InputError(f"{MAX_BLOCKS_ENV} = {short_repr(value)}: expected a positive whole number of blocks")
     return n
-
-
-def resolve_device(device: str) -> torch.device:
-    """``"auto"`` (CUDA when torch sees it, else the CPU), ``"cpu"`` or ``"cuda"``: Stable-Baselines3's convention."""
-    if device not in DEVICES:
-        raise InputError(f"device = {short_repr(device)}: expected one of {', '.join(DEVICES)}")
-    if device == "auto":
-        device = "cuda" if torch.cuda.is_available() else "cpu"
-    if device == "cuda" and not torch.cuda.is_available():
-        raise InputError("device = 'cuda': torch sees no CUDA device here (use 'auto' or 'cpu')")
-    return torch.device(device)
 
 
 def route_input(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -> np.ndarray:
