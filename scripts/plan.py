@@ -8,6 +8,13 @@
     python scripts/plan.py floor.png --start 40 60 --goal 900 700 --sampler policy   # the learned sampler
     python scripts/plan.py floor.png --start 40 60 --goal 900 700 --sampler route    # the shipped route encoder
     python scripts/plan.py floor.png --start 40 60 --goal 900 700 --sampler mine=my_module:make_sampler
+    python scripts/plan.py --map-set tests/data/ros --list-queries            # a map set's queries, numbered
+    python scripts/plan.py --map-set tests/data/ros --split test --query 3    # plan one of them
+
+A map set (--map-set: a folder of maps, a manifest .json, or "generated", "shifted", "movingai"; see
+docs/map-sets.md) gives the map, start, goal and goal radius instead of a map file and --start/--goal:
+--query K plans the K-th query (from 0) of its part --split (default test); --list-queries prints
+the queries with their numbers (of --split, or of every part) and plans nothing.
 
 Dark pixels (gray below --threshold) are obstacles. Coordinates are the map's world units: for
 pictures, pixels with x to the right and y downwards, as image viewers show them; for a ROS
@@ -33,6 +40,7 @@ from pathlib import Path
 from planners import planner_names
 from planners.base.fileio import InputError
 from planners.base.registry import planner_class, planner_name_arg
+from planners.maps.mapset import PARTS, MapQuery, MapSet
 from planners.tools.workflow import (
     METRICS,
     SAMPLERS,
@@ -144,10 +152,89 @@ def learned_sampler(arg: str, step: float, goal_bias: float, policy: Path | None
     return make_sampler(arg, step_size=step)
 
 
+def map_set_conflict(args) -> str | None:
+    """Why the arguments do not go with ``--map-set`` (a message naming the flag), or None."""
+    if args.map is not None:
+        return f"give a map file ({args.map}) or --map-set {args.map_set}, not both"
+    if args.start is not None or args.goal is not None:
+        return "--start / --goal: a --map-set query brings its own; choose one with --split and --query"
+    if args.invert:
+        return "--invert: a map set reads its maps by its own rules (docs/map-sets.md)"
+    if args.split is not None and args.split not in PARTS:
+        return f"--split {args.split!r}: expected one of {', '.join(PARTS)}"
+    if args.query is not None and args.list_queries:
+        return f"--query {args.query}: --list-queries plans nothing; give one or the other"
+    if args.query is not None and args.query < 0:
+        return f"--query {args.query}: expected a query number from 0 (see --list-queries)"
+    if args.split_seed is not None and args.split_seed < 0:
+        return f"--split-seed {args.split_seed}: expected a non-negative integer"
+    return None
+
+
+def open_map_set(args) -> MapSet:
+    """``--map-set`` with the options given for it (``InputError`` naming the flag and value)."""
+    options = {"split_seed": args.split_seed, "robot_radius": args.radius or None, "threshold": args.threshold}
+    options = {k: v for k, v in options.items() if v is not None}
+    try:
+        return MapSet.open(args.map_set, **options)
+    except TypeError:  # the built-in sets take none of these
+        flags = {"split_seed": "--split-seed", "robot_radius": "--radius", "threshold": "--threshold"}
+        given = " / ".join(flags[k] for k in options)
+        raise InputError(f"{given}: map set {args.map_set!r} has its own maps and split; give {given} only with "
+                         "folders and manifests") from None
+    except InputError as exc:
+        raise InputError(f"--map-set {args.map_set}: {exc}") from None
+
+
+def part_queries(ms: MapSet, part: str) -> list[MapQuery]:
+    """The queries of ``part``, or an ``InputError`` naming it where there are none."""
+    queries = ms.queries(part)
+    if not queries:
+        raise InputError(f"--split {part}: the {part!r} part of map set {ms.name} holds no query "
+                         f"({ms.split.describe()})")
+    return queries
+
+
+def pick_query(ms: MapSet, part: str, k: int) -> MapQuery:
+    """The ``k``-th query of ``part`` (``InputError`` naming ``--query`` when there is no such query)."""
+    queries = part_queries(ms, part)
+    if not 0 <= k < len(queries):
+        raise InputError(f"--query {k}: the {part!r} part of map set {ms.name} holds {len(queries)} queries, "
+                         f"numbered 0 to {len(queries) - 1} (see --list-queries)")
+    return queries[k]
+
+
+def list_queries(ms: MapSet, parts: list[str]) -> None:
+    """Print each query of ``parts`` on a line: part, number (``--query``), map, start, goal, goal radius, origin."""
+    print(ms.describe())
+    if len(parts) == 1:
+        part_queries(ms, parts[0])
+    print("part        query  map  start -> goal (world units), goal radius, from")
+    for part in parts:
+        for k, q in enumerate(ms.queries(part)):
+            p = ms.problem(q)
+            print(f"{part:<11} {k:>5}  {q.map}  ({p.start[0]:g}, {p.start[1]:g}) -> ({p.goal[0]:g}, {p.goal[1]:g}), "
+                  f"{p.goal_tolerance:g}, {q.origin or q.key}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("map", type=Path, help="image (PNG, JPG, BMP, ...), ROS map.yaml, MovingAI .map or .npy map")
-    ap.add_argument("--threshold", type=float, default=0.5, help="gray level in (0, 1) below which a pixel is blocked")
+    ap.add_argument("map", type=Path, nargs="?", default=None,
+                    help="image (PNG, JPG, BMP, ...), ROS map.yaml, MovingAI .map or .npy map (or give --map-set)")
+    ap.add_argument("--map-set", default=None, metavar="DIR_OR_SPEC",
+                    help="plan a query of this map set instead: a folder or manifest .json of maps, or generated, "
+                         "shifted, movingai (docs/map-sets.md); the map, start, goal and goal radius are the query's")
+    ap.add_argument("--split", default=None, metavar="PART",
+                    help=f"--map-set: the part the query comes from, one of {', '.join(PARTS)} (default test)")
+    ap.add_argument("--query", type=int, default=None, metavar="K",
+                    help="--map-set: the query's number in its part, from 0 (default 0; see --list-queries)")
+    ap.add_argument("--list-queries", action="store_true",
+                    help="--map-set: print the queries of --split (default: of every part) with their numbers, "
+                         "plan nothing")
+    ap.add_argument("--split-seed", type=int, default=None, metavar="N",
+                    help="--map-set: the seed of a folder's or manifest's split into parts (default theirs: 0)")
+    ap.add_argument("--threshold", type=float, default=None,
+                    help="gray level in (0, 1) below which a pixel is blocked (default 0.5)")
     ap.add_argument("--invert", action="store_true", help="light pixels are obstacles")
     ap.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"), help="start in map units")
     ap.add_argument("--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal in map units")
@@ -188,6 +275,17 @@ def main(argv=None) -> int:
         print(f"error: {msg}", file=sys.stderr)
         return status
 
+    if args.map_set is not None:
+        why = map_set_conflict(args)
+        if why:
+            return fail(why)
+    elif args.map is None:
+        return fail("give a map file, or --map-set DIR_OR_SPEC to plan one of a map set's queries")
+    else:
+        for flag, value in (("--split", args.split), ("--query", args.query), ("--split-seed", args.split_seed),
+                            ("--list-queries", "" if args.list_queries else None)):
+            if value is not None:
+                return fail(f"{flag} {value}".rstrip() + ": it applies to --map-set, and none is given")
     if (args.start is None) != (args.goal is None):
         return fail(f"give both --start and --goal, or neither to pick them in a window "
                     f"(got only --{'start' if args.start is not None else 'goal'})")
@@ -200,7 +298,7 @@ def main(argv=None) -> int:
             return fail(f"{flag} must be a positive number, got {v}")
     if not 0.0 <= args.goal_bias <= 1.0:
         return fail(f"--goal-bias must lie in [0, 1], got {args.goal_bias}")
-    if not 0.0 < args.threshold < 1.0:
+    if args.threshold is not None and not 0.0 < args.threshold < 1.0:
         return fail(f"--threshold must lie in (0, 1), got {args.threshold}")
     if args.frames < 2:
         return fail(f"--frames must be at least 2, got {args.frames}")
@@ -217,6 +315,16 @@ def main(argv=None) -> int:
             names = ", ".join(dict.fromkeys((*SAMPLERS, *sampler_names())))
             return fail(f"--sampler {args.sampler!r}: choose from {names} or give NAME=SPEC (MODEL.zip@ENV_ID or "
                         "module:callable)")
+    query = None
+    if args.map_set is not None:
+        try:
+            ms = open_map_set(args)
+            if args.list_queries:
+                list_queries(ms, [args.split] if args.split else list(PARTS))
+                return EXIT_SOLVED
+            query = pick_query(ms, args.split or "test", args.query or 0)
+        except InputError as exc:
+            return fail(str(exc))
     # output locations are checked before anything slow happens
     try:
         if args.save_path is not None:
@@ -227,12 +335,22 @@ def main(argv=None) -> int:
     except ValueError as exc:
         return fail(f"--save-path: {exc}")
     t0 = time.perf_counter()
-    try:
-        grid = load_map(args.map, args.threshold, invert=args.invert, robot_radius=args.radius)
-    except (FileNotFoundError, ValueError) as exc:
-        return fail(str(exc))
+    tolerance = args.tolerance
+    if query is not None:
+        try:
+            problem = ms.problem(query)
+        except (FileNotFoundError, ValueError) as exc:
+            return fail(f"--map-set {args.map_set}, {query.part} query {args.query or 0}: {exc}")
+        grid, start, goal = problem.world, tuple(map(float, problem.start)), tuple(map(float, problem.goal))
+        tolerance = tolerance or problem.goal_tolerance
+    else:
+        try:
+            threshold = 0.5 if args.threshold is None else args.threshold
+            grid = load_map(args.map, threshold, invert=args.invert, robot_radius=args.radius)
+        except (FileNotFoundError, ValueError) as exc:
+            return fail(str(exc))
+        start, goal = args.start, args.goal
     t_load = time.perf_counter() - t0
-    start, goal = args.start, args.goal
     if start is None or goal is None:
         if args.headless or not display_available():
             return fail("no --start/--goal given and no display to pick them on (--headless or no DISPLAY); "
@@ -256,7 +374,7 @@ def main(argv=None) -> int:
         if sampler is not None and sampler not in SAMPLERS:
             sampler = learned_sampler(sampler, step, args.goal_bias, args.policy)
         out = plan_on_image(grid, start, goal, planner=args.planner, sampler=sampler, goal_bias=args.goal_bias,
-                            metric=args.metric, step=step, tolerance=args.tolerance,
+                            metric=args.metric, step=step, tolerance=tolerance,
                             max_iterations=args.max_iterations, time_limit=time_limit, seed=args.seed,
                             smooth=args.smooth, out_dir=args.out, gif=not args.no_gif, max_frames=args.frames,
                             save_path=args.save_path)
@@ -266,8 +384,10 @@ def main(argv=None) -> int:
         return fail(str(exc))
     r = out.result
     radius = f", robot radius {args.radius:g}" if args.radius else ""
-    print(f"map:              {args.map} ({grid.width}x{grid.height}, {100 * grid.obstacles.mean():.1f}% blocked"
-          f"{radius})")
+    if query is not None:
+        print(f"map set:          {ms.name}, {query.part} query {args.query or 0} ({query.origin or query.key})")
+    print(f"map:              {args.map or query.map} ({grid.width}x{grid.height}, {100 * grid.obstacles.mean():.1f}% "
+          f"blocked{radius})")
     print(f"query:            start ({start[0]:g}, {start[1]:g}) -> goal ({goal[0]:g}, {goal[1]:g}), "
           f"tolerance {out.problem.goal_tolerance:g}, metric {args.metric}")
     sampler_name = args.sampler or "default"

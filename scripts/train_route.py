@@ -28,14 +28,14 @@ parts, seeded by ``--seed``; route.json records each set's split rule and parts.
     python scripts/train_route.py --map-set tests/data/ros --maps 200 --epochs 5 --out runs/ros
 
 ``--device auto|cpu|cuda`` (Stable-Baselines3's convention: ``auto`` takes a GPU when torch sees one)
-says where the encoder trains; the targets (grid searches) are made first on ``--workers`` CPU
-processes, map by map in a fixed order, so the weights do not depend on the worker count.
+says where the encoder trains; the targets (grid searches) are made on ``--workers`` CPU processes
+while the first epoch trains, in the order it uses them, so the weights do not depend on the worker
+count.
 """
 
 from __future__ import annotations
 
 import argparse
-import functools
 import json
 import math
 import sys
@@ -47,7 +47,7 @@ import torch
 
 from learning.device import DEVICES, resolve_device
 from learning.models.route_net import RouteNet, save_route_net
-from learning.training.route import check_route_map, default_workers, train_route_net
+from learning.training.route import GeneratedProblem, check_route_map, default_workers, train_route_net
 from planners.base.fileio import (
     InputError,
     atomic_write_bytes,
@@ -57,7 +57,7 @@ from planners.base.fileio import (
     output_set,
     run_lock,
 )
-from planners.maps.generators import FAMILIES, TRAIN_SEEDS, check_size, generate
+from planners.maps.generators import FAMILIES, TRAIN_SEEDS, check_size
 from planners.maps.mapset import MapSet, MixedMapSet
 
 #: Free disk a run needs: the encoder and its checkpoint are a few MB each.
@@ -224,7 +224,7 @@ def _train(args) -> int:
     t0 = time.perf_counter()
     extra, validation, sets = {}, None, args.sets
     if sets is None:  # the generated families: each map made on a worker
-        problems = [functools.partial(generate, f, TRAIN_SEEDS[0] + s, size)
+        problems = [GeneratedProblem(f, TRAIN_SEEDS[0] + s, size)
                     for size in args.size for f in FAMILIES for s in range(args.maps)]
     else:
         print(sets.describe(), flush=True)

@@ -136,6 +136,22 @@ def test_the_field_is_scaled_up_on_maps_larger_than_the_training_ones_and_the_si
     assert train_route_net(problems, channels=4, depth=2, epochs=1, log=lambda _: None).trained_side == 96
 
 
+@pytest.mark.parametrize("chunk", [1, 3, 7])
+def test_attention_in_chunks_without_gradients_is_the_whole_pass_bit_for_bit(chunk, monkeypatch):
+    from learning.models.route_net import AxialAttention
+
+    torch.manual_seed(0)
+    net = RouteNet(4, 8, 2, attention=2).eval()
+    x = torch.rand(3, 16 + 3, 20, 13)  # 3 maps of 20 x 13 blocks: 60 row and 39 column sequences
+    monkeypatch.setattr(AxialAttention, "CHUNK_FLOATS", 1 << 40)
+    with torch.inference_mode():
+        whole = net(x)
+    # chunk sequences of rows (13 long) and columns (20 long) at a time: uneven last chunks included
+    monkeypatch.setattr(AxialAttention, "CHUNK_FLOATS", chunk * AxialAttention.HEADS * 13 * 13)
+    with torch.inference_mode():
+        assert torch.equal(net(x), whole)
+
+
 def test_axial_attention_lets_one_cell_reach_the_whole_grid_at_full_resolution():
     """After a row pass and a column pass, the output at one pixel depends on a pixel in another row and column."""
     from learning.models.route_net import AxialAttention
@@ -362,7 +378,7 @@ def test_the_device_follows_sb3s_convention_and_the_cpu_gives_the_validated_runs
     with pytest.raises(InputError, match="device = 'gpu'"):
         RouteSampler(None, device="gpu")
     if not torch.cuda.is_available():
-        with pytest.raises(InputError, match="no CUDA device"):
+        with pytest.raises(InputError, match="device = cuda: torch sees no CUDA GPU"):
             RouteSampler.load(small_net, device="cuda")
     from learning.samplers.registry import make_sampler
 

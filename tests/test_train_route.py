@@ -349,3 +349,37 @@ def test_device_auto_is_the_cpu_without_a_gpu_and_cuda_is_refused_by_name():
             resolve_device("cuda")
     with pytest.raises(InputError, match="--device 'tpu'"):
         resolve_device("tpu")
+
+
+def test_targets_made_while_the_first_epoch_trains_give_the_same_weights(tmp_path, monkeypatch):
+    import numpy as np
+
+    from learning.training import route
+    from planners.base.problem import Problem
+    from planners.maps.mapset import MapSet
+    from planners.worlds.grid import OccupancyGrid
+
+    ms = MapSet.open(_npy_maps(tmp_path / "maps", 6))
+    rng = np.random.default_rng(5)
+    wide = np.zeros((24, 40), dtype=bool)  # not square: its turns change the group it falls in
+    wide[5:20, 18] = True
+    odd = [Problem(OccupancyGrid(wide), (2.5, 2.5), (37.5, 20.5), name=f"wide{i}") for i in range(3)]
+    problems = [route.GeneratedProblem(f, 7, side) for side in (32, 36) for f in ("forest", "maze", "rooms")]
+    problems += [ms.sample("train", rng) for _ in range(4)] + odd
+    kwargs = dict(channels=4, depth=1, epochs=2, batch=3, augment=True, seed=4, log=lambda _: None,
+                  validation=[ms.problem(q) for q in ms.queries("validation")])
+    w1 = route.train_route_net(problems, workers=1, **kwargs).state_dict()
+
+    started_with = []
+    real_wait = route._Stream.wait
+
+    def wait(self, j):
+        real_wait(self, j)
+        if j == 0:
+            started_with.append(self.made)
+
+    monkeypatch.setattr(route._Stream, "wait", wait)
+    monkeypatch.setattr(route, "make_examples", lambda *a, **k: pytest.fail("targets made before training"))
+    w2 = route.train_route_net(problems, workers=2, **kwargs).state_dict()
+    assert started_with and started_with[0] < len(problems)  # the first batch trained before the last target came
+    assert all(torch.equal(w1[k], w2[k]) for k in w1)

@@ -26,7 +26,8 @@ import os
 import numba as nb
 import numpy as np
 
-from learning.models.route_net import RouteNet, load_route_net, resolve_device
+from learning.device import resolve_device
+from learning.models.route_net import RouteNet, load_route_net
 from learning.models.threads import planning_thread_count
 from learning.models.shipped import SHIPPED_ROUTE
 from planners import OccupancyGrid, SamplerBase
@@ -165,7 +166,8 @@ class RouteSampler(SamplerBase):
         patience, max_floor: Iterations without coming closer to the goal after which the uniform share
             grows, and the largest share it reaches.
         tau: Temperature of the frontier's preference, in steps (``planners.guidance.frontier``).
-        device: Where the encoder runs: "auto" (CUDA when torch sees it, else the CPU), "cpu" or "cuda";
+        device: Where the encoder runs: "auto" (CUDA when torch sees it, else the CPU), "cpu", "cuda" or
+            "cuda:N" (``learning.device.resolve_device``);
             the encoder is moved there. On the CPU the iteration counts are the validated ones.
         threads: torch threads for the encoder's passes (``learning.models.threads``): default
             ``SAMPLERGYM_TORCH_THREADS`` or 1; the caller's setting is restored after each pass.
@@ -188,7 +190,7 @@ class RouteSampler(SamplerBase):
         self.net, self.step_size, self.lookahead, self.sigma = net, float(step_size), float(lookahead), float(sigma)
         self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
         self.patience, self.max_floor, self.tau = int(patience), float(max_floor), float(tau)
-        self.device = resolve_device(device)
+        self.device = resolve_device(device, "device =")
         if threads is not None:
             planning_thread_count(threads)  # refused now, by name, rather than at the first query
         self.threads = threads

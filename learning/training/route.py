@@ -1,8 +1,10 @@
 """Training the route encoder: the grid search's cost-to-go as targets (training only, never at inference).
 
-The targets are made on CPU worker processes (``workers``), map by map in a fixed order, so the
-tensors do not depend on how many workers made them; the encoder then trains on ``device`` (the CPU
-by default, a GPU where one is asked for).
+The targets are made on CPU worker processes (``workers``); each depends only on its map, so the
+tensors do not depend on how many workers made them. Where every map's size is known beforehand
+(``Problem``s, ``GeneratedProblem``s), the first epoch's batches are drawn first and the targets are
+made in the order that epoch uses them, while it trains: the encoder (on ``device``, the CPU by
+default, a GPU where one is asked for) waits only for the maps of its next batch.
 """
 
 from __future__ import annotations
@@ -11,7 +13,8 @@ import json
 import multiprocessing
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +25,7 @@ from learning.device import deterministic
 from learning.models.route_net import MAX_BLOCKS_ENV, RouteNet, max_blocks, route_input, symmetry
 from planners.base.fileio import InputError, atomic_path, short_repr
 from planners.base.problem import Problem
+from planners.maps.generators import generate
 from planners.maps.gridsearch import distance_field
 
 #: Most blocks one training batch holds (maps x blocks a map): 32 maps of 256 cells at a block of 4.
@@ -81,23 +85,57 @@ def _example(task: tuple) -> tuple[str, int, np.ndarray, np.ndarray]:
             cost_targets(obs, goal, block).astype(np.float32))
 
 
+@dataclass(frozen=True)
+class GeneratedProblem:
+    """``generate(family, seed, size)`` made where it is called (on a worker), with its size known beforehand."""
+
+    family: str
+    seed: int
+    size: int
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """The map's shape in cells."""
+        return (self.size, self.size)
+
+    def __call__(self) -> Problem:
+        return generate(self.family, self.seed, self.size)
+
+
+def _turned_shape(problem: Problem | Callable[[], Problem], k: int) -> tuple[int, int] | None:
+    """The map's shape under symmetry ``k`` without making it: a ``Problem``'s, or a callable's ``shape``; else None."""
+    shape = problem.world.obstacles.shape if isinstance(problem, Problem) else getattr(problem, "shape", None)
+    if shape is None:
+        return None
+    rows, cols = (int(v) for v in shape)
+    return (cols, rows) if (k % 4 % 2 == 1) != (k >= 4) else (rows, cols)
+
+
+def _pool(workers: int, tasks: int):
+    """A pool of ``min(workers, tasks)`` processes forked from a fresh single-threaded server ("forkserver";
+    "spawn" where there is none): forking this process itself could copy a lock held by one of its threads
+    (torch's, Ray's) and hang, and a child must not inherit a CUDA context."""
+    methods = multiprocessing.get_all_start_methods()
+    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    return ctx.Pool(min(workers, tasks))
+
+
+def _chunk(tasks: int, workers: int, most: int = 64) -> int:
+    return max(1, min(most, tasks // (4 * workers)))
+
+
 def make_examples(problems: Sequence[Problem | Callable[[], Problem]], turns: Sequence[int], block: int,
                   workers: int = 1) -> list[tuple[str, int, np.ndarray, np.ndarray]]:
     """``_example`` of every problem under its turn, in the problems' order, on ``workers`` processes.
 
     Each example depends only on its problem, turn and block, and they come back in order, so the
-    result is the same for any number of workers. With more than one, a pool makes them, its processes
-    forked from a fresh single-threaded server ("forkserver"; "spawn" where there is none): forking
-    this process itself could copy a lock held by one of its threads (torch's, Ray's) and hang, and a
-    child must not inherit a CUDA context.
+    result is the same for any number of workers. With more than one, a pool makes them (``_pool``).
     """
     tasks = [(p, int(k), block) for p, k in zip(problems, turns, strict=True)]
     if workers <= 1 or len(tasks) < 2:
         return [_example(t) for t in tasks]
-    methods = multiprocessing.get_all_start_methods()
-    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
-    with ctx.Pool(min(workers, len(tasks))) as pool:
-        return list(pool.imap(_example, tasks, chunksize=max(1, min(64, len(tasks) // (4 * workers)))))
+    with _pool(workers, len(tasks)) as pool:
+        return list(pool.imap(_example, tasks, chunksize=_chunk(len(tasks), workers)))
 
 
 def _tensors(examples) -> list[tuple[torch.Tensor, None, torch.Tensor]]:
@@ -126,6 +164,74 @@ def _on_device(data: list, device: torch.device) -> list:
 def _group_batch(X: torch.Tensor, batch: int) -> int:
     """Maps per batch for a group of maps of one shape: ``batch``, fewer where the maps are large."""
     return max(1, min(batch, MAX_BATCH_BLOCKS // (X.shape[-1] * X.shape[-2])))
+
+
+def _epoch_batches(data: list, batch: int, order: torch.Generator) -> list[tuple[int, torch.Tensor]]:
+    """One epoch's batches in training order, drawn from ``order``: (group, indices into the group) each.
+
+    Only the groups' sizes and shapes are read, so the batches can be drawn before the examples are made.
+    """
+    batches = [(i, idx) for i, (X, _, _) in enumerate(data)
+               for idx in torch.randperm(len(X), generator=order).split(_group_batch(X, batch))]
+    return [batches[j] for j in torch.randperm(len(batches), generator=order).tolist()]
+
+
+class _Stream:
+    """The training examples made on a pool while the first epoch trains, in the order it uses them.
+
+    ``data`` holds the groups' tensors (as ``_tensors`` would make them from all the examples), filled
+    as the examples come; ``wait(i, idx)`` returns when those of a batch are in. The validation
+    examples are made after them on the same pool (``validation()``).
+    """
+
+    def __init__(self, tasks: list[tuple], shapes: list[tuple[int, int]], block: int, batch: int,
+                 order: torch.Generator, workers: int, validation: list[tuple]) -> None:
+        padded = [(-(-r // block) * block, -(-c // block) * block) for r, c in shapes]
+        members: dict[tuple[int, int], list[int]] = {}
+        for n, shape in enumerate(padded):  # groups in order of first appearance, as _tensors makes them
+            members.setdefault(shape, []).append(n)
+        self.members = list(members.values())
+        self.data = [(torch.empty((len(m), block * block + 3, r // block, c // block), dtype=torch.float32), None,
+                      torch.empty((len(m), r, c), dtype=torch.float32)) for (r, c), m in members.items()]
+        self.batches = _epoch_batches(self.data, batch, order)
+        self.names: list[str | None] = [None] * len(tasks)
+        self.sides = [max(shape) for shape in shapes]
+        self.planned = padded
+        # each example's (group, row) in the order the epoch's batches use them
+        self.slots = [(i, int(r)) for i, idx in self.batches for r in idx]
+        self.ends = np.cumsum([len(idx) for _, idx in self.batches]).tolist()
+        self.made = 0
+        self.pool = _pool(workers, len(tasks))
+        self.results: Iterator = self.pool.imap(_example, [tasks[self.members[i][r]] for i, r in self.slots],
+                                                chunksize=_chunk(len(tasks), workers, 8))
+        self.held_out = self.pool.map_async(_example, validation, chunksize=_chunk(len(validation), workers)) \
+            if validation else None
+
+    def wait(self, j: int) -> None:
+        """Return once the examples of the epoch's ``j``-th batch are in ``data``."""
+        while self.made < self.ends[j]:
+            i, r = self.slots[self.made]
+            n = self.members[i][r]
+            name, _, x, y = next(self.results)
+            if y.shape != self.planned[n]:
+                raise RuntimeError(f"training map {name!r} came out {y.shape} (padded), not the {self.planned[n]} "
+                                   "its shape promised")
+            X, _, Y = self.data[i]
+            X[r] = torch.from_numpy(x)
+            Y[r] = torch.from_numpy(y)
+            self.names[n] = name
+            self.made += 1
+
+    def validation(self) -> list | None:
+        """The validation examples' tensors (``_tensors``), once made."""
+        return _tensors(self.held_out.get()) if self.held_out is not None else None
+
+    def close(self) -> None:
+        """End the pool (once every example is in, or when training stops early)."""
+        if self.pool is not None:
+            self.pool.terminate()
+            self.pool.join()
+            self.pool = None
 
 
 #: What a route training checkpoint holds besides tensors: the recipe it belongs to and how far it got.
@@ -206,7 +312,10 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     and the weights of the epoch with the lowest validation loss are returned (``net.chosen_epoch``).
     Without, the last epoch's. ``recipe_extra`` joins the recipe a checkpoint must match (what the
     problems were drawn from). ``device``: where the encoder trains; the targets are made on
-    ``workers`` CPU processes first (``make_examples``).
+    ``workers`` CPU processes (``make_examples``). With more than one worker, and the size of every
+    map known beforehand (``Problem``s, or callables with a ``shape`` such as ``GeneratedProblem``),
+    they are made while the first epoch trains, in the order its batches (drawn first) use them; the
+    validation targets follow on the same processes. Else all are made before it.
 
     With ``checkpoint`` (a file path) the weights, the optimiser and the batch order's generator are
     committed there after every epoch; with ``resume`` a run continues from that file to the same
@@ -216,29 +325,64 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     device = torch.device(device)
     torch.manual_seed(seed)
     turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
-    examples = make_examples(problems, turns, block, workers)
-    names = [e[0] for e in examples]
-    trained_side = max(e[1] for e in examples)
-    data = _tensors(examples)
-    del examples
-    held_out = _tensors(make_examples(validation, [0] * len(validation), block, workers)) if validation else None
+    tasks = [(p, int(k), block) for p, k in zip(problems, turns, strict=True)]
+    held_tasks = [(p, 0, block) for p in validation or ()]
+    shapes = [_turned_shape(p, k) for p, k, _ in tasks]
+    order = torch.Generator().manual_seed(seed)
+    resuming = resume and checkpoint is not None and Path(checkpoint).is_file()
+    stream = None
+    if workers > 1 and len(tasks) > 1 and not resuming and None not in shapes:
+        for (p, _, _), shape in zip(tasks, shapes, strict=True):  # what _example checks, before any work
+            check_route_map(getattr(p, "name", str(p)), shape, block)
+        # the first epoch's batches are drawn now (from ``order``, as the loop below would): the targets are
+        # made in the order it uses them while it trains
+        stream = _Stream(tasks, shapes, block, batch, order, workers, held_tasks)
+        data, held_out, names, trained_side = stream.data, None, None, max(max(shape) for shape in shapes)
+    else:
+        examples = make_examples(problems, turns, block, workers)
+        names = [e[0] for e in examples]
+        trained_side = max(e[1] for e in examples)
+        data = _tensors(examples)
+        del examples
+        held_out = _tensors(make_examples(validation, [0] * len(validation), block, workers)) if validation else None
+    try:
+        return _train(data, held_out, stream, names, trained_side, order, device,
+                      block=block, channels=channels, depth=depth, attention=attention,
+                      attention_level=attention_level, epochs=epochs, batch=batch, lr=lr, augment=augment, seed=seed,
+                      log=log, checkpoint=checkpoint, resuming=resuming, validation=validation,
+                      recipe_extra=recipe_extra)
+    finally:
+        if stream is not None:
+            stream.close()
+
+
+def _train(data: list, held_out: list | None, stream: _Stream | None, names: list[str] | None, trained_side: int,
+           order: torch.Generator, device: torch.device, *, block: int, channels: int, depth: int, attention: int,
+           attention_level: int, epochs: int, batch: int, lr: float, augment: bool, seed: int, log,
+           checkpoint, resuming: bool, validation, recipe_extra: dict | None) -> RouteNet:
+    """``train_route_net``'s epochs, on the examples made (``data``) or being made (``stream``)."""
     deterministic(device)
-    data = _on_device(data, device)
-    held_out = _on_device(held_out, device) if held_out is not None else None
+    if stream is None:
+        data = _on_device(data, device)
+        held_out = _on_device(held_out, device) if held_out is not None else None
     net = RouteNet(block, channels, depth, attention, attention_level, trained_side=trained_side).to(device)
     opt = torch.optim.Adam(net.parameters(), lr)
-    order = torch.Generator().manual_seed(seed)
-    recipe = {"block": block, "channels": channels, "depth": depth, "attention": attention,
-              "attention_level": attention_level, "batch": batch, "lr": lr, "augment": augment, "seed": seed,
-              "maps": names}  # not the epochs: each epoch's weights do not depend on them
-    if validation:
-        recipe["validation"] = [p.name for p in validation]
-    if recipe_extra:
-        recipe.update(recipe_extra)
+
+    def recipe_of(maps: list[str]) -> dict:
+        recipe = {"block": block, "channels": channels, "depth": depth, "attention": attention,
+                  "attention_level": attention_level, "batch": batch, "lr": lr, "augment": augment, "seed": seed,
+                  "maps": maps}  # not the epochs: each epoch's weights do not depend on them
+        if validation:
+            recipe["validation"] = [p.name for p in validation]
+        if recipe_extra:
+            recipe.update(recipe_extra)
+        return recipe
+
+    recipe = recipe_of(names) if names is not None else None
     lines: list[str] = []
     best: dict | None = None
     first = 0
-    if resume and checkpoint is not None and Path(checkpoint).is_file():
+    if resuming:
         state = _load_checkpoint(Path(checkpoint), recipe)
         try:
             net.load_state_dict(state["net"])
@@ -255,11 +399,12 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     t0 = time.perf_counter()
     for epoch in range(first, epochs):
         net.train()
-        batches = [(i, idx) for i, (X, _, _) in enumerate(data)
-                   for idx in torch.randperm(len(X), generator=order).split(_group_batch(X, batch))]
+        streaming = stream is not None and epoch == 0
+        batches = stream.batches if streaming else _epoch_batches(data, batch, order)
         total = 0.0
-        for j in torch.randperm(len(batches), generator=order).tolist():
-            i, idx = batches[j]
+        for j, (i, idx) in enumerate(batches):
+            if streaming:
+                stream.wait(j)
             X, _, Yc = data[i]
             out = net(X[idx].to(device))
             yc = Yc[idx].to(device)
@@ -269,6 +414,11 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
             loss.backward()
             opt.step()
             total += loss.item() * len(idx)
+        if streaming:  # every example is in now: the tensors as _tensors would have made them
+            recipe = recipe_of(stream.names)
+            held_out = _on_device(stream.validation(), device) if validation else None
+            data = _on_device(data, device)
+            stream.close()
         line = f"epoch {epoch}: loss {total / sum(len(d[0]) for d in data):.3f}"
         if held_out is not None:
             score = _validation_loss(net, held_out, batch, device)
