@@ -26,6 +26,12 @@ from conftest import load_script  # noqa: E402
     ("benchmark_envs", ["--files", "/nonexistent.png"], "--files"),
     ("benchmark_policy", ["--maps", "0"], "--maps"),
     ("benchmark_policy", ["--bias", "2"], "--bias"),
+    ("benchmark_route", ["--sides", "4"], "--sides"),
+    ("benchmark_route", ["--threads", "0"], "--threads"),
+    ("benchmark_route", ["--symmetries", "9"], "--symmetries"),
+    ("benchmark_route", ["--route", "/nonexistent/route.pt"], "--route"),
+    ("benchmark_route", ["--device", "cuda"] if not __import__("torch").cuda.is_available() else ["--batch", "0"],
+     "--device" if not __import__("torch").cuda.is_available() else "--batch"),
 ])
 def test_bad_flags_exit_2_with_one_line(tmp_path, capsys, script, flags, named):
     (tmp_path / "FILE").write_text("x")
@@ -35,3 +41,14 @@ def test_bad_flags_exit_2_with_one_line(tmp_path, capsys, script, flags, named):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert named in err and err.count("\n") == 1, err
+
+
+def test_benchmark_route_table_and_refusal(capsys, monkeypatch):
+    """A small side is timed, a side above the block limit is a 'refused' row naming the limit."""
+    monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "64")  # 32 x 32 cells at 4 cells per block
+    assert load_script("benchmark_route").main(["--sides", "32", "64", "--repeat", "1", "--batch", "2",
+                                                "--symmetries", "2"]) == 0
+    out = capsys.readouterr().out
+    rows = [line for line in out.splitlines() if line.startswith("| 32 ") or line.startswith("| 64 ")]
+    assert len(rows) == 2 and "refused" in rows[1] and "refused" not in rows[0], out
+    assert "above the limit of 64 blocks" in out

@@ -1,0 +1,137 @@
+"""What the route encoder costs per query, by map side, thread count and device.
+
+    python scripts/benchmark_route.py                                  # shipped encoder, CPU, 1 thread
+    python scripts/benchmark_route.py --sides 128 512 --threads 1 2 --batch 16
+    python scripts/benchmark_route.py --device cuda --sides 128 256 512 1024 --batch 64
+
+Each row is one map side (a generated forest map, ``--symmetries`` passes, the goal in a free cell):
+the median and the best of ``--repeat`` timed ``predict`` calls after one untimed warm-up call, with the
+encoder's own planning threads (``--threads``) and, with ``--batch N``, the time per query when N
+queries of that side go through ``predict_many`` together (the evaluation's batched path on a GPU).
+Peak memory is the process's resident peak after the row (CPU; sides in increasing order), or the
+GPU's allocated peak for the row. A side above the encoder's block limit is shown as refused, with the
+limit's message. Times are wall times in one process; the machine's load is printed beside them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from learning.device import DEVICES, resolve_device
+from learning.models.route_net import load_route_net
+from learning.models.shipped import SHIPPED_ROUTE
+from planners.base.fileio import InputError, check_flags, check_int, check_int_flags
+from planners.maps.generators import TEST_SEED0, generate
+from planners.tools.benchmark import markdown_table
+
+
+def _load() -> str:
+    try:
+        return " / ".join(f"{x:.1f}" for x in os.getloadavg())
+    except OSError:
+        return "unknown"
+
+
+def _timed(call, repeat: int, sync) -> list[float]:
+    call()  # warm-up: first-call allocations, lazy CUDA set-up
+    sync()
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        call()
+        sync()
+        times.append(time.perf_counter() - start)
+    return times
+
+
+def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, batch: int, device) -> dict:
+    """One row: the encoder's time per query on a ``side`` x ``side`` forest map (see the module docstring)."""
+    problem = generate("forest", TEST_SEED0, side)
+    obstacles = np.asarray(problem.world.obstacles)
+    goal = problem.world.cell_of(problem.goal)
+    row: dict = {"side": side, "threads": threads}
+    try:
+        net.check_size(obstacles.shape)
+    except InputError as exc:
+        row["ms_per_query"] = "refused"
+        row["note"] = str(exc)
+        return row
+    cuda = device.type == "cuda"
+    sync = torch.cuda.synchronize if cuda else (lambda: None)
+    if cuda:
+        torch.cuda.reset_peak_memory_stats()
+    times = _timed(lambda: net.predict(obstacles, goal, symmetries, threads=threads), repeat, sync)
+    row["ms_per_query"] = round(1000 * float(np.median(times)), 1)
+    row["best_ms"] = round(1000 * min(times), 1)
+    if batch > 1:
+        free = np.argwhere(~obstacles.astype(bool))
+        picks = np.random.default_rng(side).choice(len(free), size=batch, replace=len(free) < batch)
+        queries = [(obstacles, (int(free[i][0]), int(free[i][1]))) for i in picks]
+        many = _timed(lambda: net.predict_many(queries, symmetries, threads=threads), max(1, repeat // 2), sync)
+        row[f"ms_per_query_batch_{batch}"] = round(1000 * float(np.median(many)) / batch, 2)
+    if cuda:
+        row["peak_mb"] = round(torch.cuda.max_memory_allocated() / 2**20)
+    else:
+        row["peak_mb"] = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+    row["load"] = _load()
+    return row
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--route", type=Path, default=SHIPPED_ROUTE, help="route encoder file (default: the shipped one)")
+    ap.add_argument("--sides", type=int, nargs="+", default=[128, 256, 512, 1024])
+    ap.add_argument("--threads", type=int, nargs="+", default=[1], help="torch threads per query (default 1, "
+                    "the library's planning default)")
+    ap.add_argument("--symmetries", type=int, default=8)
+    ap.add_argument("--repeat", type=int, default=5, help="timed calls per row; the table shows their median")
+    ap.add_argument("--batch", type=int, default=1, help="also time N queries per predict_many call")
+    ap.add_argument("--device", default="cpu", choices=DEVICES, help="cpu (default), cuda, or auto as in SB3")
+    args = ap.parse_args(argv)
+
+    def check() -> None:
+        check_int_flags(args, ("repeat", "batch"))
+        for side in args.sides:
+            check_int(side, "--sides", low=32)  # the smallest generated map
+        for n in args.threads:
+            check_int(n, "--threads")
+        check_int(args.symmetries, "--symmetries")
+        if args.symmetries > 8:
+            raise InputError(f"--symmetries {args.symmetries}: expected 1 to 8")
+        if not args.route.is_file():
+            raise InputError(f"--route {args.route}: no such file")
+
+    check_flags(check)
+    device = None
+
+    def pick() -> None:
+        nonlocal device
+        device = resolve_device(args.device)
+
+    check_flags(pick)
+    net = load_route_net(args.route).to(device)
+    print(f"route encoder {args.route.name}, {args.symmetries} symmetries, device {device}, "
+          f"{os.cpu_count()} CPUs, torch {torch.__version__}\n")
+    rows = [bench_side(net, side, symmetries=args.symmetries, threads=n, repeat=args.repeat, batch=args.batch,
+                       device=device)
+            for side in sorted(set(args.sides)) for n in args.threads]
+    columns = ["side", "threads", "ms_per_query", "best_ms"]
+    if args.batch > 1:
+        columns.append(f"ms_per_query_batch_{args.batch}")
+    columns += ["peak_mb", "load"]
+    print(markdown_table(rows, columns))
+    for row in rows:
+        if "note" in row:
+            print(f"\nside {row['side']}: {row['note']}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
