@@ -10,6 +10,12 @@ time (the process's own) says what the wall time would be on an idle machine whe
     python scripts/benchmark_first_call.py                    # every row, this checkout
     python scripts/benchmark_first_call.py --rows rrt-goal rrt-connect --repeat 3
     python scripts/benchmark_first_call.py --code /path/to/other/checkout   # the same rows on other code
+    python scripts/benchmark_first_call.py --save    # also store the compile figures the notice quotes
+    python scripts/benchmark_first_call.py --rows rrt-goal --breakdown 10   # where the compile time goes
+
+``--save`` writes, per row, the CPU seconds compiling added (empty-cache run minus filled-cache run) to
+``planners/kernels/compile_seconds.json`` with the machine's CPU count and the date; the one-line
+notice before a first compilation quotes them (``planners.kernels.cache``).
 
 Prints a Markdown table (the minimum over ``--repeat`` runs of each figure: other load on the machine
 only ever adds time). Targets: goal-biased RRT and RRT-Connect within 5 s cold; every planner within
@@ -19,6 +25,7 @@ only ever adds time). Targets: goal-biased RRT and RRT-Connect within 5 s cold; 
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import os
 import subprocess
@@ -46,6 +53,27 @@ ROWS = {
 CHILD = r"""
 import json, sys, time
 t_start = float(sys.argv[4])
+by_function = {}
+if sys.argv[5] == "breakdown":
+    from numba.core import event
+
+    class PerFunction(event.Listener):
+        # CPU seconds each dispatcher's compilation took, less the compilations nested in it
+        stack = []
+
+        def on_start(self, ev):
+            f = getattr(ev.data["dispatcher"], "py_func", None)
+            self.stack.append([getattr(f, "__module__", "?") + "." + getattr(f, "__qualname__", "?"),
+                               time.process_time(), 0.0])
+
+        def on_end(self, ev):
+            name, t0, nested = self.stack.pop()
+            dt = time.process_time() - t0
+            by_function[name] = by_function.get(name, 0.0) + dt - nested
+            if self.stack:
+                self.stack[-1][2] += dt
+
+    event.register("numba:compile", PerFunction())
 import numpy as np
 from planners import GoalBiasedSampler, OccupancyGrid, Problem, make_planner, thin_wall_scene
 from planners.base.planner import compile_seconds
@@ -63,16 +91,18 @@ t0 = time.time()
 r = make_planner(name, problem, seed=0, **kw).solve(max_iterations=2000)
 t1 = time.time()
 print(json.dumps({"total": t1 - t_start, "cpu": time.process_time(), "first_solve": t1 - t0,
-                  "compile": compile_seconds(), "solved": bool(r.solved), "iterations": int(r.iterations)}))
+                  "compile": compile_seconds(), "solved": bool(r.solved), "iterations": int(r.iterations),
+                  "by_function": by_function}))
 """
 
 
-def run_child(code: Path, row: str, cache: str) -> dict:
+def run_child(code: Path, row: str, cache: str, breakdown: bool = False) -> dict:
     """One fresh interpreter running one row against ``cache``; its figures."""
     _, name, world, sampler = ROWS[row]
     env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=str(code), SAMPLERGYM_COMPILE_NOTICE="0")
     t = time.time()
-    out = subprocess.run([sys.executable, "-c", CHILD, name, world, sampler or "-", repr(t)], env=env,
+    out = subprocess.run([sys.executable, "-c", CHILD, name, world, sampler or "-", repr(t),
+                          "breakdown" if breakdown else "-"], env=env,
                          capture_output=True, text=True, cwd=code)
     if out.returncode != 0:
         raise RuntimeError(f"row {row} failed on {code}:\n{out.stderr[-2000:]}")
@@ -86,6 +116,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--code", type=Path, default=ROOT,
                     help="checkout whose planners package is timed (default: this one)")
     ap.add_argument("--repeat", type=int, default=1, help="runs per row; the table shows the minimum of each figure")
+    ap.add_argument("--breakdown", type=int, default=0, metavar="N",
+                    help="after each row, the N functions whose compilation took the most CPU time (nested ones excluded)")
+    ap.add_argument("--save", action="store_true",
+                    help="store each row's compile CPU seconds in the timed checkout's planners/kernels/compile_seconds.json")
     args = ap.parse_args(argv)
     bad = [r for r in args.rows if r not in ROWS]
     if bad:
@@ -94,25 +128,51 @@ def main(argv: list[str] | None = None) -> int:
     if not (args.code / "planners" / "__init__.py").is_file():
         print(f"--code: {args.code} holds no planners package", file=sys.stderr)
         return 2
+    if args.breakdown < 0:
+        print(f"--breakdown: must be at least 0, got {args.breakdown}", file=sys.stderr)
+        return 2
     if args.repeat < 1:
         print(f"--repeat: must be at least 1, got {args.repeat}", file=sys.stderr)
         return 2
-    print(f"code: {args.code.resolve()}  python: {sys.executable}  cpus: {os.cpu_count()}  repeat: {args.repeat}")
+    save_to = args.code / "planners" / "kernels" / "compile_seconds.json"
+    if args.save and not os.access(save_to.parent, os.W_OK):
+        print(f"--save: {save_to.parent} is not writable", file=sys.stderr)
+        return 2
+    print(f"code: {args.code.resolve()}  python: {sys.executable}  cpus: {os.cpu_count()}  repeat: {args.repeat}  "
+          f"load: {os.getloadavg()[0]:.1f}")
     print()
     print("| planner | start to solved, empty cache | its CPU time | of it compiling | start to solved, filled cache "
           "| first solve, filled cache | iterations |")
     print("|---|---|---|---|---|---|---|")
+    saved, breakdowns = {}, []
     for row in args.rows:
         cold, warm = [], []
         for _ in range(args.repeat):
             with tempfile.TemporaryDirectory(prefix="first-call-") as d:
-                cold.append(run_child(args.code, row, d))
+                cold.append(run_child(args.code, row, d, args.breakdown > 0))
                 warm.append(run_child(args.code, row, d))
         c = {k: min(r[k] for r in cold) for k in ("total", "cpu", "compile")}
-        w = {k: min(r[k] for r in warm) for k in ("total", "first_solve")}
+        w = {k: min(r[k] for r in warm) for k in ("total", "first_solve", "cpu")}
+        _, name, world, _ = ROWS[row]
+        key = f"{name}/{'6dof' if world == 'rigid' else '2d'}"
+        saved[key] = max(saved.get(key, 0.0), round(c["cpu"] - w["cpu"], 1))
         its = cold[0]["iterations"] if cold[0]["solved"] else f"unsolved after {cold[0]['iterations']}"
         print(f"| {ROWS[row][0]} | {c['total']:.1f} s | {c['cpu']:.1f} s | {c['compile']:.1f} s | {w['total']:.1f} s "
               f"| {w['first_solve']:.2f} s | {its} |", flush=True)
+        if args.breakdown:
+            top = sorted(cold[0]["by_function"].items(), key=lambda kv: -kv[1])[:args.breakdown]
+            breakdowns.append(f"{ROWS[row][0]}: " + ", ".join(f"{n} {v:.2f} s" for n, v in top))
+    for line in breakdowns:
+        print(line)
+    print(f"load after: {os.getloadavg()[0]:.1f}")
+    if args.save:
+        old = json.loads(save_to.read_text()) if save_to.is_file() else {}
+        old.setdefault("seconds", {}).update(saved)
+        old["cpus"] = os.cpu_count()
+        old["measured"] = (f"{datetime.date.today().isoformat()}: CPU seconds a first solve spends compiling "
+                           "(empty-cache run minus filled-cache run, scripts/benchmark_first_call.py --save)")
+        save_to.write_text(json.dumps(old, indent=1, sort_keys=True) + "\n")
+        print(f"saved {len(saved)} figures to {save_to}")
     return 0
 
 

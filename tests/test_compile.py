@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -95,6 +96,18 @@ def test_the_notice_shows_once_per_install(fresh_notice, monkeypatch, capsys):
     assert capsys.readouterr().err == ""
     cache.announce("PRM", world, space)  # another planner has its own kernels
     assert "compiling the PRM kernels" in capsys.readouterr().err
+
+
+def test_the_notice_quotes_the_measured_figure_or_a_range(tmp_path):
+    rn, rigid = make_space(SPACE_RN, METRIC_L2, 1.0), make_space(SPACE_RIGID, METRIC_COSSIN, 1.0)
+    figures = tmp_path / "compile_seconds.json"
+    assert cache.expected_seconds("RRT", rn, figures) == cache.UNMEASURED  # no file
+    figures.write_text(json.dumps({"seconds": {"RRT/2d": 4.26, "PRM/6dof": 0.2}, "cpus": 2}))
+    assert cache.expected_seconds("RRT", rn, figures) == "about 4 s of CPU time (measured on a 2-CPU machine)"
+    assert cache.expected_seconds("PRM", rigid, figures).startswith("about 1 s ")
+    assert cache.expected_seconds("RRT", rigid, figures) == cache.UNMEASURED  # no figure for that row
+    figures.write_text("{not json")
+    assert cache.expected_seconds("RRT", rn, figures) == cache.UNMEASURED
 
 
 @pytest.mark.parametrize("how", ["env", "function"])

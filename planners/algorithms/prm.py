@@ -154,7 +154,8 @@ class PRM(Planner):
 
     def _insert_query_state(self, q: np.ndarray) -> int:
         self._reserve(1)
-        return int(prm_kernels.insert_vertex(np.ascontiguousarray(q, dtype=np.float64), self._store.as_tree(),
+        # a writable copy: the argument types roadmap_run's own call compiles insert_vertex for (no second compile)
+        return int(prm_kernels.insert_vertex(np.array(q, dtype=np.float64), self._store.as_tree(),
                                              self._edges,
                                     self._uf, self._vstat, self._istate, self.problem.world.kernel, self._space,
                                     self._goal, self.k, self._connect_radius(), self.max_edge_length or 0.0, self.lazy,
@@ -244,7 +245,7 @@ class PRM(Planner):
         ``PlanResult.iterations`` then counts the samples drawn for this query only.
         """
         self.problem = self.problem.with_query(start, goal)
-        self._goal = np.ascontiguousarray(self.problem.goal, dtype=np.float64)
+        self._goal = np.array(self.problem.goal, dtype=np.float64)  # writable, as Planner sets it
         self.sampler = self._sampler_spec.bind(self.problem)
         self._buf_pts = self._buf_pts[:0]
         self._pos = 0

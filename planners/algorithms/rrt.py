@@ -50,6 +50,15 @@ def default_step(problem: Problem, step_size: float | None) -> float:
     return step
 
 
+def path_to_root(parent: np.ndarray, v: int) -> np.ndarray:
+    """Vertex indices from the root to ``v`` (a path is short: a Python loop, nothing to compile)."""
+    out = []
+    while v >= 0:
+        out.append(v)
+        v = int(parent[v])
+    return np.array(out[::-1], dtype=np.int64)
+
+
 @register_planner
 class RRT(Planner):
     """Rapidly-exploring random tree.
@@ -91,10 +100,7 @@ class RRT(Planner):
             self._fstate[slots.F_BEST_COST] = 0.0
 
     def _add_root(self, store: VertexStore, q: np.ndarray, slot: int) -> None:
-        from planners.kernels.tree import add_vertex
-
-        q = np.ascontiguousarray(q, dtype=np.float64)
-        self._istate[slot] = add_vertex(store.as_tree(), 0, self._space, q, -1, 0.0)
+        self._istate[slot] = store.add_root(q)
 
     def _reserve(self, iterations: int) -> None:
         self._tree.reserve(self.num_vertices, 1)
@@ -114,7 +120,7 @@ class RRT(Planner):
         return self._tree
 
     def _path(self) -> np.ndarray:
-        idx = rrt_kernels.path_to_root(self._tree.parent, int(self._istate[slots.I_GOAL_V]))
+        idx = path_to_root(self._tree.parent, int(self._istate[slots.I_GOAL_V]))
         return self._tree.X[idx].copy()
 
     def planner_data(self) -> PlannerData:
@@ -170,11 +176,11 @@ class RRTConnect(RRT):
         return int(self._istate[slots.I_N] + self._istate[slots.I_N_B])
 
     def _path(self) -> np.ndarray:
-        a = self._tree.X[rrt_kernels.path_to_root(self._tree.parent, int(self._istate[slots.I_GOAL_V]))]
+        a = self._tree.X[path_to_root(self._tree.parent, int(self._istate[slots.I_GOAL_V]))]
         jb = int(self._istate[slots.I_JOIN_B])
         if jb < 0:
             return a.copy()
-        b = self._gtree.X[rrt_kernels.path_to_root(self._gtree.parent, jb)][::-1]
+        b = self._gtree.X[path_to_root(self._gtree.parent, jb)][::-1]
         if np.array_equal(a[-1], b[0]):
             b = b[1:]
         return np.concatenate([a, b])

@@ -14,10 +14,11 @@ from numba.core import event as _nb_event
 from planners.base.fileio import check_int
 from planners.base.problem import Problem
 from planners.base.samplers import SampleBatch, Sampler, UniformSampler
+from planners.datastructures.nn import insert as index_insert
 from planners.kernels import state as slots
 from planners.kernels.cache import announce as announce_compile
 from planners.kernels.fused import CHUNK, refill_size  # the batch and refill schedule (planners.fused)
-from planners.kernels.space import embed_dim, uses_kd
+from planners.kernels.space import embed, embed_dim, uses_kd
 from planners.kernels.state import Tree
 
 #: Under a time limit, one compiled call is sized from the measured time per sample (growing at most
@@ -164,11 +165,12 @@ class VertexStore:
     """Growable vertex arrays plus their nearest-neighbour index (shared by trees and roadmaps)."""
 
     def __init__(self, problem: Problem, capacity: int, tree: bool) -> None:
-        kind, metric, _ = problem.space
+        kind, metric, _ = self.space = problem.space
         self.dim = problem.dim
-        self.edim = int(embed_dim(kind, metric, self.dim))
+        # the compiled helpers' Python functions: answering these compiles nothing
+        self.edim = int(embed_dim.py_func(kind, metric, self.dim))
         self.same_embedding = kind == 0
-        self.kd = bool(uses_kd(kind, metric))
+        self.kd = bool(uses_kd.py_func(kind, metric))
         self.tree = tree
         self._alloc(max(int(capacity), 64), 0)
 
@@ -199,6 +201,17 @@ class VertexStore:
             return False
         self._alloc(max(need, 2 * self.capacity), n_used)
         return True
+
+    def add_root(self, q: np.ndarray) -> int:
+        """Make ``q`` vertex 0 of an empty store (no parent, cost 0), as ``planners.kernels.tree.add_vertex``
+        would; returns the vertex count, 1."""
+        q = np.array(q, dtype=np.float64)  # a writable copy: the argument types the kernels compile for
+        self.X[0] = q
+        if not self.same_embedding:
+            embed(self.space[0], self.space[1], q, self.E[0])
+        self.parent[0] = -1
+        self.cost[0] = 0.0
+        return int(index_insert(self.E, self.perm, self.split, self.box, 0)) if self.kd else 1
 
     def as_tree(self) -> Tree:
         """The arrays as the kernels take them (valid until the next ``reserve`` reallocates them)."""
@@ -249,7 +262,7 @@ class Planner(abc.ABC):
         self._sampler_spec = sampler
         self._space = problem.space
         self._low, self._high = (np.ascontiguousarray(b, dtype=np.float64) for b in problem.world.bounds)
-        self._goal = np.ascontiguousarray(problem.goal, dtype=np.float64)
+        self._goal = np.array(problem.goal, dtype=np.float64)  # writable: the kernels compile one array type
         self._stack = np.empty(2 * 256, dtype=np.int64)
         self._stack_b = np.empty(256)
         announce_compile(self.name, problem.world.kernel, self._space)

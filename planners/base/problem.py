@@ -9,7 +9,7 @@ import numpy as np
 
 from planners.base.fileio import InputError
 from planners.base.world import World
-from planners.kernels.space import METRIC_NAMES, make_space
+from planners.kernels.space import METRIC_NAMES, make_space, space_distance_of
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,10 +83,8 @@ class Problem:
 
     def distance(self, a, b) -> float:
         """Distance between two states in this problem's metric."""
-        from planners.kernels.space import distance
-
-        k, m, w = self.space
-        return float(distance(k, m, w, np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)))
+        # writable copies: one compiled signature whatever the caller passes
+        return float(space_distance_of(self.space, np.array(a, dtype=np.float64), np.array(b, dtype=np.float64)))
 
     def path_length(self, path) -> float:
         """Length of a path (sequence of states) in this problem's metric."""

@@ -25,62 +25,97 @@ LEAF = 16
 STACK = 256
 
 
+# --- one metric's building blocks ----------------------------------------------------------------
+# Each is small and branch-free and inlined (numba's ``inline="always"``) into the traversals that
+# ``_traversals`` makes for its metric, so every traversal is compiled with its metric built in (with a
+# run-time metric the distance loops keep their branches and queries run 3-5x slower) and inlining
+# one metric's few lines costs little compilation.
+
+
 @nb.njit(cache=True, inline="always")
-def rdist(metric, a, b):
-    """Reduced distance: squared for L2, plain for L1 and L-infinity."""
+def _rdist_l2(q, P, j):
+    """Reduced distance (squared for L2) from ``q`` to point ``P[j]``."""
     s = 0.0
-    if metric == METRIC_L2:
-        for i in range(a.shape[0]):
-            d = a[i] - b[i]
-            s += d * d
-    elif metric == METRIC_L1:
-        for i in range(a.shape[0]):
-            s += abs(a[i] - b[i])
-    else:
-        for i in range(a.shape[0]):
-            d = abs(a[i] - b[i])
-            if d > s:
-                s = d
+    for i in range(q.shape[0]):
+        d = q[i] - P[j, i]
+        s += d * d
     return s
 
 
 @nb.njit(cache=True, inline="always")
-def to_reduced(metric, d):
-    """A distance in the units the index compares (squared for L2, which saves the square roots)."""
-    return d * d if metric == METRIC_L2 else d
-
-
-@nb.njit(cache=True, inline="always")
-def from_reduced(metric, r):
-    """The distance back from ``to_reduced``'s units."""
-    return np.sqrt(r) if metric == METRIC_L2 else r
-
-
-@nb.njit(cache=True, inline="always")
-def box_rdist(metric, q, box, i):
-    """Reduced distance from ``q`` to the bounding box stored at position ``i``."""
-    dim = q.shape[0]
+def _rdist_l1(q, P, j):
     s = 0.0
-    for d in range(dim):
-        v = q[d]
-        lo = box[i, d]
-        hi = box[i, dim + d]
-        e = lo - v if v < lo else (v - hi if v > hi else 0.0)
-        if metric == METRIC_L2:
-            s += e * e
-        elif metric == METRIC_L1:
-            s += e
-        elif e > s:
+    for i in range(q.shape[0]):
+        s += abs(q[i] - P[j, i])
+    return s
+
+
+@nb.njit(cache=True, inline="always")
+def _rdist_linf(q, P, j):
+    s = 0.0
+    for i in range(q.shape[0]):
+        d = abs(q[i] - P[j, i])
+        if d > s:
+            s = d
+    return s
+
+
+@nb.njit(cache=True, inline="always")
+def _box_gap(q, box, i, d):
+    """How far ``q`` lies outside the bounding box stored at position ``i`` along dimension ``d``."""
+    dim = q.shape[0]
+    v = q[d]
+    lo = box[i, d]
+    hi = box[i, dim + d]
+    return lo - v if v < lo else (v - hi if v > hi else 0.0)
+
+
+@nb.njit(cache=True, inline="always")
+def _box_l2(q, box, i):
+    """Reduced distance from ``q`` to the bounding box stored at position ``i``."""
+    s = 0.0
+    for d in range(q.shape[0]):
+        e = _box_gap(q, box, i, d)
+        s += e * e
+    return s
+
+
+@nb.njit(cache=True, inline="always")
+def _box_l1(q, box, i):
+    s = 0.0
+    for d in range(q.shape[0]):
+        s += _box_gap(q, box, i, d)
+    return s
+
+
+@nb.njit(cache=True, inline="always")
+def _box_linf(q, box, i):
+    s = 0.0
+    for d in range(q.shape[0]):
+        e = _box_gap(q, box, i, d)
+        if e > s:
             s = e
     return s
 
 
 @nb.njit(cache=True, inline="always")
-def child_bound(metric, q, box, a, b, plane, parent):
-    """Lower bound for subtree [a, b): its box distance if it has one, else the split-plane bound."""
-    if b - a > LEAF:
-        return box_rdist(metric, q, box, (a + b) // 2)
-    return plane if plane > parent else parent
+def _square(x):
+    return x * x
+
+
+@nb.njit(cache=True, inline="always")
+def _abs(x):
+    return abs(x)
+
+
+def to_reduced(metric, d):
+    """A distance in the units the index compares (squared for L2, which saves the square roots)."""
+    return d * d if metric == METRIC_L2 else d
+
+
+def from_reduced(metric, r):
+    """The distance back from ``to_reduced``'s units."""
+    return np.sqrt(r) if metric == METRIC_L2 else r
 
 
 @nb.njit(cache=True)
@@ -153,8 +188,8 @@ def build(P, perm, split, box, lo, hi):
                 best_spread = mx - mn
                 best_sd = d
         mid = (a + b) // 2
-        _select(P, perm, a, b, mid, best_sd)
         split[mid] = best_sd
+        _select(P, perm, a, b, mid, split[mid])  # an int64 (best_sd starts as a literal 0: a second compilation)
         st[2 * sp] = a
         st[2 * sp + 1] = mid
         sp += 1
@@ -213,179 +248,228 @@ def _heap_push(hd, hi, cnt, k, d, idx):
     return cnt
 
 
-MODE_NEAREST = 0
-MODE_KNN = 1
-MODE_RADIUS = 2
+@nb.njit(cache=True, inline="always")
+def _offer_knn(hd, hi, cnt, k, d, idx, r):
+    """k nearest: keep ``idx`` in the bounded heap if it is among the ``k`` nearest so far; returns the count."""
+    return _heap_push(hd, hi, cnt, k, d, idx)
 
 
 @nb.njit(cache=True, inline="always")
-def _offer(mode, d, idx, hd, hi, cnt, k, r):
-    """Record candidate ``idx`` at reduced distance ``d``; returns the updated count."""
-    if mode == MODE_NEAREST:
-        if d < hd[0]:
-            hd[0] = d
-            hi[0] = idx
-            return 1
-        return cnt
-    if mode == MODE_KNN:
-        return _heap_push(hd, hi, cnt, k, d, idx)
+def _offer_radius(hd, hi, cnt, k, d, idx, r):
+    """Radius search: append ``idx`` if it lies within reduced radius ``r``; returns the count."""
     if d <= r:
         hi[cnt] = idx
         cnt += 1
     return cnt
 
 
-@nb.njit(cache=True, inline="always")
-def _prune_at(mode, hd, cnt, k, r):
-    """Bounds strictly above this (radius: above r) cannot contribute."""
-    if mode == MODE_NEAREST:
-        return hd[0]
-    if mode == MODE_KNN:
-        return hd[0] if cnt == k else np.inf
-    return r
+def _query(rdist, box_rdist, plane_rdist, offer, knn):
+    """The k-nearest (``knn``) or within-radius traversal of one metric, with its ``offer`` (``_offer_knn`` or
+    ``_offer_radius``) built in; inlined into ``nearest_k_*`` / ``nearest_r_*``."""
+
+    def query(P, perm, split, box, n, q, k, r, hd, hi):
+        """The ``k`` nearest (``knn``: a bounded max-heap of ``k`` in ``hd, hi``) or all points within reduced
+        radius ``r`` (appended to ``hi``); returns how many are held. ``offer`` records a candidate."""
+        st = np.empty(2 * STACK, dtype=np.int64)
+        sb = np.empty(STACK)
+        cnt = 0
+        full = (n // CHUNK) * CHUNK
+        for i in range(full, n):
+            cnt = offer(hd, hi, cnt, k, rdist(q, P, i), i, r)
+        m = n // CHUNK
+        start = 0
+        bit = 62
+        while bit >= 0:
+            if (m >> bit) & 1:
+                size = CHUNK << bit
+                st[0] = start
+                st[1] = start + size
+                sb[0] = box_rdist(q, box, start + size // 2)
+                sp = 1
+                while sp > 0:
+                    sp -= 1
+                    a = st[2 * sp]
+                    b = st[2 * sp + 1]
+                    bound = sb[sp]
+                    # bounds strictly above the limit (k nearest: at it too) cannot contribute
+                    if knn:
+                        lim = hd[0] if cnt == k else np.inf
+                        if bound >= lim:
+                            continue
+                    elif bound > r:
+                        continue
+                    if b - a <= LEAF:
+                        for i in range(a, b):
+                            idx = perm[i]
+                            cnt = offer(hd, hi, cnt, k, rdist(q, P, idx), idx, r)
+                        continue
+                    mid = (a + b) // 2
+                    idx = perm[mid]
+                    cnt = offer(hd, hi, cnt, k, rdist(q, P, idx), idx, r)
+                    sd = split[mid]
+                    diff = q[sd] - P[idx, sd]
+                    plane = plane_rdist(diff)
+                    lb = plane if diff > 0.0 else 0.0
+                    lb = box_rdist(q, box, (a + mid) // 2) if mid - a > LEAF else (lb if lb > bound else bound)
+                    rb = plane if diff < 0.0 else 0.0
+                    rb = box_rdist(q, box, (mid + 1 + b) // 2) if b - mid - 1 > LEAF else (rb if rb > bound else bound)
+                    # push the farther child first so the nearer one is searched first; on a tie
+                    # (equal bounds) the side of the splitting plane that holds q is the nearer one
+                    if lb < rb or (lb == rb and diff < 0.0):
+                        st[2 * sp] = mid + 1
+                        st[2 * sp + 1] = b
+                        sb[sp] = rb
+                        sp += 1
+                        st[2 * sp] = a
+                        st[2 * sp + 1] = mid
+                        sb[sp] = lb
+                        sp += 1
+                    else:
+                        st[2 * sp] = a
+                        st[2 * sp + 1] = mid
+                        sb[sp] = lb
+                        sp += 1
+                        st[2 * sp] = mid + 1
+                        st[2 * sp + 1] = b
+                        sb[sp] = rb
+                        sp += 1
+                start += size
+            bit -= 1
+        return cnt
+
+    return nb.njit(inline="always")(query)
 
 
-@nb.njit(cache=True, inline="always")
-def query(P, perm, split, box, n, q, metric, mode, k, r, hd, hi, st, sb):
-    """One traversal serving all three queries over the first ``n`` points.
+def _traversals(rdist, box_rdist, plane_rdist, name):
+    """The nearest, k-nearest and within-radius traversals of one metric, compiled with it built in.
 
-    ``mode`` is MODE_NEAREST (result in ``hd[0], hi[0]``; ``hd[0]`` must start at +inf; used only by
-    tests to cross-check ``nearest_into``), MODE_KNN
-    (bounded max-heap of ``k`` in ``hd, hi``) or MODE_RADIUS (indices within reduced radius ``r``
-    appended to ``hi``). Returns the number of results held. ``st`` / ``sb`` are scratch stacks of
-    sizes ``2 * STACK`` and ``STACK``.
+    ``rdist(q, P, j)``: reduced distance to a point; ``box_rdist(q, box, i)``: to a stored bounding
+    box; ``plane_rdist(diff)``: to a splitting plane ``diff`` away.
     """
-    cnt = 0
-    full = (n // CHUNK) * CHUNK
-    for i in range(full, n):
-        cnt = _offer(mode, rdist(metric, q, P[i]), i, hd, hi, cnt, k, r)
-    m = n // CHUNK
-    start = 0
-    bit = 62
-    while bit >= 0:
-        if (m >> bit) & 1:
-            size = CHUNK << bit
-            st[0] = start
-            st[1] = start + size
-            sb[0] = box_rdist(metric, q, box, start + size // 2)
-            sp = 1
-            while sp > 0:
-                sp -= 1
-                a = st[2 * sp]
-                b = st[2 * sp + 1]
-                bound = sb[sp]
-                lim = _prune_at(mode, hd, cnt, k, r)
-                if bound > lim or (mode != MODE_RADIUS and bound == lim):
-                    continue
-                if b - a <= LEAF:
-                    for i in range(a, b):
-                        idx = perm[i]
-                        cnt = _offer(mode, rdist(metric, q, P[idx]), idx, hd, hi, cnt, k, r)
-                    continue
-                mid = (a + b) // 2
-                idx = perm[mid]
-                cnt = _offer(mode, rdist(metric, q, P[idx]), idx, hd, hi, cnt, k, r)
-                sd = split[mid]
-                diff = q[sd] - P[idx, sd]
-                plane = diff * diff if metric == METRIC_L2 else abs(diff)
-                lb = child_bound(metric, q, box, a, mid, plane if diff > 0.0 else 0.0, bound)
-                rb = child_bound(metric, q, box, mid + 1, b, plane if diff < 0.0 else 0.0, bound)
-                # push the farther child first so the nearer one is searched first; on a tie
-                # (equal bounds) the side of the splitting plane that holds q is the nearer one
-                if lb < rb or (lb == rb and diff < 0.0):
-                    st[2 * sp] = mid + 1
-                    st[2 * sp + 1] = b
-                    sb[sp] = rb
-                    sp += 1
-                    st[2 * sp] = a
-                    st[2 * sp + 1] = mid
-                    sb[sp] = lb
-                    sp += 1
-                else:
-                    st[2 * sp] = a
-                    st[2 * sp + 1] = mid
-                    sb[sp] = lb
-                    sp += 1
-                    st[2 * sp] = mid + 1
-                    st[2 * sp + 1] = b
-                    sb[sp] = rb
-                    sp += 1
-            start += size
-        bit -= 1
-    return cnt
+
+    def nearest(P, perm, split, box, n, q, st, sb):
+        best = np.inf
+        bi = -1
+        full = (n // CHUNK) * CHUNK
+        for i in range(full, n):
+            d = rdist(q, P, i)
+            if d < best:
+                best = d
+                bi = i
+        m = n // CHUNK
+        start = 0
+        bit = 62
+        while bit >= 0:
+            if (m >> bit) & 1:
+                size = CHUNK << bit
+                st[0] = start
+                st[1] = start + size
+                sb[0] = box_rdist(q, box, start + size // 2)
+                sp = 1
+                while sp > 0:
+                    sp -= 1
+                    bound = sb[sp]
+                    if bound >= best:
+                        continue
+                    a = st[2 * sp]
+                    b = st[2 * sp + 1]
+                    if b - a <= LEAF:
+                        for i in range(a, b):
+                            idx = perm[i]
+                            d = rdist(q, P, idx)
+                            if d < best:
+                                best = d
+                                bi = idx
+                        continue
+                    mid = (a + b) // 2
+                    idx = perm[mid]
+                    d = rdist(q, P, idx)
+                    if d < best:
+                        best = d
+                        bi = idx
+                    sd = split[mid]
+                    diff = q[sd] - P[idx, sd]
+                    plane = plane_rdist(diff)
+                    # a child's lower bound: its box distance if it has a box, else the split-plane bound
+                    lb = plane if diff > 0.0 else 0.0
+                    lb = box_rdist(q, box, (a + mid) // 2) if mid - a > LEAF else (lb if lb > bound else bound)
+                    rb = plane if diff < 0.0 else 0.0
+                    rb = box_rdist(q, box, (mid + 1 + b) // 2) if b - mid - 1 > LEAF else (rb if rb > bound else bound)
+                    if lb < rb or (lb == rb and diff < 0.0):
+                        if rb < best:
+                            st[2 * sp] = mid + 1
+                            st[2 * sp + 1] = b
+                            sb[sp] = rb
+                            sp += 1
+                        if lb < best:
+                            st[2 * sp] = a
+                            st[2 * sp + 1] = mid
+                            sb[sp] = lb
+                            sp += 1
+                    else:
+                        if lb < best:
+                            st[2 * sp] = a
+                            st[2 * sp + 1] = mid
+                            sb[sp] = lb
+                            sp += 1
+                        if rb < best:
+                            st[2 * sp] = mid + 1
+                            st[2 * sp + 1] = b
+                            sb[sp] = rb
+                            sp += 1
+                start += size
+            bit -= 1
+        return bi, best
+
+    query_k = _query(rdist, box_rdist, plane_rdist, _offer_knn, True)
+    query_r = _query(rdist, box_rdist, plane_rdist, _offer_radius, False)
+
+    def nearest_k(P, perm, split, box, n, q, k, out_idx, out_d):
+        if k <= 0 or n == 0:
+            return 0
+        hd = np.empty(k)
+        hi = np.empty(k, dtype=np.int64)
+        cnt = query_k(P, perm, split, box, n, q, k, 0.0, hd, hi)
+        # nearest first: a stable insertion sort of the heap by distance, the order argsort(kind="mergesort")
+        # gives (k is small, and numba's merge sort costs a second of compilation)
+        order = np.empty(cnt, dtype=np.int64)
+        for j in range(cnt):
+            d = hd[j]
+            i = j
+            while i > 0 and hd[order[i - 1]] > d:
+                order[i] = order[i - 1]
+                i -= 1
+            order[i] = j
+        for j in range(cnt):
+            out_idx[j] = hi[order[j]]
+            out_d[j] = np.sqrt(hd[order[j]]) if l2 else hd[order[j]]
+        return cnt
+
+    def nearest_r(P, perm, split, box, n, q, radius, out_idx):
+        hd = np.empty(1)
+        return query_r(P, perm, split, box, n, q, 0, radius * radius if l2 else radius, hd, out_idx)
+
+    l2 = plane_rdist is _square
+    out = []
+    for f, what in ((nearest, "nearest_into"), (nearest_k, "nearest_k"), (nearest_r, "nearest_r")):
+        f.__name__ = f.__qualname__ = f"{what}_{name}"
+        f.__doc__ = f"``{what}`` for the {name} metric."
+        out.append(nb.njit(cache=True)(f))
+    return tuple(out)
 
 
-@nb.njit(cache=True, inline="always")
-def _nearest_impl(P, perm, split, box, n, q, metric, st, sb):
-    best = np.inf
-    bi = -1
-    full = (n // CHUNK) * CHUNK
-    for i in range(full, n):
-        d = rdist(metric, q, P[i])
-        if d < best:
-            best = d
-            bi = i
-    m = n // CHUNK
-    start = 0
-    bit = 62
-    while bit >= 0:
-        if (m >> bit) & 1:
-            size = CHUNK << bit
-            st[0] = start
-            st[1] = start + size
-            sb[0] = box_rdist(metric, q, box, start + size // 2)
-            sp = 1
-            while sp > 0:
-                sp -= 1
-                bound = sb[sp]
-                if bound >= best:
-                    continue
-                a = st[2 * sp]
-                b = st[2 * sp + 1]
-                if b - a <= LEAF:
-                    for i in range(a, b):
-                        idx = perm[i]
-                        d = rdist(metric, q, P[idx])
-                        if d < best:
-                            best = d
-                            bi = idx
-                    continue
-                mid = (a + b) // 2
-                idx = perm[mid]
-                d = rdist(metric, q, P[idx])
-                if d < best:
-                    best = d
-                    bi = idx
-                sd = split[mid]
-                diff = q[sd] - P[idx, sd]
-                plane = diff * diff if metric == METRIC_L2 else abs(diff)
-                lb = child_bound(metric, q, box, a, mid, plane if diff > 0.0 else 0.0, bound)
-                rb = child_bound(metric, q, box, mid + 1, b, plane if diff < 0.0 else 0.0, bound)
-                if lb < rb or (lb == rb and diff < 0.0):
-                    if rb < best:
-                        st[2 * sp] = mid + 1
-                        st[2 * sp + 1] = b
-                        sb[sp] = rb
-                        sp += 1
-                    if lb < best:
-                        st[2 * sp] = a
-                        st[2 * sp + 1] = mid
-                        sb[sp] = lb
-                        sp += 1
-                else:
-                    if lb < best:
-                        st[2 * sp] = a
-                        st[2 * sp + 1] = mid
-                        sb[sp] = lb
-                        sp += 1
-                    if rb < best:
-                        st[2 * sp] = mid + 1
-                        st[2 * sp + 1] = b
-                        sb[sp] = rb
-                        sp += 1
-            start += size
-        bit -= 1
-    return bi, best
+# One compiled function per metric and query, so a kernel that knows its metric when it is compiled
+# (see ``planners.kernels.space.Space``) compiles that metric's traversal only.
+nearest_l2, nearest_k_l2, nearest_r_l2 = _traversals(_rdist_l2, _box_l2, _square, "l2")
+nearest_l1, nearest_k_l1, nearest_r_l1 = _traversals(_rdist_l1, _box_l1, _abs, "l1")
+nearest_linf, nearest_k_linf, nearest_r_linf = _traversals(_rdist_linf, _box_linf, _abs, "linf")
+
+#: Per-metric entry points by metric code, for callers that pick one when they are compiled.
+BY_METRIC = {
+    METRIC_L2: (nearest_l2, nearest_k_l2, nearest_r_l2),
+    METRIC_L1: (nearest_l1, nearest_k_l1, nearest_r_l1),
+    METRIC_LINF: (nearest_linf, nearest_k_linf, nearest_r_linf),
+}
 
 
 @nb.njit(cache=True)
@@ -393,35 +477,14 @@ def nearest_into(P, perm, split, box, n, q, metric, st, sb):
     """(index, reduced distance) of the nearest of the first ``n`` points; (-1, inf) if n == 0.
 
     The planners' hot path: a dedicated traversal with the best distance held in a register, and
-    caller-owned scratch stacks ``st`` (2 * STACK ints) and ``sb`` (STACK floats). Each metric gets
-    its own inlined copy with the metric a compile-time constant: with a runtime metric the
-    distance loops keep their branches and queries run 3-5x slower.
+    caller-owned scratch stacks ``st`` (2 * STACK ints) and ``sb`` (STACK floats). ``metric`` picks
+    one of the per-metric traversals (``BY_METRIC``); a kernel that knows its metric calls that one.
     """
     if metric == METRIC_L2:
         return nearest_l2(P, perm, split, box, n, q, st, sb)
     if metric == METRIC_L1:
         return nearest_l1(P, perm, split, box, n, q, st, sb)
     return nearest_linf(P, perm, split, box, n, q, st, sb)
-
-
-# One compiled function per metric, so a kernel that knows its metric when it is compiled (see
-# ``planners.kernels.space.Space``) compiles the traversal once rather than three times.
-@nb.njit(cache=True)
-def nearest_l2(P, perm, split, box, n, q, st, sb):
-    """``nearest_into`` for the L2 metric."""
-    return _nearest_impl(P, perm, split, box, n, q, METRIC_L2, st, sb)
-
-
-@nb.njit(cache=True)
-def nearest_l1(P, perm, split, box, n, q, st, sb):
-    """``nearest_into`` for the L1 metric."""
-    return _nearest_impl(P, perm, split, box, n, q, METRIC_L1, st, sb)
-
-
-@nb.njit(cache=True)
-def nearest_linf(P, perm, split, box, n, q, st, sb):
-    """``nearest_into`` for the L-infinity metric."""
-    return _nearest_impl(P, perm, split, box, n, q, METRIC_LINF, st, sb)
 
 
 @nb.njit(cache=True)
@@ -442,40 +505,6 @@ def nearest_k(P, perm, split, box, n, q, metric, k, out_idx, out_d):
     return nearest_k_linf(P, perm, split, box, n, q, k, out_idx, out_d)
 
 
-@nb.njit(cache=True, inline="always")
-def _nearest_k_impl(P, perm, split, box, n, q, metric, k, out_idx, out_d):
-    if k <= 0 or n == 0:
-        return 0
-    hd = np.empty(k)
-    hi = np.empty(k, dtype=np.int64)
-    st = np.empty(2 * STACK, dtype=np.int64)
-    sb = np.empty(STACK)
-    cnt = query(P, perm, split, box, n, q, metric, MODE_KNN, k, 0.0, hd, hi, st, sb)
-    order = np.argsort(hd[:cnt], kind="mergesort")
-    for j in range(cnt):
-        out_idx[j] = hi[order[j]]
-        out_d[j] = from_reduced(metric, hd[order[j]])
-    return cnt
-
-
-@nb.njit(cache=True)
-def nearest_k_l2(P, perm, split, box, n, q, k, out_idx, out_d):
-    """``nearest_k`` for the L2 metric (one compiled function per metric, as ``nearest_l2``)."""
-    return _nearest_k_impl(P, perm, split, box, n, q, METRIC_L2, k, out_idx, out_d)
-
-
-@nb.njit(cache=True)
-def nearest_k_l1(P, perm, split, box, n, q, k, out_idx, out_d):
-    """``nearest_k`` for the L1 metric."""
-    return _nearest_k_impl(P, perm, split, box, n, q, METRIC_L1, k, out_idx, out_d)
-
-
-@nb.njit(cache=True)
-def nearest_k_linf(P, perm, split, box, n, q, k, out_idx, out_d):
-    """``nearest_k`` for the L-infinity metric."""
-    return _nearest_k_impl(P, perm, split, box, n, q, METRIC_LINF, k, out_idx, out_d)
-
-
 @nb.njit(cache=True)
 def nearest_r(P, perm, split, box, n, q, metric, radius, out_idx):
     """Indices of all points within ``radius`` (inclusive), unordered; ``out_idx`` holds >= n."""
@@ -484,40 +513,6 @@ def nearest_r(P, perm, split, box, n, q, metric, radius, out_idx):
     if metric == METRIC_L1:
         return nearest_r_l1(P, perm, split, box, n, q, radius, out_idx)
     return nearest_r_linf(P, perm, split, box, n, q, radius, out_idx)
-
-
-@nb.njit(cache=True, inline="always")
-def _nearest_r_impl(P, perm, split, box, n, q, metric, radius, out_idx):
-    hd = np.empty(1)
-    st = np.empty(2 * STACK, dtype=np.int64)
-    sb = np.empty(STACK)
-    return query(P, perm, split, box, n, q, metric, MODE_RADIUS, 0, to_reduced(metric, radius), hd, out_idx, st, sb)
-
-
-@nb.njit(cache=True)
-def nearest_r_l2(P, perm, split, box, n, q, radius, out_idx):
-    """``nearest_r`` for the L2 metric."""
-    return _nearest_r_impl(P, perm, split, box, n, q, METRIC_L2, radius, out_idx)
-
-
-@nb.njit(cache=True)
-def nearest_r_l1(P, perm, split, box, n, q, radius, out_idx):
-    """``nearest_r`` for the L1 metric."""
-    return _nearest_r_impl(P, perm, split, box, n, q, METRIC_L1, radius, out_idx)
-
-
-@nb.njit(cache=True)
-def nearest_r_linf(P, perm, split, box, n, q, radius, out_idx):
-    """``nearest_r`` for the L-infinity metric."""
-    return _nearest_r_impl(P, perm, split, box, n, q, METRIC_LINF, radius, out_idx)
-
-
-#: Per-metric entry points by metric code, for callers that pick one when they are compiled.
-BY_METRIC = {
-    METRIC_L2: (nearest_l2, nearest_k_l2, nearest_r_l2),
-    METRIC_L1: (nearest_l1, nearest_k_l1, nearest_r_l1),
-    METRIC_LINF: (nearest_linf, nearest_k_linf, nearest_r_linf),
-}
 
 
 _METRICS = {"euclidean": METRIC_L2, "manhattan": METRIC_L1, "chebyshev": METRIC_LINF}

@@ -17,6 +17,7 @@ See ``docs/compiling.md``.
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import sys
 import tempfile
@@ -31,9 +32,11 @@ _PACKAGE = Path(__file__).resolve().parent.parent  # planners/
 _state = {"dir": None, "notice": None, "user_dir": False}
 _seen: set[tuple[str, str, str]] = set()
 
-#: Rough compile seconds of each planner's kernels on a 2-core machine, 2-D and 6-DoF, only used
-#: to word the notice (``scripts/benchmark_first_call.py`` measures the real figures).
-_ROUGH_SECONDS = {"RRT": (4, 8), "RRTConnect": (4, 8)}
+#: Compile seconds per planner and dimension ("RRT/2d", "PRM/6dof") as ``scripts/benchmark_first_call.py --save``
+#: measured them, for the notice's wording; a planner without a figure is quoted as a range.
+FIGURES = Path(__file__).resolve().parent / "compile_seconds.json"
+#: What the notice says when no measured figure exists: the range the benchmark's rows span.
+UNMEASURED = "about 6-20 s"
 
 
 def source_hash(package: Path = _PACKAGE) -> str:
@@ -115,6 +118,17 @@ def _key(label: str, world, space) -> tuple[str, str, str]:
     return (label, type(world).__name__, type(space).__name__)
 
 
+def expected_seconds(label: str, space, figures: Path = FIGURES) -> str:
+    """How long compiling ``label``'s kernels takes, in words: the figure measured for it, else a range."""
+    dims = "2d" if type(space).__name__.startswith("SpaceRn") else "6dof"
+    try:
+        data = json.loads(figures.read_text())
+        seconds, cpus = float(data["seconds"][f"{label}/{dims}"]), int(data["cpus"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return UNMEASURED
+    return f"about {max(1, round(seconds))} s of CPU time (measured on a {cpus}-CPU machine)"
+
+
 def announce(label: str, world, space) -> None:
     """Before a planner's first run on a (world kind, space) this install has not compiled: say so on stderr.
 
@@ -129,9 +143,7 @@ def announce(label: str, world, space) -> None:
     if stamp.exists():
         return
     if _notice_on():
-        lo, hi = _ROUGH_SECONDS.get(label, (5, 15))
-        rough = f"{lo}-{hi} s" if key[2].startswith("SpaceRn") else f"up to {2 * hi} s"
-        print(f"samplergym: compiling the {label} kernels once for this install, about {rough} "
+        print(f"samplergym: compiling the {label} kernels once for this install, {expected_seconds(label, space)} "
               f"(python -m planners.compile does it ahead; {NOTICE_ENV}=0 silences this)", file=sys.stderr, flush=True)
     try:
         stamp.parent.mkdir(parents=True, exist_ok=True)

@@ -155,8 +155,10 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
                 radius = radius_gamma * (math.log(n + 1.0) / (n + 1.0)) ** (1.0 / dim)
             if max_edge > 0.0 and radius > max_edge:
                 radius = max_edge
+        # valid = not lazy: the same vertex status as False (a plain bool, not a literal False, so this call and the
+        # query states' call from Python share one compilation of insert_vertex)
         istate[slots.I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius,
-                                              max_edge, lazy, False, nbr, nbr_d, qe_buf)
+                                              max_edge, lazy, not lazy, nbr, nbr_d, qe_buf)
         refresh_anchor(uf, istate, fstate)
         if not lazy and uf_find(uf, istate[slots.I_QS]) == uf_find(uf, istate[slots.I_QG]):
             istate[slots.I_SOLVED] = 1

@@ -171,19 +171,3 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
                 fstate[slots.F_BEST_COST] = ct[vt] + co[vo]
                 break
     return samples.shape[0]
-
-
-@nb.njit(cache=True)
-def path_to_root(parent, v):
-    """Vertex indices from the root to ``v``."""
-    k = 0
-    u = v
-    while u >= 0:
-        k += 1
-        u = parent[u]
-    out = np.empty(k, dtype=np.int64)
-    u = v
-    for i in range(k - 1, -1, -1):
-        out[i] = u
-        u = parent[u]
-    return out

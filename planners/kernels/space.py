@@ -259,6 +259,12 @@ def _space_distance(space, a, b):
     return lambda space, a, b: distance(space[0], space[1], space[2], a, b)
 
 
+@nb.njit(cache=True)
+def space_distance_of(space, a, b):
+    """``space_distance`` for Python callers (``Problem.distance``): compiles only ``space``'s branch."""
+    return space_distance(space, a, b)
+
+
 @nb.njit(cache=True, inline="always")
 def copy_into(out, q):
     """``out[:] = q`` for two vectors of one length. (The slice assignment compiles numba's shape-mismatch
