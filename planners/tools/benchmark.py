@@ -44,6 +44,7 @@ class Run:
     path_cost: float  # inf when unsolved
     forward_passes: int  # a learned sampler's network evaluations
     vertices: int
+    sampler_spec: str = ""  # the sampler's name and parameters as JSON (evaluation runs), "" where not recorded
 
 
 #: Per-run properties of the OMPL logs: (OMPL property, type, ``Run`` field).
