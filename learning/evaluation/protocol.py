@@ -5,10 +5,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-from learning.samplers.registry import STEP
 from planners import Problem
 from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, TUNING_SEED0, generate
 from planners.maps.movingai import benchmark_scenarios
+from planners.tools.benchmark import MAX_ITERATIONS, STEP, TOLERANCE
 
 
 @dataclass(frozen=True)
@@ -21,8 +21,8 @@ class Protocol:
     """
 
     step: float = STEP
-    tolerance: float = 4.0
-    max_iterations: int = 20_000
+    tolerance: float = TOLERANCE
+    max_iterations: int = MAX_ITERATIONS
     seeds: int = 3  # planner seeds per test query
     size: int = 128  # side of the generated test and tuning maps
     maps: int = 50  # test maps per generated family

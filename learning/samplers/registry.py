@@ -20,9 +20,7 @@ from typing import Any
 
 from planners import GoalBiasedSampler, Sampler, UniformSampler
 from planners.base.fileio import InputError
-
-#: The extension step the samplers are built for unless told otherwise (the comparison's RRT step).
-STEP = 4.0
+from planners.tools.benchmark import STEP  # the step samplers are built for unless told otherwise
 
 
 def _uniform() -> Sampler:
