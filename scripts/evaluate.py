@@ -390,7 +390,8 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
                 "generated families' tuning maps pooled" if unseen else "")
              + "; best goal bias chosen on a tuning split")
     text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {minutes:.1f} min; {where}. "
-            f"Iterations to first solution (cap {args.max_iterations}); the expert and the exact route reference are privileged references.\n\n"
+            f"Iterations to first solution (cap {args.max_iterations}); the expert and the exact route reference are "
+            "privileged references.\n\n"
             + (f"User samplers: {named.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
                if users else "") +
             "## Results at a glance\n\nRRT on the test split: median iterations to the first solution (success "

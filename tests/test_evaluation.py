@@ -172,7 +172,8 @@ def test_a_spec_column_round_trips_as_json_never_parsed_from_the_label(tmp_path)
     specs = [E.bias_spec(0.1), E.constant_spec(0.3, E.Protocol(), 2), E.policy_spec("p.zip", 8),
              E.SamplerSpec.user("mine", "m:f"), E.SamplerSpec.of("exact_route", step_size=4.0)]
     # labels that say nothing of the parameters: the tuning reads the spec column, not the label
-    runs = [dataclasses.replace(_run("forest", "tuning", s, 100 + i), sampler=f"label {i}") for i, s in enumerate(specs)]
+    runs = [dataclasses.replace(_run("forest", "tuning", s, 100 + i), sampler=f"label {i}")
+            for i, s in enumerate(specs)]
     write_runs_csv(runs, tmp_path / "runs.csv")
     with (tmp_path / "runs.csv").open(newline="") as f:
         back = [E.SamplerSpec.from_json(r["sampler_spec"]) for r in csv.DictReader(f)]
