@@ -44,16 +44,16 @@ def main(argv=None) -> int:
     check_flags(lambda: check_int_flags(args, ("processes", "empty_tasks")))
     n = args.processes
     mdir = movingai_dir(None, required=False)
-    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": 4.0, "policy": str(SHIPPED_POLICY),
-           "step": 4.0, "max_iterations": 20000, "user_samplers": {}}
-    queries = E.generated_queries(list(FAMILIES), 128, 25, 0)
-    samplers = ["uniform", *(f"goal_bias={b:g}" for b in E.GOAL_BIASES), "policy"]
-    tasks = [(q, "RRT", s, seed, cfg) for q in queries for s in samplers for seed in range(2)]
+    protocol = E.Protocol(movingai_dir="" if mdir is None else str(mdir))
+    queries = E.generated_queries(list(FAMILIES), protocol.size, 25, 0)
+    policy = E.policy_spec(str(SHIPPED_POLICY), None)
+    samplers = [E.bias_spec(0), *(E.bias_spec(b) for b in E.GOAL_BIASES), policy]
+    tasks = [E.Task(q, "RRT", s, seed) for q in queries for s in samplers for seed in range(2)]
     names = [] if mdir is None else sorted({p.name.split(".")[0].replace("-random-1", "") for p in mdir.glob("*.scen")})
-    mai = E.movingai_queries(str(mdir), names, 1, 0, 4.0) if names else []
-    world = E.shared_context([(q, "RRT", "policy", 0, cfg) for q in mai] + tasks[:1])
+    mai = E.movingai_queries(str(mdir), names, 1, 0, protocol.tolerance) if names else []
+    world = E.shared_context([E.Task(q, "RRT", policy, 0) for q in mai] + tasks[:1], protocol)
     print(f"{n} workers per backend; {len(tasks)} comparison runs; context {len(pickle.dumps(world)) / 1e6:.1f} MB "
-          f"({len(world['scenarios'])} MovingAI maps' scenarios and the policy)\n")
+          f"({len(world.scenarios)} MovingAI maps' scenarios and the policy)\n")
     print("| backend | empty task, us (chunksize 1) | runs/s cold | runs/s warm | context to every worker, s |")
     print("|---|---|---|---|---|")
     results = {}
@@ -61,10 +61,10 @@ def main(argv=None) -> int:
         backend = make_backend(name, processes=n, worker_init=E.worker_init)
         try:
             t = time.perf_counter()
-            runs = E.run_all(tasks, backend, progress=False)
+            runs = E.run_all(tasks, protocol, backend, progress=False)
             cold = time.perf_counter() - t
             t = time.perf_counter()
-            runs = E.run_all(tasks, backend, progress=False)
+            runs = E.run_all(tasks, protocol, backend, progress=False)
             warm = time.perf_counter() - t
             # the difference of two batch sizes leaves out what a map() call pays once (the local pool's start)
             few = args.empty_tasks // 10

@@ -41,11 +41,11 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 
 from learning import PolicySampler
 from learning import evaluation as E
-from learning.models.route_net import load_route_net
 from learning.models.shipped import SHIPPED_POLICY
 from learning.samplers.route import SHIPPED
 from learning.evaluation.journal import JOURNAL, Interrupted, Journal, run_phase, stop_on_sigterm, work_folder
 from learning.evaluation.mapsets import UnseenQuery, map_set_queries, pooled_tuned, unseen_queries
+from learning.evaluation.protocol import QUICK as PROTOCOL_QUICK
 from planners import movingai_dir, planner_names
 from planners.algorithms.rrt import MAX_STEPS_ENV, max_steps_limit
 from planners.base.fileio import (
@@ -68,12 +68,11 @@ from planners.tools.parallel import add_backend_arguments, check_backend_argumen
 DEFAULT_POLICY = SHIPPED_POLICY
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
                  "maze-32-32-2", "room-32-32-4", "room-64-64-8", "random-32-32-10", "random-64-64-20")
-#: What --quick changes: fewer test queries and planner seeds, no other planners. The tuning split is
-#: the full run's, so the best goal bias is chosen as carefully as in the full comparison (tuned on
-#: 6 maps, the "best" bias was worse than uniform on the test maps and flattered the policy), and
-#: 25 maps x 2 seeds keep the quick ratios near the full ones (10 x 1 put narrow passage at 0.12
-#: of the best bias against 0.39 in full).
-QUICK = {"maps": 25, "shifted_maps": 25, "unseen_maps": 8, "scenarios": 4, "seeds": 2, "other_planners": []}
+#: The comparison's protocol at its defaults: every default below is taken from it.
+DEFAULT = E.Protocol()
+#: What --quick changes: ``Protocol.quick`` (fewer test queries and planner seeds, the tuning split
+#: unchanged), and no other planners.
+QUICK = {**PROTOCOL_QUICK, "other_planners": []}
 
 
 def _fail(message: str):
@@ -87,14 +86,15 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--policy", type=Path, default=DEFAULT_POLICY)
     ap.add_argument("--families", nargs="+", default=list(FAMILIES))
-    ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--maps", type=int, default=50, help="test maps per family")
-    ap.add_argument("--tuning-maps", type=int, default=20, help="maps per family for choosing the best goal bias")
-    ap.add_argument("--shifted-maps", type=int, default=50,
+    ap.add_argument("--size", type=int, default=DEFAULT.size)
+    ap.add_argument("--maps", type=int, default=DEFAULT.maps, help="test maps per family")
+    ap.add_argument("--tuning-maps", type=int, default=DEFAULT.tuning_maps,
+                    help="maps per family for choosing the best goal bias")
+    ap.add_argument("--shifted-maps", type=int, default=DEFAULT.shifted_maps,
                     help="test maps per family from its shifted generator, sides 64 to 256 (0: none)")
     ap.add_argument("--unseen-maps", type=int, default=None,
                     help="test maps per unseen family (generators used only for testing; default: --maps, at most "
-                         "25; 0: none)")
+                         f"{DEFAULT.unseen_maps}; 0: none)")
     ap.add_argument("--no-unseen", action="store_true", help="leave the unseen families out (--unseen-maps 0)")
     ap.add_argument("--map-set", default=None, metavar="DIR_OR_SPEC",
                     help="evaluate on this map set instead of the default ones: a folder or manifest .json of maps "
@@ -103,23 +103,27 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--split-seed", type=int, default=0, help="--map-set: the seed of its split into parts")
     ap.add_argument("--route", type=Path, default=SHIPPED,
                     help="route encoder checkpoint (scripts/train_route.py), run as the 'route encoder' sampler")
-    ap.add_argument("--seeds", type=int, default=3, help="planner seeds per query")
+    ap.add_argument("--device", default="auto", choices=("auto", "cpu", "cuda"),
+                    help="where the route encoder runs at planning time: auto (CUDA when torch sees it, else the "
+                         "CPU), cpu or cuda")
+    ap.add_argument("--seeds", type=int, default=DEFAULT.seeds, help="planner seeds per query")
     ap.add_argument("--movingai", type=Path, default=None)
     ap.add_argument("--movingai-maps", nargs="*", default=list(MOVINGAI_MAPS))
-    ap.add_argument("--scenarios", type=int, default=10, help="test scenarios per MovingAI map")
-    ap.add_argument("--tuning-scenarios", type=int, default=5,
+    ap.add_argument("--scenarios", type=int, default=DEFAULT.scenarios, help="test scenarios per MovingAI map")
+    ap.add_argument("--tuning-scenarios", type=int, default=DEFAULT.tuning_scenarios,
                     help="scenarios per MovingAI map for choosing the best goal bias")
     ap.add_argument("--other-planners", nargs="*", default=["RRTstar", "PRM"], type=planner_name_arg,
                     choices=planner_names(),
                     help="also run these (uniform, goal bias 0.05 and best, policy) on the generated families")
-    ap.add_argument("--step", type=float, default=4.0)
-    ap.add_argument("--tolerance", type=float, default=4.0)
-    ap.add_argument("--max-iterations", type=int, default=20000)
+    ap.add_argument("--step", type=float, default=DEFAULT.step)
+    ap.add_argument("--tolerance", type=float, default=DEFAULT.tolerance)
+    ap.add_argument("--max-iterations", type=int, default=DEFAULT.max_iterations)
     add_backend_arguments(ap, processes=os.cpu_count() or 1,
                           processes_help="local workers (local backend, or a local Ray instance)",
                           backend_help="where runs execute: a local process pool (default) or Ray "
                                        "(pip install -e '.[distributed]')")
-    ap.add_argument("--no-expert", action="store_true", help="skip the privileged reference")
+    ap.add_argument("--no-expert", action="store_true",
+                    help="skip the privileged references (the expert and the exact route reference)")
     ap.add_argument("--quick", action="store_true",
                     help="25 test and 25 shifted maps, 8 unseen maps per family, 4 test scenarios, 2 seeds, no other "
                          "planners; tuning as in the full run")
@@ -137,7 +141,7 @@ def parse_args(argv=None) -> argparse.Namespace:
         for k, v in QUICK.items():
             setattr(args, k, v)
     if args.unseen_maps is None:
-        args.unseen_maps = min(args.maps, 25) if isinstance(args.maps, int) else 0
+        args.unseen_maps = min(args.maps, DEFAULT.unseen_maps) if isinstance(args.maps, int) else 0
     if args.no_unseen:
         args.unseen_maps = 0
     check_backend_arguments(ap, args)
@@ -179,17 +183,26 @@ def _check_values(args) -> None:
 
 
 def _check_models(args) -> None:
-    """The policy, the route encoder, the user samplers and the map set, each loaded once here (exit 2 naming it)."""
+    """The policy, the route encoder, the user samplers and the map set, each loaded once here (exit 2 naming it).
+
+    The route encoder is kept in ``args.models``, the map set in ``args.loaded``: the runs take them from there.
+    """
     if not args.policy.is_file():
         _fail(f"--policy {args.policy}: not found (train one with scripts/train.py --export ...)")
     try:  # refused here, by name, rather than as a traceback in every worker
         PolicySampler.load(args.policy)
     except (ValueError, OSError) as exc:
         _fail(f"--policy {args.policy}: {exc}")
+    args.models, args.loaded = E.ModelCache(), {}
     try:
-        load_route_net(args.route)
+        args.models.route_net(str(args.route))
     except (InputError, OSError) as exc:
         _fail(f"--route: {exc}")
+    if args.device == "cuda":
+        import torch
+
+        if not torch.cuda.is_available():
+            _fail("--device cuda: torch sees no CUDA device here (use auto or cpu)")
     args.user_samplers = {}
     for arg in args.sampler:  # each built once here, so a bad file or spec is refused before any run
         try:
@@ -205,7 +218,7 @@ def _check_models(args) -> None:
     args.map_set_queries, args.map_set_obj = [], None
     if args.map_set is not None:
         try:
-            args.map_set_queries, args.map_set_obj = map_set_queries(args.map_set, args.split_seed)
+            args.map_set_queries, args.map_set_obj = map_set_queries(args.map_set, args.split_seed, args.loaded)
         except InputError as exc:
             _fail(f"--map-set {args.map_set}: {exc}")
 
@@ -220,7 +233,7 @@ OUTPUT_BYTES = 64 * 2**20
 def _settings(args) -> dict:
     """What decides the runs (for the journal: --resume refuses a journal of other settings)."""
     skip = {"out", "resume", "processes", "backend", "address", "quick", "no_unseen", "map_set_queries",
-            "map_set_obj", "sampler"}
+            "map_set_obj", "sampler", "models", "loaded"}
     return {k: v for k, v in vars(args).items() if k not in skip}
 
 
@@ -240,14 +253,16 @@ def main(argv=None) -> int:
         queries += E.shifted_queries(args.families, args.shifted_maps)
         if mdir is not None:
             queries += E.movingai_queries(str(mdir), args.movingai_maps, args.scenarios, args.tuning_scenarios,
-                                          args.tolerance)
+                                          args.tolerance, args.loaded)
         elif args.movingai_maps:
             print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); evaluating generated "
                   "families only", file=sys.stderr)
         queries += unseen_queries(args.size, args.unseen_maps)
-    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": args.tolerance,
-           "policy": str(args.policy), "route": str(args.route), "step": args.step,
-           "max_iterations": args.max_iterations, "user_samplers": args.user_samplers}
+    protocol = E.Protocol(step=args.step, tolerance=args.tolerance, max_iterations=args.max_iterations,
+                          seeds=args.seeds, size=args.size, maps=args.maps, tuning_maps=args.tuning_maps,
+                          shifted_maps=args.shifted_maps, unseen_maps=args.unseen_maps, scenarios=args.scenarios,
+                          tuning_scenarios=args.tuning_scenarios, movingai_dir="" if mdir is None else str(mdir))
+    context = E.RunContext(protocol, args.models, args.loaded)
     try:
         lock = run_lock(args.out)
         lock.__enter__()
@@ -261,7 +276,7 @@ def main(argv=None) -> int:
             print(f"resuming: {journal.resumed} finished runs from {journal.path}", flush=True)
         backend = make_backend(args.backend, processes=args.processes, address=args.address,
                                worker_init=E.worker_init)
-        status = _compare(args, queries, cfg, backend, journal, t0=time.perf_counter())
+        status = _compare(args, queries, context, backend, journal, t0=time.perf_counter())
         journal.remove()
         return status
     except InputError as exc:
@@ -290,55 +305,55 @@ def main(argv=None) -> int:
 PLANNED = [0]
 
 
-def _phase(tasks, backend, journal, name: str):
+def _phase(tasks, context, backend, journal, name: str):
     """One phase of runs, journaled; announces itself."""
     PLANNED[0] += len(tasks)
-    return run_phase(tasks, backend, journal, name)
+    return run_phase(tasks, context, backend, journal, name)
 
 
-def _compare(args, queries, cfg, backend, journal, t0: float) -> int:
+def _compare(args, queries, context, backend, journal, t0: float) -> int:
     """The runs, tables, plots and logs of the comparison, executed on ``backend`` and journaled."""
+    protocol, policy = context.protocol, str(args.policy)
     users = list(args.user_samplers)
-    biases = [f"goal_bias={b:g}" for b in E.GOAL_BIASES]
+    user_specs = [E.SamplerSpec.user(n, spec) for n, spec in args.user_samplers.items()]
     learned = [E.ROUTE, E.ROUTE_ABLATION]  # the route encoder, beside its ablation
-    fixed = ["uniform", *biases, E.FOLLOWER, *learned, *users] + ([] if args.no_expert else ["expert (reference)"])
+    fixed = E.fixed_specs(protocol, str(args.route), args.user_samplers, references=not args.no_expert,
+                          device=args.device)
     unseen = sorted({q.map_set for q in queries if isinstance(q, UnseenQuery)})
     # first what needs no tuned setting, beside the tuning runs of goal bias and of the policy's batch
-    tasks = E.tuning_tasks(queries, "RRT", cfg) + E.policy_tuning_tasks(queries, "RRT", cfg)
-    tasks += [(q, "RRT", s, seed, cfg) for q in queries if q.split == "test" for s in fixed
-              for seed in range(args.seeds)]
+    tasks = E.tuning_tasks(queries, "RRT") + E.policy_tuning_tasks(queries, "RRT", policy)
+    tasks += E.evaluation_tasks(queries, "RRT", fixed, protocol.seeds)
     print(f"{len(tasks)} RRT runs on {len(queries)} queries ({args.backend} backend, {backend.workers} workers)",
           flush=True)
-    runs = _phase(tasks, backend, journal, "tuning and fixed samplers")
+    runs = _phase(tasks, context, backend, journal, "tuning and fixed samplers")
     batch, batch_scores = E.best_policy_batch(runs)
-    cfg = {**cfg, "policy_batch": batch}
     # then the policy at its tuned batch, and the ablation's tuning at that batch (it decides as often)
-    tasks = E.constant_tuning_tasks(queries, "RRT", cfg)
-    tasks += [(q, "RRT", "policy", seed, cfg) for q in queries if q.split == "test" for seed in range(args.seeds)]
+    tasks = E.constant_tuning_tasks(queries, "RRT", protocol, batch)
+    tasks += E.evaluation_tasks(queries, "RRT", [E.policy_spec(policy, batch)], protocol.seeds, "policy")
     print(f"policy batch {batch} (tuned); {len(tasks)} RRT runs of the policy and of the ablation's tuning",
           flush=True)
-    runs += _phase(tasks, backend, journal, "policy and ablation tuning")
+    runs += _phase(tasks, context, backend, journal, "policy and ablation tuning")
     # a shifted map set has no tuning split of its own: it keeps its family's tuned settings; an unseen
     # family takes those tuned on the generated families' tuning maps pooled
     best = E.tuned_for_shifted(E.best_bias(runs), queries)
     constants = E.tuned_for_shifted(E.best_constant(runs), queries)
     constants.update(pooled_tuned(runs, args.families, E.best_constant, unseen))
     # the ablation (the policy's action classes, constant distribution) on the test split, at the frontier
-    # probability its tuning runs chose for each map set; named as one sampler whatever that probability
-    ablation_tasks = E.constant_test_tasks(queries, "RRT", cfg, constants, args.seeds)
+    # probability its tuning runs chose for each map set; labelled as one sampler whatever that probability
+    ablation_tasks = E.constant_test_tasks(queries, "RRT", protocol, batch, constants, protocol.seeds)
     print(f"{len(ablation_tasks)} RRT runs of the constant-distribution ablation at its tuned settings", flush=True)
-    ablation = _phase(ablation_tasks, backend, journal, "policy ablation")
-    runs += [dataclasses.replace(r, sampler=E.CONSTANT) for r in ablation]
+    runs += _phase(ablation_tasks, context, backend, journal, "policy ablation")
     # other planners: uniform, default and best goal bias, policy, on the generated families (not shifted)
     extra = []
     generated = [q for q in queries if isinstance(q, E.Query) and q.size and not q.shifted]
     for planner in args.other_planners:
-        extra += E.tuning_tasks(generated, planner, cfg)
-        extra += [(q, planner, s, 0, cfg) for q in generated if q.split == "test"
-                  for s in ("uniform", *biases, "policy", *users)]
+        extra += E.tuning_tasks(generated, planner)
+        extra += E.evaluation_tasks(generated, planner, [E.bias_spec(b) for b in E.TUNING_BIASES], 1)
+        extra += E.evaluation_tasks(generated, planner, [E.policy_spec(policy, batch)], 1, "policy")
+        extra += E.evaluation_tasks(generated, planner, user_specs, 1)
     if extra:
         print(f"{len(extra)} runs of {', '.join(args.other_planners)}", flush=True)
-        runs += _phase(extra, backend, journal, "other planners")
+        runs += _phase(extra, context, backend, journal, "other planners")
         best = E.tuned_for_shifted(E.best_bias(runs), queries)
     mai = sorted({q.family for q in queries if not q.size})
     if len(mai) > 1:  # one pooled row over every MovingAI map, beside the per-map rows
@@ -375,7 +390,8 @@ def _compare(args, queries, cfg, backend, journal, t0: float) -> int:
                 "generated families' tuning maps pooled" if unseen else "")
              + "; best goal bias chosen on a tuning split")
     text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {minutes:.1f} min; {where}. "
-            f"Iterations to first solution (cap {args.max_iterations}); the expert is a privileged reference.\n\n"
+            f"Iterations to first solution (cap {args.max_iterations}); the expert and the exact route reference are "
+            "privileged references.\n\n"
             + (f"User samplers: {named.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
                if users else "") +
             "## Results at a glance\n\nRRT on the test split: median iterations to the first solution (success "
@@ -425,7 +441,7 @@ def _compare(args, queries, cfg, backend, journal, t0: float) -> int:
         write_runs_csv(runs, tmp / "runs.csv")
         plots = E.save_plots([r for r in runs if r.map not in mai] + pool, rows, best, tmp,
                              extra=[E.CONSTANT, E.FOLLOWER, E.ROUTE, E.ROUTE_ABLATION, *users])
-        logs = E.write_ompl_logs(runs + pool, best, tmp / "ompl", cfg)
+        logs = E.write_ompl_logs(runs + pool, best, tmp / "ompl", protocol)
         atomic_write_text(tmp / "map-sets.json", json.dumps(record, indent=1, default=str) + "\n")
         atomic_write_text(tmp / "summary.md", text)
     print("\n" + markdown_table(glance))

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from planners.algorithms.obprm import compare_prm_variants
 from planners.base.fileio import atomic_write_text
-from planners.tools.benchmark import markdown_table
+from planners.tools.benchmark import MAX_ITERATIONS, markdown_table
 
 COLUMNS = ["map", "planner", "runs", "success", "median_samples", "median_candidates", "median_checks",
            "median_time_s"]
@@ -29,7 +29,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, default=20, help="queries (seeded maps) per map kind")
     ap.add_argument("--size", type=int, default=128, help="map side in cells")
     ap.add_argument("--gaps", type=int, nargs="+", default=[1, 2, 4, 8], help="gap widths of the walls, in cells")
-    ap.add_argument("--max-iterations", type=int, default=20000, help="sample budget per run")
+    ap.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS, help="sample budget per run")
     ap.add_argument("--quick", action="store_true", help="5 queries per map, 5,000-sample budget")
     ap.add_argument("--out", type=Path, default=Path("results/obprm_compare"))
     args = ap.parse_args(argv)

@@ -34,22 +34,24 @@ def main(argv=None) -> int:
         ap.error(f"--policy-batch must be at least 1, got {args.policy_batch}")
 
     from learning import PolicySampler
+    from learning.evaluation import Protocol
     from planners import RRT, GoalBiasedSampler, RRTConnect, load_scene
     from planners.maps.generators import FAMILIES, SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, generate
     from planners.viz.plotting import new_figure, plot, save_figure
     from planners.viz.plotting3d import plot_scene
 
     policy = PolicySampler.load(args.policy, batch=args.policy_batch)
+    protocol = Protocol()
     best = args.best_bias or [0.2] * len(args.families)
     fams = args.families
     fig = new_figure((3.3 * 3, 3.4 * len(fams)))
     for i, fam in enumerate(fams):
-        problem = generate(fam, TEST_SEED0 + args.seed, 128)
+        problem = generate(fam, TEST_SEED0 + args.seed, protocol.size)
         for j, (label, sampler) in enumerate((("goal bias 0.05", GoalBiasedSampler(0.05)),
                                               (f"goal bias {best[i]:g} (best)", GoalBiasedSampler(best[i])),
                                               ("learned policy", policy))):
-            planner = RRT(problem, step_size=4.0, sampler=sampler, seed=args.seed)
-            r = planner.solve(max_iterations=20000)
+            planner = RRT(problem, step_size=protocol.step, sampler=sampler, seed=args.seed)
+            r = planner.solve(max_iterations=protocol.max_iterations)
             ax = fig.add_subplot(len(fams), 3, 3 * i + j + 1)
             plot(problem, planner, r, ax=ax, title=f"{fam}, {label}: {r.iterations} it.")
             ax.title.set_fontsize(8)
@@ -68,7 +70,7 @@ def main(argv=None) -> int:
     p3 = save_figure(fig, args.out / "shifted.png", dpi=80)
 
     problem = load_scene(ROOT / "planners" / "scenes" / "example.scene")
-    r = RRTConnect(problem, step_size=0.5, seed=args.seed).solve(max_iterations=20000)
+    r = RRTConnect(problem, step_size=0.5, seed=args.seed).solve(max_iterations=protocol.max_iterations)
     fig = plot_scene(problem, r.path if r.solved else None,
                      title=f"6-DoF box, RRT-Connect: {r.iterations} iterations")
     p2 = save_figure(fig, args.out / "rigid.png", dpi=90)

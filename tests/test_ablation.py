@@ -16,10 +16,10 @@ from planners.maps.generators import generate
 from planners.tools.benchmark import Run
 
 
-def _run(family, query, split, planner, sampler, seed, its) -> Run:
+def _run(family, query, split, planner, sampler, seed, its, spec="") -> Run:
     return Run(map=family, query=query, split=split, planner=planner, sampler=sampler, seed=seed, solved=True,
                iterations=its, lower_bound=1, candidates=its, collision_checks=its, wall_time=0.001,
-               us_per_iteration=1.0, path_cost=1.0, forward_passes=0, vertices=its)
+               us_per_iteration=1.0, path_cost=1.0, forward_passes=0, vertices=its, sampler_spec=spec)
 
 
 @pytest.mark.parametrize("family", ["forest", "bugtrap", "maze"])
@@ -52,18 +52,22 @@ def test_bad_settings_are_refused_by_name(kwargs):
 
 def test_the_ablation_is_tuned_on_the_tuning_split_only():
     qs = E.generated_queries(["forest"], 64, n_test=2, n_tune=3)
-    tasks = E.constant_tuning_tasks(qs, "RRT", {})
-    assert {t[0].split for t in tasks} == {"tuning"} and len(tasks) == 3 * len(FRONTIER_GRID)
+    protocol = E.Protocol()
+    tasks = E.constant_tuning_tasks(qs, "RRT", protocol, 8)
+    assert {t.query.split for t in tasks} == {"tuning"} and len(tasks) == 3 * len(FRONTIER_GRID)
+    assert {t.sampler_label for t in tasks} == {E.constant_sampler(p) for p in FRONTIER_GRID}
     # tuning runs where 0.5 is best; test runs where 0.9 would look best must not sway the choice
     runs = []
-    for q, planner, name, seed, _ in tasks:
-        its = 10 if name == "constant=0.5" else 100
-        runs.append(_run(q.family, str(q.key), "tuning", planner, name, seed, its))
-    runs.append(_run("forest", "x", "test", "RRT", "constant=0.9", 0, 1))
+    for t in tasks:
+        its = 10 if t.sampler.param("frontier") == 0.5 else 100
+        runs.append(_run(t.query.family, str(t.query.key), "tuning", t.planner, t.sampler_label, t.seed, its,
+                         t.sampler.to_json()))
+    runs.append(_run("forest", "x", "test", "RRT", "constant=0.9", 0, 1, E.constant_spec(0.9, protocol, 8).to_json()))
     best = E.best_constant(runs)
     assert best == {("forest", "RRT"): 0.5}
-    test = E.constant_test_tasks(qs, "RRT", {}, best, seeds=2)
-    assert {t[2] for t in test} == {"constant=0.5"} and {t[0].split for t in test} == {"test"} and len(test) == 4
+    test = E.constant_test_tasks(qs, "RRT", protocol, 8, best, seeds=2)
+    assert {t.sampler for t in test} == {E.constant_spec(0.5, protocol, 8)} and {t.sampler_label for t in test} == {
+        E.CONSTANT} and {t.query.split for t in test} == {"test"} and len(test) == 4
 
 
 def test_the_geodesic_frontier_reference_ranks_its_frontier_by_cost_to_go():

@@ -174,10 +174,10 @@ def test_unseen_families_take_the_pooled_generated_tuning():
     qs = unseen_queries(64, 2)
     assert {q.map_set for q in qs} == {unseen_name(f) for f in ("spiral", "warehouse", "baffles")}
     assert all(q.split == "test" for q in qs) and qs[0].problem(None, 4.0).name.startswith("spiral-64-")
-    runs = [Run(**{**_run(0).__dict__, "map": fam, "split": "tuning", "sampler": s, "iterations": its,
-                   "solved": True}) for fam, s, its in (("forest", "uniform", 100), ("forest", "goal_bias=0.1", 50),
-                                                         ("maze", "uniform", 300), ("maze", "goal_bias=0.1", 400),
-                                                         ("maze", "goal_bias=0.1", 60), ("maze", "uniform", 200))]
+    runs = [Run(**{**_run(0).__dict__, "map": fam, "split": "tuning", "sampler": E.bias_sampler(b),
+                   "sampler_spec": E.bias_spec(b).to_json(), "iterations": its, "solved": True})
+            for fam, b, its in (("forest", 0, 100), ("forest", 0.1, 50), ("maze", 0, 300), ("maze", 0.1, 400),
+                                ("maze", 0.1, 60), ("maze", 0, 200))]
     tuned = pooled_tuned(runs, ["forest", "maze"], E.best_bias, [unseen_name("spiral")])
     # pooled medians: uniform [100, 300, 200] -> 200, bias 0.1 [50, 400, 60] -> 60
     assert tuned == {(unseen_name("spiral"), "RRT"): 0.1}
@@ -321,14 +321,20 @@ def test_progress_names_the_phase_and_the_cost_per_sampler(tmp_path, capsys):
     from planners.tools.parallel import make_backend
 
     q = E.generated_queries(["forest"], 64, 1, 0)[0]
-    cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": "", "route": "", "step": 4.0, "max_iterations": 500,
-           "user_samplers": {}}
-    tasks = [(q, "RRT", s, seed, cfg) for s in ("uniform", "goal_bias=0.05") for seed in range(4)]
+    context = E.RunContext(E.Protocol(max_iterations=500))
+    specs = (E.SamplerSpec.of("uniform"), E.bias_spec(0.05))
+    tasks = [E.Task(q, "RRT", s, seed) for s in specs for seed in range(4)]
     j = Journal(tmp_path / "w", {}, resume=False)
-    runs = run_phase(tasks, make_backend("local", processes=1), j, "a phase")
+    runs = run_phase(tasks, context, make_backend("local", processes=1), j, "a phase")
     err = capsys.readouterr().err
     assert "a phase" in err and "ms/run" in err and "goal bias" in err
-    assert [r.sampler for r in runs] == [t[2] for t in tasks] and len(j.done) == 8
-    again = run_phase(tasks, make_backend("local", processes=1), j, "again")  # all from the journal
+    assert [r.sampler for r in runs] == [t.sampler_label for t in tasks] and len(j.done) == 8
+    assert [E.spec_of(r) for r in runs] == [t.sampler for t in tasks]
+    again = run_phase(tasks, context, make_backend("local", processes=1), j, "again")  # all from the journal
     assert again == runs
     assert np.all([r.iterations > 0 for r in runs])
+    # a task's key holds its spec and the protocol: another cap is other runs, not these
+    other = E.RunContext(E.Protocol(max_iterations=400))
+    assert task_key((tasks[0], context.protocol)) != task_key((tasks[0], other.protocol))
+    assert task_key((tasks[0], context.protocol)) == task_key((E.Task(q, "RRT", E.SamplerSpec.of("uniform"), 0),
+                                                              E.Protocol(max_iterations=500)))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+import dataclasses
 import math
 import os
 import sqlite3
@@ -33,16 +35,20 @@ def _umask() -> int:
 
 
 def _run(family, split, sampler, its, solved=True, planner="RRT", query="q", seed=0) -> Run:
-    return Run(map=family, query=query, split=split, planner=planner, sampler=sampler, seed=seed, solved=solved,
+    """A run of ``sampler``: a spec (labelled from it and recorded as JSON), or a bare label."""
+    spec = sampler.to_json() if isinstance(sampler, E.SamplerSpec) else ""
+    label = E.sampler_label(sampler) if isinstance(sampler, E.SamplerSpec) else sampler
+    return Run(map=family, query=query, split=split, planner=planner, sampler=label, seed=seed, solved=solved,
                iterations=its, lower_bound=10, candidates=its, collision_checks=3 * its, wall_time=its * 1e-5,
-               us_per_iteration=10.0, path_cost=40.0 if solved else math.inf, forward_passes=0, vertices=its // 2)
+               us_per_iteration=10.0, path_cost=40.0 if solved else math.inf, forward_passes=0, vertices=its // 2,
+               sampler_spec=spec)
 
 
 # --- point 7a: the best goal bias is chosen soundly, on the tuning split only -------------------------
 
 def test_best_bias_is_never_worse_than_uniform_on_the_tuning_split():
-    runs = [_run("rooms", "tuning", "uniform", i) for i in (900, 1000, 1100)]
-    runs += [_run("rooms", "tuning", f"goal_bias={b:g}", i + k * 100) for k, b in enumerate(E.GOAL_BIASES)
+    runs = [_run("rooms", "tuning", E.bias_spec(0), i) for i in (900, 1000, 1100)]
+    runs += [_run("rooms", "tuning", E.bias_spec(b), i + k * 100) for k, b in enumerate(E.GOAL_BIASES)
              for i in (1000, 1100, 1200)]
     assert E.best_bias(runs) == {("rooms", "RRT"): 0.0}
     rows = E.summarize(runs + [_run("rooms", "test", "uniform", 5), _run("rooms", "test", "policy", 4)],
@@ -51,31 +57,33 @@ def test_best_bias_is_never_worse_than_uniform_on_the_tuning_split():
 
 
 def test_best_bias_never_looks_at_the_test_split():
-    runs = [_run("maze", "tuning", s, i) for s, i in (("uniform", 900), ("goal_bias=0.1", 500), ("goal_bias=0.5", 800))]
-    runs += [_run("maze", "test", s, i) for s, i in (("uniform", 10), ("goal_bias=0.1", 900), ("goal_bias=0.5", 5))]
+    runs = [_run("maze", "tuning", E.bias_spec(b), i) for b, i in ((0, 900), (0.1, 500), (0.5, 800))]
+    runs += [_run("maze", "test", E.bias_spec(b), i) for b, i in ((0, 10), (0.1, 900), (0.5, 5))]
     assert E.best_bias(runs) == {("maze", "RRT"): 0.1}
 
 
 def test_tuning_runs_cover_uniform_and_every_bias_on_tuning_queries_only():
     qs = E.generated_queries(["forest"], 64, n_test=2, n_tune=3)
-    tasks = E.tuning_tasks(qs, "RRT", {})
-    assert {t[0].split for t in tasks} == {"tuning"}
-    assert all(t[0].key < TEST_SEED0 for t in tasks)
-    assert sorted({t[2] for t in tasks}) == sorted(["uniform", *(f"goal_bias={b:g}" for b in E.GOAL_BIASES)])
+    tasks = E.tuning_tasks(qs, "RRT")
+    assert {t.query.split for t in tasks} == {"tuning"}
+    assert all(t.query.key < TEST_SEED0 for t in tasks)
+    assert sorted({t.sampler_label for t in tasks}) == sorted(["uniform", *(f"goal_bias={b:g}" for b in E.GOAL_BIASES)])
+    assert {E.spec_bias(t.sampler) for t in tasks} == set(E.TUNING_BIASES)
     assert len(tasks) == 3 * (1 + len(E.GOAL_BIASES))
 
 
 def test_policy_batch_is_tuned_on_generated_tuning_queries_only():
     qs = E.generated_queries(["forest", "maze"], 64, n_test=2, n_tune=3) + E.shifted_queries(["forest"], 2)
-    tasks = E.policy_tuning_tasks(qs, "RRT", {})
-    assert {t[0].split for t in tasks} == {"tuning"} and not any(t[0].shifted for t in tasks)
-    assert sorted({t[2] for t in tasks}) == sorted(E.policy_sampler(b) for b in E.POLICY_BATCHES)
+    tasks = E.policy_tuning_tasks(qs, "RRT", "p.zip")
+    assert {t.query.split for t in tasks} == {"tuning"} and not any(t.query.shifted for t in tasks)
+    assert sorted({t.sampler_label for t in tasks}) == sorted(E.policy_sampler(b) for b in E.POLICY_BATCHES)
+    assert {t.sampler for t in tasks} == {E.policy_spec("p.zip", b) for b in E.POLICY_BATCHES}
     assert len(tasks) == 2 * 3 * len(E.POLICY_BATCHES) * E.POLICY_TUNING_SEEDS
 
 
 def test_best_policy_batch_sums_log_medians_and_breaks_ties_towards_the_larger_batch():
     def runs(batch, forest, maze, split="tuning"):
-        return [_run(f, split, E.policy_sampler(batch), its) for f, its in (("forest", forest), ("maze", maze))]
+        return [_run(f, split, E.policy_spec("p.zip", batch), its) for f, its in (("forest", forest), ("maze", maze))]
 
     # batch 2 halves forest and loses a little on maze: the log sum weighs both families alike
     best, score = E.best_policy_batch(runs(8, 100, 400) + runs(2, 50, 500) + runs(1, 50, 800))
@@ -96,8 +104,8 @@ def test_shifted_maps_are_test_only_with_their_own_seeds_and_sizes():
     assert [q.size for q in qs if q.family == "maze"] == [SHIFTED_SIZES[i % len(SHIFTED_SIZES)] for i in range(7)]
     assert all(q.key >= SHIFTED_SEED0 for q in qs)
     # nothing tunes on them: neither goal bias nor the ablation
-    assert E.tuning_tasks(qs, "RRT", {}) == [] and E.constant_tuning_tasks(qs, "RRT", {}) == []
-    problem = qs[1].problem(None, 4.0)
+    assert E.tuning_tasks(qs, "RRT") == [] and E.constant_tuning_tasks(qs, "RRT", E.Protocol(), 8) == []
+    problem = E.Protocol().problem(qs[1])
     assert problem.name == f"forest-shifted-{SHIFTED_SIZES[1]}-{SHIFTED_SEED0 + 1}"
     assert problem.world.shape == (SHIFTED_SIZES[1],) * 2
 
@@ -108,9 +116,83 @@ def test_shifted_map_sets_keep_their_familys_tuned_settings():
     assert E.tuned_for_shifted(tuned, qs) == tuned | {("forest (shifted)", "RRT"): 0.2,
                                                       ("forest (shifted)", "PRM"): 0.05}
     # and the ablation's test runs on the shifted maps take that setting
-    tasks = E.constant_test_tasks(qs, "RRT", {}, E.tuned_for_shifted({("forest", "RRT"): 0.7}, qs), seeds=2)
-    assert [(t[0].map_set, t[2], t[3]) for t in tasks] == [("forest", "constant=0.7", s) for s in (0, 1)] + [
-        ("forest (shifted)", "constant=0.7", s) for s in (0, 1)]
+    tasks = E.constant_test_tasks(qs, "RRT", E.Protocol(), 8, E.tuned_for_shifted({("forest", "RRT"): 0.7}, qs),
+                                  seeds=2)
+    assert [(t.query.map_set, t.sampler.param("frontier"), t.sampler_label, t.seed) for t in tasks] == [
+        ("forest", 0.7, E.CONSTANT, s) for s in (0, 1)] + [("forest (shifted)", 0.7, E.CONSTANT, s) for s in (0, 1)]
+
+
+def test_every_registered_sampler_has_one_label_and_the_roster_carries_the_exact_reference():
+    from learning.samplers.registry import sampler_names
+
+    labels = {name: E.sampler_label(E.SamplerSpec.of(name)) for name in sampler_names()}
+    assert len(set(labels.values())) == len(labels)
+    assert labels["goal_bias"] == "goal_bias=0.05" and labels["expert"] == E.EXPERT
+    assert labels["exact_route"] == E.EXACT_ROUTE == "exact_route"
+    assert E.sampler_label(E.policy_spec("p.zip", 2)) == E.policy_sampler(2)
+    assert E.sampler_label(E.SamplerSpec.user("mine", "m:f")) == "mine"
+    protocol = E.Protocol(step=3.0)
+    fixed = E.fixed_specs(protocol, "r.pt", {"mine": "m:f"})
+    assert E.SamplerSpec.of("exact_route", step_size=3.0) in fixed
+    assert all(s.param("step_size") == 3.0 for s in fixed if s.name not in ("uniform", "goal_bias", "user"))
+    assert not {"expert", "exact_route"} & {s.name for s in E.fixed_specs(protocol, "r.pt", {}, references=False)}
+    qs = E.generated_queries(["forest"], 64, n_test=2, n_tune=1) + E.shifted_queries(["forest"], 1)
+    tasks = E.evaluation_tasks(qs, "RRT", fixed, seeds=2)
+    exact = {(t.query.map_set, t.seed) for t in tasks if t.sampler_label == E.EXACT_ROUTE}
+    assert exact == {(m, s) for m in ("forest", "forest (shifted)") for s in (0, 1)}
+
+
+def test_a_run_takes_its_protocol_models_and_scenarios_from_its_context_alone(tmp_path):
+    from learning.evaluation import mapsets, protocol, runner
+    from learning.models.route_net import load_route_net
+    from learning.samplers.route import SHIPPED
+
+    for module in (runner, protocol, mapsets):  # no per-process caches for workers to fill
+        assert not [n for n, v in vars(module).items() if isinstance(v, dict) and n.isupper() and n != "QUICK"
+                    and not n.startswith("PART")], module.__name__
+    q = E.generated_queries(["forest"], 64, 1, 0)[0]
+    nowhere = str(tmp_path / "not-there.pt")  # the encoder comes from the context, never from this path
+    spec = E.SamplerSpec.of("route", path=nowhere, step_size=4.0)
+    models = E.ModelCache()
+    models.routes[nowhere] = load_route_net(SHIPPED)
+    context = E.RunContext(E.Protocol(max_iterations=1500), models)
+    assert E.shared_context([E.Task(q, "RRT", spec, 0)], context) is context and len(models.routes) == 1
+    got = E.run_one(E.Task(q, "RRT", spec, 0), context)
+    shipped = E.run_one(E.Task(q, "RRT", E.SamplerSpec.of("route", path=str(SHIPPED), step_size=4.0), 0),
+                        E.RunContext(E.Protocol(max_iterations=1500)))
+    assert (got.iterations, got.solved, got.sampler) == (shipped.iterations, shipped.solved, E.ROUTE)
+    assert E.spec_of(got) == spec and got.lower_bound == shipped.lower_bound
+    # the cap is the context's protocol's
+    capped = E.run_one(E.Task(q, "RRT", E.SamplerSpec.of("uniform"), 0), E.RunContext(E.Protocol(max_iterations=3)))
+    assert capped.iterations <= 3
+
+
+def test_a_spec_column_round_trips_as_json_never_parsed_from_the_label(tmp_path):
+
+    specs = [E.bias_spec(0.1), E.constant_spec(0.3, E.Protocol(), 2), E.policy_spec("p.zip", 8),
+             E.SamplerSpec.user("mine", "m:f"), E.SamplerSpec.of("exact_route", step_size=4.0)]
+    # labels that say nothing of the parameters: the tuning reads the spec column, not the label
+    runs = [dataclasses.replace(_run("forest", "tuning", s, 100 + i), sampler=f"label {i}")
+            for i, s in enumerate(specs)]
+    write_runs_csv(runs, tmp_path / "runs.csv")
+    with (tmp_path / "runs.csv").open(newline="") as f:
+        back = [E.SamplerSpec.from_json(r["sampler_spec"]) for r in csv.DictReader(f)]
+    assert back == specs
+    assert E.best_bias(runs) == {("forest", "RRT"): 0.1} and E.best_constant(runs) == {("forest", "RRT"): 0.3}
+
+
+def test_the_protocol_holds_the_defaults_and_quick_keeps_the_tuning_split():
+    full, quick = E.Protocol(), E.Protocol().quick()
+    assert (full.step, full.tolerance, full.max_iterations) == (4.0, 4.0, 20_000)
+    assert (quick.tuning_maps, quick.tuning_scenarios) == (full.tuning_maps, full.tuning_scenarios)
+    assert quick.maps < full.maps and quick.seeds < full.seeds
+    ev = _load_evaluate()
+    args = ev.parse_args(["--quick"])
+    assert (args.maps, args.shifted_maps, args.scenarios, args.seeds) == (
+        quick.maps, quick.shifted_maps, quick.scenarios, quick.seeds)
+    assert (args.step, args.tolerance, args.max_iterations) == (full.step, full.tolerance, full.max_iterations)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        full.step = 2.0
 
 
 def test_quick_run_tunes_on_the_full_runs_tuning_split():
@@ -131,10 +213,9 @@ def test_a_missing_or_bad_route_encoder_is_refused_before_any_run(tmp_path, caps
 
 def test_tuned_bias_beats_or_ties_uniform_on_real_tuning_maps():
     """The real tuning runs of the quick form, on narrow passages: the choice is not worse than uniform."""
-    cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": "", "step": 4.0, "max_iterations": 20000}
     n_tune = _load_evaluate().parse_args(["--quick"]).tuning_maps
     qs = E.generated_queries(["narrow_passage"], 128, n_test=0, n_tune=n_tune)
-    runs = E.run_all(E.tuning_tasks(qs, "RRT", cfg), 1, progress=False)
+    runs = E.run_all(E.tuning_tasks(qs, "RRT"), E.Protocol(), 1, progress=False)
     b = E.best_bias(runs)[("narrow_passage", "RRT")]
 
     def median(sampler):
@@ -218,7 +299,7 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     conn = sqlite3.connect(":memory:")
     rows = runs_table(conn, read_benchmark_log((out / "ompl" / "forest.log").read_text(), conn))
     samplers = ["uniform", *(f"goal bias {b:g}" for b in E.GOAL_BIASES), "policy", E.FOLLOWER, E.ROUTE,
-                E.ROUTE_ABLATION, "expert (reference)", E.CONSTANT]
+                E.ROUTE_ABLATION, "expert (reference)", E.EXACT_ROUTE, E.CONSTANT]
     assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
     summary = (out / "summary.md").read_text()
     assert "## The policy's batch, tuned" in summary and "Chosen: **" in summary
@@ -235,6 +316,21 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     assert sorted({r["planner"] for r in shifted}) == sorted(f"RRT {s}" for s in samplers)
     assert sorted(r["iterations"] for r in shifted) == sorted(
         int(r[7]) for r in csv_runs if r[0] == "forest (shifted)")
+    # every run records its sampler as data: the spec builds the sampler its label names
+    with (out / "runs.csv").open(newline="") as f:
+        records = list(csv.DictReader(f))
+    specs = {r["sampler"]: E.SamplerSpec.from_json(r["sampler_spec"]) for r in records if r["sampler"] != E.CONSTANT}
+    assert all(E.sampler_label(spec) == label for label, spec in specs.items() if label != "policy")
+    assert specs["policy"].name == "policy" and specs["policy"].param("batch") in E.POLICY_BATCHES
+    assert {r["map"] for r in records if r["sampler"] == E.CONSTANT} == {"forest", "forest (shifted)"}
+    # the exact cost-to-go reference at the route encoder's settings, on every map set's test queries
+    assert specs[E.EXACT_ROUTE] == E.SamplerSpec.of("exact_route", step_size=4.0)
+    assert {r["map"] for r in records if r["sampler"] == E.EXACT_ROUTE and r["split"] == "test"} == {
+        "forest", "forest (shifted)"}
+    # so the room to it, and the share learning closes, are shown for every map set
+    room = summary[summary.index("## How much of the room"):summary.index("## Targets for carrying")]
+    assert "| forest |" in room and "| forest (shifted) |" in room and "No exact reference ran" not in room
+    assert "not measured (no exact reference ran)" not in summary
 
 
 def _head(family, **kw):

@@ -3,6 +3,7 @@ killed Ray worker costs only its in-flight tasks."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import threading
@@ -21,15 +22,15 @@ CHECKPOINT = str(SHIPPED_POLICY)
 ROUTE = str(SHIPPED_ROUTE)
 
 
-def _tasks(max_iterations: int = 3000, movingai: bool = True) -> list[tuple]:
+def _tasks(max_iterations: int = 3000, movingai: bool = True) -> tuple[list[E.Task], E.Protocol]:
     mdir = movingai_dir(None, required=False) if movingai else None
+    protocol = E.Protocol(max_iterations=max_iterations, movingai_dir="" if mdir is None else str(mdir))
     qs = E.generated_queries(["forest", "maze"], 64, 3, 0) + E.shifted_queries(["bugtrap"], 2)
     if mdir is not None:
         qs += E.movingai_queries(str(mdir), ["arena"], 2, 0, 4.0)
-    cfg = {"movingai_dir": "" if mdir is None else str(mdir), "tolerance": 4.0, "policy": CHECKPOINT, "route": ROUTE,
-           "step": 4.0, "max_iterations": max_iterations, "user_samplers": {}}
-    samplers = ("uniform", "goal_bias=0.1", "policy", "constant=0.7", E.ROUTE)
-    return [(q, "RRT", s, seed, cfg) for q in qs for s in samplers for seed in range(2)]
+    samplers = (E.SamplerSpec.of("uniform"), E.bias_spec(0.1), E.policy_spec(CHECKPOINT, None),
+                E.constant_spec(0.7, protocol, 8), E.SamplerSpec.of("route", path=ROUTE, step_size=4.0))
+    return [E.Task(q, "RRT", s, seed) for q in qs for s in samplers for seed in range(2)], protocol
 
 
 def _runs(runs) -> list[dict]:
@@ -43,26 +44,36 @@ def _runs(runs) -> list[dict]:
 
 
 def test_every_backend_gives_the_same_runs_in_task_order(ray_backend):
-    tasks = _tasks()
-    serial = _runs(E.run_all(tasks, 1, progress=False))
-    pool = _runs(E.run_all(tasks, make_backend("local", processes=2, worker_init=E.worker_init), progress=False))
-    on_ray = _runs(E.run_all(tasks, ray_backend, progress=False))
+    tasks, protocol = _tasks()
+    serial = _runs(E.run_all(tasks, protocol, 1, progress=False))
+    pool = _runs(E.run_all(tasks, protocol, make_backend("local", processes=2, worker_init=E.worker_init),
+                           progress=False))
+    on_ray = _runs(E.run_all(tasks, protocol, ray_backend, progress=False))
     assert serial == pool == on_ray
-    assert [r["query"] for r in serial] == [t[0].problem(t[4]["movingai_dir"], 4.0).name for t in tasks]
+    assert [r["query"] for r in serial] == [protocol.problem(t.query).name for t in tasks]
+    assert [E.SamplerSpec.from_json(r["sampler_spec"]) for r in serial] == [t.sampler for t in tasks]
 
 
 def test_the_context_travels_loaded_so_workers_need_no_files(ray_backend, tmp_path):
     # checkpoint paths that do not exist where the runs execute: the policy and encoder come from the context
-    tasks = _tasks(movingai=False)[:10]
-    context = E.shared_context(tasks)
-    assert set(context["policies"]) == {(CHECKPOINT, None)}  # (path, batch): the checkpoint's own batch here
-    assert set(context["routes"]) == {ROUTE}
+    tasks, protocol = _tasks(movingai=False)
+    tasks = [t for t in tasks if t.seed == 0][:10]
+    context = E.shared_context(tasks, protocol)
+    # (path, batch, step): the checkpoint's own batch and step here
+    assert set(context.models.policies) == {(CHECKPOINT, None, None)}
+    assert set(context.models.routes) == {ROUTE}
     elsewhere = {"policy": str(tmp_path / "elsewhere.zip"), "route": str(tmp_path / "elsewhere.pt")}
-    moved = [(q, p, s, seed, {**cfg, **elsewhere}) for q, p, s, seed, cfg in tasks]
-    context = {"policies": {(elsewhere["policy"], None): context["policies"][CHECKPOINT, None]},
-               "routes": {elsewhere["route"]: context["routes"][ROUTE]}, "scenarios": {}}
-    got = ray_backend.map(E.run_one, moved, context=context, chunksize=3)
-    assert _runs(got) == _runs(E.run_all(tasks, 1, progress=False))
+    relocate = {"policy": E.policy_spec(elsewhere["policy"], None),
+                "route": E.SamplerSpec.of("route", path=elsewhere["route"], step_size=4.0)}
+    moved = [dataclasses.replace(t, sampler=relocate.get(t.sampler.name, t.sampler)) for t in tasks]
+    models = E.ModelCache()
+    models.policies[elsewhere["policy"], None, None] = context.models.policies[CHECKPOINT, None, None]
+    models.routes[elsewhere["route"]] = context.models.routes[ROUTE]
+    got = ray_backend.map(E.run_one, moved, context=E.RunContext(protocol, models), chunksize=3)
+    expected = _runs(E.run_all(tasks, protocol, 1, progress=False))
+    for r in expected:
+        r.pop("sampler_spec")
+    assert [{k: v for k, v in r.items() if k != "sampler_spec"} for r in _runs(got)] == expected
 
 
 def _ray_chunk_pids() -> list[int]:
@@ -79,8 +90,9 @@ def _ray_chunk_pids() -> list[int]:
 
 
 def test_a_killed_ray_worker_loses_only_its_in_flight_tasks(ray_backend):
-    tasks = _tasks(max_iterations=20000, movingai=False) * 2
-    undisturbed = _runs(E.run_all(tasks, 1, progress=False))
+    tasks, protocol = _tasks(max_iterations=20000, movingai=False)
+    tasks *= 2
+    undisturbed = _runs(E.run_all(tasks, protocol, 1, progress=False))
     killed = []
 
     def kill_one_busy_worker():
@@ -94,7 +106,7 @@ def test_a_killed_ray_worker_loses_only_its_in_flight_tasks(ray_backend):
 
     killer = threading.Thread(target=kill_one_busy_worker)
     killer.start()
-    got = ray_backend.map(E.run_one, tasks, context=E.shared_context(tasks), chunksize=4)
+    got = ray_backend.map(E.run_one, tasks, context=E.shared_context(tasks, protocol), chunksize=4)
     killer.join()
     assert killed, "no busy Ray worker was seen to kill"
     assert _runs(got) == undisturbed

@@ -10,7 +10,14 @@ from hypothesis import strategies as st
 
 import learning
 from learning.models.shipped import SHIPPED_POLICY_BATCH
-from learning.samplers.registry import REFERENCES, SamplerSpec, make_sampler, parse_user_sampler, sampler_names
+from learning.samplers.registry import (
+    REFERENCES,
+    ModelCache,
+    SamplerSpec,
+    make_sampler,
+    parse_user_sampler,
+    sampler_names,
+)
 from learning.samplers.route import FOLLOWER_SETTINGS, SHIPPED_SETTINGS, RouteSampler, shipped_sampler
 from planners import RRT, GoalBiasedSampler, Sampler, UniformSampler
 from planners.base.fileio import InputError
@@ -72,3 +79,27 @@ def test_user_names_may_not_shadow_registered_samplers():
     for arg in ("route=x:y", "follower=x:y", "policy=a.zip@SamplerGym/RRT-Forest-v0", "nospec"):
         with pytest.raises(InputError):
             parse_user_sampler(arg)
+
+
+def test_a_spec_round_trips_through_json_and_a_model_cache_loads_each_file_once():
+    spec = SamplerSpec.of("route", step_size=4.0)
+    assert SamplerSpec.from_json(spec.to_json()) == spec and spec.param("step_size") == 4.0
+    assert spec.param("path") is None and spec.param("colour", "x") == "x"  # the factory's default, or the given one
+    assert SamplerSpec.of("goal_bias").param("bias") == make_sampler("goal_bias").p
+    models = ModelCache()
+    a, b = spec.build(models), spec.build(models)
+    assert a is not b and a.net is b.net and len(models.routes) == 1  # a new sampler per run, one network
+    assert repr(a) == repr(make_sampler("route"))
+    policy = SamplerSpec.of("policy", batch=2)
+    assert policy.build(models) is policy.build(models) and policy.build(models).batch == 2
+    assert len(models.policies) == 1
+
+
+def test_a_users_sampler_is_a_spec_too(tmp_path, monkeypatch):
+    (tmp_path / "my_factory.py").write_text("from planners import UniformSampler\n\ndef make():\n"
+                                            "    return UniformSampler()\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    spec = SamplerSpec.user("mine", "my_factory:make")
+    assert json.loads(spec.to_json()) == {"name": "user", "params": {"name": "mine", "spec": "my_factory:make"}}
+    models = ModelCache()
+    assert isinstance(spec.build(), UniformSampler) and spec.build(models) is spec.build(models)

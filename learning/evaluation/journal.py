@@ -20,7 +20,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from learning.evaluation.runner import run_one, shared_context
+from learning.evaluation.runner import RunContext, run_one, shared_context
+from learning.evaluation.tuning import spec_of
 from planners.base.fileio import InputError
 from planners.tools.benchmark import Run
 from planners.tools.parallel import Backend
@@ -36,7 +37,10 @@ def work_folder(out: str | os.PathLike) -> Path:
 
 
 def task_key(task) -> str:
-    """A task's identity in the journal: a hash of its ``repr`` (query, planner, sampler, seed and settings)."""
+    """A task's identity in the journal: a hash of its ``repr``.
+
+    :func:`run_phase` keys a ``Task`` (query, planner, sampler spec, seed, label) with its ``Protocol``.
+    """
     return hashlib.sha256(repr(task).encode()).hexdigest()[:32]
 
 
@@ -104,44 +108,50 @@ class Journal:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
-def _label(sampler: str) -> str:
-    return "goal bias" if sampler.startswith("goal_bias=") else sampler.split(" batch=")[0].split("=")[0]
+#: Progress-bar names of the samplers whose runs are pooled there whatever their parameters.
+_POOLED = {"goal_bias": "goal bias", "policy": "policy", "policy_ablation": "constant"}
 
 
-def run_phase(tasks: Sequence, backend: Backend, journal: Journal, phase: str, progress: bool = True) -> list[Run]:
+def _label(run: Run) -> str:
+    spec = spec_of(run)
+    return _POOLED.get(spec.name, run.sampler) if spec is not None else run.sampler
+
+
+def run_phase(tasks: Sequence, context: RunContext, backend: Backend, journal: Journal, phase: str,
+              progress: bool = True) -> list[Run]:
     """Every task's run, in task order: from the journal where it is there, else run on ``backend`` and recorded.
 
+    ``context`` holds the protocol the runs are made under and what is loaded for them (added to here).
     The progress bar names ``phase`` and, as runs arrive, the sampler of the last one and the mean
     wall time per run of each sampler so far (goal biases pooled), slowest first.
     """
     from tqdm.auto import tqdm
 
-    keys = [task_key(t) for t in tasks]
+    keys = [task_key((t, context.protocol)) for t in tasks]
     todo = [i for i, k in enumerate(keys) if k not in journal.done]
     cost: dict[str, list[float]] = {}
     for k in keys:
         if k in journal.done:
             r = journal.done[k]
-            cost.setdefault(_label(r.sampler), []).append(r.wall_time)
+            cost.setdefault(_label(r), []).append(r.wall_time)
     with tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=phase, disable=not progress,
               smoothing=0.05) as bar:
         def arrived(j: int, run: Run) -> None:
             journal.add(keys[todo[j]], run)
-            c = cost.setdefault(_label(run.sampler), [0.0, 0])
+            c = cost.setdefault(_label(run), [0.0, 0])
             c[0] += run.wall_time
             c[1] += 1
             bar.update(1)
             if bar.n % 8 == 0 or bar.n == bar.total:
                 means = sorted(((v[0] / max(v[1], 1) * 1e3, s) for s, v in cost.items()), reverse=True)
-                bar.set_postfix_str(f"now {_label(run.sampler)}; ms/run " +
+                bar.set_postfix_str(f"now {_label(run)}; ms/run " +
                                     ", ".join(f"{s} {ms:.0f}" for ms, s in means[:5]), refresh=False)
 
         # runs restored from the journal count with the same [total, count] form
         cost = {s: [sum(v), len(v)] for s, v in cost.items()}
         if todo:
             sub = [tasks[i] for i in todo]
-            context = shared_context(sub) if backend.workers > 1 else None
-            backend.map(run_one, sub, context=context, progress=False, on_result=arrived)
+            backend.map(run_one, sub, context=shared_context(sub, context), progress=False, on_result=arrived)
     return [journal.done[k] for k in keys]
 
 

@@ -1,7 +1,7 @@
 """Map sets in the comparison: a user's map set (``--map-set``) and the unseen test-only families.
 
 Queries here stand beside ``protocol.Query`` and answer the runner the same way (``map_set``,
-``split``, ``problem(movingai_dir, tolerance)``), so every run, table, plot and OMPL log treats them
+``split``, ``problem(movingai_dir, tolerance, cache)``), so every run, table, plot and OMPL log treats them
 alike.
 
 - A user's map set (``planners.maps.mapset.MapSet``): the baselines are tuned on its ``tuning`` part
@@ -48,7 +48,8 @@ class UnseenQuery:
     def map_set(self) -> str:
         return unseen_name(self.family)
 
-    def problem(self, movingai_dir: str | None, tolerance: float) -> Problem:  # noqa: ARG002 - the runner's interface
+    def problem(self, movingai_dir: str | None, tolerance: float,  # noqa: ARG002 - the runner's interface
+                cache: dict | None = None) -> Problem:  # noqa: ARG002
         return generate_unseen(self.family, self.key, self.size, goal_tolerance=tolerance)
 
 
@@ -71,15 +72,13 @@ def pooled_tuned(runs: Sequence[Run], families: Sequence[str], choose: Callable[
     return {(t, planner): v for (_, planner), v in chosen.items() for t in targets}
 
 
-_OPEN: dict = {}
-
-
-def open_map_set(spec: str, split_seed: int) -> MapSet:
-    """``MapSet.open(spec, split_seed=...)``, once per process."""
-    key = (spec, split_seed)
-    if key not in _OPEN:
-        _OPEN[key] = MapSet.open(spec, split_seed=split_seed) if _takes_seed(spec) else MapSet.open(spec)
-    return _OPEN[key]
+def open_map_set(spec: str, split_seed: int, cache: dict | None = None) -> MapSet:
+    """``MapSet.open(spec, split_seed=...)``, kept in ``cache`` (a worker's context) for the next call."""
+    key = ("map set", spec, split_seed)
+    cache = {} if cache is None else cache
+    if key not in cache:
+        cache[key] = MapSet.open(spec, split_seed=split_seed) if _takes_seed(spec) else MapSet.open(spec)
+    return cache[key]
 
 
 def _takes_seed(spec: str) -> bool:
@@ -113,17 +112,18 @@ class MapSetQuery:
     def split(self) -> str:
         return PART_SPLITS[self.query.part]
 
-    def problem(self, movingai_dir: str | None, tolerance: float) -> Problem:  # noqa: ARG002 - its own tolerance
-        return open_map_set(self.spec, self.split_seed).problem(self.query)
+    def problem(self, movingai_dir: str | None, tolerance: float,  # noqa: ARG002 - its own tolerance
+                cache: dict | None = None) -> Problem:
+        return open_map_set(self.spec, self.split_seed, cache).problem(self.query)
 
 
-def map_set_queries(spec: str, split_seed: int = 0) -> tuple[list[MapSetQuery], MapSet]:
+def map_set_queries(spec: str, split_seed: int = 0, cache: dict | None = None) -> tuple[list[MapSetQuery], MapSet]:
     """The tuning and test queries of the map set ``spec`` (checked: both parts hold queries), and the set.
 
     Raises:
         InputError: The spec names no map set, a map or query is bad, or a part is empty.
     """
-    ms = open_map_set(spec, split_seed)
+    ms = open_map_set(spec, split_seed, cache)
     ms.validate(list(PART_SPLITS))
     qs = [MapSetQuery(spec, split_seed, q) for part in PART_SPLITS for q in ms.queries(part)]
     return qs, ms

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from learning.evaluation.protocol import Protocol
 from learning.evaluation.roster import bias_sampler, sampler_bias
 from planners.tools.benchmark import OMPL_RUN_PROPERTIES, Run, ompl_run_values
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
@@ -149,10 +150,11 @@ def medians_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, plan
     return fig
 
 
-def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict) -> list[Path]:
-    """One OMPL benchmark log per family (map set) of the test split, under ``out_dir``.
+def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: Protocol) -> list[Path]:
+    """One OMPL benchmark log per family (map set) of the test split, under ``out_dir``, made under ``protocol``.
 
-    Each planner and sampler pair is one OMPL planner configuration (e.g. ``RRT goal bias 0.05``);
+    Each planner and sampler pair is one OMPL planner configuration (e.g. ``RRT goal bias 0.05``), its
+    settings holding the sampler's spec (name and parameters, as ``runs.csv`` records it);
     ``time`` is the run's wall time, including binding the sampler. Unsolved runs have no solution
     length. The logs open with ``ompl_benchmark_statistics.py out_dir/*.log -d db`` and Planner Arena.
     Tuning-split runs are left out: they choose the best bias, they are not the comparison.
@@ -167,18 +169,17 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict)
         for (planner, sampler), rs in sorted(configs.items()):
             b = sampler_bias(sampler)
             name = f"{planner} " + (sampler if b is None else "uniform" if b == 0 else f"goal bias {b:g}")
-            settings = {"planner": planner, "sampler": sampler, "step_size": cfg["step"],
-                        "goal_tolerance": cfg["tolerance"], "max_iterations": cfg["max_iterations"]}
+            settings = {"planner": planner, "sampler": sampler, "step_size": protocol.step,
+                        "goal_tolerance": protocol.tolerance, "max_iterations": protocol.max_iterations}
             if b is not None:
                 settings["best_goal_bias_on_tuning_split"] = "yes" if biases.get((fam, planner)) == b else "no"
-            if sampler == "policy":
-                settings["policy"] = cfg["policy"]
-            if sampler in cfg.get("user_samplers", {}):
-                settings["spec"] = cfg["user_samplers"][sampler]
+            specs = sorted({r.sampler_spec for r in rs if r.sampler_spec})
+            if specs:
+                settings["sampler_spec"] = " ".join(specs)
             planners[name] = PlannerRuns(settings, [ompl_run_values(r) for r in rs])
         queries = len({r.query for r in configs[next(iter(configs))]})
         setup = (f"SamplerGym comparison on {fam}, test split ({queries} queries, all runs of every sampler on the "
-                 f"same queries and seeds). Iterations to first solution, capped at {cfg['max_iterations']}; "
+                 f"same queries and seeds). Iterations to first solution, capped at {protocol.max_iterations}; "
                  f"the best goal bias was chosen on a separate tuning split (for shifted maps, their family's). "
                  f"'time' is wall time in seconds, "
                  f"including binding the sampler to the map. The expert is a privileged reference.")
@@ -186,6 +187,7 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, cfg: dict)
         paths.append(write_log(
             out_dir / f"{stem}.log", experiment_name(fam), planners, [(p, t) for p, t, _ in OMPL_RUN_PROPERTIES],
             setup=setup, total_time=sum(r.wall_time for rs in configs.values() for r in rs),
-            experiment_properties={"step_size": ("REAL", cfg["step"]), "goal_tolerance": ("REAL", cfg["tolerance"]),
-                                   "max_iterations": ("INTEGER", cfg["max_iterations"])}))
+            experiment_properties={"step_size": ("REAL", protocol.step),
+                                   "goal_tolerance": ("REAL", protocol.tolerance),
+                                   "max_iterations": ("INTEGER", protocol.max_iterations)}))
     return paths

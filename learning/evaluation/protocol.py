@@ -1,13 +1,58 @@
-"""What the comparison runs on: queries, their map sets and the test and tuning splits."""
+"""What the comparison runs on: the protocol (step, tolerance, cap, seeds, split sizes), queries, map sets, splits."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from planners import Problem
 from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, TUNING_SEED0, generate
 from planners.maps.movingai import benchmark_scenarios
+from planners.tools.benchmark import MAX_ITERATIONS, STEP, TOLERANCE
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """How every run of the comparison is made, and on how many queries: the one place of its defaults.
+
+    ``step`` is RRT's extension length (and the step the samplers that take one are built with),
+    ``tolerance`` the goal tolerance, ``max_iterations`` the cap; unsolved runs count as the cap.
+    ``movingai_dir`` is where MovingAI scenarios are read ("" where none are evaluated).
+    """
+
+    step: float = STEP
+    tolerance: float = TOLERANCE
+    max_iterations: int = MAX_ITERATIONS
+    seeds: int = 3  # planner seeds per test query
+    size: int = 128  # side of the generated test and tuning maps
+    maps: int = 50  # test maps per generated family
+    tuning_maps: int = 20  # tuning maps per generated family
+    shifted_maps: int = 50  # test maps per family from its shifted generator
+    unseen_maps: int = 25  # test maps per unseen family (at most ``maps``)
+    scenarios: int = 10  # test scenarios per MovingAI map
+    tuning_scenarios: int = 5  # tuning scenarios per MovingAI map
+    movingai_dir: str = ""
+
+    def quick(self) -> Protocol:
+        """The quick form: fewer test queries and planner seeds, the tuning split unchanged.
+
+        The tuning split is the full run's, so the best goal bias is chosen as carefully as in the full
+        comparison (tuned on 6 maps, the "best" bias was worse than uniform on the test maps and flattered
+        the policy), and 25 maps x 2 seeds keep the quick ratios near the full ones (10 x 1 put narrow
+        passage at 0.12 of the best bias against 0.39 in full).
+        """
+        return replace(self, **QUICK)
+
+    def problem(self, query, cache: dict | None = None) -> Problem:
+        """The problem of ``query`` (any query kind of the comparison) under this protocol's tolerance.
+
+        ``cache`` keeps what is loaded for it (MovingAI scenarios, a user's map set) for the next call.
+        """
+        return query.problem(self.movingai_dir, self.tolerance, cache)
+
+
+#: What :meth:`Protocol.quick` changes.
+QUICK = {"maps": 25, "shifted_maps": 25, "unseen_maps": 8, "scenarios": 4, "seeds": 2}
 
 
 @dataclass(frozen=True)
@@ -25,10 +70,11 @@ class Query:
         """The map set this query is reported under: the family, its shifted variant, or the MovingAI map."""
         return shifted_name(self.family) if self.shifted else self.family
 
-    def problem(self, movingai_dir: str | None, tolerance: float) -> Problem:
+    def problem(self, movingai_dir: str | None, tolerance: float, cache: dict | None = None) -> Problem:
+        """The problem: a generated map rebuilt, or a MovingAI scenario (loaded into ``cache`` where given)."""
         if self.size:
             return generate(self.family, self.key, self.size, goal_tolerance=tolerance, shifted=self.shifted)
-        return scenarios(movingai_dir, self.family, tolerance)[self.key]
+        return scenarios(movingai_dir, self.family, tolerance, cache)[self.key]
 
 
 def shifted_name(family: str) -> str:
@@ -36,14 +82,16 @@ def shifted_name(family: str) -> str:
     return f"{family} (shifted)"
 
 
-SCENARIO_CACHE: dict = {}
+def scenarios(directory: str, name: str, tolerance: float, cache: dict | None = None) -> list[Problem]:
+    """The comparison scenarios of MovingAI map ``name`` in ``directory`` (``benchmark_scenarios``).
 
-
-def scenarios(directory: str, name: str, tolerance: float) -> list[Problem]:
+    ``cache`` (keyed by ``(directory, name, tolerance)``) keeps what was loaded for the next call.
+    """
     key = (directory, name, tolerance)
-    if key not in SCENARIO_CACHE:
-        SCENARIO_CACHE[key] = benchmark_scenarios(directory, name, tolerance)
-    return SCENARIO_CACHE[key]
+    cache = {} if cache is None else cache
+    if key not in cache:
+        cache[key] = benchmark_scenarios(directory, name, tolerance)
+    return cache[key]
 
 
 def generated_queries(families: Sequence[str], size: int, n_test: int, n_tune: int) -> list[Query]:
@@ -72,14 +120,15 @@ def tuned_for_shifted(tuned: dict[tuple[str, str], float], queries: Sequence[Que
     return out
 
 
-def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: int, tolerance: float) -> list[Query]:
+def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: int, tolerance: float,
+                     cache: dict | None = None) -> list[Query]:
     """The longest half of each map's scenarios, alternately assigned to the test and tuning splits.
 
     ``n_test`` test and ``n_tune`` tuning scenarios per map (fewer where a map has too few).
     """
     out = []
     for m in maps:
-        ps = scenarios(directory, m, tolerance)
+        ps = scenarios(directory, m, tolerance, cache)
         half = max(2, len(ps) // 2)
         stride = max(1, half // (2 * max(n_test, n_tune)))
         picks = list(range(0, half, stride))

@@ -1,57 +1,22 @@
-"""The comparison's samplers by name: built-in names, tuned variants, and users' ``NAME=SPEC`` samplers."""
+"""The comparison's samplers as data: tasks carrying a ``SamplerSpec``, and one display label per spec.
+
+A task names its sampler by a :class:`~learning.samplers.registry.SamplerSpec` (a registered name and
+its parameters, or a user's ``NAME=SPEC``); runs are labelled from the spec by :func:`sampler_label`
+and record the spec itself as JSON (``runs.csv``'s ``sampler_spec``). An experiment may hand in a
+sampler the registry does not know: any picklable object with ``build(models) -> Sampler`` and
+``to_json() -> str``, labelled by the task (:class:`Task`).
+"""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from learning.evaluation.protocol import Protocol, Query
 from learning.samplers import registry
+from learning.samplers.registry import USER, SamplerSpec
 
-
-def bias_sampler(bias: float) -> str:
-    """The sampler name of goal bias ``bias``: ``"uniform"`` for 0, else ``"goal_bias=<bias>"``."""
-    return "uniform" if bias == 0 else f"goal_bias={bias:g}"
-
-
-def sampler_bias(name: str) -> float | None:
-    """The goal bias of sampler ``name`` (0 for uniform), or None for other samplers."""
-    if name == "uniform":
-        return 0.0
-    if name.startswith("goal_bias="):
-        return float(name.split("=")[1])
-    return None
-
-
-#: The test-split name of the ablation's runs, each at the frontier probability tuned for its map set.
-CONSTANT = "constant (tuned)"
-
-
-def constant_sampler(frontier: float) -> str:
-    """The sampler name of the constant-distribution ablation at frontier probability ``frontier``."""
-    return f"constant={frontier:g}"
-
-
-#: Name prefix of the privileged ablation whose frontier knows the geodesic distance (``learning.references.expert``).
-GEODESIC_FRONTIER = "geodesic frontier="
-
-
-#: Name prefixes of the privileged corridor references (``learning.references.expert.CorridorSampler``): the share of
-#: samples drawn from the exact near-shortest-path corridor follows, the rest come from uniform sampling or
-#: the straight-line follower.
-CORRIDOR_UNIFORM, CORRIDOR_FOLLOWER = "corridor+uniform=", "corridor+follower="
-
-
-def sampler_constant(name: str) -> float | None:
-    return float(name.split("=")[1]) if name.startswith("constant=") else None
-
-
-def policy_sampler(batch: int) -> str:
-    """The sampler name of the policy deciding every ``batch`` samples (a tuning run)."""
-    return f"policy batch={batch}"
-
-
-def sampler_policy_batch(name: str) -> int | None:
-    return int(name.split("=")[1]) if name.startswith("policy batch=") else None
-
-
-#: Sampler names the comparison defines itself; a user sampler takes another name.
 #: The strongest sampler without learning we know: ``learning.samplers.route.RouteSampler`` on the straight-line
 #: distance (one step ahead of the vertex nearest the goal; the frontier after 4 iterations without progress).
 FOLLOWER = "straight-line follower"
@@ -62,7 +27,134 @@ FOLLOWER = "straight-line follower"
 ROUTE, ROUTE_ABLATION = "route encoder", "route ablation"
 
 
-BUILTIN_SAMPLERS = ("uniform", "policy", FOLLOWER, ROUTE, ROUTE_ABLATION, "expert (reference)")
+#: The privileged references: the expert on the exact geodesic distance, and the route sampler on the exact
+#: cost-to-go at the route encoder's own settings (what perfect route knowledge gives that sampler).
+EXPERT, EXACT_ROUTE = "expert (reference)", "exact_route"
+
+
+#: The test-split name of the ablation's runs, each at the frontier probability tuned for its map set.
+CONSTANT = "constant (tuned)"
+
+
+#: Labels of the registered samplers whose label is not made from a parameter.
+_LABELS = {"uniform": "uniform", "follower": FOLLOWER, "route": ROUTE, "route_ablation": ROUTE_ABLATION,
+           "expert": EXPERT, "exact_route": EXACT_ROUTE}
+
+
+#: Sampler labels the comparison defines itself; a user sampler takes another name.
+BUILTIN_SAMPLERS = ("uniform", "policy", FOLLOWER, ROUTE, ROUTE_ABLATION, EXPERT, EXACT_ROUTE)
+
+
+def sampler_label(spec: SamplerSpec) -> str:
+    """The label of ``spec``'s runs in ``runs.csv``, tables and logs.
+
+    ``uniform``, ``goal_bias=<bias>``, ``constant=<frontier>`` (the ablation), ``policy`` (the checkpoint's
+    own batch) or ``policy batch=<batch>``, the follower, route encoder and ablation and references by
+    their names, a user's sampler by its ``NAME``.
+    """
+    if spec.name == "goal_bias":
+        return bias_sampler(spec.param("bias"))
+    if spec.name == "policy_ablation":
+        return constant_sampler(spec.param("frontier"))
+    if spec.name == "policy":
+        batch = spec.param("batch")
+        return "policy" if batch is None else policy_sampler(batch)
+    if spec.name == USER:
+        return spec.param("name")
+    return _LABELS[spec.name]
+
+
+@dataclass(frozen=True)
+class Task:
+    """One run to make: a query, a planner, a sampler (a spec, or an experiment's builder) and a seed.
+
+    ``label`` names the runs where it differs from the spec's own (:func:`sampler_label`): the policy
+    at its tuned batch is ``policy``, the ablation at its tuned frontier ``constant (tuned)``; an
+    experiment's own sampler must be given one.
+    """
+
+    query: Query
+    planner: str
+    sampler: Any  # SamplerSpec, or an object with build(models) and to_json()
+    seed: int
+    label: str = ""
+
+    @property
+    def sampler_label(self) -> str:
+        """The label its run is recorded under."""
+        return self.label or sampler_label(self.sampler)
+
+
+def bias_spec(bias: float) -> SamplerSpec:
+    """Goal bias ``bias`` as a spec: uniform sampling for 0."""
+    return SamplerSpec.of("uniform") if bias == 0 else SamplerSpec.of("goal_bias", bias=bias)
+
+
+def bias_sampler(bias: float) -> str:
+    """The label of goal bias ``bias``: ``"uniform"`` for 0, else ``"goal_bias=<bias>"``."""
+    return "uniform" if bias == 0 else f"goal_bias={bias:g}"
+
+
+def sampler_bias(name: str) -> float | None:
+    """The goal bias of the runs labelled ``name`` (0 for uniform), or None for other samplers."""
+    if name == "uniform":
+        return 0.0
+    if name.startswith("goal_bias="):
+        return float(name.split("=")[1])
+    return None
+
+
+def spec_bias(spec: SamplerSpec) -> float | None:
+    """The goal bias of ``spec`` (0 for uniform), or None for other samplers."""
+    if spec.name == "uniform":
+        return 0.0
+    return float(spec.param("bias")) if spec.name == "goal_bias" else None
+
+
+def constant_spec(frontier: float, protocol: Protocol, batch: int) -> SamplerSpec:
+    """The constant-distribution ablation at ``frontier``, deciding every ``batch`` samples as the policy does."""
+    return SamplerSpec.of("policy_ablation", frontier=frontier, step_size=protocol.step, batch=batch)
+
+
+def constant_sampler(frontier: float) -> str:
+    """The label of the constant-distribution ablation at frontier probability ``frontier``."""
+    return f"constant={frontier:g}"
+
+
+def policy_spec(path: str, batch: int | None) -> SamplerSpec:
+    """The policy checkpoint ``path`` deciding every ``batch`` samples (None: the checkpoint's own batch)."""
+    return SamplerSpec.of("policy", path=path, batch=batch)
+
+
+def policy_sampler(batch: int) -> str:
+    """The label of the policy deciding every ``batch`` samples (a tuning run)."""
+    return f"policy batch={batch}"
+
+
+def fixed_specs(protocol: Protocol, route: str, users: dict[str, str], references: bool = True,
+                device: str = "auto") -> list[SamplerSpec]:
+    """The test samplers that need no tuned setting, at ``protocol``'s step.
+
+    Uniform, the goal-bias sweep, the follower, the route encoder (checkpoint ``route``, its passes on
+    ``device``) and its ablation, users' samplers (name -> spec) and, with ``references``, the expert and
+    the exact route reference (``exact_route``: the route sampler's own settings on the exact cost-to-go).
+    """
+    from learning.evaluation.tuning import GOAL_BIASES
+
+    step = protocol.step
+    out = [SamplerSpec.of("uniform"), *(bias_spec(b) for b in GOAL_BIASES), SamplerSpec.of("follower", step_size=step),
+           SamplerSpec.of("route", path=route, step_size=step, device=device),
+           SamplerSpec.of("route_ablation", step_size=step), *(SamplerSpec.user(n, s) for n, s in users.items())]
+    if references:
+        out += [SamplerSpec.of("expert", step_size=step), SamplerSpec.of("exact_route", step_size=step)]
+    return out
+
+
+def evaluation_tasks(queries: Sequence[Query], planner: str, specs: Sequence[SamplerSpec], seeds: int,
+                     label: str = "") -> list[Task]:
+    """Every spec on every test query with planner seeds ``0 .. seeds-1``."""
+    return [Task(q, planner, s, seed, label) for q in queries if q.split == "test" for s in specs
+            for seed in range(seeds)]
 
 
 def parse_user_sampler(arg: str) -> tuple[str, str]:

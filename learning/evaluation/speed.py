@@ -14,13 +14,17 @@ from collections.abc import Sequence
 import numba as nb
 import numpy as np
 
+from learning.evaluation.protocol import Protocol
 from learning.models.fast_policy import FastActor, actor_logits
 from learning.samplers.policy import PolicySampler
 from planners import RRT, GoalBiasedSampler, Problem, Sampler
 from planners.guidance.guided import GuidedSampling
 
+#: The comparison's protocol: its step and iteration cap are what a query is timed at.
+DEFAULT = Protocol()
 
-def observations(sampler: PolicySampler, problems: Sequence[Problem], step_size: float = 4.0,
+
+def observations(sampler: PolicySampler, problems: Sequence[Problem], step_size: float = DEFAULT.step,
                  seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """The egocentric observations the training environment builds at each draw of RRT runs with ``sampler``."""
     plain = PolicySampler(sampler.actor, sampler.config, fuse=False)
@@ -39,7 +43,7 @@ def observations(sampler: PolicySampler, problems: Sequence[Problem], step_size:
             return draw(rng, n, view)
 
         planner.sampler.draw = recording
-        planner.solve(max_iterations=20000)
+        planner.solve(max_iterations=DEFAULT.max_iterations)
     return np.stack(local), np.stack(vector).astype(np.float32)
 
 
@@ -64,7 +68,8 @@ def forward_pass_us(actor: FastActor, local: np.ndarray, vector: np.ndarray, rep
 
 
 def query_times(policy: PolicySampler, bias: float, problems: Sequence[Problem], seeds: int = 2,
-                step_size: float = 4.0, extra: dict[str, Sampler] | None = None) -> dict[str, dict[str, float]]:
+                step_size: float = DEFAULT.step,
+                extra: dict[str, Sampler] | None = None) -> dict[str, dict[str, float]]:
     """Medians per query: wall time (ms), iterations, forward passes and wall time per iteration (us).
 
     Samplers: the policy, the policy without its hold, goal bias, and ``extra`` (e.g. an ``SB3Sampler``).
@@ -78,7 +83,7 @@ def query_times(policy: PolicySampler, bias: float, problems: Sequence[Problem],
             for name, sampler in samplers.items():
                 t0 = time.perf_counter()
                 planner = RRT(p, step_size=step_size, sampler=sampler, seed=seed)
-                r = planner.solve(max_iterations=20000)
+                r = planner.solve(max_iterations=DEFAULT.max_iterations)
                 wall = time.perf_counter() - t0
                 rows[name].append((wall * 1e3, r.iterations, getattr(planner.sampler, "forward_passes", 0),
                                    wall * 1e6 / max(r.iterations, 1)))

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from learning.evaluation.roster import CONSTANT, bias_sampler, sampler_bias
+from learning.evaluation.roster import CONSTANT, EXACT_ROUTE, EXPERT, bias_sampler, sampler_bias
 from planners.tools.benchmark import Run
 
 
@@ -175,16 +175,6 @@ def target_check(head: Sequence[dict], movingai_maps: Sequence[str], sampler: st
 
 # --- results at a glance, the room, and the targets for carrying the gain ---------------------------
 
-#: The privileged expert's and the exact route reference's sampler names (the latter runs where the roster has it).
-EXPERT_NAME = "expert (reference)"
-
-
-def _exact_name() -> str:
-    from learning.evaluation import roster
-
-    return getattr(roster, "EXACT_ROUTE", "exact_route")
-
-
 #: Share of the ablation's median below which the room to the exact reference is too small to judge.
 ROOM_FLOOR = 0.2
 
@@ -216,8 +206,8 @@ def glance_table(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
 
     by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
     cols = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy"), ("policy ablation", CONSTANT),
-            (ROUTE, ROUTE), (ROUTE_ABLATION, ROUTE_ABLATION), ("exact route reference", _exact_name()),
-            ("expert", EXPERT_NAME), *((n, n) for n in extra)]
+            (ROUTE, ROUTE), (ROUTE_ABLATION, ROUTE_ABLATION), ("exact route reference", EXACT_ROUTE),
+            ("expert", EXPERT), *((n, n) for n in extra)]
     out = []
     for fam in _order({f for f, _ in by}, movingai_maps):
         b = biases.get((fam, "RRT"))
@@ -251,7 +241,7 @@ def room_table(rows: Sequence[dict], movingai_maps: Sequence[str] = ()) -> list[
     """
     from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
 
-    exact = _exact_name()
+    exact = EXACT_ROUTE
     by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
     out = []
     for fam in _order({f for f, s in by if s == exact}, movingai_maps):
@@ -282,7 +272,7 @@ def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: s
     from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
 
     learned, ablation = learned or ROUTE, ablation or ROUTE_ABLATION
-    exact = _exact_name()
+    exact = EXACT_ROUTE
     by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
     fams = _order({f for f, s in by if s == learned and (f, ablation) in by}, movingai_maps)
     if not fams:

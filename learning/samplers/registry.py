@@ -20,6 +20,7 @@ from typing import Any
 
 from planners import GoalBiasedSampler, Sampler, UniformSampler
 from planners.base.fileio import InputError
+from planners.tools.benchmark import STEP  # the step samplers are built for unless told otherwise
 
 
 def _uniform() -> Sampler:
@@ -30,46 +31,45 @@ def _goal_bias(bias: float = 0.05) -> Sampler:
     return GoalBiasedSampler(bias)
 
 
-def _follower(step_size: float = 4.0) -> Sampler:
+def _follower(step_size: float = STEP) -> Sampler:
     from learning.samplers.route import FOLLOWER_SETTINGS, RouteSampler
 
     return RouteSampler(None, step_size=step_size, **FOLLOWER_SETTINGS)
 
 
-def _route(step_size: float = 4.0, path: str | None = None, device: str = "auto") -> Sampler:
+def _route(step_size: float = STEP, path: str | None = None, device: str = "auto", *,
+           models: ModelCache | None = None) -> Sampler:
     from learning.samplers.route import SHIPPED, shipped_sampler
 
-    return shipped_sampler(SHIPPED if path is None else path, step_size, device=device)
+    path = str(SHIPPED) if path is None else path
+    return shipped_sampler(path if models is None else models.route_net(path), step_size, device=device)
 
 
-def _route_ablation(step_size: float = 4.0) -> Sampler:
+def _route_ablation(step_size: float = STEP) -> Sampler:
     from learning.samplers.route import shipped_ablation
 
     return shipped_ablation(step_size)
 
 
-def _policy(batch: int | None = None, path: str | None = None, step_size: float | None = None) -> Sampler:
-    from learning.samplers.policy import PolicySampler
-
-    kwargs = {} if step_size is None else {"step_size": step_size}
-    if path is None:  # the shipped policy at its validated batch unless one is given
-        return PolicySampler.load(**({} if batch is None else {"batch": batch}), **kwargs)
-    return PolicySampler.load(path, batch=batch, **kwargs)
+def _policy(batch: int | None = None, path: str | None = None, step_size: float | None = None, *,
+            models: ModelCache | None = None) -> Sampler:
+    # the shipped policy at its validated batch unless a path or batch is given
+    return (ModelCache() if models is None else models).policy(path, batch, step_size)
 
 
-def _policy_ablation(frontier: float = 0.7, step_size: float = 4.0, batch: int = 8) -> Sampler:
+def _policy_ablation(frontier: float = 0.7, step_size: float = STEP, batch: int = 8) -> Sampler:
     from learning.samplers.ablation import ConstantGuidedSampler
 
     return ConstantGuidedSampler(frontier, step_size=step_size, batch=batch)
 
 
-def _expert(step_size: float = 4.0) -> Sampler:
+def _expert(step_size: float = STEP) -> Sampler:
     from learning.references.expert import ExpertSampler
 
     return ExpertSampler(step_size)
 
 
-def _exact_route(step_size: float = 4.0) -> Sampler:
+def _exact_route(step_size: float = STEP) -> Sampler:
     from learning.references.expert import GeodesicRouteSampler
     from learning.samplers.route import SHIPPED_SETTINGS
 
@@ -97,17 +97,73 @@ def sampler_names() -> tuple[str, ...]:
     return tuple(REGISTRY)
 
 
-def make_sampler(name: str, **params: Any) -> Sampler:
-    """The sampler registered as ``name`` with ``params``; an unknown name or parameter is an ``InputError``."""
+def make_sampler(name: str, *, models: ModelCache | None = None, **params: Any) -> Sampler:
+    """The sampler registered as ``name`` with ``params``; an unknown name or parameter is an ``InputError``.
+
+    ``models``: where samplers that load a file (the route encoder, the policy) take it from, loaded
+    once (:class:`ModelCache`); without it they load the file themselves.
+    """
     if name not in REGISTRY:
         raise InputError(f"unknown sampler {name!r}; choose from {', '.join(REGISTRY)}")
     factory = REGISTRY[name][0]
-    allowed = inspect.signature(factory).parameters
+    signature = inspect.signature(factory).parameters
+    allowed = [k for k, p in signature.items() if p.kind is not p.KEYWORD_ONLY]
     unknown = sorted(set(params) - set(allowed))
     if unknown:
         raise InputError(f"sampler {name!r} takes no parameter {', '.join(unknown)}; it takes "
                          f"{', '.join(allowed) or 'none'}")
+    if models is not None and "models" in signature:
+        return factory(**params, models=models)
     return factory(**params)
+
+
+#: The name of a user's ``NAME=SPEC`` sampler in a :class:`SamplerSpec` (``params``: ``name`` and ``spec``).
+USER = "user"
+
+
+class ModelCache:
+    """What samplers load from files, loaded once and kept: route encoders by path, policies, users' samplers.
+
+    A worker receives one with its tasks, so a run never loads weights again. A policy or a user's
+    sampler is kept as the sampler itself (it is bound afresh to every problem); a route encoder as its
+    network, each run building its sampler around it.
+    """
+
+    def __init__(self) -> None:
+        self.routes: dict[str, Any] = {}
+        self.policies: dict[tuple, Sampler] = {}
+        self.users: dict[str, Sampler] = {}
+
+    def __getstate__(self) -> dict:
+        # users' samplers are built in each worker: a user's object need not survive pickling
+        return {**self.__dict__, "users": {}}
+
+    def route_net(self, path: str):
+        """The route encoder in ``path``, loaded on first use."""
+        if path not in self.routes:
+            from learning.models.route_net import load_route_net
+
+            self.routes[path] = load_route_net(path)
+        return self.routes[path]
+
+    def policy(self, path: str | None, batch: int | None, step_size: float | None = None) -> Sampler:
+        """The policy in ``path`` (None: the shipped one) deciding every ``batch`` samples, loaded on first use."""
+        key = (path, batch, step_size)
+        if key not in self.policies:
+            from learning.samplers.policy import PolicySampler
+
+            kwargs = {} if step_size is None else {"step_size": step_size}
+            if path is None:  # the shipped policy at its validated batch unless one is given
+                self.policies[key] = PolicySampler.load(**({} if batch is None else {"batch": batch}), **kwargs)
+            else:
+                self.policies[key] = PolicySampler.load(path, batch=batch, **kwargs)
+        return self.policies[key]
+
+    def user(self, spec: str) -> Sampler:
+        """The user's sampler of ``spec`` (:func:`user_sampler`), built on first use."""
+        if spec not in self.users:
+            self.users[spec] = user_sampler(spec)
+        return self.users[spec]
 
 
 @dataclass(frozen=True)
@@ -122,9 +178,32 @@ class SamplerSpec:
         """The spec of ``make_sampler(name, **params)``, its parameters in a fixed order."""
         return cls(name, tuple(sorted(params.items())))
 
-    def build(self) -> Sampler:
-        """A new sampler of this spec."""
-        return make_sampler(self.name, **dict(self.params))
+    @classmethod
+    def user(cls, name: str, spec: str) -> SamplerSpec:
+        """A user's ``NAME=SPEC`` sampler (:func:`user_sampler`) as a spec."""
+        return cls(USER, (("name", name), ("spec", spec)))
+
+    @classmethod
+    def from_json(cls, text: str) -> SamplerSpec:
+        """The spec that :meth:`to_json` wrote."""
+        data = json.loads(text)
+        return cls(data["name"], tuple(sorted(data["params"].items())))
+
+    def param(self, key: str, default: Any = None) -> Any:
+        """The parameter ``key``: as the spec sets it, else the registered factory's default, else ``default``."""
+        params = dict(self.params)
+        if key in params:
+            return params[key]
+        factory = REGISTRY.get(self.name, (None,))[0]
+        p = inspect.signature(factory).parameters.get(key) if factory is not None else None
+        return default if p is None or p.default is p.empty else p.default
+
+    def build(self, models: ModelCache | None = None) -> Sampler:
+        """A sampler of this spec, taking loaded files from ``models`` where given (see :func:`make_sampler`)."""
+        if self.name == USER:
+            spec = self.param("spec")
+            return user_sampler(spec) if models is None else models.user(spec)
+        return make_sampler(self.name, models=models, **dict(self.params))
 
     def to_json(self) -> str:
         """``{"name": ..., "params": {...}}`` as one line of JSON."""

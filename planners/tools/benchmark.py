@@ -21,6 +21,12 @@ from planners.datastructures.nn import NearestNeighbors
 from planners.tools.parallel import Backend, LocalBackend
 
 
+#: The comparison's planning settings, in map cells: RRT's extension step, the goal tolerance and the
+#: iteration cap (unsolved runs count as the cap). ``learning.evaluation.Protocol`` holds them with the
+#: comparison's split sizes; scripts without learning take them from here.
+STEP, TOLERANCE, MAX_ITERATIONS = 4.0, 4.0, 20_000
+
+
 @dataclass
 class Run:
     """One planning run: a row of every ``runs.csv`` (evaluation and planner benchmark) and of every OMPL log.
@@ -44,6 +50,7 @@ class Run:
     path_cost: float  # inf when unsolved
     forward_passes: int  # a learned sampler's network evaluations
     vertices: int
+    sampler_spec: str = ""  # the sampler's name and parameters as JSON (evaluation runs), "" where not recorded
 
 
 #: Per-run properties of the OMPL logs: (OMPL property, type, ``Run`` field).

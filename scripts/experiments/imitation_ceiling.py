@@ -30,6 +30,7 @@ of the labelled cell. Validation maps only: these numbers choose what to try nex
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -46,6 +47,9 @@ from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # this folder's modules, in workers too
+from reference_samplers import Corridor, GeodesicFrontier  # noqa: E402
+
 DEFAULT_POLICY = SHIPPED_POLICY
 #: Shares of corridor samples tried per base sampler; the best on these maps is reported.
 CORRIDOR_Q = {"uniform": (0.5, 0.8, 0.95), "follower": (0.1, 0.3, 0.5)}
@@ -57,7 +61,7 @@ def main(argv=None) -> None:
     ap.add_argument("--families", nargs="+", choices=FAMILIES, default=list(FAMILIES))
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--maps", type=int, default=40, help="validation maps per family (one planner seed each)")
-    ap.add_argument("--max-iterations", type=int, default=20000)
+    ap.add_argument("--max-iterations", type=int, default=E.Protocol.max_iterations)
     add_backend_arguments(ap, processes=2, backend_help="where the runs execute", processes_help="workers for them")
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
@@ -69,24 +73,28 @@ def main(argv=None) -> None:
         ap.error(str(exc))
 
     config = PolicySampler.load(args.policy).config
-    step, tol = float(config["step_size"]), 4.0
+    protocol = E.Protocol(step=float(config["step_size"]), max_iterations=args.max_iterations)
+    step = protocol.step
     stuck = int(config.get("stuck_threshold", 16))
-    cfg = {"movingai_dir": "", "tolerance": tol, "policy": str(args.policy), "step": step,
-           "max_iterations": args.max_iterations, "user_samplers": {}}
     queries = [E.Query(f, VALIDATION_SEED0 + i, args.size, "validation") for f in args.families
                for i in range(args.maps)]
-    geodesic = {p: f"{E.GEODESIC_FRONTIER}{p:g}" for p in FRONTIER_GRID}
-    corridor = {"uniform": {q: f"{E.CORRIDOR_UNIFORM}{q:g}" for q in CORRIDOR_Q["uniform"]},
-                "follower": {q: f"{E.CORRIDOR_FOLLOWER}{q:g}" for q in CORRIDOR_Q["follower"]}}
-    samplers = ["policy", "expert (reference)", *(E.constant_sampler(p) for p in FRONTIER_GRID), *geodesic.values(),
-                E.FOLLOWER, *corridor["uniform"].values(), *corridor["follower"].values()]
-    tasks = [(q, "RRT", s, i, cfg) for s in samplers for i, q in enumerate(queries)]
+    geodesic = {p: f"geodesic frontier={p:g}" for p in FRONTIER_GRID}
+    corridor = {base: {q: f"corridor+{base}={q:g}" for q in qs} for base, qs in CORRIDOR_Q.items()}
+    bases = {"uniform": E.SamplerSpec.of("uniform"), "follower": E.SamplerSpec.of("follower", step_size=step)}
+    # (label, sampler): the registry's samplers by their specs, this probe's references by its own builders
+    samplers = [("policy", E.policy_spec(str(args.policy), None)),
+                ("expert (reference)", E.SamplerSpec.of("expert", step_size=step)),
+                *((E.constant_sampler(p), E.constant_spec(p, protocol, 8)) for p in FRONTIER_GRID),
+                *((label, GeodesicFrontier(p, step)) for p, label in geodesic.items()),
+                (E.FOLLOWER, bases["follower"]),
+                *((label, Corridor(q, bases[base])) for base, qs in corridor.items() for q, label in qs.items())]
+    tasks = [E.Task(q, "RRT", sampler, i, label) for label, sampler in samplers for i, q in enumerate(queries)]
     backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
     t0 = time.perf_counter()
     its: dict[tuple[str, str], np.ndarray] = {}
     lb: dict[str, np.ndarray] = {}
-    runs = E.run_all(tasks, backend, progress=False)
-    for s in samplers:
+    runs = E.run_all(tasks, protocol, backend, progress=False)
+    for s, _ in samplers:
         for f in args.families:
             rs = [r for r in runs if r.sampler == s and r.map == f]
             its[(f, s)] = np.array([r.iterations for r in rs], dtype=float)
@@ -94,7 +102,7 @@ def main(argv=None) -> None:
     labelled = {"labels": stuck, "labels, no frontier fallback": 10**9}
     for name, threshold in labelled.items():
         for f in args.families:
-            problems = [q.problem(None, tol) for q in queries if q.family == f]
+            problems = [protocol.problem(q) for q in queries if q.family == f]
             # RRT seeds 0.. per problem, as the runs above (collect seeds problem i with seed + i)
             _, n = collect(problems, None, 1.0, seed=0, batch=int(config["batch"]), step_size=step,
                            stuck_threshold=threshold, uniform_floor=float(config["uniform_floor"]),
@@ -127,7 +135,7 @@ def departures(queries, args, config, backend) -> list[dict]:
     actor = PolicySampler.load(args.policy).actor
     rows = []
     for f in args.families:
-        problems = [q.problem(None, 4.0) for q in queries if q.family == f]
+        problems = [E.Protocol().problem(q) for q in queries if q.family == f]
         data, _ = collect(problems, actor, 0.0, seed=0, batch=int(config["batch"]),
                           step_size=float(config["step_size"]),
                           stuck_threshold=int(config.get("stuck_threshold", 16)),

@@ -34,7 +34,7 @@ def main(argv=None) -> int:
     ap.add_argument("--batches", type=int, nargs="+", default=list(E.POLICY_BATCHES))
     ap.add_argument("--maps", type=int, default=20, help="tuning maps per family (evaluate.py's --tuning-maps)")
     ap.add_argument("--seeds", type=int, default=E.POLICY_TUNING_SEEDS)
-    ap.add_argument("--max-iterations", type=int, default=20000)
+    ap.add_argument("--max-iterations", type=int, default=E.Protocol.max_iterations)
     add_backend_arguments(ap, processes=2, backend_help="where the runs execute", processes_help="workers for them")
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
@@ -46,12 +46,11 @@ def main(argv=None) -> int:
         PolicySampler.load(args.policy)
     except (InputError, FileNotFoundError) as exc:
         ap.error(str(exc))
-    cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": str(args.policy), "step": 4.0,
-           "max_iterations": args.max_iterations}
-    queries = E.generated_queries(FAMILIES, 128, 0, args.maps)
-    tasks = E.policy_tuning_tasks(queries, "RRT", cfg, args.batches, args.seeds)
+    protocol = E.Protocol(max_iterations=args.max_iterations)
+    queries = E.generated_queries(FAMILIES, protocol.size, 0, args.maps)
+    tasks = E.policy_tuning_tasks(queries, "RRT", str(args.policy), args.batches, args.seeds)
     t0 = time.perf_counter()
-    runs = E.run_on_backend_args(tasks, args)
+    runs = E.run_on_backend_args(tasks, protocol, args)
     best, score = E.best_policy_batch(runs)
     rows = []
     for b in args.batches:

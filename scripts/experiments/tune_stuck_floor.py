@@ -44,10 +44,11 @@ def _run(task: tuple, context: dict) -> int:
     query, floor, seed = task
     base = context["policy"]
     sampler = PolicySampler(base.actor, base.config, max_floor=floor)
-    problem = query.problem(context["movingai_dir"], context["tolerance"])
+    protocol = context["protocol"]
+    problem = protocol.problem(query, context["scenarios"])
     r = make_planner("RRT", problem, extension_step=base.step_size, sampler=sampler, seed=seed).solve(
-        max_iterations=context["max_iterations"])
-    return r.first_solution_iteration if r.solved else context["max_iterations"]
+        max_iterations=protocol.max_iterations)
+    return r.first_solution_iteration if r.solved else protocol.max_iterations
 
 
 def choose(success: dict[float, dict[str, float]], medians: dict[float, float]) -> float:
@@ -65,7 +66,7 @@ def main(argv=None) -> float:
     ap.add_argument("--scenarios", type=int, default=30, help="tuning scenarios per MovingAI map")
     ap.add_argument("--seeds", type=int, default=3, help="planner seeds per query")
     ap.add_argument("--maps", type=int, default=40, help="validation maps per generated family")
-    ap.add_argument("--max-iterations", type=int, default=20000)
+    ap.add_argument("--max-iterations", type=int, default=E.Protocol.max_iterations)
     add_backend_arguments(ap, processes=2, backend_help="where the runs execute", processes_help="workers for them")
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
@@ -79,12 +80,16 @@ def main(argv=None) -> float:
     except (InputError, FileNotFoundError) as exc:
         ap.error(str(exc))
     maps = sorted(p.stem for p in Path(directory).glob("*.map"))
-    tuning = [q for q in E.movingai_queries(directory, maps, 0, args.scenarios, 4.0) if q.split == "tuning"]
-    validation = [E.Query(f, VALIDATION_SEED0 + i, 128, "validation") for f in FAMILIES for i in range(args.maps)]
+    protocol = E.Protocol(max_iterations=args.max_iterations, movingai_dir=directory)
+    loaded: dict = {}
+    tuning = [q for q in E.movingai_queries(directory, maps, 0, args.scenarios, protocol.tolerance, loaded)
+              if q.split == "tuning"]
+    validation = [E.Query(f, VALIDATION_SEED0 + i, protocol.size, "validation") for f in FAMILIES
+                  for i in range(args.maps)]
     tasks = [(q, f, s) for f in args.floors for q in tuning + validation for s in range(args.seeds)]
     backend = make_backend(args.backend, processes=args.processes, address=args.address, worker_init=E.worker_init)
     t0 = time.perf_counter()
-    context = {"policy": policy, "movingai_dir": directory, "tolerance": 4.0, "max_iterations": args.max_iterations}
+    context = {"policy": policy, "protocol": protocol, "scenarios": loaded}
     its = backend.map(_run, tasks, context=context, progress=False)
     cap = args.max_iterations
     by = {}

@@ -23,13 +23,10 @@ import numpy as np
 sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
 from learning import evaluation as E
-from learning.models.shipped import SHIPPED_POLICY
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments
-
-DEFAULT_POLICY = str(SHIPPED_POLICY)
 
 
 def main(argv=None) -> list[dict]:
@@ -38,8 +35,8 @@ def main(argv=None) -> list[dict]:
     ap.add_argument("--families", nargs="+", choices=FAMILIES, default=list(FAMILIES))
     ap.add_argument("--maps", type=int, default=20, help="validation maps per family")
     ap.add_argument("--seeds", type=int, default=3, help="planner seeds per map")
-    ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--max-iterations", type=int, default=20000)
+    ap.add_argument("--size", type=int, default=E.Protocol.size)
+    ap.add_argument("--max-iterations", type=int, default=E.Protocol.max_iterations)
     add_backend_arguments(ap, processes=2, backend_help="where the runs execute", processes_help="workers for them")
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
@@ -56,13 +53,13 @@ def main(argv=None) -> list[dict]:
             samplers[name] = spec
     except (ValueError, FileNotFoundError) as exc:
         ap.error(str(exc))
-    cfg = {"movingai_dir": "", "tolerance": 4.0, "policy": DEFAULT_POLICY, "step": 4.0,
-           "max_iterations": args.max_iterations, "user_samplers": samplers}
+    protocol = E.Protocol(max_iterations=args.max_iterations)
     queries = [E.Query(f, VALIDATION_SEED0 + i, args.size, "validation") for f in args.families
                for i in range(args.maps)]
-    tasks = [(q, "RRT", name, seed, cfg) for name in samplers for q in queries for seed in range(args.seeds)]
+    tasks = [E.Task(q, "RRT", E.SamplerSpec.user(name, spec), seed) for name, spec in samplers.items()
+             for q in queries for seed in range(args.seeds)]
     t0 = time.perf_counter()
-    runs = E.run_on_backend_args(tasks, args)
+    runs = E.run_on_backend_args(tasks, protocol, args)
     rows = []
     for name in samplers:
         row = {"sampler": name}
