@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 from learning.evaluation.protocol import Protocol
 from learning.evaluation.roster import Task
 from learning.samplers.registry import USER, ModelCache
-from planners import make_planner
+from learning.samplers.route import FieldCache, RouteSampler
+from planners import Problem, make_planner
 from planners.base.registry import planner_class
 from planners.tools.benchmark import Run
 from planners.tools.parallel import Backend, make_backend
@@ -23,11 +24,25 @@ class RunContext:
     ``models`` holds the route encoders, policies and users' samplers (loaded once, so workers on other
     machines need none of the files); ``scenarios`` the MovingAI scenarios by ``(directory, map, tolerance)``.
     Generated maps travel as (family, seed, size) and are rebuilt.
+
+    ``fields`` keeps the route encoder's fields in each worker (it travels empty), so the runs of one
+    query that differ only by planner seed run the encoder once. ``batch_fields``: when a worker meets a
+    query whose field it lacks, it computes it together with those of the next queries of the same sampler
+    (up to ``prefill`` of them, in task order; ``route_queries``, set by ``shared_context``) in one batch
+    of passes. None: so on a GPU, and one query at a time on the CPU, where a batch of several queries may
+    round differently from one query alone (the CPU's iteration counts stay those of one query at a time).
+    Each run's wall time still includes its query's field: the time of its passes, or its share of a
+    batch's, where it was computed before the run (``RouteSampler.reused_seconds``): the evaluation takes
+    less time, and a run reports what its query costs (with its share of a batch where batched).
     """
 
     protocol: Protocol
     models: ModelCache = field(default_factory=ModelCache)
     scenarios: dict = field(default_factory=dict)
+    fields: FieldCache = field(default_factory=FieldCache)
+    batch_fields: bool | None = None
+    prefill: int = 64
+    route_queries: dict = field(default_factory=dict)
 
 
 def run_one(task: Task, context: RunContext) -> Run:
@@ -35,13 +50,20 @@ def run_one(task: Task, context: RunContext) -> Run:
     protocol = context.protocol
     problem = protocol.problem(task.query, context.scenarios)
     sampler = task.sampler.build(context.models)
+    if isinstance(sampler, RouteSampler) and sampler.net is not None and sampler.fields is None \
+            and getattr(task.sampler, "name", None) != USER:  # a user's sampler is left as the user made it
+        sampler.fields = context.fields
+        batch = _batch(sampler, task, problem, context)
+        if batch:  # timed per field by the cache, charged below
+            sampler.prefill(batch, batch=True)
     # iterations to the first solution: anytime planners stop there too
     anytime = {"stop_on_first_solution": True} if planner_class(task.planner).anytime else {}
     t0 = time.perf_counter()  # wall time includes binding the sampler (the policy's per-map setup)
     planner = make_planner(task.planner, problem, extension_step=protocol.step, sampler=sampler, seed=task.seed,
                            **anytime)
     r = planner.solve(max_iterations=protocol.max_iterations)
-    wall = time.perf_counter() - t0
+    # and the encoder's time for this query's field where it was computed before (kept across seeds, batched)
+    wall = time.perf_counter() - t0 + float(getattr(planner.sampler, "reused_seconds", 0.0))
     its = r.first_solution_iteration if r.solved else r.iterations
     return Run(map=task.query.map_set, query=problem.name, split=task.query.split, planner=task.planner,
                sampler=task.sampler_label, seed=task.seed, solved=r.solved, iterations=int(its),
@@ -50,6 +72,28 @@ def run_one(task: Task, context: RunContext) -> Run:
                path_cost=r.cost if r.solved else math.inf,
                forward_passes=int(getattr(planner.sampler, "forward_passes", 0)), vertices=int(r.num_vertices),
                sampler_spec=task.sampler.to_json())
+
+
+def _batch(sampler: RouteSampler, task: Task, problem: Problem, context: RunContext) -> list[Problem]:
+    """Where ``context`` batches fields and ``sampler`` lacks ``problem``'s: it and the next queries' problems.
+
+    (Empty where there is nothing to batch.) Their fields together take at most a quarter of the cache.
+    """
+    batch = context.batch_fields
+    if batch is None:
+        batch = next(sampler.net.parameters()).device.type != "cpu"
+    if not batch or sampler.has_field(problem):
+        return []
+    queries = context.route_queries.get(task.sampler, ())
+    at = queries.index(task.query) if task.query in queries else len(queries)
+    problems, cells = [problem], problem.world.obstacles.size
+    for query in queries[at + 1:at + context.prefill]:
+        other = context.protocol.problem(query, context.scenarios)
+        cells += other.world.obstacles.size
+        if cells * 8 > context.fields.max_bytes // 4:  # the batch's fields stay well within what the cache keeps
+            break
+        problems.append(other)
+    return problems
 
 
 def shared_context(tasks: Sequence[Task], protocol: Protocol | RunContext) -> RunContext:
@@ -61,9 +105,13 @@ def shared_context(tasks: Sequence[Task], protocol: Protocol | RunContext) -> Ru
     left to each worker's first run (a user's object need not survive pickling).
     """
     context = protocol if isinstance(protocol, RunContext) else RunContext(protocol)
+    context.route_queries = {}
     for spec in dict.fromkeys(t.sampler for t in tasks):
-        if getattr(spec, "name", None) != USER:
-            spec.build(context.models)
+        if getattr(spec, "name", None) == USER:
+            continue
+        sampler = spec.build(context.models)
+        if isinstance(sampler, RouteSampler) and sampler.net is not None:  # the queries whose fields it batches
+            context.route_queries[spec] = tuple(dict.fromkeys(t.query for t in tasks if t.sampler == spec))
     for query in dict.fromkeys(t.query for t in tasks if not t.query.size):
         context.protocol.problem(query, context.scenarios)
     return context

@@ -20,8 +20,13 @@ on the straight-line distance, which is what its learning is measured against.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
+import time
+from collections import OrderedDict
+from collections.abc import Sequence
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -30,8 +35,8 @@ from learning.device import resolve_device
 from learning.models.route_net import RouteNet, load_route_net
 from learning.models.threads import planning_thread_count
 from learning.models.shipped import SHIPPED_ROUTE
-from planners import OccupancyGrid, SamplerBase
-from planners.base.fileio import InputError
+from planners import OccupancyGrid, Problem, SamplerBase
+from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, lowest_vertex_cell, walk_field
@@ -136,6 +141,130 @@ def route_rrt_loop(budget, state, buffers, rng, loop):
     return rrt_loop(budget, route_draw, state, buffers, rng, loop)
 
 
+class CachedField(NamedTuple):
+    """A field from ``FieldCache.get``: a copy the caller may change, the encoder time it took, and whether it was kept.
+
+    ``seconds`` is the wall time of the passes that computed it (its share of a batch's, ``FieldCache.fill``);
+    ``reused`` is True when it came from the cache rather than from passes run by this call.
+    """
+
+    field: np.ndarray
+    seconds: float
+    reused: bool
+
+
+class FieldCache:
+    """The route encoder's fields by query, kept for later binds of the same query: an LRU bounded in bytes.
+
+    A query is the map's obstacles (their bytes' hash, shape and type), the goal cell, the symmetries
+    averaged over, and the encoder (the object, kept alive while the cache holds its fields, and the
+    device it is on). ``RouteSampler(..., fields=cache)`` consults it before running the encoder, so runs
+    of one query that differ only by planner seed run it once; ``fill`` computes the fields of many
+    queries ahead, their passes batched together (``RouteNet.predict_many``) on a GPU.
+
+    A field computed on a miss is ``predict``'s, bit for bit. A batch of several queries on the CPU may
+    differ from one query at a time by floating-point rounding, which can change an iteration count, so
+    ``fill`` batches queries together only when the encoder is off the CPU (or when told to). A copy of
+    a cache goes without its fields (pickled for a worker, it starts empty there). The torch thread count
+    is not part of a query: one cache serves passes at one thread count.
+
+    Args:
+        max_bytes: The most bytes of fields kept; the least recently used go first. A field larger
+            than this is returned but not kept.
+    """
+
+    def __init__(self, max_bytes: int = 256 << 20) -> None:
+        if isinstance(max_bytes, bool) or not isinstance(max_bytes, int) or max_bytes < 0:
+            raise InputError(f"FieldCache max_bytes = {short_repr(max_bytes)}: expected a whole number of bytes >= 0")
+        self.max_bytes = max_bytes
+        self._clear()
+
+    def _clear(self) -> None:
+        self._fields: OrderedDict[tuple, tuple[np.ndarray, float]] = OrderedDict()  # field, encoder seconds
+        self._nets: dict[int, RouteNet] = {}  # keeps each keyed encoder alive, so its id is not reused
+        self.bytes = self.hits = self.misses = 0
+
+    def __getstate__(self) -> dict:
+        return {"max_bytes": self.max_bytes}
+
+    def __setstate__(self, state: dict) -> None:
+        self.max_bytes = state["max_bytes"]
+        self._clear()
+
+    def __len__(self) -> int:
+        return len(self._fields)
+
+    def key(self, net: RouteNet, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int) -> tuple:
+        """The key of a query's field (see the class docstring)."""
+        obstacles = np.ascontiguousarray(obstacles)
+        digest = hashlib.blake2b(obstacles.view(np.uint8).data, digest_size=16).digest()
+        device = str(next(net.parameters()).device)
+        return (id(net), device, digest, obstacles.shape, obstacles.dtype.str, (int(goal_cell[0]), int(goal_cell[1])),
+                int(symmetries))
+
+    def has(self, net: RouteNet, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int) -> bool:
+        """Whether the query's field is kept."""
+        return self.key(net, obstacles, goal_cell, symmetries) in self._fields
+
+    def get(self, net: RouteNet, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int, *,
+            threads: int | None = None) -> CachedField:
+        """``net.predict(obstacles, goal_cell, symmetries, threads=threads)``, from the cache where it is there."""
+        key = self.key(net, obstacles, goal_cell, symmetries)
+        if key in self._fields:
+            self.hits += 1
+            self._fields.move_to_end(key)
+            field, seconds = self._fields[key]
+            return CachedField(field.copy(), seconds, True)
+        self.misses += 1
+        t0 = time.perf_counter()
+        field = net.predict(obstacles, goal_cell, symmetries, threads=threads)
+        seconds = time.perf_counter() - t0
+        self._keep(key, net, field, seconds)
+        return CachedField(field.copy(), seconds, False)
+
+    def fill(self, net: RouteNet, queries: Sequence[tuple[np.ndarray, tuple[int, int]]], symmetries: int, *,
+             threads: int | None = None, batch: bool | None = None) -> int:
+        """Compute the fields of the (obstacles, goal cell) ``queries`` not yet kept; the number computed.
+
+        ``batch``: run their passes together in one ``predict_many`` (True; each field is charged an
+        equal share of the batch's time), one query at a time (False, each field then ``predict``'s bit
+        for bit), or together only when ``net`` is off the CPU (None). Queries beyond what the cache keeps
+        are computed and dropped, so pass at most as many as it holds.
+        """
+        todo: dict[tuple, tuple[np.ndarray, tuple[int, int]]] = {}
+        for obstacles, goal_cell in queries:
+            key = self.key(net, obstacles, goal_cell, symmetries)
+            if key not in self._fields:
+                todo.setdefault(key, (obstacles, goal_cell))
+        if not todo:
+            return 0
+        if batch is None:
+            batch = next(net.parameters()).device.type != "cpu"
+        if batch:
+            t0 = time.perf_counter()
+            fields = net.predict_many(list(todo.values()), symmetries, threads=threads)
+            share = (time.perf_counter() - t0) / len(todo)
+            for key, field in zip(todo, fields, strict=True):
+                self._keep(key, net, field, share)
+        else:
+            for key, (obstacles, goal) in todo.items():
+                t0 = time.perf_counter()
+                field = net.predict(obstacles, goal, symmetries, threads=threads)
+                self._keep(key, net, field, time.perf_counter() - t0)
+        self.misses += len(todo)
+        return len(todo)
+
+    def _keep(self, key: tuple, net: RouteNet, field: np.ndarray, seconds: float) -> None:
+        if field.nbytes > self.max_bytes:
+            return
+        self._fields[key] = (field, seconds)
+        self._nets[id(net)] = net
+        self.bytes += field.nbytes
+        while self.bytes > self.max_bytes:
+            _, (old, _) = self._fields.popitem(last=False)
+            self.bytes -= old.nbytes
+
+
 class RouteSampler(SamplerBase):
     """Samples one step ahead of the tree along a ``RouteNet``'s predicted cost-to-go; the frontier when stuck.
 
@@ -171,6 +300,10 @@ class RouteSampler(SamplerBase):
             the encoder is moved there. On the CPU the iteration counts are the validated ones.
         threads: torch threads for the encoder's passes (``learning.models.threads``): default
             ``SAMPLERGYM_TORCH_THREADS`` or 1; the caller's setting is restored after each pass.
+        fields: Where the encoder's fields are taken from when there and kept (``FieldCache``); None:
+            computed at every bind. ``forward_passes`` counts the passes a query's field takes either way;
+            ``reused_seconds`` is the encoder time of a field taken from the cache (0 when this bind
+            computed it), which the evaluation adds to a run's wall time so each run costs its query's field.
     """
 
     #: Where the encoder's field replaces the straight line: the progress and the frontier's ranking.
@@ -181,7 +314,8 @@ class RouteSampler(SamplerBase):
 
     def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 3.0, sigma: float = 0.5,
                  stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
-                 max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None) -> None:
+                 max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None,
+                 fields: FieldCache | None = None) -> None:
         if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
                 and 0 <= uniform_floor <= max_floor <= 1 and tau > 0):
             raise InputError(f"need step_size, lookahead, stuck, patience, batch, tau > 0, sigma >= 0 and "
@@ -193,10 +327,10 @@ class RouteSampler(SamplerBase):
         self.device = resolve_device(device, "device =")
         if threads is not None:
             planning_thread_count(threads)  # refused now, by name, rather than at the first query
-        self.threads = threads
+        self.threads, self.fields = threads, fields
         if net is not None:
             net.to(self.device)
-        self.forward_passes = 0
+        self.forward_passes, self.reused_seconds = 0, 0.0
 
     @classmethod
     def load(cls, path: str | os.PathLike = SHIPPED_ROUTE, **kwargs) -> RouteSampler:
@@ -220,17 +354,45 @@ class RouteSampler(SamplerBase):
             raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is {cells:g} cells "
                              f"of this map (resolution {grid.resolution:g}): pass "
                              f"step_size={self.net.block * grid.resolution:g}")
-        learned = self.net.predict(grid.obstacles, grid.cell_of(self.problem.goal), self._symmetries,
-                                   threads=self.threads)
+        goal = grid.cell_of(self.problem.goal)
+        if self.fields is None:
+            learned = self.net.predict(grid.obstacles, goal, self._symmetries, threads=self.threads)
+        else:
+            learned, seconds, reused = self.fields.get(self.net, grid.obstacles, goal, self._symmetries,
+                                                       threads=self.threads)
+            self.reused_seconds = seconds if reused else 0.0
         self.forward_passes = self._symmetries
         progress = self._straight(grid) if self._uses == "frontier" else learned
         return progress, (None if self._uses == "progress" else learned)
+
+    def has_field(self, problem: Problem) -> bool:
+        """Whether ``fields`` holds the encoder's field of ``problem`` (False without an encoder or a cache)."""
+        grid = problem.world
+        if self.net is None or self.fields is None or not isinstance(grid, OccupancyGrid):
+            return False
+        return self.fields.has(self.net, grid.obstacles, grid.cell_of(problem.goal), self._symmetries)
+
+    def prefill(self, problems: Sequence[Problem], *, batch: bool | None = None) -> int:
+        """Compute the encoder's fields of ``problems`` into ``fields`` ahead of their binds; the number computed.
+
+        ``batch`` as for ``FieldCache.fill``: by default the passes of all of them run together on a GPU
+        and one query at a time on the CPU. Problems off an ``OccupancyGrid``, or whose step is not the
+        encoder's block, are left to their binds (which refuse them). Needs an encoder and a ``fields`` cache.
+        """
+        if self.net is None or self.fields is None:
+            raise InputError("RouteSampler.prefill needs an encoder and a fields cache (RouteSampler(net, fields=...))")
+        queries = []
+        for problem in problems:
+            grid = problem.world
+            if isinstance(grid, OccupancyGrid) and round(self.step_size / grid.resolution) == self.net.block:
+                queries.append((grid.obstacles, grid.cell_of(problem.goal)))
+        return self.fields.fill(self.net, queries, self._symmetries, threads=self.threads, batch=batch)
 
     def _setup(self) -> None:
         grid = self.problem.world
         if not isinstance(grid, OccupancyGrid):
             raise InputError("RouteSampler plans on OccupancyGrid problems")
-        self.forward_passes = 0
+        self.forward_passes, self.reused_seconds = 0, 0.0
         field, ranking = self._fields(grid)
         field[grid.obstacles] = np.inf
         self.field = field
