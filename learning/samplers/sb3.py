@@ -101,6 +101,7 @@ class ActorPass:
         self.gaussian = gaussian
         self.parts = parts  # (observation key, or None for the whole observation; its extractor)
         self.scales = scales  # observation key (None for a Box observation) -> (shape, divide by 255)
+        self.device = policy.device  # SB3's property walks the parameters on every read
         self._last: dict = {}
 
     @classmethod
@@ -132,7 +133,9 @@ class ActorPass:
 
     def _tensor(self, key: str | None, array: np.ndarray) -> torch.Tensor:
         shape, image = self.scales[key]
-        t = torch.as_tensor(array.reshape((1, *shape)), device=self.policy.device)
+        t = torch.from_numpy(array.reshape((1, *shape)))  # ``array`` is this pass's own copy
+        if t.device != self.device:
+            t = t.to(self.device)
         return t.float() / 255.0 if image else t.float()
 
     def _inputs(self, obs, key: str | None) -> tuple[np.ndarray, ...] | None:
