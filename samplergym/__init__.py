@@ -10,8 +10,10 @@ ids from there, leaving the project's ``envs`` alone. Otherwise ``samplergym.env
 
 The main public names are re-exported here, each imported on first use (``learning`` needs torch):
 ``make_planner``, ``planner_names``, ``Problem``, ``OccupancyGrid`` (``planners``), ``SamplerEnv``,
-``EnvSampler``, ``ENV_IDS`` (the environments) and ``SB3Sampler`` (``learning``; it needs this library's
-``envs`` to be importable as ``envs``).
+``EnvSampler``, ``ENV_IDS`` (the environments) and ``SB3Sampler`` (``learning``).
+
+``samplergym.envs`` is the one way this library's own code outside ``envs/`` reaches the environment
+package (``from samplergym import envs``), so ``learning`` works beside a project's ``envs/`` too.
 """
 
 from __future__ import annotations

@@ -54,3 +54,41 @@ def test_samplergym_is_envs_when_nothing_shadows_it(tmp_path):
     proc = _run(tmp_path, code)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["ok"]
+
+
+def test_sb3_sampler_plans_beside_a_projects_own_envs(tmp_path):
+    """``learning`` reaches the environments as ``samplergym.envs``: a user's ``envs/`` does not break SB3Sampler."""
+    (tmp_path / "envs").mkdir()
+    (tmp_path / "envs" / "__init__.py").write_text('MINE = "yes"\n')
+    code = textwrap.dedent("""
+        import gymnasium as gym
+        import numpy as np
+        import torch
+        from stable_baselines3 import PPO
+
+        from learning import SB3Sampler
+        from learning.extractor import EgocentricExtractor  # the path SB3 checkpoints name the extractor by
+        from planners import RRT
+        import samplergym
+
+        torch.set_num_threads(1)
+        kwargs = {"action_mode": "bias", "obs_size": 36, "local_size": 36, "max_iterations": 50}
+        env = gym.make("samplergym:SamplerGym/RRT-Forest-v0", **kwargs)
+        model = PPO("MultiInputPolicy", env, seed=0, device="cpu")
+        model.save("user_ppo.zip")
+        problem = env.unwrapped.source(np.random.default_rng(0))
+        runs = []
+        for m in (model, "user_ppo.zip"):
+            sampler = SB3Sampler(m, "samplergym:SamplerGym/RRT-Forest-v0", **kwargs)
+            assert isinstance(sampler, samplergym.EnvSampler) and samplergym.SB3Sampler is SB3Sampler
+            planner = RRT(problem, step_size=4.0, sampler=sampler, seed=0)
+            r = planner.solve(max_iterations=40)
+            runs.append((r.iterations, planner.view().num_vertices))
+        assert runs[0] == runs[1] and runs[0][1] > 1, runs
+        import envs
+        assert envs.MINE == "yes", envs
+        print("ok", type(sampler.env).__module__, EgocentricExtractor.__module__)
+    """)
+    proc = _run(tmp_path, code)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["ok", "samplergym.envs.sampler_env", "learning.models.extractor"]

@@ -236,3 +236,32 @@ def test_the_policy_acts_at_the_planning_thread_count_and_restores_the_callers(p
     assert planning_thread_count() == 1
     with pytest.raises(InputError, match="threads = 0"):
         SB3Sampler(model, "SamplerGym/RRT-Forest-v0", threads=0, **FOREST)
+
+
+@pytest.mark.parametrize(("env_id", "kwargs"), [("SamplerGym/RRT-Forest-v0", FOREST),
+                                                ("SamplerGym/RRT-Rooms-v0", {"action_mode": "guided", **SMALL})],
+                         ids=["gaussian", "categorical"])
+def test_the_direct_actor_pass_takes_sb3s_actions(env_id, kwargs, monkeypatch):
+    """``ActorPass`` (modules called directly, features reused) gives SB3's actions: the same runs, draw for draw."""
+    env = gym.make(env_id, **kwargs)
+    model = PPO("MultiInputPolicy", env, seed=0, device="cpu")
+    base = env.unwrapped
+    reference = {True: base.as_sampler(lambda obs, rng: model.predict(obs, deterministic=True)[0]),
+                 False: SB3Sampler(model, env_id, deterministic=False, **kwargs)}
+    monkeypatch.setattr(reference[False], "_actor", None)  # SB3's own obs_to_tensor and get_distribution
+    calls = []
+    model.policy.features_extractor.extractors["image"].register_forward_hook(lambda *_: calls.append(1))
+    for deterministic in (True, False):
+        sampler = SB3Sampler(model, env_id, deterministic=deterministic, **kwargs)
+        assert sampler._actor is not None
+        for k in range(3):
+            problem = base.source(np.random.default_rng(k))
+            runs = []
+            for s in (sampler, reference[deterministic]):
+                calls.clear()
+                planner = RRT(problem, step_size=base.step_size, sampler=s, seed=k)
+                r = planner.solve(max_iterations=150)
+                runs.append((r.iterations, r.solved, planner.view().vertices.copy(), len(calls)))
+            assert runs[0][:2] == runs[1][:2]
+            assert np.array_equal(runs[0][2], runs[1][2])
+            assert runs[1][3] == runs[1][0] > runs[0][3]  # SB3 runs the image CNN every draw; the pass reuses it

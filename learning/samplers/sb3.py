@@ -5,10 +5,16 @@
     RRT(problem, step_size=4.0, sampler=sampler, seed=0).solve(20_000)
 
 The model sees what it saw in training and its actions become samples through the environment's own
-code (``envs.EnvSampler``): same observation builder, same action mode, same step size. A file is read
-with ``learning.models.checkpoint.read_sb3_zip`` (JSON and ``weights_only`` tensors; nothing is unpickled) and
-its weights are loaded into the default policy of the algorithm they belong to (PPO / A2C, DQN, SAC,
-TD3), built for the environment's spaces; pass ``policy_kwargs`` if the model was trained with others.
+code (``envs.EnvSampler``): same observation builder, same action mode, same step size. The environment
+package is reached as ``samplergym.envs``, so this works also where a project's own ``envs/`` folder
+shadows the name ``envs``. A file is read with ``learning.models.checkpoint.read_sb3_zip`` (JSON and
+``weights_only`` tensors; nothing is unpickled) and its weights are loaded into the default policy of the
+algorithm they belong to (PPO / A2C, DQN, SAC, TD3), built for the environment's spaces; pass
+``policy_kwargs`` if the model was trained with others.
+
+Each sample costs a pass of the policy's actor. For PPO and A2C policies ``ActorPass`` runs it module by
+module, without SB3's per-call checks, and reuses each observation key's features while that key's
+array is unchanged; the actions are the ones ``model.predict`` gives.
 """
 
 from __future__ import annotations
@@ -21,11 +27,12 @@ import numpy as np
 import torch
 from gymnasium import spaces
 
-from envs.env_sampler import EnvSampler
-from envs.sampler_env import SamplerEnv
 from learning.models.checkpoint import read_sb3_zip
 from learning.models.threads import planning_thread_count, planning_threads
 from planners.base.fileio import InputError
+from samplergym import envs as env_package  # this library's envs, also where a project's own envs/ shadows the name
+
+EnvSampler, SamplerEnv = env_package.EnvSampler, env_package.SamplerEnv
 
 
 def _algorithms() -> dict[str, Any]:
@@ -74,6 +81,115 @@ def load_sb3_policy(path: str | os.PathLike, env: SamplerEnv, *, algo: str | Non
     return policy
 
 
+class ActorPass:
+    """An SB3 actor-critic policy's actor (PPO, A2C), module by module, reusing a part's output while its input holds.
+
+    SB3's ``predict`` copies the observation, checks and preprocesses it and runs every module on every
+    call. Here the same modules run on the same tensors (so the outputs are the same numbers), with
+    three savings: the preprocessing of each key is decided once; with SB3's ``CombinedExtractor``
+    (the ``MultiInputPolicy`` default) each key's extractor is a part of its own, and a part whose
+    input array equals the one it saw last returns its last output instead of running again. A planner
+    iteration that adds no vertex (a sample in collision, or one the tree already covers) leaves the
+    image observations unchanged, so most iterations skip most of the CNN.
+
+    ``ActorPass.of(policy)`` builds one for the policies it reproduces exactly (an ``ActorCriticPolicy``
+    with Gaussian or categorical actions and ``Box`` observations), else None.
+    """
+
+    def __init__(self, policy, gaussian: bool, parts: list[tuple[str | None, Any]], scales: dict) -> None:
+        self.policy = policy
+        self.gaussian = gaussian
+        self.parts = parts  # (observation key, or None for the whole observation; its extractor)
+        self.scales = scales  # observation key (None for a Box observation) -> (shape, divide by 255)
+        self.device = policy.device  # SB3's property walks the parameters on every read
+        self._last: dict = {}
+
+    @classmethod
+    def of(cls, policy) -> ActorPass | None:
+        from stable_baselines3.common.distributions import CategoricalDistribution, DiagGaussianDistribution
+        from stable_baselines3.common.policies import ActorCriticPolicy
+        from stable_baselines3.common.preprocessing import is_image_space
+        from stable_baselines3.common.torch_layers import CombinedExtractor
+
+        if not isinstance(policy, ActorCriticPolicy):
+            return None
+        kind = type(policy.action_dist)
+        if kind not in (DiagGaussianDistribution, CategoricalDistribution):
+            return None
+        space = policy.observation_space
+        boxes = dict(space.spaces) if isinstance(space, spaces.Dict) else {None: space}
+        if not all(type(box) is spaces.Box for box in boxes.values()):
+            return None
+        scales = {key: (box.shape, bool(policy.normalize_images and is_image_space(box))) for key, box in boxes.items()}
+        extractor = policy.pi_features_extractor
+        if isinstance(space, spaces.Dict) and type(extractor) is CombinedExtractor:
+            parts = list(extractor.extractors.items())
+        else:
+            parts = [(None, extractor)]
+        return cls(policy, kind is DiagGaussianDistribution, parts, scales)
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_last": {}}
+
+    def _tensor(self, key: str | None, array: np.ndarray) -> torch.Tensor:
+        shape, image = self.scales[key]
+        t = torch.from_numpy(array.reshape((1, *shape)))  # ``array`` is this pass's own copy
+        if t.device != self.device:
+            t = t.to(self.device)
+        return t.float() / 255.0 if image else t.float()
+
+    def _inputs(self, obs, key: str | None) -> tuple[np.ndarray, ...] | None:
+        """The arrays a part reads (``key``'s, or all for the whole extractor); None if one has another shape."""
+        keys = list(self.scales) if key is None else [key]
+        arrays = tuple(np.asarray(obs if k is None else obs[k]) for k in keys)
+        if any(a.shape != self.scales[k][0] for k, a in zip(keys, arrays, strict=True)):
+            return None
+        return arrays
+
+    def _part(self, key: str | None, arrays: tuple[np.ndarray, ...]):
+        """A part's input tensors, preprocessed as SB3's ``preprocess_obs`` does."""
+        if key is not None or None in self.scales:
+            return self._tensor(key, arrays[0])
+        return {k: self._tensor(k, a) for k, a in zip(self.scales, arrays, strict=True)}
+
+    def features(self, obs) -> torch.Tensor | None:
+        """``policy.extract_features(obs_to_tensor(obs), pi_features_extractor)``; None if ``obs`` does not fit."""
+        encoded = []
+        for key, extractor in self.parts:
+            arrays = self._inputs(obs, key)
+            if arrays is None:
+                return None
+            last = self._last.get(key)
+            if last is None or not all(np.array_equal(a, b) for a, b in zip(last[0], arrays, strict=True)):
+                arrays = tuple(a.copy() for a in arrays)  # copies: a caller may reuse its arrays
+                last = self._last[key] = (arrays, extractor(self._part(key, arrays)))
+            encoded.append(last[1])
+        return torch.cat(encoded, dim=1)
+
+    def head(self, obs) -> torch.Tensor | None:
+        """The action net's output for one observation (Gaussian means or categorical logits), or None."""
+        with torch.inference_mode():
+            features = self.features(obs)
+            if features is None:
+                return None
+            return self.policy.action_net(self.policy.mlp_extractor.forward_actor(features))
+
+    def distribution(self, head: torch.Tensor) -> torch.distributions.Distribution:
+        """The torch distribution SB3 builds from ``head``."""
+        dist = self.policy.action_dist
+        with torch.inference_mode():
+            if self.gaussian:
+                return dist.proba_distribution(head, self.policy.log_std).distribution
+            return dist.proba_distribution(action_logits=head).distribution
+
+    def mode(self, head: torch.Tensor) -> torch.Tensor:
+        """The deterministic action SB3 takes: the Gaussian's mean (``head`` itself), or the most probable class."""
+        if self.gaussian:
+            return head
+        with torch.inference_mode():
+            return torch.argmax(self.distribution(head).probs, dim=1)
+
+
 class SB3Sampler(EnvSampler):
     """A trained SB3 model (or a path to its ``.zip``) as a ``Sampler`` every planner accepts.
 
@@ -96,9 +212,6 @@ class SB3Sampler(EnvSampler):
                  policy_kwargs: dict | None = None, threads: int | None = None, **env_kwargs) -> None:
         import gymnasium as gym
 
-        import envs
-
-        gym.register_envs(envs)
         try:
             env = gym.make(env_id, **env_kwargs).unwrapped
         except gym.error.Error as exc:
@@ -131,6 +244,7 @@ class SB3Sampler(EnvSampler):
         self.policy = policy
         self.deterministic = bool(deterministic)
         self.env_id = env_id
+        self._actor = ActorPass.of(policy)
         super().__init__(env, self._act, deterministic=self.deterministic)
 
     def _act(self, obs, rng: np.random.Generator):
@@ -138,11 +252,15 @@ class SB3Sampler(EnvSampler):
             return self._act_now(obs, rng)
 
     def _act_now(self, obs, rng: np.random.Generator):
+        head = self._actor.head(obs) if self._actor is not None else None
         if self.deterministic:
-            return self._predict(obs)
-        with torch.no_grad():
-            obs_t, _ = self.policy.obs_to_tensor(obs)
-            dist = self.policy.get_distribution(obs_t).distribution
+            return self._predict(obs) if head is None else self._actions(self._actor.mode(head))
+        if head is not None:
+            dist = self._actor.distribution(head)
+        else:
+            with torch.no_grad():
+                obs_t, _ = self.policy.obs_to_tensor(obs)
+                dist = self.policy.get_distribution(obs_t).distribution
         if isinstance(dist, torch.distributions.Categorical):
             cdf = np.cumsum(dist.probs[0].double().numpy())
             return min(int(np.searchsorted(cdf, rng.random() * cdf[-1], side="right")), len(cdf) - 1)
@@ -160,7 +278,11 @@ class SB3Sampler(EnvSampler):
             return policy.predict(obs, deterministic=True)[0]
         with torch.inference_mode():
             obs_t, _ = policy.obs_to_tensor(obs)
-            actions = policy._predict(obs_t, deterministic=True)
+            return self._actions(policy._predict(obs_t, deterministic=True))
+
+    def _actions(self, actions: torch.Tensor):
+        """A batch of one action as ``policy.predict`` returns it: an array of the space's shape, clipped to a Box."""
+        policy = self.policy
         space = policy.action_space
         actions = actions.cpu().numpy().reshape((-1, *space.shape))
         if isinstance(space, spaces.Box):
