@@ -78,12 +78,11 @@ def make_env(cfg: TrainConfig, seed: int, sets: MixedMapSet | None = None):
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    from envs import SamplerEnv
-    from envs.sources import MapSetSource
+    from samplergym import envs as env_package  # this library's envs, also beside a project's own envs/
 
     def factory():
-        source = _MixedFamilies(cfg) if sets is None else MapSetSource(sets, "train")
-        env = SamplerEnv(source, planner="rrt", step_size=cfg.step_size,
+        source = _MixedFamilies(cfg) if sets is None else env_package.MapSetSource(sets, "train")
+        env = env_package.SamplerEnv(source, planner="rrt", step_size=cfg.step_size,
                          max_iterations=cfg.max_iterations, action_mode="guided", observation="egocentric",
                          uniform_floor=cfg.uniform_floor, shaping=cfg.shaping, shaping_gamma=cfg.gamma)
         return gym.wrappers.TransformReward(env, lambda r: r * cfg.reward_scale)
