@@ -19,7 +19,7 @@ ALL_IDS = sorted(ENV_IDS)
 
 
 def _needs_movingai(env_id):
-    if env_id.endswith("MovingAI-v0") and movingai_dir() is None:
+    if env_id.endswith("MovingAI-v1") and movingai_dir() is None:
         pytest.skip("MovingAI maps not found")
 
 
@@ -72,7 +72,7 @@ def test_gym_make_without_kwargs(env_id, shared_cwd):
 def test_files_id_defaults_to_the_shipped_sample_maps():
     paths = envs.sample_map_paths()
     assert len(paths) >= 2 and all(p.suffix == ".png" and p.is_file() for p in paths)
-    env = gym.make("SamplerGym/RRT-Files-v0")
+    env = gym.make("SamplerGym/RRT-Files-v1")
     names = {env.reset(seed=s)[0] is not None and env.unwrapped.problem.name for s in range(20)}
     assert names <= {p.name for p in paths} and len(names) >= 2
 
@@ -89,7 +89,7 @@ def test_planning_id_plans_on_the_users_map(kind, tmp_path):
     else:
         m = tmp_path / "mine.npy"
         np.save(m, obstacles)
-    env = gym.make("SamplerGym/Planning-v0", map=m, start=(4.5, 20.5), goal=(44.5, 20.5), max_iterations=3000,
+    env = gym.make("SamplerGym/Planning-v1", map=m, start=(4.5, 20.5), goal=(44.5, 20.5), max_iterations=3000,
                    action_mode="point")
     env.reset(seed=0)
     p = env.unwrapped.problem
@@ -102,7 +102,7 @@ def test_planning_id_plans_on_the_users_map(kind, tmp_path):
             break
     assert term and info["solved"]
     # random queries on the user's map without start / goal; map_source=array as well
-    env = gym.make("SamplerGym/Planning-v0", map_source=obstacles)
+    env = gym.make("SamplerGym/Planning-v1", map_source=obstacles)
     env.reset(seed=1)
     assert np.array_equal(env.unwrapped.problem.world.obstacles, obstacles)
     with pytest.raises(InputError, match="start and goal"):
@@ -143,7 +143,7 @@ def test_movingai_dir_resolution(tmp_path, monkeypatch):
         sources.movingai_dir(required=False)
     monkeypatch.delenv(MOVINGAI_ENV)
     with pytest.raises(InputError, match=MOVINGAI_ENV):
-        gym.make("SamplerGym/RRT-MovingAI-v0", source_kwargs={"directory": str(tmp_path / "missing")})
+        gym.make("SamplerGym/RRT-MovingAI-v1", source_kwargs={"directory": str(tmp_path / "missing")})
 
 
 def test_movingai_id_without_kwargs_uses_the_env_var(monkeypatch, tmp_path):
@@ -152,7 +152,7 @@ def test_movingai_id_without_kwargs_uses_the_env_var(monkeypatch, tmp_path):
         pytest.skip("MovingAI maps not found")
     monkeypatch.chdir(tmp_path)  # no ../shared from here: only the variable can find the maps
     monkeypatch.setenv(MOVINGAI_ENV, str(d))
-    env = gym.make("SamplerGym/RRT-MovingAI-v0")
+    env = gym.make("SamplerGym/RRT-MovingAI-v1")
     env.reset(seed=0)
     assert env.unwrapped.source.directory == d
 
@@ -204,7 +204,7 @@ def test_stepping_after_the_episode_ended_is_refused_alike(end):
 
 # --- defaults that learn: every id's default action mode keeps a uniform floor -------------------------
 
-TWO_D_IDS = [i for i in ALL_IDS if not i.endswith("RigidBody-v0")]
+TWO_D_IDS = [i for i in ALL_IDS if not i.endswith("RigidBody-v1")]
 
 
 @pytest.mark.parametrize("env_id", ALL_IDS)
@@ -258,8 +258,8 @@ def _ppo_then_plan(env_id: str, learn_steps: int, **ppo_kwargs):
 
 
 def test_ppo_with_sb3_defaults_on_a_default_id_plans():
-    """The fast representative: SB3's PPO on RRT-Forest-v0's defaults, a rollout shrunk to 128 steps."""
-    _ppo_then_plan("SamplerGym/RRT-Forest-v0", 256, n_steps=128, batch_size=64, n_epochs=2)
+    """The fast representative: SB3's PPO on RRT-Forest-v1's defaults, a rollout shrunk to 128 steps."""
+    _ppo_then_plan("SamplerGym/RRT-Forest-v1", 256, n_steps=128, batch_size=64, n_epochs=2)
 
 
 @pytest.mark.slow
@@ -276,19 +276,19 @@ def test_a_sampler_that_cannot_explore_warns_and_says_what_to_change():
     from learning import SB3Sampler
 
     kw = {"action_mode": "point", "obs_size": 36, "local_size": 36}
-    model = PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v0", **kw), n_steps=8, batch_size=8, seed=0)
+    model = PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v1", **kw), n_steps=8, batch_size=8, seed=0)
     with pytest.warns(envs.NoExplorationWarning, match=r"action_mode='point'.*mixture.*deterministic=False"):
-        SB3Sampler(model, "SamplerGym/RRT-Forest-v0", **kw)
+        SB3Sampler(model, "SamplerGym/RRT-Forest-v1", **kw)
     with pytest.warns(envs.NoExplorationWarning, match="uniform_floor=0"):
-        SB3Sampler(PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v0", **{**kw, "action_mode": "mixture",
+        SB3Sampler(PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v1", **{**kw, "action_mode": "mixture",
                                                                                    "uniform_floor": 0.0}),
                        n_steps=8, batch_size=8, seed=0),
-                   "SamplerGym/RRT-Forest-v0", **{**kw, "action_mode": "mixture", "uniform_floor": 0.0})
+                   "SamplerGym/RRT-Forest-v1", **{**kw, "action_mode": "mixture", "uniform_floor": 0.0})
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error", envs.NoExplorationWarning)
-        SB3Sampler(model, "SamplerGym/RRT-Forest-v0", deterministic=False, **kw)  # draws: explores
+        SB3Sampler(model, "SamplerGym/RRT-Forest-v1", deterministic=False, **kw)  # draws: explores
         envs.EnvSampler(SamplerEnv(**kw), lambda obs, rng: rng.uniform(-1, 1, 2), deterministic=False)
     with pytest.warns(envs.NoExplorationWarning, match="EnvSampler"):
         envs.EnvSampler(SamplerEnv(**kw), lambda obs, rng: np.zeros(2))
@@ -296,7 +296,7 @@ def test_a_sampler_that_cannot_explore_warns_and_says_what_to_change():
 
 # --- the spec's max_episode_steps: truncation through Gymnasium's TimeLimit -----------------------------
 
-@pytest.mark.parametrize("env_id, steps", [("SamplerGym/RRT-Forest-v0", 2000), ("SamplerGym/RRT-RigidBody-v0", 5000)])
+@pytest.mark.parametrize("env_id, steps", [("SamplerGym/RRT-Forest-v1", 2000), ("SamplerGym/RRT-RigidBody-v1", 5000)])
 def test_time_limit_follows_max_iterations(env_id, steps):
     from gymnasium.wrappers import TimeLimit
 
@@ -320,6 +320,6 @@ def test_registered_envs_pass_the_env_checkers():
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    env = gym.make("SamplerGym/RRT-Forest-v0", max_iterations=50)
+    env = gym.make("SamplerGym/RRT-Forest-v1", max_iterations=50)
     check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env, warn=False)

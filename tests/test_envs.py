@@ -31,9 +31,9 @@ def png_map(tmp_path_factory):
 
 def make_kwargs(env_id, png_map, **extra):
     kw = dict(extra)
-    if env_id.endswith("Files-v0"):
+    if env_id.endswith("Files-v1"):
         kw["source_kwargs"] = {"paths": [str(png_map)]}
-    if env_id.endswith("MovingAI-v0"):
+    if env_id.endswith("MovingAI-v1"):
         if movingai_dir() is None:
             pytest.skip("MovingAI maps not found")
         kw["source_kwargs"] = {"directory": str(movingai_dir()), "maps": ["arena", "room-32-32-4"], "per_map": 5}
@@ -47,7 +47,7 @@ CHECKER_WARNINGS = (
 )
 
 ALL_IDS = sorted(ENV_IDS)
-VECTOR_IDS = ("SamplerGym/RRT-RigidBody-v0",)  # Box (vector) observations, not Dict
+VECTOR_IDS = ("SamplerGym/RRT-RigidBody-v1",)  # Box (vector) observations, not Dict
 
 
 @pytest.mark.parametrize("env_id", ALL_IDS)
@@ -105,7 +105,7 @@ def test_same_seed_same_rollout(env_id, png_map):
 
 
 def test_pickle_resumes_identically():
-    env = gym.make("SamplerGym/RRT-Maze-v0", action_mode="relative")
+    env = gym.make("SamplerGym/RRT-Maze-v1", action_mode="relative")
     env.reset(seed=1)
     env.action_space.seed(1)
     for _ in range(20):
@@ -122,7 +122,7 @@ def test_pickle_resumes_identically():
 
 @pytest.mark.parametrize("vectorization_mode", ["sync", "async"])
 def test_vector_envs(vectorization_mode):
-    vec = gym.make_vec("SamplerGym/RRT-Rooms-v0", num_envs=2, vectorization_mode=vectorization_mode,
+    vec = gym.make_vec("SamplerGym/RRT-Rooms-v1", num_envs=2, vectorization_mode=vectorization_mode,
                        action_mode="bias", max_iterations=30)
     obs, _ = vec.reset(seed=0)
     assert obs["image"].shape == (2, 4, 64, 64)
@@ -135,7 +135,7 @@ def test_vector_envs(vectorization_mode):
 def test_sb3_make_vec_env():
     from stable_baselines3.common.env_util import make_vec_env
 
-    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v0", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture"})
+    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v1", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture"})
     obs = vec.reset()
     assert obs["vector"].shape == (2, 11)
     obs, rew, done, info = vec.step(np.stack([vec.action_space.sample()] * 2))
@@ -145,7 +145,7 @@ def test_sb3_make_vec_env():
 
 def test_reregistering_is_harmless():
     importlib.reload(envs)
-    assert "SamplerGym/RRT-Maze-v0" in gym.registry
+    assert "SamplerGym/RRT-Maze-v1" in gym.registry
 
 
 @pytest.mark.parametrize("mode, n", [("point", 2), ("bias", 1), ("mixture", 4), ("relative", 3)])
@@ -250,7 +250,7 @@ def test_observation_contents():
 
 @pytest.mark.parametrize("planner", ["rrtstar", "prm", "rrtconnect", "lazyprm"])
 def test_generic_id_runs_other_planners(planner):
-    env = gym.make("SamplerGym/Planning-v0", map_source="rooms", planner=planner, source_kwargs={"size": 64},
+    env = gym.make("SamplerGym/Planning-v1", map_source="rooms", planner=planner, source_kwargs={"size": 64},
                    max_iterations=3000, action_mode="point")
     env.reset(seed=0)
     env.action_space.seed(0)
@@ -262,7 +262,7 @@ def test_generic_id_runs_other_planners(planner):
 
 
 def test_render_and_record(tmp_path):
-    env = gym.make("SamplerGym/RRT-Forest-v0", render_mode="rgb_array", source_kwargs={"size": 64})
+    env = gym.make("SamplerGym/RRT-Forest-v1", render_mode="rgb_array", source_kwargs={"size": 64})
     env.reset(seed=0)
     frame = env.render()
     assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
@@ -378,6 +378,6 @@ def test_observations_come_from_one_factory_and_the_guide_is_passed_explicitly()
     with pytest.raises(ValueError, match="guide=None"):
         guided.set_guide(None)
     # an egocentric, guided episode: the env hands one GuidedSampling to both
-    env = gym.make("SamplerGym/Planning-v0", observation="egocentric", action_mode="guided").unwrapped
+    env = gym.make("SamplerGym/Planning-v1", observation="egocentric", action_mode="guided").unwrapped
     env.reset(seed=0)
     assert env.guide is not None and env.planner.sampler.guide is env.guide

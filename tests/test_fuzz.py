@@ -353,10 +353,10 @@ odd_actions = st.one_of(
 
 
 @pytest.mark.parametrize("env_id, kwargs", [
-    ("SamplerGym/RRT-Forest-v0", {}),
-    ("SamplerGym/RRT-Forest-v0", {"action_mode": "guided", "observation": "egocentric"}),
-    ("SamplerGym/RRT-Forest-v0", {"action_mode": "bias"}),
-    ("SamplerGym/RRT-RigidBody-v0", {}),
+    ("SamplerGym/RRT-Forest-v1", {}),
+    ("SamplerGym/RRT-Forest-v1", {"action_mode": "guided", "observation": "egocentric"}),
+    ("SamplerGym/RRT-Forest-v1", {"action_mode": "bias"}),
+    ("SamplerGym/RRT-RigidBody-v1", {}),
 ])
 def test_env_actions(env_id, kwargs):
     import gymnasium as gym

@@ -331,7 +331,7 @@ def test_planning_env_draws_from_a_map_set_part():
     import envs
 
     gym.register_envs(envs)
-    env = gym.make("SamplerGym/Planning-v0", map_set=str(ROS), split="test", max_iterations=20)
+    env = gym.make("SamplerGym/Planning-v1", map_set=str(ROS), split="test", max_iterations=20)
     test_map = MapSet.open(ROS).maps("test")[0]
     seen = []
     for seed in (0, 1, 2):
@@ -341,9 +341,9 @@ def test_planning_env_draws_from_a_map_set_part():
     env.reset(seed=1)
     assert np.array_equal(env.unwrapped.problem.start, seen[1].start)
     with pytest.raises(InputError, match="split must be one of"):
-        gym.make("SamplerGym/Planning-v0", map_set=str(ROS), split="exam")
+        gym.make("SamplerGym/Planning-v1", map_set=str(ROS), split="exam")
     with pytest.raises(InputError, match="not both"):
-        gym.make("SamplerGym/Planning-v0", map_set=str(ROS), map=np.zeros((8, 8), bool))
+        gym.make("SamplerGym/Planning-v1", map_set=str(ROS), map=np.zeros((8, 8), bool))
 
 
 def test_example_maps_are_what_the_script_writes(tmp_path):

@@ -55,7 +55,7 @@ def test_unknown_name_lists_the_valid_ones():
     with pytest.raises(ValueError, match="unknown planner 'RRT-Sharp'.*LazyPRM.*RRTConnect"):
         make_planner("RRT-Sharp", _problem())
     with pytest.raises(envs.sampler_env.InputError, match="planner: unknown planner"):
-        gym.make("SamplerGym/Planning-v0", planner="RRT-Sharp")
+        gym.make("SamplerGym/Planning-v1", planner="RRT-Sharp")
 
 
 def test_step_goes_to_each_planners_own_parameter():
@@ -80,7 +80,7 @@ def test_a_name_is_taken_once():
 
 @pytest.mark.parametrize("name", ["RRTConnect", "LazyPRM", "RRTstar"])
 def test_the_env_builds_registered_planners(name):
-    env = gym.make("SamplerGym/Planning-v0", planner=name.lower(), max_iterations=50)
+    env = gym.make("SamplerGym/Planning-v1", planner=name.lower(), max_iterations=50)
     env.reset(seed=0)
     assert env.unwrapped.planner.name == name
     env.step(env.action_space.sample())
@@ -90,7 +90,7 @@ def test_the_env_builds_registered_planners(name):
 def test_the_env_refuses_planners_whose_sampler_is_their_algorithm(name):
     assert planner_class(name).own_sampler
     with pytest.raises(envs.sampler_env.InputError, match="brings its own sampler"):
-        gym.make("SamplerGym/Planning-v0", planner=name)
+        gym.make("SamplerGym/Planning-v1", planner=name)
 
 
 @pytest.mark.parametrize("alias,name", [("RRTStar", "RRTstar"), ("RRT*", "RRTstar"), ("rrt-star", "RRTstar"),
@@ -121,3 +121,9 @@ def test_the_picture_workflow_takes_step_size_and_step():
     assert picture_planner("rrt", problem, step=2.0).step_size == 2.0
     with pytest.raises(ValueError, match="picture_planner: give one step length"):
         picture_planner("rrt", problem, step_size=2.0, step=3.0)
+
+
+def test_version_0_ids_name_their_version_1():
+    """Version 1 changed the default action mode; a -v0 id is Gymnasium's DeprecatedEnv naming the -v1 id."""
+    with pytest.raises(gym.error.DeprecatedEnv, match="SamplerGym/RRT-Forest-v1"):
+        gym.make("SamplerGym/RRT-Forest-v0")

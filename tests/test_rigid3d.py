@@ -454,7 +454,7 @@ def test_plot_scene_and_animation(tmp_path):
 
 
 def test_rigid_env_runs_with_vector_observations():
-    env = gym.make("SamplerGym/RRT-RigidBody-v0", action_mode="relative", source_kwargs={"n_boxes": 20})
+    env = gym.make("SamplerGym/RRT-RigidBody-v1", action_mode="relative", source_kwargs={"n_boxes": 20})
     obs, info = env.reset(seed=0)
     assert obs.shape == (30,) and obs.dtype == np.float32 and obs in env.observation_space
     assert env.unwrapped.problem.dim == 6

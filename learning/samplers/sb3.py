@@ -1,7 +1,7 @@
 """Any Stable-Baselines3 model trained on a SamplerGym environment, as a planner ``Sampler``.
 
     from learning import SB3Sampler
-    sampler = SB3Sampler("user_ppo.zip", "SamplerGym/RRT-Forest-v0")
+    sampler = SB3Sampler("user_ppo.zip", "SamplerGym/RRT-Forest-v1")
     RRT(problem, step_size=4.0, sampler=sampler, seed=0).solve(20_000)
 
 The model sees what it saw in training and its actions become samples through the environment's own
