@@ -35,8 +35,9 @@ _seen: set[tuple[str, str, str]] = set()
 #: Compile seconds per planner and dimension ("RRT/2d", "PRM/6dof") as ``scripts/benchmark_first_call.py --save``
 #: measured them, for the notice's wording; a planner without a figure is quoted as a range.
 FIGURES = Path(__file__).resolve().parent / "compile_seconds.json"
-#: What the notice says when no measured figure exists: the range the benchmark's rows span.
-UNMEASURED = "about 6-20 s"
+#: What the notice says when the figures file cannot be read (a planner without a row of its own is quoted
+#: as the range the measured rows span).
+UNMEASURED = "some seconds to a minute"
 
 
 def source_hash(package: Path = _PACKAGE) -> str:
@@ -123,9 +124,15 @@ def expected_seconds(label: str, space, figures: Path = FIGURES) -> str:
     dims = "2d" if type(space).__name__.startswith("SpaceRn") else "6dof"
     try:
         data = json.loads(figures.read_text())
-        seconds, cpus = float(data["seconds"][f"{label}/{dims}"]), int(data["cpus"])
-    except (OSError, ValueError, KeyError, TypeError):
+        measured, cpus = {k: float(v) for k, v in data["seconds"].items()}, int(data["cpus"])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return UNMEASURED
+    seconds = measured.get(f"{label}/{dims}")
+    if seconds is None:  # no row for this one: the range the measured rows span
+        if not measured:
+            return UNMEASURED
+        low, high = min(measured.values()), max(measured.values())
+        return f"about {max(1, int(low))}-{max(1, round(high + 0.5))} s of CPU time (measured on a {cpus}-CPU machine)"
     return f"about {max(1, round(seconds))} s of CPU time (measured on a {cpus}-CPU machine)"
 
 
