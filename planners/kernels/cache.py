@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import sys
 import tempfile
@@ -132,7 +133,7 @@ def expected_seconds(label: str, space, figures: Path = FIGURES) -> str:
         if not measured:
             return UNMEASURED
         low, high = min(measured.values()), max(measured.values())
-        return f"about {max(1, int(low))}-{max(1, round(high + 0.5))} s of CPU time (measured on a {cpus}-CPU machine)"
+        return f"about {max(1, math.floor(low))}-{max(1, math.ceil(high))} s of CPU time (measured on a {cpus}-CPU machine)"
     return f"about {max(1, round(seconds))} s of CPU time (measured on a {cpus}-CPU machine)"
 
 
