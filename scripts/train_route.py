@@ -46,7 +46,7 @@ import numpy as np
 import torch
 
 from learning.device import DEVICES, resolve_device
-from learning.models.route_net import RouteNet, save_route_net
+from learning.models.route_net import KINDS, make_route_net, save_route_net
 from learning.training.route import GeneratedProblem, check_route_map, default_workers, train_route_net
 from planners.base.fileio import (
     InputError,
@@ -69,6 +69,9 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--maps", type=int, default=1600, help="training maps per family and size (default 1600)")
     ap.add_argument("--size", type=int, nargs="+", default=[64, 128], help="map sides; --maps maps of each")
     ap.add_argument("--epochs", type=int, default=30)
+    ap.add_argument("--kind", choices=KINDS, default="unet",
+                    help="the encoder: unet (a U-Net with axial attention) or vin (learned move costs and value "
+                         "iteration over them; --depth is then its local layers, --attention 0)")
     ap.add_argument("--channels", type=int, default=24)
     ap.add_argument("--depth", type=int, default=4, help="times the encoder halves the block grid")
     ap.add_argument("--attention", type=int, default=2, help="axial attention layers (a row then a column each)")
@@ -113,9 +116,9 @@ def _check(args) -> None:
             raise InputError(f"{flag} {shown}: it applies to --map-set, and none is given")
     args.sets = _open_sets(args) if args.map_set else None
     try:  # the encoder's own rules
-        RouteNet(args.step, args.channels, args.depth, args.attention, args.attention_level)
+        make_route_net(args.kind, args.step, args.channels, args.depth, args.attention, args.attention_level)
     except ValueError as exc:
-        raise InputError(f"--channels / --depth / --attention / --attention-level: {exc}") from None
+        raise InputError(f"--kind / --channels / --depth / --attention / --attention-level: {exc}") from None
     for size in args.size:
         check_size(size, "--size")
         if args.sets is None:
@@ -243,7 +246,8 @@ def _train(args) -> int:
     net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth,
                           attention=args.attention, attention_level=args.attention_level, epochs=args.epochs,
                           augment=args.augment, seed=args.seed, log=log, checkpoint=ckpt, resume=args.resume,
-                          validation=validation, recipe_extra=extra, workers=args.workers, device=args.torch_device)
+                          validation=validation, recipe_extra=extra, workers=args.workers, device=args.torch_device,
+                          kind=args.kind)
     skip = {"resume", "sets", "torch_device"}
     recipe = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if k not in skip}
     info = {"recipe": recipe, "parameters": sum(p.numel() for p in net.parameters()),

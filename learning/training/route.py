@@ -22,7 +22,9 @@ import torch
 from torch import nn
 
 from learning.device import deterministic
-from learning.models.route_net import MAX_BLOCKS_ENV, RouteNet, max_blocks, route_input, symmetry
+from learning.models.route_net import MAX_BLOCKS_ENV, RouteNet, make_route_net, max_blocks, route_input, symmetry
+from learning.models.route_vin import UNREACHED, RouteVIN
+from learning.training.vin_losses import vin_loss
 from planners.base.fileio import InputError, atomic_path, short_repr
 from planners.base.problem import Problem
 from planners.maps.generators import generate
@@ -275,8 +277,18 @@ def _load_checkpoint(path: Path, recipe: dict) -> dict:
     return blob
 
 
+def _loss(net: RouteNet | RouteVIN, x: torch.Tensor, cells: torch.Tensor) -> torch.Tensor:
+    """The training loss of one batch: a ``RouteNet``'s smooth-L1 error of every reached cell's cost-to-go,
+    a ``RouteVIN``'s ``vin_loss``."""
+    if isinstance(net, RouteVIN):
+        return vin_loss(net, x, cells)
+    out = net(x)
+    known = torch.isfinite(cells)
+    return nn.functional.smooth_l1_loss(out[known], cells[known])
+
+
 @torch.no_grad()
-def _validation_loss(net: RouteNet, data, batch: int, device: torch.device) -> float:
+def _validation_loss(net: RouteNet | RouteVIN, data, batch: int, device: torch.device) -> float:
     """Mean smooth-L1 error per map on the validation examples (as the training loss, no turns)."""
     net.eval()
     total, count = 0.0, 0
@@ -285,7 +297,7 @@ def _validation_loss(net: RouteNet, data, batch: int, device: torch.device) -> f
         for i in range(0, len(X), step):
             out = net(X[i:i + step].to(device))
             yc = Yc[i:i + step].to(device)
-            known = torch.isfinite(yc)
+            known = torch.isfinite(yc) & (out < UNREACHED / 2)
             total += nn.functional.smooth_l1_loss(out[known], yc[known]).item() * len(out)
             count += len(out)
     return total / count
@@ -296,11 +308,12 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
                     lr: float = 1e-3, augment: bool = False, seed: int = 0, log=print,
                     checkpoint: str | os.PathLike | None = None, resume: bool = False,
                     validation: Sequence[Problem] | None = None, recipe_extra: dict | None = None,
-                    workers: int = 1, device: str | torch.device = "cpu") -> RouteNet:
-    """Fit a ``RouteNet`` to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
+                    workers: int = 1, device: str | torch.device = "cpu", kind: str = "unet") -> RouteNet | RouteVIN:
+    """Fit a route encoder to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
-    The loss is the smooth-L1 error of the predicted cost-to-go, in steps, over the free cells that reach
-    the goal. With ``augment`` every map is first turned by one of the square's 8 symmetries, drawn from
+    ``kind``: "unet" (``RouteNet``), whose loss is the smooth-L1 error of the predicted cost-to-go, in steps,
+    over the free cells that reach the goal; or "vin" (``RouteVIN``, ``depth`` local layers, no attention),
+    whose loss is ``learning.training.vin_losses.vin_loss``. With ``augment`` every map is first turned by one of the square's 8 symmetries, drawn from
     ``seed``: the generators' fixed orientations (start and goal corners, trap openings) stop being
     something to learn. Same seed, same machine, same device: the same weights, whatever ``workers``.
 
@@ -346,7 +359,7 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
         del examples
         held_out = _tensors(make_examples(validation, [0] * len(validation), block, workers)) if validation else None
     try:
-        return _train(data, held_out, stream, names, trained_side, order, device,
+        return _train(data, held_out, stream, names, trained_side, order, device, kind=kind,
                       block=block, channels=channels, depth=depth, attention=attention,
                       attention_level=attention_level, epochs=epochs, batch=batch, lr=lr, augment=augment, seed=seed,
                       log=log, checkpoint=checkpoint, resuming=resuming, validation=validation,
@@ -357,21 +370,23 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
 
 
 def _train(data: list, held_out: list | None, stream: _Stream | None, names: list[str] | None, trained_side: int,
-           order: torch.Generator, device: torch.device, *, block: int, channels: int, depth: int, attention: int,
+           order: torch.Generator, device: torch.device, *, kind: str, block: int, channels: int, depth: int, attention: int,
            attention_level: int, epochs: int, batch: int, lr: float, augment: bool, seed: int, log,
-           checkpoint, resuming: bool, validation, recipe_extra: dict | None) -> RouteNet:
+           checkpoint, resuming: bool, validation, recipe_extra: dict | None) -> RouteNet | RouteVIN:
     """``train_route_net``'s epochs, on the examples made (``data``) or being made (``stream``)."""
     deterministic(device)
     if stream is None:
         data = _on_device(data, device)
         held_out = _on_device(held_out, device) if held_out is not None else None
-    net = RouteNet(block, channels, depth, attention, attention_level, trained_side=trained_side).to(device)
+    net = make_route_net(kind, block, channels, depth, attention, attention_level, trained_side).to(device)
     opt = torch.optim.Adam(net.parameters(), lr)
 
     def recipe_of(maps: list[str]) -> dict:
         recipe = {"block": block, "channels": channels, "depth": depth, "attention": attention,
                   "attention_level": attention_level, "batch": batch, "lr": lr, "augment": augment, "seed": seed,
                   "maps": maps}  # not the epochs: each epoch's weights do not depend on them
+        if kind != "unet":  # recipes of the U-Net stay as they were
+            recipe["kind"] = kind
         if validation:
             recipe["validation"] = [p.name for p in validation]
         if recipe_extra:
@@ -406,10 +421,7 @@ def _train(data: list, held_out: list | None, stream: _Stream | None, names: lis
             if streaming:
                 stream.wait(j)
             X, _, Yc = data[i]
-            out = net(X[idx].to(device))
-            yc = Yc[idx].to(device)
-            known = torch.isfinite(yc)
-            loss = nn.functional.smooth_l1_loss(out[known], yc[known])
+            loss = _loss(net, X[idx].to(device), Yc[idx].to(device))
             opt.zero_grad()
             loss.backward()
             opt.step()

@@ -1,0 +1,155 @@
+"""What every route encoder shares: its input, the square's symmetries, the size limit, and ``predict``.
+
+A route encoder (``learning.models.route_net.RouteNet``, ``learning.models.route_vin.RouteVIN``) reads a map in
+blocks of one planner step and gives the cost-to-go of every cell, in steps; ``FieldEncoder`` turns a map and a
+goal into that field, averaged over the square's symmetries, within a memory bound.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import torch
+
+from learning.models.threads import planning_threads
+from planners.base.fileio import InputError, short_repr
+
+
+GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
+
+#: The largest encoder input, in blocks (cells of the block grid), and the variable that raises it. A pass
+#: holds about ``BYTES_PER_BLOCK`` per block per map in flight; at the default, one map of 1024 x 1024
+#: cells at 4 cells per block (65,536 blocks).
+MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
+MAX_BLOCKS = 256 * 256
+#: Working memory of one pass per block of one map (activations and attention, measured on the shipped
+#: encoder), and how much of it ``predict`` lets one batch of symmetries take: larger maps run their
+#: symmetries in smaller batches (one at a time at the largest), so memory stays bounded.
+BYTES_PER_BLOCK = 5_000
+BATCH_BYTES = 1 << 30
+
+
+def max_blocks() -> int:
+    """``SAMPLERGYM_MAX_ROUTE_BLOCKS`` if set (a positive integer), else ``MAX_BLOCKS``."""
+    value = os.environ.get(MAX_BLOCKS_ENV)
+    if value is None or value == "":
+        return MAX_BLOCKS
+    try:
+        n = int(value)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise InputError(f"{MAX_BLOCKS_ENV} = {short_repr(value)}: expected a positive whole number of blocks")
+    return n
+
+
+def route_input(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -> np.ndarray:
+    """The encoder's input, (block**2 + 3, h, w) float32: each cell of each block, then the goal channels.
+
+    The map is padded with blocked cells to whole blocks.
+    """
+    H, W = obstacles.shape
+    h, w = -(-H // block), -(-W // block)
+    pad = np.ones((h * block, w * block), dtype=np.float32)
+    pad[:H, :W] = obstacles
+    cells = pad.reshape(h, block, w, block).transpose(1, 3, 0, 2).reshape(block * block, h, w)
+    gr, gc = goal_cell[0] // block, goal_cell[1] // block
+    ys, xs = np.mgrid[0:h, 0:w]
+    goal = np.stack([(ys == gr) & (xs == gc), (gc - xs) / w, (gr - ys) / h]).astype(np.float32)
+    return np.concatenate([cells, goal])
+
+
+def symmetry(obstacles: np.ndarray, goal_cell: tuple[int, int], k: int) -> tuple[np.ndarray, tuple[int, int]]:
+    """The map and goal cell under the square's symmetry ``k`` (0-7).
+
+    ``k % 4`` quarter turns, then a transpose if ``k >= 4``.
+    """
+    mark = np.zeros(obstacles.shape, dtype=bool)
+    mark[goal_cell] = True
+    obs, mark = np.rot90(obstacles, k % 4), np.rot90(mark, k % 4)
+    if k >= 4:
+        obs, mark = obs.T, mark.T
+    r, c = np.argwhere(mark)[0]
+    return np.ascontiguousarray(obs), (int(r), int(c))
+
+
+def unturn(field: np.ndarray, k: int) -> np.ndarray:
+    """A field computed on ``symmetry(..., k)``'s map, turned back onto the original map."""
+    return np.rot90(field.T if k >= 4 else field, -(k % 4))
+
+
+class FieldEncoder:
+    """What a route encoder offers the route sampler: the cost-to-go of every cell of a map, in steps.
+
+    Mixed into ``torch.nn.Module`` encoders (``RouteNet``, ``learning.models.route_vin.RouteVIN``) that have
+    ``block`` (cells per block side: the planner's step), ``trained_side`` (0 or the largest map side
+    trained on) and a ``forward`` from ``route_input``'s channels to every cell's cost-to-go.
+    """
+
+    block: int
+    trained_side: int
+
+    def check_size(self, shape: tuple[int, int]) -> tuple[int, int]:
+        """The block grid of a map of ``shape`` cells, or an ``InputError`` naming the size and the limit."""
+        h, w = -(-shape[0] // self.block), -(-shape[1] // self.block)
+        limit = max_blocks()
+        if h * w > limit:
+            raise InputError(f"the route encoder's input for this {shape[0]} x {shape[1]} map is {h} x {w} = "
+                             f"{h * w} blocks of {self.block} x {self.block} cells, above the limit of {limit} "
+                             f"blocks (a pass over it needs about {BYTES_PER_BLOCK * h * w / 2**30:.1f} GB per "
+                             f"symmetry); set {MAX_BLOCKS_ENV} to raise it")
+        return h, w
+
+    def predict(self, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int = 1, *,
+                threads: int | None = None) -> np.ndarray:
+        """Predicted cost-to-go of every cell, in blocks (steps), for one map: (H, W) float64.
+
+        With ``symmetries`` > 1 the prediction is the mean over the map turned by the first that many of
+        the square's symmetries (``symmetry``), each turned back: at 8 it is exactly equivariant, as the
+        true cost-to-go is, at 8 times the cost. Those of one shape run as one batch, in smaller ones
+        where a batch would take more than ``BATCH_BYTES``; a map above ``max_blocks()`` is refused
+        before any work. Runs on the device the encoder is on (``to``), at ``planning_threads(threads)``.
+
+        On a map whose larger side exceeds ``trained_side`` the field is multiplied by their ratio. The
+        goal offsets it reads are fractions of the map, so beyond its training sizes it predicts the
+        route's shape at the training scale: on MovingAI's random512-10-0 the start, 126 steps out,
+        came out at 35. Only the order of the field steers the sampler's progress and target; its
+        scale sets how sharply the frontier prefers its best cells.
+        """
+        return self.predict_many([(obstacles, goal_cell)], symmetries, threads=threads)[0]
+
+    def predict_many(self, queries: list[tuple[np.ndarray, tuple[int, int]]], symmetries: int = 1, *,
+                     threads: int | None = None) -> list[np.ndarray]:
+        """``predict`` for many (obstacles, goal cell) queries, the passes of same-shaped inputs batched together.
+
+        On a GPU one batch of many queries costs little more than one query; the results are those of
+        ``predict`` one query at a time up to floating-point rounding.
+        """
+        if isinstance(symmetries, bool) or not isinstance(symmetries, int) or not 1 <= symmetries <= 8:
+            raise InputError(f"symmetries must be 1 to 8, got {short_repr(symmetries)}")
+        for obstacles, _ in queries:
+            self.check_size(obstacles.shape)
+        by_shape: dict[tuple[int, int], list[tuple[int, int, np.ndarray]]] = {}
+        for i, (obstacles, goal_cell) in enumerate(queries):
+            for k in range(symmetries):
+                obs, goal = symmetry(obstacles, goal_cell, k)
+                by_shape.setdefault(obs.shape, []).append((i, k, route_input(obs, goal, self.block)))
+        totals = [np.zeros(obstacles.shape) for obstacles, _ in queries]
+        device = next(self.parameters()).device
+        with planning_threads(threads), torch.inference_mode():
+            for (h, w), group in by_shape.items():
+                blocks = group[0][2].shape[1] * group[0][2].shape[2]
+                size = max(1, min(len(group), BATCH_BYTES // (BYTES_PER_BLOCK * blocks)))
+                for at in range(0, len(group), size):
+                    part = group[at:at + size]
+                    x = torch.from_numpy(np.stack([x for _, _, x in part])).to(device)
+                    out = self(x)[:, :h, :w].cpu().numpy().astype(np.float64)
+                    for (i, k, _), field in zip(part, out, strict=True):
+                        totals[i] += unturn(field, k)
+        for total in totals:
+            total /= symmetries
+            side = max(total.shape)
+            if self.trained_side and side > self.trained_side:
+                total *= side / self.trained_side
+        return totals

@@ -1,0 +1,128 @@
+"""The value-iteration route encoder: learned local move costs, and value iteration over them, on the block grid.
+
+``RouteVIN`` reads a map in blocks of one planner step, as ``RouteNet`` does, but its reach grows with the
+map instead of being fixed by its layers. A small convolutional network looks at each block and its
+neighbours (every cell of each, so a 1-cell gap is not averaged away) and predicts what it costs, in steps,
+to move from that block into each of its 8 neighbours. Value iteration, as in value-iteration networks
+(Tamar et al., 2016), then carries the goal's cost-to-go across the block grid: each iteration is one
+layer of shared weights, ``V = min over moves of (cost of the move + V of the block it reaches)``, and the
+iterations run until the values settle (at most one per block of the grid). A last local head turns the
+block values into a cost-to-go for every cell. Nothing in it depends on the map's size or on where on the
+map a block lies: it learns local geometry (which cells let a robot through, at what cost) and composes it.
+
+The learned parts are the move costs and the cell head. Training fits the move costs to the grid search's
+cost-to-go directly (every block's cost-to-go minus its best neighbour's is the cost of that move, and no
+move may cost less than the drop it makes), and the cell head to every cell's cost-to-go given the block
+values. At inference it sees only the map and the goal; the grid search is a training target only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+from torch import nn
+
+from learning.models.field import FieldEncoder
+
+#: The 8 moves of the block grid, (row, column) offsets, and their lengths in blocks.
+MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
+LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
+#: The value of a block the goal does not reach (in steps): above any cost-to-go a map can have.
+UNREACHED = 1e6
+#: The most a move may cost, in log steps per block of length (a wall: any route around is cheaper).
+WALL_LOG = math.log(1000.0)
+#: How many cost-to-go steps either side of a block the cell head reads (its neighbours' values relative to its own).
+REACH = 4.0
+
+
+def shift(v: torch.Tensor, dr: int, dc: int, fill: float) -> torch.Tensor:
+    """``v`` (B, h, w) moved so that each block holds its neighbour at (dr, dc)'s value; ``fill`` off the map."""
+    h, w = v.shape[-2:]
+    p = nn.functional.pad(v, (1, 1, 1, 1), value=fill)
+    return p[..., 1 + dr:1 + dr + h, 1 + dc:1 + dc + w]
+
+
+def neighbours(v: torch.Tensor, fill: float) -> torch.Tensor:
+    """(B, 8, h, w): each block's 8 neighbours' values, in ``MOVES`` order."""
+    return torch.stack([shift(v, dr, dc, fill) for dr, dc in MOVES], 1)
+
+
+class RouteVIN(nn.Module, FieldEncoder):
+    """Learned move costs and value iteration over the block grid (see the module docstring).
+
+    Args:
+        block: Cells per block side: the planner's step in cells.
+        channels: Width of the local network.
+        layers: 3x3 convolutions of the local network: each block's costs read ``2 * layers + 1`` blocks across.
+    """
+
+    def __init__(self, block: int = 4, channels: int = 32, layers: int = 3) -> None:
+        super().__init__()
+        self.block, self.channels, self.layers = block, channels, layers
+        self.trained_side = 0  # its field keeps its scale on any map: nothing to rescale
+        inputs = block * block + 1  # every cell of the block, and whether the goal is in it
+        convs: list[nn.Module] = []
+        for i in range(layers):
+            convs += [nn.Conv2d(inputs if i == 0 else channels, channels, 3, padding=1), nn.ReLU()]
+        self.local = nn.Sequential(*convs)
+        self.cost = nn.Conv2d(channels, len(MOVES), 1)
+        self.cells = nn.Sequential(nn.Conv2d(channels + len(MOVES), channels, 1), nn.ReLU(),
+                                   nn.Conv2d(channels, block * block, 1))
+        self.register_buffer("lengths", torch.tensor(LENGTHS, dtype=torch.float32).view(1, -1, 1, 1))
+
+    def goal_and_walls(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """From ``route_input``'s channels: (the goal's block, the blocks with no free cell), (B, h, w) bool each."""
+        cells = self.block * self.block
+        return x[:, cells] > 0.5, x[:, :cells].amin(1) > 0.5
+
+    def move_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """(features (B, C, h, w), move costs (B, 8, h, w) in steps, each at least half the move's length)."""
+        f = self.local(x)
+        return f, self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
+
+    @staticmethod
+    def iterate(costs: torch.Tensor, goal: torch.Tensor, walls: torch.Tensor, v: torch.Tensor | None = None, *,
+                steps: int | None = None, check: int = 16) -> torch.Tensor:
+        """Value iteration on ``costs`` (B, 8, h, w) towards the blocks where ``goal`` (B, h, w, bool) holds.
+
+        A block with no free cell (``walls``, (B, h, w) bool) is never entered: its value stays ``UNREACHED``.
+        From ``v`` (default: 0 at the goal, ``UNREACHED`` elsewhere), ``steps`` iterations, or (None) until
+        the values stop changing (checked every ``check``; at most one iteration per block of the grid, the
+        longest a route over the grid can be). Without ``steps`` each value only falls, so the goal keeps 0.
+        """
+        costs = costs.masked_fill(walls.unsqueeze(1), UNREACHED)  # nothing leaves a wall, so nothing enters one
+        if v is None:
+            v = torch.where(goal, 0.0, UNREACHED).to(costs.dtype)
+        h, w = v.shape[-2:]
+        most = steps if steps is not None else h * w + check
+        done = 0
+        while done < most:
+            prev = v
+            for _ in range(min(check, most - done)):
+                p = nn.functional.pad(v, (1, 1, 1, 1), value=UNREACHED)
+                nxt = v if steps is None else None
+                for a, (dr, dc) in enumerate(MOVES):
+                    there = costs[:, a] + p[:, 1 + dr:1 + dr + h, 1 + dc:1 + dc + w]
+                    nxt = there if nxt is None else torch.minimum(nxt, there)
+                v = nxt.clamp_max(UNREACHED) if steps is None else torch.where(goal, 0.0, nxt.clamp_max(UNREACHED))
+                done += 1
+            if steps is None and torch.equal(prev, v):
+                break
+        return v
+
+    def cell_field(self, f: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+        """Every cell's cost-to-go (B, H, W) from the block features and block values."""
+        rel = (neighbours(v, UNREACHED) - v.unsqueeze(1)).clamp(-REACH, REACH)
+        offsets = self.cells(torch.cat([f, rel], 1))
+        return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """The cost-to-go of every cell (B, H, W), in steps, from ``route_input``'s channels."""
+        x = x[:, :self.block * self.block + 1]  # the cells and the goal's block; not the offsets to it
+        goal, walls = self.goal_and_walls(x)
+        f, costs = self.move_costs(x)
+        with torch.no_grad():
+            v = self.iterate(costs, goal, walls)
+        return self.cell_field(f, v)

@@ -1,0 +1,141 @@
+"""The value-iteration route encoder (``learning.models.route_vin``) and its training losses."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import torch
+from conftest import fine_check_path
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from learning.models.route_net import load_route_net, make_route_net, route_input, save_route_net
+from learning.models.route_vin import LENGTHS, MOVES, UNREACHED, RouteVIN
+from learning.samplers.route import SHIPPED_SETTINGS, RouteSampler
+from learning.training.route import cost_targets, train_route_net
+from learning.training.vin_losses import block_targets, cost_losses, path_moves
+from planners import RRT
+from planners.base.fileio import InputError
+from planners.maps.generators import TRAIN_SEEDS, generate
+
+
+def _octile(dr: int, dc: int) -> float:
+    return max(abs(dr), abs(dc)) + (math.sqrt(2) - 1) * min(abs(dr), abs(dc))
+
+
+@settings(max_examples=25, deadline=None)
+@given(h=st.integers(1, 9), w=st.integers(1, 9), data=st.data())
+def test_value_iteration_on_move_lengths_is_the_octile_distance_in_blocks(h, w, data):
+    gr, gc = data.draw(st.integers(0, h - 1)), data.draw(st.integers(0, w - 1))
+    goal = torch.zeros(1, h, w, dtype=torch.bool)
+    goal[0, gr, gc] = True
+    costs = torch.tensor(LENGTHS, dtype=torch.float64).view(1, 8, 1, 1).expand(1, 8, h, w)
+    v = RouteVIN.iterate(costs, goal, torch.zeros_like(goal))
+    want = torch.tensor([[_octile(r - gr, c - gc) for c in range(w)] for r in range(h)], dtype=torch.float64)
+    assert torch.allclose(v[0], want)
+
+
+def test_blocks_without_a_free_cell_are_never_entered():
+    goal = torch.zeros(1, 5, 5, dtype=torch.bool)
+    goal[0, 2, 2] = True
+    walls = torch.zeros_like(goal)
+    walls[0, 1:4, 1:4] = True
+    walls[0, 2, 2] = False  # the goal, walled in on every side
+    costs = torch.ones(1, 8, 5, 5, dtype=torch.float64)
+    v = RouteVIN.iterate(costs, goal, walls)
+    assert v[0, 2, 2] == 0
+    assert (v[0][walls[0]] == UNREACHED).all() and (v[0][~walls[0] & ~goal[0]] == UNREACHED).all()
+    walls[0, 1, 2] = False  # a door to the north
+    v = RouteVIN.iterate(costs, goal, walls)
+    assert v[0, 1, 2] == 1 and v[0, 0, 2] == 2 and v[0, 4, 4] < UNREACHED
+
+
+def test_a_fixed_number_of_iterations_reaches_that_many_moves_and_keeps_the_goal_at_zero():
+    goal = torch.zeros(1, 1, 6, dtype=torch.bool)
+    goal[0, 0, 0] = True
+    costs = torch.ones(1, 8, 1, 6, dtype=torch.float64)
+    v = RouteVIN.iterate(costs, goal, torch.zeros_like(goal), steps=3)
+    assert v[0, 0].tolist() == [0, 1, 2, 3, UNREACHED, UNREACHED]
+
+
+def test_the_encoder_predicts_a_cost_per_cell_on_maps_of_any_size_and_round_trips(tmp_path):
+    torch.manual_seed(0)
+    net = make_route_net("vin", 4, 8, 2).eval()
+    obs = np.zeros((50, 70), bool)
+    obs[10:40, 30] = True
+    field = net.predict(obs, (3, 4), 2)
+    assert field.shape == (50, 70) and np.isfinite(field).all()
+    save_route_net(net, tmp_path / "v.pt")
+    back = load_route_net(tmp_path / "v.pt")
+    assert isinstance(back, RouteVIN) and (back.block, back.channels, back.layers) == (4, 8, 2)
+    assert np.array_equal(back.predict(obs, (3, 4), 2), field)
+
+
+@pytest.mark.parametrize("config, needle", [
+    ({"kind": "transformer", "block": 4, "channels": 8, "depth": 2}, "kind"),
+    ({"kind": "vin", "block": 4, "channels": 8, "depth": 2, "attention": 2}, "attention"),
+])
+def test_a_bad_kind_is_refused_by_name(tmp_path, config, needle):
+    torch.save({"config": config, "state": {}}, tmp_path / "bad.pt")
+    with pytest.raises(InputError, match=needle):
+        load_route_net(tmp_path / "bad.pt")
+
+
+def test_the_path_move_of_every_block_leads_down_the_search_cost_to_go():
+    p = generate("maze", TRAIN_SEEDS[0] + 3, 64)
+    goal = p.world.cell_of(p.goal)
+    cells = torch.from_numpy(cost_targets(p.world.obstacles, goal, 4))[None]
+    tb, move = block_targets(cells, 4), path_moves(cells, 4)
+    known = torch.isfinite(tb[0]) & (tb[0] > 0)
+    assert (move[0][known] >= 0).all()
+    for r, c in zip(*np.nonzero(known.numpy()), strict=True):
+        dr, dc = MOVES[int(move[0, r, c])]
+        assert tb[0, r + dr, c + dc] < tb[0, r, c]  # the next block is nearer the goal
+
+
+def test_the_drops_as_move_costs_give_the_search_cost_to_go_and_no_loss():
+    p = generate("rooms", TRAIN_SEEDS[0] + 5, 64)
+    goal = p.world.cell_of(p.goal)
+    cells = torch.from_numpy(cost_targets(p.world.obstacles, goal, 4)).float()[None]
+    tb, move = block_targets(cells, 4), path_moves(cells, 4)
+    lengths = torch.tensor(LENGTHS).view(1, 8, 1, 1)
+    costs = torch.full((1, 8, 16, 16), 1000.0) * lengths  # every move a wall ...
+    for r, c in zip(*np.nonzero((move[0] >= 0).numpy()), strict=True):  # ... but the path's, at its drop
+        dr, dc = MOVES[int(move[0, r, c])]
+        costs[0, move[0, r, c], r, c] = max(float(tb[0, r, c] - tb[0, r + dr, c + dc]), 0.5 * LENGTHS[move[0, r, c]])
+    eq, hinge = cost_losses(costs, cells, 4)
+    assert eq.item() < 1e-6 and hinge.item() < 1e-6
+    x = torch.from_numpy(route_input(p.world.obstacles, goal, 4))[None]
+    walls = x[:, :16].amin(1) > 0.5
+    v = RouteVIN.iterate(costs.double(), x[:, 16] > 0.5, walls)
+    known = torch.isfinite(tb)
+    assert (v[known] >= tb[known] - 1e-5).all()  # no move cheaper than its drop: no shortcut
+    assert (v[known] - tb[known]).max() < 1.0  # drops below half a move are counted at half
+    costs[0, :, 0, 0] = 0.5  # a move cheaper than the drop it makes
+    assert cost_losses(costs, cells, 4)[1].item() > 0
+
+
+def test_vin_training_is_seeded_and_the_loss_falls():
+    problems = [generate(f, TRAIN_SEEDS[0] + i, 32) for f in ("maze", "rooms") for i in range(3)]
+    logs: list[list[str]] = [[], []]
+    nets = [train_route_net(problems, kind="vin", channels=8, depth=2, epochs=3, batch=2, seed=1,
+                            log=logs[i].append) for i in range(2)]
+    a, b = (n.state_dict() for n in nets)
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    assert [line.split(" (")[0] for line in logs[0]] == [line.split(" (")[0] for line in logs[1]]
+    losses = [float(line.split("loss ")[1].split()[0].rstrip(",")) for line in logs[0]]
+    assert losses[-1] < losses[0]
+
+
+def test_the_route_sampler_plans_valid_seeded_paths_with_a_vin():
+    torch.manual_seed(0)
+    net = make_route_net("vin", 4, 8, 2).eval()
+    p = generate("bugtrap", TRAIN_SEEDS[0] + 2, 64)
+    runs = [RRT(p, step_size=4.0, sampler=RouteSampler(net, **SHIPPED_SETTINGS), seed=3).solve(max_iterations=20000)
+            for _ in range(2)]
+    assert runs[0].solved and runs[0].iterations == runs[1].iterations
+    assert np.array_equal(runs[0].path, runs[1].path)
+    assert np.allclose(runs[0].path[0], p.start) and np.linalg.norm(runs[0].path[-1] - p.goal) <= p.goal_tolerance
+    assert fine_check_path(p.world, runs[0].path)
