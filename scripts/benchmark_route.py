@@ -90,7 +90,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256, 512, 1024])
     ap.add_argument("--threads", type=int, nargs="+", default=[1], help="torch threads per query (default 1, "
                     "the library's planning default)")
-    ap.add_argument("--symmetries", type=int, default=8)
+    ap.add_argument("--symmetries", type=int,
+                    help="passes per query (default: the encoder's own, as the route sampler takes: 8 for the U-Net, "
+                         "1 for the value-iteration encoder)")
     ap.add_argument("--repeat", type=int, default=5, help="timed calls per row; the table shows their median")
     ap.add_argument("--batch", type=int, default=1, help="also time N queries per predict_many call")
     ap.add_argument("--device", default="cpu", choices=DEVICES, help="cpu (default), cuda, or auto as in SB3")
@@ -102,8 +104,9 @@ def main(argv=None) -> int:
             check_int(side, "--sides", low=32)  # the smallest generated map
         for n in args.threads:
             check_int(n, "--threads")
-        check_int(args.symmetries, "--symmetries")
-        if args.symmetries > 8:
+        if args.symmetries is not None:
+            check_int(args.symmetries, "--symmetries")
+        if args.symmetries is not None and args.symmetries > 8:
             raise InputError(f"--symmetries {args.symmetries}: expected 1 to 8")
         if not args.route.is_file():
             raise InputError(f"--route {args.route}: no such file")
@@ -117,6 +120,8 @@ def main(argv=None) -> int:
 
     check_flags(pick)
     net = load_route_net(args.route).to(device)
+    if args.symmetries is None:
+        args.symmetries = net.symmetries
     print(f"route encoder {args.route.name}, {args.symmetries} symmetries, device {device}, "
           f"{os.cpu_count()} CPUs, torch {torch.__version__}\n")
     rows = [bench_side(net, side, symmetries=args.symmetries, threads=n, repeat=args.repeat, batch=args.batch,

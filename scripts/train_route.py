@@ -1,14 +1,18 @@
-"""Train the route encoder (``learning.models.route_net.RouteNet``) on the generated training maps.
+"""Train the route encoder (``learning.models.route_vin.RouteVIN``, or the U-Net ``RouteNet``) on the training maps.
 
-    python scripts/train_route.py                           # the shipped encoder's recipe (about an hour)
+    python scripts/train_route.py                           # the shipped encoder's recipe (under 10 min, 2 cores)
     python scripts/train_route.py --resume                  # continue an interrupted run from its last epoch
-    python scripts/train_route.py --epochs 5 --maps 100     # a quicker variation
+    python scripts/train_route.py --epochs 3 --maps 20      # a quicker variation
+    python scripts/train_route.py --kind unet --channels 24 --attention 2 --maps 1600 --epochs 30 --batch 32 --lr 1e-3
+                                                            # the earlier U-Net encoder's recipe (about an hour)
     python scripts/evaluate.py --route runs/route/route.pt  # the comparison with it as the route encoder
 
-With no options it trains the shipped encoder's recipe (``learning/data/route.json``: 30 epochs, 1600
-maps per family at sides 64 and 128, the 8 symmetries, 2 axial attention layers). Maps come from the
-training seeds only (validation, tuning and test seeds are never seen). The encoder learns the grid
-search's cost-to-go of every cell; ``RouteSampler`` follows its prediction.
+With no options it trains the shipped encoder's recipe (``learning/data/route.json``): the value-iteration
+encoder (``--kind vin``: learned move costs of 48 channels and 4 local layers, value iteration over them),
+12 epochs over 100 maps per training family at sides 64 and 128, each turned by one of the square's 8
+symmetries, batches of 16, Adam at 2e-3. Maps come from the training seeds only (validation, tuning and
+test seeds are never seen). The encoder learns the grid search's cost-to-go of every cell (see
+``learning.training.vin_losses``); ``RouteSampler`` follows its prediction.
 
 Writes ``<out>/route.pt`` and ``<out>/route.json`` (recipe, loss, time) as one unit: the folder is
 built beside ``<out>`` and swapped into place whole, so a kill leaves the old pair or the new pair.
@@ -66,15 +70,18 @@ NEED_BYTES = 50 * 2**20
 
 def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--maps", type=int, default=1600, help="training maps per family and size (default 1600)")
+    ap.add_argument("--maps", type=int, default=100, help="training maps per family and size (default 100)")
     ap.add_argument("--size", type=int, nargs="+", default=[64, 128], help="map sides; --maps maps of each")
-    ap.add_argument("--epochs", type=int, default=30)
-    ap.add_argument("--kind", choices=KINDS, default="unet",
+    ap.add_argument("--epochs", type=int, default=12)
+    ap.add_argument("--batch", type=int, default=16, help="maps per batch (fewer where maps are large)")
+    ap.add_argument("--lr", type=float, default=2e-3, help="Adam's learning rate")
+    ap.add_argument("--kind", choices=KINDS, default="vin",
                     help="the encoder: unet (a U-Net with axial attention) or vin (learned move costs and value "
                          "iteration over them; --depth is then its local layers, --attention 0)")
-    ap.add_argument("--channels", type=int, default=24)
-    ap.add_argument("--depth", type=int, default=4, help="times the encoder halves the block grid")
-    ap.add_argument("--attention", type=int, default=2, help="axial attention layers (a row then a column each)")
+    ap.add_argument("--channels", type=int, default=48)
+    ap.add_argument("--depth", type=int, default=4, help="the VIN's local 3x3 layers, or the times the U-Net halves the block grid")
+    ap.add_argument("--attention", type=int, default=0,
+                    help="axial attention layers of the U-Net (a row then a column each; the shipped U-Net had 2)")
     ap.add_argument("--attention-level", type=int, default=0,
                     help="times the block grid is halved where the attention runs (0: full resolution)")
     ap.add_argument("--step", type=int, default=4, help="the planner's step in cells: the encoder's block")
@@ -106,7 +113,9 @@ def _check(args) -> None:
     Opens the map sets (each checks its maps and queries) into ``args.sets``, sets ``args.step`` from
     ``--step-size`` and resolves ``--device`` into ``args.torch_device``.
     """
-    check_int_flags(args, ("maps", "epochs", "channels", "depth", "step", "workers"))
+    check_int_flags(args, ("maps", "epochs", "batch", "channels", "depth", "step", "workers"))
+    if not (math.isfinite(args.lr) and args.lr > 0):
+        raise InputError(f"--lr {args.lr:g}: expected a positive number")
     check_int_flags(args, ("attention", "attention_level", "seed"), low=0)
     args.torch_device = resolve_device(args.device)
     for flag, value in (("--map-set-weight", args.map_set_weight), ("--split-seed", args.split_seed),
@@ -245,6 +254,7 @@ def _train(args) -> int:
 
     net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth,
                           attention=args.attention, attention_level=args.attention_level, epochs=args.epochs,
+                          batch=args.batch, lr=args.lr,
                           augment=args.augment, seed=args.seed, log=log, checkpoint=ckpt, resume=args.resume,
                           validation=validation, recipe_extra=extra, workers=args.workers, device=args.torch_device,
                           kind=args.kind)

@@ -134,4 +134,6 @@ def test_the_shipped_route_encoder_matches_its_recipe():
     net = load_route_net(SHIPPED)
     assert (net.channels, net.depth, net.attention_layers, net.block) == (
         recipe["channels"], recipe["depth"], recipe["attention"], recipe["step"])
-    assert net.trained_side == max(recipe["size"])  # fields on larger maps are scaled from this side
+    # a U-Net's fields on larger maps are scaled from its largest training side; value iteration's need no scaling
+    assert net.trained_side == (max(recipe["size"]) if recipe.get("kind", "unet") == "unet" else 0)
+    assert type(net).__name__ == {"unet": "RouteNet", "vin": "RouteVIN"}[recipe.get("kind", "unet")]

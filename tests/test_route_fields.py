@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import learning.evaluation as E
+from learning.models.field import FieldEncoder
 from learning.models.route_net import RouteNet, load_route_net
 from learning.samplers.route import SHIPPED, FieldCache, RouteSampler, shipped_sampler
 from planners import RRT
@@ -21,15 +22,15 @@ def net() -> RouteNet:
 
 
 def _count_passes(monkeypatch) -> list[int]:
-    """Patch ``RouteNet.predict_many`` to record how many queries each call computes."""
+    """Patch ``FieldEncoder.predict_many`` (every encoder's) to record how many queries each call computes."""
     calls: list[int] = []
-    many = RouteNet.predict_many
+    many = FieldEncoder.predict_many
 
     def counted(self, queries, *args, **kwargs):
         calls.append(len(queries))
         return many(self, queries, *args, **kwargs)
 
-    monkeypatch.setattr(RouteNet, "predict_many", counted)
+    monkeypatch.setattr(FieldEncoder, "predict_many", counted)
     return calls
 
 
@@ -85,7 +86,7 @@ def test_a_second_bind_of_the_same_query_takes_the_kept_field_and_plans_the_same
     for s in (0, 1, 0):  # each bind is a copy of the sampler sharing its cache
         planner = RRT(p, step_size=4.0, sampler=sampler, seed=s)
         cached.append(planner.solve(max_iterations=20000))
-        assert planner.sampler.forward_passes == 8  # the passes the query's field takes, kept or not
+        assert planner.sampler.forward_passes == net.symmetries  # the passes the query's field takes, kept or not
         assert (planner.sampler.reused_seconds > 0) == (len(cached) > 1)  # its time, charged to later runs
     assert calls == [1]
     assert [r.iterations for r in cached] == [r.iterations for r in plain]
@@ -127,11 +128,11 @@ def test_the_runner_runs_the_encoder_once_per_query_across_seeds(monkeypatch, ba
     # CPU default: one pass batch per query; batched (as on a GPU): both queries' fields at the first run
     assert calls == ([2] if batch else [1, 1]) and len(context.fields) == 2
     assert [r.iterations for r in runs] == [r.iterations for r in fresh]
-    assert [r.forward_passes for r in runs] == [8] * len(tasks)
+    assert [r.forward_passes for r in runs] == [load_route_net(SHIPPED).symmetries] * len(tasks)
     # every run's wall time includes its query's field, computed in the run or before it
     net = context.models.route_net(str(SHIPPED))
     for q, three in zip(queries, (runs[:3], runs[3:]), strict=True):
         p = context.protocol.problem(q, context.scenarios)
-        kept = context.fields.get(net, p.world.obstacles, p.world.cell_of(p.goal), 8)
+        kept = context.fields.get(net, p.world.obstacles, p.world.cell_of(p.goal), net.symmetries)
         assert kept.reused and all(r.wall_time >= kept.seconds for r in three)
     assert len(pickle.loads(pickle.dumps(context)).fields) == 0  # each worker fills its own

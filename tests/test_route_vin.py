@@ -69,7 +69,7 @@ def test_the_encoder_predicts_a_cost_per_cell_on_maps_of_any_size_and_round_trip
     assert field.shape == (50, 70) and np.isfinite(field).all()
     save_route_net(net, tmp_path / "v.pt")
     back = load_route_net(tmp_path / "v.pt")
-    assert isinstance(back, RouteVIN) and (back.block, back.channels, back.layers) == (4, 8, 2)
+    assert isinstance(back, RouteVIN) and (back.block, back.channels, back.depth) == (4, 8, 2)
     assert np.array_equal(back.predict(obs, (3, 4), 2), field)
 
 

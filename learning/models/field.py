@@ -89,6 +89,8 @@ class FieldEncoder:
 
     block: int
     trained_side: int
+    #: How many of the square's symmetries the route sampler averages this encoder's field over by default.
+    symmetries: int = 8
 
     def check_size(self, shape: tuple[int, int]) -> tuple[int, int]:
         """The block grid of a map of ``shape`` cells, or an ``InputError`` naming the size and the limit."""

@@ -138,7 +138,7 @@ def save_route_net(net: RouteNet | RouteVIN, path: str | os.PathLike) -> None:
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
     if isinstance(net, RouteVIN):
-        config = {"kind": "vin", "block": net.block, "channels": net.channels, "depth": net.layers}
+        config = {"kind": "vin", "block": net.block, "channels": net.channels, "depth": net.depth}
     else:
         config = {"block": net.block, "channels": net.channels, "depth": net.depth}
         if net.attention_layers:  # files of encoders without attention stay as they were

@@ -55,16 +55,22 @@ class RouteVIN(nn.Module, FieldEncoder):
     Args:
         block: Cells per block side: the planner's step in cells.
         channels: Width of the local network.
-        layers: 3x3 convolutions of the local network: each block's costs read ``2 * layers + 1`` blocks across.
+        depth: 3x3 convolutions of the local network: each block's costs read ``2 * depth + 1`` blocks across.
     """
 
-    def __init__(self, block: int = 4, channels: int = 32, layers: int = 3) -> None:
+    #: The route sampler takes one pass per query: value iteration carries the same local costs whichever way
+    #: the map is turned, and on the validation maps the mean over 8 turns gave no fewer iterations at 8 times
+    #: the cost.
+    symmetries = 1
+
+    def __init__(self, block: int = 4, channels: int = 48, depth: int = 4) -> None:
         super().__init__()
-        self.block, self.channels, self.layers = block, channels, layers
+        self.block, self.channels, self.depth = block, channels, depth
+        self.attention_layers = 0  # as ``RouteNet`` names them: it has none
         self.trained_side = 0  # its field keeps its scale on any map: nothing to rescale
         inputs = block * block + 1  # every cell of the block, and whether the goal is in it
         convs: list[nn.Module] = []
-        for i in range(layers):
+        for i in range(depth):
             convs += [nn.Conv2d(inputs if i == 0 else channels, channels, 3, padding=1), nn.ReLU()]
         self.local = nn.Sequential(*convs)
         self.cost = nn.Conv2d(channels, len(MOVES), 1)

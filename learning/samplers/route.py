@@ -32,7 +32,8 @@ import numba as nb
 import numpy as np
 
 from learning.device import resolve_device
-from learning.models.route_net import RouteNet, load_route_net
+from learning.models.field import FieldEncoder
+from learning.models.route_net import load_route_net
 from learning.models.threads import planning_thread_count
 from learning.models.shipped import SHIPPED_ROUTE
 from planners import OccupancyGrid, Problem, SamplerBase
@@ -181,7 +182,7 @@ class FieldCache:
 
     def _clear(self) -> None:
         self._fields: OrderedDict[tuple, tuple[np.ndarray, float]] = OrderedDict()  # field, encoder seconds
-        self._nets: dict[int, RouteNet] = {}  # keeps each keyed encoder alive, so its id is not reused
+        self._nets: dict[int, FieldEncoder] = {}  # keeps each keyed encoder alive, so its id is not reused
         self.bytes = self.hits = self.misses = 0
 
     def __getstate__(self) -> dict:
@@ -194,7 +195,7 @@ class FieldCache:
     def __len__(self) -> int:
         return len(self._fields)
 
-    def key(self, net: RouteNet, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int) -> tuple:
+    def key(self, net: FieldEncoder, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int) -> tuple:
         """The key of a query's field (see the class docstring)."""
         obstacles = np.ascontiguousarray(obstacles)
         digest = hashlib.blake2b(obstacles.view(np.uint8).data, digest_size=16).digest()
@@ -202,11 +203,11 @@ class FieldCache:
         return (id(net), device, digest, obstacles.shape, obstacles.dtype.str, (int(goal_cell[0]), int(goal_cell[1])),
                 int(symmetries))
 
-    def has(self, net: RouteNet, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int) -> bool:
+    def has(self, net: FieldEncoder, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int) -> bool:
         """Whether the query's field is kept."""
         return self.key(net, obstacles, goal_cell, symmetries) in self._fields
 
-    def get(self, net: RouteNet, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int, *,
+    def get(self, net: FieldEncoder, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int, *,
             threads: int | None = None) -> CachedField:
         """``net.predict(obstacles, goal_cell, symmetries, threads=threads)``, from the cache where it is there."""
         key = self.key(net, obstacles, goal_cell, symmetries)
@@ -222,7 +223,7 @@ class FieldCache:
         self._keep(key, net, field, seconds)
         return CachedField(field.copy(), seconds, False)
 
-    def fill(self, net: RouteNet, queries: Sequence[tuple[np.ndarray, tuple[int, int]]], symmetries: int, *,
+    def fill(self, net: FieldEncoder, queries: Sequence[tuple[np.ndarray, tuple[int, int]]], symmetries: int, *,
              threads: int | None = None, batch: bool | None = None) -> int:
         """Compute the fields of the (obstacles, goal cell) ``queries`` not yet kept; the number computed.
 
@@ -254,7 +255,7 @@ class FieldCache:
         self.misses += len(todo)
         return len(todo)
 
-    def _keep(self, key: tuple, net: RouteNet, field: np.ndarray, seconds: float) -> None:
+    def _keep(self, key: tuple, net: FieldEncoder, field: np.ndarray, seconds: float) -> None:
         if field.nbytes > self.max_bytes:
             return
         self._fields[key] = (field, seconds)
@@ -309,10 +310,16 @@ class RouteSampler(SamplerBase):
     #: Where the encoder's field replaces the straight line: the progress and the frontier's ranking.
     #: (Experiments that place it elsewhere subclass, ``scripts/experiments/route_variants.py``.)
     _uses = "both"
-    #: How many of the square's symmetries the prediction is averaged over (``RouteNet.predict``).
-    _symmetries = 8
+    #: How many of the square's symmetries the prediction is averaged over (``FieldEncoder.predict``); None:
+    #: the encoder's own ``symmetries`` (8 for ``RouteNet``, 1 for ``RouteVIN``).
+    _symmetries: int | None = None
 
-    def __init__(self, net: RouteNet | None, *, step_size: float = 4.0, lookahead: float = 3.0, sigma: float = 0.5,
+    @property
+    def symmetry_passes(self) -> int:
+        """How many of the square's symmetries the encoder's field is averaged over (its passes per query)."""
+        return self._symmetries or self.net.symmetries
+
+    def __init__(self, net: FieldEncoder | None, *, step_size: float = 4.0, lookahead: float = 3.0, sigma: float = 0.5,
                  stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
                  max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None,
                  fields: FieldCache | None = None) -> None:
@@ -356,12 +363,12 @@ class RouteSampler(SamplerBase):
                              f"step_size={self.net.block * grid.resolution:g}")
         goal = grid.cell_of(self.problem.goal)
         if self.fields is None:
-            learned = self.net.predict(grid.obstacles, goal, self._symmetries, threads=self.threads)
+            learned = self.net.predict(grid.obstacles, goal, self.symmetry_passes, threads=self.threads)
         else:
-            learned, seconds, reused = self.fields.get(self.net, grid.obstacles, goal, self._symmetries,
+            learned, seconds, reused = self.fields.get(self.net, grid.obstacles, goal, self.symmetry_passes,
                                                        threads=self.threads)
             self.reused_seconds = seconds if reused else 0.0
-        self.forward_passes = self._symmetries
+        self.forward_passes = self.symmetry_passes
         progress = self._straight(grid) if self._uses == "frontier" else learned
         return progress, (None if self._uses == "progress" else learned)
 
@@ -370,7 +377,7 @@ class RouteSampler(SamplerBase):
         grid = problem.world
         if self.net is None or self.fields is None or not isinstance(grid, OccupancyGrid):
             return False
-        return self.fields.has(self.net, grid.obstacles, grid.cell_of(problem.goal), self._symmetries)
+        return self.fields.has(self.net, grid.obstacles, grid.cell_of(problem.goal), self.symmetry_passes)
 
     def prefill(self, problems: Sequence[Problem], *, batch: bool | None = None) -> int:
         """Compute the encoder's fields of ``problems`` into ``fields`` ahead of their binds; the number computed.
@@ -386,7 +393,7 @@ class RouteSampler(SamplerBase):
             grid = problem.world
             if isinstance(grid, OccupancyGrid) and round(self.step_size / grid.resolution) == self.net.block:
                 queries.append((grid.obstacles, grid.cell_of(problem.goal)))
-        return self.fields.fill(self.net, queries, self._symmetries, threads=self.threads, batch=batch)
+        return self.fields.fill(self.net, queries, self.symmetry_passes, threads=self.threads, batch=batch)
 
     def _setup(self) -> None:
         grid = self.problem.world
@@ -437,13 +444,13 @@ class RouteSampler(SamplerBase):
 _NO_ANCHORS = np.zeros(0, dtype=np.int8)
 
 
-def shipped_sampler(encoder: RouteNet | str | os.PathLike = SHIPPED, step_size: float = 4.0, *, device: str = "auto",
+def shipped_sampler(encoder: FieldEncoder | str | os.PathLike = SHIPPED, step_size: float = 4.0, *, device: str = "auto",
                     threads: int | None = None) -> RouteSampler:
     """An encoder (loaded, or a file; default the shipped one) at the validated ``SHIPPED_SETTINGS``.
 
     ``evaluate.py``'s "route encoder"; ``device`` and ``threads`` as for ``RouteSampler``.
     """
-    net = encoder if isinstance(encoder, RouteNet) else load_route_net(encoder)
+    net = encoder if isinstance(encoder, FieldEncoder) else load_route_net(encoder)
     return RouteSampler(net, step_size=step_size, device=device, threads=threads, **SHIPPED_SETTINGS)
 
 
