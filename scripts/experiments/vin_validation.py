@@ -1,0 +1,83 @@
+"""The value-iteration route encoder on the validation maps, against what it is made of.
+
+    python scripts/experiments/vin_validation.py                     # the shipped encoder, sides 128 and 256
+    python scripts/experiments/vin_validation.py --route runs/route/route.pt --maps 6 --sides 128 256
+
+Medians of RRT iterations (step 4, tolerance 4, cap 20,000; planner seeds 0 and 1) on validation maps of the
+five training families (seeds from ``VALIDATION_SEED0 + 500``, never test maps), at sides the encoder trained
+on (128) and beyond (256), for:
+
+- the route ablation (the straight line in place of the field: no learning),
+- value iteration without learning: the same value iteration over the block grid with every move costing its
+  length on blocks with any free cell (what the structure gives before any learning),
+- the route encoder (the learned move costs and cell head),
+- the exact cost-to-go at the same settings (the reference that shows the room).
+
+Prints one row per family and side with the share of the room the encoder closes,
+``(ablation - encoder) / (ablation - exact)`` where the room is at least 20% of the ablation's median.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from learning.models.route_net import load_route_net
+from learning.models.route_vin import RouteVIN
+from learning.samplers.registry import make_sampler
+from learning.samplers.route import SHIPPED, SHIPPED_SETTINGS, RouteSampler, shipped_ablation, shipped_sampler
+from planners import make_planner
+from planners.maps.generators import FAMILIES, VALIDATION_SEED0, generate
+from planners.tools.benchmark import MAX_ITERATIONS, STEP
+
+
+class LengthCosts(RouteVIN):
+    """``RouteVIN``'s value iteration with nothing learned: every move costs its length; a block's cells share its value."""
+
+    def move_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        b, _, h, w = x.shape
+        return x.new_zeros(b, 1, h, w), self.lengths.expand(b, 8, h, w).clone()
+
+    def cell_field(self, f: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+        return v.repeat_interleave(self.block, -1).repeat_interleave(self.block, -2)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--route", type=Path, default=SHIPPED, help="a value-iteration encoder file (default: shipped)")
+    ap.add_argument("--maps", type=int, default=6, help="validation maps per family and side")
+    ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
+    ap.add_argument("--seeds", type=int, default=2)
+    args = ap.parse_args(argv)
+    net = load_route_net(args.route)
+    plain = LengthCosts(net.block, 1, 1).eval()
+    samplers = {
+        "ablation": shipped_ablation,
+        "value iteration, no learning": lambda: RouteSampler(plain, **SHIPPED_SETTINGS),
+        "route encoder": lambda: shipped_sampler(net),
+        "exact": lambda: make_sampler("exact_route"),
+    }
+    print("| family | side | " + " | ".join(samplers) + " | share closed |")
+    print("|---|---|" + "---|" * (len(samplers) + 1))
+    for family in FAMILIES:
+        for side in args.sides:
+            its: dict[str, list[int]] = {name: [] for name in samplers}
+            for i in range(args.maps):
+                p = generate(family, VALIDATION_SEED0 + 500 + i, side)
+                for name, make in samplers.items():
+                    for seed in range(args.seeds):
+                        r = make_planner("RRT", p, extension_step=STEP, sampler=make(), seed=seed).solve(
+                            max_iterations=MAX_ITERATIONS)
+                        its[name].append(r.first_solution_iteration if r.solved else MAX_ITERATIONS)
+            med = {name: float(np.median(v)) for name, v in its.items()}
+            a, e, learned = med["ablation"], med["exact"], med["route encoder"]
+            share = f"{(a - learned) / (a - e):.2f}" if a - e >= 0.2 * a else "no room"
+            print(f"| {family} | {side} | " + " | ".join(f"{v:g}" for v in med.values()) + f" | {share} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
