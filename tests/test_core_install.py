@@ -13,6 +13,8 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[1]
 
 SCRIPT = textwrap.dedent("""
@@ -34,6 +36,9 @@ SCRIPT = textwrap.dedent("""
 """)
 
 
+# Slow: it compiles RRT's kernels from nothing. CI's first step (.ci/run) checks the same on every build,
+# more widely: a core install without scipy compiles every kernel (planners.compile) and runs the main job.
+@pytest.mark.slow
 def test_core_install_plans_without_scipy(tmp_path):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache"), "PYTHONPATH": str(REPO)}
     proc = subprocess.run([sys.executable, "-c", SCRIPT], cwd=tmp_path, env=env, capture_output=True, text=True,

@@ -167,6 +167,30 @@ def test_a_run_takes_its_protocol_models_and_scenarios_from_its_context_alone(tm
     assert capped.iterations <= 3
 
 
+def test_the_runs_of_a_query_share_one_problem_and_run_as_on_a_fresh_build(monkeypatch):
+    """A worker builds a recent query's problem once; its runs are those of a fresh build per run."""
+    import pickle
+
+    from learning.evaluation.runner import ProblemCache
+
+    builds = []
+    build = E.Protocol.problem
+    monkeypatch.setattr(E.Protocol, "problem", lambda self, q, cache=None: builds.append(q) or build(self, q, cache))
+    qs = E.generated_queries(["forest", "maze"], 64, 2, 0)
+    specs = (E.SamplerSpec.of("uniform"), E.bias_spec(0.05))
+    tasks = [E.Task(q, "RRT", s, seed) for q in qs for s in specs for seed in range(2)]
+    context = E.RunContext(E.Protocol(max_iterations=2000), problems=ProblemCache(size=2))
+    runs = [E.run_one(t, context) for t in tasks]
+    assert builds == qs and len(context.problems) == 2  # one build per query, the last two kept
+    assert context.problem(qs[-1]) is context.problem(qs[-1]) and builds == qs
+    context.problem(qs[0])  # no longer among the last two: built again
+    assert builds == [*qs, qs[0]]
+    fresh = [E.run_one(t, E.RunContext(E.Protocol(max_iterations=2000))) for t in tasks]
+    assert [(r.iterations, r.solved, r.path_cost, r.vertices) for r in runs] == \
+        [(r.iterations, r.solved, r.path_cost, r.vertices) for r in fresh]
+    shipped = pickle.loads(pickle.dumps(context))  # a worker gets the context without the problems
+    assert len(shipped.problems) == 0 and shipped.problems.size == 2
+
 def test_a_spec_column_round_trips_as_json_never_parsed_from_the_label(tmp_path):
 
     specs = [E.bias_spec(0.1), E.constant_spec(0.3, E.Protocol(), 2), E.policy_spec("p.zip", 8),

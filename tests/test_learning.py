@@ -23,10 +23,21 @@ TINY = TrainConfig(name="tiny", families=("forest",), sizes=(64,), dagger_rounds
                    validation_maps=2, checkpoint_every=10**9, max_iterations=1500)
 
 
+#: For the checks that train several times (reproducibility, Ray): smaller than TINY, every phase still
+#: run (two DAgger rounds, the second with the policy acting, the value warm-up, PPO, validation)
+REPRO = dataclasses.replace(TINY, name="repro", maps_per_round=8, bc_epochs=2, ppo_steps=512, value_warmup=256,
+                            ppo_n_steps=128, ppo_batch=64, ppo_epochs=1)
+
+
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory):
     out = tmp_path_factory.mktemp("runs")
     return train(TINY, out, progress=False, log_stdout=False), out
+
+
+@pytest.fixture(scope="module")
+def repro_trained(tmp_path_factory):
+    return train(REPRO, tmp_path_factory.mktemp("repro"), progress=False, log_stdout=False)
 
 
 def _weights(path):
@@ -36,21 +47,21 @@ def _weights(path):
     return params["policy"]
 
 
-def test_seeded_training_is_reproducible(trained, tmp_path):
-    final, _ = trained
-    again = train(TINY, tmp_path, progress=False, log_stdout=False)
+def test_seeded_training_is_reproducible(repro_trained, tmp_path):
+    final = repro_trained
+    again = train(REPRO, tmp_path, progress=False, log_stdout=False)
     a, b = _weights(final), _weights(again)
     assert a.keys() == b.keys()
     for k in a:
         assert torch.equal(a[k], b[k]), k
-    other = train(dataclasses.replace(TINY, seed=1), tmp_path / "other", progress=False, log_stdout=False)
+    other = train(dataclasses.replace(REPRO, seed=1), tmp_path / "other", progress=False, log_stdout=False)
     assert not torch.equal(_weights(other)["action_net.weight"], a["action_net.weight"])
 
 
-def test_training_on_ray_reaches_the_same_weights(trained, tmp_path, ray_backend):
+def test_training_on_ray_reaches_the_same_weights(repro_trained, tmp_path, ray_backend):
     """DAgger's rollouts and the validation runs on Ray workers: the weights do not depend on the backend."""
-    final, _ = trained
-    on_ray = train(TINY, tmp_path, progress=False, log_stdout=False, backend=ray_backend)
+    final = repro_trained
+    on_ray = train(REPRO, tmp_path, progress=False, log_stdout=False, backend=ray_backend)
     a, b = _weights(final), _weights(on_ray)
     assert a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
     assert (final.parent / "summary.json").read_text() == (on_ray.parent / "summary.json").read_text()
@@ -317,8 +328,7 @@ def test_evaluate_script_writes_tables_csv_and_plots(trained, tmp_path, movingai
     rc = _script("evaluate").main([
         "--policy", str(final), "--families", "forest", "--size", "64", "--maps", "3", "--tuning-maps", "2",
         "--seeds", "1", "--shifted-maps", "1", "--no-unseen", "--movingai", str(movingai), "--movingai-maps",
-        "maze-32-32-2",
-        "room-32-32-4",
+        "arena", "random-32-32-10",  # two maps, so the pooled row; open ones, which every sampler solves quickly
         "--scenarios", "2", "--other-planners", "PRM", "--processes", "1", "--out", str(out)])
     assert rc == 0
     text = (out / "summary.md").read_text()

@@ -25,9 +25,9 @@ ROUTE = str(SHIPPED_ROUTE)
 def _tasks(max_iterations: int = 3000, movingai: bool = True) -> tuple[list[E.Task], E.Protocol]:
     mdir = movingai_dir(None, required=False) if movingai else None
     protocol = E.Protocol(max_iterations=max_iterations, movingai_dir="" if mdir is None else str(mdir))
-    qs = E.generated_queries(["forest", "maze"], 64, 3, 0) + E.shifted_queries(["bugtrap"], 2)
+    qs = E.generated_queries(["forest", "maze"], 64, 2, 0) + E.shifted_queries(["bugtrap"], 1)
     if mdir is not None:
-        qs += E.movingai_queries(str(mdir), ["arena"], 2, 0, 4.0)
+        qs += E.movingai_queries(str(mdir), ["arena"], 1, 0, 4.0)
     samplers = (E.SamplerSpec.of("uniform"), E.bias_spec(0.1), E.policy_spec(CHECKPOINT, None),
                 E.constant_spec(0.7, protocol, 8), E.SamplerSpec.of("route", path=ROUTE, step_size=4.0))
     return [E.Task(q, "RRT", s, seed) for q in qs for s in samplers for seed in range(2)], protocol

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -17,13 +18,49 @@ from planners.tools.benchmark import Run
 from planners.tools.parallel import Backend, make_backend
 
 
+class ProblemCache:
+    """The problems of the last ``size`` queries one process met, so that the runs of a query share one build.
+
+    Without it every run rebuilds its problem (a generated map from its family, seed and size), which on
+    the comparison's maps costs about as much as the run. A problem is immutable (frozen, read-only
+    arrays), so runs can share it; a run's wall time never included the build. Tasks come grouped by
+    query, so a few recent queries cover nearly every run. The cache travels empty (pickled for a
+    worker, it starts empty there).
+    """
+
+    def __init__(self, size: int = 32) -> None:
+        self.size = size
+        self._problems: OrderedDict = OrderedDict()
+
+    def get(self, query, protocol: Protocol, scenarios: dict) -> Problem:
+        """``protocol.problem(query, scenarios)``, built once while ``query`` is among the last ``size`` met."""
+        problem = self._problems.get(query)
+        if problem is None:
+            problem = self._problems[query] = protocol.problem(query, scenarios)
+            if len(self._problems) > self.size:
+                self._problems.popitem(last=False)
+        else:
+            self._problems.move_to_end(query)
+        return problem
+
+    def __len__(self) -> int:
+        return len(self._problems)
+
+    def __getstate__(self) -> dict:
+        return {"size": self.size}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(state["size"])
+
+
 @dataclass
 class RunContext:
     """What every run needs, shipped once to each worker: the protocol and what was loaded for the runs.
 
     ``models`` holds the route encoders, policies and users' samplers (loaded once, so workers on other
     machines need none of the files); ``scenarios`` the MovingAI scenarios by ``(directory, map, tolerance)``.
-    Generated maps travel as (family, seed, size) and are rebuilt.
+    Generated maps travel as (family, seed, size) and are rebuilt, once per query while it is among the
+    last ones a worker met (``problems``, which travels empty).
 
     ``fields`` keeps the route encoder's fields in each worker (it travels empty), so the runs of one
     query that differ only by planner seed run the encoder once. ``batch_fields``: when a worker meets a
@@ -43,12 +80,17 @@ class RunContext:
     batch_fields: bool | None = None
     prefill: int = 64
     route_queries: dict = field(default_factory=dict)
+    problems: ProblemCache = field(default_factory=ProblemCache)
+
+    def problem(self, query) -> Problem:
+        """The problem of ``query`` under the protocol, from ``problems`` where it was built recently."""
+        return self.problems.get(query, self.protocol, self.scenarios)
 
 
 def run_one(task: Task, context: RunContext) -> Run:
     """Execute one run (a top-level function so workers can receive it) under ``context``'s protocol."""
     protocol = context.protocol
-    problem = protocol.problem(task.query, context.scenarios)
+    problem = context.problem(task.query)
     sampler = task.sampler.build(context.models)
     if isinstance(sampler, RouteSampler) and sampler.net is not None and sampler.fields is None \
             and getattr(task.sampler, "name", None) != USER:  # a user's sampler is left as the user made it
@@ -88,7 +130,7 @@ def _batch(sampler: RouteSampler, task: Task, problem: Problem, context: RunCont
     at = queries.index(task.query) if task.query in queries else len(queries)
     problems, cells = [problem], problem.world.obstacles.size
     for query in queries[at + 1:at + context.prefill]:
-        other = context.protocol.problem(query, context.scenarios)
+        other = context.problem(query)
         cells += other.world.obstacles.size
         if cells * 8 > context.fields.max_bytes // 4:  # the batch's fields stay well within what the cache keeps
             break
