@@ -23,7 +23,7 @@ from planners.kernels.space import copy_into, space_distance
 from planners.kernels.tree import add_vertex, resolve_sample, space_knn
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def uf_find(uf, v):
     p = uf[0]
     r = v
@@ -36,7 +36,7 @@ def uf_find(uf, v):
     return r
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def uf_union(uf, a, b):
     """Merge the components of a and b; the root keeps the closer-to-goal anchor."""
     p, rank, cbest, cbest_d = uf
@@ -54,7 +54,7 @@ def uf_union(uf, a, b):
         cbest[ra] = cbest[rb]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def uf_make(uf, v, dgoal):
     p, rank, cbest, cbest_d = uf
     p[v] = v
@@ -63,7 +63,7 @@ def uf_make(uf, v, dgoal):
     cbest_d[v] = dgoal
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def neighbours(store, n, space, q, qe, k, radius, out, out_d):
     """The k nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices."""
     if k > 0:
@@ -71,7 +71,7 @@ def neighbours(store, n, space, q, qe, k, radius, out, out_d):
     return near_vertices(store, n, space, q, qe, radius, out)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def refresh_anchor(uf, istate, fstate):
     """Make the query's progress anchor the start component's vertex nearest the goal (union-find root data)."""
     root = uf_find(uf, istate[slots.I_QS])
@@ -79,7 +79,7 @@ def refresh_anchor(uf, istate, fstate):
     fstate[slots.F_BEST_D] = uf[3][root]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius, max_edge, lazy, valid,
                   nbr, nbr_d, qe_buf):
     """Add state ``q`` and connect it to its neighbours; returns the new vertex index.
@@ -117,7 +117,7 @@ def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, rad
     return v
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last, world, space, goal, low, high,
                 k, radius_gamma, fixed_radius, max_edge, dim, lazy, until_joined, nbr, nbr_d):
     """Grow a PRM (``lazy=False``) or a Lazy-PRM roadmap (``lazy=True``), one sample per iteration.
@@ -167,7 +167,7 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
     return samples.shape[0]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rebuild_components(store, edges, uf, vstat, istate, goal, space):
     """Recompute the union-find from edges that are not known invalid between live vertices."""
     X = store.X
@@ -180,7 +180,7 @@ def rebuild_components(store, edges, uf, vstat, istate, goal, space):
             uf_union(uf, eu[e], ev[e])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def build_csr(edges, n, ne):
     """Adjacency of the first ``ne`` edges over ``n`` vertices: (offsets, neighbour, edge index)."""
     eu, ev = edges[0], edges[1]
@@ -204,7 +204,7 @@ def build_csr(edges, n, ne):
     return deg, adj_v, adj_e
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True):
     """Shortest path src -> dst as (vertex indices, edge indices); empty arrays if none.
 
@@ -293,14 +293,14 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
     return verts, eds
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def astar(store, edges, vstat, n, ne, src, dst, space, only_valid, heuristic=True):
     """``astar_csr`` over a freshly built adjacency of the roadmap."""
     return astar_csr(store.X, build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid,
                      heuristic)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, max_rounds):
     """Lazy-PRM query: search the optimistic roadmap, check the path, drop what fails, repeat.
 

@@ -21,13 +21,13 @@ from planners.kernels.space import copy_into, space_distance
 from planners.kernels.tree import add_vertex, resolve_sample, space_within
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def near_vertices(tree, n, space, q, qe, radius, out):
     """All of the first ``n`` vertices within ``radius`` of ``q``; returns the count."""
     return space_within(tree, n, space, q, qe, radius, out)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _link(v, p, first_child, next_sib, prev_sib):
     next_sib[v] = first_child[p]
     prev_sib[v] = -1
@@ -36,7 +36,7 @@ def _link(v, p, first_child, next_sib, prev_sib):
     first_child[p] = v
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _unlink(v, p, first_child, next_sib, prev_sib):
     if prev_sib[v] >= 0:
         next_sib[prev_sib[v]] = next_sib[v]
@@ -46,7 +46,7 @@ def _unlink(v, p, first_child, next_sib, prev_sib):
         prev_sib[next_sib[v]] = prev_sib[v]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def propagate_costs(v, cost, elen, parent, first_child, next_sib, stack):
     """Set ``cost[c] = cost[parent[c]] + elen[c]`` for every descendant of ``v``, top-down."""
     sp = 0
@@ -66,7 +66,7 @@ def propagate_costs(v, cost, elen, parent, first_child, next_sib, stack):
             c = next_sib[c]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space, goal, step, tol, low, high,
                 gamma, dim, nbr, nbr_cost, nbr_ok, stack, st, sb):
     """RRT* (Karaman & Frazzoli 2011) with radius ``min(gamma * (log n / n)^(1/dim), step)``."""
