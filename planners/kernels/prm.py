@@ -11,15 +11,17 @@ is optimistic (unchecked edges count) and is rebuilt when checks remove edges.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
+from numba.extending import overload
 
 from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free, state_free
 from planners.kernels.rrt import embed_query
 from planners.kernels.rrtstar import near_vertices
-from planners.kernels.space import copy_into, space_distance
+from planners.kernels.space import OVERLOAD_JIT, copy_into, space_distance, static_code
 from planners.kernels.tree import add_vertex, resolve_sample, space_knn
 
 
@@ -63,12 +65,50 @@ def uf_make(uf, v, dgoal):
     cbest_d[v] = dgoal
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
-def neighbours(store, n, space, q, qe, k, radius, out, out_d):
-    """The k nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices."""
-    if k > 0:
-        return space_knn(store, n, space, q, qe, k, out, out_d)
+class Neighbourhood(NamedTuple):
+    """The vertices a new roadmap vertex tries to connect to: its ``k`` nearest (``k > 0``) or all within the
+    connection radius (``k == 0``). ``neighbourhood`` makes the subclass of its kind, which numba types
+    separately, so a roadmap kernel compiled for it contains only that query's k-d traversal."""
+
+    k: int
+
+
+class KNearest(Neighbourhood):
+    __slots__ = ()
+    KNN = True
+
+
+class WithinRadius(Neighbourhood):
+    __slots__ = ()
+    KNN = False
+
+
+def neighbourhood(k: int) -> Neighbourhood:
+    """The typed ``Neighbourhood`` of ``k`` nearest neighbours (0: all within the connection radius)."""
+    return KNearest(int(k)) if k > 0 else WithinRadius(0)
+
+
+def neighbours(store, n, space, q, qe, nbhd, radius, out, out_d):
+    """The ``nbhd.k`` nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices (compiled
+    code only)."""
+    raise NotImplementedError("neighbours runs in compiled code only")
+
+
+def _any_neighbours(store, n, space, q, qe, nbhd, radius, out, out_d):
+    if nbhd[0] > 0:
+        return space_knn(store, n, space, q, qe, nbhd[0], out, out_d)
     return near_vertices(store, n, space, q, qe, radius, out)
+
+
+@overload(neighbours, jit_options=OVERLOAD_JIT)
+def _neighbours(store, n, space, q, qe, nbhd, radius, out, out_d):
+    knn = static_code(nbhd, "KNN")
+    if knn is None:  # a plain Neighbourhood: known at run time only, both traversals
+        return _any_neighbours
+    if knn:
+        return lambda store, n, space, q, qe, nbhd, radius, out, out_d: space_knn(store, n, space, q, qe, nbhd[0],
+                                                                                   out, out_d)
+    return lambda store, n, space, q, qe, nbhd, radius, out, out_d: near_vertices(store, n, space, q, qe, radius, out)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -80,9 +120,9 @@ def refresh_anchor(uf, istate, fstate):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius, max_edge, lazy, valid,
+def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, nbhd, radius, max_edge, lazy, valid,
                   nbr, nbr_d, qe_buf):
-    """Add state ``q`` and connect it to its neighbours; returns the new vertex index.
+    """Add state ``q`` and connect it to its neighbours (``nbhd``, a ``Neighbourhood``); returns the new vertex index.
 
     ``valid``: the caller already knows ``q`` is collision-free (query states).
     """
@@ -91,7 +131,7 @@ def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, rad
     kind, metric, rot_weight = space
     n = istate[slots.I_N]
     qe = embed_query(space, q, qe_buf)
-    m = neighbours(store, n, space, q, qe, k, radius, nbr, nbr_d)
+    m = neighbours(store, n, space, q, qe, nbhd, radius, nbr, nbr_d)
     v = n
     istate[slots.I_N] = add_vertex(store, n, space, q, -1, 0.0)
     vstat[v] = slots.V_VALID if (valid or not lazy) else slots.V_UNKNOWN
@@ -119,16 +159,17 @@ def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, rad
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last, world, space, goal, low, high,
-                k, radius_gamma, fixed_radius, max_edge, dim, lazy, until_joined, nbr, nbr_d):
+                nbhd, radius_gamma, fixed_radius, max_edge, dim, lazy, until_joined, nbr, nbr_d):
     """Grow a PRM (``lazy=False``) or a Lazy-PRM roadmap (``lazy=True``), one sample per iteration.
 
-    PRM checks each sample and each connection to its neighbours (k nearest, or within a radius:
+    PRM checks each sample and each connection to its neighbours (``nbhd``: k nearest, or within a radius:
     ``fixed_radius`` if > 0, else the PRM* radius ``radius_gamma (log n / n)^(1/dim)``) and keeps only
     valid edges. Lazy-PRM stores samples and connections unchecked. With ``until_joined`` it returns
     before the next sample once the query's start and goal share a component (PRM: solved;
     Lazy-PRM: time to search); without it, it grows the roadmap regardless.
     """
     X = store.X
+    k = nbhd[0]
     cap = X.shape[0]
     ecap = edges[0].shape[0]
     q = np.empty(X.shape[1])
@@ -157,7 +198,7 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
                 radius = max_edge
         # valid = not lazy: the same vertex status as False (a plain bool, not a literal False, so this call and the
         # query states' call from Python share one compilation of insert_vertex)
-        istate[slots.I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius,
+        istate[slots.I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, nbhd, radius,
                                               max_edge, lazy, not lazy, nbr, nbr_d, qe_buf)
         refresh_anchor(uf, istate, fstate)
         if not lazy and uf_find(uf, istate[slots.I_QS]) == uf_find(uf, istate[slots.I_QG]):
