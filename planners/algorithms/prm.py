@@ -155,11 +155,11 @@ class PRM(Planner):
     def _insert_query_state(self, q: np.ndarray) -> int:
         self._reserve(1)
         # a writable copy: the argument types roadmap_run's own call compiles insert_vertex for (no second compile)
-        return int(prm_kernels.insert_vertex(np.array(q, dtype=np.float64), self._store.as_tree(),
-                                             self._edges,
-                                    self._uf, self._vstat, self._istate, self.problem.world.kernel, self._space,
-                                    self._goal, self.k, self._connect_radius(), self.max_edge_length or 0.0, self.lazy,
-                                    True, self._nbr, self._nbr_d, self._qe))
+        return int(prm_kernels.insert_vertex(np.array(q, dtype=np.float64), self._store.as_tree(), self._edges,
+                                             self._uf, self._vstat, self._istate, self.problem.world.kernel,
+                                             self._space, self._goal, prm_kernels.neighbourhood(self.k),
+                                             self._connect_radius(), self.max_edge_length or 0.0, self.lazy, True,
+                                             self._nbr, self._nbr_d, self._qe))
 
     def _start_query(self) -> None:
         """Add the problem's start and goal as vertices and check whether they are already joined."""
@@ -204,9 +204,9 @@ class PRM(Planner):
     def _run(self, points, anchored) -> int:
         used = prm_kernels.roadmap_run(points, anchored, self._store.as_tree(), self._edges, self._uf, self._vstat,
                               self._istate, self._fstate, self._last, self.problem.world.kernel, self._space,
-                              self._goal, self._low, self._high, self.k, self.gamma, self.radius or 0.0,
-                              self.max_edge_length or 0.0, float(self.problem.dim), self.lazy, not self._growing,
-                              self._nbr, self._nbr_d)
+                              self._goal, self._low, self._high, prm_kernels.neighbourhood(self.k), self.gamma,
+                              self.radius or 0.0, self.max_edge_length or 0.0, float(self.problem.dim), self.lazy,
+                              not self._growing, self._nbr, self._nbr_d)
         if not self._growing:
             self._after_growth()
         return used

@@ -9,7 +9,7 @@ import numpy as np
 
 from planners.base.fileio import InputError
 from planners.base.world import World
-from planners.kernels.space import METRIC_NAMES, make_space, space_distance_of
+from planners.kernels.space import METRIC_NAMES, distance_of, make_space
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,8 +83,8 @@ class Problem:
 
     def distance(self, a, b) -> float:
         """Distance between two states in this problem's metric."""
-        # writable copies: one compiled signature whatever the caller passes
-        return float(space_distance_of(self.space, np.array(a, dtype=np.float64), np.array(b, dtype=np.float64)))
+        # writable copies: one compiled signature whatever the caller passes (SE3 compiles it)
+        return distance_of(self.space, np.array(a, dtype=np.float64), np.array(b, dtype=np.float64))
 
     def path_length(self, path) -> float:
         """Length of a path (sequence of states) in this problem's metric."""

@@ -71,7 +71,7 @@ class WorldBase:
     def is_valid(self, q) -> bool:
         """True if state ``q`` is collision-free and inside the bounds."""
         q = self._state(q)
-        return bool(np.all(np.isfinite(q))) and bool(geometry.state_free(self._kernel, q))
+        return bool(np.all(np.isfinite(q))) and geometry.state_free_of(self._kernel, q)
 
     def check_motion(self, a, b) -> bool:
         """True if the straight motion ``a -> b`` is collision-free (exact; see the world's docs)."""

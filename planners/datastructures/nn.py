@@ -32,7 +32,7 @@ STACK = 256
 # one metric's few lines costs little compilation.
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _rdist_l2(q, P, j):
     """Reduced distance (squared for L2) from ``q`` to point ``P[j]``."""
     s = 0.0
@@ -42,7 +42,7 @@ def _rdist_l2(q, P, j):
     return s
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _rdist_l1(q, P, j):
     s = 0.0
     for i in range(q.shape[0]):
@@ -50,7 +50,7 @@ def _rdist_l1(q, P, j):
     return s
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _rdist_linf(q, P, j):
     s = 0.0
     for i in range(q.shape[0]):
@@ -60,7 +60,7 @@ def _rdist_linf(q, P, j):
     return s
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _box_gap(q, box, i, d):
     """How far ``q`` lies outside the bounding box stored at position ``i`` along dimension ``d``."""
     dim = q.shape[0]
@@ -70,7 +70,7 @@ def _box_gap(q, box, i, d):
     return lo - v if v < lo else (v - hi if v > hi else 0.0)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _box_l2(q, box, i):
     """Reduced distance from ``q`` to the bounding box stored at position ``i``."""
     s = 0.0
@@ -80,7 +80,7 @@ def _box_l2(q, box, i):
     return s
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _box_l1(q, box, i):
     s = 0.0
     for d in range(q.shape[0]):
@@ -88,7 +88,7 @@ def _box_l1(q, box, i):
     return s
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _box_linf(q, box, i):
     s = 0.0
     for d in range(q.shape[0]):
@@ -98,12 +98,12 @@ def _box_linf(q, box, i):
     return s
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _square(x):
     return x * x
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _abs(x):
     return abs(x)
 
@@ -118,7 +118,7 @@ def from_reduced(metric, r):
     return np.sqrt(r) if metric == METRIC_L2 else r
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _select(P, perm, lo, hi, k, sd):
     """Reorder perm[lo:hi] so perm[k] holds the k-th smallest P[., sd], smaller left, larger right."""
     left = lo
@@ -154,7 +154,7 @@ def _select(P, perm, lo, hi, k, sd):
             break
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def build(P, perm, split, box, lo, hi):
     """Build the implicit k-d tree of points [lo, hi); ``box[mid]`` gets each subtree's bounds."""
     for i in range(lo, hi):
@@ -198,7 +198,7 @@ def build(P, perm, split, box, lo, hi):
         sp += 1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def insert(P, perm, split, box, n):
     """Index point ``n`` (already written to ``P[n]``); returns the new count ``n + 1``."""
     perm[n] = n
@@ -213,9 +213,12 @@ def insert(P, perm, split, box, n):
     return n
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _heap_push(hd, hi, cnt, k, d, idx):
-    """Bounded max-heap of (reduced distance, index) with at most k entries; returns the count."""
+    """Bounded max-heap of (reduced distance, index) with at most k entries; returns the count.
+
+    A call, not inlined: its body inlined at the traversal's two offers doubled the k-nearest query's
+    compilation (LLVM inlines the call where it pays)."""
     if cnt < k:
         i = cnt
         cnt += 1
@@ -248,13 +251,13 @@ def _heap_push(hd, hi, cnt, k, d, idx):
     return cnt
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _offer_knn(hd, hi, cnt, k, d, idx, r):
     """k nearest: keep ``idx`` in the bounded heap if it is among the ``k`` nearest so far; returns the count."""
     return _heap_push(hd, hi, cnt, k, d, idx)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _offer_radius(hd, hi, cnt, k, d, idx, r):
     """Radius search: append ``idx`` if it lies within reduced radius ``r``; returns the count."""
     if d <= r:
@@ -454,7 +457,7 @@ def _traversals(rdist, box_rdist, plane_rdist, name):
     for f, what in ((nearest, "nearest_into"), (nearest_k, "nearest_k"), (nearest_r, "nearest_r")):
         f.__name__ = f.__qualname__ = f"{what}_{name}"
         f.__doc__ = f"``{what}`` for the {name} metric."
-        out.append(nb.njit(cache=True)(f))
+        out.append(nb.njit(cache=True, no_cfunc_wrapper=True)(f))
     return tuple(out)
 
 
@@ -472,7 +475,7 @@ BY_METRIC = {
 }
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def nearest_into(P, perm, split, box, n, q, metric, st, sb):
     """(index, reduced distance) of the nearest of the first ``n`` points; (-1, inf) if n == 0.
 
@@ -487,7 +490,7 @@ def nearest_into(P, perm, split, box, n, q, metric, st, sb):
     return nearest_linf(P, perm, split, box, n, q, st, sb)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def nearest(P, perm, split, box, n, q, metric):
     """``nearest_into`` with its own scratch stacks."""
     st = np.empty(2 * STACK, dtype=np.int64)
@@ -495,7 +498,7 @@ def nearest(P, perm, split, box, n, q, metric):
     return nearest_into(P, perm, split, box, n, q, metric, st, sb)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def nearest_k(P, perm, split, box, n, q, metric, k, out_idx, out_d):
     """The ``min(k, n)`` nearest points, nearest first; returns how many were written."""
     if metric == METRIC_L2:
@@ -505,7 +508,7 @@ def nearest_k(P, perm, split, box, n, q, metric, k, out_idx, out_d):
     return nearest_k_linf(P, perm, split, box, n, q, k, out_idx, out_d)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def nearest_r(P, perm, split, box, n, q, metric, radius, out_idx):
     """Indices of all points within ``radius`` (inclusive), unordered; ``out_idx`` holds >= n."""
     if metric == METRIC_L2:
@@ -603,7 +606,7 @@ class NearestNeighbors:
         return np.sort(out[:c])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def nearest_many(P, perm, split, box, n, qs, metric, out):
     """``out[i]``: the nearest point to ``qs[i]``, every query in one compiled loop."""
     st = np.empty(2 * STACK, dtype=np.int64)

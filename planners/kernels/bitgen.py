@@ -53,7 +53,7 @@ def _call_next_double(typingctx, address):
     return types.float64(address), codegen
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def next_double(address):
     """The next ``Generator.random()`` value of the generator at ``address`` (see ``bitgen_address``)."""
     return _call_next_double(address)

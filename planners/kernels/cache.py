@@ -91,6 +91,18 @@ def configure() -> Path | None:
     return d
 
 
+def load_registries() -> None:
+    """Load numba's typing and lowering registries now, as ``import planners`` does.
+
+    numba loads them on a process's first compiled call, compiled or from the cache alike (about 0.4 s,
+    SciPy's BLAS bindings among them); loaded at import, a first solve's time is the solve's own.
+    """
+    from numba.core.registry import cpu_target
+
+    cpu_target.typing_context.refresh()
+    cpu_target.target_context.refresh()
+
+
 def cache_dir() -> Path:
     """The folder compiled kernels are cached in."""
     return _state["dir"] if _state["dir"] is not None else Path(os.environ["NUMBA_CACHE_DIR"])

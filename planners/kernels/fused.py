@@ -36,10 +36,10 @@ def refill_size(refills: int) -> int:
     return min(CHUNK, FIRST_REFILL << min(refills, 16))  # 64 << 16 > CHUNK: no overflow however many refills
 
 
-refill_size_compiled = nb.njit(cache=True, inline="always")(refill_size)
+refill_size_compiled = nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")(refill_size)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def growing_floor(floor0, max_floor, patience, stalled):
     """The uniform share after ``stalled`` iterations without coming closer to the goal.
 

@@ -29,7 +29,7 @@ import numpy as np
 from numba.extending import overload
 
 from planners.kernels.rigid import rigid_motion_free
-from planners.kernels.space import static_code
+from planners.kernels.space import OVERLOAD_JIT, static_code
 from planners.kernels.state import WorldKernel
 
 WORLD_GRID = 0
@@ -41,7 +41,7 @@ WORLD_RIGID = 2
 GRID_EPS = 1e-9
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def grid_segment_free(grid, inv_res, ax, ay, bx, by):
     """True if the segment a-b meets no blocked cell and no cell outside the grid.
 
@@ -89,7 +89,7 @@ def grid_segment_free(grid, inv_res, ax, ay, bx, by):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _segment_hits_circle(ax, ay, bx, by, cx, cy, r):
     dx = bx - ax
     dy = by - ay
@@ -103,7 +103,7 @@ def _segment_hits_circle(ax, ay, bx, by, cx, cy, r):
     return px * px + py * py <= r * r
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _segment_hits_box(ax, ay, bx, by, x0, y0, x1, y1):
     # Liang-Barsky clipping against the closed box.
     t_enter = 0.0
@@ -130,7 +130,7 @@ def _segment_hits_box(ax, ay, bx, by, x0, y0, x1, y1):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def shapes_segment_free(geom, params, ax, ay, bx, by):
     """True if the segment stays strictly inside the bounds and meets no circle or rectangle."""
     for x in (ax, bx):
@@ -154,7 +154,7 @@ def world_motion_free(world, a, b):
     raise NotImplementedError("world_motion_free runs in compiled code only")
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _grid_motion_free(world, a, b):
     kind, grid, geom, body, params = world
     # x - 0.0 is x exactly, so maps at the origin check bit-identically to the frame-free kernel
@@ -163,13 +163,13 @@ def _grid_motion_free(world, a, b):
     return grid_segment_free(grid, params[0], a[0] - ox, a[1] - oy, b[0] - ox, b[1] - oy)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _shapes_motion_free(world, a, b):
     kind, grid, geom, body, params = world
     return shapes_segment_free(geom, params, a[0], a[1], b[0], b[1])
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _rigid_motion_free(world, a, b):
     kind, grid, geom, body, params = world
     return rigid_motion_free(geom, body, params, a, b)
@@ -186,7 +186,7 @@ def _any_motion_free(world, a, b):
     raise ValueError("unknown world kind: add its check to planners.kernels.geometry.motion_free")
 
 
-@overload(world_motion_free, jit_options={"cache": True}, inline="always")
+@overload(world_motion_free, jit_options=OVERLOAD_JIT, inline="always")
 def _world_motion_free(world, a, b):
     kind = static_code(world, "KIND")
     if kind is None:
@@ -195,19 +195,34 @@ def _world_motion_free(world, a, b):
     return lambda world, a, b: check(world, a, b)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def motion_free(world, a, b):
     """True if the straight motion from state ``a`` to state ``b`` is collision-free."""
     return world_motion_free(world, a, b)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def state_free(world, q):
     """True if state ``q`` is collision-free (a zero-length motion)."""
     return motion_free(world, q, q)
 
 
-@nb.njit(cache=True)
+def state_free_of(world, q) -> bool:
+    """``state_free`` for Python callers (``World.is_valid``, a problem's start and goal).
+
+    On a grid the check's own source runs in the interpreter (``grid_segment_free.py_func``: the same
+    float64 arithmetic, so the same answer bit for bit), so validating a query compiles nothing a
+    planner does not run; other world kinds call the compiled ``state_free``.
+    """
+    if world[0] == WORLD_GRID:
+        params = world[4]
+        x = q[0] - params[1]
+        y = q[1] - params[2]
+        return bool(grid_segment_free.py_func(world[1], params[0], x, y, x, y))
+    return bool(state_free(world, q))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def motions_free(world, A, B, out):
     """Batched ``motion_free`` over rows of ``A`` and ``B``."""
     for i in range(A.shape[0]):

@@ -17,13 +17,13 @@ from planners.kernels.space import copy_into
 from planners.kernels.state import S_CHECKS, S_PENDING, S_POS, S_SEEKING
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def per_attempt(dim):
     """Uniforms one attempt reads: a mixing coin, a candidate, and Box-Muller pairs for a direction."""
     return 1 + dim + 2 * ((dim + 1) // 2)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def ob_samples(world, low, high, u, n, uniform_fraction, walk_step, refine, max_walk, out, cand, state):
     """Write up to ``n`` samples into ``out`` from the uniforms in ``u``; return how many.
 

@@ -11,19 +11,21 @@ is optimistic (unchecked edges count) and is rebuilt when checks remove edges.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
+from numba.extending import overload
 
 from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free, state_free
 from planners.kernels.rrt import embed_query
 from planners.kernels.rrtstar import near_vertices
-from planners.kernels.space import copy_into, space_distance
+from planners.kernels.space import OVERLOAD_JIT, copy_into, space_distance, static_code
 from planners.kernels.tree import add_vertex, resolve_sample, space_knn
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def uf_find(uf, v):
     p = uf[0]
     r = v
@@ -36,7 +38,7 @@ def uf_find(uf, v):
     return r
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def uf_union(uf, a, b):
     """Merge the components of a and b; the root keeps the closer-to-goal anchor."""
     p, rank, cbest, cbest_d = uf
@@ -54,7 +56,7 @@ def uf_union(uf, a, b):
         cbest[ra] = cbest[rb]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def uf_make(uf, v, dgoal):
     p, rank, cbest, cbest_d = uf
     p[v] = v
@@ -63,15 +65,53 @@ def uf_make(uf, v, dgoal):
     cbest_d[v] = dgoal
 
 
-@nb.njit(cache=True)
-def neighbours(store, n, space, q, qe, k, radius, out, out_d):
-    """The k nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices."""
-    if k > 0:
-        return space_knn(store, n, space, q, qe, k, out, out_d)
+class Neighbourhood(NamedTuple):
+    """The vertices a new roadmap vertex tries to connect to: its ``k`` nearest (``k > 0``) or all within the
+    connection radius (``k == 0``). ``neighbourhood`` makes the subclass of its kind, which numba types
+    separately, so a roadmap kernel compiled for it contains only that query's k-d traversal."""
+
+    k: int
+
+
+class KNearest(Neighbourhood):
+    __slots__ = ()
+    KNN = True
+
+
+class WithinRadius(Neighbourhood):
+    __slots__ = ()
+    KNN = False
+
+
+def neighbourhood(k: int) -> Neighbourhood:
+    """The typed ``Neighbourhood`` of ``k`` nearest neighbours (0: all within the connection radius)."""
+    return KNearest(int(k)) if k > 0 else WithinRadius(0)
+
+
+def neighbours(store, n, space, q, qe, nbhd, radius, out, out_d):
+    """The ``nbhd.k`` nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices (compiled
+    code only)."""
+    raise NotImplementedError("neighbours runs in compiled code only")
+
+
+def _any_neighbours(store, n, space, q, qe, nbhd, radius, out, out_d):
+    if nbhd[0] > 0:
+        return space_knn(store, n, space, q, qe, nbhd[0], out, out_d)
     return near_vertices(store, n, space, q, qe, radius, out)
 
 
-@nb.njit(cache=True)
+@overload(neighbours, jit_options=OVERLOAD_JIT)
+def _neighbours(store, n, space, q, qe, nbhd, radius, out, out_d):
+    knn = static_code(nbhd, "KNN")
+    if knn is None:  # a plain Neighbourhood: known at run time only, both traversals
+        return _any_neighbours
+    if knn:
+        return lambda store, n, space, q, qe, nbhd, radius, out, out_d: space_knn(store, n, space, q, qe, nbhd[0],
+                                                                                   out, out_d)
+    return lambda store, n, space, q, qe, nbhd, radius, out, out_d: near_vertices(store, n, space, q, qe, radius, out)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def refresh_anchor(uf, istate, fstate):
     """Make the query's progress anchor the start component's vertex nearest the goal (union-find root data)."""
     root = uf_find(uf, istate[slots.I_QS])
@@ -79,10 +119,10 @@ def refresh_anchor(uf, istate, fstate):
     fstate[slots.F_BEST_D] = uf[3][root]
 
 
-@nb.njit(cache=True)
-def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius, max_edge, lazy, valid,
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, nbhd, radius, max_edge, lazy, valid,
                   nbr, nbr_d, qe_buf):
-    """Add state ``q`` and connect it to its neighbours; returns the new vertex index.
+    """Add state ``q`` and connect it to its neighbours (``nbhd``, a ``Neighbourhood``); returns the new vertex index.
 
     ``valid``: the caller already knows ``q`` is collision-free (query states).
     """
@@ -91,7 +131,7 @@ def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, rad
     kind, metric, rot_weight = space
     n = istate[slots.I_N]
     qe = embed_query(space, q, qe_buf)
-    m = neighbours(store, n, space, q, qe, k, radius, nbr, nbr_d)
+    m = neighbours(store, n, space, q, qe, nbhd, radius, nbr, nbr_d)
     v = n
     istate[slots.I_N] = add_vertex(store, n, space, q, -1, 0.0)
     vstat[v] = slots.V_VALID if (valid or not lazy) else slots.V_UNKNOWN
@@ -117,18 +157,19 @@ def insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, rad
     return v
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last, world, space, goal, low, high,
-                k, radius_gamma, fixed_radius, max_edge, dim, lazy, until_joined, nbr, nbr_d):
+                nbhd, radius_gamma, fixed_radius, max_edge, dim, lazy, until_joined, nbr, nbr_d):
     """Grow a PRM (``lazy=False``) or a Lazy-PRM roadmap (``lazy=True``), one sample per iteration.
 
-    PRM checks each sample and each connection to its neighbours (k nearest, or within a radius:
+    PRM checks each sample and each connection to its neighbours (``nbhd``: k nearest, or within a radius:
     ``fixed_radius`` if > 0, else the PRM* radius ``radius_gamma (log n / n)^(1/dim)``) and keeps only
     valid edges. Lazy-PRM stores samples and connections unchecked. With ``until_joined`` it returns
     before the next sample once the query's start and goal share a component (PRM: solved;
     Lazy-PRM: time to search); without it, it grows the roadmap regardless.
     """
     X = store.X
+    k = nbhd[0]
     cap = X.shape[0]
     ecap = edges[0].shape[0]
     q = np.empty(X.shape[1])
@@ -157,7 +198,7 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
                 radius = max_edge
         # valid = not lazy: the same vertex status as False (a plain bool, not a literal False, so this call and the
         # query states' call from Python share one compilation of insert_vertex)
-        istate[slots.I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, k, radius,
+        istate[slots.I_ADDED] = insert_vertex(q, store, edges, uf, vstat, istate, world, space, goal, nbhd, radius,
                                               max_edge, lazy, not lazy, nbr, nbr_d, qe_buf)
         refresh_anchor(uf, istate, fstate)
         if not lazy and uf_find(uf, istate[slots.I_QS]) == uf_find(uf, istate[slots.I_QG]):
@@ -167,7 +208,7 @@ def roadmap_run(samples, anchored, store, edges, uf, vstat, istate, fstate, last
     return samples.shape[0]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rebuild_components(store, edges, uf, vstat, istate, goal, space):
     """Recompute the union-find from edges that are not known invalid between live vertices."""
     X = store.X
@@ -180,7 +221,7 @@ def rebuild_components(store, edges, uf, vstat, istate, goal, space):
             uf_union(uf, eu[e], ev[e])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def build_csr(edges, n, ne):
     """Adjacency of the first ``ne`` edges over ``n`` vertices: (offsets, neighbour, edge index)."""
     eu, ev = edges[0], edges[1]
@@ -204,7 +245,7 @@ def build_csr(edges, n, ne):
     return deg, adj_v, adj_e
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True):
     """Shortest path src -> dst as (vertex indices, edge indices); empty arrays if none.
 
@@ -293,14 +334,14 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
     return verts, eds
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def astar(store, edges, vstat, n, ne, src, dst, space, only_valid, heuristic=True):
     """``astar_csr`` over a freshly built adjacency of the roadmap."""
     return astar_csr(store.X, build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid,
                      heuristic)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, max_rounds):
     """Lazy-PRM query: search the optimistic roadmap, check the path, drop what fails, repeat.
 

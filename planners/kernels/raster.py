@@ -7,7 +7,7 @@ import math
 import numba as nb
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def draw_segments(img, seg, cols):
     """Draw 1-pixel lines ``seg[i] = (x0, y0, x1, y1)`` (pixel coordinates) in colour ``cols[i]`` into ``img``.
 

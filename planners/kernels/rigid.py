@@ -22,7 +22,7 @@ import numpy as np
 from planners.kernels.space import SPACE_RIGID, interpolate, wrap_angle
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rotation_matrix(tx, ty, tz):
     """H = Ry(ty) @ Rx(tx) @ Rz(tz).
 
@@ -49,7 +49,7 @@ def rotation_matrix(tx, ty, tz):
     return H
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def body_points_world(body, q):
     """(P, 3) world positions of the body points at state ``q``."""
     R = rotation_matrix(q[3], q[4], q[5])
@@ -60,7 +60,7 @@ def body_points_world(body, q):
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _point_box_sqdist(p, box):
     s = 0.0
     for j in range(3):
@@ -75,7 +75,7 @@ def _point_box_sqdist(p, box):
     return s
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rigid_state_clear(geom, body, params, q, margin):
     """True if every body point is more than ``margin`` from every box and inside the bounds."""
     pts = body_points_world(body, q)
@@ -91,7 +91,7 @@ def rigid_state_clear(geom, body, params, q, margin):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def motion_pieces(params, a, b):
     """Number of pieces a motion is cut into so no body point moves more than delta per piece."""
     delta = params[6]
@@ -107,7 +107,7 @@ def motion_pieces(params, a, b):
     return max(1, int(math.ceil(length / delta))), length
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rigid_motion_free(geom, body, params, a, b):
     """True if the motion a -> b keeps every body point clear of every box (see module doc)."""
     n, length = motion_pieces(params, a, b)

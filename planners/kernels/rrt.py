@@ -13,20 +13,16 @@ import numpy as np
 
 from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free
-from planners.kernels.space import SPACE_RN, copy_into, embed, space_distance
+from planners.kernels.space import copy_into, space_distance, space_embedding
 from planners.kernels.tree import add_vertex, nearest_vertex, resolve_sample, steer
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def embed_query(space, q, qe):
-    kind, metric, rot_weight = space
-    if kind == SPACE_RN:
-        return q
-    embed(kind, metric, q, qe)
-    return qe
+    return space_embedding(space, q, qe)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb):
     """Nearest of the first ``n`` vertices to ``q``, steered at most ``step`` into ``new``.
 
@@ -42,7 +38,7 @@ def extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb):
     return near
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb,
                 q, qe_buf, new):
     """One RRT iteration on one sample: resolve -> nearest -> steer -> check motion -> add.
@@ -51,8 +47,8 @@ def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal
     ``Sampler`` in ``planners.base.samplers``); the caller checks capacity and the stopping rule first.
     ``q``, ``qe_buf`` and ``new`` are scratch buffers.
     """
-    X, E, parent, cost, perm, split, box = tree
-    kind, metric, rot_weight = space
+    X = tree.X
+    cost = tree.cost
     istate[slots.I_ITER] += 1
     istate[slots.I_ADDED] = -1
     resolve_sample(space, sample, anchored, X[istate[slots.I_BEST_V]], goal, low, high, q)
@@ -76,7 +72,7 @@ def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal
         fstate[slots.F_BEST_COST] = c
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rrt_run(samples, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high,
             stop_when_solved, st, sb):
     """RRT (LaValle 1998) over a batch of samples."""
@@ -94,13 +90,12 @@ def rrt_run(samples, anchored, tree, istate, fstate, last, world, space, goal, s
     return samples.shape[0]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, goal, step, low, high,
                 max_connect, st, sb):
     """RRT-Connect (Kuffner & LaValle 2000): extend one tree, greedily connect the other, swap."""
     Xa = ta[0]
     Xb = tb[0]
-    kind, metric, rot_weight = space
     q = np.empty(Xa.shape[1])
     qe_buf = np.empty(ta[1].shape[1])
     new = np.empty(Xa.shape[1])

@@ -21,13 +21,13 @@ from planners.kernels.space import copy_into, space_distance
 from planners.kernels.tree import add_vertex, resolve_sample, space_within
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def near_vertices(tree, n, space, q, qe, radius, out):
     """All of the first ``n`` vertices within ``radius`` of ``q``; returns the count."""
     return space_within(tree, n, space, q, qe, radius, out)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _link(v, p, first_child, next_sib, prev_sib):
     next_sib[v] = first_child[p]
     prev_sib[v] = -1
@@ -36,7 +36,7 @@ def _link(v, p, first_child, next_sib, prev_sib):
     first_child[p] = v
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _unlink(v, p, first_child, next_sib, prev_sib):
     if prev_sib[v] >= 0:
         next_sib[prev_sib[v]] = next_sib[v]
@@ -46,7 +46,80 @@ def _unlink(v, p, first_child, next_sib, prev_sib):
         prev_sib[next_sib[v]] = prev_sib[v]
 
 
-@nb.njit(cache=True)
+#: Below this many entries ``argsort_into`` sorts by insertion (numba's quicksort's SMALL_QUICKSORT).
+SMALL_SORT = 15
+#: Pending ranges ``argsort_into`` can hold (numba's quicksort's MAX_STACK).
+SORT_STACK = 100
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def argsort_into(A, m, R, stack):
+    """``R[:m]`` = the order numba's ``np.argsort(A[:m])`` gives, for ``A`` without NaN; ``stack`` holds
+    ``2 * SORT_STACK`` ints.
+
+    The same algorithm step for step (numba's quicksort: median-of-three partitions down to ranges of
+    ``SMALL_SORT``, then insertion sort), so equal entries come out in the same order, as one function:
+    numba's generic version compiles several functions and a list, seconds of a first RRT*.
+    """
+    for i in range(m):
+        R[i] = i
+    if m < 2:
+        return
+    stack[0] = 0
+    stack[1] = m - 1
+    n = 1
+    while n > 0:
+        n -= 1
+        low = stack[2 * n]
+        high = stack[2 * n + 1]
+        while high - low >= SMALL_SORT:
+            # partition R[low:high + 1] around the median of three
+            mid = (low + high) >> 1
+            if A[R[mid]] < A[R[low]]:
+                R[low], R[mid] = R[mid], R[low]
+            if A[R[high]] < A[R[mid]]:
+                R[high], R[mid] = R[mid], R[high]
+            if A[R[mid]] < A[R[low]]:
+                R[low], R[mid] = R[mid], R[low]
+            pivot = A[R[mid]]
+            R[high], R[mid] = R[mid], R[high]
+            i = low
+            j = high - 1
+            while True:
+                while i < high and A[R[i]] < pivot:
+                    i += 1
+                while j >= low and pivot < A[R[j]]:
+                    j -= 1
+                if i >= j:
+                    break
+                R[i], R[j] = R[j], R[i]
+                i += 1
+                j -= 1
+            R[i], R[high] = R[high], R[i]
+            # push the larger side, go on with the smaller
+            if high - i > i - low:
+                if high > i:
+                    stack[2 * n] = i + 1
+                    stack[2 * n + 1] = high
+                    n += 1
+                high = i - 1
+            else:
+                if i > low:
+                    stack[2 * n] = low
+                    stack[2 * n + 1] = i - 1
+                    n += 1
+                low = i + 1
+        for i in range(low + 1, high + 1):  # insertion sort of R[low:high + 1]
+            k = R[i]
+            v = A[k]
+            j = i
+            while j > low and v < A[R[j - 1]]:
+                R[j] = R[j - 1]
+                j -= 1
+            R[j] = k
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def propagate_costs(v, cost, elen, parent, first_child, next_sib, stack):
     """Set ``cost[c] = cost[parent[c]] + elen[c]`` for every descendant of ``v``, top-down."""
     sp = 0
@@ -66,7 +139,7 @@ def propagate_costs(v, cost, elen, parent, first_child, next_sib, stack):
             c = next_sib[c]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space, goal, step, tol, low, high,
                 gamma, dim, nbr, nbr_cost, nbr_ok, stack, st, sb):
     """RRT* (Karaman & Frazzoli 2011) with radius ``min(gamma * (log n / n)^(1/dim), step)``."""
@@ -77,6 +150,8 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
     q = np.empty(X.shape[1])
     qe_buf = np.empty(E.shape[1])
     new = np.empty(X.shape[1])
+    order = np.empty(nbr.shape[0], dtype=np.int64)
+    sort_stack = np.empty(2 * SORT_STACK, dtype=np.int64)
     for s in range(samples.shape[0]):
         n = istate[slots.I_N]
         if n >= cap:
@@ -105,7 +180,7 @@ def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space
                 nbr_cost[j] = np.inf
                 continue
             nbr_cost[j] = cost[u] + space_distance(space, X[u], new)
-        order = np.argsort(nbr_cost[:k])
+        argsort_into(nbr_cost, k, order, sort_stack)  # np.argsort(nbr_cost[:k])'s order
         for jj in range(k):
             j = order[jj]
             if nbr_cost[j] >= best_c:

@@ -41,21 +41,26 @@ METRIC_NAMES = {
 
 TWO_PI = 2.0 * math.pi
 
+#: numba options of the overloads' implementations (``space_distance`` and the like): only compiled code
+#: calls them, so they are compiled without numba's Python entry wrapper and its C-callable one (less to
+#: compile). A function compiled without the Python wrapper must never be called from Python.
+OVERLOAD_JIT = {"cache": True, "no_cfunc_wrapper": True, "no_cpython_wrapper": True}
 
-@nb.njit(cache=True, inline="always")
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def wrap_angle(a):
     """Map an angle to [-pi, pi)."""
     return (a + math.pi) % TWO_PI - math.pi
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def embed_dim(kind, metric, dim):
     if kind == SPACE_RIGID and metric == METRIC_COSSIN:
         return 9
     return dim
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def embed(kind, metric, q, out):
     """Write the nearest-neighbour embedding of ``q`` into ``out``."""
     if kind == SPACE_RIGID and metric == METRIC_COSSIN:
@@ -70,7 +75,7 @@ def embed(kind, metric, q, out):
             out[i] = q[i]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _euler_to_quat(tx, ty, tz, out):
     # H = Ry @ Rx @ Rz, so the quaternion is qy * qx * qz.
     cx, sx = math.cos(0.5 * tx), math.sin(0.5 * tx)
@@ -88,7 +93,7 @@ def _euler_to_quat(tx, ty, tz, out):
     out[3] = z1 * cz + w1 * sz
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def rotation_angle_between(a, b):
     """Geodesic angle (radians, in [0, pi]) between the rotations of two rigid-body states."""
     qa = np.empty(4)
@@ -101,7 +106,7 @@ def rotation_angle_between(a, b):
     return 2.0 * math.acos(dot)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _l2(a, b):
     s = 0.0
     for i in range(a.shape[0]):
@@ -110,7 +115,7 @@ def _l2(a, b):
     return math.sqrt(s)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _l1(a, b):
     s = 0.0
     for i in range(a.shape[0]):
@@ -118,7 +123,7 @@ def _l1(a, b):
     return s
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _linf(a, b):
     s = 0.0
     for i in range(a.shape[0]):
@@ -128,7 +133,7 @@ def _linf(a, b):
     return s
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _cossin(a, b):
     t = 0.0
     for i in range(3):
@@ -141,7 +146,7 @@ def _cossin(a, b):
     return math.sqrt(t)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def distance(kind, metric, rot_weight, a, b):
     """Distance between two states under ``(kind, metric)``."""
     if kind == SPACE_RN:
@@ -160,20 +165,30 @@ def distance(kind, metric, rot_weight, a, b):
     return math.sqrt(t) + rot_weight * rotation_angle_between(a, b)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _interpolate_rn(a, b, t, out):
+    for i in range(a.shape[0]):
+        out[i] = a[i] + t * (b[i] - a[i])
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _interpolate_rigid(a, b, t, out):
+    for i in range(3):
+        out[i] = a[i] + t * (b[i] - a[i])
+    for i in range(3, 6):
+        out[i] = wrap_angle(a[i] + t * wrap_angle(b[i] - a[i]))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def interpolate(kind, a, b, t, out):
     """State at fraction ``t`` of the motion from ``a`` to ``b`` (shorter arc for angles)."""
     if kind == SPACE_RN:
-        for i in range(a.shape[0]):
-            out[i] = a[i] + t * (b[i] - a[i])
+        _interpolate_rn(a, b, t, out)
     else:
-        for i in range(3):
-            out[i] = a[i] + t * (b[i] - a[i])
-        for i in range(3, 6):
-            out[i] = wrap_angle(a[i] + t * wrap_angle(b[i] - a[i]))
+        _interpolate_rigid(a, b, t, out)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def kd_metric(metric):
     """Lp metric code the k-d index uses on the embedding (COSSIN embeds into L2)."""
     if metric == METRIC_L1 or metric == METRIC_LINF:
@@ -181,7 +196,7 @@ def kd_metric(metric):
     return METRIC_L2
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def uses_kd(kind, metric):
     return metric != METRIC_SE3
 
@@ -248,7 +263,7 @@ def space_distance(space, a, b):
     raise NotImplementedError("space_distance runs in compiled code only")
 
 
-@overload(space_distance, jit_options={"cache": True})
+@overload(space_distance, jit_options=OVERLOAD_JIT)
 def _space_distance(space, a, b):
     kind, metric = static_code(space, "KIND"), static_code(space, "METRIC")
     if kind == SPACE_RN:
@@ -259,13 +274,77 @@ def _space_distance(space, a, b):
     return lambda space, a, b: distance(space[0], space[1], space[2], a, b)
 
 
-@nb.njit(cache=True)
+def space_interpolate(space, a, b, t, out):
+    """``interpolate`` in ``space`` (compiled code only): a typed space compiles only its kind's branch."""
+    raise NotImplementedError("space_interpolate runs in compiled code only")
+
+
+@overload(space_interpolate, jit_options=OVERLOAD_JIT)
+def _space_interpolate(space, a, b, t, out):
+    kind = static_code(space, "KIND")
+    if kind is None:
+        return lambda space, a, b, t, out: interpolate(space[0], a, b, t, out)
+    impl = _interpolate_rn if kind == SPACE_RN else _interpolate_rigid
+    return lambda space, a, b, t, out: impl(a, b, t, out)
+
+
+def space_embedding(space, q, out):
+    """The nearest-neighbour embedding of ``q`` (compiled code only): ``q`` itself in a real-vector space,
+    else written into ``out`` and ``out`` returned. A typed space compiles only its kind's branch."""
+    raise NotImplementedError("space_embedding runs in compiled code only")
+
+
+def _embedding_any(space, q, out):
+    if space[0] == SPACE_RN:
+        return q
+    embed(space[0], space[1], q, out)
+    return out
+
+
+@overload(space_embedding, jit_options=OVERLOAD_JIT)
+def _space_embedding(space, q, out):
+    kind = static_code(space, "KIND")
+    if kind is None:
+        return _embedding_any
+    if kind == SPACE_RN:
+        return lambda space, q, out: q
+
+    def impl(space, q, out):
+        embed(space[0], space[1], q, out)
+        return out
+
+    return impl
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def space_distance_of(space, a, b):
-    """``space_distance`` for Python callers (``Problem.distance``): compiles only ``space``'s branch."""
+    """``space_distance`` compiled for Python callers: compiles only ``space``'s branch (see ``distance_of``)."""
     return space_distance(space, a, b)
 
 
-@nb.njit(cache=True, inline="always")
+#: The metrics whose distance is one small function of the two states, by ``(kind, metric)``.
+_LEAF_DISTANCES = {
+    (SPACE_RN, METRIC_L2): _l2,
+    (SPACE_RN, METRIC_L1): _l1,
+    (SPACE_RN, METRIC_LINF): _linf,
+    (SPACE_RIGID, METRIC_COSSIN): _cossin,
+}
+
+
+def distance_of(space, a: np.ndarray, b: np.ndarray) -> float:
+    """``space_distance`` for Python callers (``Problem.distance``), on float64 vectors.
+
+    The real-vector metrics and cossin run their compiled function's own source in the interpreter
+    (``py_func``: the same float64 operations in the same order, so the same value bit for bit), so a
+    distance asked from Python compiles nothing; SE3 calls the compiled ``space_distance_of``.
+    """
+    leaf = _LEAF_DISTANCES.get((space[0], space[1]))
+    if leaf is not None:
+        return float(leaf.py_func(a, b))
+    return float(space_distance_of(space, a, b))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def copy_into(out, q):
     """``out[:] = q`` for two vectors of one length. (The slice assignment compiles numba's shape-mismatch
     message formatting, seconds of compilation per kernel that uses it.)"""

@@ -19,11 +19,12 @@ from planners.kernels.space import (
     METRIC_L2,
     METRIC_LINF,
     METRIC_SE3,
+    OVERLOAD_JIT,
     SPACE_RN,
-    embed,
-    interpolate,
     kd_metric,
     space_distance,
+    space_embedding,
+    space_interpolate,
     static_code,
     uses_kd,
 )
@@ -43,7 +44,7 @@ def _any_space_nearest(tree, n, space, q, qe, st, sb):
     return _scan_nearest(tree, n, space, q)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _scan_nearest(tree, n, space, q):
     X = tree.X
     best = np.inf
@@ -56,7 +57,7 @@ def _scan_nearest(tree, n, space, q):
     return bi
 
 
-@overload(space_nearest, jit_options={"cache": True})
+@overload(space_nearest, jit_options=OVERLOAD_JIT)
 def _space_nearest(tree, n, space, q, qe, st, sb):
     kind, metric = static_code(space, "KIND"), static_code(space, "METRIC")
     if metric is None:
@@ -101,7 +102,7 @@ def _any_space_within(tree, n, space, q, qe, radius, out):
     return _scan_within(tree, n, space, q, qe, radius, out)
 
 
-@overload(space_within, jit_options={"cache": True})
+@overload(space_within, jit_options=OVERLOAD_JIT)
 def _space_within(tree, n, space, q, qe, radius, out):
     metric = static_code(space, "METRIC")
     if metric is None:
@@ -143,7 +144,7 @@ def _any_space_knn(tree, n, space, q, qe, k, out, out_d):
     return _scan_knn(tree, n, space, q, qe, k, out, out_d)
 
 
-@overload(space_knn, jit_options={"cache": True})
+@overload(space_knn, jit_options=OVERLOAD_JIT)
 def _space_knn(tree, n, space, q, qe, k, out, out_d):
     metric = static_code(space, "METRIC")
     if metric is None:
@@ -159,34 +160,33 @@ def _space_knn(tree, n, space, q, qe, k, out, out_d):
     return impl
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def nearest_vertex(tree, n, space, q, qe, st, sb):
     """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n``."""
     return space_nearest(tree, n, space, q, qe, st, sb)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def steer(space, a, b, step, out):
     """Write into ``out`` the state at most ``step`` from ``a`` towards ``b``; returns the distance a-b."""
-    kind, metric, rot_weight = space
     d = space_distance(space, a, b)
     if d <= step:
         for i in range(a.shape[0]):
             out[i] = b[i]
     else:
-        interpolate(kind, a, b, step / d, out)
+        space_interpolate(space, a, b, step / d, out)
     return d
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def add_vertex(tree, n, space, q, par, c):
     """Append state ``q`` with parent ``par`` and cost ``c``; returns the new vertex count."""
     X, E, parent, cost, perm, split, box = tree
     kind, metric, rot_weight = space
     for i in range(q.shape[0]):
         X[n, i] = q[i]
-    if kind != SPACE_RN:
-        embed(kind, metric, q, E[n])
+    if kind != SPACE_RN:  # else E is X
+        space_embedding(space, q, E[n])
     parent[n] = par
     cost[n] = c
     if uses_kd(kind, metric):
@@ -194,7 +194,7 @@ def add_vertex(tree, n, space, q, par, c):
     return n + 1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
     """The sample a planner uses, by ``anchored`` code.
 
@@ -222,7 +222,7 @@ def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
         out[0] = anchor[0] + ux * raw[0] - uy * raw[1]
         out[1] = anchor[1] + uy * raw[0] + ux * raw[1]
     if kind != SPACE_RN:
-        interpolate(kind, out, out, 0.0, out)  # wraps the angles into [-pi, pi) (before clipping)
+        space_interpolate(space, out, out, 0.0, out)  # wraps the angles into [-pi, pi) (before clipping)
     for i in range(raw.shape[0]):
         if out[i] < low[i]:
             out[i] = low[i]
