@@ -1,6 +1,6 @@
 """Train the route encoder (``learning.models.route_vin.RouteVIN``, or the U-Net ``RouteNet``) on the training maps.
 
-    python scripts/train_route.py                           # the shipped encoder's recipe (under 10 min, 2 cores)
+    python scripts/train_route.py                           # the shipped encoder's recipe (2 min on 2 quiet cores)
     python scripts/train_route.py --resume                  # continue an interrupted run from its last epoch
     python scripts/train_route.py --epochs 3 --maps 20      # a quicker variation
     python scripts/train_route.py --kind unet --channels 24 --attention 2 --maps 1600 --epochs 30 --batch 32 --lr 1e-3
@@ -9,8 +9,9 @@
 
 With no options it trains the shipped encoder's recipe (``learning/data/route.json``): the value-iteration
 encoder (``--kind vin``: learned move costs of 48 channels and 4 local layers, value iteration over them),
-12 epochs over 100 maps per training family at sides 64 and 128, each turned by one of the square's 8
-symmetries, batches of 16, Adam at 2e-3. Maps come from the training seeds only (validation, tuning and
+12 epochs over 100 maps per training family (``--families``: the five test families' training generators and
+caves, which no test set holds) at sides 64 and 128, each turned by one of the square's 8 symmetries, batches
+of 16, Adam at 2e-3. Maps come from the training seeds only (validation, tuning and
 test seeds are never seen). The encoder learns the grid search's cost-to-go of every cell (see
 ``learning.training.vin_losses``); ``RouteSampler`` follows its prediction.
 
@@ -61,7 +62,7 @@ from planners.base.fileio import (
     output_set,
     run_lock,
 )
-from planners.maps.generators import FAMILIES, TRAIN_SEEDS, check_size
+from planners.maps.generators import TRAIN_SEEDS, TRAINING_FAMILIES, check_size
 from planners.maps.mapset import MapSet, MixedMapSet
 
 #: Free disk a run needs: the encoder and its checkpoint are a few MB each.
@@ -72,6 +73,9 @@ def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--maps", type=int, default=100, help="training maps per family and size (default 100)")
     ap.add_argument("--size", type=int, nargs="+", default=[64, 128], help="map sides; --maps maps of each")
+    ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), metavar="FAMILY",
+                    help=f"generated training families (default {' '.join(TRAINING_FAMILIES)}; caves is in no "
+                         "test set)")
     ap.add_argument("--epochs", type=int, default=12)
     ap.add_argument("--batch", type=int, default=16, help="maps per batch (fewer where maps are large)")
     ap.add_argument("--lr", type=float, default=2e-3, help="Adam's learning rate")
@@ -128,6 +132,9 @@ def _check(args) -> None:
         make_route_net(args.kind, args.step, args.channels, args.depth, args.attention, args.attention_level)
     except ValueError as exc:
         raise InputError(f"--kind / --channels / --depth / --attention / --attention-level: {exc}") from None
+    for family in args.families:
+        if family not in TRAINING_FAMILIES:
+            raise InputError(f"--families {family}: expected some of {', '.join(TRAINING_FAMILIES)}")
     for size in args.size:
         check_size(size, "--size")
         if args.sets is None:
@@ -237,7 +244,7 @@ def _train(args) -> int:
     extra, validation, sets = {}, None, args.sets
     if sets is None:  # the generated families: each map made on a worker
         problems = [GeneratedProblem(f, TRAIN_SEEDS[0] + s, size)
-                    for size in args.size for f in FAMILIES for s in range(args.maps)]
+                    for size in args.size for f in args.families for s in range(args.maps)]
     else:
         print(sets.describe(), flush=True)
         rng = np.random.default_rng(args.seed)

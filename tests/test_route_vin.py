@@ -139,3 +139,17 @@ def test_the_route_sampler_plans_valid_seeded_paths_with_a_vin():
     assert np.array_equal(runs[0].path, runs[1].path)
     assert np.allclose(runs[0].path[0], p.start) and np.linalg.norm(runs[0].path[-1] - p.goal) <= p.goal_tolerance
     assert fine_check_path(p.world, runs[0].path)
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 10_000), size=st.sampled_from([32, 64, 128]))
+def test_caves_are_seeded_training_maps_with_a_far_query_and_no_shifted_variant(seed, size):
+    from planners.maps.generators import FAMILIES, TRAINING_FAMILIES
+
+    a, b = generate("caves", seed, size), generate("caves", seed, size)
+    assert np.array_equal(a.world.obstacles, b.world.obstacles) and np.array_equal(a.start, b.start)
+    assert a.world.obstacles[0].all() and a.world.obstacles[:, -1].all()  # the edge is a wall
+    assert a.reference_length >= size / 2  # start and goal half the map apart along the route
+    assert "caves" in TRAINING_FAMILIES and "caves" not in FAMILIES  # trained on, never tested on
+    with pytest.raises(ValueError, match="no shifted variant"):
+        generate("caves", seed, size, shifted=True)

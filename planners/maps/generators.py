@@ -17,6 +17,7 @@ import numpy as np
 
 from planners.base.fileio import InputError, check_int, env_limit
 from planners.base.problem import Problem
+from planners.maps.caves import caves as cave_problem
 from planners.maps.gridsearch import distance_field, free_components
 from planners.worlds.grid import OccupancyGrid
 
@@ -573,7 +574,19 @@ def rooms_shifted(
                       goal_tolerance=goal_tolerance, name=name or f"rooms-shifted-{size}")
 
 
-_GENERATORS = {"forest": forest, "narrow_passage": narrow_passage, "bugtrap": bugtrap, "maze": maze, "rooms": rooms}
+def caves(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str = "caves"
+) -> Problem:
+    """Irregular cave walls at every angle (``planners.maps.caves``): a training-only family, in no test set."""
+    return _found(cave_problem(rng, size, goal_tolerance=goal_tolerance, name=name, query=_query), name,
+                  goal_tolerance)
+
+
+_GENERATORS = {"forest": forest, "narrow_passage": narrow_passage, "bugtrap": bugtrap, "maze": maze, "rooms": rooms,
+               "caves": caves}
+#: The families the route encoder trains on: the five test families' training generators, and caves, which
+#: no test set holds (their walls run at every angle; every other training wall is axis-aligned).
+TRAINING_FAMILIES = (*FAMILIES, "caves")
 _SHIFTED = {"forest": forest_shifted, "narrow_passage": narrow_passage_shifted, "bugtrap": bugtrap_shifted,
             "maze": maze_shifted, "rooms": rooms_shifted}
 
@@ -614,7 +627,9 @@ def generate(
             negative seed or a non-positive goal tolerance.
     """
     if not isinstance(family, str) or family not in _GENERATORS:
-        raise ValueError(f"unknown map family {family!r}; choose from {', '.join(FAMILIES)}")
+        raise ValueError(f"unknown map family {family!r}; choose from {', '.join(TRAINING_FAMILIES)}")
+    if shifted and family not in _SHIFTED:
+        raise ValueError(f"map family {family!r} has no shifted variant; those of {', '.join(FAMILIES)} have")
     check_size(size)
     try:
         tol = float(goal_tolerance)

@@ -4,7 +4,7 @@
     python scripts/experiments/vin_validation.py --route runs/route/route.pt --maps 6 --sides 128 256
 
 Medians of RRT iterations (step 4, tolerance 4, cap 20,000; planner seeds 0 and 1) on validation maps of the
-five training families (seeds from ``VALIDATION_SEED0 + 500``, never test maps), at sides the encoder trained
+training families (the five test families' and caves) (seeds from ``VALIDATION_SEED0 + 500``, never test maps), at sides the encoder trained
 on (128) and beyond (256), for:
 
 - the route ablation (the straight line in place of the field: no learning),
@@ -30,7 +30,7 @@ from learning.models.route_vin import RouteVIN
 from learning.samplers.registry import make_sampler
 from learning.samplers.route import SHIPPED, SHIPPED_SETTINGS, RouteSampler, shipped_ablation, shipped_sampler
 from planners import make_planner
-from planners.maps.generators import FAMILIES, VALIDATION_SEED0, generate
+from planners.maps.generators import TRAINING_FAMILIES, VALIDATION_SEED0, generate
 from planners.tools.benchmark import MAX_ITERATIONS, STEP
 
 
@@ -51,6 +51,7 @@ def main(argv=None) -> int:
     ap.add_argument("--maps", type=int, default=6, help="validation maps per family and side")
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
     ap.add_argument("--seeds", type=int, default=2)
+    ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES))
     args = ap.parse_args(argv)
     net = load_route_net(args.route)
     plain = LengthCosts(net.block, 1, 1).eval()
@@ -62,7 +63,7 @@ def main(argv=None) -> int:
     }
     print("| family | side | " + " | ".join(samplers) + " | share closed |")
     print("|---|---|" + "---|" * (len(samplers) + 1))
-    for family in FAMILIES:
+    for family in args.families:
         for side in args.sides:
             its: dict[str, list[int]] = {name: [] for name in samplers}
             for i in range(args.maps):
