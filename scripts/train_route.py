@@ -83,7 +83,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="the encoder: unet (a U-Net with axial attention) or vin (learned move costs and value "
                          "iteration over them; --depth is then its local layers, --attention 0)")
     ap.add_argument("--channels", type=int, default=48)
-    ap.add_argument("--depth", type=int, default=4, help="the VIN's local 3x3 layers, or the times the U-Net halves the block grid")
+    ap.add_argument("--depth", type=int, default=4,
+                    help="the VIN's local 3x3 layers, or the times the U-Net halves the block grid")
     ap.add_argument("--attention", type=int, default=0,
                     help="axial attention layers of the U-Net (a row then a column each; the shipped U-Net had 2)")
     ap.add_argument("--attention-level", type=int, default=0,

@@ -13,7 +13,7 @@ from pathlib import Path
 import torch
 from torch import nn
 
-from learning.models.field import (  # noqa: F401 - re-exported: where users of the route encoder find them
+from learning.models.field import (  # re-exported (``__all__``): where users of the route encoder find them
     BATCH_BYTES,
     BYTES_PER_BLOCK,
     GOAL_CHANNELS,
@@ -27,6 +27,10 @@ from learning.models.field import (  # noqa: F401 - re-exported: where users of 
 )
 from learning.models.route_vin import RouteVIN
 from planners.base.fileio import InputError, short_repr
+
+__all__ = ["BATCH_BYTES", "BYTES_PER_BLOCK", "GOAL_CHANNELS", "KINDS", "MAX_BLOCKS", "MAX_BLOCKS_ENV", "AxialAttention",
+           "FieldEncoder", "RouteNet", "RouteVIN", "UNet", "load_route_net", "make_route_net", "max_blocks", "route_input",
+           "save_route_net", "symmetry", "unturn"]
 
 
 class AxialAttention(nn.Module):

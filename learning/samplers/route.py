@@ -267,7 +267,7 @@ class FieldCache:
 
 
 class RouteSampler(SamplerBase):
-    """Samples one step ahead of the tree along a ``RouteNet``'s predicted cost-to-go; the frontier when stuck.
+    """Samples one step ahead of the tree along a route encoder's predicted cost-to-go; the frontier when stuck.
 
     The progress vertex is the tree vertex of lowest predicted cost-to-go; the target is ``lookahead``
     steps (jittered 0.5-1.5x) further down the predicted field, and samples scatter ``sigma`` steps
@@ -444,8 +444,8 @@ class RouteSampler(SamplerBase):
 _NO_ANCHORS = np.zeros(0, dtype=np.int8)
 
 
-def shipped_sampler(encoder: FieldEncoder | str | os.PathLike = SHIPPED, step_size: float = 4.0, *, device: str = "auto",
-                    threads: int | None = None) -> RouteSampler:
+def shipped_sampler(encoder: FieldEncoder | str | os.PathLike = SHIPPED, step_size: float = 4.0, *,
+                    device: str = "auto", threads: int | None = None) -> RouteSampler:
     """An encoder (loaded, or a file; default the shipped one) at the validated ``SHIPPED_SETTINGS``.
 
     ``evaluate.py``'s "route encoder"; ``device`` and ``threads`` as for ``RouteSampler``.

@@ -313,7 +313,8 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
 
     ``kind``: "unet" (``RouteNet``), whose loss is the smooth-L1 error of the predicted cost-to-go, in steps,
     over the free cells that reach the goal; or "vin" (``RouteVIN``, ``depth`` local layers, no attention),
-    whose loss is ``learning.training.vin_losses.vin_loss``. With ``augment`` every map is first turned by one of the square's 8 symmetries, drawn from
+    whose loss is ``learning.training.vin_losses.vin_loss``. With ``augment`` every map is first turned by one
+    of the square's 8 symmetries, drawn from
     ``seed``: the generators' fixed orientations (start and goal corners, trap openings) stop being
     something to learn. Same seed, same machine, same device: the same weights, whatever ``workers``.
 
@@ -370,8 +371,8 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
 
 
 def _train(data: list, held_out: list | None, stream: _Stream | None, names: list[str] | None, trained_side: int,
-           order: torch.Generator, device: torch.device, *, kind: str, block: int, channels: int, depth: int, attention: int,
-           attention_level: int, epochs: int, batch: int, lr: float, augment: bool, seed: int, log,
+           order: torch.Generator, device: torch.device, *, kind: str, block: int, channels: int, depth: int,
+           attention: int, attention_level: int, epochs: int, batch: int, lr: float, augment: bool, seed: int, log,
            checkpoint, resuming: bool, validation, recipe_extra: dict | None) -> RouteNet | RouteVIN:
     """``train_route_net``'s epochs, on the examples made (``data``) or being made (``stream``)."""
     deterministic(device)
