@@ -36,16 +36,17 @@ WALL_LOG = math.log(1000.0)
 REACH = 4.0
 
 
-def shift(v: torch.Tensor, dr: int, dc: int, fill: float) -> torch.Tensor:
-    """``v`` (B, h, w) moved so that each block holds its neighbour at (dr, dc)'s value; ``fill`` off the map."""
+def shifted(v: torch.Tensor, fill: float) -> list[torch.Tensor]:
+    """``v`` (B, h, w) padded once and viewed 8 ways, in ``MOVES`` order: each view holds, at every block, the
+    value of its neighbour in that move's direction (``fill`` off the map)."""
     h, w = v.shape[-2:]
     p = nn.functional.pad(v, (1, 1, 1, 1), value=fill)
-    return p[..., 1 + dr:1 + dr + h, 1 + dc:1 + dc + w]
+    return [p[..., 1 + dr:1 + dr + h, 1 + dc:1 + dc + w] for dr, dc in MOVES]
 
 
 def neighbours(v: torch.Tensor, fill: float) -> torch.Tensor:
     """(B, 8, h, w): each block's 8 neighbours' values, in ``MOVES`` order."""
-    return torch.stack([shift(v, dr, dc, fill) for dr, dc in MOVES], 1)
+    return torch.stack(shifted(v, fill), 1)
 
 
 class RouteVIN(nn.Module, FieldEncoder):
@@ -100,16 +101,14 @@ class RouteVIN(nn.Module, FieldEncoder):
         costs = costs.masked_fill(walls.unsqueeze(1), UNREACHED)  # nothing leaves a wall, so nothing enters one
         if v is None:
             v = torch.where(goal, 0.0, UNREACHED).to(costs.dtype)
-        h, w = v.shape[-2:]
-        most = steps if steps is not None else h * w + check
+        most = steps if steps is not None else v.shape[-2] * v.shape[-1] + check
         done = 0
         while done < most:
             prev = v
             for _ in range(min(check, most - done)):
-                p = nn.functional.pad(v, (1, 1, 1, 1), value=UNREACHED)
                 nxt = v if steps is None else None
-                for a, (dr, dc) in enumerate(MOVES):
-                    there = costs[:, a] + p[:, 1 + dr:1 + dr + h, 1 + dc:1 + dc + w]
+                for a, there in enumerate(shifted(v, UNREACHED)):
+                    there = costs[:, a] + there
                     nxt = there if nxt is None else torch.minimum(nxt, there)
                 v = nxt.clamp_max(UNREACHED) if steps is None else torch.where(goal, 0.0, nxt.clamp_max(UNREACHED))
                 done += 1

@@ -32,8 +32,9 @@ def block_targets(cells: torch.Tensor, block: int) -> torch.Tensor:
     return torch.where(torch.isfinite(t), t, torch.nan)
 
 
-#: Octile lengths of the 8 cell moves, in ``MOVES`` order.
-_CELL_LENGTHS = torch.tensor(LENGTHS, dtype=torch.float32)
+def _lengths(like: torch.Tensor) -> torch.Tensor:
+    """``LENGTHS`` (the octile lengths of the 8 moves, cell or block) as (1, 8, 1, 1), of ``like``'s type and device."""
+    return torch.tensor(LENGTHS, dtype=like.dtype, device=like.device).view(1, -1, 1, 1)
 
 
 def path_moves(cells: torch.Tensor, block: int) -> torch.Tensor:
@@ -49,7 +50,7 @@ def path_moves(cells: torch.Tensor, block: int) -> torch.Tensor:
     low, at = inner.min(-1)
     rows = torch.arange(h, device=cells.device).view(1, h, 1) * block + at // block
     cols = torch.arange(w, device=cells.device).view(1, 1, w) * block + at % block
-    around = neighbours(t, torch.inf) + _CELL_LENGTHS.to(cells.device).view(1, -1, 1, 1)
+    around = neighbours(t, torch.inf) + _lengths(t)
     b = torch.arange(B, device=cells.device).view(B, 1, 1)
     step = around[b, :, rows, cols].argmin(-1)  # (B, h, w): the cell move out of the block's best cell
     dr = torch.tensor([m[0] for m in MOVES], device=cells.device)[step]
@@ -74,7 +75,7 @@ def cost_losses(costs: torch.Tensor, cells: torch.Tensor, block: int) -> tuple[t
     tb = block_targets(cells, block)
     nb = neighbours(torch.nan_to_num(tb, nan=UNREACHED), UNREACHED)
     known = torch.isfinite(tb).unsqueeze(1) & (nb < UNREACHED)
-    lengths = torch.tensor(LENGTHS, dtype=costs.dtype, device=costs.device).view(1, -1, 1, 1)
+    lengths = _lengths(costs)
     drop = torch.clamp(tb.unsqueeze(1) - nb, 0.5 * lengths, WALL * lengths)
     move = path_moves(cells, block)
     on = move >= 0

@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from planners.base.problem import Problem
-
 
 def cave_map(rng: np.random.Generator, size: int) -> np.ndarray:
     """A ``size x size`` cave: True = wall; the map's edge is a wall."""
@@ -29,14 +27,3 @@ def cave_map(rng: np.random.Generator, size: int) -> np.ndarray:
     walls[0, :] = walls[-1, :] = walls[:, 0] = walls[:, -1] = True
     return np.ascontiguousarray(walls)
 
-
-def caves(rng: np.random.Generator, size: int, *, goal_tolerance: float, name: str,
-          query, tries: int = 16) -> Problem | None:
-    """A cave map and a query in its largest free region (``query`` is the generators' rejection sampler)."""
-    for _ in range(tries):
-        obs = cave_map(rng, size)
-        everywhere = np.ones_like(obs)
-        problem = query(rng, obs, everywhere, everywhere, goal_tolerance=goal_tolerance, name=name)
-        if problem is not None:
-            return problem
-    return None

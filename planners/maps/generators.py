@@ -17,7 +17,7 @@ import numpy as np
 
 from planners.base.fileio import InputError, check_int, env_limit
 from planners.base.problem import Problem
-from planners.maps.caves import caves as cave_problem
+from planners.maps.caves import cave_map
 from planners.maps.gridsearch import distance_field, free_components
 from planners.worlds.grid import OccupancyGrid
 
@@ -577,9 +577,17 @@ def rooms_shifted(
 def caves(
     rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str = "caves"
 ) -> Problem:
-    """Irregular cave walls at every angle (``planners.maps.caves``): a training-only family, in no test set."""
-    return _found(cave_problem(rng, size, goal_tolerance=goal_tolerance, name=name, query=_query), name,
-                  goal_tolerance)
+    """Irregular cave walls at every angle (``planners.maps.caves``): a training-only family, in no test set.
+
+    Start and goal anywhere in the largest free region; a map without a far enough pair is redrawn.
+    """
+    problem = None
+    for _ in range(_MAP_TRIES):
+        everywhere = np.ones((size, size), dtype=bool)
+        problem = _query(rng, cave_map(rng, size), everywhere, everywhere, goal_tolerance=goal_tolerance, name=name)
+        if problem is not None:
+            break
+    return _found(problem, name, goal_tolerance)
 
 
 _GENERATORS = {"forest": forest, "narrow_passage": narrow_passage, "bugtrap": bugtrap, "maze": maze, "rooms": rooms,
