@@ -153,3 +153,18 @@ def test_caves_are_seeded_training_maps_with_a_far_query_and_no_shifted_variant(
     assert "caves" in TRAINING_FAMILIES and "caves" not in FAMILIES  # trained on, never tested on
     with pytest.raises(ValueError, match="no shifted variant"):
         generate("caves", seed, size, shifted=True)
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 10_000), size=st.sampled_from([32, 64, 128]))
+def test_strokes_are_seeded_training_maps_of_thin_walls_in_no_test_set(seed, size):
+    from planners.maps.generators import FAMILIES, TRAINING_FAMILIES
+    from planners.maps.unseen import UNSEEN_FAMILIES
+
+    a, b = generate("strokes", seed, size), generate("strokes", seed, size)
+    assert np.array_equal(a.world.obstacles, b.world.obstacles) and np.array_equal(a.start, b.start)
+    assert 0.08 <= a.world.obstacles.mean() <= 0.40  # the drawing stops just past its target cover of 8-25%
+    assert a.reference_length >= size / 2
+    assert "strokes" in TRAINING_FAMILIES and "strokes" not in FAMILIES + UNSEEN_FAMILIES  # trained on, never tested on
+    with pytest.raises(ValueError, match="no shifted variant"):
+        generate("strokes", seed, size, shifted=True)

@@ -18,6 +18,7 @@ import numpy as np
 from planners.base.fileio import InputError, check_int, env_limit
 from planners.base.problem import Problem
 from planners.maps.caves import cave_map
+from planners.maps.strokes import stroke_map
 from planners.maps.gridsearch import distance_field, free_components
 from planners.worlds.grid import OccupancyGrid
 
@@ -574,6 +575,17 @@ def rooms_shifted(
                       goal_tolerance=goal_tolerance, name=name or f"rooms-shifted-{size}")
 
 
+def _anywhere(rng: np.random.Generator, draw, size: int, goal_tolerance: float, name: str) -> Problem:
+    """A map from ``draw(rng, size)`` with start and goal anywhere in its largest free region; redrawn if none fits."""
+    problem = None
+    for _ in range(_MAP_TRIES):
+        everywhere = np.ones((size, size), dtype=bool)
+        problem = _query(rng, draw(rng, size), everywhere, everywhere, goal_tolerance=goal_tolerance, name=name)
+        if problem is not None:
+            break
+    return _found(problem, name, goal_tolerance)
+
+
 def caves(
     rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str = "caves"
 ) -> Problem:
@@ -581,20 +593,24 @@ def caves(
 
     Start and goal anywhere in the largest free region; a map without a far enough pair is redrawn.
     """
-    problem = None
-    for _ in range(_MAP_TRIES):
-        everywhere = np.ones((size, size), dtype=bool)
-        problem = _query(rng, cave_map(rng, size), everywhere, everywhere, goal_tolerance=goal_tolerance, name=name)
-        if problem is not None:
-            break
-    return _found(problem, name, goal_tolerance)
+    return _anywhere(rng, cave_map, size, goal_tolerance, name)
+
+
+def strokes(
+    rng: np.random.Generator, size: int = 128, *, goal_tolerance: float = 4.0, name: str = "strokes"
+) -> Problem:
+    """Thin walls at every angle, straight, bent and curved (``planners.maps.strokes``): training only, in no test set.
+
+    Start and goal anywhere in the largest free region; a map without a far enough pair is redrawn.
+    """
+    return _anywhere(rng, stroke_map, size, goal_tolerance, name)
 
 
 _GENERATORS = {"forest": forest, "narrow_passage": narrow_passage, "bugtrap": bugtrap, "maze": maze, "rooms": rooms,
-               "caves": caves}
-#: The families the route encoder trains on: the five test families' training generators, and caves, which
-#: no test set holds (their walls run at every angle; every other training wall is axis-aligned).
-TRAINING_FAMILIES = (*FAMILIES, "caves")
+               "caves": caves, "strokes": strokes}
+#: The families the route encoder trains on: the five test families' training generators, and caves and strokes,
+#: which no test set holds (their walls run at every angle; every other training wall is axis-aligned).
+TRAINING_FAMILIES = (*FAMILIES, "caves", "strokes")
 _SHIFTED = {"forest": forest_shifted, "narrow_passage": narrow_passage_shifted, "bugtrap": bugtrap_shifted,
             "maze": maze_shifted, "rooms": rooms_shifted}
 
