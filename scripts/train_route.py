@@ -1,6 +1,6 @@
 """Train the route encoder (``learning.models.route_vin.RouteVIN``, or the U-Net ``RouteNet``) on the training maps.
 
-    python scripts/train_route.py                           # the shipped encoder's recipe (2 min on 2 quiet cores)
+    python scripts/train_route.py                           # the shipped encoder's recipe (about 2 min on 2 cores)
     python scripts/train_route.py --resume                  # continue an interrupted run from its last epoch
     python scripts/train_route.py --epochs 3 --maps 20      # a quicker variation
     python scripts/train_route.py --kind unet --channels 24 --attention 2 --maps 1600 --epochs 30 --batch 32 --lr 1e-3
@@ -9,9 +9,9 @@
 
 With no options it trains the shipped encoder's recipe (``learning/data/route.json``): the value-iteration
 encoder (``--kind vin``: learned move costs of 48 channels and 4 local layers, value iteration over them),
-12 epochs over 100 maps per training family (``--families``: the five test families' training generators and
-caves, which no test set holds) at sides 64 and 128, each turned by one of the square's 8 symmetries, batches
-of 16, Adam at 2e-3. Maps come from the training seeds only (validation, tuning and
+12 epochs over 100 maps per training family (``--families``: the five test families' training generators,
+caves and strokes, which no test set holds) at sides 64 and 128, each turned by one of the square's 8
+symmetries, batches of 16, Adam from 2e-3 down to 0 along a cosine (``--lr-schedule``). Maps come from the training seeds only (validation, tuning and
 test seeds are never seen). The encoder learns the grid search's cost-to-go of every cell (see
 ``learning.training.vin_losses``); ``RouteSampler`` follows its prediction.
 
@@ -52,7 +52,7 @@ import torch
 
 from learning.device import DEVICES, resolve_device
 from learning.models.route_net import KINDS, make_route_net, save_route_net
-from learning.training.route import GeneratedProblem, check_route_map, default_workers, train_route_net
+from learning.training.route import SCHEDULES, GeneratedProblem, check_route_map, default_workers, train_route_net
 from planners.base.fileio import (
     InputError,
     atomic_write_bytes,
@@ -74,11 +74,13 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--maps", type=int, default=100, help="training maps per family and size (default 100)")
     ap.add_argument("--size", type=int, nargs="+", default=[64, 128], help="map sides; --maps maps of each")
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), metavar="FAMILY",
-                    help=f"generated training families (default {' '.join(TRAINING_FAMILIES)}; caves is in no "
-                         "test set)")
+                    help=f"generated training families (default {' '.join(TRAINING_FAMILIES)}; caves and strokes "
+                         "are in no test set)")
     ap.add_argument("--epochs", type=int, default=12)
     ap.add_argument("--batch", type=int, default=16, help="maps per batch (fewer where maps are large)")
-    ap.add_argument("--lr", type=float, default=2e-3, help="Adam's learning rate")
+    ap.add_argument("--lr", type=float, default=2e-3, help="Adam's learning rate (its peak, with --lr-schedule cosine)")
+    ap.add_argument("--lr-schedule", choices=SCHEDULES, default="cosine",
+                    help="cosine (default): from --lr down to 0 over the run's steps; or constant")
     ap.add_argument("--kind", choices=KINDS, default="vin",
                     help="the encoder: unet (a U-Net with axial attention) or vin (learned move costs and value "
                          "iteration over them; --depth is then its local layers, --attention 0)")
@@ -265,7 +267,7 @@ def _train(args) -> int:
                           batch=args.batch, lr=args.lr,
                           augment=args.augment, seed=args.seed, log=log, checkpoint=ckpt, resume=args.resume,
                           validation=validation, recipe_extra=extra, workers=args.workers, device=args.torch_device,
-                          kind=args.kind)
+                          kind=args.kind, schedule=args.lr_schedule)
     skip = {"resume", "sets", "torch_device"}
     recipe = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if k not in skip}
     info = {"recipe": recipe, "parameters": sum(p.numel() for p in net.parameters()),

@@ -177,17 +177,24 @@ def test_ctrl_c_says_what_was_kept_and_exits_130(tmp_path, capsys, monkeypatch):
     real = script.train_route_net
 
     def interrupted_after_one_epoch(problems, **kwargs):
-        real(problems, **{**kwargs, "epochs": 1})
-        raise KeyboardInterrupt
+        log = kwargs["log"]
+
+        def stop(line):  # Ctrl-C as the second epoch ends, before its checkpoint: the first epoch's is kept
+            log(line)
+            if line.startswith("epoch 1"):
+                raise KeyboardInterrupt
+
+        return real(problems, **{**kwargs, "log": stop})
 
     monkeypatch.setattr(script, "train_route_net", interrupted_after_one_epoch)
     out = tmp_path / "o"
-    assert script.main([*TINY, "--out", str(out)]) == 130
+    flags = [*TINY, "--out", str(out)]
+    assert script.main(flags) == 130
     err = capsys.readouterr().err.strip()
     assert err == f"interrupted: {out / 'checkpoint.pt'} holds the last finished epoch; continue with --resume"
     assert not (tmp_path / ".o.lock").exists(), "the lock is released"
     monkeypatch.undo()
-    assert script.main([*TINY, "--out", str(out), "--resume"]) == 0
+    assert script.main([*flags, "--resume"]) == 0
     assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "route.json", "route.pt"]
 
 
@@ -233,8 +240,14 @@ def test_map_set_training_resumes_to_the_weights_of_an_uninterrupted_run(tmp_pat
     real = script.train_route_net
 
     def interrupted_after_one_epoch(problems, **kwargs):
-        real(problems, **{**kwargs, "epochs": 1})
-        raise KeyboardInterrupt
+        log = kwargs["log"]
+
+        def stop(line):  # Ctrl-C as the second epoch ends, before its checkpoint: the first epoch's is kept
+            log(line)
+            if line.startswith("epoch 1"):
+                raise KeyboardInterrupt
+
+        return real(problems, **{**kwargs, "log": stop})
 
     monkeypatch.setattr(script, "train_route_net", interrupted_after_one_epoch)
     assert script.main([*flags, "--out", str(tmp_path / "cut")]) == 130
@@ -339,6 +352,23 @@ def test_one_and_two_workers_make_the_same_tensors(tmp_path):
     w1 = train_route_net(problems, workers=1, **kwargs).state_dict()
     w2 = train_route_net(problems, workers=2, **kwargs).state_dict()
     assert all(torch.equal(w1[k], w2[k]) for k in w1)
+
+
+def test_the_cosine_schedule_decays_the_rate_repeatably_and_a_bad_schedule_is_refused():
+    import functools
+
+    from learning.training.route import train_route_net
+    from planners.base.fileio import InputError
+    from planners.maps.generators import generate
+
+    problems = [functools.partial(generate, f, 7, 32) for f in ("forest", "maze", "strokes")]
+    kwargs = dict(channels=4, depth=1, epochs=2, batch=1, lr=1e-2, kind="vin", log=lambda _: None)
+    cos = [train_route_net(problems, schedule="cosine", **kwargs).state_dict() for _ in range(2)]
+    flat = train_route_net(problems, schedule="constant", **kwargs).state_dict()
+    assert all(torch.equal(cos[0][k], cos[1][k]) for k in flat)  # same seed, same weights
+    assert not all(torch.equal(cos[0][k], flat[k]) for k in flat)  # the rate falls: the steps differ
+    with pytest.raises(InputError, match="schedule 'linear'"):
+        train_route_net(problems, schedule="linear", **kwargs)
 
 
 def test_device_auto_is_the_cpu_without_a_gpu_and_cuda_is_refused_by_name():

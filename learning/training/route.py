@@ -10,6 +10,7 @@ default, a GPU where one is asked for) waits only for the maps of its next batch
 from __future__ import annotations
 
 import json
+import math
 import multiprocessing
 import os
 import time
@@ -34,6 +35,8 @@ from planners.maps.gridsearch import distance_field
 #: Batches of larger maps hold fewer maps, down to one; the shipped recipe's batches (32 maps of 64
 #: and 128 cells) are below it.
 MAX_BATCH_BLOCKS = 32 * 64 * 64
+#: How Adam's learning rate moves over a run: "constant", or "cosine" (from ``lr`` down to 0 over the run's steps).
+SCHEDULES = ("constant", "cosine")
 
 
 def check_route_map(name: str, shape: tuple[int, int], block: int) -> None:
@@ -308,7 +311,8 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
                     lr: float = 1e-3, augment: bool = False, seed: int = 0, log=print,
                     checkpoint: str | os.PathLike | None = None, resume: bool = False,
                     validation: Sequence[Problem] | None = None, recipe_extra: dict | None = None,
-                    workers: int = 1, device: str | torch.device = "cpu", kind: str = "unet") -> RouteNet | RouteVIN:
+                    workers: int = 1, device: str | torch.device = "cpu", kind: str = "unet",
+                    schedule: str = "constant") -> RouteNet | RouteVIN:
     """Fit a route encoder to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
     ``kind``: "unet" (``RouteNet``), whose loss is the smooth-L1 error of the predicted cost-to-go, in steps,
@@ -325,7 +329,9 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     With ``validation`` problems the loss on them (unturned) is measured after every epoch, logged,
     and the weights of the epoch with the lowest validation loss are returned (``net.chosen_epoch``).
     Without, the last epoch's. ``recipe_extra`` joins the recipe a checkpoint must match (what the
-    problems were drawn from). ``device``: where the encoder trains; the targets are made on
+    problems were drawn from). ``schedule``: Adam's learning rate stays ``lr`` ("constant") or falls from
+    ``lr`` to 0 along half a cosine over the run's steps ("cosine"; then ``epochs`` is part of the recipe, as
+    every step's rate depends on it). ``device``: where the encoder trains; the targets are made on
     ``workers`` CPU processes (``make_examples``). With more than one worker, and the size of every
     map known beforehand (``Problem``s, or callables with a ``shape`` such as ``GeneratedProblem``),
     they are made while the first epoch trains, in the order its batches (drawn first) use them; the
@@ -336,6 +342,8 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     weights an uninterrupted run reaches (a checkpoint of another recipe is refused; more ``epochs``
     than the interrupted run asked for continue it further).
     """
+    if schedule not in SCHEDULES:
+        raise InputError(f"schedule {short_repr(schedule)}: expected one of {', '.join(SCHEDULES)}")
     device = torch.device(device)
     torch.manual_seed(seed)
     turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
@@ -364,7 +372,7 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
                       block=block, channels=channels, depth=depth, attention=attention,
                       attention_level=attention_level, epochs=epochs, batch=batch, lr=lr, augment=augment, seed=seed,
                       log=log, checkpoint=checkpoint, resuming=resuming, validation=validation,
-                      recipe_extra=recipe_extra)
+                      recipe_extra=recipe_extra, schedule=schedule)
     finally:
         if stream is not None:
             stream.close()
@@ -373,7 +381,7 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
 def _train(data: list, held_out: list | None, stream: _Stream | None, names: list[str] | None, trained_side: int,
            order: torch.Generator, device: torch.device, *, kind: str, block: int, channels: int, depth: int,
            attention: int, attention_level: int, epochs: int, batch: int, lr: float, augment: bool, seed: int, log,
-           checkpoint, resuming: bool, validation, recipe_extra: dict | None) -> RouteNet | RouteVIN:
+           checkpoint, resuming: bool, validation, recipe_extra: dict | None, schedule: str) -> RouteNet | RouteVIN:
     """``train_route_net``'s epochs, on the examples made (``data``) or being made (``stream``)."""
     deterministic(device)
     if stream is None:
@@ -388,6 +396,8 @@ def _train(data: list, held_out: list | None, stream: _Stream | None, names: lis
                   "maps": maps}  # not the epochs: each epoch's weights do not depend on them
         if kind != "unet":  # recipes of the U-Net stay as they were
             recipe["kind"] = kind
+        if schedule != "constant":  # as are those at a constant rate
+            recipe["schedule"], recipe["epochs"] = schedule, epochs
         if validation:
             recipe["validation"] = [p.name for p in validation]
         if recipe_extra:
@@ -425,6 +435,10 @@ def _train(data: list, held_out: list | None, stream: _Stream | None, names: lis
             loss = _loss(net, X[idx].to(device), Yc[idx].to(device))
             opt.zero_grad()
             loss.backward()
+            if schedule == "cosine":  # every epoch has as many batches: the step's place in the run is known
+                done = (epoch * len(batches) + j) / (epochs * len(batches))
+                for group in opt.param_groups:
+                    group["lr"] = lr * 0.5 * (1 + math.cos(math.pi * done))
             opt.step()
             total += loss.item() * len(idx)
         if streaming:  # every example is in now: the tensors as _tensors would have made them
