@@ -139,6 +139,11 @@ def test_room_and_share_closed_and_targets_in_words():
     words = " ".join(E.carry_targets(rows, []))
     assert "cannot be reached" in words and "10%" in words
     assert E.room_table(_rows({"route ablation": 100, "route encoder": 90})) == []  # no exact reference: no table
+    # a set where the learned sampler is more than 5% worse names the exact reference's own ratio beside it
+    words = " ".join(E.carry_targets(_rows({"route ablation": 100, "route encoder": 130, "exact_route": 120}), []))
+    assert "maze (shifted) 1.30 (exact 1.20)" in words
+    words = " ".join(E.carry_targets(_rows({"route ablation": 100, "route encoder": 130}), []))
+    assert "maze (shifted) 1.30 (learned" in words
 
 
 def test_the_glance_table_has_a_few_columns_and_dashes_for_missing_samplers():
