@@ -4,8 +4,8 @@
     python scripts/experiments/vin_validation.py --route runs/route/route.pt --maps 6 --sides 128 256
 
 Medians of RRT iterations (step 4, tolerance 4, cap 20,000; planner seeds 0 and 1) on validation maps of the
-training families (the five test families' and caves; seeds from ``VALIDATION_SEED0 + 500``, never test maps), at
-sides the encoder trained on (128) and beyond (256), for:
+training families (the five test families', caves and strokes; seeds from ``VALIDATION_SEED0 + 500``, never
+test maps), at sides the encoder trained on (128) and beyond (256), for:
 
 - the route ablation (the straight line in place of the field: no learning),
 - value iteration without learning: the same value iteration over the block grid with every move costing its
