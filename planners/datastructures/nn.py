@@ -18,7 +18,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from planners.kernels.space import METRIC_L1, METRIC_L2, METRIC_LINF
+from planners.kernels.space import METRIC_L1, METRIC_L2, METRIC_LINF, OVERLOAD_JIT, compiled_only
 
 CHUNK = 64
 LEAF = 16
@@ -118,7 +118,7 @@ def from_reduced(metric, r):
     return np.sqrt(r) if metric == METRIC_L2 else r
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@nb.njit(**OVERLOAD_JIT)
 def _select(P, perm, lo, hi, k, sd):
     """Reorder perm[lo:hi] so perm[k] holds the k-th smallest P[., sd], smaller left, larger right."""
     left = lo
@@ -154,7 +154,7 @@ def _select(P, perm, lo, hi, k, sd):
             break
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@compiled_only
 def build(P, perm, split, box, lo, hi):
     """Build the implicit k-d tree of points [lo, hi); ``box[mid]`` gets each subtree's bounds."""
     for i in range(lo, hi):
@@ -198,7 +198,7 @@ def build(P, perm, split, box, lo, hi):
         sp += 1
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@compiled_only
 def insert(P, perm, split, box, n):
     """Index point ``n`` (already written to ``P[n]``); returns the new count ``n + 1``."""
     perm[n] = n
@@ -350,7 +350,7 @@ def _traversals(rdist, box_rdist, plane_rdist, name):
     box; ``plane_rdist(diff)``: to a splitting plane ``diff`` away.
     """
 
-    def nearest(P, perm, split, box, n, q, st, sb):
+    def nearest(P, perm, split, box, n, q, st, sb, *ignored):
         best = np.inf
         bi = -1
         full = (n // CHUNK) * CHUNK
@@ -568,9 +568,7 @@ class NearestNeighbors:
                 new = np.zeros((cap,) + old.shape[1:], dtype=old.dtype)
                 new[: self._n] = old[: self._n]
                 setattr(self, name, new)
-        for p in pts:
-            self._P[self._n] = p
-            self._n = insert(self._P, self._perm, self._split, self._box, self._n)
+        self._n = _insert_rows(self._P, self._perm, self._split, self._box, self._n, pts)
 
     def _q(self, q: np.ndarray) -> np.ndarray:
         q = np.asarray(q, dtype=np.float64)
@@ -604,6 +602,16 @@ class NearestNeighbors:
         out = np.empty(max(self._n, 1), dtype=np.int64)
         c = nearest_r(self._P, self._perm, self._split, self._box, self._n, self._q(q), self._m, float(radius), out)
         return np.sort(out[:c])
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _insert_rows(P, perm, split, box, n, rows):
+    """Write each row of ``rows`` to ``P[n]``, ``P[n + 1]``, ... and index it; returns the new count."""
+    for i in range(rows.shape[0]):
+        for j in range(rows.shape[1]):
+            P[n, j] = rows[i, j]
+        n = insert(P, perm, split, box, n)
+    return n
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)

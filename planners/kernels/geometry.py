@@ -29,7 +29,7 @@ import numpy as np
 from numba.extending import overload
 
 from planners.kernels.rigid import rigid_motion_free
-from planners.kernels.space import OVERLOAD_JIT, static_code
+from planners.kernels.space import OVERLOAD_JIT, compiled_only, static_code
 from planners.kernels.state import WorldKernel
 
 WORLD_GRID = 0
@@ -41,7 +41,7 @@ WORLD_RIGID = 2
 GRID_EPS = 1e-9
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@compiled_only
 def grid_segment_free(grid, inv_res, ax, ay, bx, by):
     """True if the segment a-b meets no blocked cell and no cell outside the grid.
 
