@@ -72,37 +72,40 @@ def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal
         fstate[slots.F_BEST_COST] = c
 
 
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def scratch_rows(scratch, tree):
+    """The sample, embedding and new-state buffers of a kernel, rows of the caller's ``scratch`` (three rows
+    at least as wide as the tree's states and embedding; no array is allocated in the kernel)."""
+    return scratch[0, :tree.X.shape[1]], scratch[1, :tree.E.shape[1]], scratch[2, :tree.X.shape[1]]
+
+
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def rrt_run(samples, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high,
-            stop_when_solved, st, sb):
+            stop_when_solved, st, sb, scratch):
     """RRT (LaValle 1998) over a batch of samples."""
     X = tree.X
-    q = np.empty(X.shape[1])
-    qe_buf = np.empty(tree.E.shape[1])
-    new = np.empty(X.shape[1])
+    q, qe_buf, new = scratch_rows(scratch, tree)
+    used = samples.shape[0]
     for s in range(samples.shape[0]):
-        if stop_when_solved and istate[slots.I_SOLVED]:
-            return s
-        if istate[slots.I_N] >= X.shape[0]:
-            return s
+        if (stop_when_solved and istate[slots.I_SOLVED]) or istate[slots.I_N] >= X.shape[0]:
+            used = s
+            break
         rrt_iterate(samples[s], anchored[s], tree, istate, fstate, last, world, space, goal, step, tol, low, high,
                     st, sb, q, qe_buf, new)
-    return samples.shape[0]
+    return used
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, goal, step, low, high,
-                max_connect, st, sb):
+                max_connect, st, sb, scratch):
     """RRT-Connect (Kuffner & LaValle 2000): extend one tree, greedily connect the other, swap.
 
     The extension and the connecting steps are one loop, so the kernel holds one nearest-neighbour
     query, one steer, one collision check and one insertion (each compiled once).
     """
-    Xa = ta[0]
-    Xb = tb[0]
-    q = np.empty(Xa.shape[1])
-    qe_buf = np.empty(ta[1].shape[1])
-    new = np.empty(Xa.shape[1])
+    Xa = ta.X
+    Xb = tb.X
+    q, qe_buf, new = scratch_rows(scratch, ta)
     for s in range(samples.shape[0]):
         if istate[slots.I_SOLVED]:
             return s
