@@ -188,7 +188,7 @@ def distance(kind, metric, rot_weight, a, b):
     return math.sqrt(t) + rot_weight * rotation_angle_between(a, b)
 
 
-@nb.njit(**OVERLOAD_JIT)
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _interpolate_rn(a, b, t, out):
     for i in range(a.shape[0]):
         out[i] = a[i] + t * (b[i] - a[i])
