@@ -21,6 +21,7 @@ from planners.kernels.space import (
     METRIC_SE3,
     OVERLOAD_JIT,
     SPACE_RN,
+    compiled_only,
     kd_metric,
     space_distance,
     space_embedding,
@@ -203,12 +204,18 @@ def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
     first two coordinates into the frame whose x axis points from the anchor to the goal (y to its
     left), so an offset like "two steps ahead, slightly left" follows the tree wherever it goes.
     Anchored results are clipped to the bounds (rigid-body angles are wrapped first, not clipped).
+    Only anchored samplers use codes 1 and 2: they are a call, not inlined into every kernel.
     """
-    kind, metric, rot_weight = space
     if anchored == 0:
         for i in range(raw.shape[0]):
             out[i] = raw[i]
-        return
+    else:
+        _resolve_anchored(space, raw, anchored, anchor, goal, low, high, out)
+
+
+@compiled_only
+def _resolve_anchored(space, raw, anchored, anchor, goal, low, high, out):
+    kind, metric, rot_weight = space
     for i in range(raw.shape[0]):
         out[i] = anchor[i] + raw[i]
     if anchored == 2:
