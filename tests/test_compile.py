@@ -162,22 +162,6 @@ def test_the_compile_command_lists_its_jobs_and_the_folder():
     assert "compiled kernels are cached in" in out.stderr
 
 
-def test_rrt_kernels_skip_reference_counting_only_where_nothing_allocates():
-    from planners import RigidBodyWorld, thin_wall_scene
-    from planners.kernels import rrt as rrt_kernels
-
-    grid = OccupancyGrid(np.zeros((4, 4), dtype=bool)).kernel
-    uncounted = (rrt_kernels.rrt_run_uncounted, rrt_kernels.connect_run_uncounted)
-    counted = (rrt_kernels.rrt_run, rrt_kernels.connect_run)
-    assert rrt_kernels.kernels_for(grid, make_space(SPACE_RN, METRIC_L2, 1.0)) == uncounted
-    assert rrt_kernels.kernels_for(grid, make_space(SPACE_RN, METRIC_L1, 1.0)) == uncounted
-    assert rrt_kernels.kernels_for(WorldKernel(*grid), make_space(SPACE_RN, METRIC_L2, 1.0)) == counted
-    assert rrt_kernels.kernels_for(grid, Space(SPACE_RN, METRIC_L2, 1.0)) == counted  # SE3's branch allocates
-    rigid = thin_wall_scene(hole=4.0)
-    assert isinstance(rigid.world, RigidBodyWorld)
-    assert rrt_kernels.kernels_for(rigid.world.kernel, rigid.space) == counted  # the rigid check allocates
-
-
 _RRTSTAR_AFTER = """
 import sys
 import numpy as np
@@ -192,9 +176,9 @@ print(r.iterations, r.num_vertices, repr(r.cost), r.path.tobytes().hex())
 
 
 @pytest.mark.slow
-def test_counted_kernels_sharing_helpers_with_uncounted_ones_give_the_same_results(tmp_path):
-    # RRT compiles the helpers it shares with RRT* (nearest query, insertion, collision check) without
-    # reference counting; RRT* reusing them, in the same process or from the cache, must not notice.
+def test_rrtstar_reusing_what_rrt_compiled_gives_the_same_results(tmp_path):
+    # RRT compiles the helpers it shares with RRT* (nearest query, insertion, collision check) first; RRT*
+    # reusing them, in the same process or from the cache, must give what it gives alone.
     def run(cache, *names):
         env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(cache), SAMPLERGYM_COMPILE_NOTICE="0")
         out = subprocess.run([sys.executable, "-c", _RRTSTAR_AFTER, *names], env=env, capture_output=True, text=True)

@@ -91,7 +91,6 @@ class RRT(Planner):
         self._tree = VertexStore(self.problem, 1024, tree=True)
         # the kernels' sample, embedding and new-state buffers (``planners.kernels.rrt.scratch_rows``)
         self._scratch = np.empty((3, max(self._tree.X.shape[1], self._tree.E.shape[1])))
-        self._rrt_run, self._connect_run = rrt_kernels.kernels_for(self.problem.world.kernel, self._space)
         self._add_root(self._tree, self.problem.start, slots.I_N)
         d = self.problem.distance(self.problem.start, self.problem.goal)
         self._fstate[slots.F_BEST_D] = d
@@ -109,7 +108,7 @@ class RRT(Planner):
         self._tree.reserve(self.num_vertices, 1)
 
     def _run(self, points, anchored) -> int:
-        return self._rrt_run(points, anchored, self._tree.as_tree(), self._istate, self._fstate, self._last,
+        return rrt_kernels.rrt_run(points, anchored, self._tree.as_tree(), self._istate, self._fstate, self._last,
                          self.problem.world.kernel, self._space, self._goal, self.step_size,
                          self.problem.goal_tolerance, self._low, self._high, True, self._stack, self._stack_b,
                          self._scratch)
@@ -171,7 +170,7 @@ class RRTConnect(RRT):
         self._gtree.reserve(int(self._istate[slots.I_N_B]), self._max_connect + 1)
 
     def _run(self, points, anchored) -> int:
-        return self._connect_run(points, anchored, self._tree.as_tree(), self._gtree.as_tree(), self._istate,
+        return rrt_kernels.connect_run(points, anchored, self._tree.as_tree(), self._gtree.as_tree(), self._istate,
                              self._fstate, self._last, self.problem.world.kernel, self._space, self._goal,
                              self.step_size, self._low, self._high, self._max_connect, self._stack, self._stack_b,
                              self._scratch)

@@ -4,39 +4,15 @@ Each kernel consumes a batch of samples (one sample = one iteration) and returns
 stops early, before touching the next sample, when the problem is solved and ``stop_when_solved`` is
 set or when the trees are too full to take another iteration; the Python side grows the arrays and
 calls again, so results never depend on capacity or batch size.
-
-Each kernel is compiled in two variants (``kernels_for`` picks one): without numba's reference
-counting of arrays (``_nrt=False``) for a grid or shapes world in a real-vector or cossin space, whose
-kernels allocate no array (their buffers are rows of the planner's ``scratch``), and with it for the
-rest (the rigid body's collision check and the SE3 distance allocate). Without reference counting a
-kernel that passes its seven-array tree and four-array world through its inlined helpers compiles in
-about a sixth less time and runs the same arithmetic, faster (the arrays belong to the calling
-planner, which holds them for the call).
-
-numba compiles a helper once per argument types, whichever kernel asked first, and caches it so, so
-the helpers an uncounted kernel calls are also what counted kernels (RRT*, PRM) call. That is safe
-for a helper that returns no array; one that returns an array must be inlined into its callers
-(``inline="always"``, as ``space_embedding`` is), or a counted caller would release an array the
-uncounted compilation never claimed (``tests/test_compile.py`` runs RRT* after RRT for this).
 """
 
 from __future__ import annotations
 
-import types
-
 import numba as nb
 
 from planners.kernels import state as slots
-from planners.kernels.geometry import GridKernel, ShapesKernel, motion_free
-from planners.kernels.space import (
-    SpaceRigidCossin,
-    SpaceRnL1,
-    SpaceRnL2,
-    SpaceRnLinf,
-    copy_into,
-    space_distance,
-    space_embedding,
-)
+from planners.kernels.geometry import motion_free
+from planners.kernels.space import copy_into, space_distance, space_embedding
 from planners.kernels.tree import add_vertex, nearest_vertex, resolve_sample, steer
 
 
@@ -192,28 +168,3 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
             break
     return samples.shape[0]
 
-
-#: Worlds and spaces whose kernels allocate no array (see the module docstring).
-ALLOCATION_FREE = ((GridKernel, ShapesKernel), (SpaceRnL2, SpaceRnL1, SpaceRnLinf, SpaceRigidCossin))
-
-
-def _variant(f, suffix):
-    """``f`` under another name, so its compiled variant has a cache entry of its own."""
-    g = types.FunctionType(f.__code__, f.__globals__, f.__name__ + suffix, f.__defaults__, f.__closure__)
-    g.__qualname__ = f.__qualname__ + suffix
-    g.__doc__ = f.__doc__
-    g.__module__ = f.__module__
-    return g
-
-
-rrt_run_uncounted = nb.njit(cache=True, no_cfunc_wrapper=True, _nrt=False)(_variant(rrt_run.py_func, "_uncounted"))
-connect_run_uncounted = nb.njit(cache=True, no_cfunc_wrapper=True, _nrt=False)(
-    _variant(connect_run.py_func, "_uncounted"))
-
-
-def kernels_for(world, space):
-    """``(rrt_run, connect_run)`` compiled for ``world`` (a ``WorldKernel``) and ``space``: without reference
-    counting where nothing they run allocates (``ALLOCATION_FREE``), else with it."""
-    if isinstance(world, ALLOCATION_FREE[0]) and isinstance(space, ALLOCATION_FREE[1]):
-        return rrt_run_uncounted, connect_run_uncounted
-    return rrt_run, connect_run

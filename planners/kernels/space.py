@@ -324,9 +324,7 @@ def _embedding_any(space, q, out):
     return out
 
 
-# inlined: it returns an array, and the RRT kernels without reference counting must call no compiled
-# function that does (see ``planners.kernels.rrt``)
-@overload(space_embedding, jit_options=OVERLOAD_JIT, inline="always")
+@overload(space_embedding, jit_options=OVERLOAD_JIT)
 def _space_embedding(space, q, out):
     kind = static_code(space, "KIND")
     if kind is None:
