@@ -160,3 +160,31 @@ def test_the_compile_command_lists_its_jobs_and_the_folder():
     assert out.stdout.split("\n")[:-1] == ["RRT grid euclidean", "PRM grid euclidean", "RRT rigid cossin",
                                            "PRM rigid cossin", "RRT rigid se3", "PRM rigid se3"]
     assert "compiled kernels are cached in" in out.stderr
+
+
+_RRTSTAR_AFTER = """
+import sys
+import numpy as np
+from planners import OccupancyGrid, Problem, make_planner
+obs = np.zeros((64, 96), dtype=bool)
+obs[12:52, 30:34] = True
+problem = Problem(OccupancyGrid(obs), (5.5, 5.5), (90.5, 58.5), goal_tolerance=2.0)
+for name in sys.argv[1:]:
+    r = make_planner(name, problem, seed=1).solve(max_iterations=1500)
+print(r.iterations, r.num_vertices, repr(r.cost), r.path.tobytes().hex())
+"""
+
+
+@pytest.mark.slow
+def test_rrtstar_reusing_what_rrt_compiled_gives_the_same_results(tmp_path):
+    # RRT compiles the helpers it shares with RRT* (nearest query, insertion, collision check) first; RRT*
+    # reusing them, in the same process or from the cache, must give what it gives alone.
+    def run(cache, *names):
+        env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(cache), SAMPLERGYM_COMPILE_NOTICE="0")
+        out = subprocess.run([sys.executable, "-c", _RRTSTAR_AFTER, *names], env=env, capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr[-2000:]
+        return out.stdout
+
+    alone = run(tmp_path / "alone", "RRTstar")
+    assert run(tmp_path / "shared", "RRT", "RRTstar") == alone
+    assert run(tmp_path / "shared", "RRTstar") == alone

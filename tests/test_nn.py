@@ -73,3 +73,56 @@ def test_nearest_many_matches_one_query_at_a_time():
     with pytest.raises(ValueError, match=r"shape \(m, 3\)"):
         nn.nearest_many(qs[:, :2])
     assert NearestNeighbors(2).nearest_many(np.zeros((2, 2))).tolist() == [-1, -1]
+
+
+def _build_depth_first(P, perm, split, box, lo, hi):
+    """The k-d build as a depth-first walk with a stack, in Python: the reference for the level-by-level one."""
+    from planners.datastructures import nn as index
+
+    perm[lo:hi] = np.arange(lo, hi)
+    dim = P.shape[1]
+    todo = [(lo, hi)]
+    while todo:
+        a, b = todo.pop()
+        if b - a <= index.LEAF:
+            continue
+        mid = (a + b) // 2
+        spread = -1.0
+        for d in range(dim):
+            v = P[perm[a:b], d]
+            box[mid, d], box[mid, dim + d] = v.min(), v.max()
+            if v.max() - v.min() > spread:
+                spread, split[mid] = v.max() - v.min(), d
+        index._select.py_func(P, perm, a, b, mid, split[mid])
+        todo += [(a, mid), (mid + 1, b)]
+
+
+@given(dim=st.integers(1, 4), n=st.integers(1, 600), coarse=st.booleans(), seed=st.integers(0, 2**31))
+def test_the_level_by_level_build_makes_the_depth_first_trees(dim, n, coarse, seed):
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, dim)) * 10
+    if coarse:
+        pts = np.round(pts)
+    nn = NearestNeighbors(dim, capacity=8)
+    nn.add(pts)
+    perm = np.zeros_like(nn._perm)
+    split = np.zeros_like(nn._split)
+    box = np.zeros_like(nn._box)
+    for k in range(1, n + 1):  # the builds insert makes as the points arrive
+        perm[k - 1] = k - 1
+        if k % 64 == 0:
+            size = 64
+            while (k // size) % 2 == 0:
+                size *= 2
+            _build_depth_first(nn._P, perm, split, box, k - size, k)
+    assert np.array_equal(perm[:n], nn._perm[:n])
+    assert np.array_equal(split[:n], nn._split[:n]) and np.array_equal(box[:n], nn._box[:n])
+
+
+def test_a_compiled_only_function_refuses_python_and_runs_its_source_as_py_func():
+    from planners.datastructures import nn as index
+
+    P, perm, split, box = np.zeros((4, 2)), np.zeros(4, np.int64), np.zeros(4, np.int64), np.zeros((4, 4))
+    with pytest.raises(NotImplementedError, match="compiled code only"):
+        index.insert(P, perm, split, box, 0)
+    assert index.insert.py_func(P, perm, split, box, 0) == 1 and perm[0] == 0

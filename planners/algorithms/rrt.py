@@ -89,6 +89,8 @@ class RRT(Planner):
 
     def _reset(self) -> None:
         self._tree = VertexStore(self.problem, 1024, tree=True)
+        # the kernels' sample, embedding and new-state buffers (``planners.kernels.rrt.scratch_rows``)
+        self._scratch = np.empty((3, max(self._tree.X.shape[1], self._tree.E.shape[1])))
         self._add_root(self._tree, self.problem.start, slots.I_N)
         d = self.problem.distance(self.problem.start, self.problem.goal)
         self._fstate[slots.F_BEST_D] = d
@@ -108,7 +110,8 @@ class RRT(Planner):
     def _run(self, points, anchored) -> int:
         return rrt_kernels.rrt_run(points, anchored, self._tree.as_tree(), self._istate, self._fstate, self._last,
                          self.problem.world.kernel, self._space, self._goal, self.step_size,
-                         self.problem.goal_tolerance, self._low, self._high, True, self._stack, self._stack_b)
+                         self.problem.goal_tolerance, self._low, self._high, True, self._stack, self._stack_b,
+                         self._scratch)
 
     def loop_args(self) -> tuple:
         """Arguments of ``rrt_iterate`` (``planners.kernels.rrt``) after the sample and its anchor code."""
@@ -169,7 +172,8 @@ class RRTConnect(RRT):
     def _run(self, points, anchored) -> int:
         return rrt_kernels.connect_run(points, anchored, self._tree.as_tree(), self._gtree.as_tree(), self._istate,
                              self._fstate, self._last, self.problem.world.kernel, self._space, self._goal,
-                             self.step_size, self._low, self._high, self._max_connect, self._stack, self._stack_b)
+                             self.step_size, self._low, self._high, self._max_connect, self._stack, self._stack_b,
+                             self._scratch)
 
     @property
     def num_vertices(self) -> int:

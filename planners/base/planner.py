@@ -211,7 +211,7 @@ class VertexStore:
             embed(self.space[0], self.space[1], q, self.E[0])
         self.parent[0] = -1
         self.cost[0] = 0.0
-        return int(index_insert(self.E, self.perm, self.split, self.box, 0)) if self.kd else 1
+        return int(index_insert.py_func(self.E, self.perm, self.split, self.box, 0)) if self.kd else 1
 
     def as_tree(self) -> Tree:
         """The arrays as the kernels take them (valid until the next ``reserve`` reallocates them)."""

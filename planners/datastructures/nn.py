@@ -18,7 +18,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from planners.kernels.space import METRIC_L1, METRIC_L2, METRIC_LINF
+from planners.kernels.space import METRIC_L1, METRIC_L2, METRIC_LINF, OVERLOAD_JIT, compiled_only
 
 CHUNK = 64
 LEAF = 16
@@ -118,7 +118,7 @@ def from_reduced(metric, r):
     return np.sqrt(r) if metric == METRIC_L2 else r
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@nb.njit(**OVERLOAD_JIT)
 def _select(P, perm, lo, hi, k, sd):
     """Reorder perm[lo:hi] so perm[k] holds the k-th smallest P[., sd], smaller left, larger right."""
     left = lo
@@ -154,51 +154,56 @@ def _select(P, perm, lo, hi, k, sd):
             break
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@compiled_only
 def build(P, perm, split, box, lo, hi):
-    """Build the implicit k-d tree of points [lo, hi); ``box[mid]`` gets each subtree's bounds."""
+    """Build the implicit k-d tree of points [lo, hi); ``box[mid]`` gets each subtree's bounds.
+
+    Level by level: node ``j`` of a level is found by halving [lo, hi) along the bits of ``j``, so no
+    stack is needed (each node reorders only its own range, so the order of the nodes of one level
+    does not matter).
+    """
     for i in range(lo, hi):
         perm[i] = i
     dim = P.shape[1]
-    st = np.empty(2 * STACK, dtype=np.int64)
-    sp = 0
-    st[0] = lo
-    st[1] = hi
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        a = st[2 * sp]
-        b = st[2 * sp + 1]
-        if b - a <= LEAF:
-            continue
-        best_sd = 0
-        best_spread = -1.0
-        for d in range(dim):
-            mn = np.inf
-            mx = -np.inf
-            for i in range(a, b):
-                v = P[perm[i], d]
-                if v < mn:
-                    mn = v
-                if v > mx:
-                    mx = v
-            box[(a + b) // 2, d] = mn
-            box[(a + b) // 2, dim + d] = mx
-            if mx - mn > best_spread:
-                best_spread = mx - mn
-                best_sd = d
-        mid = (a + b) // 2
-        split[mid] = best_sd
-        _select(P, perm, a, b, mid, split[mid])  # an int64 (best_sd starts as a literal 0: a second compilation)
-        st[2 * sp] = a
-        st[2 * sp + 1] = mid
-        sp += 1
-        st[2 * sp] = mid + 1
-        st[2 * sp + 1] = b
-        sp += 1
+    level = 0
+    more = True
+    while more:
+        more = False
+        for j in range(1 << level):
+            a = lo
+            b = hi
+            for k in range(level - 1, -1, -1):
+                mid = (a + b) // 2
+                if (j >> k) & 1:
+                    a = mid + 1
+                else:
+                    b = mid
+            if b - a <= LEAF:
+                continue
+            more = True
+            mid = (a + b) // 2
+            best_sd = 0
+            best_spread = -1.0
+            for d in range(dim):
+                mn = np.inf
+                mx = -np.inf
+                for i in range(a, b):
+                    v = P[perm[i], d]
+                    if v < mn:
+                        mn = v
+                    if v > mx:
+                        mx = v
+                box[mid, d] = mn
+                box[mid, dim + d] = mx
+                if mx - mn > best_spread:
+                    best_spread = mx - mn
+                    best_sd = d
+            split[mid] = best_sd
+            _select(P, perm, a, b, mid, split[mid])  # an int64 (best_sd starts as a literal 0: a second compilation)
+        level += 1
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@compiled_only
 def insert(P, perm, split, box, n):
     """Index point ``n`` (already written to ``P[n]``); returns the new count ``n + 1``."""
     perm[n] = n
@@ -350,78 +355,72 @@ def _traversals(rdist, box_rdist, plane_rdist, name):
     box; ``plane_rdist(diff)``: to a splitting plane ``diff`` away.
     """
 
-    def nearest(P, perm, split, box, n, q, st, sb):
+    def nearest(P, perm, split, box, n, q, st, sb, *ignored):
+        # one stack holds every range still to search: first the tail (its perm is the identity) as a
+        # leaf, then each tree's root, largest tree first; a range's entry in ``sb`` bounds its distance
         best = np.inf
         bi = -1
-        full = (n // CHUNK) * CHUNK
-        for i in range(full, n):
-            d = rdist(q, P, i)
-            if d < best:
-                best = d
-                bi = i
         m = n // CHUNK
-        start = 0
-        bit = 62
-        while bit >= 0:
+        sp = 0
+        start = m * CHUNK
+        bit = 0
+        while bit <= 62 and (m >> bit) != 0:
             if (m >> bit) & 1:
                 size = CHUNK << bit
-                st[0] = start
-                st[1] = start + size
-                sb[0] = box_rdist(q, box, start + size // 2)
-                sp = 1
-                while sp > 0:
-                    sp -= 1
-                    bound = sb[sp]
-                    if bound >= best:
-                        continue
-                    a = st[2 * sp]
-                    b = st[2 * sp + 1]
-                    if b - a <= LEAF:
-                        for i in range(a, b):
-                            idx = perm[i]
-                            d = rdist(q, P, idx)
-                            if d < best:
-                                best = d
-                                bi = idx
-                        continue
-                    mid = (a + b) // 2
-                    idx = perm[mid]
+                start -= size
+                st[2 * sp] = start
+                st[2 * sp + 1] = start + size
+                sb[sp] = box_rdist(q, box, start + size // 2)
+                sp += 1
+            bit += 1
+        st[2 * sp] = m * CHUNK
+        st[2 * sp + 1] = n
+        sb[sp] = 0.0
+        sp += 1
+        while sp > 0:
+            sp -= 1
+            bound = sb[sp]
+            if bound >= best:
+                continue
+            a = st[2 * sp]
+            b = st[2 * sp + 1]
+            if b - a <= LEAF or a >= m * CHUNK:
+                for i in range(a, b):
+                    idx = perm[i]
                     d = rdist(q, P, idx)
                     if d < best:
                         best = d
                         bi = idx
-                    sd = split[mid]
-                    diff = q[sd] - P[idx, sd]
-                    plane = plane_rdist(diff)
-                    # a child's lower bound: its box distance if it has a box, else the split-plane bound
-                    lb = plane if diff > 0.0 else 0.0
-                    lb = box_rdist(q, box, (a + mid) // 2) if mid - a > LEAF else (lb if lb > bound else bound)
-                    rb = plane if diff < 0.0 else 0.0
-                    rb = box_rdist(q, box, (mid + 1 + b) // 2) if b - mid - 1 > LEAF else (rb if rb > bound else bound)
-                    if lb < rb or (lb == rb and diff < 0.0):
-                        if rb < best:
-                            st[2 * sp] = mid + 1
-                            st[2 * sp + 1] = b
-                            sb[sp] = rb
-                            sp += 1
-                        if lb < best:
-                            st[2 * sp] = a
-                            st[2 * sp + 1] = mid
-                            sb[sp] = lb
-                            sp += 1
-                    else:
-                        if lb < best:
-                            st[2 * sp] = a
-                            st[2 * sp + 1] = mid
-                            sb[sp] = lb
-                            sp += 1
-                        if rb < best:
-                            st[2 * sp] = mid + 1
-                            st[2 * sp + 1] = b
-                            sb[sp] = rb
-                            sp += 1
-                start += size
-            bit -= 1
+                continue
+            mid = (a + b) // 2
+            idx = perm[mid]
+            d = rdist(q, P, idx)
+            if d < best:
+                best = d
+                bi = idx
+            sd = split[mid]
+            diff = q[sd] - P[idx, sd]
+            plane = plane_rdist(diff)
+            # a child's lower bound: its box distance if it has a box, else the split-plane bound
+            lb = plane if diff > 0.0 else 0.0
+            lb = box_rdist(q, box, (a + mid) // 2) if mid - a > LEAF else (lb if lb > bound else bound)
+            rb = plane if diff < 0.0 else 0.0
+            rb = box_rdist(q, box, (mid + 1 + b) // 2) if b - mid - 1 > LEAF else (rb if rb > bound else bound)
+            # the farther child goes on the stack first, so the nearer one is searched first
+            if lb < rb or (lb == rb and diff < 0.0):
+                fa, fb, fbound, na, nb, nbound = mid + 1, b, rb, a, mid, lb
+            else:
+                fa, fb, fbound, na, nb, nbound = a, mid, lb, mid + 1, b, rb
+            if fbound < best:
+                st[2 * sp] = fa
+                st[2 * sp + 1] = fb
+                sb[sp] = fbound
+                sp += 1
+            if nbound < best:
+                st[2 * sp] = na
+                st[2 * sp + 1] = nb
+                sb[sp] = nbound
+                sp += 1
         return bi, best
 
     query_k = _query(rdist, box_rdist, plane_rdist, _offer_knn, True)
@@ -568,9 +567,7 @@ class NearestNeighbors:
                 new = np.zeros((cap,) + old.shape[1:], dtype=old.dtype)
                 new[: self._n] = old[: self._n]
                 setattr(self, name, new)
-        for p in pts:
-            self._P[self._n] = p
-            self._n = insert(self._P, self._perm, self._split, self._box, self._n)
+        self._n = _insert_rows(self._P, self._perm, self._split, self._box, self._n, pts)
 
     def _q(self, q: np.ndarray) -> np.ndarray:
         q = np.asarray(q, dtype=np.float64)
@@ -604,6 +601,16 @@ class NearestNeighbors:
         out = np.empty(max(self._n, 1), dtype=np.int64)
         c = nearest_r(self._P, self._perm, self._split, self._box, self._n, self._q(q), self._m, float(radius), out)
         return np.sort(out[:c])
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _insert_rows(P, perm, split, box, n, rows):
+    """Write each row of ``rows`` to ``P[n]``, ``P[n + 1]``, ... and index it; returns the new count."""
+    for i in range(rows.shape[0]):
+        for j in range(rows.shape[1]):
+            P[n, j] = rows[i, j]
+        n = insert(P, perm, split, box, n)
+    return n
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)

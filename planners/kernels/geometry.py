@@ -29,7 +29,7 @@ import numpy as np
 from numba.extending import overload
 
 from planners.kernels.rigid import rigid_motion_free
-from planners.kernels.space import OVERLOAD_JIT, static_code
+from planners.kernels.space import OVERLOAD_JIT, compiled_only, static_code
 from planners.kernels.state import WorldKernel
 
 WORLD_GRID = 0
@@ -41,7 +41,7 @@ WORLD_RIGID = 2
 GRID_EPS = 1e-9
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@compiled_only
 def grid_segment_free(grid, inv_res, ax, ay, bx, by):
     """True if the segment a-b meets no blocked cell and no cell outside the grid.
 
@@ -54,17 +54,19 @@ def grid_segment_free(grid, inv_res, ax, ay, bx, by):
     ay *= inv_res
     bx *= inv_res
     by *= inv_res
-    xmin = min(ax, bx)
-    xmax = max(ax, bx)
+    # min and max written out (as Python's builtins pick, the first of equals) and no int() around
+    # ceil/floor (they return ints): each builtin would be one more compiled function
+    xmin = bx if bx < ax else ax
+    xmax = bx if bx > ax else ax
     dx = bx - ax
     dy = by - ay
-    c_lo = int(math.ceil(xmin - GRID_EPS)) - 1
-    c_hi = int(math.floor(xmax + GRID_EPS))
+    c_lo = math.ceil(xmin - GRID_EPS) - 1
+    c_hi = math.floor(xmax + GRID_EPS)
     if c_lo < 0 or c_hi >= W:
         return False
-    ymin_all = min(ay, by)
-    ymax_all = max(ay, by)
-    if int(math.ceil(ymin_all - GRID_EPS)) - 1 < 0 or int(math.floor(ymax_all + GRID_EPS)) >= H:
+    ymin_all = by if by < ay else ay
+    ymax_all = by if by > ay else ay
+    if math.ceil(ymin_all - GRID_EPS) - 1 < 0 or math.floor(ymax_all + GRID_EPS) >= H:
         return False
     flat = abs(dx) < 1e-15
     for c in range(c_lo, c_hi + 1):
@@ -73,16 +75,22 @@ def grid_segment_free(grid, inv_res, ax, ay, bx, by):
             yhi = ymax_all
         else:
             # parameter range of the segment inside the slab [c, c + 1]
-            x0 = min(max(float(c), xmin), xmax)
-            x1 = min(max(float(c + 1), xmin), xmax)
-            t0 = min(max((x0 - ax) / dx, 0.0), 1.0)
-            t1 = min(max((x1 - ax) / dx, 0.0), 1.0)
+            x0 = float(c)
+            x0 = xmin if xmin > x0 else x0
+            x0 = xmax if xmax < x0 else x0
+            x1 = float(c + 1)
+            x1 = xmin if xmin > x1 else x1
+            x1 = xmax if xmax < x1 else x1
+            t0 = (x0 - ax) / dx
+            t0 = 0.0 if 0.0 > t0 else (1.0 if 1.0 < t0 else t0)
+            t1 = (x1 - ax) / dx
+            t1 = 0.0 if 0.0 > t1 else (1.0 if 1.0 < t1 else t1)
             y0 = ay + t0 * dy
             y1 = ay + t1 * dy
-            ylo = min(y0, y1)
-            yhi = max(y0, y1)
-        r_lo = int(math.ceil(ylo - GRID_EPS)) - 1
-        r_hi = int(math.floor(yhi + GRID_EPS))
+            ylo = y1 if y1 < y0 else y0
+            yhi = y1 if y1 > y0 else y0
+        r_lo = math.ceil(ylo - GRID_EPS) - 1
+        r_hi = math.floor(yhi + GRID_EPS)
         for r in range(r_lo, r_hi + 1):
             if grid[r, c] != 0:
                 return False

@@ -9,7 +9,6 @@ calls again, so results never depend on capacity or batch size.
 from __future__ import annotations
 
 import numba as nb
-import numpy as np
 
 from planners.kernels import state as slots
 from planners.kernels.geometry import motion_free
@@ -72,34 +71,40 @@ def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal
         fstate[slots.F_BEST_COST] = c
 
 
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def scratch_rows(scratch, tree):
+    """The sample, embedding and new-state buffers of a kernel, rows of the caller's ``scratch`` (three rows
+    at least as wide as the tree's states and embedding; no array is allocated in the kernel)."""
+    return scratch[0, :tree.X.shape[1]], scratch[1, :tree.E.shape[1]], scratch[2, :tree.X.shape[1]]
+
+
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def rrt_run(samples, anchored, tree, istate, fstate, last, world, space, goal, step, tol, low, high,
-            stop_when_solved, st, sb):
+            stop_when_solved, st, sb, scratch):
     """RRT (LaValle 1998) over a batch of samples."""
     X = tree.X
-    q = np.empty(X.shape[1])
-    qe_buf = np.empty(tree.E.shape[1])
-    new = np.empty(X.shape[1])
+    q, qe_buf, new = scratch_rows(scratch, tree)
+    used = samples.shape[0]
     for s in range(samples.shape[0]):
-        if stop_when_solved and istate[slots.I_SOLVED]:
-            return s
-        if istate[slots.I_N] >= X.shape[0]:
-            return s
+        if (stop_when_solved and istate[slots.I_SOLVED]) or istate[slots.I_N] >= X.shape[0]:
+            used = s
+            break
         rrt_iterate(samples[s], anchored[s], tree, istate, fstate, last, world, space, goal, step, tol, low, high,
                     st, sb, q, qe_buf, new)
-    return samples.shape[0]
+    return used
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, goal, step, low, high,
-                max_connect, st, sb):
-    """RRT-Connect (Kuffner & LaValle 2000): extend one tree, greedily connect the other, swap."""
-    Xa = ta[0]
-    Xb = tb[0]
-    q = np.empty(Xa.shape[1])
-    qe_buf = np.empty(ta[1].shape[1])
-    new = np.empty(Xa.shape[1])
-    nxt = np.empty(Xa.shape[1])
+                max_connect, st, sb, scratch):
+    """RRT-Connect (Kuffner & LaValle 2000): extend one tree, greedily connect the other, swap.
+
+    The extension and the connecting steps are one loop, so the kernel holds one nearest-neighbour
+    query, one steer, one collision check and one insertion (each compiled once).
+    """
+    Xa = ta.X
+    Xb = tb.X
+    q, qe_buf, new = scratch_rows(scratch, ta)
     for s in range(samples.shape[0]):
         if istate[slots.I_SOLVED]:
             return s
@@ -115,54 +120,51 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
             t, o, it, io = ta, tb, slots.I_N, slots.I_N_B
         else:
             t, o, it, io = tb, ta, slots.I_N_B, slots.I_N
-        Xt, ct = t[0], t[3]
-        Xo, co = o[0], o[3]
-        # extend the active tree one step towards the sample
-        n = istate[it]
-        near = extend(t, n, space, q, qe_buf, step, new, world, istate, st, sb)
-        if near < 0:
-            continue
-        n = add_vertex(t, n, space, new, near, ct[near] + space_distance(space, Xt[near], new))
-        istate[it] = n
-        vt = n - 1
-        if from_start:
-            istate[slots.I_ADDED] = vt
-            dg = space_distance(space, new, goal)
-            if dg < fstate[slots.F_BEST_D]:
-                fstate[slots.F_BEST_D] = dg
-                istate[slots.I_BEST_V] = vt
-        # greedily connect the other tree towards the new vertex
-        target = Xt[vt]
+        # the first step extends the active tree t towards the sample; once it added vertex vt, the next
+        # steps greedily connect the other tree o towards vt
+        cur, ic, target = t, it, q
+        connecting = False
+        vt = -1
         while True:
-            m = istate[io]
-            near_o = nearest_vertex(o, m, space, target, embed_query(space, target, qe_buf), st, sb)
-            d = steer(space, Xo[near_o], target, step, nxt)
+            Xc = cur[0]
+            n = istate[ic]
+            near = nearest_vertex(cur, n, space, target, embed_query(space, target, qe_buf), st, sb)
+            d = steer(space, Xc[near], target, step, new)
             if d <= 1e-12:
-                vo = near_o
-                reached = True
+                if not connecting:
+                    break
+                v = near
             else:
                 istate[slots.I_CHECKS] += 1
-                if not motion_free(world, Xo[near_o], nxt):
+                if not motion_free(world, Xc[near], new):
                     break
-                m = add_vertex(o, m, space, nxt, near_o, co[near_o] + space_distance(space, Xo[near_o],
-                                                                               nxt))
-                istate[io] = m
-                vo = m - 1
-                reached = d <= step
-                if not from_start:
-                    dg = space_distance(space, nxt, goal)
+                n = add_vertex(cur, n, space, new, near, cur[3][near] + space_distance(space, Xc[near], new))
+                istate[ic] = n
+                v = n - 1
+                if connecting != from_start:  # cur is the start tree
+                    if not connecting:
+                        istate[slots.I_ADDED] = v
+                    dg = space_distance(space, new, goal)
                     if dg < fstate[slots.F_BEST_D]:
                         fstate[slots.F_BEST_D] = dg
-                        istate[slots.I_BEST_V] = vo
-            if reached:
-                istate[slots.I_SOLVED] = 1
-                istate[slots.I_FIRST] = istate[slots.I_ITER]
-                if from_start:
-                    istate[slots.I_GOAL_V] = vt
-                    istate[slots.I_JOIN_B] = vo
-                else:
-                    istate[slots.I_GOAL_V] = vo
-                    istate[slots.I_JOIN_B] = vt
-                fstate[slots.F_BEST_COST] = ct[vt] + co[vo]
-                break
+                        istate[slots.I_BEST_V] = v
+                if not connecting:
+                    vt = v
+                    cur, ic, target = o, io, Xc[vt]
+                    connecting = True
+                    continue
+                if d > step:
+                    continue
+            # the other tree reached vt: the trees are joined
+            istate[slots.I_SOLVED] = 1
+            istate[slots.I_FIRST] = istate[slots.I_ITER]
+            if from_start:
+                istate[slots.I_GOAL_V] = vt
+                istate[slots.I_JOIN_B] = v
+            else:
+                istate[slots.I_GOAL_V] = v
+                istate[slots.I_JOIN_B] = vt
+            fstate[slots.F_BEST_COST] = t[3][vt] + o[3][v]
+            break
     return samples.shape[0]
+

@@ -15,6 +15,7 @@ Angles are interpolated along the shorter arc, so a motion from 3.1 to -3.1 rad 
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -45,6 +46,28 @@ TWO_PI = 2.0 * math.pi
 #: calls them, so they are compiled without numba's Python entry wrapper and its C-callable one (less to
 #: compile). A function compiled without the Python wrapper must never be called from Python.
 OVERLOAD_JIT = {"cache": True, "no_cfunc_wrapper": True, "no_cpython_wrapper": True}
+
+
+def compiled_only(f):
+    """``f`` for compiled callers only: compiled without numba's Python entry wrapper (``OVERLOAD_JIT``).
+
+    Returns a stand-in of ``f``'s name and signature. Compiled code calling it compiles ``f`` itself (the
+    implementation of an ``overload`` of the stand-in), so nothing lies between the caller and ``f``;
+    Python calling it gets an error instead of the crash a wrapper-less function gives. The stand-in's
+    ``py_func`` is ``f``, to run its source in the interpreter.
+    """
+
+    @functools.wraps(f)
+    def stand_in(*args):
+        raise NotImplementedError(f"{f.__qualname__} runs in compiled code only (its py_func runs in Python)")
+
+    @functools.wraps(f)
+    def typer(*args):
+        return f
+
+    overload(stand_in, jit_options=OVERLOAD_JIT)(typer)
+    stand_in.py_func = f
+    return stand_in
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
@@ -165,13 +188,13 @@ def distance(kind, metric, rot_weight, a, b):
     return math.sqrt(t) + rot_weight * rotation_angle_between(a, b)
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _interpolate_rn(a, b, t, out):
     for i in range(a.shape[0]):
         out[i] = a[i] + t * (b[i] - a[i])
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
+@nb.njit(**OVERLOAD_JIT)
 def _interpolate_rigid(a, b, t, out):
     for i in range(3):
         out[i] = a[i] + t * (b[i] - a[i])

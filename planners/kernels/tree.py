@@ -21,6 +21,7 @@ from planners.kernels.space import (
     METRIC_SE3,
     OVERLOAD_JIT,
     SPACE_RN,
+    compiled_only,
     kd_metric,
     space_distance,
     space_embedding,
@@ -30,48 +31,47 @@ from planners.kernels.space import (
 )
 
 
-def space_nearest(tree, n, space, q, qe, st, sb):
-    """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n`` (compiled code only)."""
+def space_nearest(P, perm, split, box, n, q, st, sb, space, X, x):
+    """(index, reduced distance) of the nearest of the first ``n`` vertices to state ``x`` (compiled code only).
+
+    ``P, perm, split, box``: the tree's k-d forest over its embedding ``E``; ``q``: ``x``'s embedding;
+    ``st``, ``sb``: scratch stacks; ``X``: the tree's states, for the exact scan of a metric without a
+    Euclidean embedding (SE3; its "reduced distance" is the distance itself). For a typed space the
+    implementation is the k-d traversal of its metric itself (``planners.datastructures.nn``, which
+    ignores the arguments after ``sb``), so no function between the kernel and the traversal is compiled.
+    """
     raise NotImplementedError("space_nearest runs in compiled code only")
 
 
-def _any_space_nearest(tree, n, space, q, qe, st, sb):
-    X, E, parent, cost, perm, split, box = tree
-    kind, metric, rot_weight = space
-    if uses_kd(kind, metric):
-        i, _ = nn_index.nearest_into(E, perm, split, box, n, qe, kd_metric(metric), st, sb)
-        return i
-    return _scan_nearest(tree, n, space, q)
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
-def _scan_nearest(tree, n, space, q):
-    X = tree.X
+def _scan_nearest(P, perm, split, box, n, q, st, sb, space, X, x):
     best = np.inf
     bi = -1
     for i in range(n):
-        d = space_distance(space, X[i], q)
+        d = space_distance(space, X[i], x)
         if d < best:
             best = d
             bi = i
-    return bi
+    return bi, best
+
+
+_scan_nearest_any = nb.njit(cache=True, no_cfunc_wrapper=True, no_cpython_wrapper=True)(_scan_nearest)
+
+
+def _any_space_nearest(P, perm, split, box, n, q, st, sb, space, X, x):
+    kind, metric, rot_weight = space
+    if uses_kd(kind, metric):
+        return nn_index.nearest_into(P, perm, split, box, n, q, kd_metric(metric), st, sb)
+    return _scan_nearest_any(P, perm, split, box, n, q, st, sb, space, X, x)
 
 
 @overload(space_nearest, jit_options=OVERLOAD_JIT)
-def _space_nearest(tree, n, space, q, qe, st, sb):
-    kind, metric = static_code(space, "KIND"), static_code(space, "METRIC")
+def _space_nearest(P, perm, split, box, n, q, st, sb, space, X, x):
+    metric = static_code(space, "METRIC")
     if metric is None:
         return _any_space_nearest  # kind and metric known at run time only: every branch
     if metric == METRIC_SE3:
-        return lambda tree, n, space, q, qe, st, sb: _scan_nearest(tree, n, space, q)
-    kd = nn_index.BY_METRIC[_kd_metric(metric)][0]
-
-    def impl(tree, n, space, q, qe, st, sb):
-        X, E, parent, cost, perm, split, box = tree
-        i, _ = kd(E, perm, split, box, n, qe, st, sb)
-        return i
-
-    return impl
+        return _scan_nearest
+    return nn_index.BY_METRIC[_kd_metric(metric)][0].py_func
 
 
 def _kd_metric(metric):
@@ -163,7 +163,9 @@ def _space_knn(tree, n, space, q, qe, k, out, out_d):
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def nearest_vertex(tree, n, space, q, qe, st, sb):
     """Index of the vertex nearest ``q`` (``qe`` its embedding) among the first ``n``."""
-    return space_nearest(tree, n, space, q, qe, st, sb)
+    X, E, parent, cost, perm, split, box = tree
+    i, _ = space_nearest(E, perm, split, box, n, qe, st, sb, space, X, q)
+    return i
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
@@ -202,12 +204,18 @@ def resolve_sample(space, raw, anchored, anchor, goal, low, high, out):
     first two coordinates into the frame whose x axis points from the anchor to the goal (y to its
     left), so an offset like "two steps ahead, slightly left" follows the tree wherever it goes.
     Anchored results are clipped to the bounds (rigid-body angles are wrapped first, not clipped).
+    Only anchored samplers use codes 1 and 2: they are a call, not inlined into every kernel.
     """
-    kind, metric, rot_weight = space
     if anchored == 0:
         for i in range(raw.shape[0]):
             out[i] = raw[i]
-        return
+    else:
+        _resolve_anchored(space, raw, anchored, anchor, goal, low, high, out)
+
+
+@compiled_only
+def _resolve_anchored(space, raw, anchored, anchor, goal, low, high, out):
+    kind, metric, rot_weight = space
     for i in range(raw.shape[0]):
         out[i] = anchor[i] + raw[i]
     if anchored == 2:
