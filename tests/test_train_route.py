@@ -168,25 +168,30 @@ def test_output_places_and_the_lock_are_checked_before_the_work(tmp_path, capsys
     assert not (tmp_path / "o").exists()
 
 
+def _ctrl_c_in_the_second_epoch(train):
+    """``train`` (``train_route_net``) interrupted as its second epoch ends, before that epoch's checkpoint."""
+
+    def interrupted(problems, **kwargs):
+        log = kwargs["log"]
+
+        def stop(line):
+            log(line)
+            if line.startswith("epoch 1"):
+                raise KeyboardInterrupt
+
+        return train(problems, **{**kwargs, "log": stop})
+
+    return interrupted
+
+
 def test_ctrl_c_says_what_was_kept_and_exits_130(tmp_path, capsys, monkeypatch):
     from importlib import util
 
     spec = util.spec_from_file_location("train_route_script", ROOT / "scripts" / "train_route.py")
     script = util.module_from_spec(spec)
     spec.loader.exec_module(script)
-    real = script.train_route_net
 
-    def interrupted_after_one_epoch(problems, **kwargs):
-        log = kwargs["log"]
-
-        def stop(line):  # Ctrl-C as the second epoch ends, before its checkpoint: the first epoch's is kept
-            log(line)
-            if line.startswith("epoch 1"):
-                raise KeyboardInterrupt
-
-        return real(problems, **{**kwargs, "log": stop})
-
-    monkeypatch.setattr(script, "train_route_net", interrupted_after_one_epoch)
+    monkeypatch.setattr(script, "train_route_net", _ctrl_c_in_the_second_epoch(script.train_route_net))
     out = tmp_path / "o"
     flags = [*TINY, "--out", str(out)]
     assert script.main(flags) == 130
@@ -237,19 +242,7 @@ def test_map_set_training_resumes_to_the_weights_of_an_uninterrupted_run(tmp_pat
     script = _script()
     flags = [*SMALL, "--map-set", str(folder)]
     assert script.main([*flags, "--out", str(tmp_path / "whole")]) == 0
-    real = script.train_route_net
-
-    def interrupted_after_one_epoch(problems, **kwargs):
-        log = kwargs["log"]
-
-        def stop(line):  # Ctrl-C as the second epoch ends, before its checkpoint: the first epoch's is kept
-            log(line)
-            if line.startswith("epoch 1"):
-                raise KeyboardInterrupt
-
-        return real(problems, **{**kwargs, "log": stop})
-
-    monkeypatch.setattr(script, "train_route_net", interrupted_after_one_epoch)
+    monkeypatch.setattr(script, "train_route_net", _ctrl_c_in_the_second_epoch(script.train_route_net))
     assert script.main([*flags, "--out", str(tmp_path / "cut")]) == 130
     monkeypatch.undo()
     assert script.main([*flags, "--out", str(tmp_path / "cut"), "--resume"]) == 0
