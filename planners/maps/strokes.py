@@ -36,8 +36,7 @@ def _segment(walls: np.ndarray, a: np.ndarray, b: np.ndarray, radius: float) -> 
     r, c = np.ogrid[lo[0]:hi[0], lo[1]:hi[1]]
     py, px = r + 0.5 - a[0], c + 0.5 - a[1]
     d = b - a
-    n2 = float(d @ d)
-    t = np.clip((py * d[0] + px * d[1]) / n2, 0.0, 1.0) if n2 > 0 else np.zeros_like(py * px, dtype=float)
+    t = np.clip((py * d[0] + px * d[1]) / max(float(d @ d), 1e-12), 0.0, 1.0)  # a point's segment: t = 0
     walls[lo[0]:hi[0], lo[1]:hi[1]] |= (py - t * d[0]) ** 2 + (px - t * d[1]) ** 2 <= radius * radius
 
 
