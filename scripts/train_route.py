@@ -91,7 +91,10 @@ def _parser() -> argparse.ArgumentParser:
                     help="axial attention layers of the U-Net (a row then a column each; the shipped U-Net had 2)")
     ap.add_argument("--attention-level", type=int, default=0,
                     help="times the block grid is halved where the attention runs (0: full resolution)")
-    ap.add_argument("--step", type=int, default=4, help="the planner's step in cells: the encoder's block")
+    ap.add_argument("--step", type=int, default=4, help="the planner's step in cells")
+    ap.add_argument("--blocks-per-step", type=int, default=1,
+                    help="the value-iteration encoder's blocks across one step (default 1: blocks of one step; "
+                         "2: of half a step); --step must divide by it")
     ap.add_argument("--augment", action=argparse.BooleanOptionalAction, default=True,
                     help="turn each map by one of the square's 8 symmetries (default on)")
     ap.add_argument("--seed", type=int, default=0)
@@ -120,7 +123,7 @@ def _check(args) -> None:
     Opens the map sets (each checks its maps and queries) into ``args.sets``, sets ``args.step`` from
     ``--step-size`` and resolves ``--device`` into ``args.torch_device``.
     """
-    check_int_flags(args, ("maps", "epochs", "batch", "channels", "depth", "step", "workers"))
+    check_int_flags(args, ("maps", "epochs", "batch", "channels", "depth", "step", "blocks_per_step", "workers"))
     if not (math.isfinite(args.lr) and args.lr > 0):
         raise InputError(f"--lr {args.lr:g}: expected a positive number")
     check_int_flags(args, ("attention", "attention_level", "seed"), low=0)
@@ -131,10 +134,16 @@ def _check(args) -> None:
             shown = " ".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
             raise InputError(f"{flag} {shown}: it applies to --map-set, and none is given")
     args.sets = _open_sets(args) if args.map_set else None
+    if args.step % args.blocks_per_step:
+        raise InputError(f"--blocks-per-step {args.blocks_per_step}: a step of {args.step} cells does not divide into "
+                         f"{args.blocks_per_step} whole blocks")
+    args.block = args.step // args.blocks_per_step
     try:  # the encoder's own rules
-        make_route_net(args.kind, args.step, args.channels, args.depth, args.attention, args.attention_level)
+        make_route_net(args.kind, args.block, args.channels, args.depth, args.attention, args.attention_level,
+                       step=args.step)
     except ValueError as exc:
-        raise InputError(f"--kind / --channels / --depth / --attention / --attention-level: {exc}") from None
+        raise InputError(f"--kind / --channels / --depth / --attention / --attention-level / --blocks-per-step: "
+                         f"{exc}") from None
     for family in args.families:
         if family not in TRAINING_FAMILIES:
             raise InputError(f"--families {family}: expected some of {', '.join(TRAINING_FAMILIES)}")
@@ -142,7 +151,7 @@ def _check(args) -> None:
         check_size(size, "--size")
         if args.sets is None:
             try:
-                check_route_map(f"generated {size} x {size}", (size, size), args.step)
+                check_route_map(f"generated {size} x {size}", (size, size), args.block)
             except InputError as exc:
                 raise InputError(f"--size {size}: {exc}") from None
     if args.sets is None and args.maps > TRAIN_SEEDS[1] - TRAIN_SEEDS[0]:
@@ -195,17 +204,18 @@ def _open_sets(args) -> MixedMapSet:
             c = args.step_size / resolution
             if abs(c - round(c)) > 1e-6 * max(1.0, c) or round(c) < 1:
                 raise InputError(f"--step-size {args.step_size:g}: map {name!r} of {ms.name} has cells of "
-                                 f"{resolution:g} world units, so a step is {c:g} cells; the encoder's block must be "
+                                 f"{resolution:g} world units, so a step is {c:g} cells; a step must be "
                                  "a whole number of cells")
             cells[name] = round(c)
         if len(set(cells.values())) > 1:
             raise InputError(f"--step-size {args.step_size:g} comes to different cell counts on the maps "
-                             f"({', '.join(f'{n}: {c}' for n, c in sorted(cells.items()))}); the encoder's block is "
+                             f"({', '.join(f'{n}: {c}' for n, c in sorted(cells.items()))}); the encoder's step is "
                              "one number of cells: give maps of one resolution, or --step in cells")
         args.step = next(iter(cells.values()))
+    block = args.step // args.blocks_per_step if args.step % args.blocks_per_step == 0 else args.step
     for ms, name, shape, _ in grids:
         try:
-            check_route_map(name, shape, args.step)
+            check_route_map(name, shape, block)
         except InputError as exc:
             raise InputError(f"--map-set {ms.name}: {exc}") from None
     return MixedMapSet(sets, weights)
@@ -262,13 +272,13 @@ def _train(args) -> int:
         lines.append(line)
         print(line, flush=True)
 
-    net = train_route_net(problems, block=args.step, channels=args.channels, depth=args.depth,
+    net = train_route_net(problems, block=args.block, step=args.step, channels=args.channels, depth=args.depth,
                           attention=args.attention, attention_level=args.attention_level, epochs=args.epochs,
                           batch=args.batch, lr=args.lr,
                           augment=args.augment, seed=args.seed, log=log, checkpoint=ckpt, resume=args.resume,
                           validation=validation, recipe_extra=extra, workers=args.workers, device=args.torch_device,
                           kind=args.kind, schedule=args.lr_schedule)
-    skip = {"resume", "sets", "torch_device"}
+    skip = {"resume", "sets", "torch_device", "block"}
     recipe = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if k not in skip}
     info = {"recipe": recipe, "parameters": sum(p.numel() for p in net.parameters()),
             "last_epoch": next(line for line in reversed(lines) if line.startswith("epoch")),

@@ -73,9 +73,35 @@ def test_the_encoder_predicts_a_cost_per_cell_on_maps_of_any_size_and_round_trip
     assert np.array_equal(back.predict(obs, (3, 4), 2), field)
 
 
+def test_half_step_blocks_predict_in_steps_round_trip_and_fit_only_their_step(tmp_path):
+    torch.manual_seed(0)
+    net = make_route_net("vin", 2, 8, 2, step=4).eval()
+    assert (net.block, net.step) == (2, 4)
+    obs = np.zeros((40, 40), bool)
+    obs[5:35, 20] = True
+    x = torch.from_numpy(route_input(obs, (3, 4), 2))[None]
+    with torch.inference_mode():
+        blocks = net(x)[0].numpy()
+    assert np.allclose(net.predict(obs, (3, 4)), blocks / 2, atol=1e-6)  # blocks of 2 cells, steps of 4
+    save_route_net(net, tmp_path / "half.pt")
+    back = load_route_net(tmp_path / "half.pt")
+    assert (back.block, back.step) == (2, 4)
+    assert np.array_equal(back.predict(obs, (3, 4)), net.predict(obs, (3, 4)))
+    p = generate("rooms", TRAIN_SEEDS[0] + 1, 32)
+    assert RRT(p, step_size=4.0, sampler=RouteSampler(net, **SHIPPED_SETTINGS), seed=0).solve(2000).iterations > 0
+    with pytest.raises(InputError, match="trained for a step of 4 cells.*step_size=4"):
+        RRT(p, step_size=2.0, sampler=RouteSampler(net, step_size=2.0), seed=0).solve(10)
+    with pytest.raises(ValueError, match="whole blocks"):
+        make_route_net("vin", 3, 8, 2, step=4)
+    with pytest.raises(ValueError, match="one step"):
+        make_route_net("unet", 2, 8, 2, step=4)
+
+
 @pytest.mark.parametrize("config, needle", [
     ({"kind": "transformer", "block": 4, "channels": 8, "depth": 2}, "kind"),
     ({"kind": "vin", "block": 4, "channels": 8, "depth": 2, "attention": 2}, "attention"),
+    ({"kind": "vin", "block": 3, "channels": 8, "depth": 2, "step": 4}, "whole blocks"),
+    ({"kind": "vin", "block": 2, "channels": 8, "depth": 2, "step": 0}, "step"),
 ])
 def test_a_bad_kind_is_refused_by_name(tmp_path, config, needle):
     torch.save({"config": config, "state": {}}, tmp_path / "bad.pt")
@@ -117,11 +143,13 @@ def test_the_drops_as_move_costs_give_the_search_cost_to_go_and_no_loss():
     assert cost_losses(costs, cells, 4)[1].item() > 0
 
 
-def test_vin_training_is_seeded_and_the_loss_falls():
+@pytest.mark.parametrize("block", [4, 2])
+def test_vin_training_is_seeded_and_the_loss_falls(block):
     problems = [generate(f, TRAIN_SEEDS[0] + i, 32) for f in ("maze", "rooms") for i in range(3)]
     logs: list[list[str]] = [[], []]
-    nets = [train_route_net(problems, kind="vin", channels=8, depth=2, epochs=3, batch=2, seed=1,
-                            log=logs[i].append) for i in range(2)]
+    nets = [train_route_net(problems, kind="vin", channels=8, depth=2, epochs=3, batch=2, seed=1, block=block,
+                            step=4, log=logs[i].append) for i in range(2)]
+    assert (nets[0].block, nets[0].step) == (block, 4)
     a, b = (n.state_dict() for n in nets)
     assert all(torch.equal(a[k], b[k]) for k in a)
     assert [line.split(" (")[0] for line in logs[0]] == [line.split(" (")[0] for line in logs[1]]

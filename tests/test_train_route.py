@@ -97,6 +97,10 @@ def test_a_kill_then_resume_equals_an_uninterrupted_run(tmp_path, reference, fra
     got = _weights(out)
     assert all(torch.equal(got[k], weights[k]) for k in weights), kill_at
     assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "route.json", "route.pt"]
+    assert script.main([*TINY, "--epochs", "1", "--blocks-per-step", "2", "--out", str(out)]) == 0
+    net = load_route_net(out / "route.pt")
+    assert (net.block, net.step) == (2, 4)
+    assert json.loads((out / "route.json").read_text())["recipe"]["blocks_per_step"] == 2
     assert not list(tmp_path.glob(".route.*.set")) or killed.returncode == -9
 
 
@@ -138,6 +142,9 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
                                                                 "--attention-level"),
     (["--seed", "-1"], "--seed"), (["--maps", "10000000"], "--maps"), (["--resume"], "--resume"),
     (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 512 x 512 = 262144 blocks"),
+    (["--blocks-per-step", "3"], "--blocks-per-step 3: a step of 4 cells does not divide into 3 whole blocks"),
+    (["--blocks-per-step", "2", "--kind", "unet"], "--blocks-per-step: step = 4, block = 2: the U-Net's blocks"),
+    (["--blocks-per-step", "0"], "--blocks-per-step"),
 ])
 def test_bad_flags_exit_2_with_one_line_naming_them(tmp_path, capsys, flags, named):
     from importlib import util

@@ -83,11 +83,13 @@ class FieldEncoder:
     """What a route encoder offers the route sampler: the cost-to-go of every cell of a map, in steps.
 
     Mixed into ``torch.nn.Module`` encoders (``RouteNet``, ``learning.models.route_vin.RouteVIN``) that have
-    ``block`` (cells per block side: the planner's step), ``trained_side`` (0 or the largest map side
-    trained on) and a ``forward`` from ``route_input``'s channels to every cell's cost-to-go.
+    ``block`` (cells per block side), ``step`` (the planner's step in cells, a whole number of blocks),
+    ``trained_side`` (0 or the largest map side trained on) and a ``forward`` from ``route_input``'s channels
+    to every cell's cost-to-go in blocks.
     """
 
     block: int
+    step: int
     trained_side: int
     #: How many of the square's symmetries the route sampler averages this encoder's field over by default.
     symmetries: int = 8
@@ -105,7 +107,7 @@ class FieldEncoder:
 
     def predict(self, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int = 1, *,
                 threads: int | None = None) -> np.ndarray:
-        """Predicted cost-to-go of every cell, in blocks (steps), for one map: (H, W) float64.
+        """Predicted cost-to-go of every cell, in steps (of ``step`` cells), for one map: (H, W) float64.
 
         With ``symmetries`` > 1 the prediction is the mean over the map turned by the first that many of
         the square's symmetries (``symmetry``), each turned back: at 8 it is exactly equivariant, as the
@@ -150,7 +152,7 @@ class FieldEncoder:
                     for (i, k, _), field in zip(part, out, strict=True):
                         totals[i] += unturn(field, k)
         for total in totals:
-            total /= symmetries
+            total *= self.block / (self.step * symmetries)
             side = max(total.shape)
             if self.trained_side and side > self.trained_side:
                 total *= side / self.trained_side

@@ -132,6 +132,7 @@ class RouteNet(UNet, FieldEncoder):
         # a cost per cell of the block
         super().__init__(block * block + GOAL_CHANNELS, block * block, channels, depth, attention, attention_level)
         self.block, self.channels, self.depth, self.attention_layers = block, channels, depth, attention
+        self.step = block  # its blocks are one planner step
         self.trained_side = trained_side
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
@@ -143,6 +144,8 @@ def save_route_net(net: RouteNet | RouteVIN, path: str | os.PathLike) -> None:
     tmp = path.with_name(path.name + ".tmp")
     if isinstance(net, RouteVIN):
         config = {"kind": "vin", "block": net.block, "channels": net.channels, "depth": net.depth}
+        if net.step != net.block:  # files of one-step blocks stay as they were
+            config["step"] = net.step
     else:
         config = {"block": net.block, "channels": net.channels, "depth": net.depth}
         if net.attention_layers:  # files of encoders without attention stay as they were
@@ -160,16 +163,19 @@ KINDS = ("unet", "vin")
 
 
 def make_route_net(kind: str = "unet", block: int = 4, channels: int = 24, depth: int = 4, attention: int = 0,
-                   attention_level: int = 0, trained_side: int = 0) -> RouteNet | RouteVIN:
+                   attention_level: int = 0, trained_side: int = 0, step: int | None = None) -> RouteNet | RouteVIN:
     """A new encoder of ``kind``: "unet" (``RouteNet``) or "vin" (``RouteVIN``, whose ``depth`` is its local layers,
-    and which takes no attention); a ``ValueError`` naming what does not fit."""
+    which takes no attention, and whose ``step`` in cells may be several blocks); a ``ValueError`` naming what
+    does not fit."""
     if kind == "vin":
         if attention or attention_level:
             raise ValueError(f"attention = {attention}, attention_level = {attention_level}: the value-iteration "
                              f"encoder has no attention layers (expected 0)")
-        return RouteVIN(block, channels, depth)
+        return RouteVIN(block, channels, depth, step)
     if kind != "unet":
         raise ValueError(f"kind = {kind!r}, expected one of {KINDS}")
+    if step is not None and step != block:
+        raise ValueError(f"step = {step}, block = {block}: the U-Net's blocks are one step (expected step = block)")
     return RouteNet(block, channels, depth, attention, attention_level, trained_side)
 
 
@@ -188,20 +194,22 @@ def load_route_net(path: str | os.PathLike) -> RouteNet | RouteVIN:
             from None
     if not (isinstance(blob, dict) and isinstance(blob.get("config"), dict) and isinstance(blob.get("state"), dict)):
         raise InputError(f"{path}: expected {{'config': {{...}}, 'state': {{...}}}} as save_route_net writes")
-    known = ("kind", "block", "channels", "depth", "attention", "attention_level", "trained_side")
+    known = ("kind", "block", "channels", "depth", "attention", "attention_level", "trained_side", "step")
     unknown = [k for k in blob["config"] if k not in known]
     if unknown:
         raise InputError(f"{path}: config has unknown keys {short_repr(unknown)}, expected some of {known}")
     config = {"kind": "unet", "attention": 0, "attention_level": 0, "trained_side": 0, **blob["config"]}
+    config.setdefault("step", config.get("block"))
     if config["kind"] not in KINDS:
         raise InputError(f"{path}: config kind = {short_repr(config['kind'])}, expected one of {KINDS}")
     for key, lo, hi in (("block", 1, 64), ("channels", 1, 64), ("depth", 1, 64), ("attention", 0, 64),
-                        ("attention_level", 0, 64), ("trained_side", 0, 1 << 20)):  # a side in cells, 0: unknown
+                        ("attention_level", 0, 64), ("trained_side", 0, 1 << 20),  # a side in cells, 0: unknown
+                        ("step", 1, 64)):
         v = config.get(key)
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
             raise InputError(f"{path}: config {key} = {short_repr(v)}, expected an integer in [{lo}, {hi}]")
     shape = tuple(config[k] for k in ("kind", "block", "channels", "depth", "attention", "attention_level",
-                                      "trained_side"))
+                                      "trained_side", "step"))
     try:
         net = make_route_net(*shape)
     except ValueError as exc:

@@ -1,9 +1,9 @@
 """The value-iteration route encoder: learned local move costs, and value iteration over them, on the block grid.
 
-``RouteVIN`` reads a map in blocks of one planner step, as ``RouteNet`` does, but its reach grows with the
-map instead of being fixed by its layers. A small convolutional network looks at each block and its
-neighbours (every cell of each, so a 1-cell gap is not averaged away) and predicts what it costs, in steps,
-to move from that block into each of its 8 neighbours. Value iteration, as in value-iteration networks
+``RouteVIN`` reads a map in blocks of one planner step or a whole fraction of one (``RouteNet`` reads blocks
+of one step), and its reach grows with the map instead of being fixed by its layers. A small convolutional
+network looks at each block and its neighbours (every cell of each, so a 1-cell gap is not averaged away)
+and predicts what it costs, in blocks, to move from that block into each of its 8 neighbours. Value iteration, as in value-iteration networks
 (Tamar et al., 2016), then carries the goal's cost-to-go across the block grid: each iteration is one
 layer of shared weights, ``V = min over moves of (cost of the move + V of the block it reaches)``, and the
 iterations run until the values settle (at most one per block of the grid). A last local head turns the
@@ -28,11 +28,11 @@ from learning.models.field import FieldEncoder
 #: The 8 moves of the block grid, (row, column) offsets, and their lengths in blocks.
 MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
 LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
-#: The value of a block the goal does not reach (in steps): above any cost-to-go a map can have.
+#: The value of a block the goal does not reach (in blocks): above any cost-to-go a map can have.
 UNREACHED = 1e6
 #: The most a move may cost, in log steps per block of length (a wall: any route around is cheaper).
 WALL_LOG = math.log(1000.0)
-#: How many cost-to-go steps either side of a block the cell head reads (its neighbours' values relative to its own).
+#: How many blocks of cost-to-go either side of a block the cell head reads (its neighbours' values relative to its own).
 REACH = 4.0
 
 
@@ -53,9 +53,12 @@ class RouteVIN(nn.Module, FieldEncoder):
     """Learned move costs and value iteration over the block grid (see the module docstring).
 
     Args:
-        block: Cells per block side: the planner's step in cells.
+        block: Cells per block side.
         channels: Width of the local network.
         depth: 3x3 convolutions of the local network: each block's costs read ``2 * depth + 1`` blocks across.
+        step: The planner's step in cells, a whole number of blocks (default one block): ``predict`` gives the
+            cost-to-go in steps. Blocks of half a step give each half of a step its own value, so a wall
+            thinner than a step that splits one of its blocks need not join its two sides.
     """
 
     #: The route sampler takes one pass per query: value iteration carries the same local costs whichever way
@@ -63,9 +66,12 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: the cost.
     symmetries = 1
 
-    def __init__(self, block: int = 4, channels: int = 48, depth: int = 4) -> None:
+    def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
-        self.block, self.channels, self.depth = block, channels, depth
+        step = block if step is None else step
+        if step % block:
+            raise ValueError(f"step = {step} cells, block = {block} cells: expected a step of whole blocks")
+        self.block, self.channels, self.depth, self.step = block, channels, depth, step
         self.attention_layers = 0  # as ``RouteNet`` names them: it has none
         self.trained_side = 0  # its field keeps its scale on any map: nothing to rescale
         inputs = block * block + 1  # every cell of the block, and whether the goal is in it
@@ -84,7 +90,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         return x[:, cells] > 0.5, x[:, :cells].amin(1) > 0.5
 
     def move_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """(features (B, C, h, w), move costs (B, 8, h, w) in steps, each at least half the move's length)."""
+        """(features (B, C, h, w), move costs (B, 8, h, w) in blocks, each at least half the move's length)."""
         f = self.local(x)
         return f, self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
 
@@ -123,7 +129,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """The cost-to-go of every cell (B, H, W), in steps, from ``route_input``'s channels."""
+        """The cost-to-go of every cell (B, H, W), in blocks, from ``route_input``'s channels."""
         x = x[:, :self.block * self.block + 1]  # the cells and the goal's block; not the offsets to it
         goal, walls = self.goal_and_walls(x)
         f, costs = self.move_costs(x)

@@ -286,7 +286,7 @@ class RouteSampler(SamplerBase):
     The comparison's straight-line follower pins its own settings (``FOLLOWER_SETTINGS``).
 
     Args:
-        net: The trained encoder (``load_route_net``); its block must be the planner's step in cells.
+        net: The trained encoder (``load_route_net``); its ``step`` must be the planner's step in cells.
         step_size: The planner's step.
         lookahead, sigma: Target distance ahead and spread, in steps.
         stuck: Iterations without progress before the frontier takes over.
@@ -356,11 +356,11 @@ class RouteSampler(SamplerBase):
         """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
         if self.net is None:
             return self._straight(grid), None
-        if round(self.step_size / grid.resolution) != self.net.block:
+        if round(self.step_size / grid.resolution) != self.net.step:
             cells = self.step_size / grid.resolution
-            raise InputError(f"the route encoder's blocks are {self.net.block} cells, the step is {cells:g} cells "
-                             f"of this map (resolution {grid.resolution:g}): pass "
-                             f"step_size={self.net.block * grid.resolution:g}")
+            raise InputError(f"the route encoder was trained for a step of {self.net.step} cells, the step is "
+                             f"{cells:g} cells of this map (resolution {grid.resolution:g}): pass "
+                             f"step_size={self.net.step * grid.resolution:g}")
         goal = grid.cell_of(self.problem.goal)
         if self.fields is None:
             learned = self.net.predict(grid.obstacles, goal, self.symmetry_passes, threads=self.threads)
@@ -384,14 +384,14 @@ class RouteSampler(SamplerBase):
 
         ``batch`` as for ``FieldCache.fill``: by default the passes of all of them run together on a GPU
         and one query at a time on the CPU. Problems off an ``OccupancyGrid``, or whose step is not the
-        encoder's block, are left to their binds (which refuse them). Needs an encoder and a ``fields`` cache.
+        encoder's step, are left to their binds (which refuse them). Needs an encoder and a ``fields`` cache.
         """
         if self.net is None or self.fields is None:
             raise InputError("RouteSampler.prefill needs an encoder and a fields cache (RouteSampler(net, fields=...))")
         queries = []
         for problem in problems:
             grid = problem.world
-            if isinstance(grid, OccupancyGrid) and round(self.step_size / grid.resolution) == self.net.block:
+            if isinstance(grid, OccupancyGrid) and round(self.step_size / grid.resolution) == self.net.step:
                 queries.append((grid.obstacles, grid.cell_of(problem.goal)))
         return self.fields.fill(self.net, queries, self.symmetry_passes, threads=self.threads, batch=batch)
 

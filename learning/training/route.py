@@ -312,9 +312,11 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
                     checkpoint: str | os.PathLike | None = None, resume: bool = False,
                     validation: Sequence[Problem] | None = None, recipe_extra: dict | None = None,
                     workers: int = 1, device: str | torch.device = "cpu", kind: str = "unet",
-                    schedule: str = "constant") -> RouteNet | RouteVIN:
+                    schedule: str = "constant", step: int | None = None) -> RouteNet | RouteVIN:
     """Fit a route encoder to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
+    ``block``: cells per block side; ``step``: the planner's step in cells, a whole number of blocks (default
+    one block; only the value-iteration encoder takes more). The targets are in blocks.
     ``kind``: "unet" (``RouteNet``), whose loss is the smooth-L1 error of the predicted cost-to-go, in steps,
     over the free cells that reach the goal; or "vin" (``RouteVIN``, ``depth`` local layers, no attention),
     whose loss is ``learning.training.vin_losses.vin_loss``. With ``augment`` every map is first turned by one
@@ -344,6 +346,10 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     """
     if schedule not in SCHEDULES:
         raise InputError(f"schedule {short_repr(schedule)}: expected one of {', '.join(SCHEDULES)}")
+    try:  # the encoder's shape is refused now, before any map is made
+        make_route_net(kind, block, channels, depth, attention, attention_level, 0, step)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
     device = torch.device(device)
     torch.manual_seed(seed)
     turns = np.random.default_rng(seed).integers(0, 8, len(problems)) if augment else np.zeros(len(problems), int)
@@ -372,7 +378,7 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
                       block=block, channels=channels, depth=depth, attention=attention,
                       attention_level=attention_level, epochs=epochs, batch=batch, lr=lr, augment=augment, seed=seed,
                       log=log, checkpoint=checkpoint, resuming=resuming, validation=validation,
-                      recipe_extra=recipe_extra, schedule=schedule)
+                      recipe_extra=recipe_extra, schedule=schedule, step=step)
     finally:
         if stream is not None:
             stream.close()
@@ -381,13 +387,14 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
 def _train(data: list, held_out: list | None, stream: _Stream | None, names: list[str] | None, trained_side: int,
            order: torch.Generator, device: torch.device, *, kind: str, block: int, channels: int, depth: int,
            attention: int, attention_level: int, epochs: int, batch: int, lr: float, augment: bool, seed: int, log,
-           checkpoint, resuming: bool, validation, recipe_extra: dict | None, schedule: str) -> RouteNet | RouteVIN:
+           checkpoint, resuming: bool, validation, recipe_extra: dict | None, schedule: str,
+           step: int | None) -> RouteNet | RouteVIN:
     """``train_route_net``'s epochs, on the examples made (``data``) or being made (``stream``)."""
     deterministic(device)
     if stream is None:
         data = _on_device(data, device)
         held_out = _on_device(held_out, device) if held_out is not None else None
-    net = make_route_net(kind, block, channels, depth, attention, attention_level, trained_side).to(device)
+    net = make_route_net(kind, block, channels, depth, attention, attention_level, trained_side, step).to(device)
     opt = torch.optim.Adam(net.parameters(), lr)
 
     def recipe_of(maps: list[str]) -> dict:
@@ -396,6 +403,8 @@ def _train(data: list, held_out: list | None, stream: _Stream | None, names: lis
                   "maps": maps}  # not the epochs: each epoch's weights do not depend on them
         if kind != "unet":  # recipes of the U-Net stay as they were
             recipe["kind"] = kind
+        if step is not None and step != block:  # as do those of one-step blocks
+            recipe["step"] = step
         if schedule != "constant":  # as are those at a constant rate
             recipe["schedule"], recipe["epochs"] = schedule, epochs
         if validation:

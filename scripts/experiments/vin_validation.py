@@ -55,7 +55,7 @@ def main(argv=None) -> int:
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES))
     args = ap.parse_args(argv)
     net = load_route_net(args.route)
-    plain = LengthCosts(net.block, 1, 1).eval()
+    plain = LengthCosts(net.block, 1, 1, net.step).eval()
     samplers = {
         "ablation": shipped_ablation,
         "value iteration, no learning": lambda: RouteSampler(plain, **SHIPPED_SETTINGS),
