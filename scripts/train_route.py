@@ -92,9 +92,9 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--attention-level", type=int, default=0,
                     help="times the block grid is halved where the attention runs (0: full resolution)")
     ap.add_argument("--step", type=int, default=4, help="the planner's step in cells")
-    ap.add_argument("--blocks-per-step", type=int, default=1,
-                    help="the value-iteration encoder's blocks across one step (default 1: blocks of one step; "
-                         "2: of half a step); --step must divide by it")
+    ap.add_argument("--blocks-per-step", type=int,
+                    help="blocks across one step: the value-iteration encoder's default is 2 (blocks of half a step), "
+                         "the U-Net's 1 (it takes no other); --step must divide by it")
     ap.add_argument("--augment", action=argparse.BooleanOptionalAction, default=True,
                     help="turn each map by one of the square's 8 symmetries (default on)")
     ap.add_argument("--seed", type=int, default=0)
@@ -123,6 +123,8 @@ def _check(args) -> None:
     Opens the map sets (each checks its maps and queries) into ``args.sets``, sets ``args.step`` from
     ``--step-size`` and resolves ``--device`` into ``args.torch_device``.
     """
+    if args.blocks_per_step is None:
+        args.blocks_per_step = 2 if args.kind == "vin" else 1
     check_int_flags(args, ("maps", "epochs", "batch", "channels", "depth", "step", "blocks_per_step", "workers"))
     if not (math.isfinite(args.lr) and args.lr > 0):
         raise InputError(f"--lr {args.lr:g}: expected a positive number")
@@ -169,7 +171,8 @@ def _open_sets(args) -> MixedMapSet:
     """The ``--map-set`` sets, mixed by ``--map-set-weight``, checked for the encoder (``InputError`` naming flags).
 
     Each set needs a training and a validation part; every map of those parts must fit the
-    encoder's size limit at the block ``--step`` (set here from ``--step-size`` when given).
+    encoder's size limit in blocks of ``--step`` (set here from ``--step-size`` when given) over
+    ``--blocks-per-step`` cells.
     """
     weights = args.map_set_weight
     if weights is not None and len(weights) != len(args.map_set):
@@ -212,7 +215,7 @@ def _open_sets(args) -> MixedMapSet:
                              f"({', '.join(f'{n}: {c}' for n, c in sorted(cells.items()))}); the encoder's step is "
                              "one number of cells: give maps of one resolution, or --step in cells")
         args.step = next(iter(cells.values()))
-    block = args.step // args.blocks_per_step if args.step % args.blocks_per_step == 0 else args.step
+    block = args.step // args.blocks_per_step if args.step % args.blocks_per_step == 0 else args.step  # refused later
     for ms, name, shape, _ in grids:
         try:
             check_route_map(name, shape, block)

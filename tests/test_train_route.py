@@ -126,7 +126,9 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
     spec = util.spec_from_file_location("train_route_script", ROOT / "scripts" / "train_route.py")
     script = util.module_from_spec(spec)
     spec.loader.exec_module(script)
-    defaults = vars(script._parser().parse_args([]))
+    args = script._parser().parse_args([])
+    script._check(args)  # what the flags left out come to (the encoder's blocks)
+    defaults = vars(args)
     shipped = json.loads((ROOT / "learning" / "data" / "route.json").read_text())["recipe"]
     for key, value in shipped.items():
         if key == "device":  # the run named the CPU; with no flag, "auto" is the CPU on a machine without a GPU
@@ -141,7 +143,7 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
     (["--attention", "1", "--channels", "5"], "--attention"), (["--attention", "1", "--attention-level", "4"],
                                                                 "--attention-level"),
     (["--seed", "-1"], "--seed"), (["--maps", "10000000"], "--maps"), (["--resume"], "--resume"),
-    (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 512 x 512 = 262144 blocks"),
+    (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 1024 x 1024 = 1048576 blocks of 2 cells, more than the 262144"),
     (["--blocks-per-step", "3"], "--blocks-per-step 3: a step of 4 cells does not divide into 3 whole blocks"),
     (["--blocks-per-step", "2", "--kind", "unet"], "--blocks-per-step: step = 4, block = 2: the U-Net's blocks"),
     (["--blocks-per-step", "0"], "--blocks-per-step"),

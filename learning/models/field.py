@@ -19,12 +19,12 @@ from planners.base.fileio import InputError, short_repr
 GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
 
 #: The largest encoder input, in blocks (cells of the block grid), and the variable that raises it. A pass
-#: holds about ``BYTES_PER_BLOCK`` per block per map in flight; at the default, one map of 1024 x 1024
-#: cells at 4 cells per block (65,536 blocks).
+#: holds at most about ``BYTES_PER_BLOCK`` per block per map in flight; at the default, one map of 1024 x 1024
+#: cells at 2 cells per block (262,144 blocks; the shipped encoder's pass over it peaks below 0.7 GB).
 MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
-MAX_BLOCKS = 256 * 256
-#: Working memory of one pass per block of one map (activations and attention, measured on the shipped
-#: encoder), and how much of it ``predict`` lets one batch of symmetries take: larger maps run their
+MAX_BLOCKS = 512 * 512
+#: Working memory of one pass per block of one map (activations and attention, measured on the U-Net
+#: encoder, which needs the most), and how much of it ``predict`` lets one batch of symmetries take: larger maps run their
 #: symmetries in smaller batches (one at a time at the largest), so memory stays bounded.
 BYTES_PER_BLOCK = 5_000
 BATCH_BYTES = 1 << 30
