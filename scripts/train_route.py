@@ -138,7 +138,7 @@ def _check(args) -> None:
     args.sets = _open_sets(args) if args.map_set else None
     if args.step % args.blocks_per_step:
         raise InputError(f"--blocks-per-step {args.blocks_per_step}: a step of {args.step} cells does not divide into "
-                         f"{args.blocks_per_step} whole blocks")
+                         f"{args.blocks_per_step} whole blocks (--blocks-per-step 1 takes blocks of one step)")
     args.block = args.step // args.blocks_per_step
     try:  # the encoder's own rules
         make_route_net(args.kind, args.block, args.channels, args.depth, args.attention, args.attention_level,

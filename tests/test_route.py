@@ -309,7 +309,7 @@ def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
     with pytest.raises(InputError, match="OccupancyGrid"):
         RRT(Problem(GeometricWorld(10, 10, []), [1, 1], [9, 9]), step_size=4.0, sampler=shipped, seed=0)
     grid = OccupancyGrid(np.zeros((64, 64), bool), 0.5)
-    with pytest.raises(InputError, match=r"blocks are 4 cells.*pass step_size=2\b"):
+    with pytest.raises(InputError, match=r"trained for a step of 4 cells.*pass step_size=2\b"):
         RRT(Problem(grid, [2, 2], [30, 30]), step_size=4.0, sampler=shipped, seed=0)
     metres = OccupancyGrid(np.zeros((64, 64), bool), 0.03)  # a ROS map in metres, the step given in cells
     with pytest.raises(InputError, match=r"pass step_size=0\.12\b"):
