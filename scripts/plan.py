@@ -53,8 +53,8 @@ from planners.tools.workflow import (
 
 #: Exit statuses (documented in the module docstring and --help).
 EXIT_SOLVED, EXIT_UNSOLVED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
-#: Cells per block of the shipped route encoder: its samplers' default step is one block.
-ROUTE_BLOCK = 4
+#: Cells per step the shipped route encoder was trained for: its samplers' default step.
+ROUTE_STEP = 4
 #: Set to 1 to print, once the picking window is drawn, how map coordinates map to window pixels.
 PICK_DEBUG_ENV = "SAMPLERGYM_PICK_DEBUG"
 
@@ -362,7 +362,7 @@ def main(argv=None) -> int:
         start, goal = picked
     step = args.step
     if step is None and args.sampler in ("route", "route_ablation", "exact_route"):
-        step = ROUTE_BLOCK * grid.resolution  # the encoder works on blocks of one step
+        step = ROUTE_STEP * grid.resolution  # the step the encoder was trained for
     if step is None:
         w, h = grid.bounds[1] - grid.bounds[0]
         step = max(4.0 * grid.resolution, 0.02 * math.hypot(w, h))

@@ -1,6 +1,6 @@
 """Train the route encoder (``learning.models.route_vin.RouteVIN``, or the U-Net ``RouteNet``) on the training maps.
 
-    python scripts/train_route.py                           # the shipped encoder's recipe (about 2 min on 2 cores)
+    python scripts/train_route.py                           # the shipped encoder's recipe (about 7 min on 2 cores)
     python scripts/train_route.py --resume                  # continue an interrupted run from its last epoch
     python scripts/train_route.py --epochs 3 --maps 20      # a quicker variation
     python scripts/train_route.py --kind unet --channels 24 --attention 2 --maps 1600 --epochs 30 --batch 32 --lr 1e-3
@@ -8,7 +8,8 @@
     python scripts/evaluate.py --route runs/route/route.pt  # the comparison with it as the route encoder
 
 With no options it trains the shipped encoder's recipe (``learning/data/route.json``): the value-iteration
-encoder (``--kind vin``: learned move costs of 48 channels and 4 local layers, value iteration over them),
+encoder (``--kind vin``: learned move costs of 48 channels and 4 local layers over blocks of half a step,
+``--blocks-per-step 2``, value iteration over them),
 12 epochs over 100 maps per training family (``--families``: the five test families' training generators,
 caves and strokes, which no test set holds) at sides 64 and 128, each turned by one of the square's 8
 symmetries, batches of 16, Adam from 2e-3 down to 0 along a cosine (``--lr-schedule``). Maps come from the training seeds only (validation, tuning and

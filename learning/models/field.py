@@ -1,7 +1,7 @@
 """What every route encoder shares: its input, the square's symmetries, the size limit, and ``predict``.
 
 A route encoder (``learning.models.route_net.RouteNet``, ``learning.models.route_vin.RouteVIN``) reads a map in
-blocks of one planner step and gives the cost-to-go of every cell, in steps; ``FieldEncoder`` turns a map and a
+blocks (of one planner step, or a whole fraction of one) and gives the cost-to-go of every cell, in steps; ``FieldEncoder`` turns a map and a
 goal into that field, averaged over the square's symmetries, within a memory bound.
 """
 

@@ -2,9 +2,9 @@
 
 The learned policy fails where the route turns away from the goal: its windows do not show which
 gap, door or maze branch leads on (``scripts/experiments/imitation_ceiling.py``). ``RouteNet`` looks at the whole
-map once per query and predicts the cost-to-go of every cell. It works on blocks of one planner
-step; its input is every cell of each block (so a 1-cell gap is not averaged away) and the goal, and
-there is no search at inference. The grid search only makes its training targets, as it does the
+map once per query and predicts the cost-to-go of every cell. It works on blocks of a planner step
+(the shipped ``RouteVIN``: of half a step); its input is every cell of each block (so a 1-cell gap is not
+averaged away) and the goal, and there is no search at inference. The grid search only makes its training targets, as it does the
 expert's (``learning.training.route``).
 
 ``RouteSampler`` uses the prediction as the expert (``learning.references.expert``) uses the distance field:
@@ -13,8 +13,8 @@ ahead of it down the predicted field. Where the prediction is wrong the tree sto
 after ``stuck`` iterations the sampler turns to the tree's frontier until it does again, so a wrong
 prediction costs iterations, not the solution.
 
-The shipped encoder (``learning/data/route.pt``, ``shipped_sampler``) adds axial attention after the
-U-Net and is read as the mean over the square's 8 symmetries; ``shipped_ablation`` is the same sampler
+The shipped encoder (``learning/data/route.pt``, ``shipped_sampler``) is the value-iteration encoder
+(``learning.models.route_vin.RouteVIN``), one pass per query; ``shipped_ablation`` is the same sampler
 on the straight-line distance, which is what its learning is measured against.
 """
 
