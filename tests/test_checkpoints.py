@@ -132,8 +132,9 @@ def test_the_shipped_route_encoder_matches_its_recipe():
 
     recipe = json.loads(SHIPPED.with_suffix(".json").read_text())["recipe"]
     net = load_route_net(SHIPPED)
-    assert (net.channels, net.depth, net.attention_layers, net.block) == (
+    assert (net.channels, net.depth, net.attention_layers, net.step) == (
         recipe["channels"], recipe["depth"], recipe["attention"], recipe["step"])
+    assert net.block * recipe.get("blocks_per_step", 1) == recipe["step"]
     # a U-Net's fields on larger maps are scaled from its largest training side; value iteration's need no scaling
     assert net.trained_side == (max(recipe["size"]) if recipe.get("kind", "unet") == "unet" else 0)
     assert type(net).__name__ == {"unet": "RouteNet", "vin": "RouteVIN"}[recipe.get("kind", "unet")]
