@@ -9,11 +9,11 @@
 
 With no options it trains the shipped encoder's recipe (``learning/data/route.json``): the value-iteration
 encoder (``--kind vin``: learned move costs of 48 channels and 4 local layers over blocks of half a step,
-``--blocks-per-step 2``, value iteration over them),
-12 epochs over 100 maps per training family (``--families``: the five test families' training generators,
-caves and strokes, which no test set holds) at sides 64 and 128, each turned by one of the square's 8
-symmetries, batches of 16, Adam from 2e-3 down to 0 along a cosine (``--lr-schedule``). Maps come from the training seeds only (validation, tuning and
-test seeds are never seen). The encoder learns the grid search's cost-to-go of every cell (see
+``--blocks-per-step 2``, value iteration over them), 12 epochs over 100 maps per training family
+(``--families``: the five test families' training generators, caves and strokes, which no test set holds) at
+sides 64 and 128, each turned by one of the square's 8 symmetries, batches of 16, Adam from 2e-3 down to 0
+along a cosine (``--lr-schedule``). Maps come from the training seeds only (validation, tuning and test seeds
+are never seen). The encoder learns the grid search's cost-to-go of every cell (see
 ``learning.training.vin_losses``); ``RouteSampler`` follows its prediction.
 
 Writes ``<out>/route.pt`` and ``<out>/route.json`` (recipe, loss, time) as one unit: the folder is
@@ -137,10 +137,7 @@ def _check(args) -> None:
             shown = " ".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
             raise InputError(f"{flag} {shown}: it applies to --map-set, and none is given")
     args.sets = _open_sets(args) if args.map_set else None
-    if args.step % args.blocks_per_step:
-        raise InputError(f"--blocks-per-step {args.blocks_per_step}: a step of {args.step} cells does not divide into "
-                         f"{args.blocks_per_step} whole blocks (--blocks-per-step 1 takes blocks of one step)")
-    args.block = args.step // args.blocks_per_step
+    args.block = _block(args)
     try:  # the encoder's own rules
         make_route_net(args.kind, args.block, args.channels, args.depth, args.attention, args.attention_level,
                        step=args.step)
@@ -166,6 +163,14 @@ def _check(args) -> None:
         check_output_place(args.export.with_suffix(".json"), "--export (its .json)", folder=False)
     if args.resume and not (args.out / "checkpoint.pt").is_file():
         raise InputError(f"--resume: nothing to resume in {args.out} (no checkpoint.pt); start without --resume")
+
+
+def _block(args) -> int:
+    """The encoder's block in cells: ``--step`` over ``--blocks-per-step``; an ``InputError`` if it does not divide."""
+    if args.step % args.blocks_per_step:
+        raise InputError(f"--blocks-per-step {args.blocks_per_step}: a step of {args.step} cells does not divide into "
+                         f"{args.blocks_per_step} whole blocks (--blocks-per-step 1 takes blocks of one step)")
+    return args.step // args.blocks_per_step
 
 
 def _open_sets(args) -> MixedMapSet:
@@ -216,7 +221,7 @@ def _open_sets(args) -> MixedMapSet:
                              f"({', '.join(f'{n}: {c}' for n, c in sorted(cells.items()))}); the encoder's step is "
                              "one number of cells: give maps of one resolution, or --step in cells")
         args.step = next(iter(cells.values()))
-    block = args.step // args.blocks_per_step if args.step % args.blocks_per_step == 0 else args.step  # refused later
+    block = _block(args)
     for ms, name, shape, _ in grids:
         try:
             check_route_map(name, shape, block)

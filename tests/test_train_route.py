@@ -143,7 +143,8 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
     (["--attention", "1", "--channels", "5"], "--attention"), (["--attention", "1", "--attention-level", "4"],
                                                                 "--attention-level"),
     (["--seed", "-1"], "--seed"), (["--maps", "10000000"], "--maps"), (["--resume"], "--resume"),
-    (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 1024 x 1024 = 1048576 blocks of 2 cells, more than the 262144"),
+    (["--size", "2048"], "--size 2048: map 'generated 2048 x 2048' is 2048 x 2048 cells: 1024 x 1024 = 1048576 "
+                         "blocks of 2 cells, more than the 262144"),
     (["--blocks-per-step", "3"], "--blocks-per-step 3: a step of 4 cells does not divide into 3 whole blocks"),
     (["--blocks-per-step", "2", "--kind", "unet"], "--blocks-per-step: step = 4, block = 2: the U-Net's blocks"),
     (["--blocks-per-step", "0"], "--blocks-per-step"),

@@ -1,8 +1,9 @@
 """What every route encoder shares: its input, the square's symmetries, the size limit, and ``predict``.
 
 A route encoder (``learning.models.route_net.RouteNet``, ``learning.models.route_vin.RouteVIN``) reads a map in
-blocks (of one planner step, or a whole fraction of one) and gives the cost-to-go of every cell, in steps; ``FieldEncoder`` turns a map and a
-goal into that field, averaged over the square's symmetries, within a memory bound.
+blocks (of one planner step, or a whole fraction of one) and gives the cost-to-go of every cell, in steps;
+``FieldEncoder`` turns a map and a goal into that field, averaged over the square's symmetries, within a memory
+bound.
 """
 
 from __future__ import annotations
@@ -24,8 +25,8 @@ GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
 MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
 MAX_BLOCKS = 512 * 512
 #: Working memory of one pass per block of one map (activations and attention, measured on the U-Net
-#: encoder, which needs the most), and how much of it ``predict`` lets one batch of symmetries take: larger maps run their
-#: symmetries in smaller batches (one at a time at the largest), so memory stays bounded.
+#: encoder, which needs the most), and how much of it ``predict`` lets one batch of symmetries take: larger
+#: maps run their symmetries in smaller batches (one at a time at the largest), so memory stays bounded.
 BYTES_PER_BLOCK = 5_000
 BATCH_BYTES = 1 << 30
 

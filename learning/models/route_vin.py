@@ -3,12 +3,13 @@
 ``RouteVIN`` reads a map in blocks of one planner step or a whole fraction of one (``RouteNet`` reads blocks
 of one step), and its reach grows with the map instead of being fixed by its layers. A small convolutional
 network looks at each block and its neighbours (every cell of each, so a 1-cell gap is not averaged away)
-and predicts what it costs, in blocks, to move from that block into each of its 8 neighbours. Value iteration, as in value-iteration networks
-(Tamar et al., 2016), then carries the goal's cost-to-go across the block grid: each iteration is one
-layer of shared weights, ``V = min over moves of (cost of the move + V of the block it reaches)``, and the
-iterations run until the values settle (at most one per block of the grid). A last local head turns the
-block values into a cost-to-go for every cell. Nothing in it depends on the map's size or on where on the
-map a block lies: it learns local geometry (which cells let a robot through, at what cost) and composes it.
+and predicts what it costs, in blocks, to move from that block into each of its 8 neighbours. Value
+iteration, as in value-iteration networks (Tamar et al., 2016), then carries the goal's cost-to-go across the
+block grid: each iteration is one layer of shared weights, ``V = min over moves of (cost of the move + V of
+the block it reaches)``, and the iterations run until the values settle (at most one per block of the grid).
+A last local head turns the block values into a cost-to-go for every cell. Nothing in it depends on the map's
+size or on where on the map a block lies: it learns local geometry (which cells let a robot through, at what
+cost) and composes it.
 
 The learned parts are the move costs and the cell head. Training fits the move costs to the grid search's
 cost-to-go directly (every block's cost-to-go minus its best neighbour's is the cost of that move, and no
@@ -30,9 +31,10 @@ MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
 LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
 #: The value of a block the goal does not reach (in blocks): above any cost-to-go a map can have.
 UNREACHED = 1e6
-#: The most a move may cost, in log steps per block of length (a wall: any route around is cheaper).
+#: The most a move may cost, in log blocks per block of length (a wall: any route around is cheaper).
 WALL_LOG = math.log(1000.0)
-#: How many blocks of cost-to-go either side of a block the cell head reads (its neighbours' values relative to its own).
+#: How many blocks of cost-to-go either side of a block the cell head reads (its neighbours' values relative
+#: to its own).
 REACH = 4.0
 
 

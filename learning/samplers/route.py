@@ -4,8 +4,8 @@ The learned policy fails where the route turns away from the goal: its windows d
 gap, door or maze branch leads on (``scripts/experiments/imitation_ceiling.py``). ``RouteNet`` looks at the whole
 map once per query and predicts the cost-to-go of every cell. It works on blocks of a planner step
 (the shipped ``RouteVIN``: of half a step); its input is every cell of each block (so a 1-cell gap is not
-averaged away) and the goal, and there is no search at inference. The grid search only makes its training targets, as it does the
-expert's (``learning.training.route``).
+averaged away) and the goal, and there is no search at inference. The grid search only makes its training
+targets, as it does the expert's (``learning.training.route``).
 
 ``RouteSampler`` uses the prediction as the expert (``learning.references.expert``) uses the distance field:
 its progress vertex is the tree vertex of lowest predicted cost-to-go, and it samples about one step

@@ -76,7 +76,8 @@ def main(argv=None) -> int:
         cells = []
         for b in args.blocks:
             counts = np.array([split_share(m, b) for m in maps])
-            cells.append(f"{counts[:, 1].sum() / counts[:, 0].sum():.2%} ({counts[:, 1].sum()} of {counts[:, 0].sum()})")
+            total, split = counts.sum(0)
+            cells.append(f"{split / total:.2%} ({split} of {total})")
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
     return 0
 
