@@ -40,23 +40,74 @@ def next_cell(field, blocked, r, c):
     return out
 
 
-@nb.njit(cache=True)
-def walk_field(field, blocked, cell, length):
-    """Follow ``next_cell`` down ``field`` for ``length`` cells of path from ``cell``; returns the cell reached.
+@nb.njit(cache=True, inline="always")
+def lowest_unvisited(field, blocked, r, c, visited, moves):
+    """The lowest free neighbour of (r, c) not among ``visited[:moves]`` (octile, no corner cutting); -1 where none."""
+    H, W = field.shape
+    best = np.inf
+    out = -1
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            rr, cc = r + dr, c + dc
+            if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
+                continue
+            if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
+                continue
+            u = rr * W + cc
+            seen = False
+            for i in range(moves):
+                if visited[i] == u:
+                    seen = True
+                    break
+            if not seen and field[rr, cc] < best:
+                best = field[rr, cc]
+                out = u
+    return out
 
-    Each step is found when taken: a query walks a few steps at a time, far fewer than the map has cells.
+
+@nb.njit(cache=True)
+def walk_field(field, blocked, cell, length, tolerance=0.0):
+    """Walk down ``field`` from ``cell`` for ``length`` cells of path; returns the cell reached.
+
+    With ``tolerance`` 0 each move is ``next_cell``'s: to the lowest neighbour, while it is strictly lower.
+    A learned field has shallow pits (ripples) where that walk stops short of the route; with a
+    ``tolerance`` > 0 the walk moves to the lowest free neighbour it has not yet visited, and goes on
+    while that neighbour is below the lowest value the walk has reached plus ``tolerance``: it crosses
+    ripples shallower than ``tolerance`` and stops in deeper pits. On a field where every cell but the
+    goal has a strictly lower neighbour (the grid search's) the two walks are the same.
+
+    Each move is found when taken: a query walks a few moves at a time, far fewer than the map has cells.
     """
     W = field.shape[1]
     acc = 0.0
     v = cell
-    while acc < length:
-        u = next_cell(field, blocked, v // W, v % W)
-        if u < 0:
+    if tolerance <= 0.0:
+        while acc < length:
+            u = next_cell(field, blocked, v // W, v % W)
+            if u < 0:
+                break
+            dr = u // W - v // W
+            dc = u % W - v % W
+            acc += math.sqrt(float(dr * dr + dc * dc))
+            v = u
+        return v
+    if not np.isfinite(field[v // W, v % W]):
+        return v
+    visited = np.empty(int(length) + 2, dtype=np.int64)  # each move covers at least one cell of path
+    visited[0] = v
+    moves = 1
+    low = field[v // W, v % W]
+    while acc < length and moves < visited.shape[0]:
+        u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves)
+        if u < 0 or field[u // W, u % W] >= low + tolerance:
             break
         dr = u // W - v // W
         dc = u % W - v % W
         acc += math.sqrt(float(dr * dr + dc * dc))
         v = u
+        visited[moves] = v
+        moves += 1
+        low = min(low, field[v // W, v % W])
     return v
 
 

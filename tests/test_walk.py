@@ -1,0 +1,146 @@
+"""The walk down a cost-to-go field that places the route sampler's target (``planners.guidance.follow.walk_field``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, RouteSampler, shipped_ablation
+from planners.base.fileio import InputError
+from planners.guidance.follow import next_cell, walk_field
+from planners.maps.gridsearch import distance_field
+
+MOVES = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc]
+
+
+def strict_walk(field, blocked, cell, length):
+    """The walk without tolerance, move by move in Python: the lowest strictly lower neighbour, no corner cutting."""
+    H, W = field.shape
+    acc, v = 0.0, cell
+    while acc < length:
+        r, c = divmod(v, W)
+        best, out = field[r, c], -1
+        if not np.isfinite(best):
+            break
+        for dr, dc in MOVES:
+            rr, cc = r + dr, c + dc
+            if not (0 <= rr < H and 0 <= cc < W) or blocked[rr, cc]:
+                continue
+            if dr and dc and (blocked[r + dr, c] or blocked[r, c + dc]):
+                continue
+            if field[rr, cc] < best:
+                best, out = field[rr, cc], rr * W + cc
+        if out < 0:
+            break
+        acc += math.hypot(out // W - r, out % W - c)
+        v = out
+    return v
+
+
+def path_of(field, blocked, cell, length, tolerance):
+    """The cells the tolerant walk visits, in order: walks of 1, 2, ... cells of path stop at each in turn.
+
+    Every move covers at least one cell of path, so each move's end is reached by a walk of a whole length.
+    """
+    cells = [cell]
+    for L in range(1, math.ceil(length) + 1):
+        v = walk_field(field, blocked, cell, float(L), tolerance)
+        if v != cells[-1]:
+            cells.append(v)
+    return cells
+
+
+def random_map(seed, side=12, density=0.2):
+    rng = np.random.default_rng(seed)
+    blocked = rng.random((side, side)) < density
+    field = rng.random((side, side)) * 5
+    field[blocked] = np.inf
+    return field, blocked
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.5, 30.0))
+def test_without_tolerance_the_walk_goes_strictly_downhill_as_before(seed, length):
+    field, blocked = random_map(seed)
+    free = np.flatnonzero(~blocked)
+    cell = int(free[seed % free.size])
+    assert walk_field(field, blocked, cell, length) == strict_walk(field, blocked, cell, length)
+    assert walk_field(field, blocked, cell, length, 0.0) == strict_walk(field, blocked, cell, length)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.05, 1.0))
+def test_on_the_grid_searchs_field_the_tolerant_walk_is_the_strict_walk(seed, tolerance):
+    """Every reachable cell but the goal has a strictly lower neighbour: no ripple to cross, nothing changes."""
+    rng = np.random.default_rng(seed)
+    blocked = rng.random((16, 16)) < 0.25
+    goal = (int(rng.integers(16)), int(rng.integers(16)))
+    blocked[goal] = False
+    field = distance_field(blocked, goal)
+    reached = np.flatnonzero(np.isfinite(field.ravel()) & ~blocked.ravel())
+    for cell in reached[:: max(1, reached.size // 10)]:
+        for length in (3.0, 12.0, 40.0):
+            assert walk_field(field, blocked, int(cell), length, tolerance) == strict_walk(field, blocked, int(cell),
+                                                                                           length)
+
+
+def ripple_field(depth):
+    """A corridor falling 1 per cell towards column 0, with a pit of ``depth`` at column 6 (cells 5 and 7 higher)."""
+    field = np.tile(np.arange(12, dtype=float)[None, :], (3, 1))
+    blocked = np.zeros((3, 12), dtype=bool)
+    blocked[0, :] = blocked[2, :] = True
+    field[blocked] = np.inf
+    field[1, 6] = 5.0 - depth  # lower than its left neighbour: a pit of `depth` below column 5
+    return field, blocked
+
+
+@pytest.mark.parametrize("depth, tolerance, crosses", [(0.05, 0.1, True), (0.09, 0.1, True), (0.2, 0.1, False),
+                                                       (0.2, 0.25, True), (0.05, 0.0, False)])
+def test_the_walk_crosses_pits_shallower_than_its_tolerance_and_stops_in_deeper_ones(depth, tolerance, crosses):
+    field, blocked = ripple_field(depth)
+    start = 1 * 12 + 11
+    end = walk_field(field, blocked, start, 20.0, tolerance)
+    assert end == (1 * 12 + 0 if crosses else 1 * 12 + 6)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.01, 2.0), st.floats(1.0, 25.0))
+def test_the_tolerant_walk_never_revisits_a_cell_nor_rises_more_than_its_tolerance(seed, tolerance, length):
+    field, blocked = random_map(seed, side=10, density=0.15)
+    free = np.flatnonzero(~blocked)
+    cell = int(free[seed % free.size])
+    cells = path_of(field, blocked, cell, length, tolerance)
+    assert len(cells) == len(set(cells))
+    W = field.shape[1]
+    values = [field[v // W, v % W] for v in cells]
+    low = np.minimum.accumulate(values)
+    assert all(values[k + 1] < low[k] + tolerance for k in range(len(values) - 1))
+    for a, b in zip(cells, cells[1:]):  # octile moves between free cells
+        assert max(abs(a // W - b // W), abs(a % W - b % W)) == 1 and not blocked[b // W, b % W]
+
+
+def test_an_infinite_start_or_a_cell_without_a_free_neighbour_stays_put():
+    field = np.full((3, 3), np.inf)
+    blocked = np.ones((3, 3), dtype=bool)
+    blocked[1, 1] = False
+    field[1, 1] = 1.0
+    assert walk_field(field, blocked, 4, 10.0, 0.5) == 4
+    field[1, 1] = np.inf
+    assert walk_field(field, blocked, 4, 10.0, 0.5) == 4
+    assert next_cell(field, blocked, 1, 1) == -1
+
+
+def test_the_shipped_sampler_crosses_ripples_and_its_ablation_walks_strictly_downhill():
+    """Each at the setting chosen for it on the validation maps."""
+    assert SHIPPED_SETTINGS["ripple"] > 0
+    assert ABLATION_SETTINGS.get("ripple", 0.0) == 0.0 and shipped_ablation().ripple == 0.0
+
+
+@pytest.mark.parametrize("ripple", [-0.1, float("nan")])
+def test_a_negative_ripple_is_refused_by_name(ripple):
+    with pytest.raises(InputError, match="ripple"):
+        RouteSampler(None, ripple=ripple)
