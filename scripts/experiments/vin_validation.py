@@ -4,8 +4,8 @@
     python scripts/experiments/vin_validation.py --route runs/route/route.pt --maps 6 --sides 128 256
 
 Medians of RRT iterations (step 4, tolerance 4, cap 20,000; planner seeds 0 and 1) on validation maps of the
-training families (the five test families', caves and strokes; seeds from ``VALIDATION_SEED0 + 500``, never
-test maps), at sides the encoder trained on (128) and beyond (256), for:
+training families (the five test families', caves and strokes; seeds from ``VALIDATION_SEED0 + 500`` by default,
+``--offset``; never test maps), at sides the encoder trained on (128) and beyond (256), for:
 
 - the route ablation (the straight line in place of the field: no learning),
 - value iteration without learning: the same value iteration over the block grid with every move costing its
@@ -50,6 +50,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--route", type=Path, default=SHIPPED, help="a value-iteration encoder file (default: shipped)")
     ap.add_argument("--maps", type=int, default=6, help="validation maps per family and side")
+    ap.add_argument("--offset", type=int, default=500,
+                    help="the first map's seed after VALIDATION_SEED0 (default 500; maps offset .. offset + maps - 1)")
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
     ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES))
@@ -68,7 +70,7 @@ def main(argv=None) -> int:
         for side in args.sides:
             its: dict[str, list[int]] = {name: [] for name in samplers}
             for i in range(args.maps):
-                p = generate(family, VALIDATION_SEED0 + 500 + i, side)
+                p = generate(family, VALIDATION_SEED0 + args.offset + i, side)
                 for name, make in samplers.items():
                     for seed in range(args.seeds):
                         r = make_planner("RRT", p, extension_step=STEP, sampler=make(), seed=seed).solve(
