@@ -41,14 +41,14 @@ def strict_walk(field, blocked, cell, length):
     return v
 
 
-def path_of(field, blocked, cell, length, tolerance):
+def path_of(field, blocked, cell, length, tolerance, growth=0.0):
     """The cells the tolerant walk visits, in order: walks of 1, 2, ... cells of path stop at each in turn.
 
     Every move covers at least one cell of path, so each move's end is reached by a walk of a whole length.
     """
     cells = [cell]
     for L in range(1, math.ceil(length) + 1):
-        v = walk_field(field, blocked, cell, float(L), tolerance)
+        v = walk_field(field, blocked, cell, float(L), tolerance, growth)
         if v != cells[-1]:
             cells.append(v)
     return cells
@@ -73,8 +73,8 @@ def test_without_tolerance_the_walk_goes_strictly_downhill_as_before(seed, lengt
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.integers(0, 10_000), st.floats(0.05, 1.0))
-def test_on_the_grid_searchs_field_the_tolerant_walk_is_the_strict_walk(seed, tolerance):
+@given(st.integers(0, 10_000), st.floats(0.05, 1.0), st.sampled_from([0.0, 0.01, 0.1]))
+def test_on_the_grid_searchs_field_the_tolerant_walk_is_the_strict_walk(seed, tolerance, growth):
     """Every reachable cell but the goal has a strictly lower neighbour: no ripple to cross, nothing changes."""
     rng = np.random.default_rng(seed)
     blocked = rng.random((16, 16)) < 0.25
@@ -84,8 +84,8 @@ def test_on_the_grid_searchs_field_the_tolerant_walk_is_the_strict_walk(seed, to
     reached = np.flatnonzero(np.isfinite(field.ravel()) & ~blocked.ravel())
     for cell in reached[:: max(1, reached.size // 10)]:
         for length in (3.0, 12.0, 40.0):
-            assert walk_field(field, blocked, int(cell), length, tolerance) == strict_walk(field, blocked, int(cell),
-                                                                                           length)
+            assert walk_field(field, blocked, int(cell), length, tolerance, growth) == strict_walk(
+                field, blocked, int(cell), length)
 
 
 def ripple_field(depth):
@@ -107,18 +107,28 @@ def test_the_walk_crosses_pits_shallower_than_its_tolerance_and_stops_in_deeper_
     assert end == (1 * 12 + 0 if crosses else 1 * 12 + 6)
 
 
+@pytest.mark.parametrize("depth, growth, crosses", [(0.3, 0.05, True), (0.3, 0.03, False), (0.05, 0.0, True)])
+def test_the_tolerance_grows_with_the_cost_to_go(depth, growth, crosses):
+    """The pit's bottom lies at a cost of 5 - depth: the walk crosses it where 0.1 + growth * (5 - depth) > depth."""
+    field, blocked = ripple_field(depth)
+    end = walk_field(field, blocked, 1 * 12 + 11, 20.0, 0.1, growth)
+    assert end == (1 * 12 + 0 if crosses else 1 * 12 + 6)
+    field += 100.0  # the same pit far from the goal: a tolerance that grows crosses it, a fixed one does not
+    assert walk_field(field, blocked, 1 * 12 + 11, 20.0, 0.1, growth) == (1 * 12 + 0 if growth or crosses else 18)
+
+
 @settings(max_examples=60, deadline=None)
-@given(st.integers(0, 10_000), st.floats(0.01, 2.0), st.floats(1.0, 25.0))
-def test_the_tolerant_walk_never_revisits_a_cell_nor_rises_more_than_its_tolerance(seed, tolerance, length):
+@given(st.integers(0, 10_000), st.floats(0.01, 2.0), st.floats(1.0, 25.0), st.sampled_from([0.0, 0.01, 0.1]))
+def test_the_tolerant_walk_never_revisits_a_cell_nor_rises_more_than_its_tolerance(seed, tolerance, length, growth):
     field, blocked = random_map(seed, side=10, density=0.15)
     free = np.flatnonzero(~blocked)
     cell = int(free[seed % free.size])
-    cells = path_of(field, blocked, cell, length, tolerance)
+    cells = path_of(field, blocked, cell, length, tolerance, growth)
     assert len(cells) == len(set(cells))
     W = field.shape[1]
     values = [field[v // W, v % W] for v in cells]
     low = np.minimum.accumulate(values)
-    assert all(values[k + 1] < low[k] + tolerance for k in range(len(values) - 1))
+    assert all(values[k + 1] < low[k] + tolerance + growth * max(low[k], 0) for k in range(len(values) - 1))
     for a, b in zip(cells, cells[1:]):  # octile moves between free cells
         assert max(abs(a // W - b // W), abs(a % W - b % W)) == 1 and not blocked[b // W, b % W]
 
@@ -136,11 +146,13 @@ def test_an_infinite_start_or_a_cell_without_a_free_neighbour_stays_put():
 
 def test_the_shipped_sampler_crosses_ripples_and_its_ablation_walks_strictly_downhill():
     """Each at the setting chosen for it on the validation maps."""
-    assert SHIPPED_SETTINGS["ripple"] > 0
-    assert ABLATION_SETTINGS.get("ripple", 0.0) == 0.0 and shipped_ablation().ripple == 0.0
+    assert SHIPPED_SETTINGS["ripple"] > 0 and SHIPPED_SETTINGS["ripple_growth"] > 0
+    ablation = shipped_ablation()
+    assert ABLATION_SETTINGS["ripple"] == ABLATION_SETTINGS["ripple_growth"] == 0.0
+    assert ablation.ripple == ablation.ripple_growth == 0.0
 
 
-@pytest.mark.parametrize("ripple", [-0.1, float("nan")])
-def test_a_negative_ripple_is_refused_by_name(ripple):
-    with pytest.raises(InputError, match="ripple"):
-        RouteSampler(None, ripple=ripple)
+@pytest.mark.parametrize("kwargs", [{"ripple": -0.1}, {"ripple": float("nan")}, {"ripple_growth": -0.01}])
+def test_a_negative_ripple_is_refused_by_name(kwargs):
+    with pytest.raises(InputError, match="ripple = .*ripple_growth = "):
+        RouteSampler(None, **kwargs)

@@ -50,18 +50,18 @@ SHIPPED = SHIPPED_ROUTE
 
 #: How the shipped encoder is used, chosen on the validation maps (README): its field ranks the tree's
 #: vertices and places the target 3 steps ahead (spread half a step), walking across the field's ripples
-#: up to a tenth of a step deep, and ranks the frontier, which takes over after one iteration without
-#: progress at a temperature of half a step.
-SHIPPED_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 3.0, "sigma": 0.5, "ripple": 0.1}
+#: up to a tenth of a step deep plus a hundredth of the cost-to-go, and ranks the frontier, which takes
+#: over after one iteration without progress at a temperature of half a step.
+SHIPPED_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 3.0, "sigma": 0.5, "ripple": 0.1, "ripple_growth": 0.01}
 
 
 #: The ablation's own settings: the same rule, its lookahead and spread tuned on the same validation
 #: grid as the encoder's (a baseline tuned as carefully as what it is compared with). Its walk goes strictly
 #: downhill (``ripple`` 0): on the validation maps that took it fewer iterations than crossing ripples.
-ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5, "ripple": 0.0}
+ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5, "ripple": 0.0, "ripple_growth": 0.0}
 #: The straight-line follower of the comparison (``make_sampler("follower")``): one step ahead of the
 #: vertex nearest the goal, the frontier after 4 iterations without progress, at a temperature of a step.
-FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0}
+FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0}
 
 
 # slots of RouteSampler's integer state
@@ -98,7 +98,7 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
     """
     field, blocked, res, origin, step, frontier, ints, floats, params, scratch, low, high = state
     world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost = frontier
-    lookahead, sigma, stuck, floor0, max_floor, patience, ripple = params
+    lookahead, sigma, stuck, floor0, max_floor, patience, ripple, ripple_growth = params
     W = field.shape[1]
     if n > ints[R_SEEN]:
         best, c = lowest_vertex_cell(field, X[ints[R_SEEN]:n], res, origin, floats[0], ints[R_CELL])
@@ -129,7 +129,8 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
         elif frontier_mode or u[0] < floor:
             x, y = low[0] + (high[0] - low[0]) * u[1], low[1] + (high[1] - low[1]) * u[2]
         else:
-            v = walk_field(field, blocked, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res, ripple)
+            v = walk_field(field, blocked, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res, ripple,
+                           ripple_growth)
             r = sigma * step * math.sqrt(-2.0 * math.log(1.0 - u[5]))  # Box-Muller: two normals from two uniforms
             x = origin[0] + (v % W + 0.5) * res + r * math.cos(2.0 * math.pi * u[6])
             y = origin[1] + (v // W + 0.5) * res + r * math.sin(2.0 * math.pi * u[6])
@@ -273,7 +274,8 @@ class RouteSampler(SamplerBase):
     The progress vertex is the tree vertex of lowest predicted cost-to-go; the target is ``lookahead``
     steps (jittered 0.5-1.5x) further down the predicted field, and samples scatter ``sigma`` steps
     around it. A learned field has shallow pits (ripples) where a strictly downhill walk stops short of
-    the route; the walk crosses those less than ``ripple`` steps deep (``planners.guidance.follow.walk_field``).
+    the route; the walk crosses those less than ``ripple + ripple_growth * cost-to-go`` steps deep
+    (``planners.guidance.follow.walk_field``).
     When progress has stalled for ``stuck`` iterations, samples go to the tree's frontier
     (``planners.guidance.frontier``; cells of lower predicted cost-to-go preferred) until the tree
     makes progress again. A ``uniform_floor`` share of samples is uniform; it grows, as the policy's
@@ -308,8 +310,8 @@ class RouteSampler(SamplerBase):
             computed at every bind. ``forward_passes`` counts the passes a query's field takes either way;
             ``reused_seconds`` is the encoder time of a field taken from the cache (0 when this bind
             computed it), which the evaluation adds to a run's wall time so each run costs its query's field.
-        ripple: How far (in steps) the walk to the target may rise above the lowest value it has reached;
-            0 walks strictly downhill.
+        ripple, ripple_growth: How far the walk to the target may rise above the lowest value ``low`` it
+            has reached: ``ripple + ripple_growth * low`` steps; both 0 walk strictly downhill.
     """
 
     #: Where the encoder's field replaces the straight line: the progress and the frontier's ranking.
@@ -327,9 +329,11 @@ class RouteSampler(SamplerBase):
     def __init__(self, net: FieldEncoder | None, *, step_size: float = 4.0, lookahead: float = 3.0, sigma: float = 0.5,
                  stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
                  max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None,
-                 fields: FieldCache | None = None, ripple: float = 0.1) -> None:
-        if not (ripple >= 0):
-            raise InputError(f"ripple = {short_repr(ripple)}: expected a depth in steps >= 0")
+                 fields: FieldCache | None = None, ripple: float = 0.1,
+                 ripple_growth: float = 0.01) -> None:
+        if not (ripple >= 0 and ripple_growth >= 0):
+            raise InputError(f"ripple = {short_repr(ripple)}, ripple_growth = {short_repr(ripple_growth)}: expected a "
+                             f"depth in steps >= 0 and a growth per step of cost-to-go >= 0")
         if not (step_size > 0 and lookahead > 0 and sigma >= 0 and stuck >= 1 and patience >= 1 and batch >= 1
                 and 0 <= uniform_floor <= max_floor <= 1 and tau > 0):
             raise InputError(f"need step_size, lookahead, stuck, patience, batch, tau > 0, sigma >= 0 and "
@@ -338,7 +342,7 @@ class RouteSampler(SamplerBase):
         self.net, self.step_size, self.lookahead, self.sigma = net, float(step_size), float(lookahead), float(sigma)
         self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
         self.patience, self.max_floor, self.tau = int(patience), float(max_floor), float(tau)
-        self.ripple = float(ripple)
+        self.ripple, self.ripple_growth = float(ripple), float(ripple_growth)
         self.device = resolve_device(device, "device =")
         if threads is not None:
             planning_thread_count(threads)  # refused now, by name, rather than at the first query
@@ -421,7 +425,7 @@ class RouteSampler(SamplerBase):
         scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)))
         floats = np.array([field[r, c], np.inf])
         params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor, self.patience,
-                           self.ripple], dtype=np.float64)
+                           self.ripple, self.ripple_growth], dtype=np.float64)
         self._state = (field, grid.kernel.grid, res, origin, self.step_size, frontier, ints, floats, params, scratch,
                        self.low, self.high)
 
@@ -445,7 +449,7 @@ class RouteSampler(SamplerBase):
 
     def __repr__(self) -> str:
         rest = (f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}, "
-                f"ripple={self.ripple:g}")
+                f"ripple={self.ripple:g}, ripple_growth={self.ripple_growth:g}")
         return f"RouteSampler({'None, ' if self.net is None else ''}{rest})"
 
 

@@ -66,22 +66,23 @@ def lowest_unvisited(field, blocked, r, c, visited, moves):
 
 
 @nb.njit(cache=True)
-def walk_field(field, blocked, cell, length, tolerance=0.0):
+def walk_field(field, blocked, cell, length, tolerance=0.0, growth=0.0):
     """Walk down ``field`` from ``cell`` for ``length`` cells of path; returns the cell reached.
 
     With ``tolerance`` 0 each move is ``next_cell``'s: to the lowest neighbour, while it is strictly lower.
     A learned field has shallow pits (ripples) where that walk stops short of the route; with a
     ``tolerance`` > 0 the walk moves to the lowest free neighbour it has not yet visited, and goes on
-    while that neighbour is below the lowest value the walk has reached plus ``tolerance``: it crosses
-    ripples shallower than ``tolerance`` and stops in deeper pits. On a field where every cell but the
-    goal has a strictly lower neighbour (the grid search's) the two walks are the same.
+    while that neighbour is below ``low + tolerance + growth * max(low, 0)``, ``low`` the lowest value the
+    walk has reached: it crosses ripples shallower than that and stops in deeper pits (a learned field's
+    ripples deepen with the cost-to-go; ``growth`` lets the tolerance follow). On a field where every cell
+    but the goal has a strictly lower neighbour (the grid search's) the two walks are the same.
 
     Each move is found when taken: a query walks a few moves at a time, far fewer than the map has cells.
     """
     W = field.shape[1]
     acc = 0.0
     v = cell
-    if tolerance <= 0.0:
+    if tolerance <= 0.0 and growth <= 0.0:
         while acc < length:
             u = next_cell(field, blocked, v // W, v % W)
             if u < 0:
@@ -99,7 +100,7 @@ def walk_field(field, blocked, cell, length, tolerance=0.0):
     low = field[v // W, v % W]
     while acc < length and moves < visited.shape[0]:
         u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves)
-        if u < 0 or field[u // W, u % W] >= low + tolerance:
+        if u < 0 or field[u // W, u % W] >= low + tolerance + growth * max(low, 0.0):
             break
         dr = u // W - v // W
         dc = u % W - v % W
