@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import load_script
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -156,3 +157,25 @@ def test_the_shipped_sampler_crosses_ripples_and_its_ablation_walks_strictly_dow
 def test_a_negative_ripple_is_refused_by_name(kwargs):
     with pytest.raises(InputError, match="ripple = .*ripple_growth = "):
         RouteSampler(None, **kwargs)
+
+
+@pytest.mark.experiments
+def test_the_validation_script_runs_each_column_at_the_walk_it_is_given(capsys, monkeypatch):
+    script = load_script("experiments/vin_validation")
+    made = []
+    real = script.RouteSampler.__init__
+
+    def record(self, *args, **kwargs):
+        real(self, *args, **kwargs)
+        made.append((type(self).__name__, self.net is None, self.ripple, self.ripple_growth))
+
+    monkeypatch.setattr(script.RouteSampler, "__init__", record)
+    assert script.main(["--maps", "1", "--sides", "64", "--seeds", "1", "--families", "bugtrap",
+                        "--walk", "0.25", "0.02", "--ablation-walk", "0.1", "0"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| bugtrap | 64 |")]
+    assert len(rows) == 1 and len(rows[0].strip("|").split("|")) == 7
+    assert set(made) == {("RouteSampler", True, 0.1, 0.0), ("RouteSampler", False, 0.25, 0.02),
+                         ("GeodesicRouteSampler", True, 0.25, 0.02)}
+    with pytest.raises(SystemExit) as stop:
+        script.main(["--walk", "-0.1", "0"])
+    assert stop.value.code == 2 and "--walk" in capsys.readouterr().err

@@ -2,6 +2,7 @@
 
     python scripts/experiments/vin_validation.py                     # the shipped encoder, sides 128 and 256
     python scripts/experiments/vin_validation.py --route runs/route/route.pt --maps 6 --sides 128 256
+    python scripts/experiments/vin_validation.py --maps 12 --offset 600 --walk 0.1 0   # other maps, another walk
 
 Medians of RRT iterations (step 4, tolerance 4, cap 20,000; planner seeds 0 and 1) on validation maps of the
 training families (the five test families', caves and strokes; seeds from ``VALIDATION_SEED0 + 500`` by default,
@@ -27,8 +28,8 @@ import torch
 
 from learning.models.route_net import load_route_net
 from learning.models.route_vin import RouteVIN
-from learning.samplers.registry import make_sampler
-from learning.samplers.route import SHIPPED, SHIPPED_SETTINGS, RouteSampler, shipped_ablation, shipped_sampler
+from learning.references.expert import GeodesicRouteSampler
+from learning.samplers.route import ABLATION_SETTINGS, SHIPPED, SHIPPED_SETTINGS, RouteSampler
 from planners import make_planner
 from planners.maps.generators import TRAINING_FAMILIES, VALIDATION_SEED0, generate
 from planners.tools.benchmark import MAX_ITERATIONS, STEP
@@ -55,14 +56,26 @@ def main(argv=None) -> int:
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
     ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES))
+    ap.add_argument("--walk", type=float, nargs=2, metavar=("RIPPLE", "GROWTH"),
+                    default=[SHIPPED_SETTINGS["ripple"], SHIPPED_SETTINGS["ripple_growth"]],
+                    help="the walk's ripple tolerance and its growth per step of cost-to-go for the encoder, value "
+                         "iteration without learning and the exact reference (default: the shipped settings)")
+    ap.add_argument("--ablation-walk", type=float, nargs=2, metavar=("RIPPLE", "GROWTH"),
+                    default=[ABLATION_SETTINGS["ripple"], ABLATION_SETTINGS["ripple_growth"]],
+                    help="the same for the ablation (default: its settings, a strictly downhill walk)")
     args = ap.parse_args(argv)
+    if min(args.walk + args.ablation_walk) < 0:
+        ap.error(f"--walk and --ablation-walk take depths >= 0, got {args.walk} and {args.ablation_walk}")
     net = load_route_net(args.route)
     plain = LengthCosts(net.block, 1, 1, net.step).eval()
+    walk = {"ripple": args.walk[0], "ripple_growth": args.walk[1]}
+    settings = {**SHIPPED_SETTINGS, **walk}
     samplers = {
-        "ablation": shipped_ablation,
-        "value iteration, no learning": lambda: RouteSampler(plain, **SHIPPED_SETTINGS),
-        "route encoder": lambda: shipped_sampler(net),
-        "exact": lambda: make_sampler("exact_route"),
+        "ablation": lambda: RouteSampler(None, **{**ABLATION_SETTINGS, "ripple": args.ablation_walk[0],
+                                                  "ripple_growth": args.ablation_walk[1]}),
+        "value iteration, no learning": lambda: RouteSampler(plain, **settings),
+        "route encoder": lambda: RouteSampler(net, **settings),
+        "exact": lambda: GeodesicRouteSampler(**settings),
     }
     print("| family | side | " + " | ".join(samplers) + " | share closed |")
     print("|---|---|" + "---|" * (len(samplers) + 1))
