@@ -179,3 +179,15 @@ def test_the_validation_script_runs_each_column_at_the_walk_it_is_given(capsys, 
     with pytest.raises(SystemExit) as stop:
         script.main(["--walk", "-0.1", "0"])
     assert stop.value.code == 2 and "--walk" in capsys.readouterr().err
+
+
+@pytest.mark.experiments
+def test_the_walk_cost_script_times_each_walk_and_refuses_no_walks(capsys):
+    script = load_script("experiments/walk_cost")
+    assert script.main(["--walks", "50"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split(" (")[0] for line in lines] == ["strictly downhill", "tolerance 0.1 step", "shipped"]
+    assert all(line.endswith("ns per walk") for line in lines)
+    with pytest.raises(SystemExit) as stop:
+        script.main(["--walks", "0"])
+    assert stop.value.code == 2
