@@ -144,6 +144,14 @@ def test_room_and_share_closed_and_targets_in_words():
     assert "maze (shifted) 1.30 (exact 1.20)" in words
     words = " ".join(E.carry_targets(_rows({"route ablation": 100, "route encoder": 130}), []))
     assert "maze (shifted) 1.30 (learned" in words
+    # success below the ablation's by one run of 150 shows, with the exact reference's own success beside it
+    runs = [dataclass_run("maze (shifted)", s, 50) for s in ("route ablation", "route encoder", "exact_route")
+            for _ in range(150)]
+    failed = {("route encoder", 0), ("exact_route", 0), ("exact_route", 1), ("exact_route", 2)}
+    runs = [Run(**{**r.__dict__, "solved": False, "iterations": 20000}) if (r.sampler, i % 150) in failed else r
+            for i, r in enumerate(runs)]
+    words = " ".join(E.carry_targets(E.summarize(runs, {("maze (shifted)", "RRT"): 0.05}), []))
+    assert "maze (shifted) 0.993 against 1.000 (exact 0.980)" in words
 
 
 def test_the_glance_table_has_a_few_columns_and_dashes_for_missing_samplers():

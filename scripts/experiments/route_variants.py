@@ -32,7 +32,8 @@ from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, RouteSa
 TRAINED = Path(__file__).resolve().parents[2] / "runs" / "route" / "route.pt"
 
 #: ``RouteSampler``'s defaults when these variants were measured (before the validated ones became the defaults).
-MEASURED = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0, "uses": "progress", "symmetries": 1}
+MEASURED = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0, "uses": "progress",
+            "symmetries": 1}
 SETTINGS = {**MEASURED, "stuck": 1, "tau": 0.5}
 
 
