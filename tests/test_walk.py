@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -130,7 +131,7 @@ def test_the_tolerant_walk_never_revisits_a_cell_nor_rises_more_than_its_toleran
     values = [field[v // W, v % W] for v in cells]
     low = np.minimum.accumulate(values)
     assert all(values[k + 1] < low[k] + tolerance + growth * max(low[k], 0) for k in range(len(values) - 1))
-    for a, b in zip(cells, cells[1:]):  # octile moves between free cells
+    for a, b in itertools.pairwise(cells):  # octile moves between free cells
         assert max(abs(a // W - b // W), abs(a % W - b % W)) == 1 and not blocked[b // W, b % W]
 
 
@@ -191,3 +192,18 @@ def test_the_walk_cost_script_times_each_walk_and_refuses_no_walks(capsys):
     with pytest.raises(SystemExit) as stop:
         script.main(["--walks", "0"])
     assert stop.value.code == 2
+
+
+@pytest.mark.experiments
+def test_the_route_table_shows_any_sampler_of_a_run_and_refuses_one_it_lacks(tmp_path, capsys):
+    script = load_script("experiments/route_table")
+    runs = tmp_path / "runs.csv"
+    lines = ["map,split,planner,sampler,iterations,solved"]
+    for sampler, its in (("route ablation", 100), ("exact_route", 20), ("route encoder", 40), ("strict walk", 60)):
+        lines += [f"bugtrap,test,RRT,{sampler},{its + d},True" for d in (-1, 0, 1)]
+    runs.write_text("\n".join(lines) + "\n")
+    assert script.main([f"shipped={runs}", f"strict={runs}@strict walk"]) == 0
+    row = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("| bugtrap |"))
+    assert row == "| bugtrap | 20 | 100 (1.00) | 40, 0.75, 1.00 | 60, 0.50, 1.00 |"
+    assert script.main([f"{runs}", f"x={runs}@nope"]) == 2
+    assert "no test runs of the sampler 'nope'" in capsys.readouterr().err

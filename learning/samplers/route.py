@@ -34,15 +34,14 @@ import numpy as np
 from learning.device import resolve_device
 from learning.models.field import FieldEncoder
 from learning.models.route_net import load_route_net
-from learning.models.threads import planning_thread_count
 from learning.models.shipped import SHIPPED_ROUTE
+from learning.models.threads import planning_thread_count
 from planners import OccupancyGrid, Problem, SamplerBase
 from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, lowest_vertex_cell, walk_field
 from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
-
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
 SHIPPED = SHIPPED_ROUTE

@@ -2,9 +2,11 @@
 
     python scripts/experiments/route_table.py results/evaluation/runs.csv
     python scripts/experiments/route_table.py vin=results/evaluation/runs.csv unet=old/runs.csv
+    python scripts/experiments/route_table.py shipped=runs.csv "strict walk=runs.csv@strict walk"
 
-Each argument is ``[LABEL=]runs.csv`` of ``scripts/evaluate.py``. The ablation and the exact reference are
-taken from the first; each run's "route encoder" median is shown with its share of the room closed,
+Each argument is ``[LABEL=]runs.csv[@SAMPLER]`` of ``scripts/evaluate.py``: the sampler's runs (default
+"route encoder"; another name is an ``evaluate.py --sampler NAME=...`` of the same run). The ablation and the
+exact reference are taken from the first; each column's median is shown with its share of the room closed,
 ``(ablation - encoder) / (ablation - exact)`` where the room is at least 20% of the ablation's median
 ("no room" else), and its success rate. Rows: every test map set of the first run, then the MovingAI maps
 pooled. Medians are of iterations-to-solution, an unsolved run counting as the cap.
@@ -40,21 +42,31 @@ def main(argv: list[str]) -> int:
         print(__doc__, file=sys.stderr)
         return 2
     named = [(a.split("=", 1) if "=" in a else [a, a]) for a in argv]
-    runs = [(label, _runs(path)) for label, path in named]
+    columns = []
+    for label, spec in named:
+        path, _, sampler = spec.partition("@")
+        columns.append((label, path, sampler or ENCODER))
+    files = {path: _runs(path) for _, path, _ in columns}
+    for label, path, sampler in columns:
+        if not any(s == sampler for _, s in files[path]):
+            print(f"route_table: {path} holds no test runs of the sampler {sampler!r} (column {label!r})",
+                  file=sys.stderr)
+            return 2
+    runs = [(label, files[path], sampler) for label, path, sampler in columns]
     base = runs[0][1]
     sets = sorted({m for m, s in base if s == EXACT}, key=lambda m: (
         0 if m in GENERATED else 1 if "shifted" in m else 2 if "unseen" in m else 3, m))
     movingai = [m for m in sets if m not in GENERATED and "(" not in m]
-    print("| map set | exact | ablation | " + " | ".join(f"{label}: median, share closed, success" for label, _ in runs)
-          + " |")
+    heads = [f"{label}: median, share closed, success" for label, *_ in runs]
+    print("| map set | exact | ablation | " + " | ".join(heads) + " |")
     print("|---|---|---|" + "---|" * len(runs))
-    for name, pick in [*((m, [m]) for m in sets), ("MovingAI (all)", movingai)]:
+    for name, pick in [*((m, [m]) for m in sets), *([("MovingAI (all)", movingai)] if movingai else [])]:
         exact = np.median([i for i, _ in _pooled(base, EXACT, pick)])
         abl_runs = _pooled(base, ABLATION, pick)
         abl = np.median([i for i, _ in abl_runs])
         cells = []
-        for _, r in runs:
-            enc_runs = _pooled(r, ENCODER, pick)
+        for _, r, sampler in runs:
+            enc_runs = _pooled(r, sampler, pick)
             if not enc_runs:
                 cells.append("–")
                 continue

@@ -12,7 +12,8 @@ uses the field everywhere, as the shipped encoder is used (``SHIPPED_SETTINGS``)
 does so with one pass, ``both_sym<k>`` averages over the first k symmetries (1-8), and ``exact_both``
 is the reference at those settings;
 ``grid_encoder_l<lookahead>_s<sigma>`` and ``grid_ablation_l<lookahead>_s<sigma>`` are the grid the
-shipped lookahead and spread were chosen on;
+shipped lookahead and spread were chosen on; ``walk_<ripple>_<growth>`` is the shipped encoder and settings
+with another walk to the target (``walk_0_0``: strictly downhill; ``walk_0.1_0``: a fixed tolerance);
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
@@ -26,7 +27,7 @@ from pathlib import Path
 
 from learning.models.route_net import load_route_net
 from learning.references.expert import GeodesicRouteSampler
-from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, RouteSampler, shipped_sampler
+from learning.samplers.route import ABLATION_SETTINGS, SHIPPED, SHIPPED_SETTINGS, RouteSampler, shipped_sampler
 
 #: Where ``scripts/train_route.py`` writes the encoder by default.
 TRAINED = Path(__file__).resolve().parents[2] / "runs" / "route" / "route.pt"
@@ -121,13 +122,19 @@ def ranked_exact_tau1() -> GeodesicRouteSampler:
 
 
 _GRID = re.compile(r"grid_(encoder|ablation)_l([0-9.]+)_s([0-9.]+)")
+_WALK = re.compile(r"walk_([0-9.]+)_([0-9.]+)")
 _SYM = re.compile(r"both_sym(\d)")
 
 
 def __getattr__(name: str):
     """``grid_encoder_l3_s0.5`` / ``grid_ablation_l2.5_s0.5``: the lookahead and spread grid the shipped
     settings were chosen on (``--sampler e=route_variants:grid_encoder_l3_s0.5``); the rest as shipped.
-    ``both_sym4``: the module docstring."""
+    ``both_sym4``, ``walk_0.1_0``: the module docstring."""
+    walk = _WALK.fullmatch(name)
+    if walk is not None:
+        ripple, growth = float(walk.group(1)), float(walk.group(2))
+        return lambda: RouteSampler(load_route_net(SHIPPED),
+                                    **{**SHIPPED_SETTINGS, "ripple": ripple, "ripple_growth": growth})
     sym = _SYM.fullmatch(name)
     if sym is not None:
         return lambda: _variant(**SHIPPED_SETTINGS, symmetries=int(sym.group(1)))
