@@ -15,34 +15,16 @@ from planners import OccupancyGrid, Problem
 from planners.guidance.frontier import frontier_shape
 
 
-@nb.njit(cache=True, inline="always")
-def next_cell(field, blocked, r, c):
-    """The neighbour of cell (r, c) one octile step down ``field`` (flat index; -1 where none).
-
-    The lowest free neighbour that is strictly lower, first in row-major order on ties, with no
-    corner cutting; none from a cell whose cost is infinite.
-    """
-    H, W = field.shape
-    best = field[r, c]
-    out = -1
-    if not np.isfinite(best):
-        return out
-    for dr in (-1, 0, 1):
-        for dc in (-1, 0, 1):
-            rr, cc = r + dr, c + dc
-            if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
-                continue
-            if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
-                continue
-            if field[rr, cc] < best:
-                best = field[rr, cc]
-                out = rr * W + cc
-    return out
+#: ``lowest_unvisited``'s visits when none are excluded.
+NO_VISITS = np.empty(0, dtype=np.int64)
 
 
 @nb.njit(cache=True, inline="always")
 def lowest_unvisited(field, blocked, r, c, visited, moves):
-    """The lowest free neighbour of (r, c) not among ``visited[:moves]`` (octile, no corner cutting); -1 where none."""
+    """The lowest free neighbour of (r, c) not among ``visited[:moves]``, first in row-major order on ties.
+
+    Octile moves with no corner cutting; -1 where there is none.
+    """
     H, W = field.shape
     best = np.inf
     out = -1
@@ -63,6 +45,20 @@ def lowest_unvisited(field, blocked, r, c, visited, moves):
                 best = field[rr, cc]
                 out = u
     return out
+
+
+@nb.njit(cache=True, inline="always")
+def next_cell(field, blocked, r, c):
+    """The neighbour of cell (r, c) one octile step down ``field`` (flat index; -1 where none).
+
+    The lowest free neighbour that is strictly lower, first in row-major order on ties, with no
+    corner cutting; none from a cell whose cost is infinite.
+    """
+    if not np.isfinite(field[r, c]):
+        return -1
+    u = lowest_unvisited(field, blocked, r, c, NO_VISITS, 0)
+    W = field.shape[1]
+    return u if u >= 0 and field[u // W, u % W] < field[r, c] else -1
 
 
 @nb.njit(cache=True)
