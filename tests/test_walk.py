@@ -183,6 +183,27 @@ def test_the_validation_script_runs_each_column_at_the_walk_it_is_given(capsys, 
 
 
 @pytest.mark.experiments
+@pytest.mark.parametrize("argv, seeds", [([], {0, 1}), (["--first-seed", "3"], {3, 4}),
+                                         (["--first-seed", "2", "--seeds", "1"], {2})])
+def test_the_validation_script_plans_with_the_seeds_it_is_given(argv, seeds, monkeypatch, capsys):
+    script = load_script("experiments/vin_validation")
+    used = set()
+    real = script.make_planner
+
+    def record(*args, seed, **kwargs):
+        used.add(seed)
+        return real(*args, seed=seed, **kwargs)
+
+    monkeypatch.setattr(script, "make_planner", record)
+    assert script.main(["--maps", "1", "--sides", "64", "--families", "bugtrap", *argv]) == 0
+    assert used == seeds
+    for bad in (["--first-seed", "-1"], ["--seeds", "0"], ["--maps", "0"]):
+        with pytest.raises(SystemExit) as stop:
+            script.main(bad)
+        assert stop.value.code == 2 and "--first-seed" in capsys.readouterr().err
+
+
+@pytest.mark.experiments
 def test_the_walk_cost_script_times_each_walk_and_refuses_no_walks(capsys):
     script = load_script("experiments/walk_cost")
     assert script.main(["--walks", "50"]) == 0

@@ -4,9 +4,10 @@
     python scripts/experiments/vin_validation.py --route runs/route/route.pt --maps 6 --sides 128 256
     python scripts/experiments/vin_validation.py --maps 12 --offset 600 --walk 0.1 0   # other maps, another walk
 
-Medians of RRT iterations (step 4, tolerance 4, cap 20,000; planner seeds 0 and 1) on validation maps of the
-training families (the five test families', caves and strokes; seeds from ``VALIDATION_SEED0 + 500`` by default,
-``--offset``; never test maps), at sides the encoder trained on (128) and beyond (256), for:
+Medians of RRT iterations (step 4, tolerance 4, cap 20,000; planner seeds 0 and 1, ``--first-seed``) on
+validation maps of the training families (the five test families', caves and strokes; seeds from
+``VALIDATION_SEED0 + 500`` by default, ``--offset``; never test maps), at sides the encoder trained on (128)
+and beyond (256), for:
 
 - the route ablation (the straight line in place of the field: no learning),
 - value iteration without learning: the same value iteration over the block grid with every move costing its
@@ -54,7 +55,9 @@ def main(argv=None) -> int:
     ap.add_argument("--offset", type=int, default=500,
                     help="the first map's seed after VALIDATION_SEED0 (default 500; maps offset .. offset + maps - 1)")
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
-    ap.add_argument("--seeds", type=int, default=2)
+    ap.add_argument("--seeds", type=int, default=2, help="planner seeds per map (default 2)")
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="the first planner seed (default 0: seeds 0 .. seeds - 1); another shows the medians' noise")
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES))
     ap.add_argument("--walk", type=float, nargs=2, metavar=("RIPPLE", "GROWTH"),
                     default=[SHIPPED_SETTINGS["ripple"], SHIPPED_SETTINGS["ripple_growth"]],
@@ -64,6 +67,9 @@ def main(argv=None) -> int:
                     default=[ABLATION_SETTINGS["ripple"], ABLATION_SETTINGS["ripple_growth"]],
                     help="the same for the ablation (default: its settings, a strictly downhill walk)")
     args = ap.parse_args(argv)
+    if args.seeds < 1 or args.first_seed < 0 or args.maps < 1:
+        ap.error(f"--maps and --seeds take counts >= 1 and --first-seed a seed >= 0, got {args.maps}, {args.seeds} "
+                 f"and {args.first_seed}")
     if min(args.walk + args.ablation_walk) < 0:
         ap.error(f"--walk and --ablation-walk take depths >= 0, got {args.walk} and {args.ablation_walk}")
     net = load_route_net(args.route)
@@ -85,7 +91,7 @@ def main(argv=None) -> int:
             for i in range(args.maps):
                 p = generate(family, VALIDATION_SEED0 + args.offset + i, side)
                 for name, make in samplers.items():
-                    for seed in range(args.seeds):
+                    for seed in range(args.first_seed, args.first_seed + args.seeds):
                         r = make_planner("RRT", p, extension_step=STEP, sampler=make(), seed=seed).solve(
                             max_iterations=MAX_ITERATIONS)
                         its[name].append(r.first_solution_iteration if r.solved else MAX_ITERATIONS)
