@@ -13,13 +13,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import load_script
 
 from learning import evaluation as E
 from learning.evaluation.journal import JOURNAL, Journal, task_key, work_folder
 from learning.evaluation.mapsets import UnseenQuery, pooled_tuned, unseen_name, unseen_queries
 from planners.base.fileio import MANIFEST, run_lock
 from planners.tools.benchmark import Run
-from conftest import load_script
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The smallest comparison: one forest map per split, one seed, no other map sets or planners.

@@ -14,7 +14,6 @@ import numpy as np
 from planners import OccupancyGrid, Problem
 from planners.guidance.frontier import frontier_shape
 
-
 #: ``lowest_unvisited``'s visits when none are excluded.
 NO_VISITS = np.empty(0, dtype=np.int64)
 

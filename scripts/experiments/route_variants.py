@@ -6,7 +6,8 @@
 
 ``uses="frontier"`` (a knob of the private ``_VariantRouteSampler`` below, not of ``RouteSampler``) keeps
 the follower's progress on the straight line and lets the encoder's predicted cost-to-go choose among
-the frontier's cells when the tree is stuck; these settings (stuck after 1 iteration, frontier temperature half a step) were chosen on validation maps.
+the frontier's cells when the tree is stuck; these settings (stuck after 1 iteration, frontier temperature half a
+step) were chosen on validation maps.
 ``ranked_symmetric`` averages the encoder's prediction over the square's 8 symmetries; ``both_symmetric``
 uses the field everywhere, as the shipped encoder is used (``SHIPPED_SETTINGS``), ``both``
 does so with one pass, ``both_sym<k>`` averages over the first k symmetries (1-8), and ``exact_both``
