@@ -40,7 +40,7 @@ from planners import OccupancyGrid, Problem, SamplerBase
 from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
-from planners.guidance.follow import frontier_costs, lowest_vertex_cell, walk_field
+from planners.guidance.follow import frontier_costs, lowest_vertex_cell, walk_field_into
 from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
@@ -92,8 +92,8 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
     takes 7 of its doubles whatever its kind, so the stream does not depend on the branch taken.
     ``state`` is ``RouteSampler._state``: the fields, the frontier, the progress state (``ints``:
     ``R_*`` slots; ``floats``: lowest predicted cost, closest straight-line distance to the goal),
-    the parameters, and scratch buffers for a batch's uniforms and frontier points, allocated once
-    per query rather than once per iteration. Samples are absolute: ``anchored`` is left alone.
+    the parameters, and scratch buffers for a batch's uniforms and frontier points and the walk's visited
+    cells, allocated once per query rather than once per iteration. Samples are absolute: ``anchored`` is left alone.
     """
     field, blocked, res, origin, step, frontier, ints, floats, params, scratch, low, high = state
     world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost = frontier
@@ -114,6 +114,7 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
         ints[R_FSEEN] = n
     m = pts.shape[0]
     U, F, u_pick, u_xy = scratch[0][:m], scratch[1][:m], scratch[2][:m], scratch[3][:m]
+    visited = scratch[4]
     for k in range(m):  # row by row, as Generator.random((m, 7)) fills
         for j in range(7):
             U[k, j] = next_double(rng)
@@ -128,8 +129,8 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
         elif frontier_mode or u[0] < floor:
             x, y = low[0] + (high[0] - low[0]) * u[1], low[1] + (high[1] - low[1]) * u[2]
         else:
-            v = walk_field(field, blocked, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res, ripple,
-                           ripple_growth)
+            v = walk_field_into(field, blocked, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res, ripple,
+                                ripple_growth, visited)
             r = sigma * step * math.sqrt(-2.0 * math.log(1.0 - u[5]))  # Box-Muller: two normals from two uniforms
             x = origin[0] + (v % W + 0.5) * res + r * math.cos(2.0 * math.pi * u[6])
             y = origin[1] + (v // W + 0.5) * res + r * math.sin(2.0 * math.pi * u[6])
@@ -421,7 +422,9 @@ class RouteSampler(SamplerBase):
                     np.ascontiguousarray(f.world.params[1:3]), f.cost)
         ints = np.array([0, r * grid.width + c, 0, 0, 0, 0], dtype=np.int64)
         b = self.batch
-        scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)))
+        # the walk's visited cells: a walk covers less than 1.5 lookaheads of path (``route_draw``)
+        walk = int(1.5 * self.lookahead * self.step_size / res) + 2
+        scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)), np.empty(walk, np.int64))
         floats = np.array([field[r, c], np.inf])
         params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor, self.patience,
                            self.ripple, self.ripple_growth], dtype=np.float64)

@@ -73,37 +73,47 @@ def walk_field(field, blocked, cell, length, tolerance=0.0, growth=0.0):
     but the goal has a strictly lower neighbour (the grid search's) the two walks are the same.
 
     Each move is found when taken: a query walks a few moves at a time, far fewer than the map has cells.
+    ``walk_field_into`` is the same walk with the visited cells kept in a buffer of the caller's.
+    """
+    return walk_field_into(field, blocked, cell, length, tolerance, growth, np.empty(int(length) + 2, np.int64))
+
+
+@nb.njit(cache=True)
+def walk_field_into(field, blocked, cell, length, tolerance, growth, visited):
+    """``walk_field``, its visited cells kept in the caller's ``visited``.
+
+    ``visited`` should be at least ``int(length) + 2`` long (a shorter one ends the walk after
+    ``len(visited) - 1`` moves); the strictly downhill walk does not use it.
     """
     W = field.shape[1]
+    strict = tolerance <= 0.0 and growth <= 0.0
     acc = 0.0
     v = cell
-    if tolerance <= 0.0 and growth <= 0.0:
-        while acc < length:
-            u = next_cell(field, blocked, v // W, v % W)
-            if u < 0:
-                break
-            dr = u // W - v // W
-            dc = u % W - v % W
-            acc += math.sqrt(float(dr * dr + dc * dc))
-            v = u
-        return v
-    if not np.isfinite(field[v // W, v % W]):
-        return v
-    visited = np.empty(int(length) + 2, dtype=np.int64)  # each move covers at least one cell of path
-    visited[0] = v
-    moves = 1
     low = field[v // W, v % W]
-    while acc < length and moves < visited.shape[0]:
-        u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves)
-        if u < 0 or field[u // W, u % W] >= low + tolerance + growth * max(low, 0.0):
+    if not np.isfinite(low):
+        return v
+    moves = 1
+    if not strict:
+        visited[0] = v
+    while acc < length:
+        if strict:
+            u = next_cell(field, blocked, v // W, v % W)
+        elif moves < visited.shape[0]:
+            u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves)
+            if u >= 0 and field[u // W, u % W] >= low + tolerance + growth * max(low, 0.0):
+                u = -1
+        else:
+            u = -1
+        if u < 0:
             break
         dr = u // W - v // W
         dc = u % W - v % W
         acc += math.sqrt(float(dr * dr + dc * dc))
         v = u
-        visited[moves] = v
-        moves += 1
-        low = min(low, field[v // W, v % W])
+        if not strict:  # each move covers at least one cell of path: int(length) + 2 entries suffice
+            visited[moves] = v
+            moves += 1
+            low = min(low, field[v // W, v % W])
     return v
 
 
