@@ -16,6 +16,7 @@ import argparse
 import numpy as np
 
 from planners.maps.generators import VALIDATION_SEED0, generate
+from planners.maps.gridsearch import free_components
 from planners.maps.unseen import generate_unseen
 
 #: Seeds outside every split: diagnosis only, never a test, tuning or validation map.
@@ -30,22 +31,8 @@ SETS = {
 
 
 def pieces(free: np.ndarray) -> int:
-    """The 4-connected pieces of ``free`` (a small bool array), by flood fill."""
-    seen = np.zeros_like(free)
-    count = 0
-    for start in zip(*np.nonzero(free), strict=True):
-        if seen[start]:
-            continue
-        count += 1
-        stack = [start]
-        seen[start] = True
-        while stack:
-            r, c = stack.pop()
-            for nr, nc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
-                if 0 <= nr < free.shape[0] and 0 <= nc < free.shape[1] and free[nr, nc] and not seen[nr, nc]:
-                    seen[nr, nc] = True
-                    stack.append((nr, nc))
-    return count
+    """The 4-connected pieces of ``free`` (a small bool array): ``planners.maps.gridsearch.free_components``."""
+    return int(free_components(~free).max()) + 1
 
 
 def split_share(obstacles: np.ndarray, block: int) -> tuple[int, int]:
