@@ -40,7 +40,7 @@ from planners import OccupancyGrid, Problem, SamplerBase
 from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
-from planners.guidance.follow import frontier_costs, lowest_vertex_cell, walk_field_into
+from planners.guidance.follow import frontier_costs, last_in_sight, lowest_vertex_cell, walk_path
 from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
@@ -49,18 +49,22 @@ SHIPPED = SHIPPED_ROUTE
 
 #: How the shipped encoder is used, chosen on the validation maps (README): its field ranks the tree's
 #: vertices and places the target 3 steps ahead (spread half a step), walking across the field's ripples
-#: up to a tenth of a step deep plus a hundredth of the cost-to-go, and ranks the frontier, which takes
-#: over after one iteration without progress at a temperature of half a step.
-SHIPPED_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 3.0, "sigma": 0.5, "ripple": 0.1, "ripple_growth": 0.01}
+#: up to a tenth of a step deep plus a hundredth of the cost-to-go and ending where the walk leaves the
+#: progress cell's sight, and ranks the frontier, which takes over after one iteration without progress at a
+#: temperature of half a step.
+SHIPPED_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 3.0, "sigma": 0.5, "ripple": 0.1, "ripple_growth": 0.01,
+                    "sight": True}
 
 
 #: The ablation's own settings: the same rule, its lookahead and spread tuned on the same validation
 #: grid as the encoder's (a baseline tuned as carefully as what it is compared with). Its walk goes strictly
-#: downhill (``ripple`` 0): on the validation maps that took it fewer iterations than crossing ripples.
-ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5, "ripple": 0.0, "ripple_growth": 0.0}
+#: downhill (``ripple`` 0): on the validation maps that took it fewer iterations than crossing ripples; it is
+#: cut at the sight line as the encoder's is, which took it fewer iterations there too.
+ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5, "ripple": 0.0, "ripple_growth": 0.0,
+                     "sight": True}
 #: The straight-line follower of the comparison (``make_sampler("follower")``): one step ahead of the
 #: vertex nearest the goal, the frontier after 4 iterations without progress, at a temperature of a step.
-FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0}
+FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0, "sight": False}
 
 
 # slots of RouteSampler's integer state
@@ -97,7 +101,7 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
     """
     field, blocked, res, origin, step, frontier, ints, floats, params, scratch, low, high = state
     world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost = frontier
-    lookahead, sigma, stuck, floor0, max_floor, patience, ripple, ripple_growth = params
+    lookahead, sigma, stuck, floor0, max_floor, patience, ripple, ripple_growth, sight = params
     W = field.shape[1]
     if n > ints[R_SEEN]:
         best, c = lowest_vertex_cell(field, X[ints[R_SEEN]:n], res, origin, floats[0], ints[R_CELL])
@@ -129,8 +133,9 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
         elif frontier_mode or u[0] < floor:
             x, y = low[0] + (high[0] - low[0]) * u[1], low[1] + (high[1] - low[1]) * u[2]
         else:
-            v = walk_field_into(field, blocked, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res, ripple,
-                                ripple_growth, visited)
+            moves = walk_path(field, blocked, ints[R_CELL], lookahead * (0.5 + u[4]) * step / res, ripple,
+                              ripple_growth, visited)
+            v = last_in_sight(blocked, visited, moves) if sight else visited[moves - 1]
             r = sigma * step * math.sqrt(-2.0 * math.log(1.0 - u[5]))  # Box-Muller: two normals from two uniforms
             x = origin[0] + (v % W + 0.5) * res + r * math.cos(2.0 * math.pi * u[6])
             y = origin[1] + (v // W + 0.5) * res + r * math.sin(2.0 * math.pi * u[6])
@@ -275,7 +280,7 @@ class RouteSampler(SamplerBase):
     steps (jittered 0.5-1.5x) further down the predicted field, and samples scatter ``sigma`` steps
     around it. A learned field has shallow pits (ripples) where a strictly downhill walk stops short of
     the route; the walk crosses those less than ``ripple + ripple_growth * cost-to-go`` steps deep
-    (``planners.guidance.follow.walk_field``).
+    (``planners.guidance.follow.walk_field``), and ends where it leaves the progress cell's sight.
     When progress has stalled for ``stuck`` iterations, samples go to the tree's frontier
     (``planners.guidance.frontier``; cells of lower predicted cost-to-go preferred) until the tree
     makes progress again. A ``uniform_floor`` share of samples is uniform; it grows, as the policy's
@@ -312,6 +317,9 @@ class RouteSampler(SamplerBase):
             computed it), which the evaluation adds to a run's wall time so each run costs its query's field.
         ripple, ripple_growth: How far the walk to the target may rise above the lowest value ``low`` it
             has reached: ``ripple + ripple_growth * low`` steps; both 0 walk strictly downhill.
+        sight: Cut the walk where it first leaves the sight of the progress cell's centre
+            (``planners.guidance.follow.last_in_sight``): round a corner, the target is the last cell the
+            progress vertex can reach in a straight line, not one behind the wall the extension would hit.
     """
 
     #: Where the encoder's field replaces the straight line: the progress and the frontier's ranking.
@@ -330,7 +338,7 @@ class RouteSampler(SamplerBase):
                  stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
                  max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None,
                  fields: FieldCache | None = None, ripple: float = 0.1,
-                 ripple_growth: float = 0.01) -> None:
+                 ripple_growth: float = 0.01, sight: bool = True) -> None:
         if not (ripple >= 0 and ripple_growth >= 0):
             raise InputError(f"ripple = {short_repr(ripple)}, ripple_growth = {short_repr(ripple_growth)}: expected a "
                              f"depth in steps >= 0 and a growth per step of cost-to-go >= 0")
@@ -343,6 +351,9 @@ class RouteSampler(SamplerBase):
         self.stuck, self.uniform_floor, self.batch = int(stuck), float(uniform_floor), int(batch)
         self.patience, self.max_floor, self.tau = int(patience), float(max_floor), float(tau)
         self.ripple, self.ripple_growth = float(ripple), float(ripple_growth)
+        if not isinstance(sight, bool | np.bool_):
+            raise InputError(f"sight = {short_repr(sight)}: expected True or False")
+        self.sight = bool(sight)
         self.device = resolve_device(device, "device =")
         if threads is not None:
             planning_thread_count(threads)  # refused now, by name, rather than at the first query
@@ -427,7 +438,7 @@ class RouteSampler(SamplerBase):
         scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)), np.empty(walk, np.int64))
         floats = np.array([field[r, c], np.inf])
         params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor, self.patience,
-                           self.ripple, self.ripple_growth], dtype=np.float64)
+                           self.ripple, self.ripple_growth, float(self.sight)], dtype=np.float64)
         self._state = (field, grid.kernel.grid, res, origin, self.step_size, frontier, ints, floats, params, scratch,
                        self.low, self.high)
 
@@ -451,7 +462,7 @@ class RouteSampler(SamplerBase):
 
     def __repr__(self) -> str:
         rest = (f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}, "
-                f"ripple={self.ripple:g}, ripple_growth={self.ripple_growth:g}")
+                f"ripple={self.ripple:g}, ripple_growth={self.ripple_growth:g}, sight={self.sight}")
         return f"RouteSampler({'None, ' if self.net is None else ''}{rest})"
 
 

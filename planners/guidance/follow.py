@@ -13,6 +13,7 @@ import numpy as np
 
 from planners import OccupancyGrid, Problem
 from planners.guidance.frontier import frontier_shape
+from planners.kernels.geometry import grid_segment_free
 
 #: ``lowest_unvisited``'s visits when none are excluded.
 NO_VISITS = np.empty(0, dtype=np.int64)
@@ -83,38 +84,63 @@ def walk_field_into(field, blocked, cell, length, tolerance, growth, visited):
     """``walk_field``, its visited cells kept in the caller's ``visited``.
 
     ``visited`` should be at least ``int(length) + 2`` long (a shorter one ends the walk after
-    ``len(visited) - 1`` moves); the strictly downhill walk does not use it.
+    ``len(visited) - 1`` moves).
+    """
+    return visited[walk_path(field, blocked, cell, length, tolerance, growth, visited) - 1]
+
+
+@nb.njit(cache=True)
+def walk_path(field, blocked, cell, length, tolerance, growth, visited):
+    """``walk_field``'s walk, its cells in order (``cell`` first) kept in ``visited``; the number of cells.
+
+    ``visited`` should be at least ``int(length) + 2`` long (a shorter one ends the walk after
+    ``len(visited) - 1`` moves).
     """
     W = field.shape[1]
     strict = tolerance <= 0.0 and growth <= 0.0
     acc = 0.0
     v = cell
     low = field[v // W, v % W]
-    if not np.isfinite(low):
-        return v
+    visited[0] = v
     moves = 1
-    if not strict:
-        visited[0] = v
-    while acc < length:
+    if not np.isfinite(low):
+        return moves
+    while acc < length and moves < visited.shape[0]:
         if strict:
             u = next_cell(field, blocked, v // W, v % W)
-        elif moves < visited.shape[0]:
+        else:
             u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves)
             if u >= 0 and field[u // W, u % W] >= low + tolerance + growth * max(low, 0.0):
                 u = -1
-        else:
-            u = -1
         if u < 0:
             break
         dr = u // W - v // W
         dc = u % W - v % W
         acc += math.sqrt(float(dr * dr + dc * dc))
         v = u
-        if not strict:  # each move covers at least one cell of path: int(length) + 2 entries suffice
-            visited[moves] = v
-            moves += 1
-            low = min(low, field[v // W, v % W])
-    return v
+        visited[moves] = v  # each move covers at least one cell of path: int(length) + 2 entries suffice
+        moves += 1
+        low = min(low, field[v // W, v % W])
+    return moves
+
+
+@nb.njit(cache=True)
+def last_in_sight(blocked, path, moves):
+    """The last cell of ``path[:moves]`` before the path first leaves the sight of its first cell's centre.
+
+    The end itself where the straight segment between the two centres meets no blocked cell; otherwise
+    the cell before the first one out of sight (``planners.kernels.geometry.grid_segment_free``).
+    """
+    W = blocked.shape[1]
+    x0, y0 = path[0] % W + 0.5, path[0] // W + 0.5
+    end = path[moves - 1]
+    if grid_segment_free(blocked, 1.0, x0, y0, end % W + 0.5, end // W + 0.5):
+        return end
+    for i in range(1, moves):
+        u = path[i]
+        if not grid_segment_free(blocked, 1.0, x0, y0, u % W + 0.5, u // W + 0.5):
+            return path[i - 1]
+    return end
 
 
 @nb.njit(cache=True)

@@ -14,7 +14,8 @@ does so with one pass, ``both_sym<k>`` averages over the first k symmetries (1-8
 is the reference at those settings;
 ``grid_encoder_l<lookahead>_s<sigma>`` and ``grid_ablation_l<lookahead>_s<sigma>`` are the grid the
 shipped lookahead and spread were chosen on; ``walk_<ripple>_<growth>`` is the shipped encoder and settings
-with another walk to the target (``walk_0_0``: strictly downhill; ``walk_0.1_0``: a fixed tolerance);
+with another walk to the target (``walk_0_0``: strictly downhill; ``walk_0.1_0``: a fixed tolerance;
+``walk_0.1_0.01_nosight``: the shipped walk, not cut where it leaves the progress cell's sight);
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
@@ -34,8 +35,8 @@ from learning.samplers.route import ABLATION_SETTINGS, SHIPPED, SHIPPED_SETTINGS
 TRAINED = Path(__file__).resolve().parents[2] / "runs" / "route" / "route.pt"
 
 #: ``RouteSampler``'s defaults when these variants were measured (before the validated ones became the defaults).
-MEASURED = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0, "uses": "progress",
-            "symmetries": 1}
+MEASURED = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0, "sight": False,
+            "uses": "progress", "symmetries": 1}
 SETTINGS = {**MEASURED, "stuck": 1, "tau": 0.5}
 
 
@@ -123,19 +124,20 @@ def ranked_exact_tau1() -> GeodesicRouteSampler:
 
 
 _GRID = re.compile(r"grid_(encoder|ablation)_l([0-9.]+)_s([0-9.]+)")
-_WALK = re.compile(r"walk_([0-9.]+)_([0-9.]+)")
+_WALK = re.compile(r"walk_([0-9.]+)_([0-9.]+)(_nosight)?")
 _SYM = re.compile(r"both_sym(\d)")
 
 
 def __getattr__(name: str):
     """``grid_encoder_l3_s0.5`` / ``grid_ablation_l2.5_s0.5``: the lookahead and spread grid the shipped
     settings were chosen on (``--sampler e=route_variants:grid_encoder_l3_s0.5``); the rest as shipped.
-    ``both_sym4``, ``walk_0.1_0``: the module docstring."""
+    ``both_sym4``, ``walk_0.1_0``, ``walk_0.1_0.01_nosight``: the module docstring."""
     walk = _WALK.fullmatch(name)
     if walk is not None:
         ripple, growth = float(walk.group(1)), float(walk.group(2))
-        return lambda: RouteSampler(load_route_net(SHIPPED),
-                                    **{**SHIPPED_SETTINGS, "ripple": ripple, "ripple_growth": growth})
+        sight = walk.group(3) is None
+        return lambda: RouteSampler(load_route_net(SHIPPED), **{**SHIPPED_SETTINGS, "ripple": ripple,
+                                                                "ripple_growth": growth, "sight": sight})
     sym = _SYM.fullmatch(name)
     if sym is not None:
         return lambda: _variant(**SHIPPED_SETTINGS, symmetries=int(sym.group(1)))

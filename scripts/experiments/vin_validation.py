@@ -66,6 +66,12 @@ def main(argv=None) -> int:
     ap.add_argument("--ablation-walk", type=float, nargs=2, metavar=("RIPPLE", "GROWTH"),
                     default=[ABLATION_SETTINGS["ripple"], ABLATION_SETTINGS["ripple_growth"]],
                     help="the same for the ablation (default: its settings, a strictly downhill walk)")
+    ap.add_argument("--sight", choices=("on", "off"), default="on" if SHIPPED_SETTINGS.get("sight") else "off",
+                    help="cut the walk to the target where it leaves the sight of the progress cell, for the encoder, "
+                         "value iteration without learning and the exact reference (default: the shipped setting)")
+    ap.add_argument("--ablation-sight", choices=("on", "off"),
+                    default="on" if ABLATION_SETTINGS.get("sight") else "off",
+                    help="the same for the ablation (default: its setting)")
     args = ap.parse_args(argv)
     if args.seeds < 1 or args.first_seed < 0 or args.maps < 1:
         ap.error(f"--maps and --seeds take counts >= 1 and --first-seed a seed >= 0, got {args.maps}, {args.seeds} "
@@ -74,11 +80,12 @@ def main(argv=None) -> int:
         ap.error(f"--walk and --ablation-walk take depths >= 0, got {args.walk} and {args.ablation_walk}")
     net = load_route_net(args.route)
     plain = LengthCosts(net.block, 1, 1, net.step).eval()
-    walk = {"ripple": args.walk[0], "ripple_growth": args.walk[1]}
+    walk = {"ripple": args.walk[0], "ripple_growth": args.walk[1], "sight": args.sight == "on"}
     settings = {**SHIPPED_SETTINGS, **walk}
     samplers = {
         "ablation": lambda: RouteSampler(None, **{**ABLATION_SETTINGS, "ripple": args.ablation_walk[0],
-                                                  "ripple_growth": args.ablation_walk[1]}),
+                                                  "ripple_growth": args.ablation_walk[1],
+                                                  "sight": args.ablation_sight == "on"}),
         "value iteration, no learning": lambda: RouteSampler(plain, **settings),
         "route encoder": lambda: RouteSampler(net, **settings),
         "exact": lambda: GeodesicRouteSampler(**settings),
