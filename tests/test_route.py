@@ -417,9 +417,9 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     with pytest.raises(AttributeError, match="grid_encoder_l2"):
         getattr(variants, "grid_encoder_l2")  # noqa: B009 - the name is what is tested
     assert [getattr(variants, f"both_sym{k}")().symmetries for k in (1, 4)] == [1, 4]
-    walks = [getattr(variants, name)() for name in ("walk_0_0", "walk_0.1_0")]  # the shipped encoder, other walks
-    assert [(w.ripple, w.ripple_growth, w.lookahead, w.net is not None) for w in walks] == [(0, 0, 3.0, True),
-                                                                                          (0.1, 0, 3.0, True)]
+    walks = [getattr(variants, name)() for name in ("walk_0_0", "walk_0.1_0", "walk_0.1_0.01_nosight")]
+    assert [(w.ripple, w.ripple_growth, w.sight, w.lookahead, w.net is not None) for w in walks] == [
+        (0, 0, True, 3.0, True), (0.1, 0, True, 3.0, True), (0.1, 0.01, False, 3.0, True)]  # the shipped encoder
     p = generate("bugtrap", TEST_SEED0 + 3, 64)
     one = variants.both().bind(p)
     assert one.forward_passes == 1 and np.allclose(one.field[~p.world.obstacles],

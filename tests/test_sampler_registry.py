@@ -55,7 +55,8 @@ def test_defaults_are_the_validated_settings():
     follower = make_sampler("follower")
     assert follower.net is None
     assert (follower.lookahead, follower.stuck, follower.tau, follower.ripple) == (1.0, 4, 1.0, 0.0)
-    assert FOLLOWER_SETTINGS == {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0}
+    assert FOLLOWER_SETTINGS == {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0,
+                                 "sight": False}
 
 
 def test_the_follower_plans_as_the_route_sampler_at_its_settings():

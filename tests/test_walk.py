@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 
 from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, RouteSampler, shipped_ablation
 from planners.base.fileio import InputError
-from planners.guidance.follow import next_cell, walk_field
+from planners.guidance.follow import last_in_sight, next_cell, walk_field, walk_path
+from planners.kernels.geometry import grid_segment_free
 from planners.maps.gridsearch import distance_field
 
 MOVES = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc]
@@ -147,17 +148,83 @@ def test_an_infinite_start_or_a_cell_without_a_free_neighbour_stays_put():
 
 
 def test_the_shipped_sampler_crosses_ripples_and_its_ablation_walks_strictly_downhill():
-    """Each at the setting chosen for it on the validation maps."""
+    """Each at the setting chosen for it on the validation maps; both cut the walk at the sight line."""
     assert SHIPPED_SETTINGS["ripple"] > 0 and SHIPPED_SETTINGS["ripple_growth"] > 0
     ablation = shipped_ablation()
     assert ABLATION_SETTINGS["ripple"] == ABLATION_SETTINGS["ripple_growth"] == 0.0
     assert ablation.ripple == ablation.ripple_growth == 0.0
+    assert SHIPPED_SETTINGS["sight"] and ablation.sight and RouteSampler(None).sight
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.0, 1.0), st.floats(1.0, 25.0), st.sampled_from([0.0, 0.01]))
+def test_walk_path_keeps_the_walks_cells_in_order(seed, tolerance, length, growth):
+    """Its last cell is ``walk_field``'s end; its cells are the walk's, one octile move apart (strict walk too)."""
+    field, blocked = random_map(seed, side=10, density=0.15)
+    free = np.flatnonzero(~blocked)
+    cell = int(free[seed % free.size])
+    path = np.empty(int(length) + 2, np.int64)
+    moves = walk_path(field, blocked, cell, length, tolerance, growth, path)
+    cells = list(path[:moves])
+    assert cells[0] == cell and cells[-1] == walk_field(field, blocked, cell, length, tolerance, growth)
+    if tolerance > 0 or growth > 0:
+        assert cells == path_of(field, blocked, cell, length, tolerance, growth)
+    W = field.shape[1]
+    for a, b in itertools.pairwise(cells):
+        assert max(abs(a // W - b // W), abs(a % W - b % W)) == 1 and not blocked[b // W, b % W]
+
+
+def in_sight(blocked, a, b):
+    """Whether the centres of flat cells ``a`` and ``b`` see each other (the grid check's own source, in Python)."""
+    W = blocked.shape[1]
+    return bool(grid_segment_free.py_func(blocked, 1.0, a % W + 0.5, a // W + 0.5, b % W + 0.5, b // W + 0.5))
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 10_000), st.floats(2.0, 25.0))
+def test_the_cut_is_the_end_in_sight_or_the_cell_before_the_first_out_of_it(seed, length):
+    field, blocked = random_map(seed, side=14, density=0.2)
+    free = np.flatnonzero(~blocked)
+    cell = int(free[seed % free.size])
+    path = np.empty(int(length) + 2, np.int64)
+    moves = walk_path(field, blocked, cell, length, 0.5, 0.0, path)
+    cut = last_in_sight(blocked, path, moves)
+    cells = list(path[:moves])
+    seen = [in_sight(blocked, cell, u) for u in cells]
+    assert seen[0]  # a free cell's centre sees itself
+    expected = cells[-1] if seen[-1] else cells[seen.index(False) - 1]
+    assert cut == expected and in_sight(blocked, cell, cut)
+
+
+def test_round_a_corner_the_cut_stops_where_the_wall_begins_to_hide_the_walk():
+    """An L-shaped corridor: along row 1 to the right, then down column 8; the wall at (2..6, 1..7) hides the leg."""
+    blocked = np.ones((9, 10), dtype=bool)
+    blocked[1, 1:9] = False  # the corridor's first leg, row 1
+    blocked[1:8, 8] = False  # its second leg, column 8
+    field = np.full(blocked.shape, np.inf)
+    for c in range(1, 9):
+        field[1, c] = 7 + (8 - c)
+    for r in range(1, 8):
+        field[r, 8] = 7 - (r - 1)
+    W = blocked.shape[1]
+    path = np.empty(40, np.int64)
+    moves = walk_path(field, blocked, 1 * W + 1, 30.0, 0.0, 0.0, path)
+    assert path[moves - 1] == 7 * W + 8  # the walk turns the corner to the corridor's end
+    assert last_in_sight(blocked, path, moves) == 1 * W + 8  # the corner: all of row 1 is in sight, no more
+    open_map = np.zeros_like(blocked)
+    assert last_in_sight(open_map, path, moves) == 7 * W + 8  # nothing hides the end: it is the target
 
 
 @pytest.mark.parametrize("kwargs", [{"ripple": -0.1}, {"ripple": float("nan")}, {"ripple_growth": -0.01}])
 def test_a_negative_ripple_is_refused_by_name(kwargs):
     with pytest.raises(InputError, match="ripple = .*ripple_growth = "):
         RouteSampler(None, **kwargs)
+
+
+@pytest.mark.parametrize("sight", ["yes", 1, None])
+def test_a_sight_that_is_not_a_bool_is_refused_by_name(sight):
+    with pytest.raises(InputError, match="sight = .*True or False"):
+        RouteSampler(None, sight=sight)
 
 
 @pytest.mark.experiments
@@ -168,15 +235,15 @@ def test_the_validation_script_runs_each_column_at_the_walk_it_is_given(capsys, 
 
     def record(self, *args, **kwargs):
         real(self, *args, **kwargs)
-        made.append((type(self).__name__, self.net is None, self.ripple, self.ripple_growth))
+        made.append((type(self).__name__, self.net is None, self.ripple, self.ripple_growth, self.sight))
 
     monkeypatch.setattr(script.RouteSampler, "__init__", record)
     assert script.main(["--maps", "1", "--sides", "64", "--seeds", "1", "--families", "bugtrap",
-                        "--walk", "0.25", "0.02", "--ablation-walk", "0.1", "0"]) == 0
+                        "--walk", "0.25", "0.02", "--ablation-walk", "0.1", "0", "--ablation-sight", "off"]) == 0
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| bugtrap | 64 |")]
     assert len(rows) == 1 and len(rows[0].strip("|").split("|")) == 7
-    assert set(made) == {("RouteSampler", True, 0.1, 0.0), ("RouteSampler", False, 0.25, 0.02),
-                         ("GeodesicRouteSampler", True, 0.25, 0.02)}
+    assert set(made) == {("RouteSampler", True, 0.1, 0.0, False), ("RouteSampler", False, 0.25, 0.02, True),
+                         ("GeodesicRouteSampler", True, 0.25, 0.02, True)}
     with pytest.raises(SystemExit) as stop:
         script.main(["--walk", "-0.1", "0"])
     assert stop.value.code == 2 and "--walk" in capsys.readouterr().err
@@ -208,7 +275,9 @@ def test_the_walk_cost_script_times_each_walk_and_refuses_no_walks(capsys):
     script = load_script("experiments/walk_cost")
     assert script.main(["--walks", "50"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert [line.split(" (")[0] for line in lines] == ["strictly downhill", "tolerance 0.1 step", "shipped"]
+    assert [line.split(" (")[0] for line in lines] == [w for w in ("strictly downhill", "tolerance 0.1 step", "shipped")
+                                                      for _ in range(2)]
+    assert [line.split("), ")[1].split(":")[0] for line in lines] == ["uncut", "cut at the sight line"] * 3
     assert all(line.endswith("ns per walk") for line in lines)
     with pytest.raises(SystemExit) as stop:
         script.main(["--walks", "0"])
