@@ -297,3 +297,6 @@ def test_the_route_table_shows_any_sampler_of_a_run_and_refuses_one_it_lacks(tmp
     assert row == "| bugtrap | 20 | 100 (1.00) | 40, 0.75, 1.00 | 60, 0.50, 1.00 |"
     assert script.main([f"{runs}", f"x={runs}@nope"]) == 2
     assert "no test runs of the sampler 'nope'" in capsys.readouterr().err
+    assert script.main([f"x={tmp_path / 'missing.csv'}"]) == 2
+    assert "'x') is not a file" in capsys.readouterr().err
+    assert script.main(["--help"]) == 0 and "side by side" in capsys.readouterr().out

@@ -17,6 +17,7 @@ from __future__ import annotations
 import csv
 import sys
 from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 
@@ -38,14 +39,19 @@ def _pooled(runs, sampler: str, sets: list[str]) -> list[tuple[int, bool]]:
 
 
 def main(argv: list[str]) -> int:
-    if not argv:
-        print(__doc__, file=sys.stderr)
-        return 2
+    if not argv or argv[0] in ("-h", "--help"):
+        print(__doc__, file=sys.stderr if not argv else sys.stdout)
+        return 2 if not argv else 0
     named = [(a.split("=", 1) if "=" in a else [a, a]) for a in argv]
     columns = []
     for label, spec in named:
         path, _, sampler = spec.partition("@")
         columns.append((label, path, sampler or ENCODER))
+    for label, path, _ in columns:
+        if not Path(path).is_file():
+            print(f"route_table: {path!r} (column {label!r}) is not a file; expected an evaluate.py runs.csv",
+                  file=sys.stderr)
+            return 2
     files = {path: _runs(path) for _, path, _ in columns}
     for label, path, sampler in columns:
         if not any(s == sampler for _, s in files[path]):
