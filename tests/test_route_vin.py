@@ -7,9 +7,10 @@ import math
 import numpy as np
 import pytest
 import torch
-from conftest import fine_check_path
+from conftest import fine_check_path, load_script
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy import ndimage
 
 from learning.models.route_net import load_route_net, make_route_net, route_input, save_route_net
 from learning.models.route_vin import LENGTHS, MOVES, UNREACHED, RouteVIN
@@ -196,3 +197,51 @@ def test_strokes_are_seeded_training_maps_of_thin_walls_in_no_test_set(seed, siz
     assert "strokes" in TRAINING_FAMILIES and "strokes" not in FAMILIES + UNSEEN_FAMILIES  # trained on, never tested on
     with pytest.raises(ValueError, match="no shifted variant"):
         generate("strokes", seed, size, shifted=True)
+
+
+@pytest.mark.parametrize("wall_cost, reached", [(32.0, False), (None, True)])
+def test_a_move_priced_above_the_wall_cost_is_a_wall_at_inference(monkeypatch, wall_cost, reached):
+    """Every move costs its length but those out of block column 4, priced 40 per length: a wall at 32."""
+    net = RouteVIN(block=2, channels=4, depth=1, step=4).eval()
+    x = torch.from_numpy(route_input(np.zeros((8, 16), dtype=bool), (1, 1), 2)[None])
+
+    def priced(x):
+        costs = net.lengths.expand(1, 8, 4, 8).clone()
+        costs[:, :, :, 4] *= 40.0
+        return torch.zeros(1, net.channels, 4, 8), costs
+
+    monkeypatch.setattr(net, "move_costs", priced)
+    net.wall_cost = wall_cost
+    with torch.inference_mode():
+        field = net(x)[0].numpy()
+    beyond = field[:, 10:]  # block columns 5-7 reach the goal only through column 4
+    assert (beyond.max() < 1e3) if reached else (beyond.min() > 1e5)
+    assert field[:, :8].max() < 1e3  # the goal's side is reached either way
+    assert RouteVIN.wall_cost == 32.0  # the shipped inference
+
+
+@settings(max_examples=6, deadline=None)
+@given(seed=st.integers(0, 10_000), size=st.sampled_from([64, 128, 256]))
+def test_long_mazes_keep_the_training_corridors_at_any_side(seed, size):
+    from planners.maps.generators import FAMILIES, TRAINING_FAMILIES, long_maze
+
+    a, b = long_maze(seed, size), long_maze(seed, size)
+    assert np.array_equal(a.world.obstacles, b.world.obstacles) and np.array_equal(a.start, b.start)
+    assert a.name == f"long-maze-{size}-{seed}"
+    # every free cell lies within 8 cells of a wall: corridors 16 wide at every side
+    assert ndimage.distance_transform_cdt(~a.world.obstacles, metric="chessboard").max() <= 9
+    assert "long_maze" not in TRAINING_FAMILIES + FAMILIES  # validation only
+    with pytest.raises(InputError, match="size"):
+        long_maze(seed, 16)
+
+
+@pytest.mark.experiments
+def test_the_long_mazes_script_prints_a_row_per_side_and_refuses_a_bad_wall_cost(capsys):
+    script = load_script("experiments/long_mazes")
+    assert script.main(["--sides", "64", "--maps", "1", "--seeds", "1", "--wall-cost", "none"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| 64 |")]
+    assert len(rows) == 1 and len(rows[0].strip("|").split("|")) == 4
+    for bad in (["--wall-cost", "-1"], ["--wall-cost", "lots"], ["--maps", "0"]):
+        with pytest.raises(SystemExit) as stop:
+            script.main(bad)
+        assert stop.value.code == 2

@@ -33,14 +33,22 @@ LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
 UNREACHED = 1e6
 #: The most a move may cost, in log blocks per block of length (a wall: any route around is cheaper).
 WALL_LOG = math.log(1000.0)
+#: At inference, a move priced above this many blocks per block of its length is a wall. Training asks every move
+#: to cost at least the drop in cost-to-go it makes, up to ``learning.training.vin_losses.WALL`` (64): so a move
+#: through a wall learns a price just above the detours of the training maps, which a longer detour on a larger
+#: map exceeds, and value iteration would leak through the wall there. A move the robot can make costs about its
+#: length. None: no threshold.
+WALL_COST: float | None = 32.0
 #: How many blocks of cost-to-go either side of a block the cell head reads (its neighbours' values relative
 #: to its own).
 REACH = 4.0
 
 
 def shifted(v: torch.Tensor, fill: float) -> list[torch.Tensor]:
-    """``v`` (B, h, w) padded once and viewed 8 ways, in ``MOVES`` order: each view holds, at every block, the
-    value of its neighbour in that move's direction (``fill`` off the map)."""
+    """``v`` (B, h, w) padded once and viewed 8 ways, in ``MOVES`` order.
+
+    Each view holds, at every block, the value of its neighbour in that move's direction (``fill`` off the map).
+    """
     h, w = v.shape[-2:]
     p = nn.functional.pad(v, (1, 1, 1, 1), value=fill)
     return [p[..., 1 + dr:1 + dr + h, 1 + dc:1 + dc + w] for dr, dc in MOVES]
@@ -67,6 +75,8 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: the map is turned, and on the validation maps the mean over 8 turns gave no fewer iterations at 8 times
     #: the cost.
     symmetries = 1
+    #: Above how many blocks per block of length a learned move is a wall at inference (``WALL_COST``; None: none).
+    wall_cost: float | None = WALL_COST
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -136,5 +146,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         goal, walls = self.goal_and_walls(x)
         f, costs = self.move_costs(x)
         with torch.no_grad():
+            if self.wall_cost is not None:
+                costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
             v = self.iterate(costs, goal, walls)
         return self.cell_field(f, v)

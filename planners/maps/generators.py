@@ -18,8 +18,8 @@ import numpy as np
 from planners.base.fileio import InputError, check_int, env_limit
 from planners.base.problem import Problem
 from planners.maps.caves import cave_map
-from planners.maps.strokes import stroke_map
 from planners.maps.gridsearch import distance_field, free_components
+from planners.maps.strokes import stroke_map
 from planners.worlds.grid import OccupancyGrid
 
 FAMILIES = ("forest", "narrow_passage", "bugtrap", "maze", "rooms")
@@ -294,6 +294,21 @@ def maze(
     w = _scaled(size, 16, 2)
     t = _between(rng, _scaled(size, 1), _scaled(size, 2))
     return _maze(rng, size, w, t, 0.0, goal_tolerance=goal_tolerance, name=name or f"maze-{size}")
+
+
+def long_maze(seed: int | np.random.Generator, size: int, *, goal_tolerance: float = 4.0) -> Problem:
+    """The training maze's corridors (16 cells wide, walls 1-2 thick) on a map of any side: long winding routes.
+
+    ``generate("maze", seed, size)`` scales its corridors with the side, so its routes have the same number of
+    turns at every size; here the corridors keep their width and a larger map holds more of them (31 x 31 maze
+    cells at 512), so the route is longer the larger the map: what a model's reach has to span. Validation
+    only (``scripts/experiments/long_mazes.py``); no training or test set uses it. Names read
+    ``long-maze-{size}-{seed}``.
+    """
+    size = check_size(size)
+    rng, name = seeded_map(seed, "long-maze", size)
+    t = _between(rng, 1, 2)
+    return _maze(rng, size, 16, t, 0.0, goal_tolerance=goal_tolerance, name=name)
 
 
 def _maze(rng: np.random.Generator, size: int, w: int, t: int, braid: float, *, goal_tolerance: float,
