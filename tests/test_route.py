@@ -420,6 +420,7 @@ def test_route_variants_build_the_ranked_sampler_its_ablation_and_the_reference(
     walks = [getattr(variants, name)() for name in ("walk_0_0", "walk_0.1_0", "walk_0.1_0.01_nosight")]
     assert [(w.ripple, w.ripple_growth, w.sight, w.lookahead, w.net is not None) for w in walks] == [
         (0, 0, True, 3.0, True), (0.1, 0, True, 3.0, True), (0.1, 0.01, False, 3.0, True)]  # the shipped encoder
+    assert variants.no_wall_cost().net.wall_cost is None and shipped_sampler().net.wall_cost == 32.0
     p = generate("bugtrap", TEST_SEED0 + 3, 64)
     one = variants.both().bind(p)
     assert one.forward_passes == 1 and np.allclose(one.field[~p.world.obstacles],

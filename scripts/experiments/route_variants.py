@@ -16,6 +16,7 @@ is the reference at those settings;
 shipped lookahead and spread were chosen on; ``walk_<ripple>_<growth>`` is the shipped encoder and settings
 with another walk to the target (``walk_0_0``: strictly downhill; ``walk_0.1_0``: a fixed tolerance;
 ``walk_0.1_0.01_nosight``: the shipped walk, not cut where it leaves the progress cell's sight);
+``no_wall_cost`` is the shipped sampler with value iteration free to price a wall as the network does;
 ``ranked_ablation`` is the same sampler with the encoder removed (straight-line ranking), and
 ``ranked_exact`` the privileged reference with the exact cost-to-go (a grid search);
 ``ranked_exact_tau1`` the same at the follower's temperature of one step.
@@ -106,6 +107,13 @@ def both() -> RouteSampler:
 def exact_both() -> GeodesicRouteSampler:
     """The reference at the shipped settings: the exact cost-to-go everywhere the encoder's field goes."""
     return GeodesicRouteSampler(uses="both", **SHIPPED_SETTINGS)
+
+
+def no_wall_cost() -> RouteSampler:
+    """The shipped encoder and settings without the inference threshold on wall prices (``RouteVIN.wall_cost``)."""
+    net = load_route_net(SHIPPED)
+    net.wall_cost = None
+    return RouteSampler(net, **SHIPPED_SETTINGS)
 
 
 def ranked_ablation() -> RouteSampler:
