@@ -233,6 +233,8 @@ def test_long_mazes_keep_the_training_corridors_at_any_side(seed, size):
     assert "long_maze" not in TRAINING_FAMILIES + FAMILIES  # validation only
     with pytest.raises(InputError, match="size"):
         long_maze(seed, 16)
+    with pytest.raises(ValueError, match="goal_tolerance"):
+        long_maze(seed, size, goal_tolerance=-1.0)
 
 
 @pytest.mark.experiments

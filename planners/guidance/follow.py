@@ -74,18 +74,9 @@ def walk_field(field, blocked, cell, length, tolerance=0.0, growth=0.0):
     but the goal has a strictly lower neighbour (the grid search's) the two walks are the same.
 
     Each move is found when taken: a query walks a few moves at a time, far fewer than the map has cells.
-    ``walk_field_into`` is the same walk with the visited cells kept in a buffer of the caller's.
+    ``walk_path`` is the same walk with its cells kept in a buffer of the caller's.
     """
-    return walk_field_into(field, blocked, cell, length, tolerance, growth, np.empty(int(length) + 2, np.int64))
-
-
-@nb.njit(cache=True)
-def walk_field_into(field, blocked, cell, length, tolerance, growth, visited):
-    """``walk_field``, its visited cells kept in the caller's ``visited``.
-
-    ``visited`` should be at least ``int(length) + 2`` long (a shorter one ends the walk after
-    ``len(visited) - 1`` moves).
-    """
+    visited = np.empty(int(length) + 2, np.int64)
     return visited[walk_path(field, blocked, cell, length, tolerance, growth, visited) - 1]
 
 

@@ -306,9 +306,21 @@ def long_maze(seed: int | np.random.Generator, size: int, *, goal_tolerance: flo
     ``long-maze-{size}-{seed}``.
     """
     size = check_size(size)
+    tol = _check_tolerance(goal_tolerance)
     rng, name = seeded_map(seed, "long-maze", size)
     t = _between(rng, 1, 2)
-    return _maze(rng, size, 16, t, 0.0, goal_tolerance=goal_tolerance, name=name)
+    return _maze(rng, size, 16, t, 0.0, goal_tolerance=tol, name=name)
+
+
+def _check_tolerance(goal_tolerance) -> float:
+    """``goal_tolerance`` as a positive finite float, or a ``ValueError`` naming it."""
+    try:
+        tol = float(goal_tolerance)
+    except (TypeError, ValueError):
+        tol = float("nan")
+    if not (np.isfinite(tol) and tol > 0):
+        raise ValueError(f"goal_tolerance must be a positive finite number, got {goal_tolerance!r}")
+    return tol
 
 
 def _maze(rng: np.random.Generator, size: int, w: int, t: int, braid: float, *, goal_tolerance: float,
@@ -670,12 +682,7 @@ def generate(
     if shifted and family not in _SHIFTED:
         raise ValueError(f"map family {family!r} has no shifted variant; those of {', '.join(FAMILIES)} have")
     check_size(size)
-    try:
-        tol = float(goal_tolerance)
-    except (TypeError, ValueError):
-        tol = float("nan")
-    if not (np.isfinite(tol) and tol > 0):
-        raise ValueError(f"goal_tolerance must be a positive finite number, got {goal_tolerance!r}")
+    tol = _check_tolerance(goal_tolerance)
     size = int(size)
     rng, name = seeded_map(seed, f"{family}-shifted" if shifted else family, size)
     return (_SHIFTED if shifted else _GENERATORS)[family](rng, size, goal_tolerance=tol, name=name)
