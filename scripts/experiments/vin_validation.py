@@ -66,11 +66,11 @@ def main(argv=None) -> int:
     ap.add_argument("--ablation-walk", type=float, nargs=2, metavar=("RIPPLE", "GROWTH"),
                     default=[ABLATION_SETTINGS["ripple"], ABLATION_SETTINGS["ripple_growth"]],
                     help="the same for the ablation (default: its settings, a strictly downhill walk)")
-    ap.add_argument("--sight", choices=("on", "off"), default="on" if SHIPPED_SETTINGS.get("sight") else "off",
+    ap.add_argument("--sight", choices=("on", "off"), default="on" if SHIPPED_SETTINGS["sight"] else "off",
                     help="cut the walk to the target where it leaves the sight of the progress cell, for the encoder, "
                          "value iteration without learning and the exact reference (default: the shipped setting)")
     ap.add_argument("--ablation-sight", choices=("on", "off"),
-                    default="on" if ABLATION_SETTINGS.get("sight") else "off",
+                    default="on" if ABLATION_SETTINGS["sight"] else "off",
                     help="the same for the ablation (default: its setting)")
     args = ap.parse_args(argv)
     if args.seeds < 1 or args.first_seed < 0 or args.maps < 1:
