@@ -29,7 +29,6 @@ and keeps them, and --resume continues from there.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import signal
@@ -41,11 +40,11 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 
 from learning import PolicySampler
 from learning import evaluation as E
-from learning.models.shipped import SHIPPED_POLICY
-from learning.samplers.route import SHIPPED
 from learning.evaluation.journal import JOURNAL, Interrupted, Journal, run_phase, stop_on_sigterm, work_folder
 from learning.evaluation.mapsets import UnseenQuery, map_set_queries, pooled_tuned, unseen_queries
 from learning.evaluation.protocol import QUICK as PROTOCOL_QUICK
+from learning.models.shipped import SHIPPED_POLICY
+from learning.samplers.route import SHIPPED
 from planners import movingai_dir, planner_names
 from planners.algorithms.rrt import MAX_STEPS_ENV, max_steps_limit
 from planners.base.fileio import (
@@ -370,7 +369,7 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
     reach, reach_met, reach_total = E.target_check(head, mai, "expert")
     glance = E.glance_table(rows, best, users, mai)
     room = E.room_table(rows, mai)
-    goals = E.carry_targets(rows, mai) + E.carry_targets(rows, mai, "policy", E.CONSTANT)
+    goals = E.carry_targets(rows, mai, runs=runs + pool) + E.carry_targets(rows, mai, "policy", E.CONSTANT, runs + pool)
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
              "policy_success", "best_bias_success", "policy_wall_ms", "best_bias_wall_ms", "expert_median",
              "policy/lower_bound", "expert/lower_bound", "expert/best_bias", "expert_success",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -152,6 +153,30 @@ def test_room_and_share_closed_and_targets_in_words():
             for i, r in enumerate(runs)]
     words = " ".join(E.carry_targets(E.summarize(runs, {("maze (shifted)", "RRT"): 0.05}), []))
     assert "maze (shifted) 0.993 against 1.000 (exact 0.980)" in words
+
+
+def test_a_failure_carries_its_interval_over_the_queries_and_the_target_stays_on_the_measured_value():
+    fam = "maze (shifted)"
+    runs = [Run(**{**_run(0, s).__dict__, "map": fam, "query": f"q{q}", "seed": seed, "solved": True,
+                   "iterations": round((100 + 37 * q + seed) * f)})
+            for q in range(10) for seed in range(3)
+            for s, f in (("route ablation", 1.0), ("route encoder", 1.2), ("exact_route", 0.9))]
+    lo, hi = E.query_bootstrap(runs, fam, "route encoder", "route ablation", E.median_ratio)
+    assert 1.19 <= lo <= hi <= 1.21  # 1.2 on every query, whichever queries are drawn
+    assert (lo, hi) == E.query_bootstrap(runs, fam, "route encoder", "route ablation", E.median_ratio)  # seeded
+    lo, hi = E.query_bootstrap(runs, fam, "route encoder", "route ablation", E.success_difference)
+    assert lo == hi == 0.0
+    assert all(np.isnan(E.query_bootstrap(runs, fam, "route encoder", "nobody", E.median_ratio)))
+    rows = E.summarize(runs, {(fam, "RRT"): 0.05})
+    words = " ".join(E.carry_targets(rows, [], runs=runs))
+    assert re.search(r"fails on maze \(shifted\) 1\.20 \[1\.(19|20) to 1\.(20|21)\] \(exact 0\.90\)", words)
+    assert "its 95% interval over the set's queries in brackets" in words
+    plain = " ".join(E.carry_targets(rows, []))  # without the runs: the measured values only
+    assert "interval" not in plain and "[" not in plain
+    # the interval never turns a failure into a pass: a noisy set just over the margin still fails
+    noisy = [Run(**{**r.__dict__, "iterations": r.iterations * (3 if r.query == "q0" and r.sampler == "route encoder"
+                                                                 else 1)}) for r in runs]
+    assert "5% worse than the ablation: fails" in " ".join(E.carry_targets(E.summarize(noisy, {}), [], runs=noisy))
 
 
 def test_the_glance_table_has_a_few_columns_and_dashes_for_missing_samplers():

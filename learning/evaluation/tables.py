@@ -19,6 +19,42 @@ def bootstrap_mean_ci(x: np.ndarray, rng: np.random.Generator, n: int = 2000) ->
     return float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))
 
 
+def query_bootstrap(runs: Sequence[Run], family: str, learned: str, ablation: str, statistic, *, planner: str = "RRT",
+                    n: int = 2000, seed: int = 0) -> tuple[float, float]:
+    """95% percentile interval of ``statistic`` between two samplers on one map set, by a bootstrap over its queries.
+
+    ``statistic(learned, ablation)`` takes two (iterations, solved) pairs of arrays. Each of ``n`` replicates
+    redraws the set's test queries (those both samplers ran) with replacement and keeps every run of a drawn query
+    for both samplers: a query hard for both moves both sides together, as in the test. Seeded (``seed``); NaNs
+    where the two share no query.
+    """
+    by_query: dict[str, tuple[list[Run], list[Run]]] = {}
+    for r in runs:
+        if r.split == "test" and r.map == family and r.planner == planner and r.sampler in (learned, ablation):
+            by_query.setdefault(r.query, ([], []))[r.sampler != learned].append(r)
+    cells = [tuple((np.array([r.iterations for r in side], dtype=float), np.array([r.solved for r in side]))
+                   for side in by_query[q]) for q in sorted(by_query) if all(by_query[q])]
+    if not cells:
+        return math.nan, math.nan
+    rng = np.random.default_rng(seed)
+    values = []
+    for _ in range(n):
+        pick = [cells[i] for i in rng.integers(0, len(cells), len(cells))]
+        values.append(statistic(*(tuple(np.concatenate([c[side][k] for c in pick]) for k in (0, 1))
+                                  for side in (0, 1))))
+    return float(np.percentile(values, 2.5)), float(np.percentile(values, 97.5))
+
+
+def median_ratio(learned: tuple[np.ndarray, np.ndarray], ablation: tuple[np.ndarray, np.ndarray]) -> float:
+    """``query_bootstrap``'s statistic: the learned sampler's median iterations over the ablation's."""
+    return float(np.median(learned[0]) / max(np.median(ablation[0]), 1e-9))
+
+
+def success_difference(learned: tuple[np.ndarray, np.ndarray], ablation: tuple[np.ndarray, np.ndarray]) -> float:
+    """``query_bootstrap``'s statistic: the learned sampler's success rate minus the ablation's."""
+    return float(learned[1].mean() - ablation[1].mean())
+
+
 def summarize(runs: Sequence[Run], biases: dict, seed: int = 0) -> list[dict]:
     """One row per (family, planner, sampler) on the test split.
 
@@ -259,7 +295,7 @@ def room_table(rows: Sequence[dict], movingai_maps: Sequence[str] = ()) -> list[
 
 
 def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: str | None = None,
-                  ablation: str | None = None) -> list[str]:
+                  ablation: str | None = None, runs: Sequence[Run] = ()) -> list[str]:
     """The targets for carrying the learned sampler's gain, in words: which hold, which fail, which cannot be reached.
 
     On every shifted and unseen set and on the MovingAI maps pooled, where the room to the exact
@@ -268,6 +304,10 @@ def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: s
     narrow passage, bugtrap, maze and rooms maps: at most :data:`KEEP_GAIN` of the ablation's median.
     On no set more than :data:`WORSE_MARGIN` worse than the ablation; success at least the ablation's
     on every set and every MovingAI map. Default sampler: the route encoder against its ablation.
+
+    Given the ``runs`` behind ``rows``, each failure of the last two also shows the 95% interval of its
+    ratio or success difference (``query_bootstrap`` over the set's queries): how far the test's own
+    noise reaches. The targets are judged on the measured values, never on the intervals.
     """
     from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
 
@@ -311,16 +351,27 @@ def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: s
 
     # beside each failure, the exact reference's own ratio: where it too is worse than the ablation, the route
     # sampler's settings lose on that set whatever its field
-    worse = [f"{f} {against_ablation(f, learned):.2f}"
+    def interval(f: str, statistic, fmt: str) -> str:
+        """`` [lo to hi]``: the 95% interval of ``statistic`` on ``f`` over its queries; "" without the runs."""
+        lo, hi = query_bootstrap(runs, f, learned, ablation, statistic) if runs else (math.nan, math.nan)
+        return "" if math.isnan(lo) else f" [{lo:{fmt}} to {hi:{fmt}}]"
+
+    worse = [f"{f} {against_ablation(f, learned):.2f}" + interval(f, median_ratio, ".2f")
              + ("" if math.isnan(against_ablation(f, exact)) else f" (exact {against_ablation(f, exact):.2f})")
              for f in fams if _median(by, f, learned) > (1 + WORSE_MARGIN) * _median(by, f, ablation)]
     lines.append(f"never more than {WORSE_MARGIN:.0%} worse than the ablation: "
-                 + ("holds on every set." if not worse
-                    else f"fails on {', '.join(worse)} (learned / ablation, and the exact reference / ablation)."))
+                 + ("holds on every set." if not worse else
+                    f"fails on {', '.join(worse)} (learned / ablation"
+                    + (", its 95% interval over the set's queries in brackets" if runs else "")
+                    + ", and the exact reference / ablation)."))
     # three decimals: a run or two of 150 is 0.01; beside each, the exact reference's own success where it ran
     short = [f"{f} {by[(f, learned)]['success']:.3f} against {by[(f, ablation)]['success']:.3f}"
-             + (f" (exact {by[(f, exact)]['success']:.3f})" if (f, exact) in by else "") for f in fams
-             if by[(f, learned)]["success"] < by[(f, ablation)]["success"]]
+             + interval(f, success_difference, "+.3f")
+             + (f" (exact {by[(f, exact)]['success']:.3f})" if (f, exact) in by else "")
+             for f in fams if by[(f, learned)]["success"] < by[(f, ablation)]["success"]]
     lines.append("success at least the ablation's on every set and every MovingAI map: "
-                 + ("holds." if not short else f"fails on {', '.join(short)} (learned against the ablation)."))
+                 + ("holds." if not short else
+                    f"fails on {', '.join(short)} (learned against the ablation"
+                    + (", the 95% interval of the difference over the set's queries in brackets" if runs else "")
+                    + ")."))
     return [f"{learned} against its ablation: {line}" for line in lines]

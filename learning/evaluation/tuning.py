@@ -13,7 +13,6 @@ from learning.samplers.ablation import FRONTIER_GRID
 from learning.samplers.registry import SamplerSpec
 from planners.tools.benchmark import Run
 
-
 GOAL_BIASES = (0.01, 0.05, 0.1, 0.2, 0.5)
 
 
