@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from scipy import ndimage
 
 from learning.models.route_net import load_route_net, make_route_net, route_input, save_route_net
-from learning.models.route_vin import LENGTHS, MOVES, UNREACHED, RouteVIN
+from learning.models.route_vin import LENGTHS, MOVES, UNREACHED, RouteVIN, cell_steps
 from learning.samplers.route import SHIPPED_SETTINGS, RouteSampler
 from learning.training.route import cost_targets, train_route_net
 from learning.training.vin_losses import block_targets, cost_losses, path_moves
@@ -220,6 +220,71 @@ def test_a_move_priced_above_the_wall_cost_is_a_wall_at_inference(monkeypatch, w
     assert RouteVIN.wall_cost == 32.0  # the shipped inference
 
 
+def _steps_by_hand(obstacles: np.ndarray, block: int) -> np.ndarray:
+    """``cell_steps`` cell by cell: (8, h, w), whether a free cell of a block steps into the block a move away."""
+    H, W = obstacles.shape
+    h, w = -(-H // block), -(-W // block)
+    free = np.zeros((h * block, w * block), dtype=bool)
+    free[:H, :W] = ~obstacles
+    out = np.zeros((8, h, w), dtype=bool)
+    for r in range(h * block):
+        for c in range(w * block):
+            for er in (-1, 0, 1):
+                for ec in (-1, 0, 1):
+                    rr, cc = r + er, c + ec
+                    if not (er or ec) or not (0 <= rr < h * block and 0 <= cc < w * block):
+                        continue
+                    if not (free[r, c] and free[rr, cc]) or (er and ec and not (free[rr, c] and free[r, cc])):
+                        continue
+                    move = (rr // block - r // block, cc // block - c // block)
+                    if move != (0, 0):
+                        out[MOVES.index(move), r // block, c // block] = True
+    return out
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), shape=st.tuples(st.integers(2, 13), st.integers(2, 13)),
+       block=st.sampled_from([1, 2, 3]), density=st.floats(0.0, 0.6))
+def test_cell_steps_are_the_grids_own_steps_between_blocks(seed, shape, block, density):
+    obstacles = np.random.default_rng(seed).random(shape) < density
+    x = torch.from_numpy(route_input(obstacles, (0, 0), block)[None])
+    assert np.array_equal(cell_steps(x, block)[0].numpy(), _steps_by_hand(obstacles, block))
+
+
+def test_a_staircase_wall_stops_the_moves_across_it_but_not_along_it():
+    """A diagonal wall one cell thick (4-connected, so solid without corner cutting) through 2-cell blocks."""
+    obstacles = np.zeros((8, 8), dtype=bool)
+    for i in range(8):
+        obstacles[i, 7 - i] = True
+        if i:
+            obstacles[i, 8 - i] = True  # each cell of the wall touches the next by a side
+    steps = cell_steps(torch.from_numpy(route_input(obstacles, (0, 0), 2)[None]), 2)[0].numpy()
+    assert ndimage.label(~obstacles)[1] == 2  # 4-connected free cells: two sides
+    # block (1, 1) holds cells of the upper side only, block (2, 2) of the lower side only: no step between them
+    assert not steps[MOVES.index((1, 1)), 1, 1] and not steps[MOVES.index((-1, -1)), 2, 2]
+    # block (1, 2) keeps one upper cell, (2, 4), beside block (1, 1)'s (2, 3): a step along the wall's side
+    assert steps[MOVES.index((0, 1)), 1, 1] and steps[MOVES.index((0, -1)), 1, 2]
+
+
+@pytest.mark.parametrize("step_walls, reached", [(True, False), (False, True)])
+def test_a_move_no_cell_can_step_is_a_wall_at_inference(monkeypatch, step_walls, reached):
+    """Every move costs its length; a wall one cell thick down cell column 8 leaves no step between block columns
+    3 and 4, and only the network's price would carry value iteration across it."""
+    net = RouteVIN(block=2, channels=4, depth=1, step=4).eval()
+    obstacles = np.zeros((8, 16), dtype=bool)
+    obstacles[:, 8] = True
+    x = torch.from_numpy(route_input(obstacles, (1, 1), 2)[None])
+    monkeypatch.setattr(net, "move_costs", lambda x: (torch.zeros(1, net.channels, 4, 8),
+                                                      net.lengths.expand(1, 8, 4, 8).clone()))
+    net.step_walls = step_walls
+    with torch.inference_mode():
+        field = net(x)[0].numpy()
+    beyond = field[:, 9:]
+    assert (beyond.max() < 1e3) if reached else (beyond.min() > 1e5)
+    assert field[:, :8].max() < 1e3
+    assert not RouteVIN.step_walls  # not the shipped inference: it did not pass validation
+
+
 @settings(max_examples=6, deadline=None)
 @given(seed=st.integers(0, 10_000), size=st.sampled_from([64, 128, 256]))
 def test_long_mazes_keep_the_training_corridors_at_any_side(seed, size):
@@ -237,13 +302,33 @@ def test_long_mazes_keep_the_training_corridors_at_any_side(seed, size):
         long_maze(seed, size, goal_tolerance=-1.0)
 
 
+@settings(max_examples=4, deadline=None)
+@given(seed=st.integers(0, 10_000), size=st.sampled_from([64, 128]))
+def test_diagonal_mazes_are_seeded_validation_mazes_with_walls_at_a_slant(seed, size):
+    from planners.maps.generators import FAMILIES, TRAINING_FAMILIES, diagonal_maze
+    from planners.maps.gridsearch import connected
+
+    a, b = diagonal_maze(seed, size), diagonal_maze(seed, size)
+    assert np.array_equal(a.world.obstacles, b.world.obstacles) and np.array_equal(a.start, b.start)
+    assert a.name == f"diagonal-maze-{size}-{seed}" and a.reference_length >= size / 2
+    assert connected(a.world.obstacles, a.world.cell_of(a.start), a.world.cell_of(a.goal))
+    # the walls are those of 16-cell corridors turned by 45 degrees: a free cell is at most 8 cells from a wall
+    # along the turned axes, so within 8 * sqrt(2) + 2 cells in chessboard distance
+    assert ndimage.distance_transform_cdt(~a.world.obstacles, metric="chessboard").max() <= 14
+    assert "diagonal_maze" not in TRAINING_FAMILIES + FAMILIES  # validation only
+    with pytest.raises(ValueError, match="goal_tolerance"):
+        diagonal_maze(seed, size, goal_tolerance=0.0)
+
+
 @pytest.mark.experiments
 def test_the_long_mazes_script_prints_a_row_per_side_and_refuses_a_bad_wall_cost(capsys):
     script = load_script("experiments/long_mazes")
     assert script.main(["--sides", "64", "--maps", "1", "--seeds", "1", "--wall-cost", "none"]) == 0
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| 64 |")]
     assert len(rows) == 1 and len(rows[0].strip("|").split("|")) == 4
-    for bad in (["--wall-cost", "-1"], ["--wall-cost", "lots"], ["--maps", "0"]):
+    assert script.main(["--sides", "64", "--maps", "1", "--seeds", "1", "--diagonal", "--step-walls", "on"]) == 0
+    assert len([line for line in capsys.readouterr().out.splitlines() if line.startswith("| 64 |")]) == 1
+    for bad in (["--wall-cost", "-1"], ["--wall-cost", "lots"], ["--maps", "0"], ["--step-walls", "maybe"]):
         with pytest.raises(SystemExit) as stop:
             script.main(bad)
         assert stop.value.code == 2

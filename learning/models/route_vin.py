@@ -59,6 +59,40 @@ def neighbours(v: torch.Tensor, fill: float) -> torch.Tensor:
     return torch.stack(shifted(v, fill), 1)
 
 
+def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
+    """(B, 8, h, w) bool, in ``MOVES`` order: whether some free cell of a block can step into the neighbouring block.
+
+    From ``route_input``'s cell channels (B, block**2 + ..., h, w). A step goes from a free cell to one of its 8
+    neighbours that is free, a diagonal one only if both cells beside it are free (the grid's own rule, no corner
+    cutting): a block move no step makes crosses a wall, however the network prices it.
+    """
+    free = nn.functional.pixel_shuffle(x[:, :block * block], block)[:, 0] < 0.5  # (B, H, W) cells
+    H, W = free.shape[-2:]
+    pad = nn.functional.pad(free, (1, 1, 1, 1), value=False)
+
+    def at(dr: int, dc: int) -> torch.Tensor:  # each cell's neighbour (dr, dc), False off the map
+        return pad[:, 1 + dr:1 + dr + H, 1 + dc:1 + dc + W]
+
+    rows = torch.arange(H, device=x.device).view(-1, 1)
+    cols = torch.arange(W, device=x.device).view(1, -1)
+    h, w = H // block, W // block
+    out = torch.zeros(free.shape[0], len(MOVES), h, w, dtype=torch.bool, device=x.device)
+    for er in (-1, 0, 1):
+        for ec in (-1, 0, 1):
+            if not (er or ec):
+                continue
+            step = free & at(er, ec)
+            if er and ec:
+                step = step & at(er, 0) & at(0, ec)
+            # the block move each cell's step makes: (0, 0) inside its block
+            dR = torch.div(rows + er, block, rounding_mode="floor") - torch.div(rows, block, rounding_mode="floor")
+            dC = torch.div(cols + ec, block, rounding_mode="floor") - torch.div(cols, block, rounding_mode="floor")
+            for a, (mr, mc) in enumerate(MOVES):
+                hit = step & (dR == mr) & (dC == mc)
+                out[:, a] |= hit.view(-1, h, block, w, block).any(4).any(2)
+    return out
+
+
 class RouteVIN(nn.Module, FieldEncoder):
     """Learned move costs and value iteration over the block grid (see the module docstring).
 
@@ -77,6 +111,10 @@ class RouteVIN(nn.Module, FieldEncoder):
     symmetries = 1
     #: Above how many blocks per block of length a learned move is a wall at inference (``WALL_COST``; None: none).
     wall_cost: float | None = WALL_COST
+    #: Whether at inference a block move that no cell can step (``cell_steps``) is a wall, whatever its price. Off:
+    #: it closes the leak through a slanted staircase wall on MovingAI's lak303d, but it did not pass its two
+    #: validation rounds (see the research report, "What did not pay").
+    step_walls: bool = False
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -148,5 +186,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         with torch.no_grad():
             if self.wall_cost is not None:
                 costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
+            if self.step_walls:
+                costs = costs.masked_fill(~cell_steps(x, self.block), UNREACHED)
             v = self.iterate(costs, goal, walls)
         return self.cell_field(f, v)

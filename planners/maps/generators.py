@@ -312,6 +312,33 @@ def long_maze(seed: int | np.random.Generator, size: int, *, goal_tolerance: flo
     return _maze(rng, size, 16, t, 0.0, goal_tolerance=tol, name=name)
 
 
+def diagonal_maze(seed: int | np.random.Generator, size: int, *, goal_tolerance: float = 4.0) -> Problem:
+    """``long_maze``'s corridors turned by 45 degrees: walls one or two cells thick become staircases at a slant.
+
+    The maze is built on a side of ``size * sqrt(2)`` and each cell of the ``size`` x ``size`` map takes the
+    state of the maze cell its centre turns onto (outside it: blocked). Start and goal anywhere in the largest
+    free region (a maze without a far enough pair is redrawn). Validation only (``long_mazes.py --diagonal``);
+    no training or test set uses it. Names read ``diagonal-maze-{size}-{seed}``.
+    """
+    size = check_size(size)
+    tol = _check_tolerance(goal_tolerance)
+    rng, name = seeded_map(seed, "diagonal-maze", size)
+    side = int(np.ceil(size * np.sqrt(2.0))) + 2
+
+    def draw(r: np.random.Generator, n: int) -> np.ndarray:
+        t = _between(r, 1, 2)
+        src = _maze(r, side, 16, t, 0.0, goal_tolerance=tol, name=name).world.obstacles
+        y, x = np.mgrid[0:n, 0:n] + 0.5 - n / 2
+        row = np.floor((y + x) / np.sqrt(2.0) + side / 2).astype(int)
+        col = np.floor((x - y) / np.sqrt(2.0) + side / 2).astype(int)
+        inside = (row >= 0) & (row < side) & (col >= 0) & (col < side)
+        obs = np.ones((n, n), dtype=bool)
+        obs[inside] = src[row[inside], col[inside]]
+        return obs
+
+    return _anywhere(rng, draw, size, tol, name)
+
+
 def _check_tolerance(goal_tolerance) -> float:
     """``goal_tolerance`` as a positive finite float, or a ``ValueError`` naming it."""
     try:

@@ -2,12 +2,16 @@
 
     python scripts/experiments/long_mazes.py                 # sides 256 and 512, 4 maps each, 2 planner seeds
     python scripts/experiments/long_mazes.py --sides 512 --maps 8
+    python scripts/experiments/long_mazes.py --diagonal --sides 256 --maps 6 --offset 1100   # walls at a slant
 
 ``planners.maps.generators.long_maze`` (the training maze's 16-cell corridors and 1-2-cell walls, on a larger
 map: more corridors, a longer route) on seeds from ``VALIDATION_SEED0 + offset``. Medians of iterations-to-solution
 (the cap counting for an unsolved run) of the route ablation, the shipped route encoder and the exact reference,
 RRT at the evaluation's step and cap, beside the success rates. No test map is used. ``--wall-cost none`` runs the
-encoder without its inference threshold on wall prices (``learning.models.route_vin.WALL_COST``).
+encoder without its inference threshold on wall prices (``learning.models.route_vin.WALL_COST``), and
+``--step-walls on`` makes a block move that no cell can step a wall whatever its price
+(``learning.models.route_vin.cell_steps``; not shipped: ``RouteVIN.step_walls``).
+``--diagonal`` turns the mazes by 45 degrees (``diagonal_maze``): their walls become staircases at a slant.
 """
 
 from __future__ import annotations
@@ -17,11 +21,11 @@ import argparse
 import numpy as np
 
 from learning.models.route_net import load_route_net
-from learning.models.route_vin import WALL_COST
+from learning.models.route_vin import WALL_COST, RouteVIN
 from learning.samplers.registry import make_sampler
 from learning.samplers.route import SHIPPED, shipped_sampler
 from planners import make_planner
-from planners.maps.generators import VALIDATION_SEED0, long_maze
+from planners.maps.generators import VALIDATION_SEED0, diagonal_maze, long_maze
 from planners.tools.benchmark import MAX_ITERATIONS, STEP
 
 
@@ -34,6 +38,10 @@ def main(argv=None) -> int:
     ap.add_argument("--wall-cost", default=str(WALL_COST), metavar="K|none",
                     help=f"the encoder's inference: a move priced above K blocks per block of length is a wall "
                          f"(default the shipped {WALL_COST:g}; none: no threshold)")
+    ap.add_argument("--step-walls", choices=("on", "off"), default="on" if RouteVIN.step_walls else "off",
+                    help="treat a block move that no cell can step as a wall at inference (default: the shipped "
+                         "setting)")
+    ap.add_argument("--diagonal", action="store_true", help="the mazes turned by 45 degrees (diagonal_maze)")
     args = ap.parse_args(argv)
     if args.maps < 1 or args.seeds < 1 or args.offset < 0 or min(args.sides) < 64:
         ap.error(f"--maps and --seeds take counts >= 1, --offset a number >= 0 and --sides sides >= 64; got "
@@ -46,6 +54,8 @@ def main(argv=None) -> int:
         ap.error(f"--wall-cost takes a number of blocks > 0 or none, got {args.wall_cost!r}")
     net = load_route_net(SHIPPED)
     net.wall_cost = wall_cost
+    net.step_walls = args.step_walls == "on"
+    build = diagonal_maze if args.diagonal else long_maze
     samplers = {"ablation": lambda: make_sampler("route_ablation"), "route encoder": lambda: shipped_sampler(net),
                 "exact": lambda: make_sampler("exact_route")}
     print("| side | " + " | ".join(f"{name}: median (success)" for name in samplers) + " |")
@@ -53,7 +63,7 @@ def main(argv=None) -> int:
     for side in args.sides:
         its: dict[str, list[int]] = {name: [] for name in samplers}
         for i in range(args.maps):
-            problem = long_maze(VALIDATION_SEED0 + args.offset + i, side)
+            problem = build(VALIDATION_SEED0 + args.offset + i, side)
             for name, make in samplers.items():
                 for seed in range(args.seeds):
                     r = make_planner("RRT", problem, extension_step=STEP, sampler=make(),

@@ -15,7 +15,8 @@ and beyond (256), for:
 - the route encoder (the learned move costs and cell head),
 - the exact cost-to-go at the same settings (the reference that shows the room).
 
-Prints one row per family and side with the share of the room the encoder closes,
+``--step-walls on`` makes a block move that no cell can step a wall at inference (``RouteVIN.step_walls``, not
+shipped). Prints one row per family and side with the share of the room the encoder closes,
 ``(ablation - encoder) / (ablation - exact)`` where the room is at least 20% of the ablation's median.
 """
 
@@ -72,6 +73,9 @@ def main(argv=None) -> int:
     ap.add_argument("--ablation-sight", choices=("on", "off"),
                     default="on" if ABLATION_SETTINGS["sight"] else "off",
                     help="the same for the ablation (default: its setting)")
+    ap.add_argument("--step-walls", choices=("on", "off"), default="on" if RouteVIN.step_walls else "off",
+                    help="treat a block move that no cell can step as a wall at inference, for the encoder and the "
+                         "value iteration without learning (default: the shipped setting)")
     args = ap.parse_args(argv)
     if args.seeds < 1 or args.first_seed < 0 or args.maps < 1:
         ap.error(f"--maps and --seeds take counts >= 1 and --first-seed a seed >= 0, got {args.maps}, {args.seeds} "
@@ -80,6 +84,7 @@ def main(argv=None) -> int:
         ap.error(f"--walk and --ablation-walk take depths >= 0, got {args.walk} and {args.ablation_walk}")
     net = load_route_net(args.route)
     plain = LengthCosts(net.block, 1, 1, net.step).eval()
+    net.step_walls = plain.step_walls = args.step_walls == "on"
     walk = {"ripple": args.walk[0], "ripple_growth": args.walk[1], "sight": args.sight == "on"}
     settings = {**SHIPPED_SETTINGS, **walk}
     samplers = {
