@@ -332,3 +332,15 @@ def test_the_long_mazes_script_prints_a_row_per_side_and_refuses_a_bad_wall_cost
         with pytest.raises(SystemExit) as stop:
             script.main(bad)
         assert stop.value.code == 2
+
+
+@pytest.mark.experiments
+def test_the_field_leaks_script_compares_one_query_and_refuses_an_unknown_map(movingai, capsys):
+    script = load_script("experiments/field_leaks")
+    assert script.main(["maze-32-32-2", "--movingai", str(movingai), "--step-walls", "on"]) == 0
+    out = capsys.readouterr().out
+    assert "cost-to-go at the start: learned" in out and "rank correlation over the free cells" in out
+    assert "block moves no cell can step" in out
+    with pytest.raises(SystemExit) as stop:
+        script.main(["no-such-map", "--movingai", str(movingai)])
+    assert stop.value.code == 2 and "no-such-map" in capsys.readouterr().err
