@@ -349,13 +349,13 @@ def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: s
     def against_ablation(f: str, name: str) -> float:
         return _median(by, f, name) / max(_median(by, f, ablation), 1e-9)
 
-    # beside each failure, the exact reference's own ratio: where it too is worse than the ablation, the route
-    # sampler's settings lose on that set whatever its field
     def interval(f: str, statistic, fmt: str) -> str:
         """`` [lo to hi]``: the 95% interval of ``statistic`` on ``f`` over its queries; "" without the runs."""
         lo, hi = query_bootstrap(runs, f, learned, ablation, statistic) if runs else (math.nan, math.nan)
         return "" if math.isnan(lo) else f" [{lo:{fmt}} to {hi:{fmt}}]"
 
+    # beside each failure, the exact reference's own ratio: where it too is worse than the ablation, the route
+    # sampler's settings lose on that set whatever its field
     worse = [f"{f} {against_ablation(f, learned):.2f}" + interval(f, median_ratio, ".2f")
              + ("" if math.isnan(against_ablation(f, exact)) else f" (exact {against_ablation(f, exact):.2f})")
              for f in fams if _median(by, f, learned) > (1 + WORSE_MARGIN) * _median(by, f, ablation)]
