@@ -22,6 +22,7 @@ from learning.evaluation.protocol import scenarios
 from learning.models.route_net import load_route_net, route_input
 from learning.models.route_vin import MOVES, cell_steps
 from learning.samplers.route import SHIPPED
+from learning.training.vin_losses import block_targets
 from planners import movingai_dir
 from planners.base.fileio import InputError
 from planners.maps.gridsearch import distance_field
@@ -64,7 +65,7 @@ def main(argv=None) -> int:
     h, w = costs.shape[1:]
     pad = np.full((h * b, w * b), np.inf)
     pad[:exact.shape[0], :exact.shape[1]] = exact / b
-    blocks = pad.reshape(h, b, w, b).min(axis=(1, 3))  # each block's lowest exact cost-to-go, in blocks
+    blocks = block_targets(torch.from_numpy(pad)[None], b)[0].numpy()  # each block's least exact cost-to-go, NaN: none
     leaks = []
     for a, (dr, dc) in enumerate(MOVES):
         length = float(np.hypot(dr, dc))
