@@ -414,3 +414,29 @@ def test_target_check_takes_a_single_movingai_map_for_the_set():
     assert [r["map set"] for r in rows] == ["forest", "den312d"]
     assert rows[1]["every map solved in >= 90%"] == "no: den312d 0.80" and rows[1]["policy / lower bound <= 4"] == ""
     assert total == 4 + 4 and met == 4 + 3
+
+
+@pytest.mark.experiments
+def test_replication_queries_are_fresh_and_the_script_refuses_unknown_sets(movingai, capsys):
+    script = load_script("experiments/replicate_sets")
+    protocol = script.PROTOCOL
+    shifted = script.fresh_queries("narrow_passage (shifted)", 5, None)
+    used = {q.key for q in E.shifted_queries(["narrow_passage"], protocol.shifted_maps)}
+    assert len(shifted) == 5 and all(q.shifted and q.split == "test" and q.key not in used for q in shifted)
+    assert [q.size for q in shifted] == [SHIFTED_SIZES[(q.key - SHIFTED_SEED0) % len(SHIFTED_SIZES)] for q in shifted]
+    own = script.fresh_queries("maze", 3, None)
+    assert [q.key for q in own] == [TEST_SEED0 + protocol.maps + i for i in range(3)]
+    fresh = script.fresh_queries("maze-32-32-2", 20, movingai)
+    taken = {q.key for q in E.movingai_queries(str(movingai), ["maze-32-32-2"], protocol.scenarios,
+                                               protocol.tuning_scenarios, protocol.tolerance)}
+    half = len(E.protocol.scenarios(str(movingai), "maze-32-32-2", protocol.tolerance)) // 2
+    keys = [q.key for q in fresh]
+    assert len(set(keys)) == 20 and not set(keys) & taken and max(keys) < half
+    with pytest.raises(script.InputError, match="--queries 1000"):
+        script.fresh_queries("maze-32-32-2", 1000, movingai)
+    assert script.main(["random-32-32-10", "--queries", "2", "--seeds", "1", "--processes", "1",
+                        "--movingai", str(movingai)]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| random-32-32-10 |")]
+    assert len(rows) == 1 and "[" in rows[0]
+    assert script.main(["no-such-set", "--movingai", str(movingai)]) == 2
+    assert "no-such-set" in capsys.readouterr().err
