@@ -67,16 +67,24 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
     cutting): a block move no step makes crosses a wall, however the network prices it.
     """
     free = nn.functional.pixel_shuffle(x[:, :block * block], block)[:, 0] < 0.5  # (B, H, W) cells
-    H, W = free.shape[-2:]
+    B, H, W = free.shape
+    h, w = H // block, W // block
     pad = nn.functional.pad(free, (1, 1, 1, 1), value=False)
 
     def at(dr: int, dc: int) -> torch.Tensor:  # each cell's neighbour (dr, dc), False off the map
         return pad[:, 1 + dr:1 + dr + H, 1 + dc:1 + dc + W]
 
-    rows = torch.arange(H, device=x.device).view(-1, 1)
-    cols = torch.arange(W, device=x.device).view(1, -1)
-    h, w = H // block, W // block
-    out = torch.zeros(free.shape[0], len(MOVES), h, w, dtype=torch.bool, device=x.device)
+    def within(e: int, m: int) -> slice | None:
+        """The cells of a block, along one axis, whose step by ``e`` makes the block move ``m`` (None: none do)."""
+        if e == 0:
+            return slice(None) if m == 0 else None
+        if m == 0:  # the step stays inside the block along this axis
+            return slice(0, block - 1) if e > 0 else slice(1, block)
+        if m == e:  # from the block's last (first) row or column into the next (previous) block
+            return slice(block - 1, block) if e > 0 else slice(0, 1)
+        return None
+
+    out = torch.zeros(B, len(MOVES), h, w, dtype=torch.bool, device=x.device)
     for er in (-1, 0, 1):
         for ec in (-1, 0, 1):
             if not (er or ec):
@@ -84,12 +92,11 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
             step = free & at(er, ec)
             if er and ec:
                 step = step & at(er, 0) & at(0, ec)
-            # the block move each cell's step makes: (0, 0) inside its block
-            dR = torch.div(rows + er, block, rounding_mode="floor") - torch.div(rows, block, rounding_mode="floor")
-            dC = torch.div(cols + ec, block, rounding_mode="floor") - torch.div(cols, block, rounding_mode="floor")
+            cells = step.view(B, h, block, w, block)
             for a, (mr, mc) in enumerate(MOVES):
-                hit = step & (dR == mr) & (dC == mc)
-                out[:, a] |= hit.view(-1, h, block, w, block).any(4).any(2)
+                rows, cols = within(er, mr), within(ec, mc)
+                if rows is not None and cols is not None:
+                    out[:, a] |= cells[:, :, rows, :, cols].any(4).any(2)
     return out
 
 
@@ -111,10 +118,10 @@ class RouteVIN(nn.Module, FieldEncoder):
     symmetries = 1
     #: Above how many blocks per block of length a learned move is a wall at inference (``WALL_COST``; None: none).
     wall_cost: float | None = WALL_COST
-    #: Whether at inference a block move that no cell can step (``cell_steps``) is a wall, whatever its price. Off:
-    #: it closes the leak through a slanted staircase wall on MovingAI's lak303d, but it did not pass its two
-    #: validation rounds (see the research report, "What did not pay").
-    step_walls: bool = False
+    #: Whether at inference a block move that no cell can step (``cell_steps``: the grid's own step rule, no
+    #: corner cutting) is a wall, whatever its price: value iteration then cannot leak through a wall thinner
+    #: than a block at a slant (see the research report, "The step walls"). Training never applies it.
+    step_walls: bool = True
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()

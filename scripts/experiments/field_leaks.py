@@ -1,14 +1,14 @@
 """Where value iteration leaks through a wall: the learned field against the exact cost-to-go on one query.
 
-    python scripts/experiments/field_leaks.py lak303d          # a MovingAI map's longest scenario
-    python scripts/experiments/field_leaks.py arena --step-walls on
+    python scripts/experiments/field_leaks.py lak303d --step-walls off   # the leak, as before the step walls
+    python scripts/experiments/field_leaks.py lak303d                    # the shipped inference
 
 For the map's longest scenario (``--movingai`` or ``SAMPLERGYM_MOVINGAI_DIR``): the start's cost-to-go in cells by
 the shipped encoder and by the grid search, the rank correlation of the two fields over the free cells, and the
 block moves that no cell can step (``learning.models.route_vin.cell_steps``) but that the network prices below the
 drop in exact cost-to-go they make, those that skip a detour (a drop above ``DETOUR`` blocks per block of length)
-listed with their prices. ``--step-walls on`` makes such moves walls
-(``RouteVIN.step_walls``, not shipped). A diagnosis of one query: nothing here is chosen on it.
+listed with their prices. The shipped inference makes such moves walls (``RouteVIN.step_walls``); ``--step-walls
+off`` lets value iteration take them. A diagnosis of one query: nothing here is chosen on it.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import torch
 
 from learning.evaluation.protocol import scenarios
 from learning.models.route_net import load_route_net, route_input
-from learning.models.route_vin import MOVES, cell_steps
+from learning.models.route_vin import MOVES, RouteVIN, cell_steps
 from learning.samplers.route import SHIPPED
 from learning.training.vin_losses import block_targets
 from planners import movingai_dir
@@ -40,7 +40,8 @@ def main(argv=None) -> int:
     ap.add_argument("map", help="a MovingAI map's name, e.g. lak303d")
     ap.add_argument("--movingai", default=None,
                     help="the MovingAI folder (default: SAMPLERGYM_MOVINGAI_DIR, else ../shared)")
-    ap.add_argument("--step-walls", choices=("on", "off"), default="off")
+    ap.add_argument("--step-walls", choices=("on", "off"), default="on" if RouteVIN.step_walls else "off",
+                    help="a block move no cell can step is a wall (default: the shipped setting)")
     args = ap.parse_args(argv)
     try:
         problems = scenarios(str(movingai_dir(args.movingai)), args.map, 4.0)

@@ -3,20 +3,23 @@
     python scripts/experiments/long_mazes.py                 # sides 256 and 512, 4 maps each, 2 planner seeds
     python scripts/experiments/long_mazes.py --sides 512 --maps 8
     python scripts/experiments/long_mazes.py --diagonal --sides 256 --maps 6 --offset 1100   # walls at a slant
+    python scripts/experiments/long_mazes.py --route runs/route/route.pt                     # another encoder
 
 ``planners.maps.generators.long_maze`` (the training maze's 16-cell corridors and 1-2-cell walls, on a larger
 map: more corridors, a longer route) on seeds from ``VALIDATION_SEED0 + offset``. Medians of iterations-to-solution
 (the cap counting for an unsolved run) of the route ablation, the shipped route encoder and the exact reference,
 RRT at the evaluation's step and cap, beside the success rates. No test map is used. ``--wall-cost none`` runs the
 encoder without its inference threshold on wall prices (``learning.models.route_vin.WALL_COST``), and
-``--step-walls on`` makes a block move that no cell can step a wall whatever its price
-(``learning.models.route_vin.cell_steps``; not shipped: ``RouteVIN.step_walls``).
+``--step-walls off`` lets value iteration take a block move that no cell can step where the network prices it below
+the threshold (the shipped inference makes it a wall whatever its price: ``learning.models.route_vin.cell_steps``,
+``RouteVIN.step_walls``).
 ``--diagonal`` turns the mazes by 45 degrees (``diagonal_maze``): their walls become staircases at a slant.
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -42,6 +45,7 @@ def main(argv=None) -> int:
                     help="treat a block move that no cell can step as a wall at inference (default: the shipped "
                          "setting)")
     ap.add_argument("--diagonal", action="store_true", help="the mazes turned by 45 degrees (diagonal_maze)")
+    ap.add_argument("--route", type=Path, default=SHIPPED, help="a value-iteration encoder file (default: shipped)")
     args = ap.parse_args(argv)
     if args.maps < 1 or args.seeds < 1 or args.offset < 0 or min(args.sides) < 64:
         ap.error(f"--maps and --seeds take counts >= 1, --offset a number >= 0 and --sides sides >= 64; got "
@@ -52,7 +56,9 @@ def main(argv=None) -> int:
         wall_cost = -1.0
     if wall_cost is not None and not wall_cost > 0:
         ap.error(f"--wall-cost takes a number of blocks > 0 or none, got {args.wall_cost!r}")
-    net = load_route_net(SHIPPED)
+    if not args.route.is_file():
+        ap.error(f"--route {args.route}: no such file")
+    net = load_route_net(args.route)
     net.wall_cost = wall_cost
     net.step_walls = args.step_walls == "on"
     build = diagonal_maze if args.diagonal else long_maze

@@ -13,6 +13,9 @@ seeds) on queries of the same set that the evaluation never ran:
 - a family's shifted maps (``"FAMILY (shifted)"``) or its own test maps (``FAMILY``): ``--queries`` maps on the
   seeds that follow the evaluation's, at the sides it uses.
 
+``--step-walls off`` runs the encoder without its rule that a block move no cell can step is a wall
+(``RouteVIN.step_walls``): the runs then stay in this process (``--processes 1``), where the setting is made.
+
 It prints, per set, the medians and success rates, the encoder's median over the ablation's and its success
 minus the ablation's, each with its 95% interval from the same bootstrap over queries as the evaluation's targets
 (``learning.evaluation.query_bootstrap``). Nothing is tuned or chosen here: the replication measures only.
@@ -31,6 +34,7 @@ from learning.evaluation.protocol import Protocol, Query, movingai_queries, scen
 from learning.evaluation.roster import EXACT_ROUTE, ROUTE, ROUTE_ABLATION, evaluation_tasks
 from learning.evaluation.runner import run_on_backend_args
 from learning.evaluation.tables import median_ratio, query_bootstrap, success_difference
+from learning.models.route_vin import RouteVIN
 from learning.samplers.registry import SamplerSpec
 from learning.samplers.route import SHIPPED
 from planners.base.fileio import InputError, check_output_place
@@ -103,6 +107,8 @@ def main(argv=None) -> int:
     ap.add_argument("--route", type=Path, default=SHIPPED, help="route encoder file (default: the shipped one)")
     ap.add_argument("--movingai", type=Path, default=None, help="MovingAI folder (default SAMPLERGYM_MOVINGAI_DIR or "
                                                                 "../shared/maps/movingai)")
+    ap.add_argument("--step-walls", choices=("on", "off"), default="on" if RouteVIN.step_walls else "off",
+                    help="a block move no cell can step is a wall (default: the shipped setting)")
     ap.add_argument("--csv", type=Path, help="also write every run here (runs.csv's columns)")
     add_backend_arguments(ap, processes=os.cpu_count() or 1, processes_help="local workers",
                           backend_help="a local process pool (default) or Ray")
@@ -120,6 +126,9 @@ def main(argv=None) -> int:
     except (InputError, OSError) as exc:
         print(f"replicate_sets.py: {exc}", file=sys.stderr)
         return 2
+    if (args.step_walls == "on") != RouteVIN.step_walls:
+        RouteVIN.step_walls = args.step_walls == "on"  # this process's encoders only: run here
+        args.backend, args.processes = "local", 1
     protocol = Protocol(movingai_dir="" if directory is None else str(directory))
     specs = [SamplerSpec.of("route_ablation", step_size=protocol.step),
              SamplerSpec.of("route", path=str(args.route), step_size=protocol.step, device="cpu"),
@@ -129,7 +138,8 @@ def main(argv=None) -> int:
         write_runs_csv(runs, args.csv)
     table = markdown_table(summary_rows(runs, list(dict.fromkeys(args.sets))), None)
     print(f"fresh queries per set: {args.queries}, planner seeds {args.seeds}, RRT step {protocol.step:g}, "
-          f"cap {protocol.max_iterations}; medians of iterations to the first solution (the cap when unsolved)\n")
+          f"cap {protocol.max_iterations}, step walls {args.step_walls}; medians of iterations to the first solution "
+          "(the cap when unsolved)\n")
     print(table)
     return 0
 

@@ -116,6 +116,13 @@ def no_wall_cost() -> RouteSampler:
     return RouteSampler(net, **SHIPPED_SETTINGS)
 
 
+def no_step_walls() -> RouteSampler:
+    """The shipped encoder and settings without the rule that a block move no cell can step is a wall."""
+    net = load_route_net(SHIPPED)
+    net.step_walls = False
+    return RouteSampler(net, **SHIPPED_SETTINGS)
+
+
 def ranked_ablation() -> RouteSampler:
     """The same sampler without the encoder: the frontier ranked by the straight-line distance."""
     return _VariantRouteSampler(None, **SETTINGS)

@@ -15,9 +15,10 @@ and beyond (256), for:
 - the route encoder (the learned move costs and cell head),
 - the exact cost-to-go at the same settings (the reference that shows the room).
 
-``--step-walls on`` makes a block move that no cell can step a wall at inference (``RouteVIN.step_walls``, not
-shipped). Prints one row per family and side with the share of the room the encoder closes,
-``(ablation - encoder) / (ablation - exact)`` where the room is at least 20% of the ablation's median.
+``--step-walls off`` lets value iteration take a block move that no cell can step, where the network prices it
+below the wall threshold (the shipped inference makes it a wall: ``RouteVIN.step_walls``). Prints one row per
+family and side with the share of the room the encoder closes, ``(ablation - encoder) / (ablation - exact)`` where
+the room is at least 20% of the ablation's median.
 """
 
 from __future__ import annotations
