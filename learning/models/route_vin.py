@@ -14,7 +14,10 @@ cost) and composes it.
 The learned parts are the move costs and the cell head. Training fits the move costs to the grid search's
 cost-to-go directly (every block's cost-to-go minus its best neighbour's is the cost of that move, and no
 move may cost less than the drop it makes), and the cell head to every cell's cost-to-go given the block
-values. At inference it sees only the map and the goal; the grid search is a training target only.
+values. At inference it sees only the map and the goal; the grid search is a training target only. Two rules
+of inference keep value iteration from leaking through walls: a move priced above ``WALL_COST`` blocks per block
+of its length is a wall, and so is a block move that no free cell can step (``cell_steps``, the grid's own step
+rule; ``RouteVIN.step_walls``).
 """
 
 from __future__ import annotations
