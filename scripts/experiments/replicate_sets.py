@@ -14,7 +14,7 @@ seeds) on queries of the same set that the evaluation never ran:
   seeds that follow the evaluation's, at the sides it uses.
 
 ``--step-walls off`` runs the encoder without its rule that a block move no cell can step is a wall
-(``RouteVIN.step_walls``): the runs then stay in this process (``--processes 1``), where the setting is made.
+(``RouteVIN.step_walls``), still labelled "route encoder".
 
 It prints, per set, the medians and success rates, the encoder's median over the ablation's and its success
 minus the ablation's, each with its 95% interval from the same bootstrap over queries as the evaluation's targets
@@ -24,19 +24,22 @@ minus the ablation's, each with its 95% interval from the same bootstrap over qu
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from learning.evaluation.protocol import Protocol, Query, movingai_queries, scenarios, shifted_name
-from learning.evaluation.roster import EXACT_ROUTE, ROUTE, ROUTE_ABLATION, evaluation_tasks
+from learning.evaluation.roster import EXACT_ROUTE, ROUTE, ROUTE_ABLATION, Task
 from learning.evaluation.runner import run_on_backend_args
-from learning.evaluation.tables import median_ratio, query_bootstrap, success_difference
+from learning.evaluation.tables import median_ratio, query_bootstrap, success_difference, summarize
+from learning.models.route_net import load_route_net
 from learning.models.route_vin import RouteVIN
 from learning.samplers.registry import SamplerSpec
-from learning.samplers.route import SHIPPED
+from learning.samplers.route import SHIPPED, RouteSampler, shipped_sampler
 from planners.base.fileio import InputError, check_output_place
 from planners.maps.generators import FAMILIES, SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0
 from planners.maps.movingai import movingai_dir
@@ -79,23 +82,42 @@ def fresh_queries(name: str, n: int, directory: Path | None) -> list[Query]:
 
 def summary_rows(runs, sets: list[str], seed: int = 0) -> list[dict]:
     """One row per set: medians, success rates and the encoder against its ablation, with intervals."""
+    by = {(r["family"], r["_sampler"]): r for r in summarize(runs, {})}
     rows = []
     for name in sets:
-        mine = [r for r in runs if r.map == name]
-        row = {"set": name, "queries": len({r.query for r in mine})}
-        its, solved = {}, {}
-        for short, label in (("ablation", ROUTE_ABLATION), ("encoder", ROUTE), ("exact", EXACT_ROUTE)):
-            its[short] = float(np.median([r.iterations for r in mine if r.sampler == label]))
-            solved[short] = float(np.mean([r.solved for r in mine if r.sampler == label]))
-        row["medians: ablation / encoder / exact"] = " / ".join(f"{its[k]:g}" for k in its)
-        row["success: ablation / encoder / exact"] = " / ".join(f"{solved[k]:.3f}" for k in solved)
-        lo, hi = query_bootstrap(mine, name, ROUTE, ROUTE_ABLATION, median_ratio, seed=seed)
+        cells = {short: by[(name, label)] for short, label in
+                 (("ablation", ROUTE_ABLATION), ("encoder", ROUTE), ("exact", EXACT_ROUTE))}
+        its = {k: c["median_iterations"] for k, c in cells.items()}
+        solved = {k: c["success"] for k, c in cells.items()}
+        row = {"set": name, "queries": len({r.query for r in runs if r.map == name}),
+               "medians: ablation / encoder / exact": " / ".join(f"{its[k]:g}" for k in its),
+               "success: ablation / encoder / exact": " / ".join(f"{solved[k]:.3f}" for k in solved)}
+        lo, hi = query_bootstrap(runs, name, ROUTE, ROUTE_ABLATION, median_ratio, seed=seed)
         row["encoder / ablation [95%]"] = f"{its['encoder'] / max(its['ablation'], 1e-9):.2f} [{lo:.2f} to {hi:.2f}]"
-        lo, hi = query_bootstrap(mine, name, ROUTE, ROUTE_ABLATION, success_difference, seed=seed)
+        lo, hi = query_bootstrap(runs, name, ROUTE, ROUTE_ABLATION, success_difference, seed=seed)
         row["success difference [95%]"] = f"{solved['encoder'] - solved['ablation']:+.3f} [{lo:+.3f} to {hi:+.3f}]"
         row["exact / ablation"] = f"{its['exact'] / max(its['ablation'], 1e-9):.2f}"
         rows.append(row)
     return rows
+
+
+@dataclass(frozen=True)
+class EncoderWithStepWalls:
+    """The shipped sampler around the encoder in ``path`` with its step walls set to ``on``: a task's sampler
+    builder (``build`` and ``to_json``, as ``learning.evaluation.roster.Task`` takes), for a setting the registry's
+    ``route`` spec does not carry. Its own network, so the shipped spec's cached one keeps its setting."""
+
+    path: str
+    step_size: float
+    on: bool
+
+    def build(self, models) -> RouteSampler:
+        net = load_route_net(self.path)
+        net.step_walls = self.on
+        return shipped_sampler(net, step_size=self.step_size, device="cpu")
+
+    def to_json(self) -> str:
+        return json.dumps({"name": "route", "path": self.path, "step_size": self.step_size, "step_walls": self.on})
 
 
 def main(argv=None) -> int:
@@ -126,14 +148,15 @@ def main(argv=None) -> int:
     except (InputError, OSError) as exc:
         print(f"replicate_sets.py: {exc}", file=sys.stderr)
         return 2
-    if (args.step_walls == "on") != RouteVIN.step_walls:
-        RouteVIN.step_walls = args.step_walls == "on"  # this process's encoders only: run here
-        args.backend, args.processes = "local", 1
     protocol = Protocol(movingai_dir="" if directory is None else str(directory))
-    specs = [SamplerSpec.of("route_ablation", step_size=protocol.step),
-             SamplerSpec.of("route", path=str(args.route), step_size=protocol.step, device="cpu"),
+    on = args.step_walls == "on"
+    encoder = (SamplerSpec.of("route", path=str(args.route), step_size=protocol.step, device="cpu")
+               if on == RouteVIN.step_walls else EncoderWithStepWalls(str(args.route), protocol.step, on))
+    specs = [SamplerSpec.of("route_ablation", step_size=protocol.step), encoder,
              SamplerSpec.of("exact_route", step_size=protocol.step)]
-    runs = run_on_backend_args(evaluation_tasks(queries, "RRT", specs, args.seeds), protocol, args)
+    tasks = [Task(q, "RRT", spec, seed, ROUTE if spec is encoder else "") for q in queries for spec in specs
+             for seed in range(args.seeds)]
+    runs = run_on_backend_args(tasks, protocol, args)
     if args.csv is not None:
         write_runs_csv(runs, args.csv)
     table = markdown_table(summary_rows(runs, list(dict.fromkeys(args.sets))), None)
