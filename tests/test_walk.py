@@ -247,6 +247,10 @@ def test_the_validation_script_runs_each_column_at_the_walk_it_is_given(capsys, 
     with pytest.raises(SystemExit) as stop:
         script.main(["--walk", "-0.1", "0"])
     assert stop.value.code == 2 and "--walk" in capsys.readouterr().err
+    for bad in (["--wall-cost", "0"], ["--wall-cost", "lots"]):
+        with pytest.raises(SystemExit) as stop:
+            script.main(bad)
+        assert stop.value.code == 2 and "--wall-cost" in capsys.readouterr().err
 
 
 @pytest.mark.experiments

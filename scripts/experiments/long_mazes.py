@@ -19,6 +19,7 @@ the threshold (the shipped inference makes it a wall whatever its price: ``learn
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import numpy as np
@@ -32,13 +33,26 @@ from planners.maps.generators import VALIDATION_SEED0, diagonal_maze, long_maze
 from planners.tools.benchmark import MAX_ITERATIONS, STEP
 
 
+def wall_cost_arg(text: str) -> float | None:
+    """``--wall-cost``: a number of blocks > 0, or none (no threshold on wall prices)."""
+    if text.lower() == "none":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"takes a number of blocks > 0 or none, got {text!r}")
+    return value
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sides", type=int, nargs="+", default=[256, 512])
     ap.add_argument("--maps", type=int, default=4, help="validation maps per side (default 4)")
     ap.add_argument("--offset", type=int, default=800, help="the first map's seed after VALIDATION_SEED0 (default 800)")
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per map (default 2)")
-    ap.add_argument("--wall-cost", default=str(WALL_COST), metavar="K|none",
+    ap.add_argument("--wall-cost", type=wall_cost_arg, default=WALL_COST, metavar="K|none",
                     help=f"the encoder's inference: a move priced above K blocks per block of length is a wall "
                          f"(default the shipped {WALL_COST:g}; none: no threshold)")
     ap.add_argument("--step-walls", choices=("on", "off"), default="on" if RouteVIN.step_walls else "off",
@@ -50,16 +64,10 @@ def main(argv=None) -> int:
     if args.maps < 1 or args.seeds < 1 or args.offset < 0 or min(args.sides) < 64:
         ap.error(f"--maps and --seeds take counts >= 1, --offset a number >= 0 and --sides sides >= 64; got "
                  f"{args.maps}, {args.seeds}, {args.offset} and {args.sides}")
-    try:
-        wall_cost = None if args.wall_cost.lower() == "none" else float(args.wall_cost)
-    except ValueError:
-        wall_cost = -1.0
-    if wall_cost is not None and not wall_cost > 0:
-        ap.error(f"--wall-cost takes a number of blocks > 0 or none, got {args.wall_cost!r}")
     if not args.route.is_file():
         ap.error(f"--route {args.route}: no such file")
     net = load_route_net(args.route)
-    net.wall_cost = wall_cost
+    net.wall_cost = args.wall_cost
     net.step_walls = args.step_walls == "on"
     build = diagonal_maze if args.diagonal else long_maze
     samplers = {"ablation": lambda: make_sampler("route_ablation"), "route encoder": lambda: shipped_sampler(net),

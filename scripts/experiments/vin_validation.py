@@ -24,18 +24,22 @@ the room is at least 20% of the ablation's median.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
 import torch
 
 from learning.models.route_net import load_route_net
-from learning.models.route_vin import RouteVIN
+from learning.models.route_vin import WALL_COST, RouteVIN
 from learning.references.expert import GeodesicRouteSampler
 from learning.samplers.route import ABLATION_SETTINGS, SHIPPED, SHIPPED_SETTINGS, RouteSampler
 from planners import make_planner
 from planners.maps.generators import TRAINING_FAMILIES, VALIDATION_SEED0, generate
 from planners.tools.benchmark import MAX_ITERATIONS, STEP
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # this folder's modules
+from long_mazes import wall_cost_arg  # noqa: E402
 
 
 class LengthCosts(RouteVIN):
@@ -77,6 +81,9 @@ def main(argv=None) -> int:
     ap.add_argument("--step-walls", choices=("on", "off"), default="on" if RouteVIN.step_walls else "off",
                     help="treat a block move that no cell can step as a wall at inference, for the encoder and the "
                          "value iteration without learning (default: the shipped setting)")
+    ap.add_argument("--wall-cost", type=wall_cost_arg, default=WALL_COST, metavar="K|none",
+                    help=f"the encoder's inference: a move priced above K blocks per block of length is a wall "
+                         f"(default the shipped {WALL_COST:g}; none: no threshold)")
     args = ap.parse_args(argv)
     if args.seeds < 1 or args.first_seed < 0 or args.maps < 1:
         ap.error(f"--maps and --seeds take counts >= 1 and --first-seed a seed >= 0, got {args.maps}, {args.seeds} "
@@ -86,6 +93,7 @@ def main(argv=None) -> int:
     net = load_route_net(args.route)
     plain = LengthCosts(net.block, 1, 1, net.step).eval()
     net.step_walls = plain.step_walls = args.step_walls == "on"
+    net.wall_cost = args.wall_cost
     walk = {"ripple": args.walk[0], "ripple_growth": args.walk[1], "sight": args.sight == "on"}
     settings = {**SHIPPED_SETTINGS, **walk}
     samplers = {
