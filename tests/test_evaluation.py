@@ -440,3 +440,25 @@ def test_replication_queries_are_fresh_and_the_script_refuses_unknown_sets(movin
     assert len(rows) == 1 and "[" in rows[0]
     assert script.main(["no-such-set", "--movingai", str(movingai)]) == 2
     assert "no-such-set" in capsys.readouterr().err
+    test = [q for q in E.movingai_queries(str(movingai), ["maze-32-32-2"], protocol.scenarios,
+                                          protocol.tuning_scenarios, protocol.tolerance) if q.split == "test"]
+    assert script.fresh_queries("maze-32-32-2", 1, movingai, evaluation=True) == test
+    assert [q.key for q in script.fresh_queries("maze", 1, None, evaluation=True)] == \
+        [TEST_SEED0 + i for i in range(protocol.maps)]
+
+
+@pytest.mark.experiments
+def test_replication_runs_the_next_seeds_and_the_ablation_against_itself(movingai, capsys, tmp_path):
+    script = load_script("experiments/replicate_sets")
+    out = tmp_path / "runs.csv"
+    assert script.main(["random-32-32-10", "--evaluation-queries", "--first-seed", "4", "--seeds", "1", "--again",
+                        "--processes", "1", "--movingai", str(movingai), "--csv", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "planner seeds 4 to 4" in text and "ablation again / ablation" in text
+    rows = list(csv.DictReader(out.open()))
+    assert {(r["sampler"], r["seed"]) for r in rows} == {("route ablation", "4"), ("route encoder", "4"),
+                                                         ("exact_route", "4"), (script.ABLATION_AGAIN, "5")}
+    assert len({r["query"] for r in rows}) == script.PROTOCOL.scenarios
+    with pytest.raises(SystemExit) as stop:
+        script.main(["random-32-32-10", "--first-seed", "-1"])
+    assert stop.value.code == 2 and "--first-seed" in capsys.readouterr().err

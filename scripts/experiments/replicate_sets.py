@@ -48,10 +48,14 @@ from planners.tools.parallel import add_backend_arguments, check_backend_argumen
 
 #: The evaluation's protocol: its step, tolerance, cap and how many queries it draws per set.
 PROTOCOL = Protocol()
+#: The label of ``--again``'s runs: the ablation once more, on the next planner seeds.
+ABLATION_AGAIN = "route ablation (next seeds)"
 
 
-def fresh_queries(name: str, n: int, directory: Path | None) -> list[Query]:
+def fresh_queries(name: str, n: int, directory: Path | None, *, evaluation: bool = False) -> list[Query]:
     """``n`` test queries of map set ``name`` that the evaluation (at its default sizes) never runs.
+
+    With ``evaluation`` the evaluation's own test queries of the set instead (``n`` is not used).
 
     Raises:
         InputError: ``name`` is neither a family, a family's shifted set nor a MovingAI map in ``directory``, or
@@ -59,19 +63,22 @@ def fresh_queries(name: str, n: int, directory: Path | None) -> list[Query]:
     """
     for family in FAMILIES:
         if name == shifted_name(family):
-            first = PROTOCOL.shifted_maps
+            first, n = (0, PROTOCOL.shifted_maps) if evaluation else (PROTOCOL.shifted_maps, n)
             return [Query(family, SHIFTED_SEED0 + i, SHIFTED_SIZES[i % len(SHIFTED_SIZES)], "test", shifted=True)
                     for i in range(first, first + n)]
         if name == family:
-            first = PROTOCOL.maps
+            first, n = (0, PROTOCOL.maps) if evaluation else (PROTOCOL.maps, n)
             return [Query(family, TEST_SEED0 + i, PROTOCOL.size, "test") for i in range(first, first + n)]
     if directory is None or not (directory / f"{name}.map").is_file():
         where = "no MovingAI folder" if directory is None else f"no {name}.map in {directory}"
         raise InputError(f"set {name!r}: expected a family ({', '.join(FAMILIES)}), a family's shifted set "
                          f"(\"FAMILY (shifted)\") or a MovingAI map ({where})")
     problems = scenarios(str(directory), name, PROTOCOL.tolerance)
-    used = {q.key for q in movingai_queries(str(directory), [name], PROTOCOL.scenarios, PROTOCOL.tuning_scenarios,
-                                            PROTOCOL.tolerance)}
+    chosen = movingai_queries(str(directory), [name], PROTOCOL.scenarios, PROTOCOL.tuning_scenarios,
+                              PROTOCOL.tolerance)
+    if evaluation:
+        return [q for q in chosen if q.split == "test"]
+    used = {q.key for q in chosen}
     rest = [i for i in range(max(2, len(problems) // 2)) if i not in used]
     if len(rest) < n:
         raise InputError(f"set {name!r}: its longest half holds {len(rest)} scenarios the evaluation does not use; "
@@ -97,6 +104,11 @@ def summary_rows(runs, sets: list[str], seed: int = 0) -> list[dict]:
         lo, hi = query_bootstrap(runs, name, ROUTE, ROUTE_ABLATION, success_difference, seed=seed)
         row["success difference [95%]"] = f"{solved['encoder'] - solved['ablation']:+.3f} [{lo:+.3f} to {hi:+.3f}]"
         row["exact / ablation"] = f"{its['exact'] / max(its['ablation'], 1e-9):.2f}"
+        if (name, ABLATION_AGAIN) in by:
+            again = by[(name, ABLATION_AGAIN)]["median_iterations"]
+            lo, hi = query_bootstrap(runs, name, ABLATION_AGAIN, ROUTE_ABLATION, median_ratio, seed=seed)
+            row["ablation again / ablation [95%]"] = f"{again / max(its['ablation'], 1e-9):.2f} [{lo:.2f} to {hi:.2f}]"
+            row["success again"] = f"{by[(name, ABLATION_AGAIN)]['success']:.3f}"
         rows.append(row)
     return rows
 
@@ -126,6 +138,13 @@ def main(argv=None) -> int:
     ap.add_argument("--queries", type=int, default=40, help="fresh queries per set (default 40)")
     ap.add_argument("--seeds", type=int, default=PROTOCOL.seeds,
                     help=f"planner seeds per query (default {PROTOCOL.seeds})")
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="the first planner seed (default 0: seeds 0 .. seeds - 1, the evaluation's)")
+    ap.add_argument("--evaluation-queries", action="store_true",
+                    help="the evaluation's own test queries of each set instead of fresh ones (--queries unused)")
+    ap.add_argument("--again", action="store_true",
+                    help="also the ablation on the next --seeds planner seeds, against itself: how far a ratio moves "
+                         "by planner seeds alone")
     ap.add_argument("--route", type=Path, default=SHIPPED, help="route encoder file (default: the shipped one)")
     ap.add_argument("--movingai", type=Path, default=None, help="MovingAI folder (default SAMPLERGYM_MOVINGAI_DIR or "
                                                                 "../shared/maps/movingai)")
@@ -136,13 +155,15 @@ def main(argv=None) -> int:
                           backend_help="a local process pool (default) or Ray")
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
-    if args.queries < 1 or args.seeds < 1:
-        ap.error(f"--queries and --seeds take counts >= 1, got {args.queries} and {args.seeds}")
+    if args.queries < 1 or args.seeds < 1 or args.first_seed < 0:
+        ap.error(f"--queries and --seeds take counts >= 1 and --first-seed a seed >= 0, got {args.queries}, "
+                 f"{args.seeds} and {args.first_seed}")
     try:
         if not args.route.is_file():
             raise InputError(f"--route {args.route}: no such file")
         directory = movingai_dir(args.movingai, required=False)
-        queries = [q for name in args.sets for q in fresh_queries(name, args.queries, directory)]
+        queries = [q for name in args.sets
+                   for q in fresh_queries(name, args.queries, directory, evaluation=args.evaluation_queries)]
         if args.csv is not None:
             check_output_place(args.csv, "--csv", folder=False)
     except (InputError, OSError) as exc:
@@ -154,13 +175,17 @@ def main(argv=None) -> int:
                if on == RouteVIN.step_walls else EncoderWithStepWalls(str(args.route), protocol.step, on))
     specs = [SamplerSpec.of("route_ablation", step_size=protocol.step), encoder,
              SamplerSpec.of("exact_route", step_size=protocol.step)]
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
     tasks = [Task(q, "RRT", spec, seed, ROUTE if spec is encoder else "") for q in queries for spec in specs
-             for seed in range(args.seeds)]
+             for seed in seeds]
+    if args.again:
+        tasks += [Task(q, "RRT", specs[0], seed + args.seeds, ABLATION_AGAIN) for q in queries for seed in seeds]
     runs = run_on_backend_args(tasks, protocol, args)
     if args.csv is not None:
         write_runs_csv(runs, args.csv)
     table = markdown_table(summary_rows(runs, list(dict.fromkeys(args.sets))), None)
-    print(f"fresh queries per set: {args.queries}, planner seeds {args.seeds}, RRT step {protocol.step:g}, "
+    which = "the evaluation's test queries" if args.evaluation_queries else f"fresh queries per set: {args.queries}"
+    print(f"{which}, planner seeds {seeds.start} to {seeds.stop - 1}, RRT step {protocol.step:g}, "
           f"cap {protocol.max_iterations}, step walls {args.step_walls}; medians of iterations to the first solution "
           "(the cap when unsolved)\n")
     print(table)
