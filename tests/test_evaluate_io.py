@@ -153,6 +153,12 @@ def test_room_and_share_closed_and_targets_in_words():
             for i, r in enumerate(runs)]
     words = " ".join(E.carry_targets(E.summarize(runs, {("maze (shifted)", "RRT"): 0.05}), []))
     assert "maze (shifted) 0.993 against 1.000 (exact 0.980)" in words
+    # the exact reference's own failures of those two targets are named, whether or not the learned sampler fails
+    assert f"{E.EXACT_FAILS} maze (shifted) 0.980 against 1.000." in words
+    words = " ".join(E.carry_targets(_rows({"route ablation": 100, "route encoder": 100, "exact_route": 120}), []))
+    assert f"worse than the ablation: holds on every set. {E.EXACT_FAILS} maze (shifted) 1.20." in words
+    rows = _rows({"route ablation": 100, "route encoder": 130, "exact_route": 90})
+    assert E.EXACT_FAILS not in " ".join(E.carry_targets(rows, []))
 
 
 def test_a_failure_carries_its_interval_over_the_queries_and_the_target_stays_on_the_measured_value():

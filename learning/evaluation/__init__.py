@@ -58,6 +58,7 @@ from learning.evaluation.roster import (
 )
 from learning.evaluation.runner import RunContext, run_all, run_on_backend_args, run_one, shared_context, worker_init
 from learning.evaluation.tables import (
+    EXACT_FAILS,
     MOVINGAI_POOL,
     TARGETS,
     bootstrap_mean_ci,
@@ -90,15 +91,15 @@ from learning.evaluation.tuning import (
 from learning.samplers.registry import USER, ModelCache, SamplerSpec, user_sampler
 
 __all__ = [
-    "BATCH_TIE", "BUILTIN_SAMPLERS", "CONSTANT", "EXACT_ROUTE", "EXPERT", "FOLLOWER", "GOAL_BIASES", "MOVINGAI_POOL",
-    "ModelCache", "PALETTE", "POLICY_BATCHES", "POLICY_TUNING_SEEDS", "Protocol", "Query", "ROUTE", "ROUTE_ABLATION",
-    "RunContext", "SamplerSpec", "TARGETS", "TUNING_BIASES", "Task", "USER", "best_bias", "best_constant",
-    "best_policy_batch", "bias_sampler", "bias_spec", "bootstrap_mean_ci", "carry_targets", "constant_sampler",
-    "constant_spec", "constant_test_tasks", "constant_tuning_tasks", "ecdf_figure", "evaluation_tasks", "fixed_specs",
-    "generated_queries", "glance_table", "headline", "median_ratio", "medians_figure", "movingai_queries",
-    "parse_user_sampler", "policy_sampler", "policy_spec", "policy_tuning_tasks", "pooled", "query_bootstrap",
-    "room_table", "run_all", "run_on_backend_args", "run_one", "sampler_bias", "sampler_label", "save_plots",
-    "scenarios", "shared_context", "shifted_name", "shifted_queries", "spec_bias", "spec_of", "success_difference",
-    "summarize", "target_check", "tuned_for_shifted", "tuning_tasks", "user_sampler", "worker_init",
-    "write_ompl_logs",
+    "BATCH_TIE", "BUILTIN_SAMPLERS", "CONSTANT", "EXACT_FAILS", "EXACT_ROUTE", "EXPERT", "FOLLOWER", "GOAL_BIASES",
+    "MOVINGAI_POOL", "ModelCache", "PALETTE", "POLICY_BATCHES", "POLICY_TUNING_SEEDS", "Protocol", "Query", "ROUTE",
+    "ROUTE_ABLATION", "RunContext", "SamplerSpec", "TARGETS", "TUNING_BIASES", "Task", "USER", "best_bias",
+    "best_constant", "best_policy_batch", "bias_sampler", "bias_spec", "bootstrap_mean_ci", "carry_targets",
+    "constant_sampler", "constant_spec", "constant_test_tasks", "constant_tuning_tasks", "ecdf_figure",
+    "evaluation_tasks", "fixed_specs", "generated_queries", "glance_table", "headline", "median_ratio",
+    "medians_figure", "movingai_queries", "parse_user_sampler", "policy_sampler", "policy_spec", "policy_tuning_tasks",
+    "pooled", "query_bootstrap", "room_table", "run_all", "run_on_backend_args", "run_one", "sampler_bias",
+    "sampler_label", "save_plots", "scenarios", "shared_context", "shifted_name", "shifted_queries", "spec_bias",
+    "spec_of", "success_difference", "summarize", "target_check", "tuned_for_shifted", "tuning_tasks", "user_sampler",
+    "worker_init", "write_ompl_logs",
 ]
