@@ -2,6 +2,7 @@
 
     python scripts/experiments/replicate_sets.py maze-32-32-2 random-32-32-10 room-64-64-8 "narrow_passage (shifted)"
     python scripts/experiments/replicate_sets.py lak303d --queries 20 --csv runs.csv
+    python scripts/experiments/replicate_sets.py room-64-64-8 maze --evaluation-queries --first-seed 3 --again
 
 A target of ``evaluate.py`` judged on one set's few queries can fail by a run or two. This script asks whether
 such a failure is a loss or noise, by running the same three samplers (the shipped route encoder, its ablation and
@@ -12,6 +13,10 @@ seeds) on queries of the same set that the evaluation never ran:
   evaluation's test and tuning scenarios (the maps come from ``--movingai`` / ``SAMPLERGYM_MOVINGAI_DIR``);
 - a family's shifted maps (``"FAMILY (shifted)"``) or its own test maps (``FAMILY``): ``--queries`` maps on the
   seeds that follow the evaluation's, at the sides it uses.
+
+``--evaluation-queries`` runs the evaluation's own test queries of each set instead, and ``--first-seed`` other planner
+seeds: the test run's comparison again with only the seeds changed. ``--again`` also runs the ablation on the next
+``--seeds`` seeds and sets it against itself: how far a set's ratio and success move by the planner's seeds alone.
 
 ``--step-walls off`` runs the encoder without its rule that a block move no cell can step is a wall
 (``RouteVIN.step_walls``), still labelled "route encoder".
