@@ -364,8 +364,8 @@ def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: s
     worse = [f"{f} {against_ablation(f, learned):.2f}" + interval(f, median_ratio, ".2f")
              + ("" if math.isnan(against_ablation(f, exact)) else f" (exact {against_ablation(f, exact):.2f})")
              for f in fams if _median(by, f, learned) > (1 + WORSE_MARGIN) * _median(by, f, ablation)]
-    # the same two targets for the exact reference, which knows the route: where it fails one, no field could pass
-    # it on that set with these runs
+    # the same two targets for the exact reference, which knows the route: where it fails one, knowing the route did
+    # not pass it on that set's runs
     exact_worse = [f"{f} {against_ablation(f, exact):.2f}" for f in fams if (f, exact) in by
                    and _median(by, f, exact) > (1 + WORSE_MARGIN) * _median(by, f, ablation)]
     lines.append(f"never more than {WORSE_MARGIN:.0%} worse than the ablation: "
