@@ -359,15 +359,22 @@ def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: s
         lo, hi = query_bootstrap(runs, f, learned, ablation, statistic) if runs else (math.nan, math.nan)
         return "" if math.isnan(lo) else f" [{lo:{fmt}} to {hi:{fmt}}]"
 
+    def slower(f: str, name: str) -> bool:
+        """Whether ``name`` ran on ``f`` and is more than ``WORSE_MARGIN`` worse than the ablation there."""
+        return (f, name) in by and _median(by, f, name) > (1 + WORSE_MARGIN) * _median(by, f, ablation)
+
+    def less_solved(f: str, name: str) -> bool:
+        """Whether ``name`` ran on ``f`` and solved less often than the ablation there."""
+        return (f, name) in by and by[(f, name)]["success"] < by[(f, ablation)]["success"]
+
     # beside each failure, the exact reference's own ratio: where it too is worse than the ablation, the route
     # sampler's settings lose on that set whatever its field
     worse = [f"{f} {against_ablation(f, learned):.2f}" + interval(f, median_ratio, ".2f")
              + ("" if math.isnan(against_ablation(f, exact)) else f" (exact {against_ablation(f, exact):.2f})")
-             for f in fams if _median(by, f, learned) > (1 + WORSE_MARGIN) * _median(by, f, ablation)]
+             for f in fams if slower(f, learned)]
     # the same two targets for the exact reference, which knows the route: where it fails one, knowing the route did
     # not pass it on that set's runs
-    exact_worse = [f"{f} {against_ablation(f, exact):.2f}" for f in fams if (f, exact) in by
-                   and _median(by, f, exact) > (1 + WORSE_MARGIN) * _median(by, f, ablation)]
+    exact_worse = [f"{f} {against_ablation(f, exact):.2f}" for f in fams if slower(f, exact)]
     lines.append(f"never more than {WORSE_MARGIN:.0%} worse than the ablation: "
                  + ("holds on every set." if not worse else
                     f"fails on {', '.join(worse)} (learned / ablation"
@@ -378,9 +385,9 @@ def carry_targets(rows: Sequence[dict], movingai_maps: Sequence[str], learned: s
     short = [f"{f} {by[(f, learned)]['success']:.3f} against {by[(f, ablation)]['success']:.3f}"
              + interval(f, success_difference, "+.3f")
              + (f" (exact {by[(f, exact)]['success']:.3f})" if (f, exact) in by else "")
-             for f in fams if by[(f, learned)]["success"] < by[(f, ablation)]["success"]]
+             for f in fams if less_solved(f, learned)]
     exact_short = [f"{f} {by[(f, exact)]['success']:.3f} against {by[(f, ablation)]['success']:.3f}" for f in fams
-                   if (f, exact) in by and by[(f, exact)]["success"] < by[(f, ablation)]["success"]]
+                   if less_solved(f, exact)]
     lines.append("success at least the ablation's on every set and every MovingAI map: "
                  + ("holds." if not short else
                     f"fails on {', '.join(short)} (learned against the ablation"
