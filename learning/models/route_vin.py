@@ -24,13 +24,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import torch
 from torch import nn
 
 from learning.models.field import FieldEncoder
+from planners.maps.gridsearch import MOVES, move_cost_field
 
-#: The 8 moves of the block grid, (row, column) offsets, and their lengths in blocks.
-MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
+#: The moves' lengths in blocks (``MOVES``: the 8 moves of the block grid, the grid search's own order).
 LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
 #: The value of a block the goal does not reach (in blocks): above any cost-to-go a map can have.
 UNREACHED = 1e6
@@ -182,6 +183,20 @@ class RouteVIN(nn.Module, FieldEncoder):
                 break
         return v
 
+    @staticmethod
+    def settle(costs: torch.Tensor, goal: torch.Tensor, walls: torch.Tensor) -> torch.Tensor:
+        """``iterate`` run until the values settle, computed directly: the same values, bit for bit, far sooner.
+
+        Value iteration's fixed point is the shortest path over the move costs, so a compiled Dijkstra
+        (``planners.maps.gridsearch.move_cost_field``) gives it in one pass over the blocks instead of one sweep
+        of the grid per block a route crosses. It runs on the CPU whatever the device (the values come back to
+        ``costs``' device) and carries no gradient.
+        """
+        c = costs.detach().cpu().numpy()
+        g, w = goal.cpu().numpy(), walls.cpu().numpy()
+        v = np.stack([move_cost_field(c[i], g[i], w[i], UNREACHED) for i in range(len(c))])
+        return torch.from_numpy(v).to(costs.device)
+
     def cell_field(self, f: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
         """Every cell's cost-to-go (B, H, W) from the block features and block values."""
         rel = (neighbours(v, UNREACHED) - v.unsqueeze(1)).clamp(-REACH, REACH)
@@ -198,5 +213,5 @@ class RouteVIN(nn.Module, FieldEncoder):
                 costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
             if self.step_walls:
                 costs = costs.masked_fill(~cell_steps(x, self.block), UNREACHED)
-            v = self.iterate(costs, goal, walls)
+            v = self.settle(costs, goal, walls)
         return self.cell_field(f, v)
