@@ -223,7 +223,8 @@ def _check_models(args) -> None:
 
 
 #: What the outputs may hold (``means.png``: the figure's name in earlier versions); --out holding more is refused.
-OUTPUT_NAMES = frozenset({MANIFEST, "summary.md", "runs.csv", "ecdf.png", "medians.png", "means.png", "map-sets.json",
+OUTPUT_NAMES = frozenset({MANIFEST, "summary.md", "runs.csv", "ecdf.png", "ecdf-time.png", "medians.png", "means.png",
+                          "map-sets.json",
                           "ompl"})
 #: Free disk space the outputs need (tables, a few plots, one OMPL log per map set), with room to spare.
 OUTPUT_BYTES = 64 * 2**20
@@ -368,6 +369,15 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
     route_targets, route_met, route_total = E.target_check(head, mai, E.ROUTE, E.ROUTE_ABLATION)
     reach, reach_met, reach_total = E.target_check(head, mai, "expert")
     glance = E.glance_table(rows, best, users, mai)
+    clock = E.glance_table(rows, best, users, mai, metric="time")
+    loads = "; ".join(f"{what}: {seconds * 1e3:.0f} ms" for what, seconds in sorted(context.models.load_seconds.items()))
+    clock_note = ("RRT on the test split: median wall time per query in ms, from the planner's start to its first "
+                  "solution, the sampler's own work for the query included (the route encoder's pass, the exact "
+                  "reference's and the expert's grid search, the policy's set-up); the fastest sampler of each set in "
+                  "bold, the privileged expert aside. An unsolved run counts with the time it ran. Loading a model is "
+                  "paid once per process, not per query, and is left out"
+                  + (f" ({loads})" if loads else "") + ". All runs share one machine, "
+                  f"{args.processes if args.backend == 'local' else 'several'} process(es) of one thread each.")
     room = E.room_table(rows, mai)
     goals = E.carry_targets(rows, mai, runs=runs + pool) + E.carry_targets(rows, mai, "policy", E.CONSTANT, runs + pool)
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
@@ -396,6 +406,7 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
             "## Results at a glance\n\nRRT on the test split: median iterations to the first solution (success "
             "rate in brackets). Best goal bias: the bias tuned for the map set. Ablations: the learned sampler "
             "with its learning removed.\n\n" + markdown_table(glance) +
+            "\n## Time to solution at a glance\n\n" + clock_note + "\n\n" + markdown_table(clock) +
             "\n## How much of the room learning closes\n\nThe room is what separates a sampler's ablation from "
             "the exact reference (the same sampler on the exact cost-to-go); the share closed is (ablation - learned) "
             "/ (ablation - exact). Below 20% of the ablation's median the room is too small to judge.\n\n"
@@ -444,6 +455,7 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
         atomic_write_text(tmp / "map-sets.json", json.dumps(record, indent=1, default=str) + "\n")
         atomic_write_text(tmp / "summary.md", text)
     print("\n" + markdown_table(glance))
+    print("Time to solution per query, median ms (the sampler's own work included):\n" + markdown_table(clock))
     if room:
         print("How much of the room between ablation and exact reference learning closes:\n" + markdown_table(room))
     print("\n".join(goals))

@@ -192,6 +192,18 @@ def test_the_glance_table_has_a_few_columns_and_dashes_for_missing_samplers():
     assert table[0]["best goal bias"] == "800 (100%)"
 
 
+def test_the_time_glance_table_gives_median_ms_and_bolds_the_fastest_sampler_but_not_the_expert():
+    rows = _rows({"uniform": 900, "goal_bias=0.05": 800, "route encoder": 200, "expert (reference)": 50})
+    ms = {"uniform": 4.0, "goal bias 0.05 (default, best)": 2.5, "route encoder": 12.0, "expert (reference)": 0.5}
+    for r in rows:
+        r["median_wall_ms"] = ms[r["sampler"]]
+    table = E.glance_table(rows, {("maze (shifted)", "RRT"): 0.05}, metric="time")
+    assert table[0]["best goal bias"] == "**2.5 ms**" and table[0]["uniform"] == "4 ms"
+    assert table[0]["route encoder"] == "12 ms" and table[0]["expert"] == "0.5 ms"  # privileged: never bold
+    with pytest.raises(ValueError, match="metric"):
+        E.glance_table(rows, {}, metric="seconds")
+
+
 def test_one_colour_per_sampler_in_both_figures():
     runs = []
     for s, base in (("uniform", 900), ("goal_bias=0.05", 700), ("goal_bias=0.2", 500), ("policy", 300),

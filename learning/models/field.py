@@ -23,7 +23,7 @@ GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
 #: holds at most about ``BYTES_PER_BLOCK`` per block per map in flight; at the default, one map of 1024 x 1024
 #: cells at 2 cells per block (262,144 blocks; the shipped encoder's pass over it peaks below 0.7 GB).
 MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
-MAX_BLOCKS = 512 * 512
+MAX_BLOCKS = 2048 * 2048
 #: Working memory of one pass per block of one map (activations and attention, measured on the U-Net
 #: encoder, which needs the most), and how much of it ``predict`` lets one batch of symmetries take: larger
 #: maps run their symmetries in smaller batches (one at a time at the largest), so memory stays bounded.

@@ -126,6 +126,9 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: corner cutting) is a wall, whatever its price: value iteration then cannot leak through a wall thinner
     #: than a block at a slant (see the research report, "The step walls"). Training never applies it.
     step_walls: bool = True
+    #: Above how many blocks per map a pass at inference runs in strips of rows (``forward``): up to it, one
+    #: piece (every map of up to 1024 x 1024 cells at 2 cells per block).
+    strip_blocks: int = 512 * 512
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -203,15 +206,54 @@ class RouteVIN(nn.Module, FieldEncoder):
         offsets = self.cells(torch.cat([f, rel], 1))
         return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
 
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """The cost-to-go of every cell (B, H, W), in blocks, from ``route_input``'s channels."""
-        x = x[:, :self.block * self.block + 1]  # the cells and the goal's block; not the offsets to it
-        goal, walls = self.goal_and_walls(x)
-        f, costs = self.move_costs(x)
+    def strip_rows(self, h: int, w: int) -> int:
+        """Block rows per strip of a pass over an ``h`` x ``w`` block grid: ``h`` (one piece) up to ``strip_blocks``."""
+        if h * w <= self.strip_blocks:
+            return h
+        return max(1, self.strip_blocks // (2 * w))
+
+    def inference_values(self, x: torch.Tensor, costs: torch.Tensor, goal: torch.Tensor,
+                         walls: torch.Tensor) -> torch.Tensor:
+        """The block values at inference: the moves priced above ``wall_cost`` and those no cell steps are walls."""
         with torch.no_grad():
             if self.wall_cost is not None:
                 costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
             if self.step_walls:
                 costs = costs.masked_fill(~cell_steps(x, self.block), UNREACHED)
-            v = self.settle(costs, goal, walls)
-        return self.cell_field(f, v)
+            return self.settle(costs, goal, walls)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """The cost-to-go of every cell (B, H, W), in blocks, from ``route_input``'s channels.
+
+        A block grid above ``strip_blocks`` blocks runs its convolutions in strips of rows at inference: each
+        strip reads the ``depth`` rows beyond it that its layers see, so every kept row is what one pass over
+        the whole map computes (up to the rounding of another shape), and a pass holds one strip's activations
+        rather than the whole map's. The local features are computed twice there (for the move costs, then for
+        the cell head), which costs time for a bounded memory.
+        """
+        x = x[:, :self.block * self.block + 1]  # the cells and the goal's block; not the offsets to it
+        goal, walls = self.goal_and_walls(x)
+        h, w = x.shape[-2:]
+        rows = self.strip_rows(h, w)
+        if rows >= h:
+            f, costs = self.move_costs(x)
+            return self.cell_field(f, self.inference_values(x, costs, goal, walls))
+        if torch.is_grad_enabled():
+            raise ValueError(f"a {h} x {w} block grid runs in strips, at inference only (torch.no_grad): "
+                             f"train on maps of at most {self.strip_blocks} blocks")
+        d, b = self.depth, self.block
+        parts = []
+        for r0 in range(0, h, rows):
+            r1 = min(h, r0 + rows)
+            lo, hi = max(0, r0 - d), min(h, r1 + d)
+            parts.append(self.move_costs(x[:, :, lo:hi])[1][:, :, r0 - lo:r1 - lo])
+        v = self.inference_values(x, torch.cat(parts, 2), goal, walls)
+        del parts
+        out = torch.empty(x.shape[0], h * b, w * b, dtype=v.dtype, device=v.device)
+        for r0 in range(0, h, rows):
+            r1 = min(h, r0 + rows)
+            a, z = max(0, r0 - 1), min(h, r1 + 1)  # the cell head reads the values one block row either side
+            lo, hi = max(0, a - d), min(h, z + d)
+            f = self.move_costs(x[:, :, lo:hi])[0][:, :, a - lo:z - lo]
+            out[:, r0 * b:r1 * b] = self.cell_field(f, v[:, a:z])[:, (r0 - a) * b:(r1 - a) * b]
+        return out
