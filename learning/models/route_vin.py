@@ -29,7 +29,7 @@ import torch
 from torch import nn
 
 from learning.models.field import FieldEncoder
-from planners.maps.gridsearch import MOVES, move_cost_field
+from planners.maps.gridsearch import MOVES, block_steps, move_cost_field
 
 #: The moves' lengths in blocks (``MOVES``: the 8 moves of the block grid, the grid search's own order).
 LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
@@ -68,40 +68,11 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
 
     From ``route_input``'s cell channels (B, block**2 + ..., h, w). A step goes from a free cell to one of its 8
     neighbours that is free, a diagonal one only if both cells beside it are free (the grid's own rule, no corner
-    cutting): a block move no step makes crosses a wall, however the network prices it.
+    cutting): a block move no step makes crosses a wall, however the network prices it. Compiled
+    (``planners.maps.gridsearch.block_steps``), on the CPU whatever the device.
     """
-    free = nn.functional.pixel_shuffle(x[:, :block * block], block)[:, 0] < 0.5  # (B, H, W) cells
-    B, H, W = free.shape
-    h, w = H // block, W // block
-    pad = nn.functional.pad(free, (1, 1, 1, 1), value=False)
-
-    def at(dr: int, dc: int) -> torch.Tensor:  # each cell's neighbour (dr, dc), False off the map
-        return pad[:, 1 + dr:1 + dr + H, 1 + dc:1 + dc + W]
-
-    def within(e: int, m: int) -> slice | None:
-        """The cells of a block, along one axis, whose step by ``e`` makes the block move ``m`` (None: none do)."""
-        if e == 0:
-            return slice(None) if m == 0 else None
-        if m == 0:  # the step stays inside the block along this axis
-            return slice(0, block - 1) if e > 0 else slice(1, block)
-        if m == e:  # from the block's last (first) row or column into the next (previous) block
-            return slice(block - 1, block) if e > 0 else slice(0, 1)
-        return None
-
-    out = torch.zeros(B, len(MOVES), h, w, dtype=torch.bool, device=x.device)
-    for er in (-1, 0, 1):
-        for ec in (-1, 0, 1):
-            if not (er or ec):
-                continue
-            step = free & at(er, ec)
-            if er and ec:
-                step = step & at(er, 0) & at(0, ec)
-            cells = step.view(B, h, block, w, block)
-            for a, (mr, mc) in enumerate(MOVES):
-                rows, cols = within(er, mr), within(ec, mc)
-                if rows is not None and cols is not None:
-                    out[:, a] |= cells[:, :, rows, :, cols].any(4).any(2)
-    return out
+    free = (nn.functional.pixel_shuffle(x[:, :block * block], block)[:, 0] < 0.5).cpu().numpy()  # (B, H, W) cells
+    return torch.from_numpy(np.stack([block_steps(f, block) for f in free])).to(x.device)
 
 
 class RouteVIN(nn.Module, FieldEncoder):
@@ -126,6 +97,9 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: corner cutting) is a wall, whatever its price: value iteration then cannot leak through a wall thinner
     #: than a block at a slant (see the research report, "The step walls"). Training never applies it.
     step_walls: bool = True
+    #: How inference computes value iteration's fixed point: "dijkstra" (``settle``, the default) or "iterate"
+    #: (``iterate`` to convergence: the same values, bit for bit, kept to measure what the direct way saves).
+    fixed_point: str = "dijkstra"
     #: Above how many blocks per map a pass at inference runs in strips of rows (``forward``): up to it, one
     #: piece (every map of up to 1024 x 1024 cells at 2 cells per block).
     strip_blocks: int = 512 * 512
@@ -220,7 +194,9 @@ class RouteVIN(nn.Module, FieldEncoder):
                 costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
             if self.step_walls:
                 costs = costs.masked_fill(~cell_steps(x, self.block), UNREACHED)
-            return self.settle(costs, goal, walls)
+            if self.fixed_point not in ("dijkstra", "iterate"):
+                raise ValueError(f"RouteVIN.fixed_point = {self.fixed_point!r}: expected 'dijkstra' or 'iterate'")
+            return (self.settle if self.fixed_point == "dijkstra" else self.iterate)(costs, goal, walls)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         """The cost-to-go of every cell (B, H, W), in blocks, from ``route_input``'s channels.

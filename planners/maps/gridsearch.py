@@ -216,6 +216,32 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
 
 
 @nb.njit(cache=True)
+def _block_steps(free, block, dr, dc):
+    """(8, h, w) bool: whether some free cell of each block steps into its neighbour block by each move."""
+    H, W = free.shape
+    h, w = H // block, W // block
+    move = np.full((3, 3), -1, dtype=np.int64)  # (block row move + 1, block column move + 1) -> move index
+    for a in range(len(dr)):
+        move[dr[a] + 1, dc[a] + 1] = a
+    out = np.zeros((len(dr), h, w), dtype=np.bool_)
+    for r in range(H):
+        for c in range(W):
+            if not free[r, c]:
+                continue
+            br, bc = r // block, c // block
+            for k in range(len(dr)):
+                r2, c2 = r + dr[k], c + dc[k]
+                if r2 < 0 or r2 >= H or c2 < 0 or c2 >= W or not free[r2, c2]:
+                    continue
+                if k >= 4 and not (free[r2, c] and free[r, c2]):  # no corner cutting
+                    continue
+                mr, mc = r2 // block - br, c2 // block - bc
+                if mr or mc:
+                    out[move[mr + 1, mc + 1], br, bc] = True
+    return out
+
+
+@nb.njit(cache=True)
 def _flood(padded, seed, label, value, stop):
     """4-connected flood fill of free cells from flat padded index ``seed``; True if ``stop`` was reached."""
     Wp = padded.shape[1]
@@ -297,6 +323,25 @@ def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unre
     if goal.shape != shape or walls.shape != shape:
         raise ValueError(f"goal {goal.shape} and walls {walls.shape} must have the costs' grid shape {shape}")
     return _move_cost_dijkstra(costs, goal, walls, costs.dtype.type(unreached), _DR, _DC)
+
+
+def block_steps(free: np.ndarray, block: int) -> np.ndarray:
+    """Whether any free cell of each ``block`` x ``block`` block can step into its neighbour block, per move.
+
+    A step goes from a free cell to one of its 8 neighbours that is free, a diagonal one only if both cells
+    beside it are free (the grid's own rule); cells off the map are blocked.
+
+    Args:
+        free: (H, W) bool, True where a cell is free; H and W whole multiples of ``block``.
+        block: Cells per block side.
+
+    Returns:
+        (8, H // block, W // block) bool, the moves in ``MOVES`` order.
+    """
+    free = np.ascontiguousarray(free, dtype=bool)
+    if free.ndim != 2 or free.shape[0] % block or free.shape[1] % block:
+        raise ValueError(f"free must be an (H, W) map of whole {block}-cell blocks, got shape {free.shape}")
+    return _block_steps(free, int(block), _DR, _DC)
 
 
 def _search(grid: OccupancyGrid, start, goal):
