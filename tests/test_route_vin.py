@@ -377,3 +377,20 @@ def test_the_field_leaks_script_compares_one_query_and_refuses_an_unknown_map(mo
     with pytest.raises(SystemExit) as stop:
         script.main(["no-such-map", "--movingai", str(movingai)])
     assert stop.value.code == 2 and "no-such-map" in capsys.readouterr().err
+
+
+def test_a_pass_in_strips_of_rows_gives_the_one_piece_field_and_refuses_gradients(monkeypatch):
+    net = load_route_net(SHIPPED)
+    problem = generate("maze", TRAIN_SEEDS[0] + 3, 96)
+    obstacles, goal = problem.world.obstacles, problem.world.cell_of(problem.goal)
+    whole = net.predict(obstacles, goal)
+    monkeypatch.setattr(net, "strip_blocks", 48 * 7)  # strips of 3 block rows of the 48 x 48 block grid
+    assert net.strip_rows(48, 48) == 3
+    strips = net.predict(obstacles, goal)
+    reached = whole < 1e5
+    assert np.array_equal(reached, strips < 1e5)
+    assert np.abs(strips - whole)[reached].max() < 1e-4  # the rounding of another shape, no more
+    x = torch.from_numpy(route_input(obstacles, goal, net.block)[None])
+    with pytest.raises(ValueError, match="strips, at inference only"):
+        net(x)  # gradients on: a training pass never runs in strips
+    assert net.pass_bytes(2048, 2048) < 1 << 30  # a 4096 x 4096 map within 1 GB

@@ -180,6 +180,19 @@ class RouteVIN(nn.Module, FieldEncoder):
         offsets = self.cells(torch.cat([f, rel], 1))
         return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
 
+    def pass_bytes(self, h: int, w: int) -> int:
+        """About how many bytes one pass over an ``h`` x ``w`` block grid holds at its peak (one symmetry).
+
+        Measured on the shipped encoder (``scripts/benchmark_route.py``'s peak memory): in one piece about 1 kB per
+        block (0.26 GB at 1024 x 1024 cells); in strips about 0.2 GB for a strip and 200 bytes per block of the map
+        (0.35 GB at 2048 x 2048 cells, 0.84 GB at 4096 x 4096).
+        """
+        blocks = h * w
+        scale = self.channels / 48
+        if blocks <= self.strip_blocks:
+            return int(1_000 * scale * blocks)
+        return int(200 * 2**20 * scale + 200 * blocks)
+
     def strip_rows(self, h: int, w: int) -> int:
         """Block rows per strip of a pass over an ``h`` x ``w`` block grid: ``h`` (one piece) up to ``strip_blocks``."""
         if h * w <= self.strip_blocks:
