@@ -7,6 +7,8 @@ and predicts what it costs, in blocks, to move from that block into each of its 
 iteration, as in value-iteration networks (Tamar et al., 2016), then carries the goal's cost-to-go across the
 block grid: each iteration is one layer of shared weights, ``V = min over moves of (cost of the move + V of
 the block it reaches)``, and the iterations run until the values settle (at most one per block of the grid).
+That fixed point is the shortest path over the move costs, so the encoder computes it directly, by a compiled
+Dijkstra (``RouteVIN.settle``): the same values bit for bit, in one pass over the blocks.
 A last local head turns the block values into a cost-to-go for every cell. Nothing in it depends on the map's
 size or on where on the map a block lies: it learns local geometry (which cells let a robot through, at what
 cost) and composes it.
