@@ -368,7 +368,7 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
     targets, met, total = E.target_check(head, mai)
     route_targets, route_met, route_total = E.target_check(head, mai, E.ROUTE, E.ROUTE_ABLATION)
     reach, reach_met, reach_total = E.target_check(head, mai, "expert")
-    glance = E.glance_table(rows, best, users, mai, metric="both")
+    glance = E.glance_table(rows, best, users, mai)
     clock = E.glance_table(rows, best, users, mai, metric="time")
     loads = "; ".join(f"{what}: {seconds * 1e3:.0f} ms" for what, seconds in sorted(context.models.load_seconds.items()))
     clock_note = ("RRT on the test split: median wall time per query in ms, from the planner's start to its first "
@@ -404,8 +404,7 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
             + (f"User samplers: {named.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
                if users else "") +
             "## Results at a glance\n\nRRT on the test split: median iterations to the first solution (success "
-            "rate in brackets), then the median time per query (the sampler's own work included; the next table "
-            "says what it counts). Best goal bias: the bias tuned for the map set. Ablations: the learned sampler "
+            "rate in brackets). Best goal bias: the bias tuned for the map set. Ablations: the learned sampler "
             "with its learning removed.\n\n" + markdown_table(glance) +
             "\n## Time to solution at a glance\n\n" + clock_note + "\n\n" + markdown_table(clock) +
             "\n## How much of the room learning closes\n\nThe room is what separates a sampler's ablation from "

@@ -241,11 +241,10 @@ def glance_table(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
     ``metric="time"``: each cell is instead the median wall time per query in ms, from the planner's start to
     its first solution, the sampler's own per-query work included (the encoder's pass, a grid search, the
     policy's set-up; loading a model is not: it is paid once). The fastest sampler of each set is in bold,
-    the privileged expert aside (it may not compete: it is given the shortest path). ``metric="both"``: the
-    iterations with the success rate, then the time (``"47 (100%), 21 ms"``).
+    the privileged expert aside (it may not compete: it is given the shortest path).
     """
-    if metric not in ("iterations", "time", "both"):
-        raise ValueError(f"metric must be 'iterations', 'time' or 'both', got {metric!r}")
+    if metric not in ("iterations", "time"):
+        raise ValueError(f"metric must be 'iterations' or 'time', got {metric!r}")
     from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
 
     by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
@@ -259,9 +258,8 @@ def glance_table(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
         found = {label: by.get((fam, name if name is not None else bias_sampler(b) if b is not None else ""))
                  for label, name in cols}
         for label, r in found.items():
-            its = "" if r is None else f"{r['median_iterations']:.0f} ({r['success']:.0%})"
-            row[label] = ("-" if r is None else its if metric == "iterations" else _ms(r["median_wall_ms"])
-                          if metric == "time" else f"{its}, {_ms(r['median_wall_ms'])}")
+            row[label] = "-" if r is None else (f"{r['median_iterations']:.0f} ({r['success']:.0%})"
+                                                if metric == "iterations" else _ms(r["median_wall_ms"]))
         if metric == "time":
             timed = {label: r["median_wall_ms"] for label, r in found.items() if r is not None and label != "expert"}
             if timed:
