@@ -114,6 +114,30 @@ def _sift_down(heap, pos, key, j, n):
 
 
 @nb.njit(cache=True)
+def _pop(heap, pos, key, size):
+    """Take the heap's least-key item out and mark it settled: (the item, the heap's new size)."""
+    v = heap[0]
+    size -= 1
+    if size > 0:
+        heap[0] = heap[size]
+        pos[heap[0]] = 0
+        _sift_down(heap, pos, key, 0, size)
+    pos[v] = -2
+    return v, size
+
+
+@nb.njit(cache=True)
+def _lowered(heap, pos, key, u, size):
+    """Put ``u`` on the heap, or move it up after its key fell: the heap's new size."""
+    if pos[u] == -1:
+        heap[size] = u
+        pos[u] = size
+        size += 1
+    _sift_up(heap, pos, key, pos[u])
+    return size
+
+
+@nb.njit(cache=True)
 def _dijkstra(padded, goal, stop, dr, dc):
     """Octile Dijkstra from flat padded index ``goal``; stops once ``stop`` is settled (-1: never).
 
@@ -133,13 +157,7 @@ def _dijkstra(padded, goal, stop, dr, dc):
     pos[goal] = 0
     size = 1
     while size > 0:
-        v = heap[0]
-        size -= 1
-        if size > 0:
-            heap[0] = heap[size]
-            pos[heap[0]] = 0
-            _sift_down(heap, pos, dist, 0, size)
-        pos[v] = -2
+        v, size = _pop(heap, pos, dist, size)
         if v == stop:
             break
         dv = dist[v]
@@ -157,11 +175,7 @@ def _dijkstra(padded, goal, stop, dr, dc):
             if nd < dist[u]:
                 dist[u] = nd
                 toward[u] = v
-                if pos[u] == -1:
-                    heap[size] = u
-                    pos[u] = size
-                    size += 1
-                _sift_up(heap, pos, dist, pos[u])
+                size = _lowered(heap, pos, dist, u, size)
     return dist, toward
 
 
@@ -188,13 +202,7 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
             pos[i] = size
             size += 1
     while size > 0:
-        v = heap[0]
-        size -= 1
-        if size > 0:
-            heap[0] = heap[size]
-            pos[heap[0]] = 0
-            _sift_down(heap, pos, dist, 0, size)
-        pos[v] = -2
+        v, size = _pop(heap, pos, dist, size)
         r, c = v // w, v % w
         dv = dist[v]
         for a in range(A):
@@ -207,11 +215,7 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
             nd = costs[a, br, bc] + dv
             if nd < dist[b]:
                 dist[b] = nd
-                if pos[b] == -1:
-                    heap[size] = b
-                    pos[b] = size
-                    size += 1
-                _sift_up(heap, pos, dist, pos[b])
+                size = _lowered(heap, pos, dist, b, size)
     return dist.reshape(h, w)
 
 
