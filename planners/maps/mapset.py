@@ -248,6 +248,10 @@ class MapSet:
         """A JSON-able record of the set: what it holds, its query rule and its split (with the map names)."""
         raise NotImplementedError
 
+    def files(self) -> list[Path]:
+        """The files the set's problems are read from (maps, scenarios, queries, manifest); none where generated."""
+        return []
+
     def describe(self) -> str:
         """The record in a few printable lines."""
         rec = self.record()
@@ -391,6 +395,7 @@ class FileMapSet(MapSet):
             split_seed = check_int(opts.get("split_seed", 0), f"map set {source}: split_seed", low=0)
             self.split = split_by_hash(list(self.maps_by_name), split_seed, opts.get("fractions"))
         self._drawn_queries: dict[str, list[MapQuery]] = {}
+        self._query_files: list[Path] = []
         self._queries = self._read_queries(opts.get("queries"), root if "queries" not in given else Path.cwd())
         self.validate()
 
@@ -417,6 +422,7 @@ class FileMapSet(MapSet):
 
     def _file_queries(self, path: Path) -> dict[str, list[MapQuery]]:
         out: dict[str, list[MapQuery]] = {n: [] for n in self.maps_by_name}
+        self._query_files.append(path)
         for lineno, name, start, goal in read_queries_file(path):
             where = f"{path}, line {lineno}"
             if name not in self.maps_by_name:
@@ -435,6 +441,7 @@ class FileMapSet(MapSet):
             scens = sorted(p for p in m.path.parent.glob(f"{m.path.stem}*.scen")
                            if p.name.split(".")[0].replace("-random-1", "") == m.path.stem)
             for scen in scens:
+                self._query_files.append(scen)
                 for p in load_movingai_scenarios(scen, map_path=m.path):
                     # the scenario counts cells; the set's map may have a resolution and an origin
                     where = f"{scen}, line {p.name.rpartition('#')[2]}"
@@ -484,6 +491,14 @@ class FileMapSet(MapSet):
         m = self.maps_by_name[names[int(rng.integers(len(names)))]]
         start, goal = draw_query(m.grid, m.labels, rng, self._min_distance(m), m.tolerance)
         return Problem(m.grid, start, goal, goal_tolerance=m.tolerance, name=m.name)
+
+    def files(self) -> list[Path]:
+        out = [self.source] if self.source.is_file() else []
+        for m in sorted(self.maps_by_name.values(), key=lambda m: m.name):
+            out.append(m.path)
+            if m.path.suffix.lower() in ROS_SUFFIXES:
+                out.append(read_ros_yaml(m.path)["image"])
+        return out + self._query_files
 
     def record(self) -> dict:
         maps = {n: {"path": str(m.path), "shape": list(m.grid.shape), "resolution": m.grid.resolution,
@@ -859,6 +874,14 @@ class MovingAIMapSet(MapSet):
 
     def problem(self, query: MapQuery) -> Problem:
         return self._problems[query.map][query.key]
+
+    def files(self) -> list[Path]:
+        out = []
+        for m in self.names:
+            out += [p for p in sorted(self.directory.glob(f"{m}*.scen"))
+                    if p.name.split(".")[0].replace("-random-1", "") == m]
+            out += [p for p in (self.directory / f"{m}.map",) if p.is_file()]
+        return out
 
     def record(self) -> dict:
         return {"kind": "movingai", "name": self.name, "directory": str(self.directory), "maps": list(self.names),
