@@ -356,3 +356,19 @@ def test_example_maps_are_what_the_script_writes(tmp_path):
     for folder in ("forest", "maze", "rooms"):
         for f in ("map.pgm", "map.yaml"):
             assert (tmp_path / folder / f).read_bytes() == (ROS / folder / f).read_bytes(), f"{folder}/{f}"
+
+
+def test_a_manifest_may_lower_the_cell_limit_but_never_raise_it(tmp_path, monkeypatch):
+    shutil.copytree(ROS / "maze", tmp_path / "ros_maze")  # 96 x 96 = 9,216 cells
+    monkeypatch.setenv("SAMPLERGYM_MAX_PIXELS", "100")
+    manifest = {"maps": [{"path": "ros_maze/map.yaml", "part": "test"}], "max_pixels": 10**12}
+    (tmp_path / "set.json").write_text(json.dumps(manifest))
+    with pytest.raises(InputError, match=r"set.json: max_pixels = 1,000,000,000,000 is above the limit in force "
+                                         r"\(100\); a manifest may only lower it.*SAMPLERGYM_MAX_PIXELS"):
+        MapSet.open(tmp_path / "set.json")
+    monkeypatch.delenv("SAMPLERGYM_MAX_PIXELS")
+    manifest["max_pixels"] = 1000  # lower than the default: in force
+    (tmp_path / "set.json").write_text(json.dumps(manifest))
+    with pytest.raises(InputError, match="more than the limit of 1,000"):
+        MapSet.open(tmp_path / "set.json")
+    assert MapSet.open(tmp_path / "set.json", max_pixels=10_000).maps() == ("ros_maze",)  # code may raise it

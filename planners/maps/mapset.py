@@ -44,7 +44,7 @@ from planners.maps.generators import (
 )
 from planners.maps.gridsearch import free_components
 from planners.maps.movingai import benchmark_scenarios, load_movingai_scenarios, movingai_dir
-from planners.maps.readers import MAP_READERS, ROS_SUFFIXES, read_map
+from planners.maps.readers import MAP_READERS, MAX_PIXELS_ENV, ROS_SUFFIXES, max_pixels_limit, read_map
 from planners.maps.rosmap import read_ros_yaml
 from planners.worlds.grid import OccupancyGrid
 
@@ -335,7 +335,8 @@ class FileMapSet(MapSet):
         split_seed: Seed of the split (``split_by_hash``).
         fractions: Share of the maps per part, default ``DEFAULT_FRACTIONS``.
         name: The set's name in outputs, default the folder's or manifest's name.
-        max_pixels: Largest map accepted, in cells (``planners.maps.readers.max_pixels_limit``).
+        max_pixels: Largest map accepted, in cells (``planners.maps.readers.max_pixels_limit``). Given
+            here it may raise the limit; a manifest's may only lower it (one above is refused).
 
     Raises:
         InputError: Anything ``validate`` refuses, before any query is planned.
@@ -364,6 +365,13 @@ class FileMapSet(MapSet):
             root = source.parent
         else:
             raise InputError(f"map set {str(source)!r} does not exist; expected a folder of maps or a manifest .json")
+        if "max_pixels" in opts and "max_pixels" not in given:  # a file may lower the limit in force, never raise it
+            limit, mp = max_pixels_limit(), opts["max_pixels"]
+            check_int(mp, f"manifest {source}: max_pixels")
+            if mp > limit:
+                raise InputError(f"manifest {source}: max_pixels = {mp:,} is above the limit in force ({limit:,}); a "
+                                 f"manifest may only lower it. To raise it, set {MAX_PIXELS_ENV} or pass max_pixels= "
+                                 "in code")
         opts.update(given)
         self.source = source
         self.name = str(opts.get("name", source.stem if source.is_file() else source.name))
