@@ -372,3 +372,16 @@ def test_a_manifest_may_lower_the_cell_limit_but_never_raise_it(tmp_path, monkey
     with pytest.raises(InputError, match="more than the limit of 1,000"):
         MapSet.open(tmp_path / "set.json")
     assert MapSet.open(tmp_path / "set.json", max_pixels=10_000).maps() == ("ros_maze",)  # code may raise it
+
+
+def test_drawn_queries_per_map_have_a_limit_refused_before_drawing(tmp_path, monkeypatch):
+    import time
+
+    _npy_maps(tmp_path, 4)
+    t0 = time.monotonic()
+    with pytest.raises(InputError, match=r"per_map = 1,000,000 drawn queries per map, more than the limit of 1,000.*"
+                                         r"SAMPLERGYM_MAX_PER_MAP"):
+        FileMapSet(tmp_path, per_map=10**6)
+    assert time.monotonic() - t0 < 5
+    monkeypatch.setenv("SAMPLERGYM_MAX_PER_MAP", "2000")
+    assert len(FileMapSet(tmp_path, per_map=1001, fractions={"train": 1}).queries("train")) == 4 * 1001

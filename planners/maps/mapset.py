@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planners.base.fileio import InputError, check_int
+from planners.base.fileio import InputError, check_int, env_limit
 from planners.base.problem import Problem
 from planners.maps.generators import (
     FAMILIES,
@@ -60,6 +60,10 @@ QUERY_COLUMNS = ("map", "start_x", "start_y", "goal_x", "goal_y")
 NOT_MAPS = (".md", ".txt", ".csv", ".scen", ".json", ".rst")
 #: Drawn queries per map unless told otherwise.
 DEFAULT_PER_MAP = 10
+#: Most drawn queries per map (every one is drawn when the set opens, about a millisecond each on a
+#: few hundred cells a side); ``SAMPLERGYM_MAX_PER_MAP`` raises it.
+DEFAULT_MAX_PER_MAP = 1000
+MAX_PER_MAP_ENV = "SAMPLERGYM_MAX_PER_MAP"
 #: Default goal radius, in cells of the map (so in world units it is this times the resolution).
 DEFAULT_TOLERANCE_CELLS = 4.0
 #: Default least start-goal distance of drawn queries, as a share of the diagonal of the box around the free cells.
@@ -328,7 +332,8 @@ class FileMapSet(MapSet):
         robot_radius: Obstacles grow by this radius (world units) before anything else, default 0.
         threshold: Gray level below which image pixels are obstacles, default 0.5.
         goal_tolerance: Goal radius in world units, default 4 cells of each map.
-        per_map: Drawn queries per map, default 10.
+        per_map: Drawn queries per map, default 10, at most ``DEFAULT_MAX_PER_MAP`` (1,000; raised by
+            ``SAMPLERGYM_MAX_PER_MAP``).
         min_distance: Least straight-line start-goal distance of drawn queries in world units,
             default a quarter of the diagonal of the box around each map's free cells.
         seed: Seed of the drawn queries (each map's queries depend on it and the map's name only).
@@ -378,6 +383,10 @@ class FileMapSet(MapSet):
         self.options = {k: opts[k] for k in self._OPTIONS if k in opts and k != "name"}
         self.seed = check_int(opts.get("seed", 0), f"map set {source}: seed", low=0)
         self.per_map = check_int(opts.get("per_map", DEFAULT_PER_MAP), f"map set {source}: per_map", low=1)
+        most = env_limit(MAX_PER_MAP_ENV, DEFAULT_MAX_PER_MAP)
+        if self.per_map > most:
+            raise InputError(f"map set {source}: per_map = {self.per_map:,} drawn queries per map, more than the limit "
+                             f"of {most:,} (each is drawn when the set opens); set {MAX_PER_MAP_ENV} to raise it")
         self.min_distance = _positive(opts.get("min_distance"), "min_distance", source)
         robot_radius = _positive(opts.get("robot_radius", 0.0), "robot_radius", source, zero=True)
         tolerance = _positive(opts.get("goal_tolerance"), "goal_tolerance", source)
