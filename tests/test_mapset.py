@@ -385,3 +385,32 @@ def test_drawn_queries_per_map_have_a_limit_refused_before_drawing(tmp_path, mon
     assert time.monotonic() - t0 < 5
     monkeypatch.setenv("SAMPLERGYM_MAX_PER_MAP", "2000")
     assert len(FileMapSet(tmp_path, per_map=1001, fractions={"train": 1}).queries("train")) == 4 * 1001
+
+
+def _hostile_set(tmp_path: Path, case: str) -> Path:
+    """A map set holding one hostile input: a manifest nested deep, a manifest entry '.', a huge queries value."""
+    if case == "deep":
+        (tmp_path / "deep.json").write_text('{"maps": ' + "[" * 200_000 + "]" * 200_000 + "}")
+        return tmp_path / "deep.json"
+    if case == "dot":
+        _npy_maps(tmp_path, 4)
+        (tmp_path / "dot.json").write_text('{"maps": ["."]}')
+        return tmp_path / "dot.json"
+    folder = _queries_folder(tmp_path, ["left," + "1" * (130 * 1024) + ",1.5,3.5,8.5"])
+    return folder
+
+
+HOSTILE = [("deep", r"deep.json: JSON nested \d+ levels deep"),
+           ("dot", r"dot.json: maps\[0\]: path '.' is a folder, expected a map file"),
+           ("field", r"queries.csv, line 3: a value longer than the 128 KiB a field may hold")]
+
+
+@pytest.mark.parametrize("case, message", HOSTILE)
+def test_hostile_map_sets_are_refused_by_name(tmp_path, case, message):
+    spec = _hostile_set(tmp_path, case)
+    with pytest.raises(InputError, match=message):
+        MapSet.open(spec)
+    import gymnasium as gym
+
+    with pytest.raises(InputError, match=message):
+        gym.make("samplergym:SamplerGym/Planning-v1", map_set=str(spec))

@@ -144,13 +144,18 @@ def loads_json(text: str | bytes, source: str) -> object:
             text = text.decode("utf-8")
         except UnicodeDecodeError as exc:
             raise InputError(f"{source} is not UTF-8 text: {exc}") from None
-    depth = _json_depth(text)
-    if depth > MAX_JSON_DEPTH:
-        raise InputError(f"{source}: JSON nested {depth} levels deep, more than the {MAX_JSON_DEPTH} accepted")
+    check_json_depth(text, source)
     try:
         return json.loads(text)
     except (ValueError, RecursionError) as exc:
         raise InputError(f"{source} is not JSON: {exc}") from None
+
+
+def check_json_depth(text: str, source: str) -> None:
+    """Refuse JSON ``text`` nested deeper than :data:`MAX_JSON_DEPTH`: an ``InputError`` naming ``source``."""
+    depth = _json_depth(text)
+    if depth > MAX_JSON_DEPTH:
+        raise InputError(f"{source}: JSON nested {depth} levels deep, more than the {MAX_JSON_DEPTH} accepted")
 
 
 def read_json(path: str | os.PathLike, what: str = "JSON file") -> object:

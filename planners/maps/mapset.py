@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planners.base.fileio import InputError, check_int, env_limit
+from planners.base.fileio import InputError, check_int, check_json_depth, env_limit
 from planners.base.problem import Problem
 from planners.maps.generators import (
     FAMILIES,
@@ -583,7 +583,9 @@ def _default_name(relative: Path) -> str:
 
 def _manifest(path: Path) -> tuple[list[dict], dict]:
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        check_json_depth(text, f"manifest {path}")
+        data = json.loads(text)
     except UnicodeDecodeError as exc:
         raise InputError(f"manifest {path}: not UTF-8 text ({exc})") from None
     except json.JSONDecodeError as exc:
@@ -613,8 +615,11 @@ def _load_entry(entry: dict, root: Path, opts: dict, robot_radius: float, tolera
     path = Path(entry["path"])
     if not path.is_absolute():
         path = root / path
-    name = str(entry.get("name") or _default_name(Path(entry["path"])))
     where = entry.get("where", f"map set {root}")
+    if path.is_dir() or not Path(entry["path"]).name:
+        raise InputError(f"{where}: path {entry['path']!r} is {'a folder' if path.is_dir() else 'empty'}, expected "
+                         "a map file (list the maps of a folder one by one, or open the folder as the map set)")
+    name = str(entry.get("name") or _default_name(Path(entry["path"])))
     ros = path.suffix.lower() in ROS_SUFFIXES
     if ros and ("resolution" in entry or "origin" in entry):
         raise InputError(f"{where}: {path} is a ROS map.yaml, which sets its own resolution and origin; "
@@ -664,7 +669,7 @@ def read_queries_file(path: str | os.PathLike) -> Iterator[tuple[int, str, tuple
     except UnicodeDecodeError as exc:
         raise InputError(f"queries file {path}: not UTF-8 text ({exc})") from None
     header = None
-    for lineno, row in enumerate(csv.reader(text.splitlines()), start=1):
+    for lineno, row in _csv_rows(path, text):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
             continue
         row = [v.strip() for v in row]
@@ -689,6 +694,21 @@ def read_queries_file(path: str | os.PathLike) -> Iterator[tuple[int, str, tuple
         yield lineno, row[0], (values[0], values[1]), (values[2], values[3])
     if header is None:
         raise InputError(f"queries file {path} is empty; expected the header {','.join(QUERY_COLUMNS)}")
+
+
+def _csv_rows(path: Path, text: str) -> Iterator[tuple[int, list[str]]]:
+    """The CSV rows of ``text`` with their line numbers; a malformed row is an ``InputError`` naming the line."""
+    reader = csv.reader(text.splitlines())
+    while True:
+        try:
+            row = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            why = (f"a value longer than the {csv.field_size_limit() // 1024} KiB a field may hold"
+                   if "field larger than field limit" in str(exc) else str(exc))
+            raise InputError(f"{path}, line {reader.line_num}: {why}") from None
+        yield reader.line_num, row
 
 
 def _check_query(m: _Map, start, goal, where: str) -> None:
