@@ -484,3 +484,18 @@ def test_progress_names_the_phase_and_the_cost_per_sampler(tmp_path, capsys):
     assert task_key((tasks[0], context.protocol)) != task_key((tasks[0], other.protocol))
     assert task_key((tasks[0], context.protocol)) == task_key((E.Task(q, "RRT", E.SamplerSpec.of("uniform"), 0),
                                                               E.Protocol(max_iterations=500)))
+
+
+def test_ompl_log_names_are_bounded_and_one_per_map_set(tmp_path):
+    long = "a map set named at length " * 12  # 312 characters
+    runs = [Run(**{**_run(0).__dict__, "map": m, "split": "test"}) for m in (long, long + "!", "a b", "a_b")]
+    paths = E.write_ompl_logs(runs, {}, tmp_path / "ompl", E.Protocol())
+    assert len({p.name for p in paths}) == 4 and all(p.is_file() for p in paths)
+    assert max(len(p.name) for p in paths) <= 124 and "a_b.log" in {p.name for p in paths}
+
+
+def test_an_out_name_too_long_for_its_temporary_names_is_refused_before_work(tmp_path, capsys):
+    out = tmp_path / ("o" * 230)  # fits a file system's 255 bytes, but not with the temporary set's name beside it
+    with pytest.raises(SystemExit) as exc:
+        _ev().main([*TINY, "--out", str(out)])
+    assert exc.value.code == 2 and "230 bytes long" in capsys.readouterr().err
