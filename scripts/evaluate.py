@@ -237,7 +237,26 @@ def _check_models(args) -> None:
             args.map_set_queries, args.map_set_obj = map_set_queries(args.map_set, args.split_seed, args.loaded)
         except InputError as exc:
             _fail(f"--map-set {args.map_set}: {exc}")
+        _check_step_on_map_set(args)
     args.inputs = file_digests(_input_files(args))
+
+
+def _check_step_on_map_set(args) -> None:
+    """Refuse a --step too small for the largest map of --map-set (the planners' limit), naming the flag."""
+    diag, where = 0.0, ""
+    seen = set()
+    for q in args.map_set_queries:
+        if q.query.map in seen:
+            continue
+        seen.add(q.query.map)
+        low, high = args.map_set_obj.problem(q.query).world.bounds
+        d = sum((float(h) - float(lo)) ** 2 for lo, h in zip(low, high, strict=True)) ** 0.5
+        if d > diag:
+            diag, where = d, q.query.map
+    if diag / args.step > max_steps_limit():
+        _fail(f"--step = {args.step:g} is {diag / args.step:.3g} steps across the diagonal of map {where!r} of map "
+              f"set {args.map_set_obj.name} ({diag:g} world units); at most {max_steps_limit()} are accepted (a step "
+              f"of at least {diag / max_steps_limit():.3g}, or set {MAX_STEPS_ENV})")
 
 
 def _input_files(args) -> dict[str, Path]:

@@ -44,6 +44,7 @@ def _ev():
     (["--sampler", "mine=missing.zip@SamplerGym/RRT-Forest-v1@bogus=1"], "bogus"),
     (["--sampler", "mine=no_such_module:make"], "no_such_module"),
     (["--map-set", "/no/such/maps"], "/no/such/maps"),
+    (["--map-set", str(ROOT / "tests/data/ros"), "--step", "1e-6"], "--step = 1e-06 is"),
 ])
 def test_bad_arguments_exit_2_with_one_line_naming_them(argv, needle, capsys, tmp_path):
     with pytest.raises(SystemExit) as exc:
