@@ -414,3 +414,22 @@ def test_hostile_map_sets_are_refused_by_name(tmp_path, case, message):
 
     with pytest.raises(InputError, match=message):
         gym.make("samplergym:SamplerGym/Planning-v1", map_set=str(spec))
+
+
+@pytest.mark.parametrize("kind", ["folder", "fifo", "dev-zero"])
+def test_a_queries_file_that_is_not_a_regular_file_is_refused_not_ignored(tmp_path, kind):
+    import os
+
+    _npy_maps(tmp_path, 4)
+    q = tmp_path / "queries.csv"
+    if kind == "folder":
+        q.mkdir()
+    elif kind == "fifo":
+        os.mkfifo(q)
+    else:
+        q.symlink_to("/dev/zero")
+    want = {"folder": "a folder", "fifo": "a FIFO", "dev-zero": "a device"}[kind]
+    with pytest.raises(InputError, match=rf"queries.csv' is {want}; expected a regular file"):
+        FileMapSet(tmp_path)
+    with pytest.raises(InputError, match=rf"is {want}; expected a regular file"):
+        FileMapSet(tmp_path, queries=str(q))

@@ -24,6 +24,7 @@ import hashlib
 import json
 import math
 import os
+import stat
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -421,7 +422,7 @@ class FileMapSet(MapSet):
     def _read_queries(self, rule, root: Path) -> dict[str, list[MapQuery]] | None:
         """Fixed queries by map (from a file or scenarios), or None for drawn queries."""
         if rule is None:
-            if self.source.is_dir() and (self.source / QUERIES_FILE).is_file():
+            if self.source.is_dir() and os.path.lexists(self.source / QUERIES_FILE):  # a folder or FIFO is refused
                 rule = self.source / QUERIES_FILE
             elif self.source.is_dir() and any(self.source.rglob("*.scen")):
                 rule = "scen"
@@ -658,12 +659,19 @@ def read_queries_file(path: str | os.PathLike) -> Iterator[tuple[int, str, tuple
     the set (its path relative to the folder, without the suffix).
 
     Raises:
-        InputError: A missing file, a wrong header, a short row or a value that is not a finite
-            number; the message names the file, the line and the value.
+        InputError: A missing file, one that is not a regular file (a folder, a FIFO, a device), a
+            wrong header, a short row or a value that is not a finite number; the message names the
+            file, the line and the value.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"queries file {str(path)!r} does not exist")
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        raise InputError(f"queries file {str(path)!r} does not exist") from None
+    if not stat.S_ISREG(mode):
+        kind = ("a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else
+                "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "not a regular file")
+        raise InputError(f"queries file {str(path)!r} is {kind}; expected a regular file")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
