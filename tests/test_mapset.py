@@ -4,6 +4,7 @@ with the generated families and MovingAI (the same problems as the evaluation's 
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -433,3 +434,12 @@ def test_a_queries_file_that_is_not_a_regular_file_is_refused_not_ignored(tmp_pa
         FileMapSet(tmp_path)
     with pytest.raises(InputError, match=rf"is {want}; expected a regular file"):
         FileMapSet(tmp_path, queries=str(q))
+
+
+@pytest.mark.parametrize("spec, given", [("generated:forest@-5", "-5"), ("generated:maze@0", "0"),
+                                         ("generated:@8", "8")])
+def test_a_generated_size_is_refused_at_open_with_the_value_as_given(spec, given):
+    with pytest.raises(InputError, match=rf"map set '{re.escape(spec)}': size must be an integer >= 32, got {given}$"):
+        MapSet.open(spec)
+    with pytest.raises(InputError, match="train_sizes"):
+        GeneratedMapSet(("forest",), train_sizes=(64, -1))

@@ -41,6 +41,7 @@ from planners.maps.generators import (
     TRAIN_SEEDS,
     TUNING_SEED0,
     VALIDATION_SEED0,
+    check_size,
     generate,
 )
 from planners.maps.gridsearch import free_components
@@ -207,7 +208,7 @@ class MapSet:
             fams = tuple(f for f in families.split(",") if f) or FAMILIES
             if kind == "generated":
                 if size:
-                    kwargs["size"] = _int_option(size, "size", text)
+                    kwargs["size"] = check_size(_int_option(size, "size", text), f"map set {text!r}: size")
                 return GeneratedMapSet(fams, **kwargs)
             if size:
                 raise InputError(f"map set {text!r}: shifted maps cycle through the sides {SHIFTED_SIZES}; "
@@ -790,7 +791,10 @@ class GeneratedMapSet(MapSet):
                  n_validation: int = 10, validation_sizes: Sequence[int] = (64, 128),
                  train_sizes: Sequence[int] = (64, 128), goal_tolerance: float = 4.0) -> None:
         self.families = _families(families)
-        self.size, self.goal_tolerance = int(size), float(goal_tolerance)
+        self.size, self.goal_tolerance = check_size(size, "size"), float(goal_tolerance)
+        for what, sides in (("validation_sizes", validation_sizes), ("train_sizes", train_sizes)):
+            for side in sides:
+                check_size(side, what)
         self.n = {"test": check_int(n_test, "n_test", low=0), "tuning": check_int(n_tune, "n_tune", low=0),
                   "validation": check_int(n_validation, "n_validation", low=0)}
         self.validation_sizes, self.train_sizes = tuple(validation_sizes), tuple(train_sizes)
