@@ -187,8 +187,8 @@ def test_evaluate_records_the_hashes_of_the_files_it_runs(tmp_path):
 
 
 @pytest.mark.parametrize("line, needle", [
-    ('{"key": "k", "run": RUN_iterations_"12"}', "'iterations' is '12', expected a int"),
-    ('{"key": "k", "run": RUN_solved_1}', "'solved' is 1, expected a bool"),
+    ('{"key": "k", "run": RUN_iterations_"12"}', "'iterations' is '12', expected an integer"),
+    ('{"key": "k", "run": RUN_solved_1}', "'solved' is 1, expected true or false"),
     ('{"key": 5, "run": {}}', "a \"key\" string"),
     ('[' * 200_000 + ']' * 200_000, "nested too deep"),
 ])

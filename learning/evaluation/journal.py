@@ -118,7 +118,8 @@ def file_digests(files: Mapping[str, str | os.PathLike]) -> dict[str, str]:
 
 
 #: What each field of a journal's runs must hold: a field of ``Run`` by its annotation.
-_FIELD_TYPES = {"str": (str,), "int": (int,), "bool": (bool,), "float": (int, float)}
+_FIELD_TYPES = {"str": ((str,), "a string"), "int": ((int,), "an integer"), "bool": ((bool,), "true or false"),
+                "float": ((int, float), "a number")}
 
 
 def _check_run(entry: object, where: str) -> tuple[str, Run]:
@@ -134,9 +135,9 @@ def _check_run(entry: object, where: str) -> tuple[str, Run]:
                 raise InputError(f"{where}: the run has no {name!r}")
             continue
         v = entry["run"][name]
-        want = _FIELD_TYPES[f.type if isinstance(f.type, str) else f.type.__name__]
+        want, words = _FIELD_TYPES[f.type if isinstance(f.type, str) else f.type.__name__]
         if not isinstance(v, want) or (isinstance(v, bool) and bool not in want):
-            raise InputError(f"{where}: the run's {name!r} is {short_repr(v)}, expected a {f.type}")
+            raise InputError(f"{where}: the run's {name!r} is {short_repr(v)}, expected {words}")
         values[name] = v
     return entry["key"], Run(**values)
 
