@@ -500,3 +500,16 @@ def test_an_out_name_too_long_for_its_temporary_names_is_refused_before_work(tmp
     with pytest.raises(SystemExit) as exc:
         _ev().main([*TINY, "--out", str(out)])
     assert exc.value.code == 2 and "230 bytes long" in capsys.readouterr().err
+
+
+def test_resume_without_a_journal_and_fresh_over_one_say_what_they_do(tmp_path, capsys, monkeypatch):
+    ev, out = _ev(), tmp_path / "out"
+    monkeypatch.setattr(ev, "_compare", lambda *args, **kwargs: 0)  # the checks and the journal, not the runs
+    assert ev.main([*TINY, "--processes", "1", "--out", str(out), "--resume"]) == 0
+    assert "--resume: no finished runs in" in capsys.readouterr().out
+    j = Journal(work_folder(out), {"step": 4.0}, resume=False)
+    j.add("k", _run(0))
+    j.close()
+    assert ev.main([*TINY, "--processes", "1", "--out", str(out), "--fresh"]) == 0
+    assert "--fresh: discarded the 1 finished runs" in capsys.readouterr().out
+    assert not work_folder(out).exists()
