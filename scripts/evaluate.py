@@ -71,6 +71,7 @@ from planners.base.fileio import (
 )
 from planners.base.registry import planner_name_arg
 from planners.maps.generators import FAMILIES, SHIFTED_SIZES, check_size
+from planners.maps.mapset import GeneratedMapSet, ShiftedMapSet
 from planners.maps.unseen import UNSEEN_MIN_SIZE, UNSEEN_SEED0
 from planners.tools.benchmark import markdown_table, write_runs_csv
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
@@ -249,8 +250,11 @@ def _check_step_on_map_set(args) -> None:
         if q.query.map in seen:
             continue
         seen.add(q.query.map)
-        low, high = args.map_set_obj.problem(q.query).world.bounds
-        d = sum((float(h) - float(lo)) ** 2 for lo, h in zip(low, high, strict=True)) ** 0.5
+        if isinstance(args.map_set_obj, GeneratedMapSet | ShiftedMapSet):  # its side is in the name: not generated
+            d = int(q.query.map.rsplit("-", 2)[1]) * 2**0.5
+        else:
+            low, high = args.map_set_obj.problem(q.query).world.bounds
+            d = sum((float(h) - float(lo)) ** 2 for lo, h in zip(low, high, strict=True)) ** 0.5
         if d > diag:
             diag, where = d, q.query.map
     if diag / args.step > max_steps_limit():
