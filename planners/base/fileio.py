@@ -243,7 +243,8 @@ def check_output_place(path: str | os.PathLike, name: str, *, folder: bool = Tru
 
     ``path`` is a folder to create or fill (``folder=True``) or a file to create or replace. Refused:
     a file where a folder must go (or the reverse), a place below a file, a folder that cannot be written,
-    a name too long for the temporary files written beside it, and fewer than ``need_bytes`` free on its disk (where ``shutil.disk_usage`` can tell).
+    a name too long for the temporary files written beside it, and fewer than ``need_bytes`` free on its
+    disk (where ``shutil.disk_usage`` can tell).
     """
     path = Path(path)
     room = _name_max(path) - _TEMP_DECORATION
