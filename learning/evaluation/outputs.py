@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import re
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
@@ -12,6 +11,7 @@ import numpy as np
 
 from learning.evaluation.protocol import Protocol
 from learning.evaluation.roster import bias_sampler, sampler_bias
+from planners.base.fileio import safe_file_stem
 from planners.tools.benchmark import OMPL_RUN_PROPERTIES, Run, ompl_run_values
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
@@ -171,7 +171,7 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: 
     fams: dict = {}
     for r in test:
         fams.setdefault(r.map, {}).setdefault((r.planner, r.sampler), []).append(r)
-    paths = []
+    paths, stems = [], set()
     for fam, configs in sorted(fams.items()):
         planners = {}
         for (planner, sampler), rs in sorted(configs.items()):
@@ -191,7 +191,7 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: 
                  f"the best goal bias was chosen on a separate tuning split (for shifted maps, their family's). "
                  f"'time' is wall time in seconds, "
                  f"including binding the sampler to the map. The expert is a privileged reference.")
-        stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", fam).strip("_") or "experiment"
+        stem = safe_file_stem(fam, taken=stems)  # bounded, and one file per map set: a name may be anything
         paths.append(write_log(
             out_dir / f"{stem}.log", experiment_name(fam), planners, [(p, t) for p, t, _ in OMPL_RUN_PROPERTIES],
             setup=setup, total_time=sum(r.wall_time for rs in configs.values() for r in rs),

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from planners import GoalBiasedSampler, Sampler, UniformSampler
+from planners.base.samplers import check_sampler_params
 from planners.base.fileio import InputError
 from planners.tools.benchmark import STEP  # the step samplers are built for unless told otherwise
 
@@ -113,6 +114,7 @@ def make_sampler(name: str, *, models: ModelCache | None = None, **params: Any) 
     if unknown:
         raise InputError(f"sampler {name!r} takes no parameter {', '.join(unknown)}; it takes "
                          f"{', '.join(allowed) or 'none'}")
+    check_sampler_params(f"sampler {name!r}", step_size=params.get("step_size"), batch=params.get("batch"))
     if models is not None and "models" in signature:
         return factory(**params, models=models)
     return factory(**params)
