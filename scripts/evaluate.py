@@ -323,8 +323,11 @@ def main(argv=None) -> int:
             queries += E.movingai_queries(str(mdir), args.movingai_maps, args.scenarios, args.tuning_scenarios,
                                           args.tolerance, args.loaded)
         elif args.movingai_maps:
-            print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); evaluating generated "
-                  "families only", file=sys.stderr)
+            print(f"MovingAI maps not found, so their {len(args.movingai_maps)} rows and the pooled row are left out: "
+                  "the maps are published with the MovingAI grid benchmarks (movingai.com/benchmarks, 'dao', "
+                  "'street', 'maze', 'random', 'room' and 'mapf' sets; the names are in --movingai-maps); put the "
+                  ".map and .scen files in one folder and pass --movingai DIR or set SAMPLERGYM_MOVINGAI_DIR",
+                  file=sys.stderr)
         queries += unseen_queries(args.size, args.unseen_maps)
     protocol = E.Protocol(step=args.step, tolerance=args.tolerance, max_iterations=args.max_iterations,
                           seeds=args.seeds, size=args.size, maps=args.maps, tuning_maps=args.tuning_maps,
