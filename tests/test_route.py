@@ -24,7 +24,7 @@ from learning.samplers.route import (
     straight_line_sampler,
 )
 from learning.training.route import cost_targets, train_route_net
-from planners import RRT, GeometricWorld, OccupancyGrid, Problem
+from planners import RRT, GeometricWorld, OccupancyGrid, Problem, RRTConnect
 from planners.base.fileio import InputError
 from planners.maps.generators import FAMILIES, TEST_SEED0, generate
 from planners.maps.gridsearch import distance_field
@@ -308,12 +308,8 @@ def test_the_geodesic_route_reference_ranks_the_frontier_by_the_exact_cost_to_go
 def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
     with pytest.raises(InputError, match="OccupancyGrid"):
         RRT(Problem(GeometricWorld(10, 10, []), [1, 1], [9, 9]), step_size=4.0, sampler=shipped, seed=0)
-    grid = OccupancyGrid(np.zeros((64, 64), bool), 0.5)
-    with pytest.raises(InputError, match=r"trained for a step of 4 cells.*pass step_size=2\b"):
-        RRT(Problem(grid, [2, 2], [30, 30]), step_size=4.0, sampler=shipped, seed=0)
-    metres = OccupancyGrid(np.zeros((64, 64), bool), 0.03)  # a ROS map in metres, the step given in cells
-    with pytest.raises(InputError, match=r"pass step_size=0\.12\b"):
-        RRT(Problem(metres, [0.2, 0.2], [1.5, 1.5]), step_size=4.0, sampler=shipped, seed=0)
+    with pytest.raises(InputError, match="step_size"):
+        shipped.at_step(float("inf"))
     with pytest.raises(InputError, match="stuck"):
         RouteSampler(shipped.net, stuck=0)
     with pytest.raises(InputError, match="tau"):
@@ -321,6 +317,50 @@ def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
     for gone in ("uses", "symmetries", "lazy", "stall"):  # experiments' knobs, not the product's
         with pytest.raises(TypeError, match=gone):
             RouteSampler(shipped.net, **{gone: 1})
+
+
+def test_the_step_is_the_planners_in_any_maps_units():
+    """make_sampler("route") at its own step of 4 serves a planner's step of 0.2 on a 0.05 m map, as 4 on 1 m cells."""
+    from learning import make_sampler
+
+    obstacles = np.zeros((120, 160), bool)
+    obstacles[60, :130] = True  # a wall with a gap at its end
+    runs = {}
+    for resolution, step in ((1.0, 4.0), (0.05, 0.2)):
+        grid = OccupancyGrid(obstacles, resolution)
+        p = Problem(grid, np.array([5.0, 5.0]) * resolution, np.array([5.0, 110.0]) * resolution,
+                    goal_tolerance=4 * resolution)
+        for planner in (RRT, RRTConnect):
+            r = planner(p, step_size=step, sampler=make_sampler("route"), seed=0).solve(max_iterations=20000)
+            assert r.solved and r.iterations > 0
+            runs[(resolution, planner.name)] = r.iterations
+    assert runs[(1.0, RRT.name)] == runs[(0.05, RRT.name)] and runs[(1.0, "RRTConnect")] == runs[(0.05, "RRTConnect")]
+
+
+@pytest.mark.parametrize("cells_per_step", [6.7, 2.0, 13.0])
+def test_a_step_of_another_number_of_cells_reads_the_map_resampled_to_the_encoders_step(shipped, cells_per_step):
+    obstacles = np.zeros((100, 100), bool)
+    obstacles[50, 10:] = True  # a wall from the goal's side to the start's, with a gap at columns 0-9
+    grid = OccupancyGrid(obstacles, 0.03)
+    p = Problem(grid, [0.3, 0.3], [0.3, 2.7], goal_tolerance=0.12)
+    planner = RRT(p, step_size=0.03 * cells_per_step, sampler=shipped, seed=1)
+    sampler = planner.sampler
+    assert sampler.step_size == pytest.approx(0.03 * cells_per_step)  # the planner's, not the sampler's own 4
+    obstacles, goal, factor = sampler._encoder_map(grid)
+    assert factor == pytest.approx(cells_per_step / 4)
+    assert obstacles.shape == tuple(int(np.ceil(100 / factor - 1e-6)) for _ in range(2)) and obstacles.any()
+    assert sampler.field.shape == (100, 100) and np.isfinite(sampler.field[~grid.obstacles]).all()
+    # the field leads through the gap: past it is cheaper than before it, and before it, far from it dearer
+    assert sampler.field[70, 5] < sampler.field[30, 5] < sampler.field[30, 60]
+    assert planner.solve(max_iterations=20000).solved
+
+
+def test_a_step_too_fine_for_the_encoders_limit_is_refused_saying_to_take_a_larger_step(shipped, monkeypatch):
+    monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", str(64 * 64))
+    p = generate("forest", TEST_SEED0, 64)  # 16 x 16 blocks of 4 cells at a step of 4 cells; 128 x 128 at 0.5
+    assert RRT(p, step_size=4.0, sampler=shipped, seed=0).solve(max_iterations=20000).solved
+    with pytest.raises(InputError, match=r"step 0.5 is 0.5 cells.*resampled to 512 x 512 cells.*Take a larger step"):
+        RRT(p, step_size=0.5, sampler=shipped, seed=0)
 
 
 def test_a_map_above_the_encoders_limit_is_refused_naming_its_size_the_limit_and_the_variable(shipped, monkeypatch):

@@ -123,8 +123,8 @@ def test_half_step_blocks_predict_in_steps_round_trip_and_fit_only_their_step(tm
     assert np.array_equal(back.predict(obs, (3, 4)), net.predict(obs, (3, 4)))
     p = generate("rooms", TRAIN_SEEDS[0] + 1, 32)
     assert RRT(p, step_size=4.0, sampler=RouteSampler(net, **SHIPPED_SETTINGS), seed=0).solve(2000).iterations > 0
-    with pytest.raises(InputError, match="trained for a step of 4 cells.*step_size=4"):
-        RRT(p, step_size=2.0, sampler=RouteSampler(net, step_size=2.0), seed=0).solve(10)
+    # a step of 2 cells: the encoder reads the map at twice its resolution, a step of 4 of those cells
+    assert RRT(p, step_size=2.0, sampler=RouteSampler(net, step_size=2.0), seed=0).solve(2000).iterations > 0
     with pytest.raises(ValueError, match="whole blocks"):
         make_route_net("vin", 3, 8, 2, step=4)
     with pytest.raises(ValueError, match="one step"):

@@ -39,9 +39,11 @@ from learning.models.threads import planning_thread_count
 from planners import OccupancyGrid, Problem, SamplerBase
 from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
+from planners.base.samplers import check_sampler_params
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, last_in_sight, lowest_vertex_cell, walk_path
 from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
+from planners.worlds.grid import resample_obstacles
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
 SHIPPED = SHIPPED_ROUTE
@@ -375,22 +377,59 @@ class RouteSampler(SamplerBase):
         gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
         return straight_field(grid.height, grid.width, gx, gy, grid.resolution, self.step_size)
 
+    def at_step(self, step_size: float) -> RouteSampler:
+        """This sampler measuring in the planner's step (``step_size``, world units): planners call it when bound.
+
+        Every distance it takes in steps (lookahead, spread, the frontier's temperature) follows, and the encoder
+        reads the map at that step (``_encoder_map``).
+        """
+        check_sampler_params(type(self).__name__, step_size=step_size)
+        if float(step_size) == self.step_size:
+            return self
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__)
+        out.step_size = float(step_size)
+        return out
+
+    def _encoder_map(self, grid: OccupancyGrid) -> tuple[np.ndarray, tuple[int, int], float]:
+        """What the encoder reads for this query: (obstacles, goal cell, map cells per encoder cell).
+
+        The encoder was trained for a step of ``net.step`` cells. Where the step is another number of this map's
+        cells, it reads the map resampled so that a step is ``net.step`` of its cells (``resample_obstacles``:
+        a cell is blocked where any map cell it overlaps is, so a gap narrower than one can close, and no wall
+        opens); its field is in steps either way.
+        """
+        cells = self.step_size / grid.resolution
+        goal = grid.cell_of(self.problem.goal)
+        if abs(cells - self.net.step) <= 1e-6 * self.net.step:
+            return grid.obstacles, goal, 1.0
+        factor = cells / self.net.step
+        coarse = resample_obstacles(grid.obstacles, factor)
+        try:
+            self.net.check_size(coarse.shape)
+        except InputError as exc:
+            raise InputError(f"the planner's step {self.step_size:g} is {cells:g} cells of this {grid.height} x "
+                             f"{grid.width} map (resolution {grid.resolution:g}); the route encoder reads a step as "
+                             f"{self.net.step} cells, so it reads the map resampled to {coarse.shape[0]} x "
+                             f"{coarse.shape[1]} cells, and: {exc}. Take a larger step") from None
+        g = (min(int(goal[0] / factor), coarse.shape[0] - 1), min(int(goal[1] / factor), coarse.shape[1] - 1))
+        return coarse, g, factor
+
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
         """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
         if self.net is None:
             return self._straight(grid), None
-        if round(self.step_size / grid.resolution) != self.net.step:
-            cells = self.step_size / grid.resolution
-            raise InputError(f"the route encoder was trained for a step of {self.net.step} cells, the step is "
-                             f"{cells:g} cells of this map (resolution {grid.resolution:g}): pass "
-                             f"step_size={self.net.step * grid.resolution:g}")
-        goal = grid.cell_of(self.problem.goal)
+        obstacles, goal, factor = self._encoder_map(grid)
         if self.fields is None:
-            learned = self.net.predict(grid.obstacles, goal, self.symmetry_passes, threads=self.threads)
+            learned = self.net.predict(obstacles, goal, self.symmetry_passes, threads=self.threads)
         else:
-            learned, seconds, reused = self.fields.get(self.net, grid.obstacles, goal, self.symmetry_passes,
+            learned, seconds, reused = self.fields.get(self.net, obstacles, goal, self.symmetry_passes,
                                                        threads=self.threads)
             self.reused_seconds = seconds if reused else 0.0
+        if factor != 1.0:  # each map cell takes the value of the encoder's cell its centre lies in
+            rows = np.minimum(((np.arange(grid.height) + 0.5) / factor).astype(np.int64), learned.shape[0] - 1)
+            cols = np.minimum(((np.arange(grid.width) + 0.5) / factor).astype(np.int64), learned.shape[1] - 1)
+            learned = learned[rows][:, cols]
         self.forward_passes = self.symmetry_passes
         progress = self._straight(grid) if self._uses == "frontier" else learned
         return progress, (None if self._uses == "progress" else learned)
@@ -400,23 +439,35 @@ class RouteSampler(SamplerBase):
         grid = problem.world
         if self.net is None or self.fields is None or not isinstance(grid, OccupancyGrid):
             return False
-        return self.fields.has(self.net, grid.obstacles, grid.cell_of(problem.goal), self.symmetry_passes)
+        obstacles, goal, _ = self._bound_to(problem)._encoder_map(grid)
+        return self.fields.has(self.net, obstacles, goal, self.symmetry_passes)
 
     def prefill(self, problems: Sequence[Problem], *, batch: bool | None = None) -> int:
         """Compute the encoder's fields of ``problems`` into ``fields`` ahead of their binds; the number computed.
 
         ``batch`` as for ``FieldCache.fill``: by default the passes of all of them run together on a GPU
-        and one query at a time on the CPU. Problems off an ``OccupancyGrid``, or whose step is not the
-        encoder's step, are left to their binds (which refuse them). Needs an encoder and a ``fields`` cache.
+        and one query at a time on the CPU. Problems off an ``OccupancyGrid``, or too large for the encoder at
+        this sampler's step, are left to their binds (which refuse them). Needs an encoder and a ``fields`` cache.
         """
         if self.net is None or self.fields is None:
             raise InputError("RouteSampler.prefill needs an encoder and a fields cache (RouteSampler(net, fields=...))")
         queries = []
         for problem in problems:
             grid = problem.world
-            if isinstance(grid, OccupancyGrid) and round(self.step_size / grid.resolution) == self.net.step:
-                queries.append((grid.obstacles, grid.cell_of(problem.goal)))
+            if isinstance(grid, OccupancyGrid):
+                try:
+                    obstacles, goal, _ = self._bound_to(problem)._encoder_map(grid)
+                except InputError:
+                    continue
+                queries.append((obstacles, goal))
         return self.fields.fill(self.net, queries, self.symmetry_passes, threads=self.threads, batch=batch)
+
+    def _bound_to(self, problem: Problem) -> RouteSampler:
+        """A copy that knows ``problem`` (for its goal), without the set-up a bind runs."""
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__)
+        out.problem = problem
+        return out
 
     def _setup(self) -> None:
         grid = self.problem.world

@@ -257,6 +257,9 @@ class Planner(abc.ABC):
             seed = int(np.random.SeedSequence().entropy % (2**63))
         elif isinstance(seed, (bool, float)) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ValueError(f"seed must be a non-negative integer or None, got {seed!r}")
+        at_step = getattr(sampler, "at_step", None)
+        if self.step_parameter == "step_size" and callable(at_step):  # the step is the planner's (``Sampler``)
+            sampler = at_step(self.step_size)
         self.problem = problem
         self.seed = int(seed)
         self._sampler_spec = sampler

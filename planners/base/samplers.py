@@ -22,6 +22,11 @@ build one: the sampler gives a compiled draw function and ``planners.fused.fuse_
 ``run``, with the planner's refill schedule and generator stream kept. The planner is passed at each call rather than held by ``run``, so a planner and
 its loop form no reference cycle and are freed as soon as they go out of scope. A fused loop must
 draw exactly what ``draw`` would: it changes the speed, never the run.
+
+A sampler that measures in the planner's step (how far ahead it aims, what a map cell is worth) may also define
+``at_step(step_size) -> Sampler``: the same sampler at that step. A planner of the RRT family (its step is
+``step_size``) calls it with its own step before binding, so the step belongs to the planner and a user passes
+it once, there.
 """
 
 from __future__ import annotations

@@ -290,3 +290,36 @@ def _dilate(padded, widths, near):
     return out
 
 
+
+
+def resample_obstacles(obstacles: np.ndarray, factor: float) -> np.ndarray:
+    """The map on cells ``factor`` times as wide, conservatively: a cell is blocked where any cell it overlaps is.
+
+    Args:
+        obstacles: (H, W) bool, True = blocked.
+        factor: Cells of ``obstacles`` per side of a new cell (> 0; below 1 the new cells are finer).
+
+    Returns:
+        (ceil(H / factor), ceil(W / factor)) bool. New cell (i, j) covers rows ``[i * factor, (i + 1) * factor)``
+        and the columns alike; a part of it beyond the map counts as free (the map's edge is a wall anyway).
+        A gap narrower than a new cell can close; a wall never opens.
+    """
+    obstacles = np.asarray(obstacles, dtype=bool)
+    if not (math.isfinite(factor) and factor > 0):
+        raise ValueError(f"factor must be a positive number of cells, got {factor!r}")
+    H, W = obstacles.shape
+    # one part in a million absorbs the rounding of i * factor at whole numbers
+    h, w = max(1, math.ceil(H / factor - 1e-6)), max(1, math.ceil(W / factor - 1e-6))
+    total = np.zeros((H + 1, W + 1), dtype=np.int64)
+    total[1:, 1:] = obstacles.cumsum(0).cumsum(1)
+
+    def spans(n: int, size: int) -> tuple[np.ndarray, np.ndarray]:
+        i = np.arange(n)
+        lo = np.clip(np.floor(i * factor + 1e-6).astype(np.int64), 0, size)
+        hi = np.clip(np.ceil((i + 1) * factor - 1e-6).astype(np.int64), 0, size)
+        return lo, np.maximum(hi, np.minimum(lo + 1, size))
+
+    r0, r1 = spans(h, H)
+    c0, c1 = spans(w, W)
+    count = total[r1][:, c1] - total[r0][:, c1] - total[r1][:, c0] + total[r0][:, c0]
+    return count > 0
