@@ -1,0 +1,276 @@
+"""Compiled motion checks for a rigid body given as a triangle mesh among a triangle-mesh environment.
+
+State ``q = (x, y, z, tx, ty, tz)`` as for ``planners.kernels.rigid``: a body vertex ``p`` sits at
+``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``. A motion is cut into pieces by the same rule
+(``motion_pieces``: no body point travels more than ``delta`` per piece) and every checked pose must keep
+the body more than ``delta / 2`` from the environment, so no obstacle, however thin, is stepped over.
+
+Each pose goes first through a broad phase that can only prove "free": a Chebyshev distance grid of
+the environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance from
+any point in it to any environment triangle. A pose is free when the body's bounding sphere clears
+the bound, or else when every one of the body's cover points (points on its surface such that every
+surface point lies within ``cover`` of one) clears it by ``cover``. The poses left undecided go to the
+exact check (FCL, in ``planners.worlds.mesh``) in one call per motion, through numba's object mode:
+that check is registered here under an integer id that the world's ``params`` carry.
+
+``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, checker id, gx, gy, gz,
+h, nx, ny, nz, cover]``: the bounds of the body's origin, the motion resolution, the body's radius
+(largest distance of a body vertex from its origin), the exact check's id, the grid's corner, voxel
+side and shape, and the cover radius of the body's cover points. The grid travels as ``(nx, ny * nz)``
+uint8 (``grid``), the cover points as ``body``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import weakref
+
+import numba as nb
+import numpy as np
+
+from planners.kernels.rigid import motion_pieces, rotation_matrix
+from planners.kernels.space import SPACE_RIGID, interpolate
+
+P_ID = 8
+P_GRID = 9
+P_COVER = 16
+N_PARAMS = 17
+
+#: The exact checks, by id: ``check(poses, margin) -> bool`` (True when every pose keeps the body more
+#: than ``margin`` from the environment, touching counting as collision when ``margin`` is 0).
+_CHECKS: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
+_IDS = itertools.count(1)
+
+
+def register_check(check) -> int:
+    """Register an exact pose check (an object with ``poses_free(poses, margin) -> bool``); returns its id.
+
+    The registry holds it weakly: the world that owns it keeps it alive.
+    """
+    ident = next(_IDS)
+    _CHECKS[ident] = check
+    return ident
+
+
+def exact_poses_free(ident, poses, margin) -> bool:
+    """Run the exact check registered under ``ident`` (called from compiled code in object mode)."""
+    check = _CHECKS.get(int(ident))
+    if check is None:
+        raise RuntimeError(f"no exact mesh check is registered under id {int(ident)} (its world was deleted)")
+    return bool(check.poses_free(poses, float(margin)))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def broad_phase_free(grid, cover, params, q, margin):
+    """True if the broad phase proves the pose ``q`` keeps the body more than ``margin`` from the environment.
+
+    False means undecided, never "in collision".
+    """
+    gx, gy, gz, h = params[P_GRID], params[P_GRID + 1], params[P_GRID + 2], params[P_GRID + 3]
+    nx, ny, nz = int(params[P_GRID + 4]), int(params[P_GRID + 5]), int(params[P_GRID + 6])
+    # the bounding sphere: its centre's voxel bound against the body radius
+    i = int(math.floor((q[0] - gx) / h))
+    j = int(math.floor((q[1] - gy) / h))
+    k = int(math.floor((q[2] - gz) / h))
+    if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
+        return False
+    if (grid[i, j * nz + k] - 1.0) * h > params[7] + margin:
+        return True
+    # the cover points, each with its cover radius
+    need = margin + params[P_COVER]
+    R = rotation_matrix(q[3], q[4], q[5])
+    for p in range(cover.shape[0]):
+        wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
+        wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
+        wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
+        i = int(math.floor((wx - gx) / h))
+        j = int(math.floor((wy - gy) / h))
+        k = int(math.floor((wz - gz) / h))
+        if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
+            return False
+        if not (grid[i, j * nz + k] - 1.0) * h > need:
+            return False
+    return True
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _in_bounds(params, q):
+    for j in range(3):
+        if not (params[j] <= q[j] <= params[3 + j]):
+            return False
+    return True
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def mesh_motion_free(grid, cover, params, a, b):
+    """True if the motion a -> b keeps the body clear of the environment (see the module docs).
+
+    The origin must stay within the bounds (checked at both ends: the bounds are a box and translation
+    is linear). A zero-length motion is a state check: no contact, no clearance asked.
+    """
+    if not (_in_bounds(params, a) and _in_bounds(params, b)):
+        return False
+    n, length = motion_pieces(params, a, b)
+    margin = 0.5 * params[6]
+    if length == 0.0:
+        n = 0
+        margin = 0.0
+    undecided = np.empty((n + 1, 6))
+    m = 0
+    q = np.empty(6)
+    # the far end first: a blocked extension is usually blocked there
+    for s in range(n + 1):
+        t = 1.0 if s == 0 else (s - 1) / n
+        interpolate(SPACE_RIGID, a, b, t, q)
+        if not broad_phase_free(grid, cover, params, q, margin):
+            undecided[m] = q
+            m += 1
+    if m == 0:
+        return True
+    ok = False
+    poses = undecided[:m]
+    ident = params[P_ID]
+    with nb.objmode(ok="boolean"):
+        ok = exact_poses_free(ident, poses, margin)
+    return ok
+
+
+# --- building the broad phase --------------------------------------------------------------------------
+
+
+@nb.njit(cache=True)
+def _axis_test(v0, v1, v2, axis, half):
+    p0 = v0[0] * axis[0] + v0[1] * axis[1] + v0[2] * axis[2]
+    p1 = v1[0] * axis[0] + v1[1] * axis[1] + v1[2] * axis[2]
+    p2 = v2[0] * axis[0] + v2[1] * axis[1] + v2[2] * axis[2]
+    lo = min(p0, min(p1, p2))
+    hi = max(p0, max(p1, p2))
+    r = half[0] * abs(axis[0]) + half[1] * abs(axis[1]) + half[2] * abs(axis[2])
+    return not (lo > r or hi < -r)
+
+
+@nb.njit(cache=True)
+def triangle_box_overlap(c, half, t0, t1, t2):
+    """True if the closed triangle meets the closed box of centre ``c`` and half sides ``half``.
+
+    The separating-axis test (the box's three axes, the triangle's normal and the nine edge cross
+    products; T. Akenine-Moeller, "Fast 3D triangle-box overlap testing", 2001). Callers enlarge
+    ``half`` slightly so that rounding can only report an overlap, never miss one.
+    """
+    v0 = t0 - c
+    v1 = t1 - c
+    v2 = t2 - c
+    for j in range(3):
+        lo = min(v0[j], min(v1[j], v2[j]))
+        hi = max(v0[j], max(v1[j], v2[j]))
+        if lo > half[j] or hi < -half[j]:
+            return False
+    e0 = v1 - v0
+    e1 = v2 - v1
+    e2 = v0 - v2
+    normal = np.cross(e0, e1)
+    if not _axis_test(v0, v1, v2, normal, half):
+        return False
+    unit = np.eye(3)
+    for e in (e0, e1, e2):
+        for j in range(3):
+            axis = np.cross(unit[j], e)
+            if not _axis_test(v0, v1, v2, axis, half):
+                return False
+    return True
+
+
+@nb.njit(cache=True)
+def chebyshev_grid(vertices, faces, origin, h, nx, ny, nz):
+    """Voxel bounds of the distance to the environment's triangles, as ``(nx, ny * nz)`` uint8.
+
+    A voxel's value ``c`` says: no triangle meets the voxels within Chebyshev index distance ``c - 1``
+    of it, so every point of the voxel lies at least ``(c - 1) h`` from every triangle. Triangles
+    outside the grid are accounted for by counting a layer of occupied voxels around it; values stop at
+    255.
+    """
+    dist = np.full((nx, ny, nz), 255, dtype=np.int32)
+    half = np.full(3, 0.5 * h * (1.0 + 1e-6))
+    c = np.empty(3)
+    for f in range(faces.shape[0]):
+        t0 = vertices[faces[f, 0]]
+        t1 = vertices[faces[f, 1]]
+        t2 = vertices[faces[f, 2]]
+        lo = np.minimum(t0, np.minimum(t1, t2))
+        hi = np.maximum(t0, np.maximum(t1, t2))
+        i0 = max(0, int(math.floor((lo[0] - origin[0]) / h)) - 1)
+        j0 = max(0, int(math.floor((lo[1] - origin[1]) / h)) - 1)
+        k0 = max(0, int(math.floor((lo[2] - origin[2]) / h)) - 1)
+        i1 = min(nx - 1, int(math.floor((hi[0] - origin[0]) / h)) + 1)
+        j1 = min(ny - 1, int(math.floor((hi[1] - origin[1]) / h)) + 1)
+        k1 = min(nz - 1, int(math.floor((hi[2] - origin[2]) / h)) + 1)
+        for i in range(i0, i1 + 1):
+            c[0] = origin[0] + (i + 0.5) * h
+            for j in range(j0, j1 + 1):
+                c[1] = origin[1] + (j + 0.5) * h
+                for k in range(k0, k1 + 1):
+                    if dist[i, j, k] == 0:
+                        continue
+                    c[2] = origin[2] + (k + 0.5) * h
+                    if triangle_box_overlap(c, half, t0, t1, t2):
+                        dist[i, j, k] = 0
+    # level-by-level breadth-first search over the 26 neighbours: the Chebyshev index distance
+    total = nx * ny * nz
+    cur = np.empty(total, dtype=np.int64)
+    nxt = np.empty(total, dtype=np.int64)
+    nc = 0
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                if dist[i, j, k] == 0:
+                    cur[nc] = (i * ny + j) * nz + k
+                    nc += 1
+    level = 0
+    while level < 255:
+        if level == 0:
+            # the layer around the grid counts as occupied: its neighbours inside are at distance 1
+            for i in range(nx):
+                for j in range(ny):
+                    for k in range(nz):
+                        if i == 0 or j == 0 or k == 0 or i == nx - 1 or j == ny - 1 or k == nz - 1:
+                            if dist[i, j, k] > 1:
+                                dist[i, j, k] = 1
+        nn = 0
+        for s in range(nc):
+            v = cur[s]
+            i = v // (ny * nz)
+            j = (v // nz) % ny
+            k = v % nz
+            for di in range(-1, 2):
+                for dj in range(-1, 2):
+                    for dk in range(-1, 2):
+                        a = i + di
+                        b = j + dj
+                        d = k + dk
+                        if a < 0 or b < 0 or d < 0 or a >= nx or b >= ny or d >= nz:
+                            continue
+                        if dist[a, b, d] > level + 1:
+                            dist[a, b, d] = level + 1
+                            nxt[nn] = (a * ny + b) * nz + d
+                            nn += 1
+        if level == 0:
+            # the boundary voxels set to 1 above join the level-1 frontier
+            for i in range(nx):
+                for j in range(ny):
+                    for k in range(nz):
+                        if dist[i, j, k] == 1 and (i == 0 or j == 0 or k == 0 or i == nx - 1 or j == ny - 1
+                                                   or k == nz - 1):
+                            nxt[nn] = (i * ny + j) * nz + k
+                            nn += 1
+        if nn == 0:
+            break
+        cur, nxt = nxt, cur
+        nc = nn
+        level += 1
+    out = np.empty((nx, ny * nz), dtype=np.uint8)
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                out[i, j * nz + k] = dist[i, j, k]
+    return out
