@@ -213,3 +213,26 @@ def test_a_time_limit_holds_on_a_mesh_world(hole_world):
         spent = time.perf_counter() - t - planner.compile_time
         assert not r.solved and r.stop_reason == "time_limit"
         assert spent < 1.1, (name, spent)
+
+
+def test_past_a_deadline_exact_checks_answer_blocked_and_only_then(hole_world):
+    w = hole_world
+    a, b = [2, 4.55, 5, 0, 0, 0], [8, 4.55, 5, 0, 0, 0]  # through the hole 0.05 from its side: FCL decides
+    before = w.exact_poses
+    assert w.check_motion(a, b) and w.exact_poses > before
+    w.set_deadline(0.0, lambda: 1.0)
+    try:
+        assert not w.check_motion(a, b)
+        assert w.check_motion([1, 1, 1, 0, 0, 0], [1.2, 1, 1, 0, 0, 0])  # proved free without FCL: unaffected
+    finally:
+        w.set_deadline(None)
+    assert w.check_motion(a, b)
+
+
+def test_motion_poses_are_the_poses_checked(hole_world):
+    a, b = [2, 5, 5, 0.1, 0, 3.0], [8, 5, 5, 0, 0, -3.0]  # across +-pi, the short way
+    P = hole_world.motion_poses(a, b)
+    S = states_along(hole_world, a, b)
+    assert P.shape == S.shape and np.allclose(P[:, :3], S[:, :3])
+    assert np.allclose((P[:, 3:] - S[:, 3:] + PI) % (2 * PI) - PI, 0, atol=1e-12)
+    assert hole_world.motion_poses(a, a).shape == (1, 6)

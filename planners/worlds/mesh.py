@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -28,8 +29,9 @@ from planners.base.fileio import InputError
 from planners.base.world import WorldBase
 from planners.kernels import geometry
 from planners.kernels import mesh as mesh_kernels
+from planners.kernels.rigid import motion_pieces
 from planners.kernels.rigid import rotation_matrix as _rotation_matrix
-from planners.kernels.space import SPACE_RIGID
+from planners.kernels.space import SPACE_RIGID, interpolate
 from planners.worlds.rigid3d import (
     RigidBodyWorld,
     body_radius,
@@ -181,10 +183,17 @@ def cover_points(vertices: np.ndarray, faces: np.ndarray, spacing: float) -> np.
     return np.unique(np.concatenate(out), axis=0)
 
 
+class _Deadline(threading.local):
+    at: float | None = None
+    clock = None
+
+
 class _FCLCheck:
     """The exact check: the body's and the environment's FCL bounding-volume trees, one pose at a time."""
 
     def __init__(self, body, env) -> None:
+        self.deadline = _Deadline()  # per thread: a planner's time limit (set_deadline)
+        self.cut = 0  # checks answered "blocked" because the deadline had passed
         fcl = _fcl()
         self._fcl = fcl
         self.body_model = self._model(*body)
@@ -218,8 +227,15 @@ class _FCLCheck:
         return fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()) > margin
 
     def poses_free(self, poses: np.ndarray, margin: float) -> bool:
-        """True if every pose ``(x, y, z, tx, ty, tz)`` is free with ``margin``; stops at the first that is not."""
-        for q in poses:
+        """True if every pose ``(x, y, z, tx, ty, tz)`` is free with ``margin``; stops at the first that is not.
+
+        Past a deadline set by ``MeshWorld.set_deadline`` it answers False without checking further.
+        """
+        at, clock = self.deadline.at, self.deadline.clock
+        for i, q in enumerate(poses):
+            if at is not None and i % 8 == 0 and clock() > at:
+                self.cut += 1
+                return False
             R = np.asarray(_rotation_matrix(q[3], q[4], q[5]))
             if not self.pose_free(R, np.ascontiguousarray(q[:3]), margin):
                 return False
@@ -295,6 +311,15 @@ class MeshWorld(WorldBase):
         """``(low, high)``: the box of the body's origin, then ``[-pi, pi)`` for each angle."""
         return self._low, self._high
 
+    def set_deadline(self, at: float | None, clock=None) -> None:
+        """From now on, in this thread, answer "blocked" to exact checks once ``clock() > at`` (None: never).
+
+        ``Planner.solve`` sets it under a time limit, so one long motion check cannot overrun the limit;
+        answering "blocked" is conservative, the motion is left out, never wrongly accepted.
+        """
+        self._check.deadline.at = None if at is None else float(at)
+        self._check.deadline.clock = clock
+
     @property
     def exact_poses(self) -> int:
         """Poses checked by FCL so far (those the broad phase could not prove free)."""
@@ -304,6 +329,18 @@ class MeshWorld(WorldBase):
         """``(V, 3)`` world positions of the body's vertices at state ``q``."""
         q = self._state(q)
         return self.body_vertices @ np.asarray(_rotation_matrix(q[3], q[4], q[5])).T + q[:3]
+
+    def motion_poses(self, a, b) -> np.ndarray:
+        """The poses ``check_motion(a, b)`` tests, from ``a`` to ``b`` (``(n + 1, 6)``; one for ``a == b``)."""
+        a = np.ascontiguousarray(self._state(a, "a"))
+        b = np.ascontiguousarray(self._state(b, "b"))
+        n, length = motion_pieces(self._kernel.params, a, b)
+        if length == 0.0:
+            return a[None].copy()
+        out = np.empty((n + 1, 6))
+        for k in range(n + 1):
+            interpolate(SPACE_RIGID, a, b, k / n, out[k])
+        return out
 
     def pose_free_exact(self, q, margin: float = 0.0) -> bool:
         """The exact check alone (FCL, no broad phase): the body at ``q`` is more than ``margin`` from the environment."""

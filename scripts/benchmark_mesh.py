@@ -1,0 +1,106 @@
+"""Cost of one pose check on OMPL.app's mesh problems: FCL alone against the broad phase in front of it.
+
+    python scripts/benchmark_mesh.py --omplapp DIR                       # cubicles and Twistycool
+    python scripts/benchmark_mesh.py --omplapp DIR --problems Easy Home --motions 300
+
+The motions are seeded random collision-free ones (so every pose of each is checked): from a valid
+state, a move of up to ``--reach`` of the bounds' diagonal along each axis and up to 0.5 rad about each. For each problem it prints: the poses per motion; the microseconds per
+pose of FCL alone (a collision test and, where free, a distance test against the clearance delta / 2,
+one Python call per pose); the microseconds per pose of the world's motion check (the compiled broad
+phase, then FCL for the poses it leaves undecided, in one call per motion); the share of poses FCL
+still sees; and the same two costs for single states (a collision test, no clearance).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from planners.base.fileio import InputError, check_int_flags
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--omplapp", help="OMPL.app's root or resources/3D folder (default $SAMPLERGYM_OMPLAPP_DIR)")
+    ap.add_argument("--problems", nargs="+", default=["cubicles", "Twistycool"], help="names of .cfg files")
+    ap.add_argument("--motions", type=int, default=200, help="tree edges timed per problem")
+    ap.add_argument("--states", type=int, default=2000, help="random states timed per problem")
+    ap.add_argument("--reach", type=float, default=0.02,
+                    help="largest move along each axis, as a fraction of the bounds' diagonal")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    try:
+        check_int_flags(args, ("motions", "states"))
+        check_int_flags(args, ("seed",), low=0)
+        from planners.worlds.omplapp import load_omplapp, omplapp_dir
+
+        folder = omplapp_dir(args.omplapp)
+        if folder is None:
+            raise InputError("give --omplapp DIR or set SAMPLERGYM_OMPLAPP_DIR (OMPL.app's root or resources/3D)")
+        print("| problem | triangles (env / robot) | poses per motion | FCL alone, us per pose | motion check, "
+              "us per pose | poses FCL still sees | FCL state test, us | state check, us |")
+        print("|---|---|---|---|---|---|---|---|")
+        for name in args.problems:
+            row = measure(load_omplapp(folder / f"{name}.cfg").problem, args)
+            print(f"| {name} | " + " | ".join(row) + " |", flush=True)
+    except (InputError, ImportError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def free_motions(world, count: int, rng: np.random.Generator, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` collision-free motions: from a random valid state, a move of up to ``reach`` along each axis
+    and up to 0.5 rad about each, kept when the motion check passes."""
+    low, high = world.bounds
+    A, B = [], []
+    while len(A) < count:
+        a = low + (high - low) * rng.random(6)
+        if not world.is_valid(a):
+            continue
+        b = a + np.concatenate([rng.uniform(-reach, reach, 3), rng.uniform(-0.5, 0.5, 3)])
+        b[:3] = np.clip(b[:3], low[:3], high[:3])
+        if world.check_motion(a, b):
+            A.append(a)
+            B.append(b)
+    return np.array(A), np.array(B)
+
+
+def measure(problem, args) -> list[str]:
+    w = problem.world
+    rng = np.random.default_rng(args.seed)
+    reach = args.reach * float(np.linalg.norm(w.bounds[1][:3] - w.bounds[0][:3]))
+    A, B = free_motions(w, args.motions, rng, reach)
+    dense = np.concatenate([w.motion_poses(a, b) for a, b in zip(A, B, strict=True)])
+    poses = len(dense)
+    assert w.check_motions(A, B).all()
+    # the world's check: broad phase, then FCL for the undecided poses
+    before = w.exact_poses
+    t = time.perf_counter()
+    w.check_motions(A, B)
+    ours = (time.perf_counter() - t) / poses * 1e6
+    seen = (w.exact_poses - before) / poses
+    # FCL alone, one call per pose, at the same poses
+    t = time.perf_counter()
+    assert all(w.pose_free_exact(q, w.delta / 2) for q in dense)
+    fcl_alone = (time.perf_counter() - t) / len(dense) * 1e6
+    # single states: a collision test only
+    low, high = w.bounds
+    S = low + (high - low) * rng.random((args.states, 6))
+    w.check_motions(S[:2], S[:2])
+    t = time.perf_counter()
+    w.check_motions(S, S)
+    state_ours = (time.perf_counter() - t) / len(S) * 1e6
+    t = time.perf_counter()
+    for q in S:
+        w.pose_free_exact(q)
+    state_fcl = (time.perf_counter() - t) / len(S) * 1e6
+    return [f"{len(w.env_faces):,} / {len(w.body_faces):,}", f"{poses / len(A):.0f}", f"{fcl_alone:.1f}",
+            f"{ours:.1f}", f"{100 * seen:.0f}%", f"{state_fcl:.1f}", f"{state_ours:.1f}"]
+
+
+if __name__ == "__main__":
+    sys.exit(main())
