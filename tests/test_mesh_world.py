@@ -236,3 +236,11 @@ def test_motion_poses_are_the_poses_checked(hole_world):
     assert P.shape == S.shape and np.allclose(P[:, :3], S[:, :3])
     assert np.allclose((P[:, 3:] - S[:, 3:] + PI) % (2 * PI) - PI, 0, atol=1e-12)
     assert hole_world.motion_poses(a, a).shape == (1, 6)
+
+
+def test_vectorised_rotations_are_the_compiled_ones():
+    from planners.worlds.mesh import rotation_matrices
+
+    angles = np.random.default_rng(5).uniform(-PI, PI, (100, 3))
+    R = rotation_matrices(angles)
+    assert all(np.allclose(R[i], rotation_matrix(*angles[i]), atol=1e-15) for i in range(100))

@@ -8,8 +8,9 @@ the body more than ``delta / 2`` from the environment, so no obstacle, however t
 Each pose goes first through a broad phase that can only prove "free": a Chebyshev distance grid of
 the environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance from
 any point in it to any environment triangle. A pose is free when the body's bounding sphere clears
-the bound, or else when every one of the body's cover points (points on its surface such that every
-surface point lies within ``cover`` of one) clears it by ``cover``. The poses left undecided go to the
+the bound, or else, in a motion, when every one of the body's cover points (points on its surface
+such that every surface point lies within ``cover`` of one) clears it by ``cover``; a single state
+asks the sphere only, as FCL's collision test costs about what the cover points do. The poses left undecided go to the
 exact check (FCL, in ``planners.worlds.mesh``) in one call per motion, through numba's object mode:
 that check is registered here under an integer id that the world's ``params`` carry.
 
@@ -62,21 +63,34 @@ def exact_poses_free(ident, poses, margin) -> bool:
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
+def _voxel(params, x, y, z):
+    """Flat index ``(i, j * nz + k)`` of the voxel holding a point, ``(-1, -1)`` outside the grid."""
+    gx, gy, gz, h = params[P_GRID], params[P_GRID + 1], params[P_GRID + 2], params[P_GRID + 3]
+    nx, ny, nz = int(params[P_GRID + 4]), int(params[P_GRID + 5]), int(params[P_GRID + 6])
+    i = int(math.floor((x - gx) / h))
+    j = int(math.floor((y - gy) / h))
+    k = int(math.floor((z - gz) / h))
+    if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
+        return -1, -1
+    return i, j * nz + k
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def sphere_free(grid, params, q, margin):
+    """True if the broad phase's grid proves the body's bounding sphere at ``q`` more than ``margin`` clear."""
+    i, jk = _voxel(params, q[0], q[1], q[2])
+    return i >= 0 and (grid[i, jk] - 1.0) * params[P_GRID + 3] > params[7] + margin
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def broad_phase_free(grid, cover, params, q, margin):
     """True if the broad phase proves the pose ``q`` keeps the body more than ``margin`` from the environment.
 
     False means undecided, never "in collision".
     """
-    gx, gy, gz, h = params[P_GRID], params[P_GRID + 1], params[P_GRID + 2], params[P_GRID + 3]
-    nx, ny, nz = int(params[P_GRID + 4]), int(params[P_GRID + 5]), int(params[P_GRID + 6])
-    # the bounding sphere: its centre's voxel bound against the body radius
-    i = int(math.floor((q[0] - gx) / h))
-    j = int(math.floor((q[1] - gy) / h))
-    k = int(math.floor((q[2] - gz) / h))
-    if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
-        return False
-    if (grid[i, j * nz + k] - 1.0) * h > params[7] + margin:
+    if sphere_free(grid, params, q, margin):
         return True
+    h = params[P_GRID + 3]
     # the cover points, each with its cover radius
     need = margin + params[P_COVER]
     R = rotation_matrix(q[3], q[4], q[5])
@@ -84,12 +98,8 @@ def broad_phase_free(grid, cover, params, q, margin):
         wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
         wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
         wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
-        i = int(math.floor((wx - gx) / h))
-        j = int(math.floor((wy - gy) / h))
-        k = int(math.floor((wz - gz) / h))
-        if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
-            return False
-        if not (grid[i, j * nz + k] - 1.0) * h > need:
+        i, jk = _voxel(params, wx, wy, wz)
+        if i < 0 or not (grid[i, jk] - 1.0) * h > need:
             return False
     return True
 
@@ -123,7 +133,9 @@ def mesh_motion_free(grid, cover, params, a, b):
     for s in range(n + 1):
         t = 1.0 if s == 0 else (s - 1) / n
         interpolate(SPACE_RIGID, a, b, t, q)
-        if not broad_phase_free(grid, cover, params, q, margin):
+        # a single state: the sphere only (FCL's collision test costs about what the cover points do)
+        free = sphere_free(grid, params, q, margin) if n == 0 else broad_phase_free(grid, cover, params, q, margin)
+        if not free:
             undecided[m] = q
             m += 1
     if m == 0:

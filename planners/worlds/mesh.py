@@ -183,6 +183,21 @@ def cover_points(vertices: np.ndarray, faces: np.ndarray, spacing: float) -> np.
     return np.unique(np.concatenate(out), axis=0)
 
 
+def rotation_matrices(angles: np.ndarray) -> np.ndarray:
+    """``(n, 3, 3)``: ``Ry(ty) Rx(tx) Rz(tz)`` for each row ``(tx, ty, tz)``, vectorised (``rotation_matrix``'s)."""
+    cx, sx = np.cos(angles[:, 0]), np.sin(angles[:, 0])
+    cy, sy = np.cos(angles[:, 1]), np.sin(angles[:, 1])
+    cz, sz = np.cos(angles[:, 2]), np.sin(angles[:, 2])
+    a0, b0, c0 = cy, sy * sx, sy * cx
+    b1, c1 = cx, -sx
+    a2, b2, c2 = -sy, cy * sx, cy * cx
+    R = np.empty((len(angles), 3, 3))
+    R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = a0 * cz + b0 * sz, b0 * cz - a0 * sz, c0
+    R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = b1 * sz, b1 * cz, c1
+    R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = a2 * cz + b2 * sz, b2 * cz - a2 * sz, c2
+    return R
+
+
 class _Deadline(threading.local):
     at: float | None = None
     clock = None
@@ -232,12 +247,16 @@ class _FCLCheck:
         Past a deadline set by ``MeshWorld.set_deadline`` it answers False without checking further.
         """
         at, clock = self.deadline.at, self.deadline.clock
-        for i, q in enumerate(poses):
+        if len(poses) < 8:  # numpy's per-call cost outweighs the vectorised rotations
+            rotations = [np.asarray(_rotation_matrix(q[3], q[4], q[5])) for q in poses]
+        else:
+            rotations = rotation_matrices(poses[:, 3:])
+        translations = np.ascontiguousarray(poses[:, :3])
+        for i in range(len(poses)):
             if at is not None and i % 8 == 0 and clock() > at:
                 self.cut += 1
                 return False
-            R = np.asarray(_rotation_matrix(q[3], q[4], q[5]))
-            if not self.pose_free(R, np.ascontiguousarray(q[:3]), margin):
+            if not self.pose_free(rotations[i], translations[i], margin):
                 return False
         return True
 
