@@ -2,6 +2,7 @@
 
     python scripts/benchmark_mesh.py --omplapp DIR                       # cubicles and Twistycool
     python scripts/benchmark_mesh.py --omplapp DIR --problems Easy Home --motions 300
+    python scripts/benchmark_mesh.py --omplapp DIR --solutions     # replay every shipped .path instead
 
 The motions are seeded random collision-free ones (so every pose of each is checked): from a valid
 state, a move of up to ``--reach`` of the bounds' diagonal along each axis and up to 0.5 rad about each. For each problem it prints: the poses per motion; the microseconds per
@@ -9,6 +10,9 @@ pose of FCL alone (a collision test and, where free, a distance test against the
 one Python call per pose); the microseconds per pose of the world's motion check (the compiled broad
 phase, then FCL for the poses it leaves undecided, in one call per motion); the share of poses FCL
 still sees; and the same two costs for single states (a collision test, no clearance).
+
+With ``--solutions`` it replays instead every ``.path`` solution OMPL.app ships beside a ``.cfg`` of the
+same name: its states, how many are valid here, and the smallest clearance among them.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ def main(argv=None) -> int:
     ap.add_argument("--reach", type=float, default=0.02,
                     help="largest move along each axis, as a fraction of the bounds' diagonal")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--solutions", action="store_true", help="replay OMPL.app's .path solutions instead")
     args = ap.parse_args(argv)
     try:
         check_int_flags(args, ("motions", "states"))
@@ -40,6 +45,8 @@ def main(argv=None) -> int:
         folder = omplapp_dir(args.omplapp)
         if folder is None:
             raise InputError("give --omplapp DIR or set SAMPLERGYM_OMPLAPP_DIR (OMPL.app's root or resources/3D)")
+        if args.solutions:
+            return replay(folder)
         print("| problem | triangles (env / robot) | poses per motion | FCL alone, us per pose | motion check, "
               "us per pose | poses FCL still sees | FCL state test, us | state check, us |")
         print("|---|---|---|---|---|---|---|---|")
@@ -49,6 +56,28 @@ def main(argv=None) -> int:
     except (InputError, ImportError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    return 0
+
+
+def replay(folder) -> int:
+    """Print, for every .path beside a .cfg, how many of its states are valid here."""
+    from planners.worlds.omplapp import load_omplapp, read_omplapp_path
+
+    print("| problem | solution states | valid here | smallest clearance | note |")
+    print("|---|---|---|---|---|")
+    for solution in sorted(folder.glob("*.path"), key=lambda p: p.name.lower()):
+        cfg = solution.with_suffix(".cfg")
+        if not cfg.is_file():
+            continue
+        try:
+            w = load_omplapp(cfg).problem.world
+        except InputError as e:
+            print(f"| {cfg.stem} | | | | not loaded: {str(e).split(': ', 1)[-1]} |", flush=True)
+            continue
+        Q = read_omplapp_path(solution)
+        valid = sum(w.is_valid(q) for q in Q)
+        clearance = min(w.clearance(q) for q in Q)
+        print(f"| {cfg.stem} | {len(Q)} | {valid} | {clearance:.3g} | |", flush=True)
     return 0
 
 
