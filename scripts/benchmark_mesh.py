@@ -3,6 +3,7 @@
     python scripts/benchmark_mesh.py --omplapp DIR                       # cubicles and Twistycool
     python scripts/benchmark_mesh.py --omplapp DIR --problems Easy Home --motions 300
     python scripts/benchmark_mesh.py --omplapp DIR --solutions     # replay every shipped .path instead
+    python scripts/benchmark_mesh.py --omplapp DIR --time-limit 1  # each planner under a 1 s limit instead
 
 The motions are seeded random collision-free ones (so every pose of each is checked): from a valid
 state, a move of up to ``--reach`` of the bounds' diagonal along each axis and up to 0.5 rad about each. For each problem it prints: the poses per motion; the microseconds per
@@ -12,7 +13,9 @@ phase, then FCL for the poses it leaves undecided, in one call per motion); the 
 still sees; and the same two costs for single states (a collision test, no clearance).
 
 With ``--solutions`` it replays instead every ``.path`` solution OMPL.app ships beside a ``.cfg`` of the
-same name: its states, how many are valid here, and the smallest clearance among them.
+same name: its states, how many are valid here, and the smallest clearance among them. With
+``--time-limit T`` it runs each planner once (seed 0) under that limit on each problem and prints the
+seconds it took, compilation left out.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ def main(argv=None) -> int:
                     help="largest move along each axis, as a fraction of the bounds' diagonal")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--solutions", action="store_true", help="replay OMPL.app's .path solutions instead")
+    ap.add_argument("--time-limit", type=float, help="run each planner under this limit instead")
     args = ap.parse_args(argv)
     try:
         check_int_flags(args, ("motions", "states"))
@@ -47,6 +51,8 @@ def main(argv=None) -> int:
             raise InputError("give --omplapp DIR or set SAMPLERGYM_OMPLAPP_DIR (OMPL.app's root or resources/3D)")
         if args.solutions:
             return replay(folder)
+        if args.time_limit is not None:
+            return time_limits(folder, args)
         print("| problem | triangles (env / robot) | poses per motion | FCL alone, us per pose | motion check, "
               "us per pose | poses FCL still sees | FCL state test, us | state check, us |")
         print("|---|---|---|---|---|---|---|---|")
@@ -56,6 +62,30 @@ def main(argv=None) -> int:
     except (InputError, ImportError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    return 0
+
+
+TIMED = ("RRT", "RRTConnect", "RRTstar", "PRM", "LazyPRM", "OBPRM")
+
+
+def time_limits(folder, args) -> int:
+    """Each planner once under ``args.time_limit`` on each problem: the seconds it took, compilation left out."""
+    from planners import make_planner
+    from planners.worlds.omplapp import load_omplapp
+
+    if not (args.time_limit > 0):
+        raise InputError(f"--time-limit must be a positive number of seconds, got {args.time_limit}")
+    print(f"| problem | planner | seconds under time_limit={args.time_limit:g} | iterations | solved |")
+    print("|---|---|---|---|---|")
+    for name in args.problems:
+        problem = load_omplapp(folder / f"{name}.cfg").problem
+        for planner_name in TIMED:
+            make_planner(planner_name, problem, seed=args.seed).solve(max_iterations=3)  # compile first
+            planner = make_planner(planner_name, problem, seed=args.seed)
+            t = time.perf_counter()
+            r = planner.solve(time_limit=args.time_limit)
+            spent = time.perf_counter() - t - planner.compile_time
+            print(f"| {name} | {planner_name} | {spent:.3f} | {r.iterations} | {r.solved} |", flush=True)
     return 0
 
 
