@@ -6,15 +6,16 @@
     python scripts/benchmark_mesh.py --omplapp DIR --time-limit 1  # each planner under a 1 s limit instead
 
 The motions are seeded random collision-free ones (so every pose of each is checked): from a valid
-state, a move of up to ``--reach`` of the bounds' diagonal along each axis and up to 0.5 rad about each. For each problem it prints: the poses per motion; the microseconds per
-pose of FCL alone (a collision test and, where free, a distance test against the clearance delta / 2,
-one Python call per pose); the microseconds per pose of the world's motion check (the compiled broad
-phase, then FCL for the poses it leaves undecided, in one call per motion); the share of poses FCL
-still sees; and the same two costs for single states (a collision test, no clearance).
+state, a move of up to ``--reach`` of the bounds' diagonal along each axis and up to 0.5 rad about
+each. For each problem it prints: the poses per motion; the microseconds per pose of FCL alone (a
+collision test and, where free, a distance test against the clearance delta / 2, one Python call per
+pose); the microseconds per pose of the world's motion check (the compiled broad phase, then FCL for
+the poses it leaves undecided, in one call per motion); the share of poses FCL still sees; and the
+same two costs for single states (a collision test, no clearance).
 
 With ``--solutions`` it replays instead every ``.path`` solution OMPL.app ships beside a ``.cfg`` of the
 same name: its states, how many are valid here, and the smallest clearance among them. With
-``--time-limit T`` it runs each planner once (seed 0) under that limit on each problem and prints the
+``--time-limit T`` it runs each planner once (``--seed``) under that limit on each problem and prints the
 seconds it took, compilation left out.
 """
 

@@ -362,7 +362,7 @@ class MeshWorld(WorldBase):
         return out
 
     def pose_free_exact(self, q, margin: float = 0.0) -> bool:
-        """The exact check alone (FCL, no broad phase): the body at ``q`` is more than ``margin`` from the environment."""
+        """The exact check alone (FCL, no broad phase): the body at ``q`` is more than ``margin`` from the world."""
         q = self._state(q)
         return self._check.pose_free(np.asarray(_rotation_matrix(q[3], q[4], q[5])), q[:3].copy(), float(margin))
 
