@@ -5,13 +5,14 @@
     python scripts/benchmark_mesh.py --omplapp DIR --solutions     # replay every shipped .path instead
     python scripts/benchmark_mesh.py --omplapp DIR --time-limit 1  # each planner under a 1 s limit instead
 
-The motions are seeded random collision-free ones (so every pose of each is checked): from a valid
+The motions are seeded random collision-free ones (so each is followed to its end): from a valid
 state, a move of up to ``--reach`` of the bounds' diagonal along each axis and up to 0.5 rad about
-each. For each problem it prints: the poses per motion; the microseconds per pose of FCL alone (a
-collision test and, where free, a distance test against the clearance delta / 2, one Python call per
-pose); the microseconds per pose of the world's motion check (the compiled broad phase, then FCL for
-the poses it leaves undecided, in one call per motion); the share of poses FCL still sees; and the
-same two costs for single states (a collision test, no clearance).
+each. For each problem it prints: the poses per motion a travel of ``delta`` apart; FCL alone at
+each of them (a collision test and, where free, a distance test against the clearance delta / 2,
+one Python call per pose), per pose and per motion; the world's motion check (the grid's bounds,
+FCL's distance where they do not suffice, steps as long as the clearance), per motion and per pose a
+travel of ``delta`` apart; the FCL calls it makes per motion; and the cost of single states (a
+collision test, no clearance), FCL alone and the world's check.
 
 With ``--solutions`` it replays instead every ``.path`` solution OMPL.app ships beside a ``.cfg`` of the
 same name: its states, how many are valid here, and the smallest clearance among them. With
@@ -54,9 +55,10 @@ def main(argv=None) -> int:
             return replay(folder)
         if args.time_limit is not None:
             return time_limits(folder, args)
-        print("| problem | triangles (env / robot) | poses per motion | FCL alone, us per pose | motion check, "
-              "us per pose | poses FCL still sees | FCL state test, us | state check, us |")
-        print("|---|---|---|---|---|---|---|---|")
+        print("| problem | triangles (env / robot) | poses per motion at delta | FCL alone, us per pose | FCL alone, "
+              "ms per motion | motion check, ms per motion | motion check, us per pose at delta | FCL calls per "
+              "motion | FCL state test, us | state check, us |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
         for name in args.problems:
             row = measure(load_omplapp(folder / f"{name}.cfg").problem, args)
             print(f"| {name} | " + " | ".join(row) + " |", flush=True)
@@ -137,16 +139,16 @@ def measure(problem, args) -> list[str]:
     dense = np.concatenate([w.motion_poses(a, b) for a, b in zip(A, B, strict=True)])
     poses = len(dense)
     assert w.check_motions(A, B).all()
-    # the world's check: broad phase, then FCL for the undecided poses
+    # the world's check: the grid's bounds, FCL where they do not suffice, steps as long as the clearance
     before = w.exact_poses
     t = time.perf_counter()
     w.check_motions(A, B)
-    ours = (time.perf_counter() - t) / poses * 1e6
-    seen = (w.exact_poses - before) / poses
-    # FCL alone, one call per pose, at the same poses
+    ours = time.perf_counter() - t
+    calls = (w.exact_poses - before) / len(A)
+    # FCL alone, one call per pose, at every pose a travel of delta apart
     t = time.perf_counter()
     assert all(w.pose_free_exact(q, w.delta / 2) for q in dense)
-    fcl_alone = (time.perf_counter() - t) / len(dense) * 1e6
+    fcl_alone = time.perf_counter() - t
     # single states: a collision test only
     low, high = w.bounds
     S = low + (high - low) * rng.random((args.states, 6))
@@ -158,8 +160,9 @@ def measure(problem, args) -> list[str]:
     for q in S:
         w.pose_free_exact(q)
     state_fcl = (time.perf_counter() - t) / len(S) * 1e6
-    return [f"{len(w.env_faces):,} / {len(w.body_faces):,}", f"{poses / len(A):.0f}", f"{fcl_alone:.1f}",
-            f"{ours:.1f}", f"{100 * seen:.0f}%", f"{state_fcl:.1f}", f"{state_ours:.1f}"]
+    return [f"{len(w.env_faces):,} / {len(w.body_faces):,}", f"{poses / len(A):.0f}", f"{fcl_alone / poses * 1e6:.1f}",
+            f"{fcl_alone / len(A) * 1e3:.2f}", f"{ours / len(A) * 1e3:.2f}", f"{ours / poses * 1e6:.1f}",
+            f"{calls:.1f}", f"{state_fcl:.1f}", f"{state_ours:.1f}"]
 
 
 if __name__ == "__main__":

@@ -1,18 +1,24 @@
 """Compiled motion checks for a rigid body given as a triangle mesh among a triangle-mesh environment.
 
 State ``q = (x, y, z, tx, ty, tz)`` as for ``planners.kernels.rigid``: a body vertex ``p`` sits at
-``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``. A motion is cut into pieces by the same rule
-(``motion_pieces``: no body point travels more than ``delta`` per piece) and every checked pose must keep
-the body more than ``delta / 2`` from the environment, so no obstacle, however thin, is stepped over.
+``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``. Along a motion no body point travels more than
+``s`` when the motion's parameter advances by ``s / L``, ``L`` the travel bound of ``motion_pieces``
+(``|dt| + r (|dtx| + |dty| + |dtz|)``). Every checked pose must keep the body more than ``delta / 2``
+from the environment, and the next pose checked lies a travel of ``max(delta, c)`` further on, ``c``
+the clearance just certified (conservative advancement). Two consecutive checked poses with
+clearances ``c1, c2 > delta / 2`` are at most ``max(delta, c1) < c1 + c2`` apart, so every pose
+between them keeps a clearance above 0 and no obstacle, however thin, is stepped over. The far end
+is checked first, so the last step is covered the same way.
 
-Each pose goes first through a broad phase that can only prove "free": a Chebyshev distance grid of
-the environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance from
-any point in it to any environment triangle. A pose is free when the body's bounding sphere clears
-the bound, or else, in a motion, when every one of the body's cover points (points on its surface
-such that every surface point lies within ``cover`` of one) clears it by ``cover``; a single state
-asks the sphere only, as FCL's collision test costs about what the cover points do. The poses left undecided go to the
-exact check (FCL, in ``planners.worlds.mesh``) in one call per motion, through numba's object mode:
-that check is registered here under an integer id that the world's ``params`` carry.
+Each pose's clearance comes first from a broad phase that can only certify: a Chebyshev distance grid
+of the environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance
+from any point in it to any environment triangle. The bound of a pose is that of the body's bounding
+sphere, or else the smallest over the body's cover points (points on its surface such that every
+surface point lies within ``cover`` of one) less ``cover``; a single state asks the sphere only, as
+FCL's collision test costs about what the cover points do. Where the bound does not clear ``delta /
+2``, the exact check (FCL's distance, in ``planners.worlds.mesh``) gives the clearance, through
+numba's object mode: that check is registered here under an integer id that the world's ``params``
+carry.
 
 ``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, checker id, gx, gy, gz,
 h, nx, ny, nz, cover]``: the bounds of the body's origin, the motion resolution, the body's radius
@@ -62,6 +68,14 @@ def exact_poses_free(ident, poses, margin) -> bool:
     return bool(check.poses_free(poses, float(margin)))
 
 
+def exact_clearance(ident, q) -> float:
+    """The exact distance from the body at pose ``q`` to the environment, -1 where they meet (object mode)."""
+    check = _CHECKS.get(int(ident))
+    if check is None:
+        raise RuntimeError(f"no exact mesh check is registered under id {int(ident)} (its world was deleted)")
+    return float(check.pose_clearance(q))
+
+
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def _voxel(params, x, y, z):
     """Flat index ``(i, j * nz + k)`` of the voxel holding a point, ``(-1, -1)`` outside the grid."""
@@ -105,6 +119,50 @@ def broad_phase_free(grid, cover, params, q, margin):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
+def clearance_bound(grid, cover, params, q, need):
+    """A lower bound on the distance from the body at ``q`` to the environment, from the grid alone.
+
+    The sphere's bound first; where it is not above ``need``, the cover points' (stopping as soon as
+    one shows the bound cannot exceed ``need``). A result at or below ``need`` says nothing.
+    """
+    h = params[P_GRID + 3]
+    i, jk = _voxel(params, q[0], q[1], q[2])
+    if i < 0:
+        return -1.0
+    bound = (grid[i, jk] - 1.0) * h - params[7]
+    if bound > need:
+        return bound
+    lowest = np.inf
+    R = rotation_matrix(q[3], q[4], q[5])
+    for p in range(cover.shape[0]):
+        wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
+        wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
+        wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
+        i, jk = _voxel(params, wx, wy, wz)
+        if i < 0:
+            return bound
+        d = (grid[i, jk] - 1.0) * h - params[P_COVER]
+        if d < lowest:
+            lowest = d
+            if lowest <= need:
+                return max(bound, lowest)
+    return max(bound, lowest)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _pose_clearance(grid, cover, params, q, need):
+    """The grid's bound where it exceeds ``need``, else the exact distance (FCL, -1 where they meet)."""
+    c = clearance_bound(grid, cover, params, q, need)
+    if c > need:
+        return c
+    ident = params[P_ID]
+    pose = q.copy()
+    with nb.objmode(c="float64"):
+        c = exact_clearance(ident, pose)
+    return c
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _in_bounds(params, q):
     for j in range(3):
         if not (params[j] <= q[j] <= params[3 + j]):
@@ -122,30 +180,33 @@ def mesh_motion_free(grid, cover, params, a, b):
     if not (_in_bounds(params, a) and _in_bounds(params, b)):
         return False
     n, length = motion_pieces(params, a, b)
-    margin = 0.5 * params[6]
     if length == 0.0:
-        n = 0
-        margin = 0.0
-    undecided = np.empty((n + 1, 6))
-    m = 0
-    q = np.empty(6)
-    # the far end first: a blocked extension is usually blocked there
-    for s in range(n + 1):
-        t = 1.0 if s == 0 else (s - 1) / n
-        interpolate(SPACE_RIGID, a, b, t, q)
         # a single state: the sphere only (FCL's collision test costs about what the cover points do)
-        free = sphere_free(grid, params, q, margin) if n == 0 else broad_phase_free(grid, cover, params, q, margin)
-        if not free:
-            undecided[m] = q
-            m += 1
-    if m == 0:
-        return True
-    ok = False
-    poses = undecided[:m]
-    ident = params[P_ID]
-    with nb.objmode(ok="boolean"):
-        ok = exact_poses_free(ident, poses, margin)
-    return ok
+        if sphere_free(grid, params, a, 0.0):
+            return True
+        ok = False
+        poses = np.empty((1, 6))
+        poses[0] = a
+        ident = params[P_ID]
+        with nb.objmode(ok="boolean"):
+            ok = exact_poses_free(ident, poses, 0.0)
+        return ok
+    delta = params[6]
+    margin = 0.5 * delta
+    # the far end first (a blocked extension is usually blocked there), then from the start, each step as
+    # long as the clearance just measured allows: no body point travels farther than the step, so the
+    # poses between two checked ones keep a clearance above 0 (see the module docs)
+    if not _pose_clearance(grid, cover, params, b, margin) > margin:
+        return False
+    q = np.empty(6)
+    s = 0.0
+    while s < length:
+        interpolate(SPACE_RIGID, a, b, s / length, q)
+        c = _pose_clearance(grid, cover, params, q, margin)
+        if not c > margin:
+            return False
+        s += c if c > delta else delta
+    return True
 
 
 # --- building the broad phase --------------------------------------------------------------------------

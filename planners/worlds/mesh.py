@@ -241,6 +241,19 @@ class _FCLCheck:
             return True
         return fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()) > margin
 
+    def pose_clearance(self, q: np.ndarray) -> float:
+        """Distance from the body at pose ``q`` to the environment; -1 where they meet or past the deadline."""
+        at = self.deadline.at
+        if at is not None and self.deadline.clock() > at:
+            self.cut += 1
+            return -1.0
+        fcl = self._fcl
+        self.poses += 1
+        self.body.setTransform(fcl.Transform(np.asarray(_rotation_matrix(q[3], q[4], q[5])), q[:3].copy()))
+        if fcl.collide(self.body, self.env, self.collide_request, fcl.CollisionResult()):
+            return -1.0
+        return float(fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()))
+
     def poses_free(self, poses: np.ndarray, margin: float) -> bool:
         """True if every pose ``(x, y, z, tx, ty, tz)`` is free with ``margin``; stops at the first that is not.
 
@@ -350,7 +363,11 @@ class MeshWorld(WorldBase):
         return self.body_vertices @ np.asarray(_rotation_matrix(q[3], q[4], q[5])).T + q[:3]
 
     def motion_poses(self, a, b) -> np.ndarray:
-        """The poses ``check_motion(a, b)`` tests, from ``a`` to ``b`` (``(n + 1, 6)``; one for ``a == b``)."""
+        """Poses from ``a`` to ``b`` a travel of at most ``delta`` apart (``(n + 1, 6)``; one for ``a == b``).
+
+        ``check_motion(a, b)`` certifies each of them free with a clearance above ``delta / 2``, and the
+        poses between free; it tests fewer of them where the clearance allows longer steps.
+        """
         a = np.ascontiguousarray(self._state(a, "a"))
         b = np.ascontiguousarray(self._state(b, "b"))
         n, length = motion_pieces(self._kernel.params, a, b)
