@@ -192,3 +192,25 @@ def test_without_assimps_up_axis_turn_the_solution_collides(omplapp, monkeypatch
         return
     Q = read_omplapp_path(omplapp / "cubicles.path")
     assert not all(w.is_valid(q) for q in Q)
+
+
+def test_plan3d_plans_and_draws_a_problem_file(tmp_path):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(repo), os.environ.get("PYTHONPATH")]))}
+
+    def plan3d(*args):
+        return subprocess.run([sys.executable, str(repo / "scripts" / "plan3d.py"), *map(str, args)],
+                              capture_output=True, text=True, env=env, timeout=600)
+
+    out = tmp_path / "out"
+    done = plan3d(write_problem(tmp_path), "--time-limit", 20, "--frames", 3, "--out", out)
+    assert done.returncode == 0, done.stderr
+    assert "solved:           True" in done.stdout
+    assert (out / "plan3d.png").stat().st_size > 0 and (out / "plan3d.gif").stat().st_size > 0
+    bad = plan3d(tmp_path / "nothing.cfg", "--out", out)
+    assert bad.returncode == 2 and "does not exist" in bad.stderr
