@@ -250,3 +250,13 @@ def test_vectorised_rotations_are_the_compiled_ones():
     angles = np.random.default_rng(5).uniform(-PI, PI, (100, 3))
     R = rotation_matrices(angles)
     assert all(np.allclose(R[i], rotation_matrix(*angles[i]), atol=1e-15) for i in range(100))
+
+
+def test_a_mesh_world_pickles_by_its_triangles(hole_world):
+    import pickle
+
+    copy = pickle.loads(pickle.dumps(hole_world))
+    assert copy is not hole_world and repr(copy) == repr(hole_world)
+    assert np.array_equal(copy.grid, hole_world.grid) and copy.delta == hole_world.delta
+    for q in ([5, 4.6, 5, 0, 0, 0], [5, 4.6, 5, 0, 0, PI / 4]):
+        assert copy.is_valid(q) == hole_world.is_valid(q)

@@ -311,6 +311,7 @@ class MeshWorld(WorldBase):
         if isinstance(grid_cells, bool) or not isinstance(grid_cells, (int, np.integer)) or not 8 <= grid_cells <= 512:
             raise InputError(f"grid_cells must be an integer from 8 to 512, got {grid_cells!r}")
         self.name = str(name)
+        self.grid_cells = int(grid_cells)
         self.low3, self.high3 = lo, hi
         for a in (self.env_vertices, self.env_faces, self.body_vertices, self.body_faces, lo, hi):
             a.flags.writeable = False
@@ -337,6 +338,12 @@ class MeshWorld(WorldBase):
         self._low.flags.writeable = False
         self._high.flags.writeable = False
         self._free_volume: float | None = None
+
+    def __reduce__(self):
+        # FCL's trees do not pickle: a copy (another process's) is built again from the triangles
+        return _rebuild, ((self.env_vertices, self.env_faces), (self.body_vertices, self.body_faces),
+                          {"low": self.low3, "high": self.high3, "delta": self.delta, "rot_weight": self.rot_weight,
+                           "grid_cells": self.grid_cells, "name": self.name})
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -423,3 +430,7 @@ class MeshWorld(WorldBase):
         label = f"{self.name!r}, " if self.name else ""
         return (f"MeshWorld({label}{len(self.env_faces)} environment triangles, {len(self.body_faces)} body "
                 f"triangles, delta={self.delta:g})")
+
+
+def _rebuild(environment, robot, kwargs) -> MeshWorld:
+    return MeshWorld(environment, robot, **kwargs)
