@@ -3,9 +3,10 @@
 The state space is ``RigidBodyWorld``'s: ``q = (x, y, z, tx, ty, tz)``, a body vertex ``p`` (in the
 body's own frame) sits at ``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``; angles are sampled in
 ``[-pi, pi)`` and a motion turns along the shorter arc. The same metrics (``cossin``, ``se3``) and the
-same motion-resolution rule apply: a motion is cut so that no body point travels more than ``delta``
-per piece, ``r`` the body radius, and every checked pose keeps the body more than ``delta / 2`` from
-the environment, so no obstacle, however thin, is stepped over (``planners.kernels.mesh``).
+same bound on a body point's travel apply (``|dt| + r (|dtx| + |dty| + |dtz|)``, ``r`` the body
+radius): every checked pose keeps the body more than ``delta / 2`` from the environment and the next
+lies a travel of ``max(delta, c)`` on, ``c`` the clearance just certified, so the poses between stay
+free and no obstacle, however thin, is stepped over (``planners.kernels.mesh``).
 
 A state is valid when the body's origin lies within the bounds and the body's triangles meet none of
 the environment's (FCL's collision test: two meshes collide where their surfaces touch or cross, so a
@@ -284,9 +285,9 @@ class MeshWorld(WorldBase):
             body's origin there, its rotation turns the body about its origin.
         low: Corner of the box the body's origin stays in (OMPL.app's ``volume.min``).
         high: Opposite corner (``volume.max``).
-        delta: Motion resolution (> 0): the largest travel of a body point between checked poses;
-            every checked pose keeps the body more than ``delta / 2`` from the environment. Default
-            ``DEFAULT_DELTA_FRACTION`` of the bounds' diagonal.
+        delta: Motion resolution (> 0): every checked pose keeps the body more than ``delta / 2``
+            from the environment, and checked poses lie a travel of at least ``delta`` apart (more
+            where the clearance allows). Default ``DEFAULT_DELTA_FRACTION`` of the bounds' diagonal.
         rot_weight: Weight of the rotation angle in the ``"se3"`` metric; default the body radius.
         grid_cells: Voxels along the longest side of the broad phase's grid (8 to 512).
         name: A label for ``repr``.
