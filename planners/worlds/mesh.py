@@ -286,8 +286,8 @@ class MeshWorld(WorldBase):
         low: Corner of the box the body's origin stays in (OMPL.app's ``volume.min``).
         high: Opposite corner (``volume.max``).
         delta: Motion resolution (> 0): every checked pose keeps the body more than ``delta / 2``
-            from the environment, and checked poses lie a travel of at least ``delta`` apart (more
-            where the clearance allows). Default ``DEFAULT_DELTA_FRACTION`` of the bounds' diagonal.
+            from the environment, and the poses checked from the start on lie a travel of at least
+            ``delta`` apart (more where the clearance allows). Default ``DEFAULT_DELTA_FRACTION`` of the bounds' diagonal.
         rot_weight: Weight of the rotation angle in the ``"se3"`` metric; default the body radius.
         grid_cells: Voxels along the longest side of the broad phase's grid (8 to 512).
         name: A label for ``repr``.
