@@ -11,7 +11,8 @@ benchmark log per map (ompl/<map>.log) that OMPL's ompl_benchmark_statistics.py 
 With ``--rigid DIR`` (OMPL.app's root or its ``resources/3D`` folder; needs the ``mesh`` extra) it runs
 instead our RRT-Connect on every ``.cfg`` problem there, with the problem's own time limit and run count
 (``--rigid-time-limit`` and ``--rigid-runs`` cap them), and prints and writes (``rigid.md``) the
-success rate, median time, tree states and collision checks.
+success rate, median time, tree states and collision checks; ``--rigid-ompl`` adds OMPL's RRT-Connect
+(``planners.tools.ompl_bridge.ompl_rigid_connect``: OMPL.app's set-up, our state check).
 """
 
 from __future__ import annotations
@@ -179,8 +180,11 @@ def rigid(args) -> int:
     cfgs = sorted(folder.glob("*.cfg"), key=lambda p: p.name.lower())
     if args.rigid_problems:
         cfgs = [c for c in cfgs if c.stem in args.rigid_problems]
-    head = ("| problem | runs | time limit (s) | success | median time (s) | median tree states | median checks |\n"
-            "|---|---|---|---|---|---|---|\n")
+    use_ompl = args.rigid_ompl and ompl_bridge.available()
+    if args.rigid_ompl and not use_ompl:
+        print("OMPL not installed (pip install -c constraints.txt -e '.[bench]'); running without it", file=sys.stderr)
+    head = ("| problem | planner | runs | time limit (s) | success | median time (s) | median tree states "
+            "| median checks |\n|---|---|---|---|---|---|---|---|\n")
     out = io.StringIO()
     out.write(f"# RRT-Connect on OMPL.app's problems\n\n{platform.processor() or platform.machine()}, "
               f"Python {platform.python_version()}, default step (0.2 of the state box's diagonal), seeds 0 to "
@@ -190,7 +194,7 @@ def rigid(args) -> int:
         try:
             task = load_omplapp(cfg)
         except (InputError, ImportError) as e:
-            line = f"| {cfg.stem} | | | | not loaded: {str(e).split(': ', 1)[-1]} | | |\n"
+            line = f"| {cfg.stem} | | | | | not loaded: {str(e).split(': ', 1)[-1]} | | |\n"
             out.write(line)
             print(line, end="", flush=True)
             continue
@@ -206,8 +210,14 @@ def rigid(args) -> int:
             solved.append(r.solved)
             states.append(r.num_vertices)
             checks.append(r.collision_checks)
-        line = (f"| {cfg.stem} | {runs} | {limit:g} | {100 * np.mean(solved):.0f}% | {statistics.median(seconds):.2f} "
-                f"| {statistics.median(states):.0f} | {statistics.median(checks):.0f} |\n")
+        line = (f"| {cfg.stem} | ours | {runs} | {limit:g} | {100 * np.mean(solved):.0f}% | "
+                f"{statistics.median(seconds):.2f} | {statistics.median(states):.0f} | "
+                f"{statistics.median(checks):.0f} |\n")
+        if use_ompl:
+            o = [ompl_bridge.ompl_rigid_connect(task.problem, seed=seed, time_limit=limit) for seed in range(runs)]
+            line += (f"| {cfg.stem} | OMPL | {runs} | {limit:g} | {100 * np.mean([r.solved for r in o]):.0f}% | "
+                     f"{statistics.median(r.time for r in o):.2f} | "
+                     f"{statistics.median(r.num_vertices for r in o):.0f} | |\n")
         out.write(line)
         print(line, end="", flush=True)
     atomic_write_text(args.out / "rigid.md", out.getvalue())
@@ -232,6 +242,8 @@ def main(argv=None) -> int:
     ap.add_argument("--rigid-time-limit", type=float,
                     help="at most this many seconds per run (default: its time_limit)")
     ap.add_argument("--rigid-problems", nargs="+", help="only these problems (names of .cfg files)")
+    ap.add_argument("--rigid-ompl", action="store_true",
+                    help="OMPL's RRT-Connect beside ours (OMPL.app's discrete motion check, our state check)")
     add_backend_arguments(ap, processes=1,
                           backend_help="where the all-planner comparison runs (the timed ours-vs-OMPL sections stay "
                                        "serial)",

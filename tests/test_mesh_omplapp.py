@@ -210,3 +210,21 @@ def test_plan3d_plans_and_draws_a_problem_file(tmp_path):
     assert (out / "plan3d.png").stat().st_size > 0 and (out / "plan3d.gif").stat().st_size > 0
     bad = plan3d(tmp_path / "nothing.cfg", "--out", out)
     assert bad.returncode == 2 and "does not exist" in bad.stderr
+
+
+def test_ompl_runs_rrt_connect_on_a_problem_file(tmp_path):
+    from planners.tools import ompl_bridge
+
+    if not ompl_bridge.available():
+        pytest.skip("OMPL's Python bindings are not installed (the bench extra)")
+    from planners.tools.ompl_bridge import _axis_angle
+    from planners.worlds.omplapp import axis_angle_matrix
+
+    rng = np.random.default_rng(1)
+    for R in [trimesh.transformations.random_rotation_matrix(rng.random(3))[:3, :3] for _ in range(50)] + \
+            [axis_angle_matrix([1, 0, 0], PI), axis_angle_matrix([1, -1, 0.5], PI), np.eye(3)]:
+        *axis, theta = _axis_angle(R)
+        assert np.allclose(axis_angle_matrix(axis, theta), R, atol=1e-6)
+    problem = load_omplapp_cfg(write_problem(tmp_path))
+    run = ompl_bridge.ompl_rigid_connect(problem, seed=0, time_limit=20.0)
+    assert run.solved and np.allclose(run.path[0], problem.start[:3]) and np.allclose(run.path[-1], problem.goal[:3])
