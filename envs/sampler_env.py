@@ -232,6 +232,26 @@ class SamplerEnv(gym.Env):
             self.render()
         return self._obs.build(self.planner), reward, terminated, truncated, info
 
+    def sample_problem(self, seed: int | np.random.Generator | None = None) -> Problem:
+        """A planning query (a ``Problem``) drawn from this environment's maps, as an episode draws it.
+
+        ``seed``: an int (``reset(seed=seed)`` plans the same query), a ``np.random.Generator`` to
+        draw with, or None (the environment's own ``np_random``, as the next episode would). For
+        planning a query with a sampler of your own outside the environment::
+
+            problem = gym.make("samplergym:SamplerGym/RRT-Forest-v1").unwrapped.sample_problem(7)
+        """
+        if seed is None:
+            rng = self.np_random
+        elif isinstance(seed, np.random.Generator):
+            rng = seed
+        else:
+            rng = np.random.default_rng(check_int(seed, "seed", low=0))
+        problem = self.source(rng)
+        if problem.dim != self.dim:
+            raise ValueError(f"map source returned a {problem.dim}-D problem for a {self.dim}-D environment")
+        return problem
+
     def render(self):
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' or 'human'")

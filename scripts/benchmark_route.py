@@ -3,14 +3,19 @@
     python scripts/benchmark_route.py                                  # shipped encoder, CPU, 1 thread
     python scripts/benchmark_route.py --sides 128 512 --threads 1 2 --batch 16
     python scripts/benchmark_route.py --device cuda --sides 128 256 512 1024 --batch 64
+    python scripts/benchmark_route.py --sides 128 512 1024 4096 --repeat 3      # up to the largest map it takes
+    python scripts/benchmark_route.py --value-iteration                          # the fixed point the former way
 
-Each row is one map side (a generated forest map, ``--symmetries`` passes, the goal in a free cell):
+Each row is one map side and family (a generated forest, and a maze, whose route winds furthest;
+``--families``; ``--symmetries`` passes, the goal in a free cell):
 the median and the best of ``--repeat`` timed ``predict`` calls after one untimed warm-up call, with the
 encoder's own planning threads (``--threads``) and, with ``--batch N``, the time per query when N
 queries of that side go through ``predict_many`` together (the evaluation's batched path on a GPU).
 Peak memory is the process's resident peak after the row (CPU; sides in increasing order), or the
 GPU's allocated peak for the row. A side above the encoder's block limit is shown as refused, with the
 limit's message. Times are wall times in one process; the machine's load is printed beside them.
+``--value-iteration`` computes the encoder's fixed point by value iteration, as it was computed before the
+compiled Dijkstra (``RouteVIN.fixed_point``; the same values bit for bit): the time the direct way saves.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ from learning.device import DEVICES, resolve_device
 from learning.models.route_net import load_route_net
 from learning.models.shipped import SHIPPED_ROUTE
 from planners.base.fileio import InputError, check_flags, check_int, check_int_flags
-from planners.maps.generators import TEST_SEED0, generate
+from planners.maps.generators import FAMILIES, TEST_SEED0, generate
 from planners.tools.benchmark import markdown_table
 
 
@@ -51,12 +56,13 @@ def _timed(call, repeat: int, sync) -> list[float]:
     return times
 
 
-def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, batch: int, device) -> dict:
-    """One row: the encoder's time per query on a ``side`` x ``side`` forest map (see the module docstring)."""
-    problem = generate("forest", TEST_SEED0, side)
+def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, batch: int, device,
+               family: str = "forest") -> dict:
+    """One row: the encoder's time per query on a ``side`` x ``side`` map of ``family`` (see the module docstring)."""
+    problem = generate(family, TEST_SEED0, side)
     obstacles = np.asarray(problem.world.obstacles)
     goal = problem.world.cell_of(problem.goal)
-    row: dict = {"side": side, "threads": threads}
+    row: dict = {"family": family, "side": side, "threads": threads}
     try:
         net.check_size(obstacles.shape)
     except InputError as exc:
@@ -96,6 +102,10 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=5, help="timed calls per row; the table shows their median")
     ap.add_argument("--batch", type=int, default=1, help="also time N queries per predict_many call")
     ap.add_argument("--device", default="cpu", choices=DEVICES, help="cpu (default), cuda, or auto as in SB3")
+    ap.add_argument("--families", nargs="+", default=["forest", "maze"], choices=FAMILIES,
+                    help="generated families to time on (default forest and maze)")
+    ap.add_argument("--value-iteration", action="store_true",
+                    help="value iteration for the fixed point, as before the compiled Dijkstra (same values)")
     args = ap.parse_args(argv)
 
     def check() -> None:
@@ -120,14 +130,23 @@ def main(argv=None) -> int:
 
     check_flags(pick)
     net = load_route_net(args.route).to(device)
+    if args.value_iteration:
+        if not hasattr(net, "fixed_point"):
+            raise SystemExit(f"--value-iteration: {args.route} is not a value-iteration encoder")
+        net.fixed_point = "iterate"
     if args.symmetries is None:
         args.symmetries = net.symmetries
-    print(f"route encoder {args.route.name}, {args.symmetries} symmetries, device {device}, "
-          f"{os.cpu_count()} CPUs, torch {torch.__version__}\n")
-    rows = [bench_side(net, side, symmetries=args.symmetries, threads=n, repeat=args.repeat, batch=args.batch,
-                       device=device)
-            for side in sorted(set(args.sides)) for n in args.threads]
-    columns = ["side", "threads", "ms_per_query", "best_ms"]
+    how = f", fixed point by {getattr(net, 'fixed_point', 'its own network')}"
+    print(f"route encoder {args.route.name}, {args.symmetries} symmetries, device {device}{how}, "
+          f"{os.cpu_count()} CPUs, torch {torch.__version__}\n", flush=True)
+    rows = []
+    for side in sorted(set(args.sides)):
+        for family in args.families:
+            for n in args.threads:
+                rows.append(bench_side(net, side, symmetries=args.symmetries, threads=n, repeat=args.repeat,
+                                       batch=args.batch, device=device, family=family))
+                print(markdown_table([rows[-1]], [c for c in rows[-1] if c != "note"]).splitlines()[-1], flush=True)
+    columns = ["family", "side", "threads", "ms_per_query", "best_ms"]
     if args.batch > 1:
         columns.append(f"ms_per_query_batch_{args.batch}")
     columns += ["peak_mb", "load"]

@@ -23,7 +23,9 @@ Writes runs.csv (every run), summary.md (tables), ecdf.png, medians.png, map-set
 logs (ompl/<map set>.log; open them with OMPL's ompl_benchmark_statistics.py and Planner Arena) as one set:
 --out is replaced as a whole when every run is done (MANIFEST.json lists its files), and is locked while a run
 writes it. Finished runs go to a journal in <out>.partial/ as they arrive: Ctrl-C or SIGTERM stops every worker
-and keeps them, and --resume continues from there.
+and keeps them, and --resume continues from there (refused where the policy, the route encoder, a --sampler
+model or a map changed since). A rerun that finds such a journal asks for --resume or --fresh (discard it);
+nothing but the journal is ever deleted from <out>.partial/.
 """
 
 from __future__ import annotations
@@ -40,7 +42,16 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 
 from learning import PolicySampler
 from learning import evaluation as E
-from learning.evaluation.journal import JOURNAL, Interrupted, Journal, run_phase, stop_on_sigterm, work_folder
+from learning.evaluation.journal import (
+    JOURNAL,
+    Interrupted,
+    Journal,
+    check_work_folder,
+    file_digests,
+    run_phase,
+    stop_on_sigterm,
+    work_folder,
+)
 from learning.evaluation.mapsets import UnseenQuery, map_set_queries, pooled_tuned, unseen_queries
 from learning.evaluation.protocol import QUICK as PROTOCOL_QUICK
 from learning.models.shipped import SHIPPED_POLICY
@@ -60,6 +71,7 @@ from planners.base.fileio import (
 )
 from planners.base.registry import planner_name_arg
 from planners.maps.generators import FAMILIES, SHIFTED_SIZES, check_size
+from planners.maps.mapset import GeneratedMapSet, ShiftedMapSet
 from planners.maps.unseen import UNSEEN_MIN_SIZE, UNSEEN_SEED0
 from planners.tools.benchmark import markdown_table, write_runs_csv
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
@@ -134,7 +146,10 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--out", type=Path, default=Path("results/evaluation"),
                     help="output folder, replaced as a whole when the run is done")
     ap.add_argument("--resume", action="store_true",
-                    help="continue an interrupted run (same arguments) from its journal in <out>.partial/")
+                    help="continue an interrupted run (same arguments, same files) from its journal in <out>.partial/")
+    ap.add_argument("--fresh", action="store_true",
+                    help="discard the journal of an interrupted run in <out>.partial/ and start over (without it, a "
+                         "rerun that finds one is refused)")
     args = ap.parse_args(argv)
     if args.quick:
         for k, v in QUICK.items():
@@ -174,6 +189,9 @@ def _check_values(args) -> None:
         raise InputError(f"--families: unknown {unknown}; choose from {', '.join(FAMILIES)}")
     check_output_place(args.out, "--out", need_bytes=OUTPUT_BYTES)
     check_output_place(work_folder(args.out), "--out's work folder", need_bytes=OUTPUT_BYTES)
+    if args.resume and args.fresh:
+        raise InputError("--resume and --fresh: choose one (continue the journal, or discard it)")
+    check_work_folder(work_folder(args.out), resume=args.resume, fresh=args.fresh)
     foreign = sorted(p.name for p in args.out.iterdir() if p.name not in OUTPUT_NAMES) if args.out.is_dir() else []
     if foreign:
         raise InputError(f"--out {args.out}: the folder holds {', '.join(foreign[:3])}"
@@ -220,10 +238,61 @@ def _check_models(args) -> None:
             args.map_set_queries, args.map_set_obj = map_set_queries(args.map_set, args.split_seed, args.loaded)
         except InputError as exc:
             _fail(f"--map-set {args.map_set}: {exc}")
+        _check_step_on_map_set(args)
+    args.inputs = file_digests(_input_files(args))
+
+
+def _check_step_on_map_set(args) -> None:
+    """Refuse a --step too small for the largest map of --map-set (the planners' limit), naming the flag."""
+    diag, where = 0.0, ""
+    seen = set()
+    for q in args.map_set_queries:
+        if q.query.map in seen:
+            continue
+        seen.add(q.query.map)
+        if isinstance(args.map_set_obj, GeneratedMapSet | ShiftedMapSet):  # its side is in the name: not generated
+            d = int(q.query.map.rsplit("-", 2)[1]) * 2**0.5
+        else:
+            low, high = args.map_set_obj.problem(q.query).world.bounds
+            d = sum((float(h) - float(lo)) ** 2 for lo, h in zip(low, high, strict=True)) ** 0.5
+        if d > diag:
+            diag, where = d, q.query.map
+    if diag / args.step > max_steps_limit():
+        _fail(f"--step = {args.step:g} is {diag / args.step:.3g} steps across the diagonal of map {where!r} of map "
+              f"set {args.map_set_obj.name} ({diag:g} world units); at most {max_steps_limit()} are accepted (a step "
+              f"of at least {diag / max_steps_limit():.3g}, or set {MAX_STEPS_ENV})")
+
+
+def _input_files(args) -> dict[str, Path]:
+    """The files the runs read, by what names them: the journal records their hashes (``file_digests``)."""
+    files = {f"--policy {args.policy}": args.policy, f"--route {args.route}": args.route}
+    if args.route.with_suffix(".json").is_file():
+        files[f"--route {args.route.with_suffix('.json')}"] = args.route.with_suffix(".json")
+    for name, spec in args.user_samplers.items():
+        if "@" in spec:  # MODEL.zip@ENV_ID: the model file; module:callable: the module's source
+            path = Path(spec.split("@")[0])
+        else:
+            path = getattr(sys.modules.get(spec.partition(":")[0]), "__file__", None)
+        if path is not None and Path(path).is_file():
+            files[f"--sampler {name} {path}"] = Path(path)
+    if args.map_set_obj is not None:
+        for path in args.map_set_obj.files():
+            files[f"--map-set {path}"] = path
+    elif args.movingai_maps:
+        try:
+            mdir = movingai_dir(args.movingai, required=False)
+        except InputError:
+            mdir = None  # refused by name in main
+        for name in args.movingai_maps if mdir is not None else ():
+            for path in sorted(mdir.glob(f"{name}*.scen")) + [mdir / f"{name}.map"]:
+                if path.is_file() and path.name.split(".")[0].replace("-random-1", "") == name:
+                    files[f"--movingai {path}"] = path
+    return files
 
 
 #: What the outputs may hold (``means.png``: the figure's name in earlier versions); --out holding more is refused.
-OUTPUT_NAMES = frozenset({MANIFEST, "summary.md", "runs.csv", "ecdf.png", "medians.png", "means.png", "map-sets.json",
+OUTPUT_NAMES = frozenset({MANIFEST, "summary.md", "runs.csv", "ecdf.png", "ecdf-time.png", "medians.png", "means.png",
+                          "map-sets.json",
                           "ompl"})
 #: Free disk space the outputs need (tables, a few plots, one OMPL log per map set), with room to spare.
 OUTPUT_BYTES = 64 * 2**20
@@ -231,7 +300,7 @@ OUTPUT_BYTES = 64 * 2**20
 
 def _settings(args) -> dict:
     """What decides the runs (for the journal: --resume refuses a journal of other settings)."""
-    skip = {"out", "resume", "processes", "backend", "address", "quick", "no_unseen", "map_set_queries",
+    skip = {"out", "resume", "fresh", "processes", "backend", "address", "quick", "no_unseen", "map_set_queries",
             "map_set_obj", "sampler", "models", "loaded"}
     return {k: v for k, v in vars(args).items() if k not in skip}
 
@@ -254,8 +323,11 @@ def main(argv=None) -> int:
             queries += E.movingai_queries(str(mdir), args.movingai_maps, args.scenarios, args.tuning_scenarios,
                                           args.tolerance, args.loaded)
         elif args.movingai_maps:
-            print("MovingAI maps not found (use --movingai DIR or SAMPLERGYM_MOVINGAI_DIR); evaluating generated "
-                  "families only", file=sys.stderr)
+            print(f"MovingAI maps not found, so their {len(args.movingai_maps)} rows and the pooled row are left out: "
+                  "the maps are published with the MovingAI grid benchmarks (movingai.com/benchmarks, 'dao', "
+                  "'street', 'maze', 'random', 'room' and 'mapf' sets; the names are in --movingai-maps); put the "
+                  ".map and .scen files in one folder and pass --movingai DIR or set SAMPLERGYM_MOVINGAI_DIR",
+                  file=sys.stderr)
         queries += unseen_queries(args.size, args.unseen_maps)
     protocol = E.Protocol(step=args.step, tolerance=args.tolerance, max_iterations=args.max_iterations,
                           seeds=args.seeds, size=args.size, maps=args.maps, tuning_maps=args.tuning_maps,
@@ -270,9 +342,13 @@ def main(argv=None) -> int:
     stop_on_sigterm()
     backend = journal = None
     try:
-        journal = Journal(work_folder(args.out), _settings(args), resume=args.resume)
+        journal = Journal(work_folder(args.out), _settings(args), resume=args.resume, fresh=args.fresh)
         if journal.resumed:
             print(f"resuming: {journal.resumed} finished runs from {journal.path}", flush=True)
+        elif args.resume:
+            print(f"--resume: no finished runs in {journal.path}; starting from the first run", flush=True)
+        if journal.discarded:
+            print(f"--fresh: discarded the {journal.discarded} finished runs of {journal.path}", flush=True)
         backend = make_backend(args.backend, processes=args.processes, address=args.address,
                                worker_init=E.worker_init)
         status = _compare(args, queries, context, backend, journal, t0=time.perf_counter())
@@ -368,6 +444,15 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
     route_targets, route_met, route_total = E.target_check(head, mai, E.ROUTE, E.ROUTE_ABLATION)
     reach, reach_met, reach_total = E.target_check(head, mai, "expert")
     glance = E.glance_table(rows, best, users, mai)
+    clock = E.glance_table(rows, best, users, mai, metric="time")
+    loads = "; ".join(f"{what}: {seconds * 1e3:.0f} ms" for what, seconds in sorted(context.models.load_seconds.items()))
+    clock_note = ("RRT on the test split: median wall time per query in ms, from the planner's start to its first "
+                  "solution, the sampler's own work for the query included (the route encoder's pass, the exact "
+                  "reference's and the expert's grid search, the policy's set-up); the fastest sampler of each set in "
+                  "bold, the privileged expert aside. An unsolved run counts with the time it ran. Loading a model is "
+                  "paid once per process, not per query, and is left out"
+                  + (f" ({loads})" if loads else "") + ". All runs share one machine, "
+                  f"{args.processes if args.backend == 'local' else 'several'} process(es) of one thread each.")
     room = E.room_table(rows, mai)
     goals = E.carry_targets(rows, mai, runs=runs + pool) + E.carry_targets(rows, mai, "policy", E.CONSTANT, runs + pool)
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
@@ -396,6 +481,7 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
             "## Results at a glance\n\nRRT on the test split: median iterations to the first solution (success "
             "rate in brackets). Best goal bias: the bias tuned for the map set. Ablations: the learned sampler "
             "with its learning removed.\n\n" + markdown_table(glance) +
+            "\n## Time to solution at a glance\n\n" + clock_note + "\n\n" + markdown_table(clock) +
             "\n## How much of the room learning closes\n\nThe room is what separates a sampler's ablation from "
             "the exact reference (the same sampler on the exact cost-to-go); the share closed is (ablation - learned) "
             "/ (ablation - exact). Below 20% of the ablation's median the room is too small to judge.\n\n"
@@ -444,6 +530,7 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
         atomic_write_text(tmp / "map-sets.json", json.dumps(record, indent=1, default=str) + "\n")
         atomic_write_text(tmp / "summary.md", text)
     print("\n" + markdown_table(glance))
+    print("Time to solution per query, median ms (the sampler's own work included):\n" + markdown_table(clock))
     if room:
         print("How much of the room between ablation and exact reference learning closes:\n" + markdown_table(room))
     print("\n".join(goals))

@@ -401,8 +401,12 @@ def main(argv=None) -> int:
     t = out.timings
     compiled = out.planner.compile_time
     first_use = f", of which {compiled:.3f} s one-off compilation" if compiled >= 0.0005 else ""
-    print(f"time:             {t['plan']:.3f} s planning{first_use} (load {t_load:.3f} s, smooth {t['smooth']:.3f} s, "
-          f"figure {t['figure']:.3f} s, gif {t['gif']:.3f} s)")
+    print(f"time:             {t['sampler'] + t['plan']:.3f} s to {'a path' if r.solved else 'stop'}: the sampler's "
+          f"set-up {t['sampler']:.3f} s (a route encoder's pass, a grid search; the first compiles its kernels) and "
+          f"{t['plan']:.3f} s planning"
+          f"{first_use}")
+    print(f"                  (and load {t_load:.3f} s, smooth {t['smooth']:.3f} s, figure {t['figure']:.3f} s, "
+          f"gif {t['gif']:.3f} s)")
     if r.solved:
         print(f"path length:      {out.length:.2f} raw ({len(out.path)} states)")
         if out.smoothed is not None:

@@ -21,6 +21,19 @@ settings.load_profile("samplergym")
 
 REPO = Path(__file__).resolve().parents[1]
 
+#: The smoke subset (``pytest -m smoke -n 2``, a minute or two on 2 cores): the files below, their slow
+#: tests left out. They cover the grid and problem core, map sets and their hostile inputs, the
+#: environments' id prefix, plan.py and evaluate.py's checks before work, its journal, and the layering.
+SMOKE = ("test_problem.py", "test_grid.py", "test_layering.py", "test_output_units.py", "test_cli_checks.py",
+         "test_mapset.py", "test_plan_mapset.py", "test_samplergym.py", "test_evaluate_io.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark the tests of the ``SMOKE`` files, slow ones aside, as ``smoke``."""
+    for item in items:
+        if item.path.name in SMOKE and item.get_closest_marker("slow") is None:
+            item.add_marker(pytest.mark.smoke)
+
 
 def load_script(name: str):
     """``scripts/<name>.py`` imported as a module (scripts are not a package), registered in ``sys.modules``.
@@ -143,7 +156,11 @@ def _segment_meets_box(ax, ay, bx, by, x0, y0, x1, y1) -> bool:
 
 @pytest.fixture(scope="session")
 def ray_backend():
-    """One local Ray instance (loopback, 2 CPUs) for every test in this process that runs on Ray."""
+    """One local Ray instance (loopback, 2 CPUs) for every test in this process that runs on Ray.
+
+    Without Ray (the ``test`` extra alone) the tests that use it skip, saying which extra brings it.
+    """
+    pytest.importorskip("ray", reason="Ray is not installed: pip install -e '.[test-ray]' runs these tests")
     from learning.evaluation import worker_init
     from planners.tools.parallel import make_backend
 

@@ -57,6 +57,21 @@ def test_a_read_only_install_falls_back_to_the_user_cache_and_says_where(tmp_pat
     assert "not writable" in err and str(d) in err
 
 
+def test_no_writable_cache_anywhere_compiles_into_a_temporary_folder_and_says_so(tmp_path, monkeypatch, capsys):
+    import tempfile
+
+    blocker = tmp_path / "site-packages"
+    blocker.write_text("")  # neither the install nor the user cache can be written
+    monkeypatch.setenv("XDG_CACHE_HOME", str(blocker / "xdg"))
+    d = cache.choose_dir("abc123", package=blocker / "planners")
+    assert d.is_dir() and d.name.startswith("samplergym-numba-")
+    err = capsys.readouterr().err
+    assert "compiled again in every process" in err and "NUMBA_CACHE_DIR" in err and str(d) in err
+    monkeypatch.setattr(tempfile, "tempdir", str(blocker / "tmp"))  # nor a temporary folder: one clear line
+    with pytest.raises(OSError, match="no writable folder for compiled kernels.*set NUMBA_CACHE_DIR"):
+        cache.choose_dir("abc123", package=blocker / "planners")
+
+
 def test_a_writable_install_caches_next_to_its_sources(tmp_path, capsys):
     d = cache.choose_dir("abc123", package=tmp_path / "planners")
     assert d == tmp_path / "planners" / "__pycache__" / "numba" / "abc123" and d.is_dir()

@@ -17,9 +17,9 @@ import pytest
 from conftest import load_script
 
 from learning import evaluation as E
-from learning.evaluation.journal import JOURNAL, Journal, task_key, work_folder
+from learning.evaluation.journal import JOURNAL, Journal, file_digests, task_key, work_folder
 from learning.evaluation.mapsets import UnseenQuery, pooled_tuned, unseen_name, unseen_queries
-from planners.base.fileio import MANIFEST, run_lock
+from planners.base.fileio import MANIFEST, InputError, run_lock
 from planners.tools.benchmark import Run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,6 +44,7 @@ def _ev():
     (["--sampler", "mine=missing.zip@SamplerGym/RRT-Forest-v1@bogus=1"], "bogus"),
     (["--sampler", "mine=no_such_module:make"], "no_such_module"),
     (["--map-set", "/no/such/maps"], "/no/such/maps"),
+    (["--map-set", str(ROOT / "tests/data/ros"), "--step", "1e-6"], "--step = 1e-06 is"),
 ])
 def test_bad_arguments_exit_2_with_one_line_naming_them(argv, needle, capsys, tmp_path):
     with pytest.raises(SystemExit) as exc:
@@ -103,14 +104,116 @@ def test_the_journal_keeps_runs_across_a_torn_line_and_refuses_other_settings(tm
         f.write('{"key": "torn", "run": {"map": "fo')  # a kill in the middle of a line
     again = Journal(folder, {"step": 4.0}, resume=True)
     assert again.resumed == 5 and [again.done[task_key(("task", i))] for i in range(5)] == runs
+    again.add(task_key(("task", 5)), _run(5))  # after the torn line: on a line of its own
     again.close()
     with pytest.raises(ValueError, match="other settings.*step"):
         Journal(folder, {"step": 2.0}, resume=True)
-    fresh = Journal(folder, {"step": 2.0}, resume=False)  # without --resume: start over
-    assert fresh.done == {}
+    with pytest.raises(InputError, match="6 finished runs.*--resume.*--fresh"):  # never discarded unasked
+        Journal(folder, {"step": 2.0}, resume=False)
+    assert Journal(folder, {"step": 4.0}, resume=True).resumed == 6
+    fresh = Journal(folder, {"step": 2.0}, resume=False, fresh=True)  # --fresh: start over
+    assert fresh.done == {} and fresh.discarded == 6
     fresh.remove()
     assert not folder.exists()
     assert work_folder(tmp_path / "out") == (tmp_path / "out.partial").absolute()
+
+
+@pytest.mark.parametrize("resume, fresh", [(False, False), (True, False), (False, True)])
+def test_the_work_folder_never_loses_a_file_the_journal_did_not_write(tmp_path, resume, fresh):
+    folder = tmp_path / "out.partial"
+    folder.mkdir()
+    (folder / "thesis.tex").write_text("keep me")
+    with pytest.raises(InputError, match=r"out\.partial.*thesis\.tex.*move those files"):
+        Journal(folder, {}, resume=resume, fresh=fresh)
+    assert (folder / "thesis.tex").read_text() == "keep me"
+    (folder / "thesis.tex").unlink()
+    (folder / JOURNAL).write_text("my own notes\n1\n")  # a journal.jsonl that is not ours
+    with pytest.raises(InputError, match="not an evaluation journal"):
+        Journal(folder, {}, resume=resume, fresh=fresh)
+    assert (folder / JOURNAL).read_text() == "my own notes\n1\n"
+    (folder / JOURNAL).unlink()
+    j = Journal(folder, {}, resume=resume, fresh=fresh)  # an empty folder: the journal starts there
+    (folder / "arrived.txt").write_text("later")
+    j.remove()  # the journal goes, what arrived meanwhile stays
+    assert sorted(p.name for p in folder.iterdir()) == ["arrived.txt"]
+
+
+def test_evaluate_refuses_a_work_folder_of_other_files_and_a_journal_without_resume_or_fresh(tmp_path, capsys):
+    ev, out = _ev(), tmp_path / "out"
+    work = work_folder(out)
+    work.mkdir()
+    (work / "data.csv").write_text("keep me")
+    for extra in ([], ["--resume"], ["--fresh"]):
+        with pytest.raises(SystemExit) as exc:
+            ev.main([*TINY, "--out", str(out), *extra])
+        assert exc.value.code == 2
+        err = capsys.readouterr().err
+        assert "data.csv" in err and str(work) in err and "Traceback" not in err
+    assert (work / "data.csv").read_text() == "keep me"
+    (work / "data.csv").unlink()
+    j = Journal(work, {"step": 4.0}, resume=False)
+    j.add("k", _run(0))
+    j.close()
+    with pytest.raises(SystemExit) as exc:
+        ev.main([*TINY, "--out", str(out)])
+    assert exc.value.code == 2
+    assert "1 finished runs" in (err := capsys.readouterr().err) and "--resume" in err and "--fresh" in err
+    assert len((work / JOURNAL).read_text().splitlines()) == 2
+    with pytest.raises(SystemExit) as exc:
+        ev.main([*TINY, "--out", str(out), "--resume", "--fresh"])
+    assert exc.value.code == 2 and "choose one" in capsys.readouterr().err
+
+
+def test_resume_refuses_a_journal_whose_files_changed_naming_the_file(tmp_path):
+    folder = tmp_path / "w"
+    model = tmp_path / "policy.zip"
+    model.write_bytes(b"the first model")
+    settings = {"step": 4.0, "inputs": file_digests({f"--policy {model}": model})}
+    j = Journal(folder, settings, resume=False)
+    j.add("k", _run(0))
+    j.close()
+    assert Journal(folder, settings, resume=True).resumed == 1
+    model.write_bytes(b"the second model")  # replaced between the kill and the resume
+    with pytest.raises(InputError, match=rf"--policy {re.escape(str(model))}: its content changed"):
+        Journal(folder, {"step": 4.0, "inputs": file_digests({f"--policy {model}": model})}, resume=True)
+
+
+def test_evaluate_records_the_hashes_of_the_files_it_runs(tmp_path):
+    args = _ev().parse_args([*TINY, "--out", str(tmp_path / "out"), "--map-set", str(ROOT / "tests/data/ros")])
+    labels = set(args.inputs)
+    assert any(k.startswith("--policy ") for k in labels) and any(k.startswith("--route ") for k in labels)
+    assert any(k.endswith("turtlebot3_world/map.pgm") for k in labels)
+    assert _ev()._settings(args)["inputs"] == args.inputs
+
+
+@pytest.mark.parametrize("line, needle", [
+    ('{"key": "k", "run": RUN_iterations_"12"}', "'iterations' is '12', expected an integer"),
+    ('{"key": "k", "run": RUN_solved_1}', "'solved' is 1, expected true or false"),
+    ('{"key": 5, "run": {}}', "a \"key\" string"),
+    ('[' * 200_000 + ']' * 200_000, "nested too deep"),
+])
+def test_a_journal_line_of_the_wrong_types_is_refused_on_load_naming_it(tmp_path, line, needle):
+    folder = tmp_path / "w"
+    j = Journal(folder, {}, resume=False)
+    j.add("a", _run(0))
+    j.close()
+    if line.startswith('{"key": "k"'):
+        field, value = line.split("RUN_")[1].rstrip("}").split("_", 1)
+        line = json.dumps({"key": "k", "run": {**_run(1).__dict__, field: json.loads(value)}})
+    with open(folder / JOURNAL, "a") as f:
+        f.write(line + "\n" + json.dumps({"key": "b", "run": _run(2).__dict__}) + "\n")
+    with pytest.raises(InputError, match="line 3") as exc:
+        Journal(folder, {}, resume=True)
+    assert needle in str(exc.value)
+
+
+def test_a_journal_header_nested_deep_is_refused_not_a_traceback(tmp_path):
+    folder = tmp_path / "w"
+    folder.mkdir()
+    (folder / JOURNAL).write_text("[" * 200_000 + "]" * 200_000 + "\n")
+    for resume in (True, False):
+        with pytest.raises(InputError, match="not an evaluation journal"):
+            Journal(folder, {}, resume=resume)
 
 
 # --- tables and figures -----------------------------------------------------------------------------
@@ -190,6 +293,18 @@ def test_the_glance_table_has_a_few_columns_and_dashes_for_missing_samplers():
     table = E.glance_table(rows, {("maze (shifted)", "RRT"): 0.05})
     assert list(table[0]) == ["map set", "tuned bias", "uniform", "best goal bias", "policy", "route encoder"]
     assert table[0]["best goal bias"] == "800 (100%)"
+
+
+def test_the_time_glance_table_gives_median_ms_and_bolds_the_fastest_sampler_but_not_the_expert():
+    rows = _rows({"uniform": 900, "goal_bias=0.05": 800, "route encoder": 200, "expert (reference)": 50})
+    ms = {"uniform": 4.0, "goal bias 0.05 (default, best)": 2.5, "route encoder": 12.0, "expert (reference)": 0.5}
+    for r in rows:
+        r["median_wall_ms"] = ms[r["sampler"]]
+    table = E.glance_table(rows, {("maze (shifted)", "RRT"): 0.05}, metric="time")
+    assert table[0]["best goal bias"] == "**2.5 ms**" and table[0]["uniform"] == "4 ms"
+    assert table[0]["route encoder"] == "12 ms" and table[0]["expert"] == "0.5 ms"  # privileged: never bold
+    with pytest.raises(ValueError, match="metric"):
+        E.glance_table(rows, {}, metric="seconds")
 
 
 def test_one_colour_per_sampler_in_both_figures():
@@ -382,3 +497,31 @@ def test_progress_names_the_phase_and_the_cost_per_sampler(tmp_path, capsys):
     assert task_key((tasks[0], context.protocol)) != task_key((tasks[0], other.protocol))
     assert task_key((tasks[0], context.protocol)) == task_key((E.Task(q, "RRT", E.SamplerSpec.of("uniform"), 0),
                                                               E.Protocol(max_iterations=500)))
+
+
+def test_ompl_log_names_are_bounded_and_one_per_map_set(tmp_path):
+    long = "a map set named at length " * 12  # 312 characters
+    runs = [Run(**{**_run(0).__dict__, "map": m, "split": "test"}) for m in (long, long + "!", "a b", "a_b")]
+    paths = E.write_ompl_logs(runs, {}, tmp_path / "ompl", E.Protocol())
+    assert len({p.name for p in paths}) == 4 and all(p.is_file() for p in paths)
+    assert max(len(p.name) for p in paths) <= 124 and "a_b.log" in {p.name for p in paths}
+
+
+def test_an_out_name_too_long_for_its_temporary_names_is_refused_before_work(tmp_path, capsys):
+    out = tmp_path / ("o" * 230)  # fits a file system's 255 bytes, but not with the temporary set's name beside it
+    with pytest.raises(SystemExit) as exc:
+        _ev().main([*TINY, "--out", str(out)])
+    assert exc.value.code == 2 and "230 bytes long" in capsys.readouterr().err
+
+
+def test_resume_without_a_journal_and_fresh_over_one_say_what_they_do(tmp_path, capsys, monkeypatch):
+    ev, out = _ev(), tmp_path / "out"
+    monkeypatch.setattr(ev, "_compare", lambda *args, **kwargs: 0)  # the checks and the journal, not the runs
+    assert ev.main([*TINY, "--processes", "1", "--out", str(out), "--resume"]) == 0
+    assert "--resume: no finished runs in" in capsys.readouterr().out
+    j = Journal(work_folder(out), {"step": 4.0}, resume=False)
+    j.add("k", _run(0))
+    j.close()
+    assert ev.main([*TINY, "--processes", "1", "--out", str(out), "--fresh"]) == 0
+    assert "--fresh: discarded the 1 finished runs" in capsys.readouterr().out
+    assert not work_folder(out).exists()

@@ -316,7 +316,7 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
                   "--max-iterations", "3000", "--out", str(out)])
     assert rc == 0
     files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
-    assert files == ["MANIFEST.json", "ecdf.png", "map-sets.json", "medians.png", "ompl/forest.log",
+    assert files == ["MANIFEST.json", "ecdf-time.png", "ecdf.png", "map-sets.json", "medians.png", "ompl/forest.log",
                      "ompl/forest_shifted.log", "runs.csv", "summary.md"]
     mode = 0o666 & ~_umask()
     assert {p: stat.S_IMODE((out / p).stat().st_mode) for p in files} == dict.fromkeys(files, mode)
@@ -327,6 +327,9 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
     summary = (out / "summary.md").read_text()
     assert "## The policy's batch, tuned" in summary and "Chosen: **" in summary
+    clock = summary.split("## Time to solution at a glance")[1].split("\n## ")[0]
+    assert "route encoder" in clock and " ms" in clock and clock.count("**") == 2 * 2  # the fastest of 2 sets
+    assert "Loading a model is paid once" in clock and "route encoder " in clock.split("left out")[1]
     assert f"policy/{E.FOLLOWER}" in summary and f"{E.FOLLOWER}/lower_bound" in summary
     assert f"## Targets for the {E.ROUTE}" in summary and f"{E.ROUTE} / {E.ROUTE_ABLATION} <= 0.5" in summary
     assert len(rows) == 2 * len(samplers)  # the test split only: 2 maps x 1 seed per sampler

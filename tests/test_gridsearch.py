@@ -213,3 +213,25 @@ def test_matches_movingai_published_optima(movingai):
                 mismatches.append(f"{p.name}: computed {L:.6f}, published {p.reference_length}")
     assert not mismatches, "\n".join(mismatches)
     assert checked >= 10 * len(scens)
+
+
+def test_move_cost_field_on_move_lengths_is_the_octile_distance_and_refuses_bad_shapes():
+    from planners.maps.gridsearch import MOVES, move_cost_field
+
+    lengths = np.array([np.hypot(dr, dc) for dr, dc in MOVES]).reshape(8, 1, 1) * np.ones((8, 5, 7))
+    goal = np.zeros((5, 7), dtype=bool)
+    goal[2, 3] = True
+    walls = np.zeros((5, 7), dtype=bool)
+    v = move_cost_field(lengths, goal, walls, 1e6)
+    rows, cols = np.mgrid[0:5, 0:7]
+    dr, dc = np.abs(rows - 2), np.abs(cols - 3)
+    assert np.allclose(v, np.maximum(dr, dc) + (np.sqrt(2) - 1) * np.minimum(dr, dc))
+    walls[:, 5] = True  # a wall column: what lies beyond it is unreached
+    v = move_cost_field(lengths, goal, walls, 1e6)
+    assert (v[:, 5:] == 1e6).all() and (v[:, :5] < 1e6).all()
+    with pytest.raises(ValueError, match="8, h, w"):
+        move_cost_field(lengths[:4], goal, walls, 1e6)
+    with pytest.raises(ValueError, match="grid shape"):
+        move_cost_field(lengths, goal[:4], walls, 1e6)
+    with pytest.raises(ValueError, match="float32 or float64"):
+        move_cost_field(lengths.astype(np.int64), goal, walls, 1e6)

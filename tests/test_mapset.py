@@ -4,6 +4,7 @@ with the generated families and MovingAI (the same problems as the evaluation's 
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -356,3 +357,89 @@ def test_example_maps_are_what_the_script_writes(tmp_path):
     for folder in ("forest", "maze", "rooms"):
         for f in ("map.pgm", "map.yaml"):
             assert (tmp_path / folder / f).read_bytes() == (ROS / folder / f).read_bytes(), f"{folder}/{f}"
+
+
+def test_a_manifest_may_lower_the_cell_limit_but_never_raise_it(tmp_path, monkeypatch):
+    shutil.copytree(ROS / "maze", tmp_path / "ros_maze")  # 96 x 96 = 9,216 cells
+    monkeypatch.setenv("SAMPLERGYM_MAX_PIXELS", "100")
+    manifest = {"maps": [{"path": "ros_maze/map.yaml", "part": "test"}], "max_pixels": 10**12}
+    (tmp_path / "set.json").write_text(json.dumps(manifest))
+    with pytest.raises(InputError, match=r"set.json: max_pixels = 1,000,000,000,000 is above the limit in force "
+                                         r"\(100\); a manifest may only lower it.*SAMPLERGYM_MAX_PIXELS"):
+        MapSet.open(tmp_path / "set.json")
+    monkeypatch.delenv("SAMPLERGYM_MAX_PIXELS")
+    manifest["max_pixels"] = 1000  # lower than the default: in force
+    (tmp_path / "set.json").write_text(json.dumps(manifest))
+    with pytest.raises(InputError, match="more than the limit of 1,000"):
+        MapSet.open(tmp_path / "set.json")
+    assert MapSet.open(tmp_path / "set.json", max_pixels=10_000).maps() == ("ros_maze",)  # code may raise it
+
+
+def test_drawn_queries_per_map_have_a_limit_refused_before_drawing(tmp_path, monkeypatch):
+    import time
+
+    _npy_maps(tmp_path, 4)
+    t0 = time.monotonic()
+    with pytest.raises(InputError, match=r"per_map = 1,000,000 drawn queries per map, more than the limit of 1,000.*"
+                                         r"SAMPLERGYM_MAX_PER_MAP"):
+        FileMapSet(tmp_path, per_map=10**6)
+    assert time.monotonic() - t0 < 5
+    monkeypatch.setenv("SAMPLERGYM_MAX_PER_MAP", "2000")
+    assert len(FileMapSet(tmp_path, per_map=1001, fractions={"train": 1}).queries("train")) == 4 * 1001
+
+
+def _hostile_set(tmp_path: Path, case: str) -> Path:
+    """A map set holding one hostile input: a manifest nested deep, a manifest entry '.', a huge queries value."""
+    if case == "deep":
+        (tmp_path / "deep.json").write_text('{"maps": ' + "[" * 200_000 + "]" * 200_000 + "}")
+        return tmp_path / "deep.json"
+    if case == "dot":
+        _npy_maps(tmp_path, 4)
+        (tmp_path / "dot.json").write_text('{"maps": ["."]}')
+        return tmp_path / "dot.json"
+    folder = _queries_folder(tmp_path, ["left," + "1" * (130 * 1024) + ",1.5,3.5,8.5"])
+    return folder
+
+
+HOSTILE = [("deep", r"deep.json: JSON nested \d+ levels deep"),
+           ("dot", r"dot.json: maps\[0\]: path '.' is a folder, expected a map file"),
+           ("field", r"queries.csv, line 3: a value longer than the 128 KiB a field may hold")]
+
+
+@pytest.mark.parametrize("case, message", HOSTILE)
+def test_hostile_map_sets_are_refused_by_name(tmp_path, case, message):
+    spec = _hostile_set(tmp_path, case)
+    with pytest.raises(InputError, match=message):
+        MapSet.open(spec)
+    import gymnasium as gym
+
+    with pytest.raises(InputError, match=message):
+        gym.make("samplergym:SamplerGym/Planning-v1", map_set=str(spec))
+
+
+@pytest.mark.parametrize("kind", ["folder", "fifo", "dev-zero"])
+def test_a_queries_file_that_is_not_a_regular_file_is_refused_not_ignored(tmp_path, kind):
+    import os
+
+    _npy_maps(tmp_path, 4)
+    q = tmp_path / "queries.csv"
+    if kind == "folder":
+        q.mkdir()
+    elif kind == "fifo":
+        os.mkfifo(q)
+    else:
+        q.symlink_to("/dev/zero")
+    want = {"folder": "a folder", "fifo": "a FIFO", "dev-zero": "a device"}[kind]
+    with pytest.raises(InputError, match=rf"queries.csv' is {want}; expected a regular file"):
+        FileMapSet(tmp_path)
+    with pytest.raises(InputError, match=rf"is {want}; expected a regular file"):
+        FileMapSet(tmp_path, queries=str(q))
+
+
+@pytest.mark.parametrize("spec, given", [("generated:forest@-5", "-5"), ("generated:maze@0", "0"),
+                                         ("generated:@8", "8")])
+def test_a_generated_size_is_refused_at_open_with_the_value_as_given(spec, given):
+    with pytest.raises(InputError, match=rf"map set '{re.escape(spec)}': size must be an integer >= 32, got {given}$"):
+        MapSet.open(spec)
+    with pytest.raises(InputError, match="train_sizes"):
+        GeneratedMapSet(("forest",), train_sizes=(64, -1))

@@ -89,3 +89,13 @@ def test_bad_choices_exit_2_with_one_line_and_write_nothing(plan, tmp_path, caps
     assert err.startswith("error: ") and "\n" not in err, err
     assert message.format(**fill) in err, err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("case, message", [
+    ("deep", "JSON nested"), ("dot", "path '.' is a folder"), ("field", "a value longer than the 128 KiB")])
+def test_a_hostile_map_set_exits_2_not_1(plan, tmp_path, capsys, case, message):
+    from test_mapset import _hostile_set
+
+    code = plan.main(["--map-set", str(_hostile_set(tmp_path, case)), "--out", str(tmp_path / "out"), "--headless"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and message in err[0] and "Traceback" not in err[0]

@@ -304,3 +304,14 @@ def test_a_ros_map_plans_in_metres_with_y_up(tmp_path):
     grid = load_map(yaml, robot_radius=0.1)
     assert grid.path_valid(path)
     assert sorted(f.name for f in (tmp_path / "o").iterdir()) == ["plan.gif", "plan.png"]
+
+
+def test_binding_the_sampler_is_timed_apart_from_planning(map_png):
+    """A route encoder's pass happens when the sampler is bound: it is the sampler's time, not hidden before the clock."""
+    from learning import make_sampler
+
+    out = plan_on_image(map_png, (10, 40), (85, 40), planner="rrt", sampler=make_sampler("route"), step=4.0,
+                        max_iterations=5000, seed=0)
+    assert out.result.solved
+    assert set(out.timings) >= {"load", "sampler", "plan"}
+    assert out.timings["sampler"] > 0 and out.planner.sampler.forward_passes == 1

@@ -122,3 +122,12 @@ def test_problem_in_a_world_frame():
         Problem(g, start=(0.05, 2.55), goal=(0.45, 2.95))
     with pytest.raises(InputError, match=r"goal \(0.55, 1.0\).*outside the map interior \(-0.5, 0.5\) x \(2, 3\)"):
         Problem(g, start=(-0.45, 2.05), goal=(0.55, 1.0))
+
+
+def test_a_scenario_read_with_another_map_than_it_names_is_refused(tmp_path):
+    d = _scenario_dir(tmp_path)
+    (d / "s.scen").write_text("version 1\n0\tmaps/m.map\t4\t4\t1\t1\t3\t3\t2.8\n0\tother.map\t4\t4\t1\t1\t3\t3\t2.8\n")
+    with pytest.raises(InputError, match=r"s.scen, line 3: its map column names 'other.map', but the file is read "
+                                         r"with the map .*m.map"):
+        list(load_movingai_scenarios(d / "s.scen", map_path=d / "m.map"))
+    assert len(list(load_movingai_scenarios(d / "s.scen", map_path=d / "m.map", limit=1))) == 1

@@ -599,7 +599,8 @@ def test_plan3d_script(tmp_path):
     proc = run(WINDOW_SCENE, "--setup", "prm", "--seed", "1", "--out", out, "--frames", "4")
     assert proc.returncode == 0, proc.stderr
     assert "solved:           True" in proc.stdout
-    assert re.search(r"time: +[0-9.]+ s planning, [0-9.]+ s one-off compilation, ", proc.stdout), proc.stdout
+    assert re.search(r"time: +[0-9.]+ s to a path: [0-9.]+ s making the planner and binding its sampler, [0-9.]+ s "
+                     r"planning; [0-9.]+ s one-off compilation, ", proc.stdout), proc.stdout
     assert sorted(p.name for p in out.iterdir()) == ["plan3d.gif", "plan3d.png"]  # no temporary files left
     with Image.open(out / "plan3d.png") as img:
         assert img.size[0] > 300

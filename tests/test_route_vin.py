@@ -14,6 +14,7 @@ from scipy import ndimage
 
 from learning.models.route_net import load_route_net, make_route_net, route_input, save_route_net
 from learning.models.route_vin import LENGTHS, MOVES, UNREACHED, RouteVIN, cell_steps
+from learning.models.shipped import SHIPPED_ROUTE as SHIPPED
 from learning.samplers.route import SHIPPED_SETTINGS, RouteSampler
 from learning.training.route import cost_targets, train_route_net
 from learning.training.vin_losses import block_targets, cost_losses, path_moves
@@ -51,6 +52,38 @@ def test_blocks_without_a_free_cell_are_never_entered():
     walls[0, 1, 2] = False  # a door to the north
     v = RouteVIN.iterate(costs, goal, walls)
     assert v[0, 1, 2] == 1 and v[0, 0, 2] == 2 and v[0, 4, 4] < UNREACHED
+
+
+@settings(max_examples=60, deadline=None)
+@given(h=st.integers(1, 12), w=st.integers(1, 12), seed=st.integers(0, 2**32 - 1),
+       walls_p=st.sampled_from([0.0, 0.2, 0.5]), goals=st.integers(1, 3), wall_moves=st.booleans(),
+       dtype=st.sampled_from([torch.float32, torch.float64]))
+def test_settle_is_value_iterations_fixed_point_bit_for_bit(h, w, seed, walls_p, goals, wall_moves, dtype):
+    rng = np.random.default_rng(seed)
+    costs = torch.from_numpy(rng.uniform(0.5, 45.0, (2, 8, h, w))).to(dtype) * torch.tensor(LENGTHS, dtype=dtype).view(1, 8, 1, 1)
+    if wall_moves:  # moves priced as walls, as inference masks them
+        costs = costs.masked_fill(torch.from_numpy(rng.random((2, 8, h, w)) < 0.3), UNREACHED)
+    walls = torch.from_numpy(rng.random((2, h, w)) < walls_p)
+    goal = torch.zeros(2, h, w, dtype=torch.bool)
+    for b in range(2):
+        for _ in range(goals):
+            goal[b, rng.integers(h), rng.integers(w)] = True
+    want = RouteVIN.iterate(costs, goal, walls)
+    got = RouteVIN.settle(costs, goal, walls)
+    assert got.dtype == want.dtype and torch.equal(got, want)
+
+
+def test_settle_gives_the_shipped_encoders_value_iteration_on_generated_maps():
+    net = load_route_net(SHIPPED)
+    for family in ("maze", "bugtrap", "narrow_passage"):
+        problem = generate(family, TRAIN_SEEDS[0], 96)
+        x = torch.from_numpy(route_input(problem.world.obstacles, problem.world.cell_of(problem.goal), net.block)[None])
+        x = x[:, :net.block * net.block + 1]
+        with torch.inference_mode():
+            goal, walls = net.goal_and_walls(x)
+            _, costs = net.move_costs(x)
+            costs = costs.masked_fill(~cell_steps(x, net.block), UNREACHED)
+            assert torch.equal(RouteVIN.settle(costs, goal, walls), RouteVIN.iterate(costs, goal, walls))
 
 
 def test_a_fixed_number_of_iterations_reaches_that_many_moves_and_keeps_the_goal_at_zero():
@@ -344,3 +377,20 @@ def test_the_field_leaks_script_compares_one_query_and_refuses_an_unknown_map(mo
     with pytest.raises(SystemExit) as stop:
         script.main(["no-such-map", "--movingai", str(movingai)])
     assert stop.value.code == 2 and "no-such-map" in capsys.readouterr().err
+
+
+def test_a_pass_in_strips_of_rows_gives_the_one_piece_field_and_refuses_gradients(monkeypatch):
+    net = load_route_net(SHIPPED)
+    problem = generate("maze", TRAIN_SEEDS[0] + 3, 96)
+    obstacles, goal = problem.world.obstacles, problem.world.cell_of(problem.goal)
+    whole = net.predict(obstacles, goal)
+    monkeypatch.setattr(net, "strip_blocks", 48 * 7)  # strips of 3 block rows of the 48 x 48 block grid
+    assert net.strip_rows(48, 48) == 3
+    strips = net.predict(obstacles, goal)
+    reached = whole < 1e5
+    assert np.array_equal(reached, strips < 1e5)
+    assert np.abs(strips - whole)[reached].max() < 1e-4  # the rounding of another shape, no more
+    x = torch.from_numpy(route_input(obstacles, goal, net.block)[None])
+    with pytest.raises(ValueError, match="strips, at inference only"):
+        net(x)  # gradients on: a training pass never runs in strips
+    assert net.pass_bytes(2048, 2048) < 1 << 30  # a 4096 x 4096 map within 1 GB

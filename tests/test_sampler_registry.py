@@ -105,3 +105,24 @@ def test_a_users_sampler_is_a_spec_too(tmp_path, monkeypatch):
     assert json.loads(spec.to_json()) == {"name": "user", "params": {"name": "mine", "spec": "my_factory:make"}}
     models = ModelCache()
     assert isinstance(spec.build(), UniformSampler) and spec.build(models) is spec.build(models)
+
+
+@pytest.mark.parametrize("name, params, message", [
+    ("route", {"step_size": float("inf")}, "step_size = inf, expected a finite number"),
+    ("policy", {"batch": float("inf")}, "batch = inf, expected an integer from 1 to 4096"),
+    ("policy", {"batch": 10**9}, "batch = 1000000000, expected an integer from 1 to 4096"),
+    ("policy", {"step_size": float("nan")}, "step_size = nan, expected a finite number"),
+    ("policy_ablation", {"step_size": float("inf")}, "step_size = inf"),
+    ("policy_ablation", {"batch": 10**9}, "from 1 to 4096"),
+])
+def test_non_finite_or_unbounded_parameters_are_refused_when_the_sampler_is_made(name, params, message):
+    with pytest.raises(InputError, match=message):
+        make_sampler(name, **params)
+
+
+@pytest.mark.parametrize("name", ["route_ablation", "follower", "policy", "policy_ablation", "expert"])
+def test_a_step_past_the_map_is_refused_at_bind_not_a_memory_error(name):
+    problem = generate("forest", TEST_SEED0, 64)
+    sampler = make_sampler(name, step_size=1e9)
+    with pytest.raises(InputError, match=r"step_size = 1000000000.0 on a map whose diagonal is 90.5"):
+        RRT(problem, step_size=4.0, sampler=sampler, seed=0).solve(max_iterations=10)

@@ -92,3 +92,29 @@ def test_sb3_sampler_plans_beside_a_projects_own_envs(tmp_path):
     proc = _run(tmp_path, code)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["ok", "samplergym.envs.sampler_env", "learning.models.extractor"]
+
+
+def test_sample_problem_gives_the_query_an_episode_of_that_seed_plans():
+    import gymnasium as gym
+    import numpy as np
+    import pytest
+
+    from planners.base.fileio import InputError
+
+    env = gym.make("samplergym:SamplerGym/RRT-Forest-v1")
+    problem = env.unwrapped.sample_problem(7)
+    env.reset(seed=7)
+    episode = env.unwrapped.problem
+    assert np.array_equal(problem.start, episode.start) and np.array_equal(problem.goal, episode.goal)
+    assert np.array_equal(problem.world.obstacles, episode.world.obstacles)
+    again = env.unwrapped.sample_problem(np.random.default_rng(7))
+    assert np.array_equal(again.start, problem.start)
+    with pytest.raises(InputError, match="seed must be a non-negative integer"):
+        env.unwrapped.sample_problem(-1)
+
+
+def test_the_docs_make_environments_with_the_prefix_and_draw_queries_with_the_public_method():
+    for page in [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]:
+        text = page.read_text(encoding="utf-8")
+        assert "\nimport envs\n" not in text and "gym.register_envs(envs)" not in text, page
+        assert ".unwrapped.source(" not in text, page

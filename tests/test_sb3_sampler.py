@@ -175,6 +175,14 @@ def test_a_model_for_another_env_is_refused_by_name(ppo_forest, tmp_path):
         SB3Sampler(tmp_path / "missing.zip", "SamplerGym/RRT-Forest-v1")
 
 
+@pytest.mark.parametrize("kwargs", [{"observation": "egocentric"}, {"obs_size": 48}])
+def test_a_model_of_other_observations_is_refused_up_front_naming_both(ppo_forest, kwargs):
+    _, path = ppo_forest
+    with pytest.raises(InputError, match=r"user_ppo\.zip: the model was trained on observations \{'image': "
+                                         r"\(4, 36, 36\) uint8.*this environment gives .*env kwargs"):
+        SB3Sampler(path, "SamplerGym/RRT-Forest-v1", **{**FOREST, **kwargs})
+
+
 def _load_evaluate():
     return load_script("evaluate")
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import re
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
@@ -12,6 +11,7 @@ import numpy as np
 
 from learning.evaluation.protocol import Protocol
 from learning.evaluation.roster import bias_sampler, sampler_bias
+from planners.base.fileio import safe_file_stem
 from planners.tools.benchmark import OMPL_RUN_PROPERTIES, Run, ompl_run_values
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
@@ -58,17 +58,23 @@ def _roles(biases: dict, fam: str, planner: str, extra: Sequence[str]) -> list[t
 
 def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path,
                planner: str = "RRT", extra: Sequence[str] = ()) -> list[Path]:
-    """Write ``ecdf.png`` (:func:`ecdf_figure`) and ``medians.png`` (:func:`medians_figure`); returns their paths."""
+    """Write ``ecdf.png`` and ``ecdf-time.png`` (:func:`ecdf_figure` of iterations and of time) and ``medians.png``
+    (:func:`medians_figure`); returns their paths."""
     from planners.viz.plotting import save_figure
 
     if not any(r.split == "test" and r.planner == planner for r in runs):
         return []
     return [save_figure(ecdf_figure(runs, biases, planner, extra), out_dir / "ecdf.png", dpi=110),
+            save_figure(ecdf_figure(runs, biases, planner, extra, metric="time"), out_dir / "ecdf-time.png", dpi=110),
             save_figure(medians_figure(runs, rows, biases, planner, extra), out_dir / "medians.png", dpi=110)]
 
 
-def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: Sequence[str] = ()):
-    """ECDF of iterations-to-solution per sampler, one panel per family (test split).
+def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: Sequence[str] = (),
+                metric: str = "iterations"):
+    """ECDF of iterations-to-solution per sampler (``metric="time"``: of wall time), one panel per family (test split).
+
+    A run's time is its wall time from the planner's start to its first solution, the sampler's own per-query
+    work included (``Run.wall_time``).
 
     Colours follow :data:`PALETTE` (the same in every figure); one legend for all panels sits below
     them, so no legend hides a curve. Titles are wrapped to the figure's width and the layout is
@@ -82,14 +88,16 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
     nrows = math.ceil(len(fams) / cols)
     size = (4.2 * cols, 3.4 * nrows + 1.4)
     fig = new_figure(size)
-    fig.suptitle(_wrap(f"{planner} on the test split: fraction of queries solved within n iterations (unsolved "
+    within = "n iterations" if metric == "iterations" else "t ms, the sampler's own work included"
+    fig.suptitle(_wrap(f"{planner} on the test split: fraction of queries solved within {within} (unsolved "
                        "runs never reach 1); best goal bias tuned on a separate split", size[0], 11), fontsize=11)
     colors = sampler_colors(extra)
     handles: dict = {}
     for i, fam in enumerate(fams):
         ax = fig.add_subplot(nrows, cols, i + 1)
         for role, s in _roles(biases, fam, planner, extra):
-            its = np.sort([r.iterations if r.solved else math.inf for r in test if r.map == fam and r.sampler == s])
+            its = np.sort([(r.iterations if metric == "iterations" else r.wall_time * 1e3) if r.solved else math.inf
+                           for r in test if r.map == fam and r.sampler == s])
             if len(its) == 0:
                 continue
             style = {"linestyle": "--"} if s in REFERENCES else {}
@@ -98,7 +106,7 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
             handles.setdefault(LEGEND.get(role, role), line)
         ax.set_xscale("log")
         ax.set_title(_wrap(fam, 4.0, 12))
-        ax.set_xlabel("iterations to solution")
+        ax.set_xlabel("iterations to solution" if metric == "iterations" else "time to solution (ms)")
         ax.set_ylabel("fraction solved")
         ax.grid(alpha=0.3)
     fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncols=min(6, len(handles)),
@@ -163,7 +171,7 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: 
     fams: dict = {}
     for r in test:
         fams.setdefault(r.map, {}).setdefault((r.planner, r.sampler), []).append(r)
-    paths = []
+    paths, stems = [], set()
     for fam, configs in sorted(fams.items()):
         planners = {}
         for (planner, sampler), rs in sorted(configs.items()):
@@ -183,7 +191,7 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: 
                  f"the best goal bias was chosen on a separate tuning split (for shifted maps, their family's). "
                  f"'time' is wall time in seconds, "
                  f"including binding the sampler to the map. The expert is a privileged reference.")
-        stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", fam).strip("_") or "experiment"
+        stem = safe_file_stem(fam, taken=stems)  # bounded, and one file per map set: a name may be anything
         paths.append(write_log(
             out_dir / f"{stem}.log", experiment_name(fam), planners, [(p, t) for p, t, _ in OMPL_RUN_PROPERTIES],
             setup=setup, total_time=sum(r.wall_time for rs in configs.values() for r in rs),

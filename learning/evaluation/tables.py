@@ -231,13 +231,20 @@ def _order(fams, movingai_maps: Sequence[str]) -> list[str]:
 
 
 def glance_table(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
-                 movingai_maps: Sequence[str] = ()) -> list[dict]:
+                 movingai_maps: Sequence[str] = (), metric: str = "iterations") -> list[dict]:
     """Per map set (RRT, test split): each sampler's median iterations with its success rate, a few columns.
 
     Uniform, the best goal bias, the policy and its ablation, the route encoder and its ablation, the
     exact route reference (where it ran), the expert, and ``extra`` (user) samplers. A sampler that did
     not run on a set shows a dash; a column no set has is left out.
+
+    ``metric="time"``: each cell is instead the median wall time per query in ms, from the planner's start to
+    its first solution, the sampler's own per-query work included (the encoder's pass, a grid search, the
+    policy's set-up; loading a model is not: it is paid once). The fastest sampler of each set is in bold,
+    the privileged expert aside (it may not compete: it is given the shortest path).
     """
+    if metric not in ("iterations", "time"):
+        raise ValueError(f"metric must be 'iterations' or 'time', got {metric!r}")
     from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
 
     by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
@@ -248,12 +255,24 @@ def glance_table(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
     for fam in _order({f for f, _ in by}, movingai_maps):
         b = biases.get((fam, "RRT"))
         row = {"map set": fam, "tuned bias": "-" if b is None else f"{b:g}"}
-        for label, name in cols:
-            r = by.get((fam, name if name is not None else bias_sampler(b) if b is not None else ""))
-            row[label] = "-" if r is None else f"{r['median_iterations']:.0f} ({r['success']:.0%})"
+        found = {label: by.get((fam, name if name is not None else bias_sampler(b) if b is not None else ""))
+                 for label, name in cols}
+        for label, r in found.items():
+            row[label] = "-" if r is None else (f"{r['median_iterations']:.0f} ({r['success']:.0%})"
+                                                if metric == "iterations" else _ms(r["median_wall_ms"]))
+        if metric == "time":
+            timed = {label: r["median_wall_ms"] for label, r in found.items() if r is not None and label != "expert"}
+            if timed:
+                fastest = min(timed, key=timed.__getitem__)
+                row[fastest] = f"**{row[fastest]}**"
         out.append(row)
     keep = [c for c in out[0] if c in ("map set", "tuned bias") or any(r[c] != "-" for r in out)] if out else []
     return [{c: r[c] for c in keep} for r in out]
+
+
+def _ms(ms: float) -> str:
+    """A median time in ms, to two significant figures below 10 ms and whole ms above."""
+    return f"{ms:.2g} ms" if ms < 10 else f"{ms:.0f} ms"
 
 
 def _median(by: dict, fam: str, name: str) -> float:

@@ -19,11 +19,16 @@ from planners.base.fileio import InputError, short_repr
 
 GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
 
-#: The largest encoder input, in blocks (cells of the block grid), and the variable that raises it. A pass
-#: holds at most about ``BYTES_PER_BLOCK`` per block per map in flight; at the default, one map of 1024 x 1024
-#: cells at 2 cells per block (262,144 blocks; the shipped encoder's pass over it peaks below 0.7 GB).
+#: The largest encoder input, in blocks (cells of the block grid), and the variable that raises it: one map of
+#: 4096 x 4096 cells at the shipped encoder's 2 cells per block (4,194,304 blocks). The value-iteration encoder
+#: runs its passes over maps above ``RouteVIN.strip_blocks`` in strips of rows, so its memory grows with the
+#: map's blocks at a few hundred bytes each (``RouteVIN.pass_bytes``; its pass over 4096 x 4096 cells stays
+#: within 1 GB); the U-Net encoder holds the whole map's activations, ``BYTES_PER_BLOCK`` per block.
 MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
-MAX_BLOCKS = 512 * 512
+MAX_BLOCKS = 2048 * 2048
+#: The largest training map, in blocks: a training pass holds the whole map's activations and their gradients
+#: (one 1024 x 1024 map at 2 cells per block). ``SAMPLERGYM_MAX_ROUTE_BLOCKS`` can only lower it.
+TRAINING_MAX_BLOCKS = 512 * 512
 #: Working memory of one pass per block of one map (activations and attention, measured on the U-Net
 #: encoder, which needs the most), and how much of it ``predict`` lets one batch of symmetries take: larger
 #: maps run their symmetries in smaller batches (one at a time at the largest), so memory stays bounded.
@@ -95,6 +100,10 @@ class FieldEncoder:
     #: How many of the square's symmetries the route sampler averages this encoder's field over by default.
     symmetries: int = 8
 
+    def pass_bytes(self, h: int, w: int) -> int:
+        """About how many bytes one pass over an ``h`` x ``w`` block grid holds at its peak (one symmetry)."""
+        return BYTES_PER_BLOCK * h * w
+
     def check_size(self, shape: tuple[int, int]) -> tuple[int, int]:
         """The block grid of a map of ``shape`` cells, or an ``InputError`` naming the size and the limit."""
         h, w = -(-shape[0] // self.block), -(-shape[1] // self.block)
@@ -102,7 +111,7 @@ class FieldEncoder:
         if h * w > limit:
             raise InputError(f"the route encoder's input for this {shape[0]} x {shape[1]} map is {h} x {w} = "
                              f"{h * w} blocks of {self.block} x {self.block} cells, above the limit of {limit} "
-                             f"blocks (a pass over it needs about {BYTES_PER_BLOCK * h * w / 2**30:.1f} GB per "
+                             f"blocks (a pass over it needs about {self.pass_bytes(h, w) / 2**30:.1f} GB per "
                              f"symmetry); set {MAX_BLOCKS_ENV} to raise it")
         return h, w
 

@@ -7,6 +7,8 @@ and predicts what it costs, in blocks, to move from that block into each of its 
 iteration, as in value-iteration networks (Tamar et al., 2016), then carries the goal's cost-to-go across the
 block grid: each iteration is one layer of shared weights, ``V = min over moves of (cost of the move + V of
 the block it reaches)``, and the iterations run until the values settle (at most one per block of the grid).
+That fixed point is the shortest path over the move costs, so the encoder computes it directly, by a compiled
+Dijkstra (``RouteVIN.settle``): the same values bit for bit, in one pass over the blocks.
 A last local head turns the block values into a cost-to-go for every cell. Nothing in it depends on the map's
 size or on where on the map a block lies: it learns local geometry (which cells let a robot through, at what
 cost) and composes it.
@@ -24,13 +26,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import torch
 from torch import nn
 
 from learning.models.field import FieldEncoder
+from planners.maps.gridsearch import MOVES, block_steps, move_cost_field
 
-#: The 8 moves of the block grid, (row, column) offsets, and their lengths in blocks.
-MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
+#: The moves' lengths in blocks (``MOVES``: the 8 moves of the block grid, the grid search's own order).
 LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
 #: The value of a block the goal does not reach (in blocks): above any cost-to-go a map can have.
 UNREACHED = 1e6
@@ -67,40 +70,11 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
 
     From ``route_input``'s cell channels (B, block**2 + ..., h, w). A step goes from a free cell to one of its 8
     neighbours that is free, a diagonal one only if both cells beside it are free (the grid's own rule, no corner
-    cutting): a block move no step makes crosses a wall, however the network prices it.
+    cutting): a block move no step makes crosses a wall, however the network prices it. Compiled
+    (``planners.maps.gridsearch.block_steps``), on the CPU whatever the device.
     """
-    free = nn.functional.pixel_shuffle(x[:, :block * block], block)[:, 0] < 0.5  # (B, H, W) cells
-    B, H, W = free.shape
-    h, w = H // block, W // block
-    pad = nn.functional.pad(free, (1, 1, 1, 1), value=False)
-
-    def at(dr: int, dc: int) -> torch.Tensor:  # each cell's neighbour (dr, dc), False off the map
-        return pad[:, 1 + dr:1 + dr + H, 1 + dc:1 + dc + W]
-
-    def within(e: int, m: int) -> slice | None:
-        """The cells of a block, along one axis, whose step by ``e`` makes the block move ``m`` (None: none do)."""
-        if e == 0:
-            return slice(None) if m == 0 else None
-        if m == 0:  # the step stays inside the block along this axis
-            return slice(0, block - 1) if e > 0 else slice(1, block)
-        if m == e:  # from the block's last (first) row or column into the next (previous) block
-            return slice(block - 1, block) if e > 0 else slice(0, 1)
-        return None
-
-    out = torch.zeros(B, len(MOVES), h, w, dtype=torch.bool, device=x.device)
-    for er in (-1, 0, 1):
-        for ec in (-1, 0, 1):
-            if not (er or ec):
-                continue
-            step = free & at(er, ec)
-            if er and ec:
-                step = step & at(er, 0) & at(0, ec)
-            cells = step.view(B, h, block, w, block)
-            for a, (mr, mc) in enumerate(MOVES):
-                rows, cols = within(er, mr), within(ec, mc)
-                if rows is not None and cols is not None:
-                    out[:, a] |= cells[:, :, rows, :, cols].any(4).any(2)
-    return out
+    free = (nn.functional.pixel_shuffle(x[:, :block * block], block)[:, 0] < 0.5).cpu().numpy()  # (B, H, W) cells
+    return torch.from_numpy(np.stack([block_steps(f, block) for f in free])).to(x.device)
 
 
 class RouteVIN(nn.Module, FieldEncoder):
@@ -125,6 +99,12 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: corner cutting) is a wall, whatever its price: value iteration then cannot leak through a wall thinner
     #: than a block at a slant (see the research report, "The step walls"). Training never applies it.
     step_walls: bool = True
+    #: How inference computes value iteration's fixed point: "dijkstra" (``settle``, the default) or "iterate"
+    #: (``iterate`` to convergence: the same values, bit for bit, kept to measure what the direct way saves).
+    fixed_point: str = "dijkstra"
+    #: Above how many blocks per map a pass at inference runs in strips of rows (``forward``): up to it, one
+    #: piece (every map of up to 1024 x 1024 cells at 2 cells per block).
+    strip_blocks: int = 512 * 512
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -182,21 +162,89 @@ class RouteVIN(nn.Module, FieldEncoder):
                 break
         return v
 
+    @staticmethod
+    def settle(costs: torch.Tensor, goal: torch.Tensor, walls: torch.Tensor) -> torch.Tensor:
+        """``iterate`` run until the values settle, computed directly: the same values, bit for bit, far sooner.
+
+        Value iteration's fixed point is the shortest path over the move costs, so a compiled Dijkstra
+        (``planners.maps.gridsearch.move_cost_field``) gives it in one pass over the blocks instead of one sweep
+        of the grid per block a route crosses. It runs on the CPU whatever the device (the values come back to
+        ``costs``' device) and carries no gradient.
+        """
+        c = costs.detach().cpu().numpy()
+        g, w = goal.cpu().numpy(), walls.cpu().numpy()
+        v = np.stack([move_cost_field(c[i], g[i], w[i], UNREACHED) for i in range(len(c))])
+        return torch.from_numpy(v).to(costs.device)
+
     def cell_field(self, f: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
         """Every cell's cost-to-go (B, H, W) from the block features and block values."""
         rel = (neighbours(v, UNREACHED) - v.unsqueeze(1)).clamp(-REACH, REACH)
         offsets = self.cells(torch.cat([f, rel], 1))
         return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
 
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """The cost-to-go of every cell (B, H, W), in blocks, from ``route_input``'s channels."""
-        x = x[:, :self.block * self.block + 1]  # the cells and the goal's block; not the offsets to it
-        goal, walls = self.goal_and_walls(x)
-        f, costs = self.move_costs(x)
+    def pass_bytes(self, h: int, w: int) -> int:
+        """About how many bytes one pass over an ``h`` x ``w`` block grid holds at its peak (one symmetry).
+
+        Measured on the shipped encoder (``scripts/benchmark_route.py``'s peak memory): in one piece about 1 kB per
+        block (0.26 GB at 1024 x 1024 cells); in strips about 0.2 GB for a strip and 200 bytes per block of the map
+        (0.35 GB at 2048 x 2048 cells, 0.84 GB at 4096 x 4096).
+        """
+        blocks = h * w
+        scale = self.channels / 48
+        if blocks <= self.strip_blocks:
+            return int(1_000 * scale * blocks)
+        return int(200 * 2**20 * scale + 200 * blocks)
+
+    def strip_rows(self, h: int, w: int) -> int:
+        """Block rows per strip of a pass over an ``h`` x ``w`` block grid: ``h`` (one piece) up to ``strip_blocks``."""
+        if h * w <= self.strip_blocks:
+            return h
+        return max(1, self.strip_blocks // (2 * w))
+
+    def inference_values(self, x: torch.Tensor, costs: torch.Tensor, goal: torch.Tensor,
+                         walls: torch.Tensor) -> torch.Tensor:
+        """The block values at inference: the moves priced above ``wall_cost`` and those no cell steps are walls."""
         with torch.no_grad():
             if self.wall_cost is not None:
                 costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
             if self.step_walls:
                 costs = costs.masked_fill(~cell_steps(x, self.block), UNREACHED)
-            v = self.iterate(costs, goal, walls)
-        return self.cell_field(f, v)
+            if self.fixed_point not in ("dijkstra", "iterate"):
+                raise ValueError(f"RouteVIN.fixed_point = {self.fixed_point!r}: expected 'dijkstra' or 'iterate'")
+            return (self.settle if self.fixed_point == "dijkstra" else self.iterate)(costs, goal, walls)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """The cost-to-go of every cell (B, H, W), in blocks, from ``route_input``'s channels.
+
+        A block grid above ``strip_blocks`` blocks runs its convolutions in strips of rows at inference: each
+        strip reads the ``depth`` rows beyond it that its layers see, so every kept row is what one pass over
+        the whole map computes (up to the rounding of another shape), and a pass holds one strip's activations
+        rather than the whole map's. The local features are computed twice there (for the move costs, then for
+        the cell head), which costs time for a bounded memory.
+        """
+        x = x[:, :self.block * self.block + 1]  # the cells and the goal's block; not the offsets to it
+        goal, walls = self.goal_and_walls(x)
+        h, w = x.shape[-2:]
+        rows = self.strip_rows(h, w)
+        if rows >= h:
+            f, costs = self.move_costs(x)
+            return self.cell_field(f, self.inference_values(x, costs, goal, walls))
+        if torch.is_grad_enabled():
+            raise ValueError(f"a {h} x {w} block grid runs in strips, at inference only (torch.no_grad): "
+                             f"train on maps of at most {self.strip_blocks} blocks")
+        d, b = self.depth, self.block
+        parts = []
+        for r0 in range(0, h, rows):
+            r1 = min(h, r0 + rows)
+            lo, hi = max(0, r0 - d), min(h, r1 + d)
+            parts.append(self.move_costs(x[:, :, lo:hi])[1][:, :, r0 - lo:r1 - lo])
+        v = self.inference_values(x, torch.cat(parts, 2), goal, walls)
+        del parts
+        out = torch.empty(x.shape[0], h * b, w * b, dtype=v.dtype, device=v.device)
+        for r0 in range(0, h, rows):
+            r1 = min(h, r0 + rows)
+            a, z = max(0, r0 - 1), min(h, r1 + 1)  # the cell head reads the values one block row either side
+            lo, hi = max(0, a - d), min(h, z + d)
+            f = self.move_costs(x[:, :, lo:hi])[0][:, :, a - lo:z - lo]
+            out[:, r0 * b:r1 * b] = self.cell_field(f, v[:, a:z])[:, (r0 - a) * b:(r1 - a) * b]
+        return out

@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from planners import SamplerBase
-from planners.base.fileio import InputError, check_int
+from planners.base.samplers import check_sampler_params
+from planners.base.fileio import InputError
 from planners.guidance.guided import FRONTIER, GuidedSampling, ego_class
 
 #: Frontier probabilities the comparison chooses from on the tuning split (0 is left out: always
@@ -39,9 +40,7 @@ class ConstantGuidedSampler(SamplerBase):
         for name, v, lo, hi in (("frontier", frontier, 0.0, 1.0), ("uniform_floor", uniform_floor, 0.0, 1.0)):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo <= v <= hi:
                 raise InputError(f"{name} must be a number in [{lo:g}, {hi:g}], got {v!r}")
-        check_int(batch, "batch")
-        if isinstance(step_size, bool) or not isinstance(step_size, (int, float)) or not step_size > 0:
-            raise InputError(f"step_size must be a positive number, got {step_size!r}")
+        check_sampler_params("ConstantGuidedSampler", step_size=step_size, batch=batch)
         self.frontier, self.step_size, self.batch = float(frontier), float(step_size), batch
         self.uniform_floor = float(uniform_floor)
 

@@ -42,6 +42,7 @@ from learning.models.shipped import SHIPPED_POLICY, SHIPPED_POLICY_BATCH
 from planners import OccupancyGrid, SampleBatch, SamplerBase
 from planners.base.fileio import InputError, check_number
 from planners.base.planner import Planner
+from planners.base.samplers import check_sampler_params
 from planners.fused import CHUNK, FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.egocentric import EGO_VECTOR, add_vertices, build_pyramid, observe_windows
 from planners.guidance.frontier import cdf_search, frontier_arrays, frontier_shape
@@ -209,6 +210,7 @@ class PolicySampler(SamplerBase):
         if problem:
             raise InputError(f"{source}: {problem}")
         self.actor, self.config = actor, dict(config)
+        check_sampler_params("PolicySampler", step_size=step_size, batch=batch)
         self.step_size = float(step_size if step_size is not None else config["step_size"])
         self.batch = int(batch if batch is not None else config["batch"])
         self.reuse = int(reuse)

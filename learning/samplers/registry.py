@@ -14,11 +14,13 @@ from __future__ import annotations
 import importlib
 import inspect
 import json
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 from planners import GoalBiasedSampler, Sampler, UniformSampler
+from planners.base.samplers import check_sampler_params
 from planners.base.fileio import InputError
 from planners.tools.benchmark import STEP  # the step samplers are built for unless told otherwise
 
@@ -112,6 +114,7 @@ def make_sampler(name: str, *, models: ModelCache | None = None, **params: Any) 
     if unknown:
         raise InputError(f"sampler {name!r} takes no parameter {', '.join(unknown)}; it takes "
                          f"{', '.join(allowed) or 'none'}")
+    check_sampler_params(f"sampler {name!r}", step_size=params.get("step_size"), batch=params.get("batch"))
     if models is not None and "models" in signature:
         return factory(**params, models=models)
     return factory(**params)
@@ -126,13 +129,21 @@ class ModelCache:
 
     A worker receives one with its tasks, so a run never loads weights again. A policy or a user's
     sampler is kept as the sampler itself (it is bound afresh to every problem); a route encoder as its
-    network, each run building its sampler around it.
+    network, each run building its sampler around it. ``load_seconds`` holds the wall time of each load, by
+    what was loaded ("route encoder PATH", "policy PATH", "sampler SPEC"): a cost paid once, not per query.
     """
 
     def __init__(self) -> None:
         self.routes: dict[str, Any] = {}
         self.policies: dict[tuple, Sampler] = {}
         self.users: dict[str, Sampler] = {}
+        self.load_seconds: dict[str, float] = {}
+
+    def _timed(self, label: str, load: Callable[[], Any]) -> Any:
+        t0 = time.perf_counter()
+        out = load()
+        self.load_seconds[label] = self.load_seconds.get(label, 0.0) + time.perf_counter() - t0
+        return out
 
     def __getstate__(self) -> dict:
         # users' samplers are built in each worker: a user's object need not survive pickling
@@ -143,7 +154,7 @@ class ModelCache:
         if path not in self.routes:
             from learning.models.route_net import load_route_net
 
-            self.routes[path] = load_route_net(path)
+            self.routes[path] = self._timed(f"route encoder {path}", lambda: load_route_net(path))
         return self.routes[path]
 
     def policy(self, path: str | None, batch: int | None, step_size: float | None = None) -> Sampler:
@@ -154,15 +165,17 @@ class ModelCache:
 
             kwargs = {} if step_size is None else {"step_size": step_size}
             if path is None:  # the shipped policy at its validated batch unless one is given
-                self.policies[key] = PolicySampler.load(**({} if batch is None else {"batch": batch}), **kwargs)
+                kwargs.update({} if batch is None else {"batch": batch})
+                self.policies[key] = self._timed("policy (shipped)", lambda: PolicySampler.load(**kwargs))
             else:
-                self.policies[key] = PolicySampler.load(path, batch=batch, **kwargs)
+                self.policies[key] = self._timed(f"policy {path}", lambda: PolicySampler.load(path, batch=batch,
+                                                                                              **kwargs))
         return self.policies[key]
 
     def user(self, spec: str) -> Sampler:
         """The user's sampler of ``spec`` (:func:`user_sampler`), built on first use."""
         if spec not in self.users:
-            self.users[spec] = user_sampler(spec)
+            self.users[spec] = self._timed(f"sampler {spec}", lambda: user_sampler(spec))
         return self.users[spec]
 
 

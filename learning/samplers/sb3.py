@@ -20,6 +20,7 @@ array is unchanged; the actions are the ones ``model.predict`` gives.
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -58,7 +59,12 @@ def load_sb3_policy(path: str | os.PathLike, env: SamplerEnv, *, algo: str | Non
                     policy_kwargs: dict | None = None):
     """The policy in an SB3 ``.zip``, rebuilt for ``env``'s spaces, without unpickling anything."""
     path = Path(path)
-    _, state = read_sb3_zip(path)
+    data, state = read_sb3_zip(path)
+    recorded = _recorded_space(data)
+    if recorded is not None and recorded != _space_summary(env.observation_space):
+        raise InputError(f"{path}: the model was trained on observations {recorded}; this environment gives "
+                         f"{_space_summary(env.observation_space)}: make the sampler with the env id and env kwargs "
+                         "(observation, obs_size, local_size, ...) it was trained with")
     algos = _algorithms()
     name = (algo or _guess_algorithm(state, path)).upper()
     if name not in algos:
@@ -67,7 +73,7 @@ def load_sb3_policy(path: str | os.PathLike, env: SamplerEnv, *, algo: str | Non
     try:
         policy = algos[name].policy_aliases[kind](env.observation_space, env.action_space, lambda _: 0.0,
                                                   **(policy_kwargs or {}))
-    except (AssertionError, TypeError, ValueError) as exc:
+    except (AssertionError, TypeError, ValueError, RuntimeError) as exc:
         raise InputError(f"{path}: a {name} {kind} cannot be built for this environment's spaces "
                          f"(observations {env.observation_space}, actions {env.action_space}): {exc}") from None
     try:
@@ -79,6 +85,45 @@ def load_sb3_policy(path: str | os.PathLike, env: SamplerEnv, *, algo: str | Non
                          "policy_kwargs (pass the same policy_kwargs=)?") from None
     policy.set_training_mode(False)
     return policy
+
+
+_BOX = re.compile(r"'([^']+)': Box\([^()]*\(([\d, ]*)\),\s*(\w+)\)")
+
+
+def _space_summary(space) -> str:
+    """A space's shapes and dtypes: ``{'image': (4, 64, 64) uint8, ...}`` for a Dict of Boxes, ``(11,) float32``."""
+    if isinstance(space, spaces.Dict):
+        return "{" + ", ".join(f"'{k}': {_shape_text(b.shape)} {b.dtype}" for k, b in sorted(space.spaces.items())
+                               if isinstance(b, spaces.Box)) + "}"
+    if isinstance(space, spaces.Box):
+        return f"{_shape_text(space.shape)} {space.dtype}"
+    return repr(space)
+
+
+def _shape_text(shape) -> str:
+    return "(" + ", ".join(str(int(n)) for n in shape) + ("," if len(shape) == 1 else "") + ")"
+
+
+def _recorded_space(data: dict) -> str | None:
+    """The observation space a model's ``data`` records, as :func:`_space_summary` writes it; None if it says none.
+
+    Read from the plain fields SB3 writes beside the pickled space (which is never unpickled here):
+    a Dict's ``spaces`` text, a Box's ``_shape`` and ``dtype``. Anything else is not judged (None).
+    """
+    obs = data.get("observation_space") if isinstance(data, dict) else None
+    if not isinstance(obs, dict) or not isinstance(obs.get(":type:"), str):
+        return None
+    kind = obs[":type:"]
+    if kind.endswith(".Dict'>") and isinstance(obs.get("spaces"), str):
+        boxes = _BOX.findall(obs["spaces"])
+        if not boxes or len(boxes) != obs["spaces"].count("':"):
+            return None
+        return "{" + ", ".join(f"'{k}': {_shape_text([int(n) for n in shape.replace(' ', '').split(',') if n])} "
+                               f"{dtype}" for k, shape, dtype in sorted(boxes)) + "}"
+    if kind.endswith(".Box'>") and isinstance(obs.get("_shape"), list) and isinstance(obs.get("dtype"), str) \
+            and all(isinstance(n, int) for n in obs["_shape"]):
+        return f"{_shape_text(obs['_shape'])} {obs['dtype']}"
+    return None
 
 
 class ActorPass:

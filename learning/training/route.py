@@ -23,6 +23,7 @@ import torch
 from torch import nn
 
 from learning.device import deterministic
+from learning.models.field import TRAINING_MAX_BLOCKS
 from learning.models.route_net import MAX_BLOCKS_ENV, RouteNet, make_route_net, max_blocks, route_input, symmetry
 from learning.models.route_vin import UNREACHED, RouteVIN
 from learning.training.vin_losses import vin_loss
@@ -40,17 +41,20 @@ SCHEDULES = ("constant", "cosine")
 
 
 def check_route_map(name: str, shape: tuple[int, int], block: int) -> None:
-    """Refuse a training map of more blocks of ``block`` cells than the encoder takes (``max_blocks()``).
+    """Refuse a training map of more blocks of ``block`` cells than a training pass takes.
 
-    The same limit as at planning time (``learning.models.route_net.max_blocks``), so an encoder is never
-    trained on maps it would refuse to plan on.
+    At most ``TRAINING_MAX_BLOCKS`` (a training pass holds the whole map's activations and gradients) and at
+    most the planning limit (``learning.models.field.max_blocks``), so an encoder is never trained on maps it
+    would refuse to plan on.
     """
     rows, cols = -(-shape[0] // block), -(-shape[1] // block)
-    limit = max_blocks()
+    limit = min(max_blocks(), TRAINING_MAX_BLOCKS)
     if rows * cols > limit:
+        why = (f"the route encoder takes ({MAX_BLOCKS_ENV})" if limit < TRAINING_MAX_BLOCKS else
+               "a training pass takes (it holds the whole map's activations and gradients)")
         raise InputError(f"map {name!r} is {shape[0]} x {shape[1]} cells: {rows} x {cols} = {rows * cols} blocks of "
-                         f"{block} cells, more than the {limit} the route encoder takes ({MAX_BLOCKS_ENV}); take a "
-                         f"larger step, downsample the map, or raise the limit")
+                         f"{block} cells, more than the {limit} {why}; take a larger step or downsample the map"
+                         + (", or raise the limit" if limit < TRAINING_MAX_BLOCKS else ""))
 
 
 def default_workers() -> int:

@@ -99,8 +99,7 @@ def vin_loss(net: RouteVIN, x: torch.Tensor, cells: torch.Tensor) -> torch.Tenso
     goal, walls = net.goal_and_walls(x)
     f, costs = net.move_costs(x)
     eq, hinge = cost_losses(costs, cells, net.block)
-    with torch.no_grad():
-        v = net.iterate(costs, goal, walls)
+    v = net.settle(costs, goal, walls)
     v = net.iterate(costs, goal, walls, v, steps=GRAD_ITERATIONS)
     out = net.cell_field(f, v)
     known = torch.isfinite(cells) & (out < UNREACHED / 2)

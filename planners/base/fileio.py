@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import ctypes
 import errno
+import hashlib
 import json
 import math
 import numbers
 import os
+import re
 import secrets
 import shutil
 import socket
@@ -144,13 +146,18 @@ def loads_json(text: str | bytes, source: str) -> object:
             text = text.decode("utf-8")
         except UnicodeDecodeError as exc:
             raise InputError(f"{source} is not UTF-8 text: {exc}") from None
-    depth = _json_depth(text)
-    if depth > MAX_JSON_DEPTH:
-        raise InputError(f"{source}: JSON nested {depth} levels deep, more than the {MAX_JSON_DEPTH} accepted")
+    check_json_depth(text, source)
     try:
         return json.loads(text)
     except (ValueError, RecursionError) as exc:
         raise InputError(f"{source} is not JSON: {exc}") from None
+
+
+def check_json_depth(text: str, source: str) -> None:
+    """Refuse JSON ``text`` nested deeper than :data:`MAX_JSON_DEPTH`: an ``InputError`` naming ``source``."""
+    depth = _json_depth(text)
+    if depth > MAX_JSON_DEPTH:
+        raise InputError(f"{source}: JSON nested {depth} levels deep, more than the {MAX_JSON_DEPTH} accepted")
 
 
 def read_json(path: str | os.PathLike, what: str = "JSON file") -> object:
@@ -193,15 +200,58 @@ def _json_depth(text: str) -> int:
 
 # --- output places ---------------------------------------------------------------------------------
 
+#: Longest file stem made from a name (:func:`safe_file_stem`): with a suffix and the temporary name
+#: :func:`atomic_path` writes first (about 30 characters more), well inside the 255 bytes of common file systems.
+MAX_STEM = 120
+
+
+def safe_file_stem(name: str, limit: int = MAX_STEM, *, taken: set[str] | None = None) -> str:
+    """A file stem for ``name`` (a map set, a family): letters, digits, ``_.-`` only, at most ``limit`` characters.
+
+    Other characters become ``_``; a name that does not fit is cut, and a short hash of the whole
+    name added, so two long names that share their start keep two files. A stem already in ``taken``
+    (compared without case) gets the hash too, and the stem is added to it. Empty: ``"unnamed"``.
+    """
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_.") or "unnamed"
+    if len(stem) > limit or (taken is not None and stem.lower() in taken):
+        digest = hashlib.sha256(name.encode("utf-8", "surrogatepass")).hexdigest()[:10]
+        stem = f"{stem[:limit - len(digest) - 1]}-{digest}"
+    if taken is not None:
+        taken.add(stem.lower())
+    return stem
+
+
+
+#: Bytes the temporary names beside an output add to its name (``.<name>.<pid>-<token>-new.set``, the lock's
+#: ``.<name>.lock.<pid>-<token>.tmp``, ``<name>.partial``).
+_TEMP_DECORATION = 40
+
+
+def _name_max(path: Path) -> int:
+    """The longest file name (bytes) the file system under ``path`` takes; 255 where it cannot be told."""
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    try:
+        return int(os.pathconf(parent, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
+
 
 def check_output_place(path: str | os.PathLike, name: str, *, folder: bool = True, need_bytes: int = 0) -> Path:
     """Refuse an output place before any work starts: an ``InputError`` naming ``name`` (a flag) and the path.
 
     ``path`` is a folder to create or fill (``folder=True``) or a file to create or replace. Refused:
     a file where a folder must go (or the reverse), a place below a file, a folder that cannot be written,
-    and fewer than ``need_bytes`` free on its disk (where ``shutil.disk_usage`` can tell).
+    a name too long for the temporary files written beside it, and fewer than ``need_bytes`` free on its
+    disk (where ``shutil.disk_usage`` can tell).
     """
     path = Path(path)
+    room = _name_max(path) - _TEMP_DECORATION
+    if len(os.fsencode(path.name)) > room:
+        raise InputError(f"{name} {short_repr(str(path))}: the name {short_repr(path.name, 40)} is "
+                         f"{len(os.fsencode(path.name))} bytes long; the temporary files and locks written beside it "
+                         f"need it to be at most {room}")
     if path.exists():
         if folder and not path.is_dir():
             raise InputError(f"{name} {path}: a file is there, expected a folder")

@@ -27,6 +27,7 @@ draw exactly what ``draw`` would: it changes the speed, never the run.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
@@ -40,6 +41,38 @@ if TYPE_CHECKING:
 ANCHOR_NONE = 0
 ANCHOR_WORLD = 1
 ANCHOR_GOAL = 2
+
+#: Most samples per decision a sampler's ``batch`` may ask for (the shipped policy takes 1 to 8).
+MAX_BATCH = 4096
+#: A sampler's ``step_size`` is at most this many times the diagonal of the map it is bound to:
+#: samplers size their rings, windows and frontier grids in steps, and a step past the map's own
+#: size has nothing left to measure (``inf`` or ``1e9`` would overflow or exhaust memory instead).
+MAX_STEP_DIAGONALS = 4.0
+
+
+def check_sampler_params(who: str, *, step_size=None, batch=None) -> None:
+    """Refuse a sampler's ``step_size`` (a finite positive number) or ``batch`` (1..``MAX_BATCH``) by name.
+
+    Raises:
+        InputError: Naming ``who`` (the sampler), the parameter, its value and what is accepted.
+    """
+    from planners.base.fileio import InputError, check_number, short_repr
+
+    if step_size is not None:
+        check_number(who, "step_size", step_size, low=0, low_open=True)
+    if batch is not None:
+        if isinstance(batch, bool) or not isinstance(batch, (int, np.integer)) or not 1 <= batch <= MAX_BATCH:
+            raise InputError(f"{who}: batch = {short_repr(batch)}, expected an integer from 1 to {MAX_BATCH}")
+
+
+def _check_step_on_map(sampler, step, low: np.ndarray, high: np.ndarray) -> None:
+    """Refuse a sampler's ``step_size`` that is not finite and positive, or longer than ``MAX_STEP_DIAGONALS`` maps."""
+    diag = float(np.linalg.norm(high - low))
+    if isinstance(step, bool) or not isinstance(step, numbers.Real) or not 0 < step <= MAX_STEP_DIAGONALS * diag:
+        from planners.base.fileio import InputError
+
+        raise InputError(f"{type(sampler).__name__}: step_size = {step!r} on a map whose diagonal is {diag:g} world "
+                         f"units; expected a positive number of at most {MAX_STEP_DIAGONALS:g} times it")
 
 
 @dataclass(frozen=True)
@@ -84,6 +117,9 @@ class SamplerBase:
         bound.problem = problem
         low, high = problem.world.bounds
         bound.low, bound.high = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+        step = self.__dict__.get("step_size")
+        if step is not None:  # samplers that measure in steps: one past the map's size would overflow memory
+            _check_step_on_map(self, step, bound.low, bound.high)
         bound._setup()
         return bound
 

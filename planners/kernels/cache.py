@@ -16,10 +16,12 @@ See ``docs/compiling.md``.
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import json
 import math
 import os
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -63,16 +65,35 @@ def _writable(d: Path) -> bool:
 
 
 def choose_dir(key: str, package: Path = _PACKAGE) -> Path:
-    """``package/__pycache__/numba/<key>`` if writable, else the user cache folder (said on stderr)."""
+    """``package/__pycache__/numba/<key>`` if writable, else the user cache folder, else a temporary one.
+
+    Each fallback is said in one line on stderr. A temporary folder lasts for this process only, so
+    every process compiles the kernels again (seconds each): the line says to set ``NUMBA_CACHE_DIR``.
+
+    Raises:
+        OSError: Not even a temporary folder can be written (the message names the folders tried).
+    """
     local = package / "__pycache__" / "numba" / key
     if _writable(local):
         return local
-    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    d = base / "samplergym" / "numba" / key
-    if not _writable(d):
-        raise OSError(f"no writable folder for compiled kernels: neither {local} nor {d}; set NUMBA_CACHE_DIR to one")
-    print(f"samplergym: {local.parent} is not writable; compiled kernels are cached in {d}", file=sys.stderr)
-    return d
+    try:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    except RuntimeError:  # no home folder to be found
+        base = None
+    d = base / "samplergym" / "numba" / key if base is not None else None
+    if d is not None and _writable(d):
+        print(f"samplergym: {local.parent} is not writable; compiled kernels are cached in {d}", file=sys.stderr)
+        return d
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix="samplergym-numba-"))
+    except OSError:
+        raise OSError(f"no writable folder for compiled kernels: not {local}, {d} or the temporary folder "
+                      f"({tempfile.gettempdir()}); set NUMBA_CACHE_DIR to a writable folder") from None
+    atexit.register(shutil.rmtree, tmp, ignore_errors=True)
+    print(f"samplergym: no writable cache for compiled kernels ({local.parent} and {d} are not writable); they are "
+          f"compiled again in every process, into {tmp}. Set NUMBA_CACHE_DIR to a writable folder to keep them",
+          file=sys.stderr)
+    return tmp
 
 
 def configure() -> Path | None:

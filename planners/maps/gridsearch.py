@@ -1,4 +1,4 @@
-"""Exact grid searches: octile distance fields, shortest paths and connected components.
+"""Exact grid searches: octile distance fields, shortest paths, fields over per-move costs, connected components.
 
 Distances are on the 8-connected grid with straight steps of 1 and diagonal steps of sqrt(2), and no
 corner cutting: a diagonal step from (r, c) to (r+dr, c+dc) is legal only if (r+dr, c) and (r, c+dc)
@@ -22,9 +22,10 @@ from planners.worlds.grid import OccupancyGrid
 
 SQRT2 = math.sqrt(2.0)
 
-# the 8 neighbour steps; the first four are straight, the last four diagonal
-_DR = np.array([-1, 1, 0, 0, -1, -1, 1, 1], dtype=np.int64)
-_DC = np.array([0, 0, -1, 1, -1, 1, -1, 1], dtype=np.int64)
+#: The 8 neighbour steps, (row, column) offsets: the first four straight, the last four diagonal.
+MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
+_DR = np.array([dr for dr, _ in MOVES], dtype=np.int64)
+_DC = np.array([dc for _, dc in MOVES], dtype=np.int64)
 
 
 # --- input checks -------------------------------------------------------------------------------
@@ -113,6 +114,30 @@ def _sift_down(heap, pos, key, j, n):
 
 
 @nb.njit(cache=True)
+def _pop(heap, pos, key, size):
+    """Take the heap's least-key item out and mark it settled: (the item, the heap's new size)."""
+    v = heap[0]
+    size -= 1
+    if size > 0:
+        heap[0] = heap[size]
+        pos[heap[0]] = 0
+        _sift_down(heap, pos, key, 0, size)
+    pos[v] = -2
+    return v, size
+
+
+@nb.njit(cache=True)
+def _lowered(heap, pos, key, u, size):
+    """Put ``u`` on the heap, or move it up after its key fell: the heap's new size."""
+    if pos[u] == -1:
+        heap[size] = u
+        pos[u] = size
+        size += 1
+    _sift_up(heap, pos, key, pos[u])
+    return size
+
+
+@nb.njit(cache=True)
 def _dijkstra(padded, goal, stop, dr, dc):
     """Octile Dijkstra from flat padded index ``goal``; stops once ``stop`` is settled (-1: never).
 
@@ -132,13 +157,7 @@ def _dijkstra(padded, goal, stop, dr, dc):
     pos[goal] = 0
     size = 1
     while size > 0:
-        v = heap[0]
-        size -= 1
-        if size > 0:
-            heap[0] = heap[size]
-            pos[heap[0]] = 0
-            _sift_down(heap, pos, dist, 0, size)
-        pos[v] = -2
+        v, size = _pop(heap, pos, dist, size)
         if v == stop:
             break
         dv = dist[v]
@@ -156,12 +175,74 @@ def _dijkstra(padded, goal, stop, dr, dc):
             if nd < dist[u]:
                 dist[u] = nd
                 toward[u] = v
-                if pos[u] == -1:
-                    heap[size] = u
-                    pos[u] = size
-                    size += 1
-                _sift_up(heap, pos, dist, pos[u])
+                size = _lowered(heap, pos, dist, u, size)
     return dist, toward
+
+
+@nb.njit(cache=True)
+def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
+    """The least fixed point of ``V(b) = min over moves a of costs[a, b] + V(b + move a)``, ``V = 0`` at ``goal``.
+
+    Dijkstra from the goal blocks over the reversed moves: settling a block relaxes each block that one
+    move carries onto it. Sums are formed as ``costs[a, b] + V(n)`` in ``costs``' own precision, the very
+    operation (and rounding) of value iteration, so the values are its fixed point bit for bit: every cost is
+    positive, so each sum rounds to at least the value it adds to and the settling order holds in floating
+    point. A block in ``walls`` is never relaxed; a sum at or above ``unreached`` leaves a block unreached.
+    """
+    A, h, w = costs.shape
+    n = h * w
+    dist = np.full(n, unreached, dtype=costs.dtype)
+    pos = np.full(n, -1, dtype=np.int64)  # heap slot; -1 never queued, -2 settled
+    heap = np.empty(n, dtype=np.int64)
+    size = 0
+    for i in range(n):
+        if goal[i // w, i % w]:
+            dist[i] = 0.0
+            heap[size] = i
+            pos[i] = size
+            size += 1
+    while size > 0:
+        v, size = _pop(heap, pos, dist, size)
+        r, c = v // w, v % w
+        dv = dist[v]
+        for a in range(A):
+            br, bc = r - dr[a], c - dc[a]  # the block that move a carries onto v
+            if br < 0 or br >= h or bc < 0 or bc >= w:
+                continue
+            b = br * w + bc
+            if pos[b] == -2 or walls[br, bc]:
+                continue
+            nd = costs[a, br, bc] + dv
+            if nd < dist[b]:
+                dist[b] = nd
+                size = _lowered(heap, pos, dist, b, size)
+    return dist.reshape(h, w)
+
+
+@nb.njit(cache=True)
+def _block_steps(free, block, dr, dc):
+    """(8, h, w) bool: whether some free cell of each block steps into its neighbour block by each move."""
+    H, W = free.shape
+    h, w = H // block, W // block
+    move = np.full((3, 3), -1, dtype=np.int64)  # (block row move + 1, block column move + 1) -> move index
+    for a in range(len(dr)):
+        move[dr[a] + 1, dc[a] + 1] = a
+    out = np.zeros((len(dr), h, w), dtype=np.bool_)
+    for r in range(H):
+        for c in range(W):
+            if not free[r, c]:
+                continue
+            br, bc = r // block, c // block
+            for k in range(len(dr)):
+                r2, c2 = r + dr[k], c + dc[k]
+                if r2 < 0 or r2 >= H or c2 < 0 or c2 >= W or not free[r2, c2]:
+                    continue
+                if k >= 4 and not (free[r2, c] and free[r, c2]):  # no corner cutting
+                    continue
+                mr, mc = r2 // block - br, c2 // block - bc
+                if mr or mc:
+                    out[move[mr + 1, mc + 1], br, bc] = True
+    return out
 
 
 @nb.njit(cache=True)
@@ -216,6 +297,55 @@ def distance_field(obstacles: np.ndarray, goal_cell: tuple[int, int]) -> np.ndar
     padded = _padded(obstacles)
     dist, _ = _dijkstra(padded, (r + 1) * padded.shape[1] + c + 1, -1, _DR, _DC)
     return dist.reshape(padded.shape)[1:-1, 1:-1].copy()
+
+
+def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unreached: float) -> np.ndarray:
+    """Every cell's least total cost to reach a ``goal`` cell, moving with per-cell, per-move ``costs``.
+
+    The fixed point that value iteration reaches (``V = min over moves of cost + V of the cell reached``),
+    computed exactly by a compiled Dijkstra instead of one sweep of the grid per iteration.
+
+    Args:
+        costs: (8, h, w) float array, positive: ``costs[a, r, c]`` is what leaving cell (r, c) by move ``a``
+            costs, the moves in ``MOVES`` order ((-1, 0), (1, 0), (0, -1), (0, 1), then the diagonals
+            (-1, -1), (-1, 1), (1, -1), (1, 1)); a move off the grid is never taken.
+        goal: (h, w) bool, the cells whose value is 0.
+        walls: (h, w) bool, cells never entered (their value stays ``unreached``, unless they are goals).
+        unreached: The value of a cell no goal reaches; a total at or above it counts as unreached.
+
+    Returns:
+        (h, w) array of ``costs``' dtype. The sums are formed in that dtype as value iteration forms them, so
+        the result equals value iteration's converged values bit for bit.
+    """
+    costs = np.ascontiguousarray(costs)
+    if costs.ndim != 3 or costs.shape[0] != len(MOVES):
+        raise ValueError(f"costs must be an (8, h, w) array, got shape {costs.shape}")
+    if costs.dtype not in (np.float32, np.float64):
+        raise ValueError(f"costs must be float32 or float64, got dtype {costs.dtype}")
+    shape = costs.shape[1:]
+    goal, walls = np.ascontiguousarray(goal, dtype=bool), np.ascontiguousarray(walls, dtype=bool)
+    if goal.shape != shape or walls.shape != shape:
+        raise ValueError(f"goal {goal.shape} and walls {walls.shape} must have the costs' grid shape {shape}")
+    return _move_cost_dijkstra(costs, goal, walls, costs.dtype.type(unreached), _DR, _DC)
+
+
+def block_steps(free: np.ndarray, block: int) -> np.ndarray:
+    """Whether any free cell of each ``block`` x ``block`` block can step into its neighbour block, per move.
+
+    A step goes from a free cell to one of its 8 neighbours that is free, a diagonal one only if both cells
+    beside it are free (the grid's own rule); cells off the map are blocked.
+
+    Args:
+        free: (H, W) bool, True where a cell is free; H and W whole multiples of ``block``.
+        block: Cells per block side.
+
+    Returns:
+        (8, H // block, W // block) bool, the moves in ``MOVES`` order.
+    """
+    free = np.ascontiguousarray(free, dtype=bool)
+    if free.ndim != 2 or free.shape[0] % block or free.shape[1] % block:
+        raise ValueError(f"free must be an (H, W) map of whole {block}-cell blocks, got shape {free.shape}")
+    return _block_steps(free, int(block), _DR, _DC)
 
 
 def _search(grid: OccupancyGrid, start, goal):

@@ -24,13 +24,14 @@ import hashlib
 import json
 import math
 import os
+import stat
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from planners.base.fileio import InputError, check_int
+from planners.base.fileio import InputError, check_int, check_json_depth, env_limit
 from planners.base.problem import Problem
 from planners.maps.generators import (
     FAMILIES,
@@ -40,11 +41,12 @@ from planners.maps.generators import (
     TRAIN_SEEDS,
     TUNING_SEED0,
     VALIDATION_SEED0,
+    check_size,
     generate,
 )
 from planners.maps.gridsearch import free_components
 from planners.maps.movingai import benchmark_scenarios, load_movingai_scenarios, movingai_dir
-from planners.maps.readers import MAP_READERS, ROS_SUFFIXES, read_map
+from planners.maps.readers import MAP_READERS, MAX_PIXELS_ENV, ROS_SUFFIXES, max_pixels_limit, read_map
 from planners.maps.rosmap import read_ros_yaml
 from planners.worlds.grid import OccupancyGrid
 
@@ -60,6 +62,10 @@ QUERY_COLUMNS = ("map", "start_x", "start_y", "goal_x", "goal_y")
 NOT_MAPS = (".md", ".txt", ".csv", ".scen", ".json", ".rst")
 #: Drawn queries per map unless told otherwise.
 DEFAULT_PER_MAP = 10
+#: Most drawn queries per map (every one is drawn when the set opens, about a millisecond each on a
+#: few hundred cells a side); ``SAMPLERGYM_MAX_PER_MAP`` raises it.
+DEFAULT_MAX_PER_MAP = 1000
+MAX_PER_MAP_ENV = "SAMPLERGYM_MAX_PER_MAP"
 #: Default goal radius, in cells of the map (so in world units it is this times the resolution).
 DEFAULT_TOLERANCE_CELLS = 4.0
 #: Default least start-goal distance of drawn queries, as a share of the diagonal of the box around the free cells.
@@ -202,7 +208,7 @@ class MapSet:
             fams = tuple(f for f in families.split(",") if f) or FAMILIES
             if kind == "generated":
                 if size:
-                    kwargs["size"] = _int_option(size, "size", text)
+                    kwargs["size"] = check_size(_int_option(size, "size", text), f"map set {text!r}: size")
                 return GeneratedMapSet(fams, **kwargs)
             if size:
                 raise InputError(f"map set {text!r}: shifted maps cycle through the sides {SHIFTED_SIZES}; "
@@ -247,6 +253,10 @@ class MapSet:
     def record(self) -> dict:
         """A JSON-able record of the set: what it holds, its query rule and its split (with the map names)."""
         raise NotImplementedError
+
+    def files(self) -> list[Path]:
+        """The files the set's problems are read from (maps, scenarios, queries, manifest); none where generated."""
+        return []
 
     def describe(self) -> str:
         """The record in a few printable lines."""
@@ -324,14 +334,16 @@ class FileMapSet(MapSet):
         robot_radius: Obstacles grow by this radius (world units) before anything else, default 0.
         threshold: Gray level below which image pixels are obstacles, default 0.5.
         goal_tolerance: Goal radius in world units, default 4 cells of each map.
-        per_map: Drawn queries per map, default 10.
+        per_map: Drawn queries per map, default 10, at most ``DEFAULT_MAX_PER_MAP`` (1,000; raised by
+            ``SAMPLERGYM_MAX_PER_MAP``).
         min_distance: Least straight-line start-goal distance of drawn queries in world units,
             default a quarter of the diagonal of the box around each map's free cells.
         seed: Seed of the drawn queries (each map's queries depend on it and the map's name only).
         split_seed: Seed of the split (``split_by_hash``).
         fractions: Share of the maps per part, default ``DEFAULT_FRACTIONS``.
         name: The set's name in outputs, default the folder's or manifest's name.
-        max_pixels: Largest map accepted, in cells (``planners.maps.readers.max_pixels_limit``).
+        max_pixels: Largest map accepted, in cells (``planners.maps.readers.max_pixels_limit``). Given
+            here it may raise the limit; a manifest's may only lower it (one above is refused).
 
     Raises:
         InputError: Anything ``validate`` refuses, before any query is planned.
@@ -360,12 +372,23 @@ class FileMapSet(MapSet):
             root = source.parent
         else:
             raise InputError(f"map set {str(source)!r} does not exist; expected a folder of maps or a manifest .json")
+        if "max_pixels" in opts and "max_pixels" not in given:  # a file may lower the limit in force, never raise it
+            limit, mp = max_pixels_limit(), opts["max_pixels"]
+            check_int(mp, f"manifest {source}: max_pixels")
+            if mp > limit:
+                raise InputError(f"manifest {source}: max_pixels = {mp:,} is above the limit in force ({limit:,}); a "
+                                 f"manifest may only lower it. To raise it, set {MAX_PIXELS_ENV} or pass max_pixels= "
+                                 "in code")
         opts.update(given)
         self.source = source
         self.name = str(opts.get("name", source.stem if source.is_file() else source.name))
         self.options = {k: opts[k] for k in self._OPTIONS if k in opts and k != "name"}
         self.seed = check_int(opts.get("seed", 0), f"map set {source}: seed", low=0)
         self.per_map = check_int(opts.get("per_map", DEFAULT_PER_MAP), f"map set {source}: per_map", low=1)
+        most = env_limit(MAX_PER_MAP_ENV, DEFAULT_MAX_PER_MAP)
+        if self.per_map > most:
+            raise InputError(f"map set {source}: per_map = {self.per_map:,} drawn queries per map, more than the limit "
+                             f"of {most:,} (each is drawn when the set opens); set {MAX_PER_MAP_ENV} to raise it")
         self.min_distance = _positive(opts.get("min_distance"), "min_distance", source)
         robot_radius = _positive(opts.get("robot_radius", 0.0), "robot_radius", source, zero=True)
         tolerance = _positive(opts.get("goal_tolerance"), "goal_tolerance", source)
@@ -391,6 +414,7 @@ class FileMapSet(MapSet):
             split_seed = check_int(opts.get("split_seed", 0), f"map set {source}: split_seed", low=0)
             self.split = split_by_hash(list(self.maps_by_name), split_seed, opts.get("fractions"))
         self._drawn_queries: dict[str, list[MapQuery]] = {}
+        self._query_files: list[Path] = []
         self._queries = self._read_queries(opts.get("queries"), root if "queries" not in given else Path.cwd())
         self.validate()
 
@@ -399,7 +423,7 @@ class FileMapSet(MapSet):
     def _read_queries(self, rule, root: Path) -> dict[str, list[MapQuery]] | None:
         """Fixed queries by map (from a file or scenarios), or None for drawn queries."""
         if rule is None:
-            if self.source.is_dir() and (self.source / QUERIES_FILE).is_file():
+            if self.source.is_dir() and os.path.lexists(self.source / QUERIES_FILE):  # a folder or FIFO is refused
                 rule = self.source / QUERIES_FILE
             elif self.source.is_dir() and any(self.source.rglob("*.scen")):
                 rule = "scen"
@@ -417,6 +441,7 @@ class FileMapSet(MapSet):
 
     def _file_queries(self, path: Path) -> dict[str, list[MapQuery]]:
         out: dict[str, list[MapQuery]] = {n: [] for n in self.maps_by_name}
+        self._query_files.append(path)
         for lineno, name, start, goal in read_queries_file(path):
             where = f"{path}, line {lineno}"
             if name not in self.maps_by_name:
@@ -435,6 +460,7 @@ class FileMapSet(MapSet):
             scens = sorted(p for p in m.path.parent.glob(f"{m.path.stem}*.scen")
                            if p.name.split(".")[0].replace("-random-1", "") == m.path.stem)
             for scen in scens:
+                self._query_files.append(scen)
                 for p in load_movingai_scenarios(scen, map_path=m.path):
                     # the scenario counts cells; the set's map may have a resolution and an origin
                     where = f"{scen}, line {p.name.rpartition('#')[2]}"
@@ -484,6 +510,14 @@ class FileMapSet(MapSet):
         m = self.maps_by_name[names[int(rng.integers(len(names)))]]
         start, goal = draw_query(m.grid, m.labels, rng, self._min_distance(m), m.tolerance)
         return Problem(m.grid, start, goal, goal_tolerance=m.tolerance, name=m.name)
+
+    def files(self) -> list[Path]:
+        out = [self.source] if self.source.is_file() else []
+        for m in sorted(self.maps_by_name.values(), key=lambda m: m.name):
+            out.append(m.path)
+            if m.path.suffix.lower() in ROS_SUFFIXES:
+                out.append(read_ros_yaml(m.path)["image"])
+        return out + self._query_files
 
     def record(self) -> dict:
         maps = {n: {"path": str(m.path), "shape": list(m.grid.shape), "resolution": m.grid.resolution,
@@ -551,7 +585,9 @@ def _default_name(relative: Path) -> str:
 
 def _manifest(path: Path) -> tuple[list[dict], dict]:
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        check_json_depth(text, f"manifest {path}")
+        data = json.loads(text)
     except UnicodeDecodeError as exc:
         raise InputError(f"manifest {path}: not UTF-8 text ({exc})") from None
     except json.JSONDecodeError as exc:
@@ -581,8 +617,11 @@ def _load_entry(entry: dict, root: Path, opts: dict, robot_radius: float, tolera
     path = Path(entry["path"])
     if not path.is_absolute():
         path = root / path
-    name = str(entry.get("name") or _default_name(Path(entry["path"])))
     where = entry.get("where", f"map set {root}")
+    if path.is_dir() or not Path(entry["path"]).name:
+        raise InputError(f"{where}: path {entry['path']!r} is {'a folder' if path.is_dir() else 'empty'}, expected "
+                         "a map file (list the maps of a folder one by one, or open the folder as the map set)")
+    name = str(entry.get("name") or _default_name(Path(entry["path"])))
     ros = path.suffix.lower() in ROS_SUFFIXES
     if ros and ("resolution" in entry or "origin" in entry):
         raise InputError(f"{where}: {path} is a ROS map.yaml, which sets its own resolution and origin; "
@@ -621,18 +660,25 @@ def read_queries_file(path: str | os.PathLike) -> Iterator[tuple[int, str, tuple
     the set (its path relative to the folder, without the suffix).
 
     Raises:
-        InputError: A missing file, a wrong header, a short row or a value that is not a finite
-            number; the message names the file, the line and the value.
+        InputError: A missing file, one that is not a regular file (a folder, a FIFO, a device), a
+            wrong header, a short row or a value that is not a finite number; the message names the
+            file, the line and the value.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"queries file {str(path)!r} does not exist")
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        raise InputError(f"queries file {str(path)!r} does not exist") from None
+    if not stat.S_ISREG(mode):
+        kind = ("a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else
+                "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "not a regular file")
+        raise InputError(f"queries file {str(path)!r} is {kind}; expected a regular file")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputError(f"queries file {path}: not UTF-8 text ({exc})") from None
     header = None
-    for lineno, row in enumerate(csv.reader(text.splitlines()), start=1):
+    for lineno, row in _csv_rows(path, text):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
             continue
         row = [v.strip() for v in row]
@@ -657,6 +703,21 @@ def read_queries_file(path: str | os.PathLike) -> Iterator[tuple[int, str, tuple
         yield lineno, row[0], (values[0], values[1]), (values[2], values[3])
     if header is None:
         raise InputError(f"queries file {path} is empty; expected the header {','.join(QUERY_COLUMNS)}")
+
+
+def _csv_rows(path: Path, text: str) -> Iterator[tuple[int, list[str]]]:
+    """The CSV rows of ``text`` with their line numbers; a malformed row is an ``InputError`` naming the line."""
+    reader = csv.reader(text.splitlines())
+    while True:
+        try:
+            row = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            why = (f"a value longer than the {csv.field_size_limit() // 1024} KiB a field may hold"
+                   if "field larger than field limit" in str(exc) else str(exc))
+            raise InputError(f"{path}, line {reader.line_num}: {why}") from None
+        yield reader.line_num, row
 
 
 def _check_query(m: _Map, start, goal, where: str) -> None:
@@ -730,7 +791,10 @@ class GeneratedMapSet(MapSet):
                  n_validation: int = 10, validation_sizes: Sequence[int] = (64, 128),
                  train_sizes: Sequence[int] = (64, 128), goal_tolerance: float = 4.0) -> None:
         self.families = _families(families)
-        self.size, self.goal_tolerance = int(size), float(goal_tolerance)
+        self.size, self.goal_tolerance = check_size(size, "size"), float(goal_tolerance)
+        for what, sides in (("validation_sizes", validation_sizes), ("train_sizes", train_sizes)):
+            for side in sides:
+                check_size(side, what)
         self.n = {"test": check_int(n_test, "n_test", low=0), "tuning": check_int(n_tune, "n_tune", low=0),
                   "validation": check_int(n_validation, "n_validation", low=0)}
         self.validation_sizes, self.train_sizes = tuple(validation_sizes), tuple(train_sizes)
@@ -859,6 +923,14 @@ class MovingAIMapSet(MapSet):
 
     def problem(self, query: MapQuery) -> Problem:
         return self._problems[query.map][query.key]
+
+    def files(self) -> list[Path]:
+        out = []
+        for m in self.names:
+            out += [p for p in sorted(self.directory.glob(f"{m}*.scen"))
+                    if p.name.split(".")[0].replace("-random-1", "") == m]
+            out += [p for p in (self.directory / f"{m}.map",) if p.is_file()]
+        return out
 
     def record(self) -> dict:
         return {"kind": "movingai", "name": self.name, "directory": str(self.directory), "maps": list(self.names),

@@ -63,7 +63,8 @@ def load_movingai_scenarios(
 
     Start and goal are the centres of the scenario's cells (``x + 0.5, y + 0.5``); each problem's
     ``reference_length`` is the published octile optimum. The map is found by the basename of the
-    scenario's map column next to the ``.scen`` file, unless ``map_path`` is given.
+    scenario's map column next to the ``.scen`` file, unless ``map_path`` is given; then every line's
+    map column must name that file (its base name), or the line is refused.
     """
     path = Path(path)
     if not path.is_file():
@@ -91,7 +92,11 @@ def load_movingai_scenarios(
         if not (math.isfinite(optimal) and optimal >= 0):
             raise InputError(f"{path}, line {lineno}: optimal length must be a finite number >= 0, "
                              f"got {fields[8]!r}")
-        mp = Path(map_path) if map_path is not None else path.parent / Path(fields[1].replace("\\", "/")).name
+        named = Path(fields[1].replace("\\", "/")).name
+        if map_path is not None and named.casefold() != Path(map_path).name.casefold():
+            raise InputError(f"{path}, line {lineno}: its map column names {fields[1]!r}, but the file is read with "
+                             f"the map {str(map_path)!r}; a scenario file belongs to the map it names")
+        mp = Path(map_path) if map_path is not None else path.parent / named
         if mp not in grids:
             if not mp.is_file():
                 raise InputError(f"{path}, line {lineno}: its map {fields[1]!r} is looked up as {str(mp)!r}, "

@@ -1,0 +1,72 @@
+"""Time to solution: the clock comparison's table, its targets, and the benchmark script end to end."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from conftest import load_script
+
+from learning.evaluation import clock as C
+from planners.tools.benchmark import Run
+
+
+def _run(map_set: str, method: str, ms: float, solved: bool = True, query: str = "q", seed: int = 0) -> Run:
+    planner = {C.CONNECT: "RRTConnect", C.PRM: "PRM"}.get(method, "RRT")
+    sampler = "OMPL" if method == C.OMPL_CONNECT else method
+    return Run(map=map_set, query=query, split="test", planner=planner, sampler=sampler, seed=seed, solved=solved,
+               iterations=10, lower_bound=5, candidates=10, collision_checks=10, wall_time=ms / 1e3,
+               us_per_iteration=ms * 100, path_cost=1.0 if solved else math.inf, forward_passes=0, vertices=10)
+
+
+def test_the_table_names_the_fastest_classical_option_and_judges_the_targets():
+    times = {"open": {C.ROUTE: 1.1, C.ABLATION: 0.9, C.EXACT: 2.0, C.TUNED: 1.0, C.CONNECT: 3.0, C.PRM: 4.0,
+                      C.OMPL_CONNECT: 5.0},
+             "winding": {C.ROUTE: 6.0, C.ABLATION: 40.0, C.EXACT: 9.0, C.TUNED: 30.0, C.CONNECT: 12.0, C.PRM: 20.0,
+                         C.OMPL_CONNECT: 50.0}}
+    runs = [_run(m, k, v, query=f"{m}-{i}") for m, row in times.items() for k, v in row.items() for i in range(3)]
+    rows, verdict = C.clock_table(runs, ["winding", "open"])
+    assert [r["map set"] for r in rows] == ["winding", "open", C.POOLED]
+    winding, open_, pooled = rows
+    assert winding["fastest classical"].startswith(C.EXACT) and winding["route / fastest"] == "0.67"
+    assert winding["target"].startswith("fails (<= 0.5")  # the fastest takes 9 ms: the route must halve it
+    assert open_["fastest classical"].startswith(C.TUNED) and open_["target"] == "holds (<= 1.2)"
+    assert open_[C.ROUTE] == "1.1 (100%)"
+    assert verdict["held"] == 1 and verdict["sets"] == 2 and verdict["slow sets"] == 1 and verdict["slow held"] == 0
+    assert pooled["route / OMPL RRT-Connect"] == f"{verdict['pooled / OMPL RRT-Connect']:.2f}"
+
+
+def test_an_unsolved_run_counts_with_its_time_and_lowers_the_share_solved():
+    runs = [_run("m", C.ROUTE, 2.0), _run("m", C.ROUTE, 100.0, solved=False, seed=1), _run("m", C.TUNED, 1.0),
+            _run("m", C.TUNED, 1.0, seed=1)]
+    rows, _ = C.clock_table(runs)
+    assert rows[0][C.ROUTE] == "51 (50%)"
+
+
+def test_the_fastest_by_map_size():
+    runs = [_run("a", C.ROUTE, 3.0, query="small"), _run("a", C.PRM, 1.0, query="small"),
+            _run("b", C.ROUTE, 30.0, query="big"), _run("b", C.PRM, 60.0, query="big")]
+    rows = C.fastest_by_size(runs, {"small": 64, "big": 512})
+    assert [(r["map side"], r["fastest"]) for r in rows] == [("up to 64", C.PRM), ("above 256", C.ROUTE)]
+
+
+def test_the_clock_benchmark_times_every_method_on_the_same_queries(tmp_path, capsys):
+    bench = load_script("benchmark_clock")
+    out = tmp_path / "clock"
+    assert bench.main(["--families", "forest", "--maps", "2", "--tuning-maps", "1", "--seeds", "1", "--no-shifted",
+                       "--no-unseen", "--movingai-maps", "--no-ompl", "--processes", "1", "--out", str(out)]) == 0
+    text = (out / "clock.md").read_text()
+    for method in (C.ROUTE, C.ABLATION, C.EXACT, C.TUNED, C.CONNECT, C.PRM):
+        assert method in text
+    lines = (out / "runs.csv").read_text().splitlines()
+    assert len(lines) == 1 + 2 * 6  # two queries, one seed, six methods
+    assert "The fastest method by map size" in text and "| up to 128 |" in text
+
+
+@pytest.mark.parametrize("flags, named", [(["--maps", "0"], "--maps"), (["--route", "nowhere.pt"], "--route")])
+def test_bad_flags_are_refused_before_any_work(tmp_path, capsys, flags, named):
+    bench = load_script("benchmark_clock")
+    with pytest.raises(SystemExit) as exc:
+        bench.main([*flags, "--out", str(tmp_path / "o")])
+    assert exc.value.code == 2 and named in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
