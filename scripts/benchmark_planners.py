@@ -3,9 +3,16 @@
     python scripts/benchmark_planners.py                 # full run (~8 min on 2 cores), OMPL if installed
     python scripts/benchmark_planners.py --quick         # smoke-sized run
     python scripts/benchmark_planners.py --no-ompl
+    python scripts/benchmark_planners.py --rigid DIR     # RRT-Connect on OMPL.app's .cfg problems instead
 
 Prints Markdown tables and writes them, with the raw runs as CSV, under --out; also one OMPL
 benchmark log per map (ompl/<map>.log) that OMPL's ompl_benchmark_statistics.py and Planner Arena open.
+
+With ``--rigid DIR`` (OMPL.app's root or its ``resources/3D`` folder; needs the ``mesh`` extra) it runs
+instead our RRT-Connect on every ``.cfg`` problem there, with the problem's own time limit and run count
+(``--rigid-time-limit`` and ``--rigid-runs`` cap them), and prints and writes (``rigid.md``) the
+success rate, median time, tree states and collision checks; ``--rigid-ompl`` adds OMPL's RRT-Connect
+(``planners.tools.ompl_bridge.ompl_rigid_connect``: OMPL.app's set-up, our state check).
 """
 
 from __future__ import annotations
@@ -161,6 +168,63 @@ def write_ompl_logs(records: list[benchmark.Run], args, out_dir: Path) -> list[P
     return paths
 
 
+def rigid(args) -> int:
+    """RRT-Connect on every OMPL.app problem in ``args.rigid``, with each problem's time limit and run count."""
+    import statistics
+    import time
+
+    from planners import RRTConnect
+    from planners.worlds.omplapp import load_omplapp, omplapp_dir
+
+    folder = omplapp_dir(args.rigid)
+    cfgs = sorted(folder.glob("*.cfg"), key=lambda p: p.name.lower())
+    if args.rigid_problems:
+        cfgs = [c for c in cfgs if c.stem in args.rigid_problems]
+    use_ompl = args.rigid_ompl and ompl_bridge.available()
+    if args.rigid_ompl and not use_ompl:
+        print("OMPL not installed (pip install -c constraints.txt -e '.[bench]'); running without it", file=sys.stderr)
+    head = ("| problem | planner | runs | time limit (s) | success | median time (s) | median tree states "
+            "| median checks |\n|---|---|---|---|---|---|---|---|\n")
+    out = io.StringIO()
+    out.write(f"# RRT-Connect on OMPL.app's problems\n\n{platform.processor() or platform.machine()}, "
+              f"Python {platform.python_version()}, default step (0.2 of the state box's diagonal), seeds 0 to "
+              f"runs - 1; time excludes compilation.\n\n" + head)
+    print(out.getvalue(), end="", flush=True)
+    for cfg in cfgs:
+        try:
+            task = load_omplapp(cfg)
+        except (InputError, ImportError) as e:
+            line = f"| {cfg.stem} | | | | | not loaded: {str(e).split(': ', 1)[-1]} | | |\n"
+            out.write(line)
+            print(line, end="", flush=True)
+            continue
+        limit = min(task.time_limit or args.rigid_time_limit or 10.0, args.rigid_time_limit or np.inf)
+        runs = min(task.run_count or args.rigid_runs or 10, args.rigid_runs or 10**9)
+        RRTConnect(task.problem, seed=0).solve(max_iterations=2)  # compile before timing
+        solved, seconds, states, checks = [], [], [], []
+        for seed in range(runs):
+            planner = RRTConnect(task.problem, seed=seed)
+            t = time.perf_counter()
+            r = planner.solve(time_limit=limit)
+            seconds.append(time.perf_counter() - t - planner.compile_time)
+            solved.append(r.solved)
+            states.append(r.num_vertices)
+            checks.append(r.collision_checks)
+        line = (f"| {cfg.stem} | ours | {runs} | {limit:g} | {100 * np.mean(solved):.0f}% | "
+                f"{statistics.median(seconds):.2f} | {statistics.median(states):.0f} | "
+                f"{statistics.median(checks):.0f} |\n")
+        if use_ompl:
+            o = [ompl_bridge.ompl_rigid_connect(task.problem, seed=seed, time_limit=limit) for seed in range(runs)]
+            line += (f"| {cfg.stem} | OMPL | {runs} | {limit:g} | {100 * np.mean([r.solved for r in o]):.0f}% | "
+                     f"{statistics.median(r.time for r in o):.2f} | "
+                     f"{statistics.median(r.num_vertices for r in o):.0f} | |\n")
+        out.write(line)
+        print(line, end="", flush=True)
+    atomic_write_text(args.out / "rigid.md", out.getvalue())
+    print(f"\nwrote {args.out / 'rigid.md'}")
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seeds", type=int, default=30, help="generated maps per family")
@@ -173,6 +237,13 @@ def main(argv=None) -> int:
     ap.add_argument("--no-ompl", action="store_true")
     ap.add_argument("--quick", action="store_true", help="3 seeds, 2 scenarios, growth to 10k only")
     ap.add_argument("--out", type=Path, default=Path("results/benchmark_planners"))
+    ap.add_argument("--rigid", metavar="DIR", help="run RRT-Connect on OMPL.app's .cfg problems in DIR instead")
+    ap.add_argument("--rigid-runs", type=int, help="at most this many runs per problem (default: its run_count)")
+    ap.add_argument("--rigid-time-limit", type=float,
+                    help="at most this many seconds per run (default: its time_limit)")
+    ap.add_argument("--rigid-problems", nargs="+", help="only these problems (names of .cfg files)")
+    ap.add_argument("--rigid-ompl", action="store_true",
+                    help="OMPL's RRT-Connect beside ours (OMPL.app's discrete motion check, our state check)")
     add_backend_arguments(ap, processes=1,
                           backend_help="where the all-planner comparison runs (the timed ours-vs-OMPL sections stay "
                                        "serial)",
@@ -189,8 +260,18 @@ def main(argv=None) -> int:
         if args.movingai and not Path(args.movingai).is_dir():
             raise InputError(f"--movingai {args.movingai}: not a folder")
         check_output_place(args.out, "--out")
+        if args.rigid_runs is not None:
+            check_int_flags(args, ("rigid_runs",))
+        if args.rigid_time_limit is not None:
+            check_number("command line", "--rigid-time-limit", args.rigid_time_limit, low=0.0, low_open=True)
 
     check_flags(check)
+    if args.rigid is not None:
+        try:
+            return rigid(args)
+        except (InputError, ImportError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
     if args.quick:
         args.seeds, args.scenarios = 3, 2
     use_ompl = not args.no_ompl and ompl_bridge.available()

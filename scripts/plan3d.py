@@ -2,6 +2,7 @@
 
     python scripts/plan3d.py planners/scenes/window.scene --setup prm --out results/plan3d
     python scripts/plan3d.py my.scene --setup rrt --seed 3 --out results/rrt3
+    python scripts/plan3d.py omplapp/resources/3D/Easy.cfg --time-limit 20 --out results/easy   # a mesh problem
 
 Set-ups (planners.worlds.rigid3d.setup_planner): ``prm``: PRM, 5,000 samples, k = 3, Dijkstra on the
 (x, y, z, cos, sin of each angle) metric; ``rrt``: RRT, step 0.01 of the scene's longest side, goal
@@ -10,6 +11,9 @@ Writes plan3d.png (the scene, the path and the body along it) and, when solved, 
 flying the path) under --out, each atomically, and prints iterations, checks, time and path length.
 The planning time is split into planning proper and numba's one-off compilation (the first run after
 an install compiles the rigid-body kernels for a while; later runs load the compiled code).
+An OMPL.app ``.cfg`` problem (planners.worlds.omplapp; needs the ``mesh`` extra) is planned with
+RRT-Connect at its default step under ``--time-limit`` (default the file's ``time_limit``), and drawn
+with its meshes (large ones as a seeded subset of their triangles).
 Exit status: 0 solved, 1 not solved within the budget, 2 bad input or an output that cannot be written.
 """
 
@@ -26,8 +30,10 @@ from planners.worlds.rigid3d import SETUPS, load_scene, setup_planner
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("scene", type=Path, help="scene file (format: planners.worlds.rigid3d.load_scene)")
-    ap.add_argument("--setup", choices=SETUPS, required=True, help="the seed project's PRM or RRT set-up")
+    ap.add_argument("scene", type=Path, help="scene file (format: planners.worlds.rigid3d.load_scene) or an "
+                                             "OMPL.app .cfg problem")
+    ap.add_argument("--setup", choices=SETUPS, help="the seed project's PRM or RRT set-up (scene files; required)")
+    ap.add_argument("--time-limit", type=float, help="seconds for a .cfg problem (default: its time_limit)")
     ap.add_argument("--seed", type=int, default=0, help="planner seed (>= 0)")
     ap.add_argument("--out", type=Path, default=Path("results/plan3d"), help="folder for plan3d.png and plan3d.gif")
     ap.add_argument("--frames", type=int, default=None,
@@ -44,14 +50,32 @@ def main(argv=None) -> int:
         return fail(f"--frames must be at least 2, got {args.frames}")
     if args.out.exists() and not args.out.is_dir():
         return fail(f"--out {args.out} exists and is not a folder")
+    mesh = args.scene.suffix.lower() == ".cfg"
+    if not mesh and args.setup is None:
+        return fail("--setup is required for a scene file (prm or rrt)")
+    if args.time_limit is not None and not (args.time_limit > 0):
+        return fail(f"--time-limit must be a positive number of seconds, got {args.time_limit}")
     try:
-        problem = load_scene(args.scene)
-    except (FileNotFoundError, InputError) as exc:
+        if mesh:
+            from planners.worlds.omplapp import load_omplapp
+
+            task = load_omplapp(args.scene)
+            problem = task.problem
+            limit = args.time_limit or task.time_limit or 60.0
+        else:
+            problem = load_scene(args.scene)
+    except (FileNotFoundError, InputError, ImportError) as exc:
         return fail(str(exc))
     t0 = time.perf_counter()  # making the planner binds its sampler (the sampler's per-query work): timed apart
-    planner, budget = setup_planner(problem, args.setup, seed=args.seed)
+    if mesh:
+        from planners import RRTConnect
+
+        planner, budget = RRTConnect(problem, seed=args.seed), f"{limit:g} s"
+        args.setup = "RRT-Connect"
+    else:
+        planner, budget = setup_planner(problem, args.setup, seed=args.seed)
     t_sampler = time.perf_counter() - t0
-    r = planner.solve(max_iterations=budget)
+    r = planner.solve(time_limit=limit) if mesh else planner.solve(max_iterations=budget)
 
     # imported only now: matplotlib costs a second, and bad input should fail fast
     from planners.viz.plotting import save_figure
@@ -69,7 +93,8 @@ def main(argv=None) -> int:
         return fail(f"cannot write under {args.out}: {exc}")
     t_out = time.perf_counter() - t0
     print(f"scene:            {args.scene} ({problem.world!r})")
-    print(f"set-up:           {args.setup}: {r.planner}, seed {args.seed}, budget {budget} iterations")
+    unit = "" if mesh else " iterations"
+    print(f"set-up:           {args.setup}: {r.planner}, seed {args.seed}, budget {budget}{unit}")
     print(f"solved:           {r.solved} ({r.stop_reason})")
     print(f"iterations:       {r.iterations}")
     print(f"collision checks: {r.collision_checks}")

@@ -57,6 +57,11 @@ class _CompileTimer(_nb_event.Listener):
 _nb_event.register("numba:compiler_lock", _CompileTimer())
 
 
+def _work_clock() -> float:
+    """Seconds on this thread's clock that leaves numba compilation out (time limits run on it)."""
+    return time.perf_counter() - compile_seconds()
+
+
 def compile_seconds() -> float:
     """Seconds this thread has spent so far in numba's compiler (compiling or loading cached code).
 
@@ -325,6 +330,9 @@ class Planner(abc.ABC):
         two), or one iteration or one Lazy-PRM search round after it where that is longer (a
         millisecond or so on 2-D maps), plus the time ``result()`` takes to extract the path. How
         the work is split never changes the result: a timed run ends as the same iterations untimed.
+        A world with a ``set_deadline`` hook (``MeshWorld``, whose one motion check can take many
+        milliseconds) is told the deadline and answers "blocked" to checks still under way past it,
+        so the last iteration ends early; what it had added stays valid.
 
         Args:
             max_iterations: Iterations (samples) this call may use.
@@ -341,6 +349,11 @@ class Planner(abc.ABC):
         t0, c0 = time.perf_counter(), compile_seconds()
         budget = np.inf if max_iterations is None else int(max_iterations)
         done = 0
+        # a world whose single checks can be long (a mesh world) is told the deadline, on the clock that
+        # leaves compilation out, and answers "blocked" to the checks still under way past it
+        set_deadline = getattr(self.problem.world, "set_deadline", None) if time_limit is not None else None
+        if set_deadline is not None:
+            set_deadline(t0 - c0 + time_limit, _work_clock)
         try:
             while True:
                 if self._finished():
@@ -364,6 +377,8 @@ class Planner(abc.ABC):
                     spent = time.perf_counter() - t_call - (compile_seconds() - c_call)
                     self._sample_s, self._last_used = spent / max(used, 1), used
         finally:
+            if set_deadline is not None:
+                set_deadline(None, None)
             self._call_budget = None
             self._compile += compile_seconds() - c0
             self._time += time.perf_counter() - t0

@@ -15,6 +15,9 @@ an unknown code raises.
 * ``WORLD_RIGID``: ``geom`` rows are boxes ``(x0, y0, z0, x1, y1, z1)``, ``body`` the robot's points
   in its own frame, ``params = [xlo, ylo, zlo, xhi, yhi, zhi, delta, body_radius]`` (see
   ``planners.kernels.rigid``).
+* ``WORLD_MESH``: a triangle-mesh body among a triangle-mesh environment; ``grid`` the broad phase's
+  distance grid, ``body`` the body's cover points, ``params`` as ``planners.kernels.mesh`` lists them;
+  the exact check runs in FCL, reached from compiled code in object mode.
 
 Obstacles are closed sets and the free space is open: a motion is valid only if it meets no point of
 any obstacle, its boundary included, and stays strictly inside the world's bounds.
@@ -28,6 +31,7 @@ import numba as nb
 import numpy as np
 from numba.extending import overload
 
+from planners.kernels.mesh import mesh_motion_free
 from planners.kernels.rigid import rigid_motion_free
 from planners.kernels.space import OVERLOAD_JIT, compiled_only, static_code
 from planners.kernels.state import WorldKernel
@@ -35,6 +39,7 @@ from planners.kernels.state import WorldKernel
 WORLD_GRID = 0
 WORLD_SHAPES = 1
 WORLD_RIGID = 2
+WORLD_MESH = 3
 
 # Segments are inflated by this many cell widths, so floating-point rounding can only reject a
 # motion that grazes an obstacle, never accept one that touches it.
@@ -183,6 +188,12 @@ def _rigid_motion_free(world, a, b):
     return rigid_motion_free(geom, body, params, a, b)
 
 
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _mesh_motion_free(world, a, b):
+    kind, grid, geom, body, params = world
+    return mesh_motion_free(grid, body, params, a, b)
+
+
 def _any_motion_free(world, a, b):
     kind = world[0]
     if kind == WORLD_GRID:
@@ -191,6 +202,8 @@ def _any_motion_free(world, a, b):
         return _shapes_motion_free(world, a, b)
     elif kind == WORLD_RIGID:
         return _rigid_motion_free(world, a, b)
+    elif kind == WORLD_MESH:
+        return _mesh_motion_free(world, a, b)
     raise ValueError("unknown world kind: add its check to planners.kernels.geometry.motion_free")
 
 
@@ -199,7 +212,8 @@ def _world_motion_free(world, a, b):
     kind = static_code(world, "KIND")
     if kind is None:
         return _any_motion_free  # a plain WorldKernel: the kind is known at run time only
-    check = {WORLD_GRID: _grid_motion_free, WORLD_SHAPES: _shapes_motion_free, WORLD_RIGID: _rigid_motion_free}[kind]
+    check = {WORLD_GRID: _grid_motion_free, WORLD_SHAPES: _shapes_motion_free, WORLD_RIGID: _rigid_motion_free,
+             WORLD_MESH: _mesh_motion_free}[kind]
     return lambda world, a, b: check(world, a, b)
 
 
@@ -258,10 +272,17 @@ class RigidKernel(WorldKernel):
     KIND = WORLD_RIGID
 
 
+class MeshKernel(WorldKernel):
+    """A ``WorldKernel`` of kind ``WORLD_MESH``, typed as such."""
+
+    __slots__ = ()
+    KIND = WORLD_MESH
+
+
 def world_kernel(kind: int, grid: np.ndarray, geom: np.ndarray, body: np.ndarray, params: np.ndarray) -> WorldKernel:
     """The ``WorldKernel`` a world hands the planners: of its kind's class, so kernels compiled for it
     contain that kind's collision check only (a plain ``WorldKernel`` dispatches at run time)."""
-    for cls in (GridKernel, ShapesKernel, RigidKernel):
+    for cls in (GridKernel, ShapesKernel, RigidKernel, MeshKernel):
         if cls.KIND == kind:
             return cls(kind, grid, geom, body, params)
     return WorldKernel(kind, grid, geom, body, params)

@@ -32,7 +32,7 @@ class Tree(NamedTuple):
 class WorldKernel(NamedTuple):
     """A world as the collision kernels see it (``planners.kernels.geometry``); unused arrays are 1x1 placeholders.
 
-    ``kind`` is one of ``geometry.WORLD_GRID``, ``WORLD_SHAPES``, ``WORLD_RIGID``; ``grid`` the (H, W)
+    ``kind`` is one of ``geometry.WORLD_GRID``, ``WORLD_SHAPES``, ``WORLD_RIGID``, ``WORLD_MESH``; ``grid`` the (H, W)
     uint8 obstacle grid; ``geom`` shape or box rows; ``body`` a rigid body's points; ``params`` the
     kind's numbers (see ``planners.kernels.geometry``).
     """

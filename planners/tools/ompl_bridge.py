@@ -149,3 +149,79 @@ class OmplGridPlanner:
         data = ob.PlannerData(self._si)
         self._planner.getPlannerData(data)
         return OmplRun(solved, self.iterations, dt, cost, int(data.numVertices()), path)
+
+
+def _axis_angle(R: np.ndarray) -> tuple[float, float, float, float]:
+    """``(ax, ay, az, theta)`` of a rotation matrix (axis x for the identity)."""
+    c = max(-1.0, min(1.0, (float(np.trace(R)) - 1.0) / 2.0))
+    theta = math.acos(c)
+    if theta < 1e-12:
+        return 1.0, 0.0, 0.0, 0.0
+    if math.pi - theta < 1e-6:  # a half turn: the axis from the symmetric part
+        B = (R + np.eye(3)) / 2.0
+        axis = np.sqrt(np.maximum(np.diag(B), 0.0))
+        k = int(np.argmax(axis))
+        for j in range(3):
+            if j != k and B[k, j] < 0:
+                axis[j] = -axis[j]
+        return float(axis[0]), float(axis[1]), float(axis[2]), theta
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / (2.0 * math.sin(theta))
+    return float(axis[0]), float(axis[1]), float(axis[2]), theta
+
+
+def ompl_rigid_connect(problem: Problem, *, seed: int = 0, time_limit: float = 10.0) -> OmplRun:
+    """OMPL's RRT-Connect on a ``MeshWorld`` problem, as OMPL.app sets it up, with our state check.
+
+    The state space is OMPL's SE(3) (quaternions) over the world's bounds; a state is valid as
+    ``MeshWorld.is_valid`` says (FCL's collision test, one Python call per state); motions are checked
+    by OMPL's default discrete validator, every 1% of the space's extent with no clearance asked, as in
+    OMPL.app (a motion may pass through an obstacle thinner than that), and the range is OMPL's default.
+    Returns the run; ``iterations`` is not counted (0) and ``path`` holds the solution's positions.
+    """
+    from planners.worlds.mesh import MeshWorld
+    from planners.worlds.omplapp import quaternion_matrix
+    from planners.worlds.rigid3d import euler_from_matrix, rotation_matrix
+
+    ob, og, ou = _require()
+    world = problem.world
+    if not isinstance(world, MeshWorld):
+        raise TypeError("ompl_rigid_connect handles MeshWorld problems only")
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    ou.RNG.setSeed(int(seed) + 1)  # OMPL rejects seed 0
+    ou.setLogLevel(ou.LogLevel.LOG_ERROR)
+    space = ob.SE3StateSpace()
+    bounds = ob.RealVectorBounds(3)
+    for i in range(3):
+        bounds.setLow(i, float(world.low3[i]))
+        bounds.setHigh(i, float(world.high3[i]))
+    space.setBounds(bounds)
+
+    def valid(state) -> bool:
+        r = state.rotation()
+        angles = euler_from_matrix(quaternion_matrix(r.x, r.y, r.z, r.w))
+        return world.is_valid(np.array([state.getX(), state.getY(), state.getZ(), *angles]))
+
+    si = ob.SpaceInformation(space)
+    si.setStateValidityChecker(valid)
+    si.setup()
+    ends = []
+    for q in (problem.start, problem.goal):
+        st = space.allocState()
+        st.setXYZ(float(q[0]), float(q[1]), float(q[2]))
+        st.rotation().setAxisAngle(*_axis_angle(np.asarray(rotation_matrix(q[3], q[4], q[5]))))
+        ends.append(st)
+    pdef = ob.ProblemDefinition(si)
+    pdef.setStartAndGoalStates(ends[0], ends[1], problem.goal_tolerance)
+    planner = og.RRTConnect(si)
+    planner.setProblemDefinition(pdef)
+    planner.setup()
+    t0 = time.perf_counter()
+    status = planner.solve(float(time_limit))
+    dt = time.perf_counter() - t0
+    solved = bool(pdef.hasExactSolution()) and str(status) == "Exact solution"
+    path = np.empty((0, 3))
+    if solved:
+        path = np.array([(s.getX(), s.getY(), s.getZ()) for s in pdef.getSolutionPath().getStates()])
+    data = ob.PlannerData(si)
+    planner.getPlannerData(data)
+    return OmplRun(solved, 0, dt, float("nan"), int(data.numVertices()), path)

@@ -3,7 +3,9 @@
 Imported on demand only. Like ``planners.viz.plotting`` it uses Figures with an Agg canvas, never pyplot,
 and writes files atomically. Obstacles are drawn as translucent boxes; the body as the box spanned by
 its points in its own frame (exactly the body for ``box_body``), turned and moved to each state, with
-its points as dots.
+its points as dots. On a ``MeshWorld`` the environment and the robot are drawn as their triangles (at
+most ``MAX_DRAWN_TRIANGLES`` of the environment and ``MAX_DRAWN_BODY_TRIANGLES`` of the robot, a seeded
+choice where a mesh has more).
 """
 
 from __future__ import annotations
@@ -30,20 +32,33 @@ from planners.viz.plotting import (
     new_figure,
     save_animation,
 )
+from planners.worlds.mesh import MeshWorld
 from planners.worlds.rigid3d import RigidBodyWorld, rotation_matrix
+
+#: Most environment triangles drawn (a seeded subset beyond), so a large scene still draws in seconds.
+MAX_DRAWN_TRIANGLES = 6000
+#: Most robot triangles drawn per pose.
+MAX_DRAWN_BODY_TRIANGLES = 1500
 
 BODY_COLOR = "#4a90d9"
 # the six faces of a box, as indices into its corners (corner index = 4 * ix + 2 * iy + iz)
 _FACES = ((0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5))
 
 
-def _require_rigid(problem: Problem) -> RigidBodyWorld:
+def _require_rigid(problem: Problem) -> RigidBodyWorld | MeshWorld:
     if not isinstance(problem, Problem):
         raise TypeError(f"problem must be a planners.Problem, got {type(problem).__name__}")
-    if not isinstance(problem.world, RigidBodyWorld):
-        raise TypeError(f"plotting3d draws RigidBodyWorld problems, got a {type(problem.world).__name__}; "
-                        "use planners.viz.plotting for 2-D worlds")
+    if not isinstance(problem.world, (RigidBodyWorld, MeshWorld)):
+        raise TypeError(f"plotting3d draws RigidBodyWorld and MeshWorld problems, got a "
+                        f"{type(problem.world).__name__}; use planners.viz.plotting for 2-D worlds")
     return problem.world
+
+
+def _triangles(vertices: np.ndarray, faces: np.ndarray, most: int) -> np.ndarray:
+    """``(k, 3, 3)`` triangles, at most ``most`` of them (a seeded choice where there are more)."""
+    if len(faces) > most:
+        faces = faces[np.sort(np.random.default_rng(0).choice(len(faces), most, replace=False))]
+    return vertices[faces]
 
 
 def _box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -56,8 +71,14 @@ def _box_faces(corners: np.ndarray) -> list[np.ndarray]:
 
 
 def body_faces(world: RigidBodyWorld, q) -> list[np.ndarray]:
-    """The six faces (4 x 3 arrays) of the body's bounding box (in its own frame) at state ``q``."""
+    """The six faces (4 x 3 arrays) of the body's bounding box (in its own frame) at state ``q``.
+
+    On a ``MeshWorld``: the robot's triangles (3 x 3 arrays) at ``q``.
+    """
     q = np.asarray(q, dtype=np.float64)
+    if isinstance(world, MeshWorld):
+        tris = _triangles(world.body_vertices, world.body_faces, MAX_DRAWN_BODY_TRIANGLES)
+        return list(tris @ rotation_matrix(q[3], q[4], q[5]).T + q[:3])
     local = _box_corners(world.body.min(axis=0), world.body.max(axis=0))
     return _box_faces(local @ rotation_matrix(q[3], q[4], q[5]).T + q[:3])
 
@@ -96,7 +117,12 @@ def _setup_axes(fig: Figure, world: RigidBodyWorld, elev: float, azim: float):
 
 
 def draw_obstacles(ax, world: RigidBodyWorld, alpha: float = 0.25) -> None:
-    """The world's boxes as translucent solids."""
+    """The world's boxes as translucent solids (a mesh world's triangles)."""
+    if isinstance(world, MeshWorld):
+        tris = _triangles(world.env_vertices, world.env_faces, MAX_DRAWN_TRIANGLES)
+        ax.add_collection3d(Poly3DCollection(list(tris), facecolors=OBSTACLE_COLOR, edgecolors="none",
+                                             alpha=alpha))
+        return
     faces = [f for b in world.boxes for f in _box_faces(_box_corners(b[:3], b[3:]))]
     if faces:
         ax.add_collection3d(Poly3DCollection(faces, facecolors=OBSTACLE_COLOR, edgecolors="#202020",
@@ -104,11 +130,13 @@ def draw_obstacles(ax, world: RigidBodyWorld, alpha: float = 0.25) -> None:
 
 
 def draw_body(ax, world: RigidBodyWorld, q, color: str = BODY_COLOR, alpha: float = 0.5, points: bool = True):
-    """The body at state ``q``; returns ``(faces collection, points artist or None)``."""
-    poly = Poly3DCollection(body_faces(world, q), facecolors=color, edgecolors="black", linewidths=0.4, alpha=alpha)
+    """The body at state ``q``; returns ``(faces collection, points artist or None)`` (no points on a mesh world)."""
+    mesh = isinstance(world, MeshWorld)
+    poly = Poly3DCollection(body_faces(world, q), facecolors=color, edgecolors="none" if mesh else "black",
+                            linewidths=0.4, alpha=alpha)
     ax.add_collection3d(poly)
     dots = None
-    if points:
+    if points and not mesh:
         p = world.body_points(q)
         dots = ax.plot(p[:, 0], p[:, 1], p[:, 2], ".", color="black", markersize=2)[0]
     return poly, dots
@@ -120,7 +148,7 @@ def plot_scene(problem: Problem, path=None, *, ax=None, bodies: int = 6, title: 
     """A 3-D figure of the problem: boxes, the body at start (green) and goal (red) and along ``path``.
 
     Args:
-        problem: A ``RigidBodyWorld`` problem.
+        problem: A ``RigidBodyWorld`` or ``MeshWorld`` problem.
         path: Optional ``(k, 6)`` states; the body origin's track is drawn, and the body at ``bodies``
             states evenly spaced along it (interpolated with shorter-arc angles).
         ax: A 3-D Axes to draw into; default a new Figure.
@@ -184,8 +212,9 @@ def animate_rigid(problem: Problem, path, out_path: str | os.PathLike, *, fps: f
     def render() -> Iterator[np.ndarray]:
         for k, q in enumerate(states):
             poly.set_verts(body_faces(world, q))
-            p = world.body_points(q)
-            dots.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
+            if dots is not None:
+                p = world.body_points(q)
+                dots.set_data_3d(p[:, 0], p[:, 1], p[:, 2])
             caption.set_text(f"{problem.name}  {k + 1}/{len(states)}")
             yield figure_to_array(fig)
 

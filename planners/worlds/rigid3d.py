@@ -170,19 +170,8 @@ class RigidBodyWorld(WorldBase):
     def __init__(self, boxes=(), body=None, *, low: Sequence[float] = (0.0, 0.0, 0.0),
                  high: Sequence[float] = (10.0, 10.0, 10.0), delta: float = DEFAULT_DELTA,
                  rot_weight: float | None = None) -> None:
-        lo = _vector(low, 3, "low")
-        hi = _vector(high, 3, "high")
-        for j, ax in enumerate("xyz"):
-            if not lo[j] < hi[j]:
-                raise InputError(f"workspace bounds need low < high on every axis; "
-                                 f"on {ax}: low {lo[j]:g}, high {hi[j]:g}")
-        with np.errstate(over="ignore"):
-            extent = hi - lo
-            diagonal = float(np.linalg.norm(extent))
-        if not (np.all(np.isfinite(extent)) and math.isfinite(diagonal)) or np.abs(np.concatenate([lo, hi])).max() > \
-                MAX_COORDINATE:
-            raise InputError(f"workspace bounds {tuple(lo.tolist())} - {tuple(hi.tolist())} are too large: "
-                             f"coordinates must lie within +-{MAX_COORDINATE:g}")
+        lo, hi = workspace_bounds(low, high)
+        extent = hi - lo
         self.boxes = _boxes(boxes)
         limit = max_boxes_limit()
         if len(self.boxes) > limit:
@@ -190,34 +179,15 @@ class RigidBodyWorld(WorldBase):
                              f"tests each body point against each box); if that is intended, set "
                              f"{MAX_BOXES_ENV}={len(self.boxes)}")
         self.body = box_body(1.0, 0.5, 0.25) if body is None else _body(body)
-        try:
-            delta = float(delta)
-        except (TypeError, ValueError):
-            raise InputError(f"delta must be a positive number, got {delta!r}") from None
-        if not (math.isfinite(delta) and delta > 0):
-            raise InputError(f"delta must be a positive finite number, got {delta}")
+        delta = positive_delta(delta)
         if delta >= float(extent.min()):
             raise InputError(f"delta {delta:g} leaves no valid state: every checked position needs a clearance of "
                              f"delta / 2 = {delta / 2:g}, and no point is that far from the walls of a workspace "
                              f"whose smallest side is {float(extent.min()):g}; use delta < {float(extent.min()):g}")
-        with np.errstate(over="ignore"):  # a huge workspace or body gives inf here, refused just below
-            self.radius = float(np.linalg.norm(self.body, axis=1).max())
-            longest = float(np.linalg.norm(hi - lo)) + 3.0 * math.pi * self.radius
-        if not longest / delta <= MAX_MOTION_POSES:
-            raise InputError(f"delta {delta:g} is too fine for this world: its longest motion ({longest:.4g}: the "
-                             f"workspace diagonal plus a half turn about each axis) would be checked at "
-                             f"{longest / delta:.3g} poses, more than MAX_MOTION_POSES = {MAX_MOTION_POSES:,}; "
-                             f"use delta >= {longest / MAX_MOTION_POSES:.3g}")
+        self.radius = body_radius(self.body)
+        check_resolution(delta, lo, hi, self.radius)
         self.delta = delta
-        if rot_weight is None:
-            rot_weight = self.radius if self.radius > 0 else 1.0
-        try:
-            rot_weight = float(rot_weight)
-        except (TypeError, ValueError):
-            raise InputError(f"rot_weight must be a non-negative number, got {rot_weight!r}") from None
-        if not (math.isfinite(rot_weight) and rot_weight >= 0):
-            raise InputError(f"rot_weight must be a non-negative finite number, got {rot_weight}")
-        self.rot_weight = rot_weight
+        self.rot_weight = rotation_weight(rot_weight, self.radius)
         self.low3, self.high3 = lo, hi
         for a in (self.boxes, self.body, self.low3, self.high3):
             a.flags.writeable = False
@@ -262,11 +232,8 @@ class RigidBodyWorld(WorldBase):
         the free fraction times the workspace volume times ``(2 pi)^3``; computed once.
         """
         if self._free_volume is None:
-            rng = np.random.default_rng(0)
             n = int(min(16384, max(256, MAX_VOLUME_TESTS // max(1, len(self.boxes) * len(self.body)))))
-            Q = self._low + (self._high - self._low) * rng.random((n, 6))
-            frac = max(float(self.check_motions(Q, Q).mean()), 1.0 / n)
-            self._free_volume = frac * float(np.prod(self.high3 - self.low3)) * (2.0 * math.pi) ** 3
+            self._free_volume = monte_carlo_free_volume(self, n)
         return self._free_volume
 
     def explain_invalid(self, q) -> str:
@@ -327,6 +294,98 @@ def _body(body) -> np.ndarray:
     if not np.all(np.isfinite(b)):
         raise InputError("body points must be finite")
     return np.ascontiguousarray(b)
+
+
+# --- the rigid-body state space, shared by every 6-DoF world (RigidBodyWorld, MeshWorld) ----------------
+
+
+def workspace_bounds(low, high) -> tuple[np.ndarray, np.ndarray]:
+    """Validated workspace corners ``(low, high)``: finite, ``low < high`` on every axis, within ``MAX_COORDINATE``."""
+    lo = _vector(low, 3, "low")
+    hi = _vector(high, 3, "high")
+    for j, ax in enumerate("xyz"):
+        if not lo[j] < hi[j]:
+            raise InputError(f"workspace bounds need low < high on every axis; "
+                             f"on {ax}: low {lo[j]:g}, high {hi[j]:g}")
+    with np.errstate(over="ignore"):
+        extent = hi - lo
+        diagonal = float(np.linalg.norm(extent))
+    if not (np.all(np.isfinite(extent)) and math.isfinite(diagonal)) or np.abs(np.concatenate([lo, hi])).max() > \
+            MAX_COORDINATE:
+        raise InputError(f"workspace bounds {tuple(lo.tolist())} - {tuple(hi.tolist())} are too large: "
+                         f"coordinates must lie within +-{MAX_COORDINATE:g}")
+    return lo, hi
+
+
+def positive_delta(delta) -> float:
+    """``delta`` as a positive finite float, else an InputError."""
+    try:
+        delta = float(delta)
+    except (TypeError, ValueError):
+        raise InputError(f"delta must be a positive number, got {delta!r}") from None
+    if not (math.isfinite(delta) and delta > 0):
+        raise InputError(f"delta must be a positive finite number, got {delta}")
+    return delta
+
+
+def body_radius(points: np.ndarray) -> float:
+    """Largest distance of a body point from the body's origin (inf where it overflows)."""
+    with np.errstate(over="ignore"):
+        return float(np.linalg.norm(points, axis=1).max())
+
+
+def check_resolution(delta: float, lo: np.ndarray, hi: np.ndarray, radius: float) -> None:
+    """Refuse a ``delta`` that would cut the longest motion into more than ``MAX_MOTION_POSES`` poses.
+
+    The longest motion is the workspace diagonal plus a half turn about each axis (``3 pi radius``):
+    the bound on a body point's travel that ``planners.kernels.rigid.motion_pieces`` cuts by.
+    """
+    with np.errstate(over="ignore"):  # a huge workspace or body gives inf here, refused just below
+        longest = float(np.linalg.norm(hi - lo)) + 3.0 * math.pi * radius
+    if not longest / delta <= MAX_MOTION_POSES:
+        raise InputError(f"delta {delta:g} is too fine for this world: its longest motion ({longest:.4g}: the "
+                         f"workspace diagonal plus a half turn about each axis) would be checked at "
+                         f"{longest / delta:.3g} poses, more than MAX_MOTION_POSES = {MAX_MOTION_POSES:,}; "
+                         f"use delta >= {longest / MAX_MOTION_POSES:.3g}")
+
+
+def rotation_weight(rot_weight, radius: float) -> float:
+    """The ``se3`` metric's rotation weight: ``rot_weight``, or the body radius where it is None."""
+    if rot_weight is None:
+        rot_weight = radius if radius > 0 else 1.0
+    try:
+        rot_weight = float(rot_weight)
+    except (TypeError, ValueError):
+        raise InputError(f"rot_weight must be a non-negative number, got {rot_weight!r}") from None
+    if not (math.isfinite(rot_weight) and rot_weight >= 0):
+        raise InputError(f"rot_weight must be a non-negative finite number, got {rot_weight}")
+    return rot_weight
+
+
+def monte_carlo_free_volume(world, n: int) -> float:
+    """Free fraction of ``n`` states drawn with seed 0, times the state box's measure (at least 1 / n of it)."""
+    low, high = world.bounds
+    rng = np.random.default_rng(0)
+    Q = low + (high - low) * rng.random((n, 6))
+    frac = max(float(world.check_motions(Q, Q).mean()), 1.0 / n)
+    return frac * float(np.prod(high[:3] - low[:3])) * (2.0 * math.pi) ** 3
+
+
+def euler_from_matrix(R) -> np.ndarray:
+    """Angles ``(tx, ty, tz)`` with ``Ry(ty) Rx(tx) Rz(tz) = R`` (``rotation_matrix``'s convention).
+
+    ``tx`` lies in ``[-pi/2, pi/2]``; at ``tx = +-pi/2`` (gimbal lock) ``tz`` is 0.
+    """
+    R = np.asarray(R, dtype=np.float64)
+    sx = -R[1, 2]
+    tx = math.asin(max(-1.0, min(1.0, sx)))
+    if math.hypot(R[1, 0], R[1, 1]) > 1e-9:
+        ty = math.atan2(R[0, 2], R[2, 2])
+        tz = math.atan2(R[1, 0], R[1, 1])
+    else:
+        ty = math.atan2(-R[2, 0], R[0, 0])
+        tz = 0.0
+    return np.array([tx, ty, tz])
 
 
 # --- the seed project's planning set-ups -----------------------------------------------------------

@@ -1,0 +1,349 @@
+"""Compiled motion checks for a rigid body given as a triangle mesh among a triangle-mesh environment.
+
+State ``q = (x, y, z, tx, ty, tz)`` as for ``planners.kernels.rigid``: a body vertex ``p`` sits at
+``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``. Along a motion no body point travels more than
+``s`` when the motion's parameter advances by ``s / L``, ``L`` the travel bound of ``motion_pieces``
+(``|dt| + r (|dtx| + |dty| + |dtz|)``). Every checked pose must keep the body more than ``delta / 2``
+from the environment, and the next pose checked lies a travel of ``max(delta, c)`` further on, ``c``
+the clearance just certified (conservative advancement). Two consecutive checked poses with
+clearances ``c1, c2 > delta / 2`` are at most ``max(delta, c1) < c1 + c2`` apart, so every pose
+between them keeps a clearance above 0 and no obstacle, however thin, is stepped over. The far end
+is checked first, so the last step is covered the same way.
+
+Each pose's clearance comes first from a broad phase that can only certify: a Chebyshev distance grid
+of the environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance
+from any point in it to any environment triangle. The bound of a pose is that of the body's bounding
+sphere, or else the smallest over the body's cover points (points on its surface such that every
+surface point lies within ``cover`` of one) less ``cover``; a single state asks the sphere only, as
+FCL's collision test costs about what the cover points do. Where the bound does not clear ``delta /
+2``, the exact check (FCL's distance, in ``planners.worlds.mesh``) gives the clearance, through
+numba's object mode: that check is registered here under an integer id that the world's ``params``
+carry.
+
+``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, checker id, gx, gy, gz,
+h, nx, ny, nz, cover]``: the bounds of the body's origin, the motion resolution, the body's radius
+(largest distance of a body vertex from its origin), the exact check's id, the grid's corner, voxel
+side and shape, and the cover radius of the body's cover points. The grid travels as ``(nx, ny * nz)``
+uint8 (``grid``), the cover points as ``body``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import weakref
+
+import numba as nb
+import numpy as np
+
+from planners.kernels.rigid import motion_pieces, rotation_matrix
+from planners.kernels.space import SPACE_RIGID, interpolate
+
+P_ID = 8
+P_GRID = 9
+P_COVER = 16
+N_PARAMS = 17
+
+#: The exact checks, by id: ``check(poses, margin) -> bool`` (True when every pose keeps the body more
+#: than ``margin`` from the environment, touching counting as collision when ``margin`` is 0).
+_CHECKS: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
+_IDS = itertools.count(1)
+
+
+def register_check(check) -> int:
+    """Register an exact pose check (an object with ``poses_free(poses, margin) -> bool``); returns its id.
+
+    The registry holds it weakly: the world that owns it keeps it alive.
+    """
+    ident = next(_IDS)
+    _CHECKS[ident] = check
+    return ident
+
+
+def exact_poses_free(ident, poses, margin) -> bool:
+    """Run the exact check registered under ``ident`` (called from compiled code in object mode)."""
+    check = _CHECKS.get(int(ident))
+    if check is None:
+        raise RuntimeError(f"no exact mesh check is registered under id {int(ident)} (its world was deleted)")
+    return bool(check.poses_free(poses, float(margin)))
+
+
+def exact_clearance(ident, q) -> float:
+    """The exact distance from the body at pose ``q`` to the environment, -1 where they meet (object mode)."""
+    check = _CHECKS.get(int(ident))
+    if check is None:
+        raise RuntimeError(f"no exact mesh check is registered under id {int(ident)} (its world was deleted)")
+    return float(check.pose_clearance(q))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _voxel(params, x, y, z):
+    """Flat index ``(i, j * nz + k)`` of the voxel holding a point, ``(-1, -1)`` outside the grid."""
+    gx, gy, gz, h = params[P_GRID], params[P_GRID + 1], params[P_GRID + 2], params[P_GRID + 3]
+    nx, ny, nz = int(params[P_GRID + 4]), int(params[P_GRID + 5]), int(params[P_GRID + 6])
+    i = int(math.floor((x - gx) / h))
+    j = int(math.floor((y - gy) / h))
+    k = int(math.floor((z - gz) / h))
+    if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
+        return -1, -1
+    return i, j * nz + k
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def sphere_free(grid, params, q, margin):
+    """True if the broad phase's grid proves the body's bounding sphere at ``q`` more than ``margin`` clear."""
+    i, jk = _voxel(params, q[0], q[1], q[2])
+    return i >= 0 and (grid[i, jk] - 1.0) * params[P_GRID + 3] > params[7] + margin
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def broad_phase_free(grid, cover, params, q, margin):
+    """True if the broad phase proves the pose ``q`` keeps the body more than ``margin`` from the environment.
+
+    False means undecided, never "in collision".
+    """
+    if sphere_free(grid, params, q, margin):
+        return True
+    h = params[P_GRID + 3]
+    # the cover points, each with its cover radius
+    need = margin + params[P_COVER]
+    R = rotation_matrix(q[3], q[4], q[5])
+    for p in range(cover.shape[0]):
+        wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
+        wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
+        wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
+        i, jk = _voxel(params, wx, wy, wz)
+        if i < 0 or not (grid[i, jk] - 1.0) * h > need:
+            return False
+    return True
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def clearance_bound(grid, cover, params, q, need):
+    """A lower bound on the distance from the body at ``q`` to the environment, from the grid alone.
+
+    The sphere's bound first; where it is not above ``need``, the cover points' (stopping as soon as
+    one shows the bound cannot exceed ``need``). A result at or below ``need`` says nothing.
+    """
+    h = params[P_GRID + 3]
+    i, jk = _voxel(params, q[0], q[1], q[2])
+    if i < 0:
+        return -1.0
+    bound = (grid[i, jk] - 1.0) * h - params[7]
+    if bound > need:
+        return bound
+    lowest = np.inf
+    R = rotation_matrix(q[3], q[4], q[5])
+    for p in range(cover.shape[0]):
+        wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
+        wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
+        wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
+        i, jk = _voxel(params, wx, wy, wz)
+        if i < 0:
+            return bound
+        d = (grid[i, jk] - 1.0) * h - params[P_COVER]
+        if d < lowest:
+            lowest = d
+            if lowest <= need:
+                return max(bound, lowest)
+    return max(bound, lowest)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _pose_clearance(grid, cover, params, q, need):
+    """The grid's bound where it exceeds ``need``, else the exact distance (FCL, -1 where they meet)."""
+    c = clearance_bound(grid, cover, params, q, need)
+    if c > need:
+        return c
+    ident = params[P_ID]
+    pose = q.copy()
+    with nb.objmode(c="float64"):
+        c = exact_clearance(ident, pose)
+    return c
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _in_bounds(params, q):
+    for j in range(3):
+        if not (params[j] <= q[j] <= params[3 + j]):
+            return False
+    return True
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def mesh_motion_free(grid, cover, params, a, b):
+    """True if the motion a -> b keeps the body clear of the environment (see the module docs).
+
+    The origin must stay within the bounds (checked at both ends: the bounds are a box and translation
+    is linear). A zero-length motion is a state check: no contact, no clearance asked.
+    """
+    if not (_in_bounds(params, a) and _in_bounds(params, b)):
+        return False
+    n, length = motion_pieces(params, a, b)
+    if length == 0.0:
+        # a single state: the sphere only (FCL's collision test costs about what the cover points do)
+        if sphere_free(grid, params, a, 0.0):
+            return True
+        ok = False
+        poses = np.empty((1, 6))
+        poses[0] = a
+        ident = params[P_ID]
+        with nb.objmode(ok="boolean"):
+            ok = exact_poses_free(ident, poses, 0.0)
+        return ok
+    delta = params[6]
+    margin = 0.5 * delta
+    # the far end first (a blocked extension is usually blocked there), then from the start, each step as
+    # long as the clearance just measured allows: no body point travels farther than the step, so the
+    # poses between two checked ones keep a clearance above 0 (see the module docs)
+    if not _pose_clearance(grid, cover, params, b, margin) > margin:
+        return False
+    q = np.empty(6)
+    s = 0.0
+    while s < length:
+        interpolate(SPACE_RIGID, a, b, s / length, q)
+        c = _pose_clearance(grid, cover, params, q, margin)
+        if not c > margin:
+            return False
+        s += c if c > delta else delta
+    return True
+
+
+# --- building the broad phase --------------------------------------------------------------------------
+
+
+@nb.njit(cache=True)
+def _axis_test(v0, v1, v2, axis, half):
+    p0 = v0[0] * axis[0] + v0[1] * axis[1] + v0[2] * axis[2]
+    p1 = v1[0] * axis[0] + v1[1] * axis[1] + v1[2] * axis[2]
+    p2 = v2[0] * axis[0] + v2[1] * axis[1] + v2[2] * axis[2]
+    lo = min(p0, min(p1, p2))
+    hi = max(p0, max(p1, p2))
+    r = half[0] * abs(axis[0]) + half[1] * abs(axis[1]) + half[2] * abs(axis[2])
+    return not (lo > r or hi < -r)
+
+
+@nb.njit(cache=True)
+def triangle_box_overlap(c, half, t0, t1, t2):
+    """True if the closed triangle meets the closed box of centre ``c`` and half sides ``half``.
+
+    The separating-axis test (the box's three axes, the triangle's normal and the nine edge cross
+    products; T. Akenine-Moeller, "Fast 3D triangle-box overlap testing", 2001). Callers enlarge
+    ``half`` slightly so that rounding can only report an overlap, never miss one.
+    """
+    v0 = t0 - c
+    v1 = t1 - c
+    v2 = t2 - c
+    for j in range(3):
+        lo = min(v0[j], min(v1[j], v2[j]))
+        hi = max(v0[j], max(v1[j], v2[j]))
+        if lo > half[j] or hi < -half[j]:
+            return False
+    e0 = v1 - v0
+    e1 = v2 - v1
+    e2 = v0 - v2
+    normal = np.cross(e0, e1)
+    if not _axis_test(v0, v1, v2, normal, half):
+        return False
+    unit = np.eye(3)
+    for e in (e0, e1, e2):
+        for j in range(3):
+            axis = np.cross(unit[j], e)
+            if not _axis_test(v0, v1, v2, axis, half):
+                return False
+    return True
+
+
+@nb.njit(cache=True)
+def chebyshev_grid(vertices, faces, origin, h, nx, ny, nz):
+    """Voxel bounds of the distance to the environment's triangles, as ``(nx, ny * nz)`` uint8.
+
+    A voxel's value ``c`` says: no triangle meets the voxels within Chebyshev index distance ``c - 1``
+    of it, so every point of the voxel lies at least ``(c - 1) h`` from every triangle. Triangles
+    outside the grid are accounted for by counting a layer of occupied voxels around it; values stop at
+    255.
+    """
+    dist = np.full((nx, ny, nz), 255, dtype=np.int32)
+    half = np.full(3, 0.5 * h * (1.0 + 1e-6))
+    c = np.empty(3)
+    for f in range(faces.shape[0]):
+        t0 = vertices[faces[f, 0]]
+        t1 = vertices[faces[f, 1]]
+        t2 = vertices[faces[f, 2]]
+        lo = np.minimum(t0, np.minimum(t1, t2))
+        hi = np.maximum(t0, np.maximum(t1, t2))
+        i0 = max(0, int(math.floor((lo[0] - origin[0]) / h)) - 1)
+        j0 = max(0, int(math.floor((lo[1] - origin[1]) / h)) - 1)
+        k0 = max(0, int(math.floor((lo[2] - origin[2]) / h)) - 1)
+        i1 = min(nx - 1, int(math.floor((hi[0] - origin[0]) / h)) + 1)
+        j1 = min(ny - 1, int(math.floor((hi[1] - origin[1]) / h)) + 1)
+        k1 = min(nz - 1, int(math.floor((hi[2] - origin[2]) / h)) + 1)
+        for i in range(i0, i1 + 1):
+            c[0] = origin[0] + (i + 0.5) * h
+            for j in range(j0, j1 + 1):
+                c[1] = origin[1] + (j + 0.5) * h
+                for k in range(k0, k1 + 1):
+                    if dist[i, j, k] == 0:
+                        continue
+                    c[2] = origin[2] + (k + 0.5) * h
+                    if triangle_box_overlap(c, half, t0, t1, t2):
+                        dist[i, j, k] = 0
+    # level-by-level breadth-first search over the 26 neighbours: the Chebyshev index distance
+    total = nx * ny * nz
+    cur = np.empty(total, dtype=np.int64)
+    nxt = np.empty(total, dtype=np.int64)
+    nc = 0
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                if dist[i, j, k] == 0:
+                    cur[nc] = (i * ny + j) * nz + k
+                    nc += 1
+    level = 0
+    while level < 255:
+        if level == 0:
+            # the layer around the grid counts as occupied: its neighbours inside are at distance 1
+            for i in range(nx):
+                for j in range(ny):
+                    for k in range(nz):
+                        if i == 0 or j == 0 or k == 0 or i == nx - 1 or j == ny - 1 or k == nz - 1:
+                            if dist[i, j, k] > 1:
+                                dist[i, j, k] = 1
+        nn = 0
+        for s in range(nc):
+            v = cur[s]
+            i = v // (ny * nz)
+            j = (v // nz) % ny
+            k = v % nz
+            for di in range(-1, 2):
+                for dj in range(-1, 2):
+                    for dk in range(-1, 2):
+                        a = i + di
+                        b = j + dj
+                        d = k + dk
+                        if a < 0 or b < 0 or d < 0 or a >= nx or b >= ny or d >= nz:
+                            continue
+                        if dist[a, b, d] > level + 1:
+                            dist[a, b, d] = level + 1
+                            nxt[nn] = (a * ny + b) * nz + d
+                            nn += 1
+        if level == 0:
+            # the boundary voxels set to 1 above join the level-1 frontier
+            for i in range(nx):
+                for j in range(ny):
+                    for k in range(nz):
+                        if dist[i, j, k] == 1 and (i == 0 or j == 0 or k == 0 or i == nx - 1 or j == ny - 1
+                                                   or k == nz - 1):
+                            nxt[nn] = (i * ny + j) * nz + k
+                            nn += 1
+        if nn == 0:
+            break
+        cur, nxt = nxt, cur
+        nc = nn
+        level += 1
+    out = np.empty((nx, ny * nz), dtype=np.uint8)
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                out[i, j * nz + k] = dist[i, j, k]
+    return out

@@ -1,0 +1,437 @@
+"""A 6-DoF rigid body given as a triangle mesh among a triangle-mesh environment, checked exactly with FCL.
+
+The state space is ``RigidBodyWorld``'s: ``q = (x, y, z, tx, ty, tz)``, a body vertex ``p`` (in the
+body's own frame) sits at ``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``; angles are sampled in
+``[-pi, pi)`` and a motion turns along the shorter arc. The same metrics (``cossin``, ``se3``) and the
+same bound on a body point's travel apply (``|dt| + r (|dtx| + |dty| + |dtz|)``, ``r`` the body
+radius): every checked pose keeps the body more than ``delta / 2`` from the environment and the next
+lies a travel of ``max(delta, c)`` on, ``c`` the clearance just certified, so the poses between stay
+free and no obstacle, however thin, is stepped over (``planners.kernels.mesh``).
+
+A state is valid when the body's origin lies within the bounds and the body's triangles meet none of
+the environment's (FCL's collision test: two meshes collide where their surfaces touch or cross, so a
+body wholly inside a closed obstacle is not seen, as in OMPL.app; no motion from a valid state gets
+there, since it would cross the surface).
+
+The meshes are read with trimesh and checked with FCL (python-fcl); both are imported only when a
+mesh world is built (the ``mesh`` extra: ``pip install samplergym[mesh]``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from planners.base.fileio import InputError
+from planners.base.world import WorldBase
+from planners.kernels import geometry
+from planners.kernels import mesh as mesh_kernels
+from planners.kernels.rigid import motion_pieces
+from planners.kernels.rigid import rotation_matrix as _rotation_matrix
+from planners.kernels.space import SPACE_RIGID, interpolate
+from planners.worlds.rigid3d import (
+    RigidBodyWorld,
+    body_radius,
+    check_resolution,
+    monte_carlo_free_volume,
+    positive_delta,
+    rotation_weight,
+    workspace_bounds,
+)
+
+#: File types ``read_mesh`` reads (through trimesh; ``.dae`` through pycollada).
+MESH_SUFFIXES = (".obj", ".stl", ".dae", ".ply", ".off")
+#: Default motion resolution, as a fraction of the bounds' diagonal.
+DEFAULT_DELTA_FRACTION = 1e-3
+#: Voxels along the longest side of the broad phase's grid (the grid covers the bounds grown by the
+#: body radius).
+DEFAULT_GRID_CELLS = 128
+#: States drawn for the free-volume estimate (RRT*'s and PRM*'s radius).
+VOLUME_SAMPLES = 4096
+#: Most triangles a mesh may have: FCL builds a bounding-volume tree over them, and the broad phase
+#: tests each against the voxels its box covers.
+MAX_TRIANGLES = 2_000_000
+
+_INSTALL = 'pip install "samplergym[mesh]"  (trimesh, python-fcl, pycollada)'
+
+
+def _trimesh():
+    try:
+        import trimesh
+    except ImportError:
+        raise ImportError(f"mesh worlds need trimesh: {_INSTALL}") from None
+    return trimesh
+
+
+def _fcl():
+    try:
+        import fcl
+    except ImportError:
+        raise ImportError(f"mesh worlds need python-fcl: {_INSTALL}") from None
+    return fcl
+
+
+#: COLLADA's up axes, as the rotation to Y up that assimp (and so OMPL.app) applies to a file's scene.
+_UP_TO_Y = {
+    "Y_UP": np.eye(3),
+    "Z_UP": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]),
+    "X_UP": np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
+}
+
+
+def _collada_up_axis(path: Path) -> str:
+    import collada
+
+    try:
+        doc = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError,
+                                                 collada.common.DaeBrokenRefError])
+    except Exception as e:  # pycollada raises its own and lxml's errors for a bad file
+        raise InputError(f"{path}: not a COLLADA file pycollada can read ({type(e).__name__}: {e})") from None
+    return str(getattr(doc.assetInfo, "upaxis", "Y_UP") or "Y_UP")
+
+
+def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """A mesh file's triangles as ``(vertices (V, 3) float64, faces (F, 3) int32)``, in the file's world frame.
+
+    OBJ, STL, PLY and OFF are read as they are. A COLLADA ``.dae`` scene is flattened with every node's
+    transform applied, then turned so that its up axis is +y, as assimp does (OMPL.app reads its meshes
+    with assimp: a ``Z_UP`` file's ``(x, y, z)`` becomes ``(x, z, -y)``). Vertices are kept as the file
+    indexes them, not merged (OMPL.app's robot origin is their mean).
+
+    Raises:
+        InputError: The file is missing, of an unknown type, unreadable, or has no triangles.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"mesh file {path} does not exist")
+    suffix = path.suffix.lower()
+    if suffix not in MESH_SUFFIXES:
+        raise InputError(f"{path}: unknown mesh type {suffix!r}; expected one of {MESH_SUFFIXES}")
+    trimesh = _trimesh()
+    try:
+        scene = trimesh.load(str(path), force="scene")
+    except Exception as e:  # trimesh raises many kinds of error for a bad file
+        raise InputError(f"{path}: not a {suffix} mesh trimesh can read ({type(e).__name__}: {e})") from None
+    meshes = [g for g in scene.dump() if hasattr(g, "faces") and len(g.faces)]
+    if not meshes:
+        raise InputError(f"{path}: the file holds no triangles")
+    merged = trimesh.util.concatenate(meshes)
+    V = np.asarray(merged.vertices, dtype=np.float64)
+    F = np.asarray(merged.faces, dtype=np.int32)
+    if suffix == ".dae":
+        up = _collada_up_axis(path)
+        if up not in _UP_TO_Y:
+            raise InputError(f"{path}: unknown COLLADA up_axis {up!r}; expected one of {sorted(_UP_TO_Y)}")
+        V = V @ _UP_TO_Y[up].T
+    return _triangles(V, F, str(path))
+
+
+def _triangles(vertices, faces, label: str) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        V = np.ascontiguousarray(vertices, dtype=np.float64)
+        F = np.ascontiguousarray(faces, dtype=np.int64)
+    except (TypeError, ValueError):
+        raise InputError(f"{label}: vertices must be (V, 3) numbers and faces (F, 3) integers") from None
+    if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
+        raise InputError(f"{label}: vertices must have shape (V, 3) with V >= 1, got {V.shape}")
+    if F.ndim != 2 or F.shape[1] != 3 or len(F) == 0:
+        raise InputError(f"{label}: faces must have shape (F, 3) with F >= 1, got {F.shape}")
+    if len(F) > MAX_TRIANGLES:
+        raise InputError(f"{label}: {len(F):,} triangles, more than the limit of {MAX_TRIANGLES:,}")
+    if not np.all(np.isfinite(V)):
+        raise InputError(f"{label}: vertices must be finite")
+    if F.min() < 0 or F.max() >= len(V):
+        raise InputError(f"{label}: face indices must lie in [0, {len(V)}), got {F.min()} to {F.max()}")
+    return V, F.astype(np.int32)
+
+
+def _as_mesh(mesh, label: str) -> tuple[np.ndarray, np.ndarray]:
+    """A path, a ``(vertices, faces)`` pair or a trimesh.Trimesh, as ``(vertices, faces)``."""
+    if isinstance(mesh, (str, os.PathLike)):
+        return read_mesh(mesh)
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        return _triangles(mesh.vertices, mesh.faces, label)
+    try:
+        vertices, faces = mesh
+    except (TypeError, ValueError):
+        raise InputError(f"{label} must be a mesh file, a (vertices, faces) pair or a trimesh.Trimesh, "
+                         f"got {type(mesh).__name__}") from None
+    return _triangles(vertices, faces, label)
+
+
+def cover_points(vertices: np.ndarray, faces: np.ndarray, spacing: float) -> np.ndarray:
+    """Points on the mesh such that every point of every triangle lies within ``spacing`` of one.
+
+    Each triangle is cut into ``k^2`` similar triangles whose sides are at most ``spacing``; their
+    corners are the points (a point of a triangle lies within its longest side of each corner).
+    """
+    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
+    longest = np.max([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1), np.linalg.norm(a - c, axis=1)],
+                     axis=0)
+    cuts = np.maximum(1, np.ceil(longest / spacing)).astype(np.int64)
+    out = [vertices]
+    for k in np.unique(cuts[cuts > 1]):  # triangles cut alike at once
+        sel = cuts == k
+        i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+        keep = (i + j) <= k
+        u, v = (i[keep] / k)[None, :, None], (j[keep] / k)[None, :, None]
+        A, B, C = a[sel][:, None], b[sel][:, None], c[sel][:, None]
+        out.append((A + u * (B - A) + v * (C - A)).reshape(-1, 3))
+    return np.unique(np.concatenate(out), axis=0)
+
+
+def rotation_matrices(angles: np.ndarray) -> np.ndarray:
+    """``(n, 3, 3)``: ``Ry(ty) Rx(tx) Rz(tz)`` for each row ``(tx, ty, tz)``, vectorised (``rotation_matrix``'s)."""
+    cx, sx = np.cos(angles[:, 0]), np.sin(angles[:, 0])
+    cy, sy = np.cos(angles[:, 1]), np.sin(angles[:, 1])
+    cz, sz = np.cos(angles[:, 2]), np.sin(angles[:, 2])
+    a0, b0, c0 = cy, sy * sx, sy * cx
+    b1, c1 = cx, -sx
+    a2, b2, c2 = -sy, cy * sx, cy * cx
+    R = np.empty((len(angles), 3, 3))
+    R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = a0 * cz + b0 * sz, b0 * cz - a0 * sz, c0
+    R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = b1 * sz, b1 * cz, c1
+    R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = a2 * cz + b2 * sz, b2 * cz - a2 * sz, c2
+    return R
+
+
+class _Deadline(threading.local):
+    at: float | None = None
+    clock = None
+
+
+class _FCLCheck:
+    """The exact check: the body's and the environment's FCL bounding-volume trees, one pose at a time."""
+
+    def __init__(self, body, env) -> None:
+        self.deadline = _Deadline()  # per thread: a planner's time limit (set_deadline)
+        self.cut = 0  # checks answered "blocked" because the deadline had passed
+        fcl = _fcl()
+        self._fcl = fcl
+        self.body_model = self._model(*body)
+        self.env_model = self._model(*env)
+        self.body = fcl.CollisionObject(self.body_model, fcl.Transform())
+        self.env = fcl.CollisionObject(self.env_model, fcl.Transform())
+        self.collide_request = fcl.CollisionRequest()
+        self.distance_request = fcl.DistanceRequest()
+        self.poses = 0  # poses checked here (those the broad phase left undecided)
+
+    def _model(self, vertices, faces):
+        m = self._fcl.BVHModel()
+        m.beginModel(len(vertices), len(faces))
+        m.addSubModel(vertices, faces)
+        m.endModel()
+        return m
+
+    def pose_free(self, R: np.ndarray, t: np.ndarray, margin: float) -> bool:
+        """True if the body at rotation ``R`` and translation ``t`` is more than ``margin`` from the environment.
+
+        With ``margin`` 0: its triangles meet none of the environment's.
+        """
+        fcl = self._fcl
+        self.poses += 1
+        self.body.setTransform(fcl.Transform(R, t))
+        result = fcl.CollisionResult()
+        if fcl.collide(self.body, self.env, self.collide_request, result):
+            return False
+        if margin <= 0.0:
+            return True
+        return fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()) > margin
+
+    def pose_clearance(self, q: np.ndarray) -> float:
+        """Distance from the body at pose ``q`` to the environment; -1 where they meet or past the deadline."""
+        at = self.deadline.at
+        if at is not None and self.deadline.clock() > at:
+            self.cut += 1
+            return -1.0
+        fcl = self._fcl
+        self.poses += 1
+        self.body.setTransform(fcl.Transform(np.asarray(_rotation_matrix(q[3], q[4], q[5])), q[:3].copy()))
+        if fcl.collide(self.body, self.env, self.collide_request, fcl.CollisionResult()):
+            return -1.0
+        return float(fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()))
+
+    def poses_free(self, poses: np.ndarray, margin: float) -> bool:
+        """True if every pose ``(x, y, z, tx, ty, tz)`` is free with ``margin``; stops at the first that is not.
+
+        Past a deadline set by ``MeshWorld.set_deadline`` it answers False without checking further.
+        """
+        at, clock = self.deadline.at, self.deadline.clock
+        if len(poses) < 8:  # numpy's per-call cost outweighs the vectorised rotations
+            rotations = [np.asarray(_rotation_matrix(q[3], q[4], q[5])) for q in poses]
+        else:
+            rotations = rotation_matrices(poses[:, 3:])
+        translations = np.ascontiguousarray(poses[:, :3])
+        for i in range(len(poses)):
+            if at is not None and i % 8 == 0 and clock() > at:
+                self.cut += 1
+                return False
+            if not self.pose_free(rotations[i], translations[i], margin):
+                return False
+        return True
+
+
+class MeshWorld(WorldBase):
+    """A rigid body (a triangle mesh) moving among a triangle-mesh environment; exact checks with FCL.
+
+    Args:
+        environment: The obstacles: a mesh file (``read_mesh``), a ``(vertices, faces)`` pair or a
+            ``trimesh.Trimesh``, in world coordinates.
+        robot: The body, in the same forms, in its own frame: the state's translation puts the
+            body's origin there, its rotation turns the body about its origin.
+        low: Corner of the box the body's origin stays in (OMPL.app's ``volume.min``).
+        high: Opposite corner (``volume.max``).
+        delta: Motion resolution (> 0): every checked pose keeps the body more than ``delta / 2``
+            from the environment, and the poses checked from the start on lie a travel of at least
+            ``delta`` apart (more where the clearance allows). Default ``DEFAULT_DELTA_FRACTION`` of the bounds' diagonal.
+        rot_weight: Weight of the rotation angle in the ``"se3"`` metric; default the body radius.
+        grid_cells: Voxels along the longest side of the broad phase's grid (8 to 512).
+        name: A label for ``repr``.
+    """
+
+    dim = RigidBodyWorld.dim
+    space_kind = SPACE_RIGID
+    metrics = RigidBodyWorld.metrics
+
+    def __init__(self, environment, robot, *, low, high, delta: float | None = None,
+                 rot_weight: float | None = None, grid_cells: int = DEFAULT_GRID_CELLS, name: str = "") -> None:
+        lo, hi = workspace_bounds(low, high)
+        self.env_vertices, self.env_faces = _as_mesh(environment, "environment")
+        self.body_vertices, self.body_faces = _as_mesh(robot, "robot")
+        self.radius = body_radius(self.body_vertices)
+        if not math.isfinite(self.radius):
+            raise InputError("the robot's vertices are too far from its origin to measure")
+        diagonal = float(np.linalg.norm(hi - lo))
+        self.delta = positive_delta(DEFAULT_DELTA_FRACTION * diagonal if delta is None else delta)
+        check_resolution(self.delta, lo, hi, self.radius)
+        self.rot_weight = rotation_weight(rot_weight, self.radius)
+        if isinstance(grid_cells, bool) or not isinstance(grid_cells, (int, np.integer)) or not 8 <= grid_cells <= 512:
+            raise InputError(f"grid_cells must be an integer from 8 to 512, got {grid_cells!r}")
+        self.name = str(name)
+        self.grid_cells = int(grid_cells)
+        self.low3, self.high3 = lo, hi
+        for a in (self.env_vertices, self.env_faces, self.body_vertices, self.body_faces, lo, hi):
+            a.flags.writeable = False
+        self._check = _FCLCheck((self.body_vertices, self.body_faces), (self.env_vertices, self.env_faces))
+        ident = mesh_kernels.register_check(self._check)
+        # the broad phase: a grid over every place a body point can reach, and the body's cover points
+        pad = self.radius + self.delta
+        origin = lo - pad
+        side = float(np.max(hi - lo + 2 * pad)) / int(grid_cells)
+        shape = np.maximum(1, np.ceil((hi - lo + 2 * pad) / side).astype(np.int64))
+        self.grid = mesh_kernels.chebyshev_grid(self.env_vertices, self.env_faces.astype(np.int64), origin,
+                                                side, int(shape[0]), int(shape[1]), int(shape[2]))
+        self.cover = np.ascontiguousarray(cover_points(self.body_vertices, self.body_faces, side))
+        params = np.zeros(mesh_kernels.N_PARAMS)
+        params[:6] = np.concatenate([lo, hi])
+        params[6], params[7], params[mesh_kernels.P_ID] = self.delta, self.radius, ident
+        params[mesh_kernels.P_GRID:mesh_kernels.P_GRID + 4] = [*origin, side]
+        params[mesh_kernels.P_GRID + 4:mesh_kernels.P_GRID + 7] = shape
+        params[mesh_kernels.P_COVER] = side
+        _, geom, _ = geometry.placeholder_arrays()
+        self._kernel = geometry.world_kernel(geometry.WORLD_MESH, self.grid, geom, self.cover, params)
+        self._low = np.concatenate([lo, [-math.pi] * 3])
+        self._high = np.concatenate([hi, [math.pi] * 3])
+        self._low.flags.writeable = False
+        self._high.flags.writeable = False
+        self._free_volume: float | None = None
+
+    def __reduce__(self):
+        # FCL's trees do not pickle: a copy (another process's) is built again from the triangles
+        return _rebuild, ((self.env_vertices, self.env_faces), (self.body_vertices, self.body_faces),
+                          {"low": self.low3, "high": self.high3, "delta": self.delta, "rot_weight": self.rot_weight,
+                           "grid_cells": self.grid_cells, "name": self.name})
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(low, high)``: the box of the body's origin, then ``[-pi, pi)`` for each angle."""
+        return self._low, self._high
+
+    def set_deadline(self, at: float | None, clock=None) -> None:
+        """From now on, in this thread, answer "blocked" to exact checks once ``clock() > at`` (None: never).
+
+        ``Planner.solve`` sets it under a time limit, so one long motion check cannot overrun the limit;
+        answering "blocked" is conservative, the motion is left out, never wrongly accepted.
+        """
+        self._check.deadline.at = None if at is None else float(at)
+        self._check.deadline.clock = clock
+
+    @property
+    def exact_poses(self) -> int:
+        """Poses checked by FCL so far (those the broad phase could not prove free)."""
+        return self._check.poses
+
+    def body_vertices_at(self, q) -> np.ndarray:
+        """``(V, 3)`` world positions of the body's vertices at state ``q``."""
+        q = self._state(q)
+        return self.body_vertices @ np.asarray(_rotation_matrix(q[3], q[4], q[5])).T + q[:3]
+
+    def motion_poses(self, a, b) -> np.ndarray:
+        """Poses from ``a`` to ``b`` a travel of at most ``delta`` apart (``(n + 1, 6)``; one for ``a == b``).
+
+        ``check_motion(a, b)`` certifies each of them free with a clearance above ``delta / 2``, and the
+        poses between free; it tests fewer of them where the clearance allows longer steps.
+        """
+        a = np.ascontiguousarray(self._state(a, "a"))
+        b = np.ascontiguousarray(self._state(b, "b"))
+        n, length = motion_pieces(self._kernel.params, a, b)
+        if length == 0.0:
+            return a[None].copy()
+        out = np.empty((n + 1, 6))
+        for k in range(n + 1):
+            interpolate(SPACE_RIGID, a, b, k / n, out[k])
+        return out
+
+    def pose_free_exact(self, q, margin: float = 0.0) -> bool:
+        """The exact check alone (FCL, no broad phase): the body at ``q`` is more than ``margin`` from the world."""
+        q = self._state(q)
+        return self._check.pose_free(np.asarray(_rotation_matrix(q[3], q[4], q[5])), q[:3].copy(), float(margin))
+
+    def pose_free_broad(self, q, margin: float = 0.0) -> bool:
+        """The broad phase alone: True only where it proves the pose free with ``margin`` (else undecided)."""
+        q = np.ascontiguousarray(self._state(q))
+        return bool(mesh_kernels.broad_phase_free(self.grid, self.cover, self._kernel.params, q, float(margin)))
+
+    def clearance(self, q) -> float:
+        """Distance from the body at ``q`` to the environment (FCL; 0 or less where they meet)."""
+        q = self._state(q)
+        fcl = self._check._fcl
+        self._check.body.setTransform(fcl.Transform(np.asarray(_rotation_matrix(q[3], q[4], q[5])), q[:3].copy()))
+        if fcl.collide(self._check.body, self._check.env, self._check.collide_request, fcl.CollisionResult()):
+            return 0.0
+        return float(fcl.distance(self._check.body, self._check.env, self._check.distance_request,
+                                  fcl.DistanceResult()))
+
+    def free_volume(self) -> float:
+        """Measure of the free states in ``(x, y, z, tx, ty, tz)`` coordinates (for RRT*/PRM* radii).
+
+        Monte-Carlo estimate over ``VOLUME_SAMPLES`` states drawn with a fixed seed; computed once.
+        """
+        if self._free_volume is None:
+            self._free_volume = monte_carlo_free_volume(self, VOLUME_SAMPLES)
+        return self._free_volume
+
+    def explain_invalid(self, q) -> str:
+        """Why ``q`` is not a valid state ('' if it is)."""
+        q = self._state(q)
+        if not np.all(np.isfinite(q)):
+            return "is not finite"
+        if not np.all((self.low3 <= q[:3]) & (q[:3] <= self.high3)):
+            return (f"puts the body's origin at {tuple(np.round(q[:3], 4).tolist())}, outside the bounds "
+                    f"{tuple(self.low3.tolist())} - {tuple(self.high3.tolist())}")
+        if not self.pose_free_exact(q):
+            return "puts the body's triangles into the environment's"
+        return ""
+
+    def __repr__(self) -> str:
+        label = f"{self.name!r}, " if self.name else ""
+        return (f"MeshWorld({label}{len(self.env_faces)} environment triangles, {len(self.body_faces)} body "
+                f"triangles, delta={self.delta:g})")
+
+
+def _rebuild(environment, robot, kwargs) -> MeshWorld:
+    return MeshWorld(environment, robot, **kwargs)

@@ -1,0 +1,230 @@
+"""OMPL.app's problem files: the reader on files made here, and, where a copy of OMPL.app is given
+(``SAMPLERGYM_OMPLAPP_DIR``), its shipped solutions replayed state by state in our frame."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+trimesh = pytest.importorskip("trimesh", reason="mesh worlds need the mesh extra (pip install samplergym[mesh])")
+pytest.importorskip("fcl", reason="mesh worlds need the mesh extra (pip install samplergym[mesh])")
+
+from planners import RRTConnect  # noqa: E402
+from planners.base.fileio import InputError  # noqa: E402
+from planners.worlds.omplapp import (  # noqa: E402
+    OMPLAPP_ENV,
+    axis_angle_matrix,
+    load_omplapp,
+    load_omplapp_cfg,
+    omplapp_dir,
+    quaternion_matrix,
+    read_omplapp_path,
+)
+from planners.worlds.rigid3d import rotation_matrix  # noqa: E402
+
+PI = math.pi
+
+#: OMPL.app problems whose every shipped solution state is collision-free here (see docs/rigid-body.md
+#: for the others).
+REPLAYED = ("cubicles", "Twistycool", "Easy", "Apartment", "alpha-1.5", "spirelli")
+
+CFG = """[problem]
+name = {name}
+robot = robot.obj
+world = env.obj
+start.x = 2
+start.y = 5
+start.z = 5
+start.theta = {theta}
+start.axis.x = 0
+start.axis.y = 0
+start.axis.z = 1
+goal.x = 8
+goal.y = 5
+goal.z = 5
+goal.theta = 0
+goal.axis.x = 1
+goal.axis.y = 0
+goal.axis.z = 0
+volume.min.x = 0
+volume.min.y = 0
+volume.min.z = 0
+volume.max.x = 10
+volume.max.y = 10
+volume.max.z = 10
+
+[benchmark]
+time_limit=5.0
+mem_limit=1000.0
+run_count=7
+
+[planner]
+rrtconnect=
+prm=
+aps=
+aps.name=APS1
+aps=
+aps.name=APS4
+"""
+
+
+def write_problem(folder, theta=0.5, name="hole"):
+    box = lambda e, c: trimesh.creation.box(extents=e, transform=trimesh.transformations.translation_matrix(c))  # noqa: E731
+    env = trimesh.util.concatenate([box((0.2, 10, 3.5), (5, 5, 1.75)), box((0.2, 10, 3.5), (5, 5, 8.25)),
+                                    box((0.2, 3.5, 3), (5, 1.75, 5)), box((0.2, 3.5, 3), (5, 8.25, 5))])
+    env.export(folder / "env.obj")
+    # the robot off its origin: OMPL.app moves the mean of its vertices there
+    box((1.0, 0.6, 0.4), (30, -20, 10)).export(folder / "robot.obj")
+    path = folder / f"{name}.cfg"
+    path.write_text(CFG.format(name=name, theta=theta))
+    return path
+
+
+def test_a_problem_file_reads_into_a_mesh_problem(tmp_path):
+    task = load_omplapp(write_problem(tmp_path))
+    p = task.problem
+    assert p.name == "hole" and task.time_limit == 5.0 and task.mem_limit == 1000.0 and task.run_count == 7
+    assert task.planners == ("rrtconnect", "prm", "aps")
+    w = p.world
+    assert np.allclose(w.bounds[0][:3], 0) and np.allclose(w.bounds[1][:3], 10)
+    assert np.allclose(w.body_vertices.mean(axis=0), 0)  # the robot's origin is its vertex mean
+    assert np.allclose(p.start[:3], [2, 5, 5]) and np.allclose(rotation_matrix(*p.start[3:]),
+                                                                axis_angle_matrix([0, 0, 1], 0.5))
+    assert np.allclose(p.goal, [8, 5, 5, 0, 0, 0])
+    r = RRTConnect(p, step_size=1.0, seed=0).solve(max_iterations=3000)
+    assert r.solved and w.path_valid(r.path)
+    assert np.array_equal(load_omplapp_cfg(write_problem(tmp_path)).start, p.start)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace("start.x = 2\n", ""), r"start\.x is missing"),
+    (lambda t: t.replace("goal.y = 5", "goal.y = five"), r"goal\.y = 'five' is not a number"),
+    (lambda t: t.replace("robot = robot.obj", "robot = nothing.obj"), "nothing.obj not found"),
+    (lambda t: t.replace("goal.x = 8\ngoal.y = 5", "goal.x = 5\ngoal.y = 2"), "goal .* is not a valid state"),
+    (lambda t: t.replace("start.axis.z = 1", "start.axis.z = 0"), "non-zero axis"),
+    (lambda t: t.replace("run_count=7", "run_count=7.5"), "run_count = '7.5' is not an integer"),
+    (lambda t: t.replace("[problem]", "[nothing]"), r"no \[problem\] section"),
+])
+def test_a_bad_problem_file_names_the_file_and_the_key(tmp_path, edit, message):
+    path = write_problem(tmp_path)
+    path.write_text(edit(path.read_text()))
+    with pytest.raises(InputError, match=message) as e:
+        load_omplapp(path)
+    assert str(path) in str(e.value)
+
+
+def test_quaternions_and_axis_angles_agree():
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        axis, theta = rng.normal(size=3), rng.uniform(-PI, PI)
+        x, y, z = axis / np.linalg.norm(axis) * math.sin(theta / 2)
+        assert np.allclose(quaternion_matrix(x, y, z, math.cos(theta / 2)), axis_angle_matrix(axis, theta))
+        R = trimesh.transformations.rotation_matrix(theta, axis)[:3, :3]
+        assert np.allclose(axis_angle_matrix(axis, theta), R)
+
+
+def test_omplapp_dir_takes_the_root_or_the_folder(tmp_path, monkeypatch):
+    monkeypatch.delenv(OMPLAPP_ENV, raising=False)
+    assert omplapp_dir() is None
+    folder = tmp_path / "resources" / "3D"
+    folder.mkdir(parents=True)
+    write_problem(folder)
+    assert omplapp_dir(tmp_path) == folder and omplapp_dir(folder) == folder
+    monkeypatch.setenv(OMPLAPP_ENV, str(tmp_path))
+    assert omplapp_dir() == folder
+    with pytest.raises(InputError, match="--omplapp"):
+        omplapp_dir(tmp_path / "elsewhere")
+
+
+# --- OMPL.app's own files ----------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def omplapp():
+    try:
+        d = omplapp_dir()
+    except InputError as e:
+        pytest.skip(str(e))
+    if d is None:
+        pytest.skip(f"OMPL.app's problems not found: set {OMPLAPP_ENV} to a copy of OMPL.app (its root or "
+                    f"resources/3D); its licence does not let us ship them")
+    return d
+
+
+@pytest.mark.parametrize("name", REPLAYED)
+def test_every_state_of_omplapps_solution_is_free_and_a_nudged_one_is_not(omplapp, name):
+    cfg, solution = omplapp / f"{name}.cfg", omplapp / f"{name}.path"
+    if not (cfg.is_file() and solution.is_file()):
+        pytest.skip(f"{cfg.name} or {solution.name} is not in {omplapp}")
+    task = load_omplapp(cfg)
+    w = task.problem.world
+    Q = read_omplapp_path(solution)
+    assert np.allclose(Q[0, :3], task.problem.start[:3])
+    assert all(w.is_valid(q) for q in Q)
+    # nudged: each state moved towards the environment's nearest point until it touches, which the
+    # check must see; the frame is then right to within the nudge
+    fcl = pytest.importorskip("fcl")
+    hits = 0
+    for q in Q[:: max(1, len(Q) // 8)]:
+        w._check.body.setTransform(fcl.Transform(np.asarray(rotation_matrix(*q[3:])), q[:3].copy()))
+        result = fcl.DistanceResult()
+        d = fcl.distance(w._check.body, w._check.env, fcl.DistanceRequest(enable_nearest_points=True), result)
+        direction = result.nearest_points[1] - result.nearest_points[0]
+        nudged = q.copy()
+        nudged[:3] += direction * (1 + 1e-3) + direction / max(np.linalg.norm(direction), 1e-12) * 1e-3 * w.radius
+        assert d > 0 and not w.is_valid(nudged), (name, q)
+        hits += 1
+    assert hits >= 2
+
+
+def test_without_assimps_up_axis_turn_the_start_collides(omplapp, monkeypatch):
+    if not (omplapp / "cubicles.cfg").is_file():
+        pytest.skip(f"cubicles.cfg is not in {omplapp}")
+    import planners.worlds.mesh as mesh
+
+    load_omplapp(omplapp / "cubicles.cfg")  # in OMPL.app's frame it loads
+    monkeypatch.setitem(mesh._UP_TO_Y, "Z_UP", np.eye(3))  # the files are Z_UP: read them untouched
+    with pytest.raises(InputError, match="start .* is not a valid state"):
+        load_omplapp(omplapp / "cubicles.cfg")
+
+
+def test_plan3d_plans_and_draws_a_problem_file(tmp_path):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(repo), os.environ.get("PYTHONPATH")]))}
+
+    def plan3d(*args):
+        return subprocess.run([sys.executable, str(repo / "scripts" / "plan3d.py"), *map(str, args)],
+                              capture_output=True, text=True, env=env, timeout=600)
+
+    out = tmp_path / "out"
+    done = plan3d(write_problem(tmp_path), "--time-limit", 20, "--frames", 3, "--out", out)
+    assert done.returncode == 0, done.stderr
+    assert "solved:           True" in done.stdout
+    assert (out / "plan3d.png").stat().st_size > 0 and (out / "plan3d.gif").stat().st_size > 0
+    bad = plan3d(tmp_path / "nothing.cfg", "--out", out)
+    assert bad.returncode == 2 and "does not exist" in bad.stderr
+
+
+def test_ompl_runs_rrt_connect_on_a_problem_file(tmp_path):
+    from planners.tools import ompl_bridge
+
+    if not ompl_bridge.available():
+        pytest.skip("OMPL's Python bindings are not installed (the bench extra)")
+    from planners.tools.ompl_bridge import _axis_angle
+    from planners.worlds.omplapp import axis_angle_matrix
+
+    rng = np.random.default_rng(1)
+    for R in [trimesh.transformations.random_rotation_matrix(rng.random(3))[:3, :3] for _ in range(50)] + \
+            [axis_angle_matrix([1, 0, 0], PI), axis_angle_matrix([1, -1, 0.5], PI), np.eye(3)]:
+        *axis, theta = _axis_angle(R)
+        assert np.allclose(axis_angle_matrix(axis, theta), R, atol=1e-6)
+    problem = load_omplapp_cfg(write_problem(tmp_path))
+    run = ompl_bridge.ompl_rigid_connect(problem, seed=0, time_limit=20.0)
+    assert run.solved and np.allclose(run.path[0], problem.start[:3]) and np.allclose(run.path[-1], problem.goal[:3])

@@ -1,0 +1,262 @@
+"""Mesh worlds: reading meshes, exact checks against FCL, the broad phase, motions that cannot tunnel, planners."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+trimesh = pytest.importorskip("trimesh", reason="mesh worlds need the mesh extra (pip install samplergym[mesh])")
+fcl = pytest.importorskip("fcl", reason="mesh worlds need the mesh extra (pip install samplergym[mesh])")
+
+from planners import GoalBiasedSampler, Problem, make_planner  # noqa: E402
+from planners.base.fileio import InputError  # noqa: E402
+from planners.worlds.mesh import MeshWorld, read_mesh  # noqa: E402
+from planners.worlds.rigid3d import euler_from_matrix, rotation_matrix  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+PI = math.pi
+
+
+def box(extents, centre):
+    return trimesh.creation.box(extents=extents, transform=trimesh.transformations.translation_matrix(centre))
+
+
+def wall_with_hole(thickness=0.2, hole=2.0):
+    """A wall across x = 5 of a 10-cube, with a square hole of side ``hole`` around (5, 5, 5)."""
+    lo, hi = 5 - hole / 2, 5 + hole / 2
+    parts = [box((thickness, 10, lo), (5, 5, lo / 2)), box((thickness, 10, 10 - hi), (5, 5, (10 + hi) / 2)),
+             box((thickness, lo, hole), (5, lo / 2, 5)), box((thickness, 10 - hi, hole), (5, (10 + hi) / 2, 5))]
+    return trimesh.util.concatenate(parts)
+
+
+@pytest.fixture(scope="module")
+def hole_world():
+    return MeshWorld(wall_with_hole(), trimesh.creation.box(extents=(1.0, 1.0, 1.0)), low=(0, 0, 0), high=(10, 10, 10))
+
+
+@pytest.fixture(scope="module")
+def wide_hole_world():
+    return MeshWorld(wall_with_hole(hole=3.0), trimesh.creation.box(extents=(1.0, 1.0, 1.0)), low=(0, 0, 0),
+                     high=(10, 10, 10))
+
+
+def states_along(world, a, b, spacing=None):
+    """Poses along a -> b at body-point travel <= spacing (default delta; own interpolation: linear,
+    shorter-arc angles)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    dang = (b[3:] - a[3:] + PI) % (2 * PI) - PI
+    travel = np.linalg.norm(b[:3] - a[:3]) + world.radius * np.abs(dang).sum()
+    n = max(1, int(np.ceil(travel / (world.delta if spacing is None else spacing))))
+    t = np.linspace(0.0, 1.0, n + 1)[:, None]
+    return np.hstack([a[:3] + t * (b[:3] - a[:3]), a[3:] + t * dang])
+
+
+def test_importing_planners_loads_no_mesh_library():
+    code = ("import json, sys; import planners, planners.worlds.rigid3d; "
+            "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in ('trimesh', 'fcl', 'collada'))))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
+    assert json.loads(out.stdout) == []
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".stl"])
+def test_read_mesh_reads_what_trimesh_wrote(tmp_path, suffix):
+    mesh = box((1, 2, 3), (4, 5, 6))
+    path = tmp_path / f"box{suffix}"
+    mesh.export(path)
+    V, F = read_mesh(path)
+    assert F.shape == (12, 3) and F.dtype == np.int32
+    assert np.allclose(V.min(0), [3.5, 4, 4.5]) and np.allclose(V.max(0), [4.5, 6, 7.5])
+
+
+def test_read_mesh_turns_a_z_up_collada_file_to_y_up_as_assimp_does(tmp_path):
+    pytest.importorskip("collada", reason="COLLADA needs pycollada (the mesh extra)")
+    path = tmp_path / "box.dae"
+    box((1, 2, 3), (4, 5, 6)).export(path)
+    text = path.read_text()
+    assert "<up_axis>Y_UP</up_axis>" in text
+    V, _ = read_mesh(path)
+    assert np.allclose(V.min(0), [3.5, 4, 4.5]) and np.allclose(V.max(0), [4.5, 6, 7.5])
+    # the same file declared Z_UP: (x, y, z) becomes (x, z, -y)
+    path.write_text(text.replace("<up_axis>Y_UP</up_axis>", "<up_axis>Z_UP</up_axis>"))
+    V, _ = read_mesh(path)
+    assert np.allclose(V.min(0), [3.5, 4.5, -6]) and np.allclose(V.max(0), [4.5, 7.5, -4])
+
+
+def test_read_mesh_refuses_bad_files(tmp_path):
+    with pytest.raises(InputError, match="does not exist"):
+        read_mesh(tmp_path / "nothing.obj")
+    (tmp_path / "a.xyz").write_text("1 2 3\n")
+    with pytest.raises(InputError, match="unknown mesh type"):
+        read_mesh(tmp_path / "a.xyz")
+    (tmp_path / "empty.obj").write_text("# no faces\nv 0 0 0\n")
+    with pytest.raises(InputError, match="empty.obj"):
+        read_mesh(tmp_path / "empty.obj")
+    with pytest.raises(InputError, match="face indices"):
+        MeshWorld((np.zeros((3, 3)), [[0, 1, 5]]), box((1, 1, 1), (0, 0, 0)), low=(0, 0, 0), high=(1, 1, 1))
+    with pytest.raises(InputError, match="low < high"):
+        MeshWorld(box((1, 1, 1), (0, 0, 0)), box((1, 1, 1), (0, 0, 0)), low=(0, 0, 0), high=(1, 0, 1))
+
+
+def test_euler_angles_round_trip():
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        R = trimesh.transformations.random_rotation_matrix(rng.random(3))[:3, :3]
+        assert np.allclose(rotation_matrix(*euler_from_matrix(R)), R, atol=1e-9)
+    for tx in (PI / 2, -PI / 2):  # gimbal lock
+        R = rotation_matrix(tx, 0.4, -1.1)
+        assert np.allclose(rotation_matrix(*euler_from_matrix(R)), R, atol=1e-9)
+
+
+def test_states_known_free_and_known_in_collision(hole_world):
+    w = hole_world
+    assert w.is_valid([2, 5, 5, 0, 0, 0])  # in front of the wall
+    assert w.is_valid([5, 5, 5, 0, 0, 0])  # in the hole, 0.5 from its sides
+    assert not w.is_valid([5, 2, 5, 0, 0, 0])  # in the wall
+    assert w.is_valid([5, 4.6, 5, 0, 0, 0])  # 0.1 from the hole's side
+    assert not w.is_valid([5, 4.6, 5, 0, 0, PI / 4])  # turned there: a corner reaches 0.71 from the centre
+    assert not w.is_valid([11, 5, 5, 0, 0, 0])  # origin outside the bounds
+    assert "environment" in w.explain_invalid([5, 2, 5, 0, 0, 0])
+    assert "outside the bounds" in w.explain_invalid([11, 5, 5, 0, 0, 0])
+    with pytest.raises(InputError, match="not a valid state"):
+        Problem(w, [5, 2, 5, 0, 0, 0], [8, 5, 5, 0, 0, 0])
+    # through the hole and turned 90 degrees on the way is free; beside it is not
+    assert w.check_motion([2, 5, 5, 0, 0, 0], [8, 5, 5, 0, 0, PI / 2])
+    assert not w.check_motion([2, 2, 5, 0, 0, 0], [8, 2, 5, 0, 0, 0])
+
+
+def test_broad_phase_never_contradicts_fcl():
+    rng = np.random.default_rng(3)
+    env = trimesh.util.concatenate([wall_with_hole(), box((1, 1, 6), (2, 2, 3)), box((3, 0.5, 0.5), (7, 7, 7))])
+    w = MeshWorld(env, trimesh.creation.capsule(height=1.0, radius=0.3), low=(0, 0, 0), high=(10, 10, 10),
+                  grid_cells=64)
+    proved = undecided = 0
+    for _ in range(600):
+        q = np.concatenate([rng.uniform(0, 10, 3), rng.uniform(-PI, PI, 3)])
+        margin = float(rng.choice([0.0, w.delta / 2, 0.3]))
+        exact = w.pose_free_exact(q, margin)
+        if w.pose_free_broad(q, margin):
+            proved += 1
+            assert exact, q  # the broad phase only proves what FCL confirms
+            assert w.clearance(q) > margin
+        else:
+            undecided += 1
+    assert proved > 100 and undecided > 50  # both paths are exercised
+
+
+def test_motion_check_agrees_with_fcl_along_the_motion(hole_world):
+    # accepted: FCL finds every pose free at a quarter of the resolution; refused: some pose comes
+    # closer than delta / 2 (plus the travel between the poses sampled here)
+    w = hole_world
+    rng = np.random.default_rng(4)
+    seen = {True: 0, False: 0}
+    for _ in range(40):
+        a = np.concatenate([rng.uniform([1, 3.5, 3.5], [9, 6.5, 6.5]), rng.uniform(-0.4, 0.4, 3)])
+        b = np.concatenate([rng.uniform([1, 3.5, 3.5], [9, 6.5, 6.5]), rng.uniform(-0.4, 0.4, 3)])
+        got = w.check_motion(a, b)
+        fine = states_along(w, a, b, w.delta / 4)
+        if got:
+            assert all(w.pose_free_exact(q) for q in fine), (a, b)
+        else:
+            assert not all(w.pose_free_exact(q, w.delta / 2 + w.delta / 8) for q in fine), (a, b)
+        seen[got] += 1
+    assert seen[True] and seen[False]
+
+
+def test_a_motion_through_a_thin_wall_is_rejected():
+    hair = box((1e-4, 10, 10), (5, 5, 5))  # no hole: a wall far thinner than any check step
+    w = MeshWorld(hair, trimesh.creation.box(extents=(0.2, 1.0, 0.25)), low=(0, 0, 0), high=(10, 10, 10))
+    a, b = [2.125, 2.5, 2.5, 0, 0, 0], [8.125, 2.5, 2.5, 0, 0, 0]
+    assert w.is_valid(a) and w.is_valid(b)
+    coarse = [np.r_[x, 2.5, 2.5, 0, 0, 0] for x in np.arange(2.125, 8.13, 0.25)]
+    assert all(w.pose_free_exact(q) for q in coarse)  # a check every 0.25 passes straight through
+    assert not w.check_motion(a, b)
+    # turning the body through the wall with its origin still: at a quarter turn it reaches x = 5.2
+    c, d = [4.7, 2.5, 2.5, 0, 0, 0], [4.7, 2.5, 2.5, 0, 0, 3.0]
+    assert w.is_valid(c) and w.is_valid(d) and not w.is_valid([4.7, 2.5, 2.5, 0, 0, PI / 2])
+    assert not w.check_motion(c, d)
+
+
+BIASED = {"step_size": 1.0, "sampler": GoalBiasedSampler(0.05)}
+PLANNERS = [("RRT", BIASED), ("RRTConnect", {"step_size": 1.0}), ("RRTstar", BIASED), ("InformedRRTstar", BIASED),
+            ("PRM", {}), ("LazyPRM", {}), ("OBPRM", {})]
+
+
+@pytest.mark.parametrize("name, kwargs", PLANNERS, ids=[n for n, _ in PLANNERS])
+def test_planners_go_through_the_hole_and_repeat_with_the_seed(wide_hole_world, name, kwargs):
+    world = wide_hole_world
+    problem = Problem(world, [2, 3, 3, 0, 0, 0], [8, 7, 7, 0, 0, 0], goal_tolerance=0.5)
+    results = [make_planner(name, problem, seed=2, **kwargs).solve(max_iterations=4000) for _ in range(2)]
+    r = results[0]
+    assert r.solved, name
+    assert world.path_valid(r.path)
+    assert np.array_equal(r.path, results[1].path) and r.iterations == results[1].iterations
+    assert r.collision_checks == results[1].collision_checks
+    dense = np.concatenate([states_along(world, a, b) for a, b in zip(r.path[:-1], r.path[1:], strict=True)])
+    cross = np.flatnonzero(np.diff(np.sign(dense[:, 0] - 5.0)) != 0)
+    assert len(cross) and all(np.all(np.abs(dense[i, 1:3] - 5.0) < 1.5) for i in cross)  # through the hole
+
+
+def test_a_time_limit_holds_on_a_mesh_world(hole_world):
+    # an unsolvable query (the goal is walled in), so only the time limit stops the planner
+    env = trimesh.util.concatenate([wall_with_hole(), box((3, 3, 0.2), (8, 8, 6.5)), box((3, 3, 0.2), (8, 8, 9.5)),
+                                    box((0.2, 3, 3), (6.5, 8, 8)), box((0.2, 3, 3), (9.5, 8, 8)),
+                                    box((3, 0.2, 3), (8, 6.5, 8)), box((3, 0.2, 3), (8, 9.5, 8))])
+    w = MeshWorld(env, trimesh.creation.box(extents=(1.0, 1.0, 1.0)), low=(0, 0, 0), high=(10, 10, 10))
+    problem = Problem(w, [2, 3, 3, 0, 0, 0], [8, 8, 8, 0, 0, 0], goal_tolerance=0.5)
+    for name in ("RRTConnect", "PRM"):
+        make_planner(name, problem, seed=0).solve(max_iterations=20)  # compile outside the clock
+        planner = make_planner(name, problem, seed=0)
+        t = time.perf_counter()
+        r = planner.solve(time_limit=1.0)
+        spent = time.perf_counter() - t - planner.compile_time
+        assert not r.solved and r.stop_reason == "time_limit"
+        assert spent < 1.1, (name, spent)
+
+
+def test_past_a_deadline_exact_checks_answer_blocked_and_only_then(hole_world):
+    w = hole_world
+    a, b = [2, 4.55, 5, 0, 0, 0], [8, 4.55, 5, 0, 0, 0]  # through the hole 0.05 from its side: FCL decides
+    before = w.exact_poses
+    assert w.check_motion(a, b) and w.exact_poses > before
+    w.set_deadline(0.0, lambda: 1.0)
+    try:
+        assert not w.check_motion(a, b)
+        assert w.check_motion([1, 1, 1, 0, 0, 0], [1.2, 1, 1, 0, 0, 0])  # proved free without FCL: unaffected
+    finally:
+        w.set_deadline(None)
+    assert w.check_motion(a, b)
+
+
+def test_motion_poses_are_the_poses_checked(hole_world):
+    a, b = [2, 5, 5, 0.1, 0, 3.0], [8, 5, 5, 0, 0, -3.0]  # across +-pi, the short way
+    P = hole_world.motion_poses(a, b)
+    S = states_along(hole_world, a, b)
+    assert P.shape == S.shape and np.allclose(P[:, :3], S[:, :3])
+    assert np.allclose((P[:, 3:] - S[:, 3:] + PI) % (2 * PI) - PI, 0, atol=1e-12)
+    assert hole_world.motion_poses(a, a).shape == (1, 6)
+
+
+def test_vectorised_rotations_are_the_compiled_ones():
+    from planners.worlds.mesh import rotation_matrices
+
+    angles = np.random.default_rng(5).uniform(-PI, PI, (100, 3))
+    R = rotation_matrices(angles)
+    assert all(np.allclose(R[i], rotation_matrix(*angles[i]), atol=1e-15) for i in range(100))
+
+
+def test_a_mesh_world_pickles_by_its_triangles(hole_world):
+    import pickle
+
+    copy = pickle.loads(pickle.dumps(hole_world))
+    assert copy is not hole_world and repr(copy) == repr(hole_world)
+    assert np.array_equal(copy.grid, hole_world.grid) and copy.delta == hole_world.delta
+    for q in ([5, 4.6, 5, 0, 0, 0], [5, 4.6, 5, 0, 0, PI / 4]):
+        assert copy.is_valid(q) == hole_world.is_valid(q)
