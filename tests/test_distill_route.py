@@ -1,0 +1,24 @@
+"""scripts/experiments/distill_route.py: a narrower encoder learned from the shipped one, seeded, loadable."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+from conftest import load_script
+
+from learning.models.route_net import load_route_net
+
+pytestmark = pytest.mark.experiments
+
+
+def test_a_distilled_encoder_is_seeded_loads_and_fits_its_teacher_better_than_at_the_start(tmp_path, capsys):
+    distill = load_script("experiments/distill_route")
+    flags = ["--channels", "4", "--maps", "1", "--sizes", "32", "--epochs", "3", "--batch", "4"]
+    assert distill.main([*flags, "--out", str(tmp_path / "a.pt")]) == 0
+    losses = [float(line.split("loss ")[1].split()[0]) for line in capsys.readouterr().out.splitlines()
+              if line.startswith("epoch")]
+    assert len(losses) == 3 and losses[-1] < losses[0]
+    assert distill.main([*flags, "--out", str(tmp_path / "b.pt")]) == 0
+    a, b = load_route_net(tmp_path / "a.pt"), load_route_net(tmp_path / "b.pt")
+    assert a.channels == 4 and (a.block, a.step) == (2, 4)
+    assert all(torch.equal(x, y) for x, y in zip(a.state_dict().values(), b.state_dict().values(), strict=True))
