@@ -445,7 +445,8 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
     reach, reach_met, reach_total = E.target_check(head, mai, "expert")
     glance = E.glance_table(rows, best, users, mai)
     clock = E.glance_table(rows, best, users, mai, metric="time")
-    loads = "; ".join(f"{what}: {seconds * 1e3:.0f} ms" for what, seconds in sorted(context.models.load_seconds.items()))
+    loads = "; ".join(f"{what}: {seconds * 1e3:.0f} ms"
+                      for what, seconds in sorted(context.models.load_seconds.items()))
     clock_note = ("RRT on the test split: median wall time per query in ms, from the planner's start to its first "
                   "solution, the sampler's own work for the query included (the route encoder's pass, the exact "
                   "reference's and the expert's grid search, the policy's set-up); the fastest sampler of each set in "

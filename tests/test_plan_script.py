@@ -307,7 +307,7 @@ def test_a_ros_map_plans_in_metres_with_y_up(tmp_path):
 
 
 def test_binding_the_sampler_is_timed_apart_from_planning(map_png):
-    """A route encoder's pass happens when the sampler is bound: it is the sampler's time, not hidden before the clock."""
+    """A route encoder's pass happens when the sampler is bound: the sampler's time, not hidden before the clock."""
     from learning import make_sampler
 
     out = plan_on_image(map_png, (10, 40), (85, 40), planner="rrt", sampler=make_sampler("route"), step=4.0,

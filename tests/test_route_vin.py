@@ -60,7 +60,8 @@ def test_blocks_without_a_free_cell_are_never_entered():
        dtype=st.sampled_from([torch.float32, torch.float64]))
 def test_settle_is_value_iterations_fixed_point_bit_for_bit(h, w, seed, walls_p, goals, wall_moves, dtype):
     rng = np.random.default_rng(seed)
-    costs = torch.from_numpy(rng.uniform(0.5, 45.0, (2, 8, h, w))).to(dtype) * torch.tensor(LENGTHS, dtype=dtype).view(1, 8, 1, 1)
+    lengths = torch.tensor(LENGTHS, dtype=dtype).view(1, 8, 1, 1)
+    costs = torch.from_numpy(rng.uniform(0.5, 45.0, (2, 8, h, w))).to(dtype) * lengths
     if wall_moves:  # moves priced as walls, as inference masks them
         costs = costs.masked_fill(torch.from_numpy(rng.random((2, 8, h, w)) < 0.3), UNREACHED)
     walls = torch.from_numpy(rng.random((2, h, w)) < walls_p)

@@ -126,7 +126,8 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
             for name in (r.map, POOLED):
                 by.setdefault(name, {}).setdefault(_method(r), []).append(r)
     names = [m for m in order if m in by] + sorted(set(by) - set(order) - {POOLED}) + [POOLED]
-    methods = [m for m in (ROUTE, ABLATION, EXACT, TUNED, CONNECT, PRM, OMPL_CONNECT) if any(m in v for v in by.values())]
+    methods = [m for m in (ROUTE, ABLATION, EXACT, TUNED, CONNECT, PRM, OMPL_CONNECT)
+               if any(m in v for v in by.values())]
     rows, held, slow_held, slow_total = [], 0, 0, 0
     pooled_ompl = math.nan
     for name in names:

@@ -58,8 +58,11 @@ def _roles(biases: dict, fam: str, planner: str, extra: Sequence[str]) -> list[t
 
 def save_plots(runs: Sequence[Run], rows: Sequence[dict], biases: dict, out_dir: Path,
                planner: str = "RRT", extra: Sequence[str] = ()) -> list[Path]:
-    """Write ``ecdf.png`` and ``ecdf-time.png`` (:func:`ecdf_figure` of iterations and of time) and ``medians.png``
-    (:func:`medians_figure`); returns their paths."""
+    """Write the figures of the comparison; returns their paths.
+
+    ``ecdf.png`` and ``ecdf-time.png`` (:func:`ecdf_figure` of iterations and of time), ``medians.png``
+    (:func:`medians_figure`).
+    """
     from planners.viz.plotting import save_figure
 
     if not any(r.split == "test" and r.planner == planner for r in runs):

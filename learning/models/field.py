@@ -16,7 +16,6 @@ import torch
 from learning.models.threads import planning_threads
 from planners.base.fileio import InputError, short_repr
 
-
 GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
 
 #: The largest encoder input, in blocks (cells of the block grid), and the variable that raises it: one map of

@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from planners import SamplerBase
-from planners.base.samplers import check_sampler_params
 from planners.base.fileio import InputError
+from planners.base.samplers import check_sampler_params
 from planners.guidance.guided import FRONTIER, GuidedSampling, ego_class
 
 #: Frontier probabilities the comparison chooses from on the tuning split (0 is left out: always

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from planners import GoalBiasedSampler, Sampler, UniformSampler
-from planners.base.samplers import check_sampler_params
 from planners.base.fileio import InputError
+from planners.base.samplers import check_sampler_params
 from planners.tools.benchmark import STEP  # the step samplers are built for unless told otherwise
 
 

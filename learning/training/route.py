@@ -123,7 +123,8 @@ def _turned_shape(problem: Problem | Callable[[], Problem], k: int) -> tuple[int
 def _pool(workers: int, tasks: int):
     """A pool of ``min(workers, tasks)`` processes forked from a fresh single-threaded server ("forkserver";
     "spawn" where there is none): forking this process itself could copy a lock held by one of its threads
-    (torch's, Ray's) and hang, and a child must not inherit a CUDA context."""
+    (torch's, Ray's) and hang, and a child must not inherit a CUDA context.
+    """
     methods = multiprocessing.get_all_start_methods()
     ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
     return ctx.Pool(min(workers, tasks))
@@ -286,7 +287,8 @@ def _load_checkpoint(path: Path, recipe: dict) -> dict:
 
 def _loss(net: RouteNet | RouteVIN, x: torch.Tensor, cells: torch.Tensor) -> torch.Tensor:
     """The training loss of one batch: a ``RouteNet``'s smooth-L1 error of every reached cell's cost-to-go,
-    a ``RouteVIN``'s ``vin_loss``."""
+    a ``RouteVIN``'s ``vin_loss``.
+    """
     if isinstance(net, RouteVIN):
         return vin_loss(net, x, cells)
     out = net(x)

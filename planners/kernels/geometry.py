@@ -281,7 +281,8 @@ class MeshKernel(WorldKernel):
 
 def world_kernel(kind: int, grid: np.ndarray, geom: np.ndarray, body: np.ndarray, params: np.ndarray) -> WorldKernel:
     """The ``WorldKernel`` a world hands the planners: of its kind's class, so kernels compiled for it
-    contain that kind's collision check only (a plain ``WorldKernel`` dispatches at run time)."""
+    contain that kind's collision check only (a plain ``WorldKernel`` dispatches at run time).
+    """
     for cls in (GridKernel, ShapesKernel, RigidKernel, MeshKernel):
         if cls.KIND == kind:
             return cls(kind, grid, geom, body, params)

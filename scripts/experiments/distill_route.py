@@ -62,7 +62,7 @@ def main(argv=None) -> int:
     data: dict[int, list] = {}  # by side: (input, log costs, values, cell field, moves to learn, cells to learn)
     for size in args.sizes:
         for family in TRAINING_FAMILIES:
-            for i in range(args.maps):
+            for _ in range(args.maps):
                 p = generate(family, TRAIN_SEEDS[0] + rng.integers(TRAIN_SEEDS[1] - TRAIN_SEEDS[0]), size)
                 obs, goal = symmetry(np.asarray(p.world.obstacles), p.world.cell_of(p.goal), int(rng.integers(8)))
                 x = torch.from_numpy(route_input(obs, goal, teacher.block)[None, :cells + 1])
@@ -81,7 +81,7 @@ def main(argv=None) -> int:
                    for idx in [rng.permutation(len(rows))] for k in range(0, len(rows), args.batch)]
         for b in rng.permutation(len(batches)):
             size, idx = batches[b]
-            x, log_c, v, field, moving, free = (torch.cat(t) for t in zip(*(data[size][i] for i in idx)))
+            x, log_c, v, field, moving, free = (torch.cat(t) for t in zip(*(data[size][i] for i in idx), strict=True))
             f, costs = student.move_costs(x)
             cost_loss = nn.functional.mse_loss(torch.log(costs).permute(0, 2, 3, 1)[moving],
                                                log_c.permute(0, 2, 3, 1)[moving])
