@@ -97,6 +97,15 @@ def sphere_free(grid, params, q, margin):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
+def _cover_voxel(params, R, cover, p, q):
+    """The voxel of cover point ``p`` of the body turned by ``R`` and placed at ``q`` (``_voxel``'s pair)."""
+    wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
+    wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
+    wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
+    return _voxel(params, wx, wy, wz)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def broad_phase_free(grid, cover, params, q, margin):
     """True if the broad phase proves the pose ``q`` keeps the body more than ``margin`` from the environment.
 
@@ -109,10 +118,7 @@ def broad_phase_free(grid, cover, params, q, margin):
     need = margin + params[P_COVER]
     R = rotation_matrix(q[3], q[4], q[5])
     for p in range(cover.shape[0]):
-        wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
-        wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
-        wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
-        i, jk = _voxel(params, wx, wy, wz)
+        i, jk = _cover_voxel(params, R, cover, p, q)
         if i < 0 or not (grid[i, jk] - 1.0) * h > need:
             return False
     return True
@@ -135,10 +141,7 @@ def clearance_bound(grid, cover, params, q, need):
     lowest = np.inf
     R = rotation_matrix(q[3], q[4], q[5])
     for p in range(cover.shape[0]):
-        wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
-        wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
-        wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
-        i, jk = _voxel(params, wx, wy, wz)
+        i, jk = _cover_voxel(params, R, cover, p, q)
         if i < 0:
             return bound
         d = (grid[i, jk] - 1.0) * h - params[P_COVER]
