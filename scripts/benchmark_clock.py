@@ -27,6 +27,7 @@ import torch
 import learning.evaluation as E
 from learning.evaluation import clock as C
 from learning.evaluation.mapsets import pooled_tuned, unseen_queries
+from learning.evaluation.protocol import MOVINGAI_MAPS
 from learning.models.route_vin import RouteVIN
 from learning.models.shipped import SHIPPED_ROUTE
 from planners import movingai_dir
@@ -36,8 +37,6 @@ from planners.maps.unseen import UNSEEN_FAMILIES
 from planners.tools import ompl_bridge
 from planners.tools.benchmark import markdown_table, write_runs_csv
 
-MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
-                 "maze-32-32-2", "room-32-32-4", "room-64-64-8", "random-32-32-10", "random-64-64-20")
 #: --quick: test queries per set, and planner seeds.
 QUICK = {"maps": 8, "shifted_maps": 8, "unseen_maps": 4, "scenarios": 3, "seeds": 2}
 

@@ -53,6 +53,7 @@ from learning.evaluation.journal import (
     work_folder,
 )
 from learning.evaluation.mapsets import UnseenQuery, map_set_queries, pooled_tuned, unseen_queries
+from learning.evaluation.protocol import MOVINGAI_MAPS
 from learning.evaluation.protocol import QUICK as PROTOCOL_QUICK
 from learning.models.shipped import SHIPPED_POLICY
 from learning.samplers.route import SHIPPED
@@ -77,8 +78,6 @@ from planners.tools.benchmark import markdown_table, write_runs_csv
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
 DEFAULT_POLICY = SHIPPED_POLICY
-MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
-                 "maze-32-32-2", "room-32-32-4", "room-64-64-8", "random-32-32-10", "random-64-64-20")
 #: The comparison's protocol at its defaults: every default below is taken from it.
 DEFAULT = E.Protocol()
 #: What --quick changes: ``Protocol.quick`` (fewer test queries and planner seeds, the tuning split

@@ -51,6 +51,9 @@ class Protocol:
         return query.problem(self.movingai_dir, self.tolerance, cache)
 
 
+#: The MovingAI maps the comparison evaluates by default (``scripts/evaluate.py --movingai-maps``).
+MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",
+                 "maze-32-32-2", "room-32-32-4", "room-64-64-8", "random-32-32-10", "random-64-64-20")
 #: What :meth:`Protocol.quick` changes.
 QUICK = {"maps": 25, "shifted_maps": 25, "unseen_maps": 8, "scenarios": 4, "seeds": 2}
 

@@ -384,12 +384,7 @@ class RouteSampler(SamplerBase):
         reads the map at that step (``_encoder_map``).
         """
         check_sampler_params(type(self).__name__, step_size=step_size)
-        if float(step_size) == self.step_size:
-            return self
-        out = object.__new__(type(self))
-        out.__dict__.update(self.__dict__)
-        out.step_size = float(step_size)
-        return out
+        return self if float(step_size) == self.step_size else self._copy_with(step_size=float(step_size))
 
     def _encoder_map(self, grid: OccupancyGrid) -> tuple[np.ndarray, tuple[int, int], float]:
         """What the encoder reads for this query: (obstacles, goal cell, map cells per encoder cell).
@@ -439,7 +434,7 @@ class RouteSampler(SamplerBase):
         grid = problem.world
         if self.net is None or self.fields is None or not isinstance(grid, OccupancyGrid):
             return False
-        obstacles, goal, _ = self._bound_to(problem)._encoder_map(grid)
+        obstacles, goal, _ = self._copy_with(problem=problem)._encoder_map(grid)
         return self.fields.has(self.net, obstacles, goal, self.symmetry_passes)
 
     def prefill(self, problems: Sequence[Problem], *, batch: bool | None = None) -> int:
@@ -456,17 +451,17 @@ class RouteSampler(SamplerBase):
             grid = problem.world
             if isinstance(grid, OccupancyGrid):
                 try:
-                    obstacles, goal, _ = self._bound_to(problem)._encoder_map(grid)
+                    obstacles, goal, _ = self._copy_with(problem=problem)._encoder_map(grid)
                 except InputError:
                     continue
                 queries.append((obstacles, goal))
         return self.fields.fill(self.net, queries, self.symmetry_passes, threads=self.threads, batch=batch)
 
-    def _bound_to(self, problem: Problem) -> RouteSampler:
-        """A copy that knows ``problem`` (for its goal), without the set-up a bind runs."""
+    def _copy_with(self, **attributes) -> RouteSampler:
+        """A shallow copy with ``attributes`` set (a step, or a problem for its goal), without a bind's set-up."""
         out = object.__new__(type(self))
         out.__dict__.update(self.__dict__)
-        out.problem = problem
+        out.__dict__.update(attributes)
         return out
 
     def _setup(self) -> None:
