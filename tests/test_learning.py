@@ -58,6 +58,7 @@ def test_seeded_training_is_reproducible(repro_trained, tmp_path):
     assert not torch.equal(_weights(other)["action_net.weight"], a["action_net.weight"])
 
 
+@pytest.mark.slow  # a training run on Ray
 def test_training_on_ray_reaches_the_same_weights(repro_trained, tmp_path, ray_backend):
     """DAgger's rollouts and the validation runs on Ray workers: the weights do not depend on the backend."""
     final = repro_trained

@@ -18,6 +18,7 @@ from planners import RRT, GoalBiasedSampler  # noqa: E402
 from planners.maps.generators import VALIDATION_SEED0, generate  # noqa: E402
 
 
+@pytest.mark.slow  # two training trials on Ray Tune
 def test_a_recipe_sweep_picks_on_validation_logs_every_trial_and_resumes(tmp_path, ray_backend):
     sweep = load_script("sweep")
     args = ["recipe", "--quick", "--samples", "2", "--out", str(tmp_path)]
@@ -56,6 +57,7 @@ def test_baseline_score_is_the_validation_metric():
     assert ("goal_bias", 0.0) in BASELINE_GRID and any(k == "constant" for k, _ in BASELINE_GRID)
 
 
+@pytest.mark.slow  # three training trials, one killed
 def test_an_interrupted_sweep_resumes_and_keeps_its_finished_trials(tmp_path):
     """Ctrl-C in the middle of a sweep, then --resume: every trial ends finished, none run twice."""
     import signal

@@ -82,7 +82,10 @@ def reference(tmp_path_factory):
     return int(done.stdout.split()[-1]), _weights(tmp / "route")
 
 
-@pytest.mark.parametrize("fraction", [0.25, 0.5, 0.75, 1.0])
+# one kill point in the default run; the other three with `-m slow`
+@pytest.mark.parametrize("fraction", [pytest.param(0.25, marks=pytest.mark.slow), 0.5,
+                                      pytest.param(0.75, marks=pytest.mark.slow),
+                                      pytest.param(1.0, marks=pytest.mark.slow)])
 def test_a_kill_then_resume_equals_an_uninterrupted_run(tmp_path, reference, fraction):
     renames, weights = reference
     kill_at = max(1, round(fraction * renames))

@@ -107,7 +107,10 @@ def _kill_and_resume(tmp: Path, kill_at: int, reference) -> None:
     assert not list(run.rglob(".*.tmp*")), "the resumed run removes the temporary files the kill left"
 
 
-@pytest.mark.parametrize("fraction", [0.25, 0.5, 0.75, 1.0])
+# one kill point in the default run; the other three with `-m slow`
+@pytest.mark.parametrize("fraction", [pytest.param(0.25, marks=pytest.mark.slow), 0.5,
+                                      pytest.param(0.75, marks=pytest.mark.slow),
+                                      pytest.param(1.0, marks=pytest.mark.slow)])
 def test_a_kill_then_resume_equals_an_uninterrupted_run(tmp_path, reference, fraction):
     _kill_and_resume(tmp_path, max(1, round(fraction * reference[0])), reference)
 
