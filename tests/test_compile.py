@@ -103,7 +103,8 @@ def test_the_notice_shows_once_per_install(fresh_notice, monkeypatch, capsys):
     assert not cache.is_compiled("RRT", world, space)
     cache.announce("RRT", world, space)
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "compiling the RRT kernels once for this install, about" in err
+    assert err.count("\n") == 1 and "compiling the RRT kernels for occupancy grids once for this install, about" in err
+    assert "other planners, worlds and samplers compile at their own first use" in err
     assert cache.is_compiled("RRT", world, space)
     cache.announce("RRT", world, space)
     monkeypatch.setattr(cache, "_seen", set())  # a new process: the stamp is on disk

@@ -170,6 +170,11 @@ def expected_seconds(label: str, space, figures: Path = FIGURES) -> str:
     return f"about {max(1, round(seconds))} s of CPU time (measured on a {cpus}-CPU machine)"
 
 
+#: The world kinds a notice names, by their kernel's type.
+_KINDS = {"GridKernel": "occupancy grids", "ShapesKernel": "circle and rectangle worlds",
+          "RigidKernel": "the rigid body among boxes", "MeshKernel": "mesh worlds"}
+
+
 def announce(label: str, world, space) -> None:
     """Before a planner's first run on a (world kind, space) this install has not compiled: say so on stderr.
 
@@ -184,8 +189,10 @@ def announce(label: str, world, space) -> None:
     if stamp.exists():
         return
     if _notice_on():
-        print(f"samplergym: compiling the {label} kernels once for this install, {expected_seconds(label, space)} "
-              f"(python -m planners.compile does it ahead; {NOTICE_ENV}=0 silences this)", file=sys.stderr, flush=True)
+        print(f"samplergym: compiling the {label} kernels for {_KINDS.get(type(world).__name__, 'this world')} once "
+              f"for this install, {expected_seconds(label, space)}; other planners, worlds and samplers compile "
+              f"at their own first use (python -m planners.compile does every planner ahead; {NOTICE_ENV}=0 "
+              f"silences this)", file=sys.stderr, flush=True)
     try:
         stamp.parent.mkdir(parents=True, exist_ok=True)
         stamp.touch()
