@@ -241,7 +241,7 @@ def test_the_validation_script_runs_each_column_at_the_walk_it_is_given(capsys, 
     assert script.main(["--maps", "1", "--sides", "64", "--seeds", "1", "--families", "bugtrap",
                         "--walk", "0.25", "0.02", "--ablation-walk", "0.1", "0", "--ablation-sight", "off"]) == 0
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| bugtrap | 64 |")]
-    assert len(rows) == 1 and len(rows[0].strip("|").split("|")) == 7
+    assert len(rows) == 1 and len(rows[0].strip("|").split("|")) == 8  # 4 samplers, share, unsolved
     assert set(made) == {("RouteSampler", True, 0.1, 0.0, False), ("RouteSampler", False, 0.25, 0.02, True),
                          ("GeodesicRouteSampler", True, 0.25, 0.02, True)}
     with pytest.raises(SystemExit) as stop:

@@ -24,6 +24,7 @@ the room is at least 20% of the ablation's median.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -40,6 +41,9 @@ from planners.tools.benchmark import MAX_ITERATIONS, STEP
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # this folder's modules
 from long_mazes import wall_cost_arg  # noqa: E402
+
+#: The table's columns, in order.
+SAMPLERS = ("ablation", "value iteration, no learning", "route encoder", "exact")
 
 
 class LengthCosts(RouteVIN):
@@ -65,6 +69,8 @@ def main(argv=None) -> int:
     ap.add_argument("--first-seed", type=int, default=0,
                     help="the first planner seed (default 0: seeds 0 .. seeds - 1); another shows the medians' noise")
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES))
+    ap.add_argument("--samplers", nargs="+", choices=SAMPLERS, default=list(SAMPLERS),
+                    help="which columns to run (default: all)")
     ap.add_argument("--walk", type=float, nargs=2, metavar=("RIPPLE", "GROWTH"),
                     default=[SHIPPED_SETTINGS["ripple"], SHIPPED_SETTINGS["ripple_growth"]],
                     help="the walk's ripple tolerance and its growth per step of cost-to-go for the encoder, value "
@@ -104,8 +110,9 @@ def main(argv=None) -> int:
         "route encoder": lambda: RouteSampler(net, **settings),
         "exact": lambda: GeodesicRouteSampler(**settings),
     }
-    print("| family | side | " + " | ".join(samplers) + " | share closed |")
-    print("|---|---|" + "---|" * (len(samplers) + 1))
+    samplers = {name: make for name, make in samplers.items() if name in args.samplers}
+    print("| family | side | " + " | ".join(samplers) + " | share closed | unsolved (" + ", ".join(samplers) + ") |")
+    print("|---|---|" + "---|" * (len(samplers) + 2))
     for family in args.families:
         for side in args.sides:
             its: dict[str, list[int]] = {name: [] for name in samplers}
@@ -117,9 +124,14 @@ def main(argv=None) -> int:
                             max_iterations=MAX_ITERATIONS)
                         its[name].append(r.first_solution_iteration if r.solved else MAX_ITERATIONS)
             med = {name: float(np.median(v)) for name, v in its.items()}
-            a, e, learned = med["ablation"], med["exact"], med["route encoder"]
-            share = f"{(a - learned) / (a - e):.2f}" if a - e >= 0.2 * a else "no room"
-            print(f"| {family} | {side} | " + " | ".join(f"{v:g}" for v in med.values()) + f" | {share} |", flush=True)
+            a, e, learned = (med.get(k, math.nan) for k in ("ablation", "exact", "route encoder"))
+            if math.isnan(a + e + learned):
+                share = "-"
+            else:
+                share = f"{(a - learned) / (a - e):.2f}" if a - e >= 0.2 * a else "no room"
+            unsolved = ", ".join(str(sum(x >= MAX_ITERATIONS for x in v)) for v in its.values())
+            print(f"| {family} | {side} | " + " | ".join(f"{v:g}" for v in med.values()) + f" | {share} | {unsolved} |",
+                  flush=True)
     return 0
 
 
