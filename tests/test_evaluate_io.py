@@ -358,7 +358,8 @@ def test_a_map_set_is_tuned_on_its_tuning_part_and_tested_on_its_test_part(tmp_p
     parts = record["map set"]["split"]["parts"]
     for r in rows:
         assert r["query"].split("#")[0] in parts["tuning" if r["split"] == "tuning" else "test"]
-    summary = (out / "summary.md").read_text()
+    assert "| sampler | ros | time per query | success |" in (out / "summary.md").read_text()  # the short table
+    summary = (out / "details.md").read_text()
     assert summary.index("## Results at a glance") < summary.index("## All cells") and "| ros |" in summary
     assert (out / "ompl" / "ros.log").is_file()
 
