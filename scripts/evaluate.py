@@ -7,7 +7,12 @@
     python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v1   # your SB3 model too
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
     python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
+    python scripts/evaluate.py --route mine=runs/route/route.pt                    # your encoder beside the shipped one
+    python scripts/evaluate.py --quick --other-planners all                        # every planner, every sampler
     python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments
+
+A thin command line over ``learning.evaluation.compare`` (one call a notebook makes as well: see
+learning/evaluation/comparison.py).
 
 Default map set: the five generated families at 128x128 on test seeds (never trained on), each family's
 shifted variant (other generators, sides 64 to 256, never used for training, validation or tuning) and the
@@ -19,7 +24,9 @@ tuning split first; the test runs use what was chosen there. With --map-set, a m
 (a folder or manifest of maps, see docs/map-sets.md) replaces the default ones: tuned on its tuning part,
 tested on its test part, its split printed and recorded.
 
-Writes runs.csv (every run), summary.md (tables), ecdf.png, medians.png, map-sets.json and OMPL benchmark
+Writes summary.md (one short table and a sentence per finding, made from the numbers), details.md (every wide
+table), runs.csv (every run), medians.png (a grid: iterations and time per group of sets), ecdf.png,
+ecdf-time.png, map-sets.json and OMPL benchmark
 logs (ompl/<map set>.log; open them with OMPL's ompl_benchmark_statistics.py and Planner Arena) as one set:
 --out is replaced as a whole when every run is done (MANIFEST.json lists its files), and is locked while a run
 writes it. Finished runs go to a journal in <out>.partial/ as they arrive: Ctrl-C or SIGTERM stops every worker

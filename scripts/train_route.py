@@ -256,7 +256,8 @@ def _mix_generated(args, sets: list) -> bool:
         return False
     sets.append(MapSet.open("generated"))
     print(f"mixing in the generated families (weight {args.mix_weight:g} against 1 for each of your sets): "
-          + (f"your training parts hold {held} maps, fewer than {MIX_BELOW}; " if args.mix_generated == "auto" else "")
+          + (f"your training parts hold {held} map{'s' * (held != 1)}, fewer than {MIX_BELOW}; "
+             if args.mix_generated == "auto" else "")
           + "--mix-generated no trains on yours alone", flush=True)
     return True
 
