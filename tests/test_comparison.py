@@ -140,3 +140,33 @@ def test_other_planners_run_every_registry_sampler_beside_their_classical_option
     summary = (out / "summary.md").read_text()
     assert "Your encoder mine" in summary and "With PRM" in summary and "| mine |" in summary
     assert "## Other planners" in (out / "details.md").read_text()
+
+
+class _OnePart:
+    """The smallest part: uniform RRT on one small generated map, under a protocol of its own."""
+
+    name = "a part of its own"
+
+    def __init__(self) -> None:
+        self.protocol = E.Protocol(max_iterations=400, seeds=1)
+
+    def tasks(self):
+        q = E.Query("forest", 1_000_000, 32, "test")
+        return [E.Task(q, "RRT", E.SamplerSpec.of("uniform"), seed) for seed in (0, 1)]
+
+    def report(self, runs):
+        return E.PartReport(f"{len(runs)} runs of the part.\n", [f"the part ran {len(runs)} runs"])
+
+
+def test_a_part_plugs_into_the_same_call_journal_and_output_set(tmp_path):
+    part = _OnePart()
+    assert isinstance(part, E.Part)
+    out = tmp_path / "out"
+    res = E.compare(E.Comparison([], parts=[part]), out, log=lambda line: None)
+    runs, rep = res.parts[part.name]
+    assert len(runs) == 2 and all(r.map == "forest" for r in runs) and not res.runs
+    assert "- a part of its own: the part ran 2 runs" in (out / "summary.md").read_text()
+    assert "## a part of its own\n\n2 runs of the part." in (out / "details.md").read_text()
+    rows = list(csv.DictReader((out / "runs.csv").open()))
+    assert len(rows) == 2 and (out / "ompl" / "forest.log").is_file()
+    assert not (tmp_path / "out.partial").exists()  # the journal is removed once the set is written

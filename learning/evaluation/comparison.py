@@ -184,6 +184,9 @@ class Comparison:
             self.planned += len(tasks)
             return run_phase(tasks, ctx, backend, journal, name)
 
+        if not queries:  # parts alone (e.g. only 6-DoF scene sets): no 2D phases
+            return Results(self, [], None, {}, {}, [], self._run_parts(phase),
+                           minutes=(time.perf_counter() - t0) / 60, processes=str(backend.workers))
         users = dict(self.samplers)
         extra_routes = {label: spec for label, spec in self.route_specs().items() if label != ROUTE}
         fixed = fixed_specs(protocol, self.route, users, references=self.references, device=self.device)
@@ -211,12 +214,17 @@ class Comparison:
         log(f"{len(tasks)} RRT runs of the constant-distribution ablation at its tuned settings")
         runs += phase(tasks, "policy ablation")
         runs += self._other_planners(queries, runs, batch, unseen, phase, log)
+        parts = self._run_parts(phase)
+        return Results(self, runs, batch, batch_scores, constants, unseen, parts,
+                       minutes=(time.perf_counter() - t0) / 60, processes=str(backend.workers))
+
+    def _run_parts(self, phase) -> dict:
+        """Phase (6): each part's tasks under its own protocol; {name: (runs, report)}."""
         parts = {}
         for part in self.parts:
             part_runs = phase(list(part.tasks()), part.name, RunContext(part.protocol, self.models, self.cache))
             parts[part.name] = (part_runs, part.report(part_runs))
-        return Results(self, runs, batch, batch_scores, constants, unseen, parts,
-                       minutes=(time.perf_counter() - t0) / 60, processes=str(backend.workers))
+        return parts
 
     def _other_planners(self, queries, runs, batch, unseen, phase, log) -> list[Run]:
         """Phases (4) and (5): every other planner on every test set (see the module docstring)."""
@@ -330,7 +338,7 @@ class Results:
 
     comparison: Comparison
     runs: list[Run]
-    batch: int
+    batch: int | None
     batch_scores: dict
     constants: dict
     unseen: list[str]

@@ -273,12 +273,14 @@ def summary_markdown(results) -> str:
             + (f"User samplers: {users.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
                if users else "")
             + (f"Your route encoders, beside the shipped one: {routes.rstrip('; ')}.\n\n" if routes else "")
-            + "## At a glance\n\nRRT on the test split, every run of a group pooled: median iterations to the first "
+            + ("## At a glance\n\nNo 2D map set ran: the comparison is its parts (details.md has their "
+               "sections).\n" if not glance else
+               "## At a glance\n\nRRT on the test split, every run of a group pooled: median iterations to the first "
             f"solution in the {', '.join(groups)} columns (cap {c.protocol.max_iterations}, an unsolved run counting "
             "as the iterations it ran), then the median time per query (the sampler's own work included) and the "
             "success rate over every test run. Best goal bias: each set's own, tuned on its tuning split. The expert "
             "and the exact route reference are privileged references, not competitors.\n\n"
-            + markdown_table(glance)
+            + markdown_table(glance))
             + ("\n† Needs the MovingAI maps.\n" if any(g.startswith("MovingAI") for g in groups) else "")
             + "\n## Findings\n\n" + "".join(f"- {line}\n" for line in findings(results))
             + f"\nEvery table (per map set, ratios, the room, the targets, every cell, the other planners): "
