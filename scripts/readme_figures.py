@@ -1,9 +1,11 @@
 """Regenerate the README's pictures (docs/*.png) from the library and the shipped checkpoint.
 
-    python scripts/readme_figures.py --policy-batch 2   # writes docs/samplers.png, docs/shifted.png, docs/rigid.png
+    python scripts/readme_figures.py --best-bias 0.05 0.1 0.01   # docs/samplers.png, docs/shifted.png, docs/rigid.png
 
-samplers.png: one held-out map per family, RRT with goal bias 0.05, the tuned best goal bias and the
-learned policy, same planner seed; each panel's title gives the iterations it took.
+samplers.png: one held-out map per family, RRT with the tuned best goal bias, the route ablation (the
+route sampler on the straight line, no learning) and the route encoder the README recommends, same
+planner seed; each panel's title gives the iterations it took and its time (from the planner's start to
+its first solution, the encoder's pass included; one thread, the machine's load included).
 shifted.png: one test map per family (top) beside two of its shifted variant (below: 128x128, and
 the first 256x256 one), the maps evaluate.py reports as "<family> (shifted)".
 rigid.png: RRT-Connect moving a box body through the window of the example 6-DoF scene.
@@ -14,46 +16,48 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from learning.models.shipped import SHIPPED_POLICY
-
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--policy", type=Path, default=SHIPPED_POLICY)
     ap.add_argument("--out", type=Path, default=ROOT / "docs")
     ap.add_argument("--families", nargs="+", default=["bugtrap", "maze", "rooms"])
     ap.add_argument("--best-bias", nargs="+", type=float, default=None,
                     help="best goal bias per family (from evaluate.py's summary); default 0.2 for all")
-    ap.add_argument("--policy-batch", type=int, default=None,
-                    help="the policy's samples per decision (evaluate.py's tuned batch); default: the checkpoint's")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
-    if args.policy_batch is not None and args.policy_batch < 1:
-        ap.error(f"--policy-batch must be at least 1, got {args.policy_batch}")
 
-    from learning import PolicySampler
+    import time
+
+    import torch
+
+    from learning import make_sampler
     from learning.evaluation import Protocol
     from planners import RRT, GoalBiasedSampler, RRTConnect, load_scene
     from planners.maps.generators import FAMILIES, SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, generate
     from planners.viz.plotting import new_figure, plot, save_figure
     from planners.viz.plotting3d import plot_scene
 
-    policy = PolicySampler.load(args.policy, batch=args.policy_batch)
+    torch.set_num_threads(1)  # as the comparison times a query: one thread
     protocol = Protocol()
     best = args.best_bias or [0.2] * len(args.families)
     fams = args.families
     fig = new_figure((3.3 * 3, 3.4 * len(fams)))
     for i, fam in enumerate(fams):
         problem = generate(fam, TEST_SEED0 + args.seed, protocol.size)
-        for j, (label, sampler) in enumerate((("goal bias 0.05", GoalBiasedSampler(0.05)),
-                                              (f"goal bias {best[i]:g} (best)", GoalBiasedSampler(best[i])),
-                                              ("learned policy", policy))):
+        for j, (label, make) in enumerate(((f"goal bias {best[i]:g} (tuned)", lambda b=best[i]: GoalBiasedSampler(b)),
+                                           ("route ablation", lambda: make_sampler("route_ablation")),
+                                           ("route encoder", lambda: make_sampler("route", device="cpu")))):
+            # a first plan loads the kernels and the weights: paid once per process, not per query, so off the clock
+            RRT(problem, step_size=protocol.step, sampler=make(), seed=args.seed).solve(max_iterations=1)
+            sampler = make()
+            t0 = time.perf_counter()
             planner = RRT(problem, step_size=protocol.step, sampler=sampler, seed=args.seed)
             r = planner.solve(max_iterations=protocol.max_iterations)
+            ms = (time.perf_counter() - t0) * 1e3
             ax = fig.add_subplot(len(fams), 3, 3 * i + j + 1)
-            plot(problem, planner, r, ax=ax, title=f"{fam}, {label}: {r.iterations} it.")
+            plot(problem, planner, r, ax=ax, title=f"{fam}, {label}: {r.iterations} it., {ms:.0f} ms")
             ax.title.set_fontsize(8)
     p1 = save_figure(fig, args.out / "samplers.png", dpi=90)
 

@@ -68,6 +68,9 @@ from planners.maps.mapset import MapSet, MixedMapSet
 
 #: Free disk a run needs: the encoder and its checkpoint are a few MB each.
 NEED_BYTES = 50 * 2**20
+#: ``--mix-generated auto`` mixes the generated families in where the training parts hold fewer maps than this,
+#: at this weight against 1 for each of the user's sets (docs/worked-example.md has the measurement behind it).
+MIX_BELOW, MIX_WEIGHT = 20, 3.0
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -104,6 +107,12 @@ def _parser() -> argparse.ArgumentParser:
                          "sets); default the generated families at --size")
     ap.add_argument("--map-set-weight", type=float, action="append", metavar="W",
                     help="one weight per --map-set: how often a training query comes from it (default equal)")
+    ap.add_argument("--mix-generated", choices=("auto", "yes", "no"), default="auto",
+                    help="with --map-set: also draw training queries from the generated families (their training "
+                         "seeds; their validation maps join the choice of epoch). auto (default): where your sets' "
+                         f"training parts together hold fewer than {MIX_BELOW} maps; yes: always; no: never")
+    ap.add_argument("--mix-weight", type=float, default=MIX_WEIGHT, metavar="W",
+                    help=f"the generated families' weight against 1 for each of your sets (default {MIX_WEIGHT:g})")
     ap.add_argument("--split-seed", type=int, help="split seed of folder and manifest map sets (default theirs: 0)")
     ap.add_argument("--step-size", type=float, metavar="WORLD_UNITS",
                     help="with --map-set: the planner's step in world units; it sets --step to the cells it "
@@ -131,6 +140,7 @@ def _check(args) -> None:
         raise InputError(f"--lr {args.lr:g}: expected a positive number")
     check_int_flags(args, ("attention", "attention_level", "seed"), low=0)
     args.torch_device = resolve_device(args.device)
+    args.mixed_generated = False
     for flag, value in (("--map-set-weight", args.map_set_weight), ("--split-seed", args.split_seed),
                         ("--step-size", args.step_size)):
         if value is not None and not args.map_set:
@@ -184,6 +194,8 @@ def _open_sets(args) -> MixedMapSet:
     if weights is not None and len(weights) != len(args.map_set):
         raise InputError(f"--map-set-weight: {len(weights)} weights {weights} for {len(args.map_set)} --map-set; "
                          "give one weight per map set, in the same order")
+    if not math.isfinite(args.mix_weight) or args.mix_weight <= 0:
+        raise InputError(f"--mix-weight {args.mix_weight:g}: expected a positive number")
     for w in weights or ():
         if not math.isfinite(w) or w <= 0:
             raise InputError(f"--map-set-weight {w:g}: expected a positive number")
@@ -206,10 +218,15 @@ def _open_sets(args) -> MixedMapSet:
         except InputError as exc:
             raise InputError(f"--map-set {spec}: {exc}") from None
         sets.append(ms)
+    args.mixed_generated = _mix_generated(args, sets)
+    if args.mixed_generated:
+        weights = [*(weights or [1.0] * (len(sets) - 1)), args.mix_weight]
     grids = [(ms, name, shape, resolution) for ms in sets for name, shape, resolution in _training_grids(ms)]
     if args.step_size is not None:
         cells = {}
         for ms, name, _, resolution in grids:
+            if args.mixed_generated and ms is sets[-1]:
+                continue  # the generated maps mixed in are in cells: they take the step your maps come to
             c = args.step_size / resolution
             if abs(c - round(c)) > 1e-6 * max(1.0, c) or round(c) < 1:
                 raise InputError(f"--step-size {args.step_size:g}: map {name!r} of {ms.name} has cells of "
@@ -228,6 +245,21 @@ def _open_sets(args) -> MixedMapSet:
         except InputError as exc:
             raise InputError(f"--map-set {ms.name}: {exc}") from None
     return MixedMapSet(sets, weights)
+
+
+def _mix_generated(args, sets: list) -> bool:
+    """Whether to mix the generated families in (``--mix-generated``); if so, their set is appended to ``sets``."""
+    if args.mix_generated == "no" or any(ms.name == "generated" for ms in sets):
+        return False
+    held = sum(len(ms.maps("train")) for ms in sets)
+    if args.mix_generated == "auto" and held >= MIX_BELOW:
+        return False
+    sets.append(MapSet.open("generated"))
+    print(f"mixing in the generated families (weight {args.mix_weight:g} against 1 for each of your sets): "
+          + (f"your training parts hold {held} map{'s' * (held != 1)}, fewer than {MIX_BELOW}; "
+             if args.mix_generated == "auto" else "")
+          + "--mix-generated no trains on yours alone", flush=True)
+    return True
 
 
 def _training_grids(ms: MapSet) -> list[tuple[str, tuple[int, int], float]]:

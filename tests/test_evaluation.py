@@ -297,11 +297,17 @@ def test_plot_text_is_inside_the_figure_and_legend_off_the_bars(families):
         fig.canvas.draw()
         assert _clipped(fig) == []
         assert fig.get_suptitle() or all(ax.get_title() for ax in fig.axes)
-    renderer = fig.canvas.get_renderer()  # the bar chart
+    renderer = fig.canvas.get_renderer()  # the bar chart: a grid, each sampler named on the first column's axis
     ax = fig.axes[0]
-    legend = ax.get_legend().get_window_extent(renderer)
-    bars = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_height() > 0]
-    assert bars and not any(legend.overlaps(b.get_window_extent(renderer)) for b in bars)
+    names = [t for t in ax.get_yticklabels() if t.get_text()]
+    bars = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_width() > 0]
+    assert {t.get_text() for t in names} >= {"uniform", "policy", "expert"}
+    assert bars and not any(t.get_window_extent(renderer).overlaps(b.get_window_extent(renderer))
+                            for t in names for b in bars)
+    groups = {"narrow_passage": 1, "MovingAI (all)": 2}[families[0]]  # generated, and MovingAI beside it
+    assert len(fig.axes) == 2 * groups and any("time" in a.get_title() for a in fig.axes)
+    width, height = fig.get_size_inches() * fig.dpi
+    assert width / height < 3  # a grid a screen shows whole, not one long strip
 
 
 # --- the main job end to end: every output present, normal permissions, OMPL logs Planner Arena reads --
@@ -316,8 +322,8 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
                   "--max-iterations", "3000", "--out", str(out)])
     assert rc == 0
     files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
-    assert files == ["MANIFEST.json", "ecdf-time.png", "ecdf.png", "map-sets.json", "medians.png", "ompl/forest.log",
-                     "ompl/forest_shifted.log", "runs.csv", "summary.md"]
+    assert files == ["MANIFEST.json", "details.md", "ecdf-time.png", "ecdf.png", "map-sets.json", "medians.png",
+                     "ompl/forest.log", "ompl/forest_shifted.log", "runs.csv", "summary.md"]
     mode = 0o666 & ~_umask()
     assert {p: stat.S_IMODE((out / p).stat().st_mode) for p in files} == dict.fromkeys(files, mode)
     conn = sqlite3.connect(":memory:")
@@ -325,7 +331,13 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     samplers = ["uniform", *(f"goal bias {b:g}" for b in E.GOAL_BIASES), "policy", E.FOLLOWER, E.ROUTE,
                 E.ROUTE_ABLATION, "expert (reference)", E.EXACT_ROUTE, E.CONSTANT]
     assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
-    summary = (out / "summary.md").read_text()
+    short = (out / "summary.md").read_text()  # the short table and the findings; every wide table in details.md
+    assert "## At a glance" in short and "## Findings" in short and "(details.md)" in short
+    glance = short.split("## At a glance")[1].split("## Findings")[0]
+    assert "| sampler | generated | shifted | time per query | success |" in glance
+    assert all(len(line.split("|")) == 7 for line in glance.splitlines() if line.startswith("|"))
+    assert "route encoder needs" in short and "On the clock the fastest is" in short
+    summary = (out / "details.md").read_text()
     assert "## The policy's batch, tuned" in summary and "Chosen: **" in summary
     clock = summary.split("## Time to solution at a glance")[1].split("\n## ")[0]
     assert "route encoder" in clock and " ms" in clock and clock.count("**") == 2 * 2  # the fastest of 2 sets

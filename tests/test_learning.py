@@ -332,7 +332,8 @@ def test_evaluate_script_writes_tables_csv_and_plots(trained, tmp_path, movingai
         "arena", "random-32-32-10",  # two maps, so the pooled row; open ones, which every sampler solves quickly
         "--scenarios", "2", "--other-planners", "PRM", "--processes", "1", "--out", str(out)])
     assert rc == 0
-    text = (out / "summary.md").read_text()
+    text = (out / "details.md").read_text()  # the wide tables; summary.md opens with the short one
+    assert "MovingAI †" in (out / "summary.md").read_text() and "With PRM" in (out / "summary.md").read_text()
     for needle in ("forest", "forest (shifted)", "MovingAI (all)", "policy", "goal bias 0.05 (default",
                    "expert (reference)", "PRM"):
         assert needle in text, needle

@@ -225,7 +225,28 @@ def _script():
 _npy_maps = npy_map_folder
 
 
-SMALL = ["--maps", "6", "--epochs", "2", "--channels", "4", "--depth", "1", "--attention", "0", "--workers", "1"]
+SMALL = ["--maps", "6", "--epochs", "2", "--channels", "4", "--depth", "1", "--attention", "0", "--workers", "1",
+         "--mix-generated", "no"]  # your sets alone (a small set mixes the generated families in by default)
+
+
+def test_a_small_map_set_mixes_the_generated_families_in_by_default_and_a_large_one_does_not(tmp_path, capsys):
+    script = _script()
+    ros = str(ROOT / "tests" / "data" / "ros")
+    args = script._parser().parse_args(["--map-set", ros, "--out", str(tmp_path / "o")])
+    script._check(args)
+    assert args.mixed_generated and [ms.name for ms in args.sets.sets] == ["ros", "generated"]
+    assert args.sets.record()["weights"] == [0.25, 0.75]  # --mix-weight 3 against 1
+    assert "fewer than 20" in capsys.readouterr().out
+    for flags, mixed in ((["--mix-generated", "no"], False), (["--map-set", "generated"], False),
+                         (["--mix-generated", "yes", "--mix-weight", "1"], True)):
+        args = script._parser().parse_args(["--map-set", ros, *flags, "--out", str(tmp_path / "o")])
+        script._check(args)
+        assert args.mixed_generated == mixed and sum(ms.name == "generated" for ms in args.sets.sets) == (
+            1 if mixed or "generated" in flags else 0)
+    big = _npy_maps(tmp_path / "big", 40)  # 40 maps: a training part of 20 or more
+    args = script._parser().parse_args(["--map-set", str(big), "--out", str(tmp_path / "o")])
+    script._check(args)
+    assert not args.mixed_generated and len(args.sets.sets) == 1
 
 
 def test_map_set_training_writes_a_loadable_encoder_whose_json_records_the_sets(tmp_path, capsys):

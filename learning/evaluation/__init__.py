@@ -1,5 +1,8 @@
 """The comparison: iterations-to-solution of the learned sampler against uniform and goal bias.
 
+One call runs it: ``compare(Comparison(queries, protocol, ...), out)`` (``learning.evaluation.comparison``),
+which ``scripts/evaluate.py`` wraps; notebooks, other planners and other scene sets enter there.
+
 Every run is one planner on one query with one sampler and one seed (a ``Task``: the sampler as a
 ``SamplerSpec``, a registered name and its parameters), made under one ``Protocol`` (step, tolerance,
 iteration cap, seeds, split sizes); ``runs.csv`` records each run's spec as JSON (its ``sampler_spec``
@@ -23,6 +26,16 @@ Results are written as a CSV of runs, a Markdown summary, plots, and OMPL benchm
 
 from __future__ import annotations
 
+from learning.evaluation.comparison import (
+    Comparison,
+    ComparisonInterrupted,
+    Part,
+    PartReport,
+    Results,
+    compare,
+    default_queries,
+    is_roadmap,
+)
 from learning.evaluation.outputs import PALETTE, ecdf_figure, medians_figure, save_plots, write_ompl_logs
 from learning.evaluation.protocol import (
     Protocol,
@@ -40,8 +53,10 @@ from learning.evaluation.roster import (
     EXACT_ROUTE,
     EXPERT,
     FOLLOWER,
+    OBSTACLE_BASED,
     ROUTE,
     ROUTE_ABLATION,
+    ObstacleBasedSpec,
     Task,
     bias_sampler,
     bias_spec,
@@ -91,6 +106,8 @@ from learning.evaluation.tuning import (
 from learning.samplers.registry import USER, ModelCache, SamplerSpec, user_sampler
 
 __all__ = [
+    "Comparison", "ComparisonInterrupted", "OBSTACLE_BASED", "ObstacleBasedSpec", "Part", "PartReport", "Results",
+    "compare", "default_queries", "is_roadmap",
     "BATCH_TIE", "BUILTIN_SAMPLERS", "CONSTANT", "EXACT_FAILS", "EXACT_ROUTE", "EXPERT", "FOLLOWER", "GOAL_BIASES",
     "MOVINGAI_POOL", "ModelCache", "PALETTE", "POLICY_BATCHES", "POLICY_TUNING_SEEDS", "Protocol", "Query", "ROUTE",
     "ROUTE_ABLATION", "RunContext", "SamplerSpec", "TARGETS", "TUNING_BIASES", "Task", "USER", "best_bias",

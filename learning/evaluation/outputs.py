@@ -117,47 +117,66 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
     return fig
 
 
-def medians_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT",
+def medians_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT",  # noqa: ARG001
                    extra: Sequence[str] = ()):
-    """Median iterations-to-solution with the interquartile range per map set, as the tables report them.
+    """Median iterations and median time per query with the quartiles, per sampler and group of map sets: a grid.
 
-    One bar per sampler role, coloured as in :func:`ecdf_figure`; the legend sits beside the bars,
-    never over them; the title is wrapped to the figure's width.
+    One column per group (generated, shifted, unseen, MovingAI pooled, or a user's map set; every test
+    run of the group pooled), iterations above and time below; one horizontal bar per sampler, named
+    on the axis and coloured as in :func:`ecdf_figure`; the references hatched. Sized for a screen to
+    show whole. ``rows`` is kept for callers that pass the summary; the bars come from ``runs``.
     """
+    from learning.evaluation.tables import group_of
     from planners.viz.plotting import new_figure
 
-    fams = sorted({r.map for r in runs if r.split == "test" and r.planner == planner})
+    test = [r for r in runs if r.split == "test" and r.planner == planner]
+    groups: dict = {}
+    for r in test:
+        groups.setdefault(group_of(r.map), []).append(r)
+    order = {"generated": 0, "shifted": 1, "unseen": 2, "MovingAI": 4}
+    names = sorted(groups, key=lambda g: (order.get(g, 3), g))
     colors = sampler_colors(extra)
-    present = {r["_sampler"] for r in rows if r["planner"] == planner}
+    present = {r.sampler for r in test}
     sel = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy"),
            *((n, n) for n in extra if n not in REFERENCES), *((n, n) for n in REFERENCES if n in present)]
-    width = 0.8 / len(sel)
-    size = (max(6.0, 0.25 * len(sel) * len(fams) + 1.0) + 2.2, 4.4)
+    cols = max(1, len(names))
+    size = (2.2 + 2.6 * cols, 6.4)
     fig = new_figure(size)
-    ax = fig.add_subplot(1, 1, 1)
-    ax.set_title(_wrap(f"{planner} on the test split: median iterations to solution, bars from the first to the third "
-                       "quartile (unsolved runs count as the cap)", size[0] - 2.2, 11), fontsize=11)
-    for j, (label, s) in enumerate(sel):
-        meds, errs = [], []
-        for fam in fams:
-            key = s or bias_sampler(biases.get((fam, planner), 0.05))
-            r = next((x for x in rows if x["family"] == fam and x["planner"] == planner and x["_sampler"] == key), None)
-            if r is None:
-                meds.append(math.nan)
-                errs.append((0, 0))
-                continue
-            q1, q3 = (float(v) for v in r["iqr"].split("-"))
-            med = r["median_iterations"]
-            meds.append(med)
-            errs.append((max(med - q1, 0.0), max(q3 - med, 0.0)))
-        x = np.arange(len(fams)) + (j - (len(sel) - 1) / 2) * width
-        ax.bar(x, meds, width, yerr=np.array(errs).T, capsize=3, label=LEGEND.get(label, label),
-               color=colors.get(label, "#7f7f7f"),
-               **({"hatch": "//", "edgecolor": "white"} if s in REFERENCES else {}))
-    ax.set_xticks(np.arange(len(fams)), fams, rotation=30, ha="right")
-    ax.set_yscale("log")
-    ax.set_ylabel("median iterations (quartiles)")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    fig.suptitle(_wrap(f"{planner} on the test split, every run of a group pooled: median iterations (top) and "
+                       "median time per query, the sampler's own work included (bottom); bars from the first to the "
+                       "third quartile, unsolved runs counting as what they ran", size[0], 10), fontsize=10)
+    for j, group in enumerate(names):
+        for i, metric in enumerate(("iterations", "time")):
+            ax = fig.add_subplot(2, cols, i * cols + j + 1)
+            labels, meds, errs, colours, hatches = [], [], [], [], []
+            for label, s in sel:
+                rs = [r for r in groups[group]
+                      if r.sampler == (s or bias_sampler(biases.get((r.map, planner), 0.05)))]
+                if not rs:
+                    continue
+                v = np.array([r.iterations if metric == "iterations" else r.wall_time * 1e3 for r in rs], float)
+                q1, med, q3 = np.percentile(v, [25, 50, 75])
+                labels.append(LEGEND.get(label, label))
+                meds.append(med)
+                errs.append((max(med - q1, 0.0), max(q3 - med, 0.0)))
+                colours.append(colors.get(label, "#7f7f7f"))
+                hatches.append("//" if s in REFERENCES else "")
+            y = np.arange(len(labels))[::-1]
+            # bars start at a power of ten below the lowest first quartile, never at 0 (off a log axis)
+            low = min((m - e[0] for m, e in zip(meds, errs, strict=True) if m - e[0] > 0), default=1.0)
+            base = 10.0 ** math.floor(math.log10(low))
+            for k, label in enumerate(labels):  # one container per sampler, labelled with its name
+                (bar,) = ax.barh([y[k]], [max(meds[k] - base, 0.0)], left=base, xerr=np.array([errs[k]]).T,
+                                 color=colours[k], capsize=2, error_kw={"elinewidth": 0.8}, label=label)
+                if hatches[k]:
+                    bar.set_hatch(hatches[k])
+                    bar.set_edgecolor("white")
+            ax.set_xlim(left=base)
+            ax.set_xscale("log")
+            ax.set_yticks(y, labels if j == 0 else [""] * len(labels), fontsize=8)
+            ax.tick_params(axis="x", labelsize=7)
+            ax.set_title(f"{group}: {'iterations' if metric == 'iterations' else 'time (ms)'}", fontsize=9)
+            ax.grid(axis="x", alpha=0.3)
     return fig
 
 

@@ -36,9 +36,14 @@ EXPERT, EXACT_ROUTE = "expert (reference)", "exact_route"
 CONSTANT = "constant (tuned)"
 
 
+#: The roadmaps' classical option: OB-PRM's obstacle-based sampling (``planners.ObstacleBasedSampler``) at its
+#: defaults, handed to PRM, Lazy-PRM or OB-PRM (:class:`ObstacleBasedSpec`).
+OBSTACLE_BASED = "obstacle-based"
+
+
 #: Labels of the registered samplers whose label is not made from a parameter.
 _LABELS = {"uniform": "uniform", "follower": FOLLOWER, "route": ROUTE, "route_ablation": ROUTE_ABLATION,
-           "expert": EXPERT, "exact_route": EXACT_ROUTE}
+           "expert": EXPERT, "exact_route": EXACT_ROUTE, "obstacle_based": OBSTACLE_BASED}
 
 
 #: Sampler labels the comparison defines itself; a user sampler takes another name.
@@ -61,7 +66,31 @@ def sampler_label(spec: SamplerSpec) -> str:
         return "policy" if batch is None else policy_sampler(batch)
     if spec.name == USER:
         return spec.param("name")
-    return _LABELS[spec.name]
+    return _LABELS.get(spec.name, spec.name)
+
+
+@dataclass(frozen=True)
+class ObstacleBasedSpec:
+    """OB-PRM's obstacle-based sampling at its defaults, as a task's sampler: the roadmaps' classical option.
+
+    A spec the sampler registry does not hold (the roster's own, see the module docstring): it builds a
+    fresh ``planners.ObstacleBasedSampler()`` and records itself as ``{"name": "obstacle_based"}``. Its own
+    validity checks count among the run's collision checks (``runner.run_one``), as OB-PRM counts them.
+    """
+
+    name: str = "obstacle_based"
+    params: tuple = ()
+
+    def build(self, models=None):  # noqa: ARG002 - the spec interface
+        from planners import ObstacleBasedSampler
+
+        return ObstacleBasedSampler()
+
+    def param(self, key: str, default: Any = None) -> Any:  # noqa: ARG002 - the spec interface
+        return default
+
+    def to_json(self) -> str:
+        return SamplerSpec(self.name).to_json()
 
 
 @dataclass(frozen=True)

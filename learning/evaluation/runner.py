@@ -107,10 +107,13 @@ def run_one(task: Task, context: RunContext) -> Run:
     # and the encoder's time for this query's field where it was computed before (kept across seeds, batched)
     wall = time.perf_counter() - t0 + float(getattr(planner.sampler, "reused_seconds", 0.0))
     its = r.first_solution_iteration if r.solved else r.iterations
+    checks = r.collision_checks
+    if not planner_class(task.planner).own_sampler:  # OB-PRM counts its sampler's own checks; others do not
+        checks += int(getattr(planner.sampler, "checks", 0))  # e.g. obstacle-based sampling handed to PRM
     return Run(map=task.query.map_set, query=problem.name, split=task.query.split, planner=task.planner,
                sampler=task.sampler_label, seed=task.seed, solved=r.solved, iterations=int(its),
                lower_bound=problem.iteration_lower_bound(protocol.step), candidates=r.candidates,
-               collision_checks=r.collision_checks, wall_time=wall, us_per_iteration=wall / max(r.iterations, 1) * 1e6,
+               collision_checks=checks, wall_time=wall, us_per_iteration=wall / max(r.iterations, 1) * 1e6,
                path_cost=r.cost if r.solved else math.inf,
                forward_passes=int(getattr(planner.sampler, "forward_passes", 0)), vertices=int(r.num_vertices),
                sampler_spec=task.sampler.to_json())

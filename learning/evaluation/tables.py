@@ -221,6 +221,19 @@ KEEP_GAIN = {"families": ("narrow_passage", "bugtrap", "maze", "rooms"), "ratio"
 CLOSE_SHARE, WORSE_MARGIN = 0.5, 0.05
 
 
+def group_of(map_set: str, movingai_maps: Sequence[str] = ()) -> str:
+    """The group a map set is pooled into at a glance: generated, shifted, unseen, MovingAI, or its own name."""
+    from planners.maps.generators import FAMILIES
+
+    if map_set in movingai_maps or map_set == MOVINGAI_POOL:
+        return "MovingAI"
+    if map_set.endswith("(shifted)"):
+        return "shifted"
+    if map_set.endswith("(unseen)"):
+        return "unseen"
+    return "generated" if map_set in FAMILIES else map_set
+
+
 def _order(fams, movingai_maps: Sequence[str]) -> list[str]:
     """Generated, shifted and unseen map sets first, then the MovingAI maps and their pooled row."""
     def group(f: str) -> int:
