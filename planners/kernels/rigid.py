@@ -50,6 +50,21 @@ def rotation_matrix(tx, ty, tz):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
+def euler_angles(R, out):
+    """Write ``(tx, ty, tz)`` with ``rotation_matrix(tx, ty, tz) = R`` into ``out``.
+
+    ``tx`` lies in ``[-pi/2, pi/2]``; at ``tx = +-pi/2`` (gimbal lock) ``tz`` is 0.
+    """
+    out[0] = math.asin(max(-1.0, min(1.0, -R[1, 2])))
+    if math.hypot(R[1, 0], R[1, 1]) > 1e-9:
+        out[1] = math.atan2(R[0, 2], R[2, 2])
+        out[2] = math.atan2(R[1, 0], R[1, 1])
+    else:
+        out[1] = math.atan2(-R[2, 0], R[0, 0])
+        out[2] = 0.0
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def body_points_world(body, q):
     """(P, 3) world positions of the body points at state ``q``."""
     R = rotation_matrix(q[3], q[4], q[5])

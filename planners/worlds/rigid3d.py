@@ -376,16 +376,9 @@ def euler_from_matrix(R) -> np.ndarray:
 
     ``tx`` lies in ``[-pi/2, pi/2]``; at ``tx = +-pi/2`` (gimbal lock) ``tz`` is 0.
     """
-    R = np.asarray(R, dtype=np.float64)
-    sx = -R[1, 2]
-    tx = math.asin(max(-1.0, min(1.0, sx)))
-    if math.hypot(R[1, 0], R[1, 1]) > 1e-9:
-        ty = math.atan2(R[0, 2], R[2, 2])
-        tz = math.atan2(R[1, 0], R[1, 1])
-    else:
-        ty = math.atan2(-R[2, 0], R[0, 0])
-        tz = 0.0
-    return np.array([tx, ty, tz])
+    out = np.empty(3)
+    rigid_kernels.euler_angles(np.ascontiguousarray(R, dtype=np.float64), out)
+    return out
 
 
 # --- the seed project's planning set-ups -----------------------------------------------------------
