@@ -3,12 +3,16 @@
     python scripts/evaluate_rigid.py --part validation --scenes 2 --seeds 2 --out results/rigid
     python scripts/evaluate_rigid.py --part test --families slot windows --planners RRTConnect \\
         --samplers uniform gaussian rigid_workspace_route --out results/rigid-test
+    python scripts/evaluate_rigid.py --mesh --omplapp DIR --scenes 1 --max-iterations 2000 --out results/rigid-mesh
 
 Runs ``learning.evaluation.rigid.evaluate_rigid`` on a part of the scene set
 (``planners.worlds.rigid_scenes.RigidSceneSet``: every scene proved solvable first) and prints a
 table per planner and sampler, and one per family. Writes ``rows.json`` (every run), ``summary.md``
 (the tables) and ``scenes.json`` (the set's record) under ``--out``. Tune on ``tuning``, choose on
 ``validation``; ``test`` is for the reported comparison only.
+``--mesh`` runs the test-only mesh set instead (``MeshSceneSet``: the test-only families written as
+meshes, and OMPL.app's problems from ``--omplapp`` or ``$SAMPLERGYM_OMPLAPP_DIR``; the ``mesh``
+extra); ``rigid_workspace_route`` needs boxes and is left out there unless named.
 Exit status: 0 done, 2 bad input.
 """
 
@@ -35,9 +39,12 @@ def main(argv=None) -> int:
     ap.add_argument("--scenes", type=int, default=2, help="scenes per family")
     ap.add_argument("--seeds", type=int, default=1, help="planner seeds per scene (0, 1, ...)")
     ap.add_argument("--planners", nargs="+", default=list(PLANNERS))
-    ap.add_argument("--samplers", nargs="+", default=list(SAMPLERS))
+    ap.add_argument("--samplers", nargs="+", help=f"registry names (default {' '.join(SAMPLERS)})")
     ap.add_argument("--max-iterations", type=int, help="lower every planner's cap (quick looks only)")
     ap.add_argument("--out", type=Path, default=Path("results/rigid"))
+    ap.add_argument("--mesh", action="store_true", help="the test-only mesh scenes (and OMPL.app's problems)")
+    ap.add_argument("--omplapp", help="folder of OMPL.app's problems for --mesh (default $SAMPLERGYM_OMPLAPP_DIR)")
+    ap.add_argument("--problems", nargs="+", help="OMPL.app problem names to take for --mesh (default all)")
     args = ap.parse_args(argv)
 
     def fail(msg: str) -> int:
@@ -50,8 +57,18 @@ def main(argv=None) -> int:
         return fail(f"--max-iterations must be at least 1, got {args.max_iterations}")
     if args.out.exists() and not args.out.is_dir():
         return fail(f"--out {args.out} exists and is not a folder")
+    samplers = args.samplers or [s for s in SAMPLERS if not (args.mesh and s == "rigid_workspace_route")]
+    if args.mesh and args.part != "test":
+        return fail("--mesh scenes are test-only: use --part test")
+    if not args.mesh and (args.omplapp or args.problems):
+        return fail("--omplapp and --problems go with --mesh")
     try:
-        scenes = RigidSceneSet(args.families, args.test_only, {args.part: args.scenes})
+        if args.mesh:
+            from planners.worlds.rigid_scenes import MeshSceneSet
+
+            scenes = MeshSceneSet(args.test_only, args.scenes, args.omplapp, args.problems)
+        else:
+            scenes = RigidSceneSet(args.families, args.test_only, {args.part: args.scenes})
         print(scenes.describe(), flush=True)
 
         def show(row) -> None:
@@ -59,7 +76,7 @@ def main(argv=None) -> int:
                   f"{'solved' if row.solved else 'failed'} {row.iterations:>6} iterations "
                   f"{row.collision_checks:>8} checks {row.time:7.2f} s", flush=True)
 
-        rows = evaluate_rigid(scenes, args.part, planners=args.planners, samplers=args.samplers,
+        rows = evaluate_rigid(scenes, args.part, planners=args.planners, samplers=samplers,
                               seeds=range(args.seeds), max_iterations=args.max_iterations, progress=show)
     except InputError as e:
         return fail(str(e))

@@ -32,7 +32,7 @@ from planners import PRM, RRT, Problem, RRTConnect
 from planners.base.fileio import InputError
 from planners.base.planner import compile_seconds
 from planners.worlds.rigid3d import PRM_SETUP, RRT_SETUP
-from planners.worlds.rigid_scenes import RigidSceneSet, SceneQuery
+from planners.worlds.rigid_scenes import MeshSceneSet, RigidSceneSet, SceneQuery
 
 #: The planners of the comparison, and their iteration caps (PRM: samples).
 PLANNERS = ("RRT", "RRTConnect", "PRM")
@@ -97,15 +97,15 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
                     sampler_checks=sampler_checks, candidates=int(result.candidates), time=float(elapsed))
 
 
-def evaluate_rigid(scene_set: RigidSceneSet, part: str, *, planners: Sequence[str] = PLANNERS,
+def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planners: Sequence[str] = PLANNERS,
                    samplers: Sequence[str] = SAMPLERS, seeds: Iterable[int] = (0,),
                    sampler_params: dict[str, dict] | None = None, max_iterations: int | None = None,
                    progress: Callable[[RigidRow], None] | None = None) -> list[RigidRow]:
     """Every planner with every sampler on every scene of ``part`` of ``scene_set``, once per seed.
 
     Args:
-        scene_set: The scenes (``RigidSceneSet``).
-        part: ``validation``, ``tuning`` or ``test``.
+        scene_set: The scenes (``RigidSceneSet``, or the test-only ``MeshSceneSet``).
+        part: ``validation``, ``tuning`` or ``test`` (a mesh set: ``test``).
         planners: Names from ``PLANNERS``.
         samplers: Registry names.
         seeds: Planner seeds; each run's seed is this seed (the scene fixes the rest).

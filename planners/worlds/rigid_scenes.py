@@ -43,6 +43,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -430,15 +431,23 @@ def rigid_scene(family: str, seed: int, *, verify: bool = True, max_iterations: 
 
 @dataclass(frozen=True)
 class SceneQuery:
-    """One scene of a set: its family, seed and part (the problem is ``rigid_scene(family, seed)``)."""
+    """One scene of a set: its family, seed and part (the problem is ``rigid_scene(family, seed)``).
+
+    A mesh scene has ``mesh`` set: the box scene written as meshes (``mesh_scene``), or with ``path``
+    an OMPL.app problem file (family ``"omplapp"``).
+    """
 
     family: str
     seed: int
     part: str
+    mesh: bool = False
+    path: str = ""
 
     @property
     def name(self) -> str:
-        return f"{self.family}-{self.seed}"
+        if self.path:
+            return Path(self.path).stem
+        return f"{self.family}-{self.seed}" + ("-mesh" if self.mesh else "")
 
 
 #: Scenes per family in each fixed part unless told otherwise.
@@ -515,3 +524,115 @@ class RigidSceneSet:
                 "verified": self.verify,
                 "parts": {part: [q.name for q in self.queries(part)] for part in DEFAULT_COUNTS},
                 "train_seeds": list(TRAIN_SEEDS)}
+
+
+# --- mesh scenes ------------------------------------------------------------------------------------
+
+
+def box_mesh(box) -> tuple[np.ndarray, np.ndarray]:
+    """The closed box ``(x0, y0, z0, x1, y1, z1)`` as a triangle mesh: 8 vertices, 12 outward triangles."""
+    b = np.asarray(box, dtype=np.float64)
+    v = np.array([[(b[0], b[3])[i], (b[1], b[4])[j], (b[2], b[5])[k]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    # vertex index = 4 i + 2 j + k; two triangles per face, wound so their normals point out
+    f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5],   # x = x0, x = x1
+                  [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],   # y = y0, y = y1
+                  [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])  # z = z0, z = z1
+    return v, f
+
+
+def as_mesh_scene(problem: Problem) -> Problem:
+    """A box scene written as a mesh world (``planners.worlds.mesh.MeshWorld``, the ``mesh`` extra).
+
+    The environment is every box as a closed mesh, the robot the body's box (its points' bounding box)
+    as one; the bounds, ``delta``, start, goal, tolerance and metric are the box scene's. Checks are
+    then exact on the body's whole surface, not on its points.
+    """
+    from planners.worlds.mesh import MeshWorld
+
+    world = problem.world
+    meshes = [box_mesh(b) for b in world.boxes]
+    verts = np.concatenate([v for v, _ in meshes]) if meshes else np.zeros((0, 3))
+    faces = np.concatenate([f + 8 * i for i, (_, f) in enumerate(meshes)]) if meshes else np.zeros((0, 3), int)
+    body = np.concatenate([world.body.min(axis=0), world.body.max(axis=0)])
+    mesh_world = MeshWorld((verts, faces), box_mesh(body), low=world.low3, high=world.high3, delta=world.delta,
+                           name=f"{problem.name}-mesh")
+    return Problem(mesh_world, problem.start, problem.goal, goal_tolerance=problem.goal_tolerance,
+                   metric=problem.metric, name=f"{problem.name}-mesh")
+
+
+def mesh_scene(family: str, seed: int) -> Problem:
+    """``rigid_scene(family, seed)`` as a mesh world, refused unless its witness path is free there too.
+
+    Raises:
+        RuntimeError: The box scene's witness path meets the mesh environment (the body's surface
+            reaches where its points did not).
+    """
+    problem, witness = scene_with_witness(family, seed)
+    mesh = as_mesh_scene(problem)
+    if not mesh.world.path_valid(witness.path):
+        raise RuntimeError(f"{problem.name}: the witness path of the box scene meets the mesh environment")
+    return mesh
+
+
+class MeshSceneSet:
+    """The test-only mesh scenes: the test-only families written as meshes, and OMPL.app's problems.
+
+    Args:
+        families: Families whose test scenes (``scene_seeds(family, "test", count)``) are written as
+            meshes (``mesh_scene``); default the test-only ones.
+        count: Scenes per family.
+        omplapp: A folder of OMPL.app problems (``planners.worlds.omplapp.omplapp_dir``: the root or
+            its ``resources/3D``), or None for ``$SAMPLERGYM_OMPLAPP_DIR`` or none at all.
+        problems: OMPL.app problem names to take (file stems); default every ``.cfg`` in the folder.
+
+    Nothing here is ever trained or tuned on: it has a ``test`` part only.
+    """
+
+    def __init__(self, families=TEST_ONLY_FAMILIES, count: int = 2, omplapp=None, problems=None) -> None:
+        from planners.worlds.omplapp import omplapp_dir
+
+        for f in families:
+            _check_family(f)
+        self.families = tuple(families)
+        self.count = check_int(count, "count", low=0)
+        self.omplapp = omplapp_dir(omplapp)
+        cfgs = sorted(self.omplapp.glob("*.cfg")) if self.omplapp is not None else []
+        if problems is not None:
+            known = {p.stem: p for p in cfgs}
+            missing = [p for p in problems if p not in known]
+            if missing:
+                raise InputError(f"no OMPL.app problem {', '.join(missing)} in {self.omplapp}; there are "
+                                 f"{', '.join(known) or 'none'}")
+            cfgs = [known[p] for p in problems]
+        self.cfgs = cfgs
+        self._cache: dict[str, Problem] = {}
+
+    def queries(self, part: str) -> list[SceneQuery]:
+        """The test scenes (any other part is refused: the set is test-only)."""
+        if part != "test":
+            raise InputError(f"the mesh scene set is test-only: it has no {part!r} part")
+        qs = [SceneQuery(f, s, "test", mesh=True) for f in self.families for s in scene_seeds(f, "test", self.count)]
+        return qs + [SceneQuery("omplapp", i, "test", mesh=True, path=str(p)) for i, p in enumerate(self.cfgs)]
+
+    def problem(self, query: SceneQuery) -> Problem:
+        """The mesh scene of ``query`` (built once, then kept)."""
+        if query.name not in self._cache:
+            if query.path:
+                from planners.worlds.omplapp import load_omplapp_cfg
+
+                self._cache[query.name] = load_omplapp_cfg(query.path)
+            else:
+                self._cache[query.name] = mesh_scene(query.family, query.seed)
+        return self._cache[query.name]
+
+    def describe(self) -> str:
+        """The set in words."""
+        where = f"OMPL.app problems from {self.omplapp}: {', '.join(p.stem for p in self.cfgs)}" if self.cfgs \
+            else "no OMPL.app folder given (--omplapp or $SAMPLERGYM_OMPLAPP_DIR)"
+        return (f"mesh scene set (test only): {self.count} mesh scenes of each of {', '.join(self.families)}; "
+                f"{where}")
+
+    def record(self) -> dict:
+        """The set as JSON-able data."""
+        return {"kind": "mesh scenes", "families": list(self.families), "count": self.count,
+                "omplapp": [p.name for p in self.cfgs], "parts": {"test": [q.name for q in self.queries("test")]}}
