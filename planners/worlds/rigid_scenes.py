@@ -7,20 +7,23 @@ opening is narrower than the body's long side (10) in at least one direction:
 
 Training families (train, validation, tuning and test parts):
 
-- ``slot``: one wall across x, 2 to 5 thick, with a slot 6 to 8.5 by 3.5 to 4.5 (upright or lying),
-  anywhere in the wall: the body passes long side first, turned about its long axis to the slot.
-- ``windows``: two or three walls across x, 14 to 20 apart, each with a window 7 to 9.5 square, the
-  windows at least 15 apart in (y, z) from one wall to the next: the route zigzags, long side first.
-- ``duct``: a wall 12 to 20 thick with a rectangular duct through it (6 to 8 by 3.5 to 4.5), then a
-  wall with a low band: a slit 3.5 to 4.5 high over the whole width, so the body lies flat.
-- ``shelves``: a block 15 to 25 deep with three or four compartments 3.5 to 4.5 high and 12 to 20
+- ``slot``: one wall across x, 1.5 to 2.5 thick, with a slot 9.5 to 10.4 by 5.2 to 5.45 (upright
+  or lying), anywhere in the wall: the body passes long side first (the slot is narrower than the
+  long side plus the check's margin one way and than the middle side the other), turned about its
+  long axis to the slot.
+- ``windows``: two or three walls across x, 18 to 24 apart, each with a window 10 to 12.5 square
+  (about the body's long side: the body passes long side first, or flat across the wider ones),
+  the windows at least 15 apart in (y, z) from one wall to the next: the route zigzags between them.
+- ``duct``: a wall 5 to 8 thick with a rectangular duct through it (9.5 to 10.4 by 5.2 to 5.45),
+  then a wall with a low band: a slit 5.2 to 5.45 high over the whole width, so the body lies flat.
+- ``shelves``: a block 6 to 10 deep with three or four compartments 5.2 to 5.45 high and 12 to 20
   wide stacked in z; one is open at the back, the others are dead ends.
-- ``clutter``: a window wall (window 8.5 to 11 square) among 100 to 300 small boxes (sides 0.5 to
+- ``clutter``: a window wall (window 8.5 to 11 square) among 100 to 250 small boxes (sides 0.5 to
   2) strewn over the whole workspace.
 
 Test-only families (``TEST_ONLY_FAMILIES``: a test part only, seeds from ``UNSEEN_SEED0``):
 
-- ``hatch``: a floor across z (2 to 4 thick) with a hatch 6 to 8.5 by 3.5 to 4.5; start below,
+- ``hatch``: a floor across z (1.5 to 2.5 thick) with a hatch like the slot; start below,
   goal above. The passage runs along z, so the body must pitch its long side upright, which no
   training family asks for (every training passage runs along x).
 - ``elbow``: a slot in a wall across x, then a slot in a wall across y: the route turns a right
@@ -33,9 +36,11 @@ seeds from ``TRAIN_SEEDS``, validation, tuning and test scenes take consecutive 
 scenes.
 
 Every scene is solvable: ``rigid_scene`` draws the geometry and the query from
-``np.random.default_rng(seed)``, then runs RRT-Connect (step 1.0, seeded by the scene's seed) for up
-to ``VERIFY_ITERATIONS`` iterations; a draw it does not solve is replaced by the generator's next
-draw, at most ``SCENE_TRIES`` times (then ``RuntimeError``). Numpy and the project's own planners only.
+``np.random.default_rng(seed)`` and builds a witness path (``verify_scene``): the body turned to fit
+each opening stands before and after it, the legs between those poses, the start and the goal are
+straight motions or seeded RRT-Connect runs, and the exact motion check passes the whole path. A
+draw without one is replaced by the generator's next draw, at most ``SCENE_TRIES`` times (then
+``RuntimeError``). Numpy and the project's own planners only (mesh scenes: the ``mesh`` extra).
 """
 
 from __future__ import annotations
@@ -222,7 +227,7 @@ def _windows(rng: np.random.Generator):
     xs = np.concatenate([[first], first + np.cumsum(gaps)])
     boxes, passages, last = [], [], None
     for x in xs:
-        t, s = rng.uniform(1.5, 3.0), rng.uniform(8.5, 10.3)
+        t, s = rng.uniform(1.5, 3.0), rng.uniform(10.0, 12.5)
         for _ in range(100):  # windows at least 15 apart from one wall to the next
             c = _centre_in(rng, 0, (s, s))
             if last is None or math.dist(c, last) >= 15.0:
