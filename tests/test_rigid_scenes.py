@@ -200,3 +200,27 @@ def test_a_box_scene_written_as_meshes_keeps_its_witness_and_omplapp_problems_jo
     names = [q.name for q in ms.queries("test")]
     assert names == [f"hatch-{UNSEEN_SEED0}-mesh", "Easy"]
     assert ms.problem(ms.queries("test")[1]).world.name == "Easy"
+
+
+def test_the_spatial_index_answers_as_the_full_scan_does():
+    from planners.kernels.rigid import N_INDEXED, N_PLAIN, states_clear
+    from planners.tools.box_index_bench import pose_check_cost, random_box_world
+
+    world = random_box_world(300, seed=4, sides=(0.05, 3.0))
+    k = world.kernel
+    assert k.params.shape == (N_INDEXED,) and k.grid.dtype == np.int64
+    rng = np.random.default_rng(5)
+    qs = np.column_stack([rng.uniform(5, 95, (3000, 3)), rng.uniform(-3, 3, (3000, 3))])
+    for margin in (0.0, 0.5 * world.delta):
+        a, b = np.empty(len(qs), dtype=np.bool_), np.empty(len(qs), dtype=np.bool_)
+        states_clear(k.geom, k.grid, k.body, k.params, qs, margin, a)
+        states_clear(k.geom, k.grid, k.body, k.params[:N_PLAIN], qs, margin, b)
+        assert np.array_equal(a, b) and 0 < a.mean() < 1
+    # a body corner exactly on a box's corner touches it: in collision either way
+    inner = world.boxes[np.all((world.boxes[:, :3] > 10) & (world.boxes[:, 3:] < 90), axis=1)][0]
+    q = np.array([[inner[3] + 5.0, inner[4] + 2.5, inner[5] + 1.25, 0, 0, 0]])
+    for params in (k.params, k.params[:N_PLAIN]):
+        out = np.empty(1, dtype=np.bool_)
+        states_clear(k.geom, k.grid, k.body, params, q, 0.0, out)
+        assert not out[0]
+    assert pose_check_cost(40, poses=200).disagreements == 0
