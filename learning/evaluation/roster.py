@@ -61,7 +61,7 @@ def sampler_label(spec: SamplerSpec) -> str:
         return "policy" if batch is None else policy_sampler(batch)
     if spec.name == USER:
         return spec.param("name")
-    return _LABELS[spec.name]
+    return _LABELS.get(spec.name, spec.name)  # the 6-DoF references go by their registry names
 
 
 @dataclass(frozen=True)
