@@ -96,7 +96,7 @@ def _obstacle_based(max_distance: float | None = None, uniform_fraction: float =
     return ObstacleBasedSampler(max_distance, uniform_fraction=uniform_fraction)
 
 
-def _rigid_workspace_route(route_fraction: float = 0.5, spread: float | None = None, cell: float = 1.0) -> Sampler:
+def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = None, cell: float = 1.0) -> Sampler:
     from planners.guidance.workspace_route import WorkspaceRouteSampler
 
     return WorkspaceRouteSampler(route_fraction, spread, cell)

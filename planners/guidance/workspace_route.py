@@ -10,7 +10,7 @@ go (a shortest route through the workspace) and nothing about how the body must 
   Dijkstra search from the goal's voxel gives every free voxel its cost-to-go (edge lengths 1, sqrt 2,
   sqrt 3 voxels); the route descends it from the start's voxel. An end whose voxel is not free starts
   from the nearest free voxel.
-* ``WorkspaceRouteSampler``: with probability ``route_fraction`` a position drawn uniformly by arc
+* ``WorkspaceRouteSampler``: with probability ``route_fraction`` (0.75) a position drawn uniformly by arc
   length along the route, plus isotropic Gaussian noise of ``spread`` (default the inner radius),
   with uniform angles; otherwise a uniform state. Samples do not depend on the tree, so they come in
   batches.
@@ -143,13 +143,14 @@ class WorkspaceRouteSampler(SamplerBase):
     """Positions along the exact workspace route of the body's centre, uniform angles (the module doc).
 
     Args:
-        route_fraction: Probability in [0, 1] that a sample follows the route (else uniform).
+        route_fraction: Probability in [0, 1] that a sample follows the route (else uniform); 0.75 is
+            the share chosen on the tuning scenes (``scripts/experiments/tune_rigid_route.py``).
         spread: Standard deviation of the Gaussian noise about the route, world units; None: the
             body's inner radius.
         cell: Voxel side of the route search, world units.
     """
 
-    def __init__(self, route_fraction: float = 0.5, spread: float | None = None, cell: float = DEFAULT_CELL) -> None:
+    def __init__(self, route_fraction: float = 0.75, spread: float | None = None, cell: float = DEFAULT_CELL) -> None:
         self.route_fraction = float(check_number("WorkspaceRouteSampler", "route_fraction", route_fraction,
                                                  low=0, high=1))
         self.spread = None if spread is None else float(check_number("WorkspaceRouteSampler", "spread", spread,
