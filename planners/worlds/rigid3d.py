@@ -251,10 +251,14 @@ class RigidBodyWorld(WorldBase):
             if not np.all((self.low3 < p) & (p < self.high3)):
                 return (f"puts body point {i} at {tuple(np.round(p, 4).tolist())} outside the workspace interior "
                         f"{tuple(self.low3.tolist())} - {tuple(self.high3.tolist())}")
-        for i, p in enumerate(pts):
-            for k, b in enumerate(self.boxes):
-                if np.all((b[:3] <= p) & (p <= b[3:])):
-                    return f"puts body point {i} at {tuple(np.round(p, 4).tolist())} in box {k} {tuple(b.tolist())}"
+        if len(self.boxes):
+            inside = np.all((self.boxes[None, :, :3] <= pts[:, None]) & (pts[:, None] <= self.boxes[None, :, 3:]),
+                            axis=2)  # (points, boxes)
+            hits = np.argwhere(inside)
+            if len(hits):
+                i, k = (int(v) for v in hits[0])  # the first point, then its first box
+                return (f"puts body point {i} at {tuple(np.round(pts[i], 4).tolist())} in box {k} "
+                        f"{tuple(self.boxes[k].tolist())}")
         return ""
 
     def __repr__(self) -> str:
