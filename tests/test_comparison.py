@@ -92,7 +92,7 @@ def test_other_planners_are_tabled_with_samples_checks_success_and_time_and_name
 def test_a_roadmap_takes_obstacle_based_sampling_and_a_tree_its_goal_bias():
     assert [E.is_roadmap(p) for p in ("PRM", "LazyPRM", "OBPRM", "RRTConnect", "RRTstar")] == [
         True, True, True, False, False]
-    spec = E.ObstacleBasedSpec()
+    spec = E.SamplerSpec.of("obstacle_based")
     assert E.sampler_label(E.SamplerSpec.from_json(spec.to_json())) == E.OBSTACLE_BASED
     assert type(spec.build()).__name__ == "ObstacleBasedSampler"
 

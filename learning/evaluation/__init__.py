@@ -56,7 +56,6 @@ from learning.evaluation.roster import (
     OBSTACLE_BASED,
     ROUTE,
     ROUTE_ABLATION,
-    ObstacleBasedSpec,
     Task,
     bias_sampler,
     bias_spec,
@@ -106,7 +105,7 @@ from learning.evaluation.tuning import (
 from learning.samplers.registry import USER, ModelCache, SamplerSpec, user_sampler
 
 __all__ = [
-    "Comparison", "ComparisonInterrupted", "OBSTACLE_BASED", "ObstacleBasedSpec", "Part", "PartReport", "Results",
+    "Comparison", "ComparisonInterrupted", "OBSTACLE_BASED", "Part", "PartReport", "Results",
     "compare", "default_queries", "is_roadmap",
     "BATCH_TIE", "BUILTIN_SAMPLERS", "CONSTANT", "EXACT_FAILS", "EXACT_ROUTE", "EXPERT", "FOLLOWER", "GOAL_BIASES",
     "MOVINGAI_POOL", "ModelCache", "PALETTE", "POLICY_BATCHES", "POLICY_TUNING_SEEDS", "Protocol", "Query", "ROUTE",

@@ -52,7 +52,6 @@ from learning.evaluation.protocol import (
 )
 from learning.evaluation.roster import (
     ROUTE,
-    ObstacleBasedSpec,
     Task,
     bias_spec,
     evaluation_tasks,
@@ -244,7 +243,7 @@ class Comparison:
             for q in queries:
                 if q.split != "test":
                     continue
-                classical = (ObstacleBasedSpec() if is_roadmap(planner)
+                classical = (SamplerSpec.of("obstacle_based") if is_roadmap(planner)
                              else bias_spec(tuned.get((q.map_set, planner), TUNING_BIASES[2])))
                 for spec in (SamplerSpec.of("uniform"), classical, *learned):
                     tasks.append(Task(q, planner, spec, 0))

@@ -37,7 +37,7 @@ CONSTANT = "constant (tuned)"
 
 
 #: The roadmaps' classical option: OB-PRM's obstacle-based sampling (``planners.ObstacleBasedSampler``) at its
-#: defaults, handed to PRM, Lazy-PRM or OB-PRM (:class:`ObstacleBasedSpec`).
+#: defaults (the registry's ``obstacle_based``), handed to PRM, Lazy-PRM or OB-PRM.
 OBSTACLE_BASED = "obstacle-based"
 
 
@@ -66,31 +66,7 @@ def sampler_label(spec: SamplerSpec) -> str:
         return "policy" if batch is None else policy_sampler(batch)
     if spec.name == USER:
         return spec.param("name")
-    return _LABELS.get(spec.name, spec.name)
-
-
-@dataclass(frozen=True)
-class ObstacleBasedSpec:
-    """OB-PRM's obstacle-based sampling at its defaults, as a task's sampler: the roadmaps' classical option.
-
-    A spec the sampler registry does not hold (the roster's own, see the module docstring): it builds a
-    fresh ``planners.ObstacleBasedSampler()`` and records itself as ``{"name": "obstacle_based"}``. Its own
-    validity checks count among the run's collision checks (``runner.run_one``), as OB-PRM counts them.
-    """
-
-    name: str = "obstacle_based"
-    params: tuple = ()
-
-    def build(self, models=None):  # noqa: ARG002 - the spec interface
-        from planners import ObstacleBasedSampler
-
-        return ObstacleBasedSampler()
-
-    def param(self, key: str, default: Any = None) -> Any:  # noqa: ARG002 - the spec interface
-        return default
-
-    def to_json(self) -> str:
-        return SamplerSpec(self.name).to_json()
+    return _LABELS.get(spec.name, spec.name)  # the 6-DoF references go by their registry names
 
 
 @dataclass(frozen=True)

@@ -78,6 +78,30 @@ def _exact_route(step_size: float = STEP) -> Sampler:
     return GeodesicRouteSampler(step_size=step_size, **SHIPPED_SETTINGS)
 
 
+def _gaussian(stddev: float | None = None, attempts: int = 100) -> Sampler:
+    from planners.base.samplers import GaussianSampler
+
+    return GaussianSampler(stddev, attempts)
+
+
+def _bridge_test(stddev: float | None = None, attempts: int = 100) -> Sampler:
+    from planners.base.samplers import BridgeTestSampler
+
+    return BridgeTestSampler(stddev, attempts)
+
+
+def _obstacle_based(max_distance: float | None = None, uniform_fraction: float = 0.1) -> Sampler:
+    from planners.algorithms.obprm import ObstacleBasedSampler
+
+    return ObstacleBasedSampler(max_distance, uniform_fraction=uniform_fraction)
+
+
+def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = None, cell: float = 1.0) -> Sampler:
+    from planners.guidance.workspace_route import WorkspaceRouteSampler
+
+    return WorkspaceRouteSampler(route_fraction, spread, cell)
+
+
 #: name -> (factory, one line for help texts).
 REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "uniform": (_uniform, "uniform sampling"),
@@ -87,6 +111,11 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "route_ablation": (_route_ablation, "the route sampler without its encoder, tuned for itself"),
     "policy": (_policy, "the learned sampler policy (shipped at its validated batch, or path=)"),
     "policy_ablation": (_policy_ablation, "the policy's action classes at a constant distribution (frontier=)"),
+    "gaussian": (_gaussian, "OMPL's Gaussian sampling: the valid one of a uniform state and a Gaussian one near it"),
+    "bridge_test": (_bridge_test, "OMPL's bridge test: the valid midpoint of two invalid states close together"),
+    "obstacle_based": (_obstacle_based, "OB-PRM's sampling: a step out of an obstacle to the first free state"),
+    "rigid_workspace_route": (_rigid_workspace_route, "6-DoF box worlds: along the exact workspace route of the "
+                              "body's centre, uniform angles (the no-learning ablation)"),
     "expert": (_expert, "reference: the privileged expert on the exact geodesic distance"),
     "exact_route": (_exact_route, "reference: the route sampler on the exact cost-to-go"),
 }

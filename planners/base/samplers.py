@@ -19,7 +19,8 @@ A sampler whose draws are compiled may also define ``fuse(planner)``. A planner 
 ``run(planner, n) -> used`` that runs up to ``n`` iterations with the sampler's draws inside the
 compiled loop, so a solve never returns to Python between batches. ``planners.fused`` is the way to
 build one: the sampler gives a compiled draw function and ``planners.fused.fuse_rrt`` returns the
-``run``, with the planner's refill schedule and generator stream kept. The planner is passed at each call rather than held by ``run``, so a planner and
+``run``, with the planner's refill schedule and generator stream kept. The planner is passed at each call
+rather than held by ``run``, so a planner and
 its loop form no reference cycle and are freed as soon as they go out of scope. A fused loop must
 draw exactly what ``draw`` would: it changes the speed, never the run.
 
@@ -225,3 +226,90 @@ class InformedSampler(SamplerBase):
         # every candidate drawn is charged, those behind surplus samples to the last one returned
         cands[m - 1] += int(cands[m:].sum()) + carry
         return SampleBatch(pts[:m], None, cands[:m])
+
+
+class _NarrowPassageSampler(SamplerBase):
+    """Shared by ``GaussianSampler`` and ``BridgeTestSampler``: OMPL's valid state samplers, compiled.
+
+    Both are defined in ``planners.kernels.narrow``; they differ in ``_mode``. The default standard
+    deviation is OMPL's: 0.1 of the space's maximum extent (the bounds' diagonal; on the rigid body
+    the workspace's diagonal plus pi/2, the extent of SO(3)). On the rigid body OMPL's SE(3) gives the
+    position and the rotation half of it each (``pos_sd``, ``rot_sd = 2 * (sd / 2) / sqrt(3)``: its
+    ``SO3StateSampler``); above ``ROT_UNIFORM`` the rotation is drawn uniformly.
+
+    Every attempt counts as a candidate (``SampleBatch.candidates``) and the sampler's own validity
+    checks accumulate in ``checks`` (a comparison adds them to the planner's). A sample that
+    ``attempts`` attempts did not find is the last attempt's uniform state.
+
+    Args:
+        stddev: Standard deviation of the Gaussian state; None: OMPL's default.
+        attempts: Attempts per sample (OMPL's default 100).
+    """
+
+    _mode = 0  # planners.kernels.narrow.GAUSSIAN or BRIDGE
+
+    def __init__(self, stddev: float | None = None, attempts: int = 100) -> None:
+        from planners.base.fileio import check_int, check_number
+
+        if stddev is not None:
+            check_number(type(self).__name__, "stddev", stddev, low=0, low_open=True)
+        self.stddev = None if stddev is None else float(stddev)
+        self.attempts = check_int(attempts, f"{type(self).__name__}: attempts", low=1)
+
+    def _setup(self) -> None:
+        from planners.kernels import narrow
+        from planners.kernels.space import SPACE_RN
+
+        world = self.problem.world
+        self._kind = int(world.space_kind)
+        rn = self._kind == SPACE_RN
+        diag = float(np.linalg.norm((self.high - self.low) if rn else (self.high[:3] - self.low[:3])))
+        sd = self.stddev if self.stddev is not None else 0.1 * (diag if rn else diag + 0.5 * math.pi)
+        self.pos_sd = sd if rn else 0.5 * sd
+        self.rot_sd = 0.0 if rn else 2.0 * (0.5 * sd) / math.sqrt(3.0)
+        self._world = world.kernel
+        self._per = int(narrow.per_attempt(self.problem.dim))
+        self._rate = 4.0  # running estimate of attempts per sample, sizes the uniform pools
+        self.checks = 0
+
+    def draw(self, rng, n, view):
+        """``n`` samples, with the attempts behind each as candidates."""
+        from planners.kernels import narrow
+        from planners.kernels.state import N_STATE, S_CHECKS
+
+        d = self.problem.dim
+        out = np.empty((n, d))
+        cand = np.zeros(n, dtype=np.int64)
+        state = np.zeros(N_STATE, dtype=np.int64)
+        m = 0
+        while m < n:  # each sample takes at most ``attempts`` attempts, so this ends
+            pool = int(min(self.attempts * (n - m), max(64, math.ceil(1.25 * self._rate * (n - m)))))
+            u = rng.random(pool * self._per)
+            state[0] = 0
+            m += narrow.narrow_samples(self._world, self._kind, self._mode, self.low, self.high, u, n - m,
+                                       self.attempts, self.pos_sd, self.rot_sd, out[m:], cand[m:], state)
+        self.checks += int(state[S_CHECKS])
+        self._rate = 0.5 * self._rate + 0.5 * float(cand.sum()) / n
+        return SampleBatch(out, None, cand)
+
+    def __repr__(self) -> str:
+        sd = "default" if self.stddev is None else f"{self.stddev:g}"
+        return f"{type(self).__name__}(stddev={sd}, attempts={self.attempts})"
+
+
+class GaussianSampler(_NarrowPassageSampler):
+    """OMPL's Gaussian sampling (Boor et al. 1999): of a uniform state and a Gaussian one near it, the valid one.
+
+    A sample needs exactly one of the two valid. See ``_NarrowPassageSampler`` for the arguments.
+    """
+
+    _mode = 0  # planners.kernels.narrow.GAUSSIAN
+
+
+class BridgeTestSampler(_NarrowPassageSampler):
+    """OMPL's bridge test (Hsu et al. 2003): the valid midpoint of two invalid states.
+
+    The two are a uniform state and a Gaussian one near it. See ``_NarrowPassageSampler`` for the arguments.
+    """
+
+    _mode = 1  # planners.kernels.narrow.BRIDGE

@@ -13,7 +13,8 @@ an unknown code raises.
 * ``WORLD_SHAPES``: ``geom`` rows are ``(0, cx, cy, r, 0)`` circles and ``(1, x0, y0, x1, y1)``
   axis-aligned rectangles, ``params = [xlo, ylo, xhi, yhi]``.
 * ``WORLD_RIGID``: ``geom`` rows are boxes ``(x0, y0, z0, x1, y1, z1)``, ``body`` the robot's points
-  in its own frame, ``params = [xlo, ylo, zlo, xhi, yhi, zhi, delta, body_radius]`` (see
+  in its own frame, ``params = [xlo, ylo, zlo, xhi, yhi, zhi, delta, body_radius]``, followed in a
+  scene of many boxes by the spatial index's grid, whose cell lists ``grid`` holds (int64; see
   ``planners.kernels.rigid``).
 * ``WORLD_MESH``: a triangle-mesh body among a triangle-mesh environment; ``grid`` the broad phase's
   distance grid, ``body`` the body's cover points, ``params`` as ``planners.kernels.mesh`` lists them;
@@ -185,7 +186,7 @@ def _shapes_motion_free(world, a, b):
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _rigid_motion_free(world, a, b):
     kind, grid, geom, body, params = world
-    return rigid_motion_free(geom, body, params, a, b)
+    return rigid_motion_free(geom, grid, body, params, a, b)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
@@ -280,8 +281,10 @@ class MeshKernel(WorldKernel):
 
 
 def world_kernel(kind: int, grid: np.ndarray, geom: np.ndarray, body: np.ndarray, params: np.ndarray) -> WorldKernel:
-    """The ``WorldKernel`` a world hands the planners: of its kind's class, so kernels compiled for it
-    contain that kind's collision check only (a plain ``WorldKernel`` dispatches at run time).
+    """The ``WorldKernel`` a world hands the planners, of its kind's class.
+
+    Kernels compiled for it contain that kind's collision check only (a plain ``WorldKernel``
+    dispatches at run time).
     """
     for cls in (GridKernel, ShapesKernel, RigidKernel, MeshKernel):
         if cls.KIND == kind:

@@ -10,6 +10,14 @@ rotation factor has operator norm equal to its angular rate). The motion is cut 
 that this bound is at most ``delta`` per piece; every point of the continuous path then lies within
 ``delta / 2`` of a checked position. Each checked position must keep a clearance of more than
 ``delta / 2`` from every box and from the bounds, so no obstacle, however thin, is stepped over.
+
+The spatial index: where ``params`` goes on past its first eight numbers, a uniform grid of cells
+(``params[8:12]``: the grid's origin and cell side, ``params[12:15]``: cells along x, y, z) lists
+for each cell the boxes that come within ``pad`` of it, ``pad`` at least the largest margin a check
+asks (``delta / 2``). ``index[0]`` holds the cells' offsets (``ncells + 1`` of them) and then the
+box numbers. A body point then tests only the boxes of its own cell: a box within the margin of the
+point reaches into that cell, so the answer is the full scan's, at a cost that does not grow with
+the boxes elsewhere in the scene (``box_index`` builds it).
 """
 
 from __future__ import annotations
@@ -50,6 +58,21 @@ def rotation_matrix(tx, ty, tz):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
+def euler_angles(R, out):
+    """Write ``(tx, ty, tz)`` with ``rotation_matrix(tx, ty, tz) = R`` into ``out``.
+
+    ``tx`` lies in ``[-pi/2, pi/2]``; at ``tx = +-pi/2`` (gimbal lock) ``tz`` is 0.
+    """
+    out[0] = math.asin(max(-1.0, min(1.0, -R[1, 2])))
+    if math.hypot(R[1, 0], R[1, 1]) > 1e-9:
+        out[1] = math.atan2(R[0, 2], R[2, 2])
+        out[2] = math.atan2(R[1, 0], R[1, 1])
+    else:
+        out[1] = math.atan2(-R[2, 0], R[0, 0])
+        out[2] = 0.0
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def body_points_world(body, q):
     """(P, 3) world positions of the body points at state ``q``."""
     R = rotation_matrix(q[3], q[4], q[5])
@@ -75,20 +98,87 @@ def _point_box_sqdist(p, box):
     return s
 
 
+#: Parameters of a world without a spatial index (bounds, delta, radius); an indexed one has ``N_INDEXED``.
+N_PLAIN = 8
+N_INDEXED = 15
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _cell_of(x, origin, cell, n):
+    """The cell along one axis that holds coordinate ``x``, clamped to ``[0, n - 1]``."""
+    c = int(math.floor((x - origin) / cell))
+    return min(max(c, 0), n - 1)
+
+
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def rigid_state_clear(geom, body, params, q, margin):
+def rigid_state_clear(geom, index, body, params, q, margin):
     """True if every body point is more than ``margin`` from every box and inside the bounds."""
     pts = body_points_world(body, q)
     m2 = margin * margin
+    indexed = params.shape[0] >= N_INDEXED
+    if indexed:
+        cell = params[11]
+        nx, ny, nz = int(params[12]), int(params[13]), int(params[14])
+        base = nx * ny * nz + 1
     for i in range(pts.shape[0]):
         for j in range(3):
             if not (params[j] + margin < pts[i, j] < params[3 + j] - margin):
                 return False
-        for k in range(geom.shape[0]):
-            d2 = _point_box_sqdist(pts[i], geom[k])
-            if d2 <= m2:
-                return False
+        if indexed:
+            c = ((_cell_of(pts[i, 0], params[8], cell, nx) * ny + _cell_of(pts[i, 1], params[9], cell, ny)) * nz
+                 + _cell_of(pts[i, 2], params[10], cell, nz))
+            for t in range(index[0, c], index[0, c + 1]):
+                if _point_box_sqdist(pts[i], geom[index[0, base + t]]) <= m2:
+                    return False
+        else:
+            for k in range(geom.shape[0]):
+                if _point_box_sqdist(pts[i], geom[k]) <= m2:
+                    return False
     return True
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def states_clear(geom, index, body, params, qs, margin, out):
+    """``rigid_state_clear`` over the rows of ``qs``, into ``out`` (benchmarks time the check with it)."""
+    for i in range(qs.shape[0]):
+        out[i] = rigid_state_clear(geom, index, body, params, qs[i], margin)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _box_cells(box, pad, origin, cell, shape, out):
+    """The cell ranges ``[out[2j], out[2j + 1]]`` along each axis that the box grown by ``pad`` meets."""
+    for j in range(3):
+        out[2 * j] = _cell_of(box[j] - pad, origin[j], cell, shape[j])
+        out[2 * j + 1] = _cell_of(box[3 + j] + pad, origin[j], cell, shape[j])
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def bin_boxes(geom, pad, origin, cell, shape):
+    """``index[0]``: each cell's offset into the box numbers that follow, then the numbers (see the module doc)."""
+    nx, ny, nz = shape[0], shape[1], shape[2]
+    ncells = nx * ny * nz
+    counts = np.zeros(ncells + 1, dtype=np.int64)
+    r = np.empty(6, dtype=np.int64)
+    for k in range(geom.shape[0]):
+        _box_cells(geom[k], pad, origin, cell, shape, r)
+        for a in range(r[0], r[1] + 1):
+            for b in range(r[2], r[3] + 1):
+                for c in range(r[4], r[5] + 1):
+                    counts[(a * ny + b) * nz + c + 1] += 1
+    for c in range(ncells):
+        counts[c + 1] += counts[c]
+    out = np.empty((1, ncells + 1 + counts[ncells]), dtype=np.int64)
+    out[0, :ncells + 1] = counts
+    fill = counts[:ncells].copy()
+    for k in range(geom.shape[0]):
+        _box_cells(geom[k], pad, origin, cell, shape, r)
+        for a in range(r[0], r[1] + 1):
+            for b in range(r[2], r[3] + 1):
+                for c in range(r[4], r[5] + 1):
+                    i = (a * ny + b) * nz + c
+                    out[0, ncells + 1 + fill[i]] = k
+                    fill[i] += 1
+    return out
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -108,15 +198,15 @@ def motion_pieces(params, a, b):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def rigid_motion_free(geom, body, params, a, b):
+def rigid_motion_free(geom, index, body, params, a, b):
     """True if the motion a -> b keeps every body point clear of every box (see module doc)."""
     n, length = motion_pieces(params, a, b)
     if length == 0.0:
-        return rigid_state_clear(geom, body, params, a, 0.0)
+        return rigid_state_clear(geom, index, body, params, a, 0.0)
     margin = 0.5 * params[6]
     q = np.empty(6)
     for k in range(n + 1):
         interpolate(SPACE_RIGID, a, b, k / n, q)
-        if not rigid_state_clear(geom, body, params, q, margin):
+        if not rigid_state_clear(geom, index, body, params, q, margin):
             return False
     return True

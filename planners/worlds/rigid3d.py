@@ -63,9 +63,14 @@ DEFAULT_DELTA = 0.05
 MAX_MOTION_POSES = 100_000
 #: Largest coordinate of a workspace corner: beyond it distances and volumes lose their precision.
 MAX_COORDINATE = 1e12
-#: Most boxes a world accepts unless raised: one pose of the default 16-point body among 5,000 boxes costs
-#: about 0.3 ms, and a time limit is looked at between iterations (each a few motion checks).
-DEFAULT_MAX_BOXES = 5_000
+#: Most boxes a world accepts unless raised. A scene of more than ``INDEX_MIN_BOXES`` boxes gets a spatial
+#: index (a uniform grid of at most ``INDEX_MAX_CELLS`` cells, each listing the boxes near it), so a body
+#: point tests the boxes of its own cell only and a pose's cost does not grow with every box in the scene.
+DEFAULT_MAX_BOXES = 100_000
+#: Fewer boxes than this are scanned in full: there the scan is as cheap as the index's look-up.
+INDEX_MIN_BOXES = 16
+#: Most cells of the spatial index (int64 offsets: 8 bytes each); the grid aims at about 4 cells per box.
+INDEX_MAX_CELLS = 1 << 18
 #: The environment variable that raises (or lowers) ``DEFAULT_MAX_BOXES``.
 MAX_BOXES_ENV = "SAMPLERGYM_MAX_BOXES"
 
@@ -175,9 +180,9 @@ class RigidBodyWorld(WorldBase):
         self.boxes = _boxes(boxes)
         limit = max_boxes_limit()
         if len(self.boxes) > limit:
-            raise InputError(f"the scene has {len(self.boxes):,} boxes, more than the limit of {limit:,} (every check "
-                             f"tests each body point against each box); if that is intended, set "
-                             f"{MAX_BOXES_ENV}={len(self.boxes)}")
+            raise InputError(f"the scene has {len(self.boxes):,} boxes, more than the limit of {limit:,} (the "
+                             f"spatial index holds every box, and the free-volume estimate scans them); if that "
+                             f"is intended, set {MAX_BOXES_ENV}={len(self.boxes)}")
         self.body = box_body(1.0, 0.5, 0.25) if body is None else _body(body)
         delta = positive_delta(delta)
         if delta >= float(extent.min()):
@@ -191,9 +196,9 @@ class RigidBodyWorld(WorldBase):
         self.low3, self.high3 = lo, hi
         for a in (self.boxes, self.body, self.low3, self.high3):
             a.flags.writeable = False
-        params = np.concatenate([lo, hi, [delta, self.radius]])
-        grid, _, _ = geometry.placeholder_arrays()
-        self._kernel = geometry.world_kernel(geometry.WORLD_RIGID, grid, np.ascontiguousarray(self.boxes),
+        index, grid_params = box_index(self.boxes, lo, hi, 0.5 * delta)
+        params = np.concatenate([lo, hi, [delta, self.radius], grid_params])
+        self._kernel = geometry.world_kernel(geometry.WORLD_RIGID, index, np.ascontiguousarray(self.boxes),
                                              np.ascontiguousarray(self.body), params)
         self._low = np.concatenate([lo, [-math.pi] * 3])
         self._high = np.concatenate([hi, [math.pi] * 3])
@@ -246,15 +251,42 @@ class RigidBodyWorld(WorldBase):
             if not np.all((self.low3 < p) & (p < self.high3)):
                 return (f"puts body point {i} at {tuple(np.round(p, 4).tolist())} outside the workspace interior "
                         f"{tuple(self.low3.tolist())} - {tuple(self.high3.tolist())}")
-        for i, p in enumerate(pts):
-            for k, b in enumerate(self.boxes):
-                if np.all((b[:3] <= p) & (p <= b[3:])):
-                    return f"puts body point {i} at {tuple(np.round(p, 4).tolist())} in box {k} {tuple(b.tolist())}"
+        if len(self.boxes):
+            inside = np.all((self.boxes[None, :, :3] <= pts[:, None]) & (pts[:, None] <= self.boxes[None, :, 3:]),
+                            axis=2)  # (points, boxes)
+            hits = np.argwhere(inside)
+            if len(hits):
+                i, k = (int(v) for v in hits[0])  # the first point, then its first box
+                return (f"puts body point {i} at {tuple(np.round(pts[i], 4).tolist())} in box {k} "
+                        f"{tuple(self.boxes[k].tolist())}")
         return ""
 
     def __repr__(self) -> str:
         ext = "x".join(f"{v:g}" for v in self.high3 - self.low3)
         return f"RigidBodyWorld({ext}, {len(self.boxes)} boxes, {len(self.body)} body points, delta={self.delta:g})"
+
+
+def box_index(boxes: np.ndarray, low: np.ndarray, high: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """The spatial index of ``boxes`` for checks with margins up to ``margin``: ``(index, grid parameters)``.
+
+    Scenes of at most ``INDEX_MIN_BOXES`` boxes get none (a ``(1, 1)`` placeholder and no parameters).
+    Otherwise a grid of cubic cells over the workspace, about four cells per box and at most
+    ``INDEX_MAX_CELLS``, lists in each cell the boxes that come within ``margin`` of it
+    (``planners.kernels.rigid``); the grid parameters are its origin, cell side and cells per axis.
+    """
+    if len(boxes) <= INDEX_MIN_BOXES:
+        return np.zeros((1, 1), dtype=np.int64), np.zeros(0)
+    extent = high - low
+    cells = min(INDEX_MAX_CELLS, max(4096, 4 * len(boxes)))
+    side = float(np.prod(extent) / cells) ** (1.0 / 3.0)
+    shape = np.maximum(1, np.ceil(extent / side)).astype(np.int64)
+    while int(np.prod(shape)) > INDEX_MAX_CELLS:  # flat workspaces: ceil can overshoot the budget
+        side *= 1.1
+        shape = np.maximum(1, np.ceil(extent / side)).astype(np.int64)
+    # a little more than the margin: a point within it of a box, by rounded arithmetic, is surely in its cells
+    pad = margin * (1.0 + 1e-9) + 1e-12 * float(np.max(np.abs(np.concatenate([low, high]))) + 1.0)
+    index = rigid_kernels.bin_boxes(np.ascontiguousarray(boxes), pad, np.ascontiguousarray(low), side, shape)
+    return index, np.concatenate([low, [side], shape.astype(np.float64)])
 
 
 def _vector(v, n: int, label: str) -> np.ndarray:
@@ -376,16 +408,9 @@ def euler_from_matrix(R) -> np.ndarray:
 
     ``tx`` lies in ``[-pi/2, pi/2]``; at ``tx = +-pi/2`` (gimbal lock) ``tz`` is 0.
     """
-    R = np.asarray(R, dtype=np.float64)
-    sx = -R[1, 2]
-    tx = math.asin(max(-1.0, min(1.0, sx)))
-    if math.hypot(R[1, 0], R[1, 1]) > 1e-9:
-        ty = math.atan2(R[0, 2], R[2, 2])
-        tz = math.atan2(R[1, 0], R[1, 1])
-    else:
-        ty = math.atan2(-R[2, 0], R[0, 0])
-        tz = 0.0
-    return np.array([tx, ty, tz])
+    out = np.empty(3)
+    rigid_kernels.euler_angles(np.ascontiguousarray(R, dtype=np.float64), out)
+    return out
 
 
 # --- the seed project's planning set-ups -----------------------------------------------------------

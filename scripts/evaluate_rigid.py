@@ -1,0 +1,98 @@
+"""Planners x samplers on the generated 6-DoF scenes: success, iterations, collision checks and time.
+
+    python scripts/evaluate_rigid.py --part validation --scenes 2 --seeds 2 --out results/rigid
+    python scripts/evaluate_rigid.py --part test --families slot windows --planners RRTConnect \\
+        --samplers uniform gaussian rigid_workspace_route --out results/rigid-test
+    python scripts/evaluate_rigid.py --mesh --omplapp DIR --scenes 1 --max-iterations 2000 --out results/rigid-mesh
+
+Runs ``learning.evaluation.rigid.evaluate_rigid`` on a part of the scene set
+(``planners.worlds.rigid_scenes.RigidSceneSet``: every scene proved solvable first) and prints a
+table per planner and sampler, and one per family. Writes ``rows.json`` (every run), ``summary.md``
+(the tables) and ``scenes.json`` (the set's record) under ``--out``. Tune on ``tuning``, choose on
+``validation``; ``test`` is for the reported comparison only.
+``--mesh`` runs the test-only mesh set instead (``MeshSceneSet``: the test-only families written as
+meshes, and OMPL.app's problems from ``--omplapp`` or ``$SAMPLERGYM_OMPLAPP_DIR``; the ``mesh``
+extra); ``rigid_workspace_route`` needs boxes and is left out there unless named.
+Exit status: 0 done, 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from planners.base.fileio import InputError, atomic_write_text
+from planners.worlds.rigid_scenes import TEST_ONLY_FAMILIES, TRAINING_FAMILIES
+
+
+def main(argv=None) -> int:
+    from learning.evaluation.rigid import PLANNERS, SAMPLERS, evaluate_rigid, format_table, summarize
+    from planners.worlds.rigid_scenes import RigidSceneSet
+
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--part", choices=("validation", "tuning", "test"), default="validation")
+    ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), help="training families")
+    ap.add_argument("--test-only", nargs="*", default=list(TEST_ONLY_FAMILIES),
+                    help="test-only families (in --part test only)")
+    ap.add_argument("--scenes", type=int, default=2, help="scenes per family")
+    ap.add_argument("--seeds", type=int, default=1, help="planner seeds per scene (0, 1, ...)")
+    ap.add_argument("--planners", nargs="+", default=list(PLANNERS))
+    ap.add_argument("--samplers", nargs="+", help=f"registry names (default {' '.join(SAMPLERS)})")
+    ap.add_argument("--max-iterations", type=int, help="lower every planner's cap (quick looks only)")
+    ap.add_argument("--out", type=Path, default=Path("results/rigid"))
+    ap.add_argument("--mesh", action="store_true", help="the test-only mesh scenes (and OMPL.app's problems)")
+    ap.add_argument("--omplapp", help="folder of OMPL.app's problems for --mesh (default $SAMPLERGYM_OMPLAPP_DIR)")
+    ap.add_argument("--problems", nargs="+", help="OMPL.app problem names to take for --mesh (default all)")
+    args = ap.parse_args(argv)
+
+    def fail(msg: str) -> int:
+        print(f"error: {msg}", file=sys.stderr)
+        return 2
+
+    if args.scenes < 1 or args.seeds < 1:
+        return fail(f"--scenes and --seeds must be at least 1, got {args.scenes} and {args.seeds}")
+    if args.max_iterations is not None and args.max_iterations < 1:
+        return fail(f"--max-iterations must be at least 1, got {args.max_iterations}")
+    if args.out.exists() and not args.out.is_dir():
+        return fail(f"--out {args.out} exists and is not a folder")
+    samplers = args.samplers or [s for s in SAMPLERS if not (args.mesh and s == "rigid_workspace_route")]
+    if args.mesh and args.part != "test":
+        return fail("--mesh scenes are test-only: use --part test")
+    if not args.mesh and (args.omplapp or args.problems):
+        return fail("--omplapp and --problems go with --mesh")
+    try:
+        if args.mesh:
+            from planners.worlds.rigid_scenes import MeshSceneSet
+
+            scenes = MeshSceneSet(args.test_only, args.scenes, args.omplapp, args.problems)
+        else:
+            scenes = RigidSceneSet(args.families, args.test_only, {args.part: args.scenes})
+        print(scenes.describe(), flush=True)
+
+        def show(row) -> None:
+            print(f"{row.scene:>18} {row.planner:>10} {row.sampler:>22} seed {row.seed}: "
+                  f"{'solved' if row.solved else 'failed'} {row.iterations:>6} iterations "
+                  f"{row.collision_checks:>8} checks {row.time:7.2f} s", flush=True)
+
+        rows = evaluate_rigid(scenes, args.part, planners=args.planners, samplers=samplers,
+                              seeds=range(args.seeds), max_iterations=args.max_iterations, progress=show)
+    except InputError as e:
+        return fail(str(e))
+    by_sampler = format_table(summarize(rows))
+    by_family = format_table(summarize(rows, ("family", "planner", "sampler")), ("family", "planner", "sampler"))
+    text = (f"# {args.part} part: {args.scenes} scenes per family, {args.seeds} seeds\n\n"
+            "Times are wall-clock seconds on whatever machine ran this (compilation left out).\n\n"
+            f"{by_sampler}\n\n## By family\n\n{by_family}\n")
+    print(text)
+    args.out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(args.out / "rows.json", json.dumps([r.as_dict() for r in rows], indent=1) + "\n")
+    atomic_write_text(args.out / "summary.md", text)
+    atomic_write_text(args.out / "scenes.json", json.dumps(scenes.record(), indent=1) + "\n")
+    print(f"wrote {args.out}/rows.json, summary.md, scenes.json")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
