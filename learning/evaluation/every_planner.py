@@ -64,12 +64,22 @@ def planner_maps(which: str, n: int, *, size: int = 128, tolerance: float = TOLE
 
 @dataclass(frozen=True)
 class Setup:
-    """One row of the comparison: a label, the planner, and its sampler (None: the planner's own)."""
+    """One row of the comparison: a label, the planner, and its sampler (None: the planner's own).
+
+    ``make``, where given, builds the sampler instead of the registry (a sampler at other settings, when tuning).
+    """
 
     label: str
     planner: str
     sampler: str | None
     params: tuple[tuple[str, object], ...] = ()
+    make: Callable[[], object] | None = None
+
+    def build(self, models: ModelCache | None = None):
+        """A fresh sampler of this row, or None for the planner's own."""
+        if self.make is not None:
+            return self.make()
+        return None if self.sampler is None else make_sampler(self.sampler, models=models, **dict(self.params))
 
 
 def setups_for(planner: str) -> list[Setup]:
@@ -85,8 +95,8 @@ def run_setup(setup: Setup, problem: Problem, seed: int, *, max_iterations: int 
 
     ``sampler`` replaces the setup's (a sampler object, e.g. at other settings while tuning).
     """
-    if sampler is None and setup.sampler is not None:
-        sampler = make_sampler(setup.sampler, models=models, **dict(setup.params))
+    if sampler is None:
+        sampler = setup.build(models)
     extra = {"stop_on_first_solution": True} if setup.planner in ANYTIME else {}
     t0 = time.perf_counter()
     planner = make_planner(setup.planner, problem, extension_step=step, sampler=sampler, seed=seed, **extra)
@@ -95,12 +105,19 @@ def run_setup(setup: Setup, problem: Problem, seed: int, *, max_iterations: int 
     # the iteration of the first solution: an RRT* stopping at it finishes the batch of samples it holds
     return {"setup": setup.label, "planner": setup.planner, "query": problem.name, "seed": seed, "solved": r.solved,
             "iterations": r.first_solution_iteration if r.solved else max_iterations, "candidates": r.candidates,
-            "checks": r.collision_checks, "cost": r.cost, "time_s": wall, "compile_s": planner.compile_time}
+            "checks": r.collision_checks, "cost": r.cost, "time_s": wall, "compile_s": planner.compile_time,
+            "lower_bound": problem.iteration_lower_bound(step)}
 
 
 def summarize_runs(runs: Sequence[dict]) -> dict:
-    """Success share and medians (an unsolved run counts at its budget) of ``runs`` of one row."""
+    """Success share and medians (an unsolved run counts at its budget) of ``runs`` of one row.
+
+    ``lower_bound``: the median of the queries' iteration lower bounds (``Problem.iteration_lower_bound``; nan
+    where no query knows its shortest path).
+    """
+    bounds = [r["lower_bound"] for r in runs if r.get("lower_bound") is not None]
     return {"runs": len(runs), "success": float(np.mean([r["solved"] for r in runs])),
+            "lower_bound": float(np.median(bounds)) if bounds else math.nan,
             "iterations": float(np.median([r["iterations"] for r in runs])),
             "checks": float(np.median([r["checks"] for r in runs])),
             "time_ms": 1e3 * float(np.median([r["time_s"] - r["compile_s"] for r in runs]))}
@@ -132,7 +149,8 @@ def compare_planners(maps: dict[str, list[Problem]], planners: Sequence[str] = t
 def format_row(row: dict) -> str:
     """One printed line of a row of ``compare_planners``."""
     return (f"{row['map']:24s} {row['planner']:11s} {row['sampler']:15s} success {row['success']:5.2f}  "
-            f"iterations {row['iterations']:8.0f}  checks {row['checks']:8.0f}  time {row['time_ms']:7.1f} ms")
+            f"iterations {row['iterations']:8.0f}  checks {row['checks']:8.0f}  time {row['time_ms']:7.1f} ms  "
+            f"lower bound {row['lower_bound']:5.0f}")
 
 
 #: How close to the best known cost ``convergence`` measures (5% and 1%).
@@ -145,8 +163,7 @@ def cost_trace(setup: Setup, problem: Problem, seed: int, *, budget: int, chunk:
 
     How a run is split never changes it (``Planner.solve``), so this is one run read every ``chunk`` iterations.
     """
-    sampler = None if setup.sampler is None else make_sampler(setup.sampler, models=models, **dict(setup.params))
-    planner = make_planner(setup.planner, problem, extension_step=step, sampler=sampler, seed=seed)
+    planner = make_planner(setup.planner, problem, extension_step=step, sampler=setup.build(models), seed=seed)
     out = np.full(math.ceil(budget / chunk), np.inf)
     for i in range(len(out)):
         out[i] = planner.solve(max_iterations=chunk).cost

@@ -45,8 +45,11 @@ CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3}
 #: The straight-line ablation's corridor, tuned for it on the same maps: an ellipse about the start and the
 #: goal, 60% longer than the straight line.
 ABLATION_CORRIDOR = {"margin": 0.6, "floor": 0.3}
-#: RRT*'s corridor after the first solution.
-CONVERGING_SETTINGS = {"margin": 0.3, "floor": 0.3}
+#: RRT*'s corridor after the first solution, chosen on the validation maps (``tune_route_rules.py --rrtstar``):
+#: cells within 10% of the shortest route the field sees, and a tenth of the samples from the informed set.
+CONVERGING_SETTINGS = {"margin": 0.1, "floor": 0.1}
+#: The straight-line ablation's, tuned for it on the same maps: an ellipse twice as long as the straight line.
+ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1}
 #: Corridor cells are those within ``margin`` times the shortest route plus this many steps.
 WIDTH_STEPS = 1.0
 #: Samples per draw once RRT* has a solution (the informed set shrinks as the solution improves).
@@ -61,7 +64,7 @@ def rule_for(route: RouteSampler, family: str) -> SamplerBase:
     if family == FAMILY_ROADMAP:
         return CorridorSampler(route, **(ABLATION_CORRIDOR if straight else CORRIDOR_SETTINGS))
     if family == FAMILY_OPTIMIZING:
-        return ConvergingRouteSampler(route, **(ABLATION_CORRIDOR if straight else CONVERGING_SETTINGS))
+        return ConvergingRouteSampler(route, **(ABLATION_CONVERGING if straight else CONVERGING_SETTINGS))
     return route
 
 
@@ -151,7 +154,19 @@ class BidirectionalRouteSampler(SamplerBase):
         return f"BidirectionalRouteSampler({self.route!r})"
 
 
-class CorridorSampler(SamplerBase):
+class _CorridorRule(SamplerBase):
+    """What the corridor's rules share: the route sampler, a corridor ``margin`` and a ``floor``, checked."""
+
+    def __init__(self, route: RouteSampler, margin: float, floor: float) -> None:
+        self.route = route
+        self.margin = _check_margin(type(self).__name__, margin)
+        self.floor = _check_share(type(self).__name__, "floor", floor)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.route!r}, margin={self.margin:g}, floor={self.floor:g})"
+
+
+class CorridorSampler(_CorridorRule):
     """Roadmaps' rule: uniform over the corridor where the field says a short route runs, with a uniform floor.
 
     The corridor is the free cells whose cost from the start plus cost to the goal (two passes of the field,
@@ -166,9 +181,7 @@ class CorridorSampler(SamplerBase):
 
     def __init__(self, route: RouteSampler, margin: float = CORRIDOR_SETTINGS["margin"],
                  floor: float = CORRIDOR_SETTINGS["floor"]) -> None:
-        self.route = route
-        self.margin = _check_margin(type(self).__name__, margin)
-        self.floor = _check_share(type(self).__name__, "floor", floor)
+        super().__init__(route, margin, floor)
 
     def _setup(self) -> None:
         p = self.problem
@@ -186,11 +199,8 @@ class CorridorSampler(SamplerBase):
             pts[guided] = cell_points(self.problem.world, self.cells, u[guided, 1:4], self.low, self.high)
         return pts
 
-    def __repr__(self) -> str:
-        return f"CorridorSampler({self.route!r}, margin={self.margin:g}, floor={self.floor:g})"
 
-
-class ConvergingRouteSampler(SamplerBase):
+class ConvergingRouteSampler(_CorridorRule):
     """RRT*'s rule: ``RouteSampler``'s to the first solution, then the corridor inside the informed set.
 
     Once a solution of cost ``c`` exists, a sample is, with probability ``floor``, from the informed set
@@ -205,9 +215,7 @@ class ConvergingRouteSampler(SamplerBase):
 
     def __init__(self, route: RouteSampler, margin: float = CONVERGING_SETTINGS["margin"],
                  floor: float = CONVERGING_SETTINGS["floor"]) -> None:
-        self.route = route
-        self.margin = _check_margin(type(self).__name__, margin)
-        self.floor = _check_share(type(self).__name__, "floor", floor)
+        super().__init__(route, margin, floor)
 
     def _setup(self) -> None:
         p = self.problem
@@ -247,5 +255,3 @@ class ConvergingRouteSampler(SamplerBase):
             k -= len(pts[-1])
         return SampleBatch(np.concatenate(pts), None, np.concatenate(cands))
 
-    def __repr__(self) -> str:
-        return f"ConvergingRouteSampler({self.route!r}, margin={self.margin:g}, floor={self.floor:g})"

@@ -1,6 +1,16 @@
-"""The roadmaps' corridor (``learning.samplers.route_rules.CorridorSampler``) tuned on validation maps.
+"""The route field's rules for other planners, chosen on validation maps.
 
-    python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2
+    python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2                 # the roadmaps' corridor
+    python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2 --connect       # RRT-Connect: one tree or two
+    python scripts/experiments/tune_route_rules.py --maps 2 --seeds 2 --rrtstar       # RRT*'s rule after a solution
+
+``--connect``: RRT-Connect with the RRT rule handed as it is (it guides the start tree, and its samples on the goal
+tree's turns pull the goal tree towards the start tree's target) against both trees guided, each by its own field
+(``BidirectionalRouteSampler``), for each field; prints median iterations per family and their geometric mean.
+
+``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin and floor (floor 1: the RRT rule, then the informed
+set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of the best cost any of
+them reached (``learning.evaluation.every_planner.convergence``), per family, and their geometric means.
 
 For each field (the route encoder, its straight-line ablation, the exact cost-to-go) and each corridor
 ``margin`` and uniform ``floor`` of the grid, PRM and Lazy-PRM run on the five families' validation maps
@@ -15,9 +25,31 @@ import itertools
 
 import numpy as np
 
-from learning.evaluation.every_planner import Setup, planner_maps, run_setup, summarize_runs
+from learning.evaluation.every_planner import Setup, convergence, planner_maps, run_setup, summarize_runs
 from learning.samplers.registry import ModelCache, make_sampler
-from learning.samplers.route_rules import CorridorSampler
+from learning.samplers.route_rules import BidirectionalRouteSampler, ConvergingRouteSampler, CorridorSampler
+from planners import SamplerBase
+
+
+class StartTreeOnly(SamplerBase):
+    """The route sampler's RRT rule handed to RRT-Connect as it is (no ``for_planner``): the start tree's."""
+
+    def __init__(self, route) -> None:
+        self.route = route
+
+    def bind(self, problem):
+        return self.route.bind(problem)
+
+    def draw(self, rng, n, view):
+        raise NotImplementedError("bound, this is the route sampler itself")
+
+
+def geomean_row(label: str, per_family: list[dict]) -> str:
+    """A printed row: the geometric mean of the families' median iterations, each, and the lowest success."""
+    medians = [r["iterations"] for r in per_family]
+    score = float(np.exp(np.mean(np.log(medians))))
+    return (f"{label}  geomean {score:7.1f}  per family {' '.join(f'{m:6.0f}' for m in medians)}  "
+            f"success {min(r['success'] for r in per_family):.2f}")
 
 
 def main(argv=None) -> int:
@@ -28,22 +60,47 @@ def main(argv=None) -> int:
     ap.add_argument("--floors", type=float, nargs="+", default=[0.1, 0.3])
     ap.add_argument("--fields", nargs="+", default=["route", "route_ablation", "exact_route"])
     ap.add_argument("--planners", nargs="+", default=["PRM", "LazyPRM"])
+    ap.add_argument("--connect", action="store_true", help="RRT-Connect: the start tree guided, or both")
+    ap.add_argument("--rrtstar", action="store_true", help="RRT*: the rule after the first solution")
+    ap.add_argument("--budget", type=int, default=3000, help="RRT* iterations per run with --rrtstar")
     args = ap.parse_args(argv)
     maps = planner_maps("validation", args.maps)
     models = ModelCache()
+    if args.rrtstar:
+        for field in args.fields:
+            setups = [Setup("RRT rule throughout", "RRTstar", field, make=lambda f=field: StartTreeOnly(
+                make_sampler(f, models=models)))]
+            setups += [Setup(f"margin {m:g} floor {fl:g}", "RRTstar", field,
+                             make=lambda f=field, m=m, fl=fl: ConvergingRouteSampler(make_sampler(f, models=models), m,
+                                                                                     fl))
+                       for m, fl in itertools.product(args.margins, args.floors)]
+            rows = convergence(maps, setups, seeds=tuple(range(args.seeds)), budget=args.budget)
+            for s in setups:
+                mine = [r for r in rows if r["sampler"] == s.label]
+                for share in ("0.05", "0.01"):
+                    its = [r[f"iterations_{share}"] for r in mine]
+                    mean = float(np.exp(np.mean(np.log(its))))
+                    print(f"RRTstar {field:15s} {s.label:22s} within {share}: geomean {mean:7.0f}  "
+                          f"per family {' '.join(f'{i:5.0f}' for i in its)}", flush=True)
+        return 0
+    if args.connect:
+        for field in args.fields:
+            for rule, wrap in (("start tree only", StartTreeOnly), ("both trees", BidirectionalRouteSampler)):
+                per_family = [summarize_runs([run_setup(Setup(field, "RRTConnect", field), p, s, models=models,
+                                                        sampler=wrap(make_sampler(field, models=models)))
+                                              for p in problems for s in range(args.seeds)])
+                              for problems in maps.values()]
+                print(geomean_row(f"RRTConnect {field:15s} {rule:16s}", per_family), flush=True)
+        return 0
     for planner in args.planners:
         for field, margin, floor in itertools.product(args.fields, args.margins, args.floors):
-            medians, success = [], []
-            for problems in maps.values():
-                runs = [run_setup(Setup(field, planner, field), p, s, models=models,
-                                  sampler=CorridorSampler(make_sampler(field, models=models), margin, floor))
-                        for p in problems for s in range(args.seeds)]
-                row = summarize_runs(runs)
-                medians.append(row["iterations"])
-                success.append(row["success"])
-            score = float(np.exp(np.mean(np.log(medians))))
-            print(f"{planner:8s} {field:15s} margin {margin:4.2f} floor {floor:4.2f}  geomean {score:7.1f}  "
-                  f"per family {' '.join(f'{m:6.0f}' for m in medians)}  success {min(success):.2f}", flush=True)
+            per_family = [summarize_runs([run_setup(Setup(field, planner, field), p, s, models=models,
+                                                    sampler=CorridorSampler(make_sampler(field, models=models),
+                                                                            margin, floor))
+                                          for p in problems for s in range(args.seeds)])
+                          for problems in maps.values()]
+            print(geomean_row(f"{planner:8s} {field:15s} margin {margin:4.2f} floor {floor:4.2f}", per_family),
+                  flush=True)
     return 0
 
 
