@@ -184,3 +184,20 @@ def test_the_planning_env_serves_each_planner_and_passes_the_checkers(planner):
     sb3_check_env(env.unwrapped, warn=False)
     # SB3's default policy for Dict observations takes the env as it is (a few updates, not a training run)
     PPO("MultiInputPolicy", env, n_steps=16, batch_size=16, n_epochs=1, seed=0, device="cpu").learn(16)
+
+
+def test_a_roadmap_query_moves_the_corridor_and_later_queries_are_counted():
+    from learning.evaluation.every_planner import later_queries, other_queries
+
+    p = wall_problem()
+    pairs = other_queries(p, 2, seed=0)
+    assert len(pairs) == 2 and all(p.world.path_valid(np.array([s, s])) for s, _ in pairs)
+    planner = make_planner("PRM", p, sampler=make_sampler("exact_route", step_size=2.0), seed=0)
+    planner.solve(max_iterations=3000)
+    before = planner.sampler.cells
+    s, g = pairs[0]
+    r = planner.query(s, g, max_iterations=3000)
+    assert r.solved and not np.array_equal(planner.sampler.cells, before)
+    rows = later_queries({"wall": [p]}, [Setup("exact_route", "PRM", "exact_route", (("step_size", 2.0),))],
+                         queries=2, seeds=(0,), max_iterations=3000)
+    assert rows[0]["success"] == 1.0 and 0.0 <= rows[0]["served"] <= 1.0 and rows[0]["later"] >= 0

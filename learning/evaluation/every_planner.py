@@ -3,7 +3,8 @@
 ``make_sampler("route")`` (and ``"route_ablation"``, ``"exact_route"``) handed to any planner takes that
 planner's rule (``learning.samplers.route_rules``). ``compare_planners`` runs each planner with its default
 sampling, its classical option, the learned field, its ablation and the exact reference on the same queries;
-``convergence`` measures how many iterations RRT* takes to come within 5% and 1% of the best known cost.
+``convergence`` measures how many iterations RRT* takes to come within 5% and 1% of the best known cost, and
+``later_queries`` whether a roadmap built for one query serves others.
 
 Map sets (``planner_maps``): ``validation`` (the five families' validation maps, the only ones settings are
 chosen on), and the held-apart ``shifted`` and ``unseen`` test maps.
@@ -212,3 +213,58 @@ def rrtstar_setups() -> list[Setup]:
     """RRT*'s rows of ``convergence``: uniform, goal bias, Informed RRT*, the field's three samplers."""
     return [Setup("uniform", "RRTstar", None), Setup("goal bias 0.05", "RRTstar", "goal_bias", (("bias", 0.05),)),
             Setup("informed", "InformedRRTstar", None)] + [Setup(s, "RRTstar", s) for s in FIELD_SAMPLERS]
+
+
+def other_queries(problem: Problem, k: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``k`` more (start, goal) pairs on ``problem``'s grid, drawn with ``seed``.
+
+    Free cell centres joined by a path and a quarter of the map's side apart at least.
+    """
+    from planners.maps.gridsearch import connected
+
+    grid = problem.world
+    free = np.argwhere(~grid.obstacles)
+    rng = np.random.default_rng(seed)
+    apart = 0.25 * max(grid.height, grid.width)
+    out = []
+    for _ in range(1000 * k):
+        if len(out) == k:
+            break
+        a, b = free[rng.integers(len(free), size=2)]
+        if np.hypot(*(a - b)) >= apart and connected(grid.obstacles, tuple(a), tuple(b)):
+            out.append((grid.cell_center(int(a[0]), int(a[1])), grid.cell_center(int(b[0]), int(b[1]))))
+    return out
+
+
+def later_queries(maps: dict[str, list[Problem]], setups: Sequence[Setup], *, queries: int = 3,
+                  seeds: Sequence[int] = (0, 1), max_iterations: int = MAX_ITERATIONS,
+                  step: float = STEP) -> list[dict]:
+    """Whether a roadmap built for one query serves others: the samples each later query adds.
+
+    Each roadmap planner of ``setups`` solves the map's own query, then answers ``queries`` more on the same
+    roadmap (``PRM.query``; ``other_queries``), the sampler bound afresh to each (the field's corridor moves to
+    the new query). Rows: ``map``, ``sampler``, the median samples of the first query (``first``) and of the
+    later ones (``later``; an unanswered one counting at ``max_iterations``), their mean (``later_mean``), the
+    share of later queries the roadmap answered with no new sample (``served``), and their ``success``.
+    """
+    models = ModelCache()
+    rows = []
+    for name, problems in maps.items():
+        for setup in setups:
+            first, later = [], []
+            for i, p in enumerate(problems):
+                pairs = other_queries(p, queries, seed=i)
+                for seed in seeds:
+                    planner = make_planner(setup.planner, p, extension_step=step, sampler=setup.build(models),
+                                           seed=seed)
+                    r = planner.solve(max_iterations=max_iterations)
+                    first.append(r.iterations if r.solved else max_iterations)
+                    for s, g in pairs:
+                        r = planner.query(s, g, max_iterations=max_iterations)
+                        later.append((r.iterations if r.solved else max_iterations, r.solved))
+            rows.append({"map": name, "sampler": setup.label, "first": float(np.median(first)),
+                         "later": float(np.median([n for n, _ in later])),
+                         "later_mean": float(np.mean([n for n, _ in later])),
+                         "served": float(np.mean([n == 0 and ok for n, ok in later])),
+                         "success": float(np.mean([ok for _, ok in later]))})
+    return rows

@@ -16,8 +16,9 @@ handed to:
   corridor cells inside the informed set (the states that could lie on a shorter path), with a ``floor`` share
   from the informed set itself (``InformedSampler``).
 
-The settings (``CORRIDOR_SETTINGS``; the straight-line ablation's own, ``ABLATION_CORRIDOR``) were chosen on
-validation maps (``scripts/experiments/tune_route_rules.py``).
+The settings (``CORRIDOR_SETTINGS``, ``CONVERGING_SETTINGS``; the straight-line ablation's own,
+``ABLATION_CORRIDOR``, ``ABLATION_CONVERGING``) were chosen on validation maps
+(``scripts/experiments/tune_route_rules.py``); the exact reference takes the learned field's.
 """
 
 from __future__ import annotations
