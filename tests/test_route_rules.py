@@ -201,3 +201,17 @@ def test_a_roadmap_query_moves_the_corridor_and_later_queries_are_counted():
     rows = later_queries({"wall": [p]}, [Setup("exact_route", "PRM", "exact_route", (("step_size", 2.0),))],
                          queries=2, seeds=(0,), max_iterations=3000)
     assert rows[0]["success"] == 1.0 and 0.0 <= rows[0]["served"] <= 1.0 and rows[0]["later"] >= 0
+
+
+def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run():
+    from learning.samplers.route import FieldCache, shipped_sampler
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("maze", VALIDATION_SEED0 + 11, 64, goal_tolerance=4.0)
+    cache = FieldCache()
+    route = shipped_sampler(device="cpu")
+    route.fields = cache
+    runs = [make_planner("PRM", p, sampler=route, seed=0) for _ in range(2)]
+    assert cache.misses == 2 and cache.hits == 2  # a field to the goal and one to the start, computed once
+    assert runs[0].sampler.reused_seconds == 0 and runs[1].sampler.reused_seconds > 0
+    assert np.array_equal(runs[0].sampler.cells, runs[1].sampler.cells) and runs[1].sampler.forward_passes == 2

@@ -531,18 +531,23 @@ class RouteSampler(SamplerBase):
                    _NO_ANCHORS)
         return pts
 
-    def cost_to_go(self, problem: Problem) -> np.ndarray:
+    def cost_to_go(self, problem: Problem) -> CachedField:
         """The field this sampler follows on ``problem``: cost-to-go to its goal of every grid cell, in steps.
 
-        A fresh array, ``inf`` on obstacles; the encoder's pass (or the cache's field) as a bind takes it, without
-        the rest of a bind's set-up.
+        The encoder's pass (or the cache's field) as a bind takes it, without the rest of a bind's set-up: a fresh
+        array, ``inf`` on obstacles, with the encoder seconds behind it and whether they were the cache's
+        (``reused``, as ``reused_seconds``).
         """
         grid = problem.world
         if not isinstance(grid, OccupancyGrid):
             raise InputError("RouteSampler plans on OccupancyGrid problems")
-        field = np.array(self._copy_with(problem=problem)._fields(grid)[0], dtype=np.float64)
+        probe = self._copy_with(problem=problem)
+        t0 = time.perf_counter()
+        field = np.array(probe._fields(grid)[0], dtype=np.float64)
+        seconds = time.perf_counter() - t0
         field[grid.obstacles] = np.inf
-        return field
+        reused = probe.reused_seconds > 0
+        return CachedField(field, probe.reused_seconds if reused else seconds, reused)
 
     def __repr__(self) -> str:
         rest = (f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}, "

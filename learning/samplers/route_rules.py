@@ -189,8 +189,11 @@ class CorridorSampler(_CorridorRule):
         grid = p.world
         if not isinstance(grid, OccupancyGrid):
             raise InputError("CorridorSampler plans on OccupancyGrid problems")
-        self.cells = corridor_cells(self.route.cost_to_go(p), self.route.cost_to_go(reversed_query(p)), self.margin)
+        to_goal, to_start = self.route.cost_to_go(p), self.route.cost_to_go(reversed_query(p))
+        self.cells = corridor_cells(to_goal.field, to_start.field, self.margin)
         self.forward_passes = 0 if self.route.net is None else 2 * self.route.symmetry_passes
+        #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
+        self.reused_seconds = sum(f.seconds for f in (to_goal, to_start) if f.reused)
 
     def draw(self, rng, n, view):
         u = rng.random((n, 4))
@@ -221,7 +224,10 @@ class ConvergingRouteSampler(_CorridorRule):
     def _setup(self) -> None:
         p = self.problem
         self.first = self.route.bind(p)  # refuses a world that is not an OccupancyGrid
-        self.cells = corridor_cells(self.first.field, self.route.cost_to_go(reversed_query(p)), self.margin)
+        to_start = self.route.cost_to_go(reversed_query(p))
+        self.cells = corridor_cells(self.first.field, to_start.field, self.margin)
+        #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
+        self.reused_seconds = self.first.reused_seconds + (to_start.seconds if to_start.reused else 0.0)
         self.informed = InformedSampler().bind(p)
         grid = p.world
         rows, cols = np.divmod(self.cells, grid.width)
