@@ -213,8 +213,9 @@ class VertexStore:
         return True
 
     def add_root(self, q: np.ndarray) -> int:
-        """Make ``q`` vertex 0 of an empty store (no parent, cost 0), as ``planners.kernels.tree.add_vertex``
-        would; returns the vertex count, 1.
+        """Make ``q`` vertex 0 of an empty store (no parent, cost 0); returns the vertex count, 1.
+
+        As ``planners.kernels.tree.add_vertex`` would.
         """
         q = np.array(q, dtype=np.float64)  # a writable copy: the argument types the kernels compile for
         self.X[0] = q

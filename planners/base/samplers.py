@@ -19,9 +19,9 @@ A sampler whose draws are compiled may also define ``fuse(planner)``. A planner 
 ``run(planner, n) -> used`` that runs up to ``n`` iterations with the sampler's draws inside the
 compiled loop, so a solve never returns to Python between batches. ``planners.fused`` is the way to
 build one: the sampler gives a compiled draw function and ``planners.fused.fuse_rrt`` returns the
-``run``, with the planner's refill schedule and generator stream kept. The planner is passed at each call rather than held by ``run``, so a planner and
-its loop form no reference cycle and are freed as soon as they go out of scope. A fused loop must
-draw exactly what ``draw`` would: it changes the speed, never the run.
+``run``, with the planner's refill schedule and generator stream kept. The planner is passed at each call
+rather than held by ``run``, so a planner and its loop form no reference cycle and are freed as soon as they go
+out of scope. A fused loop must draw exactly what ``draw`` would: it changes the speed, never the run.
 
 A sampler that measures in the planner's step (how far ahead it aims, what a map cell is worth) may also define
 ``at_step(step_size) -> Sampler``: the same sampler at that step. A planner of the RRT family (its step is
