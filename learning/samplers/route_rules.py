@@ -115,17 +115,19 @@ class BidirectionalRouteSampler(SamplerBase):
 
     Args:
         route: The route sampler whose rule and field each tree follows (at the planner's step).
+        backward: The sampler the goal tree follows, bound to the query with start and goal swapped; None:
+            ``route`` (its field to the start).
     """
 
-    def __init__(self, route: RouteSampler) -> None:
-        self.route = route
+    def __init__(self, route: RouteSampler, backward: RouteSampler | None = None) -> None:
+        self.route, self.backward = route, backward
 
     def _setup(self) -> None:
         p = self.problem
         if not isinstance(p.world, OccupancyGrid):
             raise InputError("BidirectionalRouteSampler plans on OccupancyGrid problems")
         self.to_goal = self.route.bind(p)
-        self.to_start = self.route.bind(reversed_query(p))
+        self.to_start = (self.route if self.backward is None else self.backward).bind(reversed_query(p))
         self._start = np.asarray(p.start, dtype=np.float64)
         self._seen, self._closest = 0, math.inf  # goal-tree vertices looked at, their closest distance to the start
 

@@ -6,7 +6,8 @@
 
 ``--connect``: RRT-Connect with the RRT rule handed as it is (it guides the start tree, and its samples on the goal
 tree's turns pull the goal tree towards the start tree's target) against both trees guided, each by its own field
-(``BidirectionalRouteSampler``), for each field; prints median iterations per family and their geometric mean.
+(``BidirectionalRouteSampler``), and against one field read both ways (the goal tree follows the field to the goal
+mirrored, ``MirroredField``), for each field; prints median iterations per family and their geometric mean.
 
 ``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin and floor (floor 1: the RRT rule, then the informed
 set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of the best cost any of
@@ -27,8 +28,41 @@ import numpy as np
 
 from learning.evaluation.every_planner import Setup, convergence, planner_maps, run_setup, summarize_runs
 from learning.samplers.registry import ModelCache, make_sampler
-from learning.samplers.route_rules import BidirectionalRouteSampler, ConvergingRouteSampler, CorridorSampler
+from learning.samplers.route import RouteSampler
+from learning.samplers.route_rules import (
+    BidirectionalRouteSampler,
+    ConvergingRouteSampler,
+    CorridorSampler,
+    reversed_query,
+)
 from planners import SamplerBase
+
+
+class MirroredField(RouteSampler):
+    """Bound to a reversed query, the field to the start read off the one field to the goal: ``L - to_goal``.
+
+    ``L`` is the field's value at the start (the bound problem's goal). Along the route it is the cost from the
+    start; off it (a dead end) it is too low. One encoder pass serves both trees this way.
+    """
+
+    origin: type = RouteSampler  # the class whose field is mirrored (the route sampler's, or the exact reference's)
+
+    def _fields(self, grid):
+        forward = object.__new__(self.origin)
+        forward.__dict__.update(self.__dict__)
+        forward.problem = reversed_query(self.problem)
+        forward, _ = forward._fields(grid)
+        r, c = grid.cell_of(self.problem.goal)
+        mirrored = np.maximum(forward[r, c] - forward, 0.0)
+        return mirrored, mirrored
+
+
+def mirrored(route: RouteSampler) -> RouteSampler:
+    """``route``'s settings and encoder on ``MirroredField``'s field."""
+    out = object.__new__(MirroredField)
+    out.__dict__.update(route.__dict__)
+    out.origin = type(route)
+    return out
 
 
 class StartTreeOnly(SamplerBase):
@@ -85,7 +119,9 @@ def main(argv=None) -> int:
         return 0
     if args.connect:
         for field in args.fields:
-            for rule, wrap in (("start tree only", StartTreeOnly), ("both trees", BidirectionalRouteSampler)):
+            rules = (("start tree only", StartTreeOnly), ("both trees", BidirectionalRouteSampler),
+                     ("one field, mirrored", lambda r: BidirectionalRouteSampler(r, mirrored(r))))
+            for rule, wrap in rules:
                 per_family = [summarize_runs([run_setup(Setup(field, "RRTConnect", field), p, s, models=models,
                                                         sampler=wrap(make_sampler(field, models=models)))
                                               for p in problems for s in range(args.seeds)])
