@@ -215,3 +215,16 @@ def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run():
     assert cache.misses == 2 and cache.hits == 2  # a field to the goal and one to the start, computed once
     assert runs[0].sampler.reused_seconds == 0 and runs[1].sampler.reused_seconds > 0
     assert np.array_equal(runs[0].sampler.cells, runs[1].sampler.cells) and runs[1].sampler.forward_passes == 2
+
+
+def test_the_every_planner_script_prints_each_planners_rows_and_refuses_bad_counts(capsys):
+    from conftest import load_script
+
+    script = load_script("every_planner")
+    with pytest.raises(SystemExit):
+        script.main(["--n", "0"])
+    assert "--n 0" in capsys.readouterr().err
+    assert script.main(["--n", "1", "--seeds", "1", "--planners", "RRTConnect", "--max-iterations", "300"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 5 * 5 and {line.split()[2] for line in lines if line.startswith("forest ")} == {
+        "uniform", "goal", "route", "route_ablation", "exact_route"}
