@@ -176,12 +176,19 @@ def test_convergence_counts_iterations_to_within_a_share():
 @pytest.mark.parametrize("planner", ["rrt-connect", "prm", "rrt*"])
 def test_the_planning_env_serves_each_planner_and_passes_the_checkers(planner):
     from gymnasium.utils.env_checker import check_env
-    from stable_baselines3 import PPO
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
     env = gym.make("SamplerGym/Planning-v1", planner=planner, source_kwargs={"size": 64}, max_iterations=40)
     check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env.unwrapped, warn=False)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("planner", ["rrt-connect", "prm", "rrt*"])
+def test_sb3s_default_policy_trains_on_the_planning_env_for_each_planner(planner):
+    from stable_baselines3 import PPO
+
+    env = gym.make("SamplerGym/Planning-v1", planner=planner, source_kwargs={"size": 64}, max_iterations=40)
     # SB3's default policy for Dict observations takes the env as it is (a few updates, not a training run)
     PPO("MultiInputPolicy", env, n_steps=16, batch_size=16, n_epochs=1, seed=0, device="cpu").learn(16)
 
