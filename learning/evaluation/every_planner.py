@@ -7,7 +7,7 @@ sampling, its classical option, the learned field, its ablation and the exact re
 ``later_queries`` whether a roadmap built for one query serves others.
 
 Map sets (``planner_maps``): ``validation`` (the five families' validation maps, the only ones settings are
-chosen on), and the held-apart ``shifted`` and ``unseen`` test maps.
+chosen on), and the held-apart ``shifted`` and ``unseen`` test maps and ``movingai`` test scenarios.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -40,7 +41,7 @@ ANYTIME = ("RRTstar", "InformedRRTstar")
 #: The field's samplers of every row: learned, its ablation, the exact reference.
 FIELD_SAMPLERS = ("route", "route_ablation", "exact_route")
 #: Map sets of ``planner_maps``.
-MAP_SETS = ("validation", "shifted", "unseen")
+MAP_SETS = ("validation", "shifted", "unseen", "movingai")
 
 
 def planner_maps(which: str, n: int, *, size: int = 128, tolerance: float = TOLERANCE) -> dict[str, list[Problem]]:
@@ -48,7 +49,8 @@ def planner_maps(which: str, n: int, *, size: int = 128, tolerance: float = TOLE
 
     ``validation``: the five families at ``size``, seeds from ``VALIDATION_SEED0 + VALIDATION_OFFSET``;
     ``shifted``: their shifted generators (sides cycling through ``SHIFTED_SIZES``); ``unseen``: the unseen
-    families at ``size``.
+    families at ``size``; ``movingai``: ``n`` test scenarios of each of the comparison's MovingAI maps
+    (``protocol.MOVINGAI_MAPS``, those in ``planners.movingai_dir()``), pooled as one set.
     """
     if which == "validation":
         return {f: [generate(f, VALIDATION_SEED0 + VALIDATION_OFFSET + i, size, goal_tolerance=tolerance)
@@ -60,6 +62,16 @@ def planner_maps(which: str, n: int, *, size: int = 128, tolerance: float = TOLE
     if which == "unseen":
         return {f"{f} (unseen)": [generate_unseen(f, UNSEEN_SEED0 + i, size, goal_tolerance=tolerance)
                                   for i in range(n)] for f in UNSEEN_FAMILIES}
+    if which == "movingai":
+        from planners.maps.movingai import movingai_dir
+
+        from .protocol import MOVINGAI_MAPS, movingai_queries
+
+        directory = str(movingai_dir())
+        have = [m for m in MOVINGAI_MAPS if any(Path(directory).glob(f"{m}*.scen"))]
+        cache: dict = {}
+        return {"MovingAI (pooled)": [q.problem(directory, tolerance, cache)
+                                      for q in movingai_queries(directory, have, n, 0, tolerance, cache)]}
     raise ValueError(f"map set {which!r}: choose from {', '.join(MAP_SETS)}")
 
 
