@@ -506,6 +506,49 @@ class RouteSampler(SamplerBase):
         """RRT's loop with this sampler's draws compiled in (same samples, less time); None for other planners."""
         return fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
 
+    def for_planner(self, family: str) -> SamplerBase:
+        """This sampler's rule for a planner ``family`` (``planners.base.samplers``), on the same field.
+
+        ``"tree"`` (RRT) and families it does not know: this sampler. ``"bidirectional"`` (RRT-Connect): each
+        tree follows its own field (``BidirectionalRouteSampler``); ``"roadmap"`` (PRM, Lazy-PRM, OB-PRM): the
+        corridor where the fields say a short route runs (``CorridorSampler``); ``"optimizing"`` (RRT*): this
+        sampler to the first solution, then the corridor inside the informed set (``ConvergingRouteSampler``).
+        Planners call it when given the sampler, so ``make_sampler("route")`` serves any of them.
+        """
+        from learning.samplers.route_rules import rule_for
+
+        return rule_for(self, family)
+
+    def draw_tree(self, rng: np.random.Generator, n: int, vertices: np.ndarray, num_vertices: int,
+                  best_distance: float, iteration: int) -> np.ndarray:
+        """``draw`` for a tree given by its parts (for a planner that grows more than one tree).
+
+        The tree is ``vertices[:num_vertices]``, ``best_distance`` their closest distance to this problem's goal,
+        and ``iteration`` the tree's own count of draws.
+        """
+        pts = np.empty((min(n, self.batch), 2))
+        route_draw(self._state, vertices, num_vertices, 0, best_distance, iteration, rng_address(rng), pts,
+                   _NO_ANCHORS)
+        return pts
+
+    def cost_to_go(self, problem: Problem) -> CachedField:
+        """The field this sampler follows on ``problem``: cost-to-go to its goal of every grid cell, in steps.
+
+        The encoder's pass (or the cache's field) as a bind takes it, without the rest of a bind's set-up: a fresh
+        array, ``inf`` on obstacles, with the encoder seconds behind it and whether they were the cache's
+        (``reused``, as ``reused_seconds``).
+        """
+        grid = problem.world
+        if not isinstance(grid, OccupancyGrid):
+            raise InputError("RouteSampler plans on OccupancyGrid problems")
+        probe = self._copy_with(problem=problem)
+        t0 = time.perf_counter()
+        field = np.array(probe._fields(grid)[0], dtype=np.float64)
+        seconds = time.perf_counter() - t0
+        field[grid.obstacles] = np.inf
+        reused = probe.reused_seconds > 0
+        return CachedField(field, probe.reused_seconds if reused else seconds, reused)
+
     def __repr__(self) -> str:
         rest = (f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}, "
                 f"ripple={self.ripple:g}, ripple_growth={self.ripple_growth:g}, sight={self.sight}")

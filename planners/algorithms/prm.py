@@ -21,7 +21,7 @@ from planners.base.planner import (
 )
 from planners.base.problem import Problem
 from planners.base.registry import register_planner
-from planners.base.samplers import Sampler
+from planners.base.samplers import FAMILY_ROADMAP, Sampler
 from planners.kernels import prm as prm_kernels
 from planners.kernels import state as slots
 
@@ -68,6 +68,7 @@ class PRM(Planner):
 
     name = "PRM"
     step_parameter = "max_edge_length"
+    family = FAMILY_ROADMAP
     lazy = False
 
     def __init__(self, problem: Problem, *, max_edge_length: float | None = None, k: int = DEFAULT_K,

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from planners.base.fileio import InputError, env_limit
-from planners.base.planner import Planner, PlannerData, VertexStore, require_problem
+from planners.base.planner import Planner, PlannerData, TreeView, VertexStore, require_problem
 from planners.base.problem import Problem
 from planners.base.registry import register_planner
-from planners.base.samplers import Sampler
+from planners.base.samplers import FAMILY_BIDIRECTIONAL, Sampler
 from planners.kernels import rrt as rrt_kernels
 from planners.kernels import state as slots
 
@@ -144,11 +145,20 @@ class RRTConnect(RRT):
     J. J. Kuffner, S. M. LaValle, "RRT-Connect: An efficient approach to single-query path
     planning", ICRA 2000, doi:10.1109/ROBOT.2000.844730.
 
-    Args: as ``RRT``. ``TreeView`` and anchored samples refer to the start tree.
+    Args: as ``RRT``. ``TreeView`` and anchored samples refer to the start tree; the view's ``tree`` says
+    which tree the next sample extends and its ``goal_tree`` holds the goal tree's states.
     """
 
     name = "RRTConnect"
     fusable_loop = None
+    family = FAMILY_BIDIRECTIONAL
+
+    def view(self) -> TreeView:
+        """As ``Planner.view``, with the tree the next sample extends and the goal tree's states."""
+        v = super().view()
+        goal_tree = self._gtree.X[:int(self._istate[slots.I_N_B])].view()
+        goal_tree.flags.writeable = False
+        return replace(v, tree=int(self._istate[slots.I_SWAP]), goal_tree=goal_tree)
 
     def vertex_counts(self) -> tuple[int, ...]:
         """Vertices of the start tree and of the goal tree (``PlannerData`` tags 0 and 1)."""

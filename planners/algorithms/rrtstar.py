@@ -10,7 +10,7 @@ from planners.algorithms.rrt import RRT
 from planners.base.planner import require_problem
 from planners.base.problem import Problem
 from planners.base.registry import register_planner
-from planners.base.samplers import InformedSampler, Sampler
+from planners.base.samplers import FAMILY_OPTIMIZING, InformedSampler, Sampler
 from planners.kernels import rrtstar as rrtstar_kernels
 from planners.kernels.state import I_N_GOAL
 
@@ -46,6 +46,7 @@ class RRTStar(RRT):
 
     name = "RRTstar"
     anytime = True  # per instance: False with stop_on_first_solution
+    family = FAMILY_OPTIMIZING
     fusable_loop = None
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,

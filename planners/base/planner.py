@@ -13,7 +13,7 @@ from numba.core import event as _nb_event
 
 from planners.base.fileio import check_int
 from planners.base.problem import Problem
-from planners.base.samplers import SampleBatch, Sampler, UniformSampler
+from planners.base.samplers import FAMILY_TREE, SampleBatch, Sampler, UniformSampler
 from planners.datastructures.nn import insert as index_insert
 from planners.kernels import state as slots
 from planners.kernels.cache import announce as announce_compile
@@ -132,6 +132,9 @@ class TreeView:
         best_distance: Its distance to the goal.
         best_cost: Cost of the best solution so far (inf if none).
         iteration: Iterations run so far.
+        tree: Which tree the next sample extends: ``TREE_START`` (0: the start tree, the only tree, or the
+            roadmap) or ``TREE_GOAL`` (1: RRT-Connect's goal tree, on its turns).
+        goal_tree: RRT-Connect's goal-tree states (read-only, rooted at the goal); None for the other planners.
     """
 
     problem: Problem
@@ -142,6 +145,8 @@ class TreeView:
     best_distance: float
     best_cost: float
     iteration: int
+    tree: int = 0
+    goal_tree: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -208,8 +213,9 @@ class VertexStore:
         return True
 
     def add_root(self, q: np.ndarray) -> int:
-        """Make ``q`` vertex 0 of an empty store (no parent, cost 0), as ``planners.kernels.tree.add_vertex``
-        would; returns the vertex count, 1.
+        """Make ``q`` vertex 0 of an empty store (no parent, cost 0); returns the vertex count, 1.
+
+        As ``planners.kernels.tree.add_vertex`` would.
         """
         q = np.array(q, dtype=np.float64)  # a writable copy: the argument types the kernels compile for
         self.X[0] = q
@@ -251,6 +257,9 @@ class Planner(abc.ABC):
     anytime: ClassVar[bool] = False
     #: The compiled loop a sampler may fuse its draws into (see ``Sampler``); None: draws only.
     fusable_loop: ClassVar[str | None] = None
+    #: How the planner uses its samples, told to a sampler's ``for_planner`` hook before binding (``Sampler``):
+    #: one of ``planners.base.samplers.PLANNER_FAMILIES``.
+    family: ClassVar[str] = FAMILY_TREE
 
     def __init__(self, problem: Problem, *, sampler: Sampler | None = None, seed: int | None = None) -> None:
         require_problem(problem)
@@ -266,6 +275,13 @@ class Planner(abc.ABC):
         at_step = getattr(sampler, "at_step", None)
         if self.step_parameter == "step_size" and callable(at_step):  # the step is the planner's (``Sampler``)
             sampler = at_step(self.step_size)
+        for_planner = getattr(sampler, "for_planner", None)
+        if callable(for_planner):  # the sampler's rule for this planner family (``Sampler``)
+            ruled = for_planner(self.family)
+            if not isinstance(ruled, Sampler):
+                raise TypeError(f"{type(sampler).__name__}.for_planner({self.family!r}) returned a "
+                                f"{type(ruled).__name__}, not a Sampler")
+            sampler = ruled
         self.problem = problem
         self.seed = int(seed)
         self._sampler_spec = sampler

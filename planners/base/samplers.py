@@ -20,14 +20,28 @@ A sampler whose draws are compiled may also define ``fuse(planner)``. A planner 
 compiled loop, so a solve never returns to Python between batches. ``planners.fused`` is the way to
 build one: the sampler gives a compiled draw function and ``planners.fused.fuse_rrt`` returns the
 ``run``, with the planner's refill schedule and generator stream kept. The planner is passed at each call
-rather than held by ``run``, so a planner and
-its loop form no reference cycle and are freed as soon as they go out of scope. A fused loop must
-draw exactly what ``draw`` would: it changes the speed, never the run.
+rather than held by ``run``, so a planner and its loop form no reference cycle and are freed as soon as they go
+out of scope. A fused loop must draw exactly what ``draw`` would: it changes the speed, never the run.
 
 A sampler that measures in the planner's step (how far ahead it aims, what a map cell is worth) may also define
 ``at_step(step_size) -> Sampler``: the same sampler at that step. A planner of the RRT family (its step is
 ``step_size``) calls it with its own step before binding, so the step belongs to the planner and a user passes
 it once, there.
+
+A sampler whose rule depends on how the planner uses its samples may also define ``for_planner(family) ->
+Sampler``: the sampler to bind for a planner of that family (``Planner.family``, one of ``PLANNER_FAMILIES``).
+Every planner calls it, after ``at_step``, before binding, so one sampler object serves every planner and a user
+never picks a per-planner variant. The families:
+
+* ``"tree"`` (RRT): one tree grows from the start; samples pull it.
+* ``"bidirectional"`` (RRT-Connect): two trees take turns; each draw is for one of them, and ``TreeView.tree``
+  says which (``TREE_START`` or ``TREE_GOAL``), ``TreeView.goal_tree`` holds the goal tree's states. A sampler
+  that reads them returns one sample per draw (a batch would span both trees' turns).
+* ``"roadmap"`` (PRM, Lazy-PRM, OB-PRM): samples become roadmap vertices wherever they are free; no tree to follow.
+* ``"optimizing"`` (RRT*, Informed RRT*): one tree, and after the first solution the samples should shorten it
+  (``TreeView.best_cost``).
+
+A family a sampler does not know should get its plain rule back (``for_planner`` returns ``self``).
 """
 
 from __future__ import annotations
@@ -43,6 +57,16 @@ if TYPE_CHECKING:
     from planners.base.planner import TreeView
     from planners.base.problem import Problem
 
+
+#: ``Planner.family`` values, told to a sampler's ``for_planner`` (see the module docstring).
+FAMILY_TREE = "tree"
+FAMILY_BIDIRECTIONAL = "bidirectional"
+FAMILY_ROADMAP = "roadmap"
+FAMILY_OPTIMIZING = "optimizing"
+PLANNER_FAMILIES = (FAMILY_TREE, FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP, FAMILY_OPTIMIZING)
+#: ``TreeView.tree``: the tree the next sample extends.
+TREE_START = 0
+TREE_GOAL = 1
 
 ANCHOR_NONE = 0
 ANCHOR_WORLD = 1

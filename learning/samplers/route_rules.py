@@ -1,0 +1,266 @@
+"""The route field's rule for each planner family: one field, read as each kind of planner needs it.
+
+``RouteSampler`` follows the tree vertex of lowest cost-to-go, which is what RRT needs. The same field (the
+route encoder's cost-to-go over the whole map; the straight line for its ablation; the exact grid distance for
+the reference) serves the other planners through ``RouteSampler.for_planner``, which every planner calls
+before binding (``planners.base.samplers``), so ``make_sampler("route")`` does the right thing whatever it is
+handed to:
+
+- ``BidirectionalRouteSampler`` (RRT-Connect): the start tree follows the field to the goal and the goal tree
+  a field to the start (a second pass with start and goal swapped), each by ``RouteSampler``'s rule, uniform
+  floor included; each draw serves the tree whose turn it is (``TreeView.tree``).
+- ``CorridorSampler`` (PRM, Lazy-PRM, OB-PRM): uniform over the cells whose cost from the start plus cost to
+  the goal is within ``margin`` of the lowest, a corridor around the routes the field calls short, with a
+  ``floor`` share of uniform samples so the roadmap stays complete.
+- ``ConvergingRouteSampler`` (RRT*, Informed RRT*): ``RouteSampler``'s rule to the first solution, then the
+  corridor cells inside the informed set (the states that could lie on a shorter path), with a ``floor`` share
+  from the informed set itself (``InformedSampler``).
+
+The settings (``CORRIDOR_SETTINGS``, ``CONVERGING_SETTINGS``; the straight-line ablation's own,
+``ABLATION_CORRIDOR``, ``ABLATION_CONVERGING``) were chosen on validation maps
+(``scripts/experiments/tune_route_rules.py``); the exact reference takes the learned field's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from learning.samplers.route import RouteSampler
+from planners import InformedSampler, OccupancyGrid, Problem
+from planners.base.fileio import InputError, short_repr
+from planners.base.samplers import (
+    FAMILY_BIDIRECTIONAL,
+    FAMILY_OPTIMIZING,
+    FAMILY_ROADMAP,
+    TREE_GOAL,
+    SampleBatch,
+    SamplerBase,
+)
+
+#: The roadmaps' corridor, chosen on the validation maps (``scripts/experiments/tune_route_rules.py``): cells on
+#: routes within 30% of the shortest the field sees (plus one step), and 30% of the samples uniform. The exact
+#: reference takes the same settings.
+CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3}
+#: The straight-line ablation's corridor, tuned for it on the same maps: an ellipse about the start and the
+#: goal, 60% longer than the straight line.
+ABLATION_CORRIDOR = {"margin": 0.6, "floor": 0.3}
+#: RRT*'s corridor after the first solution, chosen on the validation maps (``tune_route_rules.py --rrtstar``):
+#: cells within 10% of the shortest route the field sees, and a tenth of the samples from the informed set.
+CONVERGING_SETTINGS = {"margin": 0.1, "floor": 0.1}
+#: The straight-line ablation's, tuned for it on the same maps: an ellipse twice as long as the straight line.
+ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1}
+#: Corridor cells are those within ``margin`` times the shortest route plus this many steps.
+WIDTH_STEPS = 1.0
+#: Samples per draw once RRT* has a solution (the informed set shrinks as the solution improves).
+CONVERGING_BATCH = 64
+
+
+def rule_for(route: RouteSampler, family: str) -> SamplerBase:
+    """``route``'s rule for planner ``family`` (``RouteSampler.for_planner``); ``route`` itself for RRT."""
+    if family == FAMILY_BIDIRECTIONAL:
+        return BidirectionalRouteSampler(route)
+    straight = route.net is None and type(route) is RouteSampler  # the straight line: the ablation's own settings
+    if family == FAMILY_ROADMAP:
+        return CorridorSampler(route, **(ABLATION_CORRIDOR if straight else CORRIDOR_SETTINGS))
+    if family == FAMILY_OPTIMIZING:
+        return ConvergingRouteSampler(route, **(ABLATION_CONVERGING if straight else CONVERGING_SETTINGS))
+    return route
+
+
+def reversed_query(problem: Problem) -> Problem:
+    """``problem`` with start and goal swapped: the query whose cost-to-go is a cost from the start."""
+    return problem.with_query(problem.goal, problem.start)
+
+
+def _check_share(who: str, name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not 0 <= value <= 1:
+        raise InputError(f"{who}: {name} = {short_repr(value)}, expected a share from 0 to 1")
+    return float(value)
+
+
+def _check_margin(who: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not 0 <= value < math.inf:
+        raise InputError(f"{who}: margin = {short_repr(value)}, expected a finite number >= 0 (a share of the route)")
+    return float(value)
+
+
+def corridor_cells(to_goal: np.ndarray, to_start: np.ndarray, margin: float, width: float = WIDTH_STEPS) -> np.ndarray:
+    """Flat indices of the cells whose ``to_start + to_goal`` is within ``(1 + margin)`` x the lowest + ``width``.
+
+    The fields are in steps, ``inf`` where blocked or unreached; no cell finite: none.
+    """
+    total = to_goal + to_start
+    finite = np.isfinite(total)
+    if not finite.any():
+        return np.empty(0, dtype=np.int64)
+    best = float(total[finite].min())
+    return np.flatnonzero(finite & (total <= best * (1.0 + margin) + width))
+
+
+def cell_points(grid: OccupancyGrid, cells: np.ndarray, u: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """States in the grid's ``cells`` (flat indices, not empty) from uniforms ``u`` (m, 3): a cell, then a point in it.
+
+    They are kept inside the sampling box ``[low, high)``.
+    """
+    pick = cells[np.minimum((u[:, 0] * len(cells)).astype(np.int64), len(cells) - 1)]
+    rows, cols = np.divmod(pick, grid.width)
+    pts = np.stack([cols + u[:, 1], rows + u[:, 2]], axis=1) * grid.resolution + np.asarray(grid.origin)
+    return np.minimum(np.maximum(pts, low), np.nextafter(high, low))
+
+
+class BidirectionalRouteSampler(SamplerBase):
+    """RRT-Connect's rule: each tree follows the field to the other end (see the module docstring).
+
+    Args:
+        route: The route sampler whose rule and field each tree follows (at the planner's step).
+        backward: The sampler the goal tree follows, bound to the query with start and goal swapped; None:
+            ``route`` (its field to the start).
+    """
+
+    def __init__(self, route: RouteSampler, backward: RouteSampler | None = None) -> None:
+        self.route, self.backward = route, backward
+
+    def _setup(self) -> None:
+        p = self.problem
+        if not isinstance(p.world, OccupancyGrid):
+            raise InputError("BidirectionalRouteSampler plans on OccupancyGrid problems")
+        self.to_goal = self.route.bind(p)
+        self.to_start = (self.route if self.backward is None else self.backward).bind(reversed_query(p))
+        self._start = np.asarray(p.start, dtype=np.float64)
+        self._seen, self._closest = 0, math.inf  # goal-tree vertices looked at, their closest distance to the start
+
+    @property
+    def forward_passes(self) -> int:
+        """The encoder's passes this query took (two fields)."""
+        return self.to_goal.forward_passes + self.to_start.forward_passes
+
+    @property
+    def reused_seconds(self) -> float:
+        """Encoder seconds of fields taken from a cache (see ``RouteSampler``)."""
+        return self.to_goal.reused_seconds + self.to_start.reused_seconds
+
+    def draw(self, rng, n, view):
+        # the trees take turns, so each has drawn ``iteration // 2`` times before: its own iteration count
+        if view.tree == TREE_GOAL and view.goal_tree is not None:
+            X = view.goal_tree
+            m = len(X)
+            if m > self._seen:  # only the vertices added since the last look
+                d = np.sqrt(((X[self._seen:m] - self._start) ** 2).sum(axis=1)).min()
+                self._closest, self._seen = min(self._closest, float(d)), m
+            return self.to_start.draw_tree(rng, n, X, m, self._closest, view.iteration // 2)
+        return self.to_goal.draw_tree(rng, n, view.vertices, view.num_vertices, view.best_distance,
+                                      view.iteration // 2)
+
+    def __repr__(self) -> str:
+        return f"BidirectionalRouteSampler({self.route!r})"
+
+
+class _CorridorRule(SamplerBase):
+    """What the corridor's rules share: the route sampler, a corridor ``margin`` and a ``floor``, checked."""
+
+    def __init__(self, route: RouteSampler, margin: float, floor: float) -> None:
+        self.route = route
+        self.margin = _check_margin(type(self).__name__, margin)
+        self.floor = _check_share(type(self).__name__, "floor", floor)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.route!r}, margin={self.margin:g}, floor={self.floor:g})"
+
+
+class CorridorSampler(_CorridorRule):
+    """Roadmaps' rule: uniform over the corridor where the field says a short route runs, with a uniform floor.
+
+    The corridor is the free cells whose cost from the start plus cost to the goal (two passes of the field,
+    the second with start and goal swapped) is within ``margin`` of the lowest (``corridor_cells``). Every
+    sample takes 4 uniforms from the planner's generator, so the stream does not depend on batch sizes.
+
+    Args:
+        route: The route sampler whose field is read.
+        margin: How much longer than the shortest route a route through a corridor cell may be (0.3: 30%).
+        floor: Share of samples uniform over the whole sampling box.
+    """
+
+    def __init__(self, route: RouteSampler, margin: float = CORRIDOR_SETTINGS["margin"],
+                 floor: float = CORRIDOR_SETTINGS["floor"]) -> None:
+        super().__init__(route, margin, floor)
+
+    def _setup(self) -> None:
+        p = self.problem
+        grid = p.world
+        if not isinstance(grid, OccupancyGrid):
+            raise InputError("CorridorSampler plans on OccupancyGrid problems")
+        to_goal, to_start = self.route.cost_to_go(p), self.route.cost_to_go(reversed_query(p))
+        self.cells = corridor_cells(to_goal.field, to_start.field, self.margin)
+        self.forward_passes = 0 if self.route.net is None else 2 * self.route.symmetry_passes
+        #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
+        self.reused_seconds = sum(f.seconds for f in (to_goal, to_start) if f.reused)
+
+    def draw(self, rng, n, view):
+        u = rng.random((n, 4))
+        pts = self._uniform(u[:, 2:4].copy())
+        if len(self.cells):
+            guided = u[:, 0] >= self.floor
+            pts[guided] = cell_points(self.problem.world, self.cells, u[guided, 1:4], self.low, self.high)
+        return pts
+
+
+class ConvergingRouteSampler(_CorridorRule):
+    """RRT*'s rule: ``RouteSampler``'s to the first solution, then the corridor inside the informed set.
+
+    Once a solution of cost ``c`` exists, a sample is, with probability ``floor``, from the informed set
+    (``InformedSampler``: states with ``|x - start| + |x - goal| <= c + tolerance``), and otherwise uniform
+    over the corridor cells (``CorridorSampler``, at ``margin``) whose centre lies in that set, within half a
+    cell's diagonal. Where no corridor cell is left in it, every sample is informed.
+
+    Args:
+        route: The route sampler whose rule runs to the first solution and whose field makes the corridor.
+        margin, floor: As ``CorridorSampler``'s, after the first solution.
+    """
+
+    def __init__(self, route: RouteSampler, margin: float = CONVERGING_SETTINGS["margin"],
+                 floor: float = CONVERGING_SETTINGS["floor"]) -> None:
+        super().__init__(route, margin, floor)
+
+    def _setup(self) -> None:
+        p = self.problem
+        self.first = self.route.bind(p)  # refuses a world that is not an OccupancyGrid
+        to_start = self.route.cost_to_go(reversed_query(p))
+        self.cells = corridor_cells(self.first.field, to_start.field, self.margin)
+        #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
+        self.reused_seconds = self.first.reused_seconds + (to_start.seconds if to_start.reused else 0.0)
+        self.informed = InformedSampler().bind(p)
+        grid = p.world
+        rows, cols = np.divmod(self.cells, grid.width)
+        centres = (np.stack([cols, rows], axis=1) + 0.5) * grid.resolution + np.asarray(grid.origin)
+        # each corridor cell's start-to-goal distance through its centre, less half a cell's diagonal
+        self._through = (np.linalg.norm(centres - p.start, axis=1) + np.linalg.norm(centres - p.goal, axis=1)
+                         - math.sqrt(2.0) * grid.resolution)
+        self._cost, self._inside = math.inf, self.cells
+
+    @property
+    def forward_passes(self) -> int:
+        """The encoder's passes this query took (two fields)."""
+        return self.first.forward_passes + (0 if self.route.net is None else self.route.symmetry_passes)
+
+    def draw(self, rng, n, view):
+        if not math.isfinite(view.best_cost):
+            return self.first.draw(rng, n, view)
+        c = view.best_cost + self.problem.goal_tolerance
+        if c < self._cost:  # the informed set shrank: keep the corridor cells still in it
+            self._cost, self._inside = c, self.cells[self._through <= c]
+        m = min(n, CONVERGING_BATCH)
+        u = rng.random((m, 4))
+        informed = u[:, 0] < self.floor if len(self._inside) else np.ones(m, dtype=bool)
+        k = int(informed.sum())
+        pts = [cell_points(self.problem.world, self._inside, u[~informed, 1:4], self.low, self.high)] if k < m else []
+        cands = [np.ones(m - k, dtype=np.int64)] if k < m else []
+        while k > 0:  # the informed sampler returns at most its own batch per draw
+            got = self.informed.draw(rng, k, view)
+            pts.append(got.points if isinstance(got, SampleBatch) else got)
+            cands.append(got.candidates if isinstance(got, SampleBatch) and got.candidates is not None
+                         else np.ones(len(pts[-1]), dtype=np.int64))
+            k -= len(pts[-1])
+        return SampleBatch(np.concatenate(pts), None, np.concatenate(cands))
+

@@ -1,0 +1,144 @@
+"""The route field's rules for other planners, chosen on validation maps.
+
+    python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2                 # the roadmaps' corridor
+    python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2 --connect       # RRT-Connect: one tree or two
+    python scripts/experiments/tune_route_rules.py --maps 2 --seeds 2 --rrtstar       # RRT*'s rule after a solution
+
+``--connect``: RRT-Connect with the RRT rule handed as it is (it guides the start tree, and its samples on the goal
+tree's turns pull the goal tree towards the start tree's target) against both trees guided, each by its own field
+(``BidirectionalRouteSampler``), and against one field read both ways (the goal tree follows the field to the goal
+mirrored, ``MirroredField``), for each field; prints median iterations per family and their geometric mean.
+
+``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin and floor (floor 1: the RRT rule, then the informed
+set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of the best cost any of
+them reached (``learning.evaluation.every_planner.convergence``), per family, and their geometric means.
+
+For each field (the route encoder, its straight-line ablation, the exact cost-to-go) and each corridor
+``margin`` and uniform ``floor`` of the grid, PRM and Lazy-PRM run on the five families' validation maps
+(``learning.evaluation.every_planner.planner_maps("validation")``; never test maps); prints the median samples per
+family and their geometric mean, the score the settings are chosen by (lowest), with the success share.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+
+import numpy as np
+
+from learning.evaluation.every_planner import Setup, convergence, planner_maps, run_setup, summarize_runs
+from learning.samplers.registry import ModelCache, make_sampler
+from learning.samplers.route import RouteSampler
+from learning.samplers.route_rules import (
+    BidirectionalRouteSampler,
+    ConvergingRouteSampler,
+    CorridorSampler,
+    reversed_query,
+)
+from planners import SamplerBase
+
+
+class MirroredField(RouteSampler):
+    """Bound to a reversed query, the field to the start read off the one field to the goal: ``L - to_goal``.
+
+    ``L`` is the field's value at the start (the bound problem's goal). Along the route it is the cost from the
+    start; off it (a dead end) it is too low. One encoder pass serves both trees this way.
+    """
+
+    origin: type = RouteSampler  # the class whose field is mirrored (the route sampler's, or the exact reference's)
+
+    def _fields(self, grid):
+        forward = object.__new__(self.origin)
+        forward.__dict__.update(self.__dict__)
+        forward.problem = reversed_query(self.problem)
+        forward, _ = forward._fields(grid)
+        r, c = grid.cell_of(self.problem.goal)
+        mirrored = np.maximum(forward[r, c] - forward, 0.0)
+        return mirrored, mirrored
+
+
+def mirrored(route: RouteSampler) -> RouteSampler:
+    """``route``'s settings and encoder on ``MirroredField``'s field."""
+    out = object.__new__(MirroredField)
+    out.__dict__.update(route.__dict__)
+    out.origin = type(route)
+    return out
+
+
+class StartTreeOnly(SamplerBase):
+    """The route sampler's RRT rule handed to RRT-Connect as it is (no ``for_planner``): the start tree's."""
+
+    def __init__(self, route) -> None:
+        self.route = route
+
+    def bind(self, problem):
+        return self.route.bind(problem)
+
+    def draw(self, rng, n, view):
+        raise NotImplementedError("bound, this is the route sampler itself")
+
+
+def geomean_row(label: str, per_family: list[dict]) -> str:
+    """A printed row: the geometric mean of the families' median iterations, each, and the lowest success."""
+    medians = [r["iterations"] for r in per_family]
+    score = float(np.exp(np.mean(np.log(medians))))
+    return (f"{label}  geomean {score:7.1f}  per family {' '.join(f'{m:6.0f}' for m in medians)}  "
+            f"success {min(r['success'] for r in per_family):.2f}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--maps", type=int, default=6, help="validation maps per family")
+    ap.add_argument("--seeds", type=int, default=2, help="planner seeds per map")
+    ap.add_argument("--margins", type=float, nargs="+", default=[0.1, 0.3, 0.6, 1.0])
+    ap.add_argument("--floors", type=float, nargs="+", default=[0.1, 0.3])
+    ap.add_argument("--fields", nargs="+", default=["route", "route_ablation", "exact_route"])
+    ap.add_argument("--planners", nargs="+", default=["PRM", "LazyPRM"])
+    ap.add_argument("--connect", action="store_true", help="RRT-Connect: the start tree guided, or both")
+    ap.add_argument("--rrtstar", action="store_true", help="RRT*: the rule after the first solution")
+    ap.add_argument("--budget", type=int, default=3000, help="RRT* iterations per run with --rrtstar")
+    args = ap.parse_args(argv)
+    maps = planner_maps("validation", args.maps)
+    models = ModelCache()
+    if args.rrtstar:
+        for field in args.fields:
+            setups = [Setup("RRT rule throughout", "RRTstar", field, make=lambda f=field: StartTreeOnly(
+                make_sampler(f, models=models)))]
+            setups += [Setup(f"margin {m:g} floor {fl:g}", "RRTstar", field,
+                             make=lambda f=field, m=m, fl=fl: ConvergingRouteSampler(make_sampler(f, models=models), m,
+                                                                                     fl))
+                       for m, fl in itertools.product(args.margins, args.floors)]
+            rows = convergence(maps, setups, seeds=tuple(range(args.seeds)), budget=args.budget)
+            for s in setups:
+                mine = [r for r in rows if r["sampler"] == s.label]
+                for share in ("0.05", "0.01"):
+                    its = [r[f"iterations_{share}"] for r in mine]
+                    mean = float(np.exp(np.mean(np.log(its))))
+                    print(f"RRTstar {field:15s} {s.label:22s} within {share}: geomean {mean:7.0f}  "
+                          f"per family {' '.join(f'{i:5.0f}' for i in its)}", flush=True)
+        return 0
+    if args.connect:
+        for field in args.fields:
+            rules = (("start tree only", StartTreeOnly), ("both trees", BidirectionalRouteSampler),
+                     ("one field, mirrored", lambda r: BidirectionalRouteSampler(r, mirrored(r))))
+            for rule, wrap in rules:
+                per_family = [summarize_runs([run_setup(Setup(field, "RRTConnect", field), p, s, models=models,
+                                                        sampler=wrap(make_sampler(field, models=models)))
+                                              for p in problems for s in range(args.seeds)])
+                              for problems in maps.values()]
+                print(geomean_row(f"RRTConnect {field:15s} {rule:16s}", per_family), flush=True)
+        return 0
+    for planner in args.planners:
+        for field, margin, floor in itertools.product(args.fields, args.margins, args.floors):
+            per_family = [summarize_runs([run_setup(Setup(field, planner, field), p, s, models=models,
+                                                    sampler=CorridorSampler(make_sampler(field, models=models),
+                                                                            margin, floor))
+                                          for p in problems for s in range(args.seeds)])
+                          for problems in maps.values()]
+            print(geomean_row(f"{planner:8s} {field:15s} margin {margin:4.2f} floor {floor:4.2f}", per_family),
+                  flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,237 @@
+"""The route field with every planner family: the ``for_planner`` hook, RRT-Connect's view, and the field's rules."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import envs  # noqa: F401 - registers the environments
+from learning.evaluation.every_planner import Setup, iterations_within, run_setup
+from learning.samplers.registry import make_sampler
+from learning.samplers.route import RouteSampler
+from learning.samplers.route_rules import (
+    BidirectionalRouteSampler,
+    ConvergingRouteSampler,
+    CorridorSampler,
+    corridor_cells,
+    reversed_query,
+)
+from planners import OccupancyGrid, Problem, TreeView, UniformSampler, make_planner
+from planners.base.fileio import InputError
+from planners.base.samplers import PLANNER_FAMILIES, TREE_GOAL, TREE_START
+from planners.maps.gridsearch import distance_field
+
+
+def wall_problem(size: int = 32) -> Problem:
+    """A small map split by a wall with one gap near its bottom, start and goal on either side."""
+    obs = np.zeros((size, size), dtype=bool)
+    obs[:, size // 2 - 1:size // 2 + 1] = True
+    obs[2:5, size // 2 - 1:size // 2 + 1] = False
+    return Problem(OccupancyGrid(obs), (4.5, size - 4.5), (size - 4.5, size - 4.5), goal_tolerance=2.0, name="wall")
+
+
+class Recorder(UniformSampler):
+    """Uniform sampling that records the family it was told."""
+
+    told: list = []
+
+    def for_planner(self, family):
+        Recorder.told.append(family)
+        return self
+
+
+FAMILY_OF = {"RRT": "tree", "RRTConnect": "bidirectional", "PRM": "roadmap", "LazyPRM": "roadmap",
+             "OBPRM": "roadmap", "RRTstar": "optimizing", "InformedRRTstar": "optimizing"}
+
+
+@pytest.mark.parametrize("planner", sorted(FAMILY_OF))
+def test_every_planner_tells_the_sampler_its_family(planner):
+    Recorder.told = []
+    make_planner(planner, wall_problem(), sampler=Recorder(), seed=0)
+    assert Recorder.told == [FAMILY_OF[planner]] and FAMILY_OF[planner] in PLANNER_FAMILIES
+
+
+def test_a_for_planner_hook_that_returns_no_sampler_is_refused_by_name():
+    class Broken(UniformSampler):
+        def for_planner(self, family):
+            return "nothing"
+
+    with pytest.raises(TypeError, match="Broken.for_planner"):
+        make_planner("RRT", wall_problem(), sampler=Broken(), seed=0)
+
+
+def test_rrt_connect_tells_which_tree_the_next_sample_extends():
+    seen = []
+
+    class Watcher(UniformSampler):
+        def draw(self, rng, n, view):
+            seen.append((view.iteration, view.tree, None if view.goal_tree is None else len(view.goal_tree)))
+            return self._uniform(rng.random((1, 2)))
+
+    planner = make_planner("RRTConnect", wall_problem(), sampler=Watcher(), seed=3, step_size=2.0)
+    planner.solve(max_iterations=6)
+    assert [t for _, t, _ in seen] == [TREE_START, TREE_GOAL] * 3
+    assert all(it == i for i, (it, _, _) in enumerate(seen)) and seen[0][2] == 1
+    assert make_planner("RRT", wall_problem(), seed=0).view().goal_tree is None
+
+
+@pytest.mark.parametrize("name", ["route_ablation", "exact_route"])
+@pytest.mark.parametrize("planner, rule", [("RRT", RouteSampler), ("RRTConnect", BidirectionalRouteSampler),
+                                           ("PRM", CorridorSampler), ("LazyPRM", CorridorSampler),
+                                           ("RRTstar", ConvergingRouteSampler)])
+def test_one_sampler_takes_each_planners_rule_and_solves_the_same_way_twice(name, planner, rule):
+    p = wall_problem()
+    results = []
+    for _ in range(2):
+        solver = make_planner(planner, p, sampler=make_sampler(name, step_size=2.0), seed=5, extension_step=2.0)
+        assert isinstance(solver.sampler, rule)
+        r = solver.solve(max_iterations=400 if planner == "RRTstar" else 3000)
+        assert r.solved and p.world.path_valid(r.path)
+        results.append((r.iterations, r.collision_checks, r.cost))
+    assert results[0] == results[1]
+
+
+def test_the_learned_field_serves_rrt_connect_and_prm():
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("rooms", VALIDATION_SEED0 + 7, 64, goal_tolerance=4.0)
+    for planner in ("RRTConnect", "PRM"):
+        r = make_planner(planner, p, sampler=make_sampler("route"), seed=0, extension_step=4.0).solve(
+            max_iterations=5000)
+        assert r.solved and p.world.path_valid(r.path)
+
+
+def test_the_exact_corridor_holds_the_shortest_route_and_nothing_longer():
+    p = wall_problem()
+    to_goal = distance_field(p.world.obstacles, p.world.cell_of(p.goal))
+    to_start = distance_field(p.world.obstacles, p.world.cell_of(p.start))
+    cells = corridor_cells(to_goal, to_start, 0.0, width=1e-9)  # sums along two routes differ by rounding
+    total = (to_goal + to_start).ravel()
+    assert len(cells) and np.allclose(total[cells], np.nanmin(np.where(np.isfinite(total), total, np.nan)))
+    gap = np.ravel_multi_index((4, 15), p.world.obstacles.shape)  # every shortest route passes the gap's top cell
+    assert gap in cells
+    assert len(corridor_cells(np.full((2, 2), np.inf), np.full((2, 2), np.inf), 0.3)) == 0
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), margin=st.sampled_from([0.0, 0.3, 1.0]))
+def test_corridor_samples_lie_in_corridor_cells_without_a_floor(seed, margin):
+    p = wall_problem()
+    bound = CorridorSampler(make_sampler("exact_route", step_size=2.0), margin, 0.0).bind(p)
+    pts = bound.draw(np.random.default_rng(seed), 64, None)
+    rows, cols = np.floor(pts[:, 1]).astype(int), np.floor(pts[:, 0]).astype(int)
+    assert np.isin(rows * 32 + cols, bound.cells).all()
+    again = CorridorSampler(make_sampler("exact_route", step_size=2.0), margin, 0.0).bind(p)
+    assert np.array_equal(again.draw(np.random.default_rng(seed), 64, None), pts)  # seeded: the same samples
+
+
+def test_the_goal_tree_follows_the_field_to_the_start():
+    p = wall_problem()
+    bound = BidirectionalRouteSampler(make_sampler("exact_route", step_size=2.0)).bind(p)
+    view = TreeView(p, np.array([p.start]), None, 1, 0, math.dist(p.start, p.goal), math.inf, 1, tree=TREE_GOAL,
+                    goal_tree=np.array([p.goal]))
+    pts = np.concatenate([bound.draw(np.random.default_rng(s), 1, view) for s in range(40)])
+    # the route to the start leaves the goal downwards, to the gap near row 3
+    assert np.median(pts[:, 1]) < p.goal[1] - 2
+
+
+def test_after_a_solution_rrtstar_samples_stay_in_the_informed_set():
+    p = wall_problem()
+    bound = ConvergingRouteSampler(make_sampler("exact_route", step_size=2.0), 0.3, 0.3).bind(p)
+    cost = 40.0
+    view = TreeView(p, np.array([p.start]), np.array([-1]), 1, 0, 1.0, cost, 100)
+    out = bound.draw(np.random.default_rng(0), 64, view)
+    through = np.linalg.norm(out.points - p.start, axis=1) + np.linalg.norm(out.points - p.goal, axis=1)
+    assert len(out.points) == 64 and (through <= cost + p.goal_tolerance + 2 * math.sqrt(2)).all()
+    assert out.candidates.sum() >= 64
+
+
+def test_bad_corridor_settings_are_refused_by_name():
+    with pytest.raises(InputError, match="margin"):
+        CorridorSampler(make_sampler("route_ablation"), -1.0)
+    with pytest.raises(InputError, match="floor"):
+        CorridorSampler(make_sampler("route_ablation"), 0.3, 1.5)
+
+
+def test_the_reversed_query_swaps_start_and_goal():
+    p = wall_problem()
+    q = reversed_query(p)
+    assert np.array_equal(q.start, p.goal) and np.array_equal(q.goal, p.start) and q.goal_tolerance == 2.0
+
+
+def test_convergence_counts_iterations_to_within_a_share():
+    trace = np.array([np.inf, 120.0, 104.0, 100.5])
+    assert iterations_within(trace, 100.0, 0.05, 25) == 75
+    assert iterations_within(trace, 100.0, 0.01, 25) == 100
+    assert iterations_within(trace, 100.0, 0.001, 25) == math.inf
+    run = run_setup(Setup("uniform", "RRTstar", None), wall_problem(), 0, max_iterations=2000, step=2.0)
+    assert run["solved"] and run["iterations"] < 2000  # stopped at its first solution
+
+
+@pytest.mark.parametrize("planner", ["rrt-connect", "prm", "rrt*"])
+def test_the_planning_env_serves_each_planner_and_passes_the_checkers(planner):
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    env = gym.make("SamplerGym/Planning-v1", planner=planner, source_kwargs={"size": 64}, max_iterations=40)
+    check_env(env.unwrapped, skip_render_check=True)
+    sb3_check_env(env.unwrapped, warn=False)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("planner", ["rrt-connect", "prm", "rrt*"])
+def test_sb3s_default_policy_trains_on_the_planning_env_for_each_planner(planner):
+    from stable_baselines3 import PPO
+
+    env = gym.make("SamplerGym/Planning-v1", planner=planner, source_kwargs={"size": 64}, max_iterations=40)
+    # SB3's default policy for Dict observations takes the env as it is (a few updates, not a training run)
+    PPO("MultiInputPolicy", env, n_steps=16, batch_size=16, n_epochs=1, seed=0, device="cpu").learn(16)
+
+
+def test_a_roadmap_query_moves_the_corridor_and_later_queries_are_counted():
+    from learning.evaluation.every_planner import later_queries, other_queries
+
+    p = wall_problem()
+    pairs = other_queries(p, 2, seed=0)
+    assert len(pairs) == 2 and all(p.world.path_valid(np.array([s, s])) for s, _ in pairs)
+    planner = make_planner("PRM", p, sampler=make_sampler("exact_route", step_size=2.0), seed=0)
+    planner.solve(max_iterations=3000)
+    before = planner.sampler.cells
+    s, g = pairs[0]
+    r = planner.query(s, g, max_iterations=3000)
+    assert r.solved and not np.array_equal(planner.sampler.cells, before)
+    rows = later_queries({"wall": [p]}, [Setup("exact_route", "PRM", "exact_route", (("step_size", 2.0),))],
+                         queries=2, seeds=(0,), max_iterations=3000)
+    assert rows[0]["success"] == 1.0 and 0.0 <= rows[0]["served"] <= 1.0 and rows[0]["later"] >= 0
+
+
+def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run():
+    from learning.samplers.route import FieldCache, shipped_sampler
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("maze", VALIDATION_SEED0 + 11, 64, goal_tolerance=4.0)
+    cache = FieldCache()
+    route = shipped_sampler(device="cpu")
+    route.fields = cache
+    runs = [make_planner("PRM", p, sampler=route, seed=0) for _ in range(2)]
+    assert cache.misses == 2 and cache.hits == 2  # a field to the goal and one to the start, computed once
+    assert runs[0].sampler.reused_seconds == 0 and runs[1].sampler.reused_seconds > 0
+    assert np.array_equal(runs[0].sampler.cells, runs[1].sampler.cells) and runs[1].sampler.forward_passes == 2
+
+
+def test_the_every_planner_script_prints_each_planners_rows_and_refuses_bad_counts(capsys):
+    from conftest import load_script
+
+    script = load_script("every_planner")
+    with pytest.raises(SystemExit):
+        script.main(["--n", "0"])
+    assert "--n 0" in capsys.readouterr().err
+    assert script.main(["--n", "1", "--seeds", "1", "--planners", "RRTConnect", "--max-iterations", "300"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 5 * 5 and {line.split()[2] for line in lines if line.startswith("forest ")} == {
+        "uniform", "goal", "route", "route_ablation", "exact_route"}
