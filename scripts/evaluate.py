@@ -4,7 +4,7 @@
     python scripts/evaluate.py --quick               # fewer test queries, same tuning: about a minute
     python scripts/evaluate.py --policy runs/guided/final.zip --processes 2
     python scripts/evaluate.py --backend ray --address auto                        # on your Ray cluster
-    python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v1   # your SB3 model too
+    python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v2   # your SB3 model too
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
     python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
     python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments

@@ -31,9 +31,9 @@ def png_map(tmp_path_factory):
 
 def make_kwargs(env_id, png_map, **extra):
     kw = dict(extra)
-    if env_id.endswith("Files-v1"):
+    if env_id.endswith("Files-v2"):
         kw["source_kwargs"] = {"paths": [str(png_map)]}
-    if env_id.endswith("MovingAI-v1"):
+    if env_id.endswith("MovingAI-v2"):
         if movingai_dir() is None:
             pytest.skip("MovingAI maps not found")
         kw["source_kwargs"] = {"directory": str(movingai_dir()), "maps": ["arena", "room-32-32-4"], "per_map": 5}
@@ -105,7 +105,7 @@ def test_same_seed_same_rollout(env_id, png_map):
 
 
 def test_pickle_resumes_identically():
-    env = gym.make("SamplerGym/RRT-Maze-v1", action_mode="relative")
+    env = gym.make("SamplerGym/RRT-Maze-v2", action_mode="relative")
     env.reset(seed=1)
     env.action_space.seed(1)
     for _ in range(20):
@@ -122,7 +122,7 @@ def test_pickle_resumes_identically():
 
 @pytest.mark.parametrize("vectorization_mode", ["sync", "async"])
 def test_vector_envs(vectorization_mode):
-    vec = gym.make_vec("SamplerGym/RRT-Rooms-v1", num_envs=2, vectorization_mode=vectorization_mode,
+    vec = gym.make_vec("SamplerGym/RRT-Rooms-v2", num_envs=2, vectorization_mode=vectorization_mode,
                        action_mode="bias", max_iterations=30)
     obs, _ = vec.reset(seed=0)
     assert obs["image"].shape == (2, 4, 64, 64)
@@ -135,7 +135,7 @@ def test_vector_envs(vectorization_mode):
 def test_sb3_make_vec_env():
     from stable_baselines3.common.env_util import make_vec_env
 
-    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v1", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture"})
+    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v2", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture"})
     obs = vec.reset()
     assert obs["vector"].shape == (2, 11)
     obs, rew, done, info = vec.step(np.stack([vec.action_space.sample()] * 2))
@@ -145,7 +145,7 @@ def test_sb3_make_vec_env():
 
 def test_reregistering_is_harmless():
     importlib.reload(envs)
-    assert "SamplerGym/RRT-Maze-v1" in gym.registry
+    assert "SamplerGym/RRT-Maze-v2" in gym.registry
 
 
 @pytest.mark.parametrize("mode, n", [("point", 2), ("bias", 1), ("mixture", 4), ("relative", 3)])
@@ -264,7 +264,7 @@ def test_generic_id_runs_other_planners(planner):
 
 
 def test_render_and_record(tmp_path):
-    env = gym.make("SamplerGym/RRT-Forest-v1", render_mode="rgb_array", source_kwargs={"size": 64})
+    env = gym.make("SamplerGym/RRT-Forest-v2", render_mode="rgb_array", source_kwargs={"size": 64})
     env.reset(seed=0)
     frame = env.render()
     assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3

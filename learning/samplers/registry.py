@@ -231,7 +231,7 @@ def parse_user_sampler(arg: str, taken: tuple[str, ...] = ()) -> tuple[str, str]
     name, sep, spec = arg.partition("=")
     name, spec = name.strip(), spec.strip()
     if not sep or not name or not spec:
-        raise InputError(f"--sampler {arg!r}: expected NAME=SPEC, e.g. mine=user_ppo.zip@SamplerGym/RRT-Forest-v1 "
+        raise InputError(f"--sampler {arg!r}: expected NAME=SPEC, e.g. mine=user_ppo.zip@SamplerGym/RRT-Forest-v2 "
                          "or mine=my_module:make_sampler")
     if name in taken or name in REGISTRY or name.startswith("goal_bias=") or "," in name:
         raise InputError(f"--sampler {arg!r}: the name {name!r} is taken or has a comma; choose another")

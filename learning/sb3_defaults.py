@@ -1,0 +1,112 @@
+"""PPO with Stable-Baselines3's defaults on a SamplerGym id, against goal bias tuned on the tuning split.
+
+What a researcher's first run is: ``PPO("MultiInputPolicy", env)`` with no arguments, ``learn(steps)``,
+then the model as a planner sampler (``learning.SB3Sampler``). ``train_default_ppo`` does exactly that
+on the id's training maps (generated seeds from ``planners.maps.generators.TRAIN_SEEDS``);
+``tune_goal_bias`` picks RRT's goal bias on the tuning maps; ``compare`` runs both, and uniform
+sampling, on held-out test maps (``TEST_SEED0`` onwards) and reports iterations, success and time per
+run. ``scripts/sb3_defaults.py`` is its command line.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from planners import GoalBiasedSampler, Problem, make_planner
+from planners.base.fileio import InputError, check_int
+from planners.maps.generators import FAMILIES, TEST_SEED0, TRAIN_SEEDS, TUNING_SEED0, generate
+
+#: Goal biases the comparison chooses from on the tuning maps (0 is uniform sampling).
+BIAS_GRID = (0.0, 0.01, 0.05, 0.1, 0.2, 0.5)
+#: Map side, step and iteration cap of the family ids (``SamplerEnv``'s defaults).
+SIZE, STEP, CAP = 64, 4.0, 2000
+
+
+def family_id(family: str) -> str:
+    """The ``SamplerGym/RRT-<Family>-v2`` id of a generated family."""
+    if family not in FAMILIES:
+        raise InputError(f"family must be one of {FAMILIES}, got {family!r}")
+    return "SamplerGym/RRT-" + "".join(p.title() for p in family.split("_")) + "-v2"
+
+
+def train_default_ppo(family: str, steps: int, seed: int, out: str | os.PathLike):
+    """``PPO("MultiInputPolicy", env, seed=seed).learn(steps)`` on the family's training maps; saved to ``out``.
+
+    Nothing but the seed is set: the environment is ``gym.make(id)`` with its map seeds limited to the
+    training range. Returns the model.
+    """
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    import samplergym  # noqa: F401 (registers the ids)
+
+    check_int(steps, "steps")
+    env = gym.make(family_id(family), source_kwargs={"seeds": np.arange(*TRAIN_SEEDS)})
+    model = PPO("MultiInputPolicy", env, seed=seed)
+    model.learn(steps)
+    model.save(out)
+    return model
+
+
+def maps(family: str, seed0: int, n: int) -> list[Problem]:
+    """``n`` generated maps of ``family`` with consecutive seeds from ``seed0`` (a split's maps)."""
+    return [generate(family, seed0 + i, SIZE) for i in range(n)]
+
+
+def run_sampler(sampler, problems: Sequence[Problem], seeds: int) -> dict[str, np.ndarray]:
+    """RRT with ``sampler`` on each problem and planner seed: iterations (the cap if unsolved), solved, seconds."""
+    its, ok, secs = [], [], []
+    for p in problems:
+        for s in range(seeds):
+            t0 = time.perf_counter()
+            r = make_planner("rrt", p, extension_step=STEP, sampler=sampler, seed=s).solve(CAP)
+            secs.append(time.perf_counter() - t0)
+            its.append(r.iterations if r.solved else CAP)
+            ok.append(r.solved)
+    return {"iterations": np.asarray(its), "solved": np.asarray(ok), "seconds": np.asarray(secs)}
+
+
+def tune_goal_bias(family: str, n_maps: int, seeds: int) -> tuple[float, dict[float, float]]:
+    """The goal bias of ``BIAS_GRID`` with the lowest median iterations on the family's tuning maps."""
+    problems = maps(family, TUNING_SEED0, n_maps)
+    medians = {b: float(np.median(run_sampler(GoalBiasedSampler(b), problems, seeds)["iterations"]))
+               for b in BIAS_GRID}
+    return min(medians, key=medians.get), medians
+
+
+def compare(family: str, models: Sequence[str | os.PathLike], *, n_test: int, n_tune: int, seeds: int,
+            deterministic: bool = False) -> list[dict]:
+    """Rows (sampler, median and mean iterations, success, median ms per run) on held-out test maps.
+
+    Goal bias is tuned on ``n_tune`` tuning maps first; each model in ``models`` is an SB3 ``.zip``
+    trained on ``family_id(family)``. The last row per model compares it query by query with the
+    tuned goal bias (``wins``: queries whose median over planner seeds is lower).
+    """
+    from learning.samplers.sb3 import SB3Sampler
+
+    bias, _ = tune_goal_bias(family, n_tune, seeds)
+    test = maps(family, TEST_SEED0, n_test)
+    rows = []
+    base = run_sampler(GoalBiasedSampler(bias), test, seeds)
+    base_q = base["iterations"].reshape(n_test, seeds)
+    rows.append(_row(f"goal bias {bias:g} (tuned)", base, None))
+    for path in models:
+        sampler = SB3Sampler(path, family_id(family), deterministic=deterministic)
+        run_sampler(sampler, test[:1], 1)  # first use compiles and loads; not timed
+        res = run_sampler(sampler, test, seeds)
+        rows.append(_row(f"PPO {Path(path).stem}", res, base_q))
+    return rows
+
+
+def _row(name: str, res: dict, base_q: np.ndarray | None) -> dict:
+    row = {"sampler": name, "median": float(np.median(res["iterations"])), "mean": float(res["iterations"].mean()),
+           "success": float(res["solved"].mean()), "ms_per_run": 1000 * float(np.median(res["seconds"]))}
+    if base_q is not None:
+        q = np.median(res["iterations"].reshape(base_q.shape), axis=1)
+        row["wins"] = f"{int((q < np.median(base_q, axis=1)).sum())}/{len(q)}"
+    return row

@@ -1,0 +1,48 @@
+"""Train PPO with Stable-Baselines3's defaults on a SamplerGym family id, then compare it with tuned goal bias.
+
+    python scripts/sb3_defaults.py --family forest --steps 10000 --train-seeds 0 1 2 --out runs/sb3
+
+Trains one model per seed (``learning.sb3_defaults.train_default_ppo``; skipped when its .zip exists),
+tunes goal bias on the tuning maps and prints a table on held-out test maps (``compare``).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from learning.sb3_defaults import compare, train_default_ppo
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--family", default="forest")
+    ap.add_argument("--steps", type=int, default=10_000, help="PPO steps per training seed")
+    ap.add_argument("--train-seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--out", default="runs/sb3_defaults", help="folder for the models")
+    ap.add_argument("--n-test", type=int, default=20, help="held-out test maps")
+    ap.add_argument("--n-tune", type=int, default=20, help="tuning maps for goal bias")
+    ap.add_argument("--seeds", type=int, default=3, help="planner seeds per map")
+    ap.add_argument("--train-only", action="store_true")
+    a = ap.parse_args(argv)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for seed in a.train_seeds:
+        path = out / f"{a.family}-{a.steps}-seed{seed}.zip"
+        if not path.exists():
+            train_default_ppo(a.family, a.steps, seed, path)
+            print(f"trained {path}", flush=True)
+        paths.append(path)
+    if a.train_only:
+        return
+    rows = compare(a.family, paths, n_test=a.n_test, n_tune=a.n_tune, seeds=a.seeds)
+    print("| sampler | median iterations | mean | success | median ms per run | queries won vs tuned goal bias |")
+    print("|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['sampler']} | {r['median']:g} | {r['mean']:.1f} | {r['success']:.0%} | {r['ms_per_run']:.1f} | "
+              f"{r.get('wins', '')} |")
+
+
+if __name__ == "__main__":
+    main()
