@@ -79,8 +79,22 @@ def tune_goal_bias(family: str, n_maps: int, seeds: int) -> tuple[float, dict[fl
     return min(medians, key=medians.get), medians
 
 
+def tune_batch(family: str, model: str | os.PathLike, batches: Sequence[int], n_maps: int, seeds: int) -> dict:
+    """Median iterations and median ms per run of ``SB3Sampler(model, batch=b)`` on the tuning maps, per batch."""
+    from learning.samplers.sb3 import SB3Sampler
+
+    problems = maps(family, TUNING_SEED0, n_maps)
+    out = {}
+    for b in batches:
+        sampler = SB3Sampler(model, family_id(family), batch=b)
+        run_sampler(sampler, problems[:1], 1)  # first use compiles and loads; not timed
+        res = run_sampler(sampler, problems, seeds)
+        out[b] = (float(np.median(res["iterations"])), 1000 * float(np.median(res["seconds"])))
+    return out
+
+
 def compare(family: str, models: Sequence[str | os.PathLike], *, n_test: int, n_tune: int, seeds: int,
-            deterministic: bool = False) -> list[dict]:
+            deterministic: bool | None = None, batch: int = 1) -> list[dict]:
     """Rows (sampler, median and mean iterations, success, median ms per run) on held-out test maps.
 
     Goal bias is tuned on ``n_tune`` tuning maps first; each model in ``models`` is an SB3 ``.zip``
@@ -96,7 +110,7 @@ def compare(family: str, models: Sequence[str | os.PathLike], *, n_test: int, n_
     base_q = base["iterations"].reshape(n_test, seeds)
     rows.append(_row(f"goal bias {bias:g} (tuned)", base, None))
     for path in models:
-        sampler = SB3Sampler(path, family_id(family), deterministic=deterministic)
+        sampler = SB3Sampler(path, family_id(family), deterministic=deterministic, batch=batch)
         run_sampler(sampler, test[:1], 1)  # first use compiles and loads; not timed
         res = run_sampler(sampler, test, seeds)
         rows.append(_row(f"PPO {Path(path).stem}", res, base_q))

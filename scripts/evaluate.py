@@ -139,8 +139,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                          "planners; tuning as in the full run")
     ap.add_argument("--sampler", action="append", default=[], metavar="NAME=SPEC",
                     help="also compare this sampler (repeatable): NAME=MODEL.zip@ENV_ID[@stochastic][@key=value...] "
-                         "for a Stable-Baselines3 model trained on that SamplerGym id (deterministic actions unless "
-                         "@stochastic; key=value: the env kwargs it was trained with), or NAME=module:callable "
+                         "for a Stable-Baselines3 model trained on that SamplerGym id (SB3Sampler's default: the "
+                         "policy's mode, draws for guided actions; @stochastic or @deterministic to choose; "
+                         "key=value: the env kwargs it was trained with), or NAME=module:callable "
                          "for a factory returning a Sampler")
     ap.add_argument("--out", type=Path, default=Path("results/evaluation"),
                     help="output folder, replaced as a whole when the run is done")
@@ -476,7 +477,8 @@ def _compare(args, queries, context, backend, journal, t0: float) -> int:
     text = (f"# Sampler comparison\n\npolicy {args.policy}, {len(runs)} runs in {minutes:.1f} min; {where}. "
             f"Iterations to first solution (cap {args.max_iterations}); the expert and the exact route reference are "
             "privileged references.\n\n"
-            + (f"User samplers: {named.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
+            + (f"User samplers: {named.rstrip('; ')} (the policy's mode, draws for guided actions, unless the spec "
+               "says @stochastic or @deterministic).\n\n"
                if users else "") +
             "## Results at a glance\n\nRRT on the test split: median iterations to the first solution (success "
             "rate in brackets). Best goal bias: the bias tuned for the map set. Ablations: the learned sampler "

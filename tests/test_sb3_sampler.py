@@ -255,12 +255,12 @@ def test_the_direct_actor_pass_takes_sb3s_actions(env_id, kwargs, monkeypatch):
     model = PPO("MultiInputPolicy", env, seed=0, device="cpu")
     base = env.unwrapped
     reference = {True: base.as_sampler(lambda obs, rng: model.predict(obs, deterministic=True)[0]),
-                 False: SB3Sampler(model, env_id, deterministic=False, **kwargs)}
+                 False: SB3Sampler(model, env_id, deterministic=False, batch=1, **kwargs)}
     monkeypatch.setattr(reference[False], "_actor", None)  # SB3's own obs_to_tensor and get_distribution
     calls = []
     model.policy.features_extractor.extractors["image"].register_forward_hook(lambda *_: calls.append(1))
     for deterministic in (True, False):
-        sampler = SB3Sampler(model, env_id, deterministic=deterministic, **kwargs)
+        sampler = SB3Sampler(model, env_id, deterministic=deterministic, batch=1, **kwargs)
         assert sampler._actor is not None
         for k in range(3):
             problem = base.source(np.random.default_rng(k))
@@ -304,3 +304,21 @@ def test_a_policy_without_cnn_runs_in_numpy_and_takes_sb3s_actions(monkeypatch):
     np.testing.assert_allclose(actor.head(obs) - actor.head(obs).max(), logits[0].numpy() - logits[0].numpy().max(),
                                atol=1e-5)
     assert actor.head({"local": obs["local"][:3], "vector": obs["vector"]}) is None  # a wrong shape: not this pass
+
+
+def test_guided_draws_decide_once_per_batch():
+    """A sampler drawing guided classes answers GUIDED_BATCH classes per observation; other modes refuse a batch."""
+    from learning.samplers.sb3 import GUIDED_BATCH
+
+    env_id = "SamplerGym/RRT-Forest-v2"
+    model = PPO("MultiInputPolicy", gym.make(env_id, max_iterations=300), seed=0, device="cpu")
+    sampler = SB3Sampler(model, env_id, max_iterations=300)
+    assert sampler.batch == GUIDED_BATCH and not sampler.deterministic
+    assert SB3Sampler(model, env_id, deterministic=True, max_iterations=300).batch == 1
+    calls = []
+    act_batch = sampler.act_batch
+    sampler.act_batch = lambda obs, rng, k: calls.append(k) or act_batch(obs, rng, k)
+    r = RRT(generate("forest", 3, 64), step_size=4.0, sampler=sampler, seed=0).solve(max_iterations=200)
+    assert sum(calls) >= r.iterations > len(calls) and max(calls) <= GUIDED_BATCH
+    with pytest.raises(InputError, match="batch=4 needs the guided action mode"):
+        envs.EnvSampler(envs.SamplerEnv(action_mode="mixture"), lambda obs, rng: np.zeros(4), batch=4)

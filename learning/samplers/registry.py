@@ -242,7 +242,8 @@ def user_sampler(spec: str) -> Sampler:
     """The sampler a spec names.
 
     ``MODEL.zip@ENV_ID[@OPTION...]``: an SB3 model trained on that SamplerGym id (``SB3Sampler``);
-    options are ``stochastic`` (draw actions from the policy's distribution; default deterministic),
+    options are ``stochastic`` (draw actions from the policy's distribution) or ``deterministic`` (its mode;
+    without either, ``SB3Sampler``'s default: the mode, draws in the ``guided`` action mode), ``batch=K``,
     ``algo=NAME``, or env kwargs ``key=value`` (the ones the model was trained with; values read as
     JSON where they parse, else as strings). ``module:callable``: ``callable()`` returns a ``Sampler``.
     """
@@ -250,7 +251,7 @@ def user_sampler(spec: str) -> Sampler:
         from learning.samplers.sb3 import SB3Sampler
 
         path, env_id, *options = spec.split("@")
-        kwargs: dict = {"deterministic": True}
+        kwargs: dict = {}
         for opt in options:
             key, sep, value = opt.partition("=")
             if opt in ("stochastic", "deterministic"):

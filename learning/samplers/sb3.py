@@ -237,6 +237,12 @@ class ActorPass:
             return torch.argmax(self.distribution(head).probs, dim=1)
 
 
+#: Samples per decision of a sampler drawing guided classes (``SB3Sampler(batch=None)``): chosen on the
+#: tuning maps by ``learning.sb3_defaults.tune_batch`` (docs/first-steps.md); it cuts the policy's passes
+#: by this factor at no measurable cost in iterations.
+GUIDED_BATCH = 16
+
+
 class MlpActor:
     """An SB3 actor-critic policy whose extractor only flattens, evaluated in numpy.
 
@@ -315,9 +321,13 @@ class MlpActor:
             return np.clip(a, self.space.low, self.space.high).astype(np.float32)
         if deterministic:
             return np.int64(np.argmax(head))
-        z = np.exp(head.astype(np.float64) - float(head.max()))
-        cdf = np.cumsum(z)
-        return min(int(np.searchsorted(cdf, rng.random() * cdf[-1], side="right")), len(cdf) - 1)
+        return int(_draw_classes(np.exp(head.astype(np.float64) - float(head.max())), rng, 1)[0])
+
+
+def _draw_classes(weights: np.ndarray, rng: np.random.Generator, k: int) -> np.ndarray:
+    """``k`` classes drawn with probabilities proportional to ``weights`` (one uniform each, as ``_act_now``)."""
+    cdf = np.cumsum(weights)
+    return np.minimum(np.searchsorted(cdf, rng.random(k) * cdf[-1], side="right"), len(cdf) - 1).astype(np.int64)
 
 
 def _relu(x: np.ndarray) -> np.ndarray:
@@ -331,19 +341,26 @@ class SB3Sampler(EnvSampler):
         model: An SB3 model or policy, or the path of a model saved with ``model.save``.
         env_id: The SamplerGym id it was trained on; ``env_kwargs`` are the kwargs it was made with.
             They fix the observation and action code; the maps come from the planner's problem.
-        deterministic: Take the policy's most likely action (the default). Otherwise draw the action
-            from the policy's distribution with the planner's generator, so runs stay seeded
-            (actor-critic policies: PPO, A2C). Deterministic in an action mode with no uniform floor
+        deterministic: Take the policy's most likely action (the default, except in the ``guided``
+            action mode, whose classes are cells to sample in: there the default draws). Otherwise
+            draw the action from the policy's distribution with the planner's generator, so runs
+            stay seeded (actor-critic policies: PPO, A2C). Deterministic in an action mode with no uniform floor
             (``point``, or ``uniform_floor=0``) warns (``envs.NoExplorationWarning``): such a
             sampler may sample one place forever.
         algo: For a path: the algorithm (``PPO``, ``A2C``, ``DQN``, ``SAC``, ``TD3``), guessed from the
             weight names if omitted. ``policy_kwargs``: those the model was trained with, if any.
+        batch: Samples per decision in the ``guided`` action mode (``envs.EnvSampler``): each
+            observation answers ``batch`` classes, drawn from the policy's distribution (its mode,
+            deterministically), and the planner uses their samples in turn. Default
+            ``GUIDED_BATCH`` where the sampler draws guided classes, else 1 (which decides every
+            sample, so a deterministic sampler's run is the env's rollout, draw for draw).
         threads: torch threads for the policy's passes while planning (``learning.models.threads``):
             default ``SAMPLERGYM_TORCH_THREADS`` or 1; the caller's setting is restored after each pass.
     """
 
-    def __init__(self, model: Any, env_id: str, *, deterministic: bool = True, algo: str | None = None,
-                 policy_kwargs: dict | None = None, threads: int | None = None, **env_kwargs) -> None:
+    def __init__(self, model: Any, env_id: str, *, deterministic: bool | None = None, algo: str | None = None,
+                 policy_kwargs: dict | None = None, threads: int | None = None, batch: int | None = None,
+                 **env_kwargs) -> None:
         import gymnasium as gym
 
         try:
@@ -365,6 +382,10 @@ class SB3Sampler(EnvSampler):
                                  f"{policy.action_space}; {env_id} with {env_kwargs or 'no kwargs'} has "
                                  f"{env.observation_space} and {env.action_space}")
             self.source = type(model).__name__
+        if deterministic is None:  # a guided class is a distribution over cells: its draws are the sampler
+            deterministic = env.action_mode != "guided" or not hasattr(policy, "get_distribution")
+        if batch is None:
+            batch = GUIDED_BATCH if env.action_mode == "guided" and not deterministic else 1
         if not deterministic and not hasattr(policy, "get_distribution"):
             raise InputError(f"deterministic=False needs an actor-critic policy (PPO, A2C) whose action distribution "
                              f"can be drawn from; {type(policy).__name__} acts deterministically only")
@@ -380,11 +401,27 @@ class SB3Sampler(EnvSampler):
         self.env_id = env_id
         self._actor = ActorPass.of(policy)
         self._mlp = MlpActor.of(policy)
-        super().__init__(env, self._act, deterministic=self.deterministic)
+        super().__init__(env, self._act, deterministic=self.deterministic, act_batch=self._act_batch, batch=batch)
 
     def _act(self, obs, rng: np.random.Generator):
         with planning_threads(self.threads):
             return self._act_now(obs, rng)
+
+    def _act_batch(self, obs, rng: np.random.Generator, k: int) -> np.ndarray:
+        """``k`` guided classes for one observation: the policy's mode ``k`` times, or ``k`` draws from it."""
+        with planning_threads(self.threads):
+            if self.deterministic:
+                return np.full(k, int(self._act_now(obs, rng)), dtype=np.int64)
+            head = self._mlp.head(obs) if self._mlp is not None else None
+            if head is not None:
+                return _draw_classes(np.exp(head.astype(np.float64) - float(head.max())), rng, k)
+            head = self._actor.head(obs) if self._actor is not None else None
+            if head is not None:
+                dist = self._actor.distribution(head)
+            else:
+                with torch.no_grad():
+                    dist = self.policy.get_distribution(self.policy.obs_to_tensor(obs)[0]).distribution
+            return _draw_classes(dist.probs[0].double().numpy(), rng, k)
 
     def _act_now(self, obs, rng: np.random.Generator):
         if self._mlp is not None:
@@ -401,8 +438,7 @@ class SB3Sampler(EnvSampler):
                 obs_t, _ = self.policy.obs_to_tensor(obs)
                 dist = self.policy.get_distribution(obs_t).distribution
         if isinstance(dist, torch.distributions.Categorical):
-            cdf = np.cumsum(dist.probs[0].double().numpy())
-            return min(int(np.searchsorted(cdf, rng.random() * cdf[-1], side="right")), len(cdf) - 1)
+            return int(_draw_classes(dist.probs[0].double().numpy(), rng, 1)[0])
         if isinstance(dist, torch.distributions.Normal):
             mean, std = dist.mean[0].double().numpy(), dist.stddev[0].double().numpy()
             a = mean + std * rng.standard_normal(mean.shape)
