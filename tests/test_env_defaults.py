@@ -234,7 +234,7 @@ def test_bias_mode_keeps_its_floor_at_full_bias():
 def _ppo_then_plan(env_id: str, learn_steps: int, **ppo_kwargs):
     """PPO with SB3's defaults (``ppo_kwargs`` only shrink the rollout) on ``env_id``'s defaults, then plan.
 
-    The model plans through ``SB3Sampler(model, env_id)`` (deterministic, the default) on a query of the
+    The model plans through ``SB3Sampler(model, env_id)`` (its defaults) on a query of the
     id's family that training never saw, within 20,000 iterations.
     """
     import torch

@@ -128,6 +128,17 @@ def _recorded_space(data: dict) -> str | None:
     return None
 
 
+def _gaussian_or_categorical(policy) -> bool | None:
+    """For an SB3 actor-critic policy (PPO, A2C): True for Gaussian actions, False for categorical; else None."""
+    from stable_baselines3.common.distributions import CategoricalDistribution, DiagGaussianDistribution
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    if not isinstance(policy, ActorCriticPolicy):
+        return None
+    kind = type(policy.action_dist)
+    return {DiagGaussianDistribution: True, CategoricalDistribution: False}.get(kind)
+
+
 class ActorPass:
     """An SB3 actor-critic policy's actor (PPO, A2C), module by module, reusing a part's output while its input holds.
 
@@ -153,15 +164,11 @@ class ActorPass:
 
     @classmethod
     def of(cls, policy) -> ActorPass | None:
-        from stable_baselines3.common.distributions import CategoricalDistribution, DiagGaussianDistribution
-        from stable_baselines3.common.policies import ActorCriticPolicy
         from stable_baselines3.common.preprocessing import is_image_space
         from stable_baselines3.common.torch_layers import CombinedExtractor
 
-        if not isinstance(policy, ActorCriticPolicy):
-            return None
-        kind = type(policy.action_dist)
-        if kind not in (DiagGaussianDistribution, CategoricalDistribution):
+        gaussian = _gaussian_or_categorical(policy)
+        if gaussian is None:
             return None
         space = policy.observation_space
         boxes = dict(space.spaces) if isinstance(space, spaces.Dict) else {None: space}
@@ -173,7 +180,7 @@ class ActorPass:
             parts = list(extractor.extractors.items())
         else:
             parts = [(None, extractor)]
-        return cls(policy, kind is DiagGaussianDistribution, parts, scales)
+        return cls(policy, gaussian, parts, scales)
 
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_last": {}}
@@ -261,16 +268,12 @@ class MlpActor:
 
     @classmethod
     def of(cls, policy) -> MlpActor | None:
-        from stable_baselines3.common.distributions import CategoricalDistribution, DiagGaussianDistribution
-        from stable_baselines3.common.policies import ActorCriticPolicy
         from stable_baselines3.common.preprocessing import is_image_space
         from stable_baselines3.common.torch_layers import CombinedExtractor, FlattenExtractor
         from torch import nn
 
-        if not isinstance(policy, ActorCriticPolicy):
-            return None
-        kind = type(policy.action_dist)
-        if kind not in (DiagGaussianDistribution, CategoricalDistribution):
+        gaussian = _gaussian_or_categorical(policy)
+        if gaussian is None:
             return None
         space = policy.observation_space
         extractor = policy.pi_features_extractor
@@ -294,7 +297,6 @@ class MlpActor:
                 layers.append(np.tanh if type(module) is nn.Tanh else _relu)
             else:
                 return None
-        gaussian = kind is DiagGaussianDistribution
         std = np.exp(policy.log_std.detach().cpu().numpy().astype(np.float64)) if gaussian else None
         return cls(keys, {k: b.shape for k, b in boxes.items()}, layers, gaussian, std, policy.action_space)
 
