@@ -201,9 +201,13 @@ class EgocentricObservation:
     def __init__(self, flat: bool = False) -> None:
         self.guide: GuidedSampling | None = None
         self.flat = bool(flat)
+
+    @property
+    def space(self) -> spaces.Dict:
+        """Built when asked (a sampler's builder, made for each query, never asks: it costs a millisecond)."""
         shape = (2 * len(SCALES), WINDOW, WINDOW)
-        self.space = spaces.Dict({
-            "local": spaces.Box(0.0, 1.0, shape, np.float32) if flat else spaces.Box(0, 255, shape, np.uint8),
+        return spaces.Dict({
+            "local": spaces.Box(0.0, 1.0, shape, np.float32) if self.flat else spaces.Box(0, 255, shape, np.uint8),
             "vector": spaces.Box(-1.0, 1.0, (len(EGO_VECTOR),), np.float32),
         })
 

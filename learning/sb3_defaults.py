@@ -37,18 +37,24 @@ def family_id(family: str) -> str:
 def train_default_ppo(family: str, steps: int, seed: int, out: str | os.PathLike):
     """``PPO("MultiInputPolicy", env, seed=seed).learn(steps)`` on the family's training maps; saved to ``out``.
 
-    Nothing but the seed is set: the environment is ``gym.make(id)`` with its map seeds limited to the
-    training range. Returns the model.
+    Nothing but the seed is set (and one torch thread): the environment is ``gym.make(id)`` with its map
+    seeds limited to the training range. Returns the model.
     """
     import gymnasium as gym
+    import torch
     from stable_baselines3 import PPO
 
     import samplergym  # noqa: F401 (registers the ids)
 
     check_int(steps, "steps")
     env = gym.make(family_id(family), source_kwargs={"seeds": np.arange(*TRAIN_SEEDS)})
-    model = PPO("MultiInputPolicy", env, seed=seed)
-    model.learn(steps)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # one thread per process on small machines (docs/first-steps.md, "Threads")
+    try:
+        model = PPO("MultiInputPolicy", env, seed=seed)
+        model.learn(steps)
+    finally:
+        torch.set_num_threads(threads)
     model.save(out)
     return model
 
@@ -93,8 +99,21 @@ def tune_batch(family: str, model: str | os.PathLike, batches: Sequence[int], n_
     return out
 
 
+#: Batches ``choose_batch`` chooses from.
+BATCH_GRID = (1, 4, 8, 16, 32)
+
+
+def choose_batch(per_model: Sequence[dict]) -> int:
+    """The largest batch whose median iterations, averaged over models, is within 10% of deciding every sample's.
+
+    ``per_model``: ``tune_batch`` results of several models (batch -> (median iterations, ms per run)).
+    """
+    pooled = {b: float(np.mean([m[b][0] for m in per_model])) for b in per_model[0]}
+    return max(b for b, v in pooled.items() if v <= 1.1 * pooled[min(pooled)])
+
+
 def compare(family: str, models: Sequence[str | os.PathLike], *, n_test: int, n_tune: int, seeds: int,
-            deterministic: bool | None = None, batch: int = 1) -> list[dict]:
+            deterministic: bool | None = None, batch: int | None = None) -> list[dict]:
     """Rows (sampler, median and mean iterations, success, median ms per run) on held-out test maps.
 
     Goal bias is tuned on ``n_tune`` tuning maps first; each model in ``models`` is an SB3 ``.zip``
@@ -109,12 +128,22 @@ def compare(family: str, models: Sequence[str | os.PathLike], *, n_test: int, n_
     base = run_sampler(GoalBiasedSampler(bias), test, seeds)
     base_q = base["iterations"].reshape(n_test, seeds)
     rows.append(_row(f"goal bias {bias:g} (tuned)", base, None))
-    for path in models:
-        sampler = SB3Sampler(path, family_id(family), deterministic=deterministic, batch=batch)
+    named = [(f"PPO {Path(p).stem}", p) for p in models] + [("PPO untrained (the no-learning ablation)",
+                                                               _untrained(family))]
+    for name, model in named:
+        sampler = SB3Sampler(model, family_id(family), deterministic=deterministic, batch=batch)
         run_sampler(sampler, test[:1], 1)  # first use compiles and loads; not timed
         res = run_sampler(sampler, test, seeds)
-        rows.append(_row(f"PPO {Path(path).stem}", res, base_q))
+        rows.append(_row(name, res, base_q))
     return rows
+
+
+def _untrained(family: str):
+    """PPO's initial policy on the family id (seed 0): nearly uniform over the action classes."""
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    return PPO("MultiInputPolicy", gym.make(family_id(family)), seed=0)
 
 
 def _row(name: str, res: dict, base_q: np.ndarray | None) -> dict:

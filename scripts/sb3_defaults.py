@@ -4,6 +4,7 @@
 
 Trains one model per seed (``learning.sb3_defaults.train_default_ppo``; skipped when its .zip exists),
 tunes goal bias on the tuning maps and prints a table on held-out test maps (``compare``).
+``--tune-batch`` instead measures SB3Sampler's decision batch on the tuning maps (``tune_batch``).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from learning.sb3_defaults import compare, train_default_ppo
+from learning.sb3_defaults import BATCH_GRID, choose_batch, compare, train_default_ppo, tune_batch
 
 
 def main(argv=None) -> None:
@@ -24,6 +25,9 @@ def main(argv=None) -> None:
     ap.add_argument("--n-tune", type=int, default=20, help="tuning maps for goal bias")
     ap.add_argument("--seeds", type=int, default=3, help="planner seeds per map")
     ap.add_argument("--train-only", action="store_true")
+    ap.add_argument("--tune-batch", action="store_true",
+                    help="instead of the test comparison: SB3Sampler's batch per model on the tuning maps")
+    ap.add_argument("--batch", type=int, default=None, help="SB3Sampler's batch (default: its own)")
     a = ap.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -36,7 +40,13 @@ def main(argv=None) -> None:
         paths.append(path)
     if a.train_only:
         return
-    rows = compare(a.family, paths, n_test=a.n_test, n_tune=a.n_tune, seeds=a.seeds)
+    if a.tune_batch:
+        per_model = [tune_batch(a.family, p, BATCH_GRID, a.n_tune, a.seeds) for p in paths]
+        for p, res in zip(paths, per_model, strict=True):
+            print(p.name, "batch -> (median iterations, median ms per run) on the tuning maps:", res)
+        print("chosen batch:", choose_batch(per_model))
+        return
+    rows = compare(a.family, paths, n_test=a.n_test, n_tune=a.n_tune, seeds=a.seeds, batch=a.batch)
     print("| sampler | median iterations | mean | success | median ms per run | queries won vs tuned goal bias |")
     print("|---|---|---|---|---|---|")
     for r in rows:
