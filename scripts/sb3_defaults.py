@@ -28,6 +28,7 @@ def main(argv=None) -> None:
     ap.add_argument("--tune-batch", action="store_true",
                     help="instead of the test comparison: SB3Sampler's batch per model on the tuning maps")
     ap.add_argument("--batch", type=int, default=None, help="SB3Sampler's batch (default: its own)")
+    ap.add_argument("--deterministic", action="store_true", help="SB3Sampler takes the policy's most likely class")
     a = ap.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -46,7 +47,8 @@ def main(argv=None) -> None:
             print(p.name, "batch -> (median iterations, median ms per run) on the tuning maps:", res)
         print("chosen batch:", choose_batch(per_model))
         return
-    rows = compare(a.family, paths, n_test=a.n_test, n_tune=a.n_tune, seeds=a.seeds, batch=a.batch)
+    rows = compare(a.family, paths, n_test=a.n_test, n_tune=a.n_tune, seeds=a.seeds, batch=a.batch,
+                   deterministic=True if a.deterministic else None)
     print("| sampler | median iterations | mean | success | median ms per run | queries won vs tuned goal bias |")
     print("|---|---|---|---|---|---|")
     for r in rows:
