@@ -193,9 +193,9 @@ class EgocentricObservation:
     towards the goal, and vector features (see ``planners.guidance.egocentric``); the same on maps of
     every size. The episode's ``GuidedSampling`` computes them, so ``reset`` needs it.
 
-    ``flat=True`` (``observation="egocentric_flat"``): the windows as float32 in [0, 1], which SB3's
-    ``MultiInputPolicy`` flattens into its MLP (its CNN needs 36x36 images): a policy small enough to
-    run at every planner iteration, trained with SB3's defaults.
+    ``flat=True`` (``observation="egocentric_flat"``): the windows flattened, ``local=(1536,) float32`` in
+    [0, 1], which SB3's ``MultiInputPolicy`` feeds to its MLP (its CNN needs 36x36 images): a policy
+    small enough to run at every planner iteration, trained with SB3's defaults.
     """
 
     def __init__(self, flat: bool = False) -> None:
@@ -207,7 +207,8 @@ class EgocentricObservation:
         """Built when asked (a sampler's builder, made for each query, never asks: it costs a millisecond)."""
         shape = (2 * len(SCALES), WINDOW, WINDOW)
         return spaces.Dict({
-            "local": spaces.Box(0.0, 1.0, shape, np.float32) if self.flat else spaces.Box(0, 255, shape, np.uint8),
+            "local": (spaces.Box(0.0, 1.0, (math.prod(shape),), np.float32) if self.flat
+                      else spaces.Box(0, 255, shape, np.uint8)),
             "vector": spaces.Box(-1.0, 1.0, (len(EGO_VECTOR),), np.float32),
         })
 
@@ -225,7 +226,7 @@ class EgocentricObservation:
         obs = self.guide.observe(view)
         obs["vector"] = np.clip(obs["vector"], -1.0, 1.0)
         if self.flat:
-            obs["local"] = obs["local"].astype(np.float32) * np.float32(1.0 / 255.0)
+            obs["local"] = obs["local"].reshape(-1).astype(np.float32) * np.float32(1.0 / 255.0)
         return obs
 
 

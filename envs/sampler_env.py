@@ -47,8 +47,8 @@ class SamplerEnv(gym.Env):
     ``obs_size`` / ``local_size`` (below 36) need a custom extractor. ``observation="egocentric"``:
     ``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``, multi-scale windows around the progress
     vertex turned towards the goal (``EgocentricObservation``), for ``learning.models.extractor`` (too
-    small for SB3's default CNN); ``observation="egocentric_flat"``: the same with the windows as
-    ``(6, 16, 16) float32`` in [0, 1], which SB3's ``MultiInputPolicy`` flattens into its MLP (the
+    small for SB3's default CNN); ``observation="egocentric_flat"``: the same with the windows flattened,
+    ``local=(1536,) float32`` in [0, 1], which SB3's ``MultiInputPolicy`` feeds to its MLP (the
     family ids' default from ``-v2``). Other worlds (geometric, 6-DoF rigid body): a ``Box`` vector
     (``VectorObservation``), for SB3's ``MlpPolicy``.
 

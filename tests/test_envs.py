@@ -100,7 +100,7 @@ def test_same_seed_same_rollout(env_id, png_map):
     b = rollout(gym.make(env_id, **kw), seed=3)
     assert_same(a, b)
     c = rollout(gym.make(env_id, **kw), seed=4)
-    key = (lambda o: o) if env_id in VECTOR_IDS else (lambda o: o["image"])
+    key = (lambda o: o) if env_id in VECTOR_IDS else (lambda o: o["image"] if "image" in o else o["local"])
     assert not all(np.array_equal(key(x[0]), key(y[0])) for x, y in zip(a, c, strict=False))
 
 
@@ -123,7 +123,7 @@ def test_pickle_resumes_identically():
 @pytest.mark.parametrize("vectorization_mode", ["sync", "async"])
 def test_vector_envs(vectorization_mode):
     vec = gym.make_vec("SamplerGym/RRT-Rooms-v2", num_envs=2, vectorization_mode=vectorization_mode,
-                       action_mode="bias", max_iterations=30)
+                       action_mode="bias", observation="image", max_iterations=30)
     obs, _ = vec.reset(seed=0)
     assert obs["image"].shape == (2, 4, 64, 64)
     for _ in range(40):
@@ -135,7 +135,8 @@ def test_vector_envs(vectorization_mode):
 def test_sb3_make_vec_env():
     from stable_baselines3.common.env_util import make_vec_env
 
-    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v2", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture"})
+    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v2", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture",
+                                                                                      "observation": "image"})
     obs = vec.reset()
     assert obs["vector"].shape == (2, 11)
     obs, rew, done, info = vec.step(np.stack([vec.action_space.sample()] * 2))
@@ -365,7 +366,8 @@ def test_observations_come_from_one_factory_and_the_guide_is_passed_explicitly()
     from planners.base.fileio import InputError
     from planners.maps.generators import generate
 
-    with pytest.raises(InputError, match=r"observation must be one of \('image', 'egocentric'\), got 'pixels'"):
+    expected = r"observation must be one of \('image', 'egocentric', 'egocentric_flat'\), got 'pixels'"
+    with pytest.raises(InputError, match=expected):
         make_observation("pixels", 2)
     for env_id in envs.ENV_IDS:
         spec = gym.spec(env_id)

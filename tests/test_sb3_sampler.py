@@ -191,7 +191,7 @@ def test_the_worked_example_ranks_a_user_model_and_a_user_factory(ppo_forest, tm
     """README: train with SB3's defaults, save, compare with one command, read the table."""
     _, path = ppo_forest
     out = tmp_path / "evaluation"
-    opts = "@action_mode=bias@obs_size=36@local_size=36@max_iterations=300"
+    opts = "@action_mode=bias@observation=image@obs_size=36@local_size=36@max_iterations=300"
     rc = _load_evaluate().main([
         "--families", "forest", "--size", "64", "--maps", "2", "--tuning-maps", "2", "--seeds", "1",
         "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "--processes", "1",
