@@ -34,9 +34,9 @@ observation="image", shaping=False``; one trained on version 0 with ``action_mod
 uniform floor; image or vector observations).
 
 Every id trains with Stable-Baselines3's defaults: ``PPO("MultiInputPolicy", env)`` (Dict
-observations) or ``PPO("MlpPolicy", env)`` (``RRT-RigidBody-v1``'s Box observations); on a family's
-``-v2`` id 10,000 steps of it already plan in fewer iterations than tuned goal bias
-(``docs/first-steps.md``).
+observations) or ``PPO("MlpPolicy", env)`` (``RRT-RigidBody-v1``'s Box observations); on
+``RRT-Forest-v2`` 10,000 steps of it already plan in fewer iterations than tuned goal bias on
+held-out maps (``docs/first-steps.md``).
 """
 
 from __future__ import annotations

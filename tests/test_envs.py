@@ -123,7 +123,7 @@ def test_pickle_resumes_identically():
 @pytest.mark.parametrize("vectorization_mode", ["sync", "async"])
 def test_vector_envs(vectorization_mode):
     vec = gym.make_vec("SamplerGym/RRT-Rooms-v2", num_envs=2, vectorization_mode=vectorization_mode,
-                       action_mode="bias", observation="image", max_iterations=30)
+                       action_mode="bias", observation="image", shaping=False, max_iterations=30)
     obs, _ = vec.reset(seed=0)
     assert obs["image"].shape == (2, 4, 64, 64)
     for _ in range(40):
