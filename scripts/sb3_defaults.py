@@ -13,6 +13,8 @@ import argparse
 from pathlib import Path
 
 from learning.sb3_defaults import BATCH_GRID, choose_batch, compare, train_default_ppo, tune_batch
+from planners.base.fileio import InputError, check_flags, check_int_flags
+from planners.maps.generators import FAMILIES
 
 
 def main(argv=None) -> None:
@@ -30,6 +32,15 @@ def main(argv=None) -> None:
     ap.add_argument("--batch", type=int, default=None, help="SB3Sampler's batch (default: its own)")
     ap.add_argument("--deterministic", action="store_true", help="SB3Sampler takes the policy's most likely class")
     a = ap.parse_args(argv)
+
+    def check() -> None:
+        check_int_flags(a, ("steps", "n_test", "n_tune", "seeds"))
+        if a.family not in FAMILIES:
+            raise InputError(f"--family: {a.family!r} is not a generated family; choose from {', '.join(FAMILIES)}")
+        if a.batch is not None:
+            check_int_flags(a, ("batch",))
+
+    check_flags(check)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
