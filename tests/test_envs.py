@@ -136,7 +136,8 @@ def test_sb3_make_vec_env():
     from stable_baselines3.common.env_util import make_vec_env
 
     vec = make_vec_env("SamplerGym/RRT-Bugtrap-v2", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture",
-                                                                                      "observation": "image"})
+                                                                                      "observation": "image",
+                                                                                      "shaping": False})
     obs = vec.reset()
     assert obs["vector"].shape == (2, 11)
     obs, rew, done, info = vec.step(np.stack([vec.action_space.sample()] * 2))
