@@ -24,9 +24,9 @@ Registered ids:
   (``planners.maps.mapset``, ``docs/map-sets.md``).
 
 The generated-family, ``MovingAI`` and ``Files`` ids are at version 2: ``guided`` actions (a class of
-egocentric cells ahead of the tree's progress, or its frontier; even a uniform choice among them needs
-fewer iterations than tuned goal bias), ``egocentric_flat`` observations (small windows SB3's default
-MLP reads, cheap enough to decide at every iteration) and progress shaping at PPO's discount 0.99
+egocentric cells ahead of the tree's progress, or its frontier, so that PPO's initial, nearly uniform
+policy already samples near the tree's progress), ``egocentric_flat`` observations (small windows
+SB3's default MLP reads, cheap to evaluate) and progress shaping at PPO's discount 0.99
 (``V2_DEFAULTS``). ``gym.make`` of a ``-v0`` or ``-v1`` id is Gymnasium's ``DeprecatedEnv`` error naming
 the ``-v2`` id. A model trained on version 1 plans under version 2 with ``action_mode="mixture",
 observation="image", shaping=False``; one trained on version 0 with ``action_mode="point"`` too.
