@@ -1,19 +1,19 @@
 """SamplerGym environments; importing this package registers them under ``SamplerGym/``.
 
     import gymnasium as gym
-    env = gym.make("samplergym:SamplerGym/RRT-Maze-v1", action_mode="relative")
+    env = gym.make("samplergym:SamplerGym/RRT-Maze-v2", action_mode="relative")
 
 (``samplergym:`` makes Gymnasium import ``samplergym``, which registers the ids even when a project's
 own ``envs/`` folder shadows this package; ``import envs`` registers them too.)
 
 Registered ids:
 
-* ``SamplerGym/RRT-{Forest,NarrowPassage,Bugtrap,Maze,Rooms}-v1``: RRT on a fresh generated map of
+* ``SamplerGym/RRT-{Forest,NarrowPassage,Bugtrap,Maze,Rooms}-v2``: RRT on a fresh generated map of
   that family each episode (``source_kwargs={"size": ...}``, default 64).
-* ``SamplerGym/RRT-MovingAI-v1``: RRT on the MovingAI benchmark scenarios, found by
+* ``SamplerGym/RRT-MovingAI-v2``: RRT on the MovingAI benchmark scenarios, found by
   ``planners.movingai_dir`` (``source_kwargs={"directory": ...}``, else ``SAMPLERGYM_MOVINGAI_DIR``,
   else ``../shared/maps/movingai`` from the working directory).
-* ``SamplerGym/RRT-Files-v1``: RRT on your own maps (``source_kwargs={"paths": [...]}``), by default on
+* ``SamplerGym/RRT-Files-v2``: RRT on your own maps (``source_kwargs={"paths": [...]}``), by default on
   the small sample maps shipped in ``envs/data/maps``.
 * ``SamplerGym/RRT-RigidBody-v1``: RRT for a 6-DoF rigid body among 3-D boxes, a fresh
   ``planners.worlds.rigid3d.random_scene`` each episode (``source_kwargs={"n_boxes": ...}``); vector
@@ -23,13 +23,20 @@ Registered ids:
   your own map; ``map_set=DIR, split="train"`` draws episodes from a part of a map set
   (``planners.maps.mapset``, ``docs/map-sets.md``).
 
-The ids are at version 1. Version 0 defaulted to the ``point`` action mode, which has no uniform floor,
-so a policy trained with SB3's defaults could not plan; version 1 defaults to ``mixture`` (a 5% uniform
-floor). ``gym.make`` of a ``-v0`` id is Gymnasium's ``DeprecatedEnv`` error naming the ``-v1`` id; a model
-trained on version 0 plans under version 1 with ``action_mode="point"``.
+The generated-family, ``MovingAI`` and ``Files`` ids are at version 2: ``guided`` actions (a class of
+egocentric cells ahead of the tree's progress, or its frontier, so that PPO's initial, nearly uniform
+policy already samples near the tree's progress), ``egocentric_flat`` observations (small windows
+SB3's default MLP reads, cheap to evaluate) and progress shaping at PPO's discount 0.99
+(``V2_DEFAULTS``). ``gym.make`` of a ``-v0`` or ``-v1`` id is Gymnasium's ``DeprecatedEnv`` error naming
+the ``-v2`` id. A model trained on version 1 plans under version 2 with ``action_mode="mixture",
+observation="image", shaping=False``; one trained on version 0 with ``action_mode="point"`` too.
+``RRT-RigidBody-v1`` and ``Planning-v1`` keep ``SamplerEnv``'s own defaults (``mixture`` actions, a 5%
+uniform floor; image or vector observations).
 
 Every id trains with Stable-Baselines3's defaults: ``PPO("MultiInputPolicy", env)`` (Dict
-observations) or ``PPO("MlpPolicy", env)`` (``RRT-RigidBody-v1``'s Box observations).
+observations) or ``PPO("MlpPolicy", env)`` (``RRT-RigidBody-v1``'s Box observations); on
+``RRT-Forest-v2`` 10,000 steps of it already plan in fewer iterations than tuned goal bias on
+held-out maps (``docs/first-steps.md``).
 """
 
 from __future__ import annotations
@@ -64,9 +71,14 @@ _FAMILY_IDS = {
     "Rooms": "rooms",
 }
 
-ENV_IDS: dict[str, dict] = {f"SamplerGym/RRT-{name}-v1": {"map_source": fam} for name, fam in _FAMILY_IDS.items()}
-ENV_IDS["SamplerGym/RRT-MovingAI-v1"] = {"map_source": "movingai"}
-ENV_IDS["SamplerGym/RRT-Files-v1"] = {"map_source": "files"}
+#: What version 2 of the 2-D ids changed from version 1 (``SamplerEnv``'s own defaults, which ``Planning-v1``
+#: keeps): guided actions, egocentric observations an MLP reads, and progress shaping at PPO's discount.
+V2_DEFAULTS = {"action_mode": "guided", "observation": "egocentric_flat", "shaping": True, "shaping_gamma": 0.99}
+
+ENV_IDS: dict[str, dict] = {f"SamplerGym/RRT-{name}-v2": {"map_source": fam, **V2_DEFAULTS}
+                            for name, fam in _FAMILY_IDS.items()}
+ENV_IDS["SamplerGym/RRT-MovingAI-v2"] = {"map_source": "movingai", **V2_DEFAULTS}
+ENV_IDS["SamplerGym/RRT-Files-v2"] = {"map_source": "files", **V2_DEFAULTS}
 ENV_IDS["SamplerGym/RRT-RigidBody-v1"] = {"map_source": "rigid", "step_size": 0.5, "max_iterations": 5000}
 ENV_IDS["SamplerGym/Planning-v1"] = {}
 

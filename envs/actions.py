@@ -210,12 +210,24 @@ class GuidedAction(ActionSampler):
         if not 0 <= a < N_ACTIONS:
             raise InputError(f"guided action must be {expected}, got {a}")
         self.action = a
+        self.classes = np.array([a], dtype=np.int64)
+
+    def set_classes(self, classes) -> None:
+        """Several actions at once: the next draw gives one sample per class, in order (a decision batch)."""
+        from planners.guidance.guided import N_ACTIONS
+
+        c = np.asarray(classes)
+        if c.ndim != 1 or not len(c) or not np.issubdtype(c.dtype, np.integer) or c.min() < 0 or c.max() >= N_ACTIONS:
+            raise InputError(f"guided classes must be a non-empty 1-D array of integers in [0, {N_ACTIONS}), "
+                             f"got {classes!r}")
+        self.action = int(c[0])
+        self.classes = c.astype(np.int64)
 
     def draw(self, rng, n, view):
         if self.action is None or self.guide is None:
             raise RuntimeError("set_action and set_guide must be called before the planner steps")
         self.guide.update(view)
-        return self.guide.samples(np.array([self.action]), rng)
+        return self.guide.samples(self.classes[:max(1, n)], rng)
 
 
 #: Action modes by name; a new mode is an ``ActionSampler`` subclass above and its entry here.

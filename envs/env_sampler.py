@@ -61,15 +61,26 @@ class EnvSampler(SamplerBase):
             deterministic ``act`` in an action mode without a uniform floor (``point``, or
             ``uniform_floor=0``) may sample one place forever; that combination warns when the
             sampler is built, naming what to change.
+        act_batch: ``act_batch(obs, rng, k) -> k guided classes`` (the ``guided`` action mode only): with
+            ``batch`` above 1, each observation decides the next ``batch`` samples, drawn from one
+            answer (a decision batch: a guided sample is an offset from the progress vertex current when
+            the planner uses it, so a batch keeps following the tree). ``batch``: samples per decision.
 
     Warns:
         NoExplorationWarning: ``deterministic`` and the env's action mode has no uniform floor.
     """
 
     def __init__(self, env: SamplerEnv, act: Callable[[Any, np.random.Generator], Any], *,
-                 deterministic: bool = True) -> None:
+                 deterministic: bool = True, act_batch: Callable | None = None, batch: int = 1) -> None:
+        from planners.base.fileio import InputError, check_int
+
+        check_int(batch, "batch")
+        if batch > 1 and (env.action_mode != "guided" or act_batch is None):
+            raise InputError(f"batch={batch} needs the guided action mode and an act_batch; this sampler has "
+                             f"action_mode={env.action_mode!r}" + ("" if act_batch else " and no act_batch"))
         self.env = env
         self.act = act
+        self.act_batch, self.batch = act_batch, int(batch)
         if deterministic and not env.new_action_sampler().explores:
             warnings.warn(no_exploration_message(env, f"{type(self).__name__} (deterministic)"),
                           NoExplorationWarning, stacklevel=2)
@@ -88,7 +99,12 @@ class EnvSampler(SamplerBase):
     def draw(self, rng, n, view):
         holder = _ViewHolder(view)
         self.observer.update(holder)
-        self.actions.set_action(self.act(self.observer.build(holder), rng))
+        obs = self.observer.build(holder)
+        if self.batch > 1:
+            k = min(n, self.batch)
+            self.actions.set_classes(self.act_batch(obs, rng, k))
+            return self.actions.draw(rng, k, view)
+        self.actions.set_action(self.act(obs, rng))
         return self.actions.draw(rng, 1, view)
 
     def __repr__(self) -> str:

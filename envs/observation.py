@@ -192,12 +192,23 @@ class EgocentricObservation:
     Windows around the progress vertex at 1/4, 1 and 4 steps per pixel (obstacles and tree), turned
     towards the goal, and vector features (see ``planners.guidance.egocentric``); the same on maps of
     every size. The episode's ``GuidedSampling`` computes them, so ``reset`` needs it.
+
+    ``flat=True`` (``observation="egocentric_flat"``): the windows flattened, ``local=(1536,) float32`` in
+    [0, 1], which SB3's ``MultiInputPolicy`` feeds to its MLP (its CNN needs 36x36 images): a policy
+    small enough to run at every planner iteration, trained with SB3's defaults.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, flat: bool = False) -> None:
         self.guide: GuidedSampling | None = None
-        self.space = spaces.Dict({
-            "local": spaces.Box(0, 255, (2 * len(SCALES), WINDOW, WINDOW), np.uint8),
+        self.flat = bool(flat)
+
+    @property
+    def space(self) -> spaces.Dict:
+        """Built when asked (a sampler's builder, made for each query, never asks: it costs a millisecond)."""
+        shape = (2 * len(SCALES), WINDOW, WINDOW)
+        return spaces.Dict({
+            "local": (spaces.Box(0.0, 1.0, (math.prod(shape),), np.float32) if self.flat
+                      else spaces.Box(0, 255, shape, np.uint8)),
             "vector": spaces.Box(-1.0, 1.0, (len(EGO_VECTOR),), np.float32),
         })
 
@@ -214,6 +225,8 @@ class EgocentricObservation:
         self.guide.update(view)
         obs = self.guide.observe(view)
         obs["vector"] = np.clip(obs["vector"], -1.0, 1.0)
+        if self.flat:
+            obs["local"] = obs["local"].reshape(-1).astype(np.float32) * np.float32(1.0 / 255.0)
         return obs
 
 
@@ -228,6 +241,7 @@ def _map_observation(dim: int, obs_size: int, local_size: int, local_scale: int)
 OBSERVATIONS = {
     "image": _map_observation,
     "egocentric": lambda dim, obs_size, local_size, local_scale: EgocentricObservation(),
+    "egocentric_flat": lambda dim, obs_size, local_size, local_scale: EgocentricObservation(flat=True),
 }
 
 

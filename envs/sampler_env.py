@@ -47,7 +47,9 @@ class SamplerEnv(gym.Env):
     ``obs_size`` / ``local_size`` (below 36) need a custom extractor. ``observation="egocentric"``:
     ``Dict(local=(6, 16, 16) uint8, vector=(8,) float32)``, multi-scale windows around the progress
     vertex turned towards the goal (``EgocentricObservation``), for ``learning.models.extractor`` (too
-    small for SB3's default CNN). Other worlds (geometric, 6-DoF rigid body): a ``Box`` vector
+    small for SB3's default CNN); ``observation="egocentric_flat"``: the same with the windows flattened,
+    ``local=(1536,) float32`` in [0, 1], which SB3's ``MultiInputPolicy`` feeds to its MLP (the
+    family ids' default from ``-v2``). Other worlds (geometric, 6-DoF rigid body): a ``Box`` vector
     (``VectorObservation``), for SB3's ``MlpPolicy``.
 
     ## Rewards
@@ -88,7 +90,11 @@ class SamplerEnv(gym.Env):
     ``shaping_gamma``, ``render_mode`` (``rgb_array`` or ``human``).
 
     ## Version History
-    * v0: initial version.
+    * v0: initial version (``point`` actions).
+    * v1: ``mixture`` actions (a uniform floor).
+    * v2 (the generated-family, ``MovingAI`` and ``Files`` ids): ``guided`` actions,
+      ``egocentric_flat`` observations, ``shaping=True`` at ``shaping_gamma=0.99``
+      (``envs.V2_DEFAULTS``); ``SamplerEnv``'s own defaults, and ``Planning-v1``'s, are version 1's.
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 15}
@@ -169,7 +175,7 @@ class SamplerEnv(gym.Env):
         self.observation = observation
         self.obs_size, self.local_size, self.local_scale = obs_size, local_size, local_scale
         self._guide = None
-        if (observation == "egocentric" or action_mode == "guided") and self.dim != 2:
+        if (observation.startswith("egocentric") or action_mode == "guided") and self.dim != 2:
             raise InputError("egocentric observations and guided actions are defined for 2-D grid problems")
         self._obs = self.new_observation()
         self.observation_space = self._obs.space
@@ -239,7 +245,7 @@ class SamplerEnv(gym.Env):
         draw with, or None (the environment's own ``np_random``, as the next episode would). For
         planning a query with a sampler of your own outside the environment::
 
-            problem = gym.make("samplergym:SamplerGym/RRT-Forest-v1").unwrapped.sample_problem(7)
+            problem = gym.make("samplergym:SamplerGym/RRT-Forest-v2").unwrapped.sample_problem(7)
         """
         if seed is None:
             rng = self.np_random
@@ -286,7 +292,7 @@ class SamplerEnv(gym.Env):
 
     def new_guide(self, problem: Problem):
         """The per-query ``GuidedSampling`` that egocentric observations and guided actions share, or None."""
-        if self.observation != "egocentric" and self.action_mode != "guided":
+        if not self.observation.startswith("egocentric") and self.action_mode != "guided":
             return None
         from planners.guidance.guided import GuidedSampling
 

@@ -22,7 +22,7 @@ MapSource = Callable[[np.random.Generator], Problem]
 
 
 def sample_map_paths() -> list[Path]:
-    """The small sample maps shipped with the package (``envs/data/maps/*.png``), used by ``RRT-Files-v1``."""
+    """The small sample maps shipped with the package (``envs/data/maps/*.png``), used by ``RRT-Files-v2``."""
     from importlib import resources
 
     root = resources.files("envs") / "data" / "maps"

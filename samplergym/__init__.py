@@ -1,7 +1,7 @@
 """SamplerGym under a name a user's project will not shadow; importing it registers the environments.
 
     import gymnasium as gym
-    env = gym.make("samplergym:SamplerGym/RRT-Forest-v1")   # Gymnasium imports samplergym first
+    env = gym.make("samplergym:SamplerGym/RRT-Forest-v2")   # Gymnasium imports samplergym first
 
 The library's code lives in the top-level packages ``planners``, ``envs`` and ``learning``. A project
 with an ``envs/`` folder of its own (common in RL code) shadows ``envs``; ``import samplergym`` then

@@ -38,7 +38,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--steps", type=int, default=20000)
     ap.add_argument("--modes", default=",".join(envs.ACTION_MODES))
-    ap.add_argument("--files", nargs="*", help="map images for SamplerGym/RRT-Files-v1 (default: a generated PNG)")
+    ap.add_argument("--files", nargs="*", help="map images for SamplerGym/RRT-Files-v2 (default: a generated PNG)")
     args = ap.parse_args(argv)
 
     def check() -> None:
@@ -65,7 +65,7 @@ def main(argv=None) -> int:
     rows = []
     for env_id in sorted(envs.ENV_IDS):
         kw = {}
-        if env_id.endswith("Files-v1"):
+        if env_id.endswith("Files-v2"):
             kw["source_kwargs"] = {"paths": files}
         for mode in args.modes.split(","):
             if mode == "guided" and env_id.endswith("RigidBody-v1"):

@@ -2,7 +2,7 @@
 
     python scripts/benchmark_policy.py                                   # the shipped checkpoint
     python scripts/benchmark_policy.py --policy old.zip learning/data/guided.zip --family bugtrap --bias 0.05
-    python scripts/benchmark_policy.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v1 --family forest
+    python scripts/benchmark_policy.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v2 --family forest
 
 For each checkpoint: its actor's parameters, microseconds per forward pass on observations taken
 from real runs, and on held-out 128x128 maps of one family the median wall time per query (binding

@@ -4,7 +4,7 @@
     python scripts/evaluate.py --quick               # fewer test queries, same tuning: 7.5 min of CPU time
     python scripts/evaluate.py --policy runs/guided/final.zip --processes 2
     python scripts/evaluate.py --backend ray --address auto                        # on your Ray cluster
-    python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v1   # your SB3 model too
+    python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v2   # your SB3 model too
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
     python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
     python scripts/evaluate.py --route mine=runs/route/route.pt                    # your encoder beside the shipped one
@@ -149,8 +149,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                          "planners; tuning as in the full run")
     ap.add_argument("--sampler", action="append", default=[], metavar="NAME=SPEC",
                     help="also compare this sampler (repeatable): NAME=MODEL.zip@ENV_ID[@stochastic][@key=value...] "
-                         "for a Stable-Baselines3 model trained on that SamplerGym id (deterministic actions unless "
-                         "@stochastic; key=value: the env kwargs it was trained with), or NAME=module:callable "
+                         "for a Stable-Baselines3 model trained on that SamplerGym id (SB3Sampler's default: the "
+                         "policy's mode, draws for guided actions; @stochastic or @deterministic to choose; "
+                         "key=value: the env kwargs it was trained with), or NAME=module:callable "
                          "for a factory returning a Sampler")
     ap.add_argument("--out", type=Path, default=Path("results/evaluation"),
                     help="output folder, replaced as a whole when the run is done")

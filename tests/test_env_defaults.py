@@ -19,7 +19,7 @@ ALL_IDS = sorted(ENV_IDS)
 
 
 def _needs_movingai(env_id):
-    if env_id.endswith("MovingAI-v1") and movingai_dir() is None:
+    if env_id.endswith("MovingAI-v2") and movingai_dir() is None:
         pytest.skip("MovingAI maps not found")
 
 
@@ -46,11 +46,11 @@ def test_sb3_default_policy_trains_on_every_id(env_id, shared_cwd):
     venv = make_vec_env(env_id, n_envs=2, seed=0, env_kwargs={"max_iterations": 64})
     policy = "MlpPolicy" if isinstance(venv.observation_space, gym.spaces.Box) else "MultiInputPolicy"
     model = PPO(policy, venv, n_steps=64, batch_size=64, n_epochs=1, seed=0)
-    if policy == "MultiInputPolicy":  # SB3's default CNN on every image key
+    if policy == "MultiInputPolicy":  # SB3's default CNN on every image key; the -v2 ids' windows are flattened
         from stable_baselines3.common.torch_layers import NatureCNN
 
         cnns = {k for k, m in model.policy.features_extractor.extractors.items() if isinstance(m, NatureCNN)}
-        assert cnns == {"image", "local"}
+        assert cnns == (set() if env_id.endswith("-v2") else {"image", "local"})
     before = [p.detach().clone() for p in model.policy.parameters()]
     model.learn(128)  # one rollout (64 steps of each of the 2 envs), then one update
     assert model.num_timesteps >= 128
@@ -73,7 +73,7 @@ def test_gym_make_without_kwargs(env_id, shared_cwd):
 def test_files_id_defaults_to_the_shipped_sample_maps():
     paths = envs.sample_map_paths()
     assert len(paths) >= 2 and all(p.suffix == ".png" and p.is_file() for p in paths)
-    env = gym.make("SamplerGym/RRT-Files-v1")
+    env = gym.make("SamplerGym/RRT-Files-v2")
     names = {env.reset(seed=s)[0] is not None and env.unwrapped.problem.name for s in range(20)}
     assert names <= {p.name for p in paths} and len(names) >= 2
 
@@ -144,7 +144,7 @@ def test_movingai_dir_resolution(tmp_path, monkeypatch):
         sources.movingai_dir(required=False)
     monkeypatch.delenv(MOVINGAI_ENV)
     with pytest.raises(InputError, match=MOVINGAI_ENV):
-        gym.make("SamplerGym/RRT-MovingAI-v1", source_kwargs={"directory": str(tmp_path / "missing")})
+        gym.make("SamplerGym/RRT-MovingAI-v2", source_kwargs={"directory": str(tmp_path / "missing")})
 
 
 def test_movingai_id_without_kwargs_uses_the_env_var(monkeypatch, tmp_path):
@@ -153,7 +153,7 @@ def test_movingai_id_without_kwargs_uses_the_env_var(monkeypatch, tmp_path):
         pytest.skip("MovingAI maps not found")
     monkeypatch.chdir(tmp_path)  # no ../shared from here: only the variable can find the maps
     monkeypatch.setenv(MOVINGAI_ENV, str(d))
-    env = gym.make("SamplerGym/RRT-MovingAI-v1")
+    env = gym.make("SamplerGym/RRT-MovingAI-v2")
     env.reset(seed=0)
     assert env.unwrapped.source.directory == d
 
@@ -234,7 +234,7 @@ def test_bias_mode_keeps_its_floor_at_full_bias():
 def _ppo_then_plan(env_id: str, learn_steps: int, **ppo_kwargs):
     """PPO with SB3's defaults (``ppo_kwargs`` only shrink the rollout) on ``env_id``'s defaults, then plan.
 
-    The model plans through ``SB3Sampler(model, env_id)`` (deterministic, the default) on a query of the
+    The model plans through ``SB3Sampler(model, env_id)`` (its defaults) on a query of the
     id's family that training never saw, within 20,000 iterations.
     """
     import torch
@@ -259,8 +259,8 @@ def _ppo_then_plan(env_id: str, learn_steps: int, **ppo_kwargs):
 
 
 def test_ppo_with_sb3_defaults_on_a_default_id_plans():
-    """The fast representative: SB3's PPO on RRT-Forest-v1's defaults, a rollout shrunk to 128 steps."""
-    _ppo_then_plan("SamplerGym/RRT-Forest-v1", 256, n_steps=128, batch_size=64, n_epochs=2)
+    """The fast representative: SB3's PPO on RRT-Forest-v2's defaults, a rollout shrunk to 128 steps."""
+    _ppo_then_plan("SamplerGym/RRT-Forest-v2", 256, n_steps=128, batch_size=64, n_epochs=2)
 
 
 @pytest.mark.slow
@@ -277,19 +277,19 @@ def test_a_sampler_that_cannot_explore_warns_and_says_what_to_change():
     from learning import SB3Sampler
 
     kw = {"action_mode": "point", "obs_size": 36, "local_size": 36}
-    model = PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v1", **kw), n_steps=8, batch_size=8, seed=0)
+    model = PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v2", **kw), n_steps=8, batch_size=8, seed=0)
     with pytest.warns(envs.NoExplorationWarning, match=r"action_mode='point'.*mixture.*deterministic=False"):
-        SB3Sampler(model, "SamplerGym/RRT-Forest-v1", **kw)
+        SB3Sampler(model, "SamplerGym/RRT-Forest-v2", **kw)
     with pytest.warns(envs.NoExplorationWarning, match="uniform_floor=0"):
-        SB3Sampler(PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v1", **{**kw, "action_mode": "mixture",
+        SB3Sampler(PPO("MultiInputPolicy", gym.make("SamplerGym/RRT-Forest-v2", **{**kw, "action_mode": "mixture",
                                                                                    "uniform_floor": 0.0}),
                        n_steps=8, batch_size=8, seed=0),
-                   "SamplerGym/RRT-Forest-v1", **{**kw, "action_mode": "mixture", "uniform_floor": 0.0})
+                   "SamplerGym/RRT-Forest-v2", **{**kw, "action_mode": "mixture", "uniform_floor": 0.0})
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error", envs.NoExplorationWarning)
-        SB3Sampler(model, "SamplerGym/RRT-Forest-v1", deterministic=False, **kw)  # draws: explores
+        SB3Sampler(model, "SamplerGym/RRT-Forest-v2", deterministic=False, **kw)  # draws: explores
         envs.EnvSampler(SamplerEnv(**kw), lambda obs, rng: rng.uniform(-1, 1, 2), deterministic=False)
     with pytest.warns(envs.NoExplorationWarning, match="EnvSampler"):
         envs.EnvSampler(SamplerEnv(**kw), lambda obs, rng: np.zeros(2))
@@ -297,7 +297,7 @@ def test_a_sampler_that_cannot_explore_warns_and_says_what_to_change():
 
 # --- the spec's max_episode_steps: truncation through Gymnasium's TimeLimit -----------------------------
 
-@pytest.mark.parametrize("env_id, steps", [("SamplerGym/RRT-Forest-v1", 2000), ("SamplerGym/RRT-RigidBody-v1", 5000)])
+@pytest.mark.parametrize("env_id, steps", [("SamplerGym/RRT-Forest-v2", 2000), ("SamplerGym/RRT-RigidBody-v1", 5000)])
 def test_time_limit_follows_max_iterations(env_id, steps):
     from gymnasium.wrappers import TimeLimit
 
@@ -321,6 +321,6 @@ def test_registered_envs_pass_the_env_checkers():
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    env = gym.make("SamplerGym/RRT-Forest-v1", max_iterations=50)
+    env = gym.make("SamplerGym/RRT-Forest-v2", max_iterations=50)
     check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env, warn=False)

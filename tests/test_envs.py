@@ -31,9 +31,9 @@ def png_map(tmp_path_factory):
 
 def make_kwargs(env_id, png_map, **extra):
     kw = dict(extra)
-    if env_id.endswith("Files-v1"):
+    if env_id.endswith("Files-v2"):
         kw["source_kwargs"] = {"paths": [str(png_map)]}
-    if env_id.endswith("MovingAI-v1"):
+    if env_id.endswith("MovingAI-v2"):
         if movingai_dir() is None:
             pytest.skip("MovingAI maps not found")
         kw["source_kwargs"] = {"directory": str(movingai_dir()), "maps": ["arena", "room-32-32-4"], "per_map": 5}
@@ -100,12 +100,12 @@ def test_same_seed_same_rollout(env_id, png_map):
     b = rollout(gym.make(env_id, **kw), seed=3)
     assert_same(a, b)
     c = rollout(gym.make(env_id, **kw), seed=4)
-    key = (lambda o: o) if env_id in VECTOR_IDS else (lambda o: o["image"])
+    key = (lambda o: o) if env_id in VECTOR_IDS else (lambda o: o["image"] if "image" in o else o["local"])
     assert not all(np.array_equal(key(x[0]), key(y[0])) for x, y in zip(a, c, strict=False))
 
 
 def test_pickle_resumes_identically():
-    env = gym.make("SamplerGym/RRT-Maze-v1", action_mode="relative")
+    env = gym.make("SamplerGym/RRT-Maze-v2", action_mode="relative")
     env.reset(seed=1)
     env.action_space.seed(1)
     for _ in range(20):
@@ -122,8 +122,8 @@ def test_pickle_resumes_identically():
 
 @pytest.mark.parametrize("vectorization_mode", ["sync", "async"])
 def test_vector_envs(vectorization_mode):
-    vec = gym.make_vec("SamplerGym/RRT-Rooms-v1", num_envs=2, vectorization_mode=vectorization_mode,
-                       action_mode="bias", max_iterations=30)
+    vec = gym.make_vec("SamplerGym/RRT-Rooms-v2", num_envs=2, vectorization_mode=vectorization_mode,
+                       action_mode="bias", observation="image", shaping=False, max_iterations=30)
     obs, _ = vec.reset(seed=0)
     assert obs["image"].shape == (2, 4, 64, 64)
     for _ in range(40):
@@ -135,7 +135,9 @@ def test_vector_envs(vectorization_mode):
 def test_sb3_make_vec_env():
     from stable_baselines3.common.env_util import make_vec_env
 
-    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v1", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture"})
+    vec = make_vec_env("SamplerGym/RRT-Bugtrap-v2", n_envs=2, seed=0, env_kwargs={"action_mode": "mixture",
+                                                                                      "observation": "image",
+                                                                                      "shaping": False})
     obs = vec.reset()
     assert obs["vector"].shape == (2, 11)
     obs, rew, done, info = vec.step(np.stack([vec.action_space.sample()] * 2))
@@ -145,7 +147,7 @@ def test_sb3_make_vec_env():
 
 def test_reregistering_is_harmless():
     importlib.reload(envs)
-    assert "SamplerGym/RRT-Maze-v1" in gym.registry
+    assert "SamplerGym/RRT-Maze-v2" in gym.registry
 
 
 @pytest.mark.parametrize("mode, n", [("point", 2), ("bias", 1), ("mixture", 4), ("relative", 3)])
@@ -264,7 +266,7 @@ def test_generic_id_runs_other_planners(planner):
 
 
 def test_render_and_record(tmp_path):
-    env = gym.make("SamplerGym/RRT-Forest-v1", render_mode="rgb_array", source_kwargs={"size": 64})
+    env = gym.make("SamplerGym/RRT-Forest-v2", render_mode="rgb_array", source_kwargs={"size": 64})
     env.reset(seed=0)
     frame = env.render()
     assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
@@ -365,7 +367,8 @@ def test_observations_come_from_one_factory_and_the_guide_is_passed_explicitly()
     from planners.base.fileio import InputError
     from planners.maps.generators import generate
 
-    with pytest.raises(InputError, match=r"observation must be one of \('image', 'egocentric'\), got 'pixels'"):
+    expected = r"observation must be one of \('image', 'egocentric', 'egocentric_flat'\), got 'pixels'"
+    with pytest.raises(InputError, match=expected):
         make_observation("pixels", 2)
     for env_id in envs.ENV_IDS:
         spec = gym.spec(env_id)

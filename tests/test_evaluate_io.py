@@ -41,7 +41,7 @@ def _ev():
     (["--size", "10"], "--size"), (["--size", "100000"], "--size = 100000"),
     (["--maps", "0"], "--maps"), (["--seeds", "-2"], "--seeds"), (["--processes", "0"], "--processes"),
     (["--unseen-maps", "-1"], "--unseen-maps"), (["--families", "lava"], "lava"),
-    (["--sampler", "mine=missing.zip@SamplerGym/RRT-Forest-v1@bogus=1"], "bogus"),
+    (["--sampler", "mine=missing.zip@SamplerGym/RRT-Forest-v2@bogus=1"], "bogus"),
     (["--sampler", "mine=no_such_module:make"], "no_such_module"),
     (["--map-set", "/no/such/maps"], "/no/such/maps"),
     (["--map-set", str(ROOT / "tests/data/ros"), "--step", "1e-6"], "--step = 1e-06 is"),

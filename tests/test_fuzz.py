@@ -353,9 +353,9 @@ odd_actions = st.one_of(
 
 
 @pytest.mark.parametrize("env_id, kwargs", [
-    ("SamplerGym/RRT-Forest-v1", {}),
-    ("SamplerGym/RRT-Forest-v1", {"action_mode": "guided", "observation": "egocentric"}),
-    ("SamplerGym/RRT-Forest-v1", {"action_mode": "bias"}),
+    ("SamplerGym/RRT-Forest-v2", {}),
+    ("SamplerGym/RRT-Forest-v2", {"action_mode": "guided", "observation": "egocentric"}),
+    ("SamplerGym/RRT-Forest-v2", {"action_mode": "bias"}),
     ("SamplerGym/RRT-RigidBody-v1", {}),
 ])
 def test_env_actions(env_id, kwargs):

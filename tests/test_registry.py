@@ -123,7 +123,8 @@ def test_the_picture_workflow_takes_step_size_and_step():
         picture_planner("rrt", problem, step_size=2.0, step=3.0)
 
 
-def test_version_0_ids_name_their_version_1():
-    """Version 1 changed the default action mode; a -v0 id is Gymnasium's DeprecatedEnv naming the -v1 id."""
-    with pytest.raises(gym.error.DeprecatedEnv, match="SamplerGym/RRT-Forest-v1"):
-        gym.make("SamplerGym/RRT-Forest-v0")
+@pytest.mark.parametrize("old", ["v0", "v1"])
+def test_older_family_ids_name_their_version_2(old):
+    """Versions 1 and 2 changed the default spaces; an older id is Gymnasium's DeprecatedEnv naming the -v2 id."""
+    with pytest.raises(gym.error.DeprecatedEnv, match="SamplerGym/RRT-Forest-v2"):
+        gym.make(f"SamplerGym/RRT-Forest-{old}")

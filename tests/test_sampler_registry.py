@@ -79,7 +79,7 @@ def test_a_spec_is_data_that_builds_its_sampler(name, value):
 
 def test_user_names_may_not_shadow_registered_samplers():
     assert parse_user_sampler("mine=my_module:make") == ("mine", "my_module:make")
-    for arg in ("route=x:y", "follower=x:y", "policy=a.zip@SamplerGym/RRT-Forest-v1", "nospec"):
+    for arg in ("route=x:y", "follower=x:y", "policy=a.zip@SamplerGym/RRT-Forest-v2", "nospec"):
         with pytest.raises(InputError):
             parse_user_sampler(arg)
 

@@ -14,7 +14,7 @@ SCRIPT = textwrap.dedent("""
     import gymnasium as gym
     import numpy as np
 
-    env = gym.make("samplergym:SamplerGym/RRT-Forest-v1", max_iterations=20)
+    env = gym.make("samplergym:SamplerGym/RRT-Forest-v2", max_iterations=20)
     obs, info = env.reset(seed=0)
     assert env.observation_space.contains(obs)
     env.step(env.action_space.sample())
@@ -38,14 +38,14 @@ def test_gym_make_with_the_module_prefix_beside_a_projects_own_envs(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["ok", "samplergym.envs.sampler_env", "SamplerEnv"]
     # without the prefix, a fresh process has not registered anything: the prefix is what imports it
-    proc = _run(tmp_path, 'import gymnasium as gym\ngym.make("SamplerGym/RRT-Forest-v1")')
+    proc = _run(tmp_path, 'import gymnasium as gym\ngym.make("SamplerGym/RRT-Forest-v2")')
     assert proc.returncode != 0 and "SamplerGym" in proc.stderr
 
 
 def test_samplergym_is_envs_when_nothing_shadows_it(tmp_path):
     code = textwrap.dedent("""
         import gymnasium as gym
-        env = gym.make("samplergym:SamplerGym/RRT-Maze-v1")
+        env = gym.make("samplergym:SamplerGym/RRT-Maze-v2")
         import envs, samplergym
         assert samplergym.envs is envs and type(env.unwrapped) is envs.SamplerEnv
         assert samplergym.make_planner.__module__ == "planners.base.registry"
@@ -73,13 +73,13 @@ def test_sb3_sampler_plans_beside_a_projects_own_envs(tmp_path):
 
         torch.set_num_threads(1)
         kwargs = {"action_mode": "bias", "obs_size": 36, "local_size": 36, "max_iterations": 50}
-        env = gym.make("samplergym:SamplerGym/RRT-Forest-v1", **kwargs)
+        env = gym.make("samplergym:SamplerGym/RRT-Forest-v2", **kwargs)
         model = PPO("MultiInputPolicy", env, seed=0, device="cpu")
         model.save("user_ppo.zip")
         problem = env.unwrapped.source(np.random.default_rng(0))
         runs = []
         for m in (model, "user_ppo.zip"):
-            sampler = SB3Sampler(m, "samplergym:SamplerGym/RRT-Forest-v1", **kwargs)
+            sampler = SB3Sampler(m, "samplergym:SamplerGym/RRT-Forest-v2", **kwargs)
             assert isinstance(sampler, samplergym.EnvSampler) and samplergym.SB3Sampler is SB3Sampler
             planner = RRT(problem, step_size=4.0, sampler=sampler, seed=0)
             r = planner.solve(max_iterations=40)
@@ -101,7 +101,7 @@ def test_sample_problem_gives_the_query_an_episode_of_that_seed_plans():
 
     from planners.base.fileio import InputError
 
-    env = gym.make("samplergym:SamplerGym/RRT-Forest-v1")
+    env = gym.make("samplergym:SamplerGym/RRT-Forest-v2")
     problem = env.unwrapped.sample_problem(7)
     env.reset(seed=7)
     episode = env.unwrapped.problem

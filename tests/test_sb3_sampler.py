@@ -34,11 +34,11 @@ REPO = Path(__file__).resolve().parents[1]
 # (env id, env kwargs, algorithm): every action mode an SB3 algorithm can drive, 2-D and 6-DoF
 # SB3's default CNN costs about 2.5 ms per sample on 64x64 and 48x48 images: the tests use its smallest
 # input (36x36) and short episodes, and fit every model briefly (the weights only need to be fixed)
-SMALL = {"obs_size": 36, "local_size": 36, "max_iterations": 300}
+SMALL = {"observation": "image", "obs_size": 36, "local_size": 36, "max_iterations": 300}
 CASES = [
-    ("SamplerGym/RRT-Forest-v1", {"action_mode": "bias", **SMALL}, PPO),
-    ("SamplerGym/RRT-Forest-v1", {"action_mode": "relative", **SMALL}, SAC),
-    ("SamplerGym/RRT-Rooms-v1", {"action_mode": "guided", **SMALL}, DQN),
+    ("SamplerGym/RRT-Forest-v2", {"action_mode": "bias", **SMALL}, PPO),
+    ("SamplerGym/RRT-Forest-v2", {"action_mode": "relative", **SMALL}, SAC),
+    ("SamplerGym/RRT-Rooms-v2", {"action_mode": "guided", **SMALL}, DQN),
     ("SamplerGym/RRT-RigidBody-v1", {"action_mode": "bias", "max_iterations": 300}, PPO),
 ]
 FOREST = {"action_mode": "bias", **SMALL}
@@ -62,8 +62,8 @@ def _train(env_id: str, kwargs: dict, algo, steps: int = 64):
 
 @pytest.fixture(scope="module")
 def ppo_forest(tmp_path_factory):
-    """A PPO model trained briefly on RRT-Forest-v1 with goal-bias actions, and its saved file."""
-    env, model = _train("SamplerGym/RRT-Forest-v1", FOREST, PPO)
+    """A PPO model trained briefly on RRT-Forest-v2 with goal-bias actions, and its saved file."""
+    env, model = _train("SamplerGym/RRT-Forest-v2", FOREST, PPO)
     path = tmp_path_factory.mktemp("user") / "user_ppo.zip"
     model.save(path)
     return model, path
@@ -94,9 +94,9 @@ def test_a_planner_run_is_the_env_rollout(env_id, kwargs, algo, tmp_path):
 @pytest.mark.parametrize("cls", [RRT, RRTStar, RRTConnect])
 def test_every_tree_planner_takes_it(ppo_forest, cls):
     _, path = ppo_forest
-    env = gym.make("SamplerGym/RRT-Forest-v1").unwrapped
+    env = gym.make("SamplerGym/RRT-Forest-v2").unwrapped
     problem = env.source(np.random.default_rng(5))
-    sampler = SB3Sampler(path, "SamplerGym/RRT-Forest-v1", **FOREST)
+    sampler = SB3Sampler(path, "SamplerGym/RRT-Forest-v2", **FOREST)
     kw = {"stop_on_first_solution": True} if cls is RRTStar else {}
     r = cls(problem, step_size=4.0, sampler=sampler, seed=0, **kw).solve(max_iterations=3000)
     assert r.solved
@@ -110,7 +110,7 @@ def test_a_model_of_every_id_plans_in_every_tree_planner(env_id, monkeypatch):
     """A (untrained) SB3 default model of each registered id, 2-D and 6-DoF, drives RRT, RRT* and RRT-Connect."""
     from conftest import movingai_dir
 
-    if env_id.endswith("MovingAI-v1"):
+    if env_id.endswith("MovingAI-v2"):
         if movingai_dir() is None:
             pytest.skip("MovingAI maps not found: set SAMPLERGYM_MOVINGAI_DIR or place them in ../shared/maps/movingai")
         monkeypatch.setenv("SAMPLERGYM_MOVINGAI_DIR", str(movingai_dir()))
@@ -129,8 +129,8 @@ def test_a_model_of_every_id_plans_in_every_tree_planner(env_id, monkeypatch):
 
 def test_stochastic_actions_are_seeded_by_the_planner(ppo_forest):
     _, path = ppo_forest
-    problem = gym.make("SamplerGym/RRT-Forest-v1").unwrapped.source(np.random.default_rng(1))
-    sampler = SB3Sampler(path, "SamplerGym/RRT-Forest-v1", **FOREST, deterministic=False)
+    problem = gym.make("SamplerGym/RRT-Forest-v2").unwrapped.source(np.random.default_rng(1))
+    sampler = SB3Sampler(path, "SamplerGym/RRT-Forest-v2", **FOREST, deterministic=False)
 
     def run(seed):
         planner = RRT(problem, step_size=4.0, sampler=sampler, seed=seed)
@@ -159,20 +159,20 @@ def test_a_pickled_call_in_the_model_file_does_not_run(ppo_forest, tmp_path):
     with zipfile.ZipFile(hostile, "w") as zf:
         for name, blob in entries.items():
             zf.writestr(name, blob)
-    SB3Sampler(hostile, "SamplerGym/RRT-Forest-v1", **FOREST)
+    SB3Sampler(hostile, "SamplerGym/RRT-Forest-v2", **FOREST)
     assert not target.exists()
 
 
 def test_a_model_for_another_env_is_refused_by_name(ppo_forest, tmp_path):
     model, path = ppo_forest
     with pytest.raises(InputError, match=r"user_ppo\.zip: its weights do not fit"):
-        SB3Sampler(path, "SamplerGym/RRT-Forest-v1", **{**FOREST, "action_mode": "point"})
+        SB3Sampler(path, "SamplerGym/RRT-Forest-v2", **{**FOREST, "action_mode": "point"})
     with pytest.raises(InputError, match="trained on observations"):
         SB3Sampler(model, "SamplerGym/RRT-RigidBody-v1")
     with pytest.raises(InputError, match="not-an-id"):
         SB3Sampler(path, "SamplerGym/not-an-id")
     with pytest.raises(FileNotFoundError):
-        SB3Sampler(tmp_path / "missing.zip", "SamplerGym/RRT-Forest-v1")
+        SB3Sampler(tmp_path / "missing.zip", "SamplerGym/RRT-Forest-v2")
 
 
 @pytest.mark.parametrize("kwargs", [{"observation": "egocentric"}, {"obs_size": 48}])
@@ -180,7 +180,7 @@ def test_a_model_of_other_observations_is_refused_up_front_naming_both(ppo_fores
     _, path = ppo_forest
     with pytest.raises(InputError, match=r"user_ppo\.zip: the model was trained on observations \{'image': "
                                          r"\(4, 36, 36\) uint8.*this environment gives .*env kwargs"):
-        SB3Sampler(path, "SamplerGym/RRT-Forest-v1", **{**FOREST, **kwargs})
+        SB3Sampler(path, "SamplerGym/RRT-Forest-v2", **{**FOREST, **kwargs})
 
 
 def _load_evaluate():
@@ -191,14 +191,14 @@ def test_the_worked_example_ranks_a_user_model_and_a_user_factory(ppo_forest, tm
     """README: train with SB3's defaults, save, compare with one command, read the table."""
     _, path = ppo_forest
     out = tmp_path / "evaluation"
-    opts = "@action_mode=bias@obs_size=36@local_size=36@max_iterations=300"
+    opts = "@action_mode=bias@observation=image@obs_size=36@local_size=36@max_iterations=300"
     rc = _load_evaluate().main([
         "--families", "forest", "--size", "64", "--maps", "2", "--tuning-maps", "2", "--seeds", "1",
         "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "--processes", "1",
         "--max-iterations", "600",
         "--no-expert",
-        "--sampler", f"mine={path}@SamplerGym/RRT-Forest-v1{opts}",
-        "--sampler", f"mine_stochastic={path}@SamplerGym/RRT-Forest-v1{opts}@stochastic",
+        "--sampler", f"mine={path}@SamplerGym/RRT-Forest-v2{opts}",
+        "--sampler", f"mine_stochastic={path}@SamplerGym/RRT-Forest-v2{opts}@stochastic",
         "--sampler", "factory=planners.base.samplers:UniformSampler", "--out", str(out)])
     assert rc == 0
     printed = capsys.readouterr().out
@@ -218,7 +218,7 @@ def test_the_worked_example_ranks_a_user_model_and_a_user_factory(ppo_forest, tm
 @pytest.mark.parametrize(("arg", "match"), [
     ("mine", "expected NAME=SPEC"),
     ("uniform=planners.base.samplers:UniformSampler", "taken"),
-    ("mine=nowhere.zip@SamplerGym/RRT-Forest-v1", "nowhere.zip"),
+    ("mine=nowhere.zip@SamplerGym/RRT-Forest-v2", "nowhere.zip"),
     ("mine=planners.base.samplers:NoSuchSampler", "NoSuchSampler"),
     ("mine=planners.worlds.grid:OccupancyGrid", "not a Sampler|OccupancyGrid"),
 ])
@@ -235,7 +235,7 @@ def test_the_policy_acts_at_the_planning_thread_count_and_restores_the_callers(p
 
     model, _ = ppo_forest
     seen = []
-    sampler = SB3Sampler(model, "SamplerGym/RRT-Forest-v1", threads=2, **FOREST)
+    sampler = SB3Sampler(model, "SamplerGym/RRT-Forest-v2", threads=2, **FOREST)
     act = sampler._act_now
     monkeypatch.setattr(sampler, "_act_now", lambda obs, rng: seen.append(torch.get_num_threads()) or act(obs, rng))
     torch.set_num_threads(1)
@@ -243,11 +243,11 @@ def test_the_policy_acts_at_the_planning_thread_count_and_restores_the_callers(p
     assert set(seen) == {2} and torch.get_num_threads() == 1
     assert planning_thread_count() == 1
     with pytest.raises(InputError, match="threads = 0"):
-        SB3Sampler(model, "SamplerGym/RRT-Forest-v1", threads=0, **FOREST)
+        SB3Sampler(model, "SamplerGym/RRT-Forest-v2", threads=0, **FOREST)
 
 
-@pytest.mark.parametrize(("env_id", "kwargs"), [("SamplerGym/RRT-Forest-v1", FOREST),
-                                                ("SamplerGym/RRT-Rooms-v1", {"action_mode": "guided", **SMALL})],
+@pytest.mark.parametrize(("env_id", "kwargs"), [("SamplerGym/RRT-Forest-v2", FOREST),
+                                                ("SamplerGym/RRT-Rooms-v2", {"action_mode": "guided", **SMALL})],
                          ids=["gaussian", "categorical"])
 def test_the_direct_actor_pass_takes_sb3s_actions(env_id, kwargs, monkeypatch):
     """``ActorPass`` (modules called directly, features reused) gives SB3's actions: the same runs, draw for draw."""
@@ -255,12 +255,12 @@ def test_the_direct_actor_pass_takes_sb3s_actions(env_id, kwargs, monkeypatch):
     model = PPO("MultiInputPolicy", env, seed=0, device="cpu")
     base = env.unwrapped
     reference = {True: base.as_sampler(lambda obs, rng: model.predict(obs, deterministic=True)[0]),
-                 False: SB3Sampler(model, env_id, deterministic=False, **kwargs)}
+                 False: SB3Sampler(model, env_id, deterministic=False, batch=1, **kwargs)}
     monkeypatch.setattr(reference[False], "_actor", None)  # SB3's own obs_to_tensor and get_distribution
     calls = []
     model.policy.features_extractor.extractors["image"].register_forward_hook(lambda *_: calls.append(1))
     for deterministic in (True, False):
-        sampler = SB3Sampler(model, env_id, deterministic=deterministic, **kwargs)
+        sampler = SB3Sampler(model, env_id, deterministic=deterministic, batch=1, **kwargs)
         assert sampler._actor is not None
         for k in range(3):
             problem = base.source(np.random.default_rng(k))
@@ -273,3 +273,52 @@ def test_the_direct_actor_pass_takes_sb3s_actions(env_id, kwargs, monkeypatch):
             assert runs[0][:2] == runs[1][:2]
             assert np.array_equal(runs[0][2], runs[1][2])
             assert runs[1][3] == runs[1][0] > runs[0][3]  # SB3 runs the image CNN every draw; the pass reuses it
+
+
+def test_a_policy_without_cnn_runs_in_numpy_and_takes_sb3s_actions(monkeypatch):
+    """On a -v2 family id's defaults (flattened windows) ``MlpActor`` gives the actions of SB3's own pass."""
+    env_id = "SamplerGym/RRT-Forest-v2"
+    env = gym.make(env_id, max_iterations=300)
+    model = PPO("MultiInputPolicy", env, seed=0, device="cpu")
+    base = env.unwrapped
+    for deterministic in (True, False):
+        fast = SB3Sampler(model, env_id, deterministic=deterministic, max_iterations=300)
+        slow = SB3Sampler(model, env_id, deterministic=deterministic, max_iterations=300)
+        assert fast._mlp is not None
+        monkeypatch.setattr(slow, "_mlp", None)
+        for k in range(2):
+            problem = base.source(np.random.default_rng(k))
+            runs = []
+            for s in (fast, slow):
+                planner = RRT(problem, step_size=base.step_size, sampler=s, seed=k)
+                r = planner.solve(max_iterations=100)
+                runs.append((r.iterations, r.solved, planner.view().vertices.copy()))
+            assert runs[0][:2] == runs[1][:2]
+            assert np.array_equal(runs[0][2], runs[1][2])
+    obs, _ = env.reset(seed=0)
+    from learning.samplers.sb3 import MlpActor
+
+    actor = MlpActor.of(model.policy)
+    with torch.no_grad():
+        logits = model.policy.get_distribution(model.policy.obs_to_tensor(obs)[0]).distribution.logits
+    np.testing.assert_allclose(actor.head(obs) - actor.head(obs).max(), logits[0].numpy() - logits[0].numpy().max(),
+                               atol=1e-5)
+    assert actor.head({"local": obs["local"][:3], "vector": obs["vector"]}) is None  # a wrong shape: not this pass
+
+
+def test_guided_draws_decide_once_per_batch():
+    """A sampler drawing guided classes answers GUIDED_BATCH classes per observation; other modes refuse a batch."""
+    from learning.samplers.sb3 import GUIDED_BATCH
+
+    env_id = "SamplerGym/RRT-Forest-v2"
+    model = PPO("MultiInputPolicy", gym.make(env_id, max_iterations=300), seed=0, device="cpu")
+    sampler = SB3Sampler(model, env_id, max_iterations=300)
+    assert sampler.batch == GUIDED_BATCH and not sampler.deterministic
+    assert SB3Sampler(model, env_id, deterministic=True, max_iterations=300).batch == 1
+    calls = []
+    act_batch = sampler.act_batch
+    sampler.act_batch = lambda obs, rng, k: calls.append(k) or act_batch(obs, rng, k)
+    r = RRT(generate("forest", 3, 64), step_size=4.0, sampler=sampler, seed=0).solve(max_iterations=200)
+    assert sum(calls) >= r.iterations > len(calls) and max(calls) <= GUIDED_BATCH
+    with pytest.raises(InputError, match="batch=4 needs the guided action mode"):
+        envs.EnvSampler(envs.SamplerEnv(action_mode="mixture"), lambda obs, rng: np.zeros(4), batch=4)

@@ -270,7 +270,8 @@ def summary_markdown(results) -> str:
     groups = [k for k in (glance[0] if glance else {}) if k not in ("sampler", "time per query", "success")]
     return (f"# Sampler comparison\n\n{len(results.all_runs)} runs in {results.minutes:.1f} min; {_where(results)}. "
             f"Policy {c.policy}; route encoder {c.route}.\n\n"
-            + (f"User samplers: {users.rstrip('; ')} (deterministic actions unless the spec says @stochastic).\n\n"
+            + (f"User samplers: {users.rstrip('; ')} (the policy's mode, draws for guided actions, unless the spec "
+               "says @stochastic or @deterministic).\n\n"
                if users else "")
             + (f"Your route encoders, beside the shipped one: {routes.rstrip('; ')}.\n\n" if routes else "")
             + ("## At a glance\n\nNo 2D map set ran: the comparison is its parts (details.md has their "

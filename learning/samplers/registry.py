@@ -260,7 +260,7 @@ def parse_user_sampler(arg: str, taken: tuple[str, ...] = ()) -> tuple[str, str]
     name, sep, spec = arg.partition("=")
     name, spec = name.strip(), spec.strip()
     if not sep or not name or not spec:
-        raise InputError(f"--sampler {arg!r}: expected NAME=SPEC, e.g. mine=user_ppo.zip@SamplerGym/RRT-Forest-v1 "
+        raise InputError(f"--sampler {arg!r}: expected NAME=SPEC, e.g. mine=user_ppo.zip@SamplerGym/RRT-Forest-v2 "
                          "or mine=my_module:make_sampler")
     if name in taken or name in REGISTRY or name.startswith("goal_bias=") or "," in name:
         raise InputError(f"--sampler {arg!r}: the name {name!r} is taken or has a comma; choose another")
@@ -271,7 +271,8 @@ def user_sampler(spec: str) -> Sampler:
     """The sampler a spec names.
 
     ``MODEL.zip@ENV_ID[@OPTION...]``: an SB3 model trained on that SamplerGym id (``SB3Sampler``);
-    options are ``stochastic`` (draw actions from the policy's distribution; default deterministic),
+    options are ``stochastic`` (draw actions from the policy's distribution) or ``deterministic`` (its mode;
+    without either, ``SB3Sampler``'s default: the mode, draws in the ``guided`` action mode), ``batch=K``,
     ``algo=NAME``, or env kwargs ``key=value`` (the ones the model was trained with; values read as
     JSON where they parse, else as strings). ``module:callable``: ``callable()`` returns a ``Sampler``.
     """
@@ -279,7 +280,7 @@ def user_sampler(spec: str) -> Sampler:
         from learning.samplers.sb3 import SB3Sampler
 
         path, env_id, *options = spec.split("@")
-        kwargs: dict = {"deterministic": True}
+        kwargs: dict = {}
         for opt in options:
             key, sep, value = opt.partition("=")
             if opt in ("stochastic", "deterministic"):

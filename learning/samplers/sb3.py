@@ -1,7 +1,7 @@
 """Any Stable-Baselines3 model trained on a SamplerGym environment, as a planner ``Sampler``.
 
     from learning import SB3Sampler
-    sampler = SB3Sampler("user_ppo.zip", "SamplerGym/RRT-Forest-v1")
+    sampler = SB3Sampler("user_ppo.zip", "SamplerGym/RRT-Forest-v2")
     RRT(problem, step_size=4.0, sampler=sampler, seed=0).solve(20_000)
 
 The model sees what it saw in training and its actions become samples through the environment's own
@@ -14,7 +14,9 @@ algorithm they belong to (PPO / A2C, DQN, SAC, TD3), built for the environment's
 
 Each sample costs a pass of the policy's actor. For PPO and A2C policies ``ActorPass`` runs it module by
 module, without SB3's per-call checks, and reuses each observation key's features while that key's
-array is unchanged; the actions are the ones ``model.predict`` gives.
+array is unchanged; the actions are the ones ``model.predict`` gives. A policy with no CNN (the
+``-v2`` family ids' observations, which SB3 flattens) runs in numpy (``MlpActor``), a few times
+faster than a torch call at one decision per iteration.
 """
 
 from __future__ import annotations
@@ -126,6 +128,17 @@ def _recorded_space(data: dict) -> str | None:
     return None
 
 
+def _gaussian_or_categorical(policy) -> bool | None:
+    """For an SB3 actor-critic policy (PPO, A2C): True for Gaussian actions, False for categorical; else None."""
+    from stable_baselines3.common.distributions import CategoricalDistribution, DiagGaussianDistribution
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    if not isinstance(policy, ActorCriticPolicy):
+        return None
+    kind = type(policy.action_dist)
+    return {DiagGaussianDistribution: True, CategoricalDistribution: False}.get(kind)
+
+
 class ActorPass:
     """An SB3 actor-critic policy's actor (PPO, A2C), module by module, reusing a part's output while its input holds.
 
@@ -151,15 +164,11 @@ class ActorPass:
 
     @classmethod
     def of(cls, policy) -> ActorPass | None:
-        from stable_baselines3.common.distributions import CategoricalDistribution, DiagGaussianDistribution
-        from stable_baselines3.common.policies import ActorCriticPolicy
         from stable_baselines3.common.preprocessing import is_image_space
         from stable_baselines3.common.torch_layers import CombinedExtractor
 
-        if not isinstance(policy, ActorCriticPolicy):
-            return None
-        kind = type(policy.action_dist)
-        if kind not in (DiagGaussianDistribution, CategoricalDistribution):
+        gaussian = _gaussian_or_categorical(policy)
+        if gaussian is None:
             return None
         space = policy.observation_space
         boxes = dict(space.spaces) if isinstance(space, spaces.Dict) else {None: space}
@@ -171,7 +180,7 @@ class ActorPass:
             parts = list(extractor.extractors.items())
         else:
             parts = [(None, extractor)]
-        return cls(policy, kind is DiagGaussianDistribution, parts, scales)
+        return cls(policy, gaussian, parts, scales)
 
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_last": {}}
@@ -235,6 +244,98 @@ class ActorPass:
             return torch.argmax(self.distribution(head).probs, dim=1)
 
 
+#: Samples per decision of a sampler drawing guided classes (``SB3Sampler(batch=None)``): chosen on the
+#: forest tuning maps by ``learning.sb3_defaults.choose_batch`` (docs/first-steps.md), the largest batch
+#: whose median iterations stay within 10% of deciding every sample.
+GUIDED_BATCH = 32
+
+
+class MlpActor:
+    """An SB3 actor-critic policy whose extractor only flattens, evaluated in numpy.
+
+    An ``MlpPolicy``, or a ``MultiInputPolicy`` on non-image keys (the ``-v2`` family ids). Such a policy
+    is a few small matrix products; torch's per-call overhead is several times their cost, so at one
+    decision per planner iteration numpy runs the same layers on the same float32 weights (the outputs
+    agree with torch's to rounding). ``MlpActor.of(policy)`` builds one for the policies it reproduces
+    (flattening extractor, ``Linear`` and ``Tanh`` / ``ReLU`` policy layers, Gaussian or categorical
+    actions), else None.
+    """
+
+    def __init__(self, keys: list[str | None], shapes: dict, layers: list, gaussian: bool, std: np.ndarray | None,
+                 space) -> None:
+        self.keys, self.shapes, self.layers = keys, shapes, layers
+        self.gaussian, self.std, self.space = gaussian, std, space
+
+    @classmethod
+    def of(cls, policy) -> MlpActor | None:
+        from stable_baselines3.common.preprocessing import is_image_space
+        from stable_baselines3.common.torch_layers import CombinedExtractor, FlattenExtractor
+        from torch import nn
+
+        gaussian = _gaussian_or_categorical(policy)
+        if gaussian is None:
+            return None
+        space = policy.observation_space
+        extractor = policy.pi_features_extractor
+        if isinstance(space, spaces.Dict) and type(extractor) is CombinedExtractor:
+            keys = list(extractor.extractors)
+            if not all(type(m) is nn.Flatten for m in extractor.extractors.values()):
+                return None
+            boxes = {k: space.spaces[k] for k in keys}
+        elif type(space) is spaces.Box and type(extractor) is FlattenExtractor:
+            keys, boxes = [None], {None: space}
+        else:
+            return None
+        if not all(type(b) is spaces.Box and not is_image_space(b) for b in boxes.values()):
+            return None
+        layers = []
+        for module in [*policy.mlp_extractor.policy_net, policy.action_net]:
+            if type(module) is nn.Linear:
+                layers.append((module.weight.detach().cpu().numpy().astype(np.float32),
+                               module.bias.detach().cpu().numpy().astype(np.float32)))
+            elif type(module) in (nn.Tanh, nn.ReLU):
+                layers.append(np.tanh if type(module) is nn.Tanh else _relu)
+            else:
+                return None
+        std = np.exp(policy.log_std.detach().cpu().numpy().astype(np.float64)) if gaussian else None
+        return cls(keys, {k: b.shape for k, b in boxes.items()}, layers, gaussian, std, policy.action_space)
+
+    def head(self, obs) -> np.ndarray | None:
+        """The action net's output (Gaussian means or categorical logits) for one observation, or None."""
+        parts = []
+        for k in self.keys:
+            a = np.asarray(obs if k is None else obs[k])
+            if a.shape != self.shapes[k]:
+                return None
+            parts.append(a.reshape(-1))
+        x = np.concatenate(parts).astype(np.float32, copy=False)
+        for layer in self.layers:
+            x = layer(x) if callable(layer) else layer[0] @ x + layer[1]
+        return x
+
+    def act(self, obs, rng: np.random.Generator, deterministic: bool):
+        """SB3's action (``deterministic``) or one drawn from its distribution with ``rng``; None if ``obs`` misfits."""
+        head = self.head(obs)
+        if head is None:
+            return None
+        if self.gaussian:
+            a = head.astype(np.float64) if deterministic else head + self.std * rng.standard_normal(head.shape)
+            return np.clip(a, self.space.low, self.space.high).astype(np.float32)
+        if deterministic:
+            return np.int64(np.argmax(head))
+        return int(_draw_classes(np.exp(head.astype(np.float64) - float(head.max())), rng, 1)[0])
+
+
+def _draw_classes(weights: np.ndarray, rng: np.random.Generator, k: int) -> np.ndarray:
+    """``k`` classes drawn with probabilities proportional to ``weights`` (one uniform each, as ``_act_now``)."""
+    cdf = np.cumsum(weights)
+    return np.minimum(np.searchsorted(cdf, rng.random(k) * cdf[-1], side="right"), len(cdf) - 1).astype(np.int64)
+
+
+def _relu(x: np.ndarray) -> np.ndarray:
+    return np.maximum(x, 0.0)
+
+
 class SB3Sampler(EnvSampler):
     """A trained SB3 model (or a path to its ``.zip``) as a ``Sampler`` every planner accepts.
 
@@ -242,19 +343,26 @@ class SB3Sampler(EnvSampler):
         model: An SB3 model or policy, or the path of a model saved with ``model.save``.
         env_id: The SamplerGym id it was trained on; ``env_kwargs`` are the kwargs it was made with.
             They fix the observation and action code; the maps come from the planner's problem.
-        deterministic: Take the policy's most likely action (the default). Otherwise draw the action
-            from the policy's distribution with the planner's generator, so runs stay seeded
-            (actor-critic policies: PPO, A2C). Deterministic in an action mode with no uniform floor
+        deterministic: Take the policy's most likely action (the default, except in the ``guided``
+            action mode, whose classes are cells to sample in: there the default draws). Otherwise
+            draw the action from the policy's distribution with the planner's generator, so runs
+            stay seeded (actor-critic policies: PPO, A2C). Deterministic in an action mode with no uniform floor
             (``point``, or ``uniform_floor=0``) warns (``envs.NoExplorationWarning``): such a
             sampler may sample one place forever.
         algo: For a path: the algorithm (``PPO``, ``A2C``, ``DQN``, ``SAC``, ``TD3``), guessed from the
             weight names if omitted. ``policy_kwargs``: those the model was trained with, if any.
+        batch: Samples per decision in the ``guided`` action mode (``envs.EnvSampler``): each
+            observation answers ``batch`` classes, drawn from the policy's distribution (its mode,
+            deterministically), and the planner uses their samples in turn. Default
+            ``GUIDED_BATCH`` where the sampler draws guided classes, else 1 (which decides every
+            sample, so a deterministic sampler's run is the env's rollout, draw for draw).
         threads: torch threads for the policy's passes while planning (``learning.models.threads``):
             default ``SAMPLERGYM_TORCH_THREADS`` or 1; the caller's setting is restored after each pass.
     """
 
-    def __init__(self, model: Any, env_id: str, *, deterministic: bool = True, algo: str | None = None,
-                 policy_kwargs: dict | None = None, threads: int | None = None, **env_kwargs) -> None:
+    def __init__(self, model: Any, env_id: str, *, deterministic: bool | None = None, algo: str | None = None,
+                 policy_kwargs: dict | None = None, threads: int | None = None, batch: int | None = None,
+                 **env_kwargs) -> None:
         import gymnasium as gym
 
         try:
@@ -276,6 +384,10 @@ class SB3Sampler(EnvSampler):
                                  f"{policy.action_space}; {env_id} with {env_kwargs or 'no kwargs'} has "
                                  f"{env.observation_space} and {env.action_space}")
             self.source = type(model).__name__
+        if deterministic is None:  # a guided class is a distribution over cells: its draws are the sampler
+            deterministic = env.action_mode != "guided" or not hasattr(policy, "get_distribution")
+        if batch is None:
+            batch = GUIDED_BATCH if env.action_mode == "guided" and not deterministic else 1
         if not deterministic and not hasattr(policy, "get_distribution"):
             raise InputError(f"deterministic=False needs an actor-critic policy (PPO, A2C) whose action distribution "
                              f"can be drawn from; {type(policy).__name__} acts deterministically only")
@@ -290,13 +402,34 @@ class SB3Sampler(EnvSampler):
         self.deterministic = bool(deterministic)
         self.env_id = env_id
         self._actor = ActorPass.of(policy)
-        super().__init__(env, self._act, deterministic=self.deterministic)
+        self._mlp = MlpActor.of(policy)
+        super().__init__(env, self._act, deterministic=self.deterministic, act_batch=self._act_batch, batch=batch)
 
     def _act(self, obs, rng: np.random.Generator):
         with planning_threads(self.threads):
             return self._act_now(obs, rng)
 
+    def _act_batch(self, obs, rng: np.random.Generator, k: int) -> np.ndarray:
+        """``k`` guided classes for one observation: the policy's mode ``k`` times, or ``k`` draws from it."""
+        with planning_threads(self.threads):
+            if self.deterministic:
+                return np.full(k, int(self._act_now(obs, rng)), dtype=np.int64)
+            head = self._mlp.head(obs) if self._mlp is not None else None
+            if head is not None:
+                return _draw_classes(np.exp(head.astype(np.float64) - float(head.max())), rng, k)
+            head = self._actor.head(obs) if self._actor is not None else None
+            if head is not None:
+                dist = self._actor.distribution(head)
+            else:
+                with torch.no_grad():
+                    dist = self.policy.get_distribution(self.policy.obs_to_tensor(obs)[0]).distribution
+            return _draw_classes(dist.probs[0].double().numpy(), rng, k)
+
     def _act_now(self, obs, rng: np.random.Generator):
+        if self._mlp is not None:
+            action = self._mlp.act(obs, rng, self.deterministic)
+            if action is not None:
+                return action
         head = self._actor.head(obs) if self._actor is not None else None
         if self.deterministic:
             return self._predict(obs) if head is None else self._actions(self._actor.mode(head))
@@ -307,8 +440,7 @@ class SB3Sampler(EnvSampler):
                 obs_t, _ = self.policy.obs_to_tensor(obs)
                 dist = self.policy.get_distribution(obs_t).distribution
         if isinstance(dist, torch.distributions.Categorical):
-            cdf = np.cumsum(dist.probs[0].double().numpy())
-            return min(int(np.searchsorted(cdf, rng.random() * cdf[-1], side="right")), len(cdf) - 1)
+            return int(_draw_classes(dist.probs[0].double().numpy(), rng, 1)[0])
         if isinstance(dist, torch.distributions.Normal):
             mean, std = dist.mean[0].double().numpy(), dist.stddev[0].double().numpy()
             a = mean + std * rng.standard_normal(mean.shape)
