@@ -14,7 +14,7 @@ import numpy as np
 
 from planners import OccupancyGrid, Problem, load_movingai_scenarios, movingai_dir
 from planners.base.fileio import InputError
-from planners.maps.generators import FAMILIES, generate
+from planners.maps.generators import FAMILIES, TRAIN_SEEDS, generate
 from planners.maps.gridsearch import free_components
 from planners.maps.mapset import PARTS, MapSet, MixedMapSet
 
@@ -41,8 +41,9 @@ def _seeded(seeds: Sequence[int] | None) -> np.ndarray | None:
     return out
 
 
-def _draw_seed(pool: np.ndarray | None, np_random: np.random.Generator) -> int:
-    return int(np_random.integers(2**31)) if pool is None else int(pool[np_random.integers(len(pool))])
+def _draw_seed(pool: np.ndarray | None, np_random: np.random.Generator, low: int = 0, high: int = 2**31) -> int:
+    """A seed from ``pool``, or from ``[low, high)`` when there is none."""
+    return int(np_random.integers(low, high)) if pool is None else int(pool[np_random.integers(len(pool))])
 
 
 class FamilySource:
@@ -52,7 +53,9 @@ class FamilySource:
         family: One of ``planners.maps.generators.FAMILIES``.
         size: Map side in cells.
         goal_tolerance: Goal radius of every problem.
-        seeds: Optional pool of map seeds to draw from (e.g. a training split); default any seed.
+        seeds: Optional pool of map seeds to draw from; default the training split's seeds
+            (``planners.maps.generators.TRAIN_SEEDS``), so an environment never serves a validation, tuning
+            or test map unless asked to.
     """
 
     def __init__(self, family: str, size: int = 64, goal_tolerance: float = 4.0,
@@ -63,7 +66,7 @@ class FamilySource:
         self.seeds = _seeded(seeds)
 
     def __call__(self, np_random: np.random.Generator) -> Problem:
-        seed = _draw_seed(self.seeds, np_random)
+        seed = _draw_seed(self.seeds, np_random, *TRAIN_SEEDS)
         return generate(self.family, seed, self.size, goal_tolerance=self.goal_tolerance)
 
     def __repr__(self) -> str:

@@ -386,3 +386,19 @@ def test_observations_come_from_one_factory_and_the_guide_is_passed_explicitly()
     env = gym.make("SamplerGym/Planning-v1", observation="egocentric", action_mode="guided").unwrapped
     env.reset(seed=0)
     assert env.guide is not None and env.planner.sampler.guide is env.guide
+
+
+def test_a_family_source_draws_training_maps_only_by_default(monkeypatch):
+    """Without a seed pool an environment serves training maps, never a validation, tuning or test seed."""
+    from envs import sources
+    from planners.maps.generators import TRAIN_SEEDS
+
+    seen = []
+    monkeypatch.setattr(sources, "generate", lambda family, seed, size, **kw: seen.append(seed))
+    source, rng = sources.FamilySource("forest"), np.random.default_rng(0)
+    for _ in range(500):
+        source(rng)
+    assert all(TRAIN_SEEDS[0] <= s < TRAIN_SEEDS[1] for s in seen) and len(set(seen)) > 450
+    pooled = sources.FamilySource("forest", seeds=[5_000_000])
+    pooled(rng)
+    assert seen[-1] == 5_000_000  # a pool the caller gives is used as it is
