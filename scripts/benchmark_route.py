@@ -8,9 +8,12 @@
 
 Each row is one map side and family (a generated forest, and a maze, whose route winds furthest;
 ``--families``; ``--symmetries`` passes, the goal in a free cell):
-the median and the best of ``--repeat`` timed ``predict`` calls after one untimed warm-up call, with the
-encoder's own planning threads (``--threads``) and, with ``--batch N``, the time per query when N
-queries of that side go through ``predict_many`` together (the evaluation's batched path on a GPU).
+the median and the best of ``--repeat`` timed ``predict`` calls after one untimed warm-up call, each the first
+query on its map (nothing of the map kept), with the encoder's own planning threads (``--threads``); for an
+encoder that keeps a map's goal-free parts (``RouteVIN.map_cache_bytes``), the median and best of as many later
+queries on the same map, each to another goal (``later_ms``: a robot planning again on its map); and, with
+``--batch N``, the time per query when N queries of that side go through ``predict_many`` together (the
+evaluation's batched path on a GPU).
 Peak memory is the process's resident peak after the row (CPU; sides in increasing order), or the
 GPU's allocated peak for the row. A side above the encoder's block limit is shown as refused, with the
 limit's message. Times are wall times in one process; the machine's load is printed beside them.
@@ -73,11 +76,25 @@ def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, ba
     sync = torch.cuda.synchronize if cuda else (lambda: None)
     if cuda:
         torch.cuda.reset_peak_memory_stats()
-    times = _timed(lambda: net.predict(obstacles, goal, symmetries, threads=threads), repeat, sync)
+    forget = getattr(net, "clear_map_cache", lambda: None)
+
+    def first_query() -> None:  # the first query on this map: nothing of it kept
+        forget()
+        net.predict(obstacles, goal, symmetries, threads=threads)
+
+    times = _timed(first_query, repeat, sync)
     row["ms_per_query"] = round(1000 * float(np.median(times)), 1)
     row["best_ms"] = round(1000 * min(times), 1)
+    free = np.argwhere(~obstacles.astype(bool))
+    if getattr(net, "map_cache_bytes", 0) > 0:
+        # later queries on the same map: other goals (seeded free cells), the map's goal-free parts kept
+        picks = np.random.default_rng(side + 1).choice(len(free), size=repeat + 1, replace=len(free) <= repeat)
+        goals = iter([(int(free[i][0]), int(free[i][1])) for i in picks])
+        net.predict(obstacles, goal, symmetries, threads=threads)
+        later = _timed(lambda: net.predict(obstacles, next(goals), symmetries, threads=threads), repeat, sync)
+        row["later_ms"] = round(1000 * float(np.median(later)), 2)
+        row["later_best_ms"] = round(1000 * min(later), 2)
     if batch > 1:
-        free = np.argwhere(~obstacles.astype(bool))
         picks = np.random.default_rng(side).choice(len(free), size=batch, replace=len(free) < batch)
         queries = [(obstacles, (int(free[i][0]), int(free[i][1]))) for i in picks]
         many = _timed(lambda: net.predict_many(queries, symmetries, threads=threads), max(1, repeat // 2), sync)
@@ -147,6 +164,8 @@ def main(argv=None) -> int:
                                        batch=args.batch, device=device, family=family))
                 print(markdown_table([rows[-1]], [c for c in rows[-1] if c != "note"]).splitlines()[-1], flush=True)
     columns = ["family", "side", "threads", "ms_per_query", "best_ms"]
+    if any("later_ms" in row for row in rows):
+        columns += ["later_ms", "later_best_ms"]
     if args.batch > 1:
         columns.append(f"ms_per_query_batch_{args.batch}")
     columns += ["peak_mb", "load"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -395,3 +396,58 @@ def test_a_pass_in_strips_of_rows_gives_the_one_piece_field_and_refuses_gradient
     with pytest.raises(ValueError, match="strips, at inference only"):
         net(x)  # gradients on: a training pass never runs in strips
     assert net.pass_bytes(2048, 2048) < 1 << 30  # a 4096 x 4096 map within 1 GB
+
+
+def _whole_and_reused(net: RouteVIN, obstacles: np.ndarray, goal: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    keep = net.map_cache_bytes
+    try:
+        net.map_cache_bytes = 0  # one whole pass, as before any map was kept
+        whole = net.predict(obstacles, goal)
+    finally:
+        net.map_cache_bytes = keep
+    return whole, net.predict(obstacles, goal)
+
+
+@settings(max_examples=40, deadline=None)
+@given(h=st.integers(4, 40), w=st.integers(4, 40), depth=st.integers(1, 4), density=st.sampled_from([0.0, 0.2, 0.4]),
+       seed=st.integers(0, 2**16), goals=st.lists(st.tuples(st.floats(0, 1), st.floats(0, 1)), min_size=1, max_size=3),
+       wall_cost=st.sampled_from([None, 1.2, 32.0]), step_walls=st.booleans())
+def test_a_kept_map_gives_every_goal_the_whole_pass_field(h, w, depth, density, seed, goals, wall_cost, step_walls):
+    torch.manual_seed(seed)  # the weights only; the map and goals come from the seeded generator below
+    net = make_route_net("vin", block=2, channels=8, depth=depth, step=2).eval()
+    net.wall_cost, net.step_walls = wall_cost, step_walls  # 1.2: many moves priced as walls, on both paths
+    obstacles = np.random.default_rng(seed).random((h, w)) < density
+    for fr, fc in goals:  # goals anywhere, the map's edges and corners included; later ones reuse the kept map
+        goal = (min(h - 1, int(fr * h)), min(w - 1, int(fc * w)))
+        obstacles[goal] = False
+        whole, reused = _whole_and_reused(net, obstacles, goal)
+        reached = whole < 1e5
+        assert np.array_equal(reached, reused < 1e5)
+        assert np.abs(reused - whole)[reached].max(initial=0.0) < 1e-4
+
+
+def test_kept_maps_stay_within_their_bytes_and_go_with_new_weights():
+    net = load_route_net(SHIPPED)
+    problems = [generate("forest", TRAIN_SEEDS[0] + i, 64) for i in range(3)]
+    for p in problems:
+        net.predict(p.world.obstacles, p.world.cell_of(p.goal))
+    assert len(net._maps) == 3
+    one = next(iter(net._maps.values())).nbytes()
+    net.map_cache_bytes = 2 * one  # room for two maps: the least recently used one goes
+    net.predict(problems[0].world.obstacles, problems[0].world.cell_of(problems[0].goal))
+    assert len(net._maps) == 2
+    copy = pickle.loads(pickle.dumps(net))  # a copy sent to another process starts with no kept map
+    assert len(copy._maps) == 0 and len(net._maps) == 2
+    obstacles, goal = problems[1].world.obstacles, problems[1].world.cell_of(problems[1].goal)
+    before = net.predict(obstacles, goal)
+    state = {k: v * 1.5 if k.startswith("local.0") else v for k, v in net.state_dict().items()}
+    net.load_state_dict(state)  # other weights: nothing kept from the old ones may serve them
+    assert len(net._maps) == 0
+    whole, changed = _whole_and_reused(net, obstacles, goal)
+    reached = whole < 1e5
+    assert np.abs(changed - whole)[reached].max() < 1e-4 and np.array_equal(reached, changed < 1e5)
+    assert not np.allclose(before, changed)
+    net.map_cache_bytes = 1 << 20
+    net.predict(obstacles, goal)
+    net.train()
+    assert len(net._maps) == 0  # training changes the weights in place

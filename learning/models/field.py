@@ -103,6 +103,13 @@ class FieldEncoder:
         """About how many bytes one pass over an ``h`` x ``w`` block grid holds at its peak (one symmetry)."""
         return BYTES_PER_BLOCK * h * w
 
+    def infer(self, x: torch.Tensor) -> torch.Tensor:
+        """The pass ``predict`` takes (no gradients): ``forward``, unless the encoder has a cheaper way there.
+
+        ``RouteVIN`` reuses what it computed for a map at its next query on that map.
+        """
+        return self(x)
+
     def check_size(self, shape: tuple[int, int]) -> tuple[int, int]:
         """The block grid of a map of ``shape`` cells, or an ``InputError`` naming the size and the limit."""
         h, w = -(-shape[0] // self.block), -(-shape[1] // self.block)
@@ -157,7 +164,7 @@ class FieldEncoder:
                 for at in range(0, len(group), size):
                     part = group[at:at + size]
                     x = torch.from_numpy(np.stack([x for _, _, x in part])).to(device)
-                    out = self(x)[:, :h, :w].cpu().numpy().astype(np.float64)
+                    out = self.infer(x)[:, :h, :w].cpu().numpy().astype(np.float64)
                     for (i, k, _), field in zip(part, out, strict=True):
                         totals[i] += unturn(field, k)
         for total in totals:

@@ -9,9 +9,13 @@ block grid: each iteration is one layer of shared weights, ``V = min over moves 
 the block it reaches)``, and the iterations run until the values settle (at most one per block of the grid).
 That fixed point is the shortest path over the move costs, so the encoder computes it directly, by a compiled
 Dijkstra (``RouteVIN.settle``): the same values bit for bit, in one pass over the blocks.
-A last local head turns the block values into a cost-to-go for every cell. Nothing in it depends on the map's
-size or on where on the map a block lies: it learns local geometry (which cells let a robot through, at what
-cost) and composes it.
+A last local head turns the block values into a cost-to-go for every cell. The goal enters the local network
+as one block's mark, which reaches only the features within ``depth`` blocks of it, so at inference the encoder
+keeps each map's goal-free parts (``MapParts``: the cost head's output, the cell head's first layer, the step
+walls) and a later query on the same map recomputes the local network over the goal's window only
+(``RouteVIN.reusing_field``, ``map_cache_bytes``): the same field up to rounding, at a fraction of the pass.
+Nothing in it depends on the map's size or on where on the map a block lies: it learns local geometry (which
+cells let a robot through, at what cost) and composes it.
 
 The learned parts are the move costs and the cell head. Training fits the move costs to the grid search's
 cost-to-go directly (every block's cost-to-go minus its best neighbour's is the cost of that move, and no
@@ -24,7 +28,10 @@ rule; ``RouteVIN.step_walls``).
 
 from __future__ import annotations
 
+import hashlib
 import math
+from collections import OrderedDict
+from typing import NamedTuple
 
 import numpy as np
 import torch
@@ -77,6 +84,21 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
     return torch.from_numpy(np.stack([block_steps(f, block) for f in free])).to(x.device)
 
 
+class MapParts(NamedTuple):
+    """What a pass computes from a map alone (no goal), kept for the next query on the same map (``RouteVIN``).
+
+    ``raw``: the cost head's output (B=1, 8, h, w) before it becomes a price; ``hidden``: the cell head's first
+    layer on the local features, before the block values join (1, C, h, w); ``steps``: ``cell_steps`` (1, 8, h, w).
+    """
+
+    raw: torch.Tensor
+    hidden: torch.Tensor
+    steps: torch.Tensor
+
+    def nbytes(self) -> int:
+        return sum(t.element_size() * t.nelement() for t in self)
+
+
 class RouteVIN(nn.Module, FieldEncoder):
     """Learned move costs and value iteration over the block grid (see the module docstring).
 
@@ -105,6 +127,12 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: Above how many blocks per map a pass at inference runs in strips of rows (``forward``): up to it, one
     #: piece (every map of up to 1024 x 1024 cells at 2 cells per block).
     strip_blocks: int = 512 * 512
+    #: How many bytes of goal-free map parts (``MapParts``) inference keeps, the most recently used maps first:
+    #: the goal reaches only the features of blocks within ``depth`` blocks of its own, so a later query on the
+    #: same map recomputes the local network over that window only (``reusing_field``). 0: no reuse. The reuse
+    #: runs the local network, the cost head and the cell head itself: a subclass that overrides ``move_costs`` or
+    #: ``cell_field`` sets it to 0.
+    map_cache_bytes: int = 256 << 20
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -123,6 +151,25 @@ class RouteVIN(nn.Module, FieldEncoder):
         self.cells = nn.Sequential(nn.Conv2d(channels + len(MOVES), channels, 1), nn.ReLU(),
                                    nn.Conv2d(channels, block * block, 1))
         self.register_buffer("lengths", torch.tensor(LENGTHS, dtype=torch.float32).view(1, -1, 1, 1))
+        self._maps: OrderedDict[tuple, MapParts] = OrderedDict()
+
+    def clear_map_cache(self) -> None:
+        """Forget every map's kept parts (``map_cache_bytes``); ``train`` and ``load_state_dict`` do it themselves.
+
+        Call it after changing the weights in place in evaluation mode by any other way.
+        """
+        self._maps.clear()
+
+    def train(self, mode: bool = True) -> RouteVIN:
+        self.clear_map_cache()
+        return super().train(mode)
+
+    def load_state_dict(self, *args, **kwargs):
+        self.clear_map_cache()
+        return super().load_state_dict(*args, **kwargs)
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_maps": OrderedDict()}  # a copy sent elsewhere starts with no kept maps
 
     def goal_and_walls(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """From ``route_input``'s channels: (the goal's block, the blocks with no free cell), (B, h, w) bool each."""
@@ -202,16 +249,109 @@ class RouteVIN(nn.Module, FieldEncoder):
         return max(1, self.strip_blocks // (2 * w))
 
     def inference_values(self, x: torch.Tensor, costs: torch.Tensor, goal: torch.Tensor,
-                         walls: torch.Tensor) -> torch.Tensor:
-        """The block values at inference: the moves priced above ``wall_cost`` and those no cell steps are walls."""
+                         walls: torch.Tensor, steps: torch.Tensor | None = None) -> torch.Tensor:
+        """The block values at inference: the moves priced above ``wall_cost`` and those no cell steps are walls.
+
+        ``steps``: ``cell_steps(x, block)`` where the caller has it already.
+        """
         with torch.no_grad():
             if self.wall_cost is not None:
                 costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
             if self.step_walls:
-                costs = costs.masked_fill(~cell_steps(x, self.block), UNREACHED)
+                costs = costs.masked_fill(~(cell_steps(x, self.block) if steps is None else steps), UNREACHED)
             if self.fixed_point not in ("dijkstra", "iterate"):
                 raise ValueError(f"RouteVIN.fixed_point = {self.fixed_point!r}: expected 'dijkstra' or 'iterate'")
             return (self.settle if self.fixed_point == "dijkstra" else self.iterate)(costs, goal, walls)
+
+    def map_parts(self, x: torch.Tensor) -> MapParts:
+        """``MapParts`` of one map (``x``: (1, block**2 + 1, h, w)), from the kept ones where they are there."""
+        cells = self.block * self.block
+        key = (tuple(x.shape), str(x.device),
+               hashlib.blake2b(x[:, :cells].cpu().numpy().tobytes(), digest_size=16).digest())
+        parts = self._maps.pop(key, None)
+        if parts is None:
+            free = x.clone()
+            free[:, cells] = 0.0  # no goal anywhere
+            f = self.local(free)
+            first = self.cells[0]
+            parts = MapParts(self.cost(f), nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias),
+                             cell_steps(x, self.block))
+        self._maps[key] = parts  # the most recently used last
+        while sum(p.nbytes() for p in self._maps.values()) > self.map_cache_bytes:
+            self._maps.popitem(last=False)  # the least recently used first (this one too, if it alone is too large)
+        return parts
+
+    def local_window(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> torch.Tensor:
+        """``self.local(x)`` over the blocks of ``window`` (rows ``k0:k1``, columns ``j0:j1``) only.
+
+        Each 3x3 layer runs unpadded over the region it must hand the next one, one block wider on every side that
+        is not the map's edge (where the layer pads with zeros as over the whole map): the same values as the whole
+        pass there, up to floating-point rounding, at the cost of the window and its ``depth``-block margin.
+        """
+        h, w = x.shape[-2:]
+        k0, k1, j0, j1 = window
+        d = self.depth
+        r0, r1, c0, c1 = max(0, k0 - d), min(h, k1 + d), max(0, j0 - d), min(w, j1 + d)
+        y = x[:, :, r0:r1, c0:c1]
+        for layer in self.local:
+            if isinstance(layer, nn.Conv2d):
+                # pad by one where this side of the region is the map's edge; elsewhere the region shrinks by one
+                y = nn.functional.conv2d(nn.functional.pad(y, (int(c0 == 0), int(c1 == w), int(r0 == 0), int(r1 == h))),
+                                         layer.weight, layer.bias)
+                r0, r1, c0, c1 = r0 + (r0 > 0), r1 - (r1 < h), c0 + (c0 > 0), c1 - (c1 < w)
+            else:
+                y = layer(y)
+        return y[:, :, k0 - r0:k1 - r0, j0 - c0:j1 - c0]
+
+    def reusing_field(self, x: torch.Tensor) -> torch.Tensor:
+        """``forward`` of one query (``x``: (1, block**2 + 1, h, w)) over its map's kept goal-free parts.
+
+        The goal's channel reaches the local features of the blocks within ``depth`` blocks of the goal's block
+        only (each 3x3 layer one block further), so those are computed again, from the input within ``2 * depth``
+        blocks (where a crop's edge is not the map's, its zero padding reaches ``depth - 1`` blocks in; the kept
+        window is ``depth`` blocks in), and the map's parts serve every other block. The same values as one whole
+        pass up to floating-point rounding (the first layer of the cell head is summed in two parts). A query whose
+        goal channel marks other than one block takes the whole pass.
+        """
+        cells, d = self.block * self.block, self.depth
+        marked = torch.nonzero(x[0, cells] > 0.5)
+        if len(marked) != 1:
+            f, costs = self.move_costs(x)
+            goal, walls = self.goal_and_walls(x)
+            return self.cell_field(f, self.inference_values(x, costs, goal, walls))
+        h, w = x.shape[-2:]
+        gr, gc = (int(i) for i in marked[0])
+        parts = self.map_parts(x)
+        k0, k1, j0, j1 = max(0, gr - d), min(h, gr + d + 1), max(0, gc - d), min(w, gc + d + 1)
+        f = self.local_window(x, (k0, k1, j0, j1))
+        raw, hidden = parts.raw.clone(), parts.hidden.clone()
+        first = self.cells[0]
+        raw[:, :, k0:k1, j0:j1] = self.cost(f)
+        hidden[:, :, k0:k1, j0:j1] = nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias)
+        costs = self.lengths * (0.5 + torch.exp(raw.clamp_max(WALL_LOG)))
+        goal, walls = self.goal_and_walls(x)
+        v = self.inference_values(x, costs, goal, walls, parts.steps)
+        # the cell head's 1x1 layers as matrix products over the blocks (cheaper than convolutions this thin)
+        rel = (neighbours(v, UNREACHED) - v.unsqueeze(1)).clamp(-REACH, REACH)
+        last = self.cells[2]
+        hidden = torch.addmm(hidden[0].reshape(self.channels, -1), first.weight[:, self.channels:, 0, 0],
+                             rel[0].reshape(len(MOVES), -1)).relu_()
+        offsets = torch.addmm(last.bias[:, None], last.weight[:, :, 0, 0], hidden).view(1, -1, h, w)
+        return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
+
+    def infer(self, x: torch.Tensor) -> torch.Tensor:
+        """``forward`` at inference (``FieldEncoder.predict``): on the CPU, over each map's kept parts where they fit.
+
+        Each query of the batch takes ``reusing_field`` on the CPU when ``map_cache_bytes`` allows it and its map
+        runs in one piece; otherwise, and on a GPU (where one batched pass costs little more than one query), the
+        whole batch takes ``forward``.
+        """
+        h, w = x.shape[-2:]
+        if x.device.type != "cpu" or self.map_cache_bytes <= 0 or self.strip_rows(h, w) < h:
+            return self(x)
+        with torch.no_grad():
+            x = x[:, :self.block * self.block + 1]
+            return torch.cat([self.reusing_field(x[i:i + 1]) for i in range(x.shape[0])])
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         """The cost-to-go of every cell (B, H, W), in blocks, from ``route_input``'s channels.

@@ -50,6 +50,8 @@ class LengthCosts(RouteVIN):
     """``RouteVIN``'s value iteration with nothing learned: every move costs its length; a block's cells share its
     value."""
 
+    map_cache_bytes = 0  # its own move costs and cell field: every pass is a whole one
+
     def move_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         b, _, h, w = x.shape
         return x.new_zeros(b, 1, h, w), self.lengths.expand(b, 8, h, w).clone()
