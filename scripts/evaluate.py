@@ -58,6 +58,9 @@ from learning.evaluation.journal import (
 from learning.evaluation.mapsets import map_set_queries
 from learning.evaluation.protocol import MOVINGAI_MAPS
 from learning.evaluation.protocol import QUICK as PROTOCOL_QUICK
+from learning.evaluation.rigid import PLANNERS as RIGID_PLANNERS
+from learning.evaluation.rigid import SAMPLERS as RIGID_SAMPLERS
+from learning.evaluation.rigid import RigidPart
 from learning.models.shipped import SHIPPED_POLICY
 from learning.samplers.route import SHIPPED
 from planners import movingai_dir, planner_names
@@ -76,6 +79,7 @@ from planners.maps.generators import FAMILIES, SHIFTED_SIZES, check_size
 from planners.maps.mapset import GeneratedMapSet, ShiftedMapSet
 from planners.maps.unseen import UNSEEN_MIN_SIZE
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments
+from planners.worlds.rigid_scenes import RigidSceneSet
 
 DEFAULT_POLICY = SHIPPED_POLICY
 #: The comparison's protocol at its defaults: every default below is taken from it.
@@ -153,6 +157,18 @@ def parse_args(argv=None) -> argparse.Namespace:
                          "policy's mode, draws for guided actions; @stochastic or @deterministic to choose; "
                          "key=value: the env kwargs it was trained with), or NAME=module:callable "
                          "for a factory returning a Sampler")
+    ap.add_argument("--rigid", choices=("validation", "tuning", "test"), default=None, metavar="PART",
+                    help="also run the 6-DoF scene sets' PART (validation, tuning or test; docs/rigid-scenes.md): the "
+                         "seed project's planners with every 6-DoF sampler, in the same journal and output set")
+    ap.add_argument("--rigid-scenes", type=int, default=2, help="--rigid: scenes per family (default 2)")
+    ap.add_argument("--rigid-seeds", type=int, default=1, help="--rigid: planner seeds per scene (default 1)")
+    ap.add_argument("--rigid-planners", nargs="+", default=list(RIGID_PLANNERS), choices=RIGID_PLANNERS,
+                    help="--rigid: planners (default all)")
+    ap.add_argument("--rigid-samplers", nargs="+", default=None, metavar="NAME",
+                    help="--rigid: registry samplers (default: every 6-DoF reference and learned sampler)")
+    ap.add_argument("--rigid-max-iterations", type=int, default=None,
+                    help="--rigid: lower every planner's cap to this (quick looks; default the set-ups' own caps)")
+    ap.add_argument("--rigid-only", action="store_true", help="--rigid without the 2D map sets")
     ap.add_argument("--out", type=Path, default=Path("results/evaluation"),
                     help="output folder, replaced as a whole when the run is done")
     ap.add_argument("--resume", action="store_true",
@@ -173,6 +189,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.other_planners = list(dict.fromkeys(args.other_planners))
     check_backend_arguments(ap, args)
     check_flags(lambda: _check_values(args))
+    check_flags(lambda: _check_rigid(args))
     _check_models(args)
     return args
 
@@ -210,6 +227,26 @@ def _check_values(args) -> None:
         raise InputError(f"--out {args.out}: the folder holds {', '.join(foreign[:3])}"
                          f"{' and more' if len(foreign) > 3 else ''}, which this command does not write, and the "
                          "outputs replace the folder as a whole; choose an empty or new folder")
+
+
+def _check_rigid(args) -> None:
+    """``--rigid``'s flags, and its part of the comparison (``args.parts``): an ``InputError`` naming the flag."""
+    args.parts = []
+    given = [f for f in ("rigid_only", "rigid_max_iterations", "rigid_samplers") if getattr(args, f)]
+    if args.rigid is None:
+        if given:
+            raise InputError(f"--{given[0].replace('_', '-')} needs --rigid PART")
+        return
+    check_int_flags(args, ("rigid_scenes", "rigid_seeds"))
+    if args.rigid_max_iterations is not None:
+        check_int_flags(args, ("rigid_max_iterations",))
+    try:
+        scenes = RigidSceneSet(counts={args.rigid: args.rigid_scenes})
+        args.parts = [RigidPart(scenes, args.rigid, planners=args.rigid_planners,
+                                samplers=args.rigid_samplers or list(RIGID_SAMPLERS), seeds=args.rigid_seeds,
+                                max_iterations=args.rigid_max_iterations)]
+    except InputError as exc:
+        raise InputError(f"--rigid-samplers: {exc}") from exc
 
 
 def _check_models(args) -> None:
@@ -345,6 +382,9 @@ def _settings(args) -> dict:
             "map_set_obj", "sampler", "models", "loaded"}
     if not args.extra_routes:  # so a run without NAME=FILE encoders keeps the journal settings it always had
         skip.add("extra_routes")
+    skip.add("parts")
+    if args.rigid is None:  # likewise without --rigid
+        skip.update(k for k in vars(args) if k.startswith("rigid"))
     return {k: v for k, v in vars(args).items() if k not in skip}
 
 
@@ -372,10 +412,13 @@ def comparison_of(args) -> E.Comparison:
                           seeds=args.seeds, size=args.size, maps=args.maps, tuning_maps=args.tuning_maps,
                           shifted_maps=args.shifted_maps, unseen_maps=args.unseen_maps, scenarios=args.scenarios,
                           tuning_scenarios=args.tuning_scenarios, movingai_dir="" if mdir is None else str(mdir))
+    if args.rigid_only:
+        queries = []
     return E.Comparison(queries, protocol, policy=str(args.policy), route=str(args.route),
                         routes={n: str(p) for n, p in args.extra_routes.items()}, samplers=args.user_samplers,
                         families=args.families, other_planners=args.other_planners, references=not args.no_expert,
-                        device=args.device, map_set=args.map_set_obj, models=args.models, cache=args.loaded)
+                        device=args.device, map_set=args.map_set_obj, models=args.models, cache=args.loaded,
+                        parts=args.parts)
 
 
 def _say(line: str) -> None:

@@ -170,3 +170,23 @@ def test_a_part_plugs_into_the_same_call_journal_and_output_set(tmp_path):
     rows = list(csv.DictReader((out / "runs.csv").open()))
     assert len(rows) == 2 and (out / "ompl" / "forest.log").is_file()
     assert not (tmp_path / "out.partial").exists()  # the journal is removed once the set is written
+
+
+def test_evaluate_runs_the_6dof_scene_sets_as_a_part_and_checks_its_flags_first(tmp_path, capsys):
+    ev = load_script("evaluate")
+    for argv, needle in ((["--rigid-only"], "--rigid-only needs --rigid PART"),
+                         (["--rigid", "validation", "--rigid-samplers", "nope"], "unknown sampler 'nope'"),
+                         (["--rigid", "validation", "--rigid-scenes", "0"], "--rigid-scenes")):
+        with pytest.raises(SystemExit) as exc:
+            ev.parse_args([*argv, "--out", str(tmp_path / "x")])
+        assert exc.value.code == 2 and needle in capsys.readouterr().err
+    args = ev.parse_args(["--out", str(tmp_path / "a")])
+    assert not any(k.startswith("rigid") for k in ev._settings(args))  # journals of runs without --rigid unchanged
+    out = tmp_path / "rigid"
+    rc = ev.main(["--rigid", "validation", "--rigid-only", "--rigid-scenes", "1", "--rigid-planners", "RRTConnect",
+                  "--rigid-samplers", "uniform", "--rigid-max-iterations", "100", "--processes", "1",
+                  "--out", str(out)])
+    assert rc == 0
+    rows = list(csv.DictReader((out / "runs.csv").open()))
+    assert len(rows) == 5 and {r["planner"] for r in rows} == {"RRTConnect"}  # one scene of each training family
+    assert "6-DoF scenes (validation)" in (out / "details.md").read_text()

@@ -224,3 +224,48 @@ def test_the_spatial_index_answers_as_the_full_scan_does():
         states_clear(k.geom, k.grid, k.body, params, q, 0.0, out)
         assert not out[0]
     assert pose_check_cost(40, poses=200).disagreements == 0
+
+
+def test_the_scene_sets_run_inside_the_one_comparison_as_a_part_with_the_same_runs(tmp_path):
+    import learning.evaluation as E
+    from learning.evaluation.rigid import RigidPart, evaluate_rigid
+
+    ss = RigidSceneSet(("clutter",), (), {"validation": 1})
+    part = RigidPart(ss, "validation", planners=("RRTConnect", "RRT"), samplers=("uniform", "goal_bias"), seeds=2,
+                     max_iterations=300)
+    assert isinstance(part, E.Part) and len(part.tasks()) == 8
+    out = tmp_path / "out"
+    res = E.compare(E.Comparison([], parts=[part]), out, log=lambda line: None)
+    runs, report = res.parts[part.name]
+    # the same seeded runs as the rigid comparison's own loop: iterations, success and checks, run by run
+    alone = evaluate_rigid(ss, "validation", planners=("RRTConnect", "RRT"), samplers=("uniform", "goal_bias"),
+                           seeds=(0, 1), max_iterations=300)
+    got = sorted((r.planner, r.sampler, r.seed, r.solved, r.iterations, r.collision_checks) for r in runs)
+    assert got == sorted((r.planner, r.sampler, r.seed, r.solved, r.iterations, r.collision_checks) for r in alone)
+    assert {r.map for r in runs} == {"clutter"} and {r.split for r in runs} == {"validation"}
+    summary, details = (out / "summary.md").read_text(), (out / "details.md").read_text()
+    assert "no 2D map set ran" in summary and "RRTConnect: best classical option" in summary
+    assert "| clutter | RRTConnect | goal_bias | 2 |" in details and "## Results at a glance" not in details
+    assert len((out / "runs.csv").read_text().splitlines()) == 1 + 8
+    with pytest.raises(InputError, match="unknown rigid-body planner"):
+        RigidPart(ss, "validation", planners=("RRTstar",))
+    with pytest.raises(InputError, match="part must be one of"):
+        RigidPart(ss, "train")
+
+
+def test_a_learned_samplers_targets_are_marked_per_scene_set_and_planner():
+    from learning.evaluation.rigid import target_rows
+
+    def cell(sampler, its, solved, time):
+        return {"family": "slot", "planner": "RRTConnect", "sampler": sampler, "runs": 4, "solved": solved,
+                "success": solved / 4, "median_iterations": its, "median_checks": its, "median_time": time}
+
+    by_set = [cell("uniform", 10_000, 2, 1.0), cell("gaussian", 8_000, 2, 2.0),
+              cell("rigid_workspace_route", 4_000, 3, 0.5), cell("learned", 2_000, 3, 0.4)]
+    (row,) = target_rows(by_set)
+    assert row["best classical"] == "gaussian" and row["iterations vs classical"] == 0.25
+    assert row["iterations vs ablation"] == 0.5 and row["time vs classical"] == 0.2 and row["held"]
+    by_set[-1] = cell("learned", 2_000, 2, 0.4)  # success below the ablation's: not held
+    assert not target_rows(by_set)[0]["held"]
+    by_set[-1] = cell("learned", 3_000, 3, 0.4)  # 0.75x the ablation: learning must matter, not only the route
+    assert not target_rows(by_set)[0]["held"]

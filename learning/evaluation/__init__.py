@@ -47,6 +47,7 @@ from learning.evaluation.protocol import (
     shifted_queries,
     tuned_for_shifted,
 )
+from learning.evaluation.rigid import RigidPart
 from learning.evaluation.roster import (
     BUILTIN_SAMPLERS,
     CONSTANT,
@@ -109,7 +110,7 @@ __all__ = [
     "compare", "default_queries", "is_roadmap",
     "BATCH_TIE", "BUILTIN_SAMPLERS", "CONSTANT", "EXACT_FAILS", "EXACT_ROUTE", "EXPERT", "FOLLOWER", "GOAL_BIASES",
     "MOVINGAI_POOL", "ModelCache", "PALETTE", "POLICY_BATCHES", "POLICY_TUNING_SEEDS", "Protocol", "Query", "ROUTE",
-    "ROUTE_ABLATION", "RunContext", "SamplerSpec", "TARGETS", "TUNING_BIASES", "Task", "USER", "best_bias",
+    "ROUTE_ABLATION", "RigidPart", "RunContext", "SamplerSpec", "TARGETS", "TUNING_BIASES", "Task", "USER", "best_bias",
     "best_constant", "best_policy_batch", "bias_sampler", "bias_spec", "bootstrap_mean_ci", "carry_targets",
     "constant_sampler", "constant_spec", "constant_test_tasks", "constant_tuning_tasks", "ecdf_figure",
     "evaluation_tasks", "fixed_specs", "generated_queries", "glance_table", "headline", "median_ratio",

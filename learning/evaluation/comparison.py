@@ -24,7 +24,8 @@ roadmap), the policy, each route encoder, its ablation, the exact reference and 
 registry builds them (``make_sampler`` names handed to the planner as they are); (6) each :class:`Part`.
 
 A **part** plugs a comparison of another kind into the same call, journal and output set (the 6-DoF
-scene sets, ``learning.evaluation.rigid``): any object with ``name``, ``protocol`` (how its runs are made),
+scene sets, ``learning.evaluation.rigid.RigidPart``): any object with ``name``, ``protocol`` (how its runs are
+made: a :class:`~learning.evaluation.protocol.Protocol` whose ``planner`` builds each run's planner and cap),
 ``tasks()`` (its :class:`~learning.evaluation.roster.Task` list, queries that answer ``problem(movingai_dir,
 tolerance, cache)``, ``map_set``, ``split`` and ``size``) and ``report(runs)`` returning a :class:`PartReport`
 (a Markdown section for ``details.md`` and sentences for ``summary.md``). Its runs join ``runs.csv`` and

@@ -5,7 +5,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-from planners import Problem
+from planners import Problem, make_planner
+from planners.base.planner import Planner
+from planners.base.registry import planner_class
 from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, TUNING_SEED0, generate
 from planners.maps.movingai import benchmark_scenarios
 from planners.tools.benchmark import MAX_ITERATIONS, STEP, TOLERANCE
@@ -49,6 +51,17 @@ class Protocol:
         ``cache`` keeps what is loaded for it (MovingAI scenarios, a user's map set) for the next call.
         """
         return query.problem(self.movingai_dir, self.tolerance, cache)
+
+    def planner(self, name: str, problem: Problem, sampler, seed: int) -> tuple[Planner, int]:
+        """The planner a run of ``name`` makes on ``problem`` with ``sampler``, and its iteration cap.
+
+        The registry's planner at this protocol's ``step`` as the extension length (roadmaps keep their own edge
+        length), stopping at its first solution where it is anytime, capped at ``max_iterations``. Another kind of
+        comparison (the 6-DoF scene sets' seed set-ups) overrides it.
+        """
+        anytime = {"stop_on_first_solution": True} if planner_class(name).anytime else {}
+        planner = make_planner(name, problem, extension_step=self.step, sampler=sampler, seed=seed, **anytime)
+        return planner, self.max_iterations
 
 
 #: The MovingAI maps the comparison evaluates by default (``scripts/evaluate.py --movingai-maps``).

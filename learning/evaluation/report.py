@@ -261,9 +261,19 @@ def _where(results) -> str:
             + "; best goal bias chosen on a tuning split")
 
 
+def _parts_only(results) -> bool:
+    """Whether no 2D map set ran: the comparison is its parts alone (e.g. only 6-DoF scene sets)."""
+    return not results.runs and bool(results.parts)
+
+
 def summary_markdown(results) -> str:
     """``summary.md``: the short table, one sentence per finding, and where the rest is."""
     c = results.comparison
+    if _parts_only(results):
+        return (f"# Sampler comparison\n\n{len(results.all_runs)} runs in {results.minutes:.1f} min; no 2D map set "
+                f"ran: the comparison is its parts ({', '.join(results.parts)}).\n\n## Findings\n\n"
+                + "".join(f"- {line}\n" for line in findings(results))
+                + f"\nEvery table: [{DETAILS}]({DETAILS}); every run: runs.csv.\n")
     glance = glance_short(results)
     users = "".join(f"`{n}`: `{spec}`; " for n, spec in c.samplers.items())
     routes = "".join(f"`{n}`: `{path}`; " for n, path in c.routes.items())
@@ -326,6 +336,10 @@ def wide_tables(results) -> dict:
 
 def details_markdown(results, wide: dict | None = None) -> str:
     """``details.md``: every wide table of the comparison (what ``summary.md`` was before it got short)."""
+    if _parts_only(results):
+        return (f"# Sampler comparison: every table\n\nThe short version is [{SUMMARY}]({SUMMARY}).\n"
+                + "".join(f"\n## {name}\n\n{report.markdown.rstrip()}\n"
+                          for name, (_, report) in results.parts.items()))
     w = wide or wide_tables(results)
     c, rows = results.comparison, results.rows
     (targets, met, total), (route_targets, route_met, route_total) = w["targets"], w["route_targets"]
@@ -415,6 +429,11 @@ def write_outputs(results, out: Path, settings: dict) -> list[Path]:
 
 def printed(results, out: Path | str | None = None) -> str:
     """What the command line prints at the end: the short table, the findings, then the wide tables."""
+    if _parts_only(results):
+        text = "\n".join(["", *(f"- {f}" for f in findings(results)), "",
+                          *(report.markdown.rstrip() + "\n" for _, report in results.parts.values())])
+        return text + (f"\nsummary: {Path(out) / SUMMARY}; every table: {Path(out) / DETAILS}; raw runs: "
+                       f"{Path(out) / 'runs.csv'}" if out is not None else "")
     w = results.wide
     (_, met, total), (_, route_met, route_total), (_, reach_met, reach_total) = (w["targets"], w["route_targets"],
                                                                                  w["reach"])

@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from learning.evaluation.protocol import Protocol
 from planners import PRM, RRT, Problem, RRTConnect
 from planners.base.fileio import InputError
 from planners.base.planner import compile_seconds
@@ -169,3 +170,212 @@ def format_table(summary: Sequence[dict], by: Sequence[str] = ("planner", "sampl
                                            f"{s['median_time']:.2f}"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+# --- the scene sets as a part of the one comparison (``learning.evaluation.compare``) ---------------------------
+
+#: The classical options of the 6-DoF comparison, the no-learning ablation, and what else counts as learned: every
+#: sampler a part runs that is none of these is a learned sampler, judged against the targets below.
+CLASSICAL = ("uniform", "goal_bias", "gaussian", "bridge_test", "obstacle_based")
+ABLATION = "rigid_workspace_route"
+#: The targets of a learned sampler on each scene set, per planner: median iterations at most ``VS_CLASSICAL`` times
+#: the best classical option's and ``VS_ABLATION`` times the ablation's, success at least theirs, and median time to
+#: solution at most ``TIME_VS_CLASSICAL`` times the best classical option's.
+VS_CLASSICAL, VS_ABLATION, TIME_VS_CLASSICAL = 0.3, 0.7, 0.5
+
+
+@dataclass(frozen=True)
+class RigidQuery:
+    """A scene of a scene set as a query of the comparison (rebuilt in any worker from its fields).
+
+    ``verify``: the scene set's (``RigidSceneSet.verify``), which decides the scene drawn.
+    """
+
+    scene: SceneQuery
+    verify: bool = True
+
+    @property
+    def map_set(self) -> str:
+        """The set its runs are reported under: the family, ``<family> (mesh)``, or ``OMPL.app``."""
+        if self.scene.path:
+            return "OMPL.app"
+        return f"{self.scene.family} (mesh)" if self.scene.mesh else self.scene.family
+
+    @property
+    def split(self) -> str:
+        return self.scene.part
+
+    @property
+    def size(self) -> int:
+        return 0
+
+    def problem(self, movingai_dir: str | None = None, tolerance: float | None = None,
+                cache: dict | None = None) -> Problem:
+        """The scene (the comparison's tolerance does not apply: the set-ups fix the goal distance)."""
+        from planners.worlds.rigid_scenes import mesh_scene, rigid_scene
+
+        q = self.scene
+        if q.path:
+            from planners.worlds.omplapp import load_omplapp_cfg
+
+            return load_omplapp_cfg(q.path)
+        return mesh_scene(q.family, q.seed) if q.mesh else rigid_scene(q.family, q.seed, verify=self.verify)
+
+
+@dataclass(frozen=True)
+class RigidProtocol(Protocol):
+    """How a part's runs are made on the scene sets: the seed project's set-ups (``build_planner``).
+
+    ``max_iterations`` lowers every planner's cap (the set-ups' own caps otherwise: RRT and RRT-Connect 20,000,
+    PRM 5,000 samples); ``step`` is the set-ups' RRT step on the generated scenes (recorded; the set-ups compute it
+    from each workspace).
+    """
+
+    step: float = 1.0
+    max_iterations: int = CAPS["RRT"]
+    seeds: int = 1
+
+    def planner(self, name: str, problem: Problem, sampler, seed: int):
+        planner, cap = build_planner(name, problem, sampler, seed)
+        return planner, min(cap, self.max_iterations)
+
+
+@dataclass
+class RigidPart:
+    """A part of the comparison (``learning.evaluation.Part``): planners x samplers on a part of a scene set.
+
+    Every run is one ``Task`` of the comparison (journaled, resumable, in ``runs.csv`` and the OMPL logs); the
+    report is the table per planner and sampler, the table per scene set, and the targets of each learned sampler
+    (any sampler that is neither a classical option nor the ablation) marked held or not, scene set by scene set.
+    """
+
+    scenes: RigidSceneSet | MeshSceneSet
+    part: str = "validation"
+    planners: Sequence[str] = PLANNERS
+    samplers: Sequence[str] = SAMPLERS
+    seeds: int = 1
+    max_iterations: int | None = None
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        from learning.samplers.registry import sampler_names
+
+        for planner in self.planners:
+            if planner not in PLANNERS:
+                raise InputError(f"unknown rigid-body planner {planner!r}; choose from {', '.join(PLANNERS)}")
+        known = set(sampler_names())
+        for sampler in self.samplers:
+            if sampler not in known:
+                raise InputError(f"unknown sampler {sampler!r}; choose from {', '.join(sorted(known))}")
+        self.scenes.queries(self.part)  # refuses a part the set has not, by name
+        self.planners, self.samplers = list(self.planners), list(self.samplers)
+        self.name = self.name or f"6-DoF scenes ({self.part})"
+
+    @property
+    def protocol(self) -> RigidProtocol:
+        cap = CAPS["RRT"] if self.max_iterations is None else int(self.max_iterations)
+        return RigidProtocol(max_iterations=cap, seeds=self.seeds)
+
+    def tasks(self) -> list:
+        from learning.evaluation.roster import Task
+        from learning.samplers.registry import SamplerSpec
+
+        verify = bool(getattr(self.scenes, "verify", True))
+        return [Task(RigidQuery(q, verify), planner, SamplerSpec.of(sampler), seed, sampler)
+                for q in self.scenes.queries(self.part) for planner in self.planners for sampler in self.samplers
+                for seed in range(self.seeds)]
+
+    def rows(self, runs: Sequence) -> list[RigidRow]:
+        """The comparison's runs as ``RigidRow`` (an unsolved run's iterations are its cap)."""
+        return [RigidRow(scene=r.query, family=r.map, part=r.split, planner=r.planner, sampler=r.sampler,
+                         seed=r.seed, solved=r.solved, iterations=r.iterations, cap=r.iterations,
+                         collision_checks=r.collision_checks, sampler_checks=0, candidates=r.candidates,
+                         time=r.wall_time) for r in runs]
+
+    def report(self, runs: Sequence):
+        from learning.evaluation.comparison import PartReport
+
+        rows = self.rows(runs)
+        overall = summarize(rows)
+        by_set = summarize(rows, ("family", "planner", "sampler"))
+        targets = target_rows(by_set)
+        text = (f"{self.scenes.describe()}\n\nPart `{self.part}`, {self.seeds} planner seed(s) per scene, the seed "
+                "project's set-ups (RRT and RRT-Connect: step 0.01 of the workspace, goal distance 1.0; PRM: k = 3, "
+                "Dijkstra); an unsolved run counts at its cap. Checks include the sampler's own; time runs from "
+                "building the planner (the sampler's per-scene work included) to the end of the solve.\n\n"
+                + format_table(overall) + "\n\nBy scene set:\n\n"
+                + format_table(by_set, ("family", "planner", "sampler")))
+        if targets:
+            text += ("\n\nTargets of each learned sampler, per scene set and planner (iterations at most "
+                     f"{VS_CLASSICAL:g}x the best classical option's and {VS_ABLATION:g}x the ablation's, success at "
+                     f"least theirs, time at most {TIME_VS_CLASSICAL:g}x the best classical option's):\n\n"
+                     + _targets_table(targets))
+        return PartReport(text, findings(overall, targets))
+
+
+def target_rows(by_set: Sequence[dict]) -> list[dict]:
+    """Per scene set, planner and learned sampler: its medians against the best classical option and the ablation.
+
+    ``by_set``: ``summarize(rows, ("family", "planner", "sampler"))``. The best classical option is the one of
+    fewest median iterations (ties: higher success). Learned: any sampler neither in ``CLASSICAL`` nor the ablation.
+    """
+    cells = {(s["family"], s["planner"], s["sampler"]): s for s in by_set}
+    out = []
+    for (family, planner, sampler), s in cells.items():
+        if sampler in CLASSICAL or sampler == ABLATION:
+            continue
+        classical = [cells[(family, planner, c)] for c in CLASSICAL if (family, planner, c) in cells]
+        ablation = cells.get((family, planner, ABLATION))
+        if not classical:
+            continue
+        best = min(classical, key=lambda c: (c["median_iterations"], -c["success"]))
+        row = {"scene set": family, "planner": planner, "sampler": sampler, "best classical": best["sampler"],
+               "iterations vs classical": s["median_iterations"] / max(best["median_iterations"], 1.0),
+               "time vs classical": s["median_time"] / max(best["median_time"], 1e-9),
+               "success": f"{s['solved']}/{s['runs']}", "classical success": f"{best['solved']}/{best['runs']}"}
+        held = (row["iterations vs classical"] <= VS_CLASSICAL and s["success"] >= best["success"]
+                and row["time vs classical"] <= TIME_VS_CLASSICAL)
+        if ablation is not None:
+            row["iterations vs ablation"] = s["median_iterations"] / max(ablation["median_iterations"], 1.0)
+            row["ablation success"] = f"{ablation['solved']}/{ablation['runs']}"
+            held = held and row["iterations vs ablation"] <= VS_ABLATION and s["success"] >= ablation["success"]
+        row["held"] = held
+        out.append(row)
+    return out
+
+
+def _targets_table(targets: Sequence[dict]) -> str:
+    head = ["scene set", "planner", "sampler", "best classical", "iterations vs classical", "iterations vs ablation",
+            "time vs classical", "success", "classical success", "ablation success", "held"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for t in targets:
+        cells = []
+        for k in head:
+            v = t.get(k, "")
+            word = "yes" if v is True else "no" if v is False else str(v)
+            cells.append(f"{v:.2f}" if isinstance(v, float) else word)
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def findings(overall: Sequence[dict], targets: Sequence[dict]) -> list[str]:
+    """A sentence per planner (the best classical option, the ablation, each learned sampler) and on the targets."""
+    out = []
+    for planner in dict.fromkeys(s["planner"] for s in overall):
+        cells = {s["sampler"]: s for s in overall if s["planner"] == planner}
+        classical = [cells[c] for c in CLASSICAL if c in cells]
+        parts = []
+        if classical:
+            best = min(classical, key=lambda c: (c["median_iterations"], -c["success"]))
+            parts.append(f"best classical option {best['sampler']} (median {best['median_iterations']:,.0f} "
+                         f"iterations, {best['solved']}/{best['runs']} solved)")
+        for name, s in cells.items():
+            if name in CLASSICAL:
+                continue
+            role = "the ablation" if name == ABLATION else "learned"
+            parts.append(f"{name} ({role}: median {s['median_iterations']:,.0f}, {s['solved']}/{s['runs']} solved)")
+        out.append(f"{planner}: " + "; ".join(parts) + ".")
+    if targets:
+        held = sum(t["held"] for t in targets)
+        out.append(f"The learned sampler's targets hold on {held} of {len(targets)} scene sets and planners.")
+    return out

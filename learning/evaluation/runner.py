@@ -12,7 +12,7 @@ from learning.evaluation.protocol import Protocol
 from learning.evaluation.roster import Task
 from learning.samplers.registry import USER, ModelCache
 from learning.samplers.route import FieldCache, RouteSampler
-from planners import Problem, make_planner
+from planners import Problem
 from planners.base.registry import planner_class
 from planners.tools.benchmark import Run
 from planners.tools.parallel import Backend, make_backend
@@ -98,12 +98,10 @@ def run_one(task: Task, context: RunContext) -> Run:
         batch = _batch(sampler, task, problem, context)
         if batch:  # timed per field by the cache, charged below
             sampler.prefill(batch, batch=True)
-    # iterations to the first solution: anytime planners stop there too
-    anytime = {"stop_on_first_solution": True} if planner_class(task.planner).anytime else {}
     t0 = time.perf_counter()  # wall time includes binding the sampler (the policy's per-map setup)
-    planner = make_planner(task.planner, problem, extension_step=protocol.step, sampler=sampler, seed=task.seed,
-                           **anytime)
-    r = planner.solve(max_iterations=protocol.max_iterations)
+    # iterations to the first solution: anytime planners stop there too (Protocol.planner)
+    planner, cap = protocol.planner(task.planner, problem, sampler, task.seed)
+    r = planner.solve(max_iterations=cap)
     # and the encoder's time for this query's field where it was computed before (kept across seeds, batched)
     wall = time.perf_counter() - t0 + float(getattr(planner.sampler, "reused_seconds", 0.0))
     its = r.first_solution_iteration if r.solved else r.iterations
