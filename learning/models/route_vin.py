@@ -87,11 +87,12 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
 class MapParts(NamedTuple):
     """What a pass computes from a map alone (no goal), kept for the next query on the same map (``RouteVIN``).
 
-    ``raw``: the cost head's output (B=1, 8, h, w) before it becomes a price; ``hidden``: the cell head's first
-    layer on the local features, before the block values join (1, C, h, w); ``steps``: ``cell_steps`` (1, 8, h, w).
+    ``costs``: the move costs with inference's walls (``RouteVIN.wall_rules``), (1, 8, h, w); ``hidden``: the cell
+    head's first layer on the local features, before the block values join (1, C, h, w); ``steps``: ``cell_steps``
+    (1, 8, h, w).
     """
 
-    raw: torch.Tensor
+    costs: torch.Tensor
     hidden: torch.Tensor
     steps: torch.Tensor
 
@@ -255,27 +256,36 @@ class RouteVIN(nn.Module, FieldEncoder):
         ``steps``: ``cell_steps(x, block)`` where the caller has it already.
         """
         with torch.no_grad():
-            if self.wall_cost is not None:
-                costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
-            if self.step_walls:
-                costs = costs.masked_fill(~(cell_steps(x, self.block) if steps is None else steps), UNREACHED)
-            if self.fixed_point not in ("dijkstra", "iterate"):
-                raise ValueError(f"RouteVIN.fixed_point = {self.fixed_point!r}: expected 'dijkstra' or 'iterate'")
-            return (self.settle if self.fixed_point == "dijkstra" else self.iterate)(costs, goal, walls)
+            return self.fixed_point_values(self.wall_rules(x, costs, steps), goal, walls)
+
+    def wall_rules(self, x: torch.Tensor, costs: torch.Tensor, steps: torch.Tensor | None = None) -> torch.Tensor:
+        """``costs`` with inference's walls: moves above ``wall_cost``, and (``step_walls``) those no cell makes."""
+        if self.wall_cost is not None:
+            costs = costs.masked_fill(costs > self.wall_cost * self.lengths, UNREACHED)
+        if self.step_walls:
+            costs = costs.masked_fill(~(cell_steps(x, self.block) if steps is None else steps), UNREACHED)
+        return costs
+
+    def fixed_point_values(self, costs: torch.Tensor, goal: torch.Tensor, walls: torch.Tensor) -> torch.Tensor:
+        """Value iteration's fixed point over ``costs`` (walls applied), the way ``fixed_point`` says."""
+        if self.fixed_point not in ("dijkstra", "iterate"):
+            raise ValueError(f"RouteVIN.fixed_point = {self.fixed_point!r}: expected 'dijkstra' or 'iterate'")
+        return (self.settle if self.fixed_point == "dijkstra" else self.iterate)(costs, goal, walls)
 
     def map_parts(self, x: torch.Tensor) -> MapParts:
         """``MapParts`` of one map (``x``: (1, block**2 + 1, h, w)), from the kept ones where they are there."""
         cells = self.block * self.block
-        key = (tuple(x.shape), str(x.device),
+        key = (tuple(x.shape), str(x.device), self.wall_cost, self.step_walls,
                hashlib.blake2b(x[:, :cells].cpu().numpy().tobytes(), digest_size=16).digest())
         parts = self._maps.pop(key, None)
         if parts is None:
             free = x.clone()
             free[:, cells] = 0.0  # no goal anywhere
-            f = self.local(free)
+            f, costs = self.move_costs(free)
+            steps = cell_steps(x, self.block)
             first = self.cells[0]
-            parts = MapParts(self.cost(f), nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias),
-                             cell_steps(x, self.block))
+            parts = MapParts(self.wall_rules(x, costs, steps),
+                             nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias), steps)
         self._maps[key] = parts  # the most recently used last
         while sum(p.nbytes() for p in self._maps.values()) > self.map_cache_bytes:
             self._maps.popitem(last=False)  # the least recently used first (this one too, if it alone is too large)
@@ -324,18 +334,20 @@ class RouteVIN(nn.Module, FieldEncoder):
         parts = self.map_parts(x)
         k0, k1, j0, j1 = max(0, gr - d), min(h, gr + d + 1), max(0, gc - d), min(w, gc + d + 1)
         f = self.local_window(x, (k0, k1, j0, j1))
-        raw, hidden = parts.raw.clone(), parts.hidden.clone()
-        first = self.cells[0]
-        raw[:, :, k0:k1, j0:j1] = self.cost(f)
-        hidden[:, :, k0:k1, j0:j1] = nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias)
-        costs = self.lengths * (0.5 + torch.exp(raw.clamp_max(WALL_LOG)))
+        first, last = self.cells[0], self.cells[2]
+        win = (slice(None), slice(None), slice(k0, k1), slice(j0, j1))
+        costs = parts.costs.clone()
+        priced = self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
+        costs[win] = self.wall_rules(x, priced, parts.steps[win])
         goal, walls = self.goal_and_walls(x)
-        v = self.inference_values(x, costs, goal, walls, parts.steps)
-        # the cell head's 1x1 layers as matrix products over the blocks (cheaper than convolutions this thin)
+        v = self.fixed_point_values(costs, goal, walls)
+        # the cell head's 1x1 layers as matrix products over the blocks (cheaper than convolutions this thin); the
+        # map's goal-free first layer everywhere, corrected in the goal's window
         rel = (neighbours(v, UNREACHED) - v.unsqueeze(1)).clamp(-REACH, REACH)
-        last = self.cells[2]
-        hidden = torch.addmm(hidden[0].reshape(self.channels, -1), first.weight[:, self.channels:, 0, 0],
-                             rel[0].reshape(len(MOVES), -1)).relu_()
+        hidden = torch.addmm(parts.hidden[0].reshape(self.channels, -1), first.weight[:, self.channels:, 0, 0],
+                             rel[0].reshape(len(MOVES), -1)).view(1, self.channels, h, w)
+        hidden[win] += nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias) - parts.hidden[win]
+        hidden = hidden.view(self.channels, -1).relu_()
         offsets = torch.addmm(last.bias[:, None], last.weight[:, :, 0, 0], hidden).view(1, -1, h, w)
         return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
 
