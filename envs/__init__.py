@@ -18,6 +18,11 @@ Registered ids:
 * ``SamplerGym/RRT-RigidBody-v1``: RRT for a 6-DoF rigid body among 3-D boxes, a fresh
   ``planners.worlds.rigid3d.random_scene`` each episode (``source_kwargs={"n_boxes": ...}``); vector
   observations, step 0.5, 5,000 iterations.
+* ``SamplerGym/RRT-RigidScenes-v1``: RRT for the 6-DoF body on the generated scene sets, whose passages it must
+  turn to pass (``planners.worlds.rigid_scenes``): a training scene each episode by default
+  (``source_kwargs={"part": "validation"}`` and so on, ``SceneSetSource``), at the seed project's RRT set-up
+  (step 1.0, goal distance 1.0, 20,000 iterations). ``map_source="problem.cfg"`` (an OMPL.app problem, with the
+  ``mesh`` extra) or ``"scene.scene"`` plans one 6-DoF problem every episode.
 * ``SamplerGym/Planning-v1``: everything by kwargs (``planner``, ``map_source``, ``step_size``,
   ``max_iterations``, ``action_mode``, ...); ``map=array_or_path, start=(x, y), goal=(x, y)`` plans on
   your own map; ``map_set=DIR, split="train"`` draws episodes from a part of a map set
@@ -56,12 +61,13 @@ from .sources import (
     MovingAISource,
     ProblemListSource,
     RigidSceneSource,
+    SceneSetSource,
     sample_map_paths,
 )
 
 __all__ = ["ACTION_MODES", "ENV_IDS", "EnvSampler", "FamilySource", "FileSource", "MapSetSource", "MovingAISource",
-           "NoExplorationWarning", "ProblemListSource", "RigidSceneSource", "SamplerEnv", "make_sampler_env",
-           "record_episode", "sample_map_paths"]
+           "NoExplorationWarning", "ProblemListSource", "RigidSceneSource", "SamplerEnv", "SceneSetSource",
+           "make_sampler_env", "record_episode", "sample_map_paths"]
 
 _FAMILY_IDS = {
     "Forest": "forest",
@@ -80,6 +86,7 @@ ENV_IDS: dict[str, dict] = {f"SamplerGym/RRT-{name}-v2": {"map_source": fam, **V
 ENV_IDS["SamplerGym/RRT-MovingAI-v2"] = {"map_source": "movingai", **V2_DEFAULTS}
 ENV_IDS["SamplerGym/RRT-Files-v2"] = {"map_source": "files", **V2_DEFAULTS}
 ENV_IDS["SamplerGym/RRT-RigidBody-v1"] = {"map_source": "rigid", "step_size": 0.5, "max_iterations": 5000}
+ENV_IDS["SamplerGym/RRT-RigidScenes-v1"] = {"map_source": "rigid_scenes", "step_size": 1.0, "max_iterations": 20000}
 ENV_IDS["SamplerGym/Planning-v1"] = {}
 
 

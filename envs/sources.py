@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from planners import OccupancyGrid, Problem, load_movingai_scenarios, movingai_dir
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, short_repr
 from planners.maps.generators import FAMILIES, TRAIN_SEEDS, generate
 from planners.maps.gridsearch import free_components
 from planners.maps.mapset import PARTS, MapSet, MixedMapSet
@@ -270,15 +270,77 @@ class RigidSceneSource:
         return f"RigidSceneSource(n_boxes={self.n_boxes})"
 
 
-def make_source(source: str | MapSource, **kwargs) -> MapSource:
-    """Build a map source from a name: a family, ``"movingai"``, ``"files"`` or ``"rigid"``; callables pass.
+class SceneSetSource:
+    """6-DoF rigid-body problems from one part of the generated scene sets (``planners.worlds.rigid_scenes``).
 
-    ``"rigid"`` is ``RigidSceneSource`` (6-DoF rigid-body scenes).
+    Each reset draws a scene of ``part`` with the env's ``np_random`` (``RigidSceneSet.sample``): ``train``
+    draws a family and a seed from the training seeds; ``validation``, ``tuning`` and ``test`` draw among that
+    part's fixed scenes (``test`` includes the test-only families unless ``test_only=()``).
+
+    Args:
+        part: ``train`` (default), ``validation``, ``tuning`` or ``test``.
+        families: Training families (default all); ``test_only``: test-only families (default all).
+        counts: Scenes per family in the fixed parts (``RigidSceneSet``'s default otherwise).
+    """
+
+    dim = 6
+
+    def __init__(self, part: str = "train", families: Sequence[str] | None = None,
+                 test_only: Sequence[str] | None = None, counts: dict | None = None) -> None:
+        from planners.worlds.rigid_scenes import TEST_ONLY_FAMILIES, TRAINING_FAMILIES, RigidSceneSet
+
+        if part not in ("train", "validation", "tuning", "test"):
+            raise InputError(f"part must be train, validation, tuning or test, got {short_repr(part)}")
+        self.part = part
+        self.scenes = RigidSceneSet(TRAINING_FAMILIES if families is None else families,
+                                    TEST_ONLY_FAMILIES if test_only is None else test_only, counts)
+        if part != "train" and not self.scenes.queries(part):
+            raise InputError(f"the {part!r} part of the scene set holds no scene (counts: {self.scenes.counts})")
+
+    def __call__(self, np_random: np.random.Generator) -> Problem:
+        return self.scenes.sample(self.part, np_random)
+
+    def __repr__(self) -> str:
+        return f"SceneSetSource(part={self.part!r}, families={list(self.scenes.families)})"
+
+
+def scene_file_source(path: str | os.PathLike) -> ProblemListSource:
+    """One 6-DoF problem from a file, every episode.
+
+    An OMPL.app ``.cfg`` (its meshes; the ``mesh`` extra) or a box scene (``planners.worlds.rigid3d.load_scene``).
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".cfg":
+        from planners.worlds.omplapp import load_omplapp_cfg
+
+        source = ProblemListSource([load_omplapp_cfg(path)])
+    else:
+        from planners.worlds.rigid3d import load_scene
+
+        source = ProblemListSource([load_scene(path)])
+    source.dim = source.problems[0].dim  # the environment's dimension follows its source
+    return source
+
+
+#: File endings that ``make_source`` reads as a 6-DoF problem rather than a 2-D map.
+SCENE_SUFFIXES = (".cfg", ".scene")
+
+
+def make_source(source: str | MapSource, **kwargs) -> MapSource:
+    """Build a map source from a name: a family, ``"movingai"``, ``"files"``, ``"rigid"`` or ``"rigid_scenes"``.
+
+    ``"rigid"`` is ``RigidSceneSource`` (random 6-DoF box scenes), ``"rigid_scenes"`` ``SceneSetSource`` (a part
+    of the generated scene sets). A path ending in ``.cfg`` (an OMPL.app problem) or ``.scene`` (a box scene) is
+    that one 6-DoF problem; other paths, arrays and grids are 2-D maps; callables pass.
     """
     if callable(source):
         if kwargs:
             raise InputError(f"source options {sorted(kwargs)} given with a callable source")
         return source
+    if isinstance(source, (str, os.PathLike)) and str(source).lower().endswith(SCENE_SUFFIXES):
+        if kwargs:
+            raise InputError(f"source options {sorted(kwargs)} given with the problem file {source}")
+        return scene_file_source(source)
     if isinstance(source, (np.ndarray, OccupancyGrid, os.PathLike)):
         return map_problem(source, **kwargs)  # the user's own map, e.g. map_source=array
     if not isinstance(source, str):
@@ -292,5 +354,7 @@ def make_source(source: str | MapSource, **kwargs) -> MapSource:
         return FileSource(**kwargs)  # no paths: the shipped sample maps
     if source == "rigid":
         return RigidSceneSource(**kwargs)
-    raise InputError(f"map_source must be one of {FAMILIES + ('movingai', 'files', 'rigid')}, a map or a "
-                     f"callable, got {source!r}")
+    if source == "rigid_scenes":
+        return SceneSetSource(**kwargs)
+    raise InputError(f"map_source must be one of {FAMILIES + ('movingai', 'files', 'rigid', 'rigid_scenes')}, a "
+                     f"map, a .cfg or .scene file or a callable, got {source!r}")

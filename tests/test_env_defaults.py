@@ -205,7 +205,7 @@ def test_stepping_after_the_episode_ended_is_refused_alike(end):
 
 # --- defaults that learn: every id's default action mode keeps a uniform floor -------------------------
 
-TWO_D_IDS = [i for i in ALL_IDS if not i.endswith("RigidBody-v1")]
+TWO_D_IDS = [i for i in ALL_IDS if not i.endswith(("RigidBody-v1", "RigidScenes-v1"))]
 
 
 @pytest.mark.parametrize("env_id", ALL_IDS)

@@ -15,6 +15,7 @@ from PIL import Image
 import envs
 from envs import ENV_IDS, SamplerEnv, record_episode
 from planners import RRT, UniformSampler
+from planners.base.fileio import InputError
 from planners.maps.generators import generate
 
 gym.register_envs(envs)
@@ -47,7 +48,7 @@ CHECKER_WARNINGS = (
 )
 
 ALL_IDS = sorted(ENV_IDS)
-VECTOR_IDS = ("SamplerGym/RRT-RigidBody-v1",)  # Box (vector) observations, not Dict
+VECTOR_IDS = ("SamplerGym/RRT-RigidBody-v1", "SamplerGym/RRT-RigidScenes-v1")  # Box (vector) observations, not Dict
 
 
 @pytest.mark.parametrize("env_id", ALL_IDS)
@@ -402,3 +403,25 @@ def test_a_family_source_draws_training_maps_only_by_default(monkeypatch):
     pooled = sources.FamilySource("forest", seeds=[5_000_000])
     pooled(rng)
     assert seen[-1] == 5_000_000  # a pool the caller gives is used as it is
+
+
+def test_the_scene_sets_are_an_environment_source_part_by_part_and_a_scene_file_is_one_problem():
+    from envs import SceneSetSource
+    from planners.worlds.rigid_scenes import RigidSceneSet
+
+    train = SceneSetSource()
+    a, b = train(np.random.default_rng(5)), train(np.random.default_rng(5))
+    assert a.name == b.name and a.dim == 6 and train.dim == 6  # seeded by the env's generator
+    validation = SceneSetSource("validation", families=["slot", "duct"], counts={"validation": 2})
+    names = {validation(np.random.default_rng(s)).name for s in range(12)}
+    want = {q.name for q in RigidSceneSet(("slot", "duct"), (), {"validation": 2}).queries("validation")}
+    assert names <= want and len(names) > 1
+    with pytest.raises(InputError, match="part must be"):
+        SceneSetSource("bogus")
+    from planners.worlds.rigid3d import WINDOW_SCENE
+
+    env = gym.make("samplergym:SamplerGym/Planning-v1", map_source=str(WINDOW_SCENE), step_size=0.5)
+    obs, _ = env.reset(seed=0)
+    assert env.unwrapped.dim == 6 and obs.shape == env.observation_space.shape
+    with pytest.raises(InputError, match="source options"):
+        gym.make("samplergym:SamplerGym/Planning-v1", map_source="window.scene", source_kwargs={"n_boxes": 3})
