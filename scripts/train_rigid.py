@@ -43,6 +43,9 @@ def main(argv=None) -> int:
     ap.add_argument("--poses", type=int, default=d.poses, help="jittered poses per point and class for the label")
     ap.add_argument("--open-keep", type=float, default=d.open_keep,
                     help="share of the points where every class fits that are kept")
+    ap.add_argument("--label", choices=("point", "window"), default=d.label,
+                    help="classes that fit along the path's window (default) or at the point alone")
+    ap.add_argument("--window", type=float, default=d.window, help="half the window of --label window, world units")
     ap.add_argument("--no-augment", action="store_true", help="no symmetries of the grid")
     ap.add_argument("--seed", type=int, default=d.seed)
     ap.add_argument("--out", type=Path, default=Path("runs/rigid_route"))
@@ -53,7 +56,8 @@ def main(argv=None) -> int:
         config = RigidTrainConfig(scenes_per_family=args.scenes_per_family, families=tuple(args.families),
                                   epochs=args.epochs, batch=args.batch, lr=args.lr, channels=args.channels,
                                   hidden=args.hidden, poses=args.poses, open_keep=args.open_keep,
-                                  augment=not args.no_augment, seed=args.seed).check()
+                                  augment=not args.no_augment, seed=args.seed,
+                                  label=args.label, window=args.window).check()
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

@@ -118,3 +118,16 @@ def test_training_is_reproducible_on_a_tiny_set():
     net2, log2 = train_rigid_orientation(config)
     assert isinstance(net1, OrientationNet) and log1["examples"] == log2["examples"] > 0
     assert all(torch.equal(a, b) for a, b in zip(net1.state_dict().values(), net2.state_dict().values(), strict=True))
+
+
+def test_window_labels_keep_the_classes_that_fit_along_the_whole_window():
+    from learning.training.rigid import window_labels
+
+    pts = np.stack([np.arange(10.0), np.zeros(10), np.zeros(10)], axis=1)
+    fit = np.ones((10, 6))
+    fit[5, 1:] = 0  # a passage at x = 5 that only class 0 passes
+    y = window_labels(pts, fit, 2.0)
+    assert np.array_equal(y[3:8], np.tile(np.eye(6)[0], (5, 1)))  # within 2 of the passage: class 0 only
+    assert np.all(y[:3] == 1) and np.all(y[8:] == 1)
+    none = window_labels(pts, np.zeros((10, 6)) + np.eye(6)[np.arange(10) % 6], 1.0)
+    assert np.allclose(none[4], [0, 0, 0, 1 / 3, 1 / 3, 1 / 3])  # no class throughout: the window's mean

@@ -35,7 +35,7 @@ from planners.guidance.workspace_route import DEFAULT_CELL, inner_radius, voxel_
 
 #: The settings ``make_sampler("rigid_route")`` uses: chosen on the tuning scenes
 #: (``scripts/experiments/tune_rigid_learned.py``; ``docs/rigid-scenes.md``).
-SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.5, "angle_noise": 0.1}
+SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1}
 
 _ROTATIONS = class_rotations()
 
@@ -56,7 +56,7 @@ class RigidRouteSampler(SamplerBase):
             trained at 1).
     """
 
-    def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.5, angle_noise: float = 0.1,
+    def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
                  cell: float = DEFAULT_CELL) -> None:
         who = "RigidRouteSampler"

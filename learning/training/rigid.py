@@ -5,12 +5,16 @@ Examples come from training scenes only: ``scenes_per_family`` seeds of each fam
 validation, tuning or test seed, nor a test-only family). In each scene the positions are the
 workspace route's points (``voxel_route``, what the sampler sees at planning time) and the points of
 the scene's witness path (``scene_with_witness``: poses through every passage), one per unit of its
-length. The observation at each is ``route_observation``'s (the same function the sampler calls);
-the label is, per orientation class, the share of ``poses`` poses of that class, jittered about the
-point by ``jitter`` (the sampler's position noise), that keep the motion check's clearance
-(``class_validity``): the expert's answer to "which way can the body lie here", a configuration-space
-query made at training time only. Points where no class fits are left out, and of those where every
-class fits (open space, most of a route) only ``open_keep`` are kept, drawn at random.
+length. The observation at each is ``route_observation``'s (the same function the sampler calls). The
+label (``class_validity``: a configuration-space query made at training time only) is, with
+``label="window"`` (the default), the classes that fit at every point of the same path within
+``window`` of arc length, a class fitting at a point when any of ``poses`` poses of it, jittered about
+the point by ``jitter`` (the sampler's position noise), keeps the motion check's clearance: the
+orientation the body must already have to pass what comes next, as the witness path holds its turned
+pose from before a passage to after it (where no class fits throughout, the window's mean fit). With
+``label="point"``, the share of the jittered poses of each class that keep it at the point alone.
+Points where no class fits are left out, and of those where every class fits (open space, most of a
+route) only ``open_keep`` are kept, drawn at random.
 
 The model learns the label normalised to a distribution (cross-entropy with soft targets). Each
 example is seen under one of the 48 symmetries of the voxel grid per epoch (a permutation of the
@@ -42,6 +46,25 @@ from planners.guidance.workspace_route import voxel_route
 from planners.maps.generators import TRAIN_SEEDS
 from planners.worlds.rigid_scenes import TRAINING_FAMILIES, scene_with_witness
 
+#: The labels a model may learn (``RigidTrainConfig.label``; the module doc).
+LABELS = ("point", "window")
+
+
+def window_labels(points: np.ndarray, fit: np.ndarray, window: float) -> np.ndarray:
+    """``(n, 6)``: per point of a path, the classes that fit (``fit > 0``) at every point within ``window`` of it.
+
+    ``window`` is measured in arc length; where no class fits throughout, the mean of ``fit`` over the window.
+    """
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points[:, :3], axis=0), axis=1))])
+    lo = np.searchsorted(arc, arc - window, side="left")
+    hi = np.searchsorted(arc, arc + window, side="right")
+    out = np.zeros_like(fit, dtype=np.float64)
+    for i in range(len(points)):
+        w = fit[lo[i]:hi[i]]
+        every = np.all(w > 0, axis=0)
+        out[i] = every if every.any() else w.mean(axis=0)
+    return out
+
 
 @dataclass(frozen=True)
 class RigidTrainConfig:
@@ -50,7 +73,7 @@ class RigidTrainConfig:
     scenes_per_family: int = 40
     families: tuple[str, ...] = TRAINING_FAMILIES
     jitter: float = 1.25
-    poses: int = 8
+    poses: int = 16
     epochs: int = 15
     batch: int = 64
     lr: float = 2e-3
@@ -60,6 +83,8 @@ class RigidTrainConfig:
     seed: int = 0
     held_out: float = 0.1
     open_keep: float = 0.25
+    label: str = "window"
+    window: float = 6.0
 
     def check(self) -> RigidTrainConfig:
         """The config, or an ``InputError`` naming the first field out of range."""
@@ -75,6 +100,9 @@ class RigidTrainConfig:
         check_int(self.seed, "seed", low=0)
         check_number("RigidTrainConfig", "held_out", self.held_out, low=0, high=0.5)
         check_number("RigidTrainConfig", "open_keep", self.open_keep, low=0, high=1)
+        if self.label not in LABELS:
+            raise InputError(f"label = {self.label!r}; choose from {', '.join(LABELS)}")
+        check_number("RigidTrainConfig", "window", self.window, low=0)
         return self
 
     def as_dict(self) -> dict:
@@ -119,7 +147,11 @@ def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], N
             for pts in parts:
                 p, _ = route_observation(world, pts, half=PATCH_HALF)
                 d = route_directions(pts).astype(np.float32)
-                y = class_validity(world, pts, label_rng, config.jitter, config.poses)
+                if config.label == "point":
+                    y = class_validity(world, pts, label_rng, config.jitter, config.poses)
+                else:
+                    y = window_labels(pts, class_validity(world, pts, label_rng, config.jitter, config.poses, "any"),
+                                      config.window)
                 fit = (y > 0).sum(axis=1)
                 keep = (fit > 0) & ((fit < y.shape[1]) | (label_rng.random(len(y)) < config.open_keep))
                 patches.append(p[keep])

@@ -113,13 +113,15 @@ def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF) -
     return route_patches(grid, route, world.low3, cell, half), route_directions(route).astype(np.float32)
 
 
-def class_validity(world, points, rng: np.random.Generator, jitter: float, k: int) -> np.ndarray:
+def class_validity(world, points, rng: np.random.Generator, jitter: float, k: int, reduce: str = "mean") -> np.ndarray:
     """``(n, 6)``: per point and class, the share of ``k`` poses that keep the motion check's clearance.
 
     The first pose of each point is the point itself, the others Gaussian with deviation ``jitter``
-    about it; each pose takes one of the class's four rotations at random. A configuration-space
-    query, for training labels only.
+    about it; each pose takes one of the class's four rotations at random. ``reduce="any"`` gives 1
+    where any of the poses keeps it, else 0. A configuration-space query, for training labels only.
     """
+    if reduce not in ("mean", "any"):
+        raise ValueError(f"reduce = {reduce!r}, expected 'mean' or 'any'")
     points = np.asarray(points, dtype=np.float64)[:, :3]
     n = len(points)
     rots = class_rotations()
@@ -129,7 +131,8 @@ def class_validity(world, points, rng: np.random.Generator, jitter: float, k: in
     for c in range(N_CLASSES):
         angles = euler_from_matrices(rots[c, rng.integers(4, size=n * k)])
         q = np.concatenate([pos.reshape(-1, 3), angles], axis=1)
-        out[:, c] = world.check_motions(q, q).reshape(n, k).mean(axis=1)
+        ok = world.check_motions(q, q).reshape(n, k)
+        out[:, c] = ok.mean(axis=1) if reduce == "mean" else ok.any(axis=1)
     return out
 
 

@@ -1,7 +1,7 @@
 """Which uniform-angle share and angle noise the learned 6-DoF sampler (``rigid_route``) should take, on tuning scenes.
 
     PYTHONPATH=$PWD python scripts/experiments/tune_rigid_learned.py --scenes 2 --shares 0.1 0.25 0.5
-    PYTHONPATH=$PWD python scripts/experiments/tune_rigid_learned.py --shares 0.5 --noises 0.03 0.3 \
+    PYTHONPATH=$PWD python scripts/experiments/tune_rigid_learned.py --shares 0.5 --noises 0.03 0.3 \\
         --planners RRTConnect
 
 Runs ``rigid_route`` at each (``uniform_share``, ``angle_noise``) with the seed set-ups of RRT-Connect and
