@@ -71,6 +71,7 @@ class RigidRouteSampler(SamplerBase):
 
     def _setup(self) -> None:
         from learning.models.rigid_orientation import class_probabilities
+        from learning.models.threads import planning_threads
 
         world = self.problem.world
         if not (hasattr(world, "boxes") and hasattr(world, "body")):
@@ -82,7 +83,8 @@ class RigidRouteSampler(SamplerBase):
         self.sd = inner_radius(world.body) if self.spread is None else self.spread
         if len(self.route):
             patches, dirs = route_observation(world, self.route, self.cell, self.net.half)
-            self.probs = class_probabilities(self.net, patches, dirs, self.temperature)
+            with planning_threads():  # one torch thread unless SAMPLERGYM_TORCH_THREADS says otherwise
+                self.probs = class_probabilities(self.net, patches, dirs, self.temperature)
         else:
             self.probs = np.full((0, N_CLASSES), 1.0 / N_CLASSES)
         self.cdf = np.cumsum(self.probs, axis=1)
