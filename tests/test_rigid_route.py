@@ -131,3 +131,22 @@ def test_window_labels_keep_the_classes_that_fit_along_the_whole_window():
     assert np.all(y[:3] == 1) and np.all(y[8:] == 1)
     none = window_labels(pts, np.zeros((10, 6)) + np.eye(6)[np.arange(10) % 6], 1.0)
     assert np.allclose(none[4], [0, 0, 0, 1 / 3, 1 / 3, 1 / 3])  # no class throughout: the window's mean
+
+
+def test_centring_moves_route_points_across_the_route_to_more_clearance(slot_scene):
+    from planners.guidance.workspace_route import centre_route, voxel_route
+
+    world = slot_scene.world
+    route = voxel_route(world, slot_scene.start, slot_scene.goal)
+    moved = centre_route(world, route, 2)
+    assert moved.shape == route.shape and np.array_equal(moved[[0, -1]], route[[0, -1]])
+    assert np.array_equal(centre_route(world, route, 0), route)
+
+    def clearance(p):
+        gap = np.maximum(np.maximum(world.boxes[None, :, :3] - p[:, None], p[:, None] - world.boxes[None, :, 3:]), 0)
+        return np.minimum(np.linalg.norm(gap, axis=2).min(axis=1),
+                          np.minimum(p - world.low3, world.high3 - p).min(axis=1))
+
+    assert np.all(clearance(moved) >= clearance(route) - 1e-12) and np.any(clearance(moved) > clearance(route))
+    s = make_sampler("rigid_route", centre=0).bind(slot_scene)
+    assert np.array_equal(s.route, route) and make_sampler("rigid_route").centre == SHIPPED_RIGID_SETTINGS["centre"]

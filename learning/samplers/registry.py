@@ -103,8 +103,8 @@ def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = 
 
 
 def _rigid_route(uniform_share: float | None = None, angle_noise: float | None = None, goal_share: float = 0.05,
-                 temperature: float = 1.0, route_fraction: float = 0.75, path: str | None = None, *,
-                 models: ModelCache | None = None) -> Sampler:
+                 temperature: float = 1.0, route_fraction: float = 0.75, centre: int | None = None,
+                 path: str | None = None, *, models: ModelCache | None = None) -> Sampler:
     from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
     from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
 
@@ -114,7 +114,8 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                              uniform_share=SHIPPED_RIGID_SETTINGS["uniform_share"] if uniform_share is None
                              else uniform_share,
                              angle_noise=SHIPPED_RIGID_SETTINGS["angle_noise"] if angle_noise is None else angle_noise,
-                             goal_share=goal_share, temperature=temperature)
+                             goal_share=goal_share, temperature=temperature,
+                             centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre)
 
 
 #: name -> (factory, one line for help texts).

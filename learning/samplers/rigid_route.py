@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planners.base.fileio import InputError, check_number
+from planners.base.fileio import InputError, check_int, check_number
 from planners.base.samplers import SamplerBase
 from planners.guidance.rigid_orientation import (
     N_CLASSES,
@@ -31,11 +31,11 @@ from planners.guidance.rigid_orientation import (
     route_observation,
     small_rotations,
 )
-from planners.guidance.workspace_route import DEFAULT_CELL, inner_radius, voxel_route
+from planners.guidance.workspace_route import DEFAULT_CELL, centre_route, inner_radius, voxel_route
 
 #: The settings ``make_sampler("rigid_route")`` uses: chosen on the tuning scenes
 #: (``scripts/experiments/tune_rigid_learned.py``; ``docs/rigid-scenes.md``).
-SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1}
+SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2}
 
 _ROTATIONS = class_rotations()
 
@@ -54,12 +54,15 @@ class RigidRouteSampler(SamplerBase):
         spread: Standard deviation of the position noise about the route; None: the body's inner radius.
         cell: Voxel side of the route search and of the model's observation, world units (the model is
             trained at 1).
+        centre: Reach in voxels of ``centre_route``: each interior route point moves to the clearest voxel
+            centre that near (0: the search's route as it is).
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
-                 cell: float = DEFAULT_CELL) -> None:
+                 cell: float = DEFAULT_CELL, centre: int = 2) -> None:
         who = "RigidRouteSampler"
+        self.centre = check_int(centre, f"{who}: centre", low=0)
         self.net = net
         self.route_fraction = float(check_number(who, "route_fraction", route_fraction, low=0, high=1))
         self.uniform_share = float(check_number(who, "uniform_share", uniform_share, low=0, high=1))
@@ -77,7 +80,7 @@ class RigidRouteSampler(SamplerBase):
         if not (hasattr(world, "boxes") and hasattr(world, "body")):
             raise InputError(f"RigidRouteSampler needs a box world (RigidBodyWorld), got {type(world).__name__}")
         route = voxel_route(world, self.problem.start, self.problem.goal, self.cell)
-        self.route = np.zeros((0, 3)) if route is None else route
+        self.route = np.zeros((0, 3)) if route is None else centre_route(world, route, self.centre, self.cell)
         seg = np.linalg.norm(np.diff(self.route, axis=0), axis=1) if len(self.route) > 1 else np.zeros(0)
         self.arc = np.concatenate([[0.0], np.cumsum(seg)])
         self.sd = inner_radius(world.body) if self.spread is None else self.spread
@@ -120,7 +123,7 @@ class RigidRouteSampler(SamplerBase):
         sd = "inner radius" if self.spread is None else f"{self.spread:g}"
         return (f"RigidRouteSampler(route_fraction={self.route_fraction:g}, uniform_share={self.uniform_share:g}, "
                 f"angle_noise={self.angle_noise:g}, goal_share={self.goal_share:g}, "
-                f"temperature={self.temperature:g}, spread={sd}, cell={self.cell:g})")
+                f"temperature={self.temperature:g}, spread={sd}, cell={self.cell:g}, centre={self.centre})")
 
 
 def _normals(u: np.ndarray) -> np.ndarray:

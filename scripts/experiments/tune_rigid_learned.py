@@ -26,15 +26,16 @@ def main(argv=None) -> int:
     ap.add_argument("--shares", type=float, nargs="+", default=[0.1, 0.25, 0.5])
     ap.add_argument("--noises", type=float, nargs="+", default=[0.1])
     ap.add_argument("--temperatures", type=float, nargs="+", default=[1.0])
+    ap.add_argument("--centre", type=int, default=0, help="reach in voxels of the route's centring (0: none)")
     ap.add_argument("--planners", nargs="+", default=["RRTConnect", "RRT"])
     ap.add_argument("--path", help="orientation model file (default the shipped one)")
     args = ap.parse_args(argv)
     scenes = RigidSceneSet(counts={"tuning": args.scenes}, test_only=())
-    print("| planner | uniform_share | angle_noise | temperature | success | median iterations | median time (s) |\n"
-          "|---|---|---|---|---|---|---|", flush=True)
+    print(f"centre {args.centre}\n| planner | uniform_share | angle_noise | temperature | success | median iterations "
+          "| median time (s) |\n|---|---|---|---|---|---|---|", flush=True)
     grid = [(share, noise, temp) for share in args.shares for noise in args.noises for temp in args.temperatures]
     for share, noise, temp in grid:
-        params = {"uniform_share": share, "angle_noise": noise, "temperature": temp}
+        params = {"uniform_share": share, "angle_noise": noise, "temperature": temp, "centre": args.centre}
         if args.path:
             params["path"] = args.path
         rows = evaluate_rigid(scenes, "tuning", planners=args.planners, samplers=("rigid_route",),
