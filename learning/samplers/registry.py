@@ -132,8 +132,8 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "obstacle_based": (_obstacle_based, "OB-PRM's sampling: a step out of an obstacle to the first free state"),
     "rigid_workspace_route": (_rigid_workspace_route, "6-DoF box worlds: along the exact workspace route of the "
                               "body's centre, uniform angles (the no-learning ablation)"),
-    "rigid_route": (_rigid_route, "6-DoF box worlds: the workspace route's positions with orientations from the "
-                    "shipped orientation model (or path=)"),
+    "rigid_route": (_rigid_route, "6-DoF box worlds: the workspace route, centred in its passages, with "
+                    "orientations from the shipped orientation model (or path=)"),
     "expert": (_expert, "reference: the privileged expert on the exact geodesic distance"),
     "exact_route": (_exact_route, "reference: the route sampler on the exact cost-to-go"),
 }

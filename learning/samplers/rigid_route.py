@@ -1,12 +1,13 @@
 """The learned 6-DoF route sampler: the workspace route's positions with orientations from a learned model.
 
-``RigidRouteSampler`` keeps the positions of the no-learning ablation
+``RigidRouteSampler`` draws positions as the no-learning ablation does
 (``planners.guidance.workspace_route.WorkspaceRouteSampler``: points at uniform arc length along the
 exact workspace route of the body's centre plus Gaussian noise of the body's inner radius, a share of
-uniform states) and replaces its uniform angles by the orientation model's
-(``learning.models.rigid_orientation.OrientationNet``). Per query, once: the route, the model's
-observation at every route point (``planners.guidance.rigid_orientation.route_observation``) and its
-distribution over the six axis-aligned orientation classes there. Per sample, numpy only:
+uniform states), about the route pulled to the middle of its passages (``centre_route``, ``centre``
+voxels), and replaces its uniform angles by the orientation model's
+(``learning.models.rigid_orientation.OrientationNet``). Per query, once: the route, its centring, the
+model's observation at every route point (``planners.guidance.rigid_orientation.route_observation``)
+and its distribution over the six axis-aligned orientation classes there. Per sample, numpy only:
 
 * with probability ``goal_share`` the goal state;
 * else with probability ``route_fraction`` a route sample: its position as the ablation draws it; its
