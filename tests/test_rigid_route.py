@@ -150,3 +150,27 @@ def test_centring_moves_route_points_across_the_route_to_more_clearance(slot_sce
     assert np.all(clearance(moved) >= clearance(route) - 1e-12) and np.any(clearance(moved) > clearance(route))
     s = make_sampler("rigid_route", centre=0).bind(slot_scene)
     assert np.array_equal(s.route, route) and make_sampler("rigid_route").centre == SHIPPED_RIGID_SETTINGS["centre"]
+
+
+def test_the_training_script_writes_weights_and_recipe_and_the_comparison_takes_sampler_params(tmp_path, capsys):
+    import json
+    import runpy
+    import sys
+
+    from scripts import evaluate_rigid
+
+    argv = sys.argv
+    try:
+        sys.argv = ["train_rigid.py", "--scenes-per-family", "1", "--families", "slot", "--epochs", "1",
+                    "--out", str(tmp_path / "run")]
+        with pytest.raises(SystemExit) as done:
+            runpy.run_path("scripts/train_rigid.py", run_name="__main__")
+    finally:
+        sys.argv = argv
+    assert done.value.code == 0
+    meta = json.loads((tmp_path / "run" / "rigid_route.json").read_text())
+    assert meta["recipe"]["families"] == ["slot"] and meta["recipe"]["label"] == "window"
+    load_orientation_net(tmp_path / "run" / "rigid_route.pt")
+    assert evaluate_rigid.main(["--sampler-params", "[1]", "--out", str(tmp_path / "e")]) == 2
+    assert evaluate_rigid.main(["--sampler-params", "{", "--out", str(tmp_path / "e")]) == 2
+    assert "sampler-params" in capsys.readouterr().err
