@@ -4,6 +4,7 @@
     python scripts/evaluate_rigid.py --part test --families slot windows --planners RRTConnect \\
         --samplers uniform gaussian rigid_workspace_route --out results/rigid-test
     python scripts/evaluate_rigid.py --mesh --omplapp DIR --scenes 1 --max-iterations 2000 --out results/rigid-mesh
+    python scripts/evaluate_rigid.py --samplers rigid_route --sampler-params '{"rigid_route": {"uniform_share": 1.0}}'
 
 Runs ``learning.evaluation.rigid.evaluate_rigid`` on a part of the scene set
 (``planners.worlds.rigid_scenes.RigidSceneSet``: every scene proved solvable first) and prints a
@@ -13,6 +14,7 @@ table per planner and sampler, and one per family. Writes ``rows.json`` (every r
 ``--mesh`` runs the test-only mesh set instead (``MeshSceneSet``: the test-only families written as
 meshes, and OMPL.app's problems from ``--omplapp`` or ``$SAMPLERGYM_OMPLAPP_DIR``; the ``mesh``
 extra); ``rigid_workspace_route`` needs boxes and is left out there unless named.
+``--sampler-params`` passes parameters to the registry's samplers by name (``make_sampler(name, **params)``).
 Exit status: 0 done, 2 bad input.
 """
 
@@ -41,6 +43,8 @@ def main(argv=None) -> int:
     ap.add_argument("--planners", nargs="+", default=list(PLANNERS))
     ap.add_argument("--samplers", nargs="+", help=f"registry names (default {' '.join(SAMPLERS)})")
     ap.add_argument("--max-iterations", type=int, help="lower every planner's cap (quick looks only)")
+    ap.add_argument("--sampler-params", default="{}",
+                    help='parameters by sampler name as JSON, e.g. \'{"rigid_route": {"uniform_share": 1.0}}\'')
     ap.add_argument("--out", type=Path, default=Path("results/rigid"))
     ap.add_argument("--mesh", action="store_true", help="the test-only mesh scenes (and OMPL.app's problems)")
     ap.add_argument("--omplapp", help="folder of OMPL.app's problems for --mesh (default $SAMPLERGYM_OMPLAPP_DIR)")
@@ -55,6 +59,12 @@ def main(argv=None) -> int:
         return fail(f"--scenes and --seeds must be at least 1, got {args.scenes} and {args.seeds}")
     if args.max_iterations is not None and args.max_iterations < 1:
         return fail(f"--max-iterations must be at least 1, got {args.max_iterations}")
+    try:
+        sampler_params = json.loads(args.sampler_params)
+    except ValueError as e:
+        return fail(f"--sampler-params is not JSON: {e}")
+    if not (isinstance(sampler_params, dict) and all(isinstance(v, dict) for v in sampler_params.values())):
+        return fail("--sampler-params must be a JSON object of objects: {\"NAME\": {\"KEY\": VALUE}}")
     if args.out.exists() and not args.out.is_dir():
         return fail(f"--out {args.out} exists and is not a folder")
     samplers = args.samplers or [s for s in SAMPLERS if not (args.mesh and s == "rigid_workspace_route")]
@@ -77,7 +87,8 @@ def main(argv=None) -> int:
                   f"{row.collision_checks:>8} checks {row.time:7.2f} s", flush=True)
 
         rows = evaluate_rigid(scenes, args.part, planners=args.planners, samplers=samplers,
-                              seeds=range(args.seeds), max_iterations=args.max_iterations, progress=show)
+                              seeds=range(args.seeds), max_iterations=args.max_iterations, progress=show,
+                              sampler_params=sampler_params)
     except InputError as e:
         return fail(str(e))
     by_sampler = format_table(summarize(rows))

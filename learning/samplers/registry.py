@@ -102,6 +102,22 @@ def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = 
     return WorkspaceRouteSampler(route_fraction, spread, cell)
 
 
+def _rigid_route(uniform_share: float | None = None, angle_noise: float | None = None, goal_share: float = 0.05,
+                 temperature: float = 1.0, route_fraction: float = 0.75, centre: int | None = None,
+                 path: str | None = None, *, models: ModelCache | None = None) -> Sampler:
+    from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
+    from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
+
+    path = str(SHIPPED_RIGID_ORIENTATION) if path is None else path
+    net = (ModelCache() if models is None else models).orientation_net(path)
+    return RigidRouteSampler(net, route_fraction=route_fraction,
+                             uniform_share=SHIPPED_RIGID_SETTINGS["uniform_share"] if uniform_share is None
+                             else uniform_share,
+                             angle_noise=SHIPPED_RIGID_SETTINGS["angle_noise"] if angle_noise is None else angle_noise,
+                             goal_share=goal_share, temperature=temperature,
+                             centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre)
+
+
 #: name -> (factory, one line for help texts).
 REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "uniform": (_uniform, "uniform sampling"),
@@ -116,6 +132,8 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "obstacle_based": (_obstacle_based, "OB-PRM's sampling: a step out of an obstacle to the first free state"),
     "rigid_workspace_route": (_rigid_workspace_route, "6-DoF box worlds: along the exact workspace route of the "
                               "body's centre, uniform angles (the no-learning ablation)"),
+    "rigid_route": (_rigid_route, "6-DoF box worlds: the workspace route, centred in its passages, with "
+                    "orientations from the shipped orientation model (or path=)"),
     "expert": (_expert, "reference: the privileged expert on the exact geodesic distance"),
     "exact_route": (_exact_route, "reference: the route sampler on the exact cost-to-go"),
 }
@@ -164,6 +182,7 @@ class ModelCache:
 
     def __init__(self) -> None:
         self.routes: dict[str, Any] = {}
+        self.orientations: dict[str, Any] = {}
         self.policies: dict[tuple, Sampler] = {}
         self.users: dict[str, Sampler] = {}
         self.load_seconds: dict[str, float] = {}
@@ -177,6 +196,14 @@ class ModelCache:
     def __getstate__(self) -> dict:
         # users' samplers are built in each worker: a user's object need not survive pickling
         return {**self.__dict__, "users": {}}
+
+    def orientation_net(self, path: str):
+        """The 6-DoF orientation model in ``path`` (``load_orientation_net``), loaded on first use."""
+        if path not in self.orientations:
+            from learning.models.rigid_orientation import load_orientation_net
+
+            self.orientations[path] = self._timed(f"orientation model {path}", lambda: load_orientation_net(path))
+        return self.orientations[path]
 
     def route_net(self, path: str):
         """The route encoder in ``path``, loaded on first use."""

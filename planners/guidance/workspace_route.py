@@ -139,6 +139,46 @@ def voxel_route(world, start, goal, cell: float = DEFAULT_CELL) -> np.ndarray | 
     return np.concatenate([np.asarray(start[:3])[None], centres, np.asarray(goal[:3])[None]])
 
 
+def centre_route(world, route: np.ndarray, reach: int, cell: float = DEFAULT_CELL) -> np.ndarray:
+    """``route`` with each interior point moved across the route to the clearest voxel centre within ``reach`` voxels.
+
+    The candidates are the voxel centres within ``reach`` voxels of the point's voxel whose offset runs
+    across the route (at most half a voxel along the route's local direction, the chord between the points
+    two before and two after); the clearance of a point is its exact distance to the nearest box or
+    workspace wall. The search's route keeps only the body's inner radius from every box, so it hugs the
+    walls of a passage; this pulls it to the passage's middle. A point keeps its place unless a candidate
+    clears more; the ends stay.
+    """
+    route = np.asarray(route, dtype=np.float64)
+    if reach <= 0 or len(route) < 3:
+        return route.copy()
+    low, high = np.asarray(world.low3, dtype=np.float64), np.asarray(world.high3, dtype=np.float64)
+    boxes = np.asarray(world.boxes, dtype=np.float64).reshape(-1, 6)
+    shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
+    r = np.arange(-reach, reach + 1)
+    offsets = np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
+
+    def clearance(p: np.ndarray) -> np.ndarray:
+        d = np.minimum(p - low, high - p).min(axis=1)
+        if len(boxes):
+            gap = np.maximum(np.maximum(boxes[None, :, :3] - p[:, None], p[:, None] - boxes[None, :, 3:]), 0.0)
+            d = np.minimum(d, np.linalg.norm(gap, axis=2).min(axis=1))
+        return d
+
+    out = route.copy()
+    k = len(route)
+    for i in range(1, k - 1):
+        chord = route[min(i + 2, k - 1)] - route[max(i - 2, 0)]
+        along = np.abs(offsets @ (chord / max(float(np.linalg.norm(chord)), 1e-12)))
+        v = np.clip(np.floor((route[i] - low) / cell).astype(np.int64), 0, shape - 1)
+        cand = low + (np.clip(v + offsets[along <= 0.5], 0, shape - 1) + 0.5) * cell
+        c = clearance(cand)
+        best = int(np.argmax(c))
+        if c[best] > clearance(route[i][None])[0]:
+            out[i] = cand[best]
+    return out
+
+
 class WorkspaceRouteSampler(SamplerBase):
     """Positions along the exact workspace route of the body's centre, uniform angles (the module doc).
 

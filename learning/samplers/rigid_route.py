@@ -1,0 +1,134 @@
+"""The learned 6-DoF route sampler: the workspace route's positions with orientations from a learned model.
+
+``RigidRouteSampler`` draws positions as the no-learning ablation does
+(``planners.guidance.workspace_route.WorkspaceRouteSampler``: points at uniform arc length along the
+exact workspace route of the body's centre plus Gaussian noise of the body's inner radius, a share of
+uniform states), about the route pulled to the middle of its passages (``centre_route``, ``centre``
+voxels), and replaces its uniform angles by the orientation model's
+(``learning.models.rigid_orientation.OrientationNet``). Per query, once: the route, its centring, the
+model's observation at every route point (``planners.guidance.rigid_orientation.route_observation``)
+and its distribution over the six axis-aligned orientation classes there. Per sample, numpy only:
+
+* with probability ``goal_share`` the goal state;
+* else with probability ``route_fraction`` a route sample: its position as the ablation draws it; its
+  orientation, with probability ``uniform_share``, uniform angles, else a class drawn from the model's
+  distribution at the nearest route point, one of the class's four rotations (the box's symmetry) at
+  random, turned by a random rotation of about ``angle_noise`` radians per axis (a Gaussian rotation vector);
+* else a uniform state.
+
+Samples do not depend on the tree, so they come in batches. Box worlds (``RigidBodyWorld``) only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planners.base.fileio import InputError, check_int, check_number
+from planners.base.samplers import SamplerBase
+from planners.guidance.rigid_orientation import (
+    N_CLASSES,
+    class_rotations,
+    euler_from_matrices,
+    route_observation,
+    small_rotations,
+)
+from planners.guidance.workspace_route import DEFAULT_CELL, centre_route, inner_radius, voxel_route
+
+#: The settings ``make_sampler("rigid_route")`` uses: chosen on the tuning scenes
+#: (``scripts/experiments/tune_rigid_learned.py``; ``docs/rigid-scenes.md``).
+SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2}
+
+_ROTATIONS = class_rotations()
+
+
+class RigidRouteSampler(SamplerBase):
+    """Route positions with learned orientations (see the module doc).
+
+    Args:
+        net: The orientation model (``load_orientation_net``).
+        route_fraction: Probability in [0, 1] of a route sample (the ablation's 0.75).
+        uniform_share: Probability in [0, 1] that a route sample takes uniform angles instead of the model's.
+        angle_noise: Standard deviation, radians, of each component of the rotation vector turning a
+            class's orientation.
+        goal_share: Probability in [0, 1] of drawing the goal state.
+        temperature: Softmax temperature of the model's logits (> 0; below 1 sharpens).
+        spread: Standard deviation of the position noise about the route; None: the body's inner radius.
+        cell: Voxel side of the route search and of the model's observation, world units (the model is
+            trained at 1).
+        centre: Reach in voxels of ``centre_route``: each interior route point moves to the clearest voxel
+            centre that near (0: the search's route as it is).
+    """
+
+    def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
+                 goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
+                 cell: float = DEFAULT_CELL, centre: int = 2) -> None:
+        who = "RigidRouteSampler"
+        self.centre = check_int(centre, f"{who}: centre", low=0)
+        self.net = net
+        self.route_fraction = float(check_number(who, "route_fraction", route_fraction, low=0, high=1))
+        self.uniform_share = float(check_number(who, "uniform_share", uniform_share, low=0, high=1))
+        self.angle_noise = float(check_number(who, "angle_noise", angle_noise, low=0))
+        self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
+        self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
+        self.spread = None if spread is None else float(check_number(who, "spread", spread, low=0))
+        self.cell = float(check_number(who, "cell", cell, low=0, low_open=True))
+
+    def _setup(self) -> None:
+        from learning.models.rigid_orientation import class_probabilities
+        from learning.models.threads import planning_threads
+
+        world = self.problem.world
+        if not (hasattr(world, "boxes") and hasattr(world, "body")):
+            raise InputError(f"RigidRouteSampler needs a box world (RigidBodyWorld), got {type(world).__name__}")
+        route = voxel_route(world, self.problem.start, self.problem.goal, self.cell)
+        self.route = np.zeros((0, 3)) if route is None else centre_route(world, route, self.centre, self.cell)
+        seg = np.linalg.norm(np.diff(self.route, axis=0), axis=1) if len(self.route) > 1 else np.zeros(0)
+        self.arc = np.concatenate([[0.0], np.cumsum(seg)])
+        self.sd = inner_radius(world.body) if self.spread is None else self.spread
+        if len(self.route):
+            patches, dirs = route_observation(world, self.route, self.cell, self.net.half)
+            with planning_threads():  # one torch thread unless SAMPLERGYM_TORCH_THREADS says otherwise
+                self.probs = class_probabilities(self.net, patches, dirs, self.temperature)
+        else:
+            self.probs = np.full((0, N_CLASSES), 1.0 / N_CLASSES)
+        self.cdf = np.cumsum(self.probs, axis=1)
+
+    def draw(self, rng, n, view):
+        # one row of uniforms per sample keeps the stream identical whatever the batch size: a coin, an
+        # arc length, a uniform state, two Box-Muller pairs for the position, a coin for uniform angles,
+        # a class, a symmetry, two Box-Muller pairs for the rotation noise
+        d = self.problem.dim
+        u = rng.random((n, 13 + d))
+        pos_z = _normals(u[:, 2 + d:6 + d])
+        cls_u, sym_u, rot_z = u[:, 7 + d], u[:, 8 + d], _normals(u[:, 9 + d:13 + d])
+        pts = self._uniform(u[:, 2:2 + d])
+        if self.arc[-1] > 0:
+            on = (u[:, 0] >= self.goal_share) & (u[:, 0] < self.goal_share + (1.0 - self.goal_share)
+                                                 * self.route_fraction)
+            s = u[on, 1] * self.arc[-1]
+            i = np.clip(np.searchsorted(self.arc, s, side="right") - 1, 0, len(self.route) - 2)
+            t = (s - self.arc[i]) / np.maximum(self.arc[i + 1] - self.arc[i], 1e-300)
+            p = self.route[i] + t[:, None] * (self.route[i + 1] - self.route[i]) + self.sd * pos_z[on]
+            pts[on, :3] = np.clip(p, self.low[:3], np.nextafter(self.high[:3], -np.inf))
+            learned = np.flatnonzero(on)[u[on, 6 + d] >= self.uniform_share]
+            if len(learned):
+                near = (i + (t >= 0.5))[u[on, 6 + d] >= self.uniform_share]
+                cls = np.minimum((self.cdf[near] < cls_u[learned, None]).sum(axis=1), N_CLASSES - 1)
+                base = _ROTATIONS[cls, np.minimum((sym_u[learned] * 4).astype(np.int64), 3)]
+                turn = small_rotations(self.angle_noise * rot_z[learned])
+                pts[learned, 3:] = euler_from_matrices(turn @ base)
+        pts[u[:, 0] < self.goal_share] = self.problem.goal
+        return pts
+
+    def __repr__(self) -> str:
+        sd = "inner radius" if self.spread is None else f"{self.spread:g}"
+        return (f"RigidRouteSampler(route_fraction={self.route_fraction:g}, uniform_share={self.uniform_share:g}, "
+                f"angle_noise={self.angle_noise:g}, goal_share={self.goal_share:g}, "
+                f"temperature={self.temperature:g}, spread={sd}, cell={self.cell:g}, centre={self.centre})")
+
+
+def _normals(u: np.ndarray) -> np.ndarray:
+    """``(n, 3)`` standard normals from ``(n, 4)`` uniforms (two Box-Muller pairs, the fourth value unused)."""
+    r = np.sqrt(-2.0 * np.log(1.0 - u[:, 0:2]))
+    t = 2.0 * np.pi * u[:, 2:4]
+    return np.concatenate([r * np.cos(t), r * np.sin(t)], axis=1)[:, :3]

@@ -1,0 +1,256 @@
+"""Training the 6-DoF orientation model (``learning.models.rigid_orientation``) on the training scenes' routes.
+
+Examples come from training scenes only: ``scenes_per_family`` seeds of each family drawn from
+``TRAIN_SEEDS`` with ``np.random.default_rng(seed)`` (``planners.worlds.rigid_scenes``; never a
+validation, tuning or test seed, nor a test-only family). In each scene the positions are the
+workspace route's points (``voxel_route``, what the sampler sees at planning time) and the points of
+the scene's witness path (``scene_with_witness``: poses through every passage), one per unit of its
+length. The observation at each is ``route_observation``'s (the same function the sampler calls). The
+label (``class_validity``: a configuration-space query made at training time only) is, with
+``label="window"`` (the default), the classes that fit at every point of the same path within
+``window`` of arc length, a class fitting at a point when any of ``poses`` poses of it, jittered about
+the point by ``jitter`` (the sampler's position noise), keeps the motion check's clearance: the
+orientation the body must already have to pass what comes next, as the witness path holds its turned
+pose from before a passage to after it (where no class fits throughout, the window's mean fit). With
+``label="point"``, the share of the jittered poses of each class that keep it at the point alone.
+Points where no class fits are left out, and of those where every class fits (open space, most of a
+route) only ``open_keep`` are kept, drawn at random.
+
+The model learns the label normalised to a distribution (cross-entropy with soft targets). Each
+example is seen under one of the 48 symmetries of the voxel grid per epoch (a permutation of the
+world's axes and reflections; the classes and the direction move with it), so a passage along x
+teaches passages along y and z too. Every random choice comes from ``seed``; with one torch thread
+the same seed gives the same weights.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import torch
+
+from learning.models.rigid_orientation import OrientationNet
+from planners.base.fileio import InputError, check_int, check_number
+from planners.guidance.rigid_orientation import (
+    AXIS_PERMUTATIONS,
+    CLASS_PERMUTATIONS,
+    PATCH_HALF,
+    class_validity,
+    route_directions,
+    route_observation,
+)
+from planners.guidance.workspace_route import voxel_route
+from planners.maps.generators import TRAIN_SEEDS
+from planners.worlds.rigid_scenes import TRAINING_FAMILIES, scene_with_witness
+
+#: The labels a model may learn (``RigidTrainConfig.label``; the module doc).
+LABELS = ("point", "window")
+
+
+def window_labels(points: np.ndarray, fit: np.ndarray, window: float) -> np.ndarray:
+    """``(n, 6)``: per point of a path, the classes that fit (``fit > 0``) at every point within ``window`` of it.
+
+    ``window`` is measured in arc length; where no class fits throughout, the mean of ``fit`` over the window.
+    """
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points[:, :3], axis=0), axis=1))])
+    lo = np.searchsorted(arc, arc - window, side="left")
+    hi = np.searchsorted(arc, arc + window, side="right")
+    out = np.zeros_like(fit, dtype=np.float64)
+    for i in range(len(points)):
+        w = fit[lo[i]:hi[i]]
+        every = np.all(w > 0, axis=0)
+        out[i] = every if every.any() else w.mean(axis=0)
+    return out
+
+
+@dataclass(frozen=True)
+class RigidTrainConfig:
+    """The recipe of an orientation model (every field is stored beside the weights)."""
+
+    scenes_per_family: int = 40
+    families: tuple[str, ...] = TRAINING_FAMILIES
+    jitter: float = 1.25
+    poses: int = 16
+    epochs: int = 15
+    batch: int = 64
+    lr: float = 2e-3
+    channels: int = 8
+    hidden: int = 64
+    augment: bool = True
+    seed: int = 0
+    held_out: float = 0.1
+    open_keep: float = 0.25
+    label: str = "window"
+    window: float = 6.0
+
+    def check(self) -> RigidTrainConfig:
+        """The config, or an ``InputError`` naming the first field out of range."""
+        check_int(self.scenes_per_family, "scenes_per_family", low=1)
+        for f in self.families:
+            if f not in TRAINING_FAMILIES:
+                raise InputError(f"{f!r} is not a training scene family; choose from {', '.join(TRAINING_FAMILIES)}")
+        check_number("RigidTrainConfig", "jitter", self.jitter, low=0)
+        check_int(self.poses, "poses", low=1)
+        check_int(self.epochs, "epochs", low=1)
+        check_int(self.batch, "batch", low=1)
+        check_number("RigidTrainConfig", "lr", self.lr, low=0, low_open=True)
+        check_int(self.seed, "seed", low=0)
+        check_number("RigidTrainConfig", "held_out", self.held_out, low=0, high=0.5)
+        check_number("RigidTrainConfig", "open_keep", self.open_keep, low=0, high=1)
+        if self.label not in LABELS:
+            raise InputError(f"label = {self.label!r}; choose from {', '.join(LABELS)}")
+        check_number("RigidTrainConfig", "window", self.window, low=0)
+        return self
+
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        d["families"] = list(self.families)
+        return d
+
+
+@dataclass
+class RigidExamples:
+    """Observations and labels: ``patches (n, s, s, s)``, ``directions (n, 3)``, ``labels (n, 6)``, ``scene (n,)``."""
+
+    patches: np.ndarray
+    directions: np.ndarray
+    labels: np.ndarray
+    scene: np.ndarray
+    names: list[str]
+
+
+def _densify(path: np.ndarray, spacing: float = 1.0) -> np.ndarray:
+    """Positions along a path's centres, about ``spacing`` apart."""
+    pts = [path[0, :3]]
+    for a, b in zip(path[:-1, :3], path[1:, :3], strict=True):
+        k = max(1, int(np.ceil(np.linalg.norm(b - a) / spacing)))
+        pts.extend(a + (b - a) * (np.arange(1, k + 1) / k)[:, None])
+    return np.array(pts)
+
+
+def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], None] | None = None) -> RigidExamples:
+    """The examples of ``config``'s training scenes (the module doc)."""
+    rng = np.random.default_rng(config.seed)
+    patches, dirs, labels, scene, names = [], [], [], [], []
+    for family in config.families:
+        seeds = rng.integers(*TRAIN_SEEDS, size=config.scenes_per_family)
+        for s in seeds:
+            problem, witness = scene_with_witness(family, int(s))
+            world = problem.world
+            route = voxel_route(world, problem.start, problem.goal)
+            parts = [] if route is None else [route]
+            parts.append(_densify(witness.path))
+            label_rng = np.random.default_rng([config.seed, int(s), len(names)])
+            for pts in parts:
+                p, _ = route_observation(world, pts, half=PATCH_HALF)
+                d = route_directions(pts).astype(np.float32)
+                if config.label == "point":
+                    y = class_validity(world, pts, label_rng, config.jitter, config.poses)
+                else:
+                    y = window_labels(pts, class_validity(world, pts, label_rng, config.jitter, config.poses, "any"),
+                                      config.window)
+                fit = (y > 0).sum(axis=1)
+                keep = (fit > 0) & ((fit < y.shape[1]) | (label_rng.random(len(y)) < config.open_keep))
+                patches.append(p[keep])
+                dirs.append(d[keep])
+                labels.append(y[keep].astype(np.float32))
+                scene.append(np.full(int(keep.sum()), len(names)))
+            names.append(problem.name)
+            if progress is not None:
+                progress(f"{problem.name}: {sum(len(a) for a in labels)} examples so far")
+    return RigidExamples(np.concatenate(patches), np.concatenate(dirs), np.concatenate(labels),
+                         np.concatenate(scene), names)
+
+
+def augment(patches: np.ndarray, directions: np.ndarray, labels: np.ndarray, rng: np.random.Generator):
+    """Each example under one of the grid's 48 symmetries drawn from ``rng`` (the module doc); new arrays."""
+    n = len(patches)
+    perm_of = rng.integers(len(AXIS_PERMUTATIONS), size=n)
+    flips = rng.random((n, 3)) < 0.5
+    P, D, Y = np.empty_like(patches), np.empty_like(directions), np.empty_like(labels)
+    for k, perm in enumerate(AXIS_PERMUTATIONS):
+        idx = np.flatnonzero(perm_of == k)
+        P[idx] = np.transpose(patches[idx], (0, 1 + perm[0], 1 + perm[1], 1 + perm[2]))
+        D[idx] = directions[idx][:, list(perm)]
+        Y[idx[:, None], CLASS_PERMUTATIONS[k][None, :]] = labels[idx]
+    for axis in range(3):
+        idx = np.flatnonzero(flips[:, axis])
+        P[idx] = np.flip(P[idx], axis=1 + axis)
+        D[idx, axis] = -D[idx, axis]
+    return P, D, Y
+
+
+def soft_cross_entropy(logits: torch.Tensor, labels: torch.Tensor) -> torch.Tensor:
+    """Mean cross-entropy of ``logits`` against ``labels`` normalised to distributions."""
+    target = labels / labels.sum(dim=1, keepdim=True)
+    return -(target * torch.log_softmax(logits, dim=1)).sum(dim=1).mean()
+
+
+def _evaluate(net: OrientationNet, P, D, Y) -> dict:
+    """Held-out loss, and how often the most likely class is one that fits (label > 0)."""
+    with torch.no_grad():
+        logits = net(torch.as_tensor(P), torch.as_tensor(D))
+        loss = float(soft_cross_entropy(logits, torch.as_tensor(Y)))
+        top = logits.argmax(dim=1).numpy()
+    fits = Y[np.arange(len(Y)), top] > 0
+    narrow = (Y > 0).sum(axis=1) <= 2  # points where at most two classes fit: the passages
+    return {"loss": loss, "top_fits": float(fits.mean()) if len(Y) else 0.0,
+            "top_fits_narrow": float(fits[narrow].mean()) if narrow.any() else 0.0, "narrow": int(narrow.sum())}
+
+
+def train_rigid_orientation(config: RigidTrainConfig, examples: RigidExamples | None = None,
+                            progress: Callable[[str], None] | None = None) -> tuple[OrientationNet, dict]:
+    """Train an orientation model on ``config``'s training scenes: ``(net, log)``.
+
+    ``examples`` (from ``collect_rigid_examples(config)``) may be passed to skip collecting them. The
+    log holds the example counts, each epoch's training loss and the held-out scenes' loss and accuracy
+    (scenes of the training seeds kept out of the fit, ``held_out`` of them).
+    """
+    config.check()
+    t0 = time.perf_counter()
+    ex = collect_rigid_examples(config, progress) if examples is None else examples
+    t_collect = time.perf_counter() - t0
+    rng = np.random.default_rng([config.seed, 1])
+    n_scenes = len(ex.names)
+    held = rng.permutation(n_scenes)[:int(round(config.held_out * n_scenes))]
+    test = np.isin(ex.scene, held)
+    train_idx = np.flatnonzero(~test)
+    with torch.random.fork_rng(devices=[]):  # the weights' initialisation from the seed, the caller's state kept
+        torch.manual_seed(config.seed)
+        net = OrientationNet(half=PATCH_HALF, channels=config.channels, hidden=config.hidden)
+    opt = torch.optim.Adam(net.parameters(), lr=config.lr)
+    steps = config.epochs * int(np.ceil(len(train_idx) / config.batch))
+    sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(1, steps))
+    log = {"examples": int(len(train_idx)), "held_out_examples": int(test.sum()), "scenes": n_scenes,
+           "held_out_scenes": len(held), "epochs": [], "collect_seconds": round(t_collect, 1)}
+    for epoch in range(config.epochs):
+        order = rng.permutation(train_idx)
+        P, D, Y = ex.patches[order], ex.directions[order], ex.labels[order]
+        if config.augment:
+            P, D, Y = augment(P, D, Y, rng)
+        net.train()
+        total = 0.0
+        for i in range(0, len(order), config.batch):
+            loss = soft_cross_entropy(net(torch.as_tensor(P[i:i + config.batch]),
+                                          torch.as_tensor(D[i:i + config.batch])),
+                                      torch.as_tensor(Y[i:i + config.batch]))
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            sched.step()
+            total += float(loss.detach()) * len(P[i:i + config.batch])
+        net.eval()
+        entry = {"epoch": epoch, "loss": round(total / max(1, len(order)), 5)}
+        if test.any():
+            held_stats = _evaluate(net, ex.patches[test], ex.directions[test], ex.labels[test])
+            entry.update({f"held_out_{k}": (round(v, 5) if isinstance(v, float) else v)
+                          for k, v in held_stats.items()})
+        log["epochs"].append(entry)
+        if progress is not None:
+            progress(f"epoch {epoch}: {entry}")
+    log["seconds"] = round(time.perf_counter() - t0, 1)
+    log["parameters"] = int(sum(p.numel() for p in net.parameters()))
+    return net.eval(), log

@@ -1,0 +1,170 @@
+"""What a learned 6-DoF orientation model sees along a workspace route, and its orientation classes (numpy only).
+
+The box body (sides ``lx > ly > lz`` along its own x, y, z) passes the generated scenes' openings
+turned to one of a few axis-aligned orientations. Up to the box's own symmetry (a half turn about any
+of its axes maps it onto itself) an axis-aligned orientation is which world axis the long side lies
+along and which the middle side does: six classes (``ORIENTATION_CLASSES``), each the same body
+pose under four rotations (``class_rotations``).
+
+* ``occupancy_grid(world, cell)``: the fraction of each voxel of side ``cell`` that the boxes cover,
+  exact (boxes are axis-aligned), as float32.
+* ``route_patches(grid, points, low, cell, half)``: the ``(2 half + 1)^3`` voxels about each point's
+  voxel, voxels outside the workspace counting as covered.
+* ``route_directions(route, reach)``: the route's unit direction at each of its points.
+* ``route_observation(world, route)``: both, at every route point: the observation of the learned
+  orientation model (``learning.models.rigid_orientation``), computed once per query.
+* ``permute_class`` / ``CLASS_PERMUTATIONS``: how the classes move when the world's axes are permuted
+  (the training's augmentation).
+* ``class_validity(world, points, classes, rng, jitter, k)``: the share of ``k`` poses of each class,
+  jittered about each point, that keep the motion check's clearance (``check_motions`` of a pose to
+  itself): the training label. A configuration-space query: training only, never at planning time.
+* ``euler_from_matrices`` and ``small_rotations``: vectorised angle conversion and noise for drawing.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+#: (world axis of the body's long side, world axis of its middle side), the six axis-aligned classes.
+ORIENTATION_CLASSES = tuple((a, b) for a in range(3) for b in range(3) if a != b)
+N_CLASSES = len(ORIENTATION_CLASSES)
+#: Half the side of an observation patch, in voxels: 13 voxels cover the body's long side (10) and more.
+PATCH_HALF = 6
+#: Route points on either side whose chord gives a route point's direction.
+DIRECTION_REACH = 2
+
+
+def class_rotations() -> np.ndarray:
+    """``(6, 4, 3, 3)``: for each class, the four rotations that put the body in it (the box's symmetry)."""
+    out = np.zeros((N_CLASSES, 4, 3, 3))
+    for c, (a, b) in enumerate(ORIENTATION_CLASSES):
+        for s, (sa, sb) in enumerate(itertools.product((1.0, -1.0), repeat=2)):
+            ea, eb = np.zeros(3), np.zeros(3)
+            ea[a], eb[b] = sa, sb
+            out[c, s] = np.stack([ea, eb, np.cross(ea, eb)], axis=1)  # columns: the body's axes in the world
+    return out
+
+
+def permute_class(perm) -> np.ndarray:
+    """``(6,)``: the class each class becomes when world axis ``perm[k]`` is renamed ``k``."""
+    inv = np.argsort(np.asarray(perm))
+    index = {ab: i for i, ab in enumerate(ORIENTATION_CLASSES)}
+    return np.array([index[(int(inv[a]), int(inv[b]))] for a, b in ORIENTATION_CLASSES])
+
+
+#: The six permutations of the world's axes.
+AXIS_PERMUTATIONS = tuple(itertools.permutations(range(3)))
+#: ``(6, 6)``: ``CLASS_PERMUTATIONS[p][c]`` is the class ``c`` becomes under ``AXIS_PERMUTATIONS[p]``.
+CLASS_PERMUTATIONS = np.array([permute_class(p) for p in AXIS_PERMUTATIONS])
+
+
+def occupancy_grid(world, cell: float = 1.0) -> np.ndarray:
+    """``(nx, ny, nz)`` float32: the share of each voxel of side ``cell`` (from the workspace's low corner) in boxes."""
+    low, high = np.asarray(world.low3, dtype=np.float64), np.asarray(world.high3, dtype=np.float64)
+    shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
+    grid = np.zeros(tuple(shape), dtype=np.float64)
+    edges = [low[k] + np.arange(shape[k] + 1) * cell for k in range(3)]
+    for b in np.asarray(world.boxes, dtype=np.float64).reshape(-1, 6):
+        sl, cover = [], []
+        for k in range(3):
+            i0 = max(0, int(np.floor((b[k] - low[k]) / cell)))
+            i1 = min(int(shape[k]), int(np.ceil((b[3 + k] - low[k]) / cell)))
+            if i1 <= i0:
+                break
+            lo, hi = edges[k][i0:i1], edges[k][i0 + 1:i1 + 1]
+            sl.append(slice(i0, i1))
+            cover.append(np.clip(np.minimum(hi, b[3 + k]) - np.maximum(lo, b[k]), 0.0, cell) / cell)
+        else:
+            grid[tuple(sl)] += cover[0][:, None, None] * cover[1][None, :, None] * cover[2][None, None, :]
+    return np.minimum(grid, 1.0).astype(np.float32)
+
+
+def voxel_index(points, low, cell: float, shape) -> np.ndarray:
+    """``(n, 3)`` int: each point's voxel, clipped to the grid."""
+    idx = np.floor((np.asarray(points, dtype=np.float64)[:, :3] - np.asarray(low)) / cell).astype(np.int64)
+    return np.clip(idx, 0, np.asarray(shape) - 1)
+
+
+def route_patches(grid: np.ndarray, points, low, cell: float = 1.0, half: int = PATCH_HALF) -> np.ndarray:
+    """``(n, 2 half + 1, 2 half + 1, 2 half + 1)`` float32: the grid about each point's voxel, outside = 1."""
+    padded = np.pad(grid, half, constant_values=1.0)
+    side = 2 * half + 1
+    windows = np.lib.stride_tricks.sliding_window_view(padded, (side, side, side))
+    idx = voxel_index(points, low, cell, grid.shape)
+    return np.ascontiguousarray(windows[idx[:, 0], idx[:, 1], idx[:, 2]])
+
+
+def route_directions(route, reach: int = DIRECTION_REACH) -> np.ndarray:
+    """``(k, 3)``: the unit chord from ``reach`` points before each route point to ``reach`` after (0 if none)."""
+    route = np.asarray(route, dtype=np.float64)[:, :3]
+    k = len(route)
+    i = np.arange(k)
+    chord = route[np.minimum(i + reach, k - 1)] - route[np.maximum(i - reach, 0)]
+    norm = np.linalg.norm(chord, axis=1, keepdims=True)
+    return np.where(norm > 1e-12, chord / np.maximum(norm, 1e-12), 0.0)
+
+
+def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF) -> tuple[np.ndarray, np.ndarray]:
+    """The orientation model's observation at every route point: ``(patches, directions)`` (see the module doc)."""
+    grid = occupancy_grid(world, cell)
+    return route_patches(grid, route, world.low3, cell, half), route_directions(route).astype(np.float32)
+
+
+def class_validity(world, points, rng: np.random.Generator, jitter: float, k: int, reduce: str = "mean") -> np.ndarray:
+    """``(n, 6)``: per point and class, the share of ``k`` poses that keep the motion check's clearance.
+
+    The first pose of each point is the point itself, the others Gaussian with deviation ``jitter``
+    about it; each pose takes one of the class's four rotations at random. ``reduce="any"`` gives 1
+    where any of the poses keeps it, else 0. A configuration-space query, for training labels only.
+    """
+    if reduce not in ("mean", "any"):
+        raise ValueError(f"reduce = {reduce!r}, expected 'mean' or 'any'")
+    points = np.asarray(points, dtype=np.float64)[:, :3]
+    n = len(points)
+    rots = class_rotations()
+    pos = np.repeat(points[:, None], k, axis=1) + jitter * rng.standard_normal((n, k, 3)) * (np.arange(k) > 0)[:, None]
+    pos = np.clip(pos, world.low3 + 1e-9, world.high3 - 1e-9)
+    out = np.zeros((n, N_CLASSES))
+    for c in range(N_CLASSES):
+        angles = euler_from_matrices(rots[c, rng.integers(4, size=n * k)])
+        q = np.concatenate([pos.reshape(-1, 3), angles], axis=1)
+        ok = world.check_motions(q, q).reshape(n, k)
+        out[:, c] = ok.mean(axis=1) if reduce == "mean" else ok.any(axis=1)
+    return out
+
+
+def euler_from_matrices(R: np.ndarray) -> np.ndarray:
+    """``(n, 3)`` angles ``(tx, ty, tz)`` with ``Ry(ty) Rx(tx) Rz(tz) = R`` for ``(n, 3, 3)`` rotations.
+
+    ``tx`` lies in ``[-pi/2, pi/2]``; at ``tx = +-pi/2`` (gimbal lock) ``tz`` is 0, as
+    ``planners.worlds.rigid3d.euler_from_matrix`` has it.
+    """
+    R = np.asarray(R, dtype=np.float64).reshape(-1, 3, 3)
+    tx = np.arcsin(np.clip(-R[:, 1, 2], -1.0, 1.0))
+    cx = np.sqrt(R[:, 1, 0] ** 2 + R[:, 1, 1] ** 2)
+    lock = cx < 1e-9
+    ty = np.where(lock, np.arctan2(np.where(R[:, 1, 2] < 0, 1.0, -1.0) * R[:, 0, 1], R[:, 0, 0]),
+                  np.arctan2(R[:, 0, 2], R[:, 2, 2]))
+    tz = np.where(lock, 0.0, np.arctan2(R[:, 1, 0], R[:, 1, 1]))
+    return np.stack([tx, ty, tz], axis=1)
+
+
+def small_rotations(omega: np.ndarray) -> np.ndarray:
+    """``(n, 3, 3)``: the rotations ``exp([omega]x)`` of rotation vectors ``(n, 3)`` (Rodrigues)."""
+    omega = np.asarray(omega, dtype=np.float64).reshape(-1, 3)
+    theta = np.linalg.norm(omega, axis=1)
+    safe = np.maximum(theta, 1e-12)
+    k = omega / safe[:, None]
+    K = np.zeros((len(omega), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    s, c = np.sin(theta)[:, None, None], (1.0 - np.cos(theta))[:, None, None]
+    return np.eye(3)[None] + s * K + c * (K @ K)
+
+
+def wrap_angles(a: np.ndarray) -> np.ndarray:
+    """Angles wrapped to ``[-pi, pi)``."""
+    return (np.asarray(a) + math.pi) % (2.0 * math.pi) - math.pi

@@ -1,0 +1,80 @@
+"""Train the 6-DoF orientation model that ``make_sampler("rigid_route")`` uses, on the rigid-body training scenes.
+
+    python scripts/train_rigid.py                                   # the shipped model's recipe (a few CPU minutes)
+    python scripts/train_rigid.py --export learning/data/rigid_route.pt
+    python scripts/train_rigid.py --scenes-per-family 5 --epochs 2 --out runs/rigid-quick
+
+Runs ``learning.training.rigid.train_rigid_orientation``: examples from training scenes only (seeds drawn
+from ``TRAIN_SEEDS`` with ``--seed``; never a validation, tuning or test scene, nor a test-only family),
+the observation at the workspace route's and the witness path's points, the label which orientation
+classes keep the motion check's clearance there. One torch thread: the same seed gives the same weights.
+
+Writes ``<out>/rigid_route.pt`` (tensors and plain numbers, read with ``torch.load(weights_only=True)``)
+and ``<out>/rigid_route.json`` (the recipe, the log, the time); ``--export PATH`` copies the weights to
+``PATH`` and the JSON beside it. Exit status: 0 done, 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import torch
+
+from learning.models.rigid_orientation import save_orientation_net
+from learning.training.rigid import RigidTrainConfig, train_rigid_orientation
+from planners.base.fileio import InputError, atomic_write_text
+from planners.worlds.rigid_scenes import TRAINING_FAMILIES
+
+
+def main(argv=None) -> int:
+    d = RigidTrainConfig()
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scenes-per-family", type=int, default=d.scenes_per_family)
+    ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES))
+    ap.add_argument("--epochs", type=int, default=d.epochs)
+    ap.add_argument("--batch", type=int, default=d.batch)
+    ap.add_argument("--lr", type=float, default=d.lr)
+    ap.add_argument("--channels", type=int, default=d.channels)
+    ap.add_argument("--hidden", type=int, default=d.hidden)
+    ap.add_argument("--poses", type=int, default=d.poses, help="jittered poses per point and class for the label")
+    ap.add_argument("--open-keep", type=float, default=d.open_keep,
+                    help="share of the points where every class fits that are kept")
+    ap.add_argument("--label", choices=("point", "window"), default=d.label,
+                    help="classes that fit along the path's window (default) or at the point alone")
+    ap.add_argument("--window", type=float, default=d.window, help="half the window of --label window, world units")
+    ap.add_argument("--no-augment", action="store_true", help="no symmetries of the grid")
+    ap.add_argument("--seed", type=int, default=d.seed)
+    ap.add_argument("--out", type=Path, default=Path("runs/rigid_route"))
+    ap.add_argument("--export", type=Path, help="also copy the weights here (and the JSON beside them)")
+    args = ap.parse_args(argv)
+    torch.set_num_threads(1)
+    try:
+        config = RigidTrainConfig(scenes_per_family=args.scenes_per_family, families=tuple(args.families),
+                                  epochs=args.epochs, batch=args.batch, lr=args.lr, channels=args.channels,
+                                  hidden=args.hidden, poses=args.poses, open_keep=args.open_keep,
+                                  augment=not args.no_augment, seed=args.seed,
+                                  label=args.label, window=args.window).check()
+    except InputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    net, log = train_rigid_orientation(config, progress=lambda msg: print(msg, flush=True))
+    args.out.mkdir(parents=True, exist_ok=True)
+    weights = args.out / "rigid_route.pt"
+    save_orientation_net(net, weights)
+    meta = json.dumps({"recipe": config.as_dict(), "log": log, "minutes": round(log["seconds"] / 60, 1),
+                       "device": "cpu", "torch_threads": 1}, indent=1) + "\n"
+    atomic_write_text(args.out / "rigid_route.json", meta)
+    print(f"wrote {weights} ({weights.stat().st_size:,} bytes) and rigid_route.json; {log['seconds']} s")
+    if args.export is not None:
+        shutil.copyfile(weights, args.export)
+        atomic_write_text(args.export.with_suffix(".json"), meta)
+        print(f"exported to {args.export}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

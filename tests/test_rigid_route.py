@@ -1,0 +1,176 @@
+"""The learned 6-DoF route sampler: its features, its file, its draws, its registry name and its training."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from learning.models.rigid_orientation import OrientationNet, load_orientation_net, save_orientation_net
+from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
+from learning.samplers.registry import make_sampler
+from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
+from learning.training.rigid import RigidTrainConfig, augment, train_rigid_orientation
+from planners.base.fileio import InputError
+from planners.guidance.rigid_orientation import (
+    CLASS_PERMUTATIONS,
+    ORIENTATION_CLASSES,
+    class_rotations,
+    euler_from_matrices,
+    occupancy_grid,
+    route_patches,
+)
+from planners.worlds.rigid3d import RigidBodyWorld, box_body, rotation_matrix
+from planners.worlds.rigid_scenes import rigid_scene
+
+
+@pytest.fixture(scope="module")
+def slot_scene():
+    return rigid_scene("slot", 12345)  # a training seed
+
+
+def test_angles_from_matrices_invert_the_bodys_rotation_and_classes_are_the_boxs_symmetry():
+    rng = np.random.default_rng(0)
+    angles = rng.uniform(-np.pi, np.pi, (100, 3))
+    R = np.array([rotation_matrix(*a) for a in angles])
+    back = np.array([rotation_matrix(*a) for a in euler_from_matrices(R)])
+    assert np.abs(back - R).max() < 1e-12
+    rots = class_rotations()
+    assert rots.shape == (6, 4, 3, 3) and np.allclose(np.linalg.det(rots), 1.0)
+    body = box_body(10, 5, 2.5)
+    for c, (a, b) in enumerate(ORIENTATION_CLASSES):
+        pts = [np.round(body @ r.T, 9) for r in rots[c]]  # the four rotations place the same point set
+        assert all({tuple(p) for p in q} == {tuple(p) for p in pts[0]} for q in pts)
+        extent = np.ptp(pts[0], axis=0)
+        assert extent[a] == 10 and extent[b] == 5
+    assert sorted(map(tuple, CLASS_PERMUTATIONS)) == sorted(set(map(tuple, CLASS_PERMUTATIONS)))
+
+
+def test_occupancy_is_the_exact_covered_share_and_outside_counts_as_covered():
+    world = RigidBodyWorld([[2.0, 0.0, 0.0, 3.5, 4.0, 4.0]], box_body(1, 0.5, 0.25), low=(0, 0, 0), high=(8, 4, 4),
+                           delta=0.05)
+    g = occupancy_grid(world)
+    assert g.shape == (8, 4, 4)
+    assert np.allclose(g[:, 0, 0], [0, 0, 1, 0.5, 0, 0, 0, 0])
+    p = route_patches(g, np.array([[0.5, 0.5, 0.5]]), world.low3, half=2)
+    assert p.shape == (1, 5, 5, 5) and p[0, 0].min() == 1.0 and p[0, 2, 2, 2] == 0.0
+
+
+def test_augmentation_moves_classes_with_the_axes():
+    rng = np.random.default_rng(1)
+    P = rng.random((40, 5, 5, 5)).astype(np.float32)
+    D = rng.standard_normal((40, 3)).astype(np.float32)
+    Y = np.eye(6, dtype=np.float32)[rng.integers(6, size=40)]
+    P2, D2, Y2 = augment(P, D, Y, np.random.default_rng(2))
+    assert np.allclose(np.sort(np.abs(D2), axis=1), np.sort(np.abs(D), axis=1))
+    assert np.allclose(Y2.sum(axis=1), 1) and np.allclose(np.sort(P2.ravel()), np.sort(P.ravel()))
+
+
+def test_the_shipped_model_is_small_and_loads_as_weights_only(tmp_path):
+    assert SHIPPED_RIGID_ORIENTATION.stat().st_size < 1_000_000
+    blob = torch.load(SHIPPED_RIGID_ORIENTATION, map_location="cpu", weights_only=True)
+    assert blob["config"]["kind"] == "rigid_orientation"
+    net = load_orientation_net(SHIPPED_RIGID_ORIENTATION)
+    path = tmp_path / "m.pt"
+    save_orientation_net(net, path)
+    again = load_orientation_net(path)
+    assert all(torch.equal(a, b) for a, b in zip(net.state_dict().values(), again.state_dict().values(), strict=True))
+    torch.save({"config": {"kind": "other"}, "state": {}}, path)
+    with pytest.raises(InputError, match="kind"):
+        load_orientation_net(path)
+
+
+def test_draws_are_valid_shaped_seeded_and_batch_invariant(slot_scene):
+    s = make_sampler("rigid_route").bind(slot_scene)
+    assert s.uniform_share == SHIPPED_RIGID_SETTINGS["uniform_share"]
+    a = s.draw(np.random.default_rng(3), 64, None)
+    b = s.draw(np.random.default_rng(3), 64, None)
+    rng = np.random.default_rng(3)
+    c = np.concatenate([s.draw(rng, 20, None), s.draw(rng, 44, None)])
+    assert a.shape == (64, 6) and np.array_equal(a, b) and np.allclose(a, c)
+    low, high = slot_scene.world.bounds
+    assert np.all(a >= low) and np.all(a <= high)
+    assert s.probs.shape == (len(s.route), 6) and np.allclose(s.probs.sum(axis=1), 1)
+    # the goal share draws the goal; everything else is the route or uniform
+    only_goal = RigidRouteSampler(s.net, goal_share=1.0).bind(slot_scene).draw(np.random.default_rng(0), 5, None)
+    assert np.allclose(only_goal, slot_scene.goal)
+    # every learned orientation is an axis-aligned one when no noise is added
+    exact = RigidRouteSampler(s.net, route_fraction=1.0, uniform_share=0.0, angle_noise=0.0, goal_share=0.0)
+    q = exact.bind(slot_scene).draw(np.random.default_rng(4), 32, None)
+    R = np.array([rotation_matrix(*x[3:]) for x in q])
+    assert np.allclose(np.abs(R).max(axis=1), 1.0)
+
+
+def test_the_registry_name_plans_with_rrt_connect(slot_scene):
+    from learning.evaluation.rigid import run_one
+
+    row = run_one(slot_scene, "RRTConnect", "rigid_route", 0, max_iterations=300)
+    again = run_one(slot_scene, "RRTConnect", "rigid_route", 0, max_iterations=300)
+    assert row.iterations == again.iterations and row.solved == again.solved and row.iterations <= 300
+    with pytest.raises(InputError, match="takes no parameter"):
+        make_sampler("rigid_route", colour=1)
+
+
+def test_training_is_reproducible_on_a_tiny_set():
+    torch.set_num_threads(1)
+    config = RigidTrainConfig(scenes_per_family=1, families=("slot", "shelves"), epochs=1, held_out=0.0)
+    net1, log1 = train_rigid_orientation(config)
+    net2, log2 = train_rigid_orientation(config)
+    assert isinstance(net1, OrientationNet) and log1["examples"] == log2["examples"] > 0
+    assert all(torch.equal(a, b) for a, b in zip(net1.state_dict().values(), net2.state_dict().values(), strict=True))
+
+
+def test_window_labels_keep_the_classes_that_fit_along_the_whole_window():
+    from learning.training.rigid import window_labels
+
+    pts = np.stack([np.arange(10.0), np.zeros(10), np.zeros(10)], axis=1)
+    fit = np.ones((10, 6))
+    fit[5, 1:] = 0  # a passage at x = 5 that only class 0 passes
+    y = window_labels(pts, fit, 2.0)
+    assert np.array_equal(y[3:8], np.tile(np.eye(6)[0], (5, 1)))  # within 2 of the passage: class 0 only
+    assert np.all(y[:3] == 1) and np.all(y[8:] == 1)
+    none = window_labels(pts, np.zeros((10, 6)) + np.eye(6)[np.arange(10) % 6], 1.0)
+    assert np.allclose(none[4], [0, 0, 0, 1 / 3, 1 / 3, 1 / 3])  # no class throughout: the window's mean
+
+
+def test_centring_moves_route_points_across_the_route_to_more_clearance(slot_scene):
+    from planners.guidance.workspace_route import centre_route, voxel_route
+
+    world = slot_scene.world
+    route = voxel_route(world, slot_scene.start, slot_scene.goal)
+    moved = centre_route(world, route, 2)
+    assert moved.shape == route.shape and np.array_equal(moved[[0, -1]], route[[0, -1]])
+    assert np.array_equal(centre_route(world, route, 0), route)
+
+    def clearance(p):
+        gap = np.maximum(np.maximum(world.boxes[None, :, :3] - p[:, None], p[:, None] - world.boxes[None, :, 3:]), 0)
+        return np.minimum(np.linalg.norm(gap, axis=2).min(axis=1),
+                          np.minimum(p - world.low3, world.high3 - p).min(axis=1))
+
+    assert np.all(clearance(moved) >= clearance(route) - 1e-12) and np.any(clearance(moved) > clearance(route))
+    s = make_sampler("rigid_route", centre=0).bind(slot_scene)
+    assert np.array_equal(s.route, route) and make_sampler("rigid_route").centre == SHIPPED_RIGID_SETTINGS["centre"]
+
+
+def test_the_training_script_writes_weights_and_recipe_and_the_comparison_takes_sampler_params(tmp_path, capsys):
+    import json
+    import runpy
+    import sys
+
+    from scripts import evaluate_rigid
+
+    argv = sys.argv
+    try:
+        sys.argv = ["train_rigid.py", "--scenes-per-family", "1", "--families", "slot", "--epochs", "1",
+                    "--out", str(tmp_path / "run")]
+        with pytest.raises(SystemExit) as done:
+            runpy.run_path("scripts/train_rigid.py", run_name="__main__")
+    finally:
+        sys.argv = argv
+    assert done.value.code == 0
+    meta = json.loads((tmp_path / "run" / "rigid_route.json").read_text())
+    assert meta["recipe"]["families"] == ["slot"] and meta["recipe"]["label"] == "window"
+    load_orientation_net(tmp_path / "run" / "rigid_route.pt")
+    assert evaluate_rigid.main(["--sampler-params", "[1]", "--out", str(tmp_path / "e")]) == 2
+    assert evaluate_rigid.main(["--sampler-params", "{", "--out", str(tmp_path / "e")]) == 2
+    assert "sampler-params" in capsys.readouterr().err
