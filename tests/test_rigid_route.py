@@ -174,3 +174,18 @@ def test_the_training_script_writes_weights_and_recipe_and_the_comparison_takes_
     assert evaluate_rigid.main(["--sampler-params", "[1]", "--out", str(tmp_path / "e")]) == 2
     assert evaluate_rigid.main(["--sampler-params", "{", "--out", str(tmp_path / "e")]) == 2
     assert "sampler-params" in capsys.readouterr().err
+
+
+def test_the_own_ablation_draws_the_learned_samplers_positions_with_uniform_angles_and_needs_no_model():
+    from planners.worlds.rigid_scenes import rigid_scene
+
+    problem = rigid_scene("slot", 200_000)
+    learned, ablation = make_sampler("rigid_route"), make_sampler("rigid_route_ablation")
+    assert ablation.net is None and ablation.uniform_share == 1.0 and ablation.centre == learned.centre
+    learned, ablation = learned.bind(problem), ablation.bind(problem)
+    a = learned.draw(np.random.default_rng(3), 400, None)
+    b = ablation.draw(np.random.default_rng(3), 400, None)
+    assert np.array_equal(a[:, :3], b[:, :3])  # the same stream: the same positions, goal draws included
+    assert not np.array_equal(a[:, 3:], b[:, 3:])  # the angles differ: the model's against uniform ones
+    with pytest.raises(InputError, match="uniform_share must be 1"):
+        RigidRouteSampler(None, uniform_share=0.5)

@@ -39,7 +39,8 @@ from planners.worlds.rigid_scenes import MeshSceneSet, RigidSceneSet, SceneQuery
 PLANNERS = ("RRT", "RRTConnect", "PRM")
 CAPS = {"RRT": RRT_SETUP["max_iterations"], "RRTConnect": RRT_SETUP["max_iterations"], "PRM": PRM_SETUP["samples"]}
 #: The samplers compared unless told otherwise (registry names).
-SAMPLERS = ("uniform", "goal_bias", "gaussian", "bridge_test", "obstacle_based", "rigid_workspace_route")
+SAMPLERS = ("uniform", "goal_bias", "gaussian", "bridge_test", "obstacle_based", "rigid_workspace_route",
+            "rigid_route_ablation", "rigid_route")
 
 
 @dataclass(frozen=True)
@@ -174,10 +175,14 @@ def format_table(summary: Sequence[dict], by: Sequence[str] = ("planner", "sampl
 
 # --- the scene sets as a part of the one comparison (``learning.evaluation.compare``) ---------------------------
 
-#: The classical options of the 6-DoF comparison, the no-learning ablation, and what else counts as learned: every
-#: sampler a part runs that is none of these is a learned sampler, judged against the targets below.
+#: The classical options of the 6-DoF comparison and the samplers without learning beyond them (the exact workspace
+#: route with uniform angles; ``rigid_route``'s positions with uniform angles): every sampler a part runs that is none
+#: of these is a learned sampler, judged against the targets below, against its own ablation where it has one
+#: (``ABLATIONS``), else against ``ABLATION``.
 CLASSICAL = ("uniform", "goal_bias", "gaussian", "bridge_test", "obstacle_based")
 ABLATION = "rigid_workspace_route"
+ABLATIONS = {"rigid_route": "rigid_route_ablation"}
+NO_LEARNING = (ABLATION, *ABLATIONS.values())
 #: The targets of a learned sampler on each scene set, per planner: median iterations at most ``VS_CLASSICAL`` times
 #: the best classical option's and ``VS_ABLATION`` times the ablation's, success at least theirs, and median time to
 #: solution at most ``TIME_VS_CLASSICAL`` times the best classical option's.
@@ -322,14 +327,15 @@ def target_rows(by_set: Sequence[dict]) -> list[dict]:
     cells = {(s["family"], s["planner"], s["sampler"]): s for s in by_set}
     out = []
     for (family, planner, sampler), s in cells.items():
-        if sampler in CLASSICAL or sampler == ABLATION:
+        if sampler in CLASSICAL or sampler in NO_LEARNING:
             continue
         classical = [cells[(family, planner, c)] for c in CLASSICAL if (family, planner, c) in cells]
-        ablation = cells.get((family, planner, ABLATION))
+        ablation = cells.get((family, planner, ABLATIONS.get(sampler, ABLATION)))
         if not classical:
             continue
         best = min(classical, key=lambda c: (c["median_iterations"], -c["success"]))
         row = {"scene set": family, "planner": planner, "sampler": sampler, "best classical": best["sampler"],
+               "ablation": ablation["sampler"] if ablation is not None else "",
                "iterations vs classical": s["median_iterations"] / max(best["median_iterations"], 1.0),
                "time vs classical": s["median_time"] / max(best["median_time"], 1e-9),
                "success": f"{s['solved']}/{s['runs']}", "classical success": f"{best['solved']}/{best['runs']}"}
@@ -345,7 +351,8 @@ def target_rows(by_set: Sequence[dict]) -> list[dict]:
 
 
 def _targets_table(targets: Sequence[dict]) -> str:
-    head = ["scene set", "planner", "sampler", "best classical", "iterations vs classical", "iterations vs ablation",
+    head = ["scene set", "planner", "sampler", "best classical", "ablation", "iterations vs classical",
+            "iterations vs ablation",
             "time vs classical", "success", "classical success", "ablation success", "held"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for t in targets:
@@ -372,7 +379,7 @@ def findings(overall: Sequence[dict], targets: Sequence[dict]) -> list[str]:
         for name, s in cells.items():
             if name in CLASSICAL:
                 continue
-            role = "the ablation" if name == ABLATION else "learned"
+            role = "no learning" if name in NO_LEARNING else "learned"
             parts.append(f"{name} ({role}: median {s['median_iterations']:,.0f}, {s['solved']}/{s['runs']} solved)")
         out.append(f"{planner}: " + "; ".join(parts) + ".")
     if targets:

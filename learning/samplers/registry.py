@@ -118,6 +118,13 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                              centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre)
 
 
+def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75, centre: int | None = None) -> Sampler:
+    from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
+
+    return RigidRouteSampler(None, route_fraction=route_fraction, uniform_share=1.0, goal_share=goal_share,
+                             centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre)
+
+
 #: name -> (factory, one line for help texts).
 REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "uniform": (_uniform, "uniform sampling"),
@@ -134,6 +141,8 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
                               "body's centre, uniform angles (the no-learning ablation)"),
     "rigid_route": (_rigid_route, "6-DoF box worlds: the workspace route, centred in its passages, with "
                     "orientations from the shipped orientation model (or path=)"),
+    "rigid_route_ablation": (_rigid_route_ablation, "6-DoF box worlds: rigid_route without its model (the same "
+                             "centred route positions and goal share, uniform angles): its no-learning ablation"),
     "expert": (_expert, "reference: the privileged expert on the exact geodesic distance"),
     "exact_route": (_exact_route, "reference: the route sampler on the exact cost-to-go"),
 }

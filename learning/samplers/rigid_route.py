@@ -45,7 +45,8 @@ class RigidRouteSampler(SamplerBase):
     """Route positions with learned orientations (see the module doc).
 
     Args:
-        net: The orientation model (``load_orientation_net``).
+        net: The orientation model (``load_orientation_net``); None with ``uniform_share`` 1: the sampler's own
+            no-learning ablation (the same positions, uniform angles; ``make_sampler("rigid_route_ablation")``).
         route_fraction: Probability in [0, 1] of a route sample (the ablation's 0.75).
         uniform_share: Probability in [0, 1] that a route sample takes uniform angles instead of the model's.
         angle_noise: Standard deviation, radians, of each component of the rotation vector turning a
@@ -72,6 +73,9 @@ class RigidRouteSampler(SamplerBase):
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
         self.spread = None if spread is None else float(check_number(who, "spread", spread, low=0))
         self.cell = float(check_number(who, "cell", cell, low=0, low_open=True))
+        if net is None and self.uniform_share < 1.0:
+            raise InputError(f"{who}: without an orientation model every route sample takes uniform angles: "
+                             f"uniform_share must be 1, got {self.uniform_share:g}")
 
     def _setup(self) -> None:
         from learning.models.rigid_orientation import class_probabilities
@@ -85,7 +89,7 @@ class RigidRouteSampler(SamplerBase):
         seg = np.linalg.norm(np.diff(self.route, axis=0), axis=1) if len(self.route) > 1 else np.zeros(0)
         self.arc = np.concatenate([[0.0], np.cumsum(seg)])
         self.sd = inner_radius(world.body) if self.spread is None else self.spread
-        if len(self.route):
+        if len(self.route) and self.net is not None:
             patches, dirs = route_observation(world, self.route, self.cell, self.net.half)
             with planning_threads():  # one torch thread unless SAMPLERGYM_TORCH_THREADS says otherwise
                 self.probs = class_probabilities(self.net, patches, dirs, self.temperature)
