@@ -3,6 +3,7 @@
     python scripts/plan3d.py planners/scenes/window.scene --setup prm --out results/plan3d
     python scripts/plan3d.py my.scene --setup rrt --seed 3 --out results/rrt3
     python scripts/plan3d.py omplapp/resources/3D/Easy.cfg --time-limit 20 --out results/easy   # a mesh problem
+    python scripts/plan3d.py my.scene --setup rrt --sampler rigid_route     # the learned 6-DoF sampler
 
 Set-ups (planners.worlds.rigid3d.setup_planner): ``prm``: PRM, 5,000 samples, k = 3, Dijkstra on the
 (x, y, z, cos, sin of each angle) metric; ``rrt``: RRT, step 0.01 of the scene's longest side, goal
@@ -11,6 +12,9 @@ Writes plan3d.png (the scene, the path and the body along it) and, when solved, 
 flying the path) under --out, each atomically, and prints iterations, checks, time and path length.
 The planning time is split into planning proper and numba's one-off compilation (the first run after
 an install compiles the rigid-body kernels for a while; later runs load the compiled code).
+``--sampler NAME`` replaces the set-up's sampling by a sampler of the registry (``make_sampler(NAME)``; e.g.
+``rigid_route``, the learned sampler for box scenes, or ``gaussian``); its per-query work (a route search, a
+model's pass) is timed apart from the planning.
 An OMPL.app ``.cfg`` problem (planners.worlds.omplapp; needs the ``mesh`` extra) is planned with
 RRT-Connect at its default step under ``--time-limit`` (default the file's ``time_limit``), and drawn
 with its meshes (large ones as a seeded subset of their triangles).
@@ -35,6 +39,9 @@ def main(argv=None) -> int:
     ap.add_argument("--setup", choices=SETUPS, help="the seed project's PRM or RRT set-up (scene files; required)")
     ap.add_argument("--time-limit", type=float, help="seconds for a .cfg problem (default: its time_limit)")
     ap.add_argument("--seed", type=int, default=0, help="planner seed (>= 0)")
+    ap.add_argument("--sampler", default=None, metavar="NAME",
+                    help="a registry sampler in place of the set-up's own (e.g. rigid_route, the learned 6-DoF "
+                         "sampler for box scenes; learning.sampler_names() lists them)")
     ap.add_argument("--out", type=Path, default=Path("results/plan3d"), help="folder for plan3d.png and plan3d.gif")
     ap.add_argument("--frames", type=int, default=None,
                     help="GIF frames (default: about two seconds per 10 units of path, 20 to 150)")
@@ -66,14 +73,29 @@ def main(argv=None) -> int:
             problem = load_scene(args.scene)
     except (FileNotFoundError, InputError, ImportError) as exc:
         return fail(str(exc))
-    t0 = time.perf_counter()  # making the planner binds its sampler (the sampler's per-query work): timed apart
-    if mesh:
-        from planners import RRTConnect
+    sampler = None
+    if args.sampler is not None:
+        from learning.samplers.registry import make_sampler
 
-        planner, budget = RRTConnect(problem, seed=args.seed), f"{limit:g} s"
-        args.setup = "RRT-Connect"
-    else:
-        planner, budget = setup_planner(problem, args.setup, seed=args.seed)
+        try:
+            sampler = make_sampler(args.sampler)
+        except (InputError, OSError) as exc:
+            return fail(f"--sampler {args.sampler}: {exc}")
+    t0 = time.perf_counter()  # making the planner binds its sampler (the sampler's per-query work): timed apart
+    try:
+        if mesh:
+            from planners import RRTConnect
+
+            planner, budget = RRTConnect(problem, seed=args.seed, sampler=sampler), f"{limit:g} s"
+            args.setup = "RRT-Connect"
+        elif sampler is not None:
+            from learning.evaluation.rigid import build_planner
+
+            planner, budget = build_planner("PRM" if args.setup == "prm" else "RRT", problem, sampler, args.seed)
+        else:
+            planner, budget = setup_planner(problem, args.setup, seed=args.seed)
+    except InputError as exc:
+        return fail(f"--sampler {args.sampler}: {exc}" if sampler is not None else str(exc))
     t_sampler = time.perf_counter() - t0
     r = planner.solve(time_limit=limit) if mesh else planner.solve(max_iterations=budget)
 
@@ -94,7 +116,8 @@ def main(argv=None) -> int:
     t_out = time.perf_counter() - t0
     print(f"scene:            {args.scene} ({problem.world!r})")
     unit = "" if mesh else " iterations"
-    print(f"set-up:           {args.setup}: {r.planner}, seed {args.seed}, budget {budget}{unit}")
+    how = f", sampler {args.sampler}" if args.sampler else ""
+    print(f"set-up:           {args.setup}: {r.planner}{how}, seed {args.seed}, budget {budget}{unit}")
     print(f"solved:           {r.solved} ({r.stop_reason})")
     print(f"iterations:       {r.iterations}")
     print(f"collision checks: {r.collision_checks}")

@@ -8,6 +8,7 @@ import re
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import load_script
 from PIL import Image
 
 import envs
@@ -620,3 +621,19 @@ def test_plan3d_script(tmp_path):
     assert not (tmp_path / "bad").exists()
     proc = run(WINDOW_SCENE, "--setup", "prm", "--seed", "-1", "--out", tmp_path / "neg")
     assert proc.returncode == 2 and "--seed" in proc.stderr
+
+
+def test_plan3d_plans_with_any_registry_sampler_and_refuses_an_unknown_one(tmp_path):
+    from learning.evaluation.rigid import build_planner
+    from learning.samplers.registry import make_sampler
+    from planners.worlds.rigid3d import WINDOW_SCENE, load_scene
+
+    plan3d = load_script("plan3d")
+    rc = plan3d.main([str(WINDOW_SCENE), "--setup", "rrt", "--sampler", "rigid_route", "--seed", "2",
+                      "--out", str(tmp_path / "a"), "--frames", "3"])
+    # the run the script reports is the comparison's run of the same planner, sampler and seed
+    planner, cap = build_planner("RRT", load_scene(WINDOW_SCENE), make_sampler("rigid_route"), 2)
+    r = planner.solve(max_iterations=cap)
+    assert rc == (0 if r.solved else 1)
+    assert plan3d.main([str(WINDOW_SCENE), "--setup", "rrt", "--sampler", "nope", "--out", str(tmp_path / "b")]) == 2
+    assert not (tmp_path / "b").exists()
