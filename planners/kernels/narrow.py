@@ -29,9 +29,9 @@ import numba as nb
 import numpy as np
 
 from planners.kernels.geometry import state_free
+from planners.kernels.pool import normals, pooled_attempts
 from planners.kernels.rigid import euler_angles, rotation_matrix
-from planners.kernels.space import SPACE_RN, interpolate
-from planners.kernels.state import S_CHECKS, S_PENDING, S_POS
+from planners.kernels.space import SPACE_RN, copy_into, interpolate
 
 #: Above this rotational deviation OMPL's SO(3) Gaussian draws a uniform rotation instead.
 ROT_UNIFORM = 1.17
@@ -47,23 +47,11 @@ def per_attempt(dim):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _normals(u, b, dim, out):
-    """``dim`` standard normals from the uniforms ``u[b:]`` (Box-Muller)."""
-    for k in range(0, dim, 2):
-        r = math.sqrt(-2.0 * math.log(1.0 - u[b]))  # 1 - u lies in (0, 1]
-        t = 2.0 * math.pi * u[b + 1]
-        b += 2
-        out[k] = r * math.cos(t)
-        if k + 1 < dim:
-            out[k + 1] = r * math.sin(t)
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
 def gaussian_state(kind, low, high, mean, u, a, pos_sd, rot_sd, out):
     """A Gaussian state around ``mean`` from the attempt's uniforms ``u[a:]`` (see the module doc)."""
     d = low.shape[0]
     z = np.empty(d)
-    _normals(u, a + d, d, z)
+    normals(u, a + d, d, z)
     npos = d if kind == SPACE_RN else 3
     for k in range(npos):
         v = mean[k] + pos_sd * z[k]
@@ -108,55 +96,47 @@ def gaussian_state(kind, low, high, mean, u, a, pos_sd, rot_sd, out):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
+def _attempt(ctx, u, a, pending, state, row):
+    """One attempt from ``u[a:]`` (``pooled_attempts``' contract): its sample into ``row``, and its checks."""
+    world, kind, mode, low, high, attempts, pos_sd, rot_sd, s1, s2, mid = ctx
+    d = low.shape[0]
+    for k in range(d):
+        s1[k] = low[k] + (high[k] - low[k]) * u[a + k]
+    found = False
+    checks = 0
+    if mode == GAUSSIAN:
+        v1 = state_free(world, s1)
+        gaussian_state(kind, low, high, s1, u, a, pos_sd, rot_sd, s2)
+        v2 = state_free(world, s2)
+        checks += 2
+        if v1 != v2:
+            found = True
+            copy_into(row, s2 if v2 else s1)
+    else:
+        checks += 1
+        if not state_free(world, s1):
+            gaussian_state(kind, low, high, s1, u, a, pos_sd, rot_sd, s2)
+            checks += 1
+            if not state_free(world, s2):
+                interpolate(kind, s2, s1, 0.5, mid)
+                checks += 1
+                if state_free(world, mid):
+                    found = True
+                    copy_into(row, mid)
+    if not found and pending >= attempts:
+        copy_into(row, s1)  # OMPL gives up here; the planner checks the uniform state itself
+        found = True
+    return found, checks
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def narrow_samples(world, kind, mode, low, high, u, n, attempts, pos_sd, rot_sd, out, cand, state):
     """Write up to ``n`` samples into ``out`` from the uniforms in ``u``; return how many.
 
     ``mode`` is ``GAUSSIAN`` or ``BRIDGE``. ``cand[i]`` receives the attempts spent on sample ``i``;
-    the attempts of a sample still being sought when ``u`` runs out are carried in ``state``.
+    the attempts of a sample still being sought when ``u`` runs out are carried in ``state``
+    (``planners.kernels.pool.pooled_attempts``).
     """
     d = low.shape[0]
-    per = per_attempt(d)
-    pos = state[S_POS]
-    pending = state[S_PENDING]
-    checks = 0
-    s1 = np.empty(d)
-    s2 = np.empty(d)
-    mid = np.empty(d)
-    m = 0
-    while m < n and pos + per <= u.shape[0]:
-        a = pos
-        pos += per
-        pending += 1
-        for k in range(d):
-            s1[k] = low[k] + (high[k] - low[k]) * u[a + k]
-        found = False
-        if mode == GAUSSIAN:
-            v1 = state_free(world, s1)
-            gaussian_state(kind, low, high, s1, u, a, pos_sd, rot_sd, s2)
-            v2 = state_free(world, s2)
-            checks += 2
-            if v1 != v2:
-                found = True
-                out[m, :] = s2 if v2 else s1
-        else:
-            checks += 1
-            if not state_free(world, s1):
-                gaussian_state(kind, low, high, s1, u, a, pos_sd, rot_sd, s2)
-                checks += 1
-                if not state_free(world, s2):
-                    interpolate(kind, s2, s1, 0.5, mid)
-                    checks += 1
-                    if state_free(world, mid):
-                        found = True
-                        out[m, :] = mid
-        if not found and pending >= attempts:
-            out[m, :] = s1  # OMPL gives up here; the planner checks the uniform state itself
-            found = True
-        if found:
-            cand[m] = pending
-            pending = 0
-            m += 1
-    state[S_POS] = pos
-    state[S_PENDING] = pending
-    state[S_CHECKS] += checks
-    return m
+    ctx = (world, kind, mode, low, high, attempts, pos_sd, rot_sd, np.empty(d), np.empty(d), np.empty(d))
+    return pooled_attempts(_attempt, ctx, u, per_attempt(d), n, out, cand, state)
