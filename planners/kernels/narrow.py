@@ -29,9 +29,10 @@ import numba as nb
 import numpy as np
 
 from planners.kernels.geometry import state_free
-from planners.kernels.pool import normals, pooled_attempts
+from planners.kernels.pool import normals
 from planners.kernels.rigid import euler_angles, rotation_matrix
-from planners.kernels.space import SPACE_RN, copy_into, interpolate
+from planners.kernels.space import SPACE_RN, interpolate
+from planners.kernels.state import S_CHECKS, S_PENDING, S_POS
 
 #: Above this rotational deviation OMPL's SO(3) Gaussian draws a uniform rotation instead.
 ROT_UNIFORM = 1.17
@@ -96,47 +97,55 @@ def gaussian_state(kind, low, high, mean, u, a, pos_sd, rot_sd, out):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _attempt(ctx, u, a, pending, state, row):
-    """One attempt from ``u[a:]`` (``pooled_attempts``' contract): its sample into ``row``, and its checks."""
-    world, kind, mode, low, high, attempts, pos_sd, rot_sd, s1, s2, mid = ctx
-    d = low.shape[0]
-    for k in range(d):
-        s1[k] = low[k] + (high[k] - low[k]) * u[a + k]
-    found = False
-    checks = 0
-    if mode == GAUSSIAN:
-        v1 = state_free(world, s1)
-        gaussian_state(kind, low, high, s1, u, a, pos_sd, rot_sd, s2)
-        v2 = state_free(world, s2)
-        checks += 2
-        if v1 != v2:
-            found = True
-            copy_into(row, s2 if v2 else s1)
-    else:
-        checks += 1
-        if not state_free(world, s1):
-            gaussian_state(kind, low, high, s1, u, a, pos_sd, rot_sd, s2)
-            checks += 1
-            if not state_free(world, s2):
-                interpolate(kind, s2, s1, 0.5, mid)
-                checks += 1
-                if state_free(world, mid):
-                    found = True
-                    copy_into(row, mid)
-    if not found and pending >= attempts:
-        copy_into(row, s1)  # OMPL gives up here; the planner checks the uniform state itself
-        found = True
-    return found, checks
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
 def narrow_samples(world, kind, mode, low, high, u, n, attempts, pos_sd, rot_sd, out, cand, state):
     """Write up to ``n`` samples into ``out`` from the uniforms in ``u``; return how many.
 
     ``mode`` is ``GAUSSIAN`` or ``BRIDGE``. ``cand[i]`` receives the attempts spent on sample ``i``;
-    the attempts of a sample still being sought when ``u`` runs out are carried in ``state``
-    (``planners.kernels.pool.pooled_attempts``).
+    the attempts of a sample still being sought when ``u`` runs out are carried in ``state``.
     """
     d = low.shape[0]
-    ctx = (world, kind, mode, low, high, attempts, pos_sd, rot_sd, np.empty(d), np.empty(d), np.empty(d))
-    return pooled_attempts(_attempt, ctx, u, per_attempt(d), n, out, cand, state)
+    per = per_attempt(d)
+    pos = state[S_POS]
+    pending = state[S_PENDING]
+    checks = 0
+    s1 = np.empty(d)
+    s2 = np.empty(d)
+    mid = np.empty(d)
+    m = 0
+    while m < n and pos + per <= u.shape[0]:
+        a = pos
+        pos += per
+        pending += 1
+        for k in range(d):
+            s1[k] = low[k] + (high[k] - low[k]) * u[a + k]
+        found = False
+        if mode == GAUSSIAN:
+            v1 = state_free(world, s1)
+            gaussian_state(kind, low, high, s1, u, a, pos_sd, rot_sd, s2)
+            v2 = state_free(world, s2)
+            checks += 2
+            if v1 != v2:
+                found = True
+                out[m, :] = s2 if v2 else s1
+        else:
+            checks += 1
+            if not state_free(world, s1):
+                gaussian_state(kind, low, high, s1, u, a, pos_sd, rot_sd, s2)
+                checks += 1
+                if not state_free(world, s2):
+                    interpolate(kind, s2, s1, 0.5, mid)
+                    checks += 1
+                    if state_free(world, mid):
+                        found = True
+                        out[m, :] = mid
+        if not found and pending >= attempts:
+            out[m, :] = s1  # OMPL gives up here; the planner checks the uniform state itself
+            found = True
+        if found:
+            cand[m] = pending
+            pending = 0
+            m += 1
+    state[S_POS] = pos
+    state[S_PENDING] = pending
+    state[S_CHECKS] += checks
+    return m

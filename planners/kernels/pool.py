@@ -1,20 +1,15 @@
-"""The attempt-pool loop of the compiled samplers that discard attempts: Gaussian, bridge test, OB-PRM.
+"""What the compiled samplers that draw attempts from a pool of uniforms share: Gaussian, bridge test, OB-PRM.
 
 Such a sampler makes each sample out of one or more *attempts*; an attempt reads a fixed slice of
-``per`` uniforms from a pool the caller drew from its ``np.random.Generator``, so the samples depend
-only on the generator's stream, never on how the caller splits it into pools. ``pooled_attempts``
-runs the attempts and does the bookkeeping the samplers share: attempts not yet charged to a sample
-(``S_PENDING``) and the position in the pool (``S_POS``) carry over between calls in ``state``, the
-attempts behind each sample go to ``cand``, and validity checks accumulate in ``S_CHECKS``. The
-sampler supplies the attempt itself, as ``planners.kernels.narrow`` and ``planners.kernels.obprm``
-do, and wraps the loop in a cached entry of its own module::
+uniforms from a pool the caller drew from its ``np.random.Generator`` (``planners.base.samplers.draw_pooled``
+sizes the pools and carries the state between them), so the samples depend only on the generator's
+stream, never on how the caller splits it into pools. ``normals`` turns a slice of an attempt's uniforms
+into standard normals.
 
-    @numba.njit(cache=True)
-    def my_samples(..., u, n, out, cand, state):
-        return pooled_attempts(my_attempt, (...), u, per, n, out, cand, state)
-
-(numba compiles the loop for ``my_attempt`` with a direct call to it, and caches it with the entry).
-The Python side of the pool (its size, the generator) is ``planners.base.samplers.draw_pooled``.
+The attempt loops themselves stay one per kernel module (``planners.kernels.narrow``,
+``planners.kernels.obprm``): a loop shared through a compiled attempt function passed to it ran the
+bridge test's cheap attempts three times slower (numba passes the world and scratch arrays to every
+attempt, or reference-counts them where the attempt is inlined), for the same samples.
 """
 
 from __future__ import annotations
@@ -22,38 +17,6 @@ from __future__ import annotations
 import math
 
 import numba as nb
-
-from planners.kernels.state import S_CHECKS, S_PENDING, S_POS
-
-
-@nb.njit(inline="always")
-def pooled_attempts(attempt, ctx, u, per, n, out, cand, state):
-    """Write up to ``n`` samples into ``out`` from the uniforms in ``u``; return how many.
-
-    Each attempt reads ``u[a:a + per]``; ``attempt(ctx, u, a, pending, state, row)`` returns
-    ``(found, checks)``: whether it wrote a sample into ``row``, and the validity checks it made.
-    ``pending`` counts the attempts spent on the sample sought, this one included. ``ctx`` is the
-    sampler's arguments and scratch arrays; ``state`` (``planners.kernels.state``'s ``S_*`` slots) is
-    the attempt's to read and write too (OB-PRM keeps ``S_SEEKING`` there).
-    """
-    pos = state[S_POS]
-    pending = state[S_PENDING]
-    checks = 0
-    m = 0
-    while m < n and pos + per <= u.shape[0]:
-        a = pos
-        pos += per
-        pending += 1
-        found, c = attempt(ctx, u, a, pending, state, out[m])
-        checks += c
-        if found:
-            cand[m] = pending
-            pending = 0
-            m += 1
-    state[S_POS] = pos
-    state[S_PENDING] = pending
-    state[S_CHECKS] += checks
-    return m
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
