@@ -109,8 +109,15 @@ def test_geometric_world(cls):
     check_solution(p, r)
 
 
-@pytest.mark.parametrize("metric", ["manhattan", "chebyshev"])
-@pytest.mark.parametrize("cls", [RRT, RRTStar, PRM], ids=lambda c: c.name)
+# Each (planner, metric) compiles the planner's kernels for that metric (10-30 s of the suite each). The
+# default tier runs every planner on one of the two metrics and each metric with a tree planner (the k-d
+# index answers both in test_nn); the rest of the product runs with -m slow.
+@pytest.mark.parametrize("cls, metric", [
+    (RRT, "chebyshev"), (RRTStar, "manhattan"), (PRM, "chebyshev"),
+    pytest.param(RRT, "manhattan", marks=pytest.mark.slow),
+    pytest.param(RRTStar, "chebyshev", marks=pytest.mark.slow),
+    pytest.param(PRM, "manhattan", marks=pytest.mark.slow),
+], ids=lambda v: getattr(v, "name", v))
 def test_other_metrics(cls, metric, open_problem):
     p = open_problem.with_query(open_problem.start, open_problem.goal, metric=metric)
     r = make(cls, p).solve(max_iterations=20000)

@@ -109,8 +109,10 @@ def test_lazy_prm_search_rounds_respect_the_time_limit():
 
 
 def test_lazy_prm_timed_rounds_end_as_untimed():
-    grid = walls(120, seed=1)
-    problem = Problem(grid, (2.5, 2.5), (117.5, 117.5), goal_tolerance=2.0)
+    # 60 cells: ~6,000 samples and ~2.5 s a solve, some 50 time slices, so the rounds are sized by the
+    # clock (9 of them a call at the end, not the 64 of an untimed call). 120 cells took 30 s a solve.
+    grid = walls(60, seed=1)
+    problem = Problem(grid, (2.5, 2.5), (57.5, 57.5), goal_tolerance=2.0)
     untimed = LazyPRM(problem, seed=2).solve(max_iterations=50_000)
     timed = LazyPRM(problem, seed=2)
     r = timed.solve(max_iterations=50_000, time_limit=60.0)

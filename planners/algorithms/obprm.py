@@ -24,9 +24,8 @@ from planners.algorithms.prm import DEFAULT_K, PRM
 from planners.base.fileio import check_int
 from planners.base.problem import Problem
 from planners.base.registry import make_planner, planner_class, register_planner
-from planners.base.samplers import SampleBatch, Sampler, SamplerBase
+from planners.base.samplers import SampleBatch, Sampler, SamplerBase, draw_pooled
 from planners.kernels import obprm as obprm_kernels
-from planners.kernels.state import N_STATE, S_CHECKS, S_PENDING, S_POS
 from planners.maps.generators import generate
 from planners.worlds.grid import OccupancyGrid
 
@@ -114,31 +113,20 @@ class ObstacleBasedSampler(SamplerBase):
 
     def draw(self, rng, n, view):
         """Up to ``n`` samples (fewer only when the attempt budget runs out), with candidates per sample."""
-        d = self.problem.dim
-        out = np.empty((n, d))
-        cand = np.zeros(n, dtype=np.int64)
-        state = np.zeros(N_STATE, dtype=np.int64)
-        budget = MAX_ATTEMPTS_PER_SAMPLE * n
-        m = attempts = 0
-        while m < n and attempts < budget:
-            pool = int(min(budget - attempts, max(64, math.ceil(1.25 * self._rate * (n - m)))))
-            u = rng.random(pool * self._per)
-            state[S_POS] = 0
-            got = obprm_kernels.ob_samples(self._kernel, self.low, self.high, u, n - m, self.uniform_fraction,
-                                           self._walk,
-                                self._refine, self._max_walk, out[m:], cand[m:], state)
-            attempts += int(state[S_POS]) // self._per
-            m += got
-        self.checks += int(state[S_CHECKS])
-        if m:
-            self._rate = 0.5 * self._rate + 0.5 * attempts / m
-        pending = int(state[S_PENDING])
+        got = draw_pooled(rng, n, self.problem.dim, self._per, self._rate, self._attempts,
+                          budget=MAX_ATTEMPTS_PER_SAMPLE * n)
+        self.checks += got.checks
+        self._rate = got.rate
+        out, cand, m = got.points, got.candidates, got.count
         if m == 0:  # nothing near an obstacle: fall back to one uniform sample
-            out[0] = self._uniform(rng.random(d))
-            cand[0] = pending + 1
+            out[0] = self._uniform(rng.random(self.problem.dim))
+            cand[0] = got.pending + 1
             return SampleBatch(out[:1], None, cand[:1])
-        cand[m - 1] += pending  # every attempt is charged to some sample
         return SampleBatch(out[:m], None, cand[:m])
+
+    def _attempts(self, u, n, out, cand, state):
+        return obprm_kernels.ob_samples(self._kernel, self.low, self.high, u, n, self.uniform_fraction, self._walk,
+                                        self._refine, self._max_walk, out, cand, state)
 
     def __repr__(self) -> str:
         dist = "default" if self.max_distance is None else f"{self.max_distance:g}"

@@ -49,7 +49,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -252,6 +252,61 @@ class InformedSampler(SamplerBase):
         return SampleBatch(pts[:m], None, cands[:m])
 
 
+class PooledDraws(NamedTuple):
+    """What ``draw_pooled`` returns.
+
+    Attributes:
+        points: (n, dim) rows, the first ``count`` of them samples.
+        candidates: (n,) the attempts behind each sample; those of a sample still sought when the
+            attempts ran out are charged to the last sample (``pending`` says how many).
+        count: Samples made, ``n`` unless ``budget`` ran out.
+        pending: Attempts after the last sample that made none.
+        checks: The attempts' validity checks.
+        rate: The running estimate of attempts per sample after this draw, for the next one.
+    """
+
+    points: np.ndarray
+    candidates: np.ndarray
+    count: int
+    pending: int
+    checks: int
+    rate: float
+
+
+def draw_pooled(rng: np.random.Generator, n: int, dim: int, per: int, rate: float, run, *,
+                attempts: int | None = None, budget: int | None = None) -> PooledDraws:
+    """Up to ``n`` samples from a compiled sampler whose samples take attempts of ``per`` uniforms each.
+
+    The Python side of ``planners.kernels.pool.pooled_attempts`` (the Gaussian, bridge-test and obstacle-based
+    samplers): pools of uniforms are drawn from ``rng``, each sized for ``1.25 * rate`` attempts a sample still
+    wanted (at least 64 attempts), and ``run(u, k, out, cand, state)`` (the sampler's compiled entry) turns a
+    pool into at most ``k`` samples, returning how many; its ``state`` (``planners.kernels.state``'s ``S_*``
+    slots) carries a sample's attempts from one pool to the next. ``attempts``: no sample takes more (then no
+    pool is larger than the samples wanted can use); ``budget``: attempts in all, after which the draw stops.
+    """
+    from planners.kernels.state import N_STATE, S_CHECKS, S_PENDING, S_POS
+
+    out = np.empty((n, dim))
+    cand = np.zeros(n, dtype=np.int64)
+    state = np.zeros(N_STATE, dtype=np.int64)
+    m = used = 0
+    while m < n and (budget is None or used < budget):
+        pool = max(64, math.ceil(1.25 * rate * (n - m)))
+        if attempts is not None:
+            pool = min(attempts * (n - m), pool)
+        if budget is not None:
+            pool = min(budget - used, pool)
+        u = rng.random(int(pool) * per)
+        state[S_POS] = 0
+        m += run(u, n - m, out[m:], cand[m:], state)
+        used += int(state[S_POS]) // per
+    pending = int(state[S_PENDING])
+    if m:
+        cand[m - 1] += pending  # every attempt is charged to some sample
+        rate = 0.5 * rate + 0.5 * used / m
+    return PooledDraws(out, cand, m, pending, int(state[S_CHECKS]), rate)
+
+
 class _NarrowPassageSampler(SamplerBase):
     """Shared by ``GaussianSampler`` and ``BridgeTestSampler``: OMPL's valid state samplers, compiled.
 
@@ -298,23 +353,16 @@ class _NarrowPassageSampler(SamplerBase):
 
     def draw(self, rng, n, view):
         """``n`` samples, with the attempts behind each as candidates."""
-        from planners.kernels import narrow
-        from planners.kernels.state import N_STATE, S_CHECKS
+        got = draw_pooled(rng, n, self.problem.dim, self._per, self._rate, self._attempts, attempts=self.attempts)
+        self.checks += got.checks
+        self._rate = got.rate
+        return SampleBatch(got.points, None, got.candidates)
 
-        d = self.problem.dim
-        out = np.empty((n, d))
-        cand = np.zeros(n, dtype=np.int64)
-        state = np.zeros(N_STATE, dtype=np.int64)
-        m = 0
-        while m < n:  # each sample takes at most ``attempts`` attempts, so this ends
-            pool = int(min(self.attempts * (n - m), max(64, math.ceil(1.25 * self._rate * (n - m)))))
-            u = rng.random(pool * self._per)
-            state[0] = 0
-            m += narrow.narrow_samples(self._world, self._kind, self._mode, self.low, self.high, u, n - m,
-                                       self.attempts, self.pos_sd, self.rot_sd, out[m:], cand[m:], state)
-        self.checks += int(state[S_CHECKS])
-        self._rate = 0.5 * self._rate + 0.5 * float(cand.sum()) / n
-        return SampleBatch(out, None, cand)
+    def _attempts(self, u, n, out, cand, state):
+        from planners.kernels import narrow
+
+        return narrow.narrow_samples(self._world, self._kind, self._mode, self.low, self.high, u, n, self.attempts,
+                                     self.pos_sd, self.rot_sd, out, cand, state)
 
     def __repr__(self) -> str:
         sd = "default" if self.stddev is None else f"{self.stddev:g}"

@@ -29,6 +29,7 @@ import numba as nb
 import numpy as np
 
 from planners.kernels.geometry import state_free
+from planners.kernels.pool import normals
 from planners.kernels.rigid import euler_angles, rotation_matrix
 from planners.kernels.space import SPACE_RN, interpolate
 from planners.kernels.state import S_CHECKS, S_PENDING, S_POS
@@ -47,23 +48,11 @@ def per_attempt(dim):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _normals(u, b, dim, out):
-    """``dim`` standard normals from the uniforms ``u[b:]`` (Box-Muller)."""
-    for k in range(0, dim, 2):
-        r = math.sqrt(-2.0 * math.log(1.0 - u[b]))  # 1 - u lies in (0, 1]
-        t = 2.0 * math.pi * u[b + 1]
-        b += 2
-        out[k] = r * math.cos(t)
-        if k + 1 < dim:
-            out[k + 1] = r * math.sin(t)
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
 def gaussian_state(kind, low, high, mean, u, a, pos_sd, rot_sd, out):
     """A Gaussian state around ``mean`` from the attempt's uniforms ``u[a:]`` (see the module doc)."""
     d = low.shape[0]
     z = np.empty(d)
-    _normals(u, a + d, d, z)
+    normals(u, a + d, d, z)
     npos = d if kind == SPACE_RN else 3
     for k in range(npos):
         v = mean[k] + pos_sd * z[k]

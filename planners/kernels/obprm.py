@@ -13,6 +13,7 @@ import numba as nb
 import numpy as np
 
 from planners.kernels.geometry import state_free
+from planners.kernels.pool import normals
 from planners.kernels.space import copy_into
 from planners.kernels.state import S_CHECKS, S_PENDING, S_POS, S_SEEKING
 
@@ -68,15 +69,8 @@ def ob_samples(world, low, high, u, n, uniform_fraction, walk_step, refine, max_
         if state_free(world, q):
             continue
         # random direction: Box-Muller normals, normalised
+        normals(u, a + 1 + d, d, direction)
         norm2 = 0.0
-        b = a + 1 + d
-        for k in range(0, d, 2):
-            r = math.sqrt(-2.0 * math.log(1.0 - u[b]))  # 1 - u lies in (0, 1]
-            t = 2.0 * math.pi * u[b + 1]
-            b += 2
-            direction[k] = r * math.cos(t)
-            if k + 1 < d:
-                direction[k + 1] = r * math.sin(t)
         for k in range(d):
             norm2 += direction[k] * direction[k]
         if norm2 <= 1e-300:

@@ -1,0 +1,69 @@
+"""``draw_pooled``: the pool side shared by the Gaussian, bridge-test and obstacle-based samplers.
+
+A stand-in for a compiled sampler (``run``) makes a sample from an attempt whose first uniform is
+below ``p``, so what it returns is known from the generator's stream alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planners.base.samplers import draw_pooled
+from planners.kernels.state import S_CHECKS, S_PENDING, S_POS
+
+PER = 3  # uniforms an attempt reads
+
+
+def coin_run(p: float, calls: list[int] | None = None):
+    """An attempt pool loop in Python: an attempt makes a sample (its uniforms) when its first is below ``p``."""
+
+    def run(u, n, out, cand, state):
+        if calls is not None:
+            calls.append(len(u) // PER)
+        pos, pending, m = int(state[S_POS]), int(state[S_PENDING]), 0
+        while m < n and pos + PER <= len(u):
+            a, pos, pending = pos, pos + PER, pending + 1
+            state[S_CHECKS] += 1
+            if u[a] < p:
+                out[m] = u[a:a + PER]
+                cand[m], pending, m = pending, 0, m + 1
+        state[S_POS], state[S_PENDING] = pos, pending
+        return m
+
+    return run
+
+
+def expected(seed: int, n: int, p: float) -> tuple[np.ndarray, np.ndarray]:
+    """The first ``n`` samples of the stream, and the attempts behind each."""
+    u = np.random.default_rng(seed).random(PER * 100_000).reshape(-1, PER)
+    hits = np.flatnonzero(u[:, 0] < p)[:n]
+    return u[hits], np.diff(np.concatenate([[-1], hits]))
+
+
+def test_samples_follow_the_stream_whatever_the_pool_sizes():
+    want, attempts = expected(3, 200, 0.05)
+    for rate in (0.01, 1.0, 20.0, 500.0):  # pools far too small (many of them) to far too large
+        calls = []
+        got = draw_pooled(np.random.default_rng(3), 200, PER, PER, rate, coin_run(0.05, calls))
+        np.testing.assert_array_equal(got.points, want)
+        np.testing.assert_array_equal(got.candidates, attempts)
+        assert got.count == 200 and got.pending == 0 and got.checks == attempts.sum()
+        assert got.rate == 0.5 * rate + 0.5 * attempts.sum() / 200  # the estimate moves halfway to this draw's
+        assert rate > 1 or len(calls) > 1  # small estimates: a sample's attempts span pools
+
+
+def test_attempts_caps_the_pool_at_what_the_samples_wanted_can_use():
+    calls = []
+    draw_pooled(np.random.default_rng(0), 4, PER, PER, 1000.0, coin_run(1.0, calls), attempts=5)
+    assert calls == [5 * 4]
+
+
+def test_a_spent_budget_stops_the_draw_and_leaves_its_attempts_pending():
+    calls = []
+    got = draw_pooled(np.random.default_rng(0), 3, PER, PER, 4.0, coin_run(0.0, calls), budget=1000)
+    assert got.count == 0 and got.pending == 1000 and sum(calls) == 1000
+    assert got.rate == 4.0  # no sample: nothing to learn the rate from
+    # attempts after the last sample are charged to it
+    got = draw_pooled(np.random.default_rng(0), 10, PER, PER, 4.0, coin_run(0.001, calls), budget=700)
+    assert 0 < got.count < 10 and got.pending > 0
+    assert got.candidates[:got.count].sum() == 700
