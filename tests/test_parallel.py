@@ -78,16 +78,32 @@ def test_the_context_travels_loaded_so_workers_need_no_files(ray_backend, tmp_pa
 
 
 def _ray_chunk_pids() -> list[int]:
-    """Ray workers executing a chunk now (Ray names a busy worker's process after its task)."""
-    pids = []
+    """This test's Ray workers executing a chunk now (Ray names a busy worker's process after its task).
+
+    Only descendants of this process (the Ray instance ``ray_backend`` started here): another run's Ray workers on
+    the same machine are never touched.
+    """
+    parents, busy = {}, []
     for d in Path("/proc").iterdir():
         if d.name.isdigit():
             try:
+                stat = (d / "stat").read_text()
+                parents[int(d.name)] = int(stat[stat.rindex(")") + 2:].split()[1])  # the field after the state
                 if (d / "cmdline").read_bytes().startswith(b"ray::_ray_chunk"):
-                    pids.append(int(d.name))
-            except OSError:
+                    busy.append(int(d.name))
+            except (OSError, ValueError):
                 continue
-    return pids
+
+    def ours(pid: int) -> bool:
+        seen = set()
+        while pid > 1 and pid not in seen:
+            if pid == os.getpid():
+                return True
+            seen.add(pid)
+            pid = parents.get(pid, 0)
+        return False
+
+    return [pid for pid in busy if ours(pid)]
 
 
 def test_a_killed_ray_worker_loses_only_its_in_flight_tasks(ray_backend):
