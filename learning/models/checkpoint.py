@@ -17,7 +17,7 @@ from pathlib import Path
 
 import torch
 
-from planners.base.fileio import InputError, loads_json
+from planners.base.fileio import InputError, loads_json, short_repr
 
 #: Largest entry the reader decompresses: a policy of a few MB is the norm; this stops zip bombs.
 MAX_ENTRY_BYTES = 256 * 1024 * 1024
@@ -77,3 +77,39 @@ def _entry(zf: zipfile.ZipFile, path: Path, name: str, limit: int) -> bytes:
     if len(blob) != info.file_size:
         raise InputError(f"{path}: entry '{name}' unpacks to another size than its header's {info.file_size} bytes")
     return blob
+
+
+def read_config_state(path: str | os.PathLike, what: str, writer: str) -> tuple[Path, dict, dict]:
+    """``(path, config, state)`` of a ``{"config": {...}, "state": {...}}`` model file, nothing in it run.
+
+    Read with ``torch.load(weights_only=True)``. ``what`` names the kind of file in messages ("route encoder"),
+    ``writer`` the function that writes it. A missing file is a ``FileNotFoundError``; every other problem an
+    ``InputError`` naming the file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{what} {path} does not exist")
+    try:
+        blob = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - whatever torch raises on a bad file, name the file
+        raise InputError(f"{path} is not a{'n' if what[0] in 'aeiou' else ''} {what} file: {type(exc).__name__}: "
+                         f"{short_repr(str(exc), 300)}") from None
+    if not (isinstance(blob, dict) and isinstance(blob.get("config"), dict) and isinstance(blob.get("state"), dict)):
+        raise InputError(f"{path}: expected {{'config': {{...}}, 'state': {{...}}}} as {writer} writes")
+    return path, dict(blob["config"]), blob["state"]
+
+
+def load_finite_state(net: torch.nn.Module, state: dict, path: Path, fits: str) -> torch.nn.Module:
+    """``net`` with ``state`` loaded, in evaluation mode.
+
+    NaN or infinite weights, or weights that do not fit (``fits`` names what they should fit), are an ``InputError``
+    naming ``path``.
+    """
+    for name, tensor in state.items():
+        if isinstance(tensor, torch.Tensor) and tensor.is_floating_point() and not torch.isfinite(tensor).all():
+            raise InputError(f"{path}: tensor {short_repr(name)} holds NaN or infinite weights")
+    try:
+        net.load_state_dict(state)
+    except (RuntimeError, TypeError, ValueError) as exc:
+        raise InputError(f"{path}: the weights do not fit {fits}: {short_repr(str(exc), 300)}") from None
+    return net.eval()

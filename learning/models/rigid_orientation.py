@@ -19,6 +19,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from learning.models.checkpoint import load_finite_state, read_config_state
 from planners.base.fileio import InputError, short_repr
 from planners.guidance.rigid_orientation import N_CLASSES, PATCH_HALF
 
@@ -74,17 +75,7 @@ def save_orientation_net(net: OrientationNet, path: str | os.PathLike) -> None:
 
 def load_orientation_net(path: str | os.PathLike) -> OrientationNet:
     """Read a ``save_orientation_net`` file with ``torch.load(weights_only=True)``; problems are ``InputError``."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"orientation model {path} does not exist")
-    try:
-        blob = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as exc:  # noqa: BLE001 - whatever torch raises on a bad file, name the file
-        raise InputError(f"{path} is not an orientation model file: {type(exc).__name__}: "
-                         f"{short_repr(str(exc), 300)}") from None
-    if not (isinstance(blob, dict) and isinstance(blob.get("config"), dict) and isinstance(blob.get("state"), dict)):
-        raise InputError(f"{path}: expected {{'config': {{...}}, 'state': {{...}}}} as save_orientation_net writes")
-    config = dict(blob["config"])
+    path, config, state = read_config_state(path, "orientation model", "save_orientation_net")
     if config.pop("kind", None) != "rigid_orientation":
         raise InputError(f"{path}: config kind is not 'rigid_orientation'")
     for key, lo, hi in (("half", 2, 32), ("channels", 1, 64), ("hidden", 1, 1024)):
@@ -94,12 +85,4 @@ def load_orientation_net(path: str | os.PathLike) -> OrientationNet:
     unknown = sorted(set(config) - {"half", "channels", "hidden"})
     if unknown:
         raise InputError(f"{path}: config has unknown keys {short_repr(unknown)}")
-    net = OrientationNet(**config)
-    for name, tensor in blob["state"].items():
-        if isinstance(tensor, torch.Tensor) and tensor.is_floating_point() and not torch.isfinite(tensor).all():
-            raise InputError(f"{path}: tensor {short_repr(name)} holds NaN or infinite weights")
-    try:
-        net.load_state_dict(blob["state"])
-    except (RuntimeError, TypeError, ValueError) as exc:
-        raise InputError(f"{path}: the weights do not fit the config: {short_repr(str(exc), 300)}") from None
-    return net.eval()
+    return load_finite_state(OrientationNet(**config), state, path, "the config")

@@ -13,6 +13,7 @@ from pathlib import Path
 import torch
 from torch import nn
 
+from learning.models.checkpoint import load_finite_state, read_config_state
 from learning.models.field import (  # re-exported (``__all__``): where users of the route encoder find them
     BATCH_BYTES,
     BYTES_PER_BLOCK,
@@ -184,21 +185,12 @@ def load_route_net(path: str | os.PathLike) -> RouteNet | RouteVIN:
 
     Every problem with the file is an ``InputError`` naming it.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"route encoder {path} does not exist")
-    try:
-        blob = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as exc:  # noqa: BLE001 - whatever torch raises on a bad file, name the file
-        raise InputError(f"{path} is not a route encoder file: {type(exc).__name__}: {short_repr(str(exc), 300)}") \
-            from None
-    if not (isinstance(blob, dict) and isinstance(blob.get("config"), dict) and isinstance(blob.get("state"), dict)):
-        raise InputError(f"{path}: expected {{'config': {{...}}, 'state': {{...}}}} as save_route_net writes")
+    path, stored, state = read_config_state(path, "route encoder", "save_route_net")
     known = ("kind", "block", "channels", "depth", "attention", "attention_level", "trained_side", "step")
-    unknown = [k for k in blob["config"] if k not in known]
+    unknown = [k for k in stored if k not in known]
     if unknown:
         raise InputError(f"{path}: config has unknown keys {short_repr(unknown)}, expected some of {known}")
-    config = {"kind": "unet", "attention": 0, "attention_level": 0, "trained_side": 0, **blob["config"]}
+    config = {"kind": "unet", "attention": 0, "attention_level": 0, "trained_side": 0, **stored}
     config.setdefault("step", config.get("block"))
     if config["kind"] not in KINDS:
         raise InputError(f"{path}: config kind = {short_repr(config['kind'])}, expected one of {KINDS}")
@@ -214,12 +206,4 @@ def load_route_net(path: str | os.PathLike) -> RouteNet | RouteVIN:
         net = make_route_net(*shape)
     except ValueError as exc:
         raise InputError(f"{path}: config {exc}") from None
-    for name, tensor in blob["state"].items():
-        if isinstance(tensor, torch.Tensor) and tensor.is_floating_point() and not torch.isfinite(tensor).all():
-            raise InputError(f"{path}: tensor {short_repr(name)} holds NaN or infinite weights")
-    try:
-        net.load_state_dict(blob["state"])
-    except (RuntimeError, TypeError, ValueError) as exc:
-        raise InputError(f"{path}: the weights do not fit {type(net).__name__}{shape[1:6]}: "
-                         f"{short_repr(str(exc), 300)}") from None
-    return net.eval()
+    return load_finite_state(net, state, path, f"{type(net).__name__}{shape[1:6]}")
