@@ -16,17 +16,19 @@ from hypothesis import strategies as st
 from learning.models.route_net import RouteNet, load_route_net, route_input, save_route_net
 from learning.samplers.route import (
     ABLATION_SETTINGS,
+    R_GSEEN,
     SHIPPED,
     SHIPPED_SETTINGS,
     RouteSampler,
     shipped_ablation,
     shipped_sampler,
     straight_line_sampler,
+    straight_where_unreached,
 )
 from learning.training.route import cost_targets, train_route_net
 from planners import RRT, GeometricWorld, OccupancyGrid, Problem, RRTConnect
 from planners.base.fileio import InputError
-from planners.maps.generators import FAMILIES, TEST_SEED0, generate
+from planners.maps.generators import FAMILIES, TEST_SEED0, VALIDATION_SEED0, generate
 from planners.maps.gridsearch import distance_field
 
 
@@ -303,6 +305,46 @@ def test_the_geodesic_route_reference_ranks_the_frontier_by_the_exact_cost_to_go
             assert r.solved and fine_check_path(p.world, r.path) and np.allclose(r.path[0], p.start)
             its[name].append(r.iterations)
     assert np.median(its["geodesic"]) < 0.8 * np.median(its["follower"]), its
+
+
+def test_a_stalled_search_widens_to_a_frontier_of_grid_cells_and_passes_a_tunnel_narrower_than_a_step():
+    """Validation narrow passage 201121: a tunnel 2 cells tall and 4 long whose step-wide frontier cells have blocked
+    centres. Without widening the exact reference fills the start side and never finds it; widened, it passes."""
+    from learning.references.expert import GeodesicRouteSampler
+
+    p = generate("narrow_passage", VALIDATION_SEED0 + 1121, 128)
+    runs = {w: RRT(p, step_size=4.0, sampler=GeodesicRouteSampler(**{**SHIPPED_SETTINGS, "widen": w}),
+                   seed=0).solve(max_iterations=20000) for w in ("off", "stalled")}
+    assert not runs["off"].solved
+    assert runs["stalled"].solved and fine_check_path(p.world, runs["stalled"].path)
+    assert runs["stalled"].iterations < 5000
+
+
+def test_widening_leaves_every_run_that_never_turns_to_the_fine_frontier_as_it_was():
+    """The widened frontier takes none of the random stream: a run that never looks at the frontier of grid cells
+    (its progress never stalled for ``patience`` iterations in frontier mode, its step-wide frontier never empty
+    there) is the same run with widening on or off."""
+    untouched = 0
+    for i, family in enumerate(("forest", "maze", "rooms", "bugtrap", "narrow_passage") * 2):
+        p = generate(family, VALIDATION_SEED0 + 50 + i, 64)
+        runs = []
+        for w in ("off", "stalled"):
+            planner = RRT(p, step_size=4.0, sampler=RouteSampler(None, **{**ABLATION_SETTINGS, "widen": w}), seed=i)
+            runs.append(planner.solve(max_iterations=20000))
+        if planner.sampler._state[7][R_GSEEN] == 0:  # the widened run never looked at the fine frontier
+            untouched += 1
+            assert runs[0].iterations == runs[1].iterations and np.array_equal(runs[0].path, runs[1].path)
+    assert untouched >= 3
+    with pytest.raises(InputError, match="widen = 'sometimes'"):
+        RouteSampler(None, widen="sometimes")
+
+
+def test_cells_the_encoder_sees_no_route_from_follow_the_straight_line_behind_every_reached_cell():
+    field = np.array([[0.0, 2.0, 5e5], [3.0, np.inf, 5e5 + 3]])
+    straight = np.array([[1.0, 2.0, 4.0], [2.0, 3.0, 5.0]])
+    out = straight_where_unreached(field, straight, 2.5e5)
+    assert np.array_equal(out, [[0.0, 2.0, 3.0 + 4.0], [3.0, np.inf, 3.0 + 5.0]])
+    assert np.array_equal(straight_where_unreached(field[:, :2], straight[:, :2], 2.5e5), field[:, :2])
 
 
 def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):

@@ -98,6 +98,8 @@ class FieldEncoder:
     trained_side: int
     #: How many of the square's symmetries the route sampler averages this encoder's field over by default.
     symmetries: int = 8
+    #: The field's value, in steps, where the encoder sees no route to the goal (None: it always gives one).
+    unreached_steps: float | None = None
 
     def pass_bytes(self, h: int, w: int) -> int:
         """About how many bytes one pass over an ``h`` x ``w`` block grid holds at its peak (one symmetry)."""

@@ -141,6 +141,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         if step % block:
             raise ValueError(f"step = {step} cells, block = {block} cells: expected a step of whole blocks")
         self.block, self.channels, self.depth, self.step = block, channels, depth, step
+        self.unreached_steps = UNREACHED * block / step  # a block's UNREACHED value, in steps
         self.attention_layers = 0  # as ``RouteNet`` names them: it has none
         self.trained_side = 0  # its field keeps its scale on any map: nothing to rescale
         inputs = block * block + 1  # every cell of the block, and whether the goal is in it

@@ -42,7 +42,7 @@ from planners.base.planner import Planner
 from planners.base.samplers import check_sampler_params
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, last_in_sight, lowest_vertex_cell, walk_path
-from planners.guidance.frontier import Frontier, frontier_sample, update_frontier
+from planners.guidance.frontier import NO_COST, Frontier, frontier_sample, update_frontier
 from planners.worlds.grid import resample_obstacles
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
@@ -53,24 +53,33 @@ SHIPPED = SHIPPED_ROUTE
 #: vertices and places the target 3 steps ahead (spread half a step), walking across the field's ripples
 #: up to a tenth of a step deep plus a hundredth of the cost-to-go and ending where the walk leaves the
 #: progress cell's sight, and ranks the frontier, which takes over after one iteration without progress at a
-#: temperature of half a step.
+#: temperature of half a step; a search whose progress has stalled ``patience`` iterations widens to a frontier of
+#: grid cells (``widen``; chosen on the validation maps with ``scripts/experiments/stall_validation.py``).
 SHIPPED_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 3.0, "sigma": 0.5, "ripple": 0.1, "ripple_growth": 0.01,
-                    "sight": True}
+                    "sight": True, "widen": "stalled"}
 
 
 #: The ablation's own settings: the same rule, its lookahead and spread tuned on the same validation
 #: grid as the encoder's (a baseline tuned as carefully as what it is compared with). Its walk goes strictly
 #: downhill (``ripple`` 0): on the validation maps that took it fewer iterations than crossing ripples; it is
-#: cut at the sight line as the encoder's is, which took it fewer iterations there too.
+#: cut at the sight line as the encoder's is, which took it fewer iterations there too. It widens a stalled
+#: search as the encoder does (on the same validation maps that left none of its runs unsolved, from 3 of 3,000).
 ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5, "ripple": 0.0, "ripple_growth": 0.0,
-                     "sight": True}
+                     "sight": True, "widen": "stalled"}
 #: The straight-line follower of the comparison (``make_sampler("follower")``): one step ahead of the
-#: vertex nearest the goal, the frontier after 4 iterations without progress, at a temperature of a step.
-FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0, "sight": False}
+#: vertex nearest the goal, the frontier after 4 iterations without progress, at a temperature of a step; it
+#: does not widen (it is the policy's baseline, as published).
+FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0, "sight": False,
+                     "widen": "off"}
 
 
-# slots of RouteSampler's integer state
-R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT = range(6)
+#: ``RouteSampler``'s ways to widen a stalled search (its ``widen``; see ``route_draw``): never; the frontier of
+#: one-grid-cell cells while the step-wide frontier is empty; that, and half the frontier's samples from it once
+#: the field's progress has stalled ``patience`` iterations.
+WIDEN_MODES = ("off", "empty", "stalled")
+
+# slots of RouteSampler's integer state (``R_GSEEN``, ``R_GCOUNT``: the fine frontier's, see ``route_draw``)
+R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT, R_GSEEN, R_GCOUNT = range(8)
 
 
 @nb.njit(cache=True)
@@ -101,9 +110,9 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
     the parameters, and scratch buffers for a batch's uniforms and frontier points and the walk's visited
     cells, allocated once per query rather than once per iteration. Samples are absolute: ``anchored`` is left alone.
     """
-    field, blocked, res, origin, step, frontier, ints, floats, params, scratch, low, high = state
+    field, blocked, res, origin, step, frontier, fine, ints, floats, params, scratch, low, high = state
     world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost = frontier
-    lookahead, sigma, stuck, floor0, max_floor, patience, ripple, ripple_growth, sight = params
+    lookahead, sigma, stuck, floor0, max_floor, patience, ripple, ripple_growth, sight, widen = params
     W = field.shape[1]
     if n > ints[R_SEEN]:
         best, c = lowest_vertex_cell(field, X[ints[R_SEEN]:n], res, origin, floats[0], ints[R_CELL])
@@ -118,20 +127,40 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
         ints[R_FCOUNT] = update_frontier(world, counts, X[ints[R_FSEEN]:n], cell, fgoal, free, cov, pos, front, dist,
                                          ints[R_FCOUNT], fcost)
         ints[R_FSEEN] = n
+    # The step-wide frontier is blind to a passage narrower than a step whose cells next to the tree have blocked
+    # centres: the frontier of one-grid-cell cells sees into it. It gives every frontier sample while the step-wide
+    # one is empty (``widen`` >= 1), and half of them once the field's progress has stalled ``patience``
+    # iterations (``widen`` 2: the step-wide frontier may hold only cells no extension can enter).
+    coarse = ints[R_FCOUNT] > 0
+    fine_all = frontier_mode and widen >= 1 and not coarse
+    fine_half = frontier_mode and widen >= 2 and coarse and iteration - ints[R_PROGRESS] >= patience
+    if (fine_all or fine_half) and n > ints[R_GSEEN]:
+        ints[R_GCOUNT] = update_frontier(world, counts, X[ints[R_GSEEN]:n], res, fgoal, fine[0], fine[1], fine[2],
+                                         fine[3], fine[4], ints[R_GCOUNT], fine[5])
+        ints[R_GSEEN] = n
+    fine_all = fine_all and ints[R_GCOUNT] > 0
+    fine_half = fine_half and ints[R_GCOUNT] > 0
     m = pts.shape[0]
-    U, F, u_pick, u_xy = scratch[0][:m], scratch[1][:m], scratch[2][:m], scratch[3][:m]
+    U, F, u_pick, u_xy, G = scratch[0][:m], scratch[1][:m], scratch[2][:m], scratch[3][:m], scratch[5][:m]
     visited = scratch[4]
     for k in range(m):  # row by row, as Generator.random((m, 7)) fills
         for j in range(7):
             U[k, j] = next_double(rng)
-    if frontier_mode and ints[R_FCOUNT] > 0:  # one frontier CDF for the whole batch
+    if frontier_mode and (coarse or fine_all):  # one frontier CDF for the whole batch
         u_pick[:] = U[:, 3]
         u_xy[:] = U[:, 1:3]
-        frontier_sample(front, ints[R_FCOUNT], fw, cell, forigin, dist, tau, u_pick, u_xy, F)
+        if coarse:
+            frontier_sample(front, ints[R_FCOUNT], fw, cell, forigin, dist, tau, u_pick, u_xy, F)
+        if fine_all or fine_half:
+            frontier_sample(fine[3], ints[R_GCOUNT], blocked.shape[1], res, forigin, fine[4], tau * step / res,
+                            u_pick, u_xy, G)
     for k in range(m):
         u = U[k]
-        if frontier_mode and u[0] >= floor and ints[R_FCOUNT] > 0:
-            x, y = F[k, 0], F[k, 1]
+        if frontier_mode and u[0] >= floor and (coarse or fine_all):
+            if fine_all or (fine_half and u[4] < 0.5):  # u[4], the walk's jitter, is unused in frontier mode
+                x, y = G[k, 0], G[k, 1]
+            else:
+                x, y = F[k, 0], F[k, 1]
         elif frontier_mode or u[0] < floor:
             x, y = low[0] + (high[0] - low[0]) * u[1], low[1] + (high[1] - low[1]) * u[2]
         else:
@@ -149,6 +178,37 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
 def route_rrt_loop(budget, state, buffers, rng, loop):
     """RRT's compiled loop drawing from ``route_draw`` (``planners.fused``)."""
     return rrt_loop(budget, route_draw, state, buffers, rng, loop)
+
+
+def straight_where_unreached(field: np.ndarray, straight: np.ndarray, unreached: float) -> np.ndarray:
+    """``field`` with its finite cells at or above ``unreached`` ranked by ``straight`` instead.
+
+    The encoder sees no route to the goal from those cells. They take the straight-line distance to the goal
+    (``straight``, in steps) plus the highest value the field reaches elsewhere, so every cell with a route stays
+    ahead of every cell without one, and among the latter the sampler follows what its ablation follows instead of
+    a flat plateau.
+    """
+    finite = np.isfinite(field)
+    cut = finite & (field >= unreached)
+    if not cut.any():
+        return field
+    reached = field[finite & ~cut]
+    return np.where(cut, (reached.max() if reached.size else 0.0) + straight, field)
+
+
+def fine_frontier(grid: OccupancyGrid, cost: np.ndarray | None) -> tuple:
+    """The frontier of one-grid-cell cells that ``route_draw`` turns to when the step-wide one is empty.
+
+    ``(free, cov, pos, front, dist, cost)`` as ``planners.guidance.frontier.Frontier``'s, over the grid's own cells,
+    ranked by ``cost`` (per grid cell, in grid cells, ``inf`` where blocked; None: the straight line). Only ``pos`` is
+    written here; the other arrays are touched only if a run ever needs this frontier.
+    """
+    H, W = grid.height, grid.width
+    pos = np.empty((H, W), dtype=np.int64)
+    pos[:] = -1
+    ranked = NO_COST if cost is None else np.where(np.isfinite(cost), cost, 1e9).reshape(-1)
+    return (np.zeros((H, W), dtype=np.uint8), np.zeros((H, W), dtype=np.bool_), pos, np.empty(H * W, np.int64),
+            np.empty(H * W), ranked)
 
 
 class CachedField(NamedTuple):
@@ -322,6 +382,10 @@ class RouteSampler(SamplerBase):
         sight: Cut the walk where it first leaves the sight of the progress cell's centre
             (``planners.guidance.follow.last_in_sight``): round a corner, the target is the last cell the
             progress vertex can reach in a straight line, not one behind the wall the extension would hit.
+        widen: How a stalled search widens (``WIDEN_MODES``): the step-wide frontier cannot see into a passage
+            narrower than a step whose cells next to the tree have blocked centres; ``"empty"`` turns to a frontier
+            of one-grid-cell cells while the step-wide one is empty, ``"stalled"`` also draws half the frontier's
+            samples from it once the field's progress has stalled ``patience`` iterations.
     """
 
     #: Where the encoder's field replaces the straight line: the progress and the frontier's ranking.
@@ -340,7 +404,7 @@ class RouteSampler(SamplerBase):
                  stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
                  max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None,
                  fields: FieldCache | None = None, ripple: float = 0.1,
-                 ripple_growth: float = 0.01, sight: bool = True) -> None:
+                 ripple_growth: float = 0.01, sight: bool = True, widen: str = "stalled") -> None:
         if not (ripple >= 0 and ripple_growth >= 0):
             raise InputError(f"ripple = {short_repr(ripple)}, ripple_growth = {short_repr(ripple_growth)}: expected a "
                              f"depth in steps >= 0 and a growth per step of cost-to-go >= 0")
@@ -356,6 +420,9 @@ class RouteSampler(SamplerBase):
         if not isinstance(sight, bool | np.bool_):
             raise InputError(f"sight = {short_repr(sight)}: expected True or False")
         self.sight = bool(sight)
+        if widen not in WIDEN_MODES:
+            raise InputError(f"widen = {short_repr(widen)}: expected one of {', '.join(WIDEN_MODES)}")
+        self.widen = widen
         self.device = resolve_device(device, "device =")
         if threads is not None:
             planning_thread_count(threads)  # refused now, by name, rather than at the first query
@@ -426,6 +493,8 @@ class RouteSampler(SamplerBase):
             cols = np.minimum(((np.arange(grid.width) + 0.5) / factor).astype(np.int64), learned.shape[1] - 1)
             learned = learned[rows][:, cols]
         self.forward_passes = self.symmetry_passes
+        if self.net.unreached_steps is not None:
+            learned = straight_where_unreached(learned, self._straight(grid), 0.5 * self.net.unreached_steps)
         progress = self._straight(grid) if self._uses == "frontier" else learned
         return progress, (None if self._uses == "progress" else learned)
 
@@ -474,27 +543,24 @@ class RouteSampler(SamplerBase):
         self.field = field
         res, origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
         r, c = grid.cell_of(self.problem.start)
-        f = Frontier(self.problem, self.step_size, self.tau, self._ranking(ranking))
+        # the frontier's ranking, per grid cell and in grid cells (None: the straight line)
+        cells = None if ranking is None else np.where(grid.obstacles, np.inf, ranking) * self.step_size / res
+        f = Frontier(self.problem, self.step_size, self.tau,
+                     None if cells is None else frontier_costs(cells, grid, self.step_size))
         frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
                     np.ascontiguousarray(f.world.params[1:3]), f.cost)
-        ints = np.array([0, r * grid.width + c, 0, 0, 0, 0], dtype=np.int64)
+        ints = np.array([0, r * grid.width + c, 0, 0, 0, 0, 0, 0], dtype=np.int64)
         b = self.batch
         # the walk's visited cells: a walk covers less than 1.5 lookaheads of path (``route_draw``)
         walk = int(1.5 * self.lookahead * self.step_size / res) + 2
-        scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)), np.empty(walk, np.int64))
+        scratch = (np.empty((b, 7)), np.empty((b, 2)), np.empty(b), np.empty((b, 2)), np.empty(walk, np.int64),
+                   np.empty((b, 2)))
         floats = np.array([field[r, c], np.inf])
         params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor, self.patience,
-                           self.ripple, self.ripple_growth, float(self.sight)], dtype=np.float64)
-        self._state = (field, grid.kernel.grid, res, origin, self.step_size, frontier, ints, floats, params, scratch,
-                       self.low, self.high)
-
-    def _ranking(self, ranking: np.ndarray | None) -> np.ndarray | None:
-        """The frontier's cost per frontier cell from a per-grid-cell field in steps (None: the straight line)."""
-        if ranking is None:
-            return None
-        grid = self.problem.world
-        return frontier_costs(np.where(grid.obstacles, np.inf, ranking) * self.step_size / grid.resolution, grid,
-                              self.step_size)
+                           self.ripple, self.ripple_growth, float(self.sight), float(WIDEN_MODES.index(self.widen))],
+                          dtype=np.float64)
+        self._state = (field, grid.kernel.grid, res, origin, self.step_size, frontier, fine_frontier(grid, cells), ints,
+                       floats, params, scratch, self.low, self.high)
 
     def draw(self, rng, n, view):
         pts = np.empty((min(n, self.batch), 2))
@@ -551,7 +617,8 @@ class RouteSampler(SamplerBase):
 
     def __repr__(self) -> str:
         rest = (f"lookahead={self.lookahead:g}, sigma={self.sigma:g}, stuck={self.stuck}, tau={self.tau:g}, "
-                f"ripple={self.ripple:g}, ripple_growth={self.ripple_growth:g}, sight={self.sight}")
+                f"ripple={self.ripple:g}, ripple_growth={self.ripple_growth:g}, sight={self.sight}, "
+                f"widen={self.widen!r}")
         return f"RouteSampler({'None, ' if self.net is None else ''}{rest})"
 
 
