@@ -477,3 +477,19 @@ def test_replication_runs_the_next_seeds_and_the_ablation_against_itself(movinga
     with pytest.raises(SystemExit) as stop:
         script.main(["random-32-32-10", "--first-seed", "-1"])
     assert stop.value.code == 2 and "--first-seed" in capsys.readouterr().err
+
+
+def test_the_quick_run_tunes_on_the_full_runs_tuning_scenarios_and_tests_on_the_first_of_its_test_ones(movingai):
+    """No MovingAI scenario is tuned on in one form of the comparison and tested in the other."""
+    full, quick = E.Protocol(), E.Protocol().quick()
+    maps = ["maze-32-32-2", "random-32-32-10"]
+    picks = {}
+    for name, pr in (("full", full), ("quick", quick)):
+        qs = E.movingai_queries(str(movingai), maps, pr.scenarios, pr.tuning_scenarios, pr.tolerance)
+        picks[name] = {split: [(q.family, q.key) for q in qs if q.split == split] for split in ("test", "tuning")}
+    assert picks["quick"]["tuning"] == picks["full"]["tuning"]
+    assert set(picks["quick"]["test"]) < set(picks["full"]["test"])
+    assert not set(picks["full"]["test"]) & set(picks["quick"]["tuning"])
+    for m in maps:
+        full_test = [k for f, k in picks["full"]["test"] if f == m]
+        assert [k for f, k in picks["quick"]["test"] if f == m] == full_test[:quick.scenarios]

@@ -140,13 +140,17 @@ def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: i
                      cache: dict | None = None) -> list[Query]:
     """The longest half of each map's scenarios, alternately assigned to the test and tuning splits.
 
-    ``n_test`` test and ``n_tune`` tuning scenarios per map (fewer where a map has too few).
+    ``n_test`` test and ``n_tune`` tuning scenarios per map (fewer where a map has too few). The picks are spaced
+    for the full comparison's counts (``Protocol``'s defaults) or for more where more are asked, so a run with
+    fewer test scenarios (``--quick``) tests on the first of the full run's test scenarios and tunes on the same
+    tuning scenarios: no scenario is tuned on in one run and tested in another.
     """
     out = []
+    slots = max(n_test, n_tune, Protocol.scenarios, Protocol.tuning_scenarios)
     for m in maps:
         ps = scenarios(directory, m, tolerance, cache)
         half = max(2, len(ps) // 2)
-        stride = max(1, half // (2 * max(n_test, n_tune)))
+        stride = max(1, half // (2 * slots))
         picks = list(range(0, half, stride))
         out += [Query(m, i, 0, "test") for i in picks[0::2][:n_test]]
         out += [Query(m, i, 0, "tuning") for i in picks[1::2][:n_tune]]
