@@ -24,6 +24,7 @@ from pathlib import Path
 
 import torch
 
+from learning.device import pin_cpu_arithmetic
 from learning.models.rigid_orientation import save_orientation_net
 from learning.training.rigid import RigidTrainConfig, train_rigid_orientation
 from planners.base.fileio import InputError, atomic_write_text
@@ -51,6 +52,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=Path("runs/rigid_route"))
     ap.add_argument("--export", type=Path, help="also copy the weights here (and the JSON beside them)")
     args = ap.parse_args(argv)
+    arithmetic = pin_cpu_arithmetic()  # before any tensor operation (learning.device.CPU_ARITHMETIC)
     torch.set_num_threads(1)
     try:
         config = RigidTrainConfig(scenes_per_family=args.scenes_per_family, families=tuple(args.families),
@@ -66,7 +68,7 @@ def main(argv=None) -> int:
     weights = args.out / "rigid_route.pt"
     save_orientation_net(net, weights)
     meta = json.dumps({"recipe": config.as_dict(), "log": log, "minutes": round(log["seconds"] / 60, 1),
-                       "device": "cpu", "torch_threads": 1}, indent=1) + "\n"
+                       "device": "cpu", "torch_threads": 1, "cpu_arithmetic": arithmetic}, indent=1) + "\n"
     atomic_write_text(args.out / "rigid_route.json", meta)
     print(f"wrote {weights} ({weights.stat().st_size:,} bytes) and rigid_route.json; {log['seconds']} s")
     if args.export is not None:

@@ -21,7 +21,10 @@ built beside ``<out>`` and swapped into place whole, so a kill leaves the old pa
 While it trains, ``<out>/checkpoint.pt`` holds the state after the last finished epoch, and
 ``--resume`` continues from it to the same weights an uninterrupted run reaches. ``<out>`` is locked
 while a run writes it (``.<out>.lock`` beside it): a second run on it exits 2 naming the first.
-One torch thread: the same seed on the same machine and device gives the same weights.
+One torch thread, and torch, oneDNN and MKL held to the AVX2 instruction set (``learning.device.pin_cpu_arithmetic``,
+recorded in route.json), so a machine with wider vector units (AVX-512) runs the arithmetic the shipped encoder was
+trained with; the same seed on the same device gives the same weights. docs/report.md ("Training and
+reproducibility") gives the spread over seeds.
 
 Your own maps: ``--map-set DIR`` (a folder of maps, a manifest ``.json`` or a built-in set such as
 ``generated``; see docs/map-sets.md) trains on the training part of the set and keeps the epoch with
@@ -51,7 +54,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from learning.device import DEVICES, resolve_device
+from learning.device import DEVICES, pin_cpu_arithmetic, resolve_device
 from learning.models.route_net import KINDS, make_route_net, save_route_net
 from learning.training.route import SCHEDULES, GeneratedProblem, check_route_map, default_workers, train_route_net
 from planners.base.fileio import (
@@ -293,6 +296,7 @@ def main(argv=None) -> int:
 
 
 def _train(args) -> int:
+    arithmetic = pin_cpu_arithmetic()  # before any tensor operation: the same weights on any x86 CPU with AVX2
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     extra, validation, sets = {}, None, args.sets
@@ -323,7 +327,8 @@ def _train(args) -> int:
     recipe = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if k not in skip}
     info = {"recipe": recipe, "parameters": sum(p.numel() for p in net.parameters()),
             "last_epoch": next(line for line in reversed(lines) if line.startswith("epoch")),
-            "minutes": round((time.perf_counter() - t0) / 60, 1), "device": str(args.torch_device)}
+            "minutes": round((time.perf_counter() - t0) / 60, 1), "device": str(args.torch_device),
+            "cpu_arithmetic": arithmetic}
     if sets is not None:
         recipe["size"] = None  # the maps bring their sizes
         info["chosen_epoch"] = net.chosen_epoch

@@ -15,6 +15,17 @@ from planners import GeometricWorld, OccupancyGrid
 from planners.base.fileio import InputError
 from planners.worlds.shapes import Circle
 
+
+@pytest.fixture(autouse=True)
+def _environment_restored():
+    """Each test leaves the process environment as it found it (a training command holds the CPU arithmetic to
+    AVX2 through environment variables, ``learning.device.pin_cpu_arithmetic``)."""
+    saved = dict(os.environ)
+    yield
+    if os.environ != saved:
+        os.environ.clear()
+        os.environ.update(saved)
+
 # derandomized so CI runs are reproducible; examples still cover the strategies broadly
 settings.register_profile("samplergym", derandomize=True, deadline=None, max_examples=60, print_blob=True)
 settings.load_profile("samplergym")

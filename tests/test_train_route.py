@@ -16,7 +16,7 @@ import pytest
 import torch
 
 from conftest import load_script, npy_map_folder
-from learning.device import resolve_device
+from learning.device import CPU_ARITHMETIC, pin_cpu_arithmetic, resolve_device
 from learning.models.route_net import load_route_net
 from planners.base.fileio import MANIFEST, run_lock
 
@@ -443,3 +443,16 @@ def test_targets_made_while_the_first_epoch_trains_give_the_same_weights(tmp_pat
     w2 = route.train_route_net(problems, workers=2, **kwargs).state_dict()
     assert started_with and started_with[0] < len(problems)  # the first batch trained before the last target came
     assert all(torch.equal(w1[k], w2[k]) for k in w1)
+
+
+def test_training_holds_the_cpu_arithmetic_to_avx2_keeps_a_users_choice_and_records_it(tmp_path, monkeypatch):
+    for name in CPU_ARITHMETIC:
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv("MKL_CBWR", "COMPATIBLE")  # the user's choice stays
+    held = pin_cpu_arithmetic()
+    assert held["ATEN_CPU_CAPABILITY"] == "avx2" and held["ONEDNN_MAX_CPU_ISA"] == "AVX2"
+    assert held["MKL_CBWR"] == "COMPATIBLE" and held["torch_cpu_capability"] == torch.backends.cpu.get_cpu_capability()
+    script = load_script("train_route")
+    assert script.main([*TINY, "--epochs", "1", "--out", str(tmp_path / "run")]) == 0
+    record = json.loads((tmp_path / "run" / "route.json").read_text())["cpu_arithmetic"]
+    assert record == {**held, "torch_cpu_capability": record["torch_cpu_capability"]}
