@@ -88,6 +88,9 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--lr", type=float, default=2e-3, help="Adam's learning rate (its peak, with --lr-schedule cosine)")
     ap.add_argument("--lr-schedule", choices=SCHEDULES, default="cosine",
                     help="cosine (default): from --lr down to 0 over the run's steps; or constant")
+    ap.add_argument("--grad-clip", type=float, metavar="NORM",
+                    help="cut the gradients' total norm to NORM before each step (default: never, as the shipped "
+                         "recipe; docs/report.md gives the spread over seeds with and without)")
     ap.add_argument("--kind", choices=KINDS, default="vin",
                     help="the encoder: unet (a U-Net with axial attention) or vin (learned move costs and value "
                          "iteration over them; --depth is then its local layers, --attention 0)")
@@ -141,6 +144,8 @@ def _check(args) -> None:
     check_int_flags(args, ("maps", "epochs", "batch", "channels", "depth", "step", "blocks_per_step", "workers"))
     if not (math.isfinite(args.lr) and args.lr > 0):
         raise InputError(f"--lr {args.lr:g}: expected a positive number")
+    if args.grad_clip is not None and not (math.isfinite(args.grad_clip) and args.grad_clip > 0):
+        raise InputError(f"--grad-clip {args.grad_clip:g}: expected a positive finite norm")
     check_int_flags(args, ("attention", "attention_level", "seed"), low=0)
     args.torch_device = resolve_device(args.device)
     args.mixed_generated = False
@@ -322,7 +327,7 @@ def _train(args) -> int:
                           batch=args.batch, lr=args.lr,
                           augment=args.augment, seed=args.seed, log=log, checkpoint=ckpt, resume=args.resume,
                           validation=validation, recipe_extra=extra, workers=args.workers, device=args.torch_device,
-                          kind=args.kind, schedule=args.lr_schedule)
+                          kind=args.kind, schedule=args.lr_schedule, grad_clip=args.grad_clip)
     skip = {"resume", "sets", "torch_device", "block"}
     recipe = {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items() if k not in skip}
     info = {"recipe": recipe, "parameters": sum(p.numel() for p in net.parameters()),

@@ -150,7 +150,8 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
                          "blocks of 2 cells, more than the 262144"),
     (["--blocks-per-step", "3"], "--blocks-per-step 3: a step of 4 cells does not divide into 3 whole blocks"),
     (["--blocks-per-step", "2", "--kind", "unet"], "--blocks-per-step: step = 4, block = 2: the U-Net's blocks"),
-    (["--blocks-per-step", "0"], "--blocks-per-step"),
+    (["--blocks-per-step", "0"], "--blocks-per-step"), (["--grad-clip", "0"], "--grad-clip 0"),
+    (["--grad-clip", "inf"], "--grad-clip inf"),
 ])
 def test_bad_flags_exit_2_with_one_line_naming_them(tmp_path, capsys, flags, named):
     from importlib import util
@@ -456,3 +457,16 @@ def test_training_holds_the_cpu_arithmetic_to_avx2_keeps_a_users_choice_and_reco
     assert script.main([*TINY, "--epochs", "1", "--out", str(tmp_path / "run")]) == 0
     record = json.loads((tmp_path / "run" / "route.json").read_text())["cpu_arithmetic"]
     assert record == {**held, "torch_cpu_capability": record["torch_cpu_capability"]}
+
+
+def test_a_gradient_cut_is_part_of_the_recipe_and_changes_the_weights_only_when_it_cuts(tmp_path):
+    script = load_script("train_route")
+    runs = {}
+    for name, flags in (("plain", []), ("loose", ["--grad-clip", "1e9"]), ("tight", ["--grad-clip", "1e-3"])):
+        assert script.main([*TINY, "--epochs", "1", "--out", str(tmp_path / name), *flags]) == 0
+        runs[name] = (torch.load(tmp_path / name / "route.pt", weights_only=True),
+                      json.loads((tmp_path / name / "route.json").read_text())["recipe"])
+    assert runs["plain"][1]["grad_clip"] is None and runs["tight"][1]["grad_clip"] == 1e-3
+    flat = {name: torch.cat([v.flatten() for v in state["state"].values() if torch.is_tensor(v)])
+            for name, (state, _) in runs.items()}
+    assert torch.equal(flat["plain"], flat["loose"]) and not torch.equal(flat["plain"], flat["tight"])

@@ -318,7 +318,8 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
                     checkpoint: str | os.PathLike | None = None, resume: bool = False,
                     validation: Sequence[Problem] | None = None, recipe_extra: dict | None = None,
                     workers: int = 1, device: str | torch.device = "cpu", kind: str = "unet",
-                    schedule: str = "constant", step: int | None = None) -> RouteNet | RouteVIN:
+                    schedule: str = "constant", step: int | None = None,
+                    grad_clip: float | None = None) -> RouteNet | RouteVIN:
     """Fit a route encoder to the grid search's cost-to-go on ``problems`` (grid problems; one map size per batch).
 
     ``block``: cells per block side; ``step``: the planner's step in cells, a whole number of blocks (default
@@ -339,11 +340,12 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     Without, the last epoch's. ``recipe_extra`` joins the recipe a checkpoint must match (what the
     problems were drawn from). ``schedule``: Adam's learning rate stays ``lr`` ("constant") or falls from
     ``lr`` to 0 along half a cosine over the run's steps ("cosine"; then ``epochs`` is part of the recipe, as
-    every step's rate depends on it). ``device``: where the encoder trains; the targets are made on
-    ``workers`` CPU processes (``make_examples``). With more than one worker, and the size of every
-    map known beforehand (``Problem``s, or callables with a ``shape`` such as ``GeneratedProblem``),
-    they are made while the first epoch trains, in the order its batches (drawn first) use them; the
-    validation targets follow on the same processes. Else all are made before it.
+    every step's rate depends on it). ``grad_clip``: the gradients' total norm is cut to this before each step
+    (``torch.nn.utils.clip_grad_norm_``; None: never, as the shipped recipe). ``device``: where the encoder
+    trains; the targets are made on ``workers`` CPU processes (``make_examples``). With more than one worker,
+    and the size of every map known beforehand (``Problem``s, or callables with a ``shape`` such as
+    ``GeneratedProblem``), they are made while the first epoch trains, in the order its batches (drawn first)
+    use them; the validation targets follow on the same processes. Else all are made before it.
 
     With ``checkpoint`` (a file path) the weights, the optimiser and the batch order's generator are
     committed there after every epoch; with ``resume`` a run continues from that file to the same
@@ -352,6 +354,9 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
     """
     if schedule not in SCHEDULES:
         raise InputError(f"schedule {short_repr(schedule)}: expected one of {', '.join(SCHEDULES)}")
+    if grad_clip is not None and (isinstance(grad_clip, bool) or not isinstance(grad_clip, int | float)
+                                  or not 0 < grad_clip < math.inf):
+        raise InputError(f"grad_clip {short_repr(grad_clip)}: expected a positive finite norm, or None")
     try:  # the encoder's shape is refused now, before any map is made
         make_route_net(kind, block, channels, depth, attention, attention_level, 0, step)
     except ValueError as exc:
@@ -384,7 +389,7 @@ def train_route_net(problems: Sequence[Problem | Callable[[], Problem]], *, bloc
                       block=block, channels=channels, depth=depth, attention=attention,
                       attention_level=attention_level, epochs=epochs, batch=batch, lr=lr, augment=augment, seed=seed,
                       log=log, checkpoint=checkpoint, resuming=resuming, validation=validation,
-                      recipe_extra=recipe_extra, schedule=schedule, step=step)
+                      recipe_extra=recipe_extra, schedule=schedule, step=step, grad_clip=grad_clip)
     finally:
         if stream is not None:
             stream.close()
@@ -394,7 +399,7 @@ def _train(data: list, held_out: list | None, stream: _Stream | None, names: lis
            order: torch.Generator, device: torch.device, *, kind: str, block: int, channels: int, depth: int,
            attention: int, attention_level: int, epochs: int, batch: int, lr: float, augment: bool, seed: int, log,
            checkpoint, resuming: bool, validation, recipe_extra: dict | None, schedule: str,
-           step: int | None) -> RouteNet | RouteVIN:
+           step: int | None, grad_clip: float | None) -> RouteNet | RouteVIN:
     """``train_route_net``'s epochs, on the examples made (``data``) or being made (``stream``)."""
     deterministic(device)
     if stream is None:
@@ -413,6 +418,8 @@ def _train(data: list, held_out: list | None, stream: _Stream | None, names: lis
             recipe["step"] = step
         if schedule != "constant":  # as are those at a constant rate
             recipe["schedule"], recipe["epochs"] = schedule, epochs
+        if grad_clip is not None:  # and those without a cut
+            recipe["grad_clip"] = grad_clip
         if validation:
             recipe["validation"] = [p.name for p in validation]
         if recipe_extra:
@@ -454,6 +461,8 @@ def _train(data: list, held_out: list | None, stream: _Stream | None, names: lis
                 done = (epoch * len(batches) + j) / (epochs * len(batches))
                 for group in opt.param_groups:
                     group["lr"] = lr * 0.5 * (1 + math.cos(math.pi * done))
+            if grad_clip is not None:
+                torch.nn.utils.clip_grad_norm_(net.parameters(), grad_clip)
             opt.step()
             total += loss.item() * len(idx)
         if streaming:  # every example is in now: the tensors as _tensors would have made them
