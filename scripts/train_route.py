@@ -56,7 +56,14 @@ import torch
 
 from learning.device import DEVICES, pin_cpu_arithmetic, resolve_device
 from learning.models.route_net import KINDS, make_route_net, save_route_net
-from learning.training.route import SCHEDULES, GeneratedProblem, check_route_map, default_workers, train_route_net
+from learning.training.route import (
+    SCHEDULES,
+    GeneratedProblem,
+    check_route_map,
+    default_workers,
+    loss_rise,
+    train_route_net,
+)
 from planners.base.fileio import (
     InputError,
     atomic_write_bytes,
@@ -334,6 +341,8 @@ def _train(args) -> int:
             "last_epoch": next(line for line in reversed(lines) if line.startswith("epoch")),
             "minutes": round((time.perf_counter() - t0) / 60, 1), "device": str(args.torch_device),
             "cpu_arithmetic": arithmetic}
+    rise = loss_rise(lines)
+    info["loss_rose"] = None if rise is None else {"lowest_epoch": rise[0], "lowest": rise[1], "last": rise[2]}
     if sets is not None:
         recipe["size"] = None  # the maps bring their sizes
         info["chosen_epoch"] = net.chosen_epoch
@@ -350,6 +359,11 @@ def _train(args) -> int:
         atomic_write_text(args.export.with_suffix(".json"), meta)
         atomic_write_bytes(args.export, (args.out / "route.pt").read_bytes())
     print(f"wrote {args.out / 'route.pt'} in {(time.perf_counter() - t0) / 60:.1f} min")
+    if rise is not None:
+        print(f"warning: the training loss rose from {rise[1]:.3f} at epoch {rise[0]} to {rise[2]:.3f}: this run "
+              f"diverged. Seeds of the shipped recipe spread (docs/report.md, training and reproducibility); compare "
+              f"this encoder with the shipped one (evaluate.py --route NAME=FILE) or train with another --seed",
+              file=sys.stderr)
     return 0
 
 

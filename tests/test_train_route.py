@@ -470,3 +470,21 @@ def test_a_gradient_cut_is_part_of_the_recipe_and_changes_the_weights_only_when_
     flat = {name: torch.cat([v.flatten() for v in state["state"].values() if torch.is_tensor(v)])
             for name, (state, _) in runs.items()}
     assert torch.equal(flat["plain"], flat["loose"]) and not torch.equal(flat["plain"], flat["tight"])
+
+
+def test_a_run_whose_loss_rose_at_the_end_is_flagged_and_recorded(tmp_path, capsys, monkeypatch):
+    from learning.training.route import RISE, loss_rise
+
+    falling = [f"epoch {k}: loss {v:.3f} ({k} s)" for k, v in enumerate([6.3, 3.4, 1.1, 0.8])]
+    rising = [f"epoch {k}: loss {v:.3f}, validation 1.0 ({k} s)" for k, v in enumerate([6.3, 3.8, 5.2, 7.0])]
+    assert loss_rise(falling) is None and loss_rise(rising) == (1, 3.8, 7.0) and loss_rise([]) is None
+    assert loss_rise(["epoch 0: loss 1.000 (1 s)", f"epoch 1: loss {RISE:.3f} (2 s)"]) is None
+    script = load_script("train_route")
+    assert script.main([*TINY, "--epochs", "1", "--out", str(tmp_path / "ok")]) == 0
+    assert "diverged" not in capsys.readouterr().err
+    assert json.loads((tmp_path / "ok" / "route.json").read_text())["loss_rose"] is None
+    monkeypatch.setattr(script, "loss_rise", lambda lines: (0, 1.0, 2.0))
+    assert script.main([*TINY, "--epochs", "1", "--out", str(tmp_path / "bad")]) == 0
+    assert "rose from 1.000 at epoch 0 to 2.000: this run diverged" in capsys.readouterr().err
+    assert json.loads((tmp_path / "bad" / "route.json").read_text())["loss_rose"] == {"lowest_epoch": 0, "lowest": 1.0,
+                                                                                      "last": 2.0}
