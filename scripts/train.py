@@ -36,7 +36,7 @@ import sys
 import time
 from pathlib import Path
 
-from learning.device import DEVICES, resolve_device
+from learning.device import DEVICES, pin_cpu_arithmetic, resolve_device
 from learning.evaluation import worker_init
 from learning.training.policy import TrainConfig, open_map_sets, read_state, train
 from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, check_output_place
@@ -83,6 +83,7 @@ def main(argv=None) -> int:
             ap.add_argument(flag, type=typ, help=f"default {f.default!r}")
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
+    arithmetic = pin_cpu_arithmetic()  # before any tensor operation, and inherited by the rollout workers
     try:
         cfg = TrainConfig.from_json(args.config) if args.config else TrainConfig()
         changes = {}
@@ -138,7 +139,8 @@ def main(argv=None) -> int:
           f"(validation score {min(summary['validation_ppo'], summary['validation_imitation']):.2f}): {final}")
     if args.export:
         atomic_write_bytes(args.export, final.read_bytes())
-        meta = {"config": dataclasses.asdict(cfg), "summary": summary, "minutes": round(minutes, 1)}
+        meta = {"config": dataclasses.asdict(cfg), "summary": summary, "minutes": round(minutes, 1),
+                "cpu_arithmetic": arithmetic}
         atomic_write_text(args.export.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
         print(f"exported to {args.export}")
     return 0
