@@ -564,3 +564,13 @@ def test_the_shipped_encoder_and_its_ablation_plan_valid_paths(family):
         assert np.allclose(runs[0].path[0], p.start)
         assert np.linalg.norm(runs[0].path[-1] - p.goal) <= p.goal_tolerance
         assert fine_check_path(p.world, runs[0].path)
+
+
+@pytest.mark.experiments
+def test_encoder_seeds_prints_each_files_medians_on_the_validation_maps(capsys):
+    script = load_script("experiments/encoder_seeds")
+    assert script.main([str(SHIPPED), str(SHIPPED), "--maps", "1", "--sides", "64"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ")]
+    assert len(rows) == 1 + 7 + 1  # header, a row per family, pooled
+    pooled = rows[-1].split("|")
+    assert pooled[3] == pooled[4] and "(" in pooled[3]  # the same file twice: the same runs
