@@ -197,11 +197,11 @@ def straight_where_unreached(field: np.ndarray, straight: np.ndarray, unreached:
 
 
 def fine_frontier(grid: OccupancyGrid, cost: np.ndarray | None) -> tuple:
-    """The frontier of one-grid-cell cells that ``route_draw`` turns to when the step-wide one is empty.
+    """The frontier of one-grid-cell cells that ``route_draw`` widens a stalled search to (``RouteSampler.widen``).
 
     ``(free, cov, pos, front, dist, cost)`` as ``planners.guidance.frontier.Frontier``'s, over the grid's own cells,
-    ranked by ``cost`` (per grid cell, in grid cells, ``inf`` where blocked; None: the straight line). Only ``pos`` is
-    written here; the other arrays are touched only if a run ever needs this frontier.
+    ranked by ``cost`` (per grid cell, in grid cells, ``inf`` where blocked; None: the straight line). Only ``pos``
+    and the ranking are written here; the other arrays are touched only if a run ever needs this frontier.
     """
     H, W = grid.height, grid.width
     pos = np.empty((H, W), dtype=np.int64)
