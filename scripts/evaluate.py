@@ -1,7 +1,7 @@
 """The comparison: the learned sampler against uniform and goal-biased sampling, on maps it never saw.
 
-    python scripts/evaluate.py                       # default map set, shipped checkpoint
-    python scripts/evaluate.py --quick               # fewer test queries, same tuning: 7.5 min of CPU time
+    python scripts/evaluate.py                       # default map set, shipped models: 13.5 min on 2 cores
+    python scripts/evaluate.py --quick               # fewer test queries, same tuning: 4 min on 2 cores
     python scripts/evaluate.py --policy runs/guided/final.zip --processes 2
     python scripts/evaluate.py --backend ray --address auto                        # on your Ray cluster
     python scripts/evaluate.py --sampler mine=user_ppo.zip@SamplerGym/RRT-Forest-v2   # your SB3 model too
