@@ -57,7 +57,8 @@ def test_defaults_are_the_validated_settings():
     assert follower.net is None
     assert (follower.lookahead, follower.stuck, follower.tau, follower.ripple) == (1.0, 4, 1.0, 0.0)
     assert FOLLOWER_SETTINGS == {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0,
-                                 "sight": False}
+                                 "sight": False, "widen": "off"}
+    assert follower.widen == "off" and shipped.widen == "stalled" == make_sampler("route_ablation").widen
 
 
 def test_the_follower_plans_as_the_route_sampler_at_its_settings():

@@ -9,7 +9,7 @@ from planners import Problem, make_planner
 from planners.base.planner import Planner
 from planners.base.registry import planner_class
 from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0, TUNING_SEED0, generate
-from planners.maps.movingai import benchmark_scenarios
+from planners.maps.movingai import benchmark_scenarios, scenario_picks
 from planners.tools.benchmark import MAX_ITERATIONS, STEP, TOLERANCE
 
 
@@ -138,20 +138,14 @@ def tuned_for_shifted(tuned: dict[tuple[str, str], float], queries: Sequence[Que
 
 def movingai_queries(directory: str, maps: Sequence[str], n_test: int, n_tune: int, tolerance: float,
                      cache: dict | None = None) -> list[Query]:
-    """The longest half of each map's scenarios, alternately assigned to the test and tuning splits.
+    """Each map's test and tuning scenarios (``planners.maps.movingai.scenario_picks``).
 
-    ``n_test`` test and ``n_tune`` tuning scenarios per map (fewer where a map has too few). The picks are spaced
-    for the full comparison's counts (``Protocol``'s defaults) or for more where more are asked, so a run with
-    fewer test scenarios (``--quick``) tests on the first of the full run's test scenarios and tunes on the same
-    tuning scenarios: no scenario is tuned on in one run and tested in another.
+    ``n_test`` test and ``n_tune`` tuning scenarios per map (fewer where a map has too few). A run with fewer test
+    scenarios (``--quick``) tests on the first of the full run's test scenarios and tunes on the same tuning ones.
     """
     out = []
-    slots = max(n_test, n_tune, Protocol.scenarios, Protocol.tuning_scenarios)
     for m in maps:
-        ps = scenarios(directory, m, tolerance, cache)
-        half = max(2, len(ps) // 2)
-        stride = max(1, half // (2 * slots))
-        picks = list(range(0, half, stride))
-        out += [Query(m, i, 0, "test") for i in picks[0::2][:n_test]]
-        out += [Query(m, i, 0, "tuning") for i in picks[1::2][:n_tune]]
+        test, tune = scenario_picks(len(scenarios(directory, m, tolerance, cache)), n_test, n_tune)
+        out += [Query(m, i, 0, "test") for i in test]
+        out += [Query(m, i, 0, "tuning") for i in tune]
     return out

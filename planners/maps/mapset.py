@@ -45,7 +45,7 @@ from planners.maps.generators import (
     generate,
 )
 from planners.maps.gridsearch import free_components
-from planners.maps.movingai import benchmark_scenarios, load_movingai_scenarios, movingai_dir
+from planners.maps.movingai import benchmark_scenarios, load_movingai_scenarios, movingai_dir, scenario_picks
 from planners.maps.readers import MAP_READERS, MAX_PIXELS_ENV, ROS_SUFFIXES, max_pixels_limit, read_map
 from planners.maps.rosmap import read_ros_yaml
 from planners.worlds.grid import OccupancyGrid
@@ -875,8 +875,8 @@ class MovingAIMapSet(MapSet):
     """The MovingAI benchmark folder as a map set: scenarios of each map split into test and tuning queries.
 
     Each map's scenarios farther apart than the goal tolerance, longest first: of the longest half,
-    every ``stride``-th (``stride = half // (2 * max(n_test, n_tune))``) goes alternately to the
-    test and the tuning part (``n_test`` and ``n_tune`` per map, fewer where a map has too few).
+    every stride-th goes alternately to the test and the tuning part (``n_test`` and ``n_tune`` per map, fewer
+    where a map has too few; ``planners.maps.movingai.scenario_picks``, as the comparison picks them).
     Unlike a user's set, this splits the queries of one map, not the maps: the maps are a test
     collection, never trained on.
 
@@ -902,11 +902,9 @@ class MovingAIMapSet(MapSet):
         self._problems = {m: self._scenarios(m) for m in self.names}
         self._queries: dict[str, list[MapQuery]] = {p: [] for p in PARTS}
         for m in self.names:
-            half = max(2, len(self._problems[m]) // 2)
-            stride = max(1, half // (2 * max(self.n_test, self.n_tune)))
-            picks = list(range(0, half, stride))
-            self._queries["test"] += [MapQuery(m, m, i, "test") for i in picks[0::2][:self.n_test]]
-            self._queries["tuning"] += [MapQuery(m, m, i, "tuning") for i in picks[1::2][:self.n_tune]]
+            test, tune = scenario_picks(len(self._problems[m]), self.n_test, self.n_tune)
+            self._queries["test"] += [MapQuery(m, m, i, "test") for i in test]
+            self._queries["tuning"] += [MapQuery(m, m, i, "tuning") for i in tune]
         parts = {p: tuple(dict.fromkeys(q.map for q in self._queries[p])) for p in PARTS}
         fr = {"train": 0.0, "validation": 0.0, "tuning": float(self.n_tune > 0), "test": float(self.n_test > 0)}
         self.split = Split(parts, {"rule": "movingai-scenarios", "fractions": fr, "n_test": self.n_test,

@@ -142,3 +142,21 @@ def benchmark_scenarios(directory: str | os.PathLike, name: str, goal_tolerance:
     ps = [p for p in load_movingai_scenarios(scen, goal_tolerance=goal_tolerance)
           if p.distance(p.start, p.goal) > goal_tolerance]
     return sorted(ps, key=lambda p: (-p.reference_length, p.name))
+
+
+#: A map's test and tuning scenarios are spaced for at least this many of each (``scenario_picks``), so a run that
+#: asks for fewer (the quick comparison) takes the first of the same picks: no scenario is tuned on in one run
+#: and tested in another.
+PICK_SLOTS = 10
+
+
+def scenario_picks(count: int, n_test: int, n_tune: int) -> tuple[list[int], list[int]]:
+    """The indices of a map's test and tuning scenarios among its ``count`` (``benchmark_scenarios``' order).
+
+    Of the longest half, every stride-th goes alternately to the test and the tuning part, the stride set for
+    ``max(n_test, n_tune, PICK_SLOTS)`` of each; ``n_test`` and ``n_tune`` of them (fewer where there are few).
+    """
+    half = max(2, count // 2)
+    stride = max(1, half // (2 * max(n_test, n_tune, PICK_SLOTS)))
+    picks = list(range(0, half, stride))
+    return picks[0::2][:n_test], picks[1::2][:n_tune]
