@@ -68,8 +68,8 @@ def main(argv=None) -> int:
         if env_id.endswith("Files-v2"):
             kw["source_kwargs"] = {"paths": files}
         for mode in args.modes.split(","):
-            if mode == "guided" and env_id.endswith("RigidBody-v1"):
-                continue  # guided actions are defined on 2-D grids only
+            if mode == "guided" and "Rigid" in env_id:
+                continue  # guided actions are defined on 2-D grids only (the 6-DoF ids: RigidBody, RigidScenes)
             try:
                 obs_kw = {"observation": "egocentric"} if mode == "guided" else {}
                 env = gym.make(env_id, action_mode=mode, **kw, **obs_kw)

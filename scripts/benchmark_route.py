@@ -1,6 +1,6 @@
 """What the route encoder costs per query, by map side, thread count and device.
 
-    python scripts/benchmark_route.py                                  # shipped encoder, CPU, 1 thread
+    python scripts/benchmark_route.py                                  # shipped encoder, CPU, 1 thread: 30 s
     python scripts/benchmark_route.py --sides 128 512 --threads 1 2 --batch 16
     python scripts/benchmark_route.py --device cuda --sides 128 256 512 1024 --batch 64
     python scripts/benchmark_route.py --sides 128 512 1024 4096 --repeat 3      # up to the largest map it takes

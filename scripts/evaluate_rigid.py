@@ -1,5 +1,6 @@
 """Planners x samplers on the generated 6-DoF scenes: success, iterations, collision checks and time.
 
+    python scripts/evaluate_rigid.py                   # validation part, 2 scenes a family, 1 seed: 2.5 min
     python scripts/evaluate_rigid.py --part validation --scenes 2 --seeds 2 --out results/rigid
     python scripts/evaluate_rigid.py --part test --families slot windows --planners RRTConnect \\
         --samplers uniform gaussian rigid_workspace_route --out results/rigid-test

@@ -1,6 +1,6 @@
 """Every planner with the route field: default sampling, classical option, learned, ablation, exact.
 
-    python scripts/every_planner.py --maps validation --n 4                 # the maps settings are chosen on
+    python scripts/every_planner.py --maps validation --n 4                 # the maps settings are chosen on (66 s)
     python scripts/every_planner.py --maps shifted unseen --n 10            # held-apart maps, measured once
     python scripts/every_planner.py --maps shifted --convergence --n 4      # RRT*: iterations to within 5% / 1%
     python scripts/every_planner.py --maps shifted --later-queries --n 4    # a roadmap built for one query, for others

@@ -1,6 +1,6 @@
 """PRM vs Lazy-PRM vs OB-PRM on narrow passages of several widths and on an open forest map.
 
-    python scripts/obprm_compare.py                  # 20 queries per map, 20,000-sample budget
+    python scripts/obprm_compare.py                  # 20 queries per map, 20,000-sample budget: 50 s
     python scripts/obprm_compare.py --quick          # 5 queries per map, 5,000-sample budget
     python scripts/obprm_compare.py --seeds 50 --gaps 1 2 4 8 16 --out results/obprm
 

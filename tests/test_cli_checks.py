@@ -55,3 +55,11 @@ def test_benchmark_route_table_and_refusal(capsys, monkeypatch):
     rows = [line for line in out.splitlines() if line.startswith("| maze | 32 ") or line.startswith("| maze | 64 ")]
     assert len(rows) == 2 and "refused" in rows[1] and "refused" not in rows[0], out
     assert "above the limit of 256 blocks" in out
+
+
+def test_benchmark_envs_runs_every_registered_id_and_leaves_guided_actions_to_the_2d_ones(capsys):
+    script = load_script("benchmark_envs")
+    assert script.main(["--steps", "1", "--modes", "guided"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| SamplerGym/")]
+    ids = {line.split("|")[1].strip() for line in rows}
+    assert "SamplerGym/RRT-Maze-v2" in ids and not any("Rigid" in i for i in ids)
