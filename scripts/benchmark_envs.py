@@ -1,6 +1,6 @@
 """Environment throughput: steps per second for every registered id, random actions, one process.
 
-    python scripts/benchmark_envs.py [--steps 20000] [--modes point,relative]
+    python scripts/benchmark_envs.py [--steps 20000] [--modes point,relative]     # every id and mode: 3.8 min
 """
 
 from __future__ import annotations
