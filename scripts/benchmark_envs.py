@@ -73,7 +73,7 @@ def main(argv=None) -> int:
             try:
                 obs_kw = {"observation": "egocentric"} if mode == "guided" else {}
                 env = gym.make(env_id, action_mode=mode, **kw, **obs_kw)
-            except FileNotFoundError as exc:
+            except (FileNotFoundError, InputError) as exc:  # e.g. the MovingAI maps are not on this machine
                 print(f"skipping {env_id}: {exc}", file=sys.stderr)
                 break
             steps_per_second(env, 500)  # load compiled kernels
