@@ -255,6 +255,48 @@ def test_a_move_priced_above_the_wall_cost_is_a_wall_at_inference(monkeypatch, w
     assert RouteVIN.wall_cost == 32.0  # the shipped inference
 
 
+
+def _door_priced_as_wall(monkeypatch) -> RouteVIN:
+    """An encoder on an open 8 x 16 map whose moves out of block column 4 cost 40 per length: a wall at 32."""
+    net = RouteVIN(block=2, channels=4, depth=1, step=4).eval()
+
+    def priced(x):
+        costs = net.lengths.expand(1, 8, 4, 8).clone()
+        costs[:, :, :, 4] *= 40.0
+        return torch.zeros(1, net.channels, 4, 8), costs
+
+    monkeypatch.setattr(net, "move_costs", priced)
+    monkeypatch.setattr(net, "map_cache_bytes", 0)  # the reuse runs the real local network, not the patched one
+    return net
+
+
+def test_where_the_learned_walls_shut_every_route_from_the_start_the_sampler_ranks_without_them(monkeypatch):
+    """The start beyond a door the encoder prices as a wall: a second pass without the learned walls, kept apart."""
+    from learning.samplers.route import FieldCache
+    from planners import OccupancyGrid, Problem
+
+    net = _door_priced_as_wall(monkeypatch)
+    grid = OccupancyGrid(np.zeros((8, 16), dtype=bool))
+    beyond = Problem(grid, start=(14.5, 4.5), goal=(1.5, 1.5), goal_tolerance=1.0)
+    near = Problem(grid, start=(5.5, 4.5), goal=(1.5, 1.5), goal_tolerance=1.0)
+    shut = net.predict(grid.obstacles, grid.cell_of(beyond.goal))
+    assert shut[grid.cell_of(beyond.start)] >= 0.5 * net.unreached_steps
+    with net.open_walls():
+        assert net.wall_cost is None
+        opened = net.predict(grid.obstacles, grid.cell_of(beyond.goal))
+    assert net.wall_cost == 32.0 and "wall_cost" not in net.__dict__  # back to the class's value
+    cache = FieldCache()
+    s = RouteSampler(net, fields=cache).bind(beyond)
+    assert s.forward_passes == 2 and len(cache) == 2  # the walled and the open field are kept apart
+    assert np.array_equal(s.field, opened) and s.field.max() < 1e3
+    again = RouteSampler(net, fields=cache).bind(beyond)
+    assert again.forward_passes == 2 and cache.hits == 2 and np.array_equal(again.field, opened)
+    s = RouteSampler(net).bind(near)  # the start is reached: one pass, the walls kept
+    assert s.forward_passes == 1 and s.field[:, 10:].min() > s.field[:, :8].max()
+    net.wall_cost = None
+    assert net.open_walls() is None
+
+
 def _steps_by_hand(obstacles: np.ndarray, block: int) -> np.ndarray:
     """``cell_steps`` cell by cell: (8, h, w), whether a free cell of a block steps into the block a move away."""
     H, W = obstacles.shape

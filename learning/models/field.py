@@ -8,6 +8,7 @@ bound.
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 import numpy as np
@@ -104,6 +105,19 @@ class FieldEncoder:
     def pass_bytes(self, h: int, w: int) -> int:
         """About how many bytes one pass over an ``h`` x ``w`` block grid holds at its peak (one symmetry)."""
         return BYTES_PER_BLOCK * h * w
+
+    def inference_key(self) -> tuple:
+        """The settings a pass depends on besides the weights, the device and the query (part of a kept field's key)."""
+        return ()
+
+    def open_walls(self) -> contextlib.AbstractContextManager | None:
+        """A context in which passes run without the encoder's learned wall rule; None where it has none.
+
+        The route sampler takes it for a query whose start the encoder sees no route from: there the rule has shut
+        a passage the map leaves open (a door priced above the threshold), and the learned move costs without it
+        still rank the route through it.
+        """
+        return None
 
     def infer(self, x: torch.Tensor) -> torch.Tensor:
         """The pass ``predict`` takes (no gradients): ``forward``, unless the encoder has a cheaper way there.

@@ -28,6 +28,7 @@ rule; ``RouteVIN.step_walls``).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 from collections import OrderedDict
@@ -172,6 +173,25 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_maps": OrderedDict()}  # a copy sent elsewhere starts with no kept maps
+
+    def inference_key(self) -> tuple:
+        return (self.wall_cost, self.step_walls, self.fixed_point)
+
+    def open_walls(self) -> contextlib.AbstractContextManager | None:
+        """Passes without the learned wall rule (``wall_cost`` None) inside the context; the step walls stay."""
+        return None if self.wall_cost is None else self._without_learned_walls()
+
+    @contextlib.contextmanager
+    def _without_learned_walls(self):
+        kept = self.__dict__.get("wall_cost")
+        self.wall_cost = None
+        try:
+            yield self
+        finally:
+            if kept is None:
+                del self.wall_cost  # back to the class's value
+            else:
+                self.wall_cost = kept
 
     def goal_and_walls(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """From ``route_input``'s channels: (the goal's block, the blocks with no free cell), (B, h, w) bool each."""

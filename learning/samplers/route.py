@@ -269,8 +269,8 @@ class FieldCache:
         obstacles = np.ascontiguousarray(obstacles)
         digest = hashlib.blake2b(obstacles.view(np.uint8).data, digest_size=16).digest()
         device = str(next(net.parameters()).device)
-        return (id(net), device, digest, obstacles.shape, obstacles.dtype.str, (int(goal_cell[0]), int(goal_cell[1])),
-                int(symmetries))
+        return (id(net), device, net.inference_key(), digest, obstacles.shape, obstacles.dtype.str,
+                (int(goal_cell[0]), int(goal_cell[1])), int(symmetries))
 
     def has(self, net: FieldEncoder, obstacles: np.ndarray, goal_cell: tuple[int, int], symmetries: int) -> bool:
         """Whether the query's field is kept."""
@@ -482,21 +482,35 @@ class RouteSampler(SamplerBase):
         if self.net is None:
             return self._straight(grid), None
         obstacles, goal, factor = self._encoder_map(grid)
-        if self.fields is None:
-            learned = self.net.predict(obstacles, goal, self.symmetry_passes, threads=self.threads)
-        else:
-            learned, seconds, reused = self.fields.get(self.net, obstacles, goal, self.symmetry_passes,
-                                                       threads=self.threads)
-            self.reused_seconds = seconds if reused else 0.0
+        learned = self._predict(obstacles, goal)
+        self.forward_passes = self.symmetry_passes
+        if self.net.unreached_steps is not None:
+            start = grid.cell_of(self.problem.start)
+            start = (min(int(start[0] / factor), learned.shape[0] - 1), min(int(start[1] / factor), learned.shape[1] - 1))
+            opened = self.net.open_walls() if learned[start] >= 0.5 * self.net.unreached_steps else None
+            if opened is not None:  # the learned walls shut every route from the start: rank without them
+                reused = self.reused_seconds
+                with opened:
+                    learned = self._predict(obstacles, goal)
+                self.reused_seconds += reused
+                self.forward_passes += self.symmetry_passes
         if factor != 1.0:  # each map cell takes the value of the encoder's cell its centre lies in
             rows = np.minimum(((np.arange(grid.height) + 0.5) / factor).astype(np.int64), learned.shape[0] - 1)
             cols = np.minimum(((np.arange(grid.width) + 0.5) / factor).astype(np.int64), learned.shape[1] - 1)
             learned = learned[rows][:, cols]
-        self.forward_passes = self.symmetry_passes
         if self.net.unreached_steps is not None:
             learned = straight_where_unreached(learned, self._straight(grid), 0.5 * self.net.unreached_steps)
         progress = self._straight(grid) if self._uses == "frontier" else learned
         return progress, (None if self._uses == "progress" else learned)
+
+    def _predict(self, obstacles: np.ndarray, goal: tuple[int, int]) -> np.ndarray:
+        """The encoder's field of one query (from ``fields`` where kept; ``reused_seconds`` says what a kept one cost)."""
+        if self.fields is None:
+            self.reused_seconds = 0.0
+            return self.net.predict(obstacles, goal, self.symmetry_passes, threads=self.threads)
+        learned, seconds, reused = self.fields.get(self.net, obstacles, goal, self.symmetry_passes, threads=self.threads)
+        self.reused_seconds = seconds if reused else 0.0
+        return learned
 
     def has_field(self, problem: Problem) -> bool:
         """Whether ``fields`` holds the encoder's field of ``problem`` (False without an encoder or a cache)."""
