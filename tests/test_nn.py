@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from planners import NearestNeighbors
@@ -12,6 +12,7 @@ from planners import NearestNeighbors
 ORD = {"euclidean": 2, "manhattan": 1, "chebyshev": np.inf}
 
 
+@settings(max_examples=50)  # numba compiles each dimension and metric it meets: most of this test's time
 @given(
     dim=st.integers(1, 9),
     n=st.integers(0, 700),

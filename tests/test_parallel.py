@@ -43,16 +43,25 @@ def _runs(runs) -> list[dict]:
     return out
 
 
-def test_every_backend_gives_the_same_runs_in_task_order(ray_backend):
+def _serial_and(backend) -> tuple[list[dict], list[dict]]:
     tasks, protocol = _tasks()
     tasks = tasks[::3]  # every sampler, query and seed still appears; a third of the runs
     serial = _runs(E.run_all(tasks, protocol, 1, progress=False))
-    pool = _runs(E.run_all(tasks, protocol, make_backend("local", processes=2, worker_init=E.worker_init),
-                           progress=False))
-    on_ray = _runs(E.run_all(tasks, protocol, ray_backend, progress=False))
-    assert serial == pool == on_ray
     assert [r["query"] for r in serial] == [protocol.problem(t.query).name for t in tasks]
     assert [E.SamplerSpec.from_json(r["sampler_spec"]) for r in serial] == [t.sampler for t in tasks]
+    return serial, _runs(E.run_all(tasks, protocol, backend, progress=False))
+
+
+def test_the_local_pool_gives_the_serial_runs_in_task_order():
+    serial, pool = _serial_and(make_backend("local", processes=2, worker_init=E.worker_init))
+    assert pool == serial
+
+
+@pytest.mark.slow  # Ray's workers start, import torch and load every kernel (1.5 to 3 min on 2 busy cores);
+# test_the_context_travels_loaded_so_workers_need_no_files compares Ray's runs with the serial ones in every tier
+def test_ray_gives_the_serial_runs_in_task_order(ray_backend):
+    serial, on_ray = _serial_and(ray_backend)
+    assert on_ray == serial
 
 
 def test_the_context_travels_loaded_so_workers_need_no_files(ray_backend, tmp_path):

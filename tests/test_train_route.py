@@ -198,6 +198,7 @@ def _ctrl_c_in_the_second_epoch(train):
     return interrupted
 
 
+@pytest.mark.slow  # a training run of its own (15-25 s on 2 cores)
 def test_ctrl_c_says_what_was_kept_and_exits_130(tmp_path, capsys, monkeypatch):
     from importlib import util
 
@@ -357,6 +358,7 @@ def test_a_step_size_must_come_to_one_block_on_every_map(tmp_path, capsys):
     assert args.step == 2 and np.isclose(args.step * 0.5, 1.0)
 
 
+@pytest.mark.slow  # a training run of its own (15-25 s on 2 cores)
 def test_one_and_two_workers_make_the_same_tensors(tmp_path):
     import functools
 
@@ -459,6 +461,7 @@ def test_training_holds_the_cpu_arithmetic_to_avx2_keeps_a_users_choice_and_reco
     assert record == {**held, "torch_cpu_capability": record["torch_cpu_capability"]}
 
 
+@pytest.mark.slow  # a training run of its own (15-25 s on 2 cores)
 def test_a_gradient_cut_is_part_of_the_recipe_and_changes_the_weights_only_when_it_cuts(tmp_path):
     script = load_script("train_route")
     runs = {}
@@ -472,6 +475,7 @@ def test_a_gradient_cut_is_part_of_the_recipe_and_changes_the_weights_only_when_
     assert torch.equal(flat["plain"], flat["loose"]) and not torch.equal(flat["plain"], flat["tight"])
 
 
+@pytest.mark.slow  # a training run of its own (15-25 s on 2 cores)
 def test_a_run_whose_loss_rose_at_the_end_is_flagged_and_recorded(tmp_path, capsys, monkeypatch):
     from learning.training.route import RISE, loss_rise
 
