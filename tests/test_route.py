@@ -574,3 +574,15 @@ def test_encoder_seeds_prints_each_files_medians_on_the_validation_maps(capsys):
     assert len(rows) == 1 + 7 + 1  # header, a row per family, pooled
     pooled = rows[-1].split("|")
     assert pooled[3] == pooled[4] and "(" in pooled[3]  # the same file twice: the same runs
+
+
+@pytest.mark.experiments
+def test_open_walls_refuses_a_map_not_in_the_comparison_and_prints_a_row_per_map(movingai, capsys):
+    script = load_script("experiments/open_walls")
+    with pytest.raises(SystemExit):
+        script.main(["--maps", "nowhere", "--movingai", str(movingai)])
+    assert "nowhere" in capsys.readouterr().err
+    assert script.main(["--maps", "random-32-32-10", "--seeds", "1", "--movingai", str(movingai)]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| random")]
+    assert len(rows) == 1 and rows[0].split("|")[2].strip() == "0/5"  # no door shut on an open map: one pass
+    assert rows[0].split("|")[3] == rows[0].split("|")[4]  # so the same runs either way

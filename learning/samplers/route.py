@@ -485,8 +485,8 @@ class RouteSampler(SamplerBase):
         learned = self._predict(obstacles, goal)
         self.forward_passes = self.symmetry_passes
         if self.net.unreached_steps is not None:
-            start = grid.cell_of(self.problem.start)
-            start = (min(int(start[0] / factor), learned.shape[0] - 1), min(int(start[1] / factor), learned.shape[1] - 1))
+            row, col = grid.cell_of(self.problem.start)
+            start = (min(int(row / factor), learned.shape[0] - 1), min(int(col / factor), learned.shape[1] - 1))
             opened = self.net.open_walls() if learned[start] >= 0.5 * self.net.unreached_steps else None
             if opened is not None:  # the learned walls shut every route from the start: rank without them
                 reused = self.reused_seconds
@@ -504,11 +504,12 @@ class RouteSampler(SamplerBase):
         return progress, (None if self._uses == "progress" else learned)
 
     def _predict(self, obstacles: np.ndarray, goal: tuple[int, int]) -> np.ndarray:
-        """The encoder's field of one query (from ``fields`` where kept; ``reused_seconds`` says what a kept one cost)."""
+        """The encoder's field of one query, from ``fields`` where kept (``reused_seconds``: what a kept one cost)."""
         if self.fields is None:
             self.reused_seconds = 0.0
             return self.net.predict(obstacles, goal, self.symmetry_passes, threads=self.threads)
-        learned, seconds, reused = self.fields.get(self.net, obstacles, goal, self.symmetry_passes, threads=self.threads)
+        learned, seconds, reused = self.fields.get(self.net, obstacles, goal, self.symmetry_passes,
+                                                   threads=self.threads)
         self.reused_seconds = seconds if reused else 0.0
         return learned
 
