@@ -189,7 +189,7 @@ def test_roadmap_vertices_hidden_when_many():
 
 def test_prm_on_geometric_world(tmp_path):
     world = GeometricWorld(50, 30, [Circle(25, 15, 6), Rectangle(5, 20, 15, 25), Rectangle(35, 0, 38, 12)])
-    p = Problem(world, (2, 2), (48, 28), goal_tolerance=1.0, metric="chebyshev")
+    p = Problem(world, (2, 2), (48, 28), goal_tolerance=1.0)  # the compiled metric (others: test_planners.py)
     planner = PRM(p, seed=1)
     planner.solve(max_iterations=2000)
     fig = plot(p, planner)
