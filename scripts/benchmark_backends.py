@@ -1,6 +1,6 @@
 """What running on Ray costs against the local pool: per-task overhead, shipping, runs per second.
 
-    python scripts/benchmark_backends.py                 # 2 workers each, this machine
+    python scripts/benchmark_backends.py                 # 2 workers each, this machine (72 s on 2 quiet cores)
     python scripts/benchmark_backends.py --processes 8
 
 1. Scheduling overhead per task: empty tasks, one per scheduling unit (chunksize 1), on each backend; the
