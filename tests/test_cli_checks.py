@@ -63,3 +63,13 @@ def test_benchmark_envs_runs_every_registered_id_and_leaves_guided_actions_to_th
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| SamplerGym/")]
     ids = {line.split("|")[1].strip() for line in rows}
     assert "SamplerGym/RRT-Maze-v2" in ids and not any("Rigid" in i for i in ids)
+
+
+def test_the_first_call_benchmark_runs_the_mesh_rows_only_with_omplapps_files(capsys, monkeypatch):
+    monkeypatch.delenv("SAMPLERGYM_OMPLAPP_DIR", raising=False)
+    script = load_script("benchmark_first_call")
+    assert script.main(["--rows", "mesh-easy"]) == 2
+    assert "--omplapp" in capsys.readouterr().err
+    assert script.main(["--rows", "mesh-cubicles", "--omplapp", "/nonexistent/omplapp"]) == 2
+    assert "/nonexistent/omplapp" in capsys.readouterr().err
+
