@@ -1,12 +1,14 @@
 """Compile every planner's kernels into the cache ahead of use: ``python -m planners.compile``.
 
 For each registered planner and each world kind (occupancy grid, circles and rectangles, 6-DoF rigid
-body) and metric, one short seeded solve on a small problem runs every kernel that kind of run
-uses, so a later first solve loads them from the cache in a fraction of a second. The cache folder
-and how it stays honest are described in ``docs/compiling.md`` (``planners.kernels.cache``).
+body among boxes, and among triangle meshes where the ``mesh`` extra is installed) and metric, one short
+seeded solve on a small problem runs every kernel that kind of run uses, so a later first solve loads
+them from the cache in a fraction of a second. The cache folder and how it stays honest are described
+in ``docs/compiling.md`` (``planners.kernels.cache``).
 
-    python -m planners.compile               # everything, with a progress bar
+    python -m planners.compile               # everything installed, with a progress bar
     python -m planners.compile --planners RRT RRTConnect --worlds grid
+    python -m planners.compile --worlds mesh # the mesh worlds' kernels (OMPL.app's problems use them)
     python -m planners.compile --list        # what would be compiled, and where
 
 A combination the planner refuses (Informed RRT* on the rigid body) is skipped.
@@ -15,6 +17,7 @@ A combination the planner refuses (Informed RRT* on the rigid body) is skipped.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import sys
 import time
 from collections.abc import Callable
@@ -44,12 +47,43 @@ def _rigid(metric: str) -> Problem:
     return thin_wall_scene(hole=4.0, metric=metric)
 
 
+def _box(lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """An axis-aligned box as a triangle mesh: (8 vertices, 12 outward triangles)."""
+    x = np.array([[hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2]]
+                  for i in range(8)], dtype=np.float64)
+    faces = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+                      [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]], dtype=np.int64)
+    return x, faces
+
+
+def _mesh(metric: str) -> Problem:
+    """A wall with a square hole across a 10-unit cube, as triangle meshes, and a unit cube for the body."""
+    from planners.worlds.mesh import MeshWorld
+
+    parts = [_box((4.9, 0, 0), (5.1, 10, 3.5)), _box((4.9, 0, 6.5), (5.1, 10, 10)),
+             _box((4.9, 0, 3.5), (5.1, 3.5, 6.5)), _box((4.9, 6.5, 3.5), (5.1, 10, 6.5))]
+    vertices = np.concatenate([v for v, _ in parts])
+    faces = np.concatenate([f + 8 * i for i, (_, f) in enumerate(parts)])
+    world = MeshWorld((vertices, faces), _box((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5)), low=(0, 0, 0),
+                      high=(10, 10, 10), name="compile")
+    return Problem(world, (4.0, 5.0, 5.0, 0.0, 0.0, 0.0), (6.0, 5.0, 5.0, 0.0, 0.0, 0.0), goal_tolerance=0.5,
+                   metric=metric)
+
+
+def mesh_installed() -> bool:
+    """Whether the ``mesh`` extra (trimesh and FCL) is installed, so mesh worlds can be built."""
+    return all(importlib.util.find_spec(m) is not None for m in ("trimesh", "fcl"))
+
+
 #: world kind -> (problem maker, metrics compiled by default)
 WORLDS: dict[str, tuple[Callable[[str], Problem], tuple[str, ...]]] = {
     "grid": (_grid, ("euclidean",)),
     "shapes": (_shapes, ("euclidean",)),
     "rigid": (_rigid, ("cossin", "se3")),
+    "mesh": (_mesh, ("cossin", "se3")),
 }
+#: World kinds that need an extra, by the check that says it is installed and the extra's name.
+NEEDS = {"mesh": (mesh_installed, "mesh")}
 #: Samples per solve: enough to reach a first solution (path extraction compiles then) on these maps.
 ITERATIONS = 400
 
@@ -81,18 +115,29 @@ def main(argv: list[str] | None = None) -> int:
     names = list(planner_names())
     ap = argparse.ArgumentParser(prog="python -m planners.compile", description=__doc__.split("\n")[0])
     ap.add_argument("--planners", nargs="+", default=names, metavar="NAME", help=f"default: all ({', '.join(names)})")
-    ap.add_argument("--worlds", nargs="+", default=list(WORLDS), metavar="KIND",
-                    help=f"default: all ({', '.join(WORLDS)})")
+    ap.add_argument("--worlds", nargs="+", default=None, metavar="KIND",
+                    help=f"default: all whose extras are installed ({', '.join(WORLDS)})")
     ap.add_argument("--metrics", nargs="+", default=None, metavar="METRIC",
                     help="default: each world's own (grid, shapes: euclidean; rigid: cossin, se3)")
     ap.add_argument("--list", action="store_true", help="print what would be compiled and the cache folder, then exit")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar (one line per job instead)")
     args = ap.parse_args(argv)
-    for label, given, allowed in (("--planners", args.planners, names), ("--worlds", args.worlds, list(WORLDS))):
+    for label, given, allowed in (("--planners", args.planners, names), ("--worlds", args.worlds or [], list(WORLDS))):
         bad = [v for v in given if v not in allowed]
         if bad:
             print(f"{label}: unknown value {bad[0]!r}; expected one of {', '.join(allowed)}", file=sys.stderr)
             return 2
+    missing = [w for w in NEEDS if not NEEDS[w][0]()]
+    if args.worlds is None:
+        args.worlds = [w for w in WORLDS if w not in missing]
+        for w in missing:
+            print(f"{w} worlds: not compiled, the {NEEDS[w][1]} extra is not installed "
+                  f"(pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')", file=sys.stderr)
+    elif any(w in missing for w in args.worlds):
+        w = next(w for w in args.worlds if w in missing)
+        print(f"--worlds {w}: needs the {NEEDS[w][1]} extra (pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')",
+              file=sys.stderr)
+        return 2
     todo = jobs(args.planners, args.worlds, args.metrics)
     for p, w, m in todo:  # checked before any compiling starts
         try:

@@ -178,6 +178,24 @@ def test_the_compile_command_lists_its_jobs_and_the_folder():
     assert "compiled kernels are cached in" in out.stderr
 
 
+
+def test_mesh_worlds_compile_where_their_extra_is_installed_and_are_refused_by_name_where_not(monkeypatch, capsys):
+    from planners import compile as pc
+
+    monkeypatch.setattr(pc.cache, "set_compile_notice", lambda on: None)
+    assert pc.main(["--list", "--planners", "RRTConnect"]) == 0
+    jobs = capsys.readouterr().out.split("\n")[:-1]
+    assert ("RRTConnect mesh se3" in jobs) == pc.mesh_installed()  # the test extra brings it: listed
+    problem = pc._mesh("se3")  # a small mesh problem the project makes itself: start and goal free
+    assert problem.world.is_valid(problem.start) and problem.world.is_valid(problem.goal)
+    monkeypatch.setitem(pc.NEEDS, "mesh", (lambda: False, "mesh"))
+    assert pc.main(["--list", "--planners", "RRT"]) == 0
+    out, err = capsys.readouterr()
+    assert "mesh" not in out and "mesh worlds: not compiled, the mesh extra is not installed" in err
+    assert pc.main(["--list", "--worlds", "mesh"]) == 2
+    assert "--worlds mesh: needs the mesh extra" in capsys.readouterr().err
+
+
 _RRTSTAR_AFTER = """
 import sys
 import numpy as np
