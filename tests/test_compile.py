@@ -105,6 +105,7 @@ def test_the_notice_shows_once_per_install(fresh_notice, monkeypatch, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "compiling the RRT kernels for occupancy grids once for this install, about" in err
     assert "other planners, worlds and samplers compile at their own first use" in err
+    assert "docs/compiling.md says where the time goes" in err  # why a first call can take this long
     assert cache.is_compiled("RRT", world, space)
     cache.announce("RRT", world, space)
     monkeypatch.setattr(cache, "_seen", set())  # a new process: the stamp is on disk

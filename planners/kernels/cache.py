@@ -191,8 +191,8 @@ def announce(label: str, world, space) -> None:
     if _notice_on():
         print(f"samplergym: compiling the {label} kernels for {_KINDS.get(type(world).__name__, 'this world')} once "
               f"for this install, {expected_seconds(label, space)}; other planners, worlds and samplers compile "
-              f"at their own first use (python -m planners.compile does every planner ahead; {NOTICE_ENV}=0 "
-              f"silences this)", file=sys.stderr, flush=True)
+              f"at their own first use (python -m planners.compile does every planner ahead; docs/compiling.md "
+              f"says where the time goes; {NOTICE_ENV}=0 silences this)", file=sys.stderr, flush=True)
     try:
         stamp.parent.mkdir(parents=True, exist_ok=True)
         stamp.touch()
