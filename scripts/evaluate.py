@@ -85,8 +85,10 @@ DEFAULT_POLICY = SHIPPED_POLICY
 #: The comparison's protocol at its defaults: every default below is taken from it.
 DEFAULT = E.Protocol()
 #: What --quick changes: ``Protocol.quick`` (fewer test queries and planner seeds, the tuning split
-#: unchanged), and no other planners.
+#: unchanged), and no other planners unless --other-planners names some.
 QUICK = {**PROTOCOL_QUICK, "other_planners": []}
+#: The other planners of the full comparison when --other-planners is not given.
+OTHER_PLANNERS = ["RRTstar", "PRM"]
 
 
 def _fail(message: str):
@@ -133,7 +135,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--scenarios", type=int, default=DEFAULT.scenarios, help="test scenarios per MovingAI map")
     ap.add_argument("--tuning-scenarios", type=int, default=DEFAULT.tuning_scenarios,
                     help="scenarios per MovingAI map for choosing the best goal bias")
-    ap.add_argument("--other-planners", nargs="*", default=["RRTstar", "PRM"], type=_other_planner,
+    ap.add_argument("--other-planners", nargs="*", default=None, type=_other_planner,
                     choices=(*planner_names(), "all"), metavar="PLANNER",
                     help="also run these planners on every test set (all: every planner but RRT; none given: none), "
                          "each with uniform sampling, its classical option (the tuned goal bias for a tree, "
@@ -177,9 +179,14 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="discard the journal of an interrupted run in <out>.partial/ and start over (without it, a "
                          "rerun that finds one is refused)")
     args = ap.parse_args(argv)
+    given_planners = args.other_planners
     if args.quick:
         for k, v in QUICK.items():
             setattr(args, k, v)
+    if given_planners is not None:  # named on the command line: --quick keeps them
+        args.other_planners = given_planners
+    elif not args.quick:
+        args.other_planners = list(OTHER_PLANNERS)
     if args.unseen_maps is None:
         args.unseen_maps = min(args.maps, DEFAULT.unseen_maps) if isinstance(args.maps, int) else 0
     if args.no_unseen:

@@ -493,3 +493,13 @@ def test_the_quick_run_tunes_on_the_full_runs_tuning_scenarios_and_tests_on_the_
     for m in maps:
         full_test = [k for f, k in picks["full"]["test"] if f == m]
         assert [k for f, k in picks["quick"]["test"] if f == m] == full_test[:quick.scenarios]
+
+
+def test_quick_keeps_the_other_planners_named_on_the_command_line():
+    ev = _load_evaluate()
+    assert ev.parse_args(["--quick"]).other_planners == []
+    assert ev.parse_args([]).other_planners == ["RRTstar", "PRM"]
+    assert ev.parse_args(["--quick", "--other-planners", "PRM"]).other_planners == ["PRM"]
+    every = ev.parse_args(["--quick", "--other-planners", "all"]).other_planners
+    assert "RRTConnect" in every and "LazyPRM" in every and "RRT" not in every
+    assert ev.parse_args(["--other-planners"]).other_planners == []  # none given: none
