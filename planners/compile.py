@@ -47,27 +47,11 @@ def _rigid(metric: str) -> Problem:
     return thin_wall_scene(hole=4.0, metric=metric)
 
 
-def _box(lo, hi) -> tuple[np.ndarray, np.ndarray]:
-    """An axis-aligned box as a triangle mesh: (8 vertices, 12 outward triangles)."""
-    x = np.array([[hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2]]
-                  for i in range(8)], dtype=np.float64)
-    faces = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
-                      [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]], dtype=np.int64)
-    return x, faces
-
-
 def _mesh(metric: str) -> Problem:
-    """A wall with a square hole across a 10-unit cube, as triangle meshes, and a unit cube for the body."""
-    from planners.worlds.mesh import MeshWorld
+    """The rigid kind's thin-wall scene written as triangle meshes (a mesh world needs no mesh file)."""
+    from planners.worlds.rigid_scenes import as_mesh_scene
 
-    parts = [_box((4.9, 0, 0), (5.1, 10, 3.5)), _box((4.9, 0, 6.5), (5.1, 10, 10)),
-             _box((4.9, 0, 3.5), (5.1, 3.5, 6.5)), _box((4.9, 6.5, 3.5), (5.1, 10, 6.5))]
-    vertices = np.concatenate([v for v, _ in parts])
-    faces = np.concatenate([f + 8 * i for i, (_, f) in enumerate(parts)])
-    world = MeshWorld((vertices, faces), _box((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5)), low=(0, 0, 0),
-                      high=(10, 10, 10), name="compile")
-    return Problem(world, (4.0, 5.0, 5.0, 0.0, 0.0, 0.0), (6.0, 5.0, 5.0, 0.0, 0.0, 0.0), goal_tolerance=0.5,
-                   metric=metric)
+    return as_mesh_scene(_rigid(metric))
 
 
 def mesh_installed() -> bool:
@@ -133,8 +117,8 @@ def main(argv: list[str] | None = None) -> int:
         for w in missing:
             print(f"{w} worlds: not compiled, the {NEEDS[w][1]} extra is not installed "
                   f"(pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')", file=sys.stderr)
-    elif any(w in missing for w in args.worlds):
-        w = next(w for w in args.worlds if w in missing)
+    elif absent := [w for w in args.worlds if w in missing]:
+        w = absent[0]
         print(f"--worlds {w}: needs the {NEEDS[w][1]} extra (pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')",
               file=sys.stderr)
         return 2
