@@ -11,6 +11,7 @@ import numpy as np
 from planners import OccupancyGrid, Planner, Problem, make_planner
 from planners.base.fileio import InputError, check_int
 from planners.base.registry import planner_class
+from planners.base.samplers import FAMILY_BIDIRECTIONAL
 
 from .actions import ACTION_MODES, make_action_sampler
 from .observation import OBSERVATIONS, make_observation
@@ -50,7 +51,10 @@ class SamplerEnv(gym.Env):
     small for SB3's default CNN); ``observation="egocentric_flat"``: the same with the windows flattened,
     ``local=(1536,) float32`` in [0, 1], which SB3's ``MultiInputPolicy`` feeds to its MLP (the
     family ids' default from ``-v2``). Other worlds (geometric, 6-DoF rigid body): a ``Box`` vector
-    (``VectorObservation``), for SB3's ``MlpPolicy``.
+    (``VectorObservation``), for SB3's ``MlpPolicy``. With a bidirectional planner (``planner="rrtconnect"``)
+    the image observation shows both trees (a fifth channel, the goal tree's) and the vector says whose
+    turn it is and where the goal tree's vertex nearest the start lies (``envs.observation.TWO_TREE_FEATURES``;
+    the rigid body's vector likewise); egocentric observations follow one tree and refuse it.
 
     ## Rewards
     -1 per iteration, so the return is minus the iterations-to-solution; ``reward="checks"`` adds
@@ -92,6 +96,7 @@ class SamplerEnv(gym.Env):
     ## Version History
     * v0: initial version (``point`` actions).
     * v1: ``mixture`` actions (a uniform floor).
+    * v1, ``planner="rrtconnect"``: the goal tree joined the observation (it showed the start tree only).
     * v2 (the generated-family, ``MovingAI`` and ``Files`` ids): ``guided`` actions,
       ``egocentric_flat`` observations, ``shaping=True`` at ``shaping_gamma=0.99``
       (``envs.V2_DEFAULTS``); ``SamplerEnv``'s own defaults, and ``Planning-v1``'s, are version 1's.
@@ -134,6 +139,7 @@ class SamplerEnv(gym.Env):
             raise InputError(f"planner {cls.name} brings its own sampler; the env's agent samples for RRT, RRTConnect, "
                              "RRTstar, PRM or LazyPRM")
         planner = cls.name
+        self.two_trees = cls.family == FAMILY_BIDIRECTIONAL
         if action_mode not in ACTION_MODES:
             raise InputError(f"action_mode must be one of {tuple(ACTION_MODES)}, got {action_mode!r}")
         if observation not in OBSERVATIONS:
@@ -288,7 +294,7 @@ class SamplerEnv(gym.Env):
     def new_observation(self):
         """A fresh observation builder of this env's kind (``envs.observation.make_observation``)."""
         return make_observation(self.observation, self.dim, obs_size=self.obs_size, local_size=self.local_size,
-                                local_scale=self.local_scale)
+                                local_scale=self.local_scale, two_trees=self.two_trees)
 
     def new_guide(self, problem: Problem):
         """The per-query ``GuidedSampling`` that egocentric observations and guided actions share, or None."""

@@ -425,3 +425,62 @@ def test_the_scene_sets_are_an_environment_source_part_by_part_and_a_scene_file_
     assert env.unwrapped.dim == 6 and obs.shape == env.observation_space.shape
     with pytest.raises(InputError, match="source options"):
         gym.make("samplergym:SamplerGym/Planning-v1", map_source="window.scene", source_kwargs={"n_boxes": 3})
+
+
+def test_rrt_connect_observation_shows_both_trees_and_whose_turn():
+    """RRT-Connect's image observation: the goal tree in its own channel, its anchor and the turn in the vector."""
+    from envs.observation import CHANNELS, TWO_TREE_FEATURES, VECTOR_FEATURES
+
+    env = gym.make("SamplerGym/Planning-v1", map_source="maze", planner="rrtconnect", source_kwargs={"size": 64},
+                   max_iterations=400, action_mode="point")
+    space = env.observation_space
+    assert space["image"].shape[0] == len(CHANNELS) + 1 and space["local"].shape[0] == len(CHANNELS) + 1
+    assert space["vector"].shape == (len(VECTOR_FEATURES) + len(TWO_TREE_FEATURES),)
+    obs, _ = env.reset(seed=3)
+    env.action_space.seed(3)
+    turns = set()
+    for _ in range(60):
+        obs, _, term, trunc, _ = env.step(env.action_space.sample())
+        assert obs in space
+        inner = env.unwrapped
+        view = inner.planner.view()
+        turns.add(view.tree)
+        v = obs["vector"]
+        assert v[-1] == (1.0 if view.tree == 1 else -1.0)
+        # the goal tree's anchor is its vertex nearest the start, and the goal channel marks every goal-tree vertex
+        d = np.linalg.norm(view.goal_tree - inner.problem.start, axis=1)
+        near = view.goal_tree[np.argmin(d)]
+        lo, hi = inner.problem.world.bounds
+        assert v[11:13] == pytest.approx(np.clip(2 * (near - lo) / (hi - lo) - 1, -1, 1), abs=1e-6)
+        grid = inner.problem.world
+        side = space["image"].shape[1]
+        px = ((view.goal_tree - lo) / (grid.resolution * max(grid.shape) / side)).astype(int).clip(0, side - 1)
+        assert np.all(obs["image"][4, px[:, 1], px[:, 0]] == 255)
+        if term or trunc:
+            break
+    assert turns == {0, 1}
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    check_env(env.unwrapped, skip_render_check=True)
+    sb3_check_env(env, warn=False)
+    # RRT keeps its four channels and eleven features; egocentric views follow one tree and refuse two
+    rrt = gym.make("SamplerGym/Planning-v1", map_source="maze", source_kwargs={"size": 64})
+    assert rrt.observation_space["image"].shape[0] == len(CHANNELS)
+    with pytest.raises(InputError, match="RRT-Connect"):
+        SamplerEnv("maze", planner="rrtconnect", observation="egocentric", action_mode="guided")
+
+
+def test_rrt_connect_vector_observation_in_6dof():
+    env = gym.make("SamplerGym/RRT-RigidBody-v1", planner="rrtconnect", max_iterations=50)
+    base = gym.make("SamplerGym/RRT-RigidBody-v1", max_iterations=50)
+    f = 3 + 2 * 3
+    assert env.observation_space.shape == (base.observation_space.shape[0] + f + 2,)
+    obs, _ = env.reset(seed=0)
+    env.action_space.seed(0)
+    for _ in range(10):
+        obs, _, term, trunc, _ = env.step(env.action_space.sample())
+        assert obs in env.observation_space
+        assert obs[-1] == (1.0 if env.unwrapped.planner.view().tree == 1 else -1.0)
+        if term or trunc:
+            break
