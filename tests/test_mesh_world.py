@@ -184,6 +184,19 @@ def test_a_motion_through_a_thin_wall_is_rejected():
     assert not w.check_motion(c, d)
 
 
+def test_a_motion_blocked_inside_is_found_by_one_contact_test(hole_world):
+    """Both ends far from the wall, the middle inside it: the probe at the midpoint finds it, no distance walk."""
+    w = hole_world
+    a, b = [2.0, 1.5, 1.5, 0, 0, 0], [8.0, 1.5, 1.5, 0, 0, 0]
+    assert w.pose_free_broad(a, w.delta) and w.pose_free_broad(b, w.delta)  # the grid alone clears both ends
+    before = w.exact_poses
+    assert not w.check_motion(a, b)
+    assert w.exact_poses - before == 1
+    # a motion through the hole has probes in the hole, none in contact: the walk decides as before
+    c, d = [2.0, 5.0, 5.0, 0, 0, 0], [8.0, 5.0, 5.0, 0, 0, 0]
+    assert w.check_motion(c, d) == all(w.pose_free_exact(q, w.delta / 2) for q in states_along(w, c, d)) is True
+
+
 BIASED = {"step_size": 1.0, "sampler": GoalBiasedSampler(0.05)}
 PLANNERS = [("RRT", BIASED), ("RRTConnect", {"step_size": 1.0}), ("RRTstar", BIASED), ("InformedRRTstar", BIASED),
             ("PRM", {}), ("LazyPRM", {}), ("OBPRM", {})]
