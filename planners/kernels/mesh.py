@@ -175,6 +175,18 @@ def _in_bounds(params, q):
     return True
 
 
+def mesh_state_free_py(grid, params, q) -> bool:
+    """``mesh_motion_free(q, q)`` run by the interpreter (the same answer): for Python callers, compiling nothing big.
+
+    The bounds, then the bounding sphere's grid bound (``sphere_free``'s source), else FCL's contact test.
+    """
+    if not _in_bounds.py_func(params, q):
+        return False
+    if sphere_free.py_func(grid, params, q, 0.0):
+        return True
+    return exact_poses_free(params[P_ID], np.ascontiguousarray(q, dtype=np.float64)[None, :], 0.0)
+
+
 #: Where a motion is blocked inside, FCL's collision test at a few of its poses (about a tenth of what its
 #: distance costs) finds it before the walk asks for distances pose by pose: the poses at these fractions
 #: (a bisection to depth 3), on motions at least ``PROBE_MIN_PIECES`` resolution steps long. A pose in
@@ -253,14 +265,15 @@ def mesh_motion_free(grid, cover, params, a, b):
 
 
 @nb.njit(cache=True)
-def _axis_test(v0, v1, v2, axis, half):
-    p0 = v0[0] * axis[0] + v0[1] * axis[1] + v0[2] * axis[2]
-    p1 = v1[0] * axis[0] + v1[1] * axis[1] + v1[2] * axis[2]
-    p2 = v2[0] * axis[0] + v2[1] * axis[1] + v2[2] * axis[2]
+def _separated(ax, ay, az, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz):
+    """True if the axis ``(ax, ay, az)`` separates the triangle (corners relative to the box's centre) from the box."""
+    p0 = x0 * ax + y0 * ay + z0 * az
+    p1 = x1 * ax + y1 * ay + z1 * az
+    p2 = x2 * ax + y2 * ay + z2 * az
     lo = min(p0, min(p1, p2))
     hi = max(p0, max(p1, p2))
-    r = half[0] * abs(axis[0]) + half[1] * abs(axis[1]) + half[2] * abs(axis[2])
-    return not (lo > r or hi < -r)
+    r = hx * abs(ax) + hy * abs(ay) + hz * abs(az)
+    return lo > r or hi < -r
 
 
 @nb.njit(cache=True)
@@ -268,29 +281,42 @@ def triangle_box_overlap(c, half, t0, t1, t2):
     """True if the closed triangle meets the closed box of centre ``c`` and half sides ``half``.
 
     The separating-axis test (the box's three axes, the triangle's normal and the nine edge cross
-    products; T. Akenine-Moeller, "Fast 3D triangle-box overlap testing", 2001). Callers enlarge
-    ``half`` slightly so that rounding can only report an overlap, never miss one.
+    products; T. Akenine-Moeller, "Fast 3D triangle-box overlap testing", 2001), in scalars. Callers
+    enlarge ``half`` slightly so that rounding can only report an overlap, never miss one.
     """
-    v0 = t0 - c
-    v1 = t1 - c
-    v2 = t2 - c
-    for j in range(3):
-        lo = min(v0[j], min(v1[j], v2[j]))
-        hi = max(v0[j], max(v1[j], v2[j]))
-        if lo > half[j] or hi < -half[j]:
-            return False
-    e0 = v1 - v0
-    e1 = v2 - v1
-    e2 = v0 - v2
-    normal = np.cross(e0, e1)
-    if not _axis_test(v0, v1, v2, normal, half):
+    hx, hy, hz = half[0], half[1], half[2]
+    x0, y0, z0 = t0[0] - c[0], t0[1] - c[1], t0[2] - c[2]
+    x1, y1, z1 = t1[0] - c[0], t1[1] - c[1], t1[2] - c[2]
+    x2, y2, z2 = t2[0] - c[0], t2[1] - c[1], t2[2] - c[2]
+    if min(x0, min(x1, x2)) > hx or max(x0, max(x1, x2)) < -hx:
         return False
-    unit = np.eye(3)
-    for e in (e0, e1, e2):
-        for j in range(3):
-            axis = np.cross(unit[j], e)
-            if not _axis_test(v0, v1, v2, axis, half):
-                return False
+    if min(y0, min(y1, y2)) > hy or max(y0, max(y1, y2)) < -hy:
+        return False
+    if min(z0, min(z1, z2)) > hz or max(z0, max(z1, z2)) < -hz:
+        return False
+    # the edges e0 = v1 - v0, e1 = v2 - v1, e2 = v0 - v2 and the normal e0 x e1
+    ex0, ey0, ez0 = x1 - x0, y1 - y0, z1 - z0
+    ex1, ey1, ez1 = x2 - x1, y2 - y1, z2 - z1
+    ex2, ey2, ez2 = x0 - x2, y0 - y2, z0 - z2
+    nx = ey0 * ez1 - ez0 * ey1
+    ny = ez0 * ex1 - ex0 * ez1
+    nz = ex0 * ey1 - ey0 * ex1
+    if _separated(nx, ny, nz, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz):
+        return False
+    # each box axis crossed with each edge: x cross e = (0, -ez, ey), y cross e = (ez, 0, -ex), z cross e = (-ey, ex, 0)
+    for k in range(3):
+        if k == 0:
+            ex, ey, ez = ex0, ey0, ez0
+        elif k == 1:
+            ex, ey, ez = ex1, ey1, ez1
+        else:
+            ex, ey, ez = ex2, ey2, ez2
+        if _separated(0.0, -ez, ey, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz):
+            return False
+        if _separated(ez, 0.0, -ex, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz):
+            return False
+        if _separated(-ey, ex, 0.0, x0, y0, z0, x1, y1, z1, x2, y2, z2, hx, hy, hz):
+            return False
     return True
 
 
