@@ -184,6 +184,37 @@ def test_a_motion_through_a_thin_wall_is_rejected():
     assert not w.check_motion(c, d)
 
 
+def test_clustered_cover_bound_is_the_bound_over_every_point(hole_world):
+    """The clusters skip points, never change the bound: the smallest over every cover point where it clears
+    ``need``, and at or below ``need`` exactly where that smallest is."""
+    from planners.kernels.mesh import P_COVER, P_GRID, clearance_bound
+
+    w = MeshWorld(wall_with_hole(), trimesh.creation.cylinder(radius=0.4, height=2.0, sections=24), low=(0, 0, 0),
+                  high=(10, 10, 10))
+    assert len(w.clusters) > 4
+    params, h = w.kernel.params, w.kernel.params[P_GRID + 3]
+    origin, shape = params[P_GRID:P_GRID + 3], params[P_GRID + 4:P_GRID + 7].astype(int)
+    rng = np.random.default_rng(7)
+    seen = {True: 0, False: 0}
+    for _ in range(1000):
+        q = np.concatenate([rng.uniform([3.0, 0.5, 0.5], [7.0, 9.5, 9.5]), rng.uniform(-PI, PI, 3)])
+        need = float(rng.choice([0.0, w.delta / 2, 0.3]))
+        got = clearance_bound(w.grid, w.cover, w.clusters, params, q, need)
+        i, j, k = np.floor((q[:3] - origin) / h).astype(int)
+        sphere = (w.grid[i, j * shape[2] + k] - 1.0) * h - w.radius
+        if sphere > need:
+            assert got == sphere
+            continue
+        pts = w.cover @ np.asarray(rotation_matrix(q[3], q[4], q[5])).T + q[:3]
+        ii, jj, kk = np.floor((pts - origin) / h).astype(int).T
+        lowest = float(((w.grid[ii, jj * shape[2] + kk] - 1.0) * h - params[P_COVER]).min())
+        assert (got > need) == (max(sphere, lowest) > need)
+        if got > need:
+            assert got == max(sphere, lowest)
+        seen[got > need] += 1
+    assert seen[True] > 20 and seen[False] > 20
+
+
 def test_a_motion_blocked_inside_is_found_by_one_contact_test(hole_world):
     """Both ends far from the wall, the middle inside it: the probe at the midpoint finds it, no distance walk."""
     w = hole_world

@@ -17,7 +17,8 @@ an unknown code raises.
   scene of many boxes by the spatial index's grid, whose cell lists ``grid`` holds (int64; see
   ``planners.kernels.rigid``).
 * ``WORLD_MESH``: a triangle-mesh body among a triangle-mesh environment; ``grid`` the broad phase's
-  distance grid, ``body`` the body's cover points, ``params`` as ``planners.kernels.mesh`` lists them;
+  distance grid, ``body`` the body's cover points, ``geom`` their clusters (``cover_clusters``),
+  ``params`` as ``planners.kernels.mesh`` lists them;
   the exact check runs in FCL, reached from compiled code in object mode.
 
 Obstacles are closed sets and the free space is open: a motion is valid only if it meets no point of
@@ -192,7 +193,7 @@ def _rigid_motion_free(world, a, b):
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _mesh_motion_free(world, a, b):
     kind, grid, geom, body, params = world
-    return mesh_motion_free(grid, body, params, a, b)
+    return mesh_motion_free(grid, body, geom, params, a, b)
 
 
 def _any_motion_free(world, a, b):

@@ -127,11 +127,34 @@ def broad_phase_free(grid, cover, params, q, margin):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def clearance_bound(grid, cover, params, q, need):
+def _cluster_floor(grid, clusters, params, R, q, c):
+    """A lower bound, in voxel values, on ``grid`` at every cover point of cluster ``c``; -1 where unknown.
+
+    The cluster's points lie within its radius of its centre, so their voxels lie within ``slack`` voxels of
+    the centre's (Chebyshev index distance), and the grid's values change by at most 1 per voxel.
+    """
+    i, jk = _cover_voxel(params, R, clusters, c, q)
+    if i < 0:
+        return -1.0
+    slack = clusters[c, 3]
+    nx, ny, nz = params[P_GRID + 4], params[P_GRID + 5], params[P_GRID + 6]
+    j = jk // int(nz)
+    k = jk - j * int(nz)
+    if i < slack or j < slack or k < slack or i + slack >= nx or j + slack >= ny or k + slack >= nz:
+        return -1.0  # near the grid's edge: a point may lie outside it
+    return grid[i, jk] - slack
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def clearance_bound(grid, cover, clusters, params, q, need):
     """A lower bound on the distance from the body at ``q`` to the environment, from the grid alone.
 
     The sphere's bound first; where it is not above ``need``, the cover points' (stopping as soon as
     one shows the bound cannot exceed ``need``). A result at or below ``need`` says nothing.
+
+    The cover points come in clusters (``cover_clusters``): the cluster with the lowest floor is read
+    first, then each other cluster only where its floor could undercut the lowest point found so far,
+    which gives the smallest bound over all points, exactly as reading every point would.
     """
     h = params[P_GRID + 3]
     i, jk = _voxel(params, q[0], q[1], q[2])
@@ -140,24 +163,60 @@ def clearance_bound(grid, cover, params, q, need):
     bound = (grid[i, jk] - 1.0) * h - params[7]
     if bound > need:
         return bound
-    lowest = np.inf
     R = rotation_matrix(q[3], q[4], q[5])
-    for p in range(cover.shape[0]):
-        i, jk = _cover_voxel(params, R, cover, p, q)
-        if i < 0:
-            return bound
-        d = (grid[i, jk] - 1.0) * h - params[P_COVER]
-        if d < lowest:
-            lowest = d
-            if lowest <= need:
-                return max(bound, lowest)
+    first = 0
+    low = np.inf
+    for c in range(clusters.shape[0]):
+        f = _cluster_floor(grid, clusters, params, R, q, c)
+        if f < low:
+            low = f
+            first = c
+    lowest = np.inf
+    for n in range(clusters.shape[0] + 1):
+        c = first if n == 0 else n - 1
+        if n > 0 and (c == first or (_cluster_floor(grid, clusters, params, R, q, c) - 1.0) * h - params[P_COVER]
+                      >= lowest):
+            continue
+        for p in range(int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < clusters.shape[0] else cover.shape[0]):
+            i, jk = _cover_voxel(params, R, cover, p, q)
+            if i < 0:
+                return bound
+            d = (grid[i, jk] - 1.0) * h - params[P_COVER]
+            if d < lowest:
+                lowest = d
+                if lowest <= need:
+                    return max(bound, lowest)
     return max(bound, lowest)
 
 
+def cover_clusters(cover: np.ndarray, h: float, side: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """The cover points ordered by cluster, and the clusters as rows ``(x, y, z, slack, first point)``.
+
+    A cluster holds the points of one cube of ``side`` voxels in the body's frame; its centre is their mean,
+    its slack the voxels (Chebyshev index distance) a point's voxel can lie from the centre's: one more
+    than its radius over the voxel side, rounded up.
+    """
+    key = np.floor(cover / (side * h)).astype(np.int64)
+    _, label = np.unique(key, axis=0, return_inverse=True)
+    label = label.reshape(-1)
+    order = np.argsort(label, kind="stable")
+    points = np.ascontiguousarray(cover[order])
+    label = label[order]
+    starts = np.flatnonzero(np.r_[True, label[1:] != label[:-1]])
+    rows = np.empty((len(starts), 5))
+    for r, (a, b) in enumerate(zip(starts, np.r_[starts[1:], len(points)], strict=True)):
+        centre = points[a:b].mean(axis=0)
+        radius = float(np.sqrt(((points[a:b] - centre) ** 2).sum(axis=1)).max())
+        rows[r, :3] = centre
+        rows[r, 3] = math.ceil(radius / h + 1e-6) + 1
+        rows[r, 4] = a
+    return points, rows
+
+
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _pose_clearance(grid, cover, params, q, need):
+def _pose_clearance(grid, cover, clusters, params, q, need):
     """The grid's bound where it exceeds ``need``, else the exact distance (FCL, -1 where they meet)."""
-    c = clearance_bound(grid, cover, params, q, need)
+    c = clearance_bound(grid, cover, clusters, params, q, need)
     if c > need:
         return c
     ident = params[P_ID]
@@ -196,7 +255,7 @@ PROBE_MIN_PIECES = 8
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _probes_free(grid, cover, params, a, b):
+def _probes_free(grid, cover, clusters, params, a, b):
     """False if one of the motion's probe poses (``PROBE_FRACTIONS``) puts the body in contact (FCL's test).
 
     Poses the grid proves free are not sent; the rest go to the exact check in one call, which stops at
@@ -207,7 +266,7 @@ def _probes_free(grid, cover, params, a, b):
     m = 0
     for f in PROBE_FRACTIONS:
         interpolate(SPACE_RIGID, a, b, f, q)
-        if not clearance_bound(grid, cover, params, q, 0.0) > 0.0:
+        if not clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0:
             poses[m] = q
             m += 1
     if m == 0:
@@ -221,7 +280,7 @@ def _probes_free(grid, cover, params, a, b):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def mesh_motion_free(grid, cover, params, a, b):
+def mesh_motion_free(grid, cover, clusters, params, a, b):
     """True if the motion a -> b keeps the body clear of the environment (see the module docs).
 
     The origin must stay within the bounds (checked at both ends: the bounds are a box and translation
@@ -246,15 +305,15 @@ def mesh_motion_free(grid, cover, params, a, b):
     # the far end first (a blocked extension is usually blocked there), then from the start, each step as
     # long as the clearance just measured allows: no body point travels farther than the step, so the
     # poses between two checked ones keep a clearance above 0 (see the module docs)
-    if not _pose_clearance(grid, cover, params, b, margin) > margin:
+    if not _pose_clearance(grid, cover, clusters, params, b, margin) > margin:
         return False
-    if n >= PROBE_MIN_PIECES and not _probes_free(grid, cover, params, a, b):
+    if n >= PROBE_MIN_PIECES and not _probes_free(grid, cover, clusters, params, a, b):
         return False
     q = np.empty(6)
     s = 0.0
     while s < length:
         interpolate(SPACE_RIGID, a, b, s / length, q)
-        c = _pose_clearance(grid, cover, params, q, margin)
+        c = _pose_clearance(grid, cover, clusters, params, q, margin)
         if not c > margin:
             return False
         s += c if c > delta else delta

@@ -287,7 +287,8 @@ class MeshWorld(WorldBase):
         high: Opposite corner (``volume.max``).
         delta: Motion resolution (> 0): every checked pose keeps the body more than ``delta / 2``
             from the environment, and the poses checked from the start on lie a travel of at least
-            ``delta`` apart (more where the clearance allows). Default ``DEFAULT_DELTA_FRACTION`` of the bounds' diagonal.
+            ``delta`` apart (more where the clearance allows). Default ``DEFAULT_DELTA_FRACTION`` of the
+            bounds' diagonal.
         rot_weight: Weight of the rotation angle in the ``"se3"`` metric; default the body radius.
         grid_cells: Voxels along the longest side of the broad phase's grid (8 to 512).
         name: A label for ``repr``.
@@ -325,15 +326,15 @@ class MeshWorld(WorldBase):
         shape = np.maximum(1, np.ceil((hi - lo + 2 * pad) / side).astype(np.int64))
         self.grid = mesh_kernels.chebyshev_grid(self.env_vertices, self.env_faces.astype(np.int64), origin,
                                                 side, int(shape[0]), int(shape[1]), int(shape[2]))
-        self.cover = np.ascontiguousarray(cover_points(self.body_vertices, self.body_faces, side))
+        self.cover, self.clusters = mesh_kernels.cover_clusters(cover_points(self.body_vertices, self.body_faces, side),
+                                                                side)
         params = np.zeros(mesh_kernels.N_PARAMS)
         params[:6] = np.concatenate([lo, hi])
         params[6], params[7], params[mesh_kernels.P_ID] = self.delta, self.radius, ident
         params[mesh_kernels.P_GRID:mesh_kernels.P_GRID + 4] = [*origin, side]
         params[mesh_kernels.P_GRID + 4:mesh_kernels.P_GRID + 7] = shape
         params[mesh_kernels.P_COVER] = side
-        _, geom, _ = geometry.placeholder_arrays()
-        self._kernel = geometry.world_kernel(geometry.WORLD_MESH, self.grid, geom, self.cover, params)
+        self._kernel = geometry.world_kernel(geometry.WORLD_MESH, self.grid, self.clusters, self.cover, params)
         self._low = np.concatenate([lo, [-math.pi] * 3])
         self._high = np.concatenate([hi, [math.pi] * 3])
         self._low.flags.writeable = False
