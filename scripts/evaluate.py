@@ -8,7 +8,7 @@
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
     python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
     python scripts/evaluate.py --route mine=runs/route/route.pt                    # your encoder beside the shipped one
-    python scripts/evaluate.py --quick --other-planners all                        # every planner, every sampler
+    python scripts/evaluate.py --quick --other-planners all                        # every planner and sampler: 40 min
     python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments
 
 A thin command line over ``learning.evaluation.compare`` (one call a notebook makes as well: see
@@ -140,7 +140,8 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="also run these planners on every test set (all: every planner but RRT; none given: none), "
                          "each with uniform sampling, its classical option (the tuned goal bias for a tree, "
                          "obstacle-based sampling for a roadmap), the policy, the route encoder, its ablation and the "
-                         f"exact reference; choose from {', '.join(planner_names())}")
+                         "exact reference (OB-PRM: its own obstacle-based sampling only); choose from "
+                         f"{', '.join(planner_names())}")
     ap.add_argument("--step", type=float, default=DEFAULT.step)
     ap.add_argument("--tolerance", type=float, default=DEFAULT.tolerance)
     ap.add_argument("--max-iterations", type=int, default=DEFAULT.max_iterations)

@@ -125,7 +125,7 @@ def test_other_planners_run_every_registry_sampler_beside_their_classical_option
     out = tmp_path / "out"
     rc = load_script("evaluate").main([
         "--families", "forest", "--size", "64", "--maps", "1", "--tuning-maps", "1", "--seeds", "1",
-        "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "PRM", "RRTConnect",
+        "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "PRM", "RRTConnect", "OBPRM",
         "--route", f"mine={SHIPPED}", "--max-iterations", "1500", "--processes", "1", "--out", str(out)])
     assert rc == 0
     rows = list(csv.DictReader((out / "runs.csv").open()))
@@ -136,6 +136,8 @@ def test_other_planners_run_every_registry_sampler_beside_their_classical_option
         if classical:
             assert (planner, classical) in got
     assert any(p == "RRTConnect" and s.startswith("goal_bias=") for p, s in got) or ("RRTConnect", "uniform") in got
+    # OB-PRM handed another sampler is PRM with it: it runs with its own obstacle-based sampling only
+    assert {(p, s) for p, s in got if p == "OBPRM"} == {("OBPRM", E.OBSTACLE_BASED)}
     assert {r["split"] for r in rows if r["planner"] == "RRTConnect"} == {"tuning", "test"}
     summary = (out / "summary.md").read_text()
     assert "Your encoder mine" in summary and "With PRM" in summary and "| mine |" in summary
@@ -190,3 +192,19 @@ def test_evaluate_runs_the_6dof_scene_sets_as_a_part_and_checks_its_flags_first(
     rows = list(csv.DictReader((out / "runs.csv").open()))
     assert len(rows) == 5 and {r["planner"] for r in rows} == {"RRTConnect"}  # one scene of each training family
     assert "6-DoF scenes (validation)" in (out / "details.md").read_text()
+
+
+def test_which_planner_names_the_fewest_iterations_and_the_fastest_per_group_over_every_planner():
+    res = _results({"uniform": (900, 1000), "goal_bias=0.05": (800, 900), E.ROUTE: (50, 60),
+                    E.ROUTE_ABLATION: (150, 200), E.EXACT_ROUTE: (10, 10)},
+                   planners={("PRM", "uniform"): 300, ("PRM", E.ROUTE): 40, ("RRTConnect", "uniform"): 70})
+    rows = {r["group"]: r for r in report.which_planner(res)}
+    assert set(rows) == {"generated", "shifted"}
+    # the exact reference (10) is privileged, not a competitor; PRM's 40 samples are the fewest on generated
+    assert rows["generated"]["fewest iterations (roadmaps: samples)"].startswith(f"PRM + {E.ROUTE}: 40 (")
+    assert rows["generated"]["fewest iterations (roadmaps: samples)"].endswith("all solved")
+    # the planners' runs here take 1 ms each, RRT's a tenth of their iterations in ms: RRT's route encoder at 5 ms
+    assert rows["generated"]["fastest to a path"].startswith("PRM + ")
+    assert rows["shifted"]["fewest iterations (roadmaps: samples)"].startswith(f"RRT + {E.ROUTE}: 60 (")
+    assert "## Which planner and sampler" in report.summary_markdown(res)
+    assert report.which_planner(_results({"uniform": (900, 1000), E.ROUTE: (50, 60)})) == []

@@ -21,7 +21,8 @@ sampler that needs no tuned setting (RRT); (2) the policy at its tuned batch and
 planner on the tuning split, then (5) every other planner on every test set with uniform sampling, its
 classical option (the goal bias tuned for the set for a tree; OB-PRM's obstacle-based sampling for a
 roadmap), the policy, each route encoder, its ablation, the exact reference and users' samplers, as the
-registry builds them (``make_sampler`` names handed to the planner as they are); (6) each :class:`Part`.
+registry builds them (``make_sampler`` names handed to the planner as they are), except OB-PRM, which runs
+with its own obstacle-based sampling only (handed another sampler it is PRM with it); (6) each :class:`Part`.
 
 A **part** plugs a comparison of another kind into the same call, journal and output set (the 6-DoF
 scene sets, ``learning.evaluation.rigid.RigidPart``): any object with ``name``, ``protocol`` (how its runs are
@@ -246,6 +247,11 @@ class Comparison:
                     continue
                 classical = (SamplerSpec.of("obstacle_based") if is_roadmap(planner)
                              else bias_spec(tuned.get((q.map_set, planner), TUNING_BIASES[2])))
+                if is_roadmap(planner) and planner_class(planner).own_sampler:
+                    # OB-PRM is PRM with obstacle-based sampling: handed another sampler it is PRM with that
+                    # sampler, whose rows PRM's runs are; it runs with its own sampling only
+                    tasks.append(Task(q, planner, classical, 0))
+                    continue
                 for spec in (SamplerSpec.of("uniform"), classical, *learned):
                     tasks.append(Task(q, planner, spec, 0))
                 tasks.append(Task(q, planner, policy_spec(self.policy, batch), 0, "policy"))

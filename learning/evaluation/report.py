@@ -213,6 +213,42 @@ def other_planner_rows(results, by_group: bool = True) -> list[dict]:
     return rows
 
 
+def which_planner(results) -> list[dict]:
+    """Per group of sets, over every planner that ran: the fewest median iterations, and the fastest to a path.
+
+    The fastest by median time per query, the sampler's own work included. Each planner's test runs by group
+    and sampler (its set's tuned goal bias as "best goal bias", the privileged references left out).
+    Iterations do not compare across planner kinds (a roadmap's are samples); each cell gives the other
+    measure and the success rate beside. Empty unless a planner besides RRT ran.
+    """
+    planners = list(dict.fromkeys(r.planner for r in results.runs if r.split == "test"))
+    if len(planners) < 2:
+        return []
+    cells: dict = {}
+    for planner in planners:
+        for (g, label), rs in _test_runs_any(results, planner).items():
+            if label not in PRIVILEGED:
+                cells.setdefault(g, {})[(planner, label)] = rs
+    rows = []
+    for g in _groups({(g, None) for g in cells}):
+        mine = cells[g]
+        its = {k: _median(rs) for k, rs in mine.items()}
+        ms = {k: _median(rs, "time") for k, rs in mine.items()}
+        fewest = min(mine, key=lambda k: (its[k], ms[k]))
+        fastest = min(mine, key=lambda k: (ms[k], its[k]))
+
+        def solved(k, mine=mine):
+            share = float(np.mean([r.solved for r in mine[k]]))
+            return "all solved" if share == 1.0 else f"{share:.0%} solved"
+
+        rows.append({"group": g + (" †" if g == "MovingAI" else ""),
+                     "fewest iterations (roadmaps: samples)": f"{fewest[0]} + {fewest[1]}: {its[fewest]:.0f} "
+                                                              f"({_ms(ms[fewest])}), {solved(fewest)}",
+                     "fastest to a path": f"{fastest[0]} + {fastest[1]}: {_ms(ms[fastest])} ({its[fastest]:.0f}), "
+                                          f"{solved(fastest)}"})
+    return rows
+
+
 def _test_runs_any(results, planner: str) -> dict[tuple[str, str], list[Run]]:
     """Test runs of ``planner`` by (group, label): each set's tuned goal bias as "best goal bias", others by name."""
     out: dict = {}
@@ -293,9 +329,20 @@ def summary_markdown(results) -> str:
             "and the exact route reference are privileged references, not competitors.\n\n"
             + markdown_table(glance))
             + ("\n† Needs the MovingAI maps.\n" if any(g.startswith("MovingAI") for g in groups) else "")
+            + _which_planner_section(results)
             + "\n## Findings\n\n" + "".join(f"- {line}\n" for line in findings(results))
             + f"\nEvery table (per map set, ratios, the room, the targets, every cell, the other planners): "
             f"[{DETAILS}]({DETAILS}). Figures: medians.png, ecdf.png, ecdf-time.png.\n")
+
+
+def _which_planner_section(results) -> str:
+    rows = which_planner(results)
+    if not rows:
+        return ""
+    return ("\n## Which planner and sampler\n\nPer group, among every planner compared (the privileged references "
+            "left out): the fewest median iterations over its test runs (a roadmap's are samples, so they do not "
+            "compare with a tree's: the time beside does), and the lowest median time to a path, the sampler's own "
+            "work included.\n\n" + markdown_table(rows))
 
 
 def _clock_note(results) -> str:
