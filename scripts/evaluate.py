@@ -8,7 +8,7 @@
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
     python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
     python scripts/evaluate.py --route mine=runs/route/route.pt                    # your encoder beside the shipped one
-    python scripts/evaluate.py --quick --other-planners all                        # every planner and sampler: 40 min
+    python scripts/evaluate.py --quick --other-planners all                        # every planner and sampler: 32 min
     python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments
 
 A thin command line over ``learning.evaluation.compare`` (one call a notebook makes as well: see
