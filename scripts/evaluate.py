@@ -56,8 +56,7 @@ from learning.evaluation.journal import (
     work_folder,
 )
 from learning.evaluation.mapsets import map_set_queries
-from learning.evaluation.protocol import MOVINGAI_MAPS
-from learning.evaluation.protocol import QUICK as PROTOCOL_QUICK
+from learning.evaluation.protocol import MOVINGAI_MAPS, QUICK
 from learning.evaluation.rigid import PLANNERS as RIGID_PLANNERS
 from learning.evaluation.rigid import SAMPLERS as RIGID_SAMPLERS
 from learning.evaluation.rigid import RigidPart
@@ -84,9 +83,6 @@ from planners.worlds.rigid_scenes import RigidSceneSet
 DEFAULT_POLICY = SHIPPED_POLICY
 #: The comparison's protocol at its defaults: every default below is taken from it.
 DEFAULT = E.Protocol()
-#: What --quick changes: ``Protocol.quick`` (fewer test queries and planner seeds, the tuning split
-#: unchanged), and no other planners unless --other-planners names some.
-QUICK = {**PROTOCOL_QUICK, "other_planners": []}
 #: The other planners of the full comparison when --other-planners is not given.
 OTHER_PLANNERS = ["RRTstar", "PRM"]
 
@@ -180,14 +176,11 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="discard the journal of an interrupted run in <out>.partial/ and start over (without it, a "
                          "rerun that finds one is refused)")
     args = ap.parse_args(argv)
-    given_planners = args.other_planners
-    if args.quick:
+    if args.quick:  # Protocol.quick's fewer test queries and seeds (the tuning split unchanged)
         for k, v in QUICK.items():
             setattr(args, k, v)
-    if given_planners is not None:  # named on the command line: --quick keeps them
-        args.other_planners = given_planners
-    elif not args.quick:
-        args.other_planners = list(OTHER_PLANNERS)
+    if args.other_planners is None:  # not on the command line: the full run's, none with --quick
+        args.other_planners = [] if args.quick else list(OTHER_PLANNERS)
     if args.unseen_maps is None:
         args.unseen_maps = min(args.maps, DEFAULT.unseen_maps) if isinstance(args.maps, int) else 0
     if args.no_unseen:

@@ -164,18 +164,16 @@ def clearance_bound(grid, cover, clusters, params, q, need):
     if bound > need:
         return bound
     R = rotation_matrix(q[3], q[4], q[5])
+    floors = np.empty(clusters.shape[0])
     first = 0
-    low = np.inf
     for c in range(clusters.shape[0]):
-        f = _cluster_floor(grid, clusters, params, R, q, c)
-        if f < low:
-            low = f
+        floors[c] = _cluster_floor(grid, clusters, params, R, q, c)
+        if floors[c] < floors[first]:
             first = c
     lowest = np.inf
     for n in range(clusters.shape[0] + 1):
         c = first if n == 0 else n - 1
-        if n > 0 and (c == first or (_cluster_floor(grid, clusters, params, R, q, c) - 1.0) * h - params[P_COVER]
-                      >= lowest):
+        if n > 0 and (c == first or (floors[c] - 1.0) * h - params[P_COVER] >= lowest):
             continue
         for p in range(int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < clusters.shape[0] else cover.shape[0]):
             i, jk = _cover_voxel(params, R, cover, p, q)
@@ -271,7 +269,7 @@ def _probes_free(grid, cover, clusters, params, a, b):
             m += 1
     if m == 0:
         return True
-    undecided = poses[:m].copy()
+    undecided = poses[:m]
     ident = params[P_ID]
     ok = False
     with nb.objmode(ok="boolean"):
