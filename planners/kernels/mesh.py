@@ -4,11 +4,13 @@ State ``q = (x, y, z, tx, ty, tz)`` as for ``planners.kernels.rigid``: a body ve
 ``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``. Along a motion no body point travels more than
 ``s`` when the motion's parameter advances by ``s / L``, ``L`` the travel bound of ``motion_pieces``
 (``|dt| + r (|dtx| + |dty| + |dtz|)``). Every checked pose must keep the body more than ``delta / 2``
-from the environment, and the next pose checked lies a travel of ``max(delta, c)`` further on, ``c``
-the clearance just certified (conservative advancement). Two consecutive checked poses with
-clearances ``c1, c2 > delta / 2`` are at most ``max(delta, c1) < c1 + c2`` apart, so every pose
-between them keeps a clearance above 0 and no obstacle, however thin, is stepped over. The far end
-is checked first, so the last step is covered the same way.
+from the environment, and a pose at travel ``s`` with clearance ``c`` covers the stretch ``(s - c, s + c)``:
+no pose there brings the body into contact (conservative advancement, both ways). The far end is checked
+first and covers the end of the motion; the walk then covers it from the start, placing each next pose
+``c`` (the clearance just certified, ``WALK_GUESS``) beyond the covered stretch and at least ``delta``
+on, and where that pose's own clearance leaves a gap, checking next the pose that the one-sided rule
+places (``max(delta, c)`` after the last): two poses with clearances above ``delta / 2`` that far apart
+cover everything between them, so no obstacle, however thin, is stepped over.
 
 Each pose's clearance comes first from a broad phase that can only certify: a Chebyshev distance grid
 of the environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance
@@ -20,7 +22,8 @@ FCL's collision test costs about what the cover points do. Where the bound does 
 numba's object mode: that check is registered here under an integer id that the world's ``params``
 carry. Before the walk asks for distances pose by pose, FCL's collision test (about a tenth of a distance
 query) at a few interior poses (``PROBE_FRACTIONS``) finds most blocked motions; a pose in contact would
-make the walk fail as well, so the verdicts, and every run, are the same.
+make the walk fail as well. The far end, often in contact, gets the collision test before its distance;
+the walk's poses, rarely in contact, ask the distance alone (0 or less where the meshes meet).
 
 ``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, checker id, gx, gy, gz,
 h, nx, ny, nz, cover]``: the bounds of the body's origin, the motion resolution, the body's radius
@@ -70,12 +73,15 @@ def exact_poses_free(ident, poses, margin) -> bool:
     return bool(check.poses_free(poses, float(margin)))
 
 
-def exact_clearance(ident, q) -> float:
-    """The exact distance from the body at pose ``q`` to the environment, -1 where they meet (object mode)."""
+def exact_clearance(ident, q, contact_first=True) -> float:
+    """The exact distance from the body at pose ``q`` to the environment, 0 or less where they meet (object mode).
+
+    ``contact_first``: ask FCL's contact test before the distance (cheaper where contact is likely).
+    """
     check = _CHECKS.get(int(ident))
     if check is None:
         raise RuntimeError(f"no exact mesh check is registered under id {int(ident)} (its world was deleted)")
-    return float(check.pose_clearance(q))
+    return float(check.pose_clearance(q, bool(contact_first)))
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -212,15 +218,19 @@ def cover_clusters(cover: np.ndarray, h: float, side: int = 4) -> tuple[np.ndarr
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _pose_clearance(grid, cover, clusters, params, q, need):
-    """The grid's bound where it exceeds ``need``, else the exact distance (FCL, -1 where they meet)."""
+def _pose_clearance(grid, cover, clusters, params, q, need, contact_first):
+    """The grid's bound where it exceeds ``need``, else the exact distance (FCL, -1 where they meet).
+
+    ``contact_first``: FCL's contact test (a tenth of a distance query) before the distance, for a pose
+    that is likely in contact; without it a distance of 0 or less says contact.
+    """
     c = clearance_bound(grid, cover, clusters, params, q, need)
     if c > need:
         return c
     ident = params[P_ID]
     pose = q.copy()
     with nb.objmode(c="float64"):
-        c = exact_clearance(ident, pose)
+        c = exact_clearance(ident, pose, contact_first)
     return c
 
 
@@ -250,6 +260,11 @@ def mesh_state_free_py(grid, params, q) -> bool:
 #: contact makes the walk fail too, so the verdict is the same; a free motion pays up to 7 collision tests.
 PROBE_FRACTIONS = np.array([0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875])
 PROBE_MIN_PIECES = 8
+
+#: The walk places its next pose this many times the last clearance beyond the stretch already covered
+#: (two-sided conservative advancement: the pose covers as much behind it as ahead of it when its
+#: clearance is at least that).
+WALK_GUESS = 1.0
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -300,22 +315,44 @@ def mesh_motion_free(grid, cover, clusters, params, a, b):
         return ok
     delta = params[6]
     margin = 0.5 * delta
-    # the far end first (a blocked extension is usually blocked there), then from the start, each step as
-    # long as the clearance just measured allows: no body point travels farther than the step, so the
-    # poses between two checked ones keep a clearance above 0 (see the module docs)
-    if not _pose_clearance(grid, cover, clusters, params, b, margin) > margin:
+    # the far end first (a blocked extension is usually blocked there): its clearance covers the travel
+    # (length - cb, length]; then the interior probes; then the walk from the start (see the module docs)
+    cb = _pose_clearance(grid, cover, clusters, params, b, margin, True)
+    if not cb > margin:
         return False
     if n >= PROBE_MIN_PIECES and not _probes_free(grid, cover, clusters, params, a, b):
         return False
-    q = np.empty(6)
+    end = length - cb  # (end, length] is covered
+    covered = -1.0  # [0, covered) is covered; nothing yet
+    island_lo = island_hi = -1.0  # a stretch covered by a pose whose guess left a gap
+    last = 0.0  # the travel of the last pose that extended the covered stretch
     s = 0.0
-    while s < length:
+    q = np.empty(6)
+    while True:
         interpolate(SPACE_RIGID, a, b, s / length, q)
-        c = _pose_clearance(grid, cover, clusters, params, q, margin)
+        c = _pose_clearance(grid, cover, clusters, params, q, margin, False)
         if not c > margin:
             return False
-        s += c if c > delta else delta
-    return True
+        if covered < 0.0 or s - c < covered:
+            covered = s + c
+            last = s
+            if island_lo >= 0.0 and island_lo < covered:
+                covered = max(covered, island_hi)
+            if covered > end:
+                return True
+            # guess that the next pose's clearance is about this one's: place it that far beyond the
+            # covered stretch, at least ``delta`` on, and no farther than halfway to the covered end
+            s = max(last + delta, min(covered + WALK_GUESS * c, 0.5 * (covered + end)))
+        else:
+            # the guess left a gap: keep what this pose covers and place the next as the one-sided rule does
+            if s + c > end:
+                end = s - c
+            else:
+                island_lo, island_hi = s - c, s + c
+            s = max(covered, last + delta)
+        if s >= end:
+            # less than delta / 2 is left between the covered stretches: a pose halfway closes it
+            s = 0.5 * (covered + end)
 
 
 # --- building the broad phase --------------------------------------------------------------------------

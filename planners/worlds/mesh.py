@@ -242,8 +242,12 @@ class _FCLCheck:
             return True
         return fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()) > margin
 
-    def pose_clearance(self, q: np.ndarray) -> float:
-        """Distance from the body at pose ``q`` to the environment; -1 where they meet or past the deadline."""
+    def pose_clearance(self, q: np.ndarray, contact_first: bool = True) -> float:
+        """Distance from the body at pose ``q`` to the environment; 0 or less where they meet, -1 past the deadline.
+
+        ``contact_first``: FCL's contact test (about a tenth of a distance query) first, answering -1 for a
+        pose in contact; without it FCL's distance alone, which is 0 or less for meshes that meet.
+        """
         at = self.deadline.at
         if at is not None and self.deadline.clock() > at:
             self.cut += 1
@@ -251,7 +255,7 @@ class _FCLCheck:
         fcl = self._fcl
         self.poses += 1
         self.body.setTransform(fcl.Transform(np.asarray(_rotation_matrix(q[3], q[4], q[5])), q[:3].copy()))
-        if fcl.collide(self.body, self.env, self.collide_request, fcl.CollisionResult()):
+        if contact_first and fcl.collide(self.body, self.env, self.collide_request, fcl.CollisionResult()):
             return -1.0
         return float(fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()))
 
