@@ -3,16 +3,19 @@
     python scripts/benchmark_planners.py                 # full run (~8 min on 2 cores), OMPL if installed
     python scripts/benchmark_planners.py --quick         # smoke-sized run
     python scripts/benchmark_planners.py --no-ompl
-    python scripts/benchmark_planners.py --rigid DIR     # RRT-Connect on OMPL.app's .cfg problems instead
+    python scripts/benchmark_planners.py --rigid DIR --rigid-ompl   # OMPL.app's .cfg problems instead, with OMPL
 
 Prints Markdown tables and writes them, with the raw runs as CSV, under --out; also one OMPL
 benchmark log per map (ompl/<map>.log) that OMPL's ompl_benchmark_statistics.py and Planner Arena open.
 
 With ``--rigid DIR`` (OMPL.app's root or its ``resources/3D`` folder; needs the ``mesh`` extra) it runs
-instead our RRT-Connect on every ``.cfg`` problem there, with the problem's own time limit and run count
-(``--rigid-time-limit`` and ``--rigid-runs`` cap them), and prints and writes (``rigid.md``) the
-success rate, median time, tree states and collision checks; ``--rigid-ompl`` adds OMPL's RRT-Connect
-(``planners.tools.ompl_bridge.ompl_rigid_connect``: OMPL.app's set-up, our state check).
+instead our RRT-Connect and goal-biased RRT on every ``.cfg`` problem there, with the problem's own time
+limit and run count (``--rigid-time-limit`` and ``--rigid-runs`` cap them, ``--rigid-problems`` and
+``--rigid-planners`` choose), and prints and writes (``rigid.md``) the success rate, median time, tree
+states, collision checks and time per iteration; ``--rigid-ompl`` adds OMPL's RRT-Connect and RRT
+(``planners.tools.ompl_bridge.ompl_rigid``: OMPL.app's set-up, our state check) and the ratio of the
+median times. Every run goes to ``rigid_runs.csv`` and to one OMPL benchmark log per problem
+(``ompl/<problem>.log``).
 """
 
 from __future__ import annotations
@@ -168,60 +171,112 @@ def write_ompl_logs(records: list[benchmark.Run], args, out_dir: Path) -> list[P
     return paths
 
 
+#: The set-ups the rigid benchmark compares (``benchmark.SETUPS`` labels), ours and OMPL's each.
+RIGID_SETUPS = {"RRTConnect": "RRTConnect", "RRT+goal0.05": "RRT"}
+
+
+def _rigid_run(problem_name: str, label: str, seed: int, solved: bool, iterations: int, checks: int, seconds: float,
+               cost: float, vertices: int, sampler: str) -> benchmark.Run:
+    return benchmark.Run(map=problem_name, query=problem_name, split="test", planner=label, sampler=sampler, seed=seed,
+                         solved=bool(solved), iterations=int(iterations), lower_bound=-1, candidates=int(iterations),
+                         collision_checks=int(checks), wall_time=float(seconds),
+                         us_per_iteration=1e6 * seconds / max(int(iterations), 1), path_cost=float(cost),
+                         forward_passes=0, vertices=int(vertices))
+
+
 def rigid(args) -> int:
-    """RRT-Connect on every OMPL.app problem in ``args.rigid``, with each problem's time limit and run count."""
+    """RRT-Connect and goal-biased RRT, ours and OMPL's, on every OMPL.app problem in ``args.rigid``."""
     import statistics
     import time
 
-    from planners import RRTConnect
+    from planners import make_planner
     from planners.worlds.omplapp import load_omplapp, omplapp_dir
 
     folder = omplapp_dir(args.rigid)
     cfgs = sorted(folder.glob("*.cfg"), key=lambda p: p.name.lower())
     if args.rigid_problems:
+        known = {c.stem for c in cfgs}
+        if unknown := [n for n in args.rigid_problems if n not in known]:
+            raise InputError(f"--rigid-problems {unknown[0]}: no {unknown[0]}.cfg in {folder} (there: "
+                             f"{', '.join(sorted(known)) or 'none'})")
         cfgs = [c for c in cfgs if c.stem in args.rigid_problems]
+    labels = args.rigid_planners or list(RIGID_SETUPS)
     use_ompl = args.rigid_ompl and ompl_bridge.available()
     if args.rigid_ompl and not use_ompl:
         print("OMPL not installed (pip install -c constraints.txt -e '.[bench]'); running without it", file=sys.stderr)
-    head = ("| problem | planner | runs | time limit (s) | success | median time (s) | median tree states "
-            "| median checks |\n|---|---|---|---|---|---|---|---|\n")
+    head = ("| problem | planner | runs | time limit (s) | success | median time (s) | ours / OMPL | median tree "
+            "states | median checks | time per iteration (us) |\n|---|---|---|---|---|---|---|---|---|---|\n")
     out = io.StringIO()
-    out.write(f"# RRT-Connect on OMPL.app's problems\n\n{platform.processor() or platform.machine()}, "
-              f"Python {platform.python_version()}, default step (0.2 of the state box's diagonal), seeds 0 to "
-              f"runs - 1; time excludes compilation.\n\n" + head)
+    out.write(f"# RRT-Connect and RRT on OMPL.app's problems\n\n{platform.processor() or platform.machine()}, "
+              f"Python {platform.python_version()}, default step (0.2 of the state box's diagonal), RRT's goal bias "
+              f"0.05, seeds 0 to runs - 1; time excludes compilation; 'ours / OMPL' is the ratio of the median "
+              f"times of the same planner; time per iteration is the median over runs.\n\n" + head)
     print(out.getvalue(), end="", flush=True)
+    records: list[benchmark.Run] = []
+    logs: list[tuple] = []
     for cfg in cfgs:
         try:
             task = load_omplapp(cfg)
         except (InputError, ImportError) as e:
-            line = f"| {cfg.stem} | | | | | not loaded: {str(e).split(': ', 1)[-1]} | | |\n"
+            line = f"| {cfg.stem} | | | | | not loaded: {str(e).split(': ', 1)[-1]} | | | | |\n"
             out.write(line)
             print(line, end="", flush=True)
             continue
         limit = min(task.time_limit or args.rigid_time_limit or 10.0, args.rigid_time_limit or np.inf)
         runs = min(task.run_count or args.rigid_runs or 10, args.rigid_runs or 10**9)
-        RRTConnect(task.problem, seed=0).solve(max_iterations=2)  # compile before timing
-        solved, seconds, states, checks = [], [], [], []
-        for seed in range(runs):
-            planner = RRTConnect(task.problem, seed=seed)
-            t = time.perf_counter()
-            r = planner.solve(time_limit=limit)
-            seconds.append(time.perf_counter() - t - planner.compile_time)
-            solved.append(r.solved)
-            states.append(r.num_vertices)
-            checks.append(r.collision_checks)
-        line = (f"| {cfg.stem} | ours | {runs} | {limit:g} | {100 * np.mean(solved):.0f}% | "
-                f"{statistics.median(seconds):.2f} | {statistics.median(states):.0f} | "
-                f"{statistics.median(checks):.0f} |\n")
-        if use_ompl:
-            o = [ompl_bridge.ompl_rigid_connect(task.problem, seed=seed, time_limit=limit) for seed in range(runs)]
-            line += (f"| {cfg.stem} | OMPL | {runs} | {limit:g} | {100 * np.mean([r.solved for r in o]):.0f}% | "
-                     f"{statistics.median(r.time for r in o):.2f} | "
-                     f"{statistics.median(r.num_vertices for r in o):.0f} | |\n")
-        out.write(line)
-        print(line, end="", flush=True)
+        name = cfg.stem
+        started = time.perf_counter()
+        mine: list[benchmark.Run] = []
+        for label in labels:
+            planner_name, kwargs = benchmark.SETUPS[label]
+            make_planner(planner_name, task.problem, seed=0, **kwargs()).solve(max_iterations=2)  # compile first
+            rs = []
+            for seed in range(runs):
+                planner = make_planner(planner_name, task.problem, seed=seed, **kwargs())
+                t = time.perf_counter()
+                r = planner.solve(time_limit=limit)
+                seconds = time.perf_counter() - t - planner.compile_time
+                rs.append(_rigid_run(name, label, seed, r.solved, r.iterations, r.collision_checks, seconds,
+                                     r.cost, r.num_vertices, "uniform" if label == "RRTConnect" else "goal0.05"))
+            theirs = []
+            if use_ompl:
+                for seed in range(runs):
+                    o = ompl_bridge.ompl_rigid(task.problem, RIGID_SETUPS[label], seed=seed, time_limit=limit)
+                    theirs.append(_rigid_run(name, f"OMPL {label}", seed, o.solved, o.iterations, -1, o.time, o.cost,
+                                             o.num_vertices, "OMPL"))
+            line = ""
+            for group in (rs, theirs):
+                if not group:
+                    continue
+                median = statistics.median(r.wall_time for r in group)
+                ratio = ""
+                if group is rs and theirs:
+                    ratio = f"{median / statistics.median(r.wall_time for r in theirs):.3f}"
+                checks = statistics.median(r.collision_checks for r in group) if group is rs else None
+                line += (f"| {name} | {group[0].planner} | {runs} | {limit:g} | "
+                         f"{100 * np.mean([r.solved for r in group]):.0f}% | {median:.3f} | {ratio} | "
+                         f"{statistics.median(r.vertices for r in group):.0f} | "
+                         f"{'' if checks is None else f'{checks:.0f}'} | "
+                         f"{statistics.median(r.us_per_iteration for r in group):.0f} |\n")
+            out.write(line)
+            print(line, end="", flush=True)
+            mine += rs + theirs
+        records += mine
+        entries = {label: PlannerRuns({"planner": label}, [benchmark.ompl_run_values(r) for r in mine
+                                                           if r.planner == label])
+                   for label in dict.fromkeys(r.planner for r in mine)}
+        logs.append((name, entries, runs, limit, time.perf_counter() - started))
+    # everything written at the end, each file whole, so a run cut short leaves the last complete results
     atomic_write_text(args.out / "rigid.md", out.getvalue())
-    print(f"\nwrote {args.out / 'rigid.md'}")
+    benchmark.write_runs_csv(records, args.out / "rigid_runs.csv")
+    for name, entries, runs, limit, seconds in logs:
+        write_log(args.out / "ompl" / f"{experiment_name(name)}.log", experiment_name(name), entries,
+                  [(p, t) for p, t, _ in benchmark.OMPL_RUN_PROPERTIES],
+                  setup=f"SamplerGym rigid-body benchmark on OMPL.app's {name}: {runs} runs per planner, seeds 0 to "
+                        f"{runs - 1}, each stopping at the first solution or at the time limit",
+                  total_time=seconds, time_limit=limit)
+    print(f"\nwrote {args.out / 'rigid.md'}, {args.out / 'rigid_runs.csv'} and {len(logs)} OMPL benchmark logs "
+          f"under {args.out / 'ompl'} (Planner Arena opens them)")
     return 0
 
 
@@ -237,13 +292,15 @@ def main(argv=None) -> int:
     ap.add_argument("--no-ompl", action="store_true")
     ap.add_argument("--quick", action="store_true", help="3 seeds, 2 scenarios, growth to 10k only")
     ap.add_argument("--out", type=Path, default=Path("results/benchmark_planners"))
-    ap.add_argument("--rigid", metavar="DIR", help="run RRT-Connect on OMPL.app's .cfg problems in DIR instead")
+    ap.add_argument("--rigid", metavar="DIR", help="run RRT-Connect and RRT on OMPL.app's .cfg problems in DIR instead")
     ap.add_argument("--rigid-runs", type=int, help="at most this many runs per problem (default: its run_count)")
     ap.add_argument("--rigid-time-limit", type=float,
                     help="at most this many seconds per run (default: its time_limit)")
     ap.add_argument("--rigid-problems", nargs="+", help="only these problems (names of .cfg files)")
+    ap.add_argument("--rigid-planners", nargs="+", choices=list(RIGID_SETUPS),
+                    help=f"only these set-ups (default: {' '.join(RIGID_SETUPS)})")
     ap.add_argument("--rigid-ompl", action="store_true",
-                    help="OMPL's RRT-Connect beside ours (OMPL.app's discrete motion check, our state check)")
+                    help="OMPL's planners beside ours (OMPL.app's discrete motion check, our state check)")
     add_backend_arguments(ap, processes=1,
                           backend_help="where the all-planner comparison runs (the timed ours-vs-OMPL sections stay "
                                        "serial)",

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -212,7 +213,7 @@ def test_plan3d_plans_and_draws_a_problem_file(tmp_path):
     assert bad.returncode == 2 and "does not exist" in bad.stderr
 
 
-def test_ompl_runs_rrt_connect_on_a_problem_file(tmp_path):
+def test_ompl_runs_its_planners_on_a_problem_file(tmp_path):
     from planners.tools import ompl_bridge
 
     if not ompl_bridge.available():
@@ -226,5 +227,45 @@ def test_ompl_runs_rrt_connect_on_a_problem_file(tmp_path):
         *axis, theta = _axis_angle(R)
         assert np.allclose(axis_angle_matrix(axis, theta), R, atol=1e-6)
     problem = load_omplapp_cfg(write_problem(tmp_path))
-    run = ompl_bridge.ompl_rigid_connect(problem, seed=0, time_limit=20.0)
-    assert run.solved and np.allclose(run.path[0], problem.start[:3]) and np.allclose(run.path[-1], problem.goal[:3])
+    for planner in ompl_bridge.OMPL_RIGID_PLANNERS:
+        run, again = (ompl_bridge.ompl_rigid(problem, planner, seed=0, time_limit=20.0) for _ in range(2))
+        assert run.solved and np.allclose(run.path[0], problem.start[:3]), planner
+        assert np.allclose(run.path[-1], problem.goal[:3]) and 0 < run.iterations == again.iterations, planner
+    with pytest.raises(ValueError, match="planner must be one of"):
+        ompl_bridge.ompl_rigid(problem, "PRM")
+
+
+def test_the_rigid_benchmark_writes_its_table_runs_and_planner_arena_logs(tmp_path):
+    """``benchmark_planners.py --rigid`` on a folder of problem files: every set-up's runs, in the table, the CSV
+    and one OMPL benchmark log per problem that OMPL's reader accepts."""
+    import csv
+    import importlib.util
+
+    import sqlite3
+
+    from test_benchmark_log import read_benchmark_log, runs_table
+
+    from planners.tools import ompl_bridge
+
+    folder = tmp_path / "problems"
+    folder.mkdir()
+    write_problem(folder)
+    repo = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("_rigid_benchmark_planners", repo / "scripts" / "benchmark_planners.py")
+    bp = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bp)
+    out = tmp_path / "out"
+    use_ompl = ompl_bridge.available()
+    argv = ["--rigid", str(folder), "--rigid-runs", "2", "--rigid-time-limit", "10", "--out", str(out)]
+    assert bp.main(argv + (["--rigid-ompl"] if use_ompl else [])) == 0
+    rows = list(csv.DictReader((out / "rigid_runs.csv").open()))
+    labels = list(bp.RIGID_SETUPS) + [f"OMPL {k}" for k in bp.RIGID_SETUPS if use_ompl]
+    assert sorted({r["planner"] for r in rows}) == sorted(labels) and len(rows) == 2 * len(labels)
+    assert all(r["solved"] == "True" and int(r["iterations"]) > 0 for r in rows)
+    table = (out / "rigid.md").read_text()
+    assert all(f"| hole | {label} | 2 | 5 | 100% |" in table for label in labels)  # the .cfg's 5 s limit
+    conn = sqlite3.connect(":memory:")
+    runs = runs_table(conn, read_benchmark_log((out / "ompl" / "hole.log").read_text(), conn))
+    assert [r["planner"] for r in runs] == [r["planner"] for r in rows]
+    assert [r["iterations"] for r in runs] == [int(r["iterations"]) for r in rows]
+    assert bp.main(argv + ["--rigid-problems", "nothing"]) == 2  # refused before any run, naming what is there

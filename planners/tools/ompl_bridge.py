@@ -169,14 +169,21 @@ def _axis_angle(R: np.ndarray) -> tuple[float, float, float, float]:
     return float(axis[0]), float(axis[1]), float(axis[2]), theta
 
 
-def ompl_rigid_connect(problem: Problem, *, seed: int = 0, time_limit: float = 10.0) -> OmplRun:
-    """OMPL's RRT-Connect on a ``MeshWorld`` problem, as OMPL.app sets it up, with our state check.
+#: OMPL's planners that ``ompl_rigid`` runs on mesh problems.
+OMPL_RIGID_PLANNERS = ("RRTConnect", "RRT")
+
+
+def ompl_rigid(problem: Problem, planner: str = "RRTConnect", *, seed: int = 0, time_limit: float = 10.0,
+               goal_bias: float = 0.05) -> OmplRun:
+    """OMPL's RRT-Connect or RRT on a ``MeshWorld`` problem, as OMPL.app sets it up, with our state check.
 
     The state space is OMPL's SE(3) (quaternions) over the world's bounds; a state is valid as
     ``MeshWorld.is_valid`` says (FCL's collision test, one Python call per state); motions are checked
     by OMPL's default discrete validator, every 1% of the space's extent with no clearance asked, as in
     OMPL.app (a motion may pass through an obstacle thinner than that), and the range is OMPL's default.
-    Returns the run; ``iterations`` is not counted (0) and ``path`` holds the solution's positions.
+    RRT samples the goal with probability ``goal_bias`` (OMPL's default 0.05). Iterations are counted
+    through the termination condition, which OMPL's planners query once per iteration. Returns the
+    run; ``path`` holds the solution's positions.
     """
     from planners.worlds.mesh import MeshWorld
     from planners.worlds.omplapp import quaternion_matrix
@@ -185,7 +192,9 @@ def ompl_rigid_connect(problem: Problem, *, seed: int = 0, time_limit: float = 1
     ob, og, ou = _require()
     world = problem.world
     if not isinstance(world, MeshWorld):
-        raise TypeError("ompl_rigid_connect handles MeshWorld problems only")
+        raise TypeError("ompl_rigid handles MeshWorld problems only")
+    if planner not in OMPL_RIGID_PLANNERS:
+        raise ValueError(f"planner must be one of {OMPL_RIGID_PLANNERS}, got {planner!r}")
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     ou.RNG.setSeed(int(seed) + 1)  # OMPL rejects seed 0
     ou.setLogLevel(ou.LogLevel.LOG_ERROR)
@@ -212,16 +221,29 @@ def ompl_rigid_connect(problem: Problem, *, seed: int = 0, time_limit: float = 1
         ends.append(st)
     pdef = ob.ProblemDefinition(si)
     pdef.setStartAndGoalStates(ends[0], ends[1], problem.goal_tolerance)
-    planner = og.RRTConnect(si)
-    planner.setProblemDefinition(pdef)
-    planner.setup()
+    p = getattr(og, planner)(si)
+    if planner == "RRT":
+        p.setGoalBias(float(goal_bias))
+    p.setProblemDefinition(pdef)
+    p.setup()
+    iterations = 0
     t0 = time.perf_counter()
-    status = planner.solve(float(time_limit))
+    deadline = t0 + float(time_limit)
+
+    def stop() -> bool:
+        nonlocal iterations
+        iterations += 1
+        return time.perf_counter() > deadline
+
+    status = p.solve(ob.PlannerTerminationCondition(stop))
     dt = time.perf_counter() - t0
     solved = bool(pdef.hasExactSolution()) and str(status) == "Exact solution"
     path = np.empty((0, 3))
+    cost = float("inf")
     if solved:
-        path = np.array([(s.getX(), s.getY(), s.getZ()) for s in pdef.getSolutionPath().getStates()])
+        solution = pdef.getSolutionPath()
+        path = np.array([(s.getX(), s.getY(), s.getZ()) for s in solution.getStates()])
+        cost = float(solution.length())
     data = ob.PlannerData(si)
-    planner.getPlannerData(data)
-    return OmplRun(solved, 0, dt, float("nan"), int(data.numVertices()), path)
+    p.getPlannerData(data)
+    return OmplRun(solved, max(iterations - 1, 0), dt, cost, int(data.numVertices()), path)
