@@ -268,6 +268,19 @@ WALK_GUESS = 1.0
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
+def _exact_free(params, poses):
+    """FCL's contact test on the rows of ``poses`` (one call, stopping at the first in contact): True if none is.
+
+    The one object-mode block for the state check and the probes (each such block compiles on its own).
+    """
+    ident = params[P_ID]
+    ok = False
+    with nb.objmode(ok="boolean"):
+        ok = exact_poses_free(ident, poses, 0.0)
+    return ok
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _probes_free(grid, cover, clusters, params, a, b):
     """False if one of the motion's probe poses (``PROBE_FRACTIONS``) puts the body in contact (FCL's test).
 
@@ -280,16 +293,12 @@ def _probes_free(grid, cover, clusters, params, a, b):
     for f in PROBE_FRACTIONS:
         interpolate(SPACE_RIGID, a, b, f, q)
         if not clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0:
-            poses[m] = q
+            for j in range(6):  # element by element: a row assignment compiles numba's shape-error formatting
+                poses[m, j] = q[j]
             m += 1
     if m == 0:
         return True
-    undecided = poses[:m]
-    ident = params[P_ID]
-    ok = False
-    with nb.objmode(ok="boolean"):
-        ok = exact_poses_free(ident, undecided, 0.0)
-    return ok
+    return _exact_free(params, poses[:m])
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -306,13 +315,10 @@ def mesh_motion_free(grid, cover, clusters, params, a, b):
         # a single state: the sphere only (FCL's collision test costs about what the cover points do)
         if sphere_free(grid, params, a, 0.0):
             return True
-        ok = False
         poses = np.empty((1, 6))
-        poses[0] = a
-        ident = params[P_ID]
-        with nb.objmode(ok="boolean"):
-            ok = exact_poses_free(ident, poses, 0.0)
-        return ok
+        for j in range(6):  # element by element: a row assignment compiles numba's shape-error formatting
+            poses[0, j] = a[j]
+        return _exact_free(params, poses)
     delta = params[6]
     margin = 0.5 * delta
     # the far end first (a blocked extension is usually blocked there): its clearance covers the travel
@@ -423,21 +429,27 @@ def chebyshev_grid(vertices, faces, origin, h, nx, ny, nz):
     outside the grid are accounted for by counting a layer of occupied voxels around it; values stop at
     255.
     """
-    dist = np.full((nx, ny, nz), 255, dtype=np.int32)
-    half = np.full(3, 0.5 * h * (1.0 + 1e-6))
+    # scalar loops, no array ufuncs (np.full, np.minimum): this builds once per world, and their compiled
+    # machinery would cost more to compile than the loops take to run
+    dist = np.empty((nx, ny, nz), dtype=np.int32)
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                dist[i, j, k] = 255
+    half = np.empty(3)
+    for d in range(3):
+        half[d] = 0.5 * h * (1.0 + 1e-6)
     c = np.empty(3)
     for f in range(faces.shape[0]):
         t0 = vertices[faces[f, 0]]
         t1 = vertices[faces[f, 1]]
         t2 = vertices[faces[f, 2]]
-        lo = np.minimum(t0, np.minimum(t1, t2))
-        hi = np.maximum(t0, np.maximum(t1, t2))
-        i0 = max(0, int(math.floor((lo[0] - origin[0]) / h)) - 1)
-        j0 = max(0, int(math.floor((lo[1] - origin[1]) / h)) - 1)
-        k0 = max(0, int(math.floor((lo[2] - origin[2]) / h)) - 1)
-        i1 = min(nx - 1, int(math.floor((hi[0] - origin[0]) / h)) + 1)
-        j1 = min(ny - 1, int(math.floor((hi[1] - origin[1]) / h)) + 1)
-        k1 = min(nz - 1, int(math.floor((hi[2] - origin[2]) / h)) + 1)
+        i0 = max(0, int(math.floor((min(t0[0], min(t1[0], t2[0])) - origin[0]) / h)) - 1)
+        j0 = max(0, int(math.floor((min(t0[1], min(t1[1], t2[1])) - origin[1]) / h)) - 1)
+        k0 = max(0, int(math.floor((min(t0[2], min(t1[2], t2[2])) - origin[2]) / h)) - 1)
+        i1 = min(nx - 1, int(math.floor((max(t0[0], max(t1[0], t2[0])) - origin[0]) / h)) + 1)
+        j1 = min(ny - 1, int(math.floor((max(t0[1], max(t1[1], t2[1])) - origin[1]) / h)) + 1)
+        k1 = min(nz - 1, int(math.floor((max(t0[2], max(t1[2], t2[2])) - origin[2]) / h)) + 1)
         for i in range(i0, i1 + 1):
             c[0] = origin[0] + (i + 0.5) * h
             for j in range(j0, j1 + 1):
