@@ -84,18 +84,27 @@ def body_points_world(body, q):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _point_box_sqdist(p, box):
+def _point_box_near(p, box, m2):
+    """True if point ``p`` lies within squared distance ``m2`` of the box (closed).
+
+    An axis whose gap alone exceeds it answers at once; the sum of the squared gaps grows with each
+    axis, so the answer is the full sum's.
+    """
     s = 0.0
     for j in range(3):
         lo = box[j]
         hi = box[3 + j]
         if p[j] < lo:
             d = lo - p[j]
-            s += d * d
         elif p[j] > hi:
             d = p[j] - hi
-            s += d * d
-    return s
+        else:
+            continue
+        d *= d
+        if d > m2:
+            return False
+        s += d
+    return s <= m2
 
 
 #: Parameters of a world without a spatial index (bounds, delta, radius); an indexed one has ``N_INDEXED``.
@@ -128,11 +137,11 @@ def rigid_state_clear(geom, index, body, params, q, margin):
             c = ((_cell_of(pts[i, 0], params[8], cell, nx) * ny + _cell_of(pts[i, 1], params[9], cell, ny)) * nz
                  + _cell_of(pts[i, 2], params[10], cell, nz))
             for t in range(index[0, c], index[0, c + 1]):
-                if _point_box_sqdist(pts[i], geom[index[0, base + t]]) <= m2:
+                if _point_box_near(pts[i], geom[index[0, base + t]], m2):
                     return False
         else:
             for k in range(geom.shape[0]):
-                if _point_box_sqdist(pts[i], geom[k]) <= m2:
+                if _point_box_near(pts[i], geom[k], m2):
                     return False
     return True
 
