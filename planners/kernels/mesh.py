@@ -219,7 +219,7 @@ def cover_clusters(cover: np.ndarray, h: float, side: int = 4) -> tuple[np.ndarr
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def _pose_clearance(grid, cover, clusters, params, q, need, contact_first):
-    """The grid's bound where it exceeds ``need``, else the exact distance (FCL, -1 where they meet).
+    """The grid's bound where it exceeds ``need``, else the exact distance (FCL; 0 or less where they meet).
 
     ``contact_first``: FCL's contact test (a tenth of a distance query) before the distance, for a pose
     that is likely in contact; without it a distance of 0 or less says contact.
