@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -239,10 +238,9 @@ def test_the_rigid_benchmark_writes_its_table_runs_and_planner_arena_logs(tmp_pa
     """``benchmark_planners.py --rigid`` on a folder of problem files: every set-up's runs, in the table, the CSV
     and one OMPL benchmark log per problem that OMPL's reader accepts."""
     import csv
-    import importlib.util
-
     import sqlite3
 
+    from conftest import load_script
     from test_benchmark_log import read_benchmark_log, runs_table
 
     from planners.tools import ompl_bridge
@@ -250,10 +248,7 @@ def test_the_rigid_benchmark_writes_its_table_runs_and_planner_arena_logs(tmp_pa
     folder = tmp_path / "problems"
     folder.mkdir()
     write_problem(folder)
-    repo = Path(__file__).resolve().parents[1]
-    spec = importlib.util.spec_from_file_location("_rigid_benchmark_planners", repo / "scripts" / "benchmark_planners.py")
-    bp = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bp)
+    bp = load_script("benchmark_planners")
     out = tmp_path / "out"
     use_ompl = ompl_bridge.available()
     argv = ["--rigid", str(folder), "--rigid-runs", "2", "--rigid-time-limit", "10", "--out", str(out)]

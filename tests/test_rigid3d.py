@@ -637,3 +637,15 @@ def test_plan3d_plans_with_any_registry_sampler_and_refuses_an_unknown_one(tmp_p
     assert rc == (0 if r.solved else 1)
     assert plan3d.main([str(WINDOW_SCENE), "--setup", "rrt", "--sampler", "nope", "--out", str(tmp_path / "b")]) == 2
     assert not (tmp_path / "b").exists()
+
+
+def test_benchmark_boxes_times_every_planner_it_can_and_refuses_unknown_names(capsys):
+    bench = load_script("benchmark_boxes")
+    assert bench.main(["--counts", "20", "--poses", "50", "--limit-boxes", "40", "--time-limit", "0.2",
+                       "--planners", "RRT", "InformedRRTstar"]) == 0
+    out = capsys.readouterr().out
+    assert "| 20 |" in out and "| 0 |" in out  # the index and the full scan agree on every pose
+    assert re.search(r"^RRT: [0-9.]+ s under time_limit=0.2 among 40 boxes", out, re.M)
+    assert "InformedRRTstar: does not plan the 6-DoF body" in out
+    assert bench.main(["--planners", "nope"]) == 2
+    assert "--planners nope: unknown" in capsys.readouterr().err
