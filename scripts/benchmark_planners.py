@@ -24,6 +24,7 @@ import argparse
 import io
 import platform
 import re
+import statistics
 import sys
 from pathlib import Path
 
@@ -175,18 +176,27 @@ def write_ompl_logs(records: list[benchmark.Run], args, out_dir: Path) -> list[P
 RIGID_SETUPS = {"RRTConnect": "RRTConnect", "RRT+goal0.05": "RRT"}
 
 
-def _rigid_run(problem_name: str, label: str, seed: int, solved: bool, iterations: int, checks: int, seconds: float,
-               cost: float, vertices: int, sampler: str) -> benchmark.Run:
+def _rigid_run(problem_name: str, label: str, seed: int, sampler: str, solved: bool, iterations: int,
+               candidates: int, checks: int, seconds: float, cost: float, vertices: int) -> benchmark.Run:
     return benchmark.Run(map=problem_name, query=problem_name, split="test", planner=label, sampler=sampler, seed=seed,
-                         solved=bool(solved), iterations=int(iterations), lower_bound=-1, candidates=int(iterations),
+                         solved=bool(solved), iterations=int(iterations), lower_bound=-1, candidates=int(candidates),
                          collision_checks=int(checks), wall_time=float(seconds),
                          us_per_iteration=1e6 * seconds / max(int(iterations), 1), path_cost=float(cost),
                          forward_passes=0, vertices=int(vertices))
 
 
+def _rigid_line(name: str, group: list[benchmark.Run], limit: float, ratio: str) -> str:
+    """One row of the rigid table: ``group``'s runs of one planner on one problem (OMPL's report no checks)."""
+    checks = statistics.median(r.collision_checks for r in group)
+    return (f"| {name} | {group[0].planner} | {len(group)} | {limit:g} | "
+            f"{100 * np.mean([r.solved for r in group]):.0f}% | {statistics.median(r.wall_time for r in group):.3f} | "
+            f"{ratio} | "
+            f"{statistics.median(r.vertices for r in group):.0f} | {'' if checks < 0 else f'{checks:.0f}'} | "
+            f"{statistics.median(r.us_per_iteration for r in group):.0f} |\n")
+
+
 def rigid(args) -> int:
     """RRT-Connect and goal-biased RRT, ours and OMPL's, on every OMPL.app problem in ``args.rigid``."""
-    import statistics
     import time
 
     from planners import make_planner
@@ -237,28 +247,19 @@ def rigid(args) -> int:
                 t = time.perf_counter()
                 r = planner.solve(time_limit=limit)
                 seconds = time.perf_counter() - t - planner.compile_time
-                rs.append(_rigid_run(name, label, seed, r.solved, r.iterations, r.collision_checks, seconds,
-                                     r.cost, r.num_vertices, "uniform" if label == "RRTConnect" else "goal0.05"))
+                rs.append(_rigid_run(name, label, seed, type(planner.sampler).__name__, r.solved, r.iterations,
+                                     r.candidates, r.collision_checks, seconds, r.cost, r.num_vertices))
             theirs = []
             if use_ompl:
                 for seed in range(runs):
                     o = ompl_bridge.ompl_rigid(task.problem, RIGID_SETUPS[label], seed=seed, time_limit=limit)
-                    theirs.append(_rigid_run(name, f"OMPL {label}", seed, o.solved, o.iterations, -1, o.time, o.cost,
-                                             o.num_vertices, "OMPL"))
-            line = ""
-            for group in (rs, theirs):
-                if not group:
-                    continue
-                median = statistics.median(r.wall_time for r in group)
-                ratio = ""  # a median of runs cut at the limit says nothing: left out unless both solve most runs
-                if group is rs and theirs and min(np.mean([r.solved for r in g]) for g in (rs, theirs)) >= 0.5:
-                    ratio = f"{median / statistics.median(r.wall_time for r in theirs):.3f}"
-                checks = statistics.median(r.collision_checks for r in group) if group is rs else None
-                line += (f"| {name} | {group[0].planner} | {runs} | {limit:g} | "
-                         f"{100 * np.mean([r.solved for r in group]):.0f}% | {median:.3f} | {ratio} | "
-                         f"{statistics.median(r.vertices for r in group):.0f} | "
-                         f"{'' if checks is None else f'{checks:.0f}'} | "
-                         f"{statistics.median(r.us_per_iteration for r in group):.0f} |\n")
+                    theirs.append(_rigid_run(name, f"OMPL {label}", seed, "OMPL", o.solved, o.iterations, o.iterations,
+                                             -1, o.time, o.cost, o.num_vertices))
+            ratio = ""  # a median of runs cut at the limit says nothing: left out unless both solve most runs
+            if theirs and min(np.mean([r.solved for r in g]) for g in (rs, theirs)) >= 0.5:
+                times = [statistics.median(r.wall_time for r in g) for g in (rs, theirs)]
+                ratio = f"{times[0] / times[1]:.3f}"
+            line = _rigid_line(name, rs, limit, ratio) + (_rigid_line(name, theirs, limit, "") if theirs else "")
             out.write(line)
             print(line, end="", flush=True)
             mine += rs + theirs
