@@ -96,7 +96,8 @@ def _obstacle_based(max_distance: float | None = None, uniform_fraction: float =
     return ObstacleBasedSampler(max_distance, uniform_fraction=uniform_fraction)
 
 
-def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = None, cell: float = 1.0) -> Sampler:
+def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = None,
+                           cell: float | None = None) -> Sampler:
     from planners.guidance.workspace_route import WorkspaceRouteSampler
 
     return WorkspaceRouteSampler(route_fraction, spread, cell)
@@ -137,12 +138,13 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "gaussian": (_gaussian, "OMPL's Gaussian sampling: the valid one of a uniform state and a Gaussian one near it"),
     "bridge_test": (_bridge_test, "OMPL's bridge test: the valid midpoint of two invalid states close together"),
     "obstacle_based": (_obstacle_based, "OB-PRM's sampling: a step out of an obstacle to the first free state"),
-    "rigid_workspace_route": (_rigid_workspace_route, "6-DoF box worlds: along the exact workspace route of the "
-                              "body's centre, uniform angles (the no-learning ablation)"),
+    "rigid_workspace_route": (_rigid_workspace_route, "6-DoF box and mesh worlds: along the workspace route of "
+                              "the body's centre, uniform angles (the no-learning ablation)"),
     "rigid_route": (_rigid_route, "6-DoF box worlds: the workspace route, centred in its passages, with "
                     "orientations from the shipped orientation model (or path=)"),
-    "rigid_route_ablation": (_rigid_route_ablation, "6-DoF box worlds: rigid_route without its model (the same "
-                             "centred route positions and goal share, uniform angles): its no-learning ablation"),
+    "rigid_route_ablation": (_rigid_route_ablation, "6-DoF box and mesh worlds: rigid_route without its model (the "
+                             "same centred route positions and goal share, uniform angles): its no-learning "
+                             "ablation"),
     "expert": (_expert, "reference: the privileged expert on the exact geodesic distance"),
     "exact_route": (_exact_route, "reference: the route sampler on the exact cost-to-go"),
 }

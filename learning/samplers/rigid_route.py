@@ -2,7 +2,8 @@
 
 ``RigidRouteSampler`` draws positions as the no-learning ablation does
 (``planners.guidance.workspace_route.WorkspaceRouteSampler``: points at uniform arc length along the
-exact workspace route of the body's centre plus Gaussian noise of the body's inner radius, a share of
+exact workspace route of the body's centre plus Gaussian noise of the world's ``route_spread`` (a box
+world's inner radius), a share of
 uniform states), about the route pulled to the middle of its passages (``centre_route``, ``centre``
 voxels), and replaces its uniform angles by the orientation model's
 (``learning.models.rigid_orientation.OrientationNet``). Per query, once: the route, its centring, the
@@ -16,7 +17,8 @@ and its distribution over the six axis-aligned orientation classes there. Per sa
   random, turned by a random rotation of about ``angle_noise`` radians per axis (a Gaussian rotation vector);
 * else a uniform state.
 
-Samples do not depend on the tree, so they come in batches. Box worlds (``RigidBodyWorld``) only.
+Samples do not depend on the tree, so they come in batches. The orientation model knows box bodies
+(``RigidBodyWorld``); without it (the ablation) the sampler also serves mesh worlds (``MeshWorld``).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from planners.guidance.rigid_orientation import (
     route_observation,
     small_rotations,
 )
-from planners.guidance.workspace_route import DEFAULT_CELL, centre_route, inner_radius, voxel_route
+from planners.guidance.workspace_route import centre_route, route_world, voxel_route
 
 #: The settings ``make_sampler("rigid_route")`` uses: chosen on the tuning scenes
 #: (``scripts/experiments/tune_rigid_learned.py``; ``docs/rigid-scenes.md``).
@@ -53,16 +55,17 @@ class RigidRouteSampler(SamplerBase):
             class's orientation.
         goal_share: Probability in [0, 1] of drawing the goal state.
         temperature: Softmax temperature of the model's logits (> 0; below 1 sharpens).
-        spread: Standard deviation of the position noise about the route; None: the body's inner radius.
+        spread: Standard deviation of the position noise about the route; None: the world's ``route_spread``
+            (a box world's inner radius).
         cell: Voxel side of the route search and of the model's observation, world units (the model is
-            trained at 1).
+            trained at 1); None: the world's ``route_cell`` (1 in a box world).
         centre: Reach in voxels of ``centre_route``: each interior route point moves to the clearest voxel
             centre that near (0: the search's route as it is).
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
-                 cell: float = DEFAULT_CELL, centre: int = 2) -> None:
+                 cell: float | None = None, centre: int = 2) -> None:
         who = "RigidRouteSampler"
         self.centre = check_int(centre, f"{who}: centre", low=0)
         self.net = net
@@ -72,7 +75,7 @@ class RigidRouteSampler(SamplerBase):
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
         self.spread = None if spread is None else float(check_number(who, "spread", spread, low=0))
-        self.cell = float(check_number(who, "cell", cell, low=0, low_open=True))
+        self.cell = None if cell is None else float(check_number(who, "cell", cell, low=0, low_open=True))
         if net is None and self.uniform_share < 1.0:
             raise InputError(f"{who}: without an orientation model every route sample takes uniform angles: "
                              f"uniform_share must be 1, got {self.uniform_share:g}")
@@ -81,16 +84,19 @@ class RigidRouteSampler(SamplerBase):
         from learning.models.rigid_orientation import class_probabilities
         from learning.models.threads import planning_threads
 
-        world = self.problem.world
-        if not (hasattr(world, "boxes") and hasattr(world, "body")):
-            raise InputError(f"RigidRouteSampler needs a box world (RigidBodyWorld), got {type(world).__name__}")
-        route = voxel_route(world, self.problem.start, self.problem.goal, self.cell)
-        self.route = np.zeros((0, 3)) if route is None else centre_route(world, route, self.centre, self.cell)
+        world = route_world(self.problem.world, "RigidRouteSampler")
+        if self.net is not None and not hasattr(world, "boxes"):
+            raise InputError(f"RigidRouteSampler: the orientation model knows box bodies among boxes, not a "
+                             f"{type(world).__name__}; on a mesh world use make_sampler('rigid_route_ablation') "
+                             f"(the same positions, uniform angles)")
+        cell = float(world.route_cell if self.cell is None else self.cell)
+        route = voxel_route(world, self.problem.start, self.problem.goal, cell)
+        self.route = np.zeros((0, 3)) if route is None else centre_route(world, route, self.centre, cell)
         seg = np.linalg.norm(np.diff(self.route, axis=0), axis=1) if len(self.route) > 1 else np.zeros(0)
         self.arc = np.concatenate([[0.0], np.cumsum(seg)])
-        self.sd = inner_radius(world.body) if self.spread is None else self.spread
+        self.sd = world.route_spread if self.spread is None else self.spread
         if len(self.route) and self.net is not None:
-            patches, dirs = route_observation(world, self.route, self.cell, self.net.half)
+            patches, dirs = route_observation(world, self.route, cell, self.net.half)
             with planning_threads():  # one torch thread unless SAMPLERGYM_TORCH_THREADS says otherwise
                 self.probs = class_probabilities(self.net, patches, dirs, self.temperature)
         else:
@@ -125,10 +131,11 @@ class RigidRouteSampler(SamplerBase):
         return pts
 
     def __repr__(self) -> str:
-        sd = "inner radius" if self.spread is None else f"{self.spread:g}"
+        sd = "the world's" if self.spread is None else f"{self.spread:g}"
+        cell = "the world's" if self.cell is None else f"{self.cell:g}"
         return (f"RigidRouteSampler(route_fraction={self.route_fraction:g}, uniform_share={self.uniform_share:g}, "
                 f"angle_noise={self.angle_noise:g}, goal_share={self.goal_share:g}, "
-                f"temperature={self.temperature:g}, spread={sd}, cell={self.cell:g}, centre={self.centre})")
+                f"temperature={self.temperature:g}, spread={sd}, cell={cell}, centre={self.centre})")
 
 
 def _normals(u: np.ndarray) -> np.ndarray:

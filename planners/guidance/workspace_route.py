@@ -4,18 +4,21 @@ This is the no-learning ablation of a 6-DoF route sampler: it knows where the bo
 go (a shortest route through the workspace) and nothing about how the body must turn.
 
 * ``voxel_route(world, start, goal, cell)``: the workspace is cut into voxels of side ``cell``; a voxel
-  is free when its centre lies farther than the body's inner radius (half its smallest side, for a box
-  body; the largest ball about the centre inside the body's hull in general) from every box and from the
-  workspace's walls, a necessary condition for any pose of the body centred there. A 26-connected
+  is free when its centre lies farther than the body's inner radius (the largest ball about the body's
+  origin inside the body: half its smallest side, for a box body) from every obstacle (and, in a box
+  world, from the workspace's walls), a necessary condition for any pose of the body centred there. The
+  world decides which voxels are free (``centre_free_voxels``): a box world exactly, a mesh world from its
+  broad phase's distance bounds. A 26-connected
   Dijkstra search from the goal's voxel gives every free voxel its cost-to-go (edge lengths 1, sqrt 2,
   sqrt 3 voxels); the route descends it from the start's voxel. An end whose voxel is not free starts
   from the nearest free voxel.
 * ``WorkspaceRouteSampler``: with probability ``route_fraction`` (0.75) a position drawn uniformly by arc
-  length along the route, plus isotropic Gaussian noise of ``spread`` (default the inner radius),
+  length along the route, plus isotropic Gaussian noise of ``spread`` (default the world's ``route_spread``:
+  a box world's inner radius, a mesh world's ``ROUTE_SPREAD_CELLS`` route cells),
   with uniform angles; otherwise a uniform state. Samples do not depend on the tree, so they come in
   batches.
 
-Box worlds (``RigidBodyWorld``) only; numpy and numba.
+Box and mesh worlds (``RigidBodyWorld``, ``MeshWorld``); numpy and numba.
 """
 
 from __future__ import annotations
@@ -28,43 +31,10 @@ import numpy as np
 
 from planners.base.fileio import InputError, check_number
 from planners.base.samplers import SamplerBase
+from planners.worlds.rigid3d import DEFAULT_CELL, MAX_VOXELS, free_voxels, inner_radius
 
-#: Voxel side of the route search, in world units, unless told otherwise.
-DEFAULT_CELL = 1.0
-#: Most voxels a route search may use (about 40 bytes each).
-MAX_VOXELS = 20_000_000
-
-
-def inner_radius(body: np.ndarray) -> float:
-    """Half the smallest side of the body points' bounding box about the body origin: the inner radius of a box."""
-    half = np.minimum(np.abs(body.min(axis=0)), np.abs(body.max(axis=0)))
-    return float(half.min())
-
-
-def free_voxels(boxes: np.ndarray, low: np.ndarray, high: np.ndarray, cell: float, radius: float) -> np.ndarray:
-    """``(nx, ny, nz)`` bool: voxel centres farther than ``radius`` from every box and from the walls."""
-    shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
-    if int(np.prod(shape)) > MAX_VOXELS:
-        raise InputError(f"a route search at cell {cell:g} needs {int(np.prod(shape)):,} voxels, more than "
-                         f"{MAX_VOXELS:,}; use a larger cell")
-    axes = [low[k] + (np.arange(shape[k]) + 0.5) * cell for k in range(3)]
-    free = np.ones(tuple(shape), dtype=np.bool_)
-    for k in range(3):  # the walls
-        near = (axes[k] - low[k] <= radius) | (high[k] - axes[k] <= radius)
-        idx = [slice(None)] * 3
-        idx[k] = near
-        free[tuple(idx)] = False
-    for b in boxes:
-        sl, gaps = [], []
-        for k in range(3):
-            i0 = int(np.searchsorted(axes[k], b[k] - radius, side="left"))
-            i1 = int(np.searchsorted(axes[k], b[3 + k] + radius, side="right"))
-            sl.append(slice(i0, i1))
-            c = axes[k][i0:i1]
-            gaps.append(np.maximum(np.maximum(b[k] - c, c - b[3 + k]), 0.0))
-        d2 = gaps[0][:, None, None] ** 2 + gaps[1][None, :, None] ** 2 + gaps[2][None, None, :] ** 2
-        free[tuple(sl)] &= d2 > radius * radius
-    return free
+__all__ = ["DEFAULT_CELL", "MAX_VOXELS", "WorkspaceRouteSampler", "centre_route", "cost_to_go", "free_voxels",
+           "inner_radius", "voxel_route"]
 
 
 @nb.njit(cache=True)
@@ -109,14 +79,17 @@ def _nearest_free(free: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return cells[int(np.argmin(((cells - idx) ** 2).sum(axis=1)))]
 
 
-def voxel_route(world, start, goal, cell: float = DEFAULT_CELL) -> np.ndarray | None:
+def voxel_route(world, start, goal, cell: float | None = None) -> np.ndarray | None:
     """The workspace route of the body's centre from ``start`` to ``goal`` as ``(k, 3)`` points, or None if none.
 
-    The route runs from the start's position through voxel centres to the goal's position (see the module doc).
+    The route runs from the start's position through voxel centres to the goal's position (see the module doc);
+    ``cell`` is the voxel side (None: the world's ``route_cell``).
     """
-    cell = float(check_number("voxel_route", "cell", cell, low=0, low_open=True))
-    low, high = np.asarray(world.low3), np.asarray(world.high3)
-    free = free_voxels(np.asarray(world.boxes), low, high, cell, inner_radius(world.body))
+    world = route_world(world, "voxel_route")
+    cell = float(world.route_cell if cell is None else check_number("voxel_route", "cell", cell, low=0,
+                                                                     low_open=True))
+    low = np.asarray(world.low3)
+    free = world.centre_free_voxels(cell)
     shape = np.array(free.shape)
 
     def index(p):
@@ -139,32 +112,27 @@ def voxel_route(world, start, goal, cell: float = DEFAULT_CELL) -> np.ndarray | 
     return np.concatenate([np.asarray(start[:3])[None], centres, np.asarray(goal[:3])[None]])
 
 
-def centre_route(world, route: np.ndarray, reach: int, cell: float = DEFAULT_CELL) -> np.ndarray:
+def centre_route(world, route: np.ndarray, reach: int, cell: float | None = None) -> np.ndarray:
     """``route`` with each interior point moved across the route to the clearest voxel centre within ``reach`` voxels.
 
     The candidates are the voxel centres within ``reach`` voxels of the point's voxel whose offset runs
     across the route (at most half a voxel along the route's local direction, the chord between the points
-    two before and two after); the clearance of a point is its exact distance to the nearest box or
-    workspace wall. The search's route keeps only the body's inner radius from every box, so it hugs the
-    walls of a passage; this pulls it to the passage's middle. A point keeps its place unless a candidate
-    clears more; the ends stay.
+    two before and two after); the clearance of a point is the world's ``workspace_clearance`` (a box
+    world's exact distance to the nearest box or wall). The search's route keeps only the body's inner
+    radius from every box, so it hugs the walls of a passage; this pulls it to the passage's middle. A
+    point keeps its place unless a candidate clears more; the ends stay.
     """
     route = np.asarray(route, dtype=np.float64)
     if reach <= 0 or len(route) < 3:
         return route.copy()
+    world = route_world(world, "centre_route")
+    cell = float(world.route_cell if cell is None else cell)
     low, high = np.asarray(world.low3, dtype=np.float64), np.asarray(world.high3, dtype=np.float64)
-    boxes = np.asarray(world.boxes, dtype=np.float64).reshape(-1, 6)
     shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
     r = np.arange(-reach, reach + 1)
     offsets = np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
 
-    def clearance(p: np.ndarray) -> np.ndarray:
-        d = np.minimum(p - low, high - p).min(axis=1)
-        if len(boxes):
-            gap = np.maximum(np.maximum(boxes[None, :, :3] - p[:, None], p[:, None] - boxes[None, :, 3:]), 0.0)
-            d = np.minimum(d, np.linalg.norm(gap, axis=2).min(axis=1))
-        return d
-
+    clearance = world.workspace_clearance
     out = route.copy()
     k = len(route)
     for i in range(1, k - 1):
@@ -179,33 +147,41 @@ def centre_route(world, route: np.ndarray, reach: int, cell: float = DEFAULT_CEL
     return out
 
 
+def route_world(world, who: str):
+    """``world`` if it offers what the workspace route needs (a box or mesh world), else a clear error."""
+    if not all(hasattr(world, m) for m in ("centre_free_voxels", "workspace_clearance", "inner_radius", "route_cell",
+                                         "route_spread")):
+        raise InputError(f"{who} needs a 6-DoF body world (RigidBodyWorld or MeshWorld), got {type(world).__name__}")
+    return world
+
+
 class WorkspaceRouteSampler(SamplerBase):
     """Positions along the exact workspace route of the body's centre, uniform angles (the module doc).
 
     Args:
         route_fraction: Probability in [0, 1] that a sample follows the route (else uniform); 0.75 is
             the share chosen on the tuning scenes (``scripts/experiments/tune_rigid_route.py``).
-        spread: Standard deviation of the Gaussian noise about the route, world units; None: the
-            body's inner radius.
-        cell: Voxel side of the route search, world units.
+        spread: Standard deviation of the Gaussian noise about the route, world units; None: the world's
+            ``route_spread`` (a box world's inner radius).
+        cell: Voxel side of the route search, world units; None: the world's ``route_cell`` (``DEFAULT_CELL``
+            in a box world, the broad phase's voxel in a mesh world).
     """
 
-    def __init__(self, route_fraction: float = 0.75, spread: float | None = None, cell: float = DEFAULT_CELL) -> None:
+    def __init__(self, route_fraction: float = 0.75, spread: float | None = None, cell: float | None = None) -> None:
         self.route_fraction = float(check_number("WorkspaceRouteSampler", "route_fraction", route_fraction,
                                                  low=0, high=1))
         self.spread = None if spread is None else float(check_number("WorkspaceRouteSampler", "spread", spread,
                                                                      low=0))
-        self.cell = float(check_number("WorkspaceRouteSampler", "cell", cell, low=0, low_open=True))
+        self.cell = None if cell is None else float(check_number("WorkspaceRouteSampler", "cell", cell, low=0,
+                                                                 low_open=True))
 
     def _setup(self) -> None:
-        world = self.problem.world
-        if not (hasattr(world, "boxes") and hasattr(world, "body")):
-            raise InputError(f"WorkspaceRouteSampler needs a box world (RigidBodyWorld), got {type(world).__name__}")
+        world = route_world(self.problem.world, "WorkspaceRouteSampler")
         route = voxel_route(world, self.problem.start, self.problem.goal, self.cell)
         self.route = np.zeros((0, 3)) if route is None else route
         seg = np.linalg.norm(np.diff(self.route, axis=0), axis=1) if len(self.route) > 1 else np.zeros(0)
         self._cum = np.concatenate([[0.0], np.cumsum(seg)])
-        self._sd = inner_radius(world.body) if self.spread is None else self.spread
+        self._sd = world.route_spread if self.spread is None else self.spread
 
     def draw(self, rng, n, view):
         # one row of uniforms per sample (a coin, an arc length, a state, two Box-Muller pairs) keeps the
@@ -226,5 +202,6 @@ class WorkspaceRouteSampler(SamplerBase):
         return pts
 
     def __repr__(self) -> str:
-        sd = "inner radius" if self.spread is None else f"{self.spread:g}"
-        return f"WorkspaceRouteSampler(route_fraction={self.route_fraction:g}, spread={sd}, cell={self.cell:g})"
+        sd = "the world's" if self.spread is None else f"{self.spread:g}"
+        cell = "the world's" if self.cell is None else f"{self.cell:g}"
+        return f"WorkspaceRouteSampler(route_fraction={self.route_fraction:g}, spread={sd}, cell={cell})"

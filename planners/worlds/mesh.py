@@ -40,6 +40,7 @@ from planners.worlds.rigid3d import (
     monte_carlo_free_volume,
     positive_delta,
     rotation_weight,
+    voxel_axes,
     workspace_bounds,
 )
 
@@ -50,6 +51,8 @@ DEFAULT_DELTA_FRACTION = 1e-3
 #: Voxels along the longest side of the broad phase's grid (the grid covers the bounds grown by the
 #: body radius).
 DEFAULT_GRID_CELLS = 128
+#: The default noise about the workspace route in a mesh world, in route cells (``MeshWorld.route_spread``).
+ROUTE_SPREAD_CELLS = 1.0
 #: States drawn for the free-volume estimate (RRT*'s and PRM*'s radius).
 VOLUME_SAMPLES = 4096
 #: Most triangles a mesh may have: FCL builds a bounding-volume tree over them, and the broad phase
@@ -182,6 +185,67 @@ def cover_points(vertices: np.ndarray, faces: np.ndarray, spacing: float) -> np.
         A, B, C = a[sel][:, None], b[sel][:, None], c[sel][:, None]
         out.append((A + u * (B - A) + v * (C - A)).reshape(-1, 3))
     return np.unique(np.concatenate(out), axis=0)
+
+
+def solid_inner_radius(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """The radius of the largest ball about the origin inside the mesh's solid, or 0 if the origin is outside.
+
+    Inside means an odd number of crossings of a ray from the origin with the triangles, for the most of
+    three rays in fixed, unaligned directions (a mesh with holes may count differently along one ray);
+    the radius is then the origin's distance to the nearest triangle.
+    """
+    a, b, c = (vertices[faces[:, i]].astype(np.float64) for i in range(3))
+    inside = 0
+    for d in ((0.5773, 0.5774, 0.5775), (-0.3119, 0.8377, 0.4482), (0.7071, -0.1234, -0.6963)):
+        inside += int(_ray_crossings(np.asarray(d), a, b, c) % 2 == 1)
+    if inside < 2:
+        return 0.0
+    return float(_origin_triangle_distance(a, b, c).min())
+
+
+def _ray_crossings(d: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> int:
+    """Triangles the ray from the origin along ``d`` crosses (Moller-Trumbore)."""
+    e1, e2 = b - a, c - a
+    p = np.cross(d, e2)
+    det = np.einsum("ij,ij->i", e1, p)
+    ok = np.abs(det) > 1e-12
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    t0 = -a
+    u = np.einsum("ij,ij->i", t0, p) * inv
+    q = np.cross(t0, e1)
+    v = (q @ d) * inv
+    t = np.einsum("ij,ij->i", e2, q) * inv
+    return int(np.sum(ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)))
+
+
+def _origin_triangle_distance(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """``(F,)``: the origin's distance to each triangle (the closest point by its Voronoi region, Ericson 5.1.5)."""
+    ab, ac, ap = b - a, c - a, -a
+    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
+    bp = -b
+    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
+    cp = -c
+    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = va + vb + vc
+        v = np.where(denom != 0, vb / denom, 0.0)
+        w = np.where(denom != 0, vc / denom, 0.0)
+        closest = a + ab * v[:, None] + ac * w[:, None]  # the face region
+        # the edge and vertex regions, in the order the test ranks them (later cases override earlier ones)
+        sbc = (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0)
+        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        closest = np.where(sbc[:, None], b + t[:, None] * (c - b), closest)
+        sac = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+        t = d2 / (d2 - d6)
+        closest = np.where(sac[:, None], a + t[:, None] * ac, closest)
+        sab = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+        t = d1 / (d1 - d3)
+        closest = np.where(sab[:, None], a + t[:, None] * ab, closest)
+        closest = np.where(((d6 >= 0) & (d5 <= d6))[:, None], c, closest)
+        closest = np.where(((d3 >= 0) & (d4 <= d3))[:, None], b, closest)
+        closest = np.where(((d1 <= 0) & (d2 <= 0))[:, None], a, closest)
+    return np.linalg.norm(closest, axis=1)
 
 
 def rotation_matrices(angles: np.ndarray) -> np.ndarray:
@@ -328,6 +392,9 @@ class MeshWorld(WorldBase):
         origin = lo - pad
         side = float(np.max(hi - lo + 2 * pad)) / int(grid_cells)
         shape = np.maximum(1, np.ceil((hi - lo + 2 * pad) / side).astype(np.int64))
+        self._grid_origin, self._grid_shape = origin, shape
+        self.route_cell = side  # the workspace route's voxel (planners.guidance.workspace_route)
+        self._inner_radius: float | None = None
         self.grid = mesh_kernels.chebyshev_grid(self.env_vertices, self.env_faces.astype(np.int64), origin,
                                                 side, int(shape[0]), int(shape[1]), int(shape[2]))
         self.cover, self.clusters = mesh_kernels.cover_clusters(cover_points(self.body_vertices, self.body_faces, side),
@@ -410,6 +477,53 @@ class MeshWorld(WorldBase):
             return 0.0
         return float(fcl.distance(self._check.body, self._check.env, self._check.distance_request,
                                   fcl.DistanceResult()))
+
+    @property
+    def inner_radius(self) -> float:
+        """Radius of the largest ball about the body origin inside the body (``solid_inner_radius``).
+
+        0 where the origin lies outside the body's solid.
+        """
+        if self._inner_radius is None:
+            self._inner_radius = solid_inner_radius(self.body_vertices, self.body_faces)
+        return self._inner_radius
+
+    @property
+    def route_spread(self) -> float:
+        """The default noise about the workspace route: the inner radius or ``ROUTE_SPREAD_CELLS`` route cells.
+
+        Whichever is larger.
+        """
+        return max(self.inner_radius, ROUTE_SPREAD_CELLS * self.route_cell)
+
+    def workspace_clearance(self, points) -> np.ndarray:
+        """``(n,)``: a lower bound on each point's distance to the environment's triangles.
+
+        From the broad phase's grid: a Chebyshev distance in voxels (``route_cell``), so the distance is at most sqrt(3)
+        times it plus two voxels; the grid's edge, a body radius beyond the bounds, counts as an obstacle
+        and outside the grid the bound is 0.
+        """
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        side = self.route_cell
+        idx = np.floor((p - self._grid_origin) / side).astype(np.int64)
+        inside = np.all((idx >= 0) & (idx < self._grid_shape), axis=1)
+        out = np.zeros(len(p))
+        i, j, k = idx[inside].T
+        c = self.grid[i, j * int(self._grid_shape[2]) + k].astype(np.float64)
+        out[inside] = np.maximum(c - 1.0, 0.0) * side
+        return out
+
+    def centre_free_voxels(self, cell: float) -> np.ndarray:
+        """``(nx, ny, nz)`` bool over voxels of side ``cell`` from ``low3``: where the body's centre may be.
+
+        Centres whose distance bound to the environment exceeds the inner radius and is positive (a
+        necessary condition for a valid pose centred there; a closed obstacle's inside stays cut off by
+        the band about its surface).
+        """
+        axes = voxel_axes(self.low3, self.high3, cell)
+        centres = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        d = self.workspace_clearance(centres)
+        return ((d > self.inner_radius) & (d > 0)).reshape(tuple(len(a) for a in axes))
 
     def free_volume(self) -> float:
         """Measure of the free states in ``(x, y, z, tx, ty, tz)`` coordinates (for RRT*/PRM* radii).

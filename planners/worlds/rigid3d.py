@@ -75,6 +75,13 @@ INDEX_MAX_CELLS = 1 << 18
 MAX_BOXES_ENV = "SAMPLERGYM_MAX_BOXES"
 
 
+#: Voxel side of a box world's workspace route of the body's centre (``planners.guidance.workspace_route``),
+#: in world units, unless told otherwise.
+DEFAULT_CELL = 1.0
+#: Most voxels a workspace route search may use (about 40 bytes each).
+MAX_VOXELS = 20_000_000
+
+
 def max_boxes_limit() -> int:
     """The box limit in force: ``$SAMPLERGYM_MAX_BOXES`` if set, else ``DEFAULT_MAX_BOXES``."""
     return env_limit(MAX_BOXES_ENV, DEFAULT_MAX_BOXES, low=0)
@@ -229,6 +236,38 @@ class RigidBodyWorld(WorldBase):
             d = min(d, dist.min())
         return float(d)
 
+    # The workspace as the route of the body's centre sees it (``planners.guidance.workspace_route``); a mesh
+    # world offers the same five members.
+    route_cell = DEFAULT_CELL
+
+    @property
+    def inner_radius(self) -> float:
+        """Radius of a ball about the body origin inside the body at every pose (``inner_radius``)."""
+        return inner_radius(self.body)
+
+    @property
+    def route_spread(self) -> float:
+        """The default noise about the workspace route: the inner radius (chosen on the tuning scenes)."""
+        return self.inner_radius
+
+    def centre_free_voxels(self, cell: float) -> np.ndarray:
+        """``(nx, ny, nz)`` bool over voxels of side ``cell`` from ``low3``: where the body's centre may be.
+
+        Centres farther than the inner radius from every box and wall (a necessary condition for a valid
+        pose centred there).
+        """
+        return free_voxels(self.boxes, self.low3, self.high3, cell, self.inner_radius)
+
+    def workspace_clearance(self, points) -> np.ndarray:
+        """``(n,)``: each point's distance to the nearest box or workspace wall (exact)."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        d = np.minimum(p - self.low3, self.high3 - p).min(axis=1)
+        if len(self.boxes):
+            lo, hi = self.boxes[None, :, :3], self.boxes[None, :, 3:]
+            gap = np.maximum(np.maximum(lo - p[:, None], p[:, None] - hi), 0.0)
+            d = np.minimum(d, np.linalg.norm(gap, axis=2).min(axis=1))
+        return d
+
     def free_volume(self) -> float:
         """Measure of the free states in ``(x, y, z, tx, ty, tz)`` coordinates (for RRT*/PRM* radii).
 
@@ -264,6 +303,47 @@ class RigidBodyWorld(WorldBase):
     def __repr__(self) -> str:
         ext = "x".join(f"{v:g}" for v in self.high3 - self.low3)
         return f"RigidBodyWorld({ext}, {len(self.boxes)} boxes, {len(self.body)} body points, delta={self.delta:g})"
+
+
+def inner_radius(body: np.ndarray) -> float:
+    """Half the smallest side of the body points' bounding box about the body origin: the inner radius of a box."""
+    half = np.minimum(np.abs(body.min(axis=0)), np.abs(body.max(axis=0)))
+    return float(half.min())
+
+
+def voxel_axes(low: np.ndarray, high: np.ndarray, cell: float) -> list[np.ndarray]:
+    """The voxel centres along each axis of a route search over ``[low, high]`` at side ``cell``.
+
+    Raises:
+        InputError: More than ``MAX_VOXELS`` voxels.
+    """
+    shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
+    if int(np.prod(shape)) > MAX_VOXELS:
+        raise InputError(f"a route search at cell {cell:g} needs {int(np.prod(shape)):,} voxels, more than "
+                         f"{MAX_VOXELS:,}; use a larger cell")
+    return [low[k] + (np.arange(shape[k]) + 0.5) * cell for k in range(3)]
+
+
+def free_voxels(boxes: np.ndarray, low: np.ndarray, high: np.ndarray, cell: float, radius: float) -> np.ndarray:
+    """``(nx, ny, nz)`` bool: voxel centres farther than ``radius`` from every box and from the walls."""
+    axes = voxel_axes(low, high, cell)
+    free = np.ones(tuple(len(a) for a in axes), dtype=np.bool_)
+    for k in range(3):  # the walls
+        near = (axes[k] - low[k] <= radius) | (high[k] - axes[k] <= radius)
+        idx = [slice(None)] * 3
+        idx[k] = near
+        free[tuple(idx)] = False
+    for b in boxes:
+        sl, gaps = [], []
+        for k in range(3):
+            i0 = int(np.searchsorted(axes[k], b[k] - radius, side="left"))
+            i1 = int(np.searchsorted(axes[k], b[3 + k] + radius, side="right"))
+            sl.append(slice(i0, i1))
+            c = axes[k][i0:i1]
+            gaps.append(np.maximum(np.maximum(b[k] - c, c - b[3 + k]), 0.0))
+        d2 = gaps[0][:, None, None] ** 2 + gaps[1][None, :, None] ** 2 + gaps[2][None, None, :] ** 2
+        free[tuple(sl)] &= d2 > radius * radius
+    return free
 
 
 def box_index(boxes: np.ndarray, low: np.ndarray, high: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
