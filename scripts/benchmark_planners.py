@@ -14,8 +14,10 @@ limit and run count (``--rigid-time-limit`` and ``--rigid-runs`` cap them, ``--r
 ``--rigid-planners`` choose), and prints and writes (``rigid.md``) the success rate, median time, tree
 states, collision checks and time per iteration; ``--rigid-ompl`` adds OMPL's RRT-Connect and RRT
 (``planners.tools.ompl_bridge.ompl_rigid``: OMPL.app's set-up, our state check) and the ratio of the
-median times. Every run goes to ``rigid_runs.csv`` and to one OMPL benchmark log per problem
-(``ompl/<problem>.log``).
+median times. ``--rigid-samplers NAME ...`` adds, for each of our set-ups, a row per sampler of the registry
+(``make_sampler(NAME)``, e.g. ``rigid_route_ablation``: the workspace route of the body's centre) in place of
+the set-up's own sampling; a run's time then includes the sampler's set-up (its route search). Every run goes
+to ``rigid_runs.csv`` and to one OMPL benchmark log per problem (``ompl/<problem>.log``).
 """
 
 from __future__ import annotations
@@ -211,6 +213,9 @@ def rigid(args) -> int:
                              f"{', '.join(sorted(known)) or 'none'})")
         cfgs = [c for c in cfgs if c.stem in args.rigid_problems]
     labels = args.rigid_planners or list(RIGID_SETUPS)
+    samplers = [None] + list(args.rigid_samplers or ())  # None: the set-up's own sampling
+    if args.rigid_samplers:
+        from learning.samplers.registry import make_sampler
     use_ompl = args.rigid_ompl and ompl_bridge.available()
     if args.rigid_ompl and not use_ompl:
         print("OMPL not installed (pip install -c constraints.txt -e '.[bench]'); running without it", file=sys.stderr)
@@ -240,29 +245,39 @@ def rigid(args) -> int:
         mine: list[benchmark.Run] = []
         for label in labels:
             planner_name, kwargs = benchmark.SETUPS[label]
-            make_planner(planner_name, task.problem, seed=0, **kwargs()).solve(max_iterations=2)  # compile first
-            rs = []
-            for seed in range(runs):
-                planner = make_planner(planner_name, task.problem, seed=seed, **kwargs())
-                t = time.perf_counter()
-                r = planner.solve(time_limit=limit)
-                seconds = time.perf_counter() - t - planner.compile_time
-                rs.append(_rigid_run(name, label, seed, type(planner.sampler).__name__, r.solved, r.iterations,
-                                     r.candidates, r.collision_checks, seconds, r.cost, r.num_vertices))
-            theirs = []
-            if use_ompl:
+            for sampler_name in samplers:
+
+                def build(seed: int, problem=task.problem, planner_name=planner_name, kwargs=kwargs,
+                          sampler_name=sampler_name):
+                    kw = kwargs()
+                    if sampler_name is not None:  # in place of the set-up's own sampling (RRT's goal bias)
+                        kw["sampler"] = make_sampler(sampler_name)
+                    return make_planner(planner_name, problem, seed=seed, **kw)
+
+                build(0).solve(max_iterations=2)  # compile first
+                row = label if sampler_name is None else f"{planner_name} with {sampler_name}"
+                rs = []
                 for seed in range(runs):
-                    o = ompl_bridge.ompl_rigid(task.problem, RIGID_SETUPS[label], seed=seed, time_limit=limit)
-                    theirs.append(_rigid_run(name, f"OMPL {label}", seed, "OMPL", o.solved, o.iterations, o.iterations,
-                                             -1, o.time, o.cost, o.num_vertices))
-            ratio = ""  # a median of runs cut at the limit says nothing: left out unless both solve most runs
-            if theirs and min(np.mean([r.solved for r in g]) for g in (rs, theirs)) >= 0.5:
-                times = [statistics.median(r.wall_time for r in g) for g in (rs, theirs)]
-                ratio = f"{times[0] / times[1]:.3f}"
-            line = _rigid_line(name, rs, limit, ratio) + (_rigid_line(name, theirs, limit, "") if theirs else "")
-            out.write(line)
-            print(line, end="", flush=True)
-            mine += rs + theirs
+                    t = time.perf_counter()
+                    planner = build(seed)  # binds the sampler: its set-up is part of the time
+                    r = planner.solve(time_limit=limit)
+                    seconds = time.perf_counter() - t - planner.compile_time
+                    rs.append(_rigid_run(name, row, seed, type(planner.sampler).__name__, r.solved, r.iterations,
+                                         r.candidates, r.collision_checks, seconds, r.cost, r.num_vertices))
+                theirs = []
+                if use_ompl and sampler_name is None:
+                    for seed in range(runs):
+                        o = ompl_bridge.ompl_rigid(task.problem, RIGID_SETUPS[label], seed=seed, time_limit=limit)
+                        theirs.append(_rigid_run(name, f"OMPL {label}", seed, "OMPL", o.solved, o.iterations,
+                                                 o.iterations, -1, o.time, o.cost, o.num_vertices))
+                ratio = ""  # a median of runs cut at the limit says nothing: left out unless both solve most runs
+                if theirs and min(np.mean([r.solved for r in g]) for g in (rs, theirs)) >= 0.5:
+                    times = [statistics.median(r.wall_time for r in g) for g in (rs, theirs)]
+                    ratio = f"{times[0] / times[1]:.3f}"
+                line = _rigid_line(name, rs, limit, ratio) + (_rigid_line(name, theirs, limit, "") if theirs else "")
+                out.write(line)
+                print(line, end="", flush=True)
+                mine += rs + theirs
         records += mine
         entries = {label: PlannerRuns({"planner": label}, [benchmark.ompl_run_values(r) for r in mine
                                                            if r.planner == label])
@@ -301,6 +316,8 @@ def main(argv=None) -> int:
     ap.add_argument("--rigid-problems", nargs="+", help="only these problems (names of .cfg files)")
     ap.add_argument("--rigid-planners", nargs="+", choices=list(RIGID_SETUPS),
                     help=f"only these set-ups (default: {' '.join(RIGID_SETUPS)})")
+    ap.add_argument("--rigid-samplers", nargs="+", metavar="NAME",
+                    help="also run our set-ups with these registry samplers (e.g. rigid_route_ablation)")
     ap.add_argument("--rigid-ompl", action="store_true",
                     help="OMPL's planners beside ours (OMPL.app's discrete motion check, our state check)")
     add_backend_arguments(ap, processes=1,
@@ -323,6 +340,12 @@ def main(argv=None) -> int:
             check_int_flags(args, ("rigid_runs",))
         if args.rigid_time_limit is not None:
             check_number("command line", "--rigid-time-limit", args.rigid_time_limit, low=0.0, low_open=True)
+        if args.rigid_samplers:
+            from learning.samplers.registry import REGISTRY
+
+            if unknown := [n for n in args.rigid_samplers if n not in REGISTRY]:
+                raise InputError(f"--rigid-samplers {unknown[0]}: not a registered sampler (choose from "
+                                 f"{', '.join(sorted(REGISTRY))})")
 
     check_flags(check)
     if args.rigid is not None:

@@ -252,9 +252,12 @@ def test_the_rigid_benchmark_writes_its_table_runs_and_planner_arena_logs(tmp_pa
     out = tmp_path / "out"
     use_ompl = ompl_bridge.available()
     argv = ["--rigid", str(folder), "--rigid-runs", "2", "--rigid-time-limit", "10", "--out", str(out)]
-    assert bp.main(argv + (["--rigid-ompl"] if use_ompl else [])) == 0
+    route = ["--rigid-samplers", "rigid_route_ablation"]  # a registry sampler in place of each set-up's own
+    assert bp.main(argv + route + (["--rigid-ompl"] if use_ompl else [])) == 0
     rows = list(csv.DictReader((out / "rigid_runs.csv").open()))
-    labels = list(bp.RIGID_SETUPS) + [f"OMPL {k}" for k in bp.RIGID_SETUPS if use_ompl]
+    labels = (list(bp.RIGID_SETUPS) + [f"OMPL {k}" for k in bp.RIGID_SETUPS if use_ompl]
+              + [f"{p} with rigid_route_ablation" for p in bp.RIGID_SETUPS.values()])
+    assert {r["sampler"] for r in rows if "with" in r["planner"]} == {"RigidRouteSampler"}
     assert sorted({r["planner"] for r in rows}) == sorted(labels) and len(rows) == 2 * len(labels)
     assert all(r["solved"] == "True" and int(r["iterations"]) > 0 for r in rows)
     table = (out / "rigid.md").read_text()
@@ -264,3 +267,6 @@ def test_the_rigid_benchmark_writes_its_table_runs_and_planner_arena_logs(tmp_pa
     assert [r["planner"] for r in runs] == [r["planner"] for r in rows]
     assert [r["iterations"] for r in runs] == [int(r["iterations"]) for r in rows]
     assert bp.main(argv + ["--rigid-problems", "nothing"]) == 2  # refused before any run, naming what is there
+    with pytest.raises(SystemExit) as refused:  # the argument checks, before anything runs
+        bp.main(argv + ["--rigid-samplers", "nothing"])
+    assert refused.value.code == 2
