@@ -34,7 +34,7 @@ from planners.base.samplers import SamplerBase
 from planners.worlds.rigid3d import DEFAULT_CELL, MAX_VOXELS, free_voxels, inner_radius
 
 __all__ = ["DEFAULT_CELL", "MAX_VOXELS", "WorkspaceRouteSampler", "centre_route", "cost_to_go", "free_voxels",
-           "inner_radius", "voxel_route"]
+           "inner_radius", "route_world", "voxel_route"]
 
 
 @nb.njit(cache=True)
