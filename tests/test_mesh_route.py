@@ -8,27 +8,18 @@ import pytest
 trimesh = pytest.importorskip("trimesh", reason="mesh worlds need the mesh extra (pip install samplergym[mesh])")
 pytest.importorskip("fcl", reason="mesh worlds need the mesh extra (pip install samplergym[mesh])")
 
+from test_mesh_world import box, wall_with_hole  # noqa: E402  (the same wall with a hole)
+
 from planners import Problem, make_planner  # noqa: E402
 from planners.base.fileio import InputError  # noqa: E402
 from planners.guidance.workspace_route import centre_route, voxel_route  # noqa: E402
 from planners.worlds.mesh import MeshWorld, solid_inner_radius  # noqa: E402
 
 
-def box(extents, centre=(0.0, 0.0, 0.0)):
-    return trimesh.creation.box(extents=extents, transform=trimesh.transformations.translation_matrix(centre))
-
-
-def wall_with_hole(hole=2.0, thickness=0.2):
-    """A wall across x = 5 of a 10-cube, with a square hole of side ``hole`` around (5, 5, 5)."""
-    lo, hi = 5 - hole / 2, 5 + hole / 2
-    parts = [box((thickness, 10, lo), (5, 5, lo / 2)), box((thickness, 10, 10 - hi), (5, 5, (10 + hi) / 2)),
-             box((thickness, lo, hole), (5, lo / 2, 5)), box((thickness, 10 - hi, hole), (5, (10 + hi) / 2, 5))]
-    return trimesh.util.concatenate(parts)
-
-
 @pytest.fixture(scope="module")
 def world():
-    return MeshWorld(wall_with_hole(), box((1.0, 1.0, 1.0)), low=(0, 0, 0), high=(10, 10, 10), grid_cells=64)
+    body = box((1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
+    return MeshWorld(wall_with_hole(), body, low=(0, 0, 0), high=(10, 10, 10), grid_cells=64)
 
 
 def triangle_distances(mesh, points):
@@ -44,7 +35,7 @@ def triangle_distances(mesh, points):
 
 
 def test_the_inner_radius_is_the_ball_about_the_origin_inside_the_solid():
-    b = box((2.0, 4.0, 6.0))
+    b = box((2.0, 4.0, 6.0), (0.0, 0.0, 0.0))
     assert solid_inner_radius(np.asarray(b.vertices), np.asarray(b.faces)) == pytest.approx(1.0)
     moved = box((2.0, 4.0, 6.0), (5.0, 0.0, 0.0))  # the origin outside the solid
     assert solid_inner_radius(np.asarray(moved.vertices), np.asarray(moved.faces)) == 0.0
