@@ -38,8 +38,12 @@ __all__ = ["DEFAULT_CELL", "MAX_VOXELS", "WorkspaceRouteSampler", "centre_route"
 
 
 @nb.njit(cache=True)
-def cost_to_go(free, goal):
-    """26-connected Dijkstra from voxel ``goal`` (a flat index) over ``free``: costs in voxel sides, inf unreached."""
+def cost_to_go(free, goal, stop=-1):
+    """26-connected Dijkstra from voxel ``goal`` (a flat index) over ``free``: costs in voxel sides, inf unreached.
+
+    With ``stop`` (a flat index), the search ends when that voxel is settled: every voxel cheaper than it
+    holds its exact cost, every other one at least its cost (what a descent from ``stop`` needs).
+    """
     nx, ny, nz = free.shape
     flat = free.ravel()
     cost = np.full(flat.shape[0], np.inf)
@@ -49,6 +53,8 @@ def cost_to_go(free, goal):
         c, v = heapq.heappop(heap)
         if c > cost[v]:
             continue
+        if v == stop:
+            break
         i = v // (ny * nz)
         j = (v // nz) % ny
         k = v % nz
@@ -96,7 +102,9 @@ def voxel_route(world, start, goal, cell: float | None = None) -> np.ndarray | N
         return np.clip(np.floor((np.asarray(p[:3]) - low) / cell).astype(np.int64), 0, shape - 1)
 
     s, g = _nearest_free(free, index(start)), _nearest_free(free, index(goal))
-    cost = cost_to_go(free, int(np.ravel_multi_index(tuple(g), free.shape)))
+    # the search stops once the start is settled: the descent below meets only cheaper voxels, whose costs are exact
+    cost = cost_to_go(free, int(np.ravel_multi_index(tuple(g), free.shape)),
+                      int(np.ravel_multi_index(tuple(s), free.shape)))
     if not np.isfinite(cost[tuple(s)]):
         return None
     steps = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) if (a, b, c) != (0, 0, 0)])

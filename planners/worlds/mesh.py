@@ -521,9 +521,15 @@ class MeshWorld(WorldBase):
         the band about its surface).
         """
         axes = voxel_axes(self.low3, self.high3, cell)
-        centres = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-        d = self.workspace_clearance(centres)
-        return ((d > self.inner_radius) & (d > 0)).reshape(tuple(len(a) for a in axes))
+        side, shape = self.route_cell, self._grid_shape
+        # the grid's voxel of each centre, axis by axis (a centre outside the grid: no bound, so not free)
+        idx = [np.floor((a - o) / side).astype(np.int64) for a, o in zip(axes, self._grid_origin, strict=True)]
+        inside = [(i >= 0) & (i < n) for i, n in zip(idx, shape, strict=True)]
+        ix, iy, iz = (np.clip(i, 0, n - 1) for i, n in zip(idx, shape, strict=True))
+        c = self.grid[ix[:, None, None], iy[None, :, None] * int(shape[2]) + iz[None, None, :]]
+        d = np.maximum(c.astype(np.float64) - 1.0, 0.0) * side
+        d *= inside[0][:, None, None] & inside[1][None, :, None] & inside[2][None, None, :]
+        return (d > self.inner_radius) & (d > 0)
 
     def free_volume(self) -> float:
         """Measure of the free states in ``(x, y, z, tx, ty, tz)`` coordinates (for RRT*/PRM* radii).
