@@ -6,12 +6,12 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from planners.base.fileio import InputError
 from planners.base.samplers import BridgeTestSampler, GaussianSampler
-from planners.guidance.workspace_route import WorkspaceRouteSampler, inner_radius, voxel_route
+from planners.guidance.workspace_route import WorkspaceRouteSampler, cost_to_go, inner_radius, voxel_route
 from planners.kernels.space import SPACE_RIGID, rotation_angle_between
 from planners.maps.generators import TEST_SEED0, TUNING_SEED0, VALIDATION_SEED0
 from planners.maps.unseen import UNSEEN_SEED0
@@ -269,3 +269,17 @@ def test_a_learned_samplers_targets_are_marked_per_scene_set_and_planner():
     assert not target_rows(by_set)[0]["held"]
     by_set[-1] = cell("learned", 3_000, 3, 0.4)  # 0.75x the ablation: learning must matter, not only the route
     assert not target_rows(by_set)[0]["held"]
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31), fill=st.floats(0.0, 0.4))
+def test_a_search_stopped_at_the_start_keeps_every_cheaper_cost_exact(seed, fill):
+    rng = np.random.default_rng(seed)
+    free = rng.random((9, 8, 7)) >= fill
+    goal, start = (int(i) for i in rng.integers(0, free.size, 2))
+    free.flat[goal] = free.flat[start] = True
+    full, stopped = cost_to_go(free, goal), cost_to_go(free, goal, start)
+    below = full < full.flat[start]
+    assert np.array_equal(stopped[below], full[below])
+    assert stopped.flat[start] == full.flat[start]
+    assert np.all(stopped >= full)
