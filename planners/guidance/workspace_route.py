@@ -8,10 +8,9 @@ go (a shortest route through the workspace) and nothing about how the body must 
   origin inside the body: half its smallest side, for a box body) from every obstacle (and, in a box
   world, from the workspace's walls), a necessary condition for any pose of the body centred there. The
   world decides which voxels are free (``centre_free_voxels``): a box world exactly, a mesh world from its
-  broad phase's distance bounds. A 26-connected
-  Dijkstra search from the goal's voxel gives every free voxel its cost-to-go (edge lengths 1, sqrt 2,
-  sqrt 3 voxels); the route descends it from the start's voxel. An end whose voxel is not free starts
-  from the nearest free voxel.
+  broad phase's distance bounds. A 26-connected Dijkstra search from the goal's voxel gives the free
+  voxels their cost-to-go (edge lengths 1, sqrt 2, sqrt 3 voxels) until it settles the start's voxel; the
+  route descends it from there. An end whose voxel is not free starts from the nearest free voxel.
 * ``WorkspaceRouteSampler``: with probability ``route_fraction`` (0.75) a position drawn uniformly by arc
   length along the route, plus isotropic Gaussian noise of ``spread`` (default the world's ``route_spread``:
   a box world's inner radius, a mesh world's ``ROUTE_SPREAD_CELLS`` route cells),
