@@ -347,11 +347,11 @@ def main(argv=None) -> int:
         if args.rigid_time_limit is not None:
             check_number("command line", "--rigid-time-limit", args.rigid_time_limit, low=0.0, low_open=True)
         if args.rigid_samplers:
-            from learning.samplers.registry import REGISTRY
+            from learning.samplers.registry import sampler_names
 
-            if unknown := [n for n in args.rigid_samplers if n not in REGISTRY]:
+            if unknown := [n for n in args.rigid_samplers if n not in sampler_names()]:
                 raise InputError(f"--rigid-samplers {unknown[0]}: not a registered sampler (choose from "
-                                 f"{', '.join(sorted(REGISTRY))})")
+                                 f"{', '.join(sorted(sampler_names()))})")
 
     check_flags(check)
     if args.rigid is not None:

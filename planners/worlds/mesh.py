@@ -499,19 +499,22 @@ class MeshWorld(WorldBase):
     def workspace_clearance(self, points) -> np.ndarray:
         """``(n,)``: a lower bound on each point's distance to the environment's triangles.
 
-        From the broad phase's grid: a Chebyshev distance in voxels (``route_cell``), so the distance is at most sqrt(3)
-        times it plus two voxels; the grid's edge, a body radius beyond the bounds, counts as an obstacle
-        and outside the grid the bound is 0.
+        From the broad phase's grid: a Chebyshev distance in voxels (``route_cell``), so the distance is at
+        most sqrt(3) times it plus two voxels; the grid's edge, a body radius beyond the bounds, counts as an
+        obstacle and outside the grid the bound is 0.
         """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        side = self.route_cell
-        idx = np.floor((p - self._grid_origin) / side).astype(np.int64)
-        inside = np.all((idx >= 0) & (idx < self._grid_shape), axis=1)
-        out = np.zeros(len(p))
-        i, j, k = idx[inside].T
-        c = self.grid[i, j * int(self._grid_shape[2]) + k].astype(np.float64)
-        out[inside] = np.maximum(c - 1.0, 0.0) * side
-        return out
+        x, y, z = (p - self._grid_origin).T
+        return self._distance_bound(x, y, z)
+
+    def _distance_bound(self, x, y, z) -> np.ndarray:
+        """The grid's distance bound at offsets ``x, y, z`` from its origin (broadcastable arrays; 0 outside it)."""
+        side, shape = self.route_cell, self._grid_shape
+        idx = [np.floor(a / side).astype(np.int64) for a in (x, y, z)]
+        inside = [(i >= 0) & (i < n) for i, n in zip(idx, shape, strict=True)]
+        ix, iy, iz = (np.clip(i, 0, n - 1) for i, n in zip(idx, shape, strict=True))
+        c = self.grid[ix, iy * int(shape[2]) + iz].astype(np.float64)
+        return np.maximum(c - 1.0, 0.0) * side * (inside[0] & inside[1] & inside[2])
 
     def centre_free_voxels(self, cell: float) -> np.ndarray:
         """``(nx, ny, nz)`` bool over voxels of side ``cell`` from ``low3``: where the body's centre may be.
@@ -520,15 +523,9 @@ class MeshWorld(WorldBase):
         necessary condition for a valid pose centred there; a closed obstacle's inside stays cut off by
         the band about its surface).
         """
-        axes = voxel_axes(self.low3, self.high3, cell)
-        side, shape = self.route_cell, self._grid_shape
-        # the grid's voxel of each centre, axis by axis (a centre outside the grid: no bound, so not free)
-        idx = [np.floor((a - o) / side).astype(np.int64) for a, o in zip(axes, self._grid_origin, strict=True)]
-        inside = [(i >= 0) & (i < n) for i, n in zip(idx, shape, strict=True)]
-        ix, iy, iz = (np.clip(i, 0, n - 1) for i, n in zip(idx, shape, strict=True))
-        c = self.grid[ix[:, None, None], iy[None, :, None] * int(shape[2]) + iz[None, None, :]]
-        d = np.maximum(c.astype(np.float64) - 1.0, 0.0) * side
-        d *= inside[0][:, None, None] & inside[1][None, :, None] & inside[2][None, None, :]
+        x, y, z = (a - o for a, o in zip(voxel_axes(self.low3, self.high3, cell), self._grid_origin, strict=True))
+        # axis by axis, broadcast: no (n, 3) array of centres
+        d = self._distance_bound(x[:, None, None], y[None, :, None], z[None, None, :])
         return (d > self.inner_radius) & (d > 0)
 
     def free_volume(self) -> float:

@@ -225,16 +225,7 @@ class RigidBodyWorld(WorldBase):
 
     def clearance(self, q) -> float:
         """Smallest distance from a body point to a box or to the workspace boundary (<= 0: invalid)."""
-        pts = self.body_points(q)
-        d = np.minimum(pts - self.low3, self.high3 - pts).min()
-        if len(self.boxes):
-            lo, hi = self.boxes[:, :3], self.boxes[:, 3:]
-            gap = np.maximum(np.maximum(lo[None] - pts[:, None], pts[:, None] - hi[None]), 0.0)
-            dist = np.linalg.norm(gap, axis=2)
-            inside = np.all((pts[:, None] >= lo[None]) & (pts[:, None] <= hi[None]), axis=2)
-            dist[inside] = 0.0
-            d = min(d, dist.min())
-        return float(d)
+        return float(self.workspace_clearance(self.body_points(q)).min())
 
     # The workspace as the route of the body's centre sees it (``planners.guidance.workspace_route``); a mesh
     # world offers the same five members.
@@ -259,7 +250,10 @@ class RigidBodyWorld(WorldBase):
         return free_voxels(self.boxes, self.low3, self.high3, cell, self.inner_radius)
 
     def workspace_clearance(self, points) -> np.ndarray:
-        """``(n,)``: each point's distance to the nearest box or workspace wall (exact)."""
+        """``(n,)``: each point's distance to the nearest box or workspace wall (exact).
+
+        0 inside a box, negative outside the workspace.
+        """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         d = np.minimum(p - self.low3, self.high3 - p).min(axis=1)
         if len(self.boxes):
