@@ -9,6 +9,7 @@
     python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
     python scripts/evaluate.py --route mine=runs/route/route.pt                    # your encoder beside the shipped one
     python scripts/evaluate.py --quick --other-planners all                        # every planner and sampler: 32 min
+    python scripts/evaluate.py --quick --convergence                               # and RRT*'s cost convergence
     python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments
 
 A thin command line over ``learning.evaluation.compare`` (one call a notebook makes as well: see
@@ -47,6 +48,7 @@ sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in 
 
 from learning import PolicySampler
 from learning import evaluation as E
+from learning.evaluation.convergence import BUDGET as CONVERGENCE_BUDGET
 from learning.evaluation.journal import (
     JOURNAL,
     Interrupted,
@@ -138,6 +140,11 @@ def parse_args(argv=None) -> argparse.Namespace:
                          "obstacle-based sampling for a roadmap), the policy, the route encoder, its ablation and the "
                          "exact reference (OB-PRM: its own obstacle-based sampling only); choose from "
                          f"{', '.join(planner_names())}")
+    ap.add_argument("--convergence", type=int, nargs="?", const=CONVERGENCE_BUDGET, default=0, metavar="ITERATIONS",
+                    help="also run RRT* and Informed RRT* to this many iterations (default "
+                         f"{CONVERGENCE_BUDGET}) on every test query and report the iterations to come within 5%% "
+                         "and 1%% of the best known cost: uniform, the tuned goal bias, Informed RRT*, the route "
+                         "encoder, its ablation and the exact reference")
     ap.add_argument("--step", type=float, default=DEFAULT.step)
     ap.add_argument("--tolerance", type=float, default=DEFAULT.tolerance)
     ap.add_argument("--max-iterations", type=int, default=DEFAULT.max_iterations)
@@ -199,7 +206,7 @@ def _check_values(args) -> None:
     """Counts, sizes, step and tolerance, families and the output place: an ``InputError`` naming the flag."""
     check_int_flags(args, ("maps", "tuning_maps", "seeds", "scenarios", "tuning_scenarios", "max_iterations",
                            "processes"))
-    check_int_flags(args, ("shifted_maps", "unseen_maps", "split_seed"), low=0)
+    check_int_flags(args, ("shifted_maps", "unseen_maps", "split_seed", "convergence"), low=0)
     check_size(args.size, "--size")
     if args.unseen_maps and args.size < UNSEEN_MIN_SIZE and args.map_set is None:
         raise InputError(f"--size = {args.size}: the unseen families need at least {UNSEEN_MIN_SIZE} cells a side "
@@ -384,6 +391,8 @@ def _settings(args) -> dict:
     if not args.extra_routes:  # so a run without NAME=FILE encoders keeps the journal settings it always had
         skip.add("extra_routes")
     skip.add("parts")
+    if not args.convergence:  # likewise without --convergence
+        skip.add("convergence")
     if args.rigid is None:  # likewise without --rigid
         skip.update(k for k in vars(args) if k.startswith("rigid"))
     return {k: v for k, v in vars(args).items() if k not in skip}
@@ -419,7 +428,7 @@ def comparison_of(args) -> E.Comparison:
                         routes={n: str(p) for n, p in args.extra_routes.items()}, samplers=args.user_samplers,
                         families=args.families, other_planners=args.other_planners, references=not args.no_expert,
                         device=args.device, map_set=args.map_set_obj, models=args.models, cache=args.loaded,
-                        parts=args.parts)
+                        parts=args.parts, convergence=args.convergence)
 
 
 def _say(line: str) -> None:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 
+from learning.evaluation.convergence import BUDGET
 from learning.evaluation.every_planner import (
     CLASSICAL,
     MAP_SETS,
@@ -38,11 +39,12 @@ def main(argv=None) -> int:
     ap.add_argument("--planners", nargs="+", choices=tuple(CLASSICAL), default=list(CLASSICAL))
     ap.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS, help="budget per run")
     ap.add_argument("--convergence", action="store_true", help="RRT*'s iterations to within 5%% and 1%% instead")
-    ap.add_argument("--budget", type=int, default=4000, help="RRT* iterations per run with --convergence")
+    ap.add_argument("--budget", type=int, default=BUDGET, help="RRT* iterations per run with --convergence")
     ap.add_argument("--later-queries", action="store_true", help="PRM: a roadmap built for one query, for three more")
     args = ap.parse_args(argv)
-    if args.n < 1 or args.seeds < 1:
-        ap.error(f"--n {args.n} and --seeds {args.seeds}: expected at least 1 each")
+    if min(args.n, args.seeds, args.budget, args.max_iterations) < 1:
+        ap.error(f"--n {args.n}, --seeds {args.seeds}, --budget {args.budget} and --max-iterations "
+                 f"{args.max_iterations}: expected at least 1 each")
     seeds = tuple(range(args.seeds))
     for which in args.maps:
         maps = planner_maps(which, args.n)

@@ -138,10 +138,28 @@ def read_benchmark_log(text: str, conn: sqlite3.Connection) -> int:
                 c.execute(f"ALTER TABLE runs ADD {name} {field[-1]}")
             prop_names.append(name)
         insert = f"INSERT INTO runs ({','.join(prop_names)}) VALUES ({','.join('?' * len(prop_names))})"
+        run_ids = []
         for _ in range(int(f.readline().split()[0])):
             vals = [None if not x or x in ("nan", "inf") else x for x in f.readline().split("; ")[:-1]]
             c.execute(insert, tuple([exp_id, planner_id, *vals]))
-        assert f.readline().strip() == ".", "progress data is not written by SamplerGym"
+            run_ids.append(c.lastrowid)
+        next_line = f.readline().strip()
+        if next_line != ".":  # the planner's progress data
+            c.execute("PRAGMA table_info(progress)")
+            cols = [col[1] for col in c.fetchall()]
+            names = ["runid"]
+            for _ in range(int(next_line.split()[0])):
+                field = f.readline().split()
+                name = "_".join(field[:-1])
+                if name not in cols:
+                    c.execute(f"ALTER TABLE progress ADD {name} {field[-1]}")
+                names.append(name)
+            insert = f"INSERT INTO progress ({','.join(names)}) VALUES ({','.join('?' * len(names))})"
+            for j in range(int(f.readline().split()[0])):
+                for sample in f.readline().split(";")[:-1]:
+                    vals = [None if not x or x in ("nan", "inf") else x for x in sample.split(",")[:-1]]
+                    c.execute(insert, tuple([run_ids[j], *vals]))  # a repeated time is an IntegrityError
+            f.readline()
     assert f.read() == "", "text after the last planner"
     conn.commit()
     return exp_id
@@ -194,6 +212,37 @@ def test_log_reads_back_through_ompls_reader():
     assert [r["solution_length"] for r in rows] == [51.5, None, 49.0, 50.25]  # unsolved: no length
     assert [r["time"] for r in rows] == [0.25, 1.5, 0.125, 0.5]
     assert "sampler = goal_bias=0.05" in rows[2]["settings"]
+
+
+PROGRESS = [("time", "REAL"), ("iterations", "INTEGER"), ("best cost", "REAL")]
+
+
+def test_progress_data_reads_back_into_the_progress_table():
+    example = _example()
+    example["RRT uniform"] = PlannerRuns(example["RRT uniform"].settings, example["RRT uniform"].runs, progress=[
+        [{"time": 0.01, "iterations": 25, "best cost": 60.5}, {"time": 0.02, "iterations": 50, "best cost": 51.5}],
+        []])  # the second run never found a path: no points
+    text = format_log("forest", example, PROPS, setup="s", total_time=1.0, progress_properties=PROGRESS)
+    conn = sqlite3.connect(":memory:")
+    exp = read_benchmark_log(text, conn)
+    ids = [r["id"] for r in runs_table(conn, exp)]
+    rows = conn.execute("SELECT runid, time, iterations, best_cost FROM progress ORDER BY runid, time").fetchall()
+    assert [tuple(r) for r in rows] == [(ids[0], 0.01, 25, 60.5), (ids[0], 0.02, 50, 51.5)]
+
+
+@pytest.mark.parametrize(("progress", "props", "match"), [
+    ([[{"time": 0.02, "iterations": 1, "best cost": 2.0}, {"time": 0.02, "iterations": 2, "best cost": 1.0}], []],
+     PROGRESS, "above the point before"),
+    ([[{"time": 0.01, "iterations": 1, "cost": 2.0}], []], PROGRESS, "not declared"),
+    ([[]], PROGRESS, "one per run"),
+    ([[], []], (), "no progress properties"),
+    ([[], []], [("iterations", "INTEGER"), ("time", "REAL")], "first"),
+])
+def test_bad_progress_data_is_refused(progress, props, match):
+    example = _example()
+    example["RRT uniform"] = PlannerRuns({}, example["RRT uniform"].runs, progress=progress)
+    with pytest.raises(InputError, match=match):
+        format_log("forest", example, PROPS, setup="s", total_time=1.0, progress_properties=props)
 
 
 def test_two_logs_make_one_database_with_two_experiments():

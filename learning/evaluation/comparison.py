@@ -22,7 +22,8 @@ planner on the tuning split, then (5) every other planner on every test set with
 classical option (the goal bias tuned for the set for a tree; OB-PRM's obstacle-based sampling for a
 roadmap), the policy, each route encoder, its ablation, the exact reference and users' samplers, as the
 registry builds them (``make_sampler`` names handed to the planner as they are), except OB-PRM, which runs
-with its own obstacle-based sampling only (handed another sampler it is PRM with it); (6) each :class:`Part`.
+with its own obstacle-based sampling only (handed another sampler it is PRM with it); (6) with ``convergence``:
+RRT*'s cost convergence on every test query (``learning.evaluation.convergence``), then each :class:`Part`.
 
 A **part** plugs a comparison of another kind into the same call, journal and output set (the 6-DoF
 scene sets, ``learning.evaluation.rigid.RigidPart``): any object with ``name``, ``protocol`` (how its runs are
@@ -82,10 +83,14 @@ from planners.tools.parallel import Backend, make_backend
 
 @dataclass
 class PartReport:
-    """What a :class:`Part` adds to the outputs: a Markdown section of ``details.md``, sentences of ``summary.md``."""
+    """What a :class:`Part` adds to the outputs: a Markdown section of ``details.md``, sentences of ``summary.md``.
+
+    ``protocol`` is filled in with the part's where its report leaves it out.
+    """
 
     markdown: str
     findings: list[str] = field(default_factory=list)
+    protocol: Protocol | None = None  # how the part's runs were made (its OMPL logs' settings); the part's own
 
 
 @runtime_checkable
@@ -137,7 +142,8 @@ class Comparison:
     encoders by name, run beside it (each labelled by its name). ``samplers``: users' ``NAME=SPEC``
     samplers. ``families``: the generated families whose tuning maps, pooled, tune the unseen families.
     ``other_planners``: planner names run beside RRT on every test set. ``references``: run the expert
-    and the exact route reference. ``map_set``: the user's map set the queries come from (for the
+    and the exact route reference. ``convergence``: RRT*'s iterations budget for the convergence part
+    (``learning.evaluation.convergence``; 0: not run). ``map_set``: the user's map set the queries come from (for the
     record). ``models`` and ``cache``: what is loaded already (models, MovingAI scenarios, map sets).
     """
 
@@ -153,6 +159,7 @@ class Comparison:
     device: str = "auto"
     map_set: Any = None
     parts: Sequence[Part] = ()
+    convergence: int = 0
     models: ModelCache = field(default_factory=ModelCache)
     cache: dict = field(default_factory=dict)
 
@@ -215,17 +222,45 @@ class Comparison:
         log(f"{len(tasks)} RRT runs of the constant-distribution ablation at its tuned settings")
         runs += phase(tasks, "policy ablation")
         runs += self._other_planners(queries, runs, batch, unseen, phase, log)
-        parts = self._run_parts(phase)
+        parts = self._run_parts(phase, self._convergence_part(queries, runs, unseen))
         return Results(self, runs, batch, batch_scores, constants, unseen, parts,
                        minutes=(time.perf_counter() - t0) / 60, processes=str(backend.workers))
 
-    def _run_parts(self, phase) -> dict:
-        """Phase (6): each part's tasks under its own protocol; {name: (runs, report)}."""
+    def _run_parts(self, phase, extra: Sequence[Part] = ()) -> dict:
+        """Phase (6): each part's tasks (``extra``, then ``parts``) under its own protocol; {name: (runs, report)}."""
         parts = {}
-        for part in self.parts:
+        for part in [*extra, *self.parts]:
             part_runs = phase(list(part.tasks()), part.name, RunContext(part.protocol, self.models, self.cache))
-            parts[part.name] = (part_runs, part.report(part_runs))
+            report = part.report(part_runs)
+            if report.protocol is None:
+                report.protocol = part.protocol
+            parts[part.name] = (part_runs, report)
         return parts
+
+    def _tuned_biases(self, runs, queries, unseen) -> dict[tuple[str, str], float]:
+        """The goal bias chosen on the tuning split per (map set, planner), shifted and unseen sets included."""
+        tuned = tuned_for_shifted(best_bias(runs), queries)
+        tuned.update(pooled_tuned(runs, self.families, best_bias, unseen))
+        return tuned
+
+    def _convergence_part(self, queries, runs, unseen) -> list[Part]:
+        """RRT*'s convergence part, where ``convergence`` asks for it.
+
+        Its goal bias is the one chosen on the tuning split for RRT* where RRT* ran among the other planners, else
+        RRT's.
+        """
+        if not self.convergence:
+            return []
+        from learning.evaluation.convergence import ConvergencePart, ConvergenceProtocol
+
+        tuned = self._tuned_biases(runs, queries, unseen)
+        sets = {q.map_set for q in queries}
+        biases = {m: tuned.get((m, "RRTstar"), tuned.get((m, "RRT"), 0.05)) for m in sets}
+        movingai = sorted({q.family for q in queries if not q.size})
+        p = self.protocol
+        protocol = ConvergenceProtocol(step=p.step, tolerance=p.tolerance, max_iterations=int(self.convergence),
+                                       seeds=p.seeds, movingai_dir=p.movingai_dir)
+        return [ConvergencePart(queries, protocol, biases, self.route_specs(), self.references, movingai)]
 
     def _other_planners(self, queries, runs, batch, unseen, phase, log) -> list[Run]:
         """Phases (4) and (5): every other planner on every test set (see the module docstring)."""
@@ -234,8 +269,7 @@ class Comparison:
         trees = [p for p in self.other_planners if not is_roadmap(p)]
         tune = [t for p in trees for t in tuning_tasks(queries, p)]
         out = phase(tune, "other planners: goal bias tuning") if tune else []
-        tuned = tuned_for_shifted(best_bias(runs + out), queries)
-        tuned.update(pooled_tuned(runs + out, self.families, best_bias, unseen))
+        tuned = self._tuned_biases(runs + out, queries, unseen)
         step = self.protocol.step
         learned = [SamplerSpec.of("route_ablation", step_size=step)]
         if self.references:

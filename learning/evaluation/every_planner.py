@@ -20,11 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
+from learning.evaluation.convergence import BUDGET, CONVERGENCE_TARGETS, EVERY, ConvergenceProtocol, convergence_rows
 from learning.samplers.registry import ModelCache, make_sampler
 from planners import Problem, make_planner
 from planners.maps.generators import FAMILIES, SHIFTED_SEED0, SHIFTED_SIZES, VALIDATION_SEED0, generate
 from planners.maps.unseen import UNSEEN_FAMILIES, UNSEEN_SEED0, generate_unseen
-from planners.tools.benchmark import MAX_ITERATIONS, STEP, TOLERANCE
+from planners.tools.benchmark import MAX_ITERATIONS, STEP, TOLERANCE, Run
 
 #: Validation maps take seeds from here on (``scripts/experiments/vin_validation.py``'s block).
 VALIDATION_OFFSET = 500
@@ -166,59 +167,33 @@ def format_row(row: dict) -> str:
             f"lower bound {row['lower_bound']:5.0f}")
 
 
-#: How close to the best known cost ``convergence`` measures (5% and 1%).
-CONVERGENCE_TARGETS = (0.05, 0.01)
-
-
-def cost_trace(setup: Setup, problem: Problem, seed: int, *, budget: int, chunk: int = 25, step: float = STEP,
-               models: ModelCache | None = None) -> np.ndarray:
-    """The best cost after every ``chunk`` iterations of ``setup`` (an RRT* variant) on ``problem``, to ``budget``.
-
-    How a run is split never changes it (``Planner.solve``), so this is one run read every ``chunk`` iterations.
-    """
-    planner = make_planner(setup.planner, problem, extension_step=step, sampler=setup.build(models), seed=seed)
-    out = np.full(math.ceil(budget / chunk), np.inf)
-    for i in range(len(out)):
-        out[i] = planner.solve(max_iterations=chunk).cost
-    return out
-
-
-def iterations_within(trace: np.ndarray, reference: float, share: float, chunk: int) -> float:
-    """Iterations until ``trace`` (``cost_trace``) is within ``share`` of ``reference``; inf if never."""
-    hit = np.flatnonzero(trace <= reference * (1.0 + share))
-    return float((hit[0] + 1) * chunk) if len(hit) else math.inf
-
-
 def convergence(maps: dict[str, list[Problem]], setups: Sequence[Setup], *, seeds: Sequence[int] = (0, 1),
-                budget: int = 4000, chunk: int = 25, step: float = STEP,
+                budget: int = BUDGET, chunk: int = EVERY, step: float = STEP,
                 targets: Sequence[float] = CONVERGENCE_TARGETS) -> list[dict]:
     """Iterations RRT* variants take to come within each of ``targets`` of the best known cost.
 
-    The best known cost of a query is the lowest any run of any setup reached on it within ``budget`` (the
-    best of the runs compared; the grid's shortest path ends at the goal's centre, a run in the goal ball,
-    so it is no fair reference). A run that never gets there counts at ``budget``. Rows: ``map``,
-    ``sampler``, ``runs``, the success share and median iterations per target, and the median cost at
-    ``budget`` over the best known.
+    Each run is made as the comparison's convergence part makes it (``ConvergenceProtocol``: ``budget``
+    iterations, the cost read every ``chunk``) and measured by the same rule (``convergence_rows``): the best
+    known cost of a query is the lowest any run of any setup reached on it within ``budget``; a run that never
+    gets there counts at ``budget``. Rows: ``map``, ``sampler``, ``runs``, the success share and median
+    iterations per target, and the median cost at ``budget`` over the best known.
     """
+    protocol = ConvergenceProtocol(step=step, max_iterations=budget, every=chunk)
     models = ModelCache()
-    rows = []
+    runs = []
     for name, problems in maps.items():
-        traces = {s.label: [] for s in setups}
         for p in problems:
-            mine = {s.label: [cost_trace(s, p, seed, budget=budget, chunk=chunk, step=step, models=models)
-                              for seed in seeds] for s in setups}
-            best = min(float(t.min()) for ts in mine.values() for t in ts)
-            for label, ts in mine.items():
-                traces[label] += [(t, best) for t in ts]
-        for s in setups:
-            row = {"map": name, "sampler": s.label, "runs": len(traces[s.label])}
-            for share in targets:
-                its = [iterations_within(t, best, share, chunk) for t, best in traces[s.label]]
-                row[f"success_{share:g}"] = float(np.mean(np.isfinite(its)))
-                row[f"iterations_{share:g}"] = float(np.median(np.minimum(its, budget)))
-            row["final_over_best"] = float(np.median([t[-1] / best for t, best in traces[s.label]]))
-            rows.append(row)
-    return rows
+            for s in setups:
+                for seed in seeds:
+                    planner, cap = protocol.planner(s.planner, p, s.build(models), seed)
+                    r, progress = protocol.solve(planner, cap)
+                    runs.append(Run(map=name, query=p.name, split="test", planner=s.planner, sampler=s.label,
+                                    seed=seed, solved=r.solved, iterations=r.first_solution_iteration or cap,
+                                    lower_bound=-1, candidates=r.candidates, collision_checks=r.collision_checks,
+                                    wall_time=r.time, us_per_iteration=r.time / max(r.iterations, 1) * 1e6,
+                                    path_cost=r.cost, forward_passes=0, vertices=r.num_vertices, progress=progress))
+    rows = convergence_rows(runs, budget, by_group=False, shares=targets)
+    return [{"map": row.pop("map set"), **row} for row in rows]
 
 
 def rrtstar_setups() -> list[Setup]:

@@ -12,7 +12,13 @@ import numpy as np
 from learning.evaluation.protocol import Protocol
 from learning.evaluation.roster import bias_sampler, sampler_bias
 from planners.base.fileio import safe_file_stem
-from planners.tools.benchmark import OMPL_RUN_PROPERTIES, Run, ompl_run_values
+from planners.tools.benchmark import (
+    OMPL_PROGRESS_PROPERTIES,
+    OMPL_RUN_PROPERTIES,
+    Run,
+    ompl_run_values,
+    progress_points,
+)
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
 
@@ -180,8 +186,11 @@ def medians_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, plan
     return fig
 
 
-def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: Protocol) -> list[Path]:
+def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: Protocol,
+                    stems: set[str] | None = None) -> list[Path]:
     """One OMPL benchmark log per family (map set) of the test split, under ``out_dir``, made under ``protocol``.
+
+    ``stems``: the file stems taken already (by earlier calls into the same folder); this call's are added.
 
     Each planner and sampler pair is one OMPL planner configuration (e.g. ``RRT goal bias 0.05``), its
     settings holding the sampler's spec (name and parameters, as ``runs.csv`` records it);
@@ -190,10 +199,11 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: 
     Tuning-split runs are left out: they choose the best bias, they are not the comparison.
     """
     test = [r for r in runs if r.split == "test"]
+    names = [n for n, _ in OMPL_PROGRESS_PROPERTIES]
     fams: dict = {}
     for r in test:
         fams.setdefault(r.map, {}).setdefault((r.planner, r.sampler), []).append(r)
-    paths, stems = [], set()
+    paths, stems = [], set() if stems is None else stems
     for fam, configs in sorted(fams.items()):
         planners = {}
         for (planner, sampler), rs in sorted(configs.items()):
@@ -206,17 +216,24 @@ def write_ompl_logs(runs: Sequence[Run], biases: dict, out_dir: Path, protocol: 
             specs = sorted({r.sampler_spec for r in rs if r.sampler_spec})
             if specs:
                 settings["sampler_spec"] = " ".join(specs)
-            planners[name] = PlannerRuns(settings, [ompl_run_values(r) for r in rs])
+            progress = [[dict(zip(names, point, strict=True)) for point in progress_points(r)] for r in rs]
+            planners[name] = PlannerRuns(settings, [ompl_run_values(r) for r in rs],
+                                         progress if any(progress) else [])
         queries = len({r.query for r in configs[next(iter(configs))]})
+        cost = any(p.progress for p in planners.values())
         setup = (f"SamplerGym comparison on {fam}, test split ({queries} queries, all runs of every sampler on the "
-                 f"same queries and seeds). Iterations to first solution, capped at {protocol.max_iterations}; "
-                 f"the best goal bias was chosen on a separate tuning split (for shifted maps, their family's). "
-                 f"'time' is wall time in seconds, "
-                 f"including binding the sampler to the map. The expert is a privileged reference.")
+                 "same queries and seeds). "
+                 + ("Anytime planners run to their budget of iterations; 'iterations' is the first solution's, the "
+                    "progress properties give the best cost each time it fell (time from the solve's start). "
+                    if cost else f"Iterations to first solution, capped at {protocol.max_iterations}; ")
+                 + "The best goal bias was chosen on a separate tuning split (for shifted maps, their family's). "
+                 "'time' is wall time in seconds, including binding the sampler to the map. The expert is a "
+                 "privileged reference.")
         stem = safe_file_stem(fam, taken=stems)  # bounded, and one file per map set: a name may be anything
         paths.append(write_log(
             out_dir / f"{stem}.log", experiment_name(fam), planners, [(p, t) for p, t, _ in OMPL_RUN_PROPERTIES],
-            setup=setup, total_time=sum(r.wall_time for rs in configs.values() for r in rs),
+            setup=setup, progress_properties=OMPL_PROGRESS_PROPERTIES if cost else (),
+            total_time=sum(r.wall_time for rs in configs.values() for r in rs),
             experiment_properties={"step_size": ("REAL", protocol.step),
                                    "goal_tolerance": ("REAL", protocol.tolerance),
                                    "max_iterations": ("INTEGER", protocol.max_iterations)}))

@@ -63,6 +63,13 @@ class Protocol:
         planner = make_planner(name, problem, extension_step=self.step, sampler=sampler, seed=seed, **anytime)
         return planner, self.max_iterations
 
+    def solve(self, planner: Planner, cap: int):
+        """A run's solve: ``(result, progress)``, ``progress`` being ``Run.progress`` ("" here: one solve to ``cap``).
+
+        Another kind of run (RRT*'s convergence, ``learning.evaluation.convergence``) records how its cost fell.
+        """
+        return planner.solve(max_iterations=cap), ""
+
 
 #: The MovingAI maps the comparison evaluates by default (``scripts/evaluate.py --movingai-maps``).
 MOVINGAI_MAPS = ("arena", "den312d", "lak303d", "Berlin_0_256", "maze512-32-0", "random512-10-0", "32room_000",

@@ -467,7 +467,10 @@ def write_outputs(results, out: Path, settings: dict) -> list[Path]:
         write_runs_csv(results.all_runs, tmp / "runs.csv")
         plots = save_plots([r for r in results.runs if r.map not in results.movingai] + results.pool, results.rows,
                            results.best, tmp, extra=extra)
-        write_ompl_logs(results.all_runs + results.pool, results.best, tmp / "ompl", c.protocol)
+        stems: set[str] = set()  # one file per map set, the parts' included
+        write_ompl_logs(results.runs + results.pool, results.best, tmp / "ompl", c.protocol, stems)
+        for runs, report in results.parts.values():  # each part's logs under the protocol its runs were made by
+            write_ompl_logs(runs, results.best, tmp / "ompl", report.protocol or c.protocol, stems)
         atomic_write_text(tmp / "map-sets.json", json.dumps(record(results, settings), indent=1, default=str) + "\n")
         atomic_write_text(tmp / SUMMARY, summary_markdown(results))
         atomic_write_text(tmp / DETAILS, details_markdown(results, results.wide))

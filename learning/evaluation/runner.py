@@ -101,7 +101,7 @@ def run_one(task: Task, context: RunContext) -> Run:
     t0 = time.perf_counter()  # wall time includes binding the sampler (the policy's per-map setup)
     # iterations to the first solution: anytime planners stop there too (Protocol.planner)
     planner, cap = protocol.planner(task.planner, problem, sampler, task.seed)
-    r = planner.solve(max_iterations=cap)
+    r, progress = protocol.solve(planner, cap)
     # and the encoder's time for this query's field where it was computed before (kept across seeds, batched)
     wall = time.perf_counter() - t0 + float(getattr(planner.sampler, "reused_seconds", 0.0))
     its = r.first_solution_iteration if r.solved else r.iterations
@@ -114,7 +114,7 @@ def run_one(task: Task, context: RunContext) -> Run:
                collision_checks=checks, wall_time=wall, us_per_iteration=wall / max(r.iterations, 1) * 1e6,
                path_cost=r.cost if r.solved else math.inf,
                forward_passes=int(getattr(planner.sampler, "forward_passes", 0)), vertices=int(r.num_vertices),
-               sampler_spec=task.sampler.to_json())
+               sampler_spec=task.sampler.to_json(), progress=progress)
 
 
 def _batch(sampler: RouteSampler, task: Task, problem: Problem, context: RunContext) -> list[Problem]:

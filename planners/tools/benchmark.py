@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import csv
 import io
+import json
+import math
 import os
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -19,7 +21,6 @@ from planners.base.registry import make_planner
 from planners.base.samplers import GoalBiasedSampler, UniformSampler
 from planners.datastructures.nn import NearestNeighbors
 from planners.tools.parallel import Backend, LocalBackend
-
 
 #: The comparison's planning settings, in map cells: RRT's extension step, the goal tolerance and the
 #: iteration cap (unsolved runs count as the cap). ``learning.evaluation.Protocol`` holds them with the
@@ -51,6 +52,7 @@ class Run:
     forward_passes: int  # a learned sampler's network evaluations
     vertices: int
     sampler_spec: str = ""  # the sampler's name and parameters as JSON (evaluation runs), "" where not recorded
+    progress: str = ""  # an anytime run's best cost as it fell: JSON ``[[time, iterations, cost], ...]`` or ""
 
 
 #: Per-run properties of the OMPL logs: (OMPL property, type, ``Run`` field).
@@ -67,6 +69,24 @@ OMPL_RUN_PROPERTIES = (
     ("time per iteration", "REAL", "us_per_iteration"),
     ("seed", "INTEGER", "seed"),
 )
+
+
+#: Progress properties of the OMPL logs, in the order of ``Run.progress``'s points (OMPL's ``Benchmark`` puts
+#: ``time`` first; RRT*'s own progress properties are ``iterations`` and ``best cost``).
+OMPL_PROGRESS_PROPERTIES = (("time", "REAL"), ("iterations", "INTEGER"), ("best cost", "REAL"))
+
+
+def progress_json(points: Sequence[tuple[float, int, float]]) -> str:
+    """``Run.progress`` of ``points`` ((seconds, iterations, best cost) each; an infinite cost is written null)."""
+    return json.dumps([[round(float(t), 6), int(i), float(c) if np.isfinite(c) else None] for t, i, c in points],
+                      separators=(",", ":"))
+
+
+def progress_points(run: Run) -> list[tuple[float, int, float]]:
+    """``run.progress`` read back: (seconds, iterations, best cost) per point, inf where no path was known."""
+    if not run.progress:
+        return []
+    return [(float(t), int(i), math.inf if c is None else float(c)) for t, i, c in json.loads(run.progress)]
 
 
 def ompl_run_values(run: Run) -> dict:

@@ -43,10 +43,14 @@ class PlannerRuns:
         settings: The configuration's parameters, shown as the planner's settings.
         runs: One mapping per run from property name to value; a missing or ``None`` value, or a
             non-finite float, is written as empty and read as NULL.
+        progress: Per run, its progress points (a mapping from progress property to value each, times
+            increasing), as an anytime planner reports them; empty: no progress data. Either empty or one
+            list per run.
     """
 
     settings: Mapping[str, object] = field(default_factory=dict)
     runs: list[Mapping[str, object]] = field(default_factory=list)
+    progress: list[Sequence[Mapping[str, object]]] = field(default_factory=list)
 
 
 def _check_line(what: str, text: str) -> str:
@@ -101,6 +105,7 @@ def experiment_name(name: str) -> str:
 
 def format_log(experiment: str, planners: Mapping[str, PlannerRuns], properties: Sequence[tuple[str, str]], *,
                setup: str, total_time: float, seed: int = 0, time_limit: float = 0.0, memory_limit: float = 0.0,
+               progress_properties: Sequence[tuple[str, str]] = (),
                experiment_properties: Mapping[str, tuple[str, object]] | None = None,
                library: str = "SamplerGym", version: str | None = None, hostname: str | None = None,
                date: datetime | None = None) -> str:
@@ -112,6 +117,8 @@ def format_log(experiment: str, planners: Mapping[str, PlannerRuns], properties:
         properties: ``(name, type)`` of each per-run property, ``type`` one of :data:`PROPERTY_TYPES`,
             e.g. ``("time", "REAL")``, ``("solved", "BOOLEAN")``, ``("graph states", "INTEGER")``.
         setup: Free text describing the set-up (stored as the experiment's setup).
+        progress_properties: ``(name, type)`` of each progress property, ``("time", "REAL")`` first as OMPL's
+            ``Benchmark`` writes it; a planner whose ``progress`` is not empty gets a progress block.
         total_time: Seconds spent collecting the data.
         seed: The experiment's seed.
         time_limit: Seconds per run (0 when runs are capped by iterations instead).
@@ -130,7 +137,11 @@ def format_log(experiment: str, planners: Mapping[str, PlannerRuns], properties:
         raise InputError(f"OMPL log experiment name {experiment!r}: expected no whitespace (the reader keeps "
                          f"only the last word); use experiment_name()")
     props = [(_check_name("property name", n), t) for n, t in properties]
-    for n, t in props:
+    progress_props = [(_check_name("progress property name", n), t) for n, t in progress_properties]
+    if progress_props and progress_props[0] != ("time", "REAL"):
+        raise InputError(f"OMPL log progress properties {progress_props}: expected ('time', 'REAL') first (the "
+                         "reader keys progress by run and time)")
+    for n, t in props + progress_props:
         if t not in PROPERTY_TYPES:
             raise InputError(f"OMPL log property {n!r} has type {t!r}: expected one of {PROPERTY_TYPES}")
     if len({n.replace(" ", "_") for n, _ in props}) != len(props):
@@ -180,8 +191,37 @@ def format_log(experiment: str, planners: Mapping[str, PlannerRuns], properties:
             if extra:
                 raise InputError(f"OMPL log planner {name!r} run {i}: properties {sorted(extra)} were not declared")
             lines.append("".join(f"{_format_value(t, run.get(n), f'{name!r} run {i} {n!r}')}; " for n, t in props))
+        if p.progress:
+            lines += _progress_lines(name, p, progress_props)
         lines.append(".")
     return "\n".join(lines) + "\n"
+
+
+def _progress_lines(name: str, p: PlannerRuns, props: Sequence[tuple[str, str]]) -> list[str]:
+    """A planner's progress block: its properties, then one line per run of ``v,v,v,;`` per point."""
+    if not props:
+        raise InputError(f"OMPL log planner {name!r} has progress data but no progress properties were declared")
+    if len(p.progress) != len(p.runs):
+        raise InputError(f"OMPL log planner {name!r}: progress for {len(p.progress)} runs, expected one per run "
+                         f"({len(p.runs)})")
+    lines = [f"{len(props)} progress properties for each run", *(f"{n} {t}" for n, t in props), f"{len(p.runs)} runs"]
+    known = {n for n, _ in props}
+    for i, points in enumerate(p.progress):
+        last, cells = -math.inf, []
+        for j, point in enumerate(points):
+            extra = set(point) - known
+            if extra:
+                raise InputError(f"OMPL log planner {name!r} run {i} progress point {j}: properties {sorted(extra)} "
+                                 "were not declared")
+            t = point.get("time")
+            if not isinstance(t, int | float) or not math.isfinite(t) or t <= last:
+                raise InputError(f"OMPL log planner {name!r} run {i} progress point {j}: time {t!r}, expected a "
+                                 "finite number above the point before's (the reader keys progress by time)")
+            last = t
+            cells.append("".join(f"{_format_value(k, point.get(n), f'{name!r} run {i} progress {n!r}')},"
+                                 for n, k in props) + ";")
+        lines.append("".join(cells))
+    return lines
 
 
 def write_log(path: str | os.PathLike, experiment: str, planners: Mapping[str, PlannerRuns],
