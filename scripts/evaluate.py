@@ -10,6 +10,7 @@
     python scripts/evaluate.py --route mine=runs/route/route.pt                    # your encoder beside the shipped one
     python scripts/evaluate.py --quick --other-planners all                        # every planner and sampler: 32 min
     python scripts/evaluate.py --quick --convergence                               # and RRT*'s cost convergence
+    python scripts/evaluate.py --quick --other-planners PRM --later-queries        # and later queries on PRM's roadmaps
     python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments
 
 A thin command line over ``learning.evaluation.compare`` (one call a notebook makes as well: see
@@ -57,6 +58,7 @@ from learning.evaluation.journal import (
     stop_on_sigterm,
     work_folder,
 )
+from learning.evaluation.later_queries import LATER
 from learning.evaluation.mapsets import map_set_queries
 from learning.evaluation.protocol import MOVINGAI_MAPS, QUICK
 from learning.evaluation.rigid import PLANNERS as RIGID_PLANNERS
@@ -145,6 +147,10 @@ def parse_args(argv=None) -> argparse.Namespace:
                          f"{CONVERGENCE_BUDGET}) on every test query and report the iterations to come within 5%% "
                          "and 1%% of the best known cost: uniform, the tuned goal bias, Informed RRT*, the route "
                          "encoder, its ablation and the exact reference")
+    ap.add_argument("--later-queries", type=int, nargs="?", const=LATER, default=0, metavar="K",
+                    help=f"also ask each roadmap (the roadmap planners among --other-planners, PRM where none is) K "
+                         f"more queries (default {LATER}) after the test query it was built for, and report the "
+                         "samples each adds and the share answered with no new sample")
     ap.add_argument("--step", type=float, default=DEFAULT.step)
     ap.add_argument("--tolerance", type=float, default=DEFAULT.tolerance)
     ap.add_argument("--max-iterations", type=int, default=DEFAULT.max_iterations)
@@ -206,7 +212,7 @@ def _check_values(args) -> None:
     """Counts, sizes, step and tolerance, families and the output place: an ``InputError`` naming the flag."""
     check_int_flags(args, ("maps", "tuning_maps", "seeds", "scenarios", "tuning_scenarios", "max_iterations",
                            "processes"))
-    check_int_flags(args, ("shifted_maps", "unseen_maps", "split_seed", "convergence"), low=0)
+    check_int_flags(args, ("shifted_maps", "unseen_maps", "split_seed", "convergence", "later_queries"), low=0)
     check_size(args.size, "--size")
     if args.unseen_maps and args.size < UNSEEN_MIN_SIZE and args.map_set is None:
         raise InputError(f"--size = {args.size}: the unseen families need at least {UNSEEN_MIN_SIZE} cells a side "
@@ -391,8 +397,7 @@ def _settings(args) -> dict:
     if not args.extra_routes:  # so a run without NAME=FILE encoders keeps the journal settings it always had
         skip.add("extra_routes")
     skip.add("parts")
-    if not args.convergence:  # likewise without --convergence
-        skip.add("convergence")
+    skip.update(k for k in ("convergence", "later_queries") if not getattr(args, k))  # likewise without them
     if args.rigid is None:  # likewise without --rigid
         skip.update(k for k in vars(args) if k.startswith("rigid"))
     return {k: v for k, v in vars(args).items() if k not in skip}
@@ -428,7 +433,7 @@ def comparison_of(args) -> E.Comparison:
                         routes={n: str(p) for n, p in args.extra_routes.items()}, samplers=args.user_samplers,
                         families=args.families, other_planners=args.other_planners, references=not args.no_expert,
                         device=args.device, map_set=args.map_set_obj, models=args.models, cache=args.loaded,
-                        parts=args.parts, convergence=args.convergence)
+                        parts=args.parts, convergence=args.convergence, later_queries=args.later_queries)
 
 
 def _say(line: str) -> None:

@@ -56,8 +56,11 @@ def test_rows_take_the_best_known_cost_over_every_run_of_a_query_and_count_misse
     assert rows["uniform"]["final_over_best"] == pytest.approx(1.1)
     assert rows[GOAL_BIAS]["final_over_best"] == math.inf and rows[GOAL_BIAS]["iterations_0.01"] == 1000
     held = targets(list(rows.values()))
-    assert held == [{"map set": "forest", "sampler": "route encoder", "iterations": "50", "/ uniform": "0.05",
-                     "/ tuned goal bias": "0.05", "held": "yes"}]
+    assert held == [{"per": "map set", "where": "forest", "sampler": "route encoder", "iterations": "50",
+                     "/ uniform": "0.05", "/ tuned goal bias": "0.05", "held": "yes"}]
+    (group,) = targets(convergence_rows(runs, 1000), "group")
+    assert group["where"] == "generated" and group["held"] == "yes"
+    assert rows[GOAL_BIAS]["final_over_best"] == math.inf
 
 
 def test_a_convergence_run_is_one_run_read_every_few_iterations():

@@ -190,7 +190,8 @@ def test_sb3s_default_policy_trains_on_the_planning_env_for_each_planner(planner
 
 
 def test_a_roadmap_query_moves_the_corridor_and_later_queries_are_counted():
-    from learning.evaluation.every_planner import later_queries, other_queries
+    from learning.evaluation.every_planner import later_queries
+    from learning.evaluation.later_queries import other_queries
 
     p = wall_problem()
     pairs = other_queries(p, 2, seed=0)

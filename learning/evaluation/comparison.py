@@ -23,7 +23,8 @@ classical option (the goal bias tuned for the set for a tree; OB-PRM's obstacle-
 roadmap), the policy, each route encoder, its ablation, the exact reference and users' samplers, as the
 registry builds them (``make_sampler`` names handed to the planner as they are), except OB-PRM, which runs
 with its own obstacle-based sampling only (handed another sampler it is PRM with it); (6) with ``convergence``:
-RRT*'s cost convergence on every test query (``learning.evaluation.convergence``), then each :class:`Part`.
+RRT*'s cost convergence on every test query (``learning.evaluation.convergence``), with ``later_queries``: later
+queries on each roadmap built for a test query (``learning.evaluation.later_queries``), then each :class:`Part`.
 
 A **part** plugs a comparison of another kind into the same call, journal and output set (the 6-DoF
 scene sets, ``learning.evaluation.rigid.RigidPart``): any object with ``name``, ``protocol`` (how its runs are
@@ -54,7 +55,9 @@ from learning.evaluation.protocol import (
     tuned_for_shifted,
 )
 from learning.evaluation.roster import (
+    EXACT_ROUTE,
     ROUTE,
+    ROUTE_ABLATION,
     Task,
     bias_spec,
     evaluation_tasks,
@@ -143,7 +146,9 @@ class Comparison:
     samplers. ``families``: the generated families whose tuning maps, pooled, tune the unseen families.
     ``other_planners``: planner names run beside RRT on every test set. ``references``: run the expert
     and the exact route reference. ``convergence``: RRT*'s iterations budget for the convergence part
-    (``learning.evaluation.convergence``; 0: not run). ``map_set``: the user's map set the queries come from (for the
+    (``learning.evaluation.convergence``; 0: not run). ``later_queries``: later queries per test query on the
+    roadmap built for it, for each roadmap planner among ``other_planners`` (PRM where none is;
+    ``learning.evaluation.later_queries``; 0: not run). ``map_set``: the user's map set the queries come from (for the
     record). ``models`` and ``cache``: what is loaded already (models, MovingAI scenarios, map sets).
     """
 
@@ -160,6 +165,7 @@ class Comparison:
     map_set: Any = None
     parts: Sequence[Part] = ()
     convergence: int = 0
+    later_queries: int = 0
     models: ModelCache = field(default_factory=ModelCache)
     cache: dict = field(default_factory=dict)
 
@@ -222,7 +228,8 @@ class Comparison:
         log(f"{len(tasks)} RRT runs of the constant-distribution ablation at its tuned settings")
         runs += phase(tasks, "policy ablation")
         runs += self._other_planners(queries, runs, batch, unseen, phase, log)
-        parts = self._run_parts(phase, self._convergence_part(queries, runs, unseen))
+        parts = self._run_parts(phase, [*self._convergence_part(queries, runs, unseen),
+                                        *self._later_queries_part(queries)])
         return Results(self, runs, batch, batch_scores, constants, unseen, parts,
                        minutes=(time.perf_counter() - t0) / 60, processes=str(backend.workers))
 
@@ -261,6 +268,28 @@ class Comparison:
         protocol = ConvergenceProtocol(step=p.step, tolerance=p.tolerance, max_iterations=int(self.convergence),
                                        seeds=p.seeds, movingai_dir=p.movingai_dir)
         return [ConvergencePart(queries, protocol, biases, self.route_specs(), self.references, movingai)]
+
+    def _later_queries_part(self, queries) -> list[Part]:
+        """The later-queries part, where ``later_queries`` asks for it.
+
+        Uniform sampling, each route encoder, its ablation and the exact reference (OB-PRM: its own sampling) on each
+        roadmap planner.
+        """
+        if not self.later_queries:
+            return []
+        from learning.evaluation.later_queries import LaterQueriesPart, LaterQueriesProtocol
+
+        step = self.protocol.step
+        samplers = {"uniform": SamplerSpec.of("uniform"), **self.route_specs(),
+                    ROUTE_ABLATION: SamplerSpec.of("route_ablation", step_size=step)}
+        if self.references:
+            samplers[EXACT_ROUTE] = SamplerSpec.of("exact_route", step_size=step)
+        p = self.protocol
+        protocol = LaterQueriesProtocol(step=p.step, tolerance=p.tolerance, max_iterations=p.max_iterations,
+                                        seeds=p.seeds, movingai_dir=p.movingai_dir, later=int(self.later_queries))
+        planners = [q for q in self.other_planners if is_roadmap(q)] or ["PRM"]
+        movingai = sorted({q.family for q in queries if not q.size})
+        return [LaterQueriesPart(queries, planners, samplers, protocol, movingai)]
 
     def _other_planners(self, queries, runs, batch, unseen, phase, log) -> list[Run]:
         """Phases (4) and (5): every other planner on every test set (see the module docstring)."""

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from learning.evaluation.convergence import BUDGET, CONVERGENCE_TARGETS, EVERY, ConvergenceProtocol, convergence_rows
+from learning.evaluation.later_queries import other_queries
 from learning.samplers.registry import ModelCache, make_sampler
 from planners import Problem, make_planner
 from planners.maps.generators import FAMILIES, SHIFTED_SEED0, SHIFTED_SIZES, VALIDATION_SEED0, generate
@@ -200,27 +201,6 @@ def rrtstar_setups() -> list[Setup]:
     """RRT*'s rows of ``convergence``: uniform, goal bias, Informed RRT*, the field's three samplers."""
     return [Setup("uniform", "RRTstar", None), Setup("goal bias 0.05", "RRTstar", "goal_bias", (("bias", 0.05),)),
             Setup("informed", "InformedRRTstar", None)] + [Setup(s, "RRTstar", s) for s in FIELD_SAMPLERS]
-
-
-def other_queries(problem: Problem, k: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """``k`` more (start, goal) pairs on ``problem``'s grid, drawn with ``seed``.
-
-    Free cell centres joined by a path and a quarter of the map's side apart at least.
-    """
-    from planners.maps.gridsearch import connected
-
-    grid = problem.world
-    free = np.argwhere(~grid.obstacles)
-    rng = np.random.default_rng(seed)
-    apart = 0.25 * max(grid.height, grid.width)
-    out = []
-    for _ in range(1000 * k):
-        if len(out) == k:
-            break
-        a, b = free[rng.integers(len(free), size=2)]
-        if np.hypot(*(a - b)) >= apart and connected(grid.obstacles, tuple(a), tuple(b)):
-            out.append((grid.cell_center(int(a[0]), int(a[1])), grid.cell_center(int(b[0]), int(b[1]))))
-    return out
 
 
 def later_queries(maps: dict[str, list[Problem]], setups: Sequence[Setup], *, queries: int = 3,

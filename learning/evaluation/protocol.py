@@ -63,10 +63,12 @@ class Protocol:
         planner = make_planner(name, problem, extension_step=self.step, sampler=sampler, seed=seed, **anytime)
         return planner, self.max_iterations
 
-    def solve(self, planner: Planner, cap: int):
-        """A run's solve: ``(result, progress)``, ``progress`` being ``Run.progress`` ("" here: one solve to ``cap``).
+    def solve(self, planner: Planner, cap: int, query=None):
+        """A run of ``query``: ``(result, progress)``, ``progress`` being ``Run.progress`` ("" here: one solve).
 
-        Another kind of run (RRT*'s convergence, ``learning.evaluation.convergence``) records how its cost fell.
+        Other kinds of run: RRT*'s convergence records how its cost fell (``learning.evaluation.convergence``); a
+        roadmap's later queries answer another query on the roadmap built for ``query`` (the run records the
+        problem the planner answered last, ``planner.problem``; ``learning.evaluation.later_queries``).
         """
         return planner.solve(max_iterations=cap), ""
 

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from planners import GoalBiasedSampler, Sampler, UniformSampler
+from planners import GoalBiasedSampler, InformedSampler, Sampler, UniformSampler
 from planners.base.fileio import InputError
 from planners.base.samplers import check_sampler_params
 from planners.tools.benchmark import STEP  # the step samplers are built for unless told otherwise
@@ -27,6 +27,10 @@ from planners.tools.benchmark import STEP  # the step samplers are built for unl
 
 def _uniform() -> Sampler:
     return UniformSampler()
+
+
+def _informed() -> Sampler:
+    return InformedSampler()
 
 
 def _goal_bias(bias: float = 0.05) -> Sampler:
@@ -130,6 +134,8 @@ def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75
 REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "uniform": (_uniform, "uniform sampling"),
     "goal_bias": (_goal_bias, "uniform sampling with the goal drawn with probability bias"),
+    "informed": (_informed, "Informed RRT*'s sampling: uniform, then uniform over the informed set once a path "
+                 "exists (Euclidean real-vector worlds)"),
     "follower": (_follower, "the straight-line follower: the route sampler on the straight-line distance"),
     "route": (_route, "the shipped route encoder at its validated settings"),
     "route_ablation": (_route_ablation, "the route sampler without its encoder, tuned for itself"),

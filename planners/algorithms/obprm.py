@@ -173,10 +173,11 @@ class OBPRM(PRM):
         self._sampler_checks = 0  # checks of samplers bound for earlier queries
         super().clear()
 
-    def query(self, start, goal, *, max_iterations: int | None = 0, time_limit: float | None = None):
+    def query(self, start, goal, *, max_iterations: int | None = 0, time_limit: float | None = None,
+              name: str | None = None):
         """As ``PRM.query``; the sampler's checks so far stay counted."""
         self._sampler_checks += int(getattr(self.sampler, "checks", 0))
-        return super().query(start, goal, max_iterations=max_iterations, time_limit=time_limit)
+        return super().query(start, goal, max_iterations=max_iterations, time_limit=time_limit, name=name)
 
     @property
     def collision_checks(self) -> int:

@@ -240,12 +240,14 @@ class PRM(Planner):
         self._after_growth()
         self._time += time.perf_counter() - t0
 
-    def query(self, start, goal, *, max_iterations: int | None = 0, time_limit: float | None = None) -> PlanResult:
+    def query(self, start, goal, *, max_iterations: int | None = 0, time_limit: float | None = None,
+              name: str | None = None) -> PlanResult:
         """Answer a new query on the current roadmap, growing it within the budget if needed.
 
-        ``PlanResult.iterations`` then counts the samples drawn for this query only.
+        ``PlanResult.iterations`` then counts the samples drawn for this query only. ``name`` names the new
+        query's problem (``self.problem``; default: the roadmap's first problem's name).
         """
-        self.problem = self.problem.with_query(start, goal)
+        self.problem = self.problem.with_query(start, goal, **({} if name is None else {"name": str(name)}))
         self._goal = np.array(self.problem.goal, dtype=np.float64)  # writable, as Planner sets it
         self.sampler = self._sampler_spec.bind(self.problem)
         self._buf_pts = self._buf_pts[:0]
