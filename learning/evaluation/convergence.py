@@ -150,9 +150,9 @@ class ConvergencePart:
                 "median final cost over the best known:\n\n" + markdown_table(_printable(rows)) + "\n\nBy map set:\n\n"
                 + markdown_table(_printable(by_set)))
         if held:
-            text += (f"\n\nThe learned field against uniform RRT* and the tuned goal bias (iterations to within 5%, at "
-                     f"most {VS_BASELINES:g}x both; a baseline that never gets there counts at the budget, so its ratio "
-                     "is an upper bound), per group, then per map set:\n\n" + markdown_table(held))
+            text += ("\n\nThe learned field against uniform RRT* and the tuned goal bias (iterations to within 5%, at "
+                     f"most {VS_BASELINES:g}x both; a baseline that never gets there counts at the budget, so its "
+                     "ratio is an upper bound), per group, then per map set:\n\n" + markdown_table(held))
         return PartReport(text, findings(rows, held))
 
 
