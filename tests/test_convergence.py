@@ -85,8 +85,8 @@ def test_the_part_runs_every_row_and_writes_its_progress_to_runs_csv_and_the_omp
     out = tmp_path / "out"
     res = E.compare(E.Comparison([], parts=[part]), out, log=lambda line: None)
     runs, rep = res.parts[part.name]
-    assert {r.sampler for r in runs} == {"uniform", GOAL_BIAS, "Informed RRT*", E.ROUTE, "route ablation",
-                                         "exact route (reference)"}
+    assert {r.sampler for r in runs} == {"uniform", GOAL_BIAS, "Informed RRT*", E.ROUTE, E.ROUTE_ABLATION,
+                                         E.EXACT_ROUTE}
     assert {r.map for r in runs} == {"forest (RRT* cost)"} and {r.split for r in runs} == {"test"}
     assert '"bias":0.1' in next(r for r in runs if r.sampler == GOAL_BIAS).sampler_spec.replace(" ", "")
     assert "within 5%" in rep.markdown and rep.protocol == protocol

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from learning.evaluation.protocol import Protocol
-from learning.evaluation.roster import Task, bias_spec
+from learning.evaluation.roster import EXACT_ROUTE, ROUTE_ABLATION, Task, bias_spec
 from learning.evaluation.tables import group_of
 from learning.samplers.registry import SamplerSpec
 from planners import make_planner
@@ -127,9 +127,9 @@ class ConvergencePart:
                 (GOAL_BIAS, "RRTstar", bias_spec(bias)),
                 (INFORMED, "InformedRRTstar", SamplerSpec.of("informed"))]
         rows += [(label, "RRTstar", spec) for label, spec in self.routes.items()]
-        rows.append(("route ablation", "RRTstar", SamplerSpec.of("route_ablation", step_size=step)))
+        rows.append((ROUTE_ABLATION, "RRTstar", SamplerSpec.of("route_ablation", step_size=step)))
         if self.references:
-            rows.append(("exact route (reference)", "RRTstar", SamplerSpec.of("exact_route", step_size=step)))
+            rows.append((EXACT_ROUTE, "RRTstar", SamplerSpec.of("exact_route", step_size=step)))
         return rows
 
     def tasks(self) -> list[Task]:
@@ -217,7 +217,7 @@ def _printable(rows: Sequence[dict]) -> list[dict]:
 
 def _learned(label: str) -> bool:
     """Whether a row is a learned field (a route encoder): neither a classical row, the ablation nor the reference."""
-    return label not in ("uniform", GOAL_BIAS, INFORMED, "route ablation", "exact route (reference)")
+    return label not in ("uniform", GOAL_BIAS, INFORMED, ROUTE_ABLATION, EXACT_ROUTE)
 
 
 def targets(rows: Sequence[dict], key: str = "map set", share: float = 0.05) -> list[dict]:
