@@ -6,6 +6,8 @@ from __future__ import annotations
 import dataclasses
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from dataclasses import asdict
@@ -16,8 +18,9 @@ import pytest
 from learning import evaluation as E
 from learning.models.shipped import SHIPPED_POLICY, SHIPPED_ROUTE
 from planners import movingai_dir
-from planners.tools.parallel import BACKENDS, LocalBackend, default_chunksize, make_backend
+from planners.tools.parallel import BACKENDS, LocalBackend, WorkerDied, default_chunksize, make_backend
 
+ROOT = Path(__file__).resolve().parents[1]
 CHECKPOINT = str(SHIPPED_POLICY)
 ROUTE = str(SHIPPED_ROUTE)
 
@@ -50,6 +53,28 @@ def _serial_and(backend) -> tuple[list[dict], list[dict]]:
     assert [r["query"] for r in serial] == [protocol.problem(t.query).name for t in tasks]
     assert [E.SamplerSpec.from_json(r["sampler_spec"]) for r in serial] == [t.sampler for t in tasks]
     return serial, _runs(E.run_all(tasks, protocol, backend, progress=False))
+
+
+def _dies_at_three(task, context):
+    if task == 3:
+        os._exit(1)  # as a worker killed for memory
+    return task + context
+
+
+def test_a_worker_that_dies_stops_the_local_pool_with_a_clear_error():
+    t0 = time.monotonic()
+    with pytest.raises(WorkerDied, match="fewer processes"):
+        LocalBackend(2).map(_dies_at_three, list(range(8)), context=0, chunksize=1)
+    assert time.monotonic() - t0 < 60
+
+
+def test_a_script_without_a_main_guard_gets_an_error_not_a_hang(tmp_path):
+    script = tmp_path / "unguarded.py"
+    script.write_text("from operator import add\nfrom planners.tools.parallel import LocalBackend\n"
+                      "print(LocalBackend(2).map(add, [1, 2, 3], context=0))\n")
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300,
+                          cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert proc.returncode != 0 and "if __name__ == '__main__':" in proc.stderr
 
 
 def test_the_local_pool_gives_the_serial_runs_in_task_order():

@@ -99,12 +99,49 @@ def _pool_init(fn, context, worker_init) -> None:
     _LOCAL["fn"], _LOCAL["context"] = fn, context
 
 
-def _pool_call(task):
-    return _LOCAL["fn"](task, _LOCAL["context"])
+def _pool_chunk(chunk):
+    return [_LOCAL["fn"](task, _LOCAL["context"]) for task in chunk]
+
+
+class WorkerDied(RuntimeError):
+    """A process of the local pool ended while its tasks were unfinished (the pool would wait for them forever)."""
+
+
+#: Seconds without a result after which the local pool checks that its workers are the ones it started.
+WATCH_SECONDS = 2.0
+
+
+def _watched(results, workers: int, every: float = WATCH_SECONDS):
+    """The results of ``results`` (a pool's ``imap`` of chunks), raising ``WorkerDied`` once a worker was replaced.
+
+    ``multiprocessing.Pool`` replaces a worker that exits and loses the tasks it held, so a worker that dies (killed
+    for memory, or a script re-run by the spawn start method that fails at its top level) would leave the caller
+    waiting forever. The pool's workers are this process's children; whenever ``every`` seconds pass without a
+    result, a child that was not among them means one of them was replaced.
+    """
+    import multiprocessing as mp
+
+    started = {p.pid for p in mp.active_children()}
+    while True:
+        try:
+            yield from results.next(timeout=every)
+        except StopIteration:
+            return
+        except mp.TimeoutError:
+            now = {p.pid for p in mp.active_children()}
+            if now - started:
+                raise WorkerDied(
+                    f"a worker process of the local pool ({workers} processes) ended before its tasks were done. If a "
+                    "script starts this with more than one process, its top-level code must run under `if __name__ "
+                    "== '__main__':` (the spawn start method runs the script again in each worker); a worker killed "
+                    "for memory ends the same way (use fewer processes)") from None
 
 
 class LocalBackend:
-    """This process (``processes <= 1``) or a pool of fresh ("spawn") processes on this machine."""
+    """This process (``processes <= 1``) or a pool of fresh ("spawn") processes on this machine.
+
+    A worker that dies stops the map with ``WorkerDied`` rather than leaving it waiting.
+    """
 
     def __init__(self, processes: int = 1, worker_init: Callable[[], None] | None = None) -> None:
         self.workers = max(1, int(processes))
@@ -137,7 +174,9 @@ class LocalBackend:
         try:
             # the context is pickled once per worker (initializer), not once per task
             with ctx.Pool(self.workers, initializer=_pool_init, initargs=(fn, context, self.worker_init)) as pool:
-                it = pool.imap(_pool_call, tasks, chunksize=chunksize or 4)
+                size = chunksize or 4
+                chunks = [tasks[i:i + size] for i in range(0, len(tasks), size)]
+                it = _watched(pool.imap(_pool_chunk, chunks), self.workers)
                 out = []
                 for i, r in enumerate(tqdm(it, total=len(tasks), desc=desc, disable=not progress)):
                     out.append(r)
