@@ -10,7 +10,9 @@ run counts at the budget), median collision checks and median time (sampler set-
 ``--convergence``: RRT* variants' median iterations to come within 5% and 1% of the best known cost (the best
 any compared run reached within the budget). With ``--later-queries``: PRM's samples for the map's query and for
 three more on the same roadmap, and the share of those it answers with no new sample. A thin CLI over
-``learning.evaluation.every_planner``.
+``learning.evaluation.every_planner``, for the validation maps settings are chosen on and quick looks at a few
+queries; on the test sets the comparison itself measures the same (``scripts/evaluate.py --other-planners
+--convergence --later-queries``).
 """
 
 from __future__ import annotations

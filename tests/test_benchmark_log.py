@@ -61,6 +61,19 @@ def _multiline(f, required):
     return value
 
 
+def _columns(c, f, table: str, n: int) -> list[str]:
+    """The next ``n`` property lines (``name words TYPE``) as ``table``'s columns, added where missing."""
+    cols = [col[1] for col in c.execute(f"PRAGMA table_info({table})").fetchall()]
+    names = []
+    for _ in range(n):
+        field = f.readline().split()
+        name = "_".join(field[:-1])
+        if name not in cols:
+            c.execute(f"ALTER TABLE {table} ADD {name} {field[-1]}")
+        names.append(name)
+    return names
+
+
 def read_benchmark_log(text: str, conn: sqlite3.Connection) -> int:
     """Parse one log into ``conn`` (OMPL's schema); returns the experiment id."""
     c = conn.cursor()
@@ -127,16 +140,7 @@ def read_benchmark_log(text: str, conn: sqlite3.Connection) -> int:
             planner_id = c.lastrowid
         else:
             planner_id = row[0]
-        c.execute("PRAGMA table_info(runs)")
-        cols = [col[1] for col in c.fetchall()]
-        nprops = int(f.readline().split()[0])
-        prop_names = ["experimentid", "plannerid"]
-        for _ in range(nprops):
-            field = f.readline().split()
-            name = "_".join(field[:-1])
-            if name not in cols:
-                c.execute(f"ALTER TABLE runs ADD {name} {field[-1]}")
-            prop_names.append(name)
+        prop_names = ["experimentid", "plannerid", *_columns(c, f, "runs", int(f.readline().split()[0]))]
         insert = f"INSERT INTO runs ({','.join(prop_names)}) VALUES ({','.join('?' * len(prop_names))})"
         run_ids = []
         for _ in range(int(f.readline().split()[0])):
@@ -145,15 +149,7 @@ def read_benchmark_log(text: str, conn: sqlite3.Connection) -> int:
             run_ids.append(c.lastrowid)
         next_line = f.readline().strip()
         if next_line != ".":  # the planner's progress data
-            c.execute("PRAGMA table_info(progress)")
-            cols = [col[1] for col in c.fetchall()]
-            names = ["runid"]
-            for _ in range(int(next_line.split()[0])):
-                field = f.readline().split()
-                name = "_".join(field[:-1])
-                if name not in cols:
-                    c.execute(f"ALTER TABLE progress ADD {name} {field[-1]}")
-                names.append(name)
+            names = ["runid", *_columns(c, f, "progress", int(next_line.split()[0]))]
             insert = f"INSERT INTO progress ({','.join(names)}) VALUES ({','.join('?' * len(names))})"
             for j in range(int(f.readline().split()[0])):
                 for sample in f.readline().split(";")[:-1]:

@@ -20,11 +20,10 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
-from learning.evaluation.protocol import Protocol
+from learning.evaluation.protocol import PartQuery, Protocol
 from learning.evaluation.roster import EXACT_ROUTE, ROUTE_ABLATION, Task, bias_spec
 from learning.evaluation.tables import group_of
 from learning.samplers.registry import SamplerSpec
@@ -71,35 +70,10 @@ class ConvergenceProtocol(Protocol):
 
 
 @dataclass(frozen=True)
-class ConvergenceQuery:
-    """A test query of the comparison, run for cost: its runs are kept apart from the first-solution runs.
+class ConvergenceQuery(PartQuery):
+    """A test query of the comparison, run for cost: its map set is the query's with `` (RRT* cost)`` added."""
 
-    ``map_set`` is the query's with `` (RRT* cost)`` added, so ``runs.csv`` and the OMPL logs (one experiment per
-    map set, with progress) keep the two kinds of RRT* run apart.
-    """
-
-    query: Any
     SUFFIX = " (RRT* cost)"
-
-    @property
-    def map_set(self) -> str:
-        return self.query.map_set + self.SUFFIX
-
-    @property
-    def split(self) -> str:
-        return self.query.split
-
-    @property
-    def size(self) -> int:
-        return self.query.size
-
-    def problem(self, movingai_dir, tolerance: float, cache: dict | None = None):
-        return self.query.problem(movingai_dir, tolerance, cache)
-
-
-def map_set_of(run: Run) -> str:
-    """The comparison's map set a convergence run was made on (its ``map`` without the suffix)."""
-    return run.map.removesuffix(ConvergenceQuery.SUFFIX)
 
 
 @dataclass
@@ -188,7 +162,8 @@ def convergence_rows(runs: Sequence[Run], budget: int, movingai_maps: Sequence[s
     best = best_known(runs)
     cells: dict[tuple[str, str], list[Run]] = {}
     for r in runs:
-        where = group_of(map_set_of(r), movingai_maps) if by_group else map_set_of(r)
+        where = ConvergenceQuery.map_set_of(r)
+        where = group_of(where, movingai_maps) if by_group else where
         cells.setdefault((where, r.sampler), []).append(r)
     out = []
     for (where, label), rs in cells.items():

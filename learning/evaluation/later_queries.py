@@ -16,11 +16,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
 
 import numpy as np
 
-from learning.evaluation.protocol import Protocol
+from learning.evaluation.protocol import PartQuery, Protocol
 from learning.evaluation.roster import OBSTACLE_BASED, Task
 from learning.evaluation.tables import group_of
 from learning.samplers.registry import SamplerSpec
@@ -53,37 +52,19 @@ def other_queries(problem: Problem, k: int, seed: int) -> list[tuple[np.ndarray,
 
 
 @dataclass(frozen=True)
-class LaterQuery:
+class LaterQuery(PartQuery):
     """The ``k``-th later query (1, 2, ...) on the roadmap built for a test query of the comparison.
 
-    ``map_set`` is the query's with `` (later queries)`` added, so ``runs.csv`` and the OMPL logs keep these runs
-    apart from the first-query runs.
+    Its map set is the query's with `` (later queries)`` added; its problem is the one the roadmap is built for.
     """
 
-    query: Any
     k: int
     SUFFIX = " (later queries)"
-
-    @property
-    def map_set(self) -> str:
-        return self.query.map_set + self.SUFFIX
-
-    @property
-    def split(self) -> str:
-        return self.query.split
-
-    @property
-    def size(self) -> int:
-        return self.query.size
 
     @property
     def seed(self) -> int:
         """The seed its pairs are drawn with: the query's key (a generator seed or a scenario index)."""
         return int(self.query.key)
-
-    def problem(self, movingai_dir, tolerance: float, cache: dict | None = None) -> Problem:
-        """The problem the roadmap is built for (the test query's own)."""
-        return self.query.problem(movingai_dir, tolerance, cache)
 
 
 @dataclass(frozen=True)
@@ -101,11 +82,6 @@ class LaterQueriesProtocol(Protocol):
         r = planner.query(start, goal, max_iterations=cap, name=f"{planner.problem.name} later {query.k}")
         # the samples this query added: a roadmap stops at the query's first solution
         return replace(r, first_solution_iteration=r.iterations if r.solved else None), ""
-
-
-def map_set_of(run: Run) -> str:
-    """The comparison's map set a later-query run was made on (its ``map`` without the suffix)."""
-    return run.map.removesuffix(LaterQuery.SUFFIX)
 
 
 @dataclass
@@ -153,7 +129,8 @@ def later_query_rows(runs: Sequence[Run], cap: int, movingai_maps: Sequence[str]
     for r in runs:
         if " later " not in r.query:  # the map had fewer later queries than asked
             continue
-        where = group_of(map_set_of(r), movingai_maps) if by_group else map_set_of(r)
+        where = LaterQuery.map_set_of(r)
+        where = group_of(where, movingai_maps) if by_group else where
         cells.setdefault((where, r.planner, r.sampler), []).append(r)
     out = []
     for (where, planner, sampler), rs in cells.items():

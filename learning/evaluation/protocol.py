@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Any, ClassVar
 
 from planners import Problem, make_planner
 from planners.base.planner import Planner
@@ -71,6 +72,38 @@ class Protocol:
         problem the planner answered last, ``planner.problem``; ``learning.evaluation.later_queries``).
         """
         return planner.solve(max_iterations=cap), ""
+
+
+@dataclass(frozen=True)
+class PartQuery:
+    """A test query of the comparison that a part runs under a map set of its own: the query's with ``SUFFIX``.
+
+    So ``runs.csv`` and the OMPL logs (one experiment per map set) keep a part's runs apart from the comparison's
+    runs of the same query. The problem is the query's own.
+    """
+
+    query: Any
+    SUFFIX: ClassVar[str] = ""
+
+    @property
+    def map_set(self) -> str:
+        return self.query.map_set + self.SUFFIX
+
+    @property
+    def split(self) -> str:
+        return self.query.split
+
+    @property
+    def size(self) -> int:
+        return self.query.size
+
+    def problem(self, movingai_dir: str | None, tolerance: float, cache: dict | None = None) -> Problem:
+        return self.query.problem(movingai_dir, tolerance, cache)
+
+    @classmethod
+    def map_set_of(cls, run) -> str:
+        """The comparison's map set a run of this kind was made on (its ``map`` without the suffix)."""
+        return run.map.removesuffix(cls.SUFFIX)
 
 
 #: The MovingAI maps the comparison evaluates by default (``scripts/evaluate.py --movingai-maps``).
