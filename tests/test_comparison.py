@@ -126,9 +126,19 @@ def test_other_planners_run_every_registry_sampler_beside_their_classical_option
     rc = load_script("evaluate").main([
         "--families", "forest", "--size", "64", "--maps", "1", "--tuning-maps", "1", "--seeds", "1",
         "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "PRM", "RRTConnect", "OBPRM",
-        "--route", f"mine={SHIPPED}", "--max-iterations", "1500", "--processes", "1", "--out", str(out)])
+        "--route", f"mine={SHIPPED}", "--max-iterations", "1500", "--convergence", "200", "--later-queries", "1",
+        "--processes", "1", "--out", str(out)])
     assert rc == 0
     rows = list(csv.DictReader((out / "runs.csv").open()))
+    # the two parts: RRT*'s cost on the test query, later queries on both roadmap planners, in their own map sets
+    cost = [r for r in rows if r["map"] == "forest (RRT* cost)"]
+    assert {r["sampler"] for r in cost} == {"uniform", "goal bias (tuned)", "Informed RRT*", E.ROUTE, "mine",
+                                            E.ROUTE_ABLATION, E.EXACT_ROUTE} and any(r["progress"] for r in cost)
+    later = [r for r in rows if r["map"] == "forest (later queries)"]
+    assert {r["planner"] for r in later} == {"PRM", "OBPRM"} and all(r["query"].endswith("later 1") for r in later)
+    details = (out / "details.md").read_text()
+    assert "## RRT* convergence" in details and "## Later queries on one roadmap" in details
+    rows = [r for r in rows if r not in cost and r not in later]
     got = {(r["planner"], r["sampler"]) for r in rows if r["split"] == "test"}
     for planner, classical in (("PRM", E.OBSTACLE_BASED), ("RRTConnect", None)):
         want = {"uniform", "policy", E.ROUTE, "mine", E.ROUTE_ABLATION, E.EXACT_ROUTE}

@@ -103,6 +103,7 @@ def run_one(task: Task, context: RunContext) -> Run:
     planner, cap = protocol.planner(task.planner, problem, sampler, task.seed)
     r, progress = protocol.solve(planner, cap, task.query)
     answered = planner.problem  # the problem the run answered (a roadmap's later query: not the one it was built for)
+    bound = answered.iteration_lower_bound(protocol.step)  # None where its shortest path is unknown: -1 in a Run
     # and the encoder's time for this query's field where it was computed before (kept across seeds, batched)
     wall = time.perf_counter() - t0 + float(getattr(planner.sampler, "reused_seconds", 0.0))
     its = r.first_solution_iteration if r.solved else r.iterations
@@ -111,7 +112,7 @@ def run_one(task: Task, context: RunContext) -> Run:
         checks += int(getattr(planner.sampler, "checks", 0))  # e.g. obstacle-based sampling handed to PRM
     return Run(map=task.query.map_set, query=answered.name, split=task.query.split, planner=task.planner,
                sampler=task.sampler_label, seed=task.seed, solved=r.solved, iterations=int(its),
-               lower_bound=answered.iteration_lower_bound(protocol.step), candidates=r.candidates,
+               lower_bound=-1 if bound is None else bound, candidates=r.candidates,
                collision_checks=checks, wall_time=wall, us_per_iteration=wall / max(r.iterations, 1) * 1e6,
                path_cost=r.cost if r.solved else math.inf,
                forward_passes=int(getattr(planner.sampler, "forward_passes", 0)), vertices=int(r.num_vertices),
