@@ -14,6 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 import pytest
+from pool_tasks import dies_at_three
 
 from learning import evaluation as E
 from learning.models.shipped import SHIPPED_POLICY, SHIPPED_ROUTE
@@ -55,16 +56,10 @@ def _serial_and(backend) -> tuple[list[dict], list[dict]]:
     return serial, _runs(E.run_all(tasks, protocol, backend, progress=False))
 
 
-def _dies_at_three(task, context):
-    if task == 3:
-        os._exit(1)  # as a worker killed for memory
-    return task + context
-
-
 def test_a_worker_that_dies_stops_the_local_pool_with_a_clear_error():
     t0 = time.monotonic()
     with pytest.raises(WorkerDied, match="fewer processes"):
-        LocalBackend(2).map(_dies_at_three, list(range(8)), context=0, chunksize=1)
+        LocalBackend(2).map(dies_at_three, list(range(8)), context=0, chunksize=1)
     assert time.monotonic() - t0 < 60
 
 
