@@ -99,6 +99,9 @@ def test_read_mesh_refuses_bad_files(tmp_path):
     (tmp_path / "empty.obj").write_text("# no faces\nv 0 0 0\n")
     with pytest.raises(InputError, match="empty.obj"):
         read_mesh(tmp_path / "empty.obj")
+    (tmp_path / "zero.dae").write_bytes(b"")  # a file a partial copy left empty
+    with pytest.raises(InputError, match=r"zero.dae is empty \(0 bytes\)"):
+        read_mesh(tmp_path / "zero.dae")
     with pytest.raises(InputError, match="face indices"):
         MeshWorld((np.zeros((3, 3)), [[0, 1, 5]]), box((1, 1, 1), (0, 0, 0)), low=(0, 0, 0), high=(1, 1, 1))
     with pytest.raises(InputError, match="low < high"):

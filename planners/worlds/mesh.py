@@ -114,6 +114,8 @@ def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     suffix = path.suffix.lower()
     if suffix not in MESH_SUFFIXES:
         raise InputError(f"{path}: unknown mesh type {suffix!r}; expected one of {MESH_SUFFIXES}")
+    if path.stat().st_size == 0:  # e.g. a large file a partial copy or checkout left out
+        raise InputError(f"mesh file {path} is empty (0 bytes): copy the file again")
     trimesh = _trimesh()
     try:
         scene = trimesh.load(str(path), force="scene")
