@@ -79,8 +79,8 @@ def test_a_convergence_run_is_one_run_read_every_few_iterations():
 def test_the_part_runs_every_row_and_writes_its_progress_to_runs_csv_and_the_ompl_logs(tmp_path):
     queries = [E.Query("forest", 1_000_000, 32, "test"), E.Query("forest", 1_000_001, 32, "tuning")]
     protocol = ConvergenceProtocol(step=2.0, max_iterations=200, seeds=1, every=50)
-    route = {E.ROUTE: E.SamplerSpec.of("route", step_size=2.0)}
-    part = ConvergencePart(queries, protocol, {"forest": 0.1}, route)
+    fields = E.Comparison([], E.Protocol(step=2.0)).field_specs()  # the route encoder, its ablation, the reference
+    part = ConvergencePart(queries, protocol, {"forest": 0.1}, fields)
     assert isinstance(part, E.Part)
     out = tmp_path / "out"
     res = E.compare(E.Comparison([], parts=[part]), out, log=lambda line: None)

@@ -50,6 +50,7 @@ from learning.evaluation.mapsets import UnseenQuery, pooled_tuned, unseen_querie
 from learning.evaluation.protocol import (
     Protocol,
     generated_queries,
+    movingai_maps,
     movingai_queries,
     shifted_queries,
     tuned_for_shifted,
@@ -185,6 +186,14 @@ class Comparison:
         return {label: SamplerSpec.of("route", path=path, step_size=step, device=device)
                 for label, path in {ROUTE: self.route, **self.routes}.items()}
 
+    def field_specs(self) -> dict[str, SamplerSpec]:
+        """The route field's samplers by label: each route encoder, its ablation, the exact reference (if asked)."""
+        step = self.protocol.step
+        out = {**self.route_specs(), ROUTE_ABLATION: SamplerSpec.of("route_ablation", step_size=step)}
+        if self.references:
+            out[EXACT_ROUTE] = SamplerSpec.of("exact_route", step_size=step)
+        return out
+
     def run(self, backend: Backend, journal=None, log: Callable[[str], None] = print) -> Results:
         """Every phase's runs on ``backend``, journaled in ``journal`` (None: kept in memory); the results."""
         t0 = time.perf_counter()
@@ -263,11 +272,10 @@ class Comparison:
         tuned = self._tuned_biases(runs, queries, unseen)
         sets = {q.map_set for q in queries}
         biases = {m: tuned.get((m, "RRTstar"), tuned.get((m, "RRT"), 0.05)) for m in sets}
-        movingai = sorted({q.family for q in queries if not q.size})
         p = self.protocol
         protocol = ConvergenceProtocol(step=p.step, tolerance=p.tolerance, max_iterations=int(self.convergence),
                                        seeds=p.seeds, movingai_dir=p.movingai_dir)
-        return [ConvergencePart(queries, protocol, biases, self.route_specs(), self.references, movingai)]
+        return [ConvergencePart(queries, protocol, biases, self.field_specs(), movingai_maps(queries))]
 
     def _later_queries_part(self, queries) -> list[Part]:
         """The later-queries part, where ``later_queries`` asks for it.
@@ -279,17 +287,12 @@ class Comparison:
             return []
         from learning.evaluation.later_queries import LaterQueriesPart, LaterQueriesProtocol
 
-        step = self.protocol.step
-        samplers = {"uniform": SamplerSpec.of("uniform"), **self.route_specs(),
-                    ROUTE_ABLATION: SamplerSpec.of("route_ablation", step_size=step)}
-        if self.references:
-            samplers[EXACT_ROUTE] = SamplerSpec.of("exact_route", step_size=step)
+        samplers = {"uniform": SamplerSpec.of("uniform"), **self.field_specs()}
         p = self.protocol
         protocol = LaterQueriesProtocol(step=p.step, tolerance=p.tolerance, max_iterations=p.max_iterations,
                                         seeds=p.seeds, movingai_dir=p.movingai_dir, later=int(self.later_queries))
         planners = [q for q in self.other_planners if is_roadmap(q)] or ["PRM"]
-        movingai = sorted({q.family for q in queries if not q.size})
-        return [LaterQueriesPart(queries, planners, samplers, protocol, movingai)]
+        return [LaterQueriesPart(queries, planners, samplers, protocol, movingai_maps(queries))]
 
     def _other_planners(self, queries, runs, batch, unseen, phase, log) -> list[Run]:
         """Phases (4) and (5): every other planner on every test set (see the module docstring)."""
@@ -299,10 +302,8 @@ class Comparison:
         tune = [t for p in trees for t in tuning_tasks(queries, p)]
         out = phase(tune, "other planners: goal bias tuning") if tune else []
         tuned = self._tuned_biases(runs + out, queries, unseen)
-        step = self.protocol.step
-        learned = [SamplerSpec.of("route_ablation", step_size=step)]
-        if self.references:
-            learned.append(SamplerSpec.of("exact_route", step_size=step))
+        routes = self.route_specs()
+        learned = [spec for label, spec in self.field_specs().items() if label not in routes]  # ablation, reference
         tasks = []
         for planner in self.other_planners:
             for q in queries:
@@ -318,7 +319,7 @@ class Comparison:
                 for spec in (SamplerSpec.of("uniform"), classical, *learned):
                     tasks.append(Task(q, planner, spec, 0))
                 tasks.append(Task(q, planner, policy_spec(self.policy, batch), 0, "policy"))
-                for label, spec in self.route_specs().items():
+                for label, spec in routes.items():
                     tasks.append(Task(q, planner, spec, 0, label if label != ROUTE else ""))
                 tasks += [Task(q, planner, SamplerSpec.user(n, s), 0) for n, s in self.samplers.items()]
         log(f"{len(tasks)} runs of {', '.join(self.other_planners)} on every test set")
@@ -419,7 +420,7 @@ class Results:
         from learning.evaluation.tables import summarize
 
         queries = self.comparison.queries
-        self.movingai = sorted({q.family for q in queries if not q.size})
+        self.movingai = movingai_maps(queries)
         self.pool = pooled(self.runs, MOVINGAI_POOL, self.movingai) if len(self.movingai) > 1 else []
         best = tuned_for_shifted(best_bias(self.runs + self.pool), queries)
         best.update(pooled_tuned(self.runs, self.comparison.families, best_bias, self.unseen))

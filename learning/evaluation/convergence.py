@@ -81,30 +81,24 @@ class ConvergencePart:
     """RRT*'s convergence on the comparison's test queries (see the module docstring).
 
     ``biases``: the goal bias chosen on the tuning split per map set (0.05, OMPL's default, where none was);
-    ``routes``: the route encoders' specs by label; ``references``: run the exact route reference;
-    ``movingai_maps``: the MovingAI map sets (pooled as one group in the report).
+    ``fields``: the route field's samplers by label (each route encoder, its ablation, the exact reference:
+    ``Comparison.field_specs``); ``movingai_maps``: the MovingAI map sets (pooled as one group in the report).
     """
 
     queries: Sequence
     protocol: ConvergenceProtocol = field(default_factory=ConvergenceProtocol)
     biases: Mapping[str, float] = field(default_factory=dict)
-    routes: Mapping[str, SamplerSpec] = field(default_factory=dict)
-    references: bool = True
+    fields: Mapping[str, SamplerSpec] = field(default_factory=dict)
     movingai_maps: Sequence[str] = ()
     name: str = "RRT* convergence"
 
     def setups(self, map_set: str) -> list[tuple[str, str, SamplerSpec]]:
         """(label, planner, sampler spec) of every row on ``map_set``."""
-        step = self.protocol.step
         bias = self.biases.get(map_set, 0.05)
         rows = [("uniform", "RRTstar", SamplerSpec.of("uniform")),
                 (GOAL_BIAS, "RRTstar", bias_spec(bias)),
                 (INFORMED, "InformedRRTstar", SamplerSpec.of("informed"))]
-        rows += [(label, "RRTstar", spec) for label, spec in self.routes.items()]
-        rows.append((ROUTE_ABLATION, "RRTstar", SamplerSpec.of("route_ablation", step_size=step)))
-        if self.references:
-            rows.append((EXACT_ROUTE, "RRTstar", SamplerSpec.of("exact_route", step_size=step)))
-        return rows
+        return rows + [(label, "RRTstar", spec) for label, spec in self.fields.items()]
 
     def tasks(self) -> list[Task]:
         return [Task(ConvergenceQuery(q), planner, spec, seed, label)

@@ -135,6 +135,11 @@ class Query:
         return scenarios(movingai_dir, self.family, tolerance, cache)[self.key]
 
 
+def movingai_maps(queries: Sequence) -> list[str]:
+    """The MovingAI maps among ``queries`` (the queries of no generated size), sorted."""
+    return sorted({q.family for q in queries if not q.size})
+
+
 def shifted_name(family: str) -> str:
     """The map-set name of ``family``'s shifted test maps."""
     return f"{family} (shifted)"
