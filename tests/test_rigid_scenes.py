@@ -188,6 +188,9 @@ def test_a_box_scene_written_as_meshes_keeps_its_witness_and_omplapp_problems_jo
     assert mesh.name == f"hatch-{UNSEEN_SEED0}-mesh" and np.array_equal(mesh.start, problem.start)
     assert mesh.world.path_valid(witness.path)
     assert not mesh.world.check_motion(problem.start, problem.goal)
+    assert mesh.world.delta == problem.world.delta  # the box scene's resolution, unless one is given
+    finer = mesh_scene("hatch", UNSEEN_SEED0, delta=0.05)
+    assert finer.world.delta == 0.05 and finer.world.path_valid(witness.path)
     ms = MeshSceneSet(("hatch",), 1, omplapp=None)
     with pytest.raises(InputError, match="test-only"):
         ms.queries("tuning")
@@ -224,6 +227,29 @@ def test_the_spatial_index_answers_as_the_full_scan_does():
         states_clear(k.geom, k.grid, k.body, params, q, 0.0, out)
         assert not out[0]
     assert pose_check_cost(40, poses=200).disagreements == 0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([0.0, 0.25, 1.0]))
+def test_a_body_point_near_a_box_is_seen_as_the_squared_distance_says(seed, margin):
+    from planners.kernels.rigid import N_PLAIN, states_clear
+
+    # one body point at the origin, so a state's position is the point: the compiled test against numpy's distance
+    rng = np.random.default_rng(seed)
+    lo = rng.uniform(20, 60, 3)
+    boxes = np.hstack([lo, lo + rng.uniform(0.0, 10.0, 3)])[None]
+    pts = np.vstack([rng.uniform(10, 80, (200, 3)),
+                     np.clip(rng.uniform(10, 80, (50, 3)), boxes[0, :3], boxes[0, 3:]),  # on and in the box
+                     boxes[0, 3:] + margin / math.sqrt(3) * np.array([1, 1, 1]),  # at the margin's corner
+                     boxes[0, :3] - [margin, 0, 0]])  # on the margin, across a face
+    gap = np.maximum(np.maximum(boxes[0, :3] - pts, 0.0), pts - boxes[0, 3:])
+    near = (gap[:, 0] ** 2 + gap[:, 1] ** 2 + gap[:, 2] ** 2) <= margin * margin
+    params = np.array([0, 0, 0, 100, 100, 100, 1.0, 0.0])
+    assert params.shape == (N_PLAIN,)
+    qs = np.hstack([pts, np.zeros((len(pts), 3))])
+    out = np.empty(len(qs), dtype=np.bool_)
+    states_clear(boxes, np.zeros((1, 1), dtype=np.int64), np.zeros((1, 3)), params, qs, margin, out)
+    assert np.array_equal(out, ~near)
 
 
 def test_the_scene_sets_run_inside_the_one_comparison_as_a_part_with_the_same_runs(tmp_path):
