@@ -14,7 +14,7 @@ table per planner and sampler, and one per family. Writes ``rows.json`` (every r
 ``validation``; ``test`` is for the reported comparison only.
 ``--mesh`` runs the test-only mesh set instead (``MeshSceneSet``: the test-only families written as
 meshes, and OMPL.app's problems from ``--omplapp`` or ``$SAMPLERGYM_OMPLAPP_DIR``; the ``mesh``
-extra); ``rigid_route`` (its orientation model knows box bodies among boxes) is left out there.
+extra); ``rigid_route`` runs there too, its box-trained classes carried to each body's own axes.
 ``--sampler-params`` passes parameters to the registry's samplers by name (``make_sampler(name, **params)``).
 Exit status: 0 done, 2 bad input.
 """
@@ -68,7 +68,7 @@ def main(argv=None) -> int:
         return fail("--sampler-params must be a JSON object of objects: {\"NAME\": {\"KEY\": VALUE}}")
     if args.out.exists() and not args.out.is_dir():
         return fail(f"--out {args.out} exists and is not a folder")
-    samplers = args.samplers or [s for s in SAMPLERS if not (args.mesh and s == "rigid_route")]
+    samplers = args.samplers or list(SAMPLERS)
     if args.mesh and args.part != "test":
         return fail("--mesh scenes are test-only: use --part test")
     if not args.mesh and (args.omplapp or args.problems):

@@ -13,8 +13,8 @@ flying the path) under --out, each atomically, and prints iterations, checks, ti
 The planning time is split into planning proper and numba's one-off compilation (the first run after
 an install compiles the rigid-body kernels for a while; later runs load the compiled code).
 ``--sampler NAME`` replaces the set-up's sampling by a sampler of the registry (``make_sampler(NAME)``; e.g.
-``rigid_route``, the learned sampler for box scenes, or ``gaussian``); its per-query work (a route search, a
-model's pass) is timed apart from the planning.
+``rigid_route``, the learned 6-DoF sampler (box scenes, mesh scenes and ``.cfg`` problems), or ``gaussian``);
+its per-query work (a route search, a model's pass) is timed apart from the planning.
 An OMPL.app ``.cfg`` problem (planners.worlds.omplapp; needs the ``mesh`` extra) is planned with
 RRT-Connect at its default step under ``--time-limit`` (default the file's ``time_limit``), and drawn
 with its meshes (large ones as a seeded subset of their triangles).
@@ -41,7 +41,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="planner seed (>= 0)")
     ap.add_argument("--sampler", default=None, metavar="NAME",
                     help="a registry sampler in place of the set-up's own (e.g. rigid_route, the learned 6-DoF "
-                         "sampler for box scenes; learning.sampler_names() lists them)")
+                         "sampler; learning.sampler_names() lists them)")
     ap.add_argument("--out", type=Path, default=Path("results/plan3d"), help="folder for plan3d.png and plan3d.gif")
     ap.add_argument("--frames", type=int, default=None,
                     help="GIF frames (default: about two seconds per 10 units of path, 20 to 150)")

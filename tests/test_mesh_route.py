@@ -11,7 +11,6 @@ pytest.importorskip("fcl", reason="mesh worlds need the mesh extra (pip install 
 from test_mesh_world import box, wall_with_hole  # noqa: E402  (the same wall with a hole)
 
 from planners import Problem, make_planner  # noqa: E402
-from planners.base.fileio import InputError  # noqa: E402
 from planners.guidance.workspace_route import centre_route, voxel_route  # noqa: E402
 from planners.worlds.mesh import MeshWorld, solid_inner_radius  # noqa: E402
 
@@ -89,7 +88,7 @@ def test_the_route_crosses_the_wall_through_its_hole(world):
     assert np.all(world.workspace_clearance(moved[1:-1]) >= world.workspace_clearance(route[1:-1]))
 
 
-def test_the_route_samplers_plan_a_mesh_world_seeded_and_the_learned_one_says_it_needs_boxes(world):
+def test_the_route_samplers_plan_a_mesh_world_seeded(world):
     from learning.samplers.registry import make_sampler
 
     problem = Problem(world, np.array([2.0, 2.0, 8.0, 0, 0, 0]), np.array([8.0, 8.0, 2.0, 0, 0, 0]),
@@ -104,5 +103,44 @@ def test_the_route_samplers_plan_a_mesh_world_seeded_and_the_learned_one_says_it
     a, b = on_route.route[:-1], on_route.route[1:]  # every position on the route's polyline
     t = np.clip(np.einsum("nkj,kj->nk", pts[:, None] - a, b - a) / np.maximum(((b - a) ** 2).sum(1), 1e-300), 0, 1)
     assert np.linalg.norm(a + t[..., None] * (b - a) - pts[:, None], axis=2).min(axis=1).max() < 1e-9
-    with pytest.raises(InputError, match="rigid_route_ablation"):
-        make_planner("RRTConnect", problem, seed=0, sampler=make_sampler("rigid_route")).solve(max_iterations=10)
+    # the learned one too: its classes carried to the body's own axes, seeded
+    runs = [make_planner("RRTConnect", problem, seed=3, sampler=make_sampler("rigid_route")).solve(max_iterations=3000)
+            for _ in range(2)]
+    assert runs[0].solved and np.array_equal(runs[0].path, runs[1].path)
+
+
+def test_the_learned_orientations_put_a_mesh_body_s_long_side_along_a_world_axis():
+    from learning.samplers.registry import make_sampler
+    from planners.guidance.rigid_orientation import body_axes
+    from planners.kernels.rigid import rotation_matrix
+
+    # a 4 x 2 x 1 box body turned off its own axes: its long side must still land on a world axis
+    turn = trimesh.transformations.rotation_matrix(0.7, [1, 2, 3])
+    body = trimesh.creation.box(extents=(4.0, 2.0, 1.0), transform=turn)
+    axes, extents = body_axes(body.vertices)
+    assert np.allclose(extents, [4, 2, 1]) and np.allclose(np.linalg.det(axes), 1.0)
+    assert np.allclose(np.abs(axes[:, 0] @ turn[:3, 0]), 1.0) and np.allclose(np.abs(axes[:, 1] @ turn[:3, 1]), 1.0)
+    world = MeshWorld(wall_with_hole(thickness=0.5, hole=4.5), body, low=(0, 0, 0), high=(10, 10, 10))
+    problem = Problem(world, np.array([2.0, 5.0, 5.0, 0, 0, 0]), np.array([8.0, 5.0, 5.0, 0, 0, 0]),
+                      goal_tolerance=0.5)
+    sampler = make_sampler("rigid_route", uniform_share=0.0, angle_noise=0.0, goal_share=0.0,
+                           route_fraction=1.0).bind(problem)
+    assert sampler.probs.shape == (len(sampler.route), 6) and np.allclose(sampler.probs.sum(axis=1), 1.0)
+    q = sampler.draw(np.random.default_rng(0), 100, None)
+    long_side = np.array([np.asarray(rotation_matrix(*a)) @ axes[:, 0] for a in q[:, 3:]])
+    assert np.allclose(np.sort(np.abs(long_side), axis=1), [0, 0, 1], atol=1e-9)
+
+
+def test_a_mesh_world_s_solid_share_is_the_boxes_volume_where_it_was_built_from_boxes():
+    from planners.guidance.rigid_orientation import occupancy_grid
+    from planners.worlds.rigid_scenes import as_mesh_scene, rigid_scene
+
+    box = rigid_scene("duct", 200_000)  # its wall is 5 to 8 thick: the inside of the boxes counts, not only faces
+    mesh = as_mesh_scene(box)
+    seeds = np.stack([box.start[:3], box.goal[:3]])
+    exact, seen = occupancy_grid(box.world, 1.0), occupancy_grid(mesh.world, 1.0, seeds)
+    assert exact.shape == seen.shape and seen.dtype == np.float32
+    assert np.abs(exact - seen).mean() < 0.02 and np.mean(np.abs(exact - seen) > 0.5) < 0.02
+    assert seen[exact == 1.0].mean() > 0.97  # whole voxels inside boxes, the thick wall's middle among them
+    with pytest.raises(ValueError, match="seeds"):
+        occupancy_grid(mesh.world, 1.0)

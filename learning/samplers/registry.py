@@ -146,8 +146,8 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "obstacle_based": (_obstacle_based, "OB-PRM's sampling: a step out of an obstacle to the first free state"),
     "rigid_workspace_route": (_rigid_workspace_route, "6-DoF box and mesh worlds: along the workspace route of "
                               "the body's centre, uniform angles (the no-learning ablation)"),
-    "rigid_route": (_rigid_route, "6-DoF box worlds: the workspace route, centred in its passages, with "
-                    "orientations from the shipped orientation model (or path=)"),
+    "rigid_route": (_rigid_route, "6-DoF box and mesh worlds: the workspace route, centred in its passages, with "
+                    "orientations from the shipped orientation model (or path=), carried to a mesh body's axes"),
     "rigid_route_ablation": (_rigid_route_ablation, "6-DoF box and mesh worlds: rigid_route without its model (the "
                              "same centred route positions and goal share, uniform angles): its no-learning "
                              "ablation"),

@@ -17,8 +17,11 @@ and its distribution over the six axis-aligned orientation classes there. Per sa
   random, turned by a random rotation of about ``angle_noise`` radians per axis (a Gaussian rotation vector);
 * else a uniform state.
 
-Samples do not depend on the tree, so they come in batches. The orientation model knows box bodies
-(``RigidBodyWorld``); without it (the ablation) the sampler also serves mesh worlds (``MeshWorld``).
+Samples do not depend on the tree, so they come in batches. The orientation model learned on a box body
+among boxes (``RigidBodyWorld``); in a mesh world (``MeshWorld``) the classes carry over to the body by
+its own long, middle and short axes (``body_axes``), the model sees voxels of the body's long side over
+``TRAINING_LONG_SIDE`` (so the body spans as many voxels as the training body did), and the occupancy is
+the world's ``solid_share`` (its surfaces and what they enclose, seen from the query's start and goal).
 """
 
 from __future__ import annotations
@@ -29,6 +32,8 @@ from planners.base.fileio import InputError, check_int, check_number
 from planners.base.samplers import SamplerBase
 from planners.guidance.rigid_orientation import (
     N_CLASSES,
+    TRAINING_LONG_SIDE,
+    body_axes,
     class_rotations,
     euler_from_matrices,
     route_observation,
@@ -58,7 +63,8 @@ class RigidRouteSampler(SamplerBase):
         spread: Standard deviation of the position noise about the route; None: the world's ``route_spread``
             (a box world's inner radius).
         cell: Voxel side of the route search and of the model's observation, world units (the model is
-            trained at 1); None: the world's ``route_cell`` (1 in a box world).
+            trained at 1); None: the world's ``route_cell`` (1 in a box world) for the route, and in a
+            mesh world the body's long side over ``TRAINING_LONG_SIDE`` for the observation.
         centre: Reach in voxels of ``centre_route``: each interior route point moves to the clearest voxel
             centre that near (0: the search's route as it is).
     """
@@ -85,18 +91,22 @@ class RigidRouteSampler(SamplerBase):
         from learning.models.threads import planning_threads
 
         world = route_world(self.problem.world, "RigidRouteSampler")
-        if self.net is not None and not hasattr(world, "boxes"):
-            raise InputError(f"RigidRouteSampler: the orientation model knows box bodies among boxes, not a "
-                             f"{type(world).__name__}; on a mesh world use make_sampler('rigid_route_ablation') "
-                             f"(the same positions, uniform angles)")
         cell = float(world.route_cell if self.cell is None else self.cell)
+        # a box world: the body the model learned on, seen at the route's voxels; a mesh world: its body's own
+        # axes carry the classes, and the model sees voxels of the body's long side over the training body's
+        self.rotations, seen = _ROTATIONS, cell
+        if not hasattr(world, "boxes"):
+            axes, extents = body_axes(world.body_vertices)
+            self.rotations = _ROTATIONS @ axes.T
+            seen = float(extents[0]) / TRAINING_LONG_SIDE if self.cell is None else cell
         route = voxel_route(world, self.problem.start, self.problem.goal, cell)
         self.route = np.zeros((0, 3)) if route is None else centre_route(world, route, self.centre, cell)
         seg = np.linalg.norm(np.diff(self.route, axis=0), axis=1) if len(self.route) > 1 else np.zeros(0)
         self.arc = np.concatenate([[0.0], np.cumsum(seg)])
         self.sd = world.route_spread if self.spread is None else self.spread
         if len(self.route) and self.net is not None:
-            patches, dirs = route_observation(world, self.route, cell, self.net.half)
+            seeds = np.stack([self.problem.start[:3], self.problem.goal[:3]])
+            patches, dirs = route_observation(world, self.route, seen, self.net.half, seeds=seeds)
             with planning_threads():  # one torch thread unless SAMPLERGYM_TORCH_THREADS says otherwise
                 self.probs = class_probabilities(self.net, patches, dirs, self.temperature)
         else:
@@ -124,7 +134,7 @@ class RigidRouteSampler(SamplerBase):
             if len(learned):
                 near = (i + (t >= 0.5))[u[on, 6 + d] >= self.uniform_share]
                 cls = np.minimum((self.cdf[near] < cls_u[learned, None]).sum(axis=1), N_CLASSES - 1)
-                base = _ROTATIONS[cls, np.minimum((sym_u[learned] * 4).astype(np.int64), 3)]
+                base = self.rotations[cls, np.minimum((sym_u[learned] * 4).astype(np.int64), 3)]
                 turn = small_rotations(self.angle_noise * rot_z[learned])
                 pts[learned, 3:] = euler_from_matrices(turn @ base)
         pts[u[:, 0] < self.goal_share] = self.problem.goal

@@ -12,7 +12,9 @@ pose under four rotations (``class_rotations``).
   voxel, voxels outside the workspace counting as covered.
 * ``route_directions(route, reach)``: the route's unit direction at each of its points.
 * ``route_observation(world, route)``: both, at every route point: the observation of the learned
-  orientation model (``learning.models.rigid_orientation``), computed once per query.
+  orientation model (``learning.models.rigid_orientation``), computed once per query. A mesh world's
+  occupancy is its ``solid_share`` (surfaces and what they enclose, seen from the query's free space).
+* ``body_axes(vertices)``: a body's long, middle and short axes, which carry the classes to a mesh body.
 * ``permute_class`` / ``CLASS_PERMUTATIONS``: how the classes move when the world's axes are permuted
   (the training's augmentation).
 * ``class_validity(world, points, classes, rng, jitter, k)``: the share of ``k`` poses of each class,
@@ -33,6 +35,9 @@ ORIENTATION_CLASSES = tuple((a, b) for a in range(3) for b in range(3) if a != b
 N_CLASSES = len(ORIENTATION_CLASSES)
 #: Half the side of an observation patch, in voxels: 13 voxels cover the body's long side (10) and more.
 PATCH_HALF = 6
+#: The long side of the box body the shipped orientation model learned on, in the model's voxels (1 unit): a
+#: mesh body's observation takes voxels of its own long side over this, so the body spans the same voxels.
+TRAINING_LONG_SIDE = 10.0
 #: Route points on either side whose chord gives a route point's direction.
 DIRECTION_REACH = 2
 
@@ -61,8 +66,16 @@ AXIS_PERMUTATIONS = tuple(itertools.permutations(range(3)))
 CLASS_PERMUTATIONS = np.array([permute_class(p) for p in AXIS_PERMUTATIONS])
 
 
-def occupancy_grid(world, cell: float = 1.0) -> np.ndarray:
-    """``(nx, ny, nz)`` float32: the share of each voxel of side ``cell`` (from the workspace's low corner) in boxes."""
+def occupancy_grid(world, cell: float = 1.0, seeds=None) -> np.ndarray:
+    """``(nx, ny, nz)`` float32: the share of each voxel of side ``cell`` (from the workspace's low corner) in boxes.
+
+    A mesh world (no boxes) gives its ``solid_share``: its surfaces and what they enclose, as seen from
+    ``seeds`` (points in free space, such as the query's start and goal positions; required there).
+    """
+    if not hasattr(world, "boxes"):
+        if seeds is None:
+            raise ValueError("occupancy_grid of a mesh world needs seeds: points in its free space")
+        return world.solid_share(cell, seeds)
     low, high = np.asarray(world.low3, dtype=np.float64), np.asarray(world.high3, dtype=np.float64)
     shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
     grid = np.zeros(tuple(shape), dtype=np.float64)
@@ -107,9 +120,15 @@ def route_directions(route, reach: int = DIRECTION_REACH) -> np.ndarray:
     return np.where(norm > 1e-12, chord / np.maximum(norm, 1e-12), 0.0)
 
 
-def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF) -> tuple[np.ndarray, np.ndarray]:
-    """The orientation model's observation at every route point: ``(patches, directions)`` (see the module doc)."""
-    grid = occupancy_grid(world, cell)
+def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF,
+                      seeds=None) -> tuple[np.ndarray, np.ndarray]:
+    """The orientation model's observation at every route point: ``(patches, directions)`` (see the module doc).
+
+    ``seeds``: points in free space, for a mesh world's ``occupancy_grid`` (default the route's ends).
+    """
+    if seeds is None and len(route):
+        seeds = np.asarray(route, dtype=np.float64)[[0, -1], :3]
+    grid = occupancy_grid(world, cell, seeds)
     return route_patches(grid, route, world.low3, cell, half), route_directions(route).astype(np.float32)
 
 
@@ -134,6 +153,24 @@ def class_validity(world, points, rng: np.random.Generator, jitter: float, k: in
         ok = world.check_motions(q, q).reshape(n, k)
         out[:, c] = ok.mean(axis=1) if reduce == "mean" else ok.any(axis=1)
     return out
+
+
+def body_axes(vertices) -> tuple[np.ndarray, np.ndarray]:
+    """A body's own long, middle and short axes: ``(U, extents)``, the axes as the columns of a rotation.
+
+    The principal axes of the body's vertices (about their mean), ordered by the body's extent along
+    each (largest first), the third the cross product of the first two. A box body's axes are its
+    sides. ``U`` maps the six classes from the box body the model learned on to another body: the
+    class rotation ``C`` (columns: where the box's long, middle and short sides point) becomes
+    ``C @ U.T`` (the body's long side along the class's long axis, and so on).
+    """
+    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    centred = v - v.mean(axis=0)
+    _, vecs = np.linalg.eigh(centred.T @ centred)
+    extents = np.ptp(centred @ vecs, axis=0)
+    order = np.argsort(-extents, kind="stable")
+    u0, u1 = vecs[:, order[0]], vecs[:, order[1]]
+    return np.stack([u0, u1, np.cross(u0, u1)], axis=1), extents[order]
 
 
 def euler_from_matrices(R: np.ndarray) -> np.ndarray:

@@ -519,3 +519,52 @@ def chebyshev_grid(vertices, faces, origin, h, nx, ny, nz):
             for k in range(nz):
                 out[i, j * nz + k] = dist[i, j, k]
     return out
+
+
+@nb.njit(cache=True)
+def reach_open(grid, nx, ny, nz, seeds):
+    """``(nx, ny * nz)`` bool: the voxels reached from ``seeds`` (flat indices) through voxels that meet no triangle.
+
+    ``grid`` is ``chebyshev_grid``'s: a voxel of value 0 meets a triangle. Six-connected breadth-first
+    search; a seed that meets a triangle is not entered.
+    """
+    nyz = ny * nz
+    seen = np.zeros((nx, nyz), dtype=np.bool_)
+    queue = np.empty(nx * nyz, dtype=np.int64)
+    n = 0
+    for s in range(seeds.shape[0]):
+        v = seeds[s]
+        i, r = v // nyz, v % nyz
+        if grid[i, r] != 0 and not seen[i, r]:
+            seen[i, r] = True
+            queue[n] = v
+            n += 1
+    head = 0
+    while head < n:
+        v = queue[head]
+        head += 1
+        i = v // nyz
+        j = (v // nz) % ny
+        k = v % nz
+        for d in range(6):
+            a, b, c = i, j, k
+            if d == 0:
+                a -= 1
+            elif d == 1:
+                a += 1
+            elif d == 2:
+                b -= 1
+            elif d == 3:
+                b += 1
+            elif d == 4:
+                c -= 1
+            else:
+                c += 1
+            if a < 0 or b < 0 or c < 0 or a >= nx or b >= ny or c >= nz:
+                continue
+            r = b * nz + c
+            if grid[a, r] != 0 and not seen[a, r]:
+                seen[a, r] = True
+                queue[n] = a * nyz + r
+                n += 1
+    return seen
