@@ -132,7 +132,7 @@ def test_the_learned_orientations_put_a_mesh_body_s_long_side_along_a_world_axis
 
 
 def test_a_mesh_world_s_solid_share_is_the_boxes_volume_where_it_was_built_from_boxes():
-    from planners.guidance.rigid_orientation import occupancy_grid
+    from planners.guidance.rigid_orientation import occupancy_grid, route_observation, route_patches
     from planners.worlds.rigid_scenes import as_mesh_scene, rigid_scene
 
     box = rigid_scene("duct", 200_000)  # its wall is 5 to 8 thick: the inside of the boxes counts, not only faces
@@ -144,3 +144,7 @@ def test_a_mesh_world_s_solid_share_is_the_boxes_volume_where_it_was_built_from_
     assert seen[exact == 1.0].mean() > 0.97  # whole voxels inside boxes, the thick wall's middle among them
     with pytest.raises(ValueError, match="seeds"):
         occupancy_grid(mesh.world, 1.0)
+    # the sampler's observation reads only the voxels its patches cover: the same values as the whole grid's
+    route = voxel_route(mesh.world, box.start, box.goal, 1.0)
+    patches, dirs = route_observation(mesh.world, route, 1.0, seeds=seeds)
+    assert np.array_equal(patches, route_patches(seen, route, mesh.world.low3, 1.0)) and len(dirs) == len(route)

@@ -72,12 +72,13 @@ def occupancy_grid(world, cell: float = 1.0, seeds=None) -> np.ndarray:
     A mesh world (no boxes) gives its ``solid_share``: its surfaces and what they enclose, as seen from
     ``seeds`` (points in free space, such as the query's start and goal positions; required there).
     """
+    low, high = np.asarray(world.low3, dtype=np.float64), np.asarray(world.high3, dtype=np.float64)
+    shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
     if not hasattr(world, "boxes"):
         if seeds is None:
             raise ValueError("occupancy_grid of a mesh world needs seeds: points in its free space")
-        return world.solid_share(cell, seeds)
-    low, high = np.asarray(world.low3, dtype=np.float64), np.asarray(world.high3, dtype=np.float64)
-    shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
+        corners = low + cell * np.stack(np.meshgrid(*(np.arange(n) for n in shape), indexing="ij"), axis=-1)
+        return world.solid_share(corners.reshape(-1, 3), cell, seeds).reshape(tuple(shape))
     grid = np.zeros(tuple(shape), dtype=np.float64)
     edges = [low[k] + np.arange(shape[k] + 1) * cell for k in range(3)]
     for b in np.asarray(world.boxes, dtype=np.float64).reshape(-1, 6):
@@ -126,10 +127,23 @@ def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF,
 
     ``seeds``: points in free space, for a mesh world's ``occupancy_grid`` (default the route's ends).
     """
+    directions = route_directions(route).astype(np.float32)
+    if hasattr(world, "boxes"):
+        return route_patches(occupancy_grid(world, cell), route, world.low3, cell, half), directions
+    # a mesh world: only the voxels the patches cover, each once (as route_patches over occupancy_grid would give)
     if seeds is None and len(route):
         seeds = np.asarray(route, dtype=np.float64)[[0, -1], :3]
-    grid = occupancy_grid(world, cell, seeds)
-    return route_patches(grid, route, world.low3, cell, half), route_directions(route).astype(np.float32)
+    low = np.asarray(world.low3, dtype=np.float64)
+    shape = np.maximum(1, np.floor((np.asarray(world.high3, dtype=np.float64) - low) / cell).astype(np.int64))
+    side = 2 * half + 1
+    window = np.stack(np.meshgrid(*[np.arange(-half, half + 1)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
+    vox = voxel_index(route, low, cell, shape)[:, None, :] + window[None]  # (n, side^3, 3)
+    inside = np.all((vox >= 0) & (vox < shape), axis=2)
+    keys, inverse = np.unique(vox[inside], axis=0, return_inverse=True)
+    patches = np.ones(inside.shape, dtype=np.float32)  # outside the workspace counts as covered
+    if len(keys):
+        patches[inside] = world.solid_share(low + cell * keys, cell, seeds)[inverse.reshape(-1)]
+    return patches.reshape(-1, side, side, side), directions
 
 
 def class_validity(world, points, rng: np.random.Generator, jitter: float, k: int, reduce: str = "mean") -> np.ndarray:

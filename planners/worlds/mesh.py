@@ -531,20 +531,19 @@ class MeshWorld(WorldBase):
         d = self._distance_bound(x[:, None, None], y[None, :, None], z[None, None, :])
         return (d > self.inner_radius) & (d > 0)
 
-    def solid_share(self, cell: float, seeds, samples: int = 3) -> np.ndarray:
-        """``(nx, ny, nz)`` float32 over voxels of side ``cell`` from ``low3``: the share of each that is solid.
+    def solid_share(self, corners, cell: float, seeds, samples: int = 3) -> np.ndarray:
+        """``(k,)`` float32: the share of each cube of side ``cell`` (low corners ``corners``, ``(k, 3)``) in solid.
 
         A point counts as solid where its broad-phase voxel (``route_cell``) meets a triangle or cannot be
         reached from the voxels of ``seeds`` (points, such as a query's start and goal positions, and the
         voxels about them) without crossing one: the environment's surfaces and what they enclose, as a box
-        world's ``occupancy_grid`` counts the boxes' volume. Each voxel's share is measured at
-        ``samples``^3 points spread evenly over it. For the learned orientation model's observation
-        (``planners.guidance.rigid_orientation.occupancy_grid``).
+        world's occupancy counts the boxes' volume; outside the broad phase's grid, solid. Each cube's share
+        is measured at ``samples``^3 points spread evenly over it. For the learned orientation model's
+        observation (``planners.guidance.rigid_orientation``).
         """
         cell = float(cell)
         if not (cell > 0 and math.isfinite(cell)):
             raise InputError(f"cell must be a positive number, got {cell!r}")
-        shape = np.maximum(1, np.floor((self.high3 - self.low3) / cell).astype(np.int64))
         nx, ny, nz = (int(n) for n in self._grid_shape)
         side = self.route_cell
         seeds = np.asarray(seeds, dtype=np.float64).reshape(-1, 3)
@@ -553,14 +552,14 @@ class MeshWorld(WorldBase):
         idx = (idx[:, None, :] + around[None]).reshape(-1, 3)
         idx = idx[np.all((idx >= 0) & (idx < [nx, ny, nz]), axis=1)]
         reached = mesh_kernels.reach_open(self.grid, nx, ny, nz, (idx[:, 0] * ny + idx[:, 1]) * nz + idx[:, 2])
+        corners = np.asarray(corners, dtype=np.float64).reshape(-1, 3) - self._grid_origin
         offsets = (np.arange(samples) + 0.5) / samples * cell
-        share = np.zeros(tuple(shape), dtype=np.float64)
-        axes = [self.low3[k] + np.arange(shape[k]) * cell - self._grid_origin[k] for k in range(3)]
-        for ox, oy, oz in itertools.product(offsets, repeat=3):
-            i = np.clip(np.floor((axes[0] + ox) / side).astype(np.int64), 0, nx - 1)
-            j = np.clip(np.floor((axes[1] + oy) / side).astype(np.int64), 0, ny - 1)
-            k = np.clip(np.floor((axes[2] + oz) / side).astype(np.int64), 0, nz - 1)
-            share += ~reached[i[:, None, None], (j[:, None] * nz + k[None, :])[None, :, :]]
+        share = np.zeros(len(corners))
+        for o in itertools.product(offsets, repeat=3):
+            v = np.floor((corners + np.asarray(o)) / side).astype(np.int64)
+            inside = np.all((v >= 0) & (v < [nx, ny, nz]), axis=1)
+            v = np.clip(v, 0, [nx - 1, ny - 1, nz - 1])
+            share += ~(reached[v[:, 0], v[:, 1] * nz + v[:, 2]] & inside)
         return (share / samples ** 3).astype(np.float32)
 
     def free_volume(self) -> float:
