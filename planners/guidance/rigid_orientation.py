@@ -66,14 +66,19 @@ AXIS_PERMUTATIONS = tuple(itertools.permutations(range(3)))
 CLASS_PERMUTATIONS = np.array([permute_class(p) for p in AXIS_PERMUTATIONS])
 
 
+def _voxels(world, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """The workspace's low corner and its voxels of side ``cell`` along each axis (whole voxels, at least one)."""
+    low = np.asarray(world.low3, dtype=np.float64)
+    return low, np.maximum(1, np.floor((np.asarray(world.high3, dtype=np.float64) - low) / cell).astype(np.int64))
+
+
 def occupancy_grid(world, cell: float = 1.0, seeds=None) -> np.ndarray:
     """``(nx, ny, nz)`` float32: the share of each voxel of side ``cell`` (from the workspace's low corner) in boxes.
 
     A mesh world (no boxes) gives its ``solid_share``: its surfaces and what they enclose, as seen from
     ``seeds`` (points in free space, such as the query's start and goal positions; required there).
     """
-    low, high = np.asarray(world.low3, dtype=np.float64), np.asarray(world.high3, dtype=np.float64)
-    shape = np.maximum(1, np.floor((high - low) / cell).astype(np.int64))
+    low, shape = _voxels(world, cell)
     if not hasattr(world, "boxes"):
         if seeds is None:
             raise ValueError("occupancy_grid of a mesh world needs seeds: points in its free space")
@@ -133,8 +138,7 @@ def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF,
     # a mesh world: only the voxels the patches cover, each once (as route_patches over occupancy_grid would give)
     if seeds is None and len(route):
         seeds = np.asarray(route, dtype=np.float64)[[0, -1], :3]
-    low = np.asarray(world.low3, dtype=np.float64)
-    shape = np.maximum(1, np.floor((np.asarray(world.high3, dtype=np.float64) - low) / cell).astype(np.int64))
+    low, shape = _voxels(world, cell)
     side = 2 * half + 1
     window = np.stack(np.meshgrid(*[np.arange(-half, half + 1)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
     vox = voxel_index(route, low, cell, shape)[:, None, :] + window[None]  # (n, side^3, 3)

@@ -546,20 +546,11 @@ def reach_open(grid, nx, ny, nz, seeds):
         i = v // nyz
         j = (v // nz) % ny
         k = v % nz
-        for d in range(6):
-            a, b, c = i, j, k
-            if d == 0:
-                a -= 1
-            elif d == 1:
-                a += 1
-            elif d == 2:
-                b -= 1
-            elif d == 3:
-                b += 1
-            elif d == 4:
-                c -= 1
-            else:
-                c += 1
+        for d in range(6):  # the face neighbours: -x, +x, -y, +y, -z, +z
+            step = 2 * (d % 2) - 1
+            a = i + step * (d // 2 == 0)
+            b = j + step * (d // 2 == 1)
+            c = k + step * (d // 2 == 2)
             if a < 0 or b < 0 or c < 0 or a >= nx or b >= ny or c >= nz:
                 continue
             r = b * nz + c

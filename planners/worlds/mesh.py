@@ -510,14 +510,22 @@ class MeshWorld(WorldBase):
         x, y, z = (p - self._grid_origin).T
         return self._distance_bound(x, y, z)
 
-    def _distance_bound(self, x, y, z) -> np.ndarray:
-        """The grid's distance bound at offsets ``x, y, z`` from its origin (broadcastable arrays; 0 outside it)."""
+    def _grid_cells(self, x, y, z):
+        """The broad phase's voxel at offsets ``x, y, z`` from its origin (broadcastable arrays).
+
+        ``(i, r, inside)``: the voxel's row and column in ``grid`` (``(nx, ny * nz)``), clipped to the grid,
+        and whether the offset lies in the grid at all.
+        """
         side, shape = self.route_cell, self._grid_shape
         idx = [np.floor(a / side).astype(np.int64) for a in (x, y, z)]
         inside = [(i >= 0) & (i < n) for i, n in zip(idx, shape, strict=True)]
         ix, iy, iz = (np.clip(i, 0, n - 1) for i, n in zip(idx, shape, strict=True))
-        c = self.grid[ix, iy * int(shape[2]) + iz].astype(np.float64)
-        return np.maximum(c - 1.0, 0.0) * side * (inside[0] & inside[1] & inside[2])
+        return ix, iy * int(shape[2]) + iz, inside[0] & inside[1] & inside[2]
+
+    def _distance_bound(self, x, y, z) -> np.ndarray:
+        """The grid's distance bound at offsets ``x, y, z`` from its origin (broadcastable arrays; 0 outside it)."""
+        i, r, inside = self._grid_cells(x, y, z)
+        return np.maximum(self.grid[i, r].astype(np.float64) - 1.0, 0.0) * self.route_cell * inside
 
     def centre_free_voxels(self, cell: float) -> np.ndarray:
         """``(nx, ny, nz)`` bool over voxels of side ``cell`` from ``low3``: where the body's centre may be.
@@ -545,21 +553,17 @@ class MeshWorld(WorldBase):
         if not (cell > 0 and math.isfinite(cell)):
             raise InputError(f"cell must be a positive number, got {cell!r}")
         nx, ny, nz = (int(n) for n in self._grid_shape)
-        side = self.route_cell
-        seeds = np.asarray(seeds, dtype=np.float64).reshape(-1, 3)
-        idx = np.floor((seeds - self._grid_origin) / side).astype(np.int64)
-        around = np.array(list(itertools.product((-1, 0, 1), repeat=3)))
-        idx = (idx[:, None, :] + around[None]).reshape(-1, 3)
-        idx = idx[np.all((idx >= 0) & (idx < [nx, ny, nz]), axis=1)]
-        reached = mesh_kernels.reach_open(self.grid, nx, ny, nz, (idx[:, 0] * ny + idx[:, 1]) * nz + idx[:, 2])
+        # the seeds' voxels and their neighbours: a seed beside a surface still starts the fill
+        around = self.route_cell * np.array(list(itertools.product((-1, 0, 1), repeat=3)))
+        near = (np.asarray(seeds, dtype=np.float64).reshape(-1, 1, 3) - self._grid_origin + around).reshape(-1, 3)
+        i, r, inside = self._grid_cells(*near.T)
+        reached = mesh_kernels.reach_open(self.grid, nx, ny, nz, (i * ny * nz + r)[inside])
         corners = np.asarray(corners, dtype=np.float64).reshape(-1, 3) - self._grid_origin
         offsets = (np.arange(samples) + 0.5) / samples * cell
         share = np.zeros(len(corners))
         for o in itertools.product(offsets, repeat=3):
-            v = np.floor((corners + np.asarray(o)) / side).astype(np.int64)
-            inside = np.all((v >= 0) & (v < [nx, ny, nz]), axis=1)
-            v = np.clip(v, 0, [nx - 1, ny - 1, nz - 1])
-            share += ~(reached[v[:, 0], v[:, 1] * nz + v[:, 2]] & inside)
+            i, r, inside = self._grid_cells(*(corners + np.asarray(o)).T)
+            share += ~(reached[i, r] & inside)
         return (share / samples ** 3).astype(np.float32)
 
     def free_volume(self) -> float:
