@@ -180,6 +180,49 @@ def _dijkstra(padded, goal, stop, dr, dc):
 
 
 @nb.njit(cache=True)
+def _place(keys, items, pos, j, k, v):
+    """Move entry (``k``, ``v``) up the heap from slot ``j`` to where it belongs."""
+    while j > 0:
+        p = (j - 1) >> 1
+        if keys[p] <= k:
+            break
+        keys[j] = keys[p]
+        items[j] = items[p]
+        pos[items[j]] = j
+        j = p
+    keys[j] = k
+    items[j] = v
+    pos[v] = j
+
+
+@nb.njit(cache=True)
+def _drop_least(keys, items, pos, size):
+    """Take the least-key entry (``keys[0]``, ``items[0]``, read by the caller first) off the heap: the new size."""
+    pos[items[0]] = -2
+    size -= 1
+    if size == 0:
+        return 0
+    k, v = keys[size], items[size]
+    j = 0
+    while True:
+        c = 2 * j + 1
+        if c >= size:
+            break
+        if c + 1 < size and keys[c + 1] < keys[c]:
+            c += 1
+        if keys[c] >= k:
+            break
+        keys[j] = keys[c]
+        items[j] = items[c]
+        pos[items[j]] = j
+        j = c
+    keys[j] = k
+    items[j] = v
+    pos[v] = j
+    return size
+
+
+@nb.njit(cache=True)
 def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
     """The least fixed point of ``V(b) = min over moves a of costs[a, b] + V(b + move a)``, ``V = 0`` at ``goal``.
 
@@ -188,23 +231,25 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
     operation (and rounding) of value iteration, so the values are its fixed point bit for bit: every cost is
     positive, so each sum rounds to at least the value it adds to and the settling order holds in floating
     point. A block in ``walls`` is never relaxed; a sum at or above ``unreached`` leaves a block unreached.
+    The heap (one slot per block, with decrease-key) keeps each entry's key beside it, so sifting reads keys in
+    order rather than looking each up by block.
     """
     A, h, w = costs.shape
     n = h * w
     dist = np.full(n, unreached, dtype=costs.dtype)
     pos = np.full(n, -1, dtype=np.int64)  # heap slot; -1 never queued, -2 settled
-    heap = np.empty(n, dtype=np.int64)
+    keys = np.empty(n, dtype=costs.dtype)
+    items = np.empty(n, dtype=np.int64)
     size = 0
     for i in range(n):
         if goal[i // w, i % w]:
             dist[i] = 0.0
-            heap[size] = i
-            pos[i] = size
+            _place(keys, items, pos, size, dist[i], i)
             size += 1
     while size > 0:
-        v, size = _pop(heap, pos, dist, size)
+        dv, v = keys[0], items[0]
+        size = _drop_least(keys, items, pos, size)
         r, c = v // w, v % w
-        dv = dist[v]
         for a in range(A):
             br, bc = r - dr[a], c - dc[a]  # the block that move a carries onto v
             if br < 0 or br >= h or bc < 0 or bc >= w:
@@ -215,7 +260,11 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
             nd = costs[a, br, bc] + dv
             if nd < dist[b]:
                 dist[b] = nd
-                size = _lowered(heap, pos, dist, b, size)
+                if pos[b] == -1:
+                    _place(keys, items, pos, size, nd, b)
+                    size += 1
+                else:
+                    _place(keys, items, pos, pos[b], nd, b)
     return dist.reshape(h, w)
 
 
@@ -224,25 +273,39 @@ def _block_steps(free, block, dr, dc):
     """(8, h, w) bool: whether some free cell of each block steps into its neighbour block by each move."""
     H, W = free.shape
     h, w = H // block, W // block
+    A = len(dr)
     move = np.full((3, 3), -1, dtype=np.int64)  # (block row move + 1, block column move + 1) -> move index
-    for a in range(len(dr)):
+    for a in range(A):
         move[dr[a] + 1, dc[a] + 1] = a
-    out = np.zeros((len(dr), h, w), dtype=np.bool_)
+    # the block move each step makes from each place in a block (-1: the step stays in the block)
+    leaves = np.full((block, block, A), -1, dtype=np.int64)
+    for i in range(block):
+        for j in range(block):
+            for k in range(A):
+                mr, mc = (i + dr[k]) // block, (j + dc[k]) // block
+                if mr != 0 or mc != 0:
+                    leaves[i, j, k] = move[mr + 1, mc + 1]
+    p = np.zeros((H + 2, W + 2), dtype=np.uint8)  # free cells, blocked off the map
     for r in range(H):
         for c in range(W):
-            if not free[r, c]:
+            p[r + 1, c + 1] = free[r, c]
+    out = np.zeros((A, h, w), dtype=np.uint8)
+    for r in range(H):
+        br, i = r // block, r % block
+        for c in range(W):
+            if p[r + 1, c + 1] == 0:
                 continue
-            br, bc = r // block, c // block
-            for k in range(len(dr)):
-                r2, c2 = r + dr[k], c + dc[k]
-                if r2 < 0 or r2 >= H or c2 < 0 or c2 >= W or not free[r2, c2]:
+            bc, j = c // block, c % block
+            for k in range(A):
+                a = leaves[i, j, k]
+                if a < 0:
                     continue
-                if k >= 4 and not (free[r2, c] and free[r, c2]):  # no corner cutting
-                    continue
-                mr, mc = r2 // block - br, c2 // block - bc
-                if mr or mc:
-                    out[move[mr + 1, mc + 1], br, bc] = True
-    return out
+                r2, c2 = r + 1 + dr[k], c + 1 + dc[k]
+                ok = p[r2, c2]
+                if k >= 4:
+                    ok &= p[r2, c + 1] & p[r + 1, c2]  # no corner cutting
+                out[a, br, bc] |= ok
+    return out.view(np.bool_)
 
 
 @nb.njit(cache=True)
