@@ -78,108 +78,6 @@ def _grid_cell(grid: OccupancyGrid, point, label: str) -> tuple[int, int]:
 
 
 @nb.njit(cache=True)
-def _sift_up(heap, pos, key, j):
-    v = heap[j]
-    kv = key[v]
-    while j > 0:
-        p = (j - 1) >> 1
-        u = heap[p]
-        if key[u] <= kv:
-            break
-        heap[j] = u
-        pos[u] = j
-        j = p
-    heap[j] = v
-    pos[v] = j
-
-
-@nb.njit(cache=True)
-def _sift_down(heap, pos, key, j, n):
-    v = heap[j]
-    kv = key[v]
-    while True:
-        c = 2 * j + 1
-        if c >= n:
-            break
-        if c + 1 < n and key[heap[c + 1]] < key[heap[c]]:
-            c += 1
-        u = heap[c]
-        if key[u] >= kv:
-            break
-        heap[j] = u
-        pos[u] = j
-        j = c
-    heap[j] = v
-    pos[v] = j
-
-
-@nb.njit(cache=True)
-def _pop(heap, pos, key, size):
-    """Take the heap's least-key item out and mark it settled: (the item, the heap's new size)."""
-    v = heap[0]
-    size -= 1
-    if size > 0:
-        heap[0] = heap[size]
-        pos[heap[0]] = 0
-        _sift_down(heap, pos, key, 0, size)
-    pos[v] = -2
-    return v, size
-
-
-@nb.njit(cache=True)
-def _lowered(heap, pos, key, u, size):
-    """Put ``u`` on the heap, or move it up after its key fell: the heap's new size."""
-    if pos[u] == -1:
-        heap[size] = u
-        pos[u] = size
-        size += 1
-    _sift_up(heap, pos, key, pos[u])
-    return size
-
-
-@nb.njit(cache=True)
-def _dijkstra(padded, goal, stop, dr, dc):
-    """Octile Dijkstra from flat padded index ``goal``; stops once ``stop`` is settled (-1: never).
-
-    Returns the flat distance array and, per cell, the next cell on a shortest path to the goal.
-    Uses an indexed binary heap with decrease-key, so the heap never holds more than H*W entries.
-    """
-    Wp = padded.shape[1]
-    n = padded.size
-    blocked = padded.ravel()
-    dist = np.full(n, np.inf)
-    toward = np.full(n, -1, dtype=np.int64)
-    pos = np.full(n, -1, dtype=np.int64)  # heap slot; -1 never queued, -2 settled
-    heap = np.empty(n, dtype=np.int64)
-    off = dr * Wp + dc
-    dist[goal] = 0.0
-    heap[0] = goal
-    pos[goal] = 0
-    size = 1
-    while size > 0:
-        v, size = _pop(heap, pos, dist, size)
-        if v == stop:
-            break
-        dv = dist[v]
-        for k in range(8):
-            u = v + off[k]
-            if blocked[u] or pos[u] == -2:
-                continue
-            if k >= 4:
-                # the step is symmetric, so the same test serves the reverse search from the goal
-                if blocked[v + dr[k] * Wp] or blocked[v + dc[k]]:
-                    continue
-                nd = dv + SQRT2
-            else:
-                nd = dv + 1.0
-            if nd < dist[u]:
-                dist[u] = nd
-                toward[u] = v
-                size = _lowered(heap, pos, dist, u, size)
-    return dist, toward
-
-
-@nb.njit(cache=True)
 def _place(keys, items, pos, j, k, v):
     """Move entry (``k``, ``v``) up the heap from slot ``j`` to where it belongs."""
     while j > 0:
@@ -220,6 +118,53 @@ def _drop_least(keys, items, pos, size):
     items[j] = v
     pos[v] = j
     return size
+
+
+@nb.njit(cache=True)
+def _dijkstra(padded, goal, stop, dr, dc):
+    """Octile Dijkstra from flat padded index ``goal``; stops once ``stop`` is settled (-1: never).
+
+    Returns the flat distance array and, per cell, the next cell on a shortest path to the goal.
+    Uses an indexed binary heap with decrease-key (``_place``, ``_drop_least``), so the heap never holds more
+    than H*W entries.
+    """
+    Wp = padded.shape[1]
+    n = padded.size
+    blocked = padded.ravel()
+    dist = np.full(n, np.inf)
+    toward = np.full(n, -1, dtype=np.int64)
+    pos = np.full(n, -1, dtype=np.int64)  # heap slot; -1 never queued, -2 settled
+    keys = np.empty(n)
+    items = np.empty(n, dtype=np.int64)
+    off = dr * Wp + dc
+    dist[goal] = 0.0
+    _place(keys, items, pos, 0, 0.0, goal)
+    size = 1
+    while size > 0:
+        dv, v = keys[0], items[0]
+        size = _drop_least(keys, items, pos, size)
+        if v == stop:
+            break
+        for k in range(8):
+            u = v + off[k]
+            if blocked[u] or pos[u] == -2:
+                continue
+            if k >= 4:
+                # the step is symmetric, so the same test serves the reverse search from the goal
+                if blocked[v + dr[k] * Wp] or blocked[v + dc[k]]:
+                    continue
+                nd = dv + SQRT2
+            else:
+                nd = dv + 1.0
+            if nd < dist[u]:
+                dist[u] = nd
+                toward[u] = v
+                if pos[u] == -1:
+                    _place(keys, items, pos, size, nd, u)
+                    size += 1
+                else:
+                    _place(keys, items, pos, pos[u], nd, u)
+    return dist, toward
 
 
 @nb.njit(cache=True)
