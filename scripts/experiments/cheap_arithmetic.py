@@ -1,0 +1,189 @@
+"""The shipped route encoder with cheaper arithmetic for its convolutions: channels-last float32 and bfloat16.
+
+    python scripts/experiments/cheap_arithmetic.py --check fields        # how far each variant's field moves
+    python scripts/experiments/cheap_arithmetic.py --check iterations    # bfloat16's RRT iterations (vin_validation)
+    python scripts/experiments/cheap_arithmetic.py --check time          # a pass at 128 cells, each way
+
+The variants keep the shipped weights and change only how the local network's 3x3 convolutions run at
+inference: on channels-last tensors in float32 (another memory layout, so oneDNN sums in another order), or
+in bfloat16 on channels-last tensors (the heads, the fixed point and everything after stay float32). bfloat16
+is fast only on a CPU that computes it natively (AMX, AVX-512 BF16).
+
+``fields``: on the validation maps (the training families, seeds from ``VALIDATION_SEED0 + 500``, ``--maps``
+per family at each of ``--sides``, each map's own goal), the largest difference from the shipped field at any
+cell the goal reaches, first and later queries, per variant. ``iterations``: the route sampler's median RRT
+iterations (step 4, cap 20,000, planner seeds 0 and 1) on the same maps, shipped against bfloat16 as
+``vin_validation.py --samplers "route encoder"`` runs them, with each row's ratio and the geometric mean.
+``time``: the best of 15 first queries at 128 cells, each way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+import torch
+from torch import nn
+
+from learning.models.route_net import load_route_net
+from learning.models.route_vin import WALL_LOG, RouteVIN
+from learning.models.shipped import SHIPPED_ROUTE
+from learning.samplers.route import SHIPPED_SETTINGS, RouteSampler
+from planners import make_planner
+from planners.base.fileio import check_int
+from planners.maps.generators import TRAINING_FAMILIES, VALIDATION_SEED0, generate
+from planners.tools.benchmark import MAX_ITERATIONS, STEP
+
+
+class CheapConvolutions(RouteVIN):
+    """``RouteVIN`` whose local network runs in ``dtype`` on channels-last tensors at inference."""
+
+    dtype = torch.float32
+
+    def _layers(self) -> list[tuple[torch.Tensor, torch.Tensor] | None]:
+        kept = self.__dict__.get("_cheap_layers")
+        if kept is not None:
+            return kept
+        out = []
+        for layer in self.local:
+            if isinstance(layer, nn.Conv2d):
+                out.append((layer.weight.detach().to(self.dtype).contiguous(memory_format=torch.channels_last),
+                            layer.bias.detach().to(self.dtype)))
+            else:
+                out.append(None)
+        self.__dict__["_cheap_layers"] = out  # the weights do not change in these checks
+        return out
+
+    def move_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        if torch.is_grad_enabled():
+            return super().move_costs(x)
+        y = x.to(self.dtype).contiguous(memory_format=torch.channels_last)
+        for layer in self._layers():
+            y = y.relu_() if layer is None else nn.functional.conv2d(y, *layer, padding=1)
+        f = y.float()
+        return f, self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
+
+    def local_window(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> torch.Tensor:
+        h, w = x.shape[-2:]
+        k0, k1, j0, j1 = window
+        d = self.depth
+        r0, r1, c0, c1 = max(0, k0 - d), min(h, k1 + d), max(0, j0 - d), min(w, j1 + d)
+        y = x[:, :, r0:r1, c0:c1].to(self.dtype).contiguous(memory_format=torch.channels_last)
+        for layer in self._layers():
+            if layer is None:
+                y = y.relu_()
+            else:
+                pad = (int(c0 == 0), int(c1 == w), int(r0 == 0), int(r1 == h))
+                y = nn.functional.conv2d(nn.functional.pad(y, pad), *layer)
+                r0, r1, c0, c1 = r0 + (r0 > 0), r1 - (r1 < h), c0 + (c0 > 0), c1 - (c1 < w)
+        return y[:, :, k0 - r0:k1 - r0, j0 - c0:j1 - c0].float()
+
+
+class ChannelsLast(CheapConvolutions):
+    dtype = torch.float32
+
+
+class BFloat16(CheapConvolutions):
+    dtype = torch.bfloat16
+
+
+VARIANTS = {"channels-last float32": ChannelsLast, "bfloat16": BFloat16}
+
+
+def encoder(variant: type[RouteVIN] | None = None) -> RouteVIN:
+    """The shipped encoder, its arithmetic changed to ``variant``'s (its weights and settings kept)."""
+    net = load_route_net(SHIPPED_ROUTE).eval()
+    if variant is not None:
+        net.__class__ = variant  # the same module, its inference methods swapped: an experiment, not the library
+    return net
+
+
+def validation_problems(families, sides, maps):
+    for side in sides:
+        for family in families:
+            for i in range(maps):
+                yield family, side, generate(family, VALIDATION_SEED0 + 500 + i, side)
+
+
+def check_fields(args) -> None:
+    shipped = encoder()
+    nets = {name: encoder(cls) for name, cls in VARIANTS.items()}
+    worst = {name: (0.0, "") for name in nets}
+    for family, side, p in validation_problems(args.families, args.sides, args.maps):
+        obstacles = np.asarray(p.world.obstacles, dtype=bool)
+        goal = tuple(int(v) for v in p.world.cell_of(p.goal))
+        shipped.clear_map_cache()
+        ref = shipped.predict(obstacles, goal)
+        reach = ref < 1e5
+        for name, net in nets.items():
+            net.clear_map_cache()
+            first, later = net.predict(obstacles, goal), net.predict(obstacles, goal)
+            d = max(float(np.abs(first - ref)[reach].max()), float(np.abs(later - ref)[reach].max()))
+            if d > worst[name][0]:
+                worst[name] = (d, p.name)
+    print("| variant | largest difference from the shipped field (steps) | on |")
+    print("|---|---|---|")
+    for name, (d, where) in worst.items():
+        print(f"| {name} | {d:.3g} | {where} |")
+
+
+def check_iterations(args) -> None:
+    nets = {"shipped": encoder(), "bfloat16": encoder(BFloat16)}
+    print("| family | side | shipped | bfloat16 | ratio | unsolved (shipped, bfloat16) |")
+    print("|---|---|---|---|---|---|")
+    logs = []
+    for family in args.families:
+        for side in args.sides:
+            its = {name: [] for name in nets}
+            for i in range(args.maps):
+                p = generate(family, VALIDATION_SEED0 + 500 + i, side)
+                for name, net in nets.items():
+                    for seed in (0, 1):
+                        r = make_planner("RRT", p, extension_step=STEP, sampler=RouteSampler(net, **SHIPPED_SETTINGS),
+                                         seed=seed).solve(max_iterations=MAX_ITERATIONS)
+                        its[name].append(r.first_solution_iteration if r.solved else MAX_ITERATIONS)
+            a, b = (float(np.median(its[k])) for k in nets)
+            logs.append(math.log(b / a))
+            unsolved = ", ".join(str(sum(x >= MAX_ITERATIONS for x in v)) for v in its.values())
+            print(f"| {family} | {side} | {a:g} | {b:g} | {b / a:.2f} | {unsolved} |", flush=True)
+    print(f"\ngeometric mean of the ratios: {math.exp(sum(logs) / len(logs)):.3f}")
+
+
+def check_time(args) -> None:
+    p = generate("maze", 123, 128)
+    obstacles = np.asarray(p.world.obstacles, dtype=bool)
+    goal = tuple(int(v) for v in p.world.cell_of(p.goal))
+    for name, net in {"shipped": encoder(), **{k: encoder(v) for k, v in VARIANTS.items()}}.items():
+        def first_query():
+            net.clear_map_cache()
+            return net.predict(obstacles, goal)
+
+        first_query()
+        times = []
+        for _ in range(15):
+            t0 = time.perf_counter()
+            first_query()
+            times.append(time.perf_counter() - t0)
+        print(f"{name}: best {1e3 * min(times):.2f} ms, median {1e3 * float(np.median(times)):.2f} ms a first query")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line entry point."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--check", choices=("fields", "iterations", "time"), required=True)
+    ap.add_argument("--maps", type=int, default=6, help="validation maps per family and side (default 6)")
+    ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
+    ap.add_argument("--families", nargs="+", choices=TRAINING_FAMILIES, default=list(TRAINING_FAMILIES))
+    args = ap.parse_args(argv)
+    check_int(args.maps, "--maps")
+    for side in args.sides:
+        check_int(side, "--sides", low=16)
+    torch.set_num_threads(1)
+    {"fields": check_fields, "iterations": check_iterations, "time": check_time}[args.check](args)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
