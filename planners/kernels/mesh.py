@@ -323,7 +323,8 @@ def mesh_motion_free(grid, cover, clusters, params, a, b):
     margin = 0.5 * delta
     # the far end first (a blocked extension is usually blocked there): its clearance covers the travel
     # (length - cb, length]; then the interior probes; then the walk from the start (see the module docs)
-    cb = _pose_clearance(grid, cover, clusters, params, b, margin, True)
+    # the contact-first choice as np.bool_, a value: a constant True or False would compile _pose_clearance once each
+    cb = _pose_clearance(grid, cover, clusters, params, b, margin, np.bool_(True))
     if not cb > margin:
         return False
     if n >= PROBE_MIN_PIECES and not _probes_free(grid, cover, clusters, params, a, b):
@@ -336,7 +337,7 @@ def mesh_motion_free(grid, cover, clusters, params, a, b):
     q = np.empty(6)
     while True:
         interpolate(SPACE_RIGID, a, b, s / length, q)
-        c = _pose_clearance(grid, cover, clusters, params, q, margin, False)
+        c = _pose_clearance(grid, cover, clusters, params, q, margin, np.bool_(False))
         if not c > margin:
             return False
         if covered < 0.0 or s - c < covered:

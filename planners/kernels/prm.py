@@ -358,7 +358,9 @@ def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, ma
         if rounds >= max_rounds:
             return np.empty(0, dtype=np.int64)
         rounds += 1
-        verts, eds = astar_csr(X, csr, ew, es, vstat, istate[slots.I_QS], istate[slots.I_QG], space, False)
+        # the flags as np.bool_ values: a constant (or an omitted default) would compile astar_csr again beside astar's
+        verts, eds = astar_csr(X, csr, ew, es, vstat, istate[slots.I_QS], istate[slots.I_QG], space, np.bool_(False),
+                               np.bool_(True))
         if verts.shape[0] == 0:
             rebuild_components(store, edges, uf, vstat, istate, goal, space)
             refresh_anchor(uf, istate, fstate)
