@@ -94,6 +94,16 @@ def _place(keys, items, pos, j, k, v):
 
 
 @nb.njit(cache=True)
+def _lower(keys, items, pos, size, k, v):
+    """Put ``v`` on the heap with key ``k``, or move it up after its key fell to ``k``: the heap's new size."""
+    if pos[v] == -1:
+        _place(keys, items, pos, size, k, v)
+        return size + 1
+    _place(keys, items, pos, pos[v], k, v)
+    return size
+
+
+@nb.njit(cache=True)
 def _drop_least(keys, items, pos, size):
     """Take the least-key entry (``keys[0]``, ``items[0]``, read by the caller first) off the heap: the new size."""
     pos[items[0]] = -2
@@ -125,7 +135,7 @@ def _dijkstra(padded, goal, stop, dr, dc):
     """Octile Dijkstra from flat padded index ``goal``; stops once ``stop`` is settled (-1: never).
 
     Returns the flat distance array and, per cell, the next cell on a shortest path to the goal.
-    Uses an indexed binary heap with decrease-key (``_place``, ``_drop_least``), so the heap never holds more
+    Uses an indexed binary heap with decrease-key (``_lower``, ``_drop_least``), so the heap never holds more
     than H*W entries.
     """
     Wp = padded.shape[1]
@@ -138,8 +148,7 @@ def _dijkstra(padded, goal, stop, dr, dc):
     items = np.empty(n, dtype=np.int64)
     off = dr * Wp + dc
     dist[goal] = 0.0
-    _place(keys, items, pos, 0, 0.0, goal)
-    size = 1
+    size = _lower(keys, items, pos, 0, 0.0, goal)
     while size > 0:
         dv, v = keys[0], items[0]
         size = _drop_least(keys, items, pos, size)
@@ -159,11 +168,7 @@ def _dijkstra(padded, goal, stop, dr, dc):
             if nd < dist[u]:
                 dist[u] = nd
                 toward[u] = v
-                if pos[u] == -1:
-                    _place(keys, items, pos, size, nd, u)
-                    size += 1
-                else:
-                    _place(keys, items, pos, pos[u], nd, u)
+                size = _lower(keys, items, pos, size, nd, u)
     return dist, toward
 
 
@@ -189,8 +194,7 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
     for i in range(n):
         if goal[i // w, i % w]:
             dist[i] = 0.0
-            _place(keys, items, pos, size, dist[i], i)
-            size += 1
+            size = _lower(keys, items, pos, size, dist[i], i)
     while size > 0:
         dv, v = keys[0], items[0]
         size = _drop_least(keys, items, pos, size)
@@ -205,11 +209,7 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
             nd = costs[a, br, bc] + dv
             if nd < dist[b]:
                 dist[b] = nd
-                if pos[b] == -1:
-                    _place(keys, items, pos, size, nd, b)
-                    size += 1
-                else:
-                    _place(keys, items, pos, pos[b], nd, b)
+                size = _lower(keys, items, pos, size, nd, b)
     return dist.reshape(h, w)
 
 
