@@ -493,3 +493,32 @@ def test_kept_maps_stay_within_their_bytes_and_go_with_new_weights():
     net.predict(obstacles, goal)
     net.train()
     assert len(net._maps) == 0  # training changes the weights in place
+
+
+@pytest.mark.experiments
+def test_the_breakdown_script_times_every_part_of_a_pass_and_refuses_a_tiny_map(capsys):
+    script = load_script("experiments/route_breakdown")
+    assert script.main(["--side", "32", "--families", "forest", "maze", "--repeat", "1"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].split(" | ")[2:] == ["whole first query", "convolutions", "step walls", "Dijkstra", "cell head |"]
+    rows = [line for line in out if line.startswith(("| forest |", "| maze |"))]
+    assert len(rows) == 2 and all(float(cell) > 0 for row in rows for cell in row.strip("| ").split(" | ")[2:])
+    with pytest.raises(SystemExit) as stop:
+        script.main(["--side", "8"])
+    assert stop.value.code == 2
+
+
+@pytest.mark.experiments
+def test_cheaper_arithmetic_moves_the_field_by_its_rounding(capsys):
+    script = load_script("experiments/cheap_arithmetic")
+    assert script.main(["--check", "fields", "--maps", "1", "--sides", "32", "--families", "forest", "maze"]) == 0
+    rows = {line.split(" | ")[0].strip("| "): float(line.split(" | ")[1])
+            for line in capsys.readouterr().out.splitlines() if line.startswith(("| channels", "| bfloat16"))}
+    # float32 in another layout differs by rounding only; bfloat16 keeps 8 bits of mantissa, so it moves further
+    assert set(rows) == {"channels-last float32", "bfloat16"}
+    assert rows["channels-last float32"] < 1e-3 < rows["bfloat16"]
+    shipped, layout = script.encoder(), script.encoder(script.ChannelsLast)  # another layout, the same weights
+    assert all(torch.equal(a, b) for a, b in zip(shipped.state_dict().values(), layout.state_dict().values()))
+    with pytest.raises(SystemExit) as stop:
+        script.main(["--check", "fields", "--maps", "0"])
+    assert stop.value.code == 2

@@ -25,60 +25,31 @@ import time
 
 import numpy as np
 import torch
-from torch import nn
 
 from learning.models.route_net import load_route_net
 from learning.models.route_vin import WALL_LOG, RouteVIN
 from learning.models.shipped import SHIPPED_ROUTE
 from learning.samplers.route import SHIPPED_SETTINGS, RouteSampler
 from planners import make_planner
-from planners.base.fileio import check_int
 from planners.maps.generators import TRAINING_FAMILIES, VALIDATION_SEED0, generate
 from planners.tools.benchmark import MAX_ITERATIONS, STEP
 
 
 class CheapConvolutions(RouteVIN):
-    """``RouteVIN`` whose local network runs in ``dtype`` on channels-last tensors at inference."""
+    """``RouteVIN`` whose local network holds its weights in ``dtype`` on channels-last tensors (``encoder`` converts
+    them): its inputs are cast to that type and layout and its features come back in float32 (inference only)."""
 
     dtype = torch.float32
 
-    def _layers(self) -> list[tuple[torch.Tensor, torch.Tensor] | None]:
-        kept = self.__dict__.get("_cheap_layers")
-        if kept is not None:
-            return kept
-        out = []
-        for layer in self.local:
-            if isinstance(layer, nn.Conv2d):
-                out.append((layer.weight.detach().to(self.dtype).contiguous(memory_format=torch.channels_last),
-                            layer.bias.detach().to(self.dtype)))
-            else:
-                out.append(None)
-        self.__dict__["_cheap_layers"] = out  # the weights do not change in these checks
-        return out
+    def _cheap(self, x: torch.Tensor) -> torch.Tensor:
+        return x.to(self.dtype).contiguous(memory_format=torch.channels_last)
 
     def move_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        if torch.is_grad_enabled():
-            return super().move_costs(x)
-        y = x.to(self.dtype).contiguous(memory_format=torch.channels_last)
-        for layer in self._layers():
-            y = y.relu_() if layer is None else nn.functional.conv2d(y, *layer, padding=1)
-        f = y.float()
+        f = self.local(self._cheap(x)).float()
         return f, self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
 
     def local_window(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> torch.Tensor:
-        h, w = x.shape[-2:]
-        k0, k1, j0, j1 = window
-        d = self.depth
-        r0, r1, c0, c1 = max(0, k0 - d), min(h, k1 + d), max(0, j0 - d), min(w, j1 + d)
-        y = x[:, :, r0:r1, c0:c1].to(self.dtype).contiguous(memory_format=torch.channels_last)
-        for layer in self._layers():
-            if layer is None:
-                y = y.relu_()
-            else:
-                pad = (int(c0 == 0), int(c1 == w), int(r0 == 0), int(r1 == h))
-                y = nn.functional.conv2d(nn.functional.pad(y, pad), *layer)
-                r0, r1, c0, c1 = r0 + (r0 > 0), r1 - (r1 < h), c0 + (c0 > 0), c1 - (c1 < w)
-        return y[:, :, k0 - r0:k1 - r0, j0 - c0:j1 - c0].float()
+        return super().local_window(self._cheap(x), window).float()
 
 
 class ChannelsLast(CheapConvolutions):
@@ -97,21 +68,22 @@ def encoder(variant: type[RouteVIN] | None = None) -> RouteVIN:
     net = load_route_net(SHIPPED_ROUTE).eval()
     if variant is not None:
         net.__class__ = variant  # the same module, its inference methods swapped: an experiment, not the library
+        net.local.to(dtype=variant.dtype, memory_format=torch.channels_last)
     return net
 
 
-def validation_problems(families, sides, maps):
-    for side in sides:
-        for family in families:
-            for i in range(maps):
-                yield family, side, generate(family, VALIDATION_SEED0 + 500 + i, side)
+def validation_problems(family: str, side: int, maps: int):
+    """The first ``maps`` validation maps of one family and side (seeds from ``VALIDATION_SEED0 + 500``)."""
+    return [generate(family, VALIDATION_SEED0 + 500 + i, side) for i in range(maps)]
 
 
 def check_fields(args) -> None:
     shipped = encoder()
     nets = {name: encoder(cls) for name, cls in VARIANTS.items()}
     worst = {name: (0.0, "") for name in nets}
-    for family, side, p in validation_problems(args.families, args.sides, args.maps):
+    problems = [p for side in args.sides for family in args.families
+                for p in validation_problems(family, side, args.maps)]
+    for p in problems:
         obstacles = np.asarray(p.world.obstacles, dtype=bool)
         goal = tuple(int(v) for v in p.world.cell_of(p.goal))
         shipped.clear_map_cache()
@@ -137,8 +109,7 @@ def check_iterations(args) -> None:
     for family in args.families:
         for side in args.sides:
             its = {name: [] for name in nets}
-            for i in range(args.maps):
-                p = generate(family, VALIDATION_SEED0 + 500 + i, side)
+            for p in validation_problems(family, side, args.maps):
                 for name, net in nets.items():
                     for seed in (0, 1):
                         r = make_planner("RRT", p, extension_step=STEP, sampler=RouteSampler(net, **SHIPPED_SETTINGS),
@@ -156,7 +127,7 @@ def check_time(args) -> None:
     obstacles = np.asarray(p.world.obstacles, dtype=bool)
     goal = tuple(int(v) for v in p.world.cell_of(p.goal))
     for name, net in {"shipped": encoder(), **{k: encoder(v) for k, v in VARIANTS.items()}}.items():
-        def first_query():
+        def first_query(net=net):
             net.clear_map_cache()
             return net.predict(obstacles, goal)
 
@@ -177,9 +148,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
     ap.add_argument("--families", nargs="+", choices=TRAINING_FAMILIES, default=list(TRAINING_FAMILIES))
     args = ap.parse_args(argv)
-    check_int(args.maps, "--maps")
-    for side in args.sides:
-        check_int(side, "--sides", low=16)
+    if args.maps < 1 or min(args.sides) < 16:
+        ap.error(f"--maps takes a count >= 1 and --sides map sides >= 16 cells, got {args.maps} and {args.sides}")
     torch.set_num_threads(1)
     {"fields": check_fields, "iterations": check_iterations, "time": check_time}[args.check](args)
     return 0

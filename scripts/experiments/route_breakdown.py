@@ -23,7 +23,6 @@ from learning.models.field import route_input
 from learning.models.route_net import load_route_net
 from learning.models.route_vin import cell_steps
 from learning.models.shipped import SHIPPED_ROUTE
-from planners.base.fileio import check_int
 from planners.maps.generators import FAMILIES, generate
 from planners.tools.benchmark import markdown_table
 
@@ -71,8 +70,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--families", nargs="+", choices=FAMILIES, default=["forest", "maze"])
     ap.add_argument("--repeat", type=int, default=15, help="timed calls per figure (default 15)")
     args = ap.parse_args(argv)
-    check_int(args.side, "--side", low=16)
-    check_int(args.repeat, "--repeat")
+    if args.side < 16 or args.repeat < 1:
+        ap.error(f"--side takes a map side >= 16 cells and --repeat a count >= 1, got {args.side} and {args.repeat}")
     torch.set_num_threads(1)
     print(markdown_table([breakdown(family, args.side, args.repeat) for family in args.families]))
     return 0
