@@ -430,96 +430,91 @@ def chebyshev_grid(vertices, faces, origin, h, nx, ny, nz):
     outside the grid are accounted for by counting a layer of occupied voxels around it; values stop at
     255.
     """
-    # scalar loops, no array ufuncs (np.full, np.minimum): this builds once per world, and their compiled
-    # machinery would cost more to compile than the loops take to run
-    dist = np.empty((nx, ny, nz), dtype=np.int32)
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                dist[i, j, k] = 255
+    # one flat array indexed by hand, scalar loops and conditional expressions instead of array
+    # ufuncs, np.full, min and max: this builds once per world, and each of those is more compiled
+    # machinery (more to type and lower) than the loops take to run
+    nyz = ny * nz
+    total = nx * nyz
+    dist = np.empty(total, dtype=np.uint8)
+    for v in range(total):
+        dist[v] = 255
     half = np.empty(3)
     for d in range(3):
         half[d] = 0.5 * h * (1.0 + 1e-6)
     c = np.empty(3)
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
     for f in range(faces.shape[0]):
         t0 = vertices[faces[f, 0]]
         t1 = vertices[faces[f, 1]]
         t2 = vertices[faces[f, 2]]
-        i0 = max(0, int(math.floor((min(t0[0], min(t1[0], t2[0])) - origin[0]) / h)) - 1)
-        j0 = max(0, int(math.floor((min(t0[1], min(t1[1], t2[1])) - origin[1]) / h)) - 1)
-        k0 = max(0, int(math.floor((min(t0[2], min(t1[2], t2[2])) - origin[2]) / h)) - 1)
-        i1 = min(nx - 1, int(math.floor((max(t0[0], max(t1[0], t2[0])) - origin[0]) / h)) + 1)
-        j1 = min(ny - 1, int(math.floor((max(t0[1], max(t1[1], t2[1])) - origin[1]) / h)) + 1)
-        k1 = min(nz - 1, int(math.floor((max(t0[2], max(t1[2], t2[2])) - origin[2]) / h)) + 1)
-        for i in range(i0, i1 + 1):
+        # the voxels of the triangle's bounding box, one more on every side
+        for d in range(3):
+            a, b, e = t0[d], t1[d], t2[d]
+            least = a if a < b else b
+            least = least if least < e else e
+            most = a if a > b else b
+            most = most if most > e else e
+            first = math.floor((least - origin[d]) / h) - 1
+            last = math.floor((most - origin[d]) / h) + 1
+            top = (nx if d == 0 else ny if d == 1 else nz) - 1
+            lo[d] = first if first > 0 else 0
+            hi[d] = last if last < top else top
+        for i in range(lo[0], hi[0] + 1):
             c[0] = origin[0] + (i + 0.5) * h
-            for j in range(j0, j1 + 1):
+            for j in range(lo[1], hi[1] + 1):
                 c[1] = origin[1] + (j + 0.5) * h
-                for k in range(k0, k1 + 1):
-                    if dist[i, j, k] == 0:
+                for k in range(lo[2], hi[2] + 1):
+                    v = i * nyz + j * nz + k
+                    if dist[v] == 0:
                         continue
                     c[2] = origin[2] + (k + 0.5) * h
                     if triangle_box_overlap(c, half, t0, t1, t2):
-                        dist[i, j, k] = 0
+                        dist[v] = 0
     # level-by-level breadth-first search over the 26 neighbours: the Chebyshev index distance
-    total = nx * ny * nz
     cur = np.empty(total, dtype=np.int64)
     nxt = np.empty(total, dtype=np.int64)
     nc = 0
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                if dist[i, j, k] == 0:
-                    cur[nc] = (i * ny + j) * nz + k
-                    nc += 1
+    for v in range(total):
+        if dist[v] == 0:
+            cur[nc] = v
+            nc += 1
     level = 0
     while level < 255:
+        nn = 0
+        for s in range(nc):
+            v = cur[s]
+            i = v // nyz
+            j = (v // nz) % ny
+            k = v % nz
+            i0, i1 = (i - 1 if i > 0 else 0), (i + 2 if i + 2 < nx else nx)
+            j0, j1 = (j - 1 if j > 0 else 0), (j + 2 if j + 2 < ny else ny)
+            k0, k1 = (k - 1 if k > 0 else 0), (k + 2 if k + 2 < nz else nz)
+            for a in range(i0, i1):
+                for b in range(j0, j1):
+                    for d in range(k0, k1):
+                        w = a * nyz + b * nz + d
+                        if dist[w] > level + 1:
+                            dist[w] = level + 1
+                            nxt[nn] = w
+                            nn += 1
         if level == 0:
-            # the layer around the grid counts as occupied: its neighbours inside are at distance 1
+            # the layer around the grid counts as occupied: the voxels on the grid's faces are at most 1
             for i in range(nx):
                 for j in range(ny):
                     for k in range(nz):
                         if i == 0 or j == 0 or k == 0 or i == nx - 1 or j == ny - 1 or k == nz - 1:
-                            if dist[i, j, k] > 1:
-                                dist[i, j, k] = 1
-        nn = 0
-        for s in range(nc):
-            v = cur[s]
-            i = v // (ny * nz)
-            j = (v // nz) % ny
-            k = v % nz
-            for di in range(-1, 2):
-                for dj in range(-1, 2):
-                    for dk in range(-1, 2):
-                        a = i + di
-                        b = j + dj
-                        d = k + dk
-                        if a < 0 or b < 0 or d < 0 or a >= nx or b >= ny or d >= nz:
-                            continue
-                        if dist[a, b, d] > level + 1:
-                            dist[a, b, d] = level + 1
-                            nxt[nn] = (a * ny + b) * nz + d
-                            nn += 1
-        if level == 0:
-            # the boundary voxels set to 1 above join the level-1 frontier
-            for i in range(nx):
-                for j in range(ny):
-                    for k in range(nz):
-                        if dist[i, j, k] == 1 and (i == 0 or j == 0 or k == 0 or i == nx - 1 or j == ny - 1
-                                                   or k == nz - 1):
-                            nxt[nn] = (i * ny + j) * nz + k
-                            nn += 1
+                            w = i * nyz + j * nz + k
+                            if dist[w] > 1:
+                                dist[w] = 1
+                                nxt[nn] = w
+                                nn += 1
         if nn == 0:
             break
         cur, nxt = nxt, cur
         nc = nn
         level += 1
-    out = np.empty((nx, ny * nz), dtype=np.uint8)
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                out[i, j * nz + k] = dist[i, j, k]
-    return out
+    return dist.reshape((nx, nyz))
 
 
 @nb.njit(cache=True)
