@@ -93,8 +93,11 @@ def time_limits(folder, args) -> int:
 
 
 def replay(folder) -> int:
-    """Print, for every .path beside a .cfg, how many of its states are valid here."""
-    from planners.worlds.omplapp import load_omplapp, read_omplapp_path
+    """Print, for every .path beside a .cfg, how many of its states are valid here.
+
+    A problem that does not load (a start or goal in collision) is replayed in its world alone, the reason noted.
+    """
+    from planners.worlds.omplapp import load_omplapp, load_omplapp_world, read_omplapp_path
 
     print("| problem | solution states | valid here | smallest clearance | note |")
     print("|---|---|---|---|---|")
@@ -102,15 +105,20 @@ def replay(folder) -> int:
         cfg = solution.with_suffix(".cfg")
         if not cfg.is_file():
             continue
+        note = ""
         try:
             w = load_omplapp(cfg).problem.world
         except InputError as e:
-            print(f"| {cfg.stem} | | | | not loaded: {str(e).split(': ', 1)[-1]} |", flush=True)
-            continue
+            note = f"problem not loaded: {str(e).removeprefix(f'{cfg}: ')}"
+            try:
+                w = load_omplapp_world(cfg)
+            except InputError as e:
+                print(f"| {cfg.stem} | | | | not loaded: {str(e).removeprefix(f'{cfg}: ')} |", flush=True)
+                continue
         Q = read_omplapp_path(solution)
         valid = sum(w.is_valid(q) for q in Q)
         clearance = min(w.clearance(q) for q in Q)
-        print(f"| {cfg.stem} | {len(Q)} | {valid} | {clearance:.3g} | |", flush=True)
+        print(f"| {cfg.stem} | {len(Q)} | {valid} | {clearance:.3g} | {note} |", flush=True)
     return 0
 
 

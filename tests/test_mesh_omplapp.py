@@ -18,6 +18,7 @@ from planners.worlds.omplapp import (  # noqa: E402
     axis_angle_matrix,
     load_omplapp,
     load_omplapp_cfg,
+    load_omplapp_world,
     omplapp_dir,
     quaternion_matrix,
     read_omplapp_path,
@@ -112,6 +113,25 @@ def test_a_bad_problem_file_names_the_file_and_the_key(tmp_path, edit, message):
     path.write_text(edit(path.read_text()))
     with pytest.raises(InputError, match=message) as e:
         load_omplapp(path)
+    assert str(path) in str(e.value)
+
+
+def test_the_world_alone_reads_where_the_query_does_not(tmp_path):
+    path = write_problem(tmp_path)
+    p = load_omplapp(path).problem
+    w = load_omplapp_world(path)
+    assert np.array_equal(w.env_vertices, p.world.env_vertices) and np.array_equal(w.body_vertices, p.world.body_vertices)
+    assert np.array_equal(w.grid, p.world.grid) and w.delta == p.world.delta and w.name == "hole"
+    assert np.array_equal(w.bounds[0], p.world.bounds[0]) and np.array_equal(w.bounds[1], p.world.bounds[1])
+    assert w.is_valid(p.goal) and w is not p.world
+    # a goal inside the wall: the problem is refused, its world still reads
+    path.write_text(path.read_text().replace("goal.x = 8\ngoal.y = 5", "goal.x = 5\ngoal.y = 2"))
+    with pytest.raises(InputError, match="goal .* is not a valid state"):
+        load_omplapp(path)
+    assert not load_omplapp_world(path).is_valid(np.array([5.0, 2, 5, 0, 0, 0]))
+    path.write_text(path.read_text().replace("robot = robot.obj", "robot = nothing.obj"))
+    with pytest.raises(InputError, match="nothing.obj not found") as e:
+        load_omplapp_world(path)
     assert str(path) in str(e.value)
 
 

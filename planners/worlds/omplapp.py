@@ -155,6 +155,60 @@ def centred_robot(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, 
     return vertices - vertices.mean(axis=0), faces
 
 
+def _read_cfg(path: Path) -> configparser.ConfigParser:
+    if not path.is_file():
+        raise InputError(f"problem file {path} does not exist")
+    cfg = configparser.ConfigParser(strict=False, interpolation=None, inline_comment_prefixes=("#",))
+    try:
+        cfg.read_string(path.read_text(encoding="utf-8"), source=str(path))
+    except (configparser.Error, UnicodeDecodeError) as e:
+        raise InputError(f"{path}: not an OMPL.app problem file ({type(e).__name__}: {e})") from None
+    if "problem" not in cfg:
+        raise InputError(f"{path}: no [problem] section")
+    return cfg
+
+
+def _world(path: Path, prob: configparser.SectionProxy, delta: float | None, grid_cells: int | None) -> MeshWorld:
+    meshes = {}
+    for key in ("world", "robot"):
+        name = prob.get(key)
+        if not name:
+            raise InputError(f"{path}: [problem] {key} is missing (the {key}'s mesh file)")
+        mesh_path = path.parent / name.strip()
+        if not mesh_path.is_file():
+            raise InputError(f"{path}: [problem] {key} = {name.strip()} not found beside it ({mesh_path})")
+        meshes[key] = read_mesh(mesh_path)
+    env = meshes["world"]
+    robot = centred_robot(*meshes["robot"])
+    if any(f"volume.{e}.{a}" in prob for e in ("min", "max") for a in "xyz"):
+        low = [_number(path, "problem", f"volume.min.{a}", prob.get(f"volume.min.{a}")) for a in "xyz"]
+        high = [_number(path, "problem", f"volume.max.{a}", prob.get(f"volume.max.{a}")) for a in "xyz"]
+    else:
+        low, high = env[0].min(axis=0), env[0].max(axis=0)
+    diagonal = float(np.linalg.norm(np.asarray(high, float) - np.asarray(low, float)))
+    name = prob.get("name", path.stem).strip() or path.stem
+    try:
+        return MeshWorld(env, robot, low=low, high=high, name=name,
+                         delta=DEFAULT_DELTA_FRACTION * diagonal if delta is None else delta,
+                         **({} if grid_cells is None else {"grid_cells": grid_cells}))
+    except InputError as e:
+        raise InputError(f"{path}: {e}") from None
+
+
+def load_omplapp_world(path: str | os.PathLike, *, delta: float | None = None,
+                       grid_cells: int | None = None) -> MeshWorld:
+    """The world of an OMPL.app ``.cfg`` file alone: its meshes in OMPL.app's frame and its bounds, no query.
+
+    For other queries in OMPL.app's environments, and for replaying a shipped solution whose problem does
+    not load here (``escape.cfg``'s goal itself meets the environment). The arguments are ``load_omplapp``'s.
+
+    Raises:
+        InputError: A missing or malformed key or a missing mesh.
+    """
+    path = Path(path)
+    return _world(path, _read_cfg(path)["problem"], delta, grid_cells)
+
+
 def load_omplapp(path: str | os.PathLike, *, delta: float | None = None, goal_tolerance: float | None = None,
                  grid_cells: int | None = None) -> OMPLAppTask:
     """Read an OMPL.app ``.cfg`` problem file and its meshes (found beside it).
@@ -176,41 +230,14 @@ def load_omplapp(path: str | os.PathLike, *, delta: float | None = None, goal_to
         InputError: A missing or malformed key, a missing mesh, or a start or goal in collision.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"problem file {path} does not exist")
-    cfg = configparser.ConfigParser(strict=False, interpolation=None, inline_comment_prefixes=("#",))
-    try:
-        cfg.read_string(path.read_text(encoding="utf-8"), source=str(path))
-    except (configparser.Error, UnicodeDecodeError) as e:
-        raise InputError(f"{path}: not an OMPL.app problem file ({type(e).__name__}: {e})") from None
-    if "problem" not in cfg:
-        raise InputError(f"{path}: no [problem] section")
+    cfg = _read_cfg(path)
     prob = cfg["problem"]
-    meshes = {}
-    for key in ("world", "robot"):
-        name = prob.get(key)
-        if not name:
-            raise InputError(f"{path}: [problem] {key} is missing (the {key}'s mesh file)")
-        mesh_path = path.parent / name.strip()
-        if not mesh_path.is_file():
-            raise InputError(f"{path}: [problem] {key} = {name.strip()} not found beside it ({mesh_path})")
-        meshes[key] = read_mesh(mesh_path)
-    env = meshes["world"]
-    robot = centred_robot(*meshes["robot"])
-    if any(f"volume.{e}.{a}" in prob for e in ("min", "max") for a in "xyz"):
-        low = [_number(path, "problem", f"volume.min.{a}", prob.get(f"volume.min.{a}")) for a in "xyz"]
-        high = [_number(path, "problem", f"volume.max.{a}", prob.get(f"volume.max.{a}")) for a in "xyz"]
-    else:
-        low, high = env[0].min(axis=0), env[0].max(axis=0)
     start, goal = _pose(path, prob, "start"), _pose(path, prob, "goal")
-    diagonal = float(np.linalg.norm(np.asarray(high, float) - np.asarray(low, float)))
-    name = prob.get("name", path.stem).strip() or path.stem
+    world = _world(path, prob, delta, grid_cells)
+    diagonal = float(np.linalg.norm(world.high3 - world.low3))
     try:
-        world = MeshWorld(env, robot, low=low, high=high, name=name,
-                          delta=DEFAULT_DELTA_FRACTION * diagonal if delta is None else delta,
-                          **({} if grid_cells is None else {"grid_cells": grid_cells}))
         tol = DEFAULT_TOLERANCE_FRACTION * diagonal if goal_tolerance is None else goal_tolerance
-        problem = Problem(world, start, goal, goal_tolerance=tol, name=name)
+        problem = Problem(world, start, goal, goal_tolerance=tol, name=world.name)
     except InputError as e:
         raise InputError(f"{path}: {e}") from None
     bench = cfg["benchmark"] if "benchmark" in cfg else {}
