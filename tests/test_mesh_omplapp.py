@@ -120,7 +120,8 @@ def test_the_world_alone_reads_where_the_query_does_not(tmp_path):
     path = write_problem(tmp_path)
     p = load_omplapp(path).problem
     w = load_omplapp_world(path)
-    assert np.array_equal(w.env_vertices, p.world.env_vertices) and np.array_equal(w.body_vertices, p.world.body_vertices)
+    assert np.array_equal(w.env_vertices, p.world.env_vertices)
+    assert np.array_equal(w.body_vertices, p.world.body_vertices)
     assert np.array_equal(w.grid, p.world.grid) and w.delta == p.world.delta and w.name == "hole"
     assert np.array_equal(w.bounds[0], p.world.bounds[0]) and np.array_equal(w.bounds[1], p.world.bounds[1])
     assert w.is_valid(p.goal) and w is not p.world
