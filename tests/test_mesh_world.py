@@ -118,6 +118,18 @@ def test_euler_angles_round_trip():
         assert np.allclose(rotation_matrix(*euler_from_matrix(R)), R, atol=1e-9)
 
 
+def test_euler_angles_from_python_are_the_compiled_kernels():
+    from planners.kernels.rigid import euler_angles
+
+    rng = np.random.default_rng(1)
+    compiled = np.empty(3)
+    for R in [trimesh.transformations.random_rotation_matrix(rng.random(3))[:3, :3] for _ in range(50)] + \
+             [rotation_matrix(PI / 2, 0.4, -1.1), rotation_matrix(-PI / 2, 2.0, 0.3)]:
+        R = np.ascontiguousarray(R)
+        euler_angles(R, compiled)
+        assert np.array_equal(euler_from_matrix(R), compiled)
+
+
 def test_states_known_free_and_known_in_collision(hole_world):
     w = hole_world
     assert w.is_valid([2, 5, 5, 0, 0, 0])  # in front of the wall

@@ -483,7 +483,9 @@ def euler_from_matrix(R) -> np.ndarray:
     ``tx`` lies in ``[-pi/2, pi/2]``; at ``tx = +-pi/2`` (gimbal lock) ``tz`` is 0.
     """
     out = np.empty(3)
-    rigid_kernels.euler_angles(np.ascontiguousarray(R, dtype=np.float64), out)
+    # the kernel's own source, run in the interpreter: Python calls this a few times per problem (a .cfg's
+    # start and goal, a .path's states), where compiling it would cost a first call about a quarter second
+    rigid_kernels.euler_angles.py_func(np.ascontiguousarray(R, dtype=np.float64), out)
     return out
 
 
