@@ -1,4 +1,4 @@
-"""The OMPL.app frame probe (scripts/experiments/omplapp_frames.py): its readings of instanced parts and its checks."""
+"""The OMPL.app probes: omplapp_frames.py (readings of instanced parts, origins, the replay) and mesh_vs_ompl.py."""
 
 from __future__ import annotations
 
@@ -56,3 +56,10 @@ def test_it_needs_a_copy_of_omplapp(monkeypatch, tmp_path):
         frames.main([])
     with pytest.raises(SystemExit):
         frames.main(["--omplapp", str(tmp_path), "--problem", "nothing"])
+
+
+def test_the_ompl_comparison_refuses_bad_counts():
+    probe = load_script("experiments/mesh_vs_ompl")
+    for bad in (["--scenes", "0"], ["--seeds", "0"], ["--time-limit", "0"], ["--families", "clutter"]):
+        with pytest.raises(SystemExit):
+            probe.main(bad)
