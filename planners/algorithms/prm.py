@@ -213,9 +213,13 @@ class PRM(Planner):
         return used
 
     def _shortest(self, only_valid: bool) -> tuple[np.ndarray, np.ndarray]:
-        return prm_kernels.astar(self._store.as_tree(), self._edges, self._vstat, int(self._istate[slots.I_N]),
-                        int(self._istate[slots.I_E]), int(self._istate[slots.I_QS]), int(self._istate[slots.I_QG]),
-                        self._space, only_valid, self.search == "astar")
+        # two calls from here rather than one kernel that makes the adjacency and searches it: such a wrapper
+        # compiles its callees' code once more (about half a second at a first solve); the flags as np.bool_, as
+        # Lazy-PRM's kernel passes them, so the search compiles once for both
+        csr = prm_kernels.build_csr(self._edges, int(self._istate[slots.I_N]), int(self._istate[slots.I_E]))
+        return prm_kernels.astar_csr(self._store.X, csr, self._edges[2], self._edges[3], self._vstat,
+                                     int(self._istate[slots.I_QS]), int(self._istate[slots.I_QG]), self._space,
+                                     np.bool_(only_valid), np.bool_(self.search == "astar"))
 
     def _path(self) -> np.ndarray:
         verts = self._lazy_path if self.lazy else self._shortest(only_valid=True)[0]

@@ -335,13 +335,6 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def astar(store, edges, vstat, n, ne, src, dst, space, only_valid, heuristic=True):
-    """``astar_csr`` over a freshly built adjacency of the roadmap."""
-    return astar_csr(store.X, build_csr(edges, n, ne), edges[2], edges[3], vstat, src, dst, space, only_valid,
-                     heuristic)
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
 def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, max_rounds):
     """Lazy-PRM query: search the optimistic roadmap, check the path, drop what fails, repeat.
 
@@ -358,7 +351,8 @@ def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, ma
         if rounds >= max_rounds:
             return np.empty(0, dtype=np.int64)
         rounds += 1
-        # the flags as np.bool_ values: a constant (or an omitted default) would compile astar_csr again beside astar's
+        # the flags as np.bool_ values, as PRM passes them from Python: a constant (or an omitted default) would
+        # compile astar_csr a second time
         verts, eds = astar_csr(X, csr, ew, es, vstat, istate[slots.I_QS], istate[slots.I_QG], space, np.bool_(False),
                                np.bool_(True))
         if verts.shape[0] == 0:
