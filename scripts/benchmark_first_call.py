@@ -10,6 +10,7 @@ time (the process's own) says what the wall time would be on an idle machine whe
     python scripts/benchmark_first_call.py                    # every row, this checkout
     python scripts/benchmark_first_call.py --rows rrt-goal rrt-connect --repeat 3
     python scripts/benchmark_first_call.py --code /path/to/other/checkout   # the same rows on other code
+    python scripts/benchmark_first_call.py --rows prm --against /path/to/parent --repeat 3   # alternating A/B
     python scripts/benchmark_first_call.py --save    # also store the compile figures the notice quotes
     python scripts/benchmark_first_call.py --rows rrt-goal --breakdown 10   # where the compile time goes
     python scripts/benchmark_first_call.py --omplapp DIR --rows mesh-easy mesh-cubicles   # OMPL.app's problems
@@ -23,8 +24,10 @@ or ``SAMPLERGYM_OMPLAPP_DIR``; not shipped); "start to solved" then includes rea
 notice before a first compilation quotes them (``planners.kernels.cache``).
 
 Prints a Markdown table (the minimum over ``--repeat`` runs of each figure: other load on the machine
-only ever adds time). Targets: goal-biased RRT and RRT-Connect within 5 s cold; every planner within
-15 s cold; a first solve within 0.3 s warm.
+only ever adds time). With ``--against DIR`` the rows also run on that checkout, the two codes taking turns
+run by run (a machine whose speed drifts then slows both alike), and a second table gives every run's
+"start to solved" and "of it compiling" for both. Targets: goal-biased RRT and RRT-Connect within 5 s cold;
+every planner within 15 s cold; a first solve within 0.3 s warm.
 """
 
 from __future__ import annotations
@@ -135,6 +138,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="OMPL.app's root or resources/3D folder, for the mesh rows (default $SAMPLERGYM_OMPLAPP_DIR)")
     ap.add_argument("--code", type=Path, default=ROOT,
                     help="checkout whose planners package is timed (default: this one)")
+    ap.add_argument("--against", type=Path, default=None,
+                    help="another checkout, timed in turns with --code run by run (an A/B comparison)")
     ap.add_argument("--repeat", type=int, default=1, help="runs per row; the table shows the minimum of each figure")
     ap.add_argument("--breakdown", type=int, default=0, metavar="N",
                     help="after each row, the N functions whose compilation took the most CPU time (nested ones excluded)")
@@ -160,8 +165,12 @@ def main(argv: list[str] | None = None) -> int:
                   file=sys.stderr)
             return 2
         omplapp = str(folder)
-    if not (args.code / "planners" / "__init__.py").is_file():
-        print(f"--code: {args.code} holds no planners package", file=sys.stderr)
+    for flag, code in (("--code", args.code), ("--against", args.against)):
+        if code is not None and not (code / "planners" / "__init__.py").is_file():
+            print(f"{flag}: {code} holds no planners package", file=sys.stderr)
+            return 2
+    if args.against is not None and args.save:
+        print("--save: not with --against (which checkout's figures would it store?)", file=sys.stderr)
         return 2
     if args.breakdown < 0:
         print(f"--breakdown: must be at least 0, got {args.breakdown}", file=sys.stderr)
@@ -180,12 +189,17 @@ def main(argv: list[str] | None = None) -> int:
           "| first solve, filled cache | iterations |")
     print("|---|---|---|---|---|---|---|")
     saved, breakdowns = {}, []
+    codes = [args.code] + ([args.against] if args.against is not None else [])
+    runs = {(code, row): ([], []) for code in codes for row in args.rows}
+    for turn in range(args.repeat):
+        # with --against, the codes take turns run by run, the first of each pair alternating
+        for code in (codes if turn % 2 == 0 else codes[::-1]):
+            for row in args.rows:
+                with tempfile.TemporaryDirectory(prefix="first-call-") as d:
+                    runs[code, row][0].append(run_child(code, row, d, args.breakdown > 0, omplapp))
+                    runs[code, row][1].append(run_child(code, row, d, omplapp=omplapp))
     for row in args.rows:
-        cold, warm = [], []
-        for _ in range(args.repeat):
-            with tempfile.TemporaryDirectory(prefix="first-call-") as d:
-                cold.append(run_child(args.code, row, d, args.breakdown > 0, omplapp))
-                warm.append(run_child(args.code, row, d, omplapp=omplapp))
+        cold, warm = runs[args.code, row]
         c = {k: min(r[k] for r in cold) for k in ("total", "cpu", "compile")}
         w = {k: min(r[k] for r in warm) for k in ("total", "first_solve", "cpu")}
         _, name, world, _ = ROWS[row]
@@ -200,6 +214,15 @@ def main(argv: list[str] | None = None) -> int:
             breakdowns.append(f"{ROWS[row][0]}: " + ", ".join(f"{n} {v:.2f} s" for n, v in top))
     for line in breakdowns:
         print(line)
+    if args.against is not None:
+        print(f"\nevery run, in turns: A = {args.code.resolve()}, B = {args.against.resolve()}\n")
+        print("| planner | start to solved, A | start to solved, B | of it compiling, A | of it compiling, B |")
+        print("|---|---|---|---|---|")
+        for row in args.rows:
+            a, b = runs[args.code, row][0], runs[args.against, row][0]
+            fmt = lambda rs, k: ", ".join(f"{r[k]:.1f}" for r in rs)  # noqa: E731
+            print(f"| {ROWS[row][0]} | {fmt(a, 'total')} | {fmt(b, 'total')} | {fmt(a, 'compile')} | "
+                  f"{fmt(b, 'compile')} |", flush=True)
     print(f"load after: {os.getloadavg()[0]:.1f}")
     if args.save:
         old = json.loads(save_to.read_text()) if save_to.is_file() else {}

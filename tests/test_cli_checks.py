@@ -73,3 +73,11 @@ def test_the_first_call_benchmark_runs_the_mesh_rows_only_with_omplapps_files(ca
     assert script.main(["--rows", "mesh-cubicles", "--omplapp", "/nonexistent/omplapp"]) == 2
     assert "/nonexistent/omplapp" in capsys.readouterr().err
 
+
+
+def test_the_first_call_benchmark_checks_the_checkout_it_compares_against(capsys, tmp_path):
+    script = load_script("benchmark_first_call")
+    assert script.main(["--rows", "rrt-goal", "--against", str(tmp_path)]) == 2
+    assert "--against" in capsys.readouterr().err
+    assert script.main(["--rows", "rrt-goal", "--against", str(Path(__file__).resolve().parents[1]), "--save"]) == 2
+    assert "not with --against" in capsys.readouterr().err
