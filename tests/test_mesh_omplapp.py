@@ -23,7 +23,7 @@ from planners.worlds.omplapp import (  # noqa: E402
     quaternion_matrix,
     read_omplapp_path,
 )
-from planners.worlds.rigid3d import rotation_matrix  # noqa: E402
+from planners.worlds.rigid3d import euler_from_matrix, rotation_matrix  # noqa: E402
 
 PI = math.pi
 
@@ -198,6 +198,19 @@ def test_every_state_of_omplapps_solution_is_free_and_a_nudged_one_is_not(omplap
         assert d > 0 and not w.is_valid(nudged), (name, q)
         hits += 1
     assert hits >= 2
+
+
+def test_escapes_goal_meets_the_environment_and_its_solution_replays_in_the_world(omplapp):
+    cfg, solution = omplapp / "escape.cfg", omplapp / "escape.path"
+    if not (cfg.is_file() and solution.is_file()):
+        pytest.skip(f"{cfg.name} or {solution.name} is not in {omplapp}")
+    with pytest.raises(InputError, match="goal .* is not a valid state"):
+        load_omplapp(cfg)
+    w = load_omplapp_world(cfg)
+    Q = read_omplapp_path(solution)
+    assert len(Q) == 326 and all(w.is_valid(q) for q in Q)
+    goal = np.array([-53.04, 18.23, 0.83, *euler_from_matrix(axis_angle_matrix([1, 0, 0], 3.14159265359))])
+    assert not w.is_valid(goal) and np.linalg.norm(Q[-1, :3] - goal[:3]) < 0.02
 
 
 def test_without_assimps_up_axis_turn_the_start_collides(omplapp, monkeypatch):
