@@ -214,7 +214,7 @@ class PRM(Planner):
 
     def _shortest(self, only_valid: bool) -> tuple[np.ndarray, np.ndarray]:
         # two calls from here rather than one kernel that makes the adjacency and searches it: such a wrapper
-        # compiles its callees' code once more (about half a second at a first solve); the flags as np.bool_, as
+        # compiles its callees' code once more (0.3 s at a first solve); the flags as np.bool_, as
         # Lazy-PRM's kernel passes them, so the search compiles once for both
         csr = prm_kernels.build_csr(self._edges, int(self._istate[slots.I_N]), int(self._istate[slots.I_E]))
         return prm_kernels.astar_csr(self._store.X, csr, self._edges[2], self._edges[3], self._vstat,
