@@ -1,4 +1,4 @@
-"""Uniform orientations for the 6-DoF body: today's uniform Euler angles against uniform rotations (Haar), on tuning scenes.
+"""Uniform orientations for the 6-DoF body: uniform Euler angles against rotations uniform over SO(3), on tuning scenes.
 
     PYTHONPATH=$PWD python scripts/experiments/so3_uniform.py --scenes 6 --seeds 2
 
@@ -23,6 +23,8 @@ import sys
 
 import numpy as np
 
+from planners.base.samplers import SamplerBase
+
 
 def haar_euler(rng: np.random.Generator, n: int) -> np.ndarray:
     """``n`` rotations uniform over SO(3), as ``(tx, ty, tz)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``, either cover."""
@@ -42,20 +44,24 @@ def haar_euler(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.stack([wrap(tx), wrap(ty), wrap(tz)], axis=1)
 
 
-def make_haar_sampler(goal_bias: float = 0.0):
-    """A sampler: positions uniform in the box, rotations uniform (``haar_euler``), the goal with ``goal_bias``."""
-    from planners.base.samplers import SamplerBase
+class HaarSampler(SamplerBase):
+    """Positions uniform in the box, rotations uniform over SO(3) (``haar_euler``), the goal with ``goal_bias``."""
 
-    class HaarSampler(SamplerBase):
-        def draw(self, rng, n, view):
-            u = rng.random((n, 4))
-            pts = np.empty((n, 6))
-            pts[:, :3] = self.low[:3] + (self.high[:3] - self.low[:3]) * u[:, 1:]
-            pts[:, 3:] = haar_euler(rng, n)
-            pts[u[:, 0] < goal_bias] = self.problem.goal
-            return pts
+    def __init__(self, goal_bias: float = 0.0) -> None:
+        self.goal_bias = float(goal_bias)
 
-    return HaarSampler()
+    def draw(self, rng, n, view):
+        u = rng.random((n, 4))
+        pts = np.empty((n, 6))
+        pts[:, :3] = self.low[:3] + (self.high[:3] - self.low[:3]) * u[:, 1:]
+        pts[:, 3:] = haar_euler(rng, n)
+        pts[u[:, 0] < self.goal_bias] = self.problem.goal
+        return pts
+
+
+def make_haar_sampler(goal_bias: float = 0.0) -> HaarSampler:
+    """A ``HaarSampler`` sampling the goal with probability ``goal_bias``."""
+    return HaarSampler(goal_bias)
 
 
 def check_conversion() -> None:
