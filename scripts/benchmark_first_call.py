@@ -172,6 +172,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.against is not None and args.save:
         print("--save: not with --against (which checkout's figures would it store?)", file=sys.stderr)
         return 2
+    if args.against is not None and args.against.resolve() == args.code.resolve():
+        print(f"--against: {args.against} is the checkout --code times; give another", file=sys.stderr)
+        return 2
     if args.breakdown < 0:
         print(f"--breakdown: must be at least 0, got {args.breakdown}", file=sys.stderr)
         return 2
@@ -220,9 +223,8 @@ def main(argv: list[str] | None = None) -> int:
         print("|---|---|---|---|---|")
         for row in args.rows:
             a, b = runs[args.code, row][0], runs[args.against, row][0]
-            fmt = lambda rs, k: ", ".join(f"{r[k]:.1f}" for r in rs)  # noqa: E731
-            print(f"| {ROWS[row][0]} | {fmt(a, 'total')} | {fmt(b, 'total')} | {fmt(a, 'compile')} | "
-                  f"{fmt(b, 'compile')} |", flush=True)
+            cells = [", ".join(f"{r[k]:.1f}" for r in rs) for k in ("total", "compile") for rs in (a, b)]
+            print(f"| {ROWS[row][0]} | " + " | ".join(cells) + " |", flush=True)
     print(f"load after: {os.getloadavg()[0]:.1f}")
     if args.save:
         old = json.loads(save_to.read_text()) if save_to.is_file() else {}

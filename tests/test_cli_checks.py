@@ -81,3 +81,5 @@ def test_the_first_call_benchmark_checks_the_checkout_it_compares_against(capsys
     assert "--against" in capsys.readouterr().err
     assert script.main(["--rows", "rrt-goal", "--against", str(Path(__file__).resolve().parents[1]), "--save"]) == 2
     assert "not with --against" in capsys.readouterr().err
+    assert script.main(["--rows", "rrt-goal", "--against", str(Path(__file__).resolve().parents[1])]) == 2
+    assert "another" in capsys.readouterr().err
