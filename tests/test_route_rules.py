@@ -19,11 +19,13 @@ from learning.samplers.route_rules import (
     ConvergingRouteSampler,
     CorridorSampler,
     corridor_cells,
+    query_cells,
     reversed_query,
+    route_sums,
 )
 from planners import OccupancyGrid, Problem, TreeView, UniformSampler, make_planner
 from planners.base.fileio import InputError
-from planners.base.samplers import PLANNER_FAMILIES, TREE_GOAL, TREE_START
+from planners.base.samplers import PLANNER_FAMILIES, TREE_GOAL, TREE_START, SamplerBase
 from planners.maps.gridsearch import distance_field
 
 
@@ -116,6 +118,91 @@ def test_the_exact_corridor_holds_the_shortest_route_and_nothing_longer():
     gap = np.ravel_multi_index((4, 15), p.world.obstacles.shape)  # every shortest route passes the gap's top cell
     assert gap in cells
     assert len(corridor_cells(np.full((2, 2), np.inf), np.full((2, 2), np.inf), 0.3)) == 0
+
+
+def test_the_routes_length_is_what_the_fields_say_not_a_dip_in_their_sum():
+    p = wall_problem()
+    to_goal = distance_field(p.world.obstacles, p.world.cell_of(p.goal))
+    to_start = distance_field(p.world.obstacles, p.world.cell_of(p.start))
+    shortest = to_goal[p.world.cell_of(p.start)]
+    cells, sums, length = route_sums(to_goal, to_start, query_cells(p))
+    assert length == pytest.approx(shortest) and sums.min() == pytest.approx(shortest)  # one number, exact
+    exact = corridor_cells(to_goal, to_start, 0.0)
+    off = np.setdiff1d(cells, exact)
+    near = off[np.argmin(to_start.ravel()[off])]  # a cell off the shortest routes, near the start
+    assert to_start.ravel()[near] < 0.5 * shortest
+    dipped = to_goal.copy()
+    dipped.ravel()[near] = 0.0  # a learned field can call a cell off the route close to the goal
+    _, sums, length = route_sums(dipped, to_start, query_cells(p))
+    assert sums.min() < 0.5 * shortest and length == pytest.approx(shortest)
+    assert len(route_sums(np.full((2, 2), np.inf), np.zeros((2, 2)), ((0, 0), (1, 1)))[0]) == 0
+
+
+class DippedExact(SamplerBase):
+    """The exact route sampler whose field to the goal calls one cell ``near`` the goal: a learned field's dip."""
+
+    def __init__(self, near: int) -> None:
+        self.exact, self.near = make_sampler("exact_route", step_size=2.0), near
+        self.net, self.step_size = None, 2.0
+
+    def cost_to_go(self, problem):
+        f = self.exact.cost_to_go(problem)
+        if problem.goal[0] > problem.start[0]:  # the field to the goal, not the pass with start and goal swapped
+            f.field.ravel()[self.near] = 0.0
+        return f
+
+    def draw(self, rng, n, view):
+        raise NotImplementedError("only its field is read")
+
+
+def stages_and_cells(bound):
+    """The stage of each of ``bound``'s first 2,000 draws, and the cells drawn in each."""
+    pts = bound.draw(np.random.default_rng(3), 2000, None)
+    stage = np.searchsorted(bound.starts, np.arange(2000), side="right") - 1
+    cells = np.floor(pts[:, 1]).astype(int) * 32 + np.floor(pts[:, 0]).astype(int)
+    return stage, cells
+
+
+def test_the_corridor_widens_from_a_dip_to_the_route_then_to_every_cell():
+    p = wall_problem()
+    assert p.goal[0] > p.start[0]
+    exact = CorridorSampler(make_sampler("exact_route", step_size=2.0), 0.0, 0.0, None).bind(p)
+    to_start = distance_field(p.world.obstacles, p.world.cell_of(p.start)).ravel()
+    off = np.setdiff1d(np.flatnonzero(np.isfinite(to_start)), exact.cells[:exact.counts[0]])
+    near = off[np.argmin(to_start[off])]
+    narrow = CorridorSampler(DippedExact(near), 0.0, 0.0, None).bind(p)
+    assert narrow.counts[0] < exact.counts[0] / 4  # the dip shrinks the first corridor
+    assert len(narrow.counts) == 1 and len(narrow.starts) == 1  # and without ``fill`` it stays
+    wide = CorridorSampler(DippedExact(near), 0.0, 0.0, 1.0).bind(p)
+    assert wide.counts[0] == narrow.counts[0] and np.array_equal(wide.cells[:wide.counts[0]],
+                                                                  narrow.cells[:narrow.counts[0]])
+    assert set(wide.cells[:wide.counts[1]]) >= set(exact.cells[:exact.counts[0]])  # stage 1: the route's corridor
+    assert wide.counts[-1] == len(wide.cells) == np.isfinite(to_start).sum()  # the last: every reachable cell
+    assert np.all(np.diff(wide.counts) > 0)
+    assert np.array_equal(np.diff(wide.starts), np.ceil(wide.counts[:-1] / 2.0 ** 2))  # one draw per 2x2 cells
+    stage, cells = stages_and_cells(wide)
+    for j in range(len(wide.counts)):
+        assert np.isin(cells[stage == j], wide.cells[:wide.counts[j]]).all()
+    assert (stage == len(wide.counts) - 1).any()
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), cut=st.integers(1, 199))
+def test_a_widening_corridors_stream_does_not_depend_on_batch_sizes(seed, cut):
+    p = wall_problem()
+    one = CorridorSampler(make_sampler("route_ablation", step_size=2.0), 0.0, 0.3, 0.5).bind(p)
+    two = CorridorSampler(make_sampler("route_ablation", step_size=2.0), 0.0, 0.3, 0.5).bind(p)
+    assert len(one.starts) > 1 and one.starts[1] < 200  # the draws cross a stage
+    a = one.draw(np.random.default_rng(seed), 200, None)
+    rng = np.random.default_rng(seed)
+    b = np.concatenate([two.draw(rng, cut, None), two.draw(rng, 200 - cut, None)])
+    assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("fill", [0, -1.0, math.inf, math.nan, True, "4"])
+def test_a_corridor_refuses_a_fill_that_is_not_a_positive_number(fill):
+    with pytest.raises(InputError, match="fill"):
+        CorridorSampler(make_sampler("route"), 0.3, 0.3, fill)
 
 
 @settings(max_examples=15, deadline=None)

@@ -39,13 +39,16 @@ from planners.base.samplers import (
     SamplerBase,
 )
 
+#: Draws per step-sized square of a stage of the roadmaps' corridor before it widens (``CorridorSampler``).
+FILL = 1.0
 #: The roadmaps' corridor, chosen on the validation maps (``scripts/experiments/tune_route_rules.py``): cells on
-#: routes within 30% of the shortest the field sees (plus one step), and 30% of the samples uniform. The exact
-#: reference takes the same settings.
-CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3}
+#: routes within 30% of the shortest the field sees (plus one step), and 30% of the samples uniform; while the
+#: roadmap stays unconnected it widens once filled (``fill``, ``CorridorSampler``).
+#: The exact reference takes the same settings.
+CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3, "fill": FILL}
 #: The straight-line ablation's corridor, tuned for it on the same maps: an ellipse about the start and the
 #: goal, 60% longer than the straight line.
-ABLATION_CORRIDOR = {"margin": 0.6, "floor": 0.3}
+ABLATION_CORRIDOR = {"margin": 0.6, "floor": 0.3, "fill": FILL}
 #: RRT*'s corridor after the first solution, chosen on the validation maps (``tune_route_rules.py --rrtstar``):
 #: cells within 10% of the shortest route the field sees, and a tenth of the samples from the informed set.
 CONVERGING_SETTINGS = {"margin": 0.1, "floor": 0.1}
@@ -74,6 +77,11 @@ def reversed_query(problem: Problem) -> Problem:
     return problem.with_query(problem.goal, problem.start)
 
 
+def query_cells(problem: Problem) -> tuple:
+    """The grid cells (row, col) of ``problem``'s start and goal: where ``route_sums`` reads the route's length."""
+    return problem.world.cell_of(problem.start), problem.world.cell_of(problem.goal)
+
+
 def _check_share(who: str, name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not 0 <= value <= 1:
         raise InputError(f"{who}: {name} = {short_repr(value)}, expected a share from 0 to 1")
@@ -84,6 +92,24 @@ def _check_margin(who: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not 0 <= value < math.inf:
         raise InputError(f"{who}: margin = {short_repr(value)}, expected a finite number >= 0 (a share of the route)")
     return float(value)
+
+
+def route_sums(to_goal: np.ndarray, to_start: np.ndarray, ends: tuple) -> tuple[np.ndarray, np.ndarray, float]:
+    """The cells a route passes and ``to_start + to_goal`` there: ``(cells, sums, length)``.
+
+    ``cells``: flat indices of the cells where the sum is finite, ascending; ``sums``: their sums; ``length``: the
+    route's length as the two fields give it, the larger of ``to_goal`` at the start's cell and ``to_start`` at the
+    goal's cell (``ends``: their (row, col)), never below the lowest sum (which it equals for an exact field; a
+    learned field's sum can dip below it off the route). No cell finite: no cells, length ``inf``.
+    """
+    total = (to_goal + to_start).ravel()
+    cells = np.flatnonzero(np.isfinite(total))
+    sums = total[cells]
+    if not len(cells):
+        return cells, sums, math.inf
+    (rs, cs), (rg, cg) = ends
+    said = [v for v in (float(to_goal[rs, cs]), float(to_start[rg, cg])) if math.isfinite(v)]
+    return cells, sums, max([float(sums.min())] + said)
 
 
 def corridor_cells(to_goal: np.ndarray, to_start: np.ndarray, margin: float, width: float = WIDTH_STEPS) -> np.ndarray:
@@ -99,12 +125,15 @@ def corridor_cells(to_goal: np.ndarray, to_start: np.ndarray, margin: float, wid
     return np.flatnonzero(finite & (total <= best * (1.0 + margin) + width))
 
 
-def cell_points(grid: OccupancyGrid, cells: np.ndarray, u: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+def cell_points(grid: OccupancyGrid, cells: np.ndarray, u: np.ndarray, low: np.ndarray, high: np.ndarray,
+                counts: np.ndarray | int | None = None) -> np.ndarray:
     """States in the grid's ``cells`` (flat indices, not empty) from uniforms ``u`` (m, 3): a cell, then a point in it.
 
-    They are kept inside the sampling box ``[low, high)``.
+    ``counts``: each state's cell is among the first ``counts`` of ``cells`` (per state, or one for all; None: any,
+    each at least 1). The states are kept inside the sampling box ``[low, high)``.
     """
-    pick = cells[np.minimum((u[:, 0] * len(cells)).astype(np.int64), len(cells) - 1)]
+    counts = len(cells) if counts is None else counts
+    pick = cells[np.minimum((u[:, 0] * counts).astype(np.int64), np.asarray(counts) - 1)]
     rows, cols = np.divmod(pick, grid.width)
     pts = np.stack([cols + u[:, 1], rows + u[:, 2]], axis=1) * grid.resolution + np.asarray(grid.origin)
     return np.minimum(np.maximum(pts, low), np.nextafter(high, low))
@@ -173,18 +202,31 @@ class CorridorSampler(_CorridorRule):
     """Roadmaps' rule: uniform over the corridor where the field says a short route runs, with a uniform floor.
 
     The corridor is the free cells whose cost from the start plus cost to the goal (two passes of the field,
-    the second with start and goal swapped) is within ``margin`` of the lowest (``corridor_cells``). Every
-    sample takes 4 uniforms from the planner's generator, so the stream does not depend on batch sizes.
+    the second with start and goal swapped) is within ``margin`` of the lowest (``corridor_cells``). While the
+    roadmap stays unconnected the corridor widens in stages: with ``L`` the route's length as the fields give it
+    (``route_sums``), stage 1 holds the cells within ``(1 + margin) x L`` (plus one step) and each later stage
+    doubles that bound, until every cell the field reaches is in; each stage lasts until it has had ``fill``
+    draws per step-sized square of its own cells. A learned field whose sum dips below its own route length
+    somewhere makes a narrow first corridor, which is right where the field is right and is soon filled where
+    it is not; a wide corridor is kept for as long as it takes to fill. Every sample takes 4 uniforms from the
+    planner's generator, and its stage depends on its place in the stream, so the stream does not depend on
+    batch sizes.
 
     Args:
         route: The route sampler whose field is read.
         margin: How much longer than the shortest route a route through a corridor cell may be (0.3: 30%).
         floor: Share of samples uniform over the whole sampling box.
+        fill: Draws per step-sized square of a stage's cells before the corridor widens; None: never.
     """
 
     def __init__(self, route: RouteSampler, margin: float = CORRIDOR_SETTINGS["margin"],
-                 floor: float = CORRIDOR_SETTINGS["floor"]) -> None:
+                 floor: float = CORRIDOR_SETTINGS["floor"], fill: float | None = CORRIDOR_SETTINGS["fill"]) -> None:
         super().__init__(route, margin, floor)
+        if fill is not None and (isinstance(fill, bool) or not isinstance(fill, int | float | np.floating)
+                                 or not 0 < fill < math.inf):
+            raise InputError(f"CorridorSampler: fill = {short_repr(fill)}, expected a finite number > 0 (draws per "
+                             "step-sized square of the corridor) or None")
+        self.fill = None if fill is None else float(fill)
 
     def _setup(self) -> None:
         p = self.problem
@@ -192,7 +234,20 @@ class CorridorSampler(_CorridorRule):
         if not isinstance(grid, OccupancyGrid):
             raise InputError("CorridorSampler plans on OccupancyGrid problems")
         to_goal, to_start = self.route.cost_to_go(p), self.route.cost_to_go(reversed_query(p))
-        self.cells = corridor_cells(to_goal.field, to_start.field, self.margin)
+        cells, sums, length = route_sums(to_goal.field, to_start.field, query_cells(p))
+        bounds = [float(sums.min()) * (1.0 + self.margin) + WIDTH_STEPS] if len(sums) else [math.inf]
+        while self.fill is not None and bounds[-1] < sums.max():
+            bounds.append(length * (1.0 + self.margin) * 2.0 ** (len(bounds) - 1) + WIDTH_STEPS)
+        # the cells by the first stage that holds them, in index order within it: each stage's a prefix of ``cells``
+        stage = np.searchsorted(np.asarray(bounds), sums, side="left")
+        order = np.argsort(stage, kind="stable")
+        self.cells = cells[order]
+        #: cells of each stage (a prefix of ``cells``), and the draw each stage starts at
+        self.counts = np.searchsorted(stage[order], np.arange(len(bounds)), side="right")
+        square = (self.route.step_size / grid.resolution) ** 2  # cells in a step-sized square
+        lasts = [math.ceil(self.fill * c / square) for c in self.counts[:-1]] if self.fill is not None else []
+        self.starts = np.concatenate([[0], np.cumsum(lasts, dtype=np.int64)]).astype(np.int64)
+        self.drawn = 0
         self.forward_passes = 0 if self.route.net is None else 2 * self.route.symmetry_passes
         #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
         self.reused_seconds = sum(f.seconds for f in (to_goal, to_start) if f.reused)
@@ -200,10 +255,16 @@ class CorridorSampler(_CorridorRule):
     def draw(self, rng, n, view):
         u = rng.random((n, 4))
         pts = self._uniform(u[:, 2:4].copy())
-        if len(self.cells):
+        if self.counts[0]:
+            stage = np.searchsorted(self.starts, self.drawn + np.arange(n), side="right") - 1
             guided = u[:, 0] >= self.floor
-            pts[guided] = cell_points(self.problem.world, self.cells, u[guided, 1:4], self.low, self.high)
+            pts[guided] = cell_points(self.problem.world, self.cells, u[guided, 1:4], self.low, self.high,
+                                      self.counts[stage[guided]])
+        self.drawn += n
         return pts
+
+    def __repr__(self) -> str:
+        return f"{super().__repr__()[:-1]}, fill={self.fill})"
 
 
 class ConvergingRouteSampler(_CorridorRule):

@@ -1,6 +1,7 @@
 """The route field's rules for other planners, chosen on validation maps.
 
     python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2                 # the roadmaps' corridor
+    python scripts/experiments/tune_route_rules.py --fields route --margins 0.3 --floors 0.3 --fills 1 2 4 8 none
     python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2 --connect       # RRT-Connect: one tree or two
     python scripts/experiments/tune_route_rules.py --maps 2 --seeds 2 --rrtstar       # RRT*'s rule after a solution
 
@@ -14,7 +15,8 @@ set only), and the RRT rule throughout; prints the median iterations to within 5
 them reached (``learning.evaluation.every_planner.convergence``), per family, and their geometric means.
 
 For each field (the route encoder, its straight-line ablation, the exact cost-to-go) and each corridor
-``margin`` and uniform ``floor`` of the grid, PRM and Lazy-PRM run on the five families' validation maps
+``margin``, uniform ``floor`` and ``fill`` (``--fills``: draws per step-sized square of a stage of the
+corridor before it widens) of the grid, PRM and Lazy-PRM run on the five families' validation maps
 (``learning.evaluation.every_planner.planner_maps("validation")``; never test maps); prints the median samples per
 family and their geometric mean, the score the settings are chosen by (lowest), with the success share.
 """
@@ -92,6 +94,9 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per map")
     ap.add_argument("--margins", type=float, nargs="+", default=[0.1, 0.3, 0.6, 1.0])
     ap.add_argument("--floors", type=float, nargs="+", default=[0.1, 0.3])
+    ap.add_argument("--fills", nargs="+", default=[None], type=lambda v: None if v == "none" else float(v),
+                    help="draws per step-sized square of a stage of the roadmaps' corridor before it widens "
+                    "('none': never)")
     ap.add_argument("--fields", nargs="+", default=["route", "route_ablation", "exact_route"])
     ap.add_argument("--planners", nargs="+", default=["PRM", "LazyPRM"])
     ap.add_argument("--connect", action="store_true", help="RRT-Connect: the start tree guided, or both")
@@ -129,14 +134,14 @@ def main(argv=None) -> int:
                 print(geomean_row(f"RRTConnect {field:15s} {rule:16s}", per_family), flush=True)
         return 0
     for planner in args.planners:
-        for field, margin, floor in itertools.product(args.fields, args.margins, args.floors):
+        for field, margin, floor, fill in itertools.product(args.fields, args.margins, args.floors, args.fills):
             per_family = [summarize_runs([run_setup(Setup(field, planner, field), p, s, models=models,
                                                     sampler=CorridorSampler(make_sampler(field, models=models),
-                                                                            margin, floor))
+                                                                            margin, floor, fill))
                                           for p in problems for s in range(args.seeds)])
                           for problems in maps.values()]
-            print(geomean_row(f"{planner:8s} {field:15s} margin {margin:4.2f} floor {floor:4.2f}", per_family),
-                  flush=True)
+            print(geomean_row(f"{planner:8s} {field:15s} margin {margin:4.2f} floor {floor:4.2f} "
+                              f"fill {fill}", per_family), flush=True)
     return 0
 
 
