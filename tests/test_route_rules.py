@@ -186,6 +186,14 @@ def test_the_corridor_widens_from_a_dip_to_the_route_then_to_every_cell():
     assert (stage == len(wide.counts) - 1).any()
 
 
+def test_a_corridor_about_a_route_of_length_zero_widens_to_every_cell():
+    p = wall_problem()
+    here = p.with_query((4.5, 27.5), (4.6, 27.4))  # start and goal in one cell
+    bound = CorridorSampler(make_sampler("exact_route", step_size=2.0), 0.3, 0.3, 1.0).bind(here)
+    assert bound.counts[-1] == len(bound.cells) == np.isfinite(distance_field(p.world.obstacles, (27, 4))).sum()
+    assert np.all(np.diff(bound.counts) > 0)
+
+
 @settings(max_examples=10, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), cut=st.integers(1, 199))
 def test_a_widening_corridors_stream_does_not_depend_on_batch_sizes(seed, cut):

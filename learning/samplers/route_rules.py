@@ -237,7 +237,8 @@ class CorridorSampler(_CorridorRule):
         cells, sums, length = route_sums(to_goal.field, to_start.field, query_cells(p))
         bounds = [float(sums.min()) * (1.0 + self.margin) + WIDTH_STEPS] if len(sums) else [math.inf]
         while self.fill is not None and bounds[-1] < sums.max():
-            bounds.append(length * (1.0 + self.margin) * 2.0 ** (len(bounds) - 1) + WIDTH_STEPS)
+            # at least a step before doubling, so a route of length 0 (start and goal in one cell) widens too
+            bounds.append(max(length * (1.0 + self.margin), 1.0) * 2.0 ** (len(bounds) - 1) + WIDTH_STEPS)
         # the cells by the first stage that holds them, in index order within it: each stage's a prefix of ``cells``
         stage = np.searchsorted(np.asarray(bounds), sums, side="left")
         order = np.argsort(stage, kind="stable")
