@@ -51,9 +51,9 @@ CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3, "fill": FILL}
 ABLATION_CORRIDOR = {"margin": 0.6, "floor": 0.3, "fill": FILL}
 #: RRT*'s corridor after the first solution, chosen on the validation maps (``tune_route_rules.py --rrtstar``):
 #: cells within 10% of the shortest route the field sees, and a tenth of the samples from the informed set.
-CONVERGING_SETTINGS = {"margin": 0.1, "floor": 0.1}
+CONVERGING_SETTINGS = {"margin": 0.1, "floor": 0.1, "fill": None}
 #: The straight-line ablation's, tuned for it on the same maps: an ellipse twice as long as the straight line.
-ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1}
+ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1, "fill": None}
 #: Corridor cells are those within ``margin`` times the shortest route plus this many steps.
 WIDTH_STEPS = 1.0
 #: Samples per draw once RRT* has a solution (the informed set shrinks as the solution improves).
@@ -125,6 +125,38 @@ def corridor_cells(to_goal: np.ndarray, to_start: np.ndarray, margin: float, wid
     return np.flatnonzero(finite & (total <= best * (1.0 + margin) + width))
 
 
+def corridor_stages(to_goal: np.ndarray, to_start: np.ndarray, ends: tuple, margin: float, fill: float | None,
+                    square: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A corridor that widens in stages: ``(cells, counts, starts)``.
+
+    Stage 0 holds the cells whose ``to_start + to_goal`` is within ``(1 + margin)`` x the lowest (plus
+    ``WIDTH_STEPS``, as ``corridor_cells``); with ``L`` the route's length as the fields give it (``route_sums``;
+    ``ends``: the start's and the goal's (row, col)), stage 1 those within ``(1 + margin) x L`` and each later stage
+    doubles that bound, until every cell the fields reach is in. ``cells``: flat indices by the first stage that
+    holds them (index order within it), so stage ``j`` is ``cells[:counts[j]]``; stage ``j`` starts at draw
+    ``starts[j]`` and lasts ``fill`` draws per ``square`` of its cells (cells in a step-sized square). ``fill``
+    None: stage 0 only, for good.
+    """
+    cells, sums, length = route_sums(to_goal, to_start, ends)
+    bounds = [float(sums.min()) * (1.0 + margin) + WIDTH_STEPS] if len(sums) else [math.inf]
+    while fill is not None and bounds[-1] < sums.max():
+        # at least a step before doubling, so a route of length 0 (start and goal in one cell) widens too
+        bounds.append(max(length * (1.0 + margin), 1.0) * 2.0 ** (len(bounds) - 1) + WIDTH_STEPS)
+    stage = np.searchsorted(np.asarray(bounds), sums, side="left")
+    order = np.argsort(stage, kind="stable")
+    counts = np.searchsorted(stage[order], np.arange(len(bounds)), side="right")
+    lasts = [math.ceil(fill * c / square) for c in counts[:-1]] if fill is not None else []
+    return cells[order], counts, np.concatenate([[0], np.cumsum(lasts, dtype=np.int64)]).astype(np.int64)
+
+
+def _check_fill(who: str, value) -> float | None:
+    if value is not None and (isinstance(value, bool) or not isinstance(value, int | float | np.floating)
+                              or not 0 < value < math.inf):
+        raise InputError(f"{who}: fill = {short_repr(value)}, expected a finite number > 0 (draws per step-sized "
+                         "square of the corridor) or None")
+    return None if value is None else float(value)
+
+
 def cell_points(grid: OccupancyGrid, cells: np.ndarray, u: np.ndarray, low: np.ndarray, high: np.ndarray,
                 counts: np.ndarray | int | None = None) -> np.ndarray:
     """States in the grid's ``cells`` (flat indices, not empty) from uniforms ``u`` (m, 3): a cell, then a point in it.
@@ -187,15 +219,26 @@ class BidirectionalRouteSampler(SamplerBase):
 
 
 class _CorridorRule(SamplerBase):
-    """What the corridor's rules share: the route sampler, a corridor ``margin`` and a ``floor``, checked."""
+    """What the corridor's rules share: the route sampler, and the corridor's ``margin``, ``floor`` and ``fill``."""
 
-    def __init__(self, route: RouteSampler, margin: float, floor: float) -> None:
+    def __init__(self, route: RouteSampler, margin: float, floor: float, fill: float | None) -> None:
         self.route = route
         self.margin = _check_margin(type(self).__name__, margin)
         self.floor = _check_share(type(self).__name__, "floor", floor)
+        self.fill = _check_fill(type(self).__name__, fill)
+
+    def _stages(self, to_goal: np.ndarray, to_start: np.ndarray) -> None:
+        """Set ``cells``, ``counts`` and ``starts``: ``corridor_stages`` at this rule's settings and route step.
+
+        The corridor's cells by stage, the cells of each stage (a prefix of them), and the draw each stage starts at.
+        """
+        p = self.problem
+        self.cells, self.counts, self.starts = corridor_stages(
+            to_goal, to_start, query_cells(p), self.margin, self.fill, (self.route.step_size / p.world.resolution) ** 2)
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.route!r}, margin={self.margin:g}, floor={self.floor:g})"
+        return (f"{type(self).__name__}({self.route!r}, margin={self.margin:g}, floor={self.floor:g}, "
+                f"fill={self.fill})")
 
 
 class CorridorSampler(_CorridorRule):
@@ -221,33 +264,14 @@ class CorridorSampler(_CorridorRule):
 
     def __init__(self, route: RouteSampler, margin: float = CORRIDOR_SETTINGS["margin"],
                  floor: float = CORRIDOR_SETTINGS["floor"], fill: float | None = CORRIDOR_SETTINGS["fill"]) -> None:
-        super().__init__(route, margin, floor)
-        if fill is not None and (isinstance(fill, bool) or not isinstance(fill, int | float | np.floating)
-                                 or not 0 < fill < math.inf):
-            raise InputError(f"CorridorSampler: fill = {short_repr(fill)}, expected a finite number > 0 (draws per "
-                             "step-sized square of the corridor) or None")
-        self.fill = None if fill is None else float(fill)
+        super().__init__(route, margin, floor, fill)
 
     def _setup(self) -> None:
         p = self.problem
-        grid = p.world
-        if not isinstance(grid, OccupancyGrid):
+        if not isinstance(p.world, OccupancyGrid):
             raise InputError("CorridorSampler plans on OccupancyGrid problems")
         to_goal, to_start = self.route.cost_to_go(p), self.route.cost_to_go(reversed_query(p))
-        cells, sums, length = route_sums(to_goal.field, to_start.field, query_cells(p))
-        bounds = [float(sums.min()) * (1.0 + self.margin) + WIDTH_STEPS] if len(sums) else [math.inf]
-        while self.fill is not None and bounds[-1] < sums.max():
-            # at least a step before doubling, so a route of length 0 (start and goal in one cell) widens too
-            bounds.append(max(length * (1.0 + self.margin), 1.0) * 2.0 ** (len(bounds) - 1) + WIDTH_STEPS)
-        # the cells by the first stage that holds them, in index order within it: each stage's a prefix of ``cells``
-        stage = np.searchsorted(np.asarray(bounds), sums, side="left")
-        order = np.argsort(stage, kind="stable")
-        self.cells = cells[order]
-        #: cells of each stage (a prefix of ``cells``), and the draw each stage starts at
-        self.counts = np.searchsorted(stage[order], np.arange(len(bounds)), side="right")
-        square = (self.route.step_size / grid.resolution) ** 2  # cells in a step-sized square
-        lasts = [math.ceil(self.fill * c / square) for c in self.counts[:-1]] if self.fill is not None else []
-        self.starts = np.concatenate([[0], np.cumsum(lasts, dtype=np.int64)]).astype(np.int64)
+        self._stages(to_goal.field, to_start.field)
         self.drawn = 0
         self.forward_passes = 0 if self.route.net is None else 2 * self.route.symmetry_passes
         #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
@@ -264,32 +288,30 @@ class CorridorSampler(_CorridorRule):
         self.drawn += n
         return pts
 
-    def __repr__(self) -> str:
-        return f"{super().__repr__()[:-1]}, fill={self.fill})"
-
 
 class ConvergingRouteSampler(_CorridorRule):
     """RRT*'s rule: ``RouteSampler``'s to the first solution, then the corridor inside the informed set.
 
     Once a solution of cost ``c`` exists, a sample is, with probability ``floor``, from the informed set
     (``InformedSampler``: states with ``|x - start| + |x - goal| <= c + tolerance``), and otherwise uniform
-    over the corridor cells (``CorridorSampler``, at ``margin``) whose centre lies in that set, within half a
-    cell's diagonal. Where no corridor cell is left in it, every sample is informed.
+    over the corridor cells (``CorridorSampler``'s, at ``margin``, its stages counted in the draws since the
+    first solution) whose centre lies in that set, within half a cell's diagonal. Where no corridor cell of the
+    stage is left in it, the sample is informed.
 
     Args:
         route: The route sampler whose rule runs to the first solution and whose field makes the corridor.
-        margin, floor: As ``CorridorSampler``'s, after the first solution.
+        margin, floor, fill: As ``CorridorSampler``'s, after the first solution.
     """
 
     def __init__(self, route: RouteSampler, margin: float = CONVERGING_SETTINGS["margin"],
-                 floor: float = CONVERGING_SETTINGS["floor"]) -> None:
-        super().__init__(route, margin, floor)
+                 floor: float = CONVERGING_SETTINGS["floor"], fill: float | None = CONVERGING_SETTINGS["fill"]) -> None:
+        super().__init__(route, margin, floor, fill)
 
     def _setup(self) -> None:
         p = self.problem
         self.first = self.route.bind(p)  # refuses a world that is not an OccupancyGrid
         to_start = self.route.cost_to_go(reversed_query(p))
-        self.cells = corridor_cells(self.first.field, to_start.field, self.margin)
+        self._stages(self.first.field, to_start.field)
         #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
         self.reused_seconds = self.first.reused_seconds + (to_start.seconds if to_start.reused else 0.0)
         self.informed = InformedSampler().bind(p)
@@ -299,7 +321,8 @@ class ConvergingRouteSampler(_CorridorRule):
         # each corridor cell's start-to-goal distance through its centre, less half a cell's diagonal
         self._through = (np.linalg.norm(centres - p.start, axis=1) + np.linalg.norm(centres - p.goal, axis=1)
                          - math.sqrt(2.0) * grid.resolution)
-        self._cost, self._inside = math.inf, self.cells
+        self._cost, self._inside, self._held = math.inf, self.cells, self.counts
+        self.drawn = 0  # draws since the first solution
 
     @property
     def forward_passes(self) -> int:
@@ -310,13 +333,18 @@ class ConvergingRouteSampler(_CorridorRule):
         if not math.isfinite(view.best_cost):
             return self.first.draw(rng, n, view)
         c = view.best_cost + self.problem.goal_tolerance
-        if c < self._cost:  # the informed set shrank: keep the corridor cells still in it
-            self._cost, self._inside = c, self.cells[self._through <= c]
+        if c < self._cost:  # the informed set shrank: keep the corridor cells still in it, stage by stage
+            inside = self._through <= c
+            self._cost, self._inside = c, self.cells[inside]
+            self._held = np.concatenate([[0], np.cumsum(inside)])[self.counts]  # each stage's cells still inside
         m = min(n, CONVERGING_BATCH)
         u = rng.random((m, 4))
-        informed = u[:, 0] < self.floor if len(self._inside) else np.ones(m, dtype=bool)
+        held = self._held[np.searchsorted(self.starts, self.drawn + np.arange(m), side="right") - 1]
+        self.drawn += m
+        informed = (u[:, 0] < self.floor) | (held == 0)
         k = int(informed.sum())
-        pts = [cell_points(self.problem.world, self._inside, u[~informed, 1:4], self.low, self.high)] if k < m else []
+        pts = [cell_points(self.problem.world, self._inside, u[~informed, 1:4], self.low, self.high,
+                           held[~informed])] if k < m else []
         cands = [np.ones(m - k, dtype=np.int64)] if k < m else []
         while k > 0:  # the informed sampler returns at most its own batch per draw
             got = self.informed.draw(rng, k, view)
@@ -325,4 +353,3 @@ class ConvergingRouteSampler(_CorridorRule):
                          else np.ones(len(pts[-1]), dtype=np.int64))
             k -= len(pts[-1])
         return SampleBatch(np.concatenate(pts), None, np.concatenate(cands))
-

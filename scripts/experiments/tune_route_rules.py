@@ -10,9 +10,9 @@ tree's turns pull the goal tree towards the start tree's target) against both tr
 (``BidirectionalRouteSampler``), and against one field read both ways (the goal tree follows the field to the goal
 mirrored, ``MirroredField``), for each field; prints median iterations per family and their geometric mean.
 
-``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin and floor (floor 1: the RRT rule, then the informed
-set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of the best cost any of
-them reached (``learning.evaluation.every_planner.convergence``), per family, and their geometric means.
+``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin, floor and fill (floor 1: the RRT rule, then the
+informed set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of the best cost
+any of them reached (``learning.evaluation.every_planner.convergence``), per family, and their geometric means.
 
 For each field (the route encoder, its straight-line ablation, the exact cost-to-go) and each corridor
 ``margin``, uniform ``floor`` and ``fill`` (``--fills``: draws per step-sized square of a stage of the
@@ -109,17 +109,17 @@ def main(argv=None) -> int:
         for field in args.fields:
             setups = [Setup("RRT rule throughout", "RRTstar", field, make=lambda f=field: StartTreeOnly(
                 make_sampler(f, models=models)))]
-            setups += [Setup(f"margin {m:g} floor {fl:g}", "RRTstar", field,
-                             make=lambda f=field, m=m, fl=fl: ConvergingRouteSampler(make_sampler(f, models=models), m,
-                                                                                     fl))
-                       for m, fl in itertools.product(args.margins, args.floors)]
+            setups += [Setup(f"margin {m:g} floor {fl:g} fill {fi}", "RRTstar", field,
+                             make=lambda f=field, m=m, fl=fl, fi=fi: ConvergingRouteSampler(
+                                 make_sampler(f, models=models), m, fl, fi))
+                       for m, fl, fi in itertools.product(args.margins, args.floors, args.fills)]
             rows = convergence(maps, setups, seeds=tuple(range(args.seeds)), budget=args.budget)
             for s in setups:
                 mine = [r for r in rows if r["sampler"] == s.label]
                 for share in ("0.05", "0.01"):
                     its = [r[f"iterations_{share}"] for r in mine]
                     mean = float(np.exp(np.mean(np.log(its))))
-                    print(f"RRTstar {field:15s} {s.label:22s} within {share}: geomean {mean:7.0f}  "
+                    print(f"RRTstar {field:15s} {s.label:30s} within {share}: geomean {mean:7.0f}  "
                           f"per family {' '.join(f'{i:5.0f}' for i in its)}", flush=True)
         return 0
     if args.connect:
