@@ -151,6 +151,11 @@ class DippedExact(SamplerBase):
             f.field.ravel()[self.near] = 0.0
         return f
 
+    def bind(self, problem):
+        bound = self.exact.bind(problem)  # RRT*'s rule follows it to a first solution
+        bound.field = self.cost_to_go(problem).field
+        return bound
+
     def draw(self, rng, n, view):
         raise NotImplementedError("only its field is read")
 
@@ -244,6 +249,27 @@ def test_after_a_solution_rrtstar_samples_stay_in_the_informed_set():
     through = np.linalg.norm(out.points - p.start, axis=1) + np.linalg.norm(out.points - p.goal, axis=1)
     assert len(out.points) == 64 and (through <= cost + p.goal_tolerance + 2 * math.sqrt(2)).all()
     assert out.candidates.sum() >= 64
+
+
+def test_after_a_solution_rrtstars_corridor_widens_by_stage_inside_the_informed_set():
+    p = wall_problem()
+    exact = CorridorSampler(make_sampler("exact_route", step_size=2.0), 0.0, 0.0, None).bind(p)
+    to_start = distance_field(p.world.obstacles, p.world.cell_of(p.start)).ravel()
+    off = np.setdiff1d(np.flatnonzero(np.isfinite(to_start)), exact.cells[:exact.counts[0]])
+    bound = ConvergingRouteSampler(DippedExact(off[np.argmin(to_start[off])]), 0.0, 0.0, 1.0).bind(p)
+    assert len(bound.counts) > 2
+    cost = 60.0  # an informed set that leaves some corridor cells out
+    view = TreeView(p, np.array([p.start]), np.array([-1]), 1, 0, 1.0, cost, 100)
+    rng = np.random.default_rng(5)
+    pts = np.concatenate([bound.draw(rng, 64, view).points for _ in range(40)])
+    stage = np.searchsorted(bound.starts, np.arange(len(pts)), side="right") - 1
+    cells = np.floor(pts[:, 1]).astype(int) * 32 + np.floor(pts[:, 0]).astype(int)
+    inside = bound.cells[bound._through <= cost + p.goal_tolerance]
+    assert 0 < len(inside) < len(bound.cells)
+    for j in range(len(bound.counts)):
+        mine = np.intersect1d(bound.cells[:bound.counts[j]], inside)  # floor 0: every sample from the corridor
+        assert np.isin(cells[stage == j], mine).all() if len(mine) else True
+    assert (stage == len(bound.counts) - 1).any()
 
 
 def test_bad_corridor_settings_are_refused_by_name():
