@@ -51,9 +51,9 @@ CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3, "fill": FILL}
 ABLATION_CORRIDOR = {"margin": 0.6, "floor": 0.3, "fill": FILL}
 #: RRT*'s corridor after the first solution, chosen on the validation maps (``tune_route_rules.py --rrtstar``):
 #: cells within 10% of the shortest route the field sees, and a tenth of the samples from the informed set.
-CONVERGING_SETTINGS = {"margin": 0.1, "floor": 0.1, "fill": None}
+CONVERGING_SETTINGS = {"margin": 0.1, "floor": 0.1, "fill": 8.0}
 #: The straight-line ablation's, tuned for it on the same maps: an ellipse twice as long as the straight line.
-ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1, "fill": None}
+ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1, "fill": 8.0}
 #: Corridor cells are those within ``margin`` times the shortest route plus this many steps.
 WIDTH_STEPS = 1.0
 #: Samples per draw once RRT* has a solution (the informed set shrinks as the solution improves).
