@@ -19,6 +19,7 @@ from learning.samplers.route_rules import (
     ConvergingRouteSampler,
     CorridorSampler,
     corridor_cells,
+    corridor_stages,
     query_cells,
     reversed_query,
     route_sums,
@@ -136,6 +137,8 @@ def test_the_routes_length_is_what_the_fields_say_not_a_dip_in_their_sum():
     _, sums, length = route_sums(dipped, to_start, query_cells(p))
     assert sums.min() < 0.5 * shortest and length == pytest.approx(shortest)
     assert len(route_sums(np.full((2, 2), np.inf), np.zeros((2, 2)), ((0, 0), (1, 1)))[0]) == 0
+    cells, counts, starts = corridor_stages(np.full((2, 2), np.inf), np.zeros((2, 2)), ((0, 0), (1, 1)), 0.3, 1.0, 4.0)
+    assert len(cells) == 0 and list(counts) == [0] and list(starts) == [0]  # no reachable cell: an empty corridor
 
 
 class DippedExact(SamplerBase):

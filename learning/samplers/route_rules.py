@@ -98,59 +98,66 @@ def _check_margin(who: str, value) -> float:
     return float(value)
 
 
-def route_sums(to_goal: np.ndarray, to_start: np.ndarray, ends: tuple) -> tuple[np.ndarray, np.ndarray, float]:
+def route_sums(to_goal: np.ndarray, to_start: np.ndarray, ends: tuple | None = None
+               ) -> tuple[np.ndarray, np.ndarray, float]:
     """The cells a route passes and ``to_start + to_goal`` there: ``(cells, sums, length)``.
 
     ``cells``: flat indices of the cells where the sum is finite, ascending; ``sums``: their sums; ``length``: the
     route's length as the two fields give it, the larger of ``to_goal`` at the start's cell and ``to_start`` at the
-    goal's cell (``ends``: their (row, col)), never below the lowest sum (which it equals for an exact field; a
-    learned field's sum can dip below it off the route). No cell finite: no cells, length ``inf``.
+    goal's cell (``ends``: their (row, col); None: the lowest sum alone), never below the lowest sum (which it equals
+    for an exact field; a learned field's sum can dip below it off the route). No cell finite: no cells, length
+    ``inf``.
     """
     total = (to_goal + to_start).ravel()
     cells = np.flatnonzero(np.isfinite(total))
     sums = total[cells]
     if not len(cells):
         return cells, sums, math.inf
-    (rs, cs), (rg, cg) = ends
-    said = [v for v in (float(to_goal[rs, cs]), float(to_start[rg, cg])) if math.isfinite(v)]
+    said = []
+    if ends is not None:
+        (rs, cs), (rg, cg) = ends
+        said = [v for v in (float(to_goal[rs, cs]), float(to_start[rg, cg])) if math.isfinite(v)]
     return cells, sums, max([float(sums.min())] + said)
+
+
+def _first_bound(sums: np.ndarray, margin: float, width: float) -> float:
+    """The first corridor's bound on a cell's sum: ``(1 + margin)`` x the lowest + ``width`` (no sums: inf)."""
+    return float(sums.min()) * (1.0 + margin) + width if len(sums) else math.inf
 
 
 def corridor_cells(to_goal: np.ndarray, to_start: np.ndarray, margin: float, width: float = WIDTH_STEPS) -> np.ndarray:
     """Flat indices of the cells whose ``to_start + to_goal`` is within ``(1 + margin)`` x the lowest + ``width``.
 
-    The fields are in steps, ``inf`` where blocked or unreached; no cell finite: none.
+    The first stage of ``corridor_stages``. The fields are in steps, ``inf`` where blocked or unreached; no cell
+    finite: none.
     """
-    total = to_goal + to_start
-    finite = np.isfinite(total)
-    if not finite.any():
-        return np.empty(0, dtype=np.int64)
-    best = float(total[finite].min())
-    return np.flatnonzero(finite & (total <= best * (1.0 + margin) + width))
+    cells, sums, _ = route_sums(to_goal, to_start)
+    return cells[sums <= _first_bound(sums, margin, width)]
 
 
 def corridor_stages(to_goal: np.ndarray, to_start: np.ndarray, ends: tuple, margin: float, fill: float | None,
                     square: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A corridor that widens in stages: ``(cells, counts, starts)``.
 
-    Stage 0 holds the cells whose ``to_start + to_goal`` is within ``(1 + margin)`` x the lowest (plus
-    ``WIDTH_STEPS``, as ``corridor_cells``); with ``L`` the route's length as the fields give it (``route_sums``;
-    ``ends``: the start's and the goal's (row, col)), stage 1 those within ``(1 + margin) x L`` and each later stage
-    doubles that bound, until every cell the fields reach is in. ``cells``: flat indices by the first stage that
-    holds them (index order within it), so stage ``j`` is ``cells[:counts[j]]``; stage ``j`` starts at draw
-    ``starts[j]`` and lasts ``fill`` draws per ``square`` of its cells (cells in a step-sized square). ``fill``
-    None: stage 0 only, for good.
+    Stage 0 is ``corridor_cells`` (the cells within ``(1 + margin)`` x the lowest sum, plus ``WIDTH_STEPS``); with
+    ``L`` the route's length as the fields give it (``route_sums``; ``ends``: the start's and the goal's (row, col)),
+    stage 1 holds those within ``(1 + margin) x L`` and each later stage doubles that bound, until every cell the
+    fields reach is in. ``cells``: flat indices of the cells some stage holds, by the first stage that holds them
+    (index order within it), so stage ``j`` is ``cells[:counts[j]]``; stage ``j`` starts at draw ``starts[j]`` and
+    lasts ``fill`` draws per ``square`` of its cells (cells in a step-sized square). ``fill`` None: stage 0 only,
+    for good.
     """
     cells, sums, length = route_sums(to_goal, to_start, ends)
-    bounds = [float(sums.min()) * (1.0 + margin) + WIDTH_STEPS] if len(sums) else [math.inf]
-    while fill is not None and bounds[-1] < sums.max():
+    bounds = [_first_bound(sums, margin, WIDTH_STEPS)]
+    while fill is not None and len(sums) and bounds[-1] < sums.max():
         # at least a step before doubling, so a route of length 0 (start and goal in one cell) widens too
         bounds.append(max(length * (1.0 + margin), 1.0) * 2.0 ** (len(bounds) - 1) + WIDTH_STEPS)
     stage = np.searchsorted(np.asarray(bounds), sums, side="left")
     order = np.argsort(stage, kind="stable")
     counts = np.searchsorted(stage[order], np.arange(len(bounds)), side="right")
     lasts = [math.ceil(fill * c / square) for c in counts[:-1]] if fill is not None else []
-    return cells[order], counts, np.concatenate([[0], np.cumsum(lasts, dtype=np.int64)]).astype(np.int64)
+    return (cells[order][:counts[-1]], counts,  # cells no stage holds are never drawn
+            np.concatenate([[0], np.cumsum(lasts, dtype=np.int64)]).astype(np.int64))
 
 
 def _check_fill(who: str, value) -> float | None:
