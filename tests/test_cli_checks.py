@@ -74,7 +74,6 @@ def test_the_first_call_benchmark_runs_the_mesh_rows_only_with_omplapps_files(ca
     assert "/nonexistent/omplapp" in capsys.readouterr().err
 
 
-
 def test_the_first_call_benchmark_checks_the_checkout_it_compares_against(capsys, tmp_path):
     script = load_script("benchmark_first_call")
     assert script.main(["--rows", "rrt-goal", "--against", str(tmp_path)]) == 2

@@ -32,7 +32,7 @@ def test_its_sampler_keeps_the_box_and_the_goal_share():
     so3 = load_script("experiments/so3_uniform")
     p = thin_wall_scene(hole=4.0)
     p = Problem(p.world, p.start, p.goal, goal_tolerance=1.0)
-    s = so3.make_haar_sampler(0.25).bind(p)
+    s = so3.HaarSampler(0.25).bind(p)
     x = s.draw(np.random.default_rng(0), 4000, None)
     low, high = p.world.bounds
     assert x.shape == (4000, 6) and np.all((x >= low) & (x <= high))

@@ -59,11 +59,6 @@ class HaarSampler(SamplerBase):
         return pts
 
 
-def make_haar_sampler(goal_bias: float = 0.0) -> HaarSampler:
-    """A ``HaarSampler`` sampling the goal with probability ``goal_bias``."""
-    return HaarSampler(goal_bias)
-
-
 def check_conversion() -> None:
     """The Euler angles ``haar_euler`` writes give back the quaternion's rotation, on both covers."""
     from planners.worlds.rigid3d import rotation_matrix
@@ -98,9 +93,9 @@ def main(argv=None) -> int:
     scenes = RigidSceneSet(counts={"tuning": args.scenes}, test_only=())
     rows = {
         ("RRTConnect", "uniform angles"): UniformSampler,
-        ("RRTConnect", "uniform rotations"): make_haar_sampler,
+        ("RRTConnect", "uniform rotations"): HaarSampler,
         ("RRT", "goal bias 0.05, uniform angles"): lambda: GoalBiasedSampler(0.05),
-        ("RRT", "goal bias 0.05, uniform rotations"): lambda: make_haar_sampler(0.05),
+        ("RRT", "goal bias 0.05, uniform rotations"): lambda: HaarSampler(0.05),
     }
     results: dict[tuple, list[tuple[bool, int]]] = {k: [] for k in rows}
     families: dict[tuple, dict[str, list[int]]] = {k: {} for k in rows}
