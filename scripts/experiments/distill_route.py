@@ -1,13 +1,17 @@
 """A narrower route encoder distilled from the shipped one: its move costs and cell head, learned from the teacher.
 
     python scripts/experiments/distill_route.py --out runs/d16/route.pt                # 16 channels
+    python scripts/experiments/distill_route.py --maps 150 --sizes 32 64 128 256 --epochs 24 --wall-hinge \
+        --out runs/d16h/route.pt                                                        # the report's second student
     python scripts/experiments/vin_validation.py --route runs/d16/route.pt             # then judge it
 
 The shipped encoder's time per query is its four 48-channel convolutions. A student of the same design with
 fewer channels (``--channels``) learns, on the recipe's training families (training seeds only), the teacher's
 log move costs of every move out of every block with a free cell, and its cell head's output given the
 teacher's block values (inference's values: the wall rules applied) on every free cell. Each map is turned by one
-of the square's 8 symmetries. Adam, its rate falling to 0 along a cosine; one torch thread; seeded.
+of the square's 8 symmetries. Adam, its rate falling to 0 along a cosine; one torch thread; seeded (the machine's
+own instruction set: the report's students were trained on an AVX-512 CPU). ``--wall-hinge`` learns the teacher's
+wall decisions rather than their prices (``move_cost_loss``).
 """
 
 from __future__ import annotations
@@ -38,6 +42,19 @@ def teacher_targets(teacher: RouteVIN, x: torch.Tensor) -> tuple[torch.Tensor, t
         return torch.log(costs), v, teacher.cell_field(f, v)
 
 
+def move_cost_loss(pred: torch.Tensor, target: torch.Tensor, wall_log: torch.Tensor | None) -> torch.Tensor:
+    """The student's loss on its log move costs ``pred`` against the teacher's ``target`` (N, 8), in ``MOVES`` order.
+
+    With ``wall_log`` (8,), the log price above which inference makes each move a wall: where the teacher's move is
+    a wall, only a squared hinge below twice that price (a wall by a margin; its exact price is free), elsewhere the
+    squared log difference. Without it, the squared log difference everywhere.
+    """
+    if wall_log is None:
+        return nn.functional.mse_loss(pred, target)
+    walled = target > wall_log
+    return torch.where(walled, nn.functional.relu(wall_log + math.log(2.0) - pred), pred - target).square().mean()
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--teacher", type=Path, default=SHIPPED_ROUTE)
@@ -48,6 +65,9 @@ def main(argv=None) -> int:
     ap.add_argument("--batch", type=int, default=16)
     ap.add_argument("--lr", type=float, default=2e-3)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--wall-hinge", action="store_true",
+                    help="a move the teacher walls at inference (priced above wall_cost x its length) costs the student "
+                         "only a squared hinge below twice that price in log terms: the wall decision, not the price")
     ap.add_argument("--out", type=Path, default=Path("runs/distilled/route.pt"))
     args = ap.parse_args(argv)
     check_int_flags(args, ("channels", "maps", "epochs", "batch"))
@@ -72,6 +92,7 @@ def main(argv=None) -> int:
                 data.setdefault(size, []).append((x, log_c, v, field, ~walls, free))
     print(f"{sum(map(len, data.values()))} maps and the teacher's targets in {time.perf_counter() - t0:.0f} s",
           flush=True)
+    wall_log = torch.log(teacher.wall_cost * teacher.lengths.view(-1))  # the inference wall threshold, per move
     opt = torch.optim.Adam(student.parameters(), lr=args.lr)
     steps = args.epochs * sum(math.ceil(len(v) / args.batch) for v in data.values())
     sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda k: 0.5 * (1 + math.cos(math.pi * min(k, steps) / steps)))
@@ -83,8 +104,8 @@ def main(argv=None) -> int:
             size, idx = batches[b]
             x, log_c, v, field, moving, free = (torch.cat(t) for t in zip(*(data[size][i] for i in idx), strict=True))
             f, costs = student.move_costs(x)
-            cost_loss = nn.functional.mse_loss(torch.log(costs).permute(0, 2, 3, 1)[moving],
-                                               log_c.permute(0, 2, 3, 1)[moving])
+            cost_loss = move_cost_loss(torch.log(costs).permute(0, 2, 3, 1)[moving],
+                                       log_c.permute(0, 2, 3, 1)[moving], wall_log if args.wall_hinge else None)
             cell_loss = nn.functional.smooth_l1_loss(student.cell_field(f, v)[free], field[free])
             loss = cost_loss + cell_loss
             opt.zero_grad()
