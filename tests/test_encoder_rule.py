@@ -61,3 +61,16 @@ def test_bad_input_is_refused_by_name(tmp_path, capsys):
     with pytest.raises(SystemExit):
         script.main([str(path), "--candidate", "other"])
     assert "no test runs of RRT with both 'route encoder' and 'other'" in capsys.readouterr().err
+
+
+def test_with_unclear_a_set_above_the_bound_passes_only_where_its_interval_holds_one(tmp_path, capsys):
+    script = load_script("experiments/encoder_rule")
+    noisy = [(10 * (1 + i % 7) ** 2, 13 * (1 + (i + 3) % 7) ** 2, True) for i in range(30)]  # wide, overlapping
+    clear = [(50, 70, True)] * 30  # every run 1.4 times the shipped one's
+    for name, runs, holds in (("noisy", noisy, True), ("clear", clear, False)):
+        path = _write(tmp_path / f"{name}.csv", {"a": [(40, 40, True)] * 30, name: runs})
+        rows = script.set_rows(script.paired_runs(path, "mine"), 1.25, 400, seed=0)
+        row = next(r for r in rows if r["set"] == name)
+        assert row["ratio"] > 1.25
+        assert script.verdict(rows, 1.5, 1.25, unclear=True)[0] is holds
+        assert script.verdict(rows, 1.5, 1.25)[0] is False
