@@ -1,13 +1,15 @@
 """Train the route encoder (``learning.models.route_vin.RouteVIN``, or the U-Net ``RouteNet``) on the training maps.
 
-    python scripts/train_route.py                           # the shipped encoder's recipe (about 7 min on 2 cores)
+    python scripts/train_route.py                           # the shipped teacher's recipe (about 7 min on 2 cores)
     python scripts/train_route.py --resume                  # continue an interrupted run from its last epoch
     python scripts/train_route.py --epochs 3 --maps 20      # a quicker variation
     python scripts/train_route.py --kind unet --channels 24 --attention 2 --maps 1600 --epochs 30 --batch 32 --lr 1e-3
                                                             # the earlier U-Net encoder's recipe (about an hour)
     python scripts/evaluate.py --route runs/route/route.pt  # the comparison with it as the route encoder
+    python scripts/distill_route.py --teacher runs/route/route.pt   # a third of its pass (the shipped encoder's way)
 
-With no options it trains the shipped encoder's recipe (``learning/data/route.json``): the value-iteration
+With no options it trains the recipe of the shipped encoder's teacher (``learning/data/route_teacher.json``; the
+shipped encoder is its 16-channel student, ``scripts/distill_route.py``): the value-iteration
 encoder (``--kind vin``: learned move costs of 48 channels and 4 local layers over blocks of half a step,
 ``--blocks-per-step 2``, value iteration over them), 12 epochs over 100 maps per training family
 (``--families``: the five test families' training generators, caves and strokes, which no test set holds) at
@@ -22,7 +24,7 @@ While it trains, ``<out>/checkpoint.pt`` holds the state after the last finished
 ``--resume`` continues from it to the same weights an uninterrupted run reaches. ``<out>`` is locked
 while a run writes it (``.<out>.lock`` beside it): a second run on it exits 2 naming the first.
 One torch thread, and torch, oneDNN and MKL held to the AVX2 instruction set (``learning.device.pin_cpu_arithmetic``,
-recorded in route.json), so a machine with wider vector units (AVX-512) runs the arithmetic the shipped encoder was
+recorded in route.json), so a machine with wider vector units (AVX-512) runs the arithmetic the shipped teacher was
 trained with; the same seed on the same device gives the same weights. docs/report.md ("Training and
 reproducibility") gives the spread over seeds.
 
@@ -45,7 +47,6 @@ count.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
@@ -55,7 +56,7 @@ import numpy as np
 import torch
 
 from learning.device import DEVICES, pin_cpu_arithmetic, resolve_device
-from learning.models.route_net import KINDS, make_route_net, save_route_net
+from learning.models.route_net import KINDS, make_route_net, save_route_set
 from learning.training.route import (
     SCHEDULES,
     GeneratedProblem,
@@ -66,11 +67,8 @@ from learning.training.route import (
 )
 from planners.base.fileio import (
     InputError,
-    atomic_write_bytes,
-    atomic_write_text,
     check_int_flags,
     check_output_place,
-    output_set,
     run_lock,
 )
 from planners.maps.generators import TRAIN_SEEDS, TRAINING_FAMILIES, check_size
@@ -351,13 +349,7 @@ def _train(args) -> int:
             name: args.step * m["resolution"] for ms in sets.sets if ms.record().get("kind") == "files"
             for name, m in ms.record()["maps"].items()}}
         info["map_sets"] = extra["map_sets"]
-    meta = json.dumps(info, indent=1) + "\n"
-    with output_set(args.out) as folder:  # route.pt and route.json replace the old pair together
-        save_route_net(net, folder / "route.pt")
-        (folder / "route.json").write_text(meta, encoding="utf-8")
-    if args.export:  # two files in a shared folder: each is written whole, the description first
-        atomic_write_text(args.export.with_suffix(".json"), meta)
-        atomic_write_bytes(args.export, (args.out / "route.pt").read_bytes())
+    save_route_set(net, info, args.out, args.export)  # route.pt and route.json replace the old pair together
     print(f"wrote {args.out / 'route.pt'} in {(time.perf_counter() - t0) / 60:.1f} min")
     if rise is not None:
         print(f"warning: the training loss rose from {rise[1]:.3f} at epoch {rise[0]} to {rise[2]:.3f}: this run "

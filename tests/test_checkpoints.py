@@ -123,15 +123,16 @@ def test_a_zip_bomb_is_refused_from_its_header(tmp_path, monkeypatch):
         PolicySampler.load(SHIPPED)
 
 
-def test_the_shipped_route_encoder_matches_its_recipe():
-    # the recipe in route.json is what checkpoints/README.md says reproduces the file: the file must agree
+def test_the_shipped_route_teacher_matches_its_recipe():
+    # the recipe in route_teacher.json is what learning/data/README.md says reproduces the file: the file must agree
+    # (the shipped encoder is its student: tests/test_distill.py)
     import json
 
     from learning.models.route_net import load_route_net
-    from learning.samplers.route import SHIPPED
+    from learning.models.shipped import SHIPPED_ROUTE_TEACHER
 
-    recipe = json.loads(SHIPPED.with_suffix(".json").read_text())["recipe"]
-    net = load_route_net(SHIPPED)
+    recipe = json.loads(SHIPPED_ROUTE_TEACHER.with_suffix(".json").read_text())["recipe"]
+    net = load_route_net(SHIPPED_ROUTE_TEACHER)
     assert (net.channels, net.depth, net.attention_layers, net.step) == (
         recipe["channels"], recipe["depth"], recipe["attention"], recipe["step"])
     assert net.block * recipe.get("blocks_per_step", 1) == recipe["step"]

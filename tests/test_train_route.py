@@ -123,7 +123,7 @@ def test_the_script_writes_a_pair_exports_it_and_the_pair_replaces_the_old_one(t
     assert json.loads((out / "route.json").read_text())["recipe"]["blocks_per_step"] == 1
 
 
-def test_with_no_flags_it_trains_the_shipped_recipe():
+def test_with_no_flags_it_trains_the_shipped_teachers_recipe():
     from importlib import util
 
     spec = util.spec_from_file_location("train_route_script", ROOT / "scripts" / "train_route.py")
@@ -132,7 +132,7 @@ def test_with_no_flags_it_trains_the_shipped_recipe():
     args = script._parser().parse_args([])
     script._check(args)  # what the flags left out come to (the encoder's blocks)
     defaults = vars(args)
-    shipped = json.loads((ROOT / "learning" / "data" / "route.json").read_text())["recipe"]
+    shipped = json.loads((ROOT / "learning" / "data" / "route_teacher.json").read_text())["recipe"]
     for key, value in shipped.items():
         if key == "device":  # the run named the CPU; with no flag, "auto" is the CPU on a machine without a GPU
             assert str(resolve_device(defaults[key])) == "cpu" or value != "cpu", key

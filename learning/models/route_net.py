@@ -7,6 +7,7 @@ inference. ``learning.samplers.route.RouteSampler`` follows its prediction.
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -27,11 +28,11 @@ from learning.models.field import (  # re-exported (``__all__``): where users of
     unturn,
 )
 from learning.models.route_vin import RouteVIN
-from planners.base.fileio import InputError, short_repr
+from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, output_set, short_repr
 
 __all__ = ["BATCH_BYTES", "BYTES_PER_BLOCK", "GOAL_CHANNELS", "KINDS", "MAX_BLOCKS", "MAX_BLOCKS_ENV", "AxialAttention",
            "FieldEncoder", "RouteNet", "RouteVIN", "UNet", "load_route_net", "make_route_net", "max_blocks", "route_input",
-           "save_route_net", "symmetry", "unturn"]
+           "save_route_net", "save_route_set", "symmetry", "unturn"]
 
 
 class AxialAttention(nn.Module):
@@ -157,6 +158,24 @@ def save_route_net(net: RouteNet | RouteVIN, path: str | os.PathLike) -> None:
             config["trained_side"] = net.trained_side
     torch.save({"config": config, "state": net.state_dict()}, tmp)
     os.replace(tmp, path)  # whole or not at all
+
+
+def save_route_set(net: RouteNet | RouteVIN, info: dict, out: str | os.PathLike,
+                   export: str | os.PathLike | None = None) -> None:
+    """Write ``out/route.pt`` and ``out/route.json`` (``info`` as JSON) as one set, and copy both to ``export``.
+
+    The folder is built beside ``out`` and swapped into place whole (``output_set``), so a kill leaves the old pair
+    or the new one; ``export`` (a file; its ``.json`` beside it) is written description first, each file whole.
+    """
+    out = Path(out)
+    meta = json.dumps(info, indent=1) + "\n"
+    with output_set(out) as folder:
+        save_route_net(net, folder / "route.pt")
+        (folder / "route.json").write_text(meta, encoding="utf-8")
+    if export is not None:
+        export = Path(export)
+        atomic_write_text(export.with_suffix(".json"), meta)
+        atomic_write_bytes(export, (out / "route.pt").read_bytes())
 
 
 #: The encoder kinds a file may hold (its config's "kind"; a file without one holds a ``RouteNet``).

@@ -13,6 +13,8 @@ _DATA = Path(str(files("learning").joinpath("data")))
 SHIPPED_POLICY = _DATA / "guided.zip"
 #: The shipped route encoder (``load_route_net``; ``RouteSampler.load()``).
 SHIPPED_ROUTE = _DATA / "route.pt"
+#: The encoder the shipped one is distilled from (``scripts/distill_route.py``'s default teacher).
+SHIPPED_ROUTE_TEACHER = _DATA / "route_teacher.pt"
 #: The shipped 6-DoF orientation model (``load_orientation_net``; ``make_sampler("rigid_route")``).
 SHIPPED_RIGID_ORIENTATION = _DATA / "rigid_route.pt"
 #: Samples per forward pass the shipped policy was validated at: chosen on the generated families' tuning
