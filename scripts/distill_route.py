@@ -88,6 +88,9 @@ def main(argv=None) -> int:
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: nothing was written ({args.out} is as it was)", file=sys.stderr)
+        return 130
 
 
 def _distill(args, teacher: RouteVIN, arithmetic: dict | None) -> int:

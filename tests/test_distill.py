@@ -97,3 +97,14 @@ def test_a_unet_teacher_is_refused(tmp_path, capsys):
     script = load_script("distill_route")
     assert script.main([*TINY, "--teacher", str(unet), "--out", str(tmp_path / "out")]) == 2
     assert "a RouteNet file; distillation learns a value-iteration encoder" in capsys.readouterr().err
+
+
+def test_an_interrupted_run_writes_nothing(tmp_path, capsys, monkeypatch):
+    script = load_script("distill_route")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(script, "distill_route_net", interrupted)
+    assert script.main([*TINY, "--out", str(tmp_path / "out")]) == 130
+    assert "nothing was written" in capsys.readouterr().err and not (tmp_path / "out").exists()
