@@ -46,12 +46,9 @@ def main(argv=None) -> int:
     check_output_place(args.out, "--out", folder=False)
     if args.avx2:
         print(f"arithmetic: {pin_cpu_arithmetic()}", flush=True)  # before any tensor operation
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
     torch.manual_seed(args.seed)
     teacher = load_route_net(args.teacher)  # building it draws from torch's generator before the student does
     student = RouteVIN(teacher.block, args.channels, teacher.depth, teacher.step)
-    torch.set_num_threads(threads)
     config = DistillConfig(args.channels, args.maps, tuple(args.sizes), args.epochs, args.batch, args.lr, args.seed,
                            walls=args.wall_hinge)
     student = distill_route_net(teacher, config, student=student)
