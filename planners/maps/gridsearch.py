@@ -173,7 +173,7 @@ def _dijkstra(padded, goal, stop, dr, dc):
 
 
 @nb.njit(cache=True)
-def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
+def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc, open_moves, most):
     """The least fixed point of ``V(b) = min over moves a of costs[a, b] + V(b + move a)``, ``V = 0`` at ``goal``.
 
     Dijkstra from the goal blocks over the reversed moves: settling a block relaxes each block that one
@@ -181,11 +181,14 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
     operation (and rounding) of value iteration, so the values are its fixed point bit for bit: every cost is
     positive, so each sum rounds to at least the value it adds to and the settling order holds in floating
     point. A block in ``walls`` is never relaxed; a sum at or above ``unreached`` leaves a block unreached.
+    Where ``open_moves`` has the costs' shape, a move it does not hold is never taken, and a move priced above
+    ``most[a]`` neither: the same values as those moves priced ``unreached`` (their sums never lower a value).
     The heap (one slot per block, with decrease-key) keeps each entry's key beside it, so sifting reads keys in
     order rather than looking each up by block.
     """
     A, h, w = costs.shape
     n = h * w
+    gated = open_moves.shape == costs.shape
     dist = np.full(n, unreached, dtype=costs.dtype)
     pos = np.full(n, -1, dtype=np.int64)  # heap slot; -1 never queued, -2 settled
     keys = np.empty(n, dtype=costs.dtype)
@@ -206,6 +209,8 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
             b = br * w + bc
             if pos[b] == -2 or walls[br, bc]:
                 continue
+            if gated and (not open_moves[a, br, bc] or costs[a, br, bc] > most[a]):
+                continue
             nd = costs[a, br, bc] + dv
             if nd < dist[b]:
                 dist[b] = nd
@@ -214,42 +219,161 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc):
 
 
 @nb.njit(cache=True)
-def _block_steps(free, block, dr, dc):
-    """(8, h, w) bool: whether some free cell of each block steps into its neighbour block by each move."""
-    H, W = free.shape
+def _move_bounds(costs, walls, unreached, open_moves, most):
+    """The least and the largest price of a move that can be taken (below ``unreached``; gated as the search does)."""
+    A, h, w = costs.shape
+    gated = open_moves.shape == costs.shape
+    low, high = np.inf, 0.0
+    for a in range(A):
+        for r in range(h):
+            for c in range(w):
+                x = costs[a, r, c]
+                if x >= unreached or walls[r, c] or (gated and (not open_moves[a, r, c] or x > most[a])):
+                    continue
+                low = min(low, x)
+                high = max(high, x)
+    return low, high
+
+
+@nb.njit(cache=True)
+def _move_cost_buckets(costs, goal, walls, unreached, dr, dc, open_moves, most, width, slots):
+    """``_move_cost_dijkstra``'s values bit for bit, with the heap replaced by buckets ``width`` apart.
+
+    Every move costs at least twice ``width`` and no sum below ``unreached`` rounds by as much as ``width``
+    (the caller checks both), so a block settled from bucket ``k`` puts its neighbours in bucket ``k + 1`` or later:
+    every block of a bucket holds its final value when the bucket is taken, in whatever order its blocks come. Each
+    value is then the least sum over its neighbours' final values, the very sums (and rounding) of the heap's
+    search. The buckets are a ring of ``slots`` doubly linked lists, enough for the dearest move.
+    """
+    A, h, w = costs.shape
+    n = h * w
+    gated = open_moves.shape == costs.shape
+    dist = np.full(n, unreached, dtype=costs.dtype)
+    state = np.zeros(n, dtype=np.int8)  # 0 never queued, 1 queued, 2 settled
+    nxt = np.empty(n, dtype=np.int64)
+    prv = np.empty(n, dtype=np.int64)
+    where = np.empty(n, dtype=np.int64)  # a queued block's bucket
+    head = np.full(slots, -1, dtype=np.int64)
+    queued = 0
+    for i in range(n):
+        if goal[i // w, i % w]:
+            dist[i] = 0.0
+            state[i], where[i], prv[i], nxt[i] = 1, 0, -1, head[0]
+            if head[0] >= 0:
+                prv[head[0]] = i
+            head[0] = i
+            queued += 1
+    cur = 0
+    while queued > 0:
+        s = cur % slots
+        v = head[s]
+        if v < 0:
+            cur += 1
+            continue
+        head[s] = nxt[v]
+        if nxt[v] >= 0:
+            prv[nxt[v]] = -1
+        state[v] = 2
+        queued -= 1
+        dv = dist[v]
+        r, c = v // w, v % w
+        for a in range(A):
+            br, bc = r - dr[a], c - dc[a]  # the block that move a carries onto v
+            if br < 0 or br >= h or bc < 0 or bc >= w:
+                continue
+            b = br * w + bc
+            if state[b] == 2 or walls[br, bc]:
+                continue
+            if gated and (not open_moves[a, br, bc] or costs[a, br, bc] > most[a]):
+                continue
+            nd = costs[a, br, bc] + dv
+            if nd < dist[b]:
+                dist[b] = nd
+                k = int(nd / width)
+                if state[b] == 1:
+                    if where[b] == k:
+                        continue
+                    # out of its bucket
+                    if prv[b] >= 0:
+                        nxt[prv[b]] = nxt[b]
+                    else:
+                        head[where[b] % slots] = nxt[b]
+                    if nxt[b] >= 0:
+                        prv[nxt[b]] = prv[b]
+                else:
+                    state[b] = 1
+                    queued += 1
+                t = k % slots
+                where[b], prv[b], nxt[b] = k, -1, head[t]
+                if head[t] >= 0:
+                    prv[head[t]] = b
+                head[t] = b
+    return dist.reshape(h, w)
+
+
+def _settle_moves(costs, goal, walls, unreached, open_moves, most):
+    """``move_cost_field``'s search: by buckets where the prices allow it exactly, else by the heap."""
+    low, high = _move_bounds(costs, walls, unreached, open_moves, most)
+    width = low / 2
+    # a sum below ``unreached`` rounds by at most unreached * eps / 2: the buckets need it well below ``width``
+    if np.isfinite(low) and width > float(unreached) * float(np.finfo(costs.dtype).eps) and high / width < 1 << 22:
+        return _move_cost_buckets(costs, goal, walls, unreached, _DR, _DC, open_moves, most, float(width),
+                                  int(high / width) + 3)
+    return _move_cost_dijkstra(costs, goal, walls, unreached, _DR, _DC, open_moves, most)
+
+
+@nb.njit(cache=True)
+def _block_steps(p, block, dr, dc):
+    """(8, h, w) bool: whether some free cell of each block steps into its neighbour block by each move.
+
+    ``p``: the map's free cells (nonzero) padded with one blocked cell on every side. Each block move is tried
+    by the (cell of the block, step) pairs that make it, the first that the map allows deciding it.
+    """
+    H, W = p.shape[0] - 2, p.shape[1] - 2
+    Wp = W + 2
     h, w = H // block, W // block
     A = len(dr)
     move = np.full((3, 3), -1, dtype=np.int64)  # (block row move + 1, block column move + 1) -> move index
     for a in range(A):
         move[dr[a] + 1, dc[a] + 1] = a
-    # the block move each step makes from each place in a block (-1: the step stays in the block)
-    leaves = np.full((block, block, A), -1, dtype=np.int64)
+    # every (place in a block, step) that leaves the block, grouped by the block move it makes
+    count = np.zeros(A + 1, dtype=np.int64)
     for i in range(block):
         for j in range(block):
             for k in range(A):
                 mr, mc = (i + dr[k]) // block, (j + dc[k]) // block
                 if mr != 0 or mc != 0:
-                    leaves[i, j, k] = move[mr + 1, mc + 1]
-    p = np.zeros((H + 2, W + 2), dtype=np.uint8)  # free cells, blocked off the map
-    for r in range(H):
-        for c in range(W):
-            p[r + 1, c + 1] = free[r, c]
-    out = np.zeros((A, h, w), dtype=np.uint8)
-    for r in range(H):
-        br, i = r // block, r % block
-        for c in range(W):
-            if p[r + 1, c + 1] == 0:
-                continue
-            bc, j = c // block, c % block
+                    count[move[mr + 1, mc + 1] + 1] += 1
+    start = np.cumsum(count)
+    fill = start.copy()
+    src = np.empty(start[A], dtype=np.int64)  # the cell, from its block's corner in the padded map
+    step = np.empty(start[A], dtype=np.int64)  # to the cell it steps to
+    side_r = np.zeros(start[A], dtype=np.int64)  # and, for a diagonal step, to the two cells beside it
+    side_c = np.zeros(start[A], dtype=np.int64)
+    for i in range(block):
+        for j in range(block):
             for k in range(A):
-                a = leaves[i, j, k]
-                if a < 0:
-                    continue
-                r2, c2 = r + 1 + dr[k], c + 1 + dc[k]
-                ok = p[r2, c2]
-                if k >= 4:
-                    ok &= p[r2, c + 1] & p[r + 1, c2]  # no corner cutting
-                out[a, br, bc] |= ok
+                mr, mc = (i + dr[k]) // block, (j + dc[k]) // block
+                if mr != 0 or mc != 0:
+                    a = move[mr + 1, mc + 1]
+                    t = fill[a]
+                    fill[a] += 1
+                    src[t] = (i + 1) * Wp + j + 1
+                    step[t] = dr[k] * Wp + dc[k]
+                    if k >= 4:  # no corner cutting
+                        side_r[t], side_c[t] = dr[k] * Wp, dc[k]
+    flat = p.ravel()
+    out = np.zeros((A, h, w), dtype=np.uint8)
+    for r in range(h):
+        for c in range(w):
+            corner = r * block * Wp + c * block
+            for a in range(A):
+                for t in range(start[a], start[a + 1]):
+                    s = corner + src[t]
+                    if flat[s] != 0 and flat[s + step[t]] != 0 and flat[s + side_r[t]] != 0 \
+                            and flat[s + side_c[t]] != 0:
+                        out[a, r, c] = 1
+                        break
     return out.view(np.bool_)
 
 
@@ -307,7 +431,13 @@ def distance_field(obstacles: np.ndarray, goal_cell: tuple[int, int]) -> np.ndar
     return dist.reshape(padded.shape)[1:-1, 1:-1].copy()
 
 
-def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unreached: float) -> np.ndarray:
+#: ``move_cost_field``'s sentinels for no gate on the moves: no mask of the costs' shape, no cap.
+_NO_GATE = np.ones((0, 0, 0), dtype=bool)
+_NO_CAP = np.zeros(0, dtype=np.float64)
+
+
+def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unreached: float, *,
+                    open_moves: np.ndarray | None = None, most: np.ndarray | None = None) -> np.ndarray:
     """Every cell's least total cost to reach a ``goal`` cell, moving with per-cell, per-move ``costs``.
 
     The fixed point that value iteration reaches (``V = min over moves of cost + V of the cell reached``),
@@ -320,6 +450,10 @@ def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unre
         goal: (h, w) bool, the cells whose value is 0.
         walls: (h, w) bool, cells never entered (their value stays ``unreached``, unless they are goals).
         unreached: The value of a cell no goal reaches; a total at or above it counts as unreached.
+        open_moves: (8, h, w) bool, the moves that may be taken (default: every one); a move it does not hold is
+            a wall, as one priced ``unreached`` would be, without a copy of ``costs``.
+        most: (8,) the most each move may cost (in ``costs``' dtype, compared as value iteration's callers compare
+            it); a move priced above it is a wall likewise. Default: no cap.
 
     Returns:
         (h, w) array of ``costs``' dtype. The sums are formed in that dtype as value iteration forms them, so
@@ -334,7 +468,15 @@ def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unre
     goal, walls = np.ascontiguousarray(goal, dtype=bool), np.ascontiguousarray(walls, dtype=bool)
     if goal.shape != shape or walls.shape != shape:
         raise ValueError(f"goal {goal.shape} and walls {walls.shape} must have the costs' grid shape {shape}")
-    return _move_cost_dijkstra(costs, goal, walls, costs.dtype.type(unreached), _DR, _DC)
+    if open_moves is None and most is None:
+        return _settle_moves(costs, goal, walls, costs.dtype.type(unreached), _NO_GATE, _NO_CAP)
+    open_moves = np.ones(costs.shape, dtype=bool) if open_moves is None else np.ascontiguousarray(open_moves, bool)
+    if open_moves.shape != costs.shape:
+        raise ValueError(f"open_moves must have the costs' shape {costs.shape}, got {open_moves.shape}")
+    cap = np.full(len(MOVES), np.inf, dtype=costs.dtype) if most is None else np.asarray(most, dtype=costs.dtype)
+    if cap.shape != (len(MOVES),):
+        raise ValueError(f"most must hold one cap per move ({len(MOVES)}), got shape {cap.shape}")
+    return _settle_moves(costs, goal, walls, costs.dtype.type(unreached), open_moves, np.ascontiguousarray(cap))
 
 
 def block_steps(free: np.ndarray, block: int) -> np.ndarray:
@@ -350,10 +492,21 @@ def block_steps(free: np.ndarray, block: int) -> np.ndarray:
     Returns:
         (8, H // block, W // block) bool, the moves in ``MOVES`` order.
     """
-    free = np.ascontiguousarray(free, dtype=bool)
+    free = np.asarray(free, dtype=bool)
     if free.ndim != 2 or free.shape[0] % block or free.shape[1] % block:
         raise ValueError(f"free must be an (H, W) map of whole {block}-cell blocks, got shape {free.shape}")
-    return _block_steps(free, int(block), _DR, _DC)
+    p = np.zeros((free.shape[0] + 2, free.shape[1] + 2), dtype=np.uint8)
+    p[1:-1, 1:-1] = free
+    return _block_steps(p, int(block), _DR, _DC)
+
+
+def padded_block_steps(padded: np.ndarray, block: int) -> np.ndarray:
+    """``block_steps`` of a map already padded: ``padded`` (H + 2, W + 2) uint8, nonzero where a cell is free, with
+    one blocked cell on every side (H and W whole multiples of ``block``)."""
+    padded = np.ascontiguousarray(padded, dtype=np.uint8)
+    if padded.ndim != 2 or (padded.shape[0] - 2) % block or (padded.shape[1] - 2) % block:
+        raise ValueError(f"padded must be an (H + 2, W + 2) map of whole {block}-cell blocks, got {padded.shape}")
+    return _block_steps(padded, int(block), _DR, _DC)
 
 
 def _search(grid: OccupancyGrid, start, goal):
