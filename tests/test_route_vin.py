@@ -443,10 +443,11 @@ def test_a_pass_in_strips_of_rows_gives_the_one_piece_field_and_refuses_gradient
 def _whole_and_reused(net: RouteVIN, obstacles: np.ndarray, goal: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     keep = net.map_cache_bytes
     try:
-        net.map_cache_bytes = 0  # one whole pass, as before any map was kept
+        net.map_cache_bytes, net.compiled_inference = 0, False  # one whole pass in torch, as before any map was kept
         whole = net.predict(obstacles, goal)
     finally:
         net.map_cache_bytes = keep
+        del net.compiled_inference  # back to the class's value
     return whole, net.predict(obstacles, goal)
 
 
@@ -522,3 +523,35 @@ def test_cheaper_arithmetic_moves_the_field_by_its_rounding(capsys):
     with pytest.raises(SystemExit) as stop:
         script.main(["--check", "fields", "--maps", "0"])
     assert stop.value.code == 2
+
+
+@pytest.mark.parametrize("family", ["maze", "bugtrap", "forest"])
+def test_the_compiled_inference_gives_the_torch_pass_field(family, monkeypatch):
+    """Walls gating the Dijkstra, the compiled cell head and the strips of rows: the torch pass's field within 1e-4."""
+    net = load_route_net(SHIPPED)
+    problem = generate(family, TRAIN_SEEDS[0] + 5, 96)
+    obstacles = problem.world.obstacles
+    free = np.argwhere(~obstacles)
+    goals = [problem.world.cell_of(problem.goal), tuple(free[len(free) // 3]), tuple(free[-1])]
+    monkeypatch.setattr(net, "feature_bytes", 4 * net.channels * 48 * 17)  # strips of 17 block rows
+    for goal in goals:  # the first query takes a whole pass, later ones the kept map with the first goal taken out
+        compiled = net.predict(obstacles, goal)
+        with monkeypatch.context() as m:
+            m.setattr(net, "compiled_inference", False)
+            m.setattr(net, "map_cache_bytes", 0)
+            torch_pass = net.predict(obstacles, goal)
+        reached = torch_pass < 1e5
+        assert np.array_equal(reached, compiled < 1e5)
+        assert np.abs(compiled - torch_pass)[reached].max() < 1e-4
+
+
+@pytest.mark.parametrize("low, high", [(0.5, 45.0), (1e-3, 0.1)])
+def test_the_search_by_buckets_and_by_heap_give_value_iterations_values(low, high):
+    """Prices of at least half a block settle by buckets; cheaper ones (too fine for buckets) by the heap."""
+    rng = np.random.default_rng(7)
+    costs = torch.from_numpy(rng.uniform(low, high, (1, 8, 30, 40)).astype(np.float32))
+    costs = costs.masked_fill(torch.from_numpy(rng.random((1, 8, 30, 40)) < 0.2), UNREACHED)
+    walls = torch.from_numpy(rng.random((1, 30, 40)) < 0.2)
+    goal = torch.zeros(1, 30, 40, dtype=torch.bool)
+    goal[0, 3, 5] = goal[0, 20, 30] = True
+    assert torch.equal(RouteVIN.settle(costs, goal, walls), RouteVIN.iterate(costs, goal, walls))

@@ -57,13 +57,18 @@ def route_input(obstacles: np.ndarray, goal_cell: tuple[int, int], block: int) -
     """
     H, W = obstacles.shape
     h, w = -(-H // block), -(-W // block)
+    cells = block * block
+    out = np.empty((cells + 3, h, w), dtype=np.float32)
     pad = np.ones((h * block, w * block), dtype=np.float32)
     pad[:H, :W] = obstacles
-    cells = pad.reshape(h, block, w, block).transpose(1, 3, 0, 2).reshape(block * block, h, w)
+    out[:cells] = pad.reshape(h, block, w, block).transpose(1, 3, 0, 2).reshape(cells, h, w)
     gr, gc = goal_cell[0] // block, goal_cell[1] // block
-    ys, xs = np.mgrid[0:h, 0:w]
-    goal = np.stack([(ys == gr) & (xs == gc), (gc - xs) / w, (gr - ys) / h]).astype(np.float32)
-    return np.concatenate([cells, goal])
+    out[cells] = 0.0
+    if 0 <= gr < h and 0 <= gc < w:
+        out[cells, gr, gc] = 1.0
+    out[cells + 1] = ((gc - np.arange(w)) / w)[None, :]  # formed in float64, stored in float32, as ever
+    out[cells + 2] = ((gr - np.arange(h)) / h)[:, None]
+    return out
 
 
 def symmetry(obstacles: np.ndarray, goal_cell: tuple[int, int], k: int) -> tuple[np.ndarray, tuple[int, int]]:

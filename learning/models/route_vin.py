@@ -38,8 +38,9 @@ import numpy as np
 import torch
 from torch import nn
 
+from learning.models.cell_head import cell_head_field, padded_free_cells
 from learning.models.field import FieldEncoder
-from planners.maps.gridsearch import MOVES, block_steps, move_cost_field
+from planners.maps.gridsearch import MOVES, move_cost_field, padded_block_steps
 
 #: The moves' lengths in blocks (``MOVES``: the 8 moves of the block grid, the grid search's own order).
 LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
@@ -79,26 +80,30 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
     From ``route_input``'s cell channels (B, block**2 + ..., h, w). A step goes from a free cell to one of its 8
     neighbours that is free, a diagonal one only if both cells beside it are free (the grid's own rule, no corner
     cutting): a block move no step makes crosses a wall, however the network prices it. Compiled
-    (``planners.maps.gridsearch.block_steps``), on the CPU whatever the device.
+    (``planners.maps.gridsearch.padded_block_steps``), on the CPU whatever the device.
     """
-    free = (nn.functional.pixel_shuffle(x[:, :block * block], block)[:, 0] < 0.5).cpu().numpy()  # (B, H, W) cells
-    return torch.from_numpy(np.stack([block_steps(f, block) for f in free])).to(x.device)
+    cells = x[:, :block * block].cpu().numpy()
+    return torch.from_numpy(np.stack([padded_block_steps(padded_free_cells(c, block), block) for c in cells])
+                            ).to(x.device)
 
 
 class MapParts(NamedTuple):
-    """What a pass computes from a map alone (no goal), kept for the next query on the same map (``RouteVIN``).
+    """What a pass computes from a map, kept for the next query on the same map (``RouteVIN``).
 
-    ``costs``: the move costs with inference's walls (``RouteVIN.wall_rules``), (1, 8, h, w); ``hidden``: the cell
-    head's first layer on the local features, before the block values join (1, C, h, w); ``steps``: ``cell_steps``
-    (1, 8, h, w).
+    ``costs``: the learned move costs, before inference's walls (1, 8, h, w); ``hidden``: the cell head's first layer
+    on the local features, before the block values join (``RouteVIN.head_inputs``, 1, C, h, w); ``steps``:
+    ``cell_steps`` (1, 8, h, w). ``goal_window``: the blocks (rows ``k0:k1``, columns ``j0:j1``) where ``costs`` and
+    ``hidden`` still hold the first query's goal (they were kept from its whole pass), or None where they hold the
+    map alone everywhere.
     """
 
     costs: torch.Tensor
     hidden: torch.Tensor
     steps: torch.Tensor
+    goal_window: tuple[int, int, int, int] | None = None
 
     def nbytes(self) -> int:
-        return sum(t.element_size() * t.nelement() for t in self)
+        return sum(t.element_size() * t.nelement() for t in (self.costs, self.hidden, self.steps))
 
 
 class RouteVIN(nn.Module, FieldEncoder):
@@ -135,6 +140,10 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: runs the local network, the cost head and the cell head itself: a subclass that overrides ``move_costs`` or
     #: ``cell_field`` sets it to 0.
     map_cache_bytes: int = 256 << 20
+    #: Whether inference on the CPU runs compiled after the convolutions (``compiled_field``): the walls gate the
+    #: Dijkstra's moves, and the cell head runs in numba from ``map_features``' strips. False: the torch pass, the
+    #: same fields up to rounding (kept to measure what the compiled one saves, and to check it).
+    compiled_inference: bool = True
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -294,24 +303,99 @@ class RouteVIN(nn.Module, FieldEncoder):
             raise ValueError(f"RouteVIN.fixed_point = {self.fixed_point!r}: expected 'dijkstra' or 'iterate'")
         return (self.settle if self.fixed_point == "dijkstra" else self.iterate)(costs, goal, walls)
 
-    def map_parts(self, x: torch.Tensor) -> MapParts:
-        """``MapParts`` of one map (``x``: (1, block**2 + 1, h, w)), from the kept ones where they are there."""
-        cells = self.block * self.block
-        key = (tuple(x.shape), str(x.device), self.wall_cost, self.step_walls,
-               hashlib.blake2b(x[:, :cells].cpu().numpy().tobytes(), digest_size=16).digest())
-        parts = self._maps.pop(key, None)
-        if parts is None:
-            free = x.clone()
-            free[:, cells] = 0.0  # no goal anywhere
-            f, costs = self.move_costs(free)
-            steps = cell_steps(x, self.block)
-            first = self.cells[0]
-            parts = MapParts(self.wall_rules(x, costs, steps),
-                             nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias), steps)
-        self._maps[key] = parts  # the most recently used last
+    def compiled(self, x: torch.Tensor) -> bool:
+        """Whether this pass takes the compiled inference (``compiled_field``): where ``compiled_inference`` holds,
+        on the CPU, without gradients, with the fixed point by Dijkstra and the class's own cell head (a subclass
+        that overrides ``cell_field`` keeps its own)."""
+        return (self.compiled_inference and x.device.type == "cpu" and not torch.is_grad_enabled()
+                and self.fixed_point == "dijkstra" and type(self).cell_field is RouteVIN.cell_field)
+
+    def head_inputs(self, f: torch.Tensor) -> torch.Tensor:
+        """The cell head's first layer on the local features ``f`` (B, C, h, w), its bias included (``pre``)."""
+        first = self.cells[0]
+        return nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias)
+
+    #: The bytes of one layer's activations a strip of ``map_features`` holds: small enough to stay in the CPU's
+    #: cache between layers. Over a 1024 x 1024-cell map the convolutions took 60 to 76 ms in strips of 32 to 64
+    #: block rows against 105 to 136 ms in one piece (one thread).
+    feature_bytes: int = 1 << 20
+
+    def map_features(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """The learned move costs and the head's first layer (``head_inputs``) of every block, in strips of rows.
+
+        Each strip reads the ``depth`` rows beyond it that its layers see, so every kept row is the whole pass's (up
+        to the rounding of another shape); a strip's activations take about ``feature_bytes`` (at least ``4 *
+        depth`` rows), so they stay in the CPU's cache from one layer to the next and a pass holds only the two
+        outputs beyond one strip.
+        """
+        h, w = x.shape[-2:]
+        d = self.depth
+        rows = max(4 * d, self.feature_bytes // (4 * self.channels * w * x.shape[0]))
+        if rows >= h:
+            f, costs = self.move_costs(x)
+            return costs, self.head_inputs(f)
+        costs = x.new_empty(x.shape[0], len(MOVES), h, w)
+        pre = x.new_empty(x.shape[0], self.channels, h, w)
+        for r0 in range(0, h, rows):
+            r1 = min(h, r0 + rows)
+            lo, hi = max(0, r0 - d), min(h, r1 + d)
+            f, c = self.move_costs(x[:, :, lo:hi])
+            costs[:, :, r0:r1] = c[:, :, r0 - lo:r1 - lo]
+            pre[:, :, r0:r1] = self.head_inputs(f[:, :, r0 - lo:r1 - lo])
+        return costs, pre
+
+    def compiled_field(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
+                       steps: torch.Tensor | None = None) -> torch.Tensor:
+        """``cell_field`` of ``inference_values``, compiled: (B, H, W) on the CPU, from the learned ``costs``.
+
+        Inference's walls gate the Dijkstra's moves (``move_cost_field``'s ``open_moves`` and ``most``) rather
+        than being written into a copy of ``costs``, so the block values are ``inference_values``' bit for bit;
+        the cell head runs compiled (``learning.models.cell_head``) from ``pre`` (``head_inputs``), the same
+        values up to the rounding of another order of summation. ``steps``: ``cell_steps(x, block)`` where the
+        caller has it already.
+        """
+        b = self.block
+        goal, walls = (t.numpy() for t in self.goal_and_walls(x))
+        gate = None
+        if self.step_walls:
+            gate = (cell_steps(x, b) if steps is None else steps).numpy()
+        most = None if self.wall_cost is None else (self.wall_cost * self.lengths).view(-1).numpy()
+        first, last = self.cells[0], self.cells[2]
+        w_rel = first.weight[:, self.channels:, 0, 0].numpy()
+        w_out, b_out = last.weight[:, :, 0, 0].numpy(), last.bias.numpy()
+        c, p = costs.numpy(), pre.numpy()
+        out = []
+        for i in range(len(c)):
+            v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
+                                most=most)
+            out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED))
+        return torch.from_numpy(np.stack(out))
+
+    def map_key(self, x: torch.Tensor) -> tuple:
+        """The key of a map's kept parts: the input's shape, device and cells (not the goal)."""
+        cells = np.ascontiguousarray(x[:, :self.block * self.block].cpu().numpy())
+        return tuple(x.shape), str(x.device), hashlib.blake2b(memoryview(cells).cast("B"), digest_size=16).digest()
+
+    def keep_map(self, key: tuple, parts: MapParts) -> None:
+        """Keep ``parts`` under ``key``, the most recently used last, within ``map_cache_bytes``."""
+        self._maps[key] = parts
         while sum(p.nbytes() for p in self._maps.values()) > self.map_cache_bytes:
             self._maps.popitem(last=False)  # the least recently used first (this one too, if it alone is too large)
-        return parts
+
+    def window_parts(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> tuple[torch.Tensor, torch.Tensor]:
+        """The move costs and the head's first layer over the blocks of ``window`` only (``local_window``)."""
+        f = self.local_window(x, window)
+        return self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG))), self.head_inputs(f)
+
+    def goal_window(self, x: torch.Tensor) -> tuple[int, int, int, int] | None:
+        """The blocks whose local features the goal reaches (within ``depth`` of its block); None unless one is marked."""
+        marked = torch.nonzero(x[0, self.block * self.block] > 0.5)
+        if len(marked) != 1:
+            return None
+        h, w = x.shape[-2:]
+        gr, gc = (int(i) for i in marked[0])
+        d = self.depth
+        return max(0, gr - d), min(h, gr + d + 1), max(0, gc - d), min(w, gc + d + 1)
 
     def local_window(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> torch.Tensor:
         """``self.local(x)`` over the blocks of ``window`` (rows ``k0:k1``, columns ``j0:j1``) only.
@@ -336,38 +420,51 @@ class RouteVIN(nn.Module, FieldEncoder):
         return y[:, :, k0 - r0:k1 - r0, j0 - c0:j1 - c0]
 
     def reusing_field(self, x: torch.Tensor) -> torch.Tensor:
-        """``forward`` of one query (``x``: (1, block**2 + 1, h, w)) over its map's kept goal-free parts.
+        """``forward`` of one query (``x``: (1, block**2 + 1, h, w)) over its map's kept parts (``MapParts``).
 
         The goal's channel reaches the local features of the blocks within ``depth`` blocks of the goal's block
         only (each 3x3 layer one block further), so those are computed again, from the input within ``2 * depth``
         blocks (where a crop's edge is not the map's, its zero padding reaches ``depth - 1`` blocks in; the kept
-        window is ``depth`` blocks in), and the map's parts serve every other block. The same values as one whole
-        pass up to floating-point rounding (the first layer of the cell head is summed in two parts). A query whose
-        goal channel marks other than one block takes the whole pass.
+        window is ``depth`` blocks in), and the map's parts serve every other block. The first query on a map takes
+        one whole pass and keeps its parts with its goal in them; the next one computes that goal's window again
+        without the goal before it puts in its own. The same values as one whole pass up to floating-point rounding.
+        A query whose goal channel marks other than one block takes the whole pass.
         """
-        cells, d = self.block * self.block, self.depth
-        marked = torch.nonzero(x[0, cells] > 0.5)
-        if len(marked) != 1:
+        window = self.goal_window(x)
+        if window is None:
             return self.forward(x)
-        h, w = x.shape[-2:]
-        gr, gc = (int(i) for i in marked[0])
-        parts = self.map_parts(x)
-        k0, k1, j0, j1 = max(0, gr - d), min(h, gr + d + 1), max(0, gc - d), min(w, gc + d + 1)
-        f = self.local_window(x, (k0, k1, j0, j1))
-        first, last = self.cells[0], self.cells[2]
+        key = self.map_key(x)
+        parts = self._maps.pop(key, None)
+        if parts is None:  # the first query on this map: one whole pass, its parts kept with this goal in them
+            if self.compiled(x):
+                parts = MapParts(*self.map_features(x), cell_steps(x, self.block), window)
+                self.keep_map(key, parts)
+                return self.compiled_field(x, parts.costs, parts.hidden, parts.steps)
+            f, costs = self.move_costs(x)
+            parts = MapParts(costs, self.head_inputs(f), cell_steps(x, self.block), window)
+            self.keep_map(key, parts)
+            return self.cell_field(f, self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps))
+        if parts.goal_window is not None:  # the first goal's window, without a goal, once
+            free = x.clone()
+            free[:, self.block * self.block] = 0.0
+            k0, k1, j0, j1 = parts.goal_window
+            costs, hidden = parts.costs.clone(), parts.hidden.clone()
+            costs[:, :, k0:k1, j0:j1], hidden[:, :, k0:k1, j0:j1] = self.window_parts(free, parts.goal_window)
+            parts = MapParts(costs, hidden, parts.steps)
+        self.keep_map(key, parts)
+        k0, k1, j0, j1 = window
         win = (slice(None), slice(None), slice(k0, k1), slice(j0, j1))
-        costs = parts.costs.clone()
-        priced = self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
-        costs[win] = self.wall_rules(x, priced, parts.steps[win])
-        goal, walls = self.goal_and_walls(x)
-        v = self.fixed_point_values(costs, goal, walls)
-        # the cell head's 1x1 layers as matrix products over the blocks (cheaper than convolutions this thin); the
-        # map's goal-free first layer everywhere, corrected in the goal's window
+        costs, pre = parts.costs.clone(), parts.hidden.clone()
+        costs[win], pre[win] = self.window_parts(x, window)
+        if self.compiled(x):
+            return self.compiled_field(x, costs, pre, parts.steps)
+        v = self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps)
+        # the cell head's 1x1 layers as matrix products over the blocks (cheaper than convolutions this thin)
+        h, w = x.shape[-2:]
+        first, last = self.cells[0], self.cells[2]
         rel = (neighbours(v, UNREACHED) - v.unsqueeze(1)).clamp(-REACH, REACH)
-        hidden = torch.addmm(parts.hidden[0].reshape(self.channels, -1), first.weight[:, self.channels:, 0, 0],
-                             rel[0].reshape(len(MOVES), -1)).view(1, self.channels, h, w)
-        hidden[win] += nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias) - parts.hidden[win]
-        hidden = hidden.view(self.channels, -1).relu_()
+        hidden = torch.addmm(pre[0].reshape(self.channels, -1), first.weight[:, self.channels:, 0, 0],
+                             rel[0].reshape(len(MOVES), -1)).relu_()
         offsets = torch.addmm(last.bias[:, None], last.weight[:, :, 0, 0], hidden).view(1, -1, h, w)
         return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
 
@@ -398,6 +495,8 @@ class RouteVIN(nn.Module, FieldEncoder):
         goal, walls = self.goal_and_walls(x)
         h, w = x.shape[-2:]
         rows = self.strip_rows(h, w)
+        if self.compiled(x):
+            return self.compiled_field(x, *self.map_features(x))
         if rows >= h:
             f, costs = self.move_costs(x)
             return self.cell_field(f, self.inference_values(x, costs, goal, walls))

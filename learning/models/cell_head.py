@@ -1,0 +1,114 @@
+"""The route encoder's cell head at inference, compiled: every cell's cost-to-go from the block values.
+
+``RouteVIN.cell_field`` in torch reads each block's neighbours' values relative to its own (clamped to ``REACH``),
+joins them to the local features, and runs two 1x1 layers per block: a dozen small tensor operations, each
+allocating a map-sized tensor. ``cell_head_field`` does the same arithmetic in float32, one block row at a time,
+with the features' part of the first layer (``pre``: its weights on the features, and its bias) computed before:
+the same values up to the rounding of another order of summation (well within the ``1e-4`` steps the encoder's
+fields are held to), in a fraction of the time. Training keeps the torch head (it needs gradients).
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from planners.maps.gridsearch import MOVES
+
+_DR = np.array([dr for dr, _ in MOVES], dtype=np.int64)
+_DC = np.array([dc for _, dc in MOVES], dtype=np.int64)
+
+
+@nb.njit(cache=True)
+def _cell_head(v, pre, w_rel, w_out, b_out, block, reach, unreached, dr, dc, out):
+    h, w = v.shape
+    C = pre.shape[0]
+    A = len(dr)
+    zero = np.float32(0.0)
+    rel = np.empty((A, w), dtype=np.float32)
+    hid = np.empty((C, w), dtype=np.float32)
+    acc = np.empty(w, dtype=np.float32)
+    for r in range(h):
+        for a in range(A):
+            rr = r + dr[a]
+            for c in range(w):
+                cc = c + dc[a]
+                there = unreached
+                if 0 <= rr < h and 0 <= cc < w:
+                    there = v[rr, cc]
+                d = there - v[r, c]
+                rel[a, c] = min(max(d, -reach), reach)
+        for k in range(C):
+            row = hid[k]
+            for c in range(w):
+                row[c] = pre[k, r, c]
+            for a in range(A):
+                wk = w_rel[k, a]
+                for c in range(w):
+                    row[c] += wk * rel[a, c]
+            for c in range(w):
+                row[c] = max(row[c], zero)
+        for j in range(w_out.shape[0]):
+            i, jj = j // block, j % block
+            for c in range(w):
+                acc[c] = b_out[j]
+            for k in range(C):
+                wk = w_out[j, k]
+                for c in range(w):
+                    acc[c] += wk * hid[k, c]
+            line = out[r * block + i]
+            for c in range(w):
+                line[c * block + jj] = v[r, c] + acc[c]
+    return out
+
+
+@nb.njit(cache=True)
+def _padded_free(cells, block, out):
+    for i in range(block):
+        for j in range(block):
+            ch = cells[i * block + j]
+            for r in range(ch.shape[0]):
+                line = out[r * block + i + 1]
+                for c in range(ch.shape[1]):
+                    line[c * block + j + 1] = 1 if ch[r, c] < 0.5 else 0
+    return out
+
+
+def padded_free_cells(cells: np.ndarray, block: int) -> np.ndarray:
+    """The map's free cells from the encoder's cell channels, padded with one blocked cell on every side.
+
+    ``cells``: (block**2, h, w), channel ``i * block + j`` the cell at row ``i``, column ``j`` of each block, below
+    0.5 where free (``route_input``). Returns (h * block + 2, w * block + 2) uint8, 1 where free
+    (``planners.maps.gridsearch.padded_block_steps`` reads it).
+    """
+    cells = np.ascontiguousarray(cells, dtype=np.float32)
+    _, h, w = cells.shape
+    out = np.zeros((h * block + 2, w * block + 2), dtype=np.uint8)
+    return _padded_free(cells, int(block), out)
+
+
+def cell_head_field(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np.ndarray, b_out: np.ndarray,
+                    block: int, reach: float, unreached: float) -> np.ndarray:
+    """Every cell's cost-to-go, (h * block, w * block) float32, from the block values and the head's weights.
+
+    Args:
+        v: (h, w) block values (float32); a neighbour off the grid reads ``unreached``.
+        pre: (C, h, w) the head's first layer on the block features, its bias included (float32).
+        w_rel: (C, 8) that layer's weights on the neighbours' relative values, the moves in ``MOVES`` order.
+        w_out, b_out: (block**2, C) and (block**2,) the last layer; output channel ``i * block + j`` is the cell
+            at row ``i``, column ``j`` of its block (``pixel_shuffle``'s order).
+        reach: The relative values are clamped to ``[-reach, reach]``.
+    """
+    f32 = np.float32
+    v, pre = np.ascontiguousarray(v, dtype=f32), np.ascontiguousarray(pre, dtype=f32)
+    h, w = v.shape
+    if pre.ndim != 3 or pre.shape[1:] != (h, w):
+        raise ValueError(f"pre must be (C, {h}, {w}), got {pre.shape}")
+    w_rel, w_out = np.ascontiguousarray(w_rel, dtype=f32), np.ascontiguousarray(w_out, dtype=f32)
+    b_out = np.ascontiguousarray(b_out, dtype=f32)
+    if w_rel.shape != (pre.shape[0], len(MOVES)) or w_out.shape != (block * block, pre.shape[0]) \
+            or b_out.shape != (block * block,):
+        raise ValueError(f"weights of shapes {w_rel.shape}, {w_out.shape}, {b_out.shape} do not fit {pre.shape[0]} "
+                         f"channels and blocks of {block} x {block} cells")
+    out = np.empty((h * block, w * block), dtype=f32)
+    return _cell_head(v, pre, w_rel, w_out, b_out, int(block), f32(reach), f32(unreached), _DR, _DC, out)
