@@ -95,9 +95,12 @@ def cell_head_field(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np
         v: (h, w) block values (float32); a neighbour off the grid reads ``unreached``.
         pre: (C, h, w) the head's first layer on the block features, its bias included (float32).
         w_rel: (C, 8) that layer's weights on the neighbours' relative values, the moves in ``MOVES`` order.
-        w_out, b_out: (block**2, C) and (block**2,) the last layer; output channel ``i * block + j`` is the cell
-            at row ``i``, column ``j`` of its block (``pixel_shuffle``'s order).
+        w_out: (block**2, C) the last layer's weights; output channel ``i * block + j`` is the cell at row ``i``,
+            column ``j`` of its block (``pixel_shuffle``'s order).
+        b_out: (block**2,) its bias.
+        block: Cells per block side.
         reach: The relative values are clamped to ``[-reach, reach]``.
+        unreached: The value off the grid.
     """
     f32 = np.float32
     v, pre = np.ascontiguousarray(v, dtype=f32), np.ascontiguousarray(pre, dtype=f32)

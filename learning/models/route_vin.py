@@ -304,9 +304,11 @@ class RouteVIN(nn.Module, FieldEncoder):
         return (self.settle if self.fixed_point == "dijkstra" else self.iterate)(costs, goal, walls)
 
     def compiled(self, x: torch.Tensor) -> bool:
-        """Whether this pass takes the compiled inference (``compiled_field``): where ``compiled_inference`` holds,
-        on the CPU, without gradients, with the fixed point by Dijkstra and the class's own cell head (a subclass
-        that overrides ``cell_field`` keeps its own)."""
+        """Whether this pass takes the compiled inference (``compiled_field``).
+
+        It does where ``compiled_inference`` holds, on the CPU, without gradients, with the fixed point by Dijkstra
+        and the class's own cell head (a subclass that overrides ``cell_field`` keeps its own).
+        """
         return (self.compiled_inference and x.device.type == "cpu" and not torch.is_grad_enabled()
                 and self.fixed_point == "dijkstra" and type(self).cell_field is RouteVIN.cell_field)
 
@@ -388,7 +390,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         return self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG))), self.head_inputs(f)
 
     def goal_window(self, x: torch.Tensor) -> tuple[int, int, int, int] | None:
-        """The blocks whose local features the goal reaches (within ``depth`` of its block); None unless one is marked."""
+        """The blocks whose features the goal reaches: within ``depth`` of its block; None unless one is marked."""
         marked = torch.nonzero(x[0, self.block * self.block] > 0.5)
         if len(marked) != 1:
             return None

@@ -501,8 +501,10 @@ def block_steps(free: np.ndarray, block: int) -> np.ndarray:
 
 
 def padded_block_steps(padded: np.ndarray, block: int) -> np.ndarray:
-    """``block_steps`` of a map already padded: ``padded`` (H + 2, W + 2) uint8, nonzero where a cell is free, with
-    one blocked cell on every side (H and W whole multiples of ``block``)."""
+    """``block_steps`` of a map already padded with one blocked cell on every side.
+
+    ``padded``: (H + 2, W + 2) uint8, nonzero where a cell is free (H and W whole multiples of ``block``).
+    """
     padded = np.ascontiguousarray(padded, dtype=np.uint8)
     if padded.ndim != 2 or (padded.shape[0] - 2) % block or (padded.shape[1] - 2) % block:
         raise ValueError(f"padded must be an (H + 2, W + 2) map of whole {block}-cell blocks, got {padded.shape}")
