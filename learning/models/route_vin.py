@@ -317,22 +317,23 @@ class RouteVIN(nn.Module, FieldEncoder):
         first = self.cells[0]
         return nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias)
 
-    #: The bytes of one layer's activations a strip of ``map_features`` holds: small enough to stay in the CPU's
-    #: cache between layers. Over a 1024 x 1024-cell map the convolutions took 60 to 76 ms in strips of 32 to 64
-    #: block rows against 105 to 136 ms in one piece (one thread).
-    feature_bytes: int = 1 << 20
+    #: About the bytes of one layer's activations a strip of ``map_features`` holds, so that they stay in the CPU's
+    #: cache between layers. One thread, the 2-core machine: over a 1024 x 1024-cell map the convolutions took 60 to
+    #: 64 ms in strips of 128 block rows (4 MB) against 105 to 136 ms in one piece; over 4096 x 4096 cells 1.35 s in
+    #: strips of 32 rows against 1.5 to 1.75 s in strips of 16 (whose margins are half their work).
+    feature_bytes: int = 4 << 20
 
     def map_features(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """The learned move costs and the head's first layer (``head_inputs``) of every block, in strips of rows.
 
         Each strip reads the ``depth`` rows beyond it that its layers see, so every kept row is the whole pass's (up
-        to the rounding of another shape); a strip's activations take about ``feature_bytes`` (at least ``4 *
+        to the rounding of another shape); a strip's activations take about ``feature_bytes`` (at least ``8 *
         depth`` rows), so they stay in the CPU's cache from one layer to the next and a pass holds only the two
         outputs beyond one strip.
         """
         h, w = x.shape[-2:]
         d = self.depth
-        rows = max(4 * d, self.feature_bytes // (4 * self.channels * w * x.shape[0]))
+        rows = max(8 * d, self.feature_bytes // (4 * self.channels * w * x.shape[0]))
         if rows >= h:
             f, costs = self.move_costs(x)
             return costs, self.head_inputs(f)
