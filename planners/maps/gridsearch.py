@@ -219,82 +219,98 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc, open_moves, most)
 
 
 @nb.njit(cache=True)
-def _move_bounds(costs, walls, unreached, open_moves, most):
-    """The least and the largest price of a move that can be taken (below ``unreached``; gated as the search does)."""
+def _incoming(costs, unreached, dr, dc, open_moves, most):
+    """Each block's incoming moves' prices, (h * w, 8): what move ``a`` costs from the block it comes from.
+
+    ``unreached`` where that move cannot be taken (off the grid, not in ``open_moves``, priced above ``most[a]``
+    or at ``unreached``). Also the least and the largest price of a move that can be taken.
+    """
     A, h, w = costs.shape
     gated = open_moves.shape == costs.shape
+    inc = np.empty((h * w, A), dtype=costs.dtype)
     low, high = np.inf, 0.0
-    for a in range(A):
-        for r in range(h):
+    for r in range(h):  # a row of blocks at a time, each move's prices read along a row of its plane
+        for a in range(A):
+            br = r - dr[a]
             for c in range(w):
-                x = costs[a, r, c]
-                if x >= unreached or walls[r, c] or (gated and (not open_moves[a, r, c] or x > most[a])):
-                    continue
-                low = min(low, x)
-                high = max(high, x)
-    return low, high
+                bc = c - dc[a]
+                x = unreached
+                if 0 <= br < h and 0 <= bc < w:
+                    y = costs[a, br, bc]
+                    if y < unreached and not (gated and (not open_moves[a, br, bc] or y > most[a])):
+                        x = y
+                        low = min(low, float(y))
+                        high = max(high, float(y))
+                inc[r * w + c, a] = x
+    return inc, low, high
 
 
 @nb.njit(cache=True)
-def _move_cost_buckets(costs, goal, walls, unreached, dr, dc, open_moves, most, width, slots):
-    """``_move_cost_dijkstra``'s values bit for bit, with the heap replaced by buckets ``width`` apart.
+def _settle_buckets(inc, goal, walls, unreached, dr, dc, width, slots):
+    """``_move_cost_dijkstra``'s values bit for bit, from ``_incoming``'s prices, with buckets ``width`` apart.
 
-    Every move costs at least twice ``width`` and no sum below ``unreached`` rounds by as much as ``width``
-    (the caller checks both), so a block settled from bucket ``k`` puts its neighbours in bucket ``k + 1`` or later:
-    every block of a bucket holds its final value when the bucket is taken, in whatever order its blocks come. Each
-    value is then the least sum over its neighbours' final values, the very sums (and rounding) of the heap's
-    search. The buckets are a ring of ``slots`` doubly linked lists, enough for the dearest move.
+    Every move costs at least twice ``width`` and no sum below ``unreached`` rounds by as much as ``width`` (the
+    caller checks both), so a block settled from bucket ``k`` puts its neighbours in bucket ``k + 1`` or later:
+    every block of a bucket holds its final value when the bucket is taken, in whatever order its blocks come.
+    Each value is then the least sum ``price + value`` over its neighbours' final values, the very sums (and
+    rounding) of the heap's search. The buckets are a ring of ``slots`` doubly linked lists, enough for the
+    dearest move; the blocks are kept on a grid padded with one settled block each side (no bounds to check),
+    and a settling block reads its 8 incoming prices side by side.
     """
-    A, h, w = costs.shape
-    n = h * w
-    gated = open_moves.shape == costs.shape
-    dist = np.full(n, unreached, dtype=costs.dtype)
-    state = np.zeros(n, dtype=np.int8)  # 0 never queued, 1 queued, 2 settled
-    nxt = np.empty(n, dtype=np.int64)
-    prv = np.empty(n, dtype=np.int64)
-    where = np.empty(n, dtype=np.int64)  # a queued block's bucket
-    head = np.full(slots, -1, dtype=np.int64)
+    h, w = goal.shape
+    A = inc.shape[1]
+    Wp = w + 2
+    n = (h + 2) * Wp
+    dist = np.full(n, unreached, dtype=inc.dtype)
+    state = np.full(n, 2, dtype=np.int8)  # 0 never queued, 1 queued, 2 settled (the border and the walls)
+    nxt = np.empty(n, dtype=np.int32)
+    prv = np.empty(n, dtype=np.int32)
+    where = np.empty(n, dtype=np.int32)  # a queued block's bucket
+    head = np.full(slots, -1, dtype=np.int32)
+    off = np.empty(A, dtype=np.int64)
+    for a in range(A):
+        off[a] = dr[a] * Wp + dc[a]
+    for r in range(h):
+        for c in range(w):
+            if not walls[r, c]:
+                state[(r + 1) * Wp + c + 1] = 0
     queued = 0
-    for i in range(n):
-        if goal[i // w, i % w]:
-            dist[i] = 0.0
-            state[i], where[i], prv[i], nxt[i] = 1, 0, -1, head[0]
-            if head[0] >= 0:
-                prv[head[0]] = i
-            head[0] = i
-            queued += 1
+    for r in range(h):
+        for c in range(w):
+            if goal[r, c]:
+                i = (r + 1) * Wp + c + 1
+                dist[i] = 0.0
+                state[i], where[i], prv[i], nxt[i] = 1, 0, -1, head[0]
+                if head[0] >= 0:
+                    prv[head[0]] = i
+                head[0] = i
+                queued += 1
     cur = 0
     while queued > 0:
         s = cur % slots
-        v = head[s]
-        if v < 0:
+        p = head[s]
+        if p < 0:
             cur += 1
             continue
-        head[s] = nxt[v]
-        if nxt[v] >= 0:
-            prv[nxt[v]] = -1
-        state[v] = 2
+        head[s] = nxt[p]
+        if nxt[p] >= 0:
+            prv[nxt[p]] = -1
+        state[p] = 2
         queued -= 1
-        dv = dist[v]
-        r, c = v // w, v % w
+        dv = dist[p]
+        v = (p // Wp - 1) * w + p % Wp - 1
         for a in range(A):
-            br, bc = r - dr[a], c - dc[a]  # the block that move a carries onto v
-            if br < 0 or br >= h or bc < 0 or bc >= w:
+            b = p - off[a]  # the block that move a carries onto p
+            if state[b] == 2:
                 continue
-            b = br * w + bc
-            if state[b] == 2 or walls[br, bc]:
-                continue
-            if gated and (not open_moves[a, br, bc] or costs[a, br, bc] > most[a]):
-                continue
-            nd = costs[a, br, bc] + dv
+            nd = inc[v, a] + dv
             if nd < dist[b]:
                 dist[b] = nd
                 k = int(nd / width)
                 if state[b] == 1:
                     if where[b] == k:
                         continue
-                    # out of its bucket
-                    if prv[b] >= 0:
+                    if prv[b] >= 0:  # out of its bucket
                         nxt[prv[b]] = nxt[b]
                     else:
                         head[where[b] % slots] = nxt[b]
@@ -308,17 +324,17 @@ def _move_cost_buckets(costs, goal, walls, unreached, dr, dc, open_moves, most, 
                 if head[t] >= 0:
                     prv[head[t]] = b
                 head[t] = b
-    return dist.reshape(h, w)
+    return dist.reshape(h + 2, Wp)[1:-1, 1:-1].copy()
 
 
 def _settle_moves(costs, goal, walls, unreached, open_moves, most):
     """``move_cost_field``'s search: by buckets where the prices allow it exactly, else by the heap."""
-    low, high = _move_bounds(costs, walls, unreached, open_moves, most)
+    inc, low, high = _incoming(costs, unreached, _DR, _DC, open_moves, most)
     width = low / 2
     # a sum below ``unreached`` rounds by at most unreached * eps / 2: the buckets need it well below ``width``
     if np.isfinite(low) and width > float(unreached) * float(np.finfo(costs.dtype).eps) and high / width < 1 << 22:
-        return _move_cost_buckets(costs, goal, walls, unreached, _DR, _DC, open_moves, most, float(width),
-                                  int(high / width) + 3)
+        return _settle_buckets(inc, goal, walls, unreached, _DR, _DC, float(width), int(high / width) + 3)
+    del inc
     return _move_cost_dijkstra(costs, goal, walls, unreached, _DR, _DC, open_moves, most)
 
 
