@@ -4,11 +4,12 @@
     python scripts/experiments/route_breakdown.py --side 256 --families forest maze rooms --repeat 30
 
 On a generated map of each family (seed 123, its own goal) at one torch thread: the best of ``--repeat`` calls
-(after one untimed call) of the shipped encoder's whole ``predict`` (a first query: nothing of the map kept), the
-local network's four convolutions over the whole block grid, the step walls (``cell_steps``), the fixed point
-(``RouteVIN.settle``, the compiled Dijkstra) and the cell head (``RouteVIN.cell_field``). Milliseconds; the
-parts do not add up to the whole (the first query also runs the convolutions over the goal's window, the cost
-head and the inputs).
+(after one untimed call) of the shipped encoder's whole ``predict`` (a first query: nothing of the map kept), and
+each part of it alone as the CPU's compiled inference runs it: the local network's convolutions and the two 1x1
+heads over the whole block grid (``RouteVIN.map_features``), the step walls (``cell_steps``), the fixed point
+(``move_cost_field``, the compiled search, its moves gated by the walls) and the cell head
+(``learning.models.cell_head``). Milliseconds; the parts do not add up to the whole (the input, the map's key and
+the conversions come on top).
 """
 
 from __future__ import annotations
@@ -19,11 +20,13 @@ import time
 import numpy as np
 import torch
 
+from learning.models.cell_head import cell_head_field
 from learning.models.field import route_input
 from learning.models.route_net import load_route_net
-from learning.models.route_vin import cell_steps
+from learning.models.route_vin import REACH, UNREACHED, cell_steps
 from learning.models.shipped import SHIPPED_ROUTE
 from planners.maps.generators import FAMILIES, generate
+from planners.maps.gridsearch import move_cost_field
 from planners.tools.benchmark import markdown_table
 
 
@@ -51,16 +54,22 @@ def breakdown(family: str, side: int, repeat: int) -> dict:
         return net.predict(obstacles, goal)
 
     with torch.no_grad():
-        features, costs = net.move_costs(x)
-        goals, walls = net.goal_and_walls(x)
-        walled = net.wall_rules(x, costs)
-        values = net.settle(walled, goals, walls)
+        costs, pre = net.map_features(x)
+        goals, walls = (t[0].numpy() for t in net.goal_and_walls(x))
+        steps = cell_steps(x, net.block)
+        gate, most = steps[0].numpy(), (net.wall_cost * net.lengths).view(-1).numpy()
+        c = costs[0].numpy()
+        values = move_cost_field(c, goals, walls, UNREACHED, open_moves=gate, most=most)
+        first, last = net.cells[0], net.cells[2]
+        head = (first.weight[:, net.channels:, 0, 0].numpy(), last.weight[:, :, 0, 0].numpy(), last.bias.numpy())
         return {"family": family, "side": side,
                 "whole first query": round(best_ms(first_query, repeat), 2),
-                "convolutions": round(best_ms(lambda: net.local(x), repeat), 2),
+                "convolutions": round(best_ms(lambda: net.map_features(x), repeat), 2),
                 "step walls": round(best_ms(lambda: cell_steps(x, net.block), repeat), 2),
-                "Dijkstra": round(best_ms(lambda: net.settle(walled, goals, walls), repeat), 2),
-                "cell head": round(best_ms(lambda: net.cell_field(features, values), repeat), 2)}
+                "Dijkstra": round(best_ms(lambda: move_cost_field(c, goals, walls, UNREACHED, open_moves=gate,
+                                                                  most=most), repeat), 2),
+                "cell head": round(best_ms(lambda: cell_head_field(values, pre[0].numpy(), *head, net.block, REACH,
+                                                                   UNREACHED), repeat), 2)}
 
 
 def main(argv: list[str] | None = None) -> int:
