@@ -76,6 +76,8 @@ def symmetry(obstacles: np.ndarray, goal_cell: tuple[int, int], k: int) -> tuple
 
     ``k % 4`` quarter turns, then a transpose if ``k >= 4``.
     """
+    if k == 0:  # the map as it is
+        return np.ascontiguousarray(obstacles), (int(goal_cell[0]), int(goal_cell[1]))
     mark = np.zeros(obstacles.shape, dtype=bool)
     mark[goal_cell] = True
     obs, mark = np.rot90(obstacles, k % 4), np.rot90(mark, k % 4)

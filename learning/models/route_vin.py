@@ -375,9 +375,14 @@ class RouteVIN(nn.Module, FieldEncoder):
         return torch.from_numpy(np.stack(out))
 
     def map_key(self, x: torch.Tensor) -> tuple:
-        """The key of a map's kept parts: the input's shape, device and cells (not the goal)."""
-        cells = np.ascontiguousarray(x[:, :self.block * self.block].cpu().numpy())
-        return tuple(x.shape), str(x.device), hashlib.blake2b(memoryview(cells).cast("B"), digest_size=16).digest()
+        """The key of a map's kept parts: the input's shape, device and cells (not the goal).
+
+        Cells of 0 and 1 only (``route_input``'s) are hashed as bits; any other values byte for byte.
+        """
+        cells = x[:, :self.block * self.block].cpu().numpy()
+        blocked = cells >= 0.5
+        data = np.packbits(blocked) if np.array_equal(cells, blocked) else np.ascontiguousarray(cells)
+        return tuple(x.shape), str(x.device), hashlib.blake2b(data.tobytes(), digest_size=16).digest()
 
     def keep_map(self, key: tuple, parts: MapParts) -> None:
         """Keep ``parts`` under ``key``, the most recently used last, within ``map_cache_bytes``."""
@@ -392,11 +397,11 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def goal_window(self, x: torch.Tensor) -> tuple[int, int, int, int] | None:
         """The blocks whose features the goal reaches: within ``depth`` of its block; None unless one is marked."""
-        marked = torch.nonzero(x[0, self.block * self.block] > 0.5)
+        h, w = x.shape[-2:]
+        marked = np.flatnonzero(x[0, self.block * self.block].cpu().numpy() > 0.5)
         if len(marked) != 1:
             return None
-        h, w = x.shape[-2:]
-        gr, gc = (int(i) for i in marked[0])
+        gr, gc = divmod(int(marked[0]), w)
         d = self.depth
         return max(0, gr - d), min(h, gr + d + 1), max(0, gc - d), min(w, gc + d + 1)
 

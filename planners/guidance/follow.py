@@ -200,10 +200,23 @@ def frontier_costs(field: np.ndarray, grid: OccupancyGrid, cell: float) -> np.nd
     """
     H, W = frontier_shape(grid, cell)
     k = max(1, int(round(cell / grid.resolution)))  # grid cells per frontier cell
-    padded = np.full((H * k, W * k), np.inf)
-    h, w = min(field.shape[0], H * k), min(field.shape[1], W * k)
-    padded[:h, :w] = field[:h, :w]
-    blocks = padded.reshape(H, k, W, k)
-    centre = blocks[:, k // 2, :, k // 2]
-    cost = np.where(np.isfinite(centre), centre, blocks.min((1, 3))) * grid.resolution / cell
-    return np.where(np.isfinite(cost), cost, 1e9).reshape(-1)
+    out = np.empty(H * W)
+    _frontier_costs(np.ascontiguousarray(field, dtype=np.float64), H, W, k, float(grid.resolution), float(cell), out)
+    return out
+
+
+@nb.njit(cache=True)
+def _frontier_costs(field, H, W, k, res, cell, out):
+    """``frontier_costs``' values: each frontier cell's centre, else its block's least (``inf`` off the field)."""
+    h, w = field.shape
+    for R in range(H):
+        for C in range(W):
+            r, c = R * k + k // 2, C * k + k // 2
+            v = field[r, c] if r < h and c < w else np.inf
+            if not np.isfinite(v):
+                v = np.inf
+                for i in range(R * k, min(h, R * k + k)):
+                    for j in range(C * k, min(w, C * k + k)):
+                        v = min(v, field[i, j])
+            cost = v * res / cell
+            out[R * W + C] = cost if np.isfinite(cost) else 1e9
