@@ -3,6 +3,7 @@
     python scripts/benchmark_clock.py --quick                # about 10 min on 2 cores
     python scripts/benchmark_clock.py                        # the test sets at the comparison's sizes
     python scripts/benchmark_clock.py --quick --value-iteration   # the encoder's fixed point by value iteration
+    python scripts/benchmark_clock.py --quick --torch-inference   # the encoder's pass through torch after its network
 
 On the comparison's test queries (generated families at 128 cells, their shifted maps, the unseen families and
 each MovingAI map), in this process and one thread, RRT with the route encoder, its ablation and the exact
@@ -12,6 +13,8 @@ see ``learning.evaluation.clock`` for what a run's time includes and the targets
 as one set) ``clock.md`` (the median time per query of every method on every set, which is fastest, the targets
 held or not, and the fastest method by map size) and ``runs.csv``. ``--value-iteration`` computes the encoder's
 fixed point the way it was computed before (value iteration, the same values bit for bit): the time it saves.
+``--torch-inference`` runs the encoder's pass through torch after its convolutions (``RouteVIN.compiled_inference``
+off; the same fields up to rounding): the time the CPU's compiled inference saves.
 """
 
 from __future__ import annotations
@@ -62,6 +65,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--route", type=Path, default=SHIPPED_ROUTE, help="route encoder (default: the shipped one)")
     ap.add_argument("--value-iteration", action="store_true",
                     help="compute the encoder's fixed point by value iteration (the former way; same values)")
+    ap.add_argument("--torch-inference", action="store_true",
+                    help="the encoder's pass through torch after its convolutions (no compiled part; same fields)")
     ap.add_argument("--no-ompl", action="store_true", help="leave out OMPL's RRT-Connect")
     ap.add_argument("--processes", type=int, default=os.cpu_count() or 1,
                     help="processes for the goal bias's tuning runs (the timed runs use one)")
@@ -86,6 +91,7 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     torch.set_num_threads(1)
     RouteVIN.fixed_point = "iterate" if args.value_iteration else "dijkstra"
+    RouteVIN.compiled_inference = not args.torch_inference
     use_ompl = not args.no_ompl and ompl_bridge.available()
     if not args.no_ompl and not use_ompl:
         print("OMPL's Python bindings are not installed (pip install -c constraints.txt -e '.[bench]'): "
@@ -123,6 +129,7 @@ def main(argv=None) -> int:
     by_size = C.fastest_by_size(runs, sides)
     load = f"{os.getloadavg()[0]:.1f}" if hasattr(os, "getloadavg") else "unknown"
     how = "value iteration" if args.value_iteration else "a compiled Dijkstra (the default)"
+    how += "; its pass through torch after the convolutions" if args.torch_inference else ""
     text = (f"# Time to solution\n\n{len(runs)} runs in {(time.perf_counter() - t0) / 60:.1f} min, one process and "
             f"one thread (load average {load} at the end); the encoder's fixed point by {how}. Median ms per query "
             "from the planner's start to its first solution, the sampler's per-query work included (an unsolved run "

@@ -5,6 +5,7 @@
     python scripts/benchmark_route.py --device cuda --sides 128 256 512 1024 --batch 64
     python scripts/benchmark_route.py --sides 128 512 1024 4096 --repeat 3      # up to the largest map it takes
     python scripts/benchmark_route.py --value-iteration                          # the fixed point the former way
+    python scripts/benchmark_route.py --torch-inference                          # no compiled part after the network
 
 Each row is one map side and family (a generated forest, and a maze, whose route winds furthest;
 ``--families``; ``--symmetries`` passes, the goal in a free cell):
@@ -19,6 +20,9 @@ GPU's allocated peak for the row. A side above the encoder's block limit is show
 limit's message. Times are wall times in one process; the machine's load is printed beside them.
 ``--value-iteration`` computes the encoder's fixed point by value iteration, as it was computed before the
 compiled Dijkstra (``RouteVIN.fixed_point``; the same values bit for bit): the time the direct way saves.
+``--torch-inference`` runs the pass through torch after the convolutions (``RouteVIN.compiled_inference`` off: the
+walls written into the move costs, the cell head in torch, the convolutions in one piece up to ``strip_blocks``; the
+same fields up to rounding): the time the CPU's compiled inference saves.
 """
 
 from __future__ import annotations
@@ -121,6 +125,8 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default="cpu", choices=DEVICES, help="cpu (default), cuda, or auto as in SB3")
     ap.add_argument("--families", nargs="+", default=["forest", "maze"], choices=FAMILIES,
                     help="generated families to time on (default forest and maze)")
+    ap.add_argument("--torch-inference", action="store_true",
+                    help="the pass through torch after the convolutions, no compiled part (same fields up to rounding)")
     ap.add_argument("--value-iteration", action="store_true",
                     help="value iteration for the fixed point, as before the compiled Dijkstra (same values)")
     args = ap.parse_args(argv)
@@ -151,9 +157,14 @@ def main(argv=None) -> int:
         if not hasattr(net, "fixed_point"):
             raise SystemExit(f"--value-iteration: {args.route} is not a value-iteration encoder")
         net.fixed_point = "iterate"
+    if args.torch_inference:
+        if not hasattr(net, "compiled_inference"):
+            raise SystemExit(f"--torch-inference: {args.route} is not a value-iteration encoder")
+        net.compiled_inference = False
     if args.symmetries is None:
         args.symmetries = net.symmetries
     how = f", fixed point by {getattr(net, 'fixed_point', 'its own network')}"
+    how += ", torch inference" if args.torch_inference else ""
     print(f"route encoder {args.route.name}, {args.symmetries} symmetries, device {device}{how}, "
           f"{os.cpu_count()} CPUs, torch {torch.__version__}\n", flush=True)
     rows = []

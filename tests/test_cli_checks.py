@@ -57,6 +57,16 @@ def test_benchmark_route_table_and_refusal(capsys, monkeypatch):
     assert "above the limit of 256 blocks" in out
 
 
+def test_benchmark_route_times_the_torch_inference_on_request(capsys):
+    from learning.models.route_vin import RouteVIN
+
+    assert load_script("benchmark_route").main(["--sides", "32", "--repeat", "1", "--families", "forest",
+                                                "--torch-inference"]) == 0
+    out = capsys.readouterr().out
+    assert "torch inference" in out.splitlines()[0] and "| forest | 32 " in out
+    assert RouteVIN.compiled_inference  # the script's own encoder only
+
+
 def test_benchmark_envs_runs_every_registered_id_and_leaves_guided_actions_to_the_2d_ones(capsys):
     script = load_script("benchmark_envs")
     assert script.main(["--steps", "1", "--modes", "guided"]) == 0
