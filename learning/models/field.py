@@ -178,7 +178,7 @@ class FieldEncoder:
             for k in range(symmetries):
                 obs, goal = symmetry(obstacles, goal_cell, k)
                 by_shape.setdefault(obs.shape, []).append((i, k, route_input(obs, goal, self.block)))
-        totals = [np.zeros(obstacles.shape) for obstacles, _ in queries]
+        totals: list[np.ndarray | None] = [None] * len(queries)
         device = next(self.parameters()).device
         with planning_threads(threads), torch.inference_mode():
             for (h, w), group in by_shape.items():
@@ -186,10 +186,12 @@ class FieldEncoder:
                 size = max(1, min(len(group), BATCH_BYTES // (BYTES_PER_BLOCK * blocks)))
                 for at in range(0, len(group), size):
                     part = group[at:at + size]
-                    x = torch.from_numpy(np.stack([x for _, _, x in part])).to(device)
-                    out = self.infer(x)[:, :h, :w].cpu().numpy().astype(np.float64)
+                    x = part[0][2][None] if len(part) == 1 else np.stack([x for _, _, x in part])  # no copy for one
+                    out = self.infer(torch.from_numpy(x).to(device))[:, :h, :w].cpu().numpy()
                     for (i, k, _), field in zip(part, out, strict=True):
-                        totals[i] += unturn(field, k)
+                        # float64 sums, in the order the symmetries come (the first one taken as it is)
+                        turned = unturn(field, k).astype(np.float64)
+                        totals[i] = turned if totals[i] is None else totals[i] + turned
         for total in totals:
             total *= self.block / (self.step * symmetries)
             side = max(total.shape)

@@ -82,9 +82,8 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
     cutting): a block move no step makes crosses a wall, however the network prices it. Compiled
     (``planners.maps.gridsearch.padded_block_steps``), on the CPU whatever the device.
     """
-    cells = x[:, :block * block].cpu().numpy()
-    return torch.from_numpy(np.stack([padded_block_steps(padded_free_cells(c, block), block) for c in cells])
-                            ).to(x.device)
+    steps = [padded_block_steps(padded_free_cells(c, block), block) for c in x[:, :block * block].cpu().numpy()]
+    return torch.from_numpy(steps[0][None] if len(steps) == 1 else np.stack(steps)).to(x.device)
 
 
 class MapParts(NamedTuple):
@@ -372,7 +371,7 @@ class RouteVIN(nn.Module, FieldEncoder):
             v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
                                 most=most)
             out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED))
-        return torch.from_numpy(np.stack(out))
+        return torch.from_numpy(out[0][None] if len(out) == 1 else np.stack(out))  # no copy for one map
 
     def map_key(self, x: torch.Tensor) -> tuple:
         """The key of a map's kept parts: the input's shape, device and cells (not the goal).
