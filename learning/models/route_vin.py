@@ -11,9 +11,10 @@ That fixed point is the shortest path over the move costs, so the encoder comput
 Dijkstra (``RouteVIN.settle``): the same values bit for bit, in one pass over the blocks.
 A last local head turns the block values into a cost-to-go for every cell. The goal enters the local network
 as one block's mark, which reaches only the features within ``depth`` blocks of it, so at inference the encoder
-keeps each map's goal-free parts (``MapParts``: the cost head's output, the cell head's first layer, the step
-walls) and a later query on the same map recomputes the local network over the goal's window only
-(``RouteVIN.reusing_field``, ``map_cache_bytes``): the same field up to rounding, at a fraction of the pass.
+keeps each map's parts (``MapParts``: the cost head's output, the cell head's first layer, the step walls) and a
+later query on the same map recomputes the local network over the goal's window only (``RouteVIN.reusing_field``,
+``map_cache_bytes``): the same field up to rounding, at a fraction of the pass. On the CPU everything after the
+convolutions runs compiled (``RouteVIN.compiled_field``).
 Nothing in it depends on the map's size or on where on the map a block lies: it learns local geometry (which
 cells let a robot through, at what cost) and composes it.
 
@@ -130,10 +131,11 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: How inference computes value iteration's fixed point: "dijkstra" (``settle``, the default) or "iterate"
     #: (``iterate`` to convergence: the same values, bit for bit, kept to measure what the direct way saves).
     fixed_point: str = "dijkstra"
-    #: Above how many blocks per map a pass at inference runs in strips of rows (``forward``): up to it, one
-    #: piece (every map of up to 1024 x 1024 cells at 2 cells per block).
+    #: Above how many blocks per map a pass at inference through torch runs in strips of rows (``forward``), and
+    #: keeps no map's parts (``infer``): up to it, one piece (every map of up to 1024 x 1024 cells at 2 cells per
+    #: block). The compiled inference runs in strips of its own (``map_features``) on every map.
     strip_blocks: int = 512 * 512
-    #: How many bytes of goal-free map parts (``MapParts``) inference keeps, the most recently used maps first:
+    #: How many bytes of map parts (``MapParts``) inference keeps, the most recently used maps first:
     #: the goal reaches only the features of blocks within ``depth`` blocks of its own, so a later query on the
     #: same map recomputes the local network over that window only (``reusing_field``). 0: no reuse. The reuse
     #: runs the local network, the cost head and the cell head itself: a subclass that overrides ``move_costs`` or
