@@ -291,9 +291,9 @@ class LazyPRM(PRM):
     """Lazy PRM: build the roadmap without collision checks, check only candidate paths.
 
     Samples and connections are stored unchecked. When start and goal share a component of this
-    optimistic roadmap, the shortest path is checked vertex by vertex and edge by edge; what fails is
-    removed and the search repeats, until a valid path is found or the components split (then
-    sampling resumes). Collision checks are therefore far fewer than PRM's.
+    optimistic roadmap, every vertex of the shortest path is checked, then every edge between valid
+    ones; what fails is removed and the search repeats, until a valid path is found or the components
+    split (then sampling resumes). Collision checks are therefore far fewer than PRM's.
 
     R. Bohlin, L. E. Kavraki, "Path planning using Lazy PRM", ICRA 2000,
     doi:10.1109/ROBOT.2000.844107.
