@@ -8,7 +8,7 @@
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
     python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
     python scripts/evaluate.py --route mine=runs/route/route.pt                    # your encoder beside the shipped one
-    python scripts/evaluate.py --quick --other-planners all                        # every planner and sampler: the longest
+    python scripts/evaluate.py --quick --other-planners all                        # every planner and sampler: 12 min
     python scripts/evaluate.py --quick --convergence                               # and RRT*'s cost convergence
     python scripts/evaluate.py --quick --other-planners PRM --later-queries        # and later queries on PRM's roadmaps
     python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments
