@@ -212,7 +212,11 @@ class RouteVIN(nn.Module, FieldEncoder):
     def move_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(features (B, C, h, w), move costs (B, 8, h, w) in blocks, each at least half the move's length)."""
         f = self.local(x)
-        return f, self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
+        return f, self.prices(f)
+
+    def prices(self, f: torch.Tensor) -> torch.Tensor:
+        """The move costs (B, 8, h, w) in blocks from the local features ``f``: each at least half its length."""
+        return self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
 
     @staticmethod
     def iterate(costs: torch.Tensor, goal: torch.Tensor, walls: torch.Tensor, v: torch.Tensor | None = None, *,
@@ -394,7 +398,7 @@ class RouteVIN(nn.Module, FieldEncoder):
     def window_parts(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> tuple[torch.Tensor, torch.Tensor]:
         """The move costs and the head's first layer over the blocks of ``window`` only (``local_window``)."""
         f = self.local_window(x, window)
-        return self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG))), self.head_inputs(f)
+        return self.prices(f), self.head_inputs(f)
 
     def goal_window(self, x: torch.Tensor) -> tuple[int, int, int, int] | None:
         """The blocks whose features the goal reaches: within ``depth`` of its block; None unless one is marked."""
