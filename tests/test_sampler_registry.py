@@ -28,8 +28,9 @@ def test_every_registered_name_builds_a_sampler_and_the_references_are_marked():
     assert set(sampler_names()) == {"uniform", "goal_bias", "informed", "follower", "route", "route_ablation",
                                     "policy",
                                     "policy_ablation", "expert", "exact_route", "gaussian", "bridge_test",
-                                    "obstacle_based", "rigid_workspace_route", "rigid_route", "rigid_route_ablation"}
-    assert set(REFERENCES) == {"expert", "exact_route"}
+                                    "obstacle_based", "rigid_workspace_route", "rigid_route", "rigid_route_ablation",
+                                    "rigid_expert"}
+    assert set(REFERENCES) == {"expert", "exact_route", "rigid_expert"}
     for name in sampler_names():
         assert isinstance(make_sampler(name), Sampler), name
     assert learning.sampler_names() == sampler_names() and learning.make_sampler is make_sampler

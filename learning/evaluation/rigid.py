@@ -9,9 +9,11 @@ sampler swapped in:
 * ``PRM``: k = 3 nearest neighbours, Dijkstra on the roadmap, at most 5,000 samples.
 
 The samplers are names of the one registry (``learning.samplers.registry.make_sampler``); the
-default list holds the references of the 6-DoF comparison: ``uniform``, ``goal_bias``, OMPL's
-``gaussian`` and ``bridge_test``, OB-PRM's ``obstacle_based``, and ``rigid_workspace_route`` (the exact
-workspace route of the body's centre with uniform orientations: the no-learning ablation).
+default list holds the samplers of the 6-DoF comparison: ``uniform``, ``goal_bias``, OMPL's
+``gaussian`` and ``bridge_test``, OB-PRM's ``obstacle_based``, ``rigid_workspace_route`` (the exact
+workspace route of the body's centre with uniform orientations: the no-learning ablation), the learned
+``rigid_route`` and its own ablation, and ``rigid_expert``, the privileged reference that samples along a solution
+long runs found before the run (``learning.references.rigid_expert``): how much room a sampler has.
 
 Every run is seeded. A row counts a run's collision checks as the planner's plus those the sampler
 made to place its samples (Gaussian, bridge test, obstacle-based), and its time from building the
@@ -29,6 +31,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from learning.evaluation.protocol import Protocol
+from learning.samplers.registry import REFERENCES
 from planners import PRM, RRT, Problem, RRTConnect
 from planners.base.fileio import InputError
 from planners.base.planner import compile_seconds
@@ -40,7 +43,7 @@ PLANNERS = ("RRT", "RRTConnect", "PRM")
 CAPS = {"RRT": RRT_SETUP["max_iterations"], "RRTConnect": RRT_SETUP["max_iterations"], "PRM": PRM_SETUP["samples"]}
 #: The samplers compared unless told otherwise (registry names).
 SAMPLERS = ("uniform", "goal_bias", "gaussian", "bridge_test", "obstacle_based", "rigid_workspace_route",
-            "rigid_route_ablation", "rigid_route")
+            "rigid_route_ablation", "rigid_route", "rigid_expert")
 
 
 @dataclass(frozen=True)
@@ -327,7 +330,7 @@ def target_rows(by_set: Sequence[dict]) -> list[dict]:
     cells = {(s["family"], s["planner"], s["sampler"]): s for s in by_set}
     out = []
     for (family, planner, sampler), s in cells.items():
-        if sampler in CLASSICAL or sampler in NO_LEARNING:
+        if sampler in CLASSICAL or sampler in NO_LEARNING or sampler in REFERENCES:
             continue
         classical = [cells[(family, planner, c)] for c in CLASSICAL if (family, planner, c) in cells]
         ablation = cells.get((family, planner, ABLATIONS.get(sampler, ABLATION)))
@@ -379,7 +382,7 @@ def findings(overall: Sequence[dict], targets: Sequence[dict]) -> list[str]:
         for name, s in cells.items():
             if name in CLASSICAL:
                 continue
-            role = "no learning" if name in NO_LEARNING else "learned"
+            role = "no learning" if name in NO_LEARNING else "privileged reference" if name in REFERENCES else "learned"
             parts.append(f"{name} ({role}: median {s['median_iterations']:,.0f}, {s['solved']}/{s['runs']} solved)")
         out.append(f"{planner}: " + "; ".join(parts) + ".")
     if targets:

@@ -5,8 +5,9 @@ strings), never from a string parsed back. A user's sampler is a spec on the com
 (``user_sampler``): ``MODEL.zip@ENV_ID[@OPTION...]`` for a Stable-Baselines3 model, or
 ``module:callable`` for a factory returning a ``Sampler``.
 
-The references (``REFERENCES``) read the map's exact geodesic distance (a grid search): they say what
-perfect route knowledge reaches, they are not competitors.
+The references (``REFERENCES``) are privileged, not competitors: in 2-D they read the map's exact geodesic
+distance (a grid search) and say what perfect route knowledge reaches; in 6-DoF, where no exact search exists,
+``rigid_expert`` samples along a solution that long runs found before the run.
 """
 
 from __future__ import annotations
@@ -109,7 +110,7 @@ def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = 
 
 def _rigid_route(uniform_share: float | None = None, angle_noise: float | None = None, goal_share: float = 0.05,
                  temperature: float = 1.0, route_fraction: float = 0.75, centre: int | None = None,
-                 path: str | None = None, *, models: ModelCache | None = None) -> Sampler:
+                 path: str | None = None, symmetry: str | None = None, *, models: ModelCache | None = None) -> Sampler:
     from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
     from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
 
@@ -120,7 +121,8 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                              else uniform_share,
                              angle_noise=SHIPPED_RIGID_SETTINGS["angle_noise"] if angle_noise is None else angle_noise,
                              goal_share=goal_share, temperature=temperature,
-                             centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre)
+                             centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre,
+                             symmetry=SHIPPED_RIGID_SETTINGS.get("symmetry", "random") if symmetry is None else symmetry)
 
 
 def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75, centre: int | None = None) -> Sampler:
@@ -128,6 +130,13 @@ def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75
 
     return RigidRouteSampler(None, route_fraction=route_fraction, uniform_share=1.0, goal_share=goal_share,
                              centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre)
+
+
+def _rigid_expert(attempts: int = 4, budget: int = 100_000, uniform_share: float = 0.1, goal_share: float = 0.05,
+                  angle_noise: float = 0.1) -> Sampler:
+    from learning.references.rigid_expert import RigidExpertSampler
+
+    return RigidExpertSampler(attempts, budget, uniform_share, goal_share, angle_noise)
 
 
 #: name -> (factory, one line for help texts).
@@ -153,9 +162,11 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
                              "ablation"),
     "expert": (_expert, "reference: the privileged expert on the exact geodesic distance"),
     "exact_route": (_exact_route, "reference: the route sampler on the exact cost-to-go"),
+    "rigid_expert": (_rigid_expert, "reference, 6-DoF box and mesh worlds: samples along a solution that long runs "
+                     "of RRT-Connect found before the run (the privileged expert)"),
 }
 #: Names that are privileged references, not competitors.
-REFERENCES = ("expert", "exact_route")
+REFERENCES = ("expert", "exact_route", "rigid_expert")
 
 
 def sampler_names() -> tuple[str, ...]:

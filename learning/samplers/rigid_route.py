@@ -13,8 +13,10 @@ and its distribution over the six axis-aligned orientation classes there. Per sa
 * with probability ``goal_share`` the goal state;
 * else with probability ``route_fraction`` a route sample: its position as the ablation draws it; its
   orientation, with probability ``uniform_share``, uniform angles, else a class drawn from the model's
-  distribution at the nearest route point, one of the class's four rotations (the box's symmetry) at
-  random, turned by a random rotation of about ``angle_noise`` radians per axis (a Gaussian rotation vector);
+  distribution at the nearest route point, one of the class's four rotations (the box's symmetry: the same
+  volume, far apart in the planner's metric) at random (``symmetry="random"``) or the one nearest the orientation
+  of the query's end nearer the sample's route point (``symmetry="ends"``: the start's or the goal's), turned by
+  a random rotation of about ``angle_noise`` radians per axis (a Gaussian rotation vector);
 * else a uniform state.
 
 Samples do not depend on the tree, so they come in batches. The orientation model learned on a box body
@@ -40,12 +42,16 @@ from planners.guidance.rigid_orientation import (
     small_rotations,
 )
 from planners.guidance.workspace_route import centre_route, route_world, voxel_route
+from planners.worlds.mesh import rotation_matrices
 
 #: The settings ``make_sampler("rigid_route")`` uses: chosen on the tuning scenes
-#: (``scripts/experiments/tune_rigid_learned.py``; ``docs/rigid-scenes.md``).
+#: (``scripts/experiments/tune_rigid_learned.py``; the rotation among a class's four by
+#: ``scripts/experiments/rigid_room.py --part tuning``, with the privileged expert's classes; ``docs/rigid-scenes.md``).
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2}
 
 _ROTATIONS = class_rotations()
+#: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
+SYMMETRY_RULES = ("random", "ends")
 
 
 class RigidRouteSampler(SamplerBase):
@@ -67,12 +73,17 @@ class RigidRouteSampler(SamplerBase):
             mesh world the body's long side over ``TRAINING_LONG_SIDE`` for the observation.
         centre: Reach in voxels of ``centre_route``: each interior route point moves to the clearest voxel
             centre that near (0: the search's route as it is).
+        symmetry: Which of a class's four rotations a sample takes: ``"random"``, or ``"ends"``, the one nearest
+            the orientation of the query's end (start or goal) nearer the sample's route point.
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
-                 cell: float | None = None, centre: int = 2) -> None:
+                 cell: float | None = None, centre: int = 2, symmetry: str = "random") -> None:
         who = "RigidRouteSampler"
+        if symmetry not in SYMMETRY_RULES:
+            raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
+        self.symmetry = symmetry
         self.centre = check_int(centre, f"{who}: centre", low=0)
         self.net = net
         self.route_fraction = float(check_number(who, "route_fraction", route_fraction, low=0, high=1))
@@ -112,6 +123,7 @@ class RigidRouteSampler(SamplerBase):
         else:
             self.probs = np.full((0, N_CLASSES), 1.0 / N_CLASSES)
         self.cdf = np.cumsum(self.probs, axis=1)
+        self.ends = rotation_matrices(np.stack([self.problem.start[3:6], self.problem.goal[3:6]]))
 
     def draw(self, rng, n, view):
         # one row of uniforms per sample keeps the stream identical whatever the batch size: a coin, an
@@ -134,7 +146,13 @@ class RigidRouteSampler(SamplerBase):
             if len(learned):
                 near = (i + (t >= 0.5))[u[on, 6 + d] >= self.uniform_share]
                 cls = np.minimum((self.cdf[near] < cls_u[learned, None]).sum(axis=1), N_CLASSES - 1)
-                base = self.rotations[cls, np.minimum((sym_u[learned] * 4).astype(np.int64), 3)]
+                sym = np.minimum((sym_u[learned] * 4).astype(np.int64), 3)
+                if self.symmetry == "ends":  # the rotation nearest the nearer end's orientation (largest trace)
+                    at = self.route[near]
+                    goal_end = (((at - self.problem.goal[:3]) ** 2).sum(axis=1)
+                                < ((at - self.problem.start[:3]) ** 2).sum(axis=1)).astype(np.int64)
+                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], self.ends[goal_end]).argmax(axis=1)
+                base = self.rotations[cls, sym]
                 turn = small_rotations(self.angle_noise * rot_z[learned])
                 pts[learned, 3:] = euler_from_matrices(turn @ base)
         pts[u[:, 0] < self.goal_share] = self.problem.goal
@@ -145,7 +163,8 @@ class RigidRouteSampler(SamplerBase):
         cell = "the world's" if self.cell is None else f"{self.cell:g}"
         return (f"RigidRouteSampler(route_fraction={self.route_fraction:g}, uniform_share={self.uniform_share:g}, "
                 f"angle_noise={self.angle_noise:g}, goal_share={self.goal_share:g}, "
-                f"temperature={self.temperature:g}, spread={sd}, cell={cell}, centre={self.centre})")
+                f"temperature={self.temperature:g}, spread={sd}, cell={cell}, centre={self.centre}, "
+                f"symmetry={self.symmetry!r})")
 
 
 def _normals(u: np.ndarray) -> np.ndarray:

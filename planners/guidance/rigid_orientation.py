@@ -173,6 +173,36 @@ def class_validity(world, points, rng: np.random.Generator, jitter: float, k: in
     return out
 
 
+def nearest_class(rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(class, symmetry)`` indices of the axis-aligned rotation (``class_rotations``) nearest each of ``(n, 3, 3)``.
+
+    Nearest in the angle between the rotations: the largest trace of ``C^T R`` over the 24.
+    """
+    rots = class_rotations().reshape(-1, 3, 3)
+    k = np.einsum("kij,nij->nk", rots, np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)).argmax(axis=1)
+    return k // 4, k % 4
+
+
+def solution_classes(points, states: np.ndarray) -> np.ndarray:
+    """``(n, 6)`` one-hot: the class of the solution state nearest each point in position (``nearest_class``).
+
+    ``states``: ``(m, 6)`` states of a solution (positions, then ``rotation_matrix``'s angles), dense along it. A
+    label from a solution, for training only: the orientation a solution takes where the body passes each point.
+    """
+    from planners.worlds.mesh import rotation_matrices
+
+    points = np.asarray(points, dtype=np.float64)[:, :3]
+    states = np.asarray(states, dtype=np.float64)
+    nearest = np.empty(len(points), dtype=np.int64)
+    for i in range(0, len(points), 256):  # in chunks: points x states distances
+        d = ((points[i:i + 256, None, :] - states[None, :, :3]) ** 2).sum(axis=2)
+        nearest[i:i + 256] = d.argmin(axis=1)
+    cls, _ = nearest_class(rotation_matrices(states[nearest, 3:]))
+    out = np.zeros((len(points), N_CLASSES))
+    out[np.arange(len(points)), cls] = 1.0
+    return out
+
+
 def body_axes(vertices) -> tuple[np.ndarray, np.ndarray]:
     """A body's own long, middle and short axes: ``(U, extents)``, the axes as the columns of a rotation.
 

@@ -1,0 +1,166 @@
+"""The 6-DoF privileged expert: samples along a solution of the query found beforehand by long runs.
+
+It shows how much room a 6-DoF sampler has, as the 2-D expert does with the grid search's shortest path: there
+is no exact search of the 6-DoF configuration space, so its "answer" is a solution that long runs of
+RRT-Connect found (``solve_reference``: the centred workspace route with uniform angles as their sampler, up to
+``attempts`` runs of ``budget`` iterations each, seeded from fixed seeds so that every planner seed of a query
+shares one answer), shortened as OMPL's path simplifier does (``planners.algorithms.smoothing.smooth``). It is a
+reference, not a competitor: it knows a solution before the run starts.
+
+Per sample: the goal with probability ``goal_share``; else with probability ``1 - uniform_share`` a state of the
+solution (uniform in its arc length, the planner's own interpolation between its states) with Gaussian noise of
+the world's ``route_spread`` on the position and a random rotation of about ``angle_noise`` radians per axis; else
+a uniform state. Where the long runs find no solution, every sample is uniform and ``solved_reference`` is False.
+
+Its long runs are kept per query (``SOLUTIONS``, keyed by the world's content and the query): later binds of the
+same query, in the same process, take them from there. The time a run of it reports includes them at the first
+bind of a query in a process; its iterations are what it is for.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from collections import OrderedDict
+
+import numpy as np
+
+from planners.base.fileio import InputError, check_int, check_number
+from planners.base.problem import Problem
+from planners.base.samplers import SamplerBase
+from planners.guidance.rigid_orientation import euler_from_matrices, small_rotations, wrap_angles
+from planners.worlds.mesh import rotation_matrices
+from planners.worlds.rigid3d import RRT_SETUP, densify
+
+#: Seeds of the long runs: fixed, so the reference's solution belongs to the query, not to a planner's seed.
+REFERENCE_SEEDS = tuple(7919 + k for k in range(16))
+#: Solutions kept per process, most recent first out.
+KEPT_SOLUTIONS = 64
+#: query key -> (dense states of the solution or None, seconds its long runs took, iterations they ran).
+SOLUTIONS: OrderedDict[str, tuple[np.ndarray | None, float, int]] = OrderedDict()
+
+
+def query_key(problem: Problem, attempts: int, budget: int) -> str:
+    """A digest of the world's content (its boxes or meshes, body, bounds), the query, and the long runs' budget."""
+    world = problem.world
+    h = hashlib.sha256(type(world).__name__.encode())
+    for name in ("boxes", "body", "env_vertices", "env_faces", "body_vertices", "body_faces"):
+        if hasattr(world, name):
+            a = np.ascontiguousarray(getattr(world, name))
+            h.update(name.encode() + str(a.shape).encode() + str(a.dtype).encode() + a.tobytes())
+    for a in (*world.bounds, problem.start, problem.goal):
+        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    h.update(f"{attempts} {budget}".encode())
+    return h.hexdigest()
+
+
+def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000) -> tuple[np.ndarray | None, float, int]:
+    """A solution of ``problem`` by long runs, densified: ``(states or None, seconds, iterations run)``.
+
+    RRT-Connect at the seed set-up's step (0.01 of the workspace's longest side) on the ``cossin`` metric, with
+    the centred workspace route and uniform angles as its sampler (``rigid_route_ablation``), seeds
+    ``REFERENCE_SEEDS`` in turn until one solves within ``budget`` iterations; the path is shortened
+    (``smooth``) and densified to half a step between states.
+    """
+    from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
+    from planners import RRTConnect
+    from planners.algorithms.smoothing import smooth
+
+    world = problem.world
+    step = RRT_SETUP["step_fraction"] * float(np.max(world.high3 - world.low3))
+    p = problem.with_query(problem.start, problem.goal, metric="cossin")
+    t0, ran = time.perf_counter(), 0
+    for k, seed in enumerate(REFERENCE_SEEDS[:attempts]):
+        sampler = RigidRouteSampler(None, uniform_share=1.0, centre=SHIPPED_RIGID_SETTINGS["centre"])
+        result = RRTConnect(p, step_size=step, sampler=sampler, seed=seed).solve(max_iterations=budget)
+        ran += int(result.iterations)
+        if result.solved:
+            path = smooth(result.path, p, seed=k)
+            return densify(path, p, 0.5 * step), time.perf_counter() - t0, ran
+    return None, time.perf_counter() - t0, ran
+
+
+class RigidExpertSampler(SamplerBase):
+    """Samples along a solution found by long runs (see the module doc): a privileged reference.
+
+    Args:
+        attempts: Long runs tried, each from the next of ``REFERENCE_SEEDS``, until one solves.
+        budget: Iterations of each long run.
+        uniform_share: Probability in [0, 1] of a uniform state (the share not along the solution).
+        goal_share: Probability in [0, 1] of the goal state.
+        angle_noise: Standard deviation, radians, of each component of the rotation vector turning a solution's
+            orientation.
+        spread: Standard deviation of the position noise; None: the world's ``route_spread``.
+    """
+
+    def __init__(self, attempts: int = 4, budget: int = 100_000, uniform_share: float = 0.1,
+                 goal_share: float = 0.05, angle_noise: float = 0.1, spread: float | None = None) -> None:
+        who = "RigidExpertSampler"
+        self.attempts = check_int(attempts, f"{who}: attempts", low=1)
+        if self.attempts > len(REFERENCE_SEEDS):
+            raise InputError(f"{who}: attempts = {attempts}: at most {len(REFERENCE_SEEDS)}")
+        self.budget = check_int(budget, f"{who}: budget", low=1)
+        self.uniform_share = float(check_number(who, "uniform_share", uniform_share, low=0, high=1))
+        self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
+        self.angle_noise = float(check_number(who, "angle_noise", angle_noise, low=0))
+        self.spread = None if spread is None else float(check_number(who, "spread", spread, low=0))
+
+    def _setup(self) -> None:
+        world = self.problem.world
+        if not (hasattr(world, "high3") and hasattr(world, "route_spread") and self.problem.dim == 6):
+            raise InputError("RigidExpertSampler plans on 6-DoF box and mesh worlds (RigidBodyWorld, MeshWorld)")
+        key = query_key(self.problem, self.attempts, self.budget)
+        if key in SOLUTIONS:
+            SOLUTIONS.move_to_end(key)
+        else:
+            SOLUTIONS[key] = solve_reference(self.problem, self.attempts, self.budget)
+            while len(SOLUTIONS) > KEPT_SOLUTIONS:
+                SOLUTIONS.popitem(last=False)
+        self.states, self.reference_seconds, self.reference_iterations = SOLUTIONS[key]
+        self.solved_reference = self.states is not None
+        self.sd = world.route_spread if self.spread is None else self.spread
+
+    def draw(self, rng, n, view):
+        # one row of uniforms per sample, whatever its kind: a coin, a place on the solution, a uniform state,
+        # two Box-Muller pairs for the position and two for the rotation
+        d = self.problem.dim
+        u = rng.random((n, 2 + d + 8))
+        pts = self._uniform(u[:, 2:2 + d])
+        if self.states is not None:
+            along = (u[:, 0] >= self.goal_share) & (u[:, 0] < self.goal_share + (1.0 - self.goal_share)
+                                                   * (1.0 - self.uniform_share))
+            m = int(along.sum())
+            if m:
+                idx = np.minimum((u[along, 1] * len(self.states)).astype(np.int64), len(self.states) - 1)
+                base = self.states[idx]
+                z = _normals(u[along, 2 + d:2 + d + 8])
+                pos = base[:, :3] + self.sd * z[:, :3]
+                pts[along, :3] = np.clip(pos, self.low[:3], np.nextafter(self.high[:3], -np.inf))
+                R = small_rotations(self.angle_noise * z[:, 3:6]) @ rotation_matrices(base[:, 3:6])
+                pts[along, 3:] = nearest_cover(euler_from_matrices(R), base[:, 3:6])
+        pts[u[:, 0] < self.goal_share] = self.problem.goal
+        return pts
+
+    def __repr__(self) -> str:
+        sd = "the world's" if self.spread is None else f"{self.spread:g}"
+        return (f"RigidExpertSampler(attempts={self.attempts}, budget={self.budget}, "
+                f"uniform_share={self.uniform_share:g}, goal_share={self.goal_share:g}, "
+                f"angle_noise={self.angle_noise:g}, spread={sd})")
+
+
+def nearest_cover(angles: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """Each row of ``angles`` written on whichever of its two Euler covers lies nearer ``near``'s row.
+
+    ``(tx, ty, tz)`` and ``(pi - tx, ty + pi, tz + pi)`` are one rotation; the planners' metrics tell them apart,
+    so a turned state of the solution is written as the solution writes its orientation.
+    """
+    other = wrap_angles(np.stack([np.pi - angles[:, 0], angles[:, 1] + np.pi, angles[:, 2] + np.pi], axis=1))
+    closer = np.abs(wrap_angles(other - near)).sum(axis=1) < np.abs(wrap_angles(angles - near)).sum(axis=1)
+    return np.where(closer[:, None], other, angles)
+
+
+def _normals(u: np.ndarray) -> np.ndarray:
+    """``(n, 8)`` standard normals from ``(n, 8)`` uniforms (four Box-Muller pairs)."""
+    r = np.sqrt(-2.0 * np.log(1.0 - u[:, 0:4]))
+    t = 2.0 * np.pi * u[:, 4:8]
+    return np.concatenate([r * np.cos(t), r * np.sin(t)], axis=1)
