@@ -26,7 +26,7 @@ import torch
 
 from learning.device import pin_cpu_arithmetic
 from learning.models.rigid_orientation import save_orientation_net
-from learning.training.rigid import RigidTrainConfig, train_rigid_orientation
+from learning.training.rigid import LABELS, RigidTrainConfig, train_rigid_orientation
 from planners.base.fileio import InputError, atomic_write_text
 from planners.worlds.rigid_scenes import TRAINING_FAMILIES
 
@@ -44,8 +44,9 @@ def main(argv=None) -> int:
     ap.add_argument("--poses", type=int, default=d.poses, help="jittered poses per point and class for the label")
     ap.add_argument("--open-keep", type=float, default=d.open_keep,
                     help="share of the points where every class fits that are kept")
-    ap.add_argument("--label", choices=("point", "window"), default=d.label,
-                    help="classes that fit along the path's window (default) or at the point alone")
+    ap.add_argument("--label", choices=LABELS, default=d.label,
+                    help="classes that fit along the path's window (default) or at the point alone, or the class a "
+                         "solution by long runs takes nearest the point")
     ap.add_argument("--window", type=float, default=d.window, help="half the window of --label window, world units")
     ap.add_argument("--no-augment", action="store_true", help="no symmetries of the grid")
     ap.add_argument("--seed", type=int, default=d.seed)

@@ -111,13 +111,29 @@ def test_the_registry_name_plans_with_rrt_connect(slot_scene):
         make_sampler("rigid_route", colour=1)
 
 
-def test_training_is_reproducible_on_a_tiny_set():
+@pytest.mark.parametrize("label", ["solution", "window"])
+def test_training_is_reproducible_on_a_tiny_set(label):
     torch.set_num_threads(1)
-    config = RigidTrainConfig(scenes_per_family=1, families=("slot", "shelves"), epochs=1, held_out=0.0)
+    config = RigidTrainConfig(scenes_per_family=1, families=("slot", "shelves"), epochs=1, held_out=0.0, label=label)
     net1, log1 = train_rigid_orientation(config)
     net2, log2 = train_rigid_orientation(config)
     assert isinstance(net1, OrientationNet) and log1["examples"] == log2["examples"] > 0
     assert all(torch.equal(a, b) for a, b in zip(net1.state_dict().values(), net2.state_dict().values(), strict=True))
+
+
+def test_solution_labels_are_one_hot_and_name_the_class_the_solution_holds(slot_scene):
+    from learning.references.rigid_expert import solve_reference
+    from learning.training.rigid import collect_rigid_examples
+    from planners.guidance.rigid_orientation import nearest_class, solution_classes
+    from planners.worlds.mesh import rotation_matrices
+
+    ex = collect_rigid_examples(RigidTrainConfig(scenes_per_family=1, families=("slot",), label="solution"))
+    assert len(ex.labels) > 0 and np.array_equal(ex.labels.sum(axis=1), np.ones(len(ex.labels)))
+    # at a state of the solution the label is that state's own class
+    states = solve_reference(slot_scene)[0]
+    assert states is not None
+    y = solution_classes(states[::7], states)
+    assert np.array_equal(y.argmax(axis=1), nearest_class(rotation_matrices(states[::7, 3:]))[0])
 
 
 def test_window_labels_keep_the_classes_that_fit_along_the_whole_window():
@@ -169,7 +185,7 @@ def test_the_training_script_writes_weights_and_recipe_and_the_comparison_takes_
         sys.argv = argv
     assert done.value.code == 0
     meta = json.loads((tmp_path / "run" / "rigid_route.json").read_text())
-    assert meta["recipe"]["families"] == ["slot"] and meta["recipe"]["label"] == "window"
+    assert meta["recipe"]["families"] == ["slot"] and meta["recipe"]["label"] == "solution"
     load_orientation_net(tmp_path / "run" / "rigid_route.pt")
     assert evaluate_rigid.main(["--sampler-params", "[1]", "--out", str(tmp_path / "e")]) == 2
     assert evaluate_rigid.main(["--sampler-params", "{", "--out", str(tmp_path / "e")]) == 2
@@ -189,3 +205,43 @@ def test_the_own_ablation_draws_the_learned_samplers_positions_with_uniform_angl
     assert not np.array_equal(a[:, 3:], b[:, 3:])  # the angles differ: the model's against uniform ones
     with pytest.raises(InputError, match="uniform_share must be 1"):
         RigidRouteSampler(None, uniform_share=0.5)
+
+
+def test_nearest_class_names_the_axis_aligned_rotation_and_solution_labels_follow_the_nearest_state():
+    from planners.guidance.rigid_orientation import nearest_class, small_rotations, solution_classes
+
+    rots = class_rotations()
+    cls, sym = nearest_class(rots.reshape(-1, 3, 3))
+    assert np.array_equal(cls, np.repeat(np.arange(6), 4)) and np.array_equal(sym, np.tile(np.arange(4), 6))
+    turned = small_rotations(np.full((24, 3), 0.2)) @ rots.reshape(-1, 3, 3)
+    assert np.array_equal(nearest_class(turned)[0], cls)
+    # a solution that holds class 2 up to x = 5 and class 4 after: each point takes the class of the nearest state
+    states = np.zeros((11, 6))
+    states[:, 0] = np.arange(11.0)
+    states[:6, 3:] = euler_from_matrices(rots[2, 1])
+    states[6:, 3:] = euler_from_matrices(rots[4, 3])
+    y = solution_classes(np.array([[0.2, 0.0, 0.0], [4.9, 1.0, 0.0], [9.0, -1.0, 2.0]]), states)
+    assert np.array_equal(y.argmax(axis=1), [2, 2, 4]) and np.array_equal(y.sum(axis=1), [1, 1, 1])
+
+
+def test_the_ends_rule_takes_the_class_rotation_nearest_the_nearer_ends_orientation(slot_scene):
+    from planners.guidance.rigid_orientation import nearest_class
+    from planners.worlds.mesh import rotation_matrices
+
+    net = make_sampler("rigid_route").net
+    s = RigidRouteSampler(net, route_fraction=1.0, uniform_share=0.0, angle_noise=0.0, goal_share=0.0,
+                          symmetry="ends").bind(slot_scene)
+    q = s.draw(np.random.default_rng(5), 64, None)
+    R = rotation_matrices(q[:, 3:])
+    cls, sym = nearest_class(R)
+    ends = rotation_matrices(np.stack([slot_scene.start[3:], slot_scene.goal[3:]]))
+    near_goal = (np.linalg.norm(q[:, :3] - slot_scene.goal[:3], axis=1)
+                 < np.linalg.norm(q[:, :3] - slot_scene.start[:3], axis=1))
+    rots = class_rotations()
+    best = np.einsum("nsij,nij->ns", rots[cls], ends[near_goal.astype(int)]).argmax(axis=1)
+    # the sample's end is judged at its route point, not its noisy position: compare where they agree clearly
+    far = np.abs(np.linalg.norm(q[:, :3] - slot_scene.goal[:3], axis=1)
+                 - np.linalg.norm(q[:, :3] - slot_scene.start[:3], axis=1)) > 5.0
+    assert far.sum() > 20 and np.array_equal(sym[far], best[far])
+    with pytest.raises(InputError, match="symmetry"):
+        RigidRouteSampler(net, symmetry="nearest")

@@ -47,7 +47,7 @@ from planners.worlds.mesh import rotation_matrices
 #: The settings ``make_sampler("rigid_route")`` uses: chosen on the tuning scenes
 #: (``scripts/experiments/tune_rigid_learned.py``; the rotation among a class's four by
 #: ``scripts/experiments/rigid_room.py --part tuning``, with the privileged expert's classes; ``docs/rigid-scenes.md``).
-SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2}
+SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends"}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.

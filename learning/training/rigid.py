@@ -13,8 +13,11 @@ the point by ``jitter`` (the sampler's position noise), keeps the motion check's
 orientation the body must already have to pass what comes next, as the witness path holds its turned
 pose from before a passage to after it (where no class fits throughout, the window's mean fit). With
 ``label="point"``, the share of the jittered poses of each class that keep it at the point alone.
-Points where no class fits are left out, and of those where every class fits (open space, most of a
-route) only ``open_keep`` are kept, drawn at random.
+With ``label="solution"``, the class of the orientation a solution takes nearest each point (one-hot,
+``solution_classes``), on the route's points and the solution's own, the solution found by the privileged
+expert's long runs (``learning.references.rigid_expert.solve_reference``) in place of the witness path; a scene
+they do not solve is left out. Points where no class fits are left out, and of those where every class fits
+(open space, most of a route) only ``open_keep`` are kept, drawn at random.
 
 The model learns the label normalised to a distribution (cross-entropy with soft targets). Each
 example is seen under one of the 48 symmetries of the voxel grid per epoch (a permutation of the
@@ -33,6 +36,7 @@ import numpy as np
 import torch
 
 from learning.models.rigid_orientation import OrientationNet
+from learning.references.rigid_expert import solve_reference
 from planners.base.fileio import InputError, check_int, check_number
 from planners.guidance.rigid_orientation import (
     AXIS_PERMUTATIONS,
@@ -41,13 +45,14 @@ from planners.guidance.rigid_orientation import (
     class_validity,
     route_directions,
     route_observation,
+    solution_classes,
 )
 from planners.guidance.workspace_route import voxel_route
 from planners.maps.generators import TRAIN_SEEDS
 from planners.worlds.rigid_scenes import TRAINING_FAMILIES, scene_with_witness
 
 #: The labels a model may learn (``RigidTrainConfig.label``; the module doc).
-LABELS = ("point", "window")
+LABELS = ("point", "window", "solution")
 
 
 def window_labels(points: np.ndarray, fit: np.ndarray, window: float) -> np.ndarray:
@@ -83,7 +88,7 @@ class RigidTrainConfig:
     seed: int = 0
     held_out: float = 0.1
     open_keep: float = 0.25
-    label: str = "window"
+    label: str = "solution"
     window: float = 6.0
 
     def check(self) -> RigidTrainConfig:
@@ -142,12 +147,23 @@ def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], N
             world = problem.world
             route = voxel_route(world, problem.start, problem.goal)
             parts = [] if route is None else [route]
-            parts.append(_densify(witness.path))
+            solution = None
+            if config.label == "solution":  # the expert's long runs (learning.references.rigid_expert)
+                solution = solve_reference(problem)[0]
+                if solution is None:
+                    if progress is not None:
+                        progress(f"{problem.name}: no solution by the long runs, left out")
+                    continue
+                parts.append(_densify(solution))
+            else:
+                parts.append(_densify(witness.path))
             label_rng = np.random.default_rng([config.seed, int(s), len(names)])
             for pts in parts:
                 p, _ = route_observation(world, pts, half=PATCH_HALF)
                 d = route_directions(pts).astype(np.float32)
-                if config.label == "point":
+                if solution is not None:
+                    y = solution_classes(pts, solution)
+                elif config.label == "point":
                     y = class_validity(world, pts, label_rng, config.jitter, config.poses)
                 else:
                     y = window_labels(pts, class_validity(world, pts, label_rng, config.jitter, config.poses, "any"),
