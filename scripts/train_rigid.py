@@ -1,13 +1,15 @@
 """Train the 6-DoF orientation model that ``make_sampler("rigid_route")`` uses, on the rigid-body training scenes.
 
-    python scripts/train_rigid.py                                   # the shipped model's recipe (a few CPU minutes)
+    python scripts/train_rigid.py                                   # the shipped model's recipe (about 7 CPU minutes)
     python scripts/train_rigid.py --export learning/data/rigid_route.pt
     python scripts/train_rigid.py --scenes-per-family 5 --epochs 2 --out runs/rigid-quick
 
 Runs ``learning.training.rigid.train_rigid_orientation``: examples from training scenes only (seeds drawn
 from ``TRAIN_SEEDS`` with ``--seed``; never a validation, tuning or test scene, nor a test-only family),
-the observation at the workspace route's and the witness path's points, the label which orientation
-classes keep the motion check's clearance there. One torch thread: the same seed gives the same weights.
+the observation at the workspace route's points and a solution's (found by the privileged expert's long runs),
+the label the orientation class the solution takes there (``--label solution``, the default; ``window`` and
+``point``: which classes keep the motion check's clearance along the witness path). One torch thread: the same
+seed gives the same weights.
 
 Writes ``<out>/rigid_route.pt`` (tensors and plain numbers, read with ``torch.load(weights_only=True)``)
 and ``<out>/rigid_route.json`` (the recipe, the log, the time); ``--export PATH`` copies the weights to

@@ -7,13 +7,13 @@ workspace route's points (``voxel_route``, what the sampler sees at planning tim
 the scene's witness path (``scene_with_witness``: poses through every passage), one per unit of its
 length. The observation at each is ``route_observation``'s (the same function the sampler calls). The
 label (``class_validity``: a configuration-space query made at training time only) is, with
-``label="window"`` (the default), the classes that fit at every point of the same path within
+``label="window"``, the classes that fit at every point of the same path within
 ``window`` of arc length, a class fitting at a point when any of ``poses`` poses of it, jittered about
 the point by ``jitter`` (the sampler's position noise), keeps the motion check's clearance: the
 orientation the body must already have to pass what comes next, as the witness path holds its turned
 pose from before a passage to after it (where no class fits throughout, the window's mean fit). With
 ``label="point"``, the share of the jittered poses of each class that keep it at the point alone.
-With ``label="solution"``, the class of the orientation a solution takes nearest each point (one-hot,
+With ``label="solution"`` (the default), the class of the orientation a solution takes nearest each point (one-hot,
 ``solution_classes``), on the route's points and the solution's own, the solution found by the privileged
 expert's long runs (``learning.references.rigid_expert.solve_reference``) in place of the witness path; a scene
 they do not solve is left out. Points where no class fits are left out, and of those where every class fits
