@@ -122,7 +122,7 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                              angle_noise=SHIPPED_RIGID_SETTINGS["angle_noise"] if angle_noise is None else angle_noise,
                              goal_share=goal_share, temperature=temperature,
                              centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre,
-                             symmetry=SHIPPED_RIGID_SETTINGS.get("symmetry", "random") if symmetry is None else symmetry)
+                             symmetry=SHIPPED_RIGID_SETTINGS["symmetry"] if symmetry is None else symmetry)
 
 
 def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75, centre: int | None = None) -> Sampler:
