@@ -12,7 +12,8 @@ centred workspace route with uniform angles. Two probes split the room between t
 * ``route positions, expert angles snapped to a class``: the same, turned instead to the axis-aligned orientation
   nearest the solution's (the orientation model's six classes with the box's symmetry): what the model's classes
   could give if it always named the solution's class (with the solution's own rotation among the class's four,
-  or, ``the same, ...``, one at random or the one nearest the nearer end's orientation);
+  or, ``the same, ...``, one at random, the one nearest the nearer end's orientation, or each route point's
+  nearest the previous point's, chained from the nearer end's orientation);
 * ``route positions, the nearer end's axis-aligned rotation``: no solution and no model: every turned sample takes
   the axis-aligned rotation nearest the orientation of the query's end (start or goal) nearer to it.
 
@@ -76,6 +77,30 @@ class EndAngles(SamplerBase):
         return pts
 
 
+def chain_rotations(route: np.ndarray, states: np.ndarray, problem) -> np.ndarray:
+    """Per route point, an axis-aligned rotation of the solution's class there, each the nearest to the one before.
+
+    From the start's orientation forward and from the goal's backward; each point takes the chain from the end
+    nearer along the route (half its arc length). The class at a route point is the nearest solution state's.
+    """
+    near = ((route[:, None, :] - states[None, :, :3]) ** 2).sum(axis=2).argmin(axis=1)
+    cls = nearest_class(rotation_matrices(states[near, 3:]))[0]
+    rots = class_rotations()
+
+    def walk(order, first):
+        out, cur = np.empty((len(route), 3, 3)), first
+        for i in order:
+            cand = rots[cls[i]]
+            cur = cand[np.einsum("sij,ij->s", cand, cur).argmax()]
+            out[i] = cur
+        return out
+
+    ends = rotation_matrices(np.stack([problem.start[3:], problem.goal[3:]]))
+    forward, backward = walk(range(len(route)), ends[0]), walk(range(len(route) - 1, -1, -1), ends[1])
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(route, axis=0), axis=1))])
+    return np.where((arc <= arc[-1] / 2)[:, None, None], forward, backward)
+
+
 class ExpertAngles(SamplerBase):
     """The ablation's positions, turned to the nearest solution state's orientation: what its angles alone give.
 
@@ -92,6 +117,9 @@ class ExpertAngles(SamplerBase):
         self.positions = RigidRouteSampler(None, uniform_share=1.0, centre=SHIPPED_RIGID_SETTINGS["centre"]).bind(
             self.problem)
         self.expert = RigidExpertSampler().bind(self.problem)
+        if self.symmetry == "chain" and self.expert.states is not None:
+            self.route, self.chain = self.positions.route, chain_rotations(self.positions.route, self.expert.states,
+                                                                            self.problem)
 
     def draw(self, rng, n, view):
         pts = self.positions.draw(rng, n, view)
@@ -117,6 +145,9 @@ class ExpertAngles(SamplerBase):
                     near_goal = (((pts[turn, :3] - self.problem.goal[:3]) ** 2).sum(axis=1)
                                  < ((pts[turn, :3] - self.problem.start[:3]) ** 2).sum(axis=1)).astype(np.int64)
                     sym = np.einsum("nsij,nij->ns", rots[cls], ends[near_goal]).argmax(axis=1)
+                elif self.symmetry == "chain":  # nearest the chained rotation at the nearest route point
+                    j = ((pts[turn, None, :3] - self.route[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
+                    sym = np.einsum("nsij,nij->ns", rots[cls], self.chain[j]).argmax(axis=1)
                 target = rots[cls, sym]
             R = small_rotations(self.angle_noise * z) @ target
             pts[turn, 3:] = nearest_cover(euler_from_matrices(R), base)
@@ -144,6 +175,8 @@ def main(argv=None) -> int:
                 "the same, the class's rotation at random": lambda: ExpertAngles(snap=True, symmetry="random"),
                 "the same, the class's rotation nearest the nearer end's": lambda: ExpertAngles(snap=True,
                                                                                                   symmetry="ends"),
+                "the same, the class's rotation chained from the nearer end": lambda: ExpertAngles(snap=True,
+                                                                                                    symmetry="chain"),
                 "route positions, the nearer end's axis-aligned rotation": EndAngles,
                 "rigid_expert": RigidExpertSampler}
     scenes = RigidSceneSet()
