@@ -160,3 +160,25 @@ def map_png_cold(tmp_path):
     path = tmp_path / "floor.png"
     Image.fromarray(img).save(path)
     return path
+
+
+def test_lazy_prm_keeps_its_adjacency_while_the_roadmap_does_not_grow(monkeypatch):
+    # a timed solve of a grown roadmap runs search rounds only: the adjacency is built once for them, and again
+    # once the roadmap grows; the runs are those of a planner that builds it for every search
+    from planners.kernels import prm as prm_kernels
+    from planners.kernels import state as slots
+
+    problem = Problem(walls(60), (2.5, 2.5), (57.5, 57.5), goal_tolerance=2.0)
+    planner = LazyPRM(problem, seed=1)
+    planner.grow(3000)
+    first = planner._adjacency()
+    assert planner._adjacency() is first
+    planner.grow(10)
+    assert planner._adjacency() is not first
+    runs = [LazyPRM(problem, seed=s).solve(max_iterations=4000) for s in range(3)]
+    monkeypatch.setattr(LazyPRM, "_adjacency", lambda self: prm_kernels.build_csr(
+        self._edges, int(self._istate[slots.I_N]), int(self._istate[slots.I_E])))
+    again = [LazyPRM(problem, seed=s).solve(max_iterations=4000) for s in range(3)]
+    assert any(r.solved for r in runs)
+    assert [(r.solved, r.iterations, r.collision_checks, r.cost) for r in runs] == \
+        [(r.solved, r.iterations, r.collision_checks, r.cost) for r in again]

@@ -335,7 +335,7 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, max_rounds):
+def lazy_resolve(store, edges, csr, uf, vstat, istate, fstate, world, space, goal, max_rounds):
     """Lazy-PRM query: search the optimistic roadmap, check the path, drop what fails, repeat.
 
     Every vertex of a candidate path is checked, then every edge between two valid ones, before the next search
@@ -346,6 +346,9 @@ def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, ma
     and MovingAI maps, three samplers) it did not move: the same iterations, successes and path costs, the checks
     within 3%.
 
+    ``csr`` is the roadmap's adjacency (``build_csr`` of its vertices and edges), which the caller keeps while
+    the roadmap does not grow: statuses are read live, so one adjacency serves every search.
+
     Returns the valid path's vertex indices (and marks the planner solved), or an empty array after
     rebuilding the components when start and goal turn out to be disconnected, or an empty array
     after ``max_rounds`` searches (the checks done so far are kept; the next call goes on), so the
@@ -353,7 +356,6 @@ def lazy_resolve(store, edges, uf, vstat, istate, fstate, world, space, goal, ma
     """
     X = store.X
     eu, ev, ew, es = edges
-    csr = build_csr(edges, istate[slots.I_N], istate[slots.I_E])
     rounds = 0
     while True:
         if rounds >= max_rounds:
