@@ -87,6 +87,11 @@ def symmetry(obstacles: np.ndarray, goal_cell: tuple[int, int], k: int) -> tuple
     return np.ascontiguousarray(obs), (int(r), int(c))
 
 
+def batch_of(arrays) -> np.ndarray:
+    """``np.stack(arrays)``, except that a single array becomes a batch of one as a view, without a copy."""
+    return arrays[0][None] if len(arrays) == 1 else np.stack(arrays)
+
+
 def unturn(field: np.ndarray, k: int) -> np.ndarray:
     """A field computed on ``symmetry(..., k)``'s map, turned back onto the original map."""
     return np.rot90(field.T if k >= 4 else field, -(k % 4))
@@ -186,7 +191,7 @@ class FieldEncoder:
                 size = max(1, min(len(group), BATCH_BYTES // (BYTES_PER_BLOCK * blocks)))
                 for at in range(0, len(group), size):
                     part = group[at:at + size]
-                    x = part[0][2][None] if len(part) == 1 else np.stack([x for _, _, x in part])  # no copy for one
+                    x = batch_of([x for _, _, x in part])
                     out = self.infer(torch.from_numpy(x).to(device))[:, :h, :w].cpu().numpy()
                     for (i, k, _), field in zip(part, out, strict=True):
                         # float64 sums, in the order the symmetries come (the first one taken as it is)

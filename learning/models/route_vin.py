@@ -40,7 +40,7 @@ import torch
 from torch import nn
 
 from learning.models.cell_head import cell_head_field, padded_free_cells
-from learning.models.field import FieldEncoder
+from learning.models.field import FieldEncoder, batch_of
 from planners.maps.gridsearch import MOVES, move_cost_field, padded_block_steps
 
 #: The moves' lengths in blocks (``MOVES``: the 8 moves of the block grid, the grid search's own order).
@@ -84,7 +84,7 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
     (``planners.maps.gridsearch.padded_block_steps``), on the CPU whatever the device.
     """
     steps = [padded_block_steps(padded_free_cells(c, block), block) for c in x[:, :block * block].cpu().numpy()]
-    return torch.from_numpy(steps[0][None] if len(steps) == 1 else np.stack(steps)).to(x.device)
+    return torch.from_numpy(batch_of(steps)).to(x.device)
 
 
 class MapParts(NamedTuple):
@@ -377,7 +377,7 @@ class RouteVIN(nn.Module, FieldEncoder):
             v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
                                 most=most)
             out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED))
-        return torch.from_numpy(out[0][None] if len(out) == 1 else np.stack(out))  # no copy for one map
+        return torch.from_numpy(batch_of(out))
 
     def map_key(self, x: torch.Tensor) -> tuple:
         """The key of a map's kept parts: the input's shape, device and cells (not the goal).
