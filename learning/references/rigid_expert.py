@@ -29,6 +29,7 @@ from planners.base.fileio import InputError, check_int, check_number
 from planners.base.problem import Problem
 from planners.base.samplers import SamplerBase
 from planners.guidance.rigid_orientation import euler_from_matrices, small_rotations, wrap_angles
+from planners.guidance.workspace_route import box_muller
 from planners.worlds.mesh import rotation_matrices
 from planners.worlds.rigid3d import RRT_SETUP, densify
 
@@ -133,7 +134,7 @@ class RigidExpertSampler(SamplerBase):
             if m:
                 idx = np.minimum((u[along, 1] * len(self.states)).astype(np.int64), len(self.states) - 1)
                 base = self.states[idx]
-                z = _normals(u[along, 2 + d:2 + d + 8])
+                z = box_muller(u[along, 2 + d:2 + d + 8])
                 pos = base[:, :3] + self.sd * z[:, :3]
                 pts[along, :3] = np.clip(pos, self.low[:3], np.nextafter(self.high[:3], -np.inf))
                 R = small_rotations(self.angle_noise * z[:, 3:6]) @ rotation_matrices(base[:, 3:6])
@@ -157,10 +158,3 @@ def nearest_cover(angles: np.ndarray, near: np.ndarray) -> np.ndarray:
     other = wrap_angles(np.stack([np.pi - angles[:, 0], angles[:, 1] + np.pi, angles[:, 2] + np.pi], axis=1))
     closer = np.abs(wrap_angles(other - near)).sum(axis=1) < np.abs(wrap_angles(angles - near)).sum(axis=1)
     return np.where(closer[:, None], other, angles)
-
-
-def _normals(u: np.ndarray) -> np.ndarray:
-    """``(n, 8)`` standard normals from ``(n, 8)`` uniforms (four Box-Muller pairs)."""
-    r = np.sqrt(-2.0 * np.log(1.0 - u[:, 0:4]))
-    t = 2.0 * np.pi * u[:, 4:8]
-    return np.concatenate([r * np.cos(t), r * np.sin(t)], axis=1)

@@ -41,7 +41,7 @@ from planners.guidance.rigid_orientation import (
     route_observation,
     small_rotations,
 )
-from planners.guidance.workspace_route import centre_route, route_world, voxel_route
+from planners.guidance.workspace_route import box_muller, centre_route, route_world, voxel_route
 from planners.worlds.mesh import rotation_matrices
 
 #: The settings ``make_sampler("rigid_route")`` uses: chosen on the tuning scenes
@@ -131,8 +131,8 @@ class RigidRouteSampler(SamplerBase):
         # a class, a symmetry, two Box-Muller pairs for the rotation noise
         d = self.problem.dim
         u = rng.random((n, 13 + d))
-        pos_z = _normals(u[:, 2 + d:6 + d])
-        cls_u, sym_u, rot_z = u[:, 7 + d], u[:, 8 + d], _normals(u[:, 9 + d:13 + d])
+        pos_z = box_muller(u[:, 2 + d:6 + d])[:, :3]
+        cls_u, sym_u, rot_z = u[:, 7 + d], u[:, 8 + d], box_muller(u[:, 9 + d:13 + d])[:, :3]
         pts = self._uniform(u[:, 2:2 + d])
         if self.arc[-1] > 0:
             on = (u[:, 0] >= self.goal_share) & (u[:, 0] < self.goal_share + (1.0 - self.goal_share)
@@ -165,10 +165,3 @@ class RigidRouteSampler(SamplerBase):
                 f"angle_noise={self.angle_noise:g}, goal_share={self.goal_share:g}, "
                 f"temperature={self.temperature:g}, spread={sd}, cell={cell}, centre={self.centre}, "
                 f"symmetry={self.symmetry!r})")
-
-
-def _normals(u: np.ndarray) -> np.ndarray:
-    """``(n, 3)`` standard normals from ``(n, 4)`` uniforms (two Box-Muller pairs, the fourth value unused)."""
-    r = np.sqrt(-2.0 * np.log(1.0 - u[:, 0:2]))
-    t = 2.0 * np.pi * u[:, 2:4]
-    return np.concatenate([r * np.cos(t), r * np.sin(t)], axis=1)[:, :3]

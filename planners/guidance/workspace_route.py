@@ -32,8 +32,8 @@ from planners.base.fileio import InputError, check_number
 from planners.base.samplers import SamplerBase
 from planners.worlds.rigid3d import DEFAULT_CELL, MAX_VOXELS, free_voxels, inner_radius
 
-__all__ = ["DEFAULT_CELL", "MAX_VOXELS", "WorkspaceRouteSampler", "centre_route", "cost_to_go", "free_voxels",
-           "inner_radius", "route_world", "voxel_route"]
+__all__ = ["DEFAULT_CELL", "MAX_VOXELS", "WorkspaceRouteSampler", "box_muller", "centre_route", "cost_to_go",
+           "free_voxels", "inner_radius", "route_world", "voxel_route"]
 
 
 @nb.njit(cache=True)
@@ -73,6 +73,17 @@ def cost_to_go(free, goal, stop=-1):
                         cost[w] = nc
                         heapq.heappush(heap, (nc, w))
     return cost.reshape(free.shape)
+
+
+def box_muller(u: np.ndarray) -> np.ndarray:
+    """``(n, 2k)`` standard normals from ``(n, 2k)`` uniforms in [0, 1): ``k`` Box-Muller pairs.
+
+    Radii from the first ``k`` columns, angles from the last ``k``; the cosines first, then the sines.
+    """
+    k = u.shape[1] // 2
+    r = np.sqrt(-2.0 * np.log(1.0 - u[:, :k]))
+    t = 2.0 * np.pi * u[:, k:2 * k]
+    return np.concatenate([r * np.cos(t), r * np.sin(t)], axis=1)
 
 
 def _nearest_free(free: np.ndarray, idx: np.ndarray) -> np.ndarray:
@@ -195,9 +206,7 @@ class WorkspaceRouteSampler(SamplerBase):
         # stream identical whatever the batch size
         d = self.problem.dim
         u = rng.random((n, 6 + d))
-        r = np.sqrt(-2.0 * np.log(1.0 - u[:, 2 + d:4 + d]))
-        t = 2.0 * np.pi * u[:, 4 + d:6 + d]
-        z = np.concatenate([r * np.cos(t), r * np.sin(t)], axis=1)[:, :3]
+        z = box_muller(u[:, 2 + d:6 + d])[:, :3]
         pts = self._uniform(u[:, 2:2 + d])
         if self._cum[-1] > 0:
             on = u[:, 0] < self.route_fraction
