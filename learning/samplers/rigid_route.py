@@ -38,6 +38,7 @@ from planners.guidance.rigid_orientation import (
     body_axes,
     class_rotations,
     euler_from_matrices,
+    nearer_end,
     route_observation,
     small_rotations,
 )
@@ -148,10 +149,8 @@ class RigidRouteSampler(SamplerBase):
                 cls = np.minimum((self.cdf[near] < cls_u[learned, None]).sum(axis=1), N_CLASSES - 1)
                 sym = np.minimum((sym_u[learned] * 4).astype(np.int64), 3)
                 if self.symmetry == "ends":  # the rotation nearest the nearer end's orientation (largest trace)
-                    at = self.route[near]
-                    goal_end = (((at - self.problem.goal[:3]) ** 2).sum(axis=1)
-                                < ((at - self.problem.start[:3]) ** 2).sum(axis=1)).astype(np.int64)
-                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], self.ends[goal_end]).argmax(axis=1)
+                    end = nearer_end(self.route[near], self.problem.start, self.problem.goal)
+                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], self.ends[end]).argmax(axis=1)
                 base = self.rotations[cls, sym]
                 turn = small_rotations(self.angle_noise * rot_z[learned])
                 pts[learned, 3:] = euler_from_matrices(turn @ base)

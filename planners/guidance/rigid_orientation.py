@@ -183,6 +183,13 @@ def nearest_class(rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return k // 4, k % 4
 
 
+def nearer_end(points, start, goal) -> np.ndarray:
+    """``(n,)`` int: 1 where a point lies nearer ``goal``'s position than ``start``'s, else 0 (an index into both)."""
+    points = np.asarray(points, dtype=np.float64)[:, :3]
+    return (((points - np.asarray(goal)[:3]) ** 2).sum(axis=1)
+            < ((points - np.asarray(start)[:3]) ** 2).sum(axis=1)).astype(np.int64)
+
+
 def solution_classes(points, states: np.ndarray) -> np.ndarray:
     """``(n, 6)`` one-hot: the class of the solution state nearest each point in position (``nearest_class``).
 

@@ -35,6 +35,7 @@ from planners.base.samplers import SamplerBase
 from planners.guidance.rigid_orientation import (
     class_rotations,
     euler_from_matrices,
+    nearer_end,
     nearest_class,
     small_rotations,
 )
@@ -70,8 +71,7 @@ class EndAngles(SamplerBase):
         u = rng.random((n, 4))
         turn = ~np.all(pts == self.problem.goal, axis=1) & (u[:, 0] >= self.uniform_share)
         if turn.any():
-            near_goal = (((pts[turn, :3] - self.problem.goal[:3]) ** 2).sum(axis=1)
-                         < ((pts[turn, :3] - self.problem.start[:3]) ** 2).sum(axis=1)).astype(np.int64)
+            near_goal = nearer_end(pts[turn], self.problem.start, self.problem.goal)
             z = rng.standard_normal((int(turn.sum()), 3))
             pts[turn, 3:] = euler_from_matrices(small_rotations(self.angle_noise * z) @ self.targets[near_goal])
         return pts
@@ -133,17 +133,14 @@ class ExpertAngles(SamplerBase):
             base = states[d.argmin(axis=1), 3:]
             z = rng.standard_normal((int(turn.sum()), 3))
             target = rotation_matrices(base)
-            if self.snap:  # the nearest of the 24 axis-aligned rotations (largest trace of C^T R)
+            if self.snap:  # the nearest of the 24 axis-aligned rotations
                 rots = class_rotations()
-                axis_aligned = rots.reshape(-1, 3, 3)
-                k = np.einsum("kij,nij->nk", axis_aligned, target).argmax(axis=1)
-                cls, sym = k // 4, k % 4
+                cls, sym = nearest_class(target)
                 if self.symmetry == "random":  # the class's rotation drawn among its four, as the sampler does
-                    sym = rng.integers(4, size=len(k))
+                    sym = rng.integers(4, size=len(cls))
                 elif self.symmetry == "ends":  # the class's rotation nearest the start's or the goal's, the nearer end
                     ends = rotation_matrices(np.stack([self.problem.start[3:], self.problem.goal[3:]]))
-                    near_goal = (((pts[turn, :3] - self.problem.goal[:3]) ** 2).sum(axis=1)
-                                 < ((pts[turn, :3] - self.problem.start[:3]) ** 2).sum(axis=1)).astype(np.int64)
+                    near_goal = nearer_end(pts[turn], self.problem.start, self.problem.goal)
                     sym = np.einsum("nsij,nij->ns", rots[cls], ends[near_goal]).argmax(axis=1)
                 elif self.symmetry == "chain":  # nearest the chained rotation at the nearest route point
                     j = ((pts[turn, None, :3] - self.route[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
