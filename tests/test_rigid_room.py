@@ -41,7 +41,7 @@ def test_snapped_angles_are_axis_aligned_and_every_rule_gives_one_of_the_solutio
         assert np.allclose(np.abs(R).max(axis=1), 1.0), rule  # axis-aligned
         near = ((q[turned, None, :3] - states[None, :, :3]) ** 2).sum(axis=2).argmin(axis=1)
         assert np.array_equal(nearest_class(R)[0], nearest_class(rotation_matrices(states[near, 3:]))[0]), rule
-    route = probe.RigidRouteSampler(None, uniform_share=1.0, centre=2).bind(slot_scene).route
+    route = probe.make_sampler("rigid_route_ablation").bind(slot_scene).route
     chain = probe.chain_rotations(route, states, slot_scene)
     rots = class_rotations().reshape(-1, 3, 3)
     assert chain.shape == (len(route), 3, 3)

@@ -63,7 +63,7 @@ def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000) 
     ``REFERENCE_SEEDS`` in turn until one solves within ``budget`` iterations; the path is shortened
     (``smooth``) and densified to half a step between states.
     """
-    from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
+    from learning.samplers.registry import make_sampler
     from planners import RRTConnect
     from planners.algorithms.smoothing import smooth
 
@@ -72,8 +72,8 @@ def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000) 
     p = problem.with_query(problem.start, problem.goal, metric="cossin")
     t0, ran = time.perf_counter(), 0
     for k, seed in enumerate(REFERENCE_SEEDS[:attempts]):
-        sampler = RigidRouteSampler(None, uniform_share=1.0, centre=SHIPPED_RIGID_SETTINGS["centre"])
-        result = RRTConnect(p, step_size=step, sampler=sampler, seed=seed).solve(max_iterations=budget)
+        result = RRTConnect(p, step_size=step, sampler=make_sampler("rigid_route_ablation"),
+                            seed=seed).solve(max_iterations=budget)
         ran += int(result.iterations)
         if result.solved:
             path = smooth(result.path, p, seed=k)

@@ -30,7 +30,7 @@ import sys
 import numpy as np
 
 from learning.references.rigid_expert import RigidExpertSampler, nearest_cover
-from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
+from learning.samplers.registry import make_sampler
 from planners.base.samplers import SamplerBase
 from planners.guidance.rigid_orientation import (
     class_rotations,
@@ -60,8 +60,7 @@ class EndAngles(SamplerBase):
         self.uniform_share, self.angle_noise = float(uniform_share), float(angle_noise)
 
     def _setup(self) -> None:
-        self.positions = RigidRouteSampler(None, uniform_share=1.0, centre=SHIPPED_RIGID_SETTINGS["centre"]).bind(
-            self.problem)
+        self.positions = make_sampler("rigid_route_ablation").bind(self.problem)
         ends = rotation_matrices(np.stack([self.problem.start[3:], self.problem.goal[3:]]))
         cls, sym = nearest_class(ends)
         self.targets = class_rotations()[cls, sym]
@@ -114,8 +113,7 @@ class ExpertAngles(SamplerBase):
         self.symmetry = symmetry
 
     def _setup(self) -> None:
-        self.positions = RigidRouteSampler(None, uniform_share=1.0, centre=SHIPPED_RIGID_SETTINGS["centre"]).bind(
-            self.problem)
+        self.positions = make_sampler("rigid_route_ablation").bind(self.problem)
         self.expert = RigidExpertSampler().bind(self.problem)
         if self.symmetry == "chain" and self.expert.states is not None:
             self.route, self.chain = self.positions.route, chain_rotations(self.positions.route, self.expert.states,
@@ -164,8 +162,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.scenes < 1 or args.seeds < 1:
         ap.error("--scenes and --seeds must be at least 1")
-    samplers = {"rigid_route_ablation": lambda: RigidRouteSampler(None, uniform_share=1.0,
-                                                                  centre=SHIPPED_RIGID_SETTINGS["centre"]),
+    samplers = {"rigid_route_ablation": lambda: make_sampler("rigid_route_ablation"),
                 "expert positions, uniform angles": ExpertPositions,
                 "route positions, expert angles": ExpertAngles,
                 "route positions, expert angles snapped to a class": lambda: ExpertAngles(snap=True),
