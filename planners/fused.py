@@ -1,4 +1,4 @@
-"""Drawing inside RRT's compiled loop: the one way for a compiled sampler to fuse its draws with the planner.
+"""Drawing inside a planner's compiled loop: the one way for a compiled sampler to fuse its draws with the planner.
 
 A sampler whose draws are a numba function can run them inside RRT's compiled loop, so a solve
 never returns to Python between batches (``Sampler.fuse`` in ``planners.base.samplers``). The
@@ -25,6 +25,13 @@ The loop asks for ``min(batch, refill_size(k))`` samples at its ``k``-th refill,
 schedule, so a fused run draws exactly what the same sampler's ``draw`` method (called by the
 planner with that many) would: fusing changes the speed, never the run. ``growing_floor`` is the
 uniform share a guided sampler keeps, growing while the tree comes no closer to the goal.
+
+RRT-Connect (``fusable_loop = "connect"``) has its own loop, ``connect_loop(budget, draw, state_a, state_b,
+buffers, rng, loop)``, entered the same way (``fuse_connect``). Its trees take turns, and each refill draws for
+the tree whose turn it is, with ``draw``'s contract as above: the start tree as ``draw(state_a, ...)`` with its
+vertices, its vertex nearest the goal and that distance; the goal tree as ``draw(state_b, ...)`` with its
+vertices, 0 and its closest distance to the start. The iteration each sees is its own count of draws
+(the planner's iteration // 2), so a tree-following draw treats each tree as RRT's tree towards the other's root.
 """
 
 from __future__ import annotations
@@ -36,13 +43,13 @@ import numpy as np
 
 from planners.kernels.bitgen import bitgen_address as rng_address
 from planners.kernels.bitgen import next_double
-from planners.kernels.fused import CHUNK, FIRST_REFILL, growing_floor, refill_size, rrt_loop
+from planners.kernels.fused import CHUNK, FIRST_REFILL, connect_loop, growing_floor, refill_size, rrt_loop
 
 if TYPE_CHECKING:
     from planners.base.planner import Planner
 
-__all__ = ["CHUNK", "FIRST_REFILL", "FusedRRT", "fuse_rrt", "growing_floor", "next_double", "refill_size",
-           "rng_address", "rrt_loop"]
+__all__ = ["CHUNK", "FIRST_REFILL", "FusedConnect", "FusedRRT", "connect_loop", "fuse_connect", "fuse_rrt",
+           "growing_floor", "next_double", "refill_size", "rng_address", "rrt_loop"]
 
 
 class FusedRRT:
@@ -67,3 +74,33 @@ def fuse_rrt(planner: Planner, entry: Callable, state: Any, batch: int) -> Fused
     if planner.fusable_loop != "rrt":
         return None
     return FusedRRT(entry, state, int(batch), planner.problem.dim)
+
+
+class FusedConnect:
+    """The callable ``Sampler.fuse`` returns for RRT-Connect: runs ``entry`` on the planner's loop with both states.
+
+    It owns the loop's sample buffer (the larger batch's rows), its counters (position, rows, refills so far, goal
+    tree vertices seen) and the goal tree's closest distance to the start, fresh for each planner (re)start.
+    """
+
+    __slots__ = ("entry", "state_a", "state_b", "buffers")
+
+    def __init__(self, entry: Callable, state_a: Any, state_b: Any, batches: tuple[int, int], dim: int) -> None:
+        self.entry, self.state_a, self.state_b = entry, state_a, state_b
+        rows = max(batches)
+        self.buffers = (np.zeros(4, dtype=np.int64), np.empty((rows, dim)), np.zeros(rows, dtype=np.int8),
+                        np.full(1, np.inf), np.array(batches, dtype=np.int64))
+
+    def __call__(self, planner: Planner, n: int) -> int:
+        return self.entry(n, self.state_a, self.state_b, self.buffers, rng_address(planner.rng), planner.loop_args())
+
+
+def fuse_connect(planner: Planner, entry: Callable, state_a: Any, state_b: Any,
+                 batches: tuple[int, int]) -> FusedConnect | None:
+    """``entry`` (a cached wrapper of ``connect_loop``) as ``planner``'s loop; None if it is not RRT-Connect's.
+
+    ``state_a`` and ``batches[0]`` serve the start tree's draws, ``state_b`` and ``batches[1]`` the goal tree's.
+    """
+    if planner.fusable_loop != "connect":
+        return None
+    return FusedConnect(entry, state_a, state_b, (int(batches[0]), int(batches[1])), planner.problem.dim)

@@ -233,6 +233,48 @@ def test_corridor_samples_lie_in_corridor_cells_without_a_floor(seed, margin):
     assert np.array_equal(again.draw(np.random.default_rng(seed), 64, None), pts)  # seeded: the same samples
 
 
+class UnfusedBidirectional(BidirectionalRouteSampler):
+    """The same rule drawn through ``draw`` once per iteration: what the fused loop must equal."""
+
+    fuse = None
+
+
+@pytest.mark.parametrize("name", ["route", "route_ablation", "exact_route"])
+@pytest.mark.parametrize("family", ["narrow_passage", "bugtrap", "rooms"])
+def test_rrt_connects_fused_loop_plans_the_same_runs_as_draw(name, family):
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate(family, VALIDATION_SEED0 + 3, 96, goal_tolerance=4.0)
+    route = make_sampler(name).at_step(4.0)
+    runs = []
+    for rule in (BidirectionalRouteSampler, UnfusedBidirectional):
+        for seed in (0, 1):
+            planner = make_planner("RRTConnect", p, sampler=rule(route), seed=seed, extension_step=4.0)
+            assert (planner._fused is not None) == (rule is BidirectionalRouteSampler)
+            r = planner.solve(max_iterations=20000)
+            assert r.solved and p.world.path_valid(r.path)
+            runs.append((r.iterations, r.collision_checks, r.candidates, r.num_vertices, r.cost, r.path.tobytes()))
+    assert runs[:2] == runs[2:]
+
+
+def test_rrt_connects_fused_run_in_pieces_is_the_run_in_one_piece():
+    """Single steps, then solves in pieces of odd sizes across the trees' turns and refills: the one-solve run."""
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("bugtrap", VALIDATION_SEED0 + 1, 96, goal_tolerance=4.0)
+    sampler = make_sampler("route_ablation")
+    whole = make_planner("RRTConnect", p, sampler=sampler, seed=3, extension_step=4.0).solve(max_iterations=20000)
+    planner = make_planner("RRTConnect", p, sampler=sampler, seed=3, extension_step=4.0)
+    for _ in range(9):
+        planner.step()
+    for size in (3, 1, 20, 7):
+        planner.solve(max_iterations=size)
+    r = planner.solve(max_iterations=20000)
+    assert whole.solved and whole.iterations > 40
+    assert (r.iterations, r.collision_checks, r.path.tobytes()) == (whole.iterations, whole.collision_checks,
+                                                                     whole.path.tobytes())
+
+
 def test_the_goal_tree_follows_the_field_to_the_start():
     p = wall_problem()
     bound = BidirectionalRouteSampler(make_sampler("exact_route", step_size=2.0)).bind(p)

@@ -583,6 +583,11 @@ class RouteSampler(SamplerBase):
                    view.iteration, rng_address(rng), pts, _NO_ANCHORS)
         return pts
 
+    @property
+    def draw_state(self) -> tuple:
+        """The per-query state ``route_draw`` reads and updates (a bound sampler's): for a loop that fuses it."""
+        return self._state
+
     def fuse(self, planner: Planner) -> FusedRRT | None:
         """RRT's loop with this sampler's draws compiled in (same samples, less time); None for other planners."""
         return fuse_rrt(planner, route_rrt_loop, self._state, self.batch)

@@ -8,7 +8,8 @@ handed to:
 
 - ``BidirectionalRouteSampler`` (RRT-Connect): the start tree follows the field to the goal and the goal tree
   a field to the start (a second pass with start and goal swapped), each by ``RouteSampler``'s rule, uniform
-  floor included; each draw serves the tree whose turn it is (``TreeView.tree``).
+  floor included; each draw serves the tree whose turn it is (``TreeView.tree``). Its draws run inside
+  RRT-Connect's compiled loop (``planners.fused.connect_loop``), as the route sampler's run inside RRT's.
 - ``CorridorSampler`` (PRM, Lazy-PRM, OB-PRM): uniform over the cells whose cost from the start plus cost to
   the goal is within ``margin`` of the lowest, a corridor around the routes the field calls short, with a
   ``floor`` share of uniform samples so the roadmap stays complete; while the roadmap stays unconnected the
@@ -26,10 +27,12 @@ The settings (``CORRIDOR_SETTINGS``, ``CONVERGING_SETTINGS``; the straight-line 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
+import numba as nb
 import numpy as np
 
-from learning.samplers.route import RouteSampler
+from learning.samplers.route import RouteSampler, route_draw
 from planners import InformedSampler, OccupancyGrid, Problem
 from planners.base.fileio import InputError, short_repr
 from planners.base.samplers import (
@@ -40,6 +43,10 @@ from planners.base.samplers import (
     SampleBatch,
     SamplerBase,
 )
+from planners.fused import FusedConnect, connect_loop, fuse_connect
+
+if TYPE_CHECKING:
+    from planners.base.planner import Planner
 
 #: The roadmaps' corridor, chosen on the validation maps (``scripts/experiments/tune_route_rules.py``): cells on
 #: routes within 30% of the shortest the field sees (plus one step), and 30% of the samples uniform; while the
@@ -182,6 +189,12 @@ def cell_points(grid: OccupancyGrid, cells: np.ndarray, u: np.ndarray, low: np.n
     return np.minimum(np.maximum(pts, low), np.nextafter(high, low))
 
 
+@nb.njit(cache=True)
+def route_connect_loop(budget, state_a, state_b, buffers, rng, loop):
+    """RRT-Connect's compiled loop drawing from ``route_draw`` for both trees (``planners.fused``)."""
+    return connect_loop(budget, route_draw, state_a, state_b, buffers, rng, loop)
+
+
 class BidirectionalRouteSampler(SamplerBase):
     """RRT-Connect's rule: each tree follows the field to the other end (see the module docstring).
 
@@ -224,6 +237,11 @@ class BidirectionalRouteSampler(SamplerBase):
             return self.to_start.draw_tree(rng, n, X, m, self._closest, view.iteration // 2)
         return self.to_goal.draw_tree(rng, n, view.vertices, view.num_vertices, view.best_distance,
                                       view.iteration // 2)
+
+    def fuse(self, planner: Planner) -> FusedConnect | None:
+        """RRT-Connect's loop with both trees' draws compiled in (the same samples as ``draw``, less time)."""
+        return fuse_connect(planner, route_connect_loop, self.to_goal.draw_state, self.to_start.draw_state,
+                            (self.to_goal.batch, self.to_start.batch))
 
     def __repr__(self) -> str:
         return f"BidirectionalRouteSampler({self.route!r})"

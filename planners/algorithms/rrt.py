@@ -150,7 +150,7 @@ class RRTConnect(RRT):
     """
 
     name = "RRTConnect"
-    fusable_loop = None
+    fusable_loop = "connect"
     family = FAMILY_BIDIRECTIONAL
 
     def view(self) -> TreeView:
@@ -178,6 +178,12 @@ class RRTConnect(RRT):
     def _reserve(self, iterations: int) -> None:
         self._tree.reserve(int(self._istate[slots.I_N]), self._max_connect + 1)
         self._gtree.reserve(int(self._istate[slots.I_N_B]), self._max_connect + 1)
+
+    def loop_args(self) -> tuple:
+        """Arguments of ``connect_run`` (``planners.kernels.rrt``) after the samples and their anchor codes."""
+        return (self._tree.as_tree(), self._gtree.as_tree(), self._istate, self._fstate, self._last,
+                self.problem.world.kernel, self._space, self._goal, self.step_size, self._low, self._high,
+                self._max_connect, self._stack, self._stack_b, self._scratch)
 
     def _run(self, points, anchored) -> int:
         return rrt_kernels.connect_run(points, anchored, self._tree.as_tree(), self._gtree.as_tree(), self._istate,

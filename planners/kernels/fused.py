@@ -1,11 +1,11 @@
-"""RRT's loop with a sampler's compiled draws inside it, the refill schedule and the growing uniform floor.
+"""RRT's and RRT-Connect's loops with a sampler's compiled draws inside, the refill schedule, the uniform floor.
 
 Internal: ``planners.fused`` is the public way in (it documents the draw function's contract).
-``rrt_loop`` takes the sampler's ``draw`` as an argument, so numba compiles one loop per draw
+``rrt_loop`` (and ``connect_loop``) takes the sampler's ``draw`` as an argument, so numba compiles one loop per draw
 function with the draw called directly, as if the loop had been written for it. A loop specialised
 on a function argument cannot be cached on its own, so the sampler wraps it in a small cached entry
 in its own module (``planners.fused`` shows how): that entry's cache then holds the whole loop, and
-an edit to the sampler's file recompiles it. ``rrt_loop`` is inlined into that entry (numba's
+an edit to the sampler's file recompiles it. Each loop is inlined into that entry (numba's
 ``inline="always"``): a call that passed the draw function across a call boundary would carry the
 function object's address in the machine code, which numba cannot cache.
 """
@@ -15,16 +15,16 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from planners.kernels.rrt import rrt_iterate
-from planners.kernels.state import F_BEST_D, I_BEST_V, I_ITER, I_N, I_SOLVED
+from planners.kernels.rrt import connect_run, rrt_iterate
+from planners.kernels.state import F_BEST_D, I_BEST_V, I_ITER, I_N, I_N_B, I_SOLVED, I_SWAP
 
 #: Samples handed to a compiled kernel per call; bounds how late a time limit is noticed.
 CHUNK = 1024
 #: Size of the first sample refill; refills double up to CHUNK, so short solves draw few samples.
 FIRST_REFILL = 64
 
-# slots of the fused loop's buffer counters (``FusedRRT.counters``)
-B_POS, B_COUNT, B_REFILLS = range(3)
+# slots of the fused loop's buffer counters (``FusedRRT.counters``; ``FusedConnect`` adds the goal tree's vertices seen)
+B_POS, B_COUNT, B_REFILLS, B_SEEN_B = range(4)
 
 
 def refill_size(refills: int) -> int:
@@ -79,5 +79,55 @@ def rrt_loop(budget, draw, state, buffers, rng, loop):
         p = counters[B_POS]
         rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb, q,
                     qe_buf, new)
+        counters[B_POS] = p + 1
+    return budget
+
+
+@nb.njit(inline="always")
+def connect_loop(budget, draw, state_a, state_b, buffers, rng, loop):
+    """Up to ``budget`` RRT-Connect iterations with samples from ``draw``, never leaving compiled code.
+
+    ``buffers`` is (counters, points, anchor codes, the goal tree's closest distance to the start (1,), the two
+    trees' batch sizes (2,)) (``planners.fused.FusedConnect``); ``loop`` is the planner's ``loop_args()``. When the
+    buffer runs dry the loop draws ``min(batch, refill_size(refills))`` samples for the tree whose turn it is: the
+    start tree as ``draw(state_a, ...)`` sees it, the goal tree as ``draw(state_b, ...)`` (its vertices, its closest
+    distance to the start, tracked here over the vertices added since its last draw), each with its own count of
+    draws (``iteration // 2``), so the run matches a planner calling a bidirectional sampler's ``draw``.
+    """
+    counters, pts, anch, closest_b, batches = buffers
+    ta, tb, istate, fstate, last, world, space, goal, step, low, high, max_connect, st, sb, scratch = loop
+    start = ta.X[0].copy()  # the start tree's root: the start state
+    for s in range(budget):
+        Xa, Xb = ta.X, tb.X
+        if istate[I_SOLVED] or istate[I_N] + max_connect >= Xa.shape[0] or istate[I_N_B] + max_connect >= Xb.shape[0]:
+            return s
+        if counters[B_POS] >= counters[B_COUNT]:
+            goal_turn = istate[I_SWAP] == 1
+            m = min(batches[1] if goal_turn else batches[0], refill_size_compiled(counters[B_REFILLS]))
+            if goal_turn:
+                nb_ = istate[I_N_B]
+                if nb_ > counters[B_SEEN_B]:
+                    d = np.inf
+                    for v in range(counters[B_SEEN_B], nb_):
+                        acc = 0.0
+                        for j in range(Xb.shape[1]):
+                            acc += (Xb[v, j] - start[j]) ** 2
+                        dv = np.sqrt(acc)
+                        if dv < d:
+                            d = dv
+                    if d < closest_b[0]:
+                        closest_b[0] = d
+                    counters[B_SEEN_B] = nb_
+                draw(state_b, Xb, nb_, 0, closest_b[0], istate[I_ITER] // 2, rng, pts[:m], anch[:m])
+            else:
+                draw(state_a, Xa, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER] // 2, rng, pts[:m],
+                     anch[:m])
+            counters[B_REFILLS] += 1
+            counters[B_COUNT] = m
+            counters[B_POS] = 0
+        p = counters[B_POS]
+        if connect_run(pts[p:p + 1], anch[p:p + 1], ta, tb, istate, fstate, last, world, space, goal, step, low, high,
+                       max_connect, st, sb, scratch) == 0:
+            return s
         counters[B_POS] = p + 1
     return budget
