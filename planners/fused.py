@@ -32,6 +32,11 @@ the tree whose turn it is, with ``draw``'s contract as above: the start tree as 
 vertices, its vertex nearest the goal and that distance; the goal tree as ``draw(state_b, ...)`` with its
 vertices, 0 and its closest distance to the start. The iteration each sees is its own count of draws
 (the planner's iteration // 2), so a tree-following draw treats each tree as RRT's tree towards the other's root.
+
+RRT* (``fusable_loop = "rrtstar"``) runs a sampler's draws in its loop, ``rrtstar_loop``, up to its first solution
+(``fuse_rrtstar``): at the first refill after it, the loop hands the draws back (``HAND_BACK``) and the planner
+calls the sampler's ``draw`` from then on, its refill count carried over (``FusedRRT.refills``). So a sampler whose
+rule changes once a solution exists (the route field's converging rule) fuses the part before it.
 """
 
 from __future__ import annotations
@@ -43,13 +48,24 @@ import numpy as np
 
 from planners.kernels.bitgen import bitgen_address as rng_address
 from planners.kernels.bitgen import next_double
-from planners.kernels.fused import CHUNK, FIRST_REFILL, connect_loop, growing_floor, refill_size, rrt_loop
+from planners.kernels.fused import (
+    B_REFILLS,
+    CHUNK,
+    FIRST_REFILL,
+    HAND_BACK,
+    connect_loop,
+    growing_floor,
+    refill_size,
+    rrt_loop,
+    rrtstar_loop,
+)
 
 if TYPE_CHECKING:
     from planners.base.planner import Planner
 
-__all__ = ["CHUNK", "FIRST_REFILL", "FusedConnect", "FusedRRT", "connect_loop", "fuse_connect", "fuse_rrt",
-           "growing_floor", "next_double", "refill_size", "rng_address", "rrt_loop"]
+__all__ = ["CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT", "connect_loop", "fuse_connect",
+           "fuse_rrt", "fuse_rrtstar", "growing_floor", "next_double", "refill_size", "rng_address", "rrt_loop",
+           "rrtstar_loop"]
 
 
 class FusedRRT:
@@ -67,6 +83,11 @@ class FusedRRT:
 
     def __call__(self, planner: Planner, n: int) -> int:
         return self.entry(n, self.state, self.buffers, rng_address(planner.rng), planner.loop_args())
+
+    @property
+    def refills(self) -> int:
+        """Refills drawn so far: where the planner's own schedule goes on after the loop hands back."""
+        return int(self.buffers[0][B_REFILLS])
 
 
 def fuse_rrt(planner: Planner, entry: Callable, state: Any, batch: int) -> FusedRRT | None:
@@ -104,3 +125,10 @@ def fuse_connect(planner: Planner, entry: Callable, state_a: Any, state_b: Any,
     if planner.fusable_loop != "connect":
         return None
     return FusedConnect(entry, state_a, state_b, (int(batches[0]), int(batches[1])), planner.problem.dim)
+
+
+def fuse_rrtstar(planner: Planner, entry: Callable, state: Any, batch: int) -> FusedRRT | None:
+    """``entry`` (a wrapper of ``rrtstar_loop``) as ``planner``'s loop to its first solution; None if not RRT*'s."""
+    if planner.fusable_loop != "rrtstar":
+        return None
+    return FusedRRT(entry, state, int(batch), planner.problem.dim)

@@ -334,13 +334,13 @@ def test_fused_sampler_hook(open_problem):
     while not stepped.solved:
         stepped.step()
     assert stepped.iterations == r.iterations and np.array_equal(stepped.result().path, r.path)
-    # planners without a fusable loop never ask (RRT* and PRM draw as usual); RRT-Connect asks for its own loop,
-    # and a sampler that fuses RRT's only draws as usual there
+    # planners without a fusable loop never ask (PRM draws as usual); RRT-Connect and RRT* ask for their own
+    # loops, and a sampler that fuses RRT's only draws as usual there
     FusedUniform.calls = 0
     for cls in (RRTConnect, RRTStar, PRM):
         planner = cls(open_problem, sampler=FusedUniform(), seed=0)
         assert planner._fused is None and planner.solve(max_iterations=5000).solved
-    assert FusedUniform.calls == 1 and RRTConnect.fusable_loop == "connect"
+    assert FusedUniform.calls == 2 and (RRTConnect.fusable_loop, RRTStar.fusable_loop) == ("connect", "rrtstar")
 
 
 class BadSampler(SamplerBase):

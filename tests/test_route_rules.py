@@ -257,6 +257,35 @@ def test_rrt_connects_fused_loop_plans_the_same_runs_as_draw(name, family):
     assert runs[:2] == runs[2:]
 
 
+class UnfusedConverging(ConvergingRouteSampler):
+    """RRT*'s rule drawn through ``draw`` once per iteration up to the first solution."""
+
+    fuse = None
+
+
+@pytest.mark.parametrize("name", ["route", "route_ablation"])
+@pytest.mark.parametrize("planner", ["RRTstar", "InformedRRTstar"])
+def test_rrtstars_loop_fused_to_its_first_solution_then_handed_back_plans_the_same_runs(name, planner):
+    """Stopped at the first solution, and anytime past it (the loop hands the draws back to ``draw``)."""
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("rooms", VALIDATION_SEED0 + 2, 96, goal_tolerance=4.0)
+    route = make_sampler(name).at_step(4.0)
+    runs = []
+    for rule in (ConvergingRouteSampler, UnfusedConverging):
+        budget = 20000
+        for first in (True, False):
+            solver = make_planner(planner, p, sampler=rule(route), seed=1, extension_step=4.0,
+                                  stop_on_first_solution=first)
+            assert (solver._fused is not None) == (rule is ConvergingRouteSampler)
+            r = solver.solve(max_iterations=budget)
+            assert r.solved and (first or r.iterations == budget > r.first_solution_iteration)
+            assert (solver._fused is None) == (not first or rule is UnfusedConverging)  # handed back past it
+            runs.append((r.iterations, r.collision_checks, r.candidates, r.num_vertices, r.cost, r.path.tobytes()))
+            budget = r.iterations + 200  # anytime: 200 iterations past the first solution
+    assert runs[:2] == runs[2:]
+
+
 def test_rrt_connects_fused_run_in_pieces_is_the_run_in_one_piece():
     """Single steps, then solves in pieces of odd sizes across the trees' turns and refills: the one-solve run."""
     from planners.maps.generators import VALIDATION_SEED0, generate
@@ -302,11 +331,11 @@ def test_after_a_solution_rrtstars_corridor_widens_by_stage_inside_the_informed_
     to_start = distance_field(p.world.obstacles, p.world.cell_of(p.start)).ravel()
     off = np.setdiff1d(np.flatnonzero(np.isfinite(to_start)), exact.cells[:exact.counts[0]])
     bound = ConvergingRouteSampler(DippedExact(off[np.argmin(to_start[off])]), 0.0, 0.0, 1.0).bind(p)
-    assert len(bound.counts) > 2
     cost = 60.0  # an informed set that leaves some corridor cells out
     view = TreeView(p, np.array([p.start]), np.array([-1]), 1, 0, 1.0, cost, 100)
     rng = np.random.default_rng(5)
     pts = np.concatenate([bound.draw(rng, 64, view).points for _ in range(40)])
+    assert len(bound.counts) > 2
     stage = np.searchsorted(bound.starts, np.arange(len(pts)), side="right") - 1
     cells = np.floor(pts[:, 1]).astype(int) * 32 + np.floor(pts[:, 0]).astype(int)
     rows, cols = np.divmod(bound.cells, 32)
@@ -389,6 +418,23 @@ def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run():
     assert cache.misses == 2 and cache.hits == 2  # a field to the goal and one to the start, computed once
     assert runs[0].sampler.reused_seconds == 0 and runs[1].sampler.reused_seconds > 0
     assert np.array_equal(runs[0].sampler.cells, runs[1].sampler.cells) and runs[1].sampler.forward_passes == 2
+
+
+def test_rrtstar_pays_the_field_to_the_start_only_once_it_has_a_solution():
+    from learning.samplers.route import FieldCache, shipped_sampler
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("forest", VALIDATION_SEED0 + 1, 64, goal_tolerance=4.0)
+    cache = FieldCache()
+    route = shipped_sampler(device="cpu")
+    route.fields = cache
+    first = make_planner("RRTstar", p, sampler=route, seed=0, stop_on_first_solution=True, step_size=4.0)
+    r = first.solve(max_iterations=5000)
+    assert r.solved and cache.misses == 1 and first.sampler.forward_passes == 1 and not first.sampler.built
+    anytime = make_planner("RRTstar", p, sampler=route, seed=0, step_size=4.0)
+    more = anytime.solve(max_iterations=r.iterations + 50)
+    assert (more.first_solution_iteration, anytime.sampler.built) == (r.iterations, True)
+    assert cache.misses == 2 and anytime.sampler.forward_passes == 2 and anytime.sampler.reused_seconds > 0
 
 
 def test_the_every_planner_script_prints_each_planners_rows_and_refuses_bad_counts(capsys):

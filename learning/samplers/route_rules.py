@@ -17,7 +17,9 @@ handed to:
   (``corridor_stages``), out to every cell the field reaches.
 - ``ConvergingRouteSampler`` (RRT*, Informed RRT*): ``RouteSampler``'s rule to the first solution, then the
   corridor cells inside the informed set (the states that could lie on a shorter path), widening in the same
-  stages, with a ``floor`` share from the informed set itself (``InformedSampler``).
+  stages, with a ``floor`` share from the informed set itself (``InformedSampler``). The field to the start is
+  computed at the first draw after the first solution, so a run that stops there pays one field; the draws up
+  to it run inside RRT*'s compiled loop (``planners.fused.rrtstar_loop``).
 
 The settings (``CORRIDOR_SETTINGS``, ``CONVERGING_SETTINGS``; the straight-line ablation's own,
 ``ABLATION_CORRIDOR``, ``ABLATION_CONVERGING``) were chosen on validation maps
@@ -43,7 +45,7 @@ from planners.base.samplers import (
     SampleBatch,
     SamplerBase,
 )
-from planners.fused import FusedConnect, connect_loop, fuse_connect
+from planners.fused import FusedConnect, FusedRRT, connect_loop, fuse_connect, fuse_rrtstar, rrtstar_loop
 
 if TYPE_CHECKING:
     from planners.base.planner import Planner
@@ -195,6 +197,12 @@ def route_connect_loop(budget, state_a, state_b, buffers, rng, loop):
     return connect_loop(budget, route_draw, state_a, state_b, buffers, rng, loop)
 
 
+@nb.njit(cache=True)
+def route_rrtstar_loop(budget, state, buffers, rng, loop):
+    """RRT*'s compiled loop drawing from ``route_draw`` up to its first solution (``planners.fused``)."""
+    return rrtstar_loop(budget, route_draw, state, buffers, rng, loop)
+
+
 class BidirectionalRouteSampler(SamplerBase):
     """RRT-Connect's rule: each tree follows the field to the other end (see the module docstring).
 
@@ -337,12 +345,22 @@ class ConvergingRouteSampler(_CorridorRule):
         super().__init__(route, margin, floor, fill)
 
     def _setup(self) -> None:
+        self.first = self.route.bind(self.problem)  # refuses a world that is not an OccupancyGrid
+        #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
+        self.reused_seconds = self.first.reused_seconds
+        self.built = False  # the corridor: built at the first draw after the first solution (``build_corridor``)
+
+    def build_corridor(self) -> None:
+        """The field to the start, the corridor's stages and the informed set: once, at the first draw after a solution.
+
+        A run that stops at its first solution never pays the second field.
+        """
+        if self.built:
+            return
         p = self.problem
-        self.first = self.route.bind(p)  # refuses a world that is not an OccupancyGrid
         to_start = self.route.cost_to_go(reversed_query(p))
         self._stages(self.first.field, to_start.field)
-        #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
-        self.reused_seconds = self.first.reused_seconds + (to_start.seconds if to_start.reused else 0.0)
+        self.reused_seconds += to_start.seconds if to_start.reused else 0.0
         self.informed = InformedSampler().bind(p)
         grid = p.world
         rows, cols = np.divmod(self.cells, grid.width)
@@ -352,15 +370,25 @@ class ConvergingRouteSampler(_CorridorRule):
                          - math.sqrt(2.0) * grid.resolution)
         self._cost, self._inside, self._held = math.inf, self.cells, self.counts
         self.drawn = 0  # draws since the first solution
+        self.built = True
 
     @property
     def forward_passes(self) -> int:
-        """The encoder's passes this query took (two fields)."""
-        return self.first.forward_passes + (0 if self.route.net is None else self.route.symmetry_passes)
+        """The encoder's passes this query took (the field to the goal; the field to the start once built)."""
+        return self.first.forward_passes + (0 if self.route.net is None or not self.built
+                                            else self.route.symmetry_passes)
+
+    def fuse(self, planner: Planner) -> FusedRRT | None:
+        """RRT*'s loop with the route rule's draws compiled in up to the first solution (the same samples as ``draw``).
+
+        The corridor after it draws through ``draw``.
+        """
+        return fuse_rrtstar(planner, route_rrtstar_loop, self.first.draw_state, self.first.batch)
 
     def draw(self, rng, n, view):
         if not math.isfinite(view.best_cost):
             return self.first.draw(rng, n, view)
+        self.build_corridor()
         c = view.best_cost + self.problem.goal_tolerance
         if c < self._cost:  # the informed set shrank: keep the corridor cells still in it, stage by stage
             inside = self._through <= c

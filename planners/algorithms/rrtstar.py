@@ -47,7 +47,7 @@ class RRTStar(RRT):
     name = "RRTstar"
     anytime = True  # per instance: False with stop_on_first_solution
     family = FAMILY_OPTIMIZING
-    fusable_loop = None
+    fusable_loop = "rrtstar"  # up to the first solution (planners.fused)
 
     def __init__(self, problem: Problem, *, step_size: float | None = None, sampler: Sampler | None = None,
                  seed: int | None = None, rewire_factor: float = 1.1, stop_on_first_solution: bool = False) -> None:
@@ -103,6 +103,14 @@ class RRTStar(RRT):
                               self.problem.goal_tolerance, self._low, self._high, self.gamma,
                               float(self.problem.dim), self._nbr, self._nbr_cost, self._nbr_ok, self._dfs,
                               self._stack, self._stack_b)
+
+    def loop_args(self) -> tuple:
+        """Arguments of ``rrtstar_run`` (``planners.kernels.rrtstar``) after the samples and their anchor codes."""
+        aux = (self._elen, self._first_child, self._next_sib, self._prev_sib, self._goal_nodes)
+        return (self._tree.as_tree(), aux, self._istate, self._fstate, self._last, self.problem.world.kernel,
+                self._space, self._goal, self.step_size, self.problem.goal_tolerance, self._low, self._high, self.gamma,
+                float(self.problem.dim), self._nbr, self._nbr_cost, self._nbr_ok, self._dfs, self._stack,
+                self._stack_b)
 
     def edge_lengths(self) -> np.ndarray:
         """(n,) length of each vertex's parent edge (0 for the root), read-only copy."""

@@ -17,7 +17,7 @@ from planners.base.samplers import FAMILY_TREE, SampleBatch, Sampler, UniformSam
 from planners.datastructures.nn import insert as index_insert
 from planners.kernels import state as slots
 from planners.kernels.cache import announce as announce_compile
-from planners.kernels.fused import CHUNK, refill_size  # the batch and refill schedule (planners.fused)
+from planners.kernels.fused import CHUNK, HAND_BACK, refill_size  # the batch and refill schedule (planners.fused)
 from planners.kernels.space import embed, embed_dim, uses_kd
 from planners.kernels.state import Tree
 
@@ -552,8 +552,11 @@ class Planner(abc.ABC):
         if self._fused is not None:
             self._reserve(n)
             used = self._fused(self, n)
-            self._candidates += used
-            return used
+            if used != HAND_BACK:
+                self._candidates += used
+                return used
+            # a loop fused up to the first solution hands the draws back (planners.fused): through draw from here
+            self._refills, self._fused = self._fused.refills, None
         # refill sizes follow a fixed schedule: when refills happen (and what a tree-dependent
         # sampler sees) must not depend on how the caller splits its budget, so that
         # step() x N == solve(N) == solve in pieces

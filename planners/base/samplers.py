@@ -15,11 +15,12 @@ calls ``draw(rng, n, view)`` whenever it needs samples:
   discard candidates).
 
 A sampler whose draws are compiled may also define ``fuse(planner)``. A planner whose class names a
-``fusable_loop`` (RRT's is ``"rrt"``, RRT-Connect's ``"connect"``) calls it once per (re)start; it returns None,
-or a callable ``run(planner, n) -> used`` that runs up to ``n`` iterations with the sampler's draws inside the
-compiled loop, so a solve never returns to Python between batches. ``planners.fused`` is the way to
-build one: the sampler gives a compiled draw function and ``planners.fused.fuse_rrt`` (``fuse_connect``) returns
-the ``run``, with the planner's refill schedule and generator stream kept. The planner is passed at each call
+``fusable_loop`` (RRT's is ``"rrt"``, RRT-Connect's ``"connect"``, RRT*'s ``"rrtstar"``, up to its first solution)
+calls it once per (re)start; it returns None, or a callable ``run(planner, n) -> used`` that runs up to ``n``
+iterations with the sampler's draws inside the compiled loop, so a solve never returns to Python between batches.
+``planners.fused`` is the way to build one: the sampler gives a compiled draw function and
+``planners.fused.fuse_rrt`` (``fuse_connect``, ``fuse_rrtstar``) returns the ``run``, with the planner's refill
+schedule and generator stream kept. The planner is passed at each call
 rather than held by ``run``, so a planner and its loop form no reference cycle and are freed as soon as they go
 out of scope. A fused loop must draw exactly what ``draw`` would: it changes the speed, never the run.
 

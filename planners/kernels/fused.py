@@ -1,9 +1,9 @@
-"""RRT's and RRT-Connect's loops with a sampler's compiled draws inside, the refill schedule, the uniform floor.
+"""RRT's, RRT-Connect's and RRT*'s loops with a sampler's compiled draws inside, the refill schedule, the floor.
 
 Internal: ``planners.fused`` is the public way in (it documents the draw function's contract).
-``rrt_loop`` (and ``connect_loop``) takes the sampler's ``draw`` as an argument, so numba compiles one loop per draw
-function with the draw called directly, as if the loop had been written for it. A loop specialised
-on a function argument cannot be cached on its own, so the sampler wraps it in a small cached entry
+Each loop (``rrt_loop``, ``connect_loop``, ``rrtstar_loop``) takes the sampler's ``draw`` as an argument, so numba
+compiles one loop per draw function with the draw called directly, as if the loop had been written for it. A
+loop specialised on a function argument cannot be cached on its own, so the sampler wraps it in a small cached entry
 in its own module (``planners.fused`` shows how): that entry's cache then holds the whole loop, and
 an edit to the sampler's file recompiles it. Each loop is inlined into that entry (numba's
 ``inline="always"``): a call that passed the draw function across a call boundary would carry the
@@ -16,6 +16,7 @@ import numba as nb
 import numpy as np
 
 from planners.kernels.rrt import connect_run, rrt_iterate
+from planners.kernels.rrtstar import rrtstar_run
 from planners.kernels.state import F_BEST_D, I_BEST_V, I_ITER, I_N, I_N_B, I_SOLVED, I_SWAP
 
 #: Samples handed to a compiled kernel per call; bounds how late a time limit is noticed.
@@ -128,6 +129,42 @@ def connect_loop(budget, draw, state_a, state_b, buffers, rng, loop):
         p = counters[B_POS]
         if connect_run(pts[p:p + 1], anch[p:p + 1], ta, tb, istate, fstate, last, world, space, goal, step, low, high,
                        max_connect, st, sb, scratch) == 0:
+            return s
+        counters[B_POS] = p + 1
+    return budget
+
+
+#: What ``rrtstar_loop`` returns when it hands the draws back to the planner (``planners.fused``).
+HAND_BACK = -1
+
+
+@nb.njit(inline="always")
+def rrtstar_loop(budget, draw, state, buffers, rng, loop):
+    """Up to ``budget`` RRT* iterations with samples from ``draw`` until the first solution, in compiled code.
+
+    As ``rrt_loop``, with RRT*'s iteration (``rrtstar_run``; ``loop`` is the planner's ``loop_args()``). Once the
+    planner has a solution, the loop draws no more: at the first refill after it, it returns the iterations it ran,
+    or ``HAND_BACK`` where it ran none, and the planner draws through the sampler's ``draw`` from then on.
+    """
+    counters, pts, anch = buffers
+    tree, aux, istate, fstate, last, world, space, goal, step, tol, low, high, gamma, dim, nbr, nbr_cost, nbr_ok, \
+        dfs, st, sb = loop
+    X = tree.X
+    batch = pts.shape[0]
+    for s in range(budget):
+        if istate[I_N] >= X.shape[0]:
+            return s
+        if counters[B_POS] >= counters[B_COUNT]:
+            if istate[I_SOLVED]:
+                return s if s > 0 else HAND_BACK
+            m = min(batch, refill_size_compiled(counters[B_REFILLS]))
+            draw(state, X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], rng, pts[:m], anch[:m])
+            counters[B_REFILLS] += 1
+            counters[B_COUNT] = m
+            counters[B_POS] = 0
+        p = counters[B_POS]
+        if rrtstar_run(pts[p:p + 1], anch[p:p + 1], tree, aux, istate, fstate, last, world, space, goal, step, tol,
+                       low, high, gamma, dim, nbr, nbr_cost, nbr_ok, dfs, st, sb) == 0:
             return s
         counters[B_POS] = p + 1
     return budget
