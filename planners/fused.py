@@ -69,7 +69,7 @@ __all__ = ["CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT", "co
 
 
 class FusedRRT:
-    """The callable ``Sampler.fuse`` returns for RRT: runs ``entry`` on the planner's loop with ``state``.
+    """The callable ``Sampler.fuse`` returns for RRT (and RRT* to its first solution): runs ``entry`` with ``state``.
 
     It owns the loop's sample buffer (``batch`` rows of ``dim``) and its counters (position, rows,
     refills so far), fresh for each planner (re)start, as the planner's own buffer is.

@@ -53,6 +53,16 @@ def growing_floor(floor0, max_floor, patience, stalled):
 
 
 @nb.njit(inline="always")
+def refill(draw, state, X, n, best_vertex, best_distance, iteration, rng, counters, pts, anch, batch):
+    """The next ``min(batch, refill_size(refills))`` samples from ``draw`` into the buffer, its counters reset."""
+    m = min(batch, refill_size_compiled(counters[B_REFILLS]))
+    draw(state, X, n, best_vertex, best_distance, iteration, rng, pts[:m], anch[:m])
+    counters[B_REFILLS] += 1
+    counters[B_COUNT] = m
+    counters[B_POS] = 0
+
+
+@nb.njit(inline="always")
 def rrt_loop(budget, draw, state, buffers, rng, loop):
     """Up to ``budget`` RRT iterations with samples from ``draw``, never leaving compiled code.
 
@@ -72,11 +82,8 @@ def rrt_loop(budget, draw, state, buffers, rng, loop):
         if istate[I_SOLVED] or istate[I_N] >= X.shape[0]:
             return s
         if counters[B_POS] >= counters[B_COUNT]:
-            m = min(batch, refill_size_compiled(counters[B_REFILLS]))
-            draw(state, X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], rng, pts[:m], anch[:m])
-            counters[B_REFILLS] += 1
-            counters[B_COUNT] = m
-            counters[B_POS] = 0
+            refill(draw, state, X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], rng, counters, pts,
+                   anch, batch)
         p = counters[B_POS]
         rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb, q,
                     qe_buf, new)
@@ -103,9 +110,7 @@ def connect_loop(budget, draw, state_a, state_b, buffers, rng, loop):
         if istate[I_SOLVED] or istate[I_N] + max_connect >= Xa.shape[0] or istate[I_N_B] + max_connect >= Xb.shape[0]:
             return s
         if counters[B_POS] >= counters[B_COUNT]:
-            goal_turn = istate[I_SWAP] == 1
-            m = min(batches[1] if goal_turn else batches[0], refill_size_compiled(counters[B_REFILLS]))
-            if goal_turn:
+            if istate[I_SWAP] == 1:  # the goal tree's turn
                 nb_ = istate[I_N_B]
                 if nb_ > counters[B_SEEN_B]:
                     d = np.inf
@@ -119,13 +124,11 @@ def connect_loop(budget, draw, state_a, state_b, buffers, rng, loop):
                     if d < closest_b[0]:
                         closest_b[0] = d
                     counters[B_SEEN_B] = nb_
-                draw(state_b, Xb, nb_, 0, closest_b[0], istate[I_ITER] // 2, rng, pts[:m], anch[:m])
+                refill(draw, state_b, Xb, nb_, 0, closest_b[0], istate[I_ITER] // 2, rng, counters, pts, anch,
+                       batches[1])
             else:
-                draw(state_a, Xa, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER] // 2, rng, pts[:m],
-                     anch[:m])
-            counters[B_REFILLS] += 1
-            counters[B_COUNT] = m
-            counters[B_POS] = 0
+                refill(draw, state_a, Xa, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER] // 2, rng,
+                       counters, pts, anch, batches[0])
         p = counters[B_POS]
         if connect_run(pts[p:p + 1], anch[p:p + 1], ta, tb, istate, fstate, last, world, space, goal, step, low, high,
                        max_connect, st, sb, scratch) == 0:
@@ -157,11 +160,8 @@ def rrtstar_loop(budget, draw, state, buffers, rng, loop):
         if counters[B_POS] >= counters[B_COUNT]:
             if istate[I_SOLVED]:
                 return s if s > 0 else HAND_BACK
-            m = min(batch, refill_size_compiled(counters[B_REFILLS]))
-            draw(state, X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], rng, pts[:m], anch[:m])
-            counters[B_REFILLS] += 1
-            counters[B_COUNT] = m
-            counters[B_POS] = 0
+            refill(draw, state, X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], rng, counters, pts,
+                   anch, batch)
         p = counters[B_POS]
         if rrtstar_run(pts[p:p + 1], anch[p:p + 1], tree, aux, istate, fstate, last, world, space, goal, step, tol,
                        low, high, gamma, dim, nbr, nbr_cost, nbr_ok, dfs, st, sb) == 0:
