@@ -286,6 +286,32 @@ def test_rrtstars_loop_fused_to_its_first_solution_then_handed_back_plans_the_sa
     assert runs[:2] == runs[2:]
 
 
+@settings(max_examples=12, deadline=None)
+@given(data=st.data())
+def test_fused_and_drawn_rules_plan_the_same_runs_on_random_maps(data):
+    """Random walls with random gaps, random ends and seeds: RRT-Connect's and RRT*'s fused loops equal ``draw``."""
+    size = 40
+    obs = np.zeros((size, size), dtype=bool)
+    for _ in range(data.draw(st.integers(1, 3))):
+        col = data.draw(st.integers(6, size - 7))
+        gap = data.draw(st.integers(1, size - 4))
+        obs[:, col] = True
+        obs[gap:gap + 3, col] = False
+    free = np.argwhere(~obs)
+    a, b = (free[data.draw(st.integers(0, len(free) - 1))] for _ in range(2))
+    p = Problem(OccupancyGrid(obs), (a[1] + 0.5, a[0] + 0.5), (b[1] + 0.5, b[0] + 0.5), goal_tolerance=1.5)
+    seed = data.draw(st.integers(0, 2**31 - 1))
+    route = make_sampler(data.draw(st.sampled_from(["route_ablation", "exact_route"])), step_size=2.0)
+    for planner, rules in (("RRTConnect", (BidirectionalRouteSampler, UnfusedBidirectional)),
+                           ("RRTstar", (ConvergingRouteSampler, UnfusedConverging))):
+        runs = []
+        for rule in rules:
+            r = make_planner(planner, p, sampler=rule(route), seed=seed, extension_step=2.0).solve(max_iterations=600)
+            runs.append((r.solved, r.iterations, r.collision_checks, r.candidates, r.num_vertices,
+                         None if r.path is None else r.path.tobytes()))
+        assert runs[0] == runs[1], planner
+
+
 def test_rrt_connects_fused_run_in_pieces_is_the_run_in_one_piece():
     """Single steps, then solves in pieces of odd sizes across the trees' turns and refills: the one-solve run."""
     from planners.maps.generators import VALIDATION_SEED0, generate
