@@ -7,8 +7,10 @@
 
 ``--connect``: RRT-Connect with the RRT rule handed as it is (it guides the start tree, and its samples on the goal
 tree's turns pull the goal tree towards the start tree's target) against both trees guided, each by its own field
-(``BidirectionalRouteSampler``), and against one field read both ways (the goal tree follows the field to the goal
-mirrored, ``MirroredField``), for each field; prints median iterations per family and their geometric mean.
+(``BidirectionalRouteSampler``), against one field read both ways (the goal tree follows the field to the goal
+mirrored, ``MirroredField``), and against the goal tree on the straight-line field to the start (the ablation's: no
+second pass), for each field; prints median iterations per family and their geometric mean, and the geometric mean
+of the median time per query (each run a first query on its map: the encoder's kept map parts are cleared first).
 
 ``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin, floor and fill (floor 1: the RRT rule, then the
 informed set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of the best cost
@@ -81,11 +83,22 @@ class StartTreeOnly(SamplerBase):
 
 
 def geomean_row(label: str, per_family: list[dict]) -> str:
-    """A printed row: the geometric mean of the families' median iterations, each, and the lowest success."""
+    """A printed row: the geometric mean of the families' median iterations, each, the lowest success, and the
+    geometric mean of the families' median time per query (the sampler's set-up included)."""
     medians = [r["iterations"] for r in per_family]
     score = float(np.exp(np.mean(np.log(medians))))
+    ms = float(np.exp(np.mean(np.log([max(r["time_ms"], 1e-3) for r in per_family]))))
     return (f"{label}  geomean {score:7.1f}  per family {' '.join(f'{m:6.0f}' for m in medians)}  "
-            f"success {min(r['success'] for r in per_family):.2f}")
+            f"success {min(r['success'] for r in per_family):.2f}  time {ms:.2f} ms")
+
+
+def connect_run(field: str, wrap, problem, seed: int, models: ModelCache) -> dict:
+    """One RRT-Connect run of ``wrap(make_sampler(field))``, timed as a first query on its map: the encoder keeps no
+    map's parts from earlier runs (``RouteVIN.clear_map_cache``), so each rule pays its passes in full."""
+    route = make_sampler(field, models=models)
+    if getattr(route, "net", None) is not None:
+        route.net.clear_map_cache()
+    return run_setup(Setup(field, "RRTConnect", field), problem, seed, models=models, sampler=wrap(route))
 
 
 def main(argv=None) -> int:
@@ -125,10 +138,11 @@ def main(argv=None) -> int:
     if args.connect:
         for field in args.fields:
             rules = (("start tree only", StartTreeOnly), ("both trees", BidirectionalRouteSampler),
-                     ("one field, mirrored", lambda r: BidirectionalRouteSampler(r, mirrored(r))))
+                     ("one field, mirrored", lambda r: BidirectionalRouteSampler(r, mirrored(r))),
+                     ("goal tree straight", lambda r: BidirectionalRouteSampler(
+                         r, make_sampler("route_ablation", models=models))))
             for rule, wrap in rules:
-                per_family = [summarize_runs([run_setup(Setup(field, "RRTConnect", field), p, s, models=models,
-                                                        sampler=wrap(make_sampler(field, models=models)))
+                per_family = [summarize_runs([connect_run(field, wrap, p, s, models)
                                               for p in problems for s in range(args.seeds)])
                               for problems in maps.values()]
                 print(geomean_row(f"RRTConnect {field:15s} {rule:16s}", per_family), flush=True)
