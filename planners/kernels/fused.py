@@ -99,8 +99,9 @@ def connect_loop(budget, draw, state_a, state_b, buffers, rng, loop):
     trees' batch sizes (2,)) (``planners.fused.FusedConnect``); ``loop`` is the planner's ``loop_args()``. When the
     buffer runs dry the loop draws ``min(batch, refill_size(refills))`` samples for the tree whose turn it is: the
     start tree as ``draw(state_a, ...)`` sees it, the goal tree as ``draw(state_b, ...)`` (its vertices, its closest
-    distance to the start, tracked here over the vertices added since its last draw), each with its own count of
-    draws (``iteration // 2``), so the run matches a planner calling a bidirectional sampler's ``draw``.
+    distance to the start, Euclidean over the state's coordinates, tracked here over the vertices added since its
+    last draw), each with its own count of draws (``iteration // 2``), so the run matches a planner calling a
+    bidirectional sampler's ``draw``.
     """
     counters, pts, anch, closest_b, batches = buffers
     ta, tb, istate, fstate, last, world, space, goal, step, low, high, max_connect, st, sb, scratch = loop
