@@ -301,7 +301,9 @@ def test_fused_and_drawn_rules_plan_the_same_runs_on_random_maps(data):
     a, b = (free[data.draw(st.integers(0, len(free) - 1))] for _ in range(2))
     p = Problem(OccupancyGrid(obs), (a[1] + 0.5, a[0] + 0.5), (b[1] + 0.5, b[0] + 0.5), goal_tolerance=1.5)
     seed = data.draw(st.integers(0, 2**31 - 1))
-    route = make_sampler(data.draw(st.sampled_from(["route_ablation", "exact_route"])), step_size=2.0)
+    batch = data.draw(st.sampled_from([1, 2, 8]))  # above 1 a refill spans both trees' turns, or the first solution
+    route = (make_sampler(data.draw(st.sampled_from(["route_ablation", "exact_route"])), step_size=2.0) if batch == 1
+             else RouteSampler(None, step_size=2.0, batch=batch))
     for planner, rules in (("RRTConnect", (BidirectionalRouteSampler, UnfusedBidirectional)),
                            ("RRTstar", (ConvergingRouteSampler, UnfusedConverging))):
         runs = []
