@@ -30,7 +30,8 @@ RRT-Connect (``fusable_loop = "connect"``) has its own loop, ``connect_loop(budg
 buffers, rng, loop)``, entered the same way (``fuse_connect``). Its trees take turns, and each refill draws for
 the tree whose turn it is, with ``draw``'s contract as above: the start tree as ``draw(state_a, ...)`` with its
 vertices, its vertex nearest the goal and that distance; the goal tree as ``draw(state_b, ...)`` with its
-vertices, 0 and its closest distance to the start. The iteration each sees is its own count of draws
+vertices, 0 and its closest distance to the start (``nearest_distance``, which a sampler's ``draw`` calls too,
+so both paths compute it alike). The iteration each sees is its own count of draws
 (the planner's iteration // 2), so a tree-following draw treats each tree as RRT's tree towards the other's root.
 
 RRT* (``fusable_loop = "rrtstar"``) runs a sampler's draws in its loop, ``rrtstar_loop``, up to its first solution
@@ -55,6 +56,7 @@ from planners.kernels.fused import (
     HAND_BACK,
     connect_loop,
     growing_floor,
+    nearest_distance,
     refill_size,
     rrt_loop,
     rrtstar_loop,
@@ -64,8 +66,8 @@ if TYPE_CHECKING:
     from planners.base.planner import Planner
 
 __all__ = ["CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT", "connect_loop", "fuse_connect",
-           "fuse_rrt", "fuse_rrtstar", "growing_floor", "next_double", "refill_size", "rng_address", "rrt_loop",
-           "rrtstar_loop"]
+           "fuse_rrt", "fuse_rrtstar", "growing_floor", "nearest_distance", "next_double", "refill_size",
+           "rng_address", "rrt_loop", "rrtstar_loop"]
 
 
 class FusedRRT:

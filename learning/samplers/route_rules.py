@@ -45,7 +45,15 @@ from planners.base.samplers import (
     SampleBatch,
     SamplerBase,
 )
-from planners.fused import FusedConnect, FusedRRT, connect_loop, fuse_connect, fuse_rrtstar, rrtstar_loop
+from planners.fused import (
+    FusedConnect,
+    FusedRRT,
+    connect_loop,
+    fuse_connect,
+    fuse_rrtstar,
+    nearest_distance,
+    rrtstar_loop,
+)
 
 if TYPE_CHECKING:
     from planners.base.planner import Planner
@@ -238,10 +246,8 @@ class BidirectionalRouteSampler(SamplerBase):
         # the trees take turns, so each has drawn ``iteration // 2`` times before: its own iteration count
         if view.tree == TREE_GOAL and view.goal_tree is not None:
             X = view.goal_tree
-            m = len(X)
-            if m > self._seen:  # only the vertices added since the last look
-                d = np.sqrt(((X[self._seen:m] - self._start) ** 2).sum(axis=1)).min()
-                self._closest, self._seen = min(self._closest, float(d)), m
+            m = len(X)  # only the vertices added since the last look
+            self._closest, self._seen = min(self._closest, nearest_distance(X, self._seen, m, self._start)), m
             return self.to_start.draw_tree(rng, n, X, m, self._closest, view.iteration // 2)
         return self.to_goal.draw_tree(rng, n, view.vertices, view.num_vertices, view.best_distance,
                                       view.iteration // 2)

@@ -16,7 +16,7 @@ import numba as nb
 import numpy as np
 
 from planners.kernels.rrt import connect_run, rrt_iterate
-from planners.kernels.rrtstar import rrtstar_run
+from planners.kernels.rrtstar import rrtstar_iterate, rrtstar_scratch
 from planners.kernels.state import F_BEST_D, I_BEST_V, I_ITER, I_N, I_N_B, I_SOLVED, I_SWAP
 
 #: Samples handed to a compiled kernel per call; bounds how late a time limit is noticed.
@@ -50,6 +50,21 @@ def growing_floor(floor0, max_floor, patience, stalled):
     if stalled < patience:
         return floor0
     return max(floor0, min(max_floor, floor0 * stalled / patience))
+
+
+@nb.njit(cache=True)
+def nearest_distance(X, lo, hi, q):
+    """The least Euclidean distance from ``q`` to the rows ``X[lo:hi]`` (``inf`` where there are none).
+
+    As ``np.sqrt(((X[lo:hi] - q) ** 2).sum(axis=1)).min()`` computes it, value for value.
+    """
+    d = np.inf
+    for v in range(lo, hi):
+        acc = 0.0
+        for j in range(X.shape[1]):
+            acc += (X[v, j] - q[j]) ** 2
+        d = min(d, np.sqrt(acc))
+    return d
 
 
 @nb.njit(inline="always")
@@ -113,18 +128,8 @@ def connect_loop(budget, draw, state_a, state_b, buffers, rng, loop):
         if counters[B_POS] >= counters[B_COUNT]:
             if istate[I_SWAP] == 1:  # the goal tree's turn
                 nb_ = istate[I_N_B]
-                if nb_ > counters[B_SEEN_B]:
-                    d = np.inf
-                    for v in range(counters[B_SEEN_B], nb_):
-                        acc = 0.0
-                        for j in range(Xb.shape[1]):
-                            acc += (Xb[v, j] - start[j]) ** 2
-                        dv = np.sqrt(acc)
-                        if dv < d:
-                            d = dv
-                    if d < closest_b[0]:
-                        closest_b[0] = d
-                    counters[B_SEEN_B] = nb_
+                closest_b[0] = min(closest_b[0], nearest_distance(Xb, counters[B_SEEN_B], nb_, start))
+                counters[B_SEEN_B] = nb_
                 refill(draw, state_b, Xb, nb_, 0, closest_b[0], istate[I_ITER] // 2, rng, counters, pts, anch,
                        batches[1])
             else:
@@ -155,6 +160,7 @@ def rrtstar_loop(budget, draw, state, buffers, rng, loop):
         dfs, st, sb = loop
     X = tree.X
     batch = pts.shape[0]
+    q, qe_buf, new, order, sort_stack = rrtstar_scratch(tree, nbr)
     for s in range(budget):
         if istate[I_N] >= X.shape[0]:
             return s
@@ -164,8 +170,7 @@ def rrtstar_loop(budget, draw, state, buffers, rng, loop):
             refill(draw, state, X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], rng, counters, pts,
                    anch, batch)
         p = counters[B_POS]
-        if rrtstar_run(pts[p:p + 1], anch[p:p + 1], tree, aux, istate, fstate, last, world, space, goal, step, tol,
-                       low, high, gamma, dim, nbr, nbr_cost, nbr_ok, dfs, st, sb) == 0:
-            return s
+        rrtstar_iterate(pts[p], anch[p], tree, aux, istate, fstate, last, world, space, goal, step, tol, low, high,
+                        gamma, dim, nbr, nbr_cost, nbr_ok, dfs, st, sb, q, qe_buf, new, order, sort_stack)
         counters[B_POS] = p + 1
     return budget

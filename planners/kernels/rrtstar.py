@@ -139,106 +139,119 @@ def propagate_costs(v, cost, elen, parent, first_child, next_sib, stack):
             c = next_sib[c]
 
 
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def rrtstar_iterate(sample, anchored, tree, aux, istate, fstate, last, world, space, goal, step, tol, low, high,
+                    gamma, dim, nbr, nbr_cost, nbr_ok, stack, st, sb, q, qe_buf, new, order, sort_stack):
+    """One RRT* iteration on ``sample`` (room for one more vertex is the caller's to check).
+
+    ``q``, ``qe_buf``, ``new``, ``order`` and ``sort_stack`` are scratch buffers (``rrtstar_scratch``), allocated
+    once per call of the caller rather than once per iteration.
+    """
+    X, E, parent, cost, perm, split, box = tree
+    elen, first_child, next_sib, prev_sib, goal_nodes = aux
+    n = istate[slots.I_N]
+    istate[slots.I_ITER] += 1
+    istate[slots.I_ADDED] = -1
+    resolve_sample(space, sample, anchored, X[istate[slots.I_BEST_V]], goal, low, high, q)
+    copy_into(last, q)
+    near = extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb)
+    if near < 0:
+        return
+    # near set of the new state
+    card = n + 1.0
+    radius = min(gamma * (math.log(card) / card) ** (1.0 / dim), step)
+    ne = embed_query(space, new, qe_buf)
+    k = near_vertices(tree, n, space, new, ne, radius, nbr)
+    # choose parent: cheapest neighbour with a valid motion, checked lazily in cost order
+    best_p = near
+    best_len = space_distance(space, X[near], new)
+    best_c = cost[near] + best_len
+    for j in range(k):
+        u = nbr[j]
+        nbr_ok[j] = -1
+        if u == near:
+            nbr_ok[j] = 1
+            nbr_cost[j] = np.inf
+            continue
+        nbr_cost[j] = cost[u] + space_distance(space, X[u], new)
+    argsort_into(nbr_cost, k, order, sort_stack)  # np.argsort(nbr_cost[:k])'s order
+    for jj in range(k):
+        j = order[jj]
+        if nbr_cost[j] >= best_c:
+            break
+        u = nbr[j]
+        istate[slots.I_CHECKS] += 1
+        ok = motion_free(world, X[u], new)
+        nbr_ok[j] = 1 if ok else 0
+        if ok:
+            best_p = u
+            best_len = space_distance(space, X[u], new)
+            best_c = cost[u] + best_len
+            break
+    n = add_vertex(tree, n, space, new, best_p, best_c)
+    v = n - 1
+    istate[slots.I_N] = n
+    istate[slots.I_ADDED] = v
+    elen[v] = best_len
+    first_child[v] = -1
+    _link(v, best_p, first_child, next_sib, prev_sib)
+    # rewire: route neighbours through the new vertex when that is cheaper
+    rewired = False
+    for j in range(k):
+        u = nbr[j]
+        if u == best_p:
+            continue
+        el = space_distance(space, new, X[u])
+        c_new = best_c + el
+        if c_new >= cost[u]:
+            continue
+        if nbr_ok[j] == -1:
+            istate[slots.I_CHECKS] += 1
+            nbr_ok[j] = 1 if motion_free(world, new, X[u]) else 0
+        if nbr_ok[j] == 0:
+            continue
+        _unlink(u, parent[u], first_child, next_sib, prev_sib)
+        parent[u] = v
+        elen[u] = el
+        cost[u] = c_new
+        _link(u, v, first_child, next_sib, prev_sib)
+        propagate_costs(u, cost, elen, parent, first_child, next_sib, stack)
+        rewired = True
+    # goal region bookkeeping
+    dg = space_distance(space, new, goal)
+    if dg < fstate[slots.F_BEST_D]:
+        fstate[slots.F_BEST_D] = dg
+        istate[slots.I_BEST_V] = v
+    if dg <= tol:
+        goal_nodes[istate[slots.I_N_GOAL]] = v
+        istate[slots.I_N_GOAL] += 1
+        if not istate[slots.I_SOLVED]:
+            istate[slots.I_SOLVED] = 1
+            istate[slots.I_FIRST] = istate[slots.I_ITER]
+        rewired = True
+    if rewired and istate[slots.I_SOLVED]:
+        for i in range(istate[slots.I_N_GOAL]):
+            g = goal_nodes[i]
+            if cost[g] < fstate[slots.F_BEST_COST]:
+                fstate[slots.F_BEST_COST] = cost[g]
+                istate[slots.I_GOAL_V] = g
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def rrtstar_scratch(tree, nbr):
+    """``rrtstar_iterate``'s scratch buffers for ``tree`` and a neighbour array ``nbr`` of the tree's capacity."""
+    return (np.empty(tree.X.shape[1]), np.empty(tree.E.shape[1]), np.empty(tree.X.shape[1]),
+            np.empty(nbr.shape[0], dtype=np.int64), np.empty(2 * SORT_STACK, dtype=np.int64))
+
+
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def rrtstar_run(samples, anchored, tree, aux, istate, fstate, last, world, space, goal, step, tol, low, high,
                 gamma, dim, nbr, nbr_cost, nbr_ok, stack, st, sb):
     """RRT* (Karaman & Frazzoli 2011) with radius ``min(gamma * (log n / n)^(1/dim), step)``."""
-    X, E, parent, cost, perm, split, box = tree
-    elen, first_child, next_sib, prev_sib, goal_nodes = aux
-    kind, metric, rot_weight = space
-    cap = X.shape[0]
-    q = np.empty(X.shape[1])
-    qe_buf = np.empty(E.shape[1])
-    new = np.empty(X.shape[1])
-    order = np.empty(nbr.shape[0], dtype=np.int64)
-    sort_stack = np.empty(2 * SORT_STACK, dtype=np.int64)
+    q, qe_buf, new, order, sort_stack = rrtstar_scratch(tree, nbr)
     for s in range(samples.shape[0]):
-        n = istate[slots.I_N]
-        if n >= cap:
+        if istate[slots.I_N] >= tree.X.shape[0]:
             return s
-        istate[slots.I_ITER] += 1
-        istate[slots.I_ADDED] = -1
-        resolve_sample(space, samples[s], anchored[s], X[istate[slots.I_BEST_V]], goal, low, high, q)
-        copy_into(last, q)
-        near = extend(tree, n, space, q, qe_buf, step, new, world, istate, st, sb)
-        if near < 0:
-            continue
-        # near set of the new state
-        card = n + 1.0
-        radius = min(gamma * (math.log(card) / card) ** (1.0 / dim), step)
-        ne = embed_query(space, new, qe_buf)
-        k = near_vertices(tree, n, space, new, ne, radius, nbr)
-        # choose parent: cheapest neighbour with a valid motion, checked lazily in cost order
-        best_p = near
-        best_len = space_distance(space, X[near], new)
-        best_c = cost[near] + best_len
-        for j in range(k):
-            u = nbr[j]
-            nbr_ok[j] = -1
-            if u == near:
-                nbr_ok[j] = 1
-                nbr_cost[j] = np.inf
-                continue
-            nbr_cost[j] = cost[u] + space_distance(space, X[u], new)
-        argsort_into(nbr_cost, k, order, sort_stack)  # np.argsort(nbr_cost[:k])'s order
-        for jj in range(k):
-            j = order[jj]
-            if nbr_cost[j] >= best_c:
-                break
-            u = nbr[j]
-            istate[slots.I_CHECKS] += 1
-            ok = motion_free(world, X[u], new)
-            nbr_ok[j] = 1 if ok else 0
-            if ok:
-                best_p = u
-                best_len = space_distance(space, X[u], new)
-                best_c = cost[u] + best_len
-                break
-        n = add_vertex(tree, n, space, new, best_p, best_c)
-        v = n - 1
-        istate[slots.I_N] = n
-        istate[slots.I_ADDED] = v
-        elen[v] = best_len
-        first_child[v] = -1
-        _link(v, best_p, first_child, next_sib, prev_sib)
-        # rewire: route neighbours through the new vertex when that is cheaper
-        rewired = False
-        for j in range(k):
-            u = nbr[j]
-            if u == best_p:
-                continue
-            el = space_distance(space, new, X[u])
-            c_new = best_c + el
-            if c_new >= cost[u]:
-                continue
-            if nbr_ok[j] == -1:
-                istate[slots.I_CHECKS] += 1
-                nbr_ok[j] = 1 if motion_free(world, new, X[u]) else 0
-            if nbr_ok[j] == 0:
-                continue
-            _unlink(u, parent[u], first_child, next_sib, prev_sib)
-            parent[u] = v
-            elen[u] = el
-            cost[u] = c_new
-            _link(u, v, first_child, next_sib, prev_sib)
-            propagate_costs(u, cost, elen, parent, first_child, next_sib, stack)
-            rewired = True
-        # goal region bookkeeping
-        dg = space_distance(space, new, goal)
-        if dg < fstate[slots.F_BEST_D]:
-            fstate[slots.F_BEST_D] = dg
-            istate[slots.I_BEST_V] = v
-        if dg <= tol:
-            goal_nodes[istate[slots.I_N_GOAL]] = v
-            istate[slots.I_N_GOAL] += 1
-            if not istate[slots.I_SOLVED]:
-                istate[slots.I_SOLVED] = 1
-                istate[slots.I_FIRST] = istate[slots.I_ITER]
-            rewired = True
-        if rewired and istate[slots.I_SOLVED]:
-            for i in range(istate[slots.I_N_GOAL]):
-                g = goal_nodes[i]
-                if cost[g] < fstate[slots.F_BEST_COST]:
-                    fstate[slots.F_BEST_COST] = cost[g]
-                    istate[slots.I_GOAL_V] = g
+        rrtstar_iterate(samples[s], anchored[s], tree, aux, istate, fstate, last, world, space, goal, step, tol, low,
+                        high, gamma, dim, nbr, nbr_cost, nbr_ok, stack, st, sb, q, qe_buf, new, order, sort_stack)
     return samples.shape[0]
