@@ -92,7 +92,7 @@ def geomean_row(label: str, per_family: list[dict]) -> str:
             f"success {min(r['success'] for r in per_family):.2f}  time {ms:.2f} ms")
 
 
-def connect_run(field: str, wrap, problem, seed: int, models: ModelCache) -> dict:
+def connect_probe(field: str, wrap, problem, seed: int, models: ModelCache) -> dict:
     """One RRT-Connect run of ``wrap(make_sampler(field))``, timed as a first query on its map: the encoder keeps no
     map's parts from earlier runs (``RouteVIN.clear_map_cache``), so each rule pays its passes in full."""
     route = make_sampler(field, models=models)
@@ -142,7 +142,7 @@ def main(argv=None) -> int:
                      ("goal tree straight", lambda r: BidirectionalRouteSampler(
                          r, make_sampler("route_ablation", models=models))))
             for rule, wrap in rules:
-                per_family = [summarize_runs([connect_run(field, wrap, p, s, models)
+                per_family = [summarize_runs([connect_probe(field, wrap, p, s, models)
                                               for p in problems for s in range(args.seeds)])
                               for problems in maps.values()]
                 print(geomean_row(f"RRTConnect {field:15s} {rule:16s}", per_family), flush=True)
