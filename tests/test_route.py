@@ -286,10 +286,10 @@ def test_the_encoders_field_leads_the_progress_and_ranks_the_frontier(shipped):
     s = shipped.bind(p)
     free = np.isfinite(s.field)
     assert np.allclose(s.field[free], learned[free]) and np.array_equal(free, ~p.world.obstacles)
-    cost = s._state[5][-1]  # the frontier's cost per frontier cell of one step, at each cell's centre
+    cost = s.draw_state[5][12]  # the frontier's cost per frontier cell of one step, at each cell's centre
     r, c = np.argwhere(free[2:-2:4, 2:-2:4])[0] * 4 + 2
     assert cost[(r // 4) * (96 // 4) + c // 4] == pytest.approx(learned[r, c])
-    assert straight_line_sampler().bind(p)._state[5][-1].size == 0  # the follower ranks by the straight line
+    assert straight_line_sampler().bind(p).draw_state[5][12].size == 0  # the follower ranks by the straight line
     r = RRT(p, step_size=4.0, sampler=shipped, seed=0).solve(max_iterations=20000)
     assert r.solved and fine_check_path(p.world, r.path)
 

@@ -42,7 +42,7 @@ from planners.base.planner import Planner
 from planners.base.samplers import check_sampler_params
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, last_in_sight, lowest_vertex_cell, walk_path
-from planners.guidance.frontier import NO_COST, Frontier, frontier_sample, update_frontier
+from planners.guidance.frontier import NO_COST, Frontier, frontier_memo, frontier_sample, update_frontier
 from planners.worlds.grid import resample_obstacles
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
@@ -111,7 +111,7 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
     cells, allocated once per query rather than once per iteration. Samples are absolute: ``anchored`` is left alone.
     """
     field, blocked, res, origin, step, frontier, fine, ints, floats, params, scratch, low, high = state
-    world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost = frontier
+    world, counts, cell, fgoal, free, cov, pos, front, dist, tau, fw, forigin, fcost, fmemo = frontier
     lookahead, sigma, stuck, floor0, max_floor, patience, ripple, ripple_growth, sight, widen = params
     W = field.shape[1]
     if n > ints[R_SEEN]:
@@ -150,10 +150,10 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
         u_pick[:] = U[:, 3]
         u_xy[:] = U[:, 1:3]
         if coarse:
-            frontier_sample(front, ints[R_FCOUNT], fw, cell, forigin, dist, tau, u_pick, u_xy, F)
+            frontier_sample(front, ints[R_FCOUNT], fw, cell, forigin, dist, tau, u_pick, u_xy, F, fmemo)
         if fine_all or fine_half:
             frontier_sample(fine[3], ints[R_GCOUNT], blocked.shape[1], res, forigin, fine[4], tau * step / res,
-                            u_pick, u_xy, G)
+                            u_pick, u_xy, G, fine[6])
     for k in range(m):
         u = U[k]
         if frontier_mode and u[0] >= floor and (coarse or fine_all):
@@ -199,16 +199,16 @@ def straight_where_unreached(field: np.ndarray, straight: np.ndarray, unreached:
 def fine_frontier(grid: OccupancyGrid, cost: np.ndarray | None) -> tuple:
     """The frontier of one-grid-cell cells that ``route_draw`` widens a stalled search to (``RouteSampler.widen``).
 
-    ``(free, cov, pos, front, dist, cost)`` as ``planners.guidance.frontier.Frontier``'s, over the grid's own cells,
-    ranked by ``cost`` (per grid cell, in grid cells, ``inf`` where blocked; None: the straight line). Only ``pos``
-    and the ranking are written here; the other arrays are touched only if a run ever needs this frontier.
+    ``(free, cov, pos, front, dist, cost, memo)`` as ``planners.guidance.frontier.Frontier``'s, over the grid's own
+    cells, ranked by ``cost`` (per grid cell, in grid cells, ``inf`` where blocked; None: the straight line). Only
+    ``pos`` and the ranking are written here; the other arrays are touched only if a run ever needs this frontier.
     """
     H, W = grid.height, grid.width
     pos = np.empty((H, W), dtype=np.int64)
     pos[:] = -1
     ranked = NO_COST if cost is None else np.where(np.isfinite(cost), cost, 1e9).reshape(-1)
     return (np.zeros((H, W), dtype=np.uint8), np.zeros((H, W), dtype=np.bool_), pos, np.empty(H * W, np.int64),
-            np.empty(H * W), ranked)
+            np.empty(H * W), ranked, frontier_memo(H * W))
 
 
 class CachedField(NamedTuple):
@@ -563,7 +563,7 @@ class RouteSampler(SamplerBase):
         f = Frontier(self.problem, self.step_size, self.tau,
                      None if cells is None else frontier_costs(cells, grid, self.step_size))
         frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
-                    np.ascontiguousarray(f.world.params[1:3]), f.cost)
+                    np.ascontiguousarray(f.world.params[1:3]), f.cost, f.memo)
         ints = np.array([0, r * grid.width + c, 0, 0, 0, 0, 0, 0], dtype=np.int64)
         b = self.batch
         # the walk's visited cells: a walk covers less than 1.5 lookaheads of path (``route_draw``)

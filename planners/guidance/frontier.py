@@ -160,13 +160,47 @@ def frontier_cdf(front, count, dist, tau, cdf):
     return acc
 
 
+def frontier_memo(capacity: int) -> tuple:
+    """What ``frontier_sample`` keeps between calls for a frontier of up to ``capacity`` cells.
+
+    ``(weights, cells, cdf, meta)``: each list entry's weight and the cell it was computed for, the running sum,
+    and (the lowest distance the weights were computed against, entries valid). Allocated, not written: a page
+    is touched only once the frontier reaches it.
+    """
+    return np.empty(capacity), np.empty(capacity, dtype=np.int64), np.empty(capacity), np.array([np.nan, 0.0])
+
+
 @nb.njit(cache=True)
-def frontier_sample(front, count, W, cell, origin, dist, tau, u_pick, u_xy, out):
-    """Frontier cells drawn with weight exp(-(d - d_min) / tau), a uniform (world) point in each."""
+def frontier_sample(front, count, W, cell, origin, dist, tau, u_pick, u_xy, out, memo):
+    """Frontier cells drawn with weight exp(-(d - d_min) / tau), a uniform (world) point in each.
+
+    ``memo`` (``frontier_memo``) keeps the weights and their running sum between calls: while ``d_min`` is that of
+    the last call, the sum up to the first entry whose cell changed stands, and an entry whose cell is the one of
+    the last call keeps its weight, so a call computes the exponentials of the entries that changed only (a
+    frontier of grid cells holds thousands); the sum adds the same values in the same order as a fresh
+    computation: the same samples, bit for bit. A frontier's cell keeps its distance once it has one.
+    """
     if count == 0:
         return 0
-    cdf = np.empty(count)
-    acc = frontier_cdf(front, count, dist, tau, cdf)
+    weights, cells, cdf, meta = memo
+    dmin = np.inf
+    for i in range(count):
+        d = dist[front[i]]
+        if d < dmin:
+            dmin = d
+    valid = min(int(meta[1]), count) if meta[0] == dmin else 0
+    start = 0  # the running sum up to the first entry that changed stands
+    while start < valid and cells[start] == front[start]:
+        start += 1
+    acc = cdf[start - 1] if start > 0 else 0.0
+    for i in range(start, count):
+        c = front[i]
+        if i >= valid or cells[i] != c:
+            weights[i] = math.exp(-(dist[c] - dmin) / tau)
+            cells[i] = c
+        acc += weights[i]
+        cdf[i] = acc
+    meta[0], meta[1] = dmin, count
     for k in range(u_pick.shape[0]):
         f = front[cdf_search(cdf, count, u_pick[k] * acc)]
         out[k, 0] = origin[0] + (f % W + u_xy[k, 0]) * cell
@@ -221,6 +255,7 @@ class Frontier:
         self.cost = NO_COST if cost is None else np.ascontiguousarray(cost, dtype=np.float64)
         if cost is not None and self.cost.shape != (self.H * self.W,):
             raise ValueError(f"cost must hold one value per frontier cell ({self.H * self.W}), got {self.cost.shape}")
+        self.memo = frontier_memo(self.H * self.W)
         self.count = 0
         self.seen = 0
 
@@ -240,5 +275,5 @@ class Frontier:
         u_xy = rng.random((m, 2))
         out = np.empty((m, 2))
         k = frontier_sample(self.front, self.count, self.W, self.cell, self.world.params[1:3], self.dist, self.tau,
-                            u_pick, u_xy, out)
+                            u_pick, u_xy, out, self.memo)
         return out[:k]
