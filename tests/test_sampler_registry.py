@@ -25,8 +25,8 @@ from planners.maps.generators import TEST_SEED0, generate
 
 
 def test_every_registered_name_builds_a_sampler_and_the_references_are_marked():
-    assert set(sampler_names()) == {"uniform", "goal_bias", "informed", "follower", "route", "route_ablation",
-                                    "policy",
+    assert set(sampler_names()) == {"uniform", "goal_bias", "informed", "follower", "route", "route_lazy",
+                                    "route_ablation", "policy",
                                     "policy_ablation", "expert", "exact_route", "gaussian", "bridge_test",
                                     "obstacle_based", "rigid_workspace_route", "rigid_route", "rigid_route_ablation",
                                     "rigid_expert"}

@@ -1,0 +1,145 @@
+"""The lazy route sampler: the straight line first, the encoder's field only when the run has not solved in time."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from conftest import load_script
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from learning.samplers.lazy_route import SHIPPED_AFTER, LazyRouteSampler
+from learning.samplers.registry import make_sampler
+from learning.samplers.route import RouteSampler
+from learning.samplers.route_rules import BidirectionalRouteSampler, CorridorSampler
+from planners import OccupancyGrid, Problem, make_planner
+from planners.base.fileio import InputError
+from planners.maps.generators import VALIDATION_SEED0, generate
+
+
+class Unfused(LazyRouteSampler):
+    """The same sampler drawn through ``draw``, one Python call per iteration."""
+
+    fuse = None
+
+
+def _run(problem, sampler, seed, pieces=()):
+    planner = make_planner("RRT", problem, sampler=sampler, seed=seed, step_size=4.0)
+    for size in pieces:
+        planner.solve(max_iterations=size)
+    r = planner.solve(max_iterations=20000)
+    key = (r.solved, r.iterations, r.collision_checks, r.candidates, r.num_vertices,
+           None if r.path is None else r.path.tobytes())
+    return key, planner.sampler
+
+
+@pytest.fixture(scope="module")
+def lazy():
+    return make_sampler("route_lazy")
+
+
+@pytest.fixture(scope="module")
+def maps():
+    return [generate(f, VALIDATION_SEED0 + 3, 64, goal_tolerance=4.0) for f in ("maze", "bugtrap", "forest")]
+
+
+def test_the_registry_builds_it_at_the_validated_switch(lazy):
+    assert isinstance(lazy, LazyRouteSampler) and lazy.after == SHIPPED_AFTER
+    assert make_sampler("route_lazy", after=1.5).after == 1.5
+
+
+def test_switching_at_once_is_the_route_sampler_and_never_is_its_ablation(lazy, maps):
+    route, ablation = make_sampler("route"), make_sampler("route_ablation")
+    at_once, never = make_sampler("route_lazy", after=0), make_sampler("route_lazy", after=math.inf)
+    for p in maps:
+        for seed in (0, 1):
+            assert _run(p, at_once, seed)[0] == _run(p, route, seed)[0]
+            key, bound = _run(p, never, seed)
+            assert key == _run(p, ablation, seed)[0]
+            assert not bound.switched and bound.forward_passes == 0
+
+
+def test_a_fused_run_is_the_drawn_run_and_a_run_in_pieces_is_one_solve(maps):
+    """At a switch that falls inside some runs, the fused loop, ``draw`` and a solve in pieces plan alike."""
+    after = 0.125  # a 64-cell map is 256 step squares: the switch at iteration 32
+    fused, drawn = make_sampler("route_lazy", after=after), None
+    drawn = Unfused(fused.net, after=after)
+    switched = kept = 0
+    for p in maps:
+        for seed in (0, 1, 2):
+            key, bound = _run(p, fused, seed)
+            assert key == _run(p, drawn, seed)[0]
+            assert key == _run(p, fused, seed, pieces=(1, 1, 5, 9, 2))[0]
+            switched += bound.switched
+            kept += not bound.switched
+            assert bound.forward_passes == (bound.symmetry_passes if bound.switched else 0)
+            if bound.switched:
+                assert key[1] > bound.switch_at == 32
+    assert switched and kept, "the maps must give runs on both sides of the switch"
+
+
+@settings(max_examples=8, deadline=None)
+@given(data=st.data())
+def test_fused_and_drawn_lazy_runs_are_the_same_on_random_walled_maps(data):
+    size = 64
+    obs = np.zeros((size, size), dtype=bool)
+    for _ in range(data.draw(st.integers(1, 3))):
+        col = data.draw(st.integers(8, size - 9))
+        gap = data.draw(st.integers(1, size - 6))
+        obs[:, col:col + 2] = True
+        obs[gap:gap + 5, col:col + 2] = False
+    free = np.argwhere(~obs)
+    a, b = (free[data.draw(st.integers(0, len(free) - 1))] for _ in range(2))
+    p = Problem(OccupancyGrid(obs), (a[1] + 0.5, a[0] + 0.5), (b[1] + 0.5, b[0] + 0.5), goal_tolerance=3.0)
+    after = data.draw(st.sampled_from([0.0, 0.02, 0.1, 0.5]))
+    seed = data.draw(st.integers(0, 2**31 - 1))
+    fused = make_sampler("route_lazy", after=after)
+    assert _run(p, fused, seed)[0] == _run(p, Unfused(fused.net, after=after), seed)[0]
+
+
+def test_other_planners_take_the_route_samplers_own_rules(lazy):
+    assert lazy.for_planner("tree") is lazy
+    assert isinstance(lazy.for_planner("bidirectional"), BidirectionalRouteSampler)
+    assert isinstance(lazy.for_planner("roadmap"), CorridorSampler)
+    eager = lazy.eager()
+    assert type(eager) is RouteSampler and eager.net is lazy.net and not hasattr(eager, "after")
+    p = generate("maze", VALIDATION_SEED0 + 3, 64, goal_tolerance=4.0)
+    assert make_planner("RRTConnect", p, sampler=lazy, seed=0, extension_step=4.0).solve(20000).solved
+
+
+def test_at_a_new_step_both_phases_measure_in_it(lazy):
+    moved = lazy.at_step(2.0)
+    assert moved.step_size == 2.0 and moved.straight.step_size == 2.0 and lazy.step_size == 4.0
+
+
+@pytest.mark.parametrize("bad", [{"after": -1.0}, {"after": "3"}, {"after": True}, {"after": math.nan},
+                                 {"batch": 2}])
+def test_bad_settings_are_refused_by_name(lazy, bad):
+    with pytest.raises(InputError, match=next(iter(bad))):
+        LazyRouteSampler(lazy.net, **bad)
+    with pytest.raises(InputError, match="needs an encoder"):
+        LazyRouteSampler(None)
+
+
+def test_a_map_the_encoder_refuses_is_refused_at_bind_not_at_the_switch(lazy, monkeypatch):
+    monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "100")
+    p = generate("forest", VALIDATION_SEED0, 64, goal_tolerance=4.0)
+    with pytest.raises(InputError, match="SAMPLERGYM_MAX_ROUTE_BLOCKS"):
+        make_planner("RRT", p, sampler=lazy, seed=0, step_size=4.0)
+
+
+@pytest.mark.experiments
+def test_the_switchs_rule_takes_the_fastest_or_a_smaller_switch_within_three_percent(tmp_path, capsys):
+    script = load_script("experiments/lazy_route_rule")
+    assert script.choose({0.0: 10.0, 0.7: 3.05, 1.4: 3.0, math.inf: 3.2}) == 0.7
+    assert script.choose({0.0: 10.0, 0.7: 3.2, math.inf: 3.0}) == math.inf
+    assert script.main(["--maps", "1", "0", "0", "--seeds", "1", "--after", "0", "inf", "--out",
+                        str(tmp_path / "rule")]) == 0
+    out = capsys.readouterr().out
+    assert "chosen: after = " in out and (tmp_path / "rule" / "runs.json").is_file()
+    with pytest.raises(SystemExit):
+        script.main(["--after", "-1"])
+    with pytest.raises(SystemExit):  # an output folder with something in it is refused before any run
+        script.main(["--out", str(tmp_path)])
