@@ -6,7 +6,8 @@
     python scripts/benchmark_clock.py --quick --torch-inference   # the encoder's pass through torch after its network
 
 On the comparison's test queries (generated families at 128 cells, their shifted maps, the unseen families and
-each MovingAI map), in this process and one thread, RRT with the route encoder, its ablation and the exact
+each MovingAI map), in this process and one thread, RRT with the route encoder, the lazy route sampler (the
+straight line first, the encoder only where that has not solved in time), the encoder's ablation and the exact
 reference, RRT with the goal bias tuned on the tuning split, RRT-Connect, PRM and (with OMPL's Python bindings,
 ``pip install -c constraints.txt -e ".[bench]"``) OMPL's RRT-Connect plan every query at the same planner seeds;
 see ``learning.evaluation.clock`` for what a run's time includes and the targets. Prints and writes (``--out``,
@@ -133,12 +134,13 @@ def main(argv=None) -> int:
     text = (f"# Time to solution\n\n{len(runs)} runs in {(time.perf_counter() - t0) / 60:.1f} min, one process and "
             f"one thread (load average {load} at the end); the encoder's fixed point by {how}. Median ms per query "
             "from the planner's start to its first solution, the sampler's per-query work included (an unsolved run "
-            f"counts with the time it ran). Targets: the route encoder's median at most {C.AT_MOST:g}x the fastest "
-            f"classical option's on every set, and at most {C.WHERE_SLOW:g}x where that is above {C.SLOW_MS:g} ms; "
-            f"pooled, at most {C.OMPL_AT_MOST:g}x OMPL's RRT-Connect.\n\n"
-            f"Targets held on {verdict['held']} of {verdict['sets']} sets ({verdict['slow held']} of "
-            f"{verdict['slow sets']} where the fastest takes more than {C.SLOW_MS:g} ms); pooled route / OMPL "
-            f"RRT-Connect: {verdict['pooled / OMPL RRT-Connect']:.2f}.\n\n"
+            "counts with the time it ran). Targets: the route encoder's (and the lazy route sampler's) median at most "
+            f"{C.AT_MOST:g}x the fastest classical option's on every set, and at most {C.WHERE_SLOW:g}x where that is "
+            f"above {C.SLOW_MS:g} ms; pooled, at most {C.OMPL_AT_MOST:g}x OMPL's RRT-Connect.\n\n"
+            + "".join(f"{learned}: targets held on {verdict[f'{p}held']} of {verdict['sets']} sets "
+                      f"({verdict[f'{p}slow held']} of {verdict['slow sets']} where the fastest takes more than "
+                      f"{C.SLOW_MS:g} ms); pooled / OMPL RRT-Connect: {verdict[f'{p}pooled / OMPL RRT-Connect']:.2f}."
+                      "\n\n" for learned, p in C.LEARNED.items())
             + markdown_table(rows) + "\n## The fastest method by map size\n\n" + markdown_table(by_size))
     with output_set(args.out) as tmp:
         write_runs_csv(runs, tmp / "runs.csv")

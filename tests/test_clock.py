@@ -20,10 +20,10 @@ def _run(map_set: str, method: str, ms: float, solved: bool = True, query: str =
 
 
 def test_the_table_names_the_fastest_classical_option_and_judges_the_targets():
-    times = {"open": {C.ROUTE: 1.1, C.ABLATION: 0.9, C.EXACT: 2.0, C.TUNED: 1.0, C.CONNECT: 3.0, C.PRM: 4.0,
-                      C.OMPL_CONNECT: 5.0},
-             "winding": {C.ROUTE: 6.0, C.ABLATION: 40.0, C.EXACT: 9.0, C.TUNED: 30.0, C.CONNECT: 12.0, C.PRM: 20.0,
-                         C.OMPL_CONNECT: 50.0}}
+    times = {"open": {C.ROUTE: 1.1, C.LAZY: 0.95, C.ABLATION: 0.9, C.EXACT: 2.0, C.TUNED: 1.0, C.CONNECT: 3.0,
+                      C.PRM: 4.0, C.OMPL_CONNECT: 5.0},
+             "winding": {C.ROUTE: 6.0, C.LAZY: 4.0, C.ABLATION: 40.0, C.EXACT: 9.0, C.TUNED: 30.0, C.CONNECT: 12.0,
+                         C.PRM: 20.0, C.OMPL_CONNECT: 50.0}}
     runs = [_run(m, k, v, query=f"{m}-{i}") for m, row in times.items() for k, v in row.items() for i in range(3)]
     rows, verdict = C.clock_table(runs, ["winding", "open"])
     assert [r["map set"] for r in rows] == ["winding", "open", C.POOLED]
@@ -34,6 +34,11 @@ def test_the_table_names_the_fastest_classical_option_and_judges_the_targets():
     assert open_[C.ROUTE] == "1.1 (100%)"
     assert verdict["held"] == 1 and verdict["sets"] == 2 and verdict["slow sets"] == 1 and verdict["slow held"] == 0
     assert pooled["route / OMPL RRT-Connect"] == f"{verdict['pooled / OMPL RRT-Connect']:.2f}"
+    # the lazy route sampler is held to the same targets in its own columns
+    assert winding["lazy route / fastest"] == "0.44" and winding["lazy target"].startswith("holds (<= 0.5")
+    assert open_["lazy target"] == "holds (<= 1.2)"
+    assert verdict["lazy held"] == 2 and verdict["lazy slow held"] == 1
+    assert pooled["lazy route / OMPL RRT-Connect"] == f"{verdict['lazy pooled / OMPL RRT-Connect']:.2f}"
 
 
 def test_an_unsolved_run_counts_with_its_time_and_lowers_the_share_solved():
@@ -56,10 +61,10 @@ def test_the_clock_benchmark_times_every_method_on_the_same_queries(tmp_path, ca
     assert bench.main(["--families", "forest", "--maps", "2", "--tuning-maps", "1", "--seeds", "1", "--no-shifted",
                        "--no-unseen", "--movingai-maps", "--no-ompl", "--processes", "1", "--out", str(out)]) == 0
     text = (out / "clock.md").read_text()
-    for method in (C.ROUTE, C.ABLATION, C.EXACT, C.TUNED, C.CONNECT, C.PRM):
+    for method in (C.ROUTE, C.LAZY, C.ABLATION, C.EXACT, C.TUNED, C.CONNECT, C.PRM):
         assert method in text
     lines = (out / "runs.csv").read_text().splitlines()
-    assert len(lines) == 1 + 2 * 6  # two queries, one seed, six methods
+    assert len(lines) == 1 + 2 * 7  # two queries, one seed, seven methods
     assert "The fastest method by map size" in text and "| up to 128 |" in text
 
 

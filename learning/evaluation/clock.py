@@ -6,6 +6,8 @@ seeds, their runs interleaved query by query so a drift in the machine's speed h
 
 - RRT with the route encoder (``route``), its ablation (``route_ablation``), and the exact reference
   (``exact_route``: the same sampler on the grid search's cost-to-go, which costs a grid search per query);
+- RRT with the lazy route sampler (``route_lazy``: the straight line first, the encoder's field once that has not
+  solved within a budget that grows with the map's area);
 - RRT with the goal bias tuned for the set on its tuning split (as the comparison tunes it);
 - RRT-Connect and PRM with their own (uniform) sampling;
 - with OMPL's Python bindings installed, OMPL's RRT-Connect (``planners.tools.ompl_bridge``).
@@ -15,7 +17,7 @@ encoder's pass, a grid search): ``learning.evaluation.run_one``'s wall time. An 
 it ran. "Fastest" is the fastest median of the tuned goal bias, RRT-Connect, PRM and the exact reference; the
 targets are the route sampler's median at most ``AT_MOST`` times it on every set, and at most ``WHERE_SLOW`` times
 it wherever that median is above ``SLOW_MS``, and, over every test query pooled, at most ``OMPL_AT_MOST`` times
-OMPL's RRT-Connect.
+OMPL's RRT-Connect; the lazy route sampler is held to the same targets.
 """
 
 from __future__ import annotations
@@ -34,12 +36,15 @@ from planners.tools.benchmark import Run
 
 #: The method labels of a clock comparison, in table order: (label, planner).
 ROUTE, ABLATION, EXACT = "RRT + route encoder", "RRT + route ablation", "RRT + exact route"
+LAZY = "RRT + lazy route"
 TUNED, CONNECT, PRM = "RRT + tuned goal bias", "RRT-Connect", "PRM"
 OMPL_CONNECT = "OMPL RRT-Connect"
 #: The classical options the route sampler is timed against: the fastest median among them.
 CLASSICAL = (TUNED, CONNECT, PRM, EXACT)
 #: The targets (see the module docstring).
 AT_MOST, WHERE_SLOW, SLOW_MS, OMPL_AT_MOST = 1.2, 0.5, 5.0, 0.5
+#: The learned methods held to the targets, and the prefix of their columns and verdict keys.
+LEARNED = {ROUTE: "", LAZY: "lazy "}
 #: The pooled row's name.
 POOLED = "all test sets pooled"
 
@@ -53,6 +58,7 @@ def clock_tasks(queries: Sequence, protocol: Protocol, route: str, biases: dict,
     fixed = [(ROUTE, "RRT", SamplerSpec.of("route", path=route, step_size=step, device="cpu")),
              (ABLATION, "RRT", SamplerSpec.of("route_ablation", step_size=step)),
              (EXACT, "RRT", SamplerSpec.of("exact_route", step_size=step)),
+             (LAZY, "RRT", SamplerSpec.of("route_lazy", path=route, step_size=step, device="cpu")),
              (CONNECT, "RRTConnect", SamplerSpec.of("uniform")),
              (PRM, "PRM", SamplerSpec.of("uniform"))]
     tasks = []
@@ -61,7 +67,7 @@ def clock_tasks(queries: Sequence, protocol: Protocol, route: str, biases: dict,
             continue
         tuned = (TUNED, "RRT", bias_spec(biases.get((q.map_set, "RRT"), 0.05)))
         for seed in range(seeds):
-            tasks += [Task(q, planner, spec, seed, label) for label, planner, spec in (*fixed[:3], tuned, *fixed[3:])]
+            tasks += [Task(q, planner, spec, seed, label) for label, planner, spec in (*fixed[:4], tuned, *fixed[4:])]
     return tasks
 
 
@@ -117,8 +123,10 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
     """Per map set (in ``order``, then the rest), and pooled: each method's median ms per query and success.
 
     Returns (rows, verdict): each row holds "map set", per method its median ms with the share solved in brackets,
-    "fastest classical", "route / fastest" and "target" ("holds" or "fails"); the verdict holds the counts of sets
-    meeting each target and, where OMPL ran, the pooled ratio to OMPL's RRT-Connect.
+    "fastest classical", and for each learned method (``LEARNED``, its prefix before each name) "route / fastest" and
+    "target" ("holds" or "fails"); the verdict holds the counts of sets ("sets", "slow sets") and, per learned method,
+    of those meeting each target ("held", "slow held") and, where OMPL ran, the pooled ratio to OMPL's RRT-Connect
+    ("pooled / OMPL RRT-Connect").
     """
     by: dict[str, dict[str, list[Run]]] = {}
     for r in runs:
@@ -126,10 +134,12 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
             for name in (r.map, POOLED):
                 by.setdefault(name, {}).setdefault(_method(r), []).append(r)
     names = [m for m in order if m in by] + sorted(set(by) - set(order) - {POOLED}) + [POOLED]
-    methods = [m for m in (ROUTE, ABLATION, EXACT, TUNED, CONNECT, PRM, OMPL_CONNECT)
+    methods = [m for m in (ROUTE, LAZY, ABLATION, EXACT, TUNED, CONNECT, PRM, OMPL_CONNECT)
                if any(m in v for v in by.values())]
-    rows, held, slow_held, slow_total = [], 0, 0, 0
-    pooled_ompl = math.nan
+    rows, slow_total = [], 0
+    verdict: dict = {"sets": len(names) - 1, "slow sets": 0}
+    for prefix in LEARNED.values():
+        verdict |= {f"{prefix}held": 0, f"{prefix}slow held": 0, f"{prefix}pooled / OMPL RRT-Connect": math.nan}
     for name in names:
         cell = by[name]
         ms = {m: float(np.median([r.wall_time for r in cell[m]]) * 1e3) for m in methods if m in cell}
@@ -137,24 +147,26 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
         for m in methods:
             row[m] = f"{ms[m]:.3g} ({np.mean([r.solved for r in cell[m]]):.0%})" if m in cell else "-"
         classical = {m: ms[m] for m in CLASSICAL if m in ms}
-        if ROUTE in ms and classical:
+        if classical:
             fastest = min(classical, key=classical.__getitem__)
-            ratio = ms[ROUTE] / max(classical[fastest], 1e-9)
             slow = classical[fastest] > SLOW_MS
-            ok = ratio <= AT_MOST and (not slow or ratio <= WHERE_SLOW)
-            row |= {"fastest classical": f"{fastest} ({classical[fastest]:.3g} ms)", "route / fastest": f"{ratio:.2f}",
-                    "target": ("holds" if ok else "fails") + (f" (<= {WHERE_SLOW:g}: above {SLOW_MS:g} ms)" if slow
-                                                             else f" (<= {AT_MOST:g})")}
-            if name != POOLED:
-                held += ok
-                slow_total += slow
-                slow_held += slow and ratio <= WHERE_SLOW
-        if name == POOLED and ROUTE in ms and OMPL_CONNECT in ms:
-            pooled_ompl = ms[ROUTE] / max(ms[OMPL_CONNECT], 1e-9)
-            row["route / OMPL RRT-Connect"] = f"{pooled_ompl:.2f}"
+            row["fastest classical"] = f"{fastest} ({classical[fastest]:.3g} ms)"
+            slow_total += slow and name != POOLED
+        for learned, prefix in LEARNED.items():
+            if learned in ms and classical:
+                ratio = ms[learned] / max(classical[fastest], 1e-9)
+                ok = ratio <= AT_MOST and (not slow or ratio <= WHERE_SLOW)
+                row |= {f"{prefix}route / fastest": f"{ratio:.2f}",
+                        f"{prefix}target": ("holds" if ok else "fails") + (
+                            f" (<= {WHERE_SLOW:g}: above {SLOW_MS:g} ms)" if slow else f" (<= {AT_MOST:g})")}
+                if name != POOLED:
+                    verdict[f"{prefix}held"] += ok
+                    verdict[f"{prefix}slow held"] += slow and ratio <= WHERE_SLOW
+            if name == POOLED and learned in ms and OMPL_CONNECT in ms:
+                verdict[f"{prefix}pooled / OMPL RRT-Connect"] = ratio = ms[learned] / max(ms[OMPL_CONNECT], 1e-9)
+                row[f"{prefix}route / OMPL RRT-Connect"] = f"{ratio:.2f}"
         rows.append(row)
-    verdict = {"sets": len(names) - 1, "held": held, "slow sets": slow_total, "slow held": slow_held,
-               "pooled / OMPL RRT-Connect": pooled_ompl}
+    verdict["slow sets"] = slow_total
     return rows, verdict
 
 
