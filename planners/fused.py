@@ -26,6 +26,11 @@ schedule, so a fused run draws exactly what the same sampler's ``draw`` method (
 planner with that many) would: fusing changes the speed, never the run. ``growing_floor`` is the
 uniform share a guided sampler keeps, growing while the tree comes no closer to the goal.
 
+A draw may end RRT's loop early: one whose state holds the loop's counters (``FusedRRT.counters``) and sets
+``counters[B_STOP]`` ends the loop's call right after that refill, its samples left unused in the buffer
+(``counters[B_POS]`` < ``counters[B_COUNT]``); the caller clears the flag and decides what the next call draws.
+A sampler that switches its rule mid-run (``learning.samplers.lazy_route``) stops there.
+
 RRT-Connect (``fusable_loop = "connect"``) has its own loop, ``connect_loop(budget, draw, state_a, state_b,
 buffers, rng, loop)``, entered the same way (``fuse_connect``). Its trees take turns, and each refill draws for
 the tree whose turn it is, with ``draw``'s contract as above: the start tree as ``draw(state_a, ...)`` with its
@@ -50,7 +55,10 @@ import numpy as np
 from planners.kernels.bitgen import bitgen_address as rng_address
 from planners.kernels.bitgen import next_double
 from planners.kernels.fused import (
+    B_COUNT,
+    B_POS,
     B_REFILLS,
+    B_STOP,
     CHUNK,
     FIRST_REFILL,
     HAND_BACK,
@@ -65,9 +73,9 @@ from planners.kernels.fused import (
 if TYPE_CHECKING:
     from planners.base.planner import Planner
 
-__all__ = ["CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT", "connect_loop", "fuse_connect",
-           "fuse_rrt", "fuse_rrtstar", "growing_floor", "nearest_distance", "next_double", "refill_size",
-           "rng_address", "rrt_loop", "rrtstar_loop"]
+__all__ = ["B_COUNT", "B_POS", "B_STOP", "CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT",
+           "connect_loop", "fuse_connect", "fuse_rrt", "fuse_rrtstar", "growing_floor", "nearest_distance",
+           "next_double", "refill_size", "rng_address", "rrt_loop", "rrtstar_loop"]
 
 
 class FusedRRT:
@@ -81,10 +89,15 @@ class FusedRRT:
 
     def __init__(self, entry: Callable, state: Any, batch: int, dim: int) -> None:
         self.entry, self.state = entry, state
-        self.buffers = (np.zeros(3, dtype=np.int64), np.empty((batch, dim)), np.zeros(batch, dtype=np.int8))
+        self.buffers = (np.zeros(B_STOP + 1, dtype=np.int64), np.empty((batch, dim)), np.zeros(batch, dtype=np.int8))
 
     def __call__(self, planner: Planner, n: int) -> int:
         return self.entry(n, self.state, self.buffers, rng_address(planner.rng), planner.loop_args())
+
+    @property
+    def counters(self) -> np.ndarray:
+        """The loop's counters (``B_POS``, ``B_COUNT``, ``B_REFILLS``, ``B_STOP``): for a draw that ends the loop."""
+        return self.buffers[0]
 
     @property
     def refills(self) -> int:

@@ -93,10 +93,24 @@ def test_fused_and_drawn_lazy_runs_are_the_same_on_random_walled_maps(data):
     free = np.argwhere(~obs)
     a, b = (free[data.draw(st.integers(0, len(free) - 1))] for _ in range(2))
     p = Problem(OccupancyGrid(obs), (a[1] + 0.5, a[0] + 0.5), (b[1] + 0.5, b[0] + 0.5), goal_tolerance=3.0)
-    after = data.draw(st.sampled_from([0.0, 0.02, 0.1, 0.5]))
+    after = data.draw(st.sampled_from([0.0, 0.02, 0.1, 0.5, math.inf]))
+    stall = data.draw(st.sampled_from([1, 3, 10, 40, math.inf]))
     seed = data.draw(st.integers(0, 2**31 - 1))
-    fused = make_sampler("route_lazy", after=after)
-    assert _run(p, fused, seed)[0] == _run(p, Unfused(fused.net, after=after), seed)[0]
+    fused = make_sampler("route_lazy", after=after, stall=stall)
+    assert _run(p, fused, seed)[0] == _run(p, Unfused(fused.net, after=after, stall=stall), seed)[0]
+
+
+def test_a_stalled_straight_line_switches_to_the_field_fused_as_drawn(maps):
+    """The stall switch: where the tree has come no closer for ``stall`` iterations, the field takes over."""
+    fused = make_sampler("route_lazy", after=math.inf, stall=8)
+    drawn = Unfused(fused.net, after=math.inf, stall=8)
+    switched = 0
+    for p in maps:
+        for seed in (0, 1, 2):
+            key, bound = _run(p, fused, seed)
+            assert key == _run(p, drawn, seed)[0] == _run(p, fused, seed, pieces=(1, 3, 8, 2))[0]
+            switched += bound.switched
+    assert switched, "the maze and the bugtrap stall the straight line for 8 iterations"
 
 
 def test_other_planners_take_the_route_samplers_own_rules(lazy):
@@ -115,7 +129,7 @@ def test_at_a_new_step_both_phases_measure_in_it(lazy):
 
 
 @pytest.mark.parametrize("bad", [{"after": -1.0}, {"after": "3"}, {"after": True}, {"after": math.nan},
-                                 {"batch": 2}])
+                                 {"stall": 0}, {"stall": math.nan}, {"stall": "5"}, {"batch": 2}])
 def test_bad_settings_are_refused_by_name(lazy, bad):
     with pytest.raises(InputError, match=next(iter(bad))):
         LazyRouteSampler(lazy.net, **bad)
@@ -133,13 +147,17 @@ def test_a_map_the_encoder_refuses_is_refused_at_bind_not_at_the_switch(lazy, mo
 @pytest.mark.experiments
 def test_the_switchs_rule_takes_the_fastest_or_a_smaller_switch_within_three_percent(tmp_path, capsys):
     script = load_script("experiments/lazy_route_rule")
-    assert script.choose({0.0: 10.0, 0.7: 3.05, 1.4: 3.0, math.inf: 3.2}) == 0.7
-    assert script.choose({0.0: 10.0, 0.7: 3.2, math.inf: 3.0}) == math.inf
-    assert script.main(["--maps", "1", "0", "0", "--seeds", "1", "--after", "0", "inf", "--out",
+    inf = math.inf
+    assert script.choose({(0.7, inf): 3.05, (1.4, inf): 3.0, (inf, inf): 3.2}) == (0.7, inf)
+    assert script.choose({(0.7, inf): 3.2, (inf, inf): 3.0}) == (inf, inf)
+    assert script.choose({(0.7, 50.0): 3.05, (0.35, inf): 3.0, (inf, 25.0): 3.5}) == (0.7, 50.0)  # stall first
+    assert script.main(["--maps", "1", "0", "0", "--seeds", "1", "--after", "inf", "--stall", "20", "inf", "--out",
                         str(tmp_path / "rule")]) == 0
     out = capsys.readouterr().out
     assert "chosen: after = " in out and (tmp_path / "rule" / "runs.json").is_file()
     with pytest.raises(SystemExit):
         script.main(["--after", "-1"])
+    with pytest.raises(SystemExit):
+        script.main(["--stall", "0"])
     with pytest.raises(SystemExit):  # an output folder with something in it is refused before any run
         script.main(["--out", str(tmp_path)])

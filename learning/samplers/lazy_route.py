@@ -21,21 +21,52 @@ from __future__ import annotations
 
 import math
 
+import numba as nb
 import numpy as np
 
-from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, RouteSampler, route_rrt_loop
+from learning.samplers.route import (
+    ABLATION_SETTINGS,
+    R_CLOSER,
+    SHIPPED_SETTINGS,
+    RouteSampler,
+    route_draw,
+    route_rrt_loop,
+)
 from planners import OccupancyGrid
 from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
 from planners.base.samplers import FAMILY_TREE, SamplerBase
-from planners.fused import FusedRRT, fuse_rrt
+from planners.fused import B_COUNT, B_POS, B_STOP, FusedRRT, fuse_rrt, rrt_loop
 
 #: The switch, chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``): the
 #: encoder's field is computed once the straight line has not solved within this many iterations per step-sized
 #: square of the map.
 SHIPPED_AFTER = 0.7
+#: The stall switch, chosen with ``after``: the field is computed once the straight line's tree has come no closer to
+#: the goal for this many iterations (inf: never on a stall).
+SHIPPED_STALL = math.inf
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
-LAZY_ATTRIBUTES = ("after", "straight", "switched", "switch_at")
+LAZY_ATTRIBUTES = ("after", "stall", "straight", "switched", "switch_at")
+
+
+@nb.njit(cache=True)
+def stall_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
+    """``route_draw`` on the straight line's state, ending RRT's loop where the tree has stalled ``stall`` iterations.
+
+    ``state`` is (the straight line's ``RouteSampler`` state, the loop's counters, ``stall``): the draw sets the
+    counters' ``B_STOP`` once the tree has come no closer to the goal for ``stall`` iterations (``R_CLOSER``, which
+    the draw itself keeps), and the loop ends before using its sample (``planners.fused``).
+    """
+    straight, counters, stall = state
+    route_draw(straight, X, n, best_vertex, best_distance, iteration, rng, pts, anchored)
+    if iteration - straight[7][R_CLOSER] >= stall:
+        counters[B_STOP] = 1
+
+
+@nb.njit(cache=True)
+def stall_rrt_loop(budget, state, buffers, rng, loop):
+    """RRT's compiled loop drawing from ``stall_draw`` (``planners.fused``)."""
+    return rrt_loop(budget, stall_draw, state, buffers, rng, loop)
 
 
 class LazyRouteSampler(RouteSampler):
@@ -55,19 +86,22 @@ class LazyRouteSampler(RouteSampler):
             must be 1, the validated setting, so that the switch falls on one iteration whatever the loop.
     """
 
-    def __init__(self, net, *, after: float = SHIPPED_AFTER, **kwargs) -> None:
+    def __init__(self, net, *, after: float = SHIPPED_AFTER, stall: float = SHIPPED_STALL, **kwargs) -> None:
         if net is None:
             raise InputError("LazyRouteSampler needs an encoder (its straight-line phase is the ablation; for the "
                              "ablation alone use RouteSampler(None) or make_sampler('route_ablation'))")
         if isinstance(after, bool) or not isinstance(after, int | float | np.floating) or not after >= 0:
             raise InputError(f"after = {short_repr(after)}: expected iterations per step-sized square of the map, "
                              f">= 0 (inf: never compute the field)")
+        if isinstance(stall, bool) or not isinstance(stall, int | float | np.floating) or not stall >= 1:
+            raise InputError(f"stall = {short_repr(stall)}: expected iterations without coming closer to the goal, "
+                             f">= 1 (inf: never switch on a stall)")
         if kwargs.get("batch", 1) != 1:
             raise InputError(f"batch = {short_repr(kwargs['batch'])}: LazyRouteSampler draws one sample at a time "
                              f"(batch 1)")
         settings = {**SHIPPED_SETTINGS, **kwargs}
         super().__init__(net, **settings)
-        self.after = float(after)
+        self.after, self.stall = float(after), float(stall)
         self.straight = RouteSampler(None, step_size=self.step_size, **ABLATION_SETTINGS)
         self.switched, self.switch_at = False, 0
 
@@ -108,15 +142,25 @@ class LazyRouteSampler(RouteSampler):
     def draw(self, rng, n, view):
         if not self.switched and view.iteration >= self.switch_at:
             self.switch()
-        return super().draw(rng, n, view)
+        pts = super().draw(rng, n, view)
+        if not self.switched and view.iteration - self._state[7][R_CLOSER] >= self.stall:
+            self.switch()  # stalled: the straight line's sample is dropped, as the fused loop drops it
+            pts = super().draw(rng, n, view)
+        return pts
 
     def fuse(self, planner: Planner) -> LazyLoop | FusedRRT | None:
         """RRT's loop with both phases' draws compiled in, the switch between them (None for other planners)."""
-        fused = fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
-        return fused if fused is None or self.switched else LazyLoop(self, fused)
+        if self.switched:
+            return fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
+        fused = fuse_rrt(planner, stall_rrt_loop, None, self.batch)
+        if fused is None:
+            return None
+        fused.state = (self._state, fused.counters, self.stall)
+        return LazyLoop(self, fused)
 
     def __repr__(self) -> str:
-        return f"LazyRouteSampler(after={self.after:g}, {super().__repr__()[len('RouteSampler('):]}"
+        return (f"LazyRouteSampler(after={self.after:g}, stall={self.stall:g}, "
+                f"{super().__repr__()[len('RouteSampler('):]}")
 
 
 class LazyLoop:
@@ -128,15 +172,17 @@ class LazyLoop:
         self.sampler, self.fused = sampler, fused
 
     def __call__(self, planner: Planner, n: int) -> int:
-        s, used = self.sampler, 0
+        s, used, counters = self.sampler, 0, self.fused.counters
         if not s.switched:
             m = min(n, s.switch_at - planner.iterations)
             if m > 0:
                 used = self.fused(planner, m)
-                if used < m or used == n:  # solved (or out of room) before the switch, or the call is spent
+                if counters[B_STOP]:  # stalled: the straight line's sample in the buffer is dropped
+                    counters[B_STOP], counters[B_POS] = 0, counters[B_COUNT]
+                elif used < m or used == n:  # solved (or out of room) before the switch, or the call is spent
                     return used
             s.switch()
-            self.fused.state = s.draw_state
+            self.fused.entry, self.fused.state = route_rrt_loop, s.draw_state
         return used + self.fused(planner, n - used)
 
     @property

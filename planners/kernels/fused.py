@@ -24,8 +24,9 @@ CHUNK = 1024
 #: Size of the first sample refill; refills double up to CHUNK, so short solves draw few samples.
 FIRST_REFILL = 64
 
-# slots of the fused loop's buffer counters (``FusedRRT.counters``; ``FusedConnect`` adds the goal tree's vertices seen)
-B_POS, B_COUNT, B_REFILLS, B_SEEN_B = range(4)
+# slots of the fused loop's buffer counters (``FusedRRT.counters``; ``FusedConnect`` adds the goal tree's vertices
+# seen; RRT's loop ends its call after a refill whose draw set ``B_STOP``)
+B_POS, B_COUNT, B_REFILLS, B_SEEN_B, B_STOP = range(5)
 
 
 def refill_size(refills: int) -> int:
@@ -84,7 +85,8 @@ def rrt_loop(budget, draw, state, buffers, rng, loop):
     ``buffers`` is (counters, points, anchor codes) (``planners.fused.FusedRRT``); ``loop`` is the
     planner's ``loop_args()``. Batches are drawn when the buffer runs dry, at ``min(batch,
     refill_size(refills))`` samples, so the run matches a planner calling the sampler's ``draw``
-    sample for sample.
+    sample for sample. A draw that sets the counters' ``B_STOP`` (its state holds them) ends the call
+    right after its refill, its samples unused in the buffer.
     """
     counters, pts, anch = buffers
     tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb = loop
@@ -99,6 +101,8 @@ def rrt_loop(budget, draw, state, buffers, rng, loop):
         if counters[B_POS] >= counters[B_COUNT]:
             refill(draw, state, X, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER], rng, counters, pts,
                    anch, batch)
+            if counters[B_STOP]:  # the draw ends this call before its samples are used (``planners.fused``)
+                return s
         p = counters[B_POS]
         rrt_iterate(pts[p], anch[p], tree, istate, fstate, last, world, space, goal, step, tol, low, high, st, sb, q,
                     qe_buf, new)

@@ -1,19 +1,20 @@
-"""When should the lazy route sampler compute the encoder's field? Its switch (``after``) chosen by time to solution.
+"""When should the lazy route sampler compute the encoder's field? Its switches chosen by time to solution.
 
     PYTHONPATH=$PWD python scripts/experiments/lazy_route_rule.py [--maps 8 4 2] [--seeds 2] [--out DIR]
 
 ``LazyRouteSampler`` (``learning.samplers.lazy_route``) runs RRT on the straight-line field and computes the
-encoder's field once the run has not solved within ``after`` iterations per step-sized square of the map. Every
-candidate of ``--after`` (0 is the route sampler, inf its ablation) plans the validation maps of each family at 128,
-256 and 512 cells (``--maps`` of each size; ``planner_maps("validation", ...)``) at planner seeds 0 upwards, RRT
-step 4, at most 20,000 iterations, one process and one thread, in turn on each (query, seed) after two untimed
-warm-up queries.
-A run's time goes from the planner's construction (the sampler's bind and its own field: no cache) to the end of
-its solve; an unsolved run counts with the time it ran.
+encoder's field once the run has not solved within ``after`` iterations per step-sized square of the map, or once
+its tree has come no closer to the goal for ``stall`` iterations. Every pair of ``--after`` and ``--stall``
+candidates (with after = 0, the route sampler, as a reference unless ``--no-reference``) plans the validation
+maps of each family at 128, 256 and 512 cells (``--maps`` of each size; ``planner_maps("validation", ...)``) at
+planner seeds 0 upwards, RRT step 4, at most 20,000 iterations, one process and one thread, in turn on each
+(query, seed) after two untimed warm-up queries. A run's time goes from the planner's construction (the sampler's
+bind and its own field: no cache) to the end of its solve; an unsolved run counts with the time it ran.
 
 The rule: the lowest geometric mean over the (family, size) cells of each candidate's median time wins, and a
-candidate within 3% of it with a smaller ``after`` wins over it. Prints a table per candidate (geometric mean,
-pooled mean time, median iterations and success per cell) and the choice; ``--out`` also writes the runs as JSON.
+candidate within 3% of it with a smaller ``stall``, then a smaller ``after``, wins over it (the reference takes no
+part). Prints a table per candidate (geometric mean, pooled mean time, median iterations and success per cell) and
+the choice; ``--out`` also writes the runs as JSON.
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ from learning.samplers.registry import make_sampler
 from planners import make_planner
 
 STEP, BUDGET, SIZES = 4.0, 20000, (128, 256, 512)
-CANDIDATES = (0.0, 0.1, 0.2, 0.35, 0.7, 1.4, 2.8, math.inf)
+AFTER = (0.35, 0.7, 1.4, math.inf)
+STALL = (10.0, 25.0, 50.0, 100.0, 200.0, math.inf)
 #: A candidate within this share of the lowest geometric mean, with a smaller ``after``, wins over it.
 TIE = 0.03
 
@@ -46,10 +48,13 @@ def run(problem, sampler, seed: int) -> dict:
             "switched": bool(planner.sampler.switched)}
 
 
-def choose(table: dict[float, float]) -> float:
-    """The rule: the lowest value wins; one within ``TIE`` of it with a smaller key wins over it."""
+def choose(table: dict[tuple[float, float], float]) -> tuple[float, float]:
+    """The rule: the lowest value wins; one within ``TIE`` of it with a smaller (stall, after) wins over it.
+
+    ``table`` maps (after, stall) to the geometric mean of the cells' median times.
+    """
     best = min(table.values())
-    return min(a for a, v in table.items() if v <= (1 + TIE) * best)
+    return min((k for k, v in table.items() if v <= (1 + TIE) * best), key=lambda k: (k[1], k[0]))
 
 
 def main(argv=None) -> int:
@@ -57,17 +62,22 @@ def main(argv=None) -> int:
     ap.add_argument("--maps", type=int, nargs=len(SIZES), default=[8, 4, 2], metavar="N",
                     help=f"validation maps per family at sides {', '.join(map(str, SIZES))} (default 8 4 2)")
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per map (default 2)")
-    ap.add_argument("--after", type=float, nargs="+", default=list(CANDIDATES), help="candidates (default: the rule's)")
+    ap.add_argument("--after", type=float, nargs="+", default=list(AFTER), help="candidates (default: the rule's)")
+    ap.add_argument("--stall", type=float, nargs="+", default=list(STALL), help="candidates (default: the rule's)")
+    ap.add_argument("--no-reference", action="store_true", help="leave out after = 0 (the route sampler)")
     ap.add_argument("--out", type=Path, default=None, help="write runs.json here (a new or empty folder)")
     args = ap.parse_args(argv)
-    if min(args.maps) < 0 or args.seeds < 1 or not all(a >= 0 for a in args.after):
-        ap.error("--maps must be >= 0, --seeds >= 1 and every --after >= 0")
+    if min(args.maps) < 0 or args.seeds < 1 or not all(a >= 0 for a in args.after) or \
+            not all(s >= 1 for s in args.stall):
+        ap.error("--maps must be >= 0, --seeds >= 1, every --after >= 0 and every --stall >= 1")
     if args.out is not None and args.out.exists() and any(args.out.iterdir()):
         ap.error(f"--out {args.out}: exists and is not empty")
     cells = {(family, size): problems for size, n in zip(SIZES, args.maps, strict=True) if n
              for family, problems in planner_maps("validation", n, size=size).items()}
-    samplers = {a: make_sampler("route_lazy", after=a) for a in args.after}
-    runs: dict[float, dict] = {a: {c: [] for c in cells} for a in args.after}
+    pairs = [] if args.no_reference else [(0.0, math.inf)]
+    pairs += [(a, s) for a in args.after for s in args.stall if (a, s) not in pairs]
+    samplers = {k: make_sampler("route_lazy", after=k[0], stall=k[1]) for k in pairs}
+    runs: dict[tuple, dict] = {k: {c: [] for c in cells} for k in pairs}
     with planning_threads(1):
         warm = next(iter(cells.values()))[:2]
         for p in warm:
@@ -80,20 +90,22 @@ def main(argv=None) -> int:
                         runs[a][cell].append(run(p, s, seed))
     geo = {a: math.exp(np.mean([math.log(np.median([r["ms"] for r in rs])) for rs in by.values()]))
            for a, by in runs.items()}
-    print("| after | geometric mean of median ms | pooled mean ms | switched | "
+    print("| after | stall | geometric mean of median ms | pooled mean ms | switched | "
           + " | ".join(f"{f} {s}: median its / ms / solved" for f, s in cells) + " |")
-    print("|---|---|---|---|" + "---|" * len(cells))
+    print("|---|---|---|---|---|" + "---|" * len(cells))
     for a, by in runs.items():
         every = [r for rs in by.values() for r in rs]
         row = [f"{np.median([r['iterations'] for r in rs]):.0f} / {np.median([r['ms'] for r in rs]):.2f} / "
                f"{sum(r['solved'] for r in rs)}/{len(rs)}" for rs in by.values()]
-        print(f"| {a:g} | {geo[a]:.3f} | {np.mean([r['ms'] for r in every]):.2f} | "
+        print(f"| {a[0]:g} | {a[1]:g} | {geo[a]:.3f} | {np.mean([r['ms'] for r in every]):.2f} | "
               f"{sum(r['switched'] for r in every)}/{len(every)} | " + " | ".join(row) + " |")
-    print(f"\nchosen: after = {choose(geo):g} (lowest geometric mean {min(geo.values()):.3f} ms; ties within "
-          f"{TIE:.0%} to the smaller after)")
+    reference = None if args.no_reference or (0.0 in args.after and math.inf in args.stall) else (0.0, math.inf)
+    after, stall = choose({k: v for k, v in geo.items() if k != reference})
+    print(f"\nchosen: after = {after:g}, stall = {stall:g} (lowest geometric mean {min(geo.values()):.3f} ms; ties "
+          f"within {TIE:.0%} to the smaller stall, then after)")
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
-        data = {str(a): {f"{f} {s}": rs for (f, s), rs in by.items()} for a, by in runs.items()}
+        data = {f"{a[0]:g} {a[1]:g}": {f"{f} {s}": rs for (f, s), rs in by.items()} for a, by in runs.items()}
         (args.out / "runs.json").write_text(json.dumps(data, indent=1))
     return 0
 
