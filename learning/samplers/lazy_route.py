@@ -155,8 +155,9 @@ class LazyRouteSampler(RouteSampler):
 
     def fuse(self, planner: Planner) -> LazyLoop | FusedRRT | None:
         """RRT's loop with both phases' draws compiled in, the switch between them (None for other planners)."""
-        if self.switched:
-            return fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
+        if self.switched or math.isinf(self.stall):  # no stall switch: the route sampler's own loop to the switch
+            fused = fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
+            return fused if fused is None or self.switched else LazyLoop(self, fused)
         fused = fuse_rrt(planner, stall_rrt_loop, None, self.batch)
         if fused is None:
             return None
