@@ -10,10 +10,10 @@ from conftest import load_script
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from learning.samplers.lazy_route import SHIPPED_AFTER, LazyRouteSampler
+from learning.samplers.lazy_route import SHIPPED_AFTER, SHIPPED_CONNECT_AFTER, LazyConnectSampler, LazyRouteSampler
 from learning.samplers.registry import make_sampler
 from learning.samplers.route import RouteSampler
-from learning.samplers.route_rules import BidirectionalRouteSampler, CorridorSampler
+from learning.samplers.route_rules import CorridorSampler
 from planners import OccupancyGrid, Problem, make_planner
 from planners.base.fileio import InputError
 from planners.maps.generators import VALIDATION_SEED0, generate
@@ -113,9 +113,45 @@ def test_a_stalled_straight_line_switches_to_the_field_fused_as_drawn(maps):
     assert switched, "the maze and the bugtrap stall the straight line for 8 iterations"
 
 
+class UnfusedConnect(LazyConnectSampler):
+    """RRT-Connect's lazy rule drawn through ``draw``, one Python call per iteration."""
+
+    fuse = None
+
+
+def _connect(problem, sampler, seed, pieces=()):
+    planner = make_planner("RRTConnect", problem, sampler=sampler, seed=seed, extension_step=4.0)
+    for size in pieces:
+        planner.solve(max_iterations=size)
+    r = planner.solve(max_iterations=20000)
+    return (r.solved, r.iterations, r.collision_checks, r.num_vertices,
+            None if r.path is None else r.path.tobytes()), planner.sampler
+
+
+def test_rrt_connects_lazy_rule_is_uniform_then_the_route_rule_fused_as_drawn(maps):
+    route, uniform = make_sampler("route"), make_sampler("uniform")
+    at_once, never = make_sampler("route_lazy", connect_after=0), make_sampler("route_lazy", connect_after=math.inf)
+    middle = make_sampler("route_lazy", connect_after=0.05)  # 256 step squares: the switch at iteration 13
+    switched = kept = 0
+    for p in maps:
+        for seed in (0, 1):
+            assert _connect(p, at_once, seed)[0] == _connect(p, route, seed)[0]
+            key, bound = _connect(p, never, seed)
+            assert key == _connect(p, uniform, seed)[0] and not bound.switched and bound.forward_passes == 0
+            key, bound = _connect(p, middle, seed)
+            assert key == _connect(p, UnfusedConnect(middle.eager(), 0.05), seed)[0]
+            assert key == _connect(p, middle, seed, pieces=(1, 3, 12, 2))[0]
+            switched += bound.switched
+            kept += not bound.switched
+            assert bound.forward_passes == (2 if bound.switched else 0)
+    assert switched and kept, "the maps must give runs on both sides of the switch"
+
+
 def test_other_planners_take_the_route_samplers_own_rules(lazy):
     assert lazy.for_planner("tree") is lazy
-    assert isinstance(lazy.for_planner("bidirectional"), BidirectionalRouteSampler)
+    connect = lazy.for_planner("bidirectional")
+    assert isinstance(connect, LazyConnectSampler) and connect.after == lazy.connect_after == SHIPPED_CONNECT_AFTER
+    assert isinstance(connect.route, RouteSampler) and connect.route.net is lazy.net
     assert isinstance(lazy.for_planner("roadmap"), CorridorSampler)
     eager = lazy.eager()
     assert type(eager) is RouteSampler and eager.net is lazy.net and not hasattr(eager, "after")
@@ -129,7 +165,8 @@ def test_at_a_new_step_both_phases_measure_in_it(lazy):
 
 
 @pytest.mark.parametrize("bad", [{"after": -1.0}, {"after": "3"}, {"after": True}, {"after": math.nan},
-                                 {"stall": 0}, {"stall": math.nan}, {"stall": "5"}, {"batch": 2}])
+                                 {"stall": 0}, {"stall": math.nan}, {"stall": "5"}, {"connect_after": -0.5},
+                                 {"connect_after": None}, {"batch": 2}])
 def test_bad_settings_are_refused_by_name(lazy, bad):
     with pytest.raises(InputError, match=next(iter(bad))):
         LazyRouteSampler(lazy.net, **bad)

@@ -16,8 +16,10 @@ ablation, run for run.
 
 Both phases draw inside RRT's compiled loop: the loop runs up to the switch on the straight-line field, the encoder
 runs, and the loop goes on on the encoder's field, so a fused run is the run drawn through ``draw``, bit for bit.
-Other planner families take the route sampler's own rule for them (``RouteSampler.for_planner``), which needs the
-field from the start.
+RRT-Connect takes ``LazyConnectSampler``: both trees grow by the planner's own uniform sampling (inside its compiled
+loop) until ``connect_after`` iterations per step-sized square, then follow the route field's two fields
+(``BidirectionalRouteSampler``). The roadmaps and RRT* take the route sampler's own rule for them
+(``RouteSampler.for_planner``), which needs the field from the start.
 """
 
 from __future__ import annotations
@@ -35,11 +37,23 @@ from learning.samplers.route import (
     route_draw,
     route_rrt_loop,
 )
+from learning.samplers.route_rules import BidirectionalRouteSampler
 from planners import OccupancyGrid
 from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
-from planners.base.samplers import FAMILY_TREE, SamplerBase
-from planners.fused import B_COUNT, B_POS, B_STOP, FusedRRT, fuse_rrt, rrt_loop
+from planners.base.samplers import FAMILY_BIDIRECTIONAL, FAMILY_TREE, SamplerBase
+from planners.fused import (
+    B_COUNT,
+    B_POS,
+    B_STOP,
+    FusedConnect,
+    FusedRRT,
+    connect_loop,
+    fuse_connect,
+    fuse_rrt,
+    next_double,
+    rrt_loop,
+)
 
 #: The switch, chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``): the
 #: encoder's field is computed once the straight line has not solved within this many iterations per step-sized
@@ -50,8 +64,13 @@ SHIPPED_AFTER = 0.7
 #: pair's objective, outside the rule's 3%, and cut the median time on the 512-cell maze, bugtrap and rooms maps from
 #: 41-107 ms to 31-36 ms: an option for large maps.
 SHIPPED_STALL = math.inf
+#: RRT-Connect's switch (``connect_after``), chosen on the validation maps by time as ``after`` was
+#: (``lazy_route_rule.py --planner RRTConnect``): both trees grow by uniform sampling until this many iterations per
+#: step-sized square of the map, then follow the route field's two fields. On the validation maps uniform RRT-Connect
+#: is as fast (1.4% less time over all cells, within the rule's 3%): the fields are a late safety net there.
+SHIPPED_CONNECT_AFTER = 1.4
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
-LAZY_ATTRIBUTES = ("after", "stall", "straight", "switched", "switch_at")
+LAZY_ATTRIBUTES = ("after", "stall", "connect_after", "straight", "switched", "switch_at")
 
 
 @nb.njit(cache=True)
@@ -91,13 +110,18 @@ class LazyRouteSampler(RouteSampler):
             must be 1, the validated setting, so that the switch falls on one iteration whatever the loop.
     """
 
-    def __init__(self, net, *, after: float = SHIPPED_AFTER, stall: float = SHIPPED_STALL, **kwargs) -> None:
+    def __init__(self, net, *, after: float = SHIPPED_AFTER, stall: float = SHIPPED_STALL,
+                 connect_after: float = SHIPPED_CONNECT_AFTER, **kwargs) -> None:
         if net is None:
             raise InputError("LazyRouteSampler needs an encoder (its straight-line phase is the ablation; for the "
                              "ablation alone use RouteSampler(None) or make_sampler('route_ablation'))")
         if isinstance(after, bool) or not isinstance(after, int | float | np.floating) or not after >= 0:
             raise InputError(f"after = {short_repr(after)}: expected iterations per step-sized square of the map, "
                              f">= 0 (inf: never compute the field)")
+        if isinstance(connect_after, bool) or not isinstance(connect_after, int | float | np.floating) or \
+                not connect_after >= 0:
+            raise InputError(f"connect_after = {short_repr(connect_after)}: expected iterations per step-sized square "
+                             f"of the map, >= 0 (inf: never compute the field)")
         if isinstance(stall, bool) or not isinstance(stall, int | float | np.floating) or not stall >= 1:
             raise InputError(f"stall = {short_repr(stall)}: expected iterations without coming closer to the goal, "
                              f">= 1 (inf: never switch on a stall)")
@@ -106,7 +130,7 @@ class LazyRouteSampler(RouteSampler):
                              f"(batch 1)")
         settings = {**SHIPPED_SETTINGS, **kwargs}
         super().__init__(net, **settings)
-        self.after, self.stall = float(after), float(stall)
+        self.after, self.stall, self.connect_after = float(after), float(stall), float(connect_after)
         self.straight = RouteSampler(None, step_size=self.step_size, **ABLATION_SETTINGS)
         self.switched, self.switch_at = False, 0
 
@@ -124,19 +148,20 @@ class LazyRouteSampler(RouteSampler):
         return out
 
     def for_planner(self, family: str) -> SamplerBase:
-        """This sampler for RRT (``"tree"``); the route sampler's rule for every other family (``rule_for``)."""
-        return self if family == FAMILY_TREE else self.eager().for_planner(family)
+        """This sampler for RRT (``"tree"``), ``LazyConnectSampler`` for RRT-Connect; the route sampler's rule for
+        every other family (``rule_for``)."""
+        if family == FAMILY_TREE:
+            return self
+        if family == FAMILY_BIDIRECTIONAL:
+            return LazyConnectSampler(self.eager(), self.connect_after)
+        return self.eager().for_planner(family)
 
     def _setup(self) -> None:
+        self.check_query(self.problem)  # a map the encoder refuses is refused at bind, not at the switch
         grid = self.problem.world
-        if not isinstance(grid, OccupancyGrid):
-            raise InputError("LazyRouteSampler plans on OccupancyGrid problems")
-        obstacles, _, _ = self._encoder_map(grid)
-        self.net.check_size(obstacles.shape)  # a map the encoder refuses is refused at bind, not at the switch
         self.forward_passes, self.reused_seconds, self.switched = 0, 0.0, False
         self._state = self.straight.bind(self.problem).draw_state
-        squares = grid.height * grid.width * (grid.resolution / self.step_size) ** 2
-        self.switch_at = np.iinfo(np.int64).max if math.isinf(self.after) else math.ceil(self.after * squares)
+        self.switch_at = switch_iteration(self.after, grid, self.step_size)
 
     def switch(self) -> None:
         """Compute the encoder's field for the bound query and follow it from here (once; a no-op after)."""
@@ -167,6 +192,107 @@ class LazyRouteSampler(RouteSampler):
     def __repr__(self) -> str:
         return (f"LazyRouteSampler(after={self.after:g}, stall={self.stall:g}, "
                 f"{super().__repr__()[len('RouteSampler('):]}")
+
+
+def switch_iteration(after: float, grid: OccupancyGrid, step: float) -> int:
+    """``ceil(after * A)`` on a map of ``A`` step-sized squares (``after`` inf: never)."""
+    squares = grid.height * grid.width * (grid.resolution / step) ** 2
+    return np.iinfo(np.int64).max if math.isinf(after) else math.ceil(after * squares)
+
+
+@nb.njit(cache=True)
+def uniform_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
+    """Uniform samples over the bounds ``state`` = (low, high), row by row as ``Generator.random`` fills them."""
+    low, high = state
+    for k in range(pts.shape[0]):
+        for j in range(pts.shape[1]):
+            pts[k, j] = low[j] + (high[j] - low[j]) * next_double(rng)
+
+
+@nb.njit(cache=True)
+def uniform_connect_loop(budget, state_a, state_b, buffers, rng, loop):
+    """RRT-Connect's compiled loop drawing from ``uniform_draw`` for both trees (``planners.fused``)."""
+    return connect_loop(budget, uniform_draw, state_a, state_b, buffers, rng, loop)
+
+
+class LazyConnectSampler(SamplerBase):
+    """RRT-Connect's lazy rule: both trees grow by uniform sampling, then follow the field once it is needed.
+
+    Until iteration ``switch_at`` (``switch_iteration(after, ...)``) each sample is uniform over the map, one at a
+    time (the planner's own sampling, drawn inside its compiled loop); at it, unless the trees have met, the route
+    sampler's two fields are computed and ``BidirectionalRouteSampler``'s rule goes on from the trees grown so far.
+
+    Args:
+        route: The route sampler whose rule each tree follows after the switch (``LazyRouteSampler.eager``).
+        after: The switch in iterations per step-sized square of the map (inf: never).
+    """
+
+    def __init__(self, route: RouteSampler, after: float) -> None:
+        self.route, self.after = route, float(after)
+
+    def _setup(self) -> None:
+        self.route.check_query(self.problem)  # refused at bind, not at the switch
+        self.switch_at = switch_iteration(self.after, self.problem.world, self.route.step_size)
+        self.bounds = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high))
+        self.rule: BidirectionalRouteSampler | None = None
+
+    @property
+    def switched(self) -> bool:
+        """Whether the fields have been computed."""
+        return self.rule is not None
+
+    @property
+    def forward_passes(self) -> int:
+        """The encoder's passes this query took (0 before the switch, two fields after)."""
+        return 0 if self.rule is None else self.rule.forward_passes
+
+    @property
+    def reused_seconds(self) -> float:
+        """Encoder seconds of fields taken from a cache (see ``RouteSampler``)."""
+        return 0.0 if self.rule is None else self.rule.reused_seconds
+
+    def switch(self) -> BidirectionalRouteSampler:
+        """Compute the two fields for the bound query and follow them from here (once)."""
+        if self.rule is None:
+            self.rule = BidirectionalRouteSampler(self.route).bind(self.problem)
+        return self.rule
+
+    def draw(self, rng, n, view):
+        if self.rule is None and view.iteration >= self.switch_at:
+            self.switch()
+        if self.rule is not None:
+            return self.rule.draw(rng, n, view)
+        return self._uniform(rng.random((1, self.problem.dim)))
+
+    def fuse(self, planner: Planner) -> LazyConnectLoop | FusedConnect | None:
+        """RRT-Connect's loop with both phases' draws compiled in, the switch between them (None for others)."""
+        if self.rule is not None:
+            return self.rule.fuse(planner)
+        fused = fuse_connect(planner, uniform_connect_loop, self.bounds, self.bounds, (1, 1))
+        return None if fused is None else LazyConnectLoop(self, fused)
+
+    def __repr__(self) -> str:
+        return f"LazyConnectSampler({self.route!r}, after={self.after:g})"
+
+
+class LazyConnectLoop:
+    """RRT-Connect's fused loop with uniform draws up to the sampler's switch, then the route field's."""
+
+    __slots__ = ("sampler", "fused")
+
+    def __init__(self, sampler: LazyConnectSampler, fused: FusedConnect) -> None:
+        self.sampler, self.fused = sampler, fused
+
+    def __call__(self, planner: Planner, n: int) -> int:
+        s, used = self.sampler, 0
+        if not s.switched:
+            m = min(n, s.switch_at - planner.iterations)
+            if m > 0:
+                used = self.fused(planner, m)
+                if used < m or used == n:  # solved (or out of room) before the switch, or the call is spent
+                    return used
+            self.fused = s.switch().fuse(planner)  # its own buffers: the goal tree's closest distance from scratch
+        return used + self.fused(planner, n - used)
 
 
 class LazyLoop:

@@ -513,6 +513,16 @@ class RouteSampler(SamplerBase):
         self.reused_seconds = seconds if reused else 0.0
         return learned
 
+    def check_query(self, problem: Problem) -> None:
+        """Refuse (``InputError``) a query this sampler cannot plan: off an ``OccupancyGrid``, or a map its encoder
+        refuses at this step (too large: ``FieldEncoder.check_size``), before any pass."""
+        grid = problem.world
+        if not isinstance(grid, OccupancyGrid):
+            raise InputError(f"{type(self).__name__} plans on OccupancyGrid problems")
+        if self.net is not None:
+            obstacles, _, _ = self._copy_with(problem=problem)._encoder_map(grid)
+            self.net.check_size(obstacles.shape)
+
     def has_field(self, problem: Problem) -> bool:
         """Whether ``fields`` holds the encoder's field of ``problem`` (False without an encoder or a cache)."""
         grid = problem.world
