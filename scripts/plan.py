@@ -407,6 +407,9 @@ def main(argv=None) -> int:
           f"{first_use}")
     print(f"                  (and load {t_load:.3f} s, smooth {t['smooth']:.3f} s, figure {t['figure']:.3f} s, "
           f"gif {t['gif']:.3f} s)")
+    if getattr(out.planner.sampler, "switched", False):  # a lazy route sampler ran its encoder inside the planning
+        print("                  (the lazy route sampler computed the encoder's field during the planning: "
+              f"{out.planner.sampler.forward_passes} pass(es))")
     if r.solved:
         print(f"path length:      {out.length:.2f} raw ({len(out.path)} states)")
         if out.smoothed is not None:

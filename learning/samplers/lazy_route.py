@@ -46,6 +46,7 @@ from planners.fused import (
     B_COUNT,
     B_POS,
     B_STOP,
+    CHUNK,
     FusedConnect,
     FusedRRT,
     connect_loop,
@@ -218,9 +219,10 @@ def uniform_connect_loop(budget, state_a, state_b, buffers, rng, loop):
 class LazyConnectSampler(SamplerBase):
     """RRT-Connect's lazy rule: both trees grow by uniform sampling, then follow the field once it is needed.
 
-    Until iteration ``switch_at`` (``switch_iteration(after, ...)``) each sample is uniform over the map, one at a
-    time (the planner's own sampling, drawn inside its compiled loop); at it, unless the trees have met, the route
-    sampler's two fields are computed and ``BidirectionalRouteSampler``'s rule goes on from the trees grown so far.
+    Until iteration ``switch_at`` (``switch_iteration(after, ...)``) each sample is uniform over the map, drawn in
+    the planner's batches inside its compiled loop; at it, unless the trees have met, the batch's samples past it are
+    dropped, the route sampler's two fields are computed and ``BidirectionalRouteSampler``'s rule goes on from the
+    trees grown so far.
 
     Args:
         route: The route sampler whose rule each tree follows after the switch (``LazyRouteSampler.eager``).
@@ -262,13 +264,15 @@ class LazyConnectSampler(SamplerBase):
             self.switch()
         if self.rule is not None:
             return self.rule.draw(rng, n, view)
-        return self._uniform(rng.random((1, self.problem.dim)))
+        # a whole batch is drawn, as the fused loop draws it; the samples past the switch are dropped, as it drops them
+        pts = self._uniform(rng.random((min(n, CHUNK), self.problem.dim)))
+        return pts[:min(len(pts), self.switch_at - view.iteration)]
 
     def fuse(self, planner: Planner) -> LazyConnectLoop | FusedConnect | None:
         """RRT-Connect's loop with both phases' draws compiled in, the switch between them (None for others)."""
         if self.rule is not None:
             return self.rule.fuse(planner)
-        fused = fuse_connect(planner, uniform_connect_loop, self.bounds, self.bounds, (1, 1))
+        fused = fuse_connect(planner, uniform_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
         return None if fused is None else LazyConnectLoop(self, fused)
 
     def __repr__(self) -> str:
@@ -291,7 +295,9 @@ class LazyConnectLoop:
                 used = self.fused(planner, m)
                 if used < m or used == n:  # solved (or out of room) before the switch, or the call is spent
                     return used
-            self.fused = s.switch().fuse(planner)  # its own buffers: the goal tree's closest distance from scratch
+            # the route rule's own loop and buffers: the uniform batch's samples past the switch are dropped, and the
+            # goal tree's closest distance to the start is computed from scratch, as its ``draw`` computes it
+            self.fused = s.switch().fuse(planner)
         return used + self.fused(planner, n - used)
 
 

@@ -125,10 +125,11 @@ def connect_loop(budget, draw, state_a, state_b, buffers, rng, loop):
     counters, pts, anch, closest_b, batches = buffers
     ta, tb, istate, fstate, last, world, space, goal, step, low, high, max_connect, st, sb, scratch = loop
     start = ta.X[0].copy()  # the start tree's root: the start state
-    for s in range(budget):
+    done = 0
+    while done < budget:
         Xa, Xb = ta.X, tb.X
         if istate[I_SOLVED] or istate[I_N] + max_connect >= Xa.shape[0] or istate[I_N_B] + max_connect >= Xb.shape[0]:
-            return s
+            return done
         if counters[B_POS] >= counters[B_COUNT]:
             if istate[I_SWAP] == 1:  # the goal tree's turn
                 nb_ = istate[I_N_B]
@@ -139,11 +140,15 @@ def connect_loop(budget, draw, state_a, state_b, buffers, rng, loop):
             else:
                 refill(draw, state_a, Xa, istate[I_N], istate[I_BEST_V], fstate[F_BEST_D], istate[I_ITER] // 2, rng,
                        counters, pts, anch, batches[0])
+        # the buffer's samples in one call (a batch's samples serve both trees in turn, as the planner's own do)
         p = counters[B_POS]
-        if connect_run(pts[p:p + 1], anch[p:p + 1], ta, tb, istate, fstate, last, world, space, goal, step, low, high,
-                       max_connect, st, sb, scratch) == 0:
-            return s
-        counters[B_POS] = p + 1
+        k = min(counters[B_COUNT] - p, budget - done)
+        used = connect_run(pts[p:p + k], anch[p:p + k], ta, tb, istate, fstate, last, world, space, goal, step, low,
+                           high, max_connect, st, sb, scratch)
+        counters[B_POS] = p + used
+        done += used
+        if used < k:  # solved, or a tree is full
+            return done
     return budget
 
 
