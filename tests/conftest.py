@@ -72,6 +72,24 @@ def npy_map_folder(folder: Path, count: int, side: int = 32, family: str = "fore
     return folder
 
 
+def random_walled_problem(data, size: int, *, wall: int, gap: int, tolerance: float):
+    """A hypothesis-drawn map: 1 to 3 vertical walls ``wall`` cells thick, each with a ``gap`` cells tall, and a
+    query between two free cells (``data``: ``st.data()``)."""
+    from hypothesis import strategies as st
+
+    from planners import OccupancyGrid, Problem
+
+    obs = np.zeros((size, size), dtype=bool)
+    for _ in range(data.draw(st.integers(1, 3))):
+        col = data.draw(st.integers(6 + wall, size - 7 - wall))
+        row = data.draw(st.integers(1, size - 1 - gap))
+        obs[:, col:col + wall] = True
+        obs[row:row + gap, col:col + wall] = False
+    free = np.argwhere(~obs)
+    a, b = (free[data.draw(st.integers(0, len(free) - 1))] for _ in range(2))
+    return Problem(OccupancyGrid(obs), (a[1] + 0.5, a[0] + 0.5), (b[1] + 0.5, b[0] + 0.5), goal_tolerance=tolerance)
+
+
 def movingai_dir() -> Path | None:
     """The shared MovingAI maps (the library's lookup, anchored at the repo rather than the working directory)."""
     try:

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
-from conftest import load_script
+from conftest import load_script, random_walled_problem
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -14,7 +13,7 @@ from learning.samplers.lazy_route import SHIPPED_AFTER, SHIPPED_CONNECT_AFTER, L
 from learning.samplers.registry import make_sampler
 from learning.samplers.route import RouteSampler
 from learning.samplers.route_rules import CorridorSampler
-from planners import OccupancyGrid, Problem, make_planner
+from planners import make_planner
 from planners.base.fileio import InputError
 from planners.maps.generators import VALIDATION_SEED0, generate
 
@@ -25,8 +24,10 @@ class Unfused(LazyRouteSampler):
     fuse = None
 
 
-def _run(problem, sampler, seed, pieces=()):
-    planner = make_planner("RRT", problem, sampler=sampler, seed=seed, step_size=4.0)
+def _run(problem, sampler, seed, pieces=(), planner_name="RRT"):
+    """One run solved after ``pieces`` (solves of those sizes): what must match, and the planner's bound sampler."""
+    step = {"step_size": 4.0} if planner_name == "RRT" else {"extension_step": 4.0}
+    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, **step)
     for size in pieces:
         planner.solve(max_iterations=size)
     r = planner.solve(max_iterations=20000)
@@ -83,16 +84,7 @@ def test_a_fused_run_is_the_drawn_run_and_a_run_in_pieces_is_one_solve(maps):
 @settings(max_examples=8, deadline=None)
 @given(data=st.data())
 def test_fused_and_drawn_lazy_runs_are_the_same_on_random_walled_maps(data):
-    size = 64
-    obs = np.zeros((size, size), dtype=bool)
-    for _ in range(data.draw(st.integers(1, 3))):
-        col = data.draw(st.integers(8, size - 9))
-        gap = data.draw(st.integers(1, size - 6))
-        obs[:, col:col + 2] = True
-        obs[gap:gap + 5, col:col + 2] = False
-    free = np.argwhere(~obs)
-    a, b = (free[data.draw(st.integers(0, len(free) - 1))] for _ in range(2))
-    p = Problem(OccupancyGrid(obs), (a[1] + 0.5, a[0] + 0.5), (b[1] + 0.5, b[0] + 0.5), goal_tolerance=3.0)
+    p = random_walled_problem(data, 64, wall=2, gap=5, tolerance=3.0)
     after = data.draw(st.sampled_from([0.0, 0.02, 0.1, 0.5, math.inf]))
     stall = data.draw(st.sampled_from([1, 3, 10, 40, math.inf]))
     seed = data.draw(st.integers(0, 2**31 - 1))
@@ -120,12 +112,7 @@ class UnfusedConnect(LazyConnectSampler):
 
 
 def _connect(problem, sampler, seed, pieces=()):
-    planner = make_planner("RRTConnect", problem, sampler=sampler, seed=seed, extension_step=4.0)
-    for size in pieces:
-        planner.solve(max_iterations=size)
-    r = planner.solve(max_iterations=20000)
-    return (r.solved, r.iterations, r.collision_checks, r.num_vertices,
-            None if r.path is None else r.path.tobytes()), planner.sampler
+    return _run(problem, sampler, seed, pieces, "RRTConnect")
 
 
 def test_rrt_connects_lazy_rule_is_uniform_then_the_route_rule_fused_as_drawn(maps):

@@ -7,6 +7,7 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import random_walled_problem
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -290,16 +291,7 @@ def test_rrtstars_loop_fused_to_its_first_solution_then_handed_back_plans_the_sa
 @given(data=st.data())
 def test_fused_and_drawn_rules_plan_the_same_runs_on_random_maps(data):
     """Random walls with random gaps, random ends and seeds: RRT-Connect's and RRT*'s fused loops equal ``draw``."""
-    size = 40
-    obs = np.zeros((size, size), dtype=bool)
-    for _ in range(data.draw(st.integers(1, 3))):
-        col = data.draw(st.integers(6, size - 7))
-        gap = data.draw(st.integers(1, size - 4))
-        obs[:, col] = True
-        obs[gap:gap + 3, col] = False
-    free = np.argwhere(~obs)
-    a, b = (free[data.draw(st.integers(0, len(free) - 1))] for _ in range(2))
-    p = Problem(OccupancyGrid(obs), (a[1] + 0.5, a[0] + 0.5), (b[1] + 0.5, b[0] + 0.5), goal_tolerance=1.5)
+    p = random_walled_problem(data, 40, wall=1, gap=3, tolerance=1.5)
     seed = data.draw(st.integers(0, 2**31 - 1))
     batch = data.draw(st.sampled_from([1, 2, 8]))  # above 1 a refill spans both trees' turns, or the first solution
     route = (make_sampler(data.draw(st.sampled_from(["route_ablation", "exact_route"])), step_size=2.0) if batch == 1
