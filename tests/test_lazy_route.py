@@ -36,6 +36,12 @@ def _run(problem, sampler, seed, pieces=(), planner_name="RRT"):
     return key, planner.sampler
 
 
+def _same(key, bound, other) -> bool:
+    """The same run, and the field computed (or not) alike: a fused run that solves on the switch's iteration must
+    not compute a field its drawn twin never needs."""
+    return key == other[0] and bound.switched == other[1].switched and bound.forward_passes == other[1].forward_passes
+
+
 @pytest.fixture(scope="module")
 def lazy():
     return make_sampler("route_lazy")
@@ -71,7 +77,7 @@ def test_a_fused_run_is_the_drawn_run_and_a_run_in_pieces_is_one_solve(maps):
     for p in maps:
         for seed in (0, 1, 2):
             key, bound = _run(p, fused, seed)
-            assert key == _run(p, drawn, seed)[0]
+            assert _same(key, bound, _run(p, drawn, seed))
             assert key == _run(p, fused, seed, pieces=(1, 1, 5, 9, 2))[0]
             switched += bound.switched
             kept += not bound.switched
@@ -79,6 +85,19 @@ def test_a_fused_run_is_the_drawn_run_and_a_run_in_pieces_is_one_solve(maps):
             if bound.switched:
                 assert key[1] > bound.switch_at == 32
     assert switched and kept, "the maps must give runs on both sides of the switch"
+
+
+def test_a_run_solved_on_the_switchs_iteration_computes_no_field(maps):
+    """The switch falls just after the iteration that solves: neither the fused loop nor ``draw`` computes a field."""
+    ablation = make_sampler("route_ablation")
+    for p in maps:
+        solved_at = _run(p, ablation, 0)[0][1]
+        for planner_name, lazy in (("RRT", make_sampler("route_lazy", after=solved_at / 256)),
+                                   ("RRTConnect", make_sampler("route_lazy", connect_after=solved_at / 256))):
+            key, bound = _run(p, lazy, 0, planner_name=planner_name)
+            if planner_name == "RRT":
+                assert key[1] == solved_at == bound.switch_at  # the straight line solves on the last iteration before
+            assert not bound.switched or key[1] > bound.switch_at
 
 
 @settings(max_examples=8, deadline=None)
@@ -89,7 +108,7 @@ def test_fused_and_drawn_lazy_runs_are_the_same_on_random_walled_maps(data):
     stall = data.draw(st.sampled_from([1, 3, 10, 40, math.inf]))
     seed = data.draw(st.integers(0, 2**31 - 1))
     fused = make_sampler("route_lazy", after=after, stall=stall)
-    assert _run(p, fused, seed)[0] == _run(p, Unfused(fused.net, after=after, stall=stall), seed)[0]
+    assert _same(*_run(p, fused, seed), _run(p, Unfused(fused.net, after=after, stall=stall), seed))
 
 
 def test_a_stalled_straight_line_switches_to_the_field_fused_as_drawn(maps):
@@ -100,7 +119,7 @@ def test_a_stalled_straight_line_switches_to_the_field_fused_as_drawn(maps):
     for p in maps:
         for seed in (0, 1, 2):
             key, bound = _run(p, fused, seed)
-            assert key == _run(p, drawn, seed)[0] == _run(p, fused, seed, pieces=(1, 3, 8, 2))[0]
+            assert _same(key, bound, _run(p, drawn, seed)) and _same(key, bound, _run(p, fused, seed, (1, 3, 8, 2)))
             switched += bound.switched
     assert switched, "the maze and the bugtrap stall the straight line for 8 iterations"
 
@@ -126,7 +145,7 @@ def test_rrt_connects_lazy_rule_is_uniform_then_the_route_rule_fused_as_drawn(ma
             key, bound = _connect(p, never, seed)
             assert key == _connect(p, uniform, seed)[0] and not bound.switched and bound.forward_passes == 0
             key, bound = _connect(p, middle, seed)
-            assert key == _connect(p, UnfusedConnect(middle.eager(), 0.05), seed)[0]
+            assert _same(key, bound, _connect(p, UnfusedConnect(middle.eager(), 0.05), seed))
             assert key == _connect(p, middle, seed, pieces=(1, 3, 12, 2))[0]
             switched += bound.switched
             kept += not bound.switched

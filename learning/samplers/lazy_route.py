@@ -293,7 +293,7 @@ class LazyConnectLoop:
             m = min(n, s.switch_at - planner.iterations)
             if m > 0:
                 used = self.fused(planner, m)
-                if used < m or used == n:  # solved (or out of room) before the switch, or the call is spent
+                if used < m or used == n or planner.solved:  # solved (or out of room), or the call is spent
                     return used
             # the route rule's own loop and buffers: the uniform batch's samples past the switch are dropped, and the
             # goal tree's closest distance to the start is computed from scratch, as its ``draw`` computes it
@@ -317,13 +317,8 @@ class LazyLoop:
                 used = self.fused(planner, m)
                 if counters[B_STOP]:  # stalled: the straight line's sample in the buffer is dropped
                     counters[B_STOP], counters[B_POS] = 0, counters[B_COUNT]
-                elif used < m or used == n:  # solved (or out of room) before the switch, or the call is spent
+                elif used < m or used == n or planner.solved:  # solved (or out of room), or the call is spent
                     return used
             s.switch()
             self.fused.entry, self.fused.state = route_rrt_loop, s.draw_state
         return used + self.fused(planner, n - used)
-
-    @property
-    def refills(self) -> int:
-        """Refills drawn so far (``FusedRRT.refills``)."""
-        return self.fused.refills
