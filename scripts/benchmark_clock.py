@@ -7,8 +7,8 @@
 
 On the comparison's test queries (generated families at 128 cells, their shifted maps, the unseen families and
 each MovingAI map), in this process and one thread, RRT with the route encoder, the lazy route sampler (the
-straight line first, the encoder only where that has not solved in time) with RRT and with RRT-Connect (its
-uniform sampling first), the encoder's ablation and the exact reference, RRT with the goal bias tuned on the
+straight line first, the encoder only where that has not solved in time) with RRT, and with RRT-Connect and PRM
+(their uniform sampling first), the encoder's ablation and the exact reference, RRT with the goal bias tuned on the
 tuning split, RRT-Connect, PRM and (with OMPL's Python bindings,
 ``pip install -c constraints.txt -e ".[bench]"``) OMPL's RRT-Connect plan every query at the same planner seeds;
 see ``learning.evaluation.clock`` for what a run's time includes and the targets. Prints and writes (``--out``,

@@ -12,7 +12,8 @@ from planners.tools.benchmark import Run
 
 
 def _run(map_set: str, method: str, ms: float, solved: bool = True, query: str = "q", seed: int = 0) -> Run:
-    planner = {C.CONNECT: "RRTConnect", C.LAZY_CONNECT: "RRTConnect", C.PRM: "PRM"}.get(method, "RRT")
+    planners = {C.CONNECT: "RRTConnect", C.LAZY_CONNECT: "RRTConnect", C.PRM: "PRM", C.LAZY_PRM: "PRM"}
+    planner = planners.get(method, "RRT")
     sampler = "OMPL" if method == C.OMPL_CONNECT else method
     return Run(map=map_set, query=query, split="test", planner=planner, sampler=sampler, seed=seed, solved=solved,
                iterations=10, lower_bound=5, candidates=10, collision_checks=10, wall_time=ms / 1e3,
@@ -61,10 +62,10 @@ def test_the_clock_benchmark_times_every_method_on_the_same_queries(tmp_path, ca
     assert bench.main(["--families", "forest", "--maps", "2", "--tuning-maps", "1", "--seeds", "1", "--no-shifted",
                        "--no-unseen", "--movingai-maps", "--no-ompl", "--processes", "1", "--out", str(out)]) == 0
     text = (out / "clock.md").read_text()
-    for method in (C.ROUTE, C.LAZY, C.LAZY_CONNECT, C.ABLATION, C.EXACT, C.TUNED, C.CONNECT, C.PRM):
+    for method in (C.ROUTE, C.LAZY, C.LAZY_CONNECT, C.LAZY_PRM, C.ABLATION, C.EXACT, C.TUNED, C.CONNECT, C.PRM):
         assert method in text
     lines = (out / "runs.csv").read_text().splitlines()
-    assert len(lines) == 1 + 2 * 8  # two queries, one seed, eight methods
+    assert len(lines) == 1 + 2 * 9  # two queries, one seed, nine methods
     assert "The fastest method by map size" in text and "| up to 128 |" in text
 
 

@@ -9,10 +9,17 @@ from conftest import load_script, random_walled_problem
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from learning.samplers.lazy_route import SHIPPED_AFTER, SHIPPED_CONNECT_AFTER, LazyConnectSampler, LazyRouteSampler
+from learning.samplers.lazy_route import (
+    SHIPPED_AFTER,
+    SHIPPED_CONNECT_AFTER,
+    SHIPPED_ROADMAP_AFTER,
+    LazyConnectSampler,
+    LazyCorridorSampler,
+    LazyRouteSampler,
+)
 from learning.samplers.registry import make_sampler
 from learning.samplers.route import RouteSampler
-from learning.samplers.route_rules import CorridorSampler
+from learning.samplers.route_rules import ConvergingRouteSampler
 from planners import make_planner
 from planners.base.fileio import InputError
 from planners.maps.generators import VALIDATION_SEED0, generate
@@ -153,12 +160,35 @@ def test_rrt_connects_lazy_rule_is_uniform_then_the_route_rule_fused_as_drawn(ma
     assert switched and kept, "the maps must give runs on both sides of the switch"
 
 
+@pytest.mark.parametrize("planner_name", ["PRM", "LazyPRM", "OBPRM"])
+def test_a_roadmaps_lazy_rule_is_uniform_then_the_corridor(maps, planner_name):
+    at_once = make_sampler("route_lazy", roadmap_after=0)
+    never = make_sampler("route_lazy", roadmap_after=math.inf)
+    middle = make_sampler("route_lazy", roadmap_after=0.1)  # 256 step squares: the switch at sample 26
+    switched = kept = 0
+    for p in maps:
+        for seed in (0, 1):
+            assert _run(p, at_once, seed, planner_name=planner_name)[0] == \
+                _run(p, make_sampler("route"), seed, planner_name=planner_name)[0]
+            key, bound = _run(p, never, seed, planner_name=planner_name)
+            assert key == _run(p, make_sampler("uniform"), seed, planner_name=planner_name)[0]
+            assert not bound.switched and bound.forward_passes == 0
+            key, bound = _run(p, middle, seed, planner_name=planner_name)
+            assert key == _run(p, middle, seed, (1, 7, 30, 2), planner_name)[0]
+            assert bound.forward_passes == (2 if bound.switched else 0)
+            switched += bound.switched
+            kept += not bound.switched
+    assert switched and kept, "the maps must give runs on both sides of the switch"
+
+
 def test_other_planners_take_the_route_samplers_own_rules(lazy):
     assert lazy.for_planner("tree") is lazy
     connect = lazy.for_planner("bidirectional")
     assert isinstance(connect, LazyConnectSampler) and connect.after == lazy.connect_after == SHIPPED_CONNECT_AFTER
     assert isinstance(connect.route, RouteSampler) and connect.route.net is lazy.net
-    assert isinstance(lazy.for_planner("roadmap"), CorridorSampler)
+    roadmap = lazy.for_planner("roadmap")
+    assert isinstance(roadmap, LazyCorridorSampler) and roadmap.after == lazy.roadmap_after == SHIPPED_ROADMAP_AFTER
+    assert isinstance(lazy.for_planner("optimizing"), ConvergingRouteSampler)
     eager = lazy.eager()
     assert type(eager) is RouteSampler and eager.net is lazy.net and not hasattr(eager, "after")
     p = generate("maze", VALIDATION_SEED0 + 3, 64, goal_tolerance=4.0)
@@ -172,7 +202,7 @@ def test_at_a_new_step_both_phases_measure_in_it(lazy):
 
 @pytest.mark.parametrize("bad", [{"after": -1.0}, {"after": "3"}, {"after": True}, {"after": math.nan},
                                  {"stall": 0}, {"stall": math.nan}, {"stall": "5"}, {"connect_after": -0.5},
-                                 {"connect_after": None}, {"batch": 2}])
+                                 {"connect_after": None}, {"roadmap_after": -1}, {"roadmap_after": "1"}, {"batch": 2}])
 def test_bad_settings_are_refused_by_name(lazy, bad):
     with pytest.raises(InputError, match=next(iter(bad))):
         LazyRouteSampler(lazy.net, **bad)

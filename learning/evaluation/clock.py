@@ -6,8 +6,8 @@ seeds, their runs interleaved query by query so a drift in the machine's speed h
 
 - RRT with the route encoder (``route``), its ablation (``route_ablation``), and the exact reference
   (``exact_route``: the same sampler on the grid search's cost-to-go, which costs a grid search per query);
-- RRT and RRT-Connect with the lazy route sampler (``route_lazy``: the straight line, or RRT-Connect's uniform
-  sampling, first, the encoder's field once that has not solved within a budget that grows with the map's area);
+- RRT, RRT-Connect and PRM with the lazy route sampler (``route_lazy``: the straight line, or the planner's
+  uniform sampling, first, the encoder's field once that has not solved within a budget that grows with the map's area);
 - RRT with the goal bias tuned for the set on its tuning split (as the comparison tunes it);
 - RRT-Connect and PRM with their own (uniform) sampling;
 - with OMPL's Python bindings installed, OMPL's RRT-Connect (``planners.tools.ompl_bridge``).
@@ -17,7 +17,7 @@ encoder's pass, a grid search): ``learning.evaluation.run_one``'s wall time. An 
 it ran. "Fastest" is the fastest median of the tuned goal bias, RRT-Connect, PRM and the exact reference; the
 targets are the route sampler's median at most ``AT_MOST`` times it on every set, and at most ``WHERE_SLOW`` times
 it wherever that median is above ``SLOW_MS``, and, over every test query pooled, at most ``OMPL_AT_MOST`` times
-OMPL's RRT-Connect; the lazy route sampler, with RRT and with RRT-Connect, is held to the same targets.
+OMPL's RRT-Connect; the lazy route sampler, with each planner, is held to the same targets.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from planners.tools.benchmark import Run
 
 #: The method labels of a clock comparison, in table order: (label, planner).
 ROUTE, ABLATION, EXACT = "RRT + route encoder", "RRT + route ablation", "RRT + exact route"
-LAZY, LAZY_CONNECT = "RRT + lazy route", "RRT-Connect + lazy route"
+LAZY, LAZY_CONNECT, LAZY_PRM = "RRT + lazy route", "RRT-Connect + lazy route", "PRM + lazy route"
 TUNED, CONNECT, PRM = "RRT + tuned goal bias", "RRT-Connect", "PRM"
 OMPL_CONNECT = "OMPL RRT-Connect"
 #: The classical options the route sampler is timed against: the fastest median among them.
@@ -44,7 +44,7 @@ CLASSICAL = (TUNED, CONNECT, PRM, EXACT)
 #: The targets (see the module docstring).
 AT_MOST, WHERE_SLOW, SLOW_MS, OMPL_AT_MOST = 1.2, 0.5, 5.0, 0.5
 #: The learned methods held to the targets, and the prefix of their columns and verdict keys.
-LEARNED = {ROUTE: "", LAZY: "lazy ", LAZY_CONNECT: "lazy connect "}
+LEARNED = {ROUTE: "", LAZY: "lazy ", LAZY_CONNECT: "lazy connect ", LAZY_PRM: "lazy prm "}
 #: The pooled row's name.
 POOLED = "all test sets pooled"
 
@@ -61,7 +61,8 @@ def clock_tasks(queries: Sequence, protocol: Protocol, route: str, biases: dict,
              (LAZY, "RRT", SamplerSpec.of("route_lazy", path=route, step_size=step, device="cpu")),
              (CONNECT, "RRTConnect", SamplerSpec.of("uniform")),
              (LAZY_CONNECT, "RRTConnect", SamplerSpec.of("route_lazy", path=route, step_size=step, device="cpu")),
-             (PRM, "PRM", SamplerSpec.of("uniform"))]
+             (PRM, "PRM", SamplerSpec.of("uniform")),
+             (LAZY_PRM, "PRM", SamplerSpec.of("route_lazy", path=route, step_size=step, device="cpu"))]
     tasks = []
     for q in queries:
         if q.split != "test":
@@ -135,7 +136,7 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
             for name in (r.map, POOLED):
                 by.setdefault(name, {}).setdefault(_method(r), []).append(r)
     names = [m for m in order if m in by] + sorted(set(by) - set(order) - {POOLED}) + [POOLED]
-    methods = [m for m in (ROUTE, LAZY, LAZY_CONNECT, ABLATION, EXACT, TUNED, CONNECT, PRM, OMPL_CONNECT)
+    methods = [m for m in (ROUTE, LAZY, LAZY_CONNECT, LAZY_PRM, ABLATION, EXACT, TUNED, CONNECT, PRM, OMPL_CONNECT)
                if any(m in v for v in by.values())]
     rows, slow_total = [], 0
     verdict: dict = {"sets": len(names) - 1, "slow sets": 0}

@@ -37,11 +37,11 @@ from learning.samplers.route import (
     route_draw,
     route_rrt_loop,
 )
-from learning.samplers.route_rules import BidirectionalRouteSampler
+from learning.samplers.route_rules import BidirectionalRouteSampler, CorridorSampler
 from planners import OccupancyGrid
 from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
-from planners.base.samplers import FAMILY_BIDIRECTIONAL, FAMILY_TREE, SamplerBase
+from planners.base.samplers import FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP, FAMILY_TREE, SamplerBase
 from planners.fused import (
     B_COUNT,
     B_POS,
@@ -70,8 +70,12 @@ SHIPPED_STALL = math.inf
 #: step-sized square of the map, then follow the route field's two fields. On the validation maps uniform RRT-Connect
 #: is as fast (1.4% less time over all cells, within the rule's 3%): the fields are a late safety net there.
 SHIPPED_CONNECT_AFTER = 1.4
+#: The roadmaps' switch (``roadmap_after``: PRM, Lazy-PRM, OB-PRM), chosen on the validation maps by time with PRM
+#: (``lazy_route_rule.py --planner PRM``): uniform samples until this many per step-sized square of the map, then
+#: the route field's corridor.
+SHIPPED_ROADMAP_AFTER = 0.35
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
-LAZY_ATTRIBUTES = ("after", "stall", "connect_after", "straight", "switched", "switch_at")
+LAZY_ATTRIBUTES = ("after", "stall", "connect_after", "roadmap_after", "straight", "switched", "switch_at")
 
 
 @nb.njit(cache=True)
@@ -112,17 +116,18 @@ class LazyRouteSampler(RouteSampler):
     """
 
     def __init__(self, net, *, after: float = SHIPPED_AFTER, stall: float = SHIPPED_STALL,
-                 connect_after: float = SHIPPED_CONNECT_AFTER, **kwargs) -> None:
+                 connect_after: float = SHIPPED_CONNECT_AFTER, roadmap_after: float = SHIPPED_ROADMAP_AFTER,
+                 **kwargs) -> None:
         if net is None:
             raise InputError("LazyRouteSampler needs an encoder (its straight-line phase is the ablation; for the "
                              "ablation alone use RouteSampler(None) or make_sampler('route_ablation'))")
         if isinstance(after, bool) or not isinstance(after, int | float | np.floating) or not after >= 0:
             raise InputError(f"after = {short_repr(after)}: expected iterations per step-sized square of the map, "
                              f">= 0 (inf: never compute the field)")
-        if isinstance(connect_after, bool) or not isinstance(connect_after, int | float | np.floating) or \
-                not connect_after >= 0:
-            raise InputError(f"connect_after = {short_repr(connect_after)}: expected iterations per step-sized square "
-                             f"of the map, >= 0 (inf: never compute the field)")
+        for name, value in (("connect_after", connect_after), ("roadmap_after", roadmap_after)):
+            if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not value >= 0:
+                raise InputError(f"{name} = {short_repr(value)}: expected iterations per step-sized square of the "
+                                 f"map, >= 0 (inf: never compute the field)")
         if isinstance(stall, bool) or not isinstance(stall, int | float | np.floating) or not stall >= 1:
             raise InputError(f"stall = {short_repr(stall)}: expected iterations without coming closer to the goal, "
                              f">= 1 (inf: never switch on a stall)")
@@ -132,6 +137,7 @@ class LazyRouteSampler(RouteSampler):
         settings = {**SHIPPED_SETTINGS, **kwargs}
         super().__init__(net, **settings)
         self.after, self.stall, self.connect_after = float(after), float(stall), float(connect_after)
+        self.roadmap_after = float(roadmap_after)
         self.straight = RouteSampler(None, step_size=self.step_size, **ABLATION_SETTINGS)
         self.switched, self.switch_at = False, 0
 
@@ -149,12 +155,14 @@ class LazyRouteSampler(RouteSampler):
         return out
 
     def for_planner(self, family: str) -> SamplerBase:
-        """This sampler for RRT (``"tree"``), ``LazyConnectSampler`` for RRT-Connect; the route sampler's rule for
-        every other family (``rule_for``)."""
+        """This sampler for RRT (``"tree"``), ``LazyConnectSampler`` for RRT-Connect, ``LazyCorridorSampler`` for the
+        roadmaps; the route sampler's rule for RRT* (``rule_for``)."""
         if family == FAMILY_TREE:
             return self
         if family == FAMILY_BIDIRECTIONAL:
             return LazyConnectSampler(self.eager(), self.connect_after)
+        if family == FAMILY_ROADMAP:
+            return LazyCorridorSampler(self.eager(), self.roadmap_after)
         return self.eager().for_planner(family)
 
     def _setup(self) -> None:
@@ -277,6 +285,52 @@ class LazyConnectSampler(SamplerBase):
 
     def __repr__(self) -> str:
         return f"LazyConnectSampler({self.route!r}, after={self.after:g})"
+
+
+class LazyCorridorSampler(SamplerBase):
+    """The roadmaps' lazy rule: uniform samples, then the route field's corridor (``CorridorSampler``) once needed.
+
+    Until sample ``switch_at`` (``switch_iteration(after, ...)``) the samples are uniform over the map (a roadmap draws
+    in batches through ``draw``: a batch stops at the switch); at it, unless the roadmap has connected the query, the
+    route sampler's two fields are computed and the corridor's samples go on (its own stages, from its first draw).
+
+    Args:
+        route: The route sampler whose fields the corridor reads (``LazyRouteSampler.eager``).
+        after: The switch in samples per step-sized square of the map (inf: never).
+    """
+
+    def __init__(self, route: RouteSampler, after: float) -> None:
+        self.route, self.after = route, float(after)
+
+    def _setup(self) -> None:
+        self.route.check_query(self.problem)  # refused at bind, not at the switch
+        self.switch_at = switch_iteration(self.after, self.problem.world, self.route.step_size)
+        self.rule: CorridorSampler | None = None
+
+    @property
+    def switched(self) -> bool:
+        """Whether the fields have been computed."""
+        return self.rule is not None
+
+    @property
+    def forward_passes(self) -> int:
+        """The encoder's passes this query took (0 before the switch, two fields after)."""
+        return 0 if self.rule is None else self.rule.forward_passes
+
+    @property
+    def reused_seconds(self) -> float:
+        """Encoder seconds of fields taken from a cache (see ``RouteSampler``)."""
+        return 0.0 if self.rule is None else self.rule.reused_seconds
+
+    def draw(self, rng, n, view):
+        if self.rule is None and view.iteration >= self.switch_at:
+            self.rule = CorridorSampler(self.route).bind(self.problem)
+        if self.rule is not None:
+            return self.rule.draw(rng, n, view)
+        return self._uniform(rng.random((min(n, self.switch_at - view.iteration), self.problem.dim)))
+
+    def __repr__(self) -> str:
+        return f"LazyCorridorSampler({self.route!r}, after={self.after:g})"
 
 
 class LazyConnectLoop:

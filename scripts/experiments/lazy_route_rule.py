@@ -9,7 +9,8 @@ candidates (with after = 0, the route sampler, as a reference unless ``--no-refe
 maps of each family at 128, 256 and 512 cells (``--maps`` of each size; ``planner_maps("validation", ...)``) at
 planner seeds 0 upwards, RRT step 4, at most 20,000 iterations, one process and one thread, in turn on each
 (query, seed) after two untimed warm-up queries. ``--planner RRTConnect`` does the same for RRT-Connect's switch
-(``connect_after``, given as ``--after``: both trees uniform until then, then the route field's two fields). A run's
+(``connect_after``, given as ``--after``: both trees uniform until then, then the route field's two fields), and
+``--planner PRM`` for the roadmaps' (``roadmap_after``: uniform samples, then the field's corridor). A run's
 time goes from the planner's construction (the sampler's bind and its own field: no cache) to the end of its solve;
 an unsolved run counts with the time it ran.
 
@@ -37,7 +38,8 @@ from planners import make_planner
 STEP, BUDGET, SIZES = 4.0, 20000, (128, 256, 512)
 AFTER = (0.35, 0.7, 1.4, math.inf)
 STALL = (10.0, 25.0, 50.0, 100.0, 200.0, math.inf)
-#: RRT-Connect's candidates (``--planner RRTConnect``: ``connect_after``, the trees' uniform budget; stall unused).
+#: RRT-Connect's and PRM's candidates (``--planner RRTConnect``: ``connect_after``, the trees' uniform budget;
+#: ``--planner PRM``: ``roadmap_after``, the roadmap's; stall unused).
 CONNECT_AFTER = (0.05, 0.1, 0.2, 0.35, 0.7, 1.4, math.inf)
 #: A candidate within this share of the lowest geometric mean, with a smaller ``after``, wins over it.
 TIE = 0.03
@@ -67,18 +69,19 @@ def main(argv=None) -> int:
     ap.add_argument("--maps", type=int, nargs=len(SIZES), default=[8, 4, 2], metavar="N",
                     help=f"validation maps per family at sides {', '.join(map(str, SIZES))} (default 8 4 2)")
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per map (default 2)")
-    ap.add_argument("--planner", choices=("RRT", "RRTConnect"), default="RRT",
-                    help="RRT (switches after and stall) or RRTConnect (its switch connect_after, as --after)")
+    ap.add_argument("--planner", choices=("RRT", "RRTConnect", "PRM"), default="RRT",
+                    help="RRT (switches after and stall), RRTConnect or PRM (connect_after, roadmap_after: --after)")
     ap.add_argument("--after", type=float, nargs="+", default=None, help="candidates (default: the rule's)")
     ap.add_argument("--stall", type=float, nargs="+", default=list(STALL), help="candidates (default: the rule's)")
     ap.add_argument("--no-reference", action="store_true", help="leave out after = 0 (the route rule)")
     ap.add_argument("--out", type=Path, default=None, help="write runs.json here (a new or empty folder)")
     args = ap.parse_args(argv)
-    connect = args.planner == "RRTConnect"
+    connect = args.planner != "RRT"  # one switch: connect_after or roadmap_after, given as --after
     if args.after is None:
         args.after = list(CONNECT_AFTER if connect else AFTER)
     if connect:
         args.stall = [math.inf]
+    switch = "connect_after" if args.planner == "RRTConnect" else "roadmap_after"
     if min(args.maps) < 0 or args.seeds < 1 or not all(a >= 0 for a in args.after) or \
             not all(s >= 1 for s in args.stall):
         ap.error("--maps must be >= 0, --seeds >= 1, every --after >= 0 and every --stall >= 1")
@@ -88,7 +91,7 @@ def main(argv=None) -> int:
              for family, problems in planner_maps("validation", n, size=size).items()}
     pairs = [] if args.no_reference else [(0.0, math.inf)]
     pairs += [(a, s) for a in args.after for s in args.stall if (a, s) not in pairs]
-    samplers = {k: make_sampler("route_lazy", connect_after=k[0]) if connect else
+    samplers = {k: make_sampler("route_lazy", **{switch: k[0]}) if connect else
                 make_sampler("route_lazy", after=k[0], stall=k[1]) for k in pairs}
     runs: dict[tuple, dict] = {k: {c: [] for c in cells} for k in pairs}
     with planning_threads(1):
