@@ -155,8 +155,11 @@ class LazyRouteSampler(RouteSampler):
         return out
 
     def for_planner(self, family: str) -> SamplerBase:
-        """This sampler for RRT (``"tree"``), ``LazyConnectSampler`` for RRT-Connect, ``LazyCorridorSampler`` for the
-        roadmaps; the route sampler's rule for RRT* (``rule_for``)."""
+        """This sampler's rule for a planner ``family``: itself for RRT, a ``LazyRule`` for RRT-Connect and roadmaps.
+
+        ``LazyConnectSampler`` for RRT-Connect, ``LazyCorridorSampler`` for the roadmaps; the route sampler's rule for
+        RRT* (``rule_for``).
+        """
         if family == FAMILY_TREE:
             return self
         if family == FAMILY_BIDIRECTIONAL:
@@ -224,18 +227,15 @@ def uniform_connect_loop(budget, state_a, state_b, buffers, rng, loop):
     return connect_loop(budget, uniform_draw, state_a, state_b, buffers, rng, loop)
 
 
-class LazyConnectSampler(SamplerBase):
-    """RRT-Connect's lazy rule: both trees grow by uniform sampling, then follow the field once it is needed.
+class LazyRule(SamplerBase):
+    """What the lazy rules for other planners share: uniform sampling, then the route field's rule for the planner.
 
-    Until iteration ``switch_at`` (``switch_iteration(after, ...)``) each sample is uniform over the map, drawn in
-    the planner's batches inside its compiled loop; at it, unless the trees have met, the batch's samples past it are
-    dropped, the route sampler's two fields are computed and ``BidirectionalRouteSampler``'s rule goes on from the
-    trees grown so far.
-
-    Args:
-        route: The route sampler whose rule each tree follows after the switch (``LazyRouteSampler.eager``).
-        after: The switch in iterations per step-sized square of the map (inf: never).
+    Until ``switch_at`` (``switch_iteration(after, ...)``) the planner's uniform sampling; from it the route sampler's
+    rule for the planner (``rule_type``), bound once.
     """
+
+    #: The route field's rule this one switches to.
+    rule_type: type = SamplerBase
 
     def __init__(self, route: RouteSampler, after: float) -> None:
         self.route, self.after = route, float(after)
@@ -243,8 +243,7 @@ class LazyConnectSampler(SamplerBase):
     def _setup(self) -> None:
         self.route.check_query(self.problem)  # refused at bind, not at the switch
         self.switch_at = switch_iteration(self.after, self.problem.world, self.route.step_size)
-        self.bounds = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high))
-        self.rule: BidirectionalRouteSampler | None = None
+        self.rule = None
 
     @property
     def switched(self) -> bool:
@@ -261,11 +260,34 @@ class LazyConnectSampler(SamplerBase):
         """Encoder seconds of fields taken from a cache (see ``RouteSampler``)."""
         return 0.0 if self.rule is None else self.rule.reused_seconds
 
-    def switch(self) -> BidirectionalRouteSampler:
-        """Compute the two fields for the bound query and follow them from here (once)."""
+    def switch(self) -> SamplerBase:
+        """Compute the fields for the bound query and follow the route field's rule from here (once)."""
         if self.rule is None:
-            self.rule = BidirectionalRouteSampler(self.route).bind(self.problem)
+            self.rule = self.rule_type(self.route).bind(self.problem)
         return self.rule
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.route!r}, after={self.after:g})"
+
+
+class LazyConnectSampler(LazyRule):
+    """RRT-Connect's lazy rule: both trees grow by uniform sampling, then follow the field once it is needed.
+
+    Until iteration ``switch_at`` (``switch_iteration(after, ...)``) each sample is uniform over the map, drawn in
+    the planner's batches inside its compiled loop; at it, unless the trees have met, the batch's samples past it are
+    dropped, the route sampler's two fields are computed and ``BidirectionalRouteSampler``'s rule goes on from the
+    trees grown so far.
+
+    Args:
+        route: The route sampler whose rule each tree follows after the switch (``LazyRouteSampler.eager``).
+        after: The switch in iterations per step-sized square of the map (inf: never).
+    """
+
+    rule_type = BidirectionalRouteSampler
+
+    def _setup(self) -> None:
+        super()._setup()
+        self.bounds = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high))
 
     def draw(self, rng, n, view):
         if self.rule is None and view.iteration >= self.switch_at:
@@ -283,11 +305,8 @@ class LazyConnectSampler(SamplerBase):
         fused = fuse_connect(planner, uniform_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
         return None if fused is None else LazyConnectLoop(self, fused)
 
-    def __repr__(self) -> str:
-        return f"LazyConnectSampler({self.route!r}, after={self.after:g})"
 
-
-class LazyCorridorSampler(SamplerBase):
+class LazyCorridorSampler(LazyRule):
     """The roadmaps' lazy rule: uniform samples, then the route field's corridor (``CorridorSampler``) once needed.
 
     Until sample ``switch_at`` (``switch_iteration(after, ...)``) the samples are uniform over the map (a roadmap draws
@@ -299,38 +318,14 @@ class LazyCorridorSampler(SamplerBase):
         after: The switch in samples per step-sized square of the map (inf: never).
     """
 
-    def __init__(self, route: RouteSampler, after: float) -> None:
-        self.route, self.after = route, float(after)
-
-    def _setup(self) -> None:
-        self.route.check_query(self.problem)  # refused at bind, not at the switch
-        self.switch_at = switch_iteration(self.after, self.problem.world, self.route.step_size)
-        self.rule: CorridorSampler | None = None
-
-    @property
-    def switched(self) -> bool:
-        """Whether the fields have been computed."""
-        return self.rule is not None
-
-    @property
-    def forward_passes(self) -> int:
-        """The encoder's passes this query took (0 before the switch, two fields after)."""
-        return 0 if self.rule is None else self.rule.forward_passes
-
-    @property
-    def reused_seconds(self) -> float:
-        """Encoder seconds of fields taken from a cache (see ``RouteSampler``)."""
-        return 0.0 if self.rule is None else self.rule.reused_seconds
+    rule_type = CorridorSampler
 
     def draw(self, rng, n, view):
         if self.rule is None and view.iteration >= self.switch_at:
-            self.rule = CorridorSampler(self.route).bind(self.problem)
+            self.switch()
         if self.rule is not None:
             return self.rule.draw(rng, n, view)
         return self._uniform(rng.random((min(n, self.switch_at - view.iteration), self.problem.dim)))
-
-    def __repr__(self) -> str:
-        return f"LazyCorridorSampler({self.route!r}, after={self.after:g})"
 
 
 class LazyConnectLoop:

@@ -514,8 +514,10 @@ class RouteSampler(SamplerBase):
         return learned
 
     def check_query(self, problem: Problem) -> None:
-        """Refuse (``InputError``) a query this sampler cannot plan: off an ``OccupancyGrid``, or a map its encoder
-        refuses at this step (too large: ``FieldEncoder.check_size``), before any pass."""
+        """Refuse (``InputError``) a query this sampler cannot plan, before any pass.
+
+        Off an ``OccupancyGrid``, or a map its encoder refuses at this step (too large: ``FieldEncoder.check_size``).
+        """
         grid = problem.world
         if not isinstance(grid, OccupancyGrid):
             raise InputError(f"{type(self).__name__} plans on OccupancyGrid problems")
