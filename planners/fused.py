@@ -27,9 +27,9 @@ planner with that many) would: fusing changes the speed, never the run. ``growin
 uniform share a guided sampler keeps, growing while the tree comes no closer to the goal.
 
 A draw may end RRT's loop early: one whose state holds the loop's counters (``FusedRRT.counters``) and sets
-``counters[B_STOP]`` ends the loop's call right after that refill, its samples left unused in the buffer
-(``counters[B_POS]`` < ``counters[B_COUNT]``); the caller clears the flag and decides what the next call draws.
-A sampler that switches its rule mid-run (``learning.samplers.lazy_route``) stops there.
+``counters[B_STOP]`` ends the loop's call right after that refill, its samples left unused in the buffer; the
+caller decides what the next call draws. A sampler that switches its rule mid-run (``learning.samplers.lazy_route``)
+goes on with another loop there.
 
 RRT-Connect (``fusable_loop = "connect"``) has its own loop, ``connect_loop(budget, draw, state_a, state_b,
 buffers, rng, loop)``, entered the same way (``fuse_connect``). Its trees take turns, and each refill draws for
@@ -55,8 +55,6 @@ import numpy as np
 from planners.kernels.bitgen import bitgen_address as rng_address
 from planners.kernels.bitgen import next_double
 from planners.kernels.fused import (
-    B_COUNT,
-    B_POS,
     B_REFILLS,
     B_STOP,
     CHUNK,
@@ -73,9 +71,9 @@ from planners.kernels.fused import (
 if TYPE_CHECKING:
     from planners.base.planner import Planner
 
-__all__ = ["B_COUNT", "B_POS", "B_STOP", "CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT",
-           "connect_loop", "fuse_connect", "fuse_rrt", "fuse_rrtstar", "growing_floor", "nearest_distance",
-           "next_double", "refill_size", "rng_address", "rrt_loop", "rrtstar_loop"]
+__all__ = ["B_STOP", "CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT", "connect_loop", "fuse_connect",
+           "fuse_rrt", "fuse_rrtstar", "growing_floor", "nearest_distance", "next_double", "refill_size",
+           "rng_address", "rrt_loop", "rrtstar_loop"]
 
 
 class FusedRRT:
@@ -96,7 +94,7 @@ class FusedRRT:
 
     @property
     def counters(self) -> np.ndarray:
-        """The loop's counters (``B_POS``, ``B_COUNT``, ``B_REFILLS``, ``B_STOP``): for a draw that ends the loop."""
+        """The loop's counters (position, rows, refills, ``B_STOP``): for a draw that ends the loop."""
         return self.buffers[0]
 
     @property
@@ -124,11 +122,16 @@ class FusedConnect:
     def __init__(self, entry: Callable, state_a: Any, state_b: Any, batches: tuple[int, int], dim: int) -> None:
         self.entry, self.state_a, self.state_b = entry, state_a, state_b
         rows = max(batches)
-        self.buffers = (np.zeros(4, dtype=np.int64), np.empty((rows, dim)), np.zeros(rows, dtype=np.int8),
+        self.buffers = (np.zeros(B_STOP + 1, dtype=np.int64), np.empty((rows, dim)), np.zeros(rows, dtype=np.int8),
                         np.full(1, np.inf), np.array(batches, dtype=np.int64))
 
     def __call__(self, planner: Planner, n: int) -> int:
         return self.entry(n, self.state_a, self.state_b, self.buffers, rng_address(planner.rng), planner.loop_args())
+
+    @property
+    def counters(self) -> np.ndarray:
+        """The loop's counters, laid out as ``FusedRRT.counters`` (``B_SEEN_B`` added; its loop never stops early)."""
+        return self.buffers[0]
 
 
 def fuse_connect(planner: Planner, entry: Callable, state_a: Any, state_b: Any,

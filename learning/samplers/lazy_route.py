@@ -43,8 +43,6 @@ from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
 from planners.base.samplers import FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP, FAMILY_TREE, SamplerBase
 from planners.fused import (
-    B_COUNT,
-    B_POS,
     B_STOP,
     CHUNK,
     FusedConnect,
@@ -190,16 +188,21 @@ class LazyRouteSampler(RouteSampler):
             pts = super().draw(rng, n, view)
         return pts
 
-    def fuse(self, planner: Planner) -> LazyLoop | FusedRRT | None:
+    def fuse(self, planner: Planner) -> SwitchLoop | FusedRRT | None:
         """RRT's loop with both phases' draws compiled in, the switch between them (None for other planners)."""
         if self.switched or math.isinf(self.stall):  # no stall switch: the route sampler's own loop to the switch
             fused = fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
-            return fused if fused is None or self.switched else LazyLoop(self, fused)
+            return fused if fused is None or self.switched else SwitchLoop(self, fused)
         fused = fuse_rrt(planner, stall_rrt_loop, None, self.batch)
         if fused is None:
             return None
         fused.state = (self._state, fused.counters, self.stall)
-        return LazyLoop(self, fused)
+        return SwitchLoop(self, fused)
+
+    def switch_loop(self, planner: Planner) -> FusedRRT:
+        """Switch (``switch``) and give RRT's loop on the encoder's field (``SwitchLoop``)."""
+        self.switch()
+        return fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
 
     def __repr__(self) -> str:
         return (f"LazyRouteSampler(after={self.after:g}, stall={self.stall:g}, "
@@ -266,6 +269,10 @@ class LazyRule(SamplerBase):
             self.rule = self.rule_type(self.route).bind(self.problem)
         return self.rule
 
+    def switch_loop(self, planner: Planner):
+        """Switch (``switch``) and give the rule's own fused loop (``SwitchLoop``)."""
+        return self.switch().fuse(planner)
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.route!r}, after={self.after:g})"
 
@@ -298,12 +305,12 @@ class LazyConnectSampler(LazyRule):
         pts = self._uniform(rng.random((min(n, CHUNK), self.problem.dim)))
         return pts[:min(len(pts), self.switch_at - view.iteration)]
 
-    def fuse(self, planner: Planner) -> LazyConnectLoop | FusedConnect | None:
+    def fuse(self, planner: Planner) -> SwitchLoop | FusedConnect | None:
         """RRT-Connect's loop with both phases' draws compiled in, the switch between them (None for others)."""
         if self.rule is not None:
             return self.rule.fuse(planner)
         fused = fuse_connect(planner, uniform_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
-        return None if fused is None else LazyConnectLoop(self, fused)
+        return None if fused is None else SwitchLoop(self, fused)
 
 
 class LazyCorridorSampler(LazyRule):
@@ -328,12 +335,17 @@ class LazyCorridorSampler(LazyRule):
         return self._uniform(rng.random((min(n, self.switch_at - view.iteration), self.problem.dim)))
 
 
-class LazyConnectLoop:
-    """RRT-Connect's fused loop with uniform draws up to the sampler's switch, then the route field's."""
+class SwitchLoop:
+    """A planner's fused loop up to a lazy sampler's switch, then the fused loop of the rule it switches to.
+
+    The rule's loop starts with buffers of its own, so what the first loop's buffer still holds is dropped: the
+    samples of a uniform batch past the switch, or the sample a stalled draw ended the loop on (``B_STOP``), as the
+    sampler's ``draw`` drops them. ``sampler.switch_loop(planner)`` switches and gives the rule's loop.
+    """
 
     __slots__ = ("sampler", "fused")
 
-    def __init__(self, sampler: LazyConnectSampler, fused: FusedConnect) -> None:
+    def __init__(self, sampler: LazyRouteSampler | LazyRule, fused: FusedRRT | FusedConnect) -> None:
         self.sampler, self.fused = sampler, fused
 
     def __call__(self, planner: Planner, n: int) -> int:
@@ -342,32 +354,8 @@ class LazyConnectLoop:
             m = min(n, s.switch_at - planner.iterations)
             if m > 0:
                 used = self.fused(planner, m)
-                if used < m or used == n or planner.solved:  # solved (or out of room), or the call is spent
+                stopped = self.fused.counters[B_STOP]
+                if not stopped and (used < m or used == n or planner.solved):  # solved or full, or the call is spent
                     return used
-            # the route rule's own loop and buffers: the uniform batch's samples past the switch are dropped, and the
-            # goal tree's closest distance to the start is computed from scratch, as its ``draw`` computes it
-            self.fused = s.switch().fuse(planner)
-        return used + self.fused(planner, n - used)
-
-
-class LazyLoop:
-    """RRT's fused loop on the straight-line field up to the sampler's switch, then on the encoder's field."""
-
-    __slots__ = ("sampler", "fused")
-
-    def __init__(self, sampler: LazyRouteSampler, fused: FusedRRT) -> None:
-        self.sampler, self.fused = sampler, fused
-
-    def __call__(self, planner: Planner, n: int) -> int:
-        s, used, counters = self.sampler, 0, self.fused.counters
-        if not s.switched:
-            m = min(n, s.switch_at - planner.iterations)
-            if m > 0:
-                used = self.fused(planner, m)
-                if counters[B_STOP]:  # stalled: the straight line's sample in the buffer is dropped
-                    counters[B_STOP], counters[B_POS] = 0, counters[B_COUNT]
-                elif used < m or used == n or planner.solved:  # solved (or out of room), or the call is spent
-                    return used
-            s.switch()
-            self.fused.entry, self.fused.state = route_rrt_loop, s.draw_state
+            self.fused = s.switch_loop(planner)
         return used + self.fused(planner, n - used)
