@@ -146,13 +146,20 @@ def update_frontier(world, counts, vertices, cell, goal, free, cov, pos, front, 
 
 
 @nb.njit(cache=True, inline="always")
-def frontier_cdf(front, count, dist, tau, cdf):
-    """Running sum into ``cdf`` of the frontier cells' weights exp(-(d - d_min) / tau); return the total."""
+def frontier_dmin(front, count, dist):
+    """The lowest distance ``d_min`` of the frontier's ``count`` cells, against which their weights are taken."""
     dmin = np.inf
     for i in range(count):
         d = dist[front[i]]
         if d < dmin:
             dmin = d
+    return dmin
+
+
+@nb.njit(cache=True, inline="always")
+def frontier_cdf(front, count, dist, tau, cdf):
+    """Running sum into ``cdf`` of the frontier cells' weights exp(-(d - d_min) / tau); return the total."""
+    dmin = frontier_dmin(front, count, dist)
     acc = 0.0
     for i in range(count):
         acc += math.exp(-(dist[front[i]] - dmin) / tau)
@@ -183,11 +190,7 @@ def frontier_sample(front, count, W, cell, origin, dist, tau, u_pick, u_xy, out,
     if count == 0:
         return 0
     weights, cells, cdf, meta = memo
-    dmin = np.inf
-    for i in range(count):
-        d = dist[front[i]]
-        if d < dmin:
-            dmin = d
+    dmin = frontier_dmin(front, count, dist)
     valid = min(int(meta[1]), count) if meta[0] == dmin else 0
     start = 0  # the running sum up to the first entry that changed stands
     while start < valid and cells[start] == front[start]:
