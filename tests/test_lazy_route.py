@@ -33,8 +33,7 @@ class Unfused(LazyRouteSampler):
 
 def _run(problem, sampler, seed, pieces=(), planner_name="RRT"):
     """One run solved after ``pieces`` (solves of those sizes): what must match, and the planner's bound sampler."""
-    step = {"step_size": 4.0} if planner_name == "RRT" else {"extension_step": 4.0}
-    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, **step)
+    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, extension_step=4.0)
     for size in pieces:
         planner.solve(max_iterations=size)
     r = planner.solve(max_iterations=20000)

@@ -47,8 +47,7 @@ TIE = 0.03
 
 def run(problem, sampler, seed: int, planner_name: str = "RRT") -> dict:
     t0 = time.perf_counter()
-    step = {"step_size": STEP} if planner_name == "RRT" else {"extension_step": STEP}
-    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, **step)
+    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, extension_step=STEP)
     r = planner.solve(BUDGET)
     seconds = time.perf_counter() - t0
     return {"solved": bool(r.solved), "iterations": int(r.iterations), "ms": 1e3 * seconds,
