@@ -6,6 +6,7 @@
     python scripts/benchmark_route.py --sides 128 512 1024 4096 --repeat 3      # up to the largest map it takes
     python scripts/benchmark_route.py --value-iteration                          # the fixed point the former way
     python scripts/benchmark_route.py --torch-inference                          # no compiled part after the network
+    python scripts/benchmark_route.py --dense-convolutions                       # the 3x3 layers as training runs them
 
 Each row is one map side and family (a generated forest, and a maze, whose route winds furthest;
 ``--families``; ``--symmetries`` passes, the goal in a free cell):
@@ -22,7 +23,9 @@ limit's message. Times are wall times in one process; the machine's load is prin
 compiled Dijkstra (``RouteVIN.fixed_point``; the same values bit for bit): the time the direct way saves.
 ``--torch-inference`` runs the pass through torch after the convolutions (``RouteVIN.compiled_inference`` off: the
 walls written into the move costs, the cell head in torch, the convolutions in one piece up to ``strip_blocks``; the
-same fields up to rounding): the time the CPU's compiled inference saves.
+same fields up to rounding): the time the CPU's compiled inference saves. ``--dense-convolutions`` runs the local
+network's 3x3 layers on torch's dense tensors, as training does (``RouteVIN.prepacked`` off; fields within 1.2e-4
+steps): the time the prepacked weights save.
 """
 
 from __future__ import annotations
@@ -127,6 +130,8 @@ def main(argv=None) -> int:
                     help="generated families to time on (default forest and maze)")
     ap.add_argument("--torch-inference", action="store_true",
                     help="the pass through torch after the convolutions, no compiled part (same fields up to rounding)")
+    ap.add_argument("--dense-convolutions", action="store_true",
+                    help="the 3x3 layers on dense tensors as training runs them, not prepacked (fields within 1.2e-4)")
     ap.add_argument("--value-iteration", action="store_true",
                     help="value iteration for the fixed point, as before the compiled Dijkstra (same values)")
     args = ap.parse_args(argv)
@@ -161,10 +166,15 @@ def main(argv=None) -> int:
         if not hasattr(net, "compiled_inference"):
             raise SystemExit(f"--torch-inference: {args.route} is not a value-iteration encoder")
         net.compiled_inference = False
+    if args.dense_convolutions:
+        if not hasattr(net, "prepacked"):
+            raise SystemExit(f"--dense-convolutions: {args.route} is not a value-iteration encoder")
+        net.prepacked = False
     if args.symmetries is None:
         args.symmetries = net.symmetries
     how = f", fixed point by {getattr(net, 'fixed_point', 'its own network')}"
     how += ", torch inference" if args.torch_inference else ""
+    how += ", dense convolutions" if args.dense_convolutions else ""
     print(f"route encoder {args.route.name}, {args.symmetries} symmetries, device {device}{how}, "
           f"{os.cpu_count()} CPUs, torch {torch.__version__}\n", flush=True)
     rows = []

@@ -514,10 +514,12 @@ def test_cheaper_arithmetic_moves_the_field_by_its_rounding(capsys):
     script = load_script("experiments/cheap_arithmetic")
     assert script.main(["--check", "fields", "--maps", "1", "--sides", "32", "--families", "forest", "maze"]) == 0
     rows = {line.split(" | ")[0].strip("| "): float(line.split(" | ")[1])
-            for line in capsys.readouterr().out.splitlines() if line.startswith(("| channels", "| bfloat16"))}
+            for line in capsys.readouterr().out.splitlines()
+            if line.startswith(("| prepacked", "| channels", "| bfloat16"))}
     # float32 in another layout differs by rounding only; bfloat16 keeps 8 bits of mantissa, so it moves further
-    assert set(rows) == {"channels-last float32", "bfloat16"}
-    assert rows["channels-last float32"] < 1e-3 < rows["bfloat16"]
+    assert set(rows) == {"prepacked", "channels-last float32", "bfloat16"}
+    assert max(rows["prepacked"], rows["channels-last float32"]) < 1e-3 < rows["bfloat16"]
+    assert not script.encoder().prepacked and script.encoder(script.Prepacked).prepacked  # dense against prepacked
     shipped, layout = script.encoder(), script.encoder(script.ChannelsLast)  # another layout, the same weights
     assert all(torch.equal(a, b) for a, b in zip(shipped.state_dict().values(), layout.state_dict().values()))
     with pytest.raises(SystemExit) as stop:
@@ -555,3 +557,45 @@ def test_the_search_by_buckets_and_by_heap_give_value_iterations_values(low, hig
     goal = torch.zeros(1, 30, 40, dtype=torch.bool)
     goal[0, 3, 5] = goal[0, 20, 30] = True
     assert torch.equal(RouteVIN.settle(costs, goal, walls), RouteVIN.iterate(costs, goal, walls))
+
+
+@pytest.mark.parametrize("family", ["maze", "rooms"])
+def test_the_prepacked_convolutions_give_the_dense_field_and_follow_the_weights(family):
+    """oneDNN's prepacked layers: the dense pass's field within rounding, first and later queries; new weights (a
+    load, training, a pickled copy) are packed again, and an encoder that prices its own moves keeps its own."""
+    dense, packed = load_route_net(SHIPPED), load_route_net(SHIPPED)
+    dense.prepacked = False
+    problem = generate(family, TRAIN_SEEDS[0] + 7, 128)
+    obstacles = problem.world.obstacles
+    free = np.argwhere(~obstacles)
+    for goal in (problem.world.cell_of(problem.goal), tuple(free[len(free) // 2]), tuple(free[0])):
+        want, got = dense.predict(obstacles, goal), packed.predict(obstacles, goal)
+        reached = want < 1e5
+        assert np.array_equal(reached, got < 1e5)
+        assert np.abs(got - want)[reached].max() < 2e-4  # another order of summation (see RouteVIN.prepacked)
+    x = torch.from_numpy(route_input(obstacles, goal, packed.block))[None][:, :packed.block ** 2 + 1]
+    with torch.no_grad():
+        f = packed.packed_local(x)
+        assert f.layout == torch.strided and f.shape == packed.local(x).shape
+        assert 0 < (f - packed.local(x)).abs().max() < 1e-4  # prepacked indeed, and the same features up to rounding
+    copy = pickle.loads(pickle.dumps(packed))  # packs its own weights
+    packed.clear_map_cache()  # a first query each: the same pass, bit for bit
+    assert np.array_equal(copy.predict(obstacles, goal), packed.predict(obstacles, goal))
+    state = {k: v * 1.5 if k.startswith("local.2") else v for k, v in packed.state_dict().items()}
+    for net in (dense, packed):
+        net.load_state_dict(state)  # other weights: the packed ones of the old weights may not serve
+    want, got = dense.predict(obstacles, goal), packed.predict(obstacles, goal)
+    assert np.abs(got - want)[want < 1e5].max() < 2e-4
+    with torch.no_grad():
+        packed.local[0].weight.mul_(0.5)  # in place, in evaluation mode: the caller says so
+    packed.weights_changed()
+    dense.load_state_dict(packed.state_dict())
+    want, got = dense.predict(obstacles, goal), packed.predict(obstacles, goal)
+    assert np.abs(got - want)[want < 1e5].max() < 2e-4
+    assert packed.packs(x) and not dense.packs(x)
+
+    class OwnPrices(RouteVIN):
+        def move_costs(self, x):
+            return super().move_costs(x)
+
+    assert not OwnPrices(block=2, channels=8, depth=2, step=4).packs(x)

@@ -145,6 +145,13 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: Dijkstra's moves, and the cell head runs in numba from ``map_features``' strips. False: the torch pass, the
     #: same fields up to rounding (kept to measure what the compiled one saves, and to check it).
     compiled_inference: bool = True
+    #: Whether the compiled inference runs the local network's 3x3 convolutions on weights prepacked once for
+    #: oneDNN (``torch.utils.mkldnn``), the activations kept in its blocked layout from layer to layer, where torch
+    #: has oneDNN. Another order of summation: the field moves by up to about 1e-4 steps (the dense pass itself moves
+    #: by up to 4.7e-4 between oneDNN's AVX2 and AVX-512 kernels), and a first query at 128 cells costs a tenth to a
+    #: third less; chosen by the validation rule (see the research report, "Cheaper arithmetic for the same
+    #: network"). False: the dense convolutions, as training runs them.
+    prepacked: bool = True
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -166,24 +173,35 @@ class RouteVIN(nn.Module, FieldEncoder):
                                    nn.Conv2d(channels, block * block, 1))
         self.register_buffer("lengths", torch.tensor(LENGTHS, dtype=torch.float32).view(1, -1, 1, 1))
         self._maps: OrderedDict[tuple, MapParts] = OrderedDict()
+        self._packed: list[tuple[torch.Tensor, torch.Tensor]] = []  # each 3x3 layer's weights for oneDNN, once made
 
     def clear_map_cache(self) -> None:
-        """Forget every map's kept parts (``map_cache_bytes``); ``train`` and ``load_state_dict`` do it themselves.
-
-        Call it after changing the weights in place in evaluation mode by any other way.
-        """
+        """Forget every map's kept parts (``map_cache_bytes``); the prepacked weights stay (``weights_changed``)."""
         self._maps.clear()
 
+    def weights_changed(self) -> None:
+        """Forget what inference keeps from the weights: every map's parts and the prepacked local network.
+
+        ``train`` and ``load_state_dict`` call it; call it after changing the weights in place in evaluation mode
+        by any other way.
+        """
+        self._maps.clear()
+        self._packed.clear()
+
     def train(self, mode: bool = True) -> RouteVIN:
-        self.clear_map_cache()
+        self.weights_changed()
         return super().train(mode)
 
     def load_state_dict(self, *args, **kwargs):
-        self.clear_map_cache()
+        self.weights_changed()
         return super().load_state_dict(*args, **kwargs)
 
     def __getstate__(self) -> dict:
-        return {**self.__dict__, "_maps": OrderedDict()}  # a copy sent elsewhere starts with no kept maps
+        # a copy sent elsewhere starts with no kept maps, and packs its own weights
+        return {**self.__dict__, "_maps": OrderedDict(), "_packed": []}
+
+    def __setstate__(self, state: dict) -> None:
+        super().__setstate__({"_packed": [], **state})  # a copy pickled before the prepacked weights existed
 
     def inference_key(self) -> tuple:
         return (self.wall_cost, self.step_walls, self.fixed_point)
@@ -322,6 +340,39 @@ class RouteVIN(nn.Module, FieldEncoder):
         first = self.cells[0]
         return nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias)
 
+    def packs(self, x: torch.Tensor) -> bool:
+        """Whether a compiled pass over ``x`` runs the local network prepacked (``prepacked``).
+
+        It does on float32 input, where torch has oneDNN and the encoder keeps the class's own ``move_costs`` (one
+        that overrides it keeps its own).
+        """
+        return (self.prepacked and x.dtype == torch.float32 and torch.backends.mkldnn.is_available()
+                and getattr(self.move_costs, "__func__", None) is RouteVIN.move_costs)
+
+    def packed_weights(self) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """Each 3x3 layer's weight and bias in oneDNN's layout, converted once (until ``weights_changed``)."""
+        if not self._packed:
+            # ATen's reorder of a convolution's weights into oneDNN's blocked layout, as torch.utils.mkldnn does it
+            reorder = torch.ops.aten.mkldnn_reorder_conv2d_weight
+            self._packed.extend((reorder(m.weight.detach().to_mkldnn(), [1, 1], [1, 1], [1, 1], 1),
+                                 m.bias.detach().to_mkldnn()) for m in self.local if isinstance(m, nn.Conv2d))
+        return self._packed
+
+    def packed_local(self, y: torch.Tensor) -> torch.Tensor:
+        """``self.local(y)`` (dense float32, padded by one a layer), its activations in oneDNN's layout between
+        layers (``packs``)."""
+        y = y.to_mkldnn()
+        for weight, bias in self.packed_weights():
+            y = torch.mkldnn_convolution(y, weight, bias, [1, 1], [1, 1], [1, 1], 1).relu_()
+        return y.to_dense()
+
+    def inference_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """``move_costs`` as the compiled inference runs it: prepacked where ``packs`` holds."""
+        if not self.packs(x):
+            return self.move_costs(x)
+        f = self.packed_local(x)
+        return f, self.prices(f)
+
     #: About the bytes of one layer's activations a strip of ``map_features`` holds, so that they stay in the CPU's
     #: cache between layers. One thread, the 2-core machine: over a 1024 x 1024-cell map the convolutions took 60 to
     #: 64 ms in strips of 128 block rows (4 MB) against 105 to 136 ms in one piece; over 4096 x 4096 cells 1.35 s in
@@ -340,14 +391,14 @@ class RouteVIN(nn.Module, FieldEncoder):
         d = self.depth
         rows = max(8 * d, self.feature_bytes // (4 * self.channels * w * x.shape[0]))
         if rows >= h:
-            f, costs = self.move_costs(x)
+            f, costs = self.inference_costs(x)
             return costs, self.head_inputs(f)
         costs = x.new_empty(x.shape[0], len(MOVES), h, w)
         pre = x.new_empty(x.shape[0], self.channels, h, w)
         for r0 in range(0, h, rows):
             r1 = min(h, r0 + rows)
             lo, hi = max(0, r0 - d), min(h, r1 + d)
-            f, c = self.move_costs(x[:, :, lo:hi])
+            f, c = self.inference_costs(x[:, :, lo:hi])
             costs[:, :, r0:r1] = c[:, :, r0 - lo:r1 - lo]
             pre[:, :, r0:r1] = self.head_inputs(f[:, :, r0 - lo:r1 - lo])
         return costs, pre
@@ -415,13 +466,18 @@ class RouteVIN(nn.Module, FieldEncoder):
 
         Each 3x3 layer runs unpadded over the region it must hand the next one, one block wider on every side that
         is not the map's edge (where the layer pads with zeros as over the whole map): the same values as the whole
-        pass there, up to floating-point rounding, at the cost of the window and its ``depth``-block margin.
+        pass there, up to floating-point rounding, at the cost of the window and its ``depth``-block margin. Where
+        the whole pass runs prepacked (``packs``), the region runs through the same prepacked layers, each padded by
+        one as over the whole map: the zeros at a side that is not the map's edge reach ``depth`` blocks in after the
+        last layer, the margin, so the window's features are what the whole pass computes.
         """
         h, w = x.shape[-2:]
         k0, k1, j0, j1 = window
         d = self.depth
         r0, r1, c0, c1 = max(0, k0 - d), min(h, k1 + d), max(0, j0 - d), min(w, j1 + d)
         y = x[:, :, r0:r1, c0:c1]
+        if self.compiled(x) and self.packs(x):
+            return self.packed_local(y)[:, :, k0 - r0:k1 - r0, j0 - c0:j1 - c0]
         for layer in self.local:
             if isinstance(layer, nn.Conv2d):
                 # pad by one where this side of the region is the map's edge; elsewhere the region shrinks by one

@@ -1,19 +1,23 @@
-"""The shipped route encoder with cheaper arithmetic for its convolutions: channels-last float32 and bfloat16.
+"""The shipped route encoder with other arithmetic for its convolutions: prepacked, channels-last and bfloat16.
 
     python scripts/experiments/cheap_arithmetic.py --check fields        # how far each variant's field moves
     python scripts/experiments/cheap_arithmetic.py --check iterations    # bfloat16's RRT iterations (vin_validation)
+    python scripts/experiments/cheap_arithmetic.py --check iterations --variant prepacked
     python scripts/experiments/cheap_arithmetic.py --check time          # a pass at 128 cells, each way
 
 The variants keep the shipped weights and change only how the local network's 3x3 convolutions run at
-inference: on channels-last tensors in float32 (another memory layout, so oneDNN sums in another order), or
+inference, each against the dense float32 convolutions that training runs (``RouteVIN.prepacked`` off): on
+weights prepacked for oneDNN, the activations in its blocked layout from layer to layer (``prepacked``: what the
+library ships); on channels-last tensors in float32 (another memory layout, so oneDNN sums in another order); or
 in bfloat16 on channels-last tensors (the heads, the fixed point and everything after stay float32). bfloat16
 is fast only on a CPU that computes it natively (AMX, AVX-512 BF16).
 
 ``fields``: on the validation maps (the training families, seeds from ``VALIDATION_SEED0 + 500``, ``--maps``
-per family at each of ``--sides``, each map's own goal), the largest difference from the shipped field at any
+per family at each of ``--sides``, each map's own goal), the largest difference from the dense field at any
 cell the goal reaches, first and later queries, per variant. ``iterations``: the route sampler's median RRT
-iterations (step 4, cap 20,000, planner seeds 0 and 1) on the same maps, shipped against bfloat16 as
-``vin_validation.py --samplers "route encoder"`` runs them, with each row's ratio and the geometric mean.
+iterations (step 4, cap 20,000, planner seeds 0 and 1) on the same maps, the dense convolutions against
+``--variant`` as ``vin_validation.py --samplers "route encoder"`` runs them, with each row's ratio and the
+geometric mean.
 ``time``: the best of 15 first queries at 128 cells, each way.
 """
 
@@ -60,14 +64,24 @@ class BFloat16(CheapConvolutions):
     dtype = torch.bfloat16
 
 
-VARIANTS = {"channels-last float32": ChannelsLast, "bfloat16": BFloat16}
+class Prepacked(RouteVIN):
+    """``RouteVIN`` as shipped: the compiled inference runs the local network prepacked for oneDNN."""
+
+    prepacked = True
+
+
+VARIANTS = {"prepacked": Prepacked, "channels-last float32": ChannelsLast, "bfloat16": BFloat16}
 
 
 def encoder(variant: type[RouteVIN] | None = None) -> RouteVIN:
-    """The shipped encoder, its arithmetic changed to ``variant``'s (its weights and settings kept)."""
+    """The shipped encoder, its arithmetic changed to ``variant``'s (its weights and settings kept); without one,
+    the dense float32 convolutions as training runs them."""
     net = load_route_net(SHIPPED_ROUTE).eval()
-    if variant is not None:
-        net.__class__ = variant  # the same module, its inference methods swapped: an experiment, not the library
+    if variant is None:
+        net.prepacked = False
+        return net
+    net.__class__ = variant  # the same module, its inference methods swapped: an experiment, not the library
+    if issubclass(variant, CheapConvolutions):
         net.local.to(dtype=variant.dtype, memory_format=torch.channels_last)
     return net
 
@@ -78,7 +92,7 @@ def validation_problems(family: str, side: int, maps: int):
 
 
 def check_fields(args) -> None:
-    shipped = encoder()
+    dense = encoder()
     nets = {name: encoder(cls) for name, cls in VARIANTS.items()}
     worst = {name: (0.0, "") for name in nets}
     problems = [p for side in args.sides for family in args.families
@@ -86,8 +100,8 @@ def check_fields(args) -> None:
     for p in problems:
         obstacles = np.asarray(p.world.obstacles, dtype=bool)
         goal = tuple(int(v) for v in p.world.cell_of(p.goal))
-        shipped.clear_map_cache()
-        ref = shipped.predict(obstacles, goal)
+        dense.clear_map_cache()
+        ref = dense.predict(obstacles, goal)
         reach = ref < 1e5
         for name, net in nets.items():
             net.clear_map_cache()
@@ -95,15 +109,15 @@ def check_fields(args) -> None:
             d = max(float(np.abs(first - ref)[reach].max()), float(np.abs(later - ref)[reach].max()))
             if d > worst[name][0]:
                 worst[name] = (d, p.name)
-    print("| variant | largest difference from the shipped field (steps) | on |")
+    print("| variant | largest difference from the dense field (steps) | on |")
     print("|---|---|---|")
     for name, (d, where) in worst.items():
         print(f"| {name} | {d:.3g} | {where} |")
 
 
 def check_iterations(args) -> None:
-    nets = {"shipped": encoder(), "bfloat16": encoder(BFloat16)}
-    print("| family | side | shipped | bfloat16 | ratio | unsolved (shipped, bfloat16) |")
+    nets = {"dense": encoder(), args.variant: encoder(VARIANTS[args.variant])}
+    print(f"| family | side | dense | {args.variant} | ratio | unsolved (dense, {args.variant}) |")
     print("|---|---|---|---|---|---|")
     logs = []
     for family in args.families:
@@ -126,7 +140,7 @@ def check_time(args) -> None:
     p = generate("maze", 123, 128)
     obstacles = np.asarray(p.world.obstacles, dtype=bool)
     goal = tuple(int(v) for v in p.world.cell_of(p.goal))
-    for name, net in {"shipped": encoder(), **{k: encoder(v) for k, v in VARIANTS.items()}}.items():
+    for name, net in {"dense": encoder(), **{k: encoder(v) for k, v in VARIANTS.items()}}.items():
         def first_query(net=net):
             net.clear_map_cache()
             return net.predict(obstacles, goal)
@@ -144,6 +158,8 @@ def main(argv: list[str] | None = None) -> int:
     """Command line entry point."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--check", choices=("fields", "iterations", "time"), required=True)
+    ap.add_argument("--variant", choices=("bfloat16", "prepacked"), default="bfloat16",
+                    help="--check iterations: the variant run against the dense convolutions (default bfloat16)")
     ap.add_argument("--maps", type=int, default=6, help="validation maps per family and side (default 6)")
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
     ap.add_argument("--families", nargs="+", choices=TRAINING_FAMILIES, default=list(TRAINING_FAMILIES))
