@@ -141,13 +141,14 @@ def test_other_planners_run_every_registry_sampler_beside_their_classical_option
     rows = [r for r in rows if r not in cost and r not in later]
     got = {(r["planner"], r["sampler"]) for r in rows if r["split"] == "test"}
     for planner, classical in (("PRM", E.OBSTACLE_BASED), ("RRTConnect", None)):
-        want = {"uniform", "policy", E.ROUTE, "mine", E.ROUTE_ABLATION, E.EXACT_ROUTE}
+        want = {"uniform", "policy", E.ROUTE, "mine", E.LAZY_ROUTE, E.ROUTE_ABLATION, E.EXACT_ROUTE}
         assert {(planner, s) for s in want} <= got
         if classical:
             assert (planner, classical) in got
     assert any(p == "RRTConnect" and s.startswith("goal_bias=") for p, s in got) or ("RRTConnect", "uniform") in got
     # OB-PRM handed another sampler is PRM with it: it runs with its own obstacle-based sampling only
     assert {(p, s) for p, s in got if p == "OBPRM"} == {("OBPRM", E.OBSTACLE_BASED)}
+    assert ("RRT", E.LAZY_ROUTE) in got  # RRT's own rows: the lazy route beside the route encoder
     assert {r["split"] for r in rows if r["planner"] == "RRTConnect"} == {"tuning", "test"}
     summary = (out / "summary.md").read_text()
     assert "Your encoder mine" in summary and "With PRM" in summary and "| mine |" in summary

@@ -329,7 +329,7 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     conn = sqlite3.connect(":memory:")
     rows = runs_table(conn, read_benchmark_log((out / "ompl" / "forest.log").read_text(), conn))
     samplers = ["uniform", *(f"goal bias {b:g}" for b in E.GOAL_BIASES), "policy", E.FOLLOWER, E.ROUTE,
-                E.ROUTE_ABLATION, "expert (reference)", E.EXACT_ROUTE, E.CONSTANT]
+                E.LAZY_ROUTE, E.ROUTE_ABLATION, "expert (reference)", E.EXACT_ROUTE, E.CONSTANT]
     assert sorted({r["planner"] for r in rows}) == sorted(f"RRT {s}" for s in samplers)
     short = (out / "summary.md").read_text()  # the short table and the findings; every wide table in details.md
     assert "## At a glance" in short and "## Findings" in short and "(details.md)" in short

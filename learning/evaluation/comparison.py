@@ -15,16 +15,17 @@ Given ``out``, ``compare`` holds ``out``'s lock, journals every finished run in 
 (``resume`` continues a journal, ``fresh`` discards one; a journal of other settings or files is refused)
 and writes the output set when every run is done. Without ``out`` the runs are kept in memory only.
 
-The phases, each journaled: (1) the goal-bias and policy-batch tuning runs beside the test runs of every
-sampler that needs no tuned setting (RRT); (2) the policy at its tuned batch and the ablation's tuning;
-(3) the ablation at its tuned settings; (4) with ``other_planners``: the goal-bias tuning of each tree
-planner on the tuning split, then (5) every other planner on every test set with uniform sampling, its
-classical option (the goal bias tuned for the set for a tree; OB-PRM's obstacle-based sampling for a
-roadmap), the policy, each route encoder, its ablation, the exact reference and users' samplers, as the
-registry builds them (``make_sampler`` names handed to the planner as they are), except OB-PRM, which runs
-with its own obstacle-based sampling only (handed another sampler it is PRM with it); (6) with ``convergence``:
-RRT*'s cost convergence on every test query (``learning.evaluation.convergence``), with ``later_queries``: later
-queries on each roadmap built for a test query (``learning.evaluation.later_queries``), then each :class:`Part`.
+The phases, each journaled: (1) the goal-bias and policy-batch tuning runs beside the test runs of every sampler
+that needs no tuned setting (RRT; the lazy route among them); (2) the policy at its tuned batch and the ablation's
+tuning; (3) the ablation at its tuned settings; (4) with ``other_planners``: the goal-bias tuning of each tree
+planner on the tuning split, then (5) every other planner on every test set with uniform sampling, its classical
+option (the goal bias tuned for the set for a tree; OB-PRM's obstacle-based sampling for a roadmap), the policy,
+each route encoder, the shipped one computed lazily (``route_lazy``, where its rule differs from the route's:
+RRT-Connect and the roadmaps), its ablation, the exact reference and users' samplers, as the registry builds them
+(``make_sampler`` names handed to the planner as they are), except OB-PRM, which runs with its own obstacle-based
+sampling only (handed another sampler it is PRM with it); (6) with ``convergence``: RRT*'s cost convergence on every
+test query (``learning.evaluation.convergence``), with ``later_queries``: later queries on each roadmap built for a
+test query (``learning.evaluation.later_queries``), then each :class:`Part`.
 
 A **part** plugs a comparison of another kind into the same call, journal and output set (the 6-DoF
 scene sets, ``learning.evaluation.rigid.RigidPart``): any object with ``name``, ``protocol`` (how its runs are
@@ -78,6 +79,7 @@ from learning.evaluation.tuning import (
     pooled,
     tuning_tasks,
 )
+from learning.samplers.lazy_route import LAZY_FAMILIES
 from learning.samplers.registry import ModelCache, SamplerSpec
 from planners.base.registry import planner_class
 from planners.maps.generators import FAMILIES
@@ -304,6 +306,7 @@ class Comparison:
         tuned = self._tuned_biases(runs + out, queries, unseen)
         routes = self.route_specs()
         learned = [spec for label, spec in self.field_specs().items() if label not in routes]  # ablation, reference
+        lazy = SamplerSpec.of("route_lazy", path=self.route, step_size=self.protocol.step, device=self.device)
         tasks = []
         for planner in self.other_planners:
             for q in queries:
@@ -321,6 +324,8 @@ class Comparison:
                 tasks.append(Task(q, planner, policy_spec(self.policy, batch), 0, "policy"))
                 for label, spec in routes.items():
                     tasks.append(Task(q, planner, spec, 0, label if label != ROUTE else ""))
+                if planner_class(planner).family in LAZY_FAMILIES:  # RRT* takes the route rule: the route's rows
+                    tasks.append(Task(q, planner, lazy, 0))
                 tasks += [Task(q, planner, SamplerSpec.user(n, s), 0) for n, s in self.samplers.items()]
         log(f"{len(tasks)} runs of {', '.join(self.other_planners)} on every test set")
         return out + phase(tasks, "other planners")

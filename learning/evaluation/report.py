@@ -23,6 +23,7 @@ from learning.evaluation.roster import (
     EXACT_ROUTE,
     EXPERT,
     FOLLOWER,
+    LAZY_ROUTE,
     OBSTACLE_BASED,
     ROUTE,
     ROUTE_ABLATION,
@@ -47,7 +48,7 @@ def _roster(results) -> list[tuple[str, str | None]]:
     users = list(results.comparison.samplers)
     routes = [n for n in results.comparison.routes]
     return [("uniform", "uniform"), (BEST_BIAS, None), ("policy", "policy"), ("policy ablation", CONSTANT),
-            (ROUTE, ROUTE), *((n, n) for n in routes), (ROUTE_ABLATION, ROUTE_ABLATION),
+            (ROUTE, ROUTE), *((n, n) for n in routes), (LAZY_ROUTE, LAZY_ROUTE), (ROUTE_ABLATION, ROUTE_ABLATION),
             ("exact route reference", EXACT_ROUTE), ("expert", EXPERT), *((n, n) for n in users)]
 
 
@@ -360,7 +361,7 @@ def wide_tables(results) -> dict:
     """The wide tables of ``details.md`` (and what the command line prints), computed once."""
     c, rows, best, mai = results.comparison, results.rows, results.best, results.movingai
     users = [*c.routes, *c.samplers]
-    learned = [ROUTE, ROUTE_ABLATION]
+    learned = [ROUTE, LAZY_ROUTE, ROUTE_ABLATION]
     runs = results.runs + results.pool
     head = T.headline(rows, best, [FOLLOWER, *learned, *users], results.constants)
     hcols = ["family", "best_bias", "uniform_median", "best_bias_median", "policy_median", "policy/best_bias",
@@ -434,7 +435,8 @@ def details_markdown(results, wide: dict | None = None) -> str:
         text += ("\n## Other planners\n\nEvery other planner on the test split (one seed per query), by group of "
                  "map sets: uniform sampling, its classical option (the goal bias tuned for each set on its tuning "
                  f"split for a tree; OB-PRM's obstacle-based sampling, `{OBSTACLE_BASED}`, for a roadmap), the policy, "
-                 "each route encoder, its ablation and the exact reference, as the sampler registry builds them. "
+                 f"each route encoder, the {LAZY_ROUTE} (RRT-Connect and the roadmaps: their uniform sampling "
+                 "first, then the field), its ablation and the exact reference, as the sampler registry builds them. "
                  "Iterations are samples for a roadmap; checks include the sampler's own.\n\n" + markdown_table(others))
     for name, (_, report) in results.parts.items():
         text += f"\n## {name}\n\n{report.markdown.rstrip()}\n"
@@ -462,7 +464,7 @@ def record(results, settings: dict) -> dict:
 def write_outputs(results, out: Path, settings: dict) -> list[Path]:
     """Every file of the output set, swapped into ``out`` together; returns the figures' paths."""
     c = results.comparison
-    extra = [CONSTANT, FOLLOWER, ROUTE, ROUTE_ABLATION, *c.routes, *c.samplers]
+    extra = [CONSTANT, FOLLOWER, ROUTE, LAZY_ROUTE, ROUTE_ABLATION, *c.routes, *c.samplers]
     with output_set(out) as tmp:
         write_runs_csv(results.all_runs, tmp / "runs.csv")
         plots = save_plots([r for r in results.runs if r.map not in results.movingai] + results.pool, results.rows,

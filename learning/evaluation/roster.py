@@ -27,6 +27,11 @@ FOLLOWER = "straight-line follower"
 ROUTE, ROUTE_ABLATION = "route encoder", "route ablation"
 
 
+#: The route encoder's field computed only when a query needs it (``make_sampler("route_lazy")``): with RRT the
+#: straight line first, with RRT-Connect and the roadmaps their uniform sampling first, then the field's rule.
+LAZY_ROUTE = "lazy route"
+
+
 #: The privileged references: the expert on the exact geodesic distance, and the route sampler on the exact
 #: cost-to-go at the route encoder's own settings (what perfect route knowledge gives that sampler).
 EXPERT, EXACT_ROUTE = "expert (reference)", "exact_route"
@@ -42,12 +47,13 @@ OBSTACLE_BASED = "obstacle-based"
 
 
 #: Labels of the registered samplers whose label is not made from a parameter.
-_LABELS = {"uniform": "uniform", "follower": FOLLOWER, "route": ROUTE, "route_ablation": ROUTE_ABLATION,
-           "expert": EXPERT, "exact_route": EXACT_ROUTE, "obstacle_based": OBSTACLE_BASED}
+_LABELS = {"uniform": "uniform", "follower": FOLLOWER, "route": ROUTE, "route_lazy": LAZY_ROUTE,
+           "route_ablation": ROUTE_ABLATION, "expert": EXPERT, "exact_route": EXACT_ROUTE,
+           "obstacle_based": OBSTACLE_BASED}
 
 
 #: Sampler labels the comparison defines itself; a user sampler takes another name.
-BUILTIN_SAMPLERS = ("uniform", "policy", FOLLOWER, ROUTE, ROUTE_ABLATION, EXPERT, EXACT_ROUTE)
+BUILTIN_SAMPLERS = ("uniform", "policy", FOLLOWER, ROUTE, LAZY_ROUTE, ROUTE_ABLATION, EXPERT, EXACT_ROUTE)
 
 
 def sampler_label(spec: SamplerSpec) -> str:
@@ -141,14 +147,16 @@ def fixed_specs(protocol: Protocol, route: str, users: dict[str, str], reference
     """The test samplers that need no tuned setting, at ``protocol``'s step.
 
     Uniform, the goal-bias sweep, the follower, the route encoder (checkpoint ``route``, its passes on
-    ``device``) and its ablation, users' samplers (name -> spec) and, with ``references``, the expert and
-    the exact route reference (``exact_route``: the route sampler's own settings on the exact cost-to-go).
+    ``device``), the same encoder computed lazily (``route_lazy``) and its ablation, users' samplers (name -> spec)
+    and, with ``references``, the expert and the exact route reference (``exact_route``: the route sampler's own
+    settings on the exact cost-to-go).
     """
     from learning.evaluation.tuning import GOAL_BIASES
 
     step = protocol.step
     out = [SamplerSpec.of("uniform"), *(bias_spec(b) for b in GOAL_BIASES), SamplerSpec.of("follower", step_size=step),
            SamplerSpec.of("route", path=route, step_size=step, device=device),
+           SamplerSpec.of("route_lazy", path=route, step_size=step, device=device),
            SamplerSpec.of("route_ablation", step_size=step), *(SamplerSpec.user(n, s) for n, s in users.items())]
     if references:
         out += [SamplerSpec.of("expert", step_size=step), SamplerSpec.of("exact_route", step_size=step)]

@@ -258,12 +258,12 @@ def glance_table(rows: Sequence[dict], biases: dict, extra: Sequence[str] = (),
     """
     if metric not in ("iterations", "time"):
         raise ValueError(f"metric must be 'iterations' or 'time', got {metric!r}")
-    from learning.evaluation.roster import ROUTE, ROUTE_ABLATION
+    from learning.evaluation.roster import LAZY_ROUTE, ROUTE, ROUTE_ABLATION
 
     by = {(r["family"], r["_sampler"]): r for r in rows if r["planner"] == "RRT"}
     cols = [("uniform", "uniform"), ("best goal bias", None), ("policy", "policy"), ("policy ablation", CONSTANT),
-            (ROUTE, ROUTE), (ROUTE_ABLATION, ROUTE_ABLATION), ("exact route reference", EXACT_ROUTE),
-            ("expert", EXPERT), *((n, n) for n in extra)]
+            (ROUTE, ROUTE), (LAZY_ROUTE, LAZY_ROUTE), (ROUTE_ABLATION, ROUTE_ABLATION),
+            ("exact route reference", EXACT_ROUTE), ("expert", EXPERT), *((n, n) for n in extra)]
     out = []
     for fam in _order({f for f, _ in by}, movingai_maps):
         b = biases.get((fam, "RRT"))

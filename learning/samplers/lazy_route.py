@@ -54,6 +54,10 @@ from planners.fused import (
     rrt_loop,
 )
 
+#: The planner families whose rule here differs from the route sampler's: RRT (the straight line first), RRT-Connect
+#: and the roadmaps (their uniform sampling first); RRT* and its kin take the route sampler's own rule.
+LAZY_FAMILIES = (FAMILY_TREE, FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP)
+
 #: The switch, chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``): the
 #: encoder's field is computed once the straight line has not solved within this many iterations per step-sized
 #: square of the map.
