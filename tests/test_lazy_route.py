@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from learning.samplers.lazy_route import (
     SHIPPED_AFTER,
+    SHIPPED_CAP,
     SHIPPED_CONNECT_AFTER,
     SHIPPED_ROADMAP_AFTER,
     LazyConnectSampler,
@@ -65,7 +66,7 @@ def test_the_registry_builds_it_at_the_validated_switch(lazy):
 
 def test_switching_at_once_is_the_route_sampler_and_never_is_its_ablation(lazy, maps):
     route, ablation = make_sampler("route"), make_sampler("route_ablation")
-    at_once, never = make_sampler("route_lazy", after=0), make_sampler("route_lazy", after=math.inf)
+    at_once, never = make_sampler("route_lazy", after=0), make_sampler("route_lazy", after=math.inf, cap=math.inf)
     for p in maps:
         for seed in (0, 1):
             assert _run(p, at_once, seed)[0] == _run(p, route, seed)[0]
@@ -93,6 +94,21 @@ def test_a_fused_run_is_the_drawn_run_and_a_run_in_pieces_is_one_solve(maps):
     assert switched and kept, "the maps must give runs on both sides of the switch"
 
 
+def test_a_cap_brings_the_switch_forward_whatever_the_maps_area(maps):
+    """``cap`` iterations at most before the switch: a cap of 32 on a 64-cell map is ``after`` = 0.125 there."""
+    capped, by_area = make_sampler("route_lazy", after=10.0, cap=32), make_sampler("route_lazy", after=0.125)
+    at_once = make_sampler("route_lazy", cap=0)
+    for p in maps:
+        for seed in (0, 1):
+            key, bound = _run(p, capped, seed)
+            assert key == _run(p, by_area, seed)[0] and bound.switch_at == 32
+            assert _run(p, at_once, seed)[0] == _run(p, make_sampler("route_lazy", after=0), seed)[0]
+    assert make_sampler("route_lazy").cap == SHIPPED_CAP and f"cap={SHIPPED_CAP:g}" in repr(make_sampler("route_lazy"))
+    for bad in (-1, True, "8", math.nan):
+        with pytest.raises(InputError, match="cap = "):
+            make_sampler("route_lazy", cap=bad)
+
+
 def test_a_run_solved_on_the_switchs_iteration_computes_no_field(maps):
     """The switch falls just after the iteration that solves: neither the fused loop nor ``draw`` computes a field."""
     ablation = make_sampler("route_ablation")
@@ -112,9 +128,10 @@ def test_fused_and_drawn_lazy_runs_are_the_same_on_random_walled_maps(data):
     p = random_walled_problem(data, 64, wall=2, gap=5, tolerance=3.0)
     after = data.draw(st.sampled_from([0.0, 0.02, 0.1, 0.5, math.inf]))
     stall = data.draw(st.sampled_from([1, 3, 10, 40, math.inf]))
+    cap = data.draw(st.sampled_from([0, 5, 40, SHIPPED_CAP, math.inf]))
     seed = data.draw(st.integers(0, 2**31 - 1))
-    fused = make_sampler("route_lazy", after=after, stall=stall)
-    assert _same(*_run(p, fused, seed), _run(p, Unfused(fused.net, after=after, stall=stall), seed))
+    fused = make_sampler("route_lazy", after=after, stall=stall, cap=cap)
+    assert _same(*_run(p, fused, seed), _run(p, Unfused(fused.net, after=after, stall=stall, cap=cap), seed))
 
 
 def test_a_stalled_straight_line_switches_to_the_field_fused_as_drawn(maps):
@@ -220,9 +237,11 @@ def test_a_map_the_encoder_refuses_is_refused_at_bind_not_at_the_switch(lazy, mo
 def test_the_switchs_rule_takes_the_fastest_or_a_smaller_switch_within_three_percent(tmp_path, capsys):
     script = load_script("experiments/lazy_route_rule")
     inf = math.inf
-    assert script.choose({(0.7, inf): 3.05, (1.4, inf): 3.0, (inf, inf): 3.2}) == (0.7, inf)
-    assert script.choose({(0.7, inf): 3.2, (inf, inf): 3.0}) == (inf, inf)
-    assert script.choose({(0.7, 50.0): 3.05, (0.35, inf): 3.0, (inf, 25.0): 3.5}) == (0.7, 50.0)  # stall first
+    assert script.choose({(0.7, inf, inf): 3.05, (1.4, inf, inf): 3.0, (inf, inf, inf): 3.2}) == (0.7, inf, inf)
+    assert script.choose({(0.7, inf, inf): 3.2, (inf, inf, inf): 3.0}) == (inf, inf, inf)
+    assert script.choose({(0.7, 50.0, inf): 3.05, (0.35, inf, inf): 3.0, (inf, 25.0, inf): 3.5}) == (0.7, 50.0, inf)
+    assert script.choose({(0.7, inf, 1000.0): 3.0, (0.7, inf, inf): 3.2}) == (0.7, inf, 1000.0)  # outside the tie
+    assert script.choose({(0.7, inf, 1000.0): 3.0, (0.7, inf, inf): 3.05}) == (0.7, inf, inf)  # the larger cap
     assert script.main(["--maps", "1", "0", "0", "--seeds", "1", "--after", "inf", "--stall", "20", "inf", "--out",
                         str(tmp_path / "rule")]) == 0
     out = capsys.readouterr().out

@@ -5,14 +5,15 @@ the goal in about as many iterations as the encoder, and the encoder's pass over
 much as hundreds of its iterations. ``LazyRouteSampler`` starts RRT on the straight-line field and computes the
 encoder's field only if the run has not solved within a budget of iterations that grows with the map's area, as the
 pass's cost does (rent, then buy: ``after`` iterations per step-sized square of the map; on the CPU a pass costs
-about as much as 0.7 of them); from then on it is the route sampler on the encoder's field, following the tree grown
+about as much as 0.7 of them), and within at most ``cap`` iterations (1,000) whatever the area, since each of them
+grows dearer with the tree; from then on it is the route sampler on the encoder's field, following the tree grown
 so far. So an easy query costs what the ablation costs, and a winding one the ablation's budget, the encoder's pass
 and the encoder's iterations from the tree already there. A second switch, off by default, computes the field once
 the straight line's tree has come no closer to the goal for ``stall`` iterations: where the straight line is lost
-on a large map, it stops paying rent long before the budget runs out. Both were chosen on the validation maps by
+on a large map, it stops paying rent long before the budget runs out. All three were chosen on the validation maps by
 time to solution (``scripts/experiments/lazy_route_rule.py``: the geometric mean of the median times over
-validation maps of 128, 256 and 512 cells); ``after=0`` is the route sampler and ``after=inf`` (with no stall) its
-ablation, run for run.
+validation maps of 128, 256 and 512 cells); ``after=0`` (or ``cap=0``) is the route sampler and ``after=inf`` with
+``cap=inf`` (and no stall) its ablation, run for run.
 
 Both phases draw inside RRT's compiled loop: the loop runs up to the switch on the straight-line field, the encoder
 runs, and the loop goes on on the encoder's field, so a fused run is the run drawn through ``draw``, bit for bit.
@@ -67,6 +68,12 @@ SHIPPED_AFTER = 0.7
 #: pair's objective, outside the rule's 3%, and cut the median time on the 512-cell maze, bugtrap and rooms maps from
 #: 41-107 ms to 31-36 ms: an option for large maps.
 SHIPPED_STALL = math.inf
+#: The most straight-line iterations before the switch, whatever the map's area (``cap``; inf: none), chosen with
+#: ``after`` by the same rule (``lazy_route_rule.py --cap``): the straight line's iterations grow dearer as its tree
+#: grows, so on a large winding map the area's budget (11,469 iterations at 512 cells) cost many passes. On the
+#: validation maps a cap of 1,000 took the geometric mean of the median times from 1.53 to 1.35 ms (the 512-cell
+#: rooms 68 to 12 ms, mazes 28 to 10); 500, 2,000 and 4,000 came out at 1.59, 1.42 and 1.50.
+SHIPPED_CAP = 1000.0
 #: RRT-Connect's switch (``connect_after``), chosen on the validation maps by time as ``after`` was
 #: (``lazy_route_rule.py --planner RRTConnect``): both trees grow by uniform sampling until this many iterations per
 #: step-sized square of the map, then follow the route field's two fields. On the validation maps uniform RRT-Connect
@@ -77,7 +84,7 @@ SHIPPED_CONNECT_AFTER = 1.4
 #: the route field's corridor.
 SHIPPED_ROADMAP_AFTER = 0.35
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
-LAZY_ATTRIBUTES = ("after", "stall", "connect_after", "roadmap_after", "straight", "switched", "switch_at")
+LAZY_ATTRIBUTES = ("after", "cap", "stall", "connect_after", "roadmap_after", "straight", "switched", "switch_at")
 
 
 @nb.njit(cache=True)
@@ -104,20 +111,21 @@ class LazyRouteSampler(RouteSampler):
     """``RouteSampler`` on the straight-line field until iteration ``switch_at``, then on the encoder's.
 
     ``switch_at`` is ``ceil(after * A)`` on a map of ``A`` step-sized squares (its cells over the cells of a step
-    squared: the encoder reads ``A`` times its ``step ** 2`` cells, so its pass grows with ``A``). Before
-    it, samples are the ablation's (``RouteSampler(None, **ABLATION_SETTINGS)``, the straight line's own tuned
+    squared: the encoder reads ``A`` times its ``step ** 2`` cells, so its pass grows with ``A``), at most ``cap``.
+    Before it, samples are the ablation's (``RouteSampler(None, **ABLATION_SETTINGS)``, the straight line's own tuned
     settings); at it, unless the run has solved, the encoder's field is computed (``forward_passes`` and
     ``reused_seconds`` as the route sampler's; 0 for a run that never switches) and the route sampler's rule goes on
     from the tree grown so far: its progress vertex is that tree's vertex of lowest predicted cost-to-go.
 
     Args:
         net: The trained encoder, as for ``RouteSampler``.
-        after: The switch in iterations per step-sized square of the map (>= 0; ``inf``: never).
+        after: The switch in iterations per step-sized square of the map (>= 0; ``inf`` with ``cap`` ``inf``: never).
+        cap: The switch at the latest at this iteration, whatever the map's area (>= 0; ``inf``: no cap).
         kwargs: ``RouteSampler``'s (its settings once the field is computed; default the shipped ones). ``batch``
             must be 1, the validated setting, so that the switch falls on one iteration whatever the loop.
     """
 
-    def __init__(self, net, *, after: float = SHIPPED_AFTER, stall: float = SHIPPED_STALL,
+    def __init__(self, net, *, after: float = SHIPPED_AFTER, cap: float = SHIPPED_CAP, stall: float = SHIPPED_STALL,
                  connect_after: float = SHIPPED_CONNECT_AFTER, roadmap_after: float = SHIPPED_ROADMAP_AFTER,
                  **kwargs) -> None:
         if net is None:
@@ -125,7 +133,10 @@ class LazyRouteSampler(RouteSampler):
                              "ablation alone use RouteSampler(None) or make_sampler('route_ablation'))")
         if isinstance(after, bool) or not isinstance(after, int | float | np.floating) or not after >= 0:
             raise InputError(f"after = {short_repr(after)}: expected iterations per step-sized square of the map, "
-                             f">= 0 (inf: never compute the field)")
+                             f">= 0 (inf, with cap=inf: never compute the field)")
+        if isinstance(cap, bool) or not isinstance(cap, int | float | np.floating) or not cap >= 0:
+            raise InputError(f"cap = {short_repr(cap)}: expected the most iterations before the switch, >= 0 "
+                             f"(inf: no cap)")
         for name, value in (("connect_after", connect_after), ("roadmap_after", roadmap_after)):
             if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not value >= 0:
                 raise InputError(f"{name} = {short_repr(value)}: expected iterations per step-sized square of the "
@@ -138,7 +149,8 @@ class LazyRouteSampler(RouteSampler):
                              f"(batch 1)")
         settings = {**SHIPPED_SETTINGS, **kwargs}
         super().__init__(net, **settings)
-        self.after, self.stall, self.connect_after = float(after), float(stall), float(connect_after)
+        self.after, self.cap, self.stall = float(after), float(cap), float(stall)
+        self.connect_after = float(connect_after)
         self.roadmap_after = float(roadmap_after)
         self.straight = RouteSampler(None, step_size=self.step_size, **ABLATION_SETTINGS)
         self.switched, self.switch_at = False, 0
@@ -175,7 +187,8 @@ class LazyRouteSampler(RouteSampler):
         grid = self.problem.world
         self.forward_passes, self.reused_seconds, self.switched = 0, 0.0, False
         self._state = self.straight.bind(self.problem).draw_state
-        self.switch_at = switch_iteration(self.after, grid, self.step_size)
+        self.switch_at = min(switch_iteration(self.after, grid, self.step_size),
+                             switch_iteration(self.cap, None, self.step_size))
 
     def switch(self) -> None:
         """Compute the encoder's field for the bound query and follow it from here (once; a no-op after)."""
@@ -209,14 +222,17 @@ class LazyRouteSampler(RouteSampler):
         return fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
 
     def __repr__(self) -> str:
-        return (f"LazyRouteSampler(after={self.after:g}, stall={self.stall:g}, "
+        return (f"LazyRouteSampler(after={self.after:g}, cap={self.cap:g}, stall={self.stall:g}, "
                 f"{super().__repr__()[len('RouteSampler('):]}")
 
 
-def switch_iteration(after: float, grid: OccupancyGrid, step: float) -> int:
-    """``ceil(after * A)`` on a map of ``A`` step-sized squares (``after`` inf: never)."""
-    squares = grid.height * grid.width * (grid.resolution / step) ** 2
-    return np.iinfo(np.int64).max if math.isinf(after) else math.ceil(after * squares)
+def switch_iteration(after: float, grid: OccupancyGrid | None, step: float) -> int:
+    """``ceil(after * A)`` on a map of ``A`` step-sized squares (``after`` inf: never); without ``grid``,
+    ``ceil(after)``."""
+    if math.isinf(after):
+        return np.iinfo(np.int64).max
+    squares = 1.0 if grid is None else grid.height * grid.width * (grid.resolution / step) ** 2
+    return math.ceil(after * squares)
 
 
 @nb.njit(cache=True)

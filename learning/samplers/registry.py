@@ -52,13 +52,15 @@ def _route(step_size: float = STEP, path: str | None = None, device: str = "auto
     return shipped_sampler(path if models is None else models.route_net(path), step_size, device=device)
 
 
-def _route_lazy(after: float | None = None, stall: float | None = None, connect_after: float | None = None,
+def _route_lazy(after: float | None = None, cap: float | None = None, stall: float | None = None,
+                connect_after: float | None = None,
                 roadmap_after: float | None = None, step_size: float = STEP, path: str | None = None,
                 device: str = "auto", *,
                 models: ModelCache | None = None) -> Sampler:
     from learning.models.route_net import load_route_net
     from learning.samplers.lazy_route import (
         SHIPPED_AFTER,
+        SHIPPED_CAP,
         SHIPPED_CONNECT_AFTER,
         SHIPPED_ROADMAP_AFTER,
         SHIPPED_STALL,
@@ -69,6 +71,7 @@ def _route_lazy(after: float | None = None, stall: float | None = None, connect_
     path = str(SHIPPED) if path is None else path
     net = load_route_net(path) if models is None else models.route_net(path)
     return LazyRouteSampler(net, after=SHIPPED_AFTER if after is None else after,
+                            cap=SHIPPED_CAP if cap is None else cap,
                             stall=SHIPPED_STALL if stall is None else stall,
                             connect_after=SHIPPED_CONNECT_AFTER if connect_after is None else connect_after,
                             roadmap_after=SHIPPED_ROADMAP_AFTER if roadmap_after is None else roadmap_after,
@@ -172,8 +175,8 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "route": (_route, "the shipped route encoder at its validated settings"),
     "route_lazy": (_route_lazy, "the route encoder's field computed only where needed: RRT follows the straight "
                    "line first and runs the encoder if that has not solved within after= iterations per step-sized "
-                   "square of the map, or has stalled stall= iterations; RRT-Connect's trees grow uniformly until "
-                   "connect_after= of them, a roadmap's samples until roadmap_after="),
+                   "square of the map (at most cap= iterations), or has stalled stall= iterations; RRT-Connect's "
+                   "trees grow uniformly until connect_after= of them, a roadmap's samples until roadmap_after="),
     "route_ablation": (_route_ablation, "the route sampler without its encoder, tuned for itself"),
     "policy": (_policy, "the learned sampler policy (shipped at its validated batch, or path=)"),
     "policy_ablation": (_policy_ablation, "the policy's action classes at a constant distribution (frontier=)"),

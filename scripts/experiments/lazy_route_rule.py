@@ -3,21 +3,21 @@
     PYTHONPATH=$PWD python scripts/experiments/lazy_route_rule.py [--maps 8 4 2] [--seeds 2] [--out DIR]
 
 ``LazyRouteSampler`` (``learning.samplers.lazy_route``) runs RRT on the straight-line field and computes the
-encoder's field once the run has not solved within ``after`` iterations per step-sized square of the map, or once
-its tree has come no closer to the goal for ``stall`` iterations. Every pair of ``--after`` and ``--stall``
-candidates (with after = 0, the route sampler, as a reference unless ``--no-reference``) plans the validation
-maps of each family at 128, 256 and 512 cells (``--maps`` of each size; ``planner_maps("validation", ...)``) at
-planner seeds 0 upwards, RRT step 4, at most 20,000 iterations, one process and one thread, in turn on each
-(query, seed) after two untimed warm-up queries. ``--planner RRTConnect`` does the same for RRT-Connect's switch
-(``connect_after``, given as ``--after``: both trees uniform until then, then the route field's two fields), and
-``--planner PRM`` for the roadmaps' (``roadmap_after``: uniform samples, then the field's corridor). A run's
-time goes from the planner's construction (the sampler's bind and its own field: no cache) to the end of its solve;
-an unsolved run counts with the time it ran.
+encoder's field once the run has not solved within ``after`` iterations per step-sized square of the map (at most
+``cap`` iterations), or once its tree has come no closer to the goal for ``stall`` iterations. Every triple of
+``--after``, ``--cap`` and ``--stall`` candidates (with after = 0, the route sampler, as a reference unless
+``--no-reference``) plans the validation maps of each family at 128, 256 and 512 cells (``--maps`` of each size;
+``planner_maps("validation", ...)``) at planner seeds 0 upwards, RRT step 4, at most 20,000 iterations, one process
+and one thread, in turn on each (query, seed) after two untimed warm-up queries. ``--planner RRTConnect`` does the
+same for RRT-Connect's switch (``connect_after``, given as ``--after``: both trees uniform until then, then the
+route field's two fields), and ``--planner PRM`` for the roadmaps' (``roadmap_after``: uniform samples, then the
+field's corridor). A run's time goes from the planner's construction (the sampler's bind and its own field: no
+cache) to the end of its solve; an unsolved run counts with the time it ran.
 
 The rule: the lowest geometric mean over the (family, size) cells of each candidate's median time wins, and a
-candidate within 3% of it with a smaller ``stall``, then a smaller ``after``, wins over it (the reference takes no
-part). Prints a table per candidate (geometric mean, pooled mean time, median iterations and success per cell) and
-the choice; ``--out`` also writes the runs as JSON.
+candidate within 3% of it with a larger ``cap`` (nearer the area's budget alone), then a smaller ``stall``, then a
+smaller ``after``, wins over it (the reference takes no part). Prints a table per candidate (geometric mean, pooled
+mean time, median iterations and success per cell) and the choice; ``--out`` also writes the runs as JSON.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ import numpy as np
 
 from learning.evaluation.every_planner import planner_maps
 from learning.models.threads import planning_threads
+from learning.samplers.lazy_route import SHIPPED_CAP
 from learning.samplers.registry import make_sampler
 from planners import make_planner
 
@@ -54,13 +55,14 @@ def run(problem, sampler, seed: int, planner_name: str = "RRT") -> dict:
             "switched": bool(planner.sampler.switched)}
 
 
-def choose(table: dict[tuple[float, float], float]) -> tuple[float, float]:
-    """The rule: the lowest value wins; one within ``TIE`` of it with a smaller (stall, after) wins over it.
+def choose(table: dict[tuple[float, float, float], float]) -> tuple[float, float, float]:
+    """The rule: the lowest value wins; one within ``TIE`` of it with a larger cap, then a smaller (stall, after),
+    wins over it.
 
-    ``table`` maps (after, stall) to the geometric mean of the cells' median times.
+    ``table`` maps (after, stall, cap) to the geometric mean of the cells' median times.
     """
     best = min(table.values())
-    return min((k for k, v in table.items() if v <= (1 + TIE) * best), key=lambda k: (k[1], k[0]))
+    return min((k for k, v in table.items() if v <= (1 + TIE) * best), key=lambda k: (-k[2], k[1], k[0]))
 
 
 def main(argv=None) -> int:
@@ -72,6 +74,9 @@ def main(argv=None) -> int:
                     help="RRT (switches after and stall), RRTConnect or PRM (connect_after, roadmap_after: --after)")
     ap.add_argument("--after", type=float, nargs="+", default=None, help="candidates (default: the rule's)")
     ap.add_argument("--stall", type=float, nargs="+", default=list(STALL), help="candidates (default: the rule's)")
+    ap.add_argument("--cap", type=float, nargs="+", default=[SHIPPED_CAP],
+                    help=f"RRT: candidates for the most iterations before the switch (default: {SHIPPED_CAP:g}, "
+                         "the shipped; inf: none)")
     ap.add_argument("--no-reference", action="store_true", help="leave out after = 0 (the route rule)")
     ap.add_argument("--out", type=Path, default=None, help="write runs.json here (a new or empty folder)")
     args = ap.parse_args(argv)
@@ -79,19 +84,19 @@ def main(argv=None) -> int:
     if args.after is None:
         args.after = list(CONNECT_AFTER if connect else AFTER)
     if connect:
-        args.stall = [math.inf]
+        args.stall, args.cap = [math.inf], [math.inf]
     switch = "connect_after" if args.planner == "RRTConnect" else "roadmap_after"
     if min(args.maps) < 0 or args.seeds < 1 or not all(a >= 0 for a in args.after) or \
-            not all(s >= 1 for s in args.stall):
-        ap.error("--maps must be >= 0, --seeds >= 1, every --after >= 0 and every --stall >= 1")
+            not all(s >= 1 for s in args.stall) or not all(c >= 0 for c in args.cap):
+        ap.error("--maps must be >= 0, --seeds >= 1, every --after and --cap >= 0 and every --stall >= 1")
     if args.out is not None and args.out.exists() and any(args.out.iterdir()):
         ap.error(f"--out {args.out}: exists and is not empty")
     cells = {(family, size): problems for size, n in zip(SIZES, args.maps, strict=True) if n
              for family, problems in planner_maps("validation", n, size=size).items()}
-    pairs = [] if args.no_reference else [(0.0, math.inf)]
-    pairs += [(a, s) for a in args.after for s in args.stall if (a, s) not in pairs]
+    pairs = [] if args.no_reference else [(0.0, math.inf, math.inf)]
+    pairs += [(a, s, c) for a in args.after for s in args.stall for c in args.cap if (a, s, c) not in pairs]
     samplers = {k: make_sampler("route_lazy", **{switch: k[0]}) if connect else
-                make_sampler("route_lazy", after=k[0], stall=k[1]) for k in pairs}
+                make_sampler("route_lazy", after=k[0], stall=k[1], cap=k[2]) for k in pairs}
     runs: dict[tuple, dict] = {k: {c: [] for c in cells} for k in pairs}
     with planning_threads(1):
         warm = next(iter(cells.values()))[:2]
@@ -105,22 +110,23 @@ def main(argv=None) -> int:
                         runs[a][cell].append(run(p, s, seed, args.planner))
     geo = {a: math.exp(np.mean([math.log(np.median([r["ms"] for r in rs])) for rs in by.values()]))
            for a, by in runs.items()}
-    print("| after | stall | geometric mean of median ms | pooled mean ms | switched | "
+    print("| after | stall | cap | geometric mean of median ms | pooled mean ms | switched | "
           + " | ".join(f"{f} {s}: median its / ms / solved" for f, s in cells) + " |")
-    print("|---|---|---|---|---|" + "---|" * len(cells))
+    print("|---|---|---|---|---|---|" + "---|" * len(cells))
     for a, by in runs.items():
         every = [r for rs in by.values() for r in rs]
         row = [f"{np.median([r['iterations'] for r in rs]):.0f} / {np.median([r['ms'] for r in rs]):.2f} / "
                f"{sum(r['solved'] for r in rs)}/{len(rs)}" for rs in by.values()]
-        print(f"| {a[0]:g} | {a[1]:g} | {geo[a]:.3f} | {np.mean([r['ms'] for r in every]):.2f} | "
+        print(f"| {a[0]:g} | {a[1]:g} | {a[2]:g} | {geo[a]:.3f} | {np.mean([r['ms'] for r in every]):.2f} | "
               f"{sum(r['switched'] for r in every)}/{len(every)} | " + " | ".join(row) + " |")
-    reference = None if args.no_reference or (0.0 in args.after and math.inf in args.stall) else (0.0, math.inf)
-    after, stall = choose({k: v for k, v in geo.items() if k != reference})
-    print(f"\nchosen: after = {after:g}, stall = {stall:g} (lowest geometric mean {min(geo.values()):.3f} ms; ties "
-          f"within {TIE:.0%} to the smaller stall, then after)")
+    reference = (None if args.no_reference or (0.0 in args.after and math.inf in args.stall and math.inf in args.cap)
+                 else (0.0, math.inf, math.inf))
+    after, stall, cap = choose({k: v for k, v in geo.items() if k != reference})
+    print(f"\nchosen: after = {after:g}, stall = {stall:g}, cap = {cap:g} (lowest geometric mean "
+          f"{min(geo.values()):.3f} ms; ties within {TIE:.0%} to the larger cap, then the smaller stall, then after)")
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
-        data = {f"{a[0]:g} {a[1]:g}": {f"{f} {s}": rs for (f, s), rs in by.items()} for a, by in runs.items()}
+        data = {f"{a[0]:g} {a[1]:g} {a[2]:g}": {f"{f} {s}": rs for (f, s), rs in by.items()} for a, by in runs.items()}
         (args.out / "runs.json").write_text(json.dumps(data, indent=1))
     return 0
 
