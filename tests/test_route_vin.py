@@ -501,7 +501,8 @@ def test_the_breakdown_script_times_every_part_of_a_pass_and_refuses_a_tiny_map(
     script = load_script("experiments/route_breakdown")
     assert script.main(["--side", "32", "--families", "forest", "maze", "--repeat", "1"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0].split(" | ")[2:] == ["whole first query", "convolutions", "step walls", "Dijkstra", "cell head |"]
+    assert out[0].split(" | ")[2:] == ["whole first query", "convolutions", "dense convolutions", "step walls",
+                                       "Dijkstra", "cell head |"]
     rows = [line for line in out if line.startswith(("| forest |", "| maze |"))]
     assert len(rows) == 2 and all(float(cell) > 0 for row in rows for cell in row.strip("| ").split(" | ")[2:])
     with pytest.raises(SystemExit) as stop:

@@ -6,7 +6,8 @@
 On a generated map of each family (seed 123, its own goal) at one torch thread: the best of ``--repeat`` calls
 (after one untimed call) of the shipped encoder's whole ``predict`` (a first query: nothing of the map kept), and
 each part of it alone as the CPU's compiled inference runs it: the local network's convolutions and the two 1x1
-heads over the whole block grid (``RouteVIN.map_features``), the step walls (``cell_steps``), the fixed point
+heads over the whole block grid (``RouteVIN.map_features``; beside them the same with the 3x3 layers dense, as
+training runs them, ``RouteVIN.prepacked`` off), the step walls (``cell_steps``), the fixed point
 (``move_cost_field``, the compiled search, its moves gated by the walls) and the cell head
 (``learning.models.cell_head``). Milliseconds; the parts do not add up to the whole (the input, the map's key and
 the conversions come on top).
@@ -41,6 +42,16 @@ def best_ms(call, repeat: int) -> float:
     return 1e3 * min(times)
 
 
+def dense(call, x):
+    """``call(x)`` with the encoder's 3x3 layers dense (``RouteVIN.prepacked`` off), as training runs them."""
+    net = call.__self__
+    net.prepacked = False
+    try:
+        return call(x)
+    finally:
+        del net.prepacked  # back to the class's value
+
+
 def breakdown(family: str, side: int, repeat: int) -> dict:
     """One row: the whole first query and each part, best ms."""
     net = load_route_net(SHIPPED_ROUTE).eval()
@@ -65,6 +76,7 @@ def breakdown(family: str, side: int, repeat: int) -> dict:
         return {"family": family, "side": side,
                 "whole first query": round(best_ms(first_query, repeat), 2),
                 "convolutions": round(best_ms(lambda: net.map_features(x), repeat), 2),
+                "dense convolutions": round(best_ms(lambda: dense(net.map_features, x), repeat), 2),
                 "step walls": round(best_ms(lambda: cell_steps(x, net.block), repeat), 2),
                 "Dijkstra": round(best_ms(lambda: move_cost_field(c, goals, walls, UNREACHED, open_moves=gate,
                                                                   most=most), repeat), 2),
