@@ -454,10 +454,12 @@ def _whole_and_reused(net: RouteVIN, obstacles: np.ndarray, goal: tuple[int, int
 @settings(max_examples=40, deadline=None)
 @given(h=st.integers(4, 40), w=st.integers(4, 40), depth=st.integers(1, 4), density=st.sampled_from([0.0, 0.2, 0.4]),
        seed=st.integers(0, 2**16), goals=st.lists(st.tuples(st.floats(0, 1), st.floats(0, 1)), min_size=1, max_size=3),
-       wall_cost=st.sampled_from([None, 1.2, 32.0]), step_walls=st.booleans())
-def test_a_kept_map_gives_every_goal_the_whole_pass_field(h, w, depth, density, seed, goals, wall_cost, step_walls):
+       wall_cost=st.sampled_from([None, 1.2, 32.0]), step_walls=st.booleans(), packed=st.booleans())
+def test_a_kept_map_gives_every_goal_the_whole_pass_field(h, w, depth, density, seed, goals, wall_cost, step_walls,
+                                                          packed):
     torch.manual_seed(seed)  # the weights only; the map and goals come from the seeded generator below
     net = make_route_net("vin", block=2, channels=8, depth=depth, step=2).eval()
+    net.prepacked_blocks = 0 if packed else 10**9  # these small maps through the prepacked layers, or dense
     net.wall_cost, net.step_walls = wall_cost, step_walls  # 1.2: many moves priced as walls, on both paths
     obstacles = np.random.default_rng(seed).random((h, w)) < density
     for fr, fc in goals:  # goals anywhere, the map's edges and corners included; later ones reuse the kept map
@@ -600,3 +602,8 @@ def test_the_prepacked_convolutions_give_the_dense_field_and_follow_the_weights(
             return super().move_costs(x)
 
     assert not OwnPrices(block=2, channels=8, depth=2, step=4).packs(x)
+    small = generate(family, TRAIN_SEEDS[0] + 7, 32)  # below prepacked_blocks: the dense layers, bit for bit
+    small_goal = small.world.cell_of(small.goal)
+    assert not packed.packs(x[..., :16, :16])
+    assert np.array_equal(packed.predict(small.world.obstacles, small_goal),
+                          dense.predict(small.world.obstacles, small_goal))

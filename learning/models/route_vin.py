@@ -152,6 +152,10 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: third less; chosen by the validation rule (see the research report, "Cheaper arithmetic for the same
     #: network"). False: the dense convolutions, as training runs them.
     prepacked: bool = True
+    #: The least blocks a map's grid has for its pass to run prepacked (``prepacked``); a smaller map runs the dense
+    #: layers: there oneDNN's layout costs more than it saves (a 32-cell map's first query 0.63 against 0.53 ms, equal
+    #: at 64 cells), and each new map shape's first pass costs 0.6 ms more to set up against 0.1 to 0.3 dense.
+    prepacked_blocks: int = 64 * 64
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -341,12 +345,13 @@ class RouteVIN(nn.Module, FieldEncoder):
         return nn.functional.conv2d(f, first.weight[:, :self.channels], first.bias)
 
     def packs(self, x: torch.Tensor) -> bool:
-        """Whether a compiled pass over ``x`` runs the local network prepacked (``prepacked``).
+        """Whether a compiled pass over the map ``x`` runs the local network prepacked (``prepacked``).
 
-        It does on float32 input, where torch has oneDNN and the encoder keeps the class's own ``move_costs`` (one
-        that overrides it keeps its own).
+        It does on float32 input of at least ``prepacked_blocks`` blocks, where torch has oneDNN and the encoder keeps
+        the class's own ``move_costs`` (one that overrides it keeps its own).
         """
-        return (self.prepacked and x.dtype == torch.float32 and torch.backends.mkldnn.is_available()
+        return (self.prepacked and x.dtype == torch.float32 and x.shape[-2] * x.shape[-1] >= self.prepacked_blocks
+                and torch.backends.mkldnn.is_available()
                 and getattr(self.move_costs, "__func__", None) is RouteVIN.move_costs)
 
     def packed_weights(self) -> list[tuple[torch.Tensor, torch.Tensor]]:
@@ -366,9 +371,10 @@ class RouteVIN(nn.Module, FieldEncoder):
             y = torch.mkldnn_convolution(y, weight, bias, [1, 1], [1, 1], [1, 1], 1).relu_()
         return y.to_dense()
 
-    def inference_costs(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """``move_costs`` as the compiled inference runs it: prepacked where ``packs`` holds."""
-        if not self.packs(x):
+    def inference_costs(self, x: torch.Tensor, packed: bool) -> tuple[torch.Tensor, torch.Tensor]:
+        """``move_costs`` as the compiled inference runs it over ``x`` (the map or a strip of it): prepacked where
+        ``packed`` (``packs`` of the whole map)."""
+        if not packed:
             return self.move_costs(x)
         f = self.packed_local(x)
         return f, self.prices(f)
@@ -391,14 +397,15 @@ class RouteVIN(nn.Module, FieldEncoder):
         d = self.depth
         rows = max(8 * d, self.feature_bytes // (4 * self.channels * w * x.shape[0]))
         if rows >= h:
-            f, costs = self.inference_costs(x)
+            f, costs = self.inference_costs(x, self.packs(x))
             return costs, self.head_inputs(f)
+        packed = self.packs(x)  # decided on the whole map, so its later windows run as its strips do
         costs = x.new_empty(x.shape[0], len(MOVES), h, w)
         pre = x.new_empty(x.shape[0], self.channels, h, w)
         for r0 in range(0, h, rows):
             r1 = min(h, r0 + rows)
             lo, hi = max(0, r0 - d), min(h, r1 + d)
-            f, c = self.inference_costs(x[:, :, lo:hi])
+            f, c = self.inference_costs(x[:, :, lo:hi], packed)
             costs[:, :, r0:r1] = c[:, :, r0 - lo:r1 - lo]
             pre[:, :, r0:r1] = self.head_inputs(f[:, :, r0 - lo:r1 - lo])
         return costs, pre
