@@ -145,12 +145,12 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: Dijkstra's moves, and the cell head runs in numba from ``map_features``' strips. False: the torch pass, the
     #: same fields up to rounding (kept to measure what the compiled one saves, and to check it).
     compiled_inference: bool = True
-    #: Whether the compiled inference runs the local network's 3x3 convolutions on weights prepacked once for
-    #: oneDNN (``torch.utils.mkldnn``), the activations kept in its blocked layout from layer to layer, where torch
-    #: has oneDNN. Another order of summation: the field moves by up to about 1e-4 steps (the dense pass itself moves
-    #: by up to 4.7e-4 between oneDNN's AVX2 and AVX-512 kernels), and a first query at 128 cells costs a tenth to a
-    #: third less; chosen by the validation rule (see the research report, "Cheaper arithmetic for the same
-    #: network"). False: the dense convolutions, as training runs them.
+    #: Whether the compiled inference runs the local network's 3x3 convolutions on weights prepacked once into
+    #: oneDNN's blocked layout (as ``torch.utils.mkldnn`` does), the activations kept in it from layer to layer, where
+    #: torch has oneDNN. Another order of summation: the field moves by up to 1.2e-4 steps (the dense pass itself
+    #: moves by up to 4.7e-4 between oneDNN's AVX2 and AVX-512 kernels), and a first query at 128 to 512 cells costs a
+    #: tenth to a quarter less; chosen by the validation rule (see the research report, "Cheaper arithmetic for the
+    #: same network"). False: the dense convolutions, as training runs them.
     prepacked: bool = True
     #: The least blocks a map's grid has for its pass to run prepacked (``prepacked``); a smaller map runs the dense
     #: layers: there oneDNN's layout costs more than it saves (a 32-cell map's first query 0.63 against 0.53 ms, equal
