@@ -13,6 +13,7 @@ from learning.samplers.lazy_route import (
     SHIPPED_AFTER,
     SHIPPED_CAP,
     SHIPPED_CONNECT_AFTER,
+    SHIPPED_FLOOR,
     SHIPPED_ROADMAP_AFTER,
     LazyConnectSampler,
     LazyCorridorSampler,
@@ -27,9 +28,17 @@ from planners.maps.generators import VALIDATION_SEED0, generate
 
 
 class Unfused(LazyRouteSampler):
-    """The same sampler drawn through ``draw``, one Python call per iteration."""
+    """The same sampler drawn through ``draw``, one Python call per iteration (no floor unless given, as ``_lazy``)."""
 
     fuse = None
+
+    def __init__(self, net, **kwargs):
+        super().__init__(net, **{"floor": 0, **kwargs})
+
+
+def _lazy(**kwargs):
+    """``make_sampler("route_lazy")`` with no floors unless given: these small maps switch where the area says."""
+    return make_sampler("route_lazy", **{"floor": 0, "connect_floor": 0, "roadmap_floor": 0, **kwargs})
 
 
 def _run(problem, sampler, seed, pieces=(), planner_name="RRT"):
@@ -66,7 +75,7 @@ def test_the_registry_builds_it_at_the_validated_switch(lazy):
 
 def test_switching_at_once_is_the_route_sampler_and_never_is_its_ablation(lazy, maps):
     route, ablation = make_sampler("route"), make_sampler("route_ablation")
-    at_once, never = make_sampler("route_lazy", after=0), make_sampler("route_lazy", after=math.inf, cap=math.inf)
+    at_once, never = _lazy(after=0), _lazy(after=math.inf, cap=math.inf)
     for p in maps:
         for seed in (0, 1):
             assert _run(p, at_once, seed)[0] == _run(p, route, seed)[0]
@@ -78,7 +87,7 @@ def test_switching_at_once_is_the_route_sampler_and_never_is_its_ablation(lazy, 
 def test_a_fused_run_is_the_drawn_run_and_a_run_in_pieces_is_one_solve(maps):
     """At a switch that falls inside some runs, the fused loop, ``draw`` and a solve in pieces plan alike."""
     after = 0.125  # a 64-cell map is 256 step squares: the switch at iteration 32
-    fused, drawn = make_sampler("route_lazy", after=after), None
+    fused, drawn = _lazy(after=after), None
     drawn = Unfused(fused.net, after=after)
     switched = kept = 0
     for p in maps:
@@ -96,17 +105,40 @@ def test_a_fused_run_is_the_drawn_run_and_a_run_in_pieces_is_one_solve(maps):
 
 def test_a_cap_brings_the_switch_forward_whatever_the_maps_area(maps):
     """``cap`` iterations at most before the switch: a cap of 32 on a 64-cell map is ``after`` = 0.125 there."""
-    capped, by_area = make_sampler("route_lazy", after=10.0, cap=32), make_sampler("route_lazy", after=0.125)
-    at_once = make_sampler("route_lazy", cap=0)
+    capped, by_area = _lazy(after=10.0, cap=32), _lazy(after=0.125)
+    at_once = _lazy(cap=0)
     for p in maps:
         for seed in (0, 1):
             key, bound = _run(p, capped, seed)
             assert key == _run(p, by_area, seed)[0] and bound.switch_at == 32
-            assert _run(p, at_once, seed)[0] == _run(p, make_sampler("route_lazy", after=0), seed)[0]
+            assert _run(p, at_once, seed)[0] == _run(p, _lazy(after=0), seed)[0]
     assert make_sampler("route_lazy").cap == SHIPPED_CAP and f"cap={SHIPPED_CAP:g}" in repr(make_sampler("route_lazy"))
     for bad in (-1, True, "8", math.nan):
         with pytest.raises(InputError, match="cap = "):
             make_sampler("route_lazy", cap=bad)
+
+
+def test_a_floor_holds_each_switch_back_on_a_small_map(maps):
+    """``floor`` (and each planner's own) iterations at least before the switch; the cap still wins for RRT."""
+    p = maps[0]  # a 64-cell map: 256 step squares
+    for planner_name, kwargs, at in (("RRT", {"after": 0.125, "floor": 100}, 100),
+                                     ("RRT", {"after": 0.125, "floor": 100, "cap": 50}, 50),
+                                     ("RRTConnect", {"connect_after": 0.125, "connect_floor": 100}, 100),
+                                     ("PRM", {"roadmap_after": 0.125, "roadmap_floor": 100}, 100),
+                                     ("RRTConnect", {"connect_after": 0.125}, 32)):
+        sampler = _lazy(**kwargs)
+        planner = make_planner(planner_name, p, sampler=sampler, seed=0, extension_step=4.0)
+        planner.solve(max_iterations=1)
+        assert planner.sampler.switch_at == at
+    # RRT-Connect's floor past every run's end is uniform RRT-Connect, run for run
+    never = _lazy(connect_after=0, connect_floor=10**6)
+    for seed in (0, 1):
+        key, bound = _connect(p, never, seed)
+        assert key == _connect(p, make_sampler("uniform"), seed)[0] and not bound.switched
+    assert f"floor={SHIPPED_FLOOR:g}" in repr(make_sampler("route_lazy"))
+    for name in ("floor", "connect_floor", "roadmap_floor"):
+        with pytest.raises(InputError, match=f"{name} = "):
+            make_sampler("route_lazy", **{name: -1})
 
 
 def test_a_run_solved_on_the_switchs_iteration_computes_no_field(maps):
@@ -114,8 +146,8 @@ def test_a_run_solved_on_the_switchs_iteration_computes_no_field(maps):
     ablation = make_sampler("route_ablation")
     for p in maps:
         solved_at = _run(p, ablation, 0)[0][1]
-        for planner_name, lazy in (("RRT", make_sampler("route_lazy", after=solved_at / 256)),
-                                   ("RRTConnect", make_sampler("route_lazy", connect_after=solved_at / 256))):
+        for planner_name, lazy in (("RRT", _lazy(after=solved_at / 256)),
+                                   ("RRTConnect", _lazy(connect_after=solved_at / 256))):
             key, bound = _run(p, lazy, 0, planner_name=planner_name)
             if planner_name == "RRT":
                 assert key[1] == solved_at == bound.switch_at  # the straight line solves on the last iteration before
@@ -130,13 +162,13 @@ def test_fused_and_drawn_lazy_runs_are_the_same_on_random_walled_maps(data):
     stall = data.draw(st.sampled_from([1, 3, 10, 40, math.inf]))
     cap = data.draw(st.sampled_from([0, 5, 40, SHIPPED_CAP, math.inf]))
     seed = data.draw(st.integers(0, 2**31 - 1))
-    fused = make_sampler("route_lazy", after=after, stall=stall, cap=cap)
+    fused = _lazy(after=after, stall=stall, cap=cap)
     assert _same(*_run(p, fused, seed), _run(p, Unfused(fused.net, after=after, stall=stall, cap=cap), seed))
 
 
 def test_a_stalled_straight_line_switches_to_the_field_fused_as_drawn(maps):
     """The stall switch: where the tree has come no closer for ``stall`` iterations, the field takes over."""
-    fused = make_sampler("route_lazy", after=math.inf, stall=8)
+    fused = _lazy(after=math.inf, stall=8)
     drawn = Unfused(fused.net, after=math.inf, stall=8)
     switched = 0
     for p in maps:
@@ -159,8 +191,8 @@ def _connect(problem, sampler, seed, pieces=()):
 
 def test_rrt_connects_lazy_rule_is_uniform_then_the_route_rule_fused_as_drawn(maps):
     route, uniform = make_sampler("route"), make_sampler("uniform")
-    at_once, never = make_sampler("route_lazy", connect_after=0), make_sampler("route_lazy", connect_after=math.inf)
-    middle = make_sampler("route_lazy", connect_after=0.05)  # 256 step squares: the switch at iteration 13
+    at_once, never = _lazy(connect_after=0), _lazy(connect_after=math.inf)
+    middle = _lazy(connect_after=0.05)  # 256 step squares: the switch at iteration 13
     switched = kept = 0
     for p in maps:
         for seed in (0, 1):
@@ -178,9 +210,9 @@ def test_rrt_connects_lazy_rule_is_uniform_then_the_route_rule_fused_as_drawn(ma
 
 @pytest.mark.parametrize("planner_name", ["PRM", "LazyPRM", "OBPRM"])
 def test_a_roadmaps_lazy_rule_is_uniform_then_the_corridor(maps, planner_name):
-    at_once = make_sampler("route_lazy", roadmap_after=0)
-    never = make_sampler("route_lazy", roadmap_after=math.inf)
-    middle = make_sampler("route_lazy", roadmap_after=0.1)  # 256 step squares: the switch at sample 26
+    at_once = _lazy(roadmap_after=0)
+    never = _lazy(roadmap_after=math.inf)
+    middle = _lazy(roadmap_after=0.1)  # 256 step squares: the switch at sample 26
     switched = kept = 0
     for p in maps:
         for seed in (0, 1):
@@ -242,6 +274,8 @@ def test_the_switchs_rule_takes_the_fastest_or_a_smaller_switch_within_three_per
     assert script.choose({(0.7, 50.0, inf): 3.05, (0.35, inf, inf): 3.0, (inf, 25.0, inf): 3.5}) == (0.7, 50.0, inf)
     assert script.choose({(0.7, inf, 1000.0): 3.0, (0.7, inf, inf): 3.2}) == (0.7, inf, 1000.0)  # outside the tie
     assert script.choose({(0.7, inf, 1000.0): 3.0, (0.7, inf, inf): 3.05}) == (0.7, inf, inf)  # the larger cap
+    assert script.choose({(1.4, inf, inf, 500.0): 3.0, (1.4, inf, inf, 0.0): 3.05}) == (1.4, inf, inf, 0.0)
+    assert script.choose({(1.4, inf, inf, 500.0): 3.0, (1.4, inf, inf, 0.0): 3.2}) == (1.4, inf, inf, 500.0)
     assert script.main(["--maps", "1", "0", "0", "--seeds", "1", "--after", "inf", "--stall", "20", "inf", "--out",
                         str(tmp_path / "rule")]) == 0
     out = capsys.readouterr().out
@@ -250,5 +284,7 @@ def test_the_switchs_rule_takes_the_fastest_or_a_smaller_switch_within_three_per
         script.main(["--after", "-1"])
     with pytest.raises(SystemExit):
         script.main(["--stall", "0"])
+    with pytest.raises(SystemExit):  # one --maps count per --sizes side
+        script.main(["--sizes", "32", "64", "--maps", "1"])
     with pytest.raises(SystemExit):  # an output folder with something in it is refused before any run
         script.main(["--out", str(tmp_path)])

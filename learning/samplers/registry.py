@@ -54,7 +54,8 @@ def _route(step_size: float = STEP, path: str | None = None, device: str = "auto
 
 def _route_lazy(after: float | None = None, cap: float | None = None, stall: float | None = None,
                 connect_after: float | None = None,
-                roadmap_after: float | None = None, step_size: float = STEP, path: str | None = None,
+                roadmap_after: float | None = None, floor: float | None = None, connect_floor: float | None = None,
+                roadmap_floor: float | None = None, step_size: float = STEP, path: str | None = None,
                 device: str = "auto", *,
                 models: ModelCache | None = None) -> Sampler:
     from learning.models.route_net import load_route_net
@@ -62,7 +63,10 @@ def _route_lazy(after: float | None = None, cap: float | None = None, stall: flo
         SHIPPED_AFTER,
         SHIPPED_CAP,
         SHIPPED_CONNECT_AFTER,
+        SHIPPED_CONNECT_FLOOR,
+        SHIPPED_FLOOR,
         SHIPPED_ROADMAP_AFTER,
+        SHIPPED_ROADMAP_FLOOR,
         SHIPPED_STALL,
         LazyRouteSampler,
     )
@@ -75,6 +79,9 @@ def _route_lazy(after: float | None = None, cap: float | None = None, stall: flo
                             stall=SHIPPED_STALL if stall is None else stall,
                             connect_after=SHIPPED_CONNECT_AFTER if connect_after is None else connect_after,
                             roadmap_after=SHIPPED_ROADMAP_AFTER if roadmap_after is None else roadmap_after,
+                            floor=SHIPPED_FLOOR if floor is None else floor,
+                            connect_floor=SHIPPED_CONNECT_FLOOR if connect_floor is None else connect_floor,
+                            roadmap_floor=SHIPPED_ROADMAP_FLOOR if roadmap_floor is None else roadmap_floor,
                             step_size=step_size, device=device)
 
 
@@ -175,8 +182,9 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
     "route": (_route, "the shipped route encoder at its validated settings"),
     "route_lazy": (_route_lazy, "the route encoder's field computed only where needed: RRT follows the straight "
                    "line first and runs the encoder if that has not solved within after= iterations per step-sized "
-                   "square of the map (at most cap= iterations), or has stalled stall= iterations; RRT-Connect's "
-                   "trees grow uniformly until connect_after= of them, a roadmap's samples until roadmap_after="),
+                   "square of the map (at least floor=, at most cap= iterations), or has stalled stall= iterations; "
+                   "RRT-Connect's trees grow uniformly until connect_after= of them (at least connect_floor=), a "
+                   "roadmap's samples until roadmap_after= (at least roadmap_floor=)"),
     "route_ablation": (_route_ablation, "the route sampler without its encoder, tuned for itself"),
     "policy": (_policy, "the learned sampler policy (shipped at its validated batch, or path=)"),
     "policy_ablation": (_policy_ablation, "the policy's action classes at a constant distribution (frontier=)"),
