@@ -1,26 +1,28 @@
 """The route encoder's field computed only when a query needs it: RRT follows the straight line first.
 
-On an open map the straight-line follower (the route sampler without its encoder, ``shipped_ablation``) reaches
-the goal in about as many iterations as the encoder, and the encoder's pass over a map it has not seen costs as
-much as hundreds of its iterations. ``LazyRouteSampler`` starts RRT on the straight-line field and computes the
-encoder's field only if the run has not solved within a budget of iterations that grows with the map's area, as the
-pass's cost does (rent, then buy: ``after`` iterations per step-sized square of the map; on the CPU a pass costs
-about as much as 0.7 of them), and within at most ``cap`` iterations (1,000) whatever the area, since each of them
-grows dearer with the tree; from then on it is the route sampler on the encoder's field, following the tree grown
-so far. So an easy query costs what the ablation costs, and a winding one the ablation's budget, the encoder's pass
-and the encoder's iterations from the tree already there. A second switch, off by default, computes the field once
-the straight line's tree has come no closer to the goal for ``stall`` iterations: where the straight line is lost
-on a large map, it stops paying rent long before the budget runs out. All three were chosen on the validation maps by
-time to solution (``scripts/experiments/lazy_route_rule.py``: the geometric mean of the median times over
-validation maps of 128, 256 and 512 cells); ``after=0`` (or ``cap=0``) is the route sampler and ``after=inf`` with
-``cap=inf`` (and no stall) its ablation, run for run.
+On an open map the straight-line follower (the route sampler without its encoder, ``shipped_ablation``) reaches the
+goal in about as many iterations as the encoder, and the encoder's pass over a map it has not seen costs as much as
+hundreds of its iterations. ``LazyRouteSampler`` starts RRT on the straight-line field and computes the encoder's
+field only if the run has not solved within a budget of iterations that grows with the map's area, as the pass's
+cost does (rent, then buy: ``after`` iterations per step-sized square of the map; on the CPU a pass costs about as
+much as 0.7 of them), at least ``floor`` and at most ``cap`` iterations whatever the area (1,000 each, so the switch
+comes at 1,000 on every map: each straight-line iteration grows dearer with the tree, and a pass has a fixed cost
+besides the one that grows with the area); from then on it is the route sampler on the encoder's field, following
+the tree grown so far. So an easy query costs what the ablation costs, and a winding one the ablation's budget, the
+encoder's pass and the encoder's iterations from the tree already there. A second switch, off by default, computes
+the field once the straight line's tree has come no closer to the goal for ``stall`` iterations: where the straight
+line is lost on a large map, it stops paying rent long before the budget runs out. Each was chosen on the validation
+maps by time to solution (``scripts/experiments/lazy_route_rule.py``: the geometric mean of the median times over
+validation maps of 128 to 512 cells, 32 to 512 for the floors); ``after=0`` with ``floor=0`` (or ``cap=0``) is the
+route sampler and ``after=inf`` with ``cap=inf`` (and no stall) its ablation, run for run.
 
 Both phases draw inside RRT's compiled loop: the loop runs up to the switch on the straight-line field, the encoder
 runs, and the loop goes on on the encoder's field, so a fused run is the run drawn through ``draw``, bit for bit.
 RRT-Connect takes ``LazyConnectSampler``: both trees grow by the planner's own uniform sampling (inside its compiled
-loop) until ``connect_after`` iterations per step-sized square, then follow the route field's two fields
-(``BidirectionalRouteSampler``). The roadmaps and RRT* take the route sampler's own rule for them
-(``RouteSampler.for_planner``), which needs the field from the start.
+loop) until ``connect_after`` iterations per step-sized square (at least ``connect_floor``), then follow the route
+field's two fields (``BidirectionalRouteSampler``). The roadmaps take ``LazyCorridorSampler``: uniform samples until
+``roadmap_after`` per step-sized square (at least ``roadmap_floor``), then the field's corridor. RRT* takes the route
+sampler's own rule for it (``RouteSampler.for_planner``), which needs the field from the start.
 """
 
 from __future__ import annotations
