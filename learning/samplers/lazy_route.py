@@ -150,23 +150,18 @@ class LazyRouteSampler(RouteSampler):
         if net is None:
             raise InputError("LazyRouteSampler needs an encoder (its straight-line phase is the ablation; for the "
                              "ablation alone use RouteSampler(None) or make_sampler('route_ablation'))")
-        if isinstance(after, bool) or not isinstance(after, int | float | np.floating) or not after >= 0:
-            raise InputError(f"after = {short_repr(after)}: expected iterations per step-sized square of the map, "
-                             f">= 0 (inf, with cap=inf: never compute the field)")
-        if isinstance(cap, bool) or not isinstance(cap, int | float | np.floating) or not cap >= 0:
-            raise InputError(f"cap = {short_repr(cap)}: expected the most iterations before the switch, >= 0 "
-                             f"(inf: no cap)")
-        for name, value in (("floor", floor), ("connect_floor", connect_floor), ("roadmap_floor", roadmap_floor)):
-            if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not value >= 0:
-                raise InputError(f"{name} = {short_repr(value)}: expected the fewest iterations before the switch, "
-                                 f">= 0 (0: none)")
-        for name, value in (("connect_after", connect_after), ("roadmap_after", roadmap_after)):
-            if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not value >= 0:
-                raise InputError(f"{name} = {short_repr(value)}: expected iterations per step-sized square of the "
-                                 f"map, >= 0 (inf: never compute the field)")
-        if isinstance(stall, bool) or not isinstance(stall, int | float | np.floating) or not stall >= 1:
-            raise InputError(f"stall = {short_repr(stall)}: expected iterations without coming closer to the goal, "
-                             f">= 1 (inf: never switch on a stall)")
+        per_square = "iterations per step-sized square of the map, >= 0"
+        for name, value, low, expected in (
+                ("after", after, 0, f"{per_square} (inf, with cap=inf: never compute the field)"),
+                ("cap", cap, 0, "the most iterations before the switch, >= 0 (inf: no cap)"),
+                *((n, v, 0, "the fewest iterations before the switch, >= 0 (0: none)")
+                  for n, v in (("floor", floor), ("connect_floor", connect_floor), ("roadmap_floor", roadmap_floor))),
+                *((n, v, 0, f"{per_square} (inf: never compute the field)")
+                  for n, v in (("connect_after", connect_after), ("roadmap_after", roadmap_after))),
+                ("stall", stall, 1, "iterations without coming closer to the goal, >= 1 (inf: never switch on a "
+                                    "stall)")):
+            if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not value >= low:
+                raise InputError(f"{name} = {short_repr(value)}: expected {expected}")
         if kwargs.get("batch", 1) != 1:
             raise InputError(f"batch = {short_repr(kwargs['batch'])}: LazyRouteSampler draws one sample at a time "
                              f"(batch 1)")

@@ -42,12 +42,11 @@ def best_ms(call, repeat: int) -> float:
     return 1e3 * min(times)
 
 
-def dense(call, x):
-    """``call(x)`` with the encoder's 3x3 layers dense (``RouteVIN.prepacked`` off), as training runs them."""
-    net = call.__self__
+def dense_features(net, x):
+    """``net.map_features(x)`` with the 3x3 layers dense (``RouteVIN.prepacked`` off), as training runs them."""
     net.prepacked = False
     try:
-        return call(x)
+        return net.map_features(x)
     finally:
         del net.prepacked  # back to the class's value
 
@@ -76,7 +75,7 @@ def breakdown(family: str, side: int, repeat: int) -> dict:
         return {"family": family, "side": side,
                 "whole first query": round(best_ms(first_query, repeat), 2),
                 "convolutions": round(best_ms(lambda: net.map_features(x), repeat), 2),
-                "dense convolutions": round(best_ms(lambda: dense(net.map_features, x), repeat), 2),
+                "dense convolutions": round(best_ms(lambda: dense_features(net, x), repeat), 2),
                 "step walls": round(best_ms(lambda: cell_steps(x, net.block), repeat), 2),
                 "Dijkstra": round(best_ms(lambda: move_cost_field(c, goals, walls, UNREACHED, open_moves=gate,
                                                                   most=most), repeat), 2),
