@@ -88,7 +88,7 @@ def padded_free_cells(cells: np.ndarray, block: int) -> np.ndarray:
 
 
 def cell_head_field(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np.ndarray, b_out: np.ndarray,
-                    block: int, reach: float, unreached: float) -> np.ndarray:
+                    block: int, reach: float, unreached: float, out: np.ndarray | None = None) -> np.ndarray:
     """Every cell's cost-to-go, (h * block, w * block) float32, from the block values and the head's weights.
 
     Args:
@@ -101,6 +101,7 @@ def cell_head_field(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np
         block: Cells per block side.
         reach: The relative values are clamped to ``[-reach, reach]``.
         unreached: The value off the grid.
+        out: Where to write the field ((h * block, w * block) float32, C-contiguous); a new array by default.
     """
     f32 = np.float32
     v, pre = np.ascontiguousarray(v, dtype=f32), np.ascontiguousarray(pre, dtype=f32)
@@ -113,5 +114,9 @@ def cell_head_field(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np
             or b_out.shape != (block * block,):
         raise ValueError(f"weights of shapes {w_rel.shape}, {w_out.shape}, {b_out.shape} do not fit {pre.shape[0]} "
                          f"channels and blocks of {block} x {block} cells")
-    out = np.empty((h * block, w * block), dtype=f32)
+    if out is None:
+        out = np.empty((h * block, w * block), dtype=f32)
+    elif out.shape != (h * block, w * block) or out.dtype != f32 or not out.flags.c_contiguous:
+        raise ValueError(f"out must be a C-contiguous ({h * block}, {w * block}) float32 array, got {out.shape} "
+                         f"{out.dtype}")
     return _cell_head(v, pre, w_rel, w_out, b_out, int(block), f32(reach), f32(unreached), _DR, _DC, out)

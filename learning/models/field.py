@@ -23,7 +23,7 @@ GOAL_CHANNELS = 3  # the goal's block, and the offset to it in x and y
 #: 4096 x 4096 cells at the shipped encoder's 2 cells per block (4,194,304 blocks). The value-iteration encoder
 #: runs its passes over maps above ``RouteVIN.strip_blocks`` in strips of rows, so its memory grows with the
 #: map's blocks at a few hundred bytes each (``RouteVIN.pass_bytes``; its pass over 4096 x 4096 cells stays
-#: within 1 GB); the U-Net encoder holds the whole map's activations, ``BYTES_PER_BLOCK`` per block.
+#: within 1.5 GB); the U-Net encoder holds the whole map's activations, ``BYTES_PER_BLOCK`` per block.
 MAX_BLOCKS_ENV = "SAMPLERGYM_MAX_ROUTE_BLOCKS"
 MAX_BLOCKS = 2048 * 2048
 #: The largest training map, in blocks: a training pass holds the whole map's activations and their gradients
@@ -134,7 +134,8 @@ class FieldEncoder:
     def infer(self, x: torch.Tensor) -> torch.Tensor:
         """The pass ``predict`` takes (no gradients): ``forward``, unless the encoder has a cheaper way there.
 
-        ``RouteVIN`` reuses what it computed for a map at its next query on that map.
+        ``RouteVIN`` reuses what it computed for a map at its next query on that map. The result may be memory the
+        encoder writes again at its next pass (``RouteVIN.keep_buffers``): ``predict`` copies it.
         """
         return self(x)
 

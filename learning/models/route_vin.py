@@ -156,6 +156,15 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: layers: there oneDNN's layout costs more than it saves (a 32-cell map's first query 0.63 against 0.53 ms, equal
     #: at 64 cells), and each new map shape's first pass costs 0.6 ms more to set up against 0.1 to 0.3 dense.
     prepacked_blocks: int = 64 * 64
+    #: Whether a compiled pass over a map whose parts inference does not keep (one above ``strip_blocks``, or any map
+    #: where ``map_cache_bytes`` is 0) writes its move costs, the head's first layer and the cell field into buffers
+    #: the encoder keeps for the next such pass of the same shape (``buffer``), rather than into new memory: the same
+    #: values, without the operating system's cost of mapping the memory afresh each pass (at 4096 x 4096 cells,
+    #: 0.45 GB and about 0.4 s of a 2.4 s pass on the 2-core machine); the compiled search keeps its working arrays
+    #: likewise (``move_cost_field``'s ``work``). They stay until ``release_buffers`` (or
+    #: ``weights_changed``): at most what one pass holds at its peak anyway (``pass_bytes``). False: new memory each
+    #: pass, nothing kept.
+    keep_buffers: bool = True
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
         super().__init__()
@@ -178,10 +187,28 @@ class RouteVIN(nn.Module, FieldEncoder):
         self.register_buffer("lengths", torch.tensor(LENGTHS, dtype=torch.float32).view(1, -1, 1, 1))
         self._maps: OrderedDict[tuple, MapParts] = OrderedDict()
         self._packed: list[tuple[torch.Tensor, torch.Tensor]] = []  # each 3x3 layer's weights for oneDNN, once made
+        self._work: dict[str, torch.Tensor] = {}  # a pass's working buffers, by name (``buffer``)
+        self._search: dict[str, np.ndarray] = {}  # the compiled search's working arrays (``move_cost_field``'s work)
 
     def clear_map_cache(self) -> None:
-        """Forget every map's kept parts (``map_cache_bytes``); the prepacked weights stay (``weights_changed``)."""
+        """Forget every map's kept parts (``map_cache_bytes``); the prepacked weights and a pass's buffers stay
+        (``weights_changed``, ``release_buffers``)."""
         self._maps.clear()
+
+    def release_buffers(self) -> None:
+        """Free the working buffers a pass keeps for the next one of the same shape (``keep_buffers``)."""
+        self._work.clear()
+        self._search.clear()
+
+    def buffer(self, name: str, shape: tuple[int, ...]) -> torch.Tensor:
+        """The kept float32 CPU buffer ``name`` of ``shape`` (``keep_buffers``): the one the last pass used where its
+        shape is the same, else a new one that replaces it. Its contents are whatever the last pass left."""
+        kept = self._work.pop(name, None)
+        if kept is None or tuple(kept.shape) != tuple(shape):
+            del kept  # freed before the new one is made: one buffer a name at a time
+            kept = torch.empty(shape, dtype=torch.float32)
+        self._work[name] = kept
+        return kept
 
     def weights_changed(self) -> None:
         """Forget what inference keeps from the weights: every map's parts and the prepacked local network.
@@ -191,6 +218,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         """
         self._maps.clear()
         self._packed.clear()
+        self.release_buffers()
 
     def train(self, mode: bool = True) -> RouteVIN:
         self.weights_changed()
@@ -201,11 +229,12 @@ class RouteVIN(nn.Module, FieldEncoder):
         return super().load_state_dict(*args, **kwargs)
 
     def __getstate__(self) -> dict:
-        # a copy sent elsewhere starts with no kept maps, and packs its own weights
-        return {**self.__dict__, "_maps": OrderedDict(), "_packed": []}
+        # a copy sent elsewhere starts with no kept maps or buffers, and packs its own weights
+        return {**self.__dict__, "_maps": OrderedDict(), "_packed": [], "_work": {}, "_search": {}}
 
     def __setstate__(self, state: dict) -> None:
-        super().__setstate__({"_packed": [], **state})  # a copy pickled before the prepacked weights existed
+        # a copy pickled before the prepacked weights or the buffers existed
+        super().__setstate__({"_packed": [], "_work": {}, "_search": {}, **state})
 
     def inference_key(self) -> tuple:
         return (self.wall_cost, self.step_walls, self.fixed_point)
@@ -291,15 +320,15 @@ class RouteVIN(nn.Module, FieldEncoder):
     def pass_bytes(self, h: int, w: int) -> int:
         """About how many bytes one pass over an ``h`` x ``w`` block grid holds at its peak (one symmetry).
 
-        Measured on the shipped encoder (``scripts/benchmark_route.py``'s peak memory): in one piece about 1 kB per
-        block (0.26 GB at 1024 x 1024 cells); in strips about 0.2 GB for a strip and 200 bytes per block of the map
-        (0.35 GB at 2048 x 2048 cells, 0.84 GB at 4096 x 4096).
+        Measured on the shipped encoder (``scripts/benchmark_route.py``'s peak memory over the interpreter's own): in
+        one piece about 1 kB per block (0.26 GB at 1024 x 1024 cells); in strips about 0.1 GB for a strip and, per
+        block of the map, 240 bytes and 4 a channel, the buffers kept for the next pass included (``keep_buffers``;
+        0.38 GB at 2048 x 2048 cells, 1.23 GB at 4096 x 4096).
         """
         blocks = h * w
-        scale = self.channels / 48
         if blocks <= self.strip_blocks:
-            return int(1_000 * scale * blocks)
-        return int(200 * 2**20 * scale + 200 * blocks)
+            return int(1_000 * self.channels / 48 * blocks)
+        return int(100 * 2**20 + (240 + 4 * self.channels) * blocks)
 
     def strip_rows(self, h: int, w: int) -> int:
         """Block rows per strip of a pass over an ``h`` x ``w`` block grid: ``h`` (one piece) up to ``strip_blocks``."""
@@ -381,17 +410,20 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     #: About the bytes of one layer's activations a strip of ``map_features`` holds, so that they stay in the CPU's
     #: cache between layers. One thread, the 2-core machine: over a 1024 x 1024-cell map the convolutions took 60 to
-    #: 64 ms in strips of 128 block rows (4 MB) against 105 to 136 ms in one piece; over 4096 x 4096 cells 1.35 s in
-    #: strips of 32 rows against 1.5 to 1.75 s in strips of 16 (whose margins are half their work).
-    feature_bytes: int = 4 << 20
+    #: 64 ms in strips of 128 block rows (4 MB) against 105 to 136 ms in one piece, and 64 to 69 ms in strips of 2 to
+    #: 32 MB; over 4096 x 4096 cells (the prepacked layers) 1.34 to 1.37 s in strips of 64 rows (8 MB) against 1.41 to
+    #: 1.44 s in strips of 32 (whose margins are a quarter of their work), 1.48 to 1.53 s in strips of 128 and 2.3 s
+    #: in strips of 512 (32 MB), out of the cache.
+    feature_bytes: int = 8 << 20
 
-    def map_features(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    def map_features(self, x: torch.Tensor, reuse: bool = False) -> tuple[torch.Tensor, torch.Tensor]:
         """The learned move costs and the head's first layer (``head_inputs``) of every block, in strips of rows.
 
         Each strip reads the ``depth`` rows beyond it that its layers see, so every kept row is the whole pass's (up
         to the rounding of another shape); a strip's activations take about ``feature_bytes`` (at least ``8 *
         depth`` rows), so they stay in the CPU's cache from one layer to the next and a pass holds only the two
-        outputs beyond one strip.
+        outputs beyond one strip. ``reuse``: the two outputs are the kept buffers (``buffer``), which the next such
+        pass overwrites.
         """
         h, w = x.shape[-2:]
         d = self.depth
@@ -400,8 +432,12 @@ class RouteVIN(nn.Module, FieldEncoder):
             f, costs = self.inference_costs(x, self.packs(x))
             return costs, self.head_inputs(f)
         packed = self.packs(x)  # decided on the whole map, so its later windows run as its strips do
-        costs = x.new_empty(x.shape[0], len(MOVES), h, w)
-        pre = x.new_empty(x.shape[0], self.channels, h, w)
+        if reuse:
+            costs = self.buffer("costs", (x.shape[0], len(MOVES), h, w))
+            pre = self.buffer("pre", (x.shape[0], self.channels, h, w))
+        else:
+            costs = x.new_empty(x.shape[0], len(MOVES), h, w)
+            pre = x.new_empty(x.shape[0], self.channels, h, w)
         for r0 in range(0, h, rows):
             r1 = min(h, r0 + rows)
             lo, hi = max(0, r0 - d), min(h, r1 + d)
@@ -411,14 +447,15 @@ class RouteVIN(nn.Module, FieldEncoder):
         return costs, pre
 
     def compiled_field(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
-                       steps: torch.Tensor | None = None) -> torch.Tensor:
+                       steps: torch.Tensor | None = None, reuse: bool = False) -> torch.Tensor:
         """``cell_field`` of ``inference_values``, compiled: (B, H, W) on the CPU, from the learned ``costs``.
 
         Inference's walls gate the Dijkstra's moves (``move_cost_field``'s ``open_moves`` and ``most``) rather
         than being written into a copy of ``costs``, so the block values are ``inference_values``' bit for bit;
         the cell head runs compiled (``learning.models.cell_head``) from ``pre`` (``head_inputs``), the same
         values up to the rounding of another order of summation. ``steps``: ``cell_steps(x, block)`` where the
-        caller has it already.
+        caller has it already. ``reuse``: the field is written into the kept buffer ``"field"`` (``buffer``), which
+        the next such pass overwrites, and the search keeps its working arrays for the next one.
         """
         b = self.block
         goal, walls = (t.numpy() for t in self.goal_and_walls(x))
@@ -430,12 +467,14 @@ class RouteVIN(nn.Module, FieldEncoder):
         w_rel = first.weight[:, self.channels:, 0, 0].numpy()
         w_out, b_out = last.weight[:, :, 0, 0].numpy(), last.bias.numpy()
         c, p = costs.numpy(), pre.numpy()
+        field = self.buffer("field", (len(c), c.shape[2] * b, c.shape[3] * b)).numpy() if reuse else None
         out = []
         for i in range(len(c)):
             v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
-                                most=most)
-            out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED))
-        return torch.from_numpy(batch_of(out))
+                                most=most, work=self._search if reuse else None)
+            out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED,
+                                       None if field is None else field[i]))
+        return torch.from_numpy(batch_of(out) if field is None else field)
 
     def map_key(self, x: torch.Tensor) -> tuple:
         """The key of a map's kept parts: the input's shape, device and cells (not the goal).
@@ -549,10 +588,14 @@ class RouteVIN(nn.Module, FieldEncoder):
 
         Each query of the batch takes ``reusing_field`` on the CPU when ``map_cache_bytes`` allows it and its map
         runs in one piece; otherwise, and on a GPU (where one batched pass costs little more than one query), the
-        whole batch takes ``forward``.
+        whole batch takes ``forward``, into the kept buffers where the pass is compiled and ``keep_buffers`` holds:
+        then the result is the buffer ``"field"``, which the next such pass overwrites (``predict`` copies it).
         """
         h, w = x.shape[-2:]
         if x.device.type != "cpu" or self.map_cache_bytes <= 0 or self.strip_rows(h, w) < h:
+            x = x[:, :self.block * self.block + 1]
+            if self.keep_buffers and self.compiled(x):
+                return self.compiled_field(x, *self.map_features(x, reuse=True), reuse=True)
             return self(x)
         with torch.no_grad():
             x = x[:, :self.block * self.block + 1]

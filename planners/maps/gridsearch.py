@@ -219,15 +219,15 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc, open_moves, most)
 
 
 @nb.njit(cache=True)
-def _incoming(costs, unreached, dr, dc, open_moves, most):
-    """Each block's incoming moves' prices, (h * w, 8): what move ``a`` costs from the block it comes from.
+def _incoming(costs, unreached, dr, dc, open_moves, most, inc):
+    """Each block's incoming moves' prices into ``inc`` (h * w, 8): what move ``a`` costs from the block it comes
+    from.
 
     ``unreached`` where that move cannot be taken (off the grid, not in ``open_moves``, priced above ``most[a]``
     or at ``unreached``). Also the least and the largest price of a move that can be taken.
     """
     A, h, w = costs.shape
     gated = open_moves.shape == costs.shape
-    inc = np.empty((h * w, A), dtype=costs.dtype)
     low, high = np.inf, 0.0
     for r in range(h):  # a row of blocks at a time, each move's prices read along a row of its plane
         for a in range(A):
@@ -242,11 +242,11 @@ def _incoming(costs, unreached, dr, dc, open_moves, most):
                         low = min(low, float(y))
                         high = max(high, float(y))
                 inc[r * w + c, a] = x
-    return inc, low, high
+    return low, high
 
 
 @nb.njit(cache=True)
-def _settle_buckets(inc, goal, walls, unreached, dr, dc, width, slots):
+def _settle_buckets(inc, goal, walls, unreached, dr, dc, width, slots, dist, state, nxt, prv, where):
     """``_move_cost_dijkstra``'s values bit for bit, from ``_incoming``'s prices, with buckets ``width`` apart.
 
     Every move costs at least twice ``width`` and no sum below ``unreached`` rounds by as much as ``width`` (the
@@ -255,17 +255,15 @@ def _settle_buckets(inc, goal, walls, unreached, dr, dc, width, slots):
     Each value is then the least sum ``price + value`` over its neighbours' final values, the very sums (and
     rounding) of the heap's search. The buckets are a ring of ``slots`` doubly linked lists, enough for the
     dearest move; the blocks are kept on a grid padded with one settled block each side (no bounds to check),
-    and a settling block reads its 8 incoming prices side by side.
+    and a settling block reads its 8 incoming prices side by side. ``dist``, ``state`` (int8), ``nxt``, ``prv`` and
+    ``where`` (int32) are working arrays of ``(h + 2) * (w + 2)``, whatever they hold.
     """
     h, w = goal.shape
     A = inc.shape[1]
     Wp = w + 2
-    n = (h + 2) * Wp
-    dist = np.full(n, unreached, dtype=inc.dtype)
-    state = np.full(n, 2, dtype=np.int8)  # 0 never queued, 1 queued, 2 settled (the border and the walls)
-    nxt = np.empty(n, dtype=np.int32)
-    prv = np.empty(n, dtype=np.int32)
-    where = np.empty(n, dtype=np.int32)  # a queued block's bucket
+    dist[:] = unreached
+    state[:] = 2  # 0 never queued, 1 queued, 2 settled (the border and the walls)
+    # nxt, prv: a queued block's neighbours in its bucket's list; where: its bucket
     head = np.full(slots, -1, dtype=np.int32)
     off = np.empty(A, dtype=np.int64)
     for a in range(A):
@@ -327,13 +325,30 @@ def _settle_buckets(inc, goal, walls, unreached, dr, dc, width, slots):
     return dist.reshape(h + 2, Wp)[1:-1, 1:-1].copy()
 
 
-def _settle_moves(costs, goal, walls, unreached, open_moves, most):
+def _work_array(work: dict | None, name: str, shape: tuple[int, ...], dtype) -> np.ndarray:
+    """The working array ``name`` kept in ``work`` where it has this shape and dtype, else a new one kept there."""
+    kept = None if work is None else work.pop(name, None)
+    if kept is None or kept.shape != shape or kept.dtype != dtype:
+        del kept  # freed before the new one is made
+        kept = np.empty(shape, dtype=dtype)
+    if work is not None:
+        work[name] = kept
+    return kept
+
+
+def _settle_moves(costs, goal, walls, unreached, open_moves, most, work=None):
     """``move_cost_field``'s search: by buckets where the prices allow it exactly, else by the heap."""
-    inc, low, high = _incoming(costs, unreached, _DR, _DC, open_moves, most)
+    A, h, w = costs.shape
+    inc = _work_array(work, "incoming", (h * w, A), costs.dtype)
+    low, high = _incoming(costs, unreached, _DR, _DC, open_moves, most, inc)
     width = low / 2
     # a sum below ``unreached`` rounds by at most unreached * eps / 2: the buckets need it well below ``width``
     if np.isfinite(low) and width > float(unreached) * float(np.finfo(costs.dtype).eps) and high / width < 1 << 22:
-        return _settle_buckets(inc, goal, walls, unreached, _DR, _DC, float(width), int(high / width) + 3)
+        n = (h + 2) * (w + 2)
+        scratch = [_work_array(work, name, (n,), dtype) for name, dtype in
+                   (("dist", costs.dtype), ("state", np.int8), ("next", np.int32), ("previous", np.int32),
+                    ("where", np.int32))]
+        return _settle_buckets(inc, goal, walls, unreached, _DR, _DC, float(width), int(high / width) + 3, *scratch)
     del inc
     return _move_cost_dijkstra(costs, goal, walls, unreached, _DR, _DC, open_moves, most)
 
@@ -453,7 +468,8 @@ _NO_CAP = np.zeros(0, dtype=np.float64)
 
 
 def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unreached: float, *,
-                    open_moves: np.ndarray | None = None, most: np.ndarray | None = None) -> np.ndarray:
+                    open_moves: np.ndarray | None = None, most: np.ndarray | None = None,
+                    work: dict | None = None) -> np.ndarray:
     """Every cell's least total cost to reach a ``goal`` cell, moving with per-cell, per-move ``costs``.
 
     The fixed point that value iteration reaches (``V = min over moves of cost + V of the cell reached``),
@@ -470,6 +486,9 @@ def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unre
             a wall, as one priced ``unreached`` would be, without a copy of ``costs``.
         most: (8,) the most each move may cost (in ``costs``' dtype, compared as value iteration's callers compare
             it); a move priced above it is a wall likewise. Default: no cap.
+        work: A dict in which the search keeps its working arrays (about 50 bytes a cell for float32 costs) for
+            the next call on a grid of the same shape, which reuses them rather than mapping new memory (a large
+            map's repeated searches); the values do not depend on it. Default: new arrays each call.
 
     Returns:
         (h, w) array of ``costs``' dtype. The sums are formed in that dtype as value iteration forms them, so
@@ -485,14 +504,15 @@ def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unre
     if goal.shape != shape or walls.shape != shape:
         raise ValueError(f"goal {goal.shape} and walls {walls.shape} must have the costs' grid shape {shape}")
     if open_moves is None and most is None:
-        return _settle_moves(costs, goal, walls, costs.dtype.type(unreached), _NO_GATE, _NO_CAP)
+        return _settle_moves(costs, goal, walls, costs.dtype.type(unreached), _NO_GATE, _NO_CAP, work)
     open_moves = np.ones(costs.shape, dtype=bool) if open_moves is None else np.ascontiguousarray(open_moves, bool)
     if open_moves.shape != costs.shape:
         raise ValueError(f"open_moves must have the costs' shape {costs.shape}, got {open_moves.shape}")
     cap = np.full(len(MOVES), np.inf, dtype=costs.dtype) if most is None else np.asarray(most, dtype=costs.dtype)
     if cap.shape != (len(MOVES),):
         raise ValueError(f"most must hold one cap per move ({len(MOVES)}), got shape {cap.shape}")
-    return _settle_moves(costs, goal, walls, costs.dtype.type(unreached), open_moves, np.ascontiguousarray(cap))
+    return _settle_moves(costs, goal, walls, costs.dtype.type(unreached), open_moves, np.ascontiguousarray(cap),
+                         work)
 
 
 def block_steps(free: np.ndarray, block: int) -> np.ndarray:
