@@ -42,11 +42,23 @@ def test_the_table_names_the_fastest_classical_option_and_judges_the_targets():
     assert pooled["lazy route / OMPL RRT-Connect"] == f"{verdict['lazy pooled / OMPL RRT-Connect']:.2f}"
 
 
-def test_an_unsolved_run_counts_with_its_time_and_lowers_the_share_solved():
+def test_an_unsolved_run_never_solves_so_a_method_that_gives_up_fast_is_not_the_fastest():
     runs = [_run("m", C.ROUTE, 2.0), _run("m", C.ROUTE, 100.0, solved=False, seed=1), _run("m", C.TUNED, 1.0),
             _run("m", C.TUNED, 1.0, seed=1)]
     rows, _ = C.clock_table(runs)
-    assert rows[0][C.ROUTE] == "51 (50%)"
+    assert rows[0][C.ROUTE] == "> 51 (50%)"  # half unsolved: the median time to solution is not reached
+    assert rows[0]["target"].startswith("fails")
+    three = [_run("m", C.ROUTE, ms, solved=ms < 50, seed=i) for i, ms in enumerate((2.0, 3.0, 90.0))]
+    assert C.solution_ms(three) == 3.0 and math.isinf(C.solution_ms(three[1:]))
+    # every classical option gives up quickly, the route solves slowly: the route is the fastest to a solution
+    runs = [_run("m", C.ROUTE, 30.0, seed=i) for i in range(3)] + [
+        _run("m", k, 5.0 + i, solved=i == 0, seed=i) for k in (C.TUNED, C.CONNECT, C.PRM, C.EXACT) for i in range(3)]
+    rows, verdict = C.clock_table(runs)
+    row = rows[0]
+    assert row["fastest classical"] == "none solves more than half" and row[C.TUNED] == "> 6 (33%)"
+    assert row["target"].startswith("holds") and verdict["held"] == 1 and verdict["slow held"] == 1
+    by_size = C.fastest_by_size(runs, {"q": 128})
+    assert by_size[0]["fastest"] == C.ROUTE and by_size[0][f"{C.PRM} ms"] == "> 6 (33%)"
 
 
 def test_the_fastest_by_map_size():

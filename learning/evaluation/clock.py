@@ -13,8 +13,11 @@ seeds, their runs interleaved query by query so a drift in the machine's speed h
 - with OMPL's Python bindings installed, OMPL's RRT-Connect (``planners.tools.ompl_bridge``).
 
 A run's time runs from the planner's start to its first solution, the sampler's per-query work included (the
-encoder's pass, a grid search): ``learning.evaluation.run_one``'s wall time. An unsolved run counts with the time
-it ran. "Fastest" is the fastest median of the tuned goal bias, RRT-Connect, PRM and the exact reference; the
+encoder's pass, a grid search): ``learning.evaluation.run_one``'s wall time. A method's time is its median time to
+solution (``solution_ms``): an unsolved run never reached a solution, so it counts as never, and where half the runs
+or more are unsolved the median is not reached (the time those runs took is no time to a solution: a method that
+gives up quickly at its iteration cap is not a fast one). "Fastest" is the fastest median of the tuned goal bias,
+RRT-Connect, PRM and the exact reference that solve more than half their runs; the
 targets are the route sampler's median at most ``AT_MOST`` times it on every set, and at most ``WHERE_SLOW`` times
 it wherever that median is above ``SLOW_MS``, and, over every test query pooled, at most ``OMPL_AT_MOST`` times
 OMPL's RRT-Connect; the lazy route sampler, with each planner, is held to the same targets.
@@ -121,14 +124,34 @@ def _method(run: Run) -> str:
     return OMPL_CONNECT if run.sampler == "OMPL" else run.sampler
 
 
+def solution_ms(runs: Sequence[Run]) -> float:
+    """The median time to solution of ``runs`` in ms: the time by which half of them had solved.
+
+    An unsolved run counts as never solving (infinitely long), so where half the runs or more are unsolved the
+    median is not reached: inf.
+    """
+    return float(np.median([r.wall_time * 1e3 if r.solved else math.inf for r in runs]))
+
+
+def _cell(runs: Sequence[Run]) -> str:
+    """A method's table cell: its median time to solution (ms) and the share solved; where that median is not
+    reached, "> " the median time its runs took."""
+    ms, solved = solution_ms(runs), f"{np.mean([r.solved for r in runs]):.0%}"
+    if math.isfinite(ms):
+        return f"{ms:.3g} ({solved})"
+    return f"> {np.median([r.wall_time for r in runs]) * 1e3:.3g} ({solved})"
+
+
 def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[dict], dict]:
     """Per map set (in ``order``, then the rest), and pooled: each method's median ms per query and success.
 
-    Returns (rows, verdict): each row holds "map set", per method its median ms with the share solved in brackets,
-    "fastest classical", and for each learned method (``LEARNED``, its prefix before each name) "route / fastest" and
-    "target" ("holds" or "fails"); the verdict holds the counts of sets ("sets", "slow sets") and, per learned method,
-    of those meeting each target ("held", "slow held") and, where OMPL ran, the pooled ratio to OMPL's RRT-Connect
-    ("pooled / OMPL RRT-Connect").
+    Returns (rows, verdict): each row holds "map set", per method its median time to solution in ms (``_cell``)
+    with the share solved in brackets, "fastest classical", and for each learned method (``LEARNED``, its prefix
+    before each name) "route / fastest" and "target" ("holds" or "fails"); the verdict holds the counts of sets
+    ("sets", "slow sets") and, per learned method, of those meeting each target ("held", "slow held") and, where
+    OMPL ran, the pooled ratio to OMPL's RRT-Connect ("pooled / OMPL RRT-Connect"). Where no classical option solves
+    more than half the runs, a learned method that does holds its targets (it is faster than every one of them), and
+    one that does not fails them.
     """
     by: dict[str, dict[str, list[Run]]] = {}
     for r in runs:
@@ -144,19 +167,21 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
         verdict |= {f"{prefix}held": 0, f"{prefix}slow held": 0, f"{prefix}pooled / OMPL RRT-Connect": math.nan}
     for name in names:
         cell = by[name]
-        ms = {m: float(np.median([r.wall_time for r in cell[m]]) * 1e3) for m in methods if m in cell}
+        ms = {m: solution_ms(cell[m]) for m in methods if m in cell}
         row: dict = {"map set": name}
         for m in methods:
-            row[m] = f"{ms[m]:.3g} ({np.mean([r.solved for r in cell[m]]):.0%})" if m in cell else "-"
+            row[m] = _cell(cell[m]) if m in cell else "-"
         classical = {m: ms[m] for m in CLASSICAL if m in ms}
         if classical:
             fastest = min(classical, key=classical.__getitem__)
-            slow = classical[fastest] > SLOW_MS
-            row["fastest classical"] = f"{fastest} ({classical[fastest]:.3g} ms)"
+            best = classical[fastest]  # inf where no classical option solves more than half the runs
+            slow = best > SLOW_MS
+            row["fastest classical"] = (f"{fastest} ({best:.3g} ms)" if math.isfinite(best) else
+                                        "none solves more than half")
             slow_total += slow and name != POOLED
         for learned, prefix in LEARNED.items():
             if learned in ms and classical:
-                ratio = ms[learned] / max(classical[fastest], 1e-9)
+                ratio = ms[learned] / max(best, 1e-9) if math.isfinite(ms[learned]) else math.inf
                 ok = ratio <= AT_MOST and (not slow or ratio <= WHERE_SLOW)
                 row |= {f"{prefix}route / fastest": f"{ratio:.2f}",
                         f"{prefix}target": ("holds" if ok else "fails") + (
@@ -178,20 +203,22 @@ def side_class(side: int) -> str:
 
 
 def fastest_by_size(runs: Sequence[Run], sides: dict[str, int]) -> list[dict]:
-    """Which method plans fastest, by map size, over every test query: each method's median ms per query.
+    """Which method plans fastest, by map size, over every test query: each method's median time to solution
+    (``solution_ms``, ``_cell``).
 
     ``sides`` maps a run's query (its problem's name) to its map's larger side in cells.
     """
-    classes: dict[str, dict[str, list[float]]] = {}
+    classes: dict[str, dict[str, list[Run]]] = {}
     for r in runs:
         if r.split == "test" and r.query in sides:
-            classes.setdefault(side_class(sides[r.query]), {}).setdefault(_method(r), []).append(r.wall_time * 1e3)
+            classes.setdefault(side_class(sides[r.query]), {}).setdefault(_method(r), []).append(r)
     out = []
     for name in ("up to 64", "up to 128", "up to 256", "above 256"):
         if name not in classes:
             continue
-        med = {m: float(np.median(v)) for m, v in classes[name].items()}
+        med = {m: solution_ms(v) for m, v in classes[name].items()}
         best = min(med, key=med.__getitem__)
-        out.append({"map side": name, "runs": len(classes[name][best]), "fastest": best,
-                    **{f"{m} ms": f"{v:.3g}" for m, v in med.items()}})
+        out.append({"map side": name, "runs": len(classes[name][best]),
+                    "fastest": best if math.isfinite(med[best]) else "none solves more than half",
+                    **{f"{m} ms": _cell(v) for m, v in classes[name].items()}})
     return out
