@@ -437,7 +437,7 @@ def test_a_pass_in_strips_of_rows_gives_the_one_piece_field_and_refuses_gradient
     x = torch.from_numpy(route_input(obstacles, goal, net.block)[None])
     with pytest.raises(ValueError, match="strips, at inference only"):
         net(x)  # gradients on: a training pass never runs in strips
-    assert 1 << 30 < net.pass_bytes(2048, 2048) < 1.5 * 2**30  # a 4096 x 4096 map within 1.5 GB (1.23 measured)
+    assert 1 << 30 < net.pass_bytes(2048, 2048) < 1.5 * 2**30  # a 4096 x 4096 map within 1.5 GB (1.25 to 1.29 measured)
 
 
 def _whole_and_reused(net: RouteVIN, obstacles: np.ndarray, goal: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:

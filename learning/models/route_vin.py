@@ -158,12 +158,11 @@ class RouteVIN(nn.Module, FieldEncoder):
     prepacked_blocks: int = 64 * 64
     #: Whether a compiled pass over a map whose parts inference does not keep (one above ``strip_blocks``, or any map
     #: where ``map_cache_bytes`` is 0) writes its move costs, the head's first layer and the cell field into buffers
-    #: the encoder keeps for the next such pass of the same shape (``buffer``), rather than into new memory: the same
-    #: values, without the operating system's cost of mapping the memory afresh each pass (at 4096 x 4096 cells,
-    #: 0.45 GB and about 0.4 s of a 2.4 s pass on the 2-core machine); the compiled search keeps its working arrays
-    #: likewise (``move_cost_field``'s ``work``). They stay until ``release_buffers`` (or
-    #: ``weights_changed``): at most what one pass holds at its peak anyway (``pass_bytes``). False: new memory each
-    #: pass, nothing kept.
+    #: the encoder keeps for the next such pass of the same shape (``buffer``), and the compiled search its working
+    #: arrays likewise (``move_cost_field``'s ``work``), rather than into new memory: the same values, without the
+    #: operating system's cost of mapping the memory afresh each pass (at 4096 x 4096 cells 0.68 GB, and about 0.4 s
+    #: of a 2.4 to 2.5 s pass on the 2-core machine). They stay until ``release_buffers`` (or ``weights_changed``):
+    #: at most what one pass holds at its peak anyway (``pass_bytes``). False: new memory each pass, nothing kept.
     keep_buffers: bool = True
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
@@ -323,7 +322,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         Measured on the shipped encoder (``scripts/benchmark_route.py``'s peak memory over the interpreter's own): in
         one piece about 1 kB per block (0.26 GB at 1024 x 1024 cells); in strips about 0.1 GB for a strip and, per
         block of the map, 240 bytes and 4 a channel, the buffers kept for the next pass included (``keep_buffers``;
-        0.38 GB at 2048 x 2048 cells, 1.23 GB at 4096 x 4096).
+        0.36 to 0.41 GB at 2048 x 2048 cells, 1.25 to 1.29 GB at 4096 x 4096).
         """
         blocks = h * w
         if blocks <= self.strip_blocks:
