@@ -15,7 +15,12 @@ table per planner and sampler, and one per family. Writes ``rows.json`` (every r
 ``--mesh`` runs the test-only mesh set instead (``MeshSceneSet``: the test-only families written as
 meshes, and OMPL.app's problems from ``--omplapp`` or ``$SAMPLERGYM_OMPLAPP_DIR``; the ``mesh``
 extra); ``rigid_route`` runs there too, its box-trained classes carried to each body's own axes.
-``--sampler-params`` passes parameters to the registry's samplers by name (``make_sampler(name, **params)``).
+``--sampler-params`` passes parameters to the registry's samplers by name (``make_sampler(name, **params)``);
+``--sampler NAME=SPEC`` adds a sampler of yours, e.g. a Stable-Baselines3 model trained on
+``SamplerGym/RRT-RigidScenes-v1``:
+
+    python scripts/evaluate_rigid.py --samplers uniform goal_bias --sampler mine=ppo.zip@SamplerGym/RRT-RigidScenes-v1
+
 Exit status: 0 done, 2 bad input.
 """
 
@@ -32,6 +37,7 @@ from planners.worlds.rigid_scenes import TEST_ONLY_FAMILIES, TRAINING_FAMILIES
 
 def main(argv=None) -> int:
     from learning.evaluation.rigid import PLANNERS, SAMPLERS, evaluate_rigid, format_table, summarize
+    from learning.samplers.registry import parse_user_sampler, user_sampler
     from planners.worlds.rigid_scenes import RigidSceneSet
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -44,6 +50,10 @@ def main(argv=None) -> int:
     ap.add_argument("--planners", nargs="+", default=list(PLANNERS))
     ap.add_argument("--samplers", nargs="+", help=f"registry names (default {' '.join(SAMPLERS)})")
     ap.add_argument("--max-iterations", type=int, help="lower every planner's cap (quick looks only)")
+    ap.add_argument("--sampler", action="append", default=[], metavar="NAME=SPEC",
+                    help="also compare a sampler of yours (repeatable): NAME=MODEL.zip@ENV_ID[@stochastic] for a "
+                         "Stable-Baselines3 model trained on that SamplerGym id (e.g. SamplerGym/RRT-RigidScenes-v1), "
+                         "or NAME=module:callable for a factory returning a Sampler")
     ap.add_argument("--sampler-params", default="{}",
                     help='parameters by sampler name as JSON, e.g. \'{"rigid_route": {"uniform_share": 1.0}}\'')
     ap.add_argument("--out", type=Path, default=Path("results/rigid"))
@@ -69,6 +79,16 @@ def main(argv=None) -> int:
     if args.out.exists() and not args.out.is_dir():
         return fail(f"--out {args.out} exists and is not a folder")
     samplers = args.samplers or list(SAMPLERS)
+    users = {}
+    for arg in args.sampler:  # each built once here, so a bad file or spec is refused before any run
+        try:
+            name, spec = parse_user_sampler(arg, tuple(samplers))
+            user_sampler(spec)
+        except (ValueError, OSError) as exc:
+            return fail(f"--sampler {arg!r}: {exc}" if arg not in str(exc) else str(exc))
+        except Exception as exc:  # noqa: BLE001 - e.g. an env kwarg the env does not take (TypeError)
+            return fail(f"--sampler {arg!r}: {type(exc).__name__}: {exc}")
+        users[name] = spec
     if args.mesh and args.part != "test":
         return fail("--mesh scenes are test-only: use --part test")
     if not args.mesh and (args.omplapp or args.problems):
@@ -89,7 +109,7 @@ def main(argv=None) -> int:
 
         rows = evaluate_rigid(scenes, args.part, planners=args.planners, samplers=samplers,
                               seeds=range(args.seeds), max_iterations=args.max_iterations, progress=show,
-                              sampler_params=sampler_params)
+                              sampler_params=sampler_params, user_samplers=users)
     except InputError as e:
         return fail(str(e))
     by_sampler = format_table(summarize(rows))

@@ -309,3 +309,30 @@ def test_a_search_stopped_at_the_start_keeps_every_cheaper_cost_exact(seed, fill
     assert np.array_equal(stopped[below], full[below])
     assert stopped.flat[start] == full.flat[start]
     assert np.all(stopped >= full)
+
+
+def test_a_users_sampler_joins_the_rigid_comparison_by_its_label(tmp_path, capsys):
+    """``user_samplers`` (``scripts/evaluate_rigid.py --sampler NAME=SPEC``): a factory's sampler runs beside the
+    registry's, labelled by its name, and gives the runs that sampler gives; SB3 models take the same path
+    (``MODEL.zip@SamplerGym/RRT-RigidScenes-v1``). A bad spec or a taken name is refused before any run."""
+    from conftest import load_script
+
+    from learning.evaluation.rigid import evaluate_rigid
+
+    ss = RigidSceneSet(("slot",), (), {"validation": 1})
+    rows = evaluate_rigid(ss, "validation", planners=("RRTConnect",), samplers=("uniform",), seeds=(0, 1),
+                          max_iterations=60, user_samplers={"mine": "planners:UniformSampler"})
+    mine = [(r.seed, r.iterations, r.solved) for r in rows if r.sampler == "mine"]
+    assert len(mine) == 2 and mine == [(r.seed, r.iterations, r.solved) for r in rows if r.sampler == "uniform"]
+    with pytest.raises(InputError, match="registered sampler"):
+        evaluate_rigid(ss, "validation", samplers=("uniform",), user_samplers={"uniform": "planners:UniformSampler"})
+    script = load_script("evaluate_rigid")
+    assert script.main(["--families", "slot", "--test-only", "--scenes", "1", "--planners", "RRTConnect",
+                        "--samplers", "uniform", "--max-iterations", "30", "--sampler", "mine=planners:UniformSampler",
+                        "--out", str(tmp_path / "out")]) == 0
+    assert "| RRTConnect | mine | 1 |" in (tmp_path / "out" / "summary.md").read_text()
+    for bad, why in (("mine=no_such_module:f", "no_such_module"), ("uniform=planners:UniformSampler", "taken"),
+                     ("mine", "expected NAME=SPEC")):
+        assert script.main(["--scenes", "1", "--sampler", bad, "--out", str(tmp_path / "bad")]) == 2
+        assert why in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()

@@ -83,11 +83,15 @@ def build_planner(name: str, problem: Problem, sampler, seed: int):
 
 
 def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: dict | None = None,
-            scene: SceneQuery | None = None, max_iterations: int | None = None) -> RigidRow:
-    """One seeded run of ``planner`` with the registry's ``sampler`` (``params`` its parameters) on ``problem``."""
-    from learning.samplers.registry import make_sampler
+            scene: SceneQuery | None = None, max_iterations: int | None = None, spec: str | None = None) -> RigidRow:
+    """One seeded run of ``planner`` with the registry's ``sampler`` (``params`` its parameters) on ``problem``.
 
-    made = make_sampler(sampler, **(params or {}))
+    ``spec``: a user's sampler instead (``learning.samplers.registry.user_sampler``: ``MODEL.zip@ENV_ID`` for a
+    Stable-Baselines3 model trained on a SamplerGym id, or ``module:callable``), labelled ``sampler`` in the row.
+    """
+    from learning.samplers.registry import make_sampler, user_sampler
+
+    made = user_sampler(spec) if spec is not None else make_sampler(sampler, **(params or {}))
     c0, t0 = compile_seconds(), time.perf_counter()
     pl, cap = build_planner(planner, problem, made, seed)
     cap = cap if max_iterations is None else min(cap, max_iterations)
@@ -105,7 +109,8 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
 def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planners: Sequence[str] = PLANNERS,
                    samplers: Sequence[str] = SAMPLERS, seeds: Iterable[int] = (0,),
                    sampler_params: dict[str, dict] | None = None, max_iterations: int | None = None,
-                   progress: Callable[[RigidRow], None] | None = None) -> list[RigidRow]:
+                   progress: Callable[[RigidRow], None] | None = None,
+                   user_samplers: dict[str, str] | None = None) -> list[RigidRow]:
     """Every planner with every sampler on every scene of ``part`` of ``scene_set``, once per seed.
 
     Args:
@@ -117,6 +122,8 @@ def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planne
         sampler_params: Parameters by sampler name (``make_sampler(name, **params)``).
         max_iterations: Lower every planner's cap to this (quick looks; the seed set-ups' caps otherwise).
         progress: Called with each row as it is made.
+        user_samplers: A user's samplers by label (``NAME`` to ``SPEC``, as ``scripts/evaluate.py --sampler
+            NAME=SPEC`` takes them: ``learning.samplers.registry.user_sampler``), run after ``samplers``.
 
     Returns:
         The rows, scene by scene, then planner, sampler and seed.
@@ -130,16 +137,20 @@ def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planne
     for name in samplers:
         if name not in known:
             raise InputError(f"unknown sampler {name!r}; choose from {', '.join(sorted(known))}")
+    users = dict(user_samplers or {})
+    for name in users:
+        if name in known or name in samplers:
+            raise InputError(f"user sampler {name!r}: the name is a registered sampler's; choose another")
     seeds = list(seeds)
     params = sampler_params or {}
     rows = []
     for query in scene_set.queries(part):
         problem = scene_set.problem(query)
         for planner in planners:
-            for sampler in samplers:
+            for sampler in [*samplers, *users]:
                 for seed in seeds:
                     row = run_one(problem, planner, sampler, seed, params=params.get(sampler), scene=query,
-                                  max_iterations=max_iterations)
+                                  max_iterations=max_iterations, spec=users.get(sampler))
                     rows.append(row)
                     if progress is not None:
                         progress(row)
