@@ -25,6 +25,8 @@ from planners.maps.generators import FAMILIES, TEST_SEED0, TRAIN_SEEDS, TUNING_S
 BIAS_GRID = (0.0, 0.01, 0.05, 0.1, 0.2, 0.5)
 #: Map side, step and iteration cap of the family ids (``SamplerEnv``'s defaults).
 SIZE, STEP, CAP = 64, 4.0, 2000
+#: The 6-DoF body's id on the generated scene sets (a training scene each episode; vector observations).
+RIGID_ID = "SamplerGym/RRT-RigidScenes-v1"
 
 
 def family_id(family: str) -> str:
@@ -40,6 +42,15 @@ def train_default_ppo(family: str, steps: int, seed: int, out: str | os.PathLike
     Nothing but the seed is set (and one torch thread): the environment is ``gym.make(id)`` with its map
     seeds limited to the training range. Returns the model.
     """
+    return train_ppo_on(family_id(family), steps, seed, out, source_kwargs={"seeds": np.arange(*TRAIN_SEEDS)})
+
+
+def train_ppo_on(env_id: str, steps: int, seed: int, out: str | os.PathLike, **env_kwargs):
+    """PPO with SB3's defaults on ``gym.make(env_id, **env_kwargs)`` for ``steps`` steps; saved to ``out``.
+
+    ``"MultiInputPolicy"`` for Dict observations, ``"MlpPolicy"`` for a vector (``RIGID_ID``'s); nothing but the
+    seed is set (and one torch thread), so the same call gives the same model. Returns the model.
+    """
     import gymnasium as gym
     import torch
     from stable_baselines3 import PPO
@@ -47,11 +58,12 @@ def train_default_ppo(family: str, steps: int, seed: int, out: str | os.PathLike
     import samplergym  # noqa: F401 (registers the ids)
 
     check_int(steps, "steps")
-    env = gym.make(family_id(family), source_kwargs={"seeds": np.arange(*TRAIN_SEEDS)})
+    env = gym.make(env_id, **env_kwargs)
+    policy = "MultiInputPolicy" if isinstance(env.observation_space, gym.spaces.Dict) else "MlpPolicy"
     threads = torch.get_num_threads()
     torch.set_num_threads(1)  # one thread per process on small machines (docs/first-steps.md, "Threads")
     try:
-        model = PPO("MultiInputPolicy", env, seed=seed)
+        model = PPO(policy, env, seed=seed)
         model.learn(steps)
     finally:
         torch.set_num_threads(threads)

@@ -27,6 +27,7 @@ from conftest import load_script  # noqa: E402
     ("sb3_defaults", ["--steps", "0"], "--steps"),
     ("sb3_defaults", ["--family", "lake"], "--family"),
     ("sb3_defaults", ["--batch", "-1"], "--batch"),
+    ("sb3_defaults", ["--rigid", "--scenes", "0"], "--scenes"),
     ("benchmark_policy", ["--maps", "0"], "--maps"),
     ("benchmark_policy", ["--bias", "2"], "--bias"),
     ("benchmark_route", ["--sides", "4"], "--sides"),

@@ -324,3 +324,23 @@ def test_registered_envs_pass_the_env_checkers():
     env = gym.make("SamplerGym/RRT-Forest-v2", max_iterations=50)
     check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env, warn=False)
+
+
+def test_ppo_on_the_rigid_scenes_id_is_reproducible_and_plans_as_a_users_sampler(tmp_path):
+    """``train_ppo_on(RIGID_ID, ...)`` (``sb3_defaults.py --rigid``): SB3's defaults on the 6-DoF scenes' vector
+    observations, the same weights from the same seed, and the saved model plans a scene through
+    ``user_sampler("MODEL.zip@ENV_ID")``, as the rigid comparison's ``--sampler`` runs it."""
+    import torch
+
+    from learning.samplers.registry import user_sampler
+    from learning.sb3_defaults import RIGID_ID, train_ppo_on
+    from planners import make_planner
+    from planners.worlds.rigid_scenes import rigid_scene
+
+    a = train_ppo_on(RIGID_ID, 64, 0, tmp_path / "a.zip")
+    b = train_ppo_on(RIGID_ID, 64, 0, tmp_path / "b.zip")
+    sa, sb = a.policy.state_dict(), b.policy.state_dict()
+    assert all(torch.equal(sa[k], sb[k]) for k in sa)
+    sampler = user_sampler(f"{tmp_path / 'a.zip'}@{RIGID_ID}")
+    result = make_planner("RRT", rigid_scene("slot", 200_000), sampler=sampler, seed=0, extension_step=1.0).solve(50)
+    assert result.iterations == 50 or result.solved
