@@ -162,7 +162,8 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: arrays likewise (``move_cost_field``'s ``work``), rather than into new memory: the same values, without the
     #: operating system's cost of mapping the memory afresh each pass (at 4096 x 4096 cells 0.68 GB, and about 0.4 s
     #: of a 2.4 to 2.5 s pass on the 2-core machine). They stay until ``release_buffers`` (or ``weights_changed``):
-    #: at most what one pass holds at its peak anyway (``pass_bytes``). False: new memory each pass, nothing kept.
+    #: at most what one pass holds at its peak anyway (``pass_bytes``). False: new memory each pass, nothing kept. Like
+    #: the kept maps they belong to the encoder: threads that plan at once take an encoder each (or a lock).
     keep_buffers: bool = True
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
