@@ -413,7 +413,7 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: 64 ms in strips of 128 block rows (4 MB) against 105 to 136 ms in one piece, and 64 to 69 ms in strips of 2 to
     #: 32 MB; over 4096 x 4096 cells (the prepacked layers) 1.34 to 1.37 s in strips of 64 rows (8 MB) against 1.41 to
     #: 1.44 s in strips of 32 (whose margins are a quarter of their work), 1.48 to 1.53 s in strips of 128 and 2.3 s
-    #: in strips of 512 (32 MB), out of the cache.
+    #: in strips of 256 (32 MB), out of the cache.
     feature_bytes: int = 8 << 20
 
     def map_features(self, x: torch.Tensor, reuse: bool = False) -> tuple[torch.Tensor, torch.Tensor]:
