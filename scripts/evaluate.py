@@ -65,6 +65,7 @@ from learning.evaluation.rigid import PLANNERS as RIGID_PLANNERS
 from learning.evaluation.rigid import SAMPLERS as RIGID_SAMPLERS
 from learning.evaluation.rigid import RigidPart
 from learning.models.shipped import SHIPPED_POLICY
+from learning.samplers import registry
 from learning.samplers.route import SHIPPED
 from planners import movingai_dir, planner_names
 from planners.algorithms.rrt import MAX_STEPS_ENV, max_steps_limit
@@ -178,6 +179,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                     help="--rigid: planners (default all)")
     ap.add_argument("--rigid-samplers", nargs="+", default=None, metavar="NAME",
                     help="--rigid: registry samplers (default: every 6-DoF reference and learned sampler)")
+    ap.add_argument("--rigid-sampler", action="append", default=[], metavar="NAME=SPEC",
+                    help="--rigid: also compare a sampler of yours (repeatable), as --sampler takes it; e.g. "
+                         "NAME=MODEL.zip@SamplerGym/RRT-RigidScenes-v1 for an SB3 model trained on the scenes")
     ap.add_argument("--rigid-max-iterations", type=int, default=None,
                     help="--rigid: lower every planner's cap to this (quick looks; default the set-ups' own caps)")
     ap.add_argument("--rigid-only", action="store_true", help="--rigid without the 2D map sets")
@@ -246,7 +250,7 @@ def _check_values(args) -> None:
 def _check_rigid(args) -> None:
     """``--rigid``'s flags, and its part of the comparison (``args.parts``): an ``InputError`` naming the flag."""
     args.parts = []
-    given = [f for f in ("rigid_only", "rigid_max_iterations", "rigid_samplers") if getattr(args, f)]
+    given = [f for f in ("rigid_only", "rigid_max_iterations", "rigid_samplers", "rigid_sampler") if getattr(args, f)]
     if args.rigid is None:
         if given:
             raise InputError(f"--{given[0].replace('_', '-')} needs --rigid PART")
@@ -254,11 +258,21 @@ def _check_rigid(args) -> None:
     check_int_flags(args, ("rigid_scenes", "rigid_seeds"))
     if args.rigid_max_iterations is not None:
         check_int_flags(args, ("rigid_max_iterations",))
+    samplers = args.rigid_samplers or list(RIGID_SAMPLERS)
+    users = {}
+    for arg in args.rigid_sampler:  # each built once here, so a bad file or spec is refused before any run
+        try:
+            name, spec = registry.parse_user_sampler(arg, tuple(samplers))
+            E.user_sampler(spec)
+        except (ValueError, OSError) as exc:
+            raise InputError(f"--rigid-sampler {arg!r}: {exc}" if arg not in str(exc) else str(exc)) from exc
+        except Exception as exc:  # noqa: BLE001 - e.g. an env kwarg the env does not take (TypeError)
+            raise InputError(f"--rigid-sampler {arg!r}: {type(exc).__name__}: {exc}") from exc
+        users[name] = spec
     try:
         scenes = RigidSceneSet(counts={args.rigid: args.rigid_scenes})
-        args.parts = [RigidPart(scenes, args.rigid, planners=args.rigid_planners,
-                                samplers=args.rigid_samplers or list(RIGID_SAMPLERS), seeds=args.rigid_seeds,
-                                max_iterations=args.rigid_max_iterations)]
+        args.parts = [RigidPart(scenes, args.rigid, planners=args.rigid_planners, samplers=samplers,
+                                seeds=args.rigid_seeds, max_iterations=args.rigid_max_iterations, users=users)]
     except InputError as exc:
         raise InputError(f"--rigid-samplers: {exc}") from exc
 
@@ -396,6 +410,8 @@ def _settings(args) -> dict:
             "map_set_obj", "sampler", "models", "loaded"}
     if not args.extra_routes:  # so a run without NAME=FILE encoders keeps the journal settings it always had
         skip.add("extra_routes")
+    if not args.rigid_sampler:  # likewise without a user's 6-DoF sampler
+        skip.add("rigid_sampler")
     skip.add("parts")
     skip.update(k for k in ("convergence", "later_queries") if not getattr(args, k))  # likewise without them
     if args.rigid is None:  # likewise without --rigid

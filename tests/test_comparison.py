@@ -11,6 +11,7 @@ from conftest import load_script
 
 from learning import evaluation as E
 from learning.evaluation import report
+from learning.sb3_defaults import RIGID_ID
 from planners import planner_names
 from planners.tools.benchmark import Run
 
@@ -189,7 +190,10 @@ def test_evaluate_runs_the_6dof_scene_sets_as_a_part_and_checks_its_flags_first(
     ev = load_script("evaluate")
     for argv, needle in ((["--rigid-only"], "--rigid-only needs --rigid PART"),
                          (["--rigid", "validation", "--rigid-samplers", "nope"], "unknown sampler 'nope'"),
-                         (["--rigid", "validation", "--rigid-scenes", "0"], "--rigid-scenes")):
+                         (["--rigid", "validation", "--rigid-scenes", "0"], "--rigid-scenes"),
+                         (["--rigid-sampler", "mine=planners:UniformSampler"], "--rigid-sampler needs --rigid PART"),
+                         (["--rigid", "validation", "--rigid-sampler", "uniform=planners:UniformSampler"], "taken"),
+                         (["--rigid", "validation", "--rigid-sampler", "mine=nope.zip@" + RIGID_ID], "nope.zip")):
         with pytest.raises(SystemExit) as exc:
             ev.parse_args([*argv, "--out", str(tmp_path / "x")])
         assert exc.value.code == 2 and needle in capsys.readouterr().err
@@ -198,10 +202,13 @@ def test_evaluate_runs_the_6dof_scene_sets_as_a_part_and_checks_its_flags_first(
     out = tmp_path / "rigid"
     rc = ev.main(["--rigid", "validation", "--rigid-only", "--rigid-scenes", "1", "--rigid-planners", "RRTConnect",
                   "--rigid-samplers", "uniform", "--rigid-max-iterations", "100", "--processes", "1",
-                  "--out", str(out)])
+                  "--rigid-sampler", "mine=planners:UniformSampler", "--out", str(out)])
     assert rc == 0
     rows = list(csv.DictReader((out / "runs.csv").open()))
-    assert len(rows) == 5 and {r["planner"] for r in rows} == {"RRTConnect"}  # one scene of each training family
+    assert len(rows) == 10 and {r["planner"] for r in rows} == {"RRTConnect"}  # one scene of each training family
+    by = {s: sorted((r["query"], r["iterations"], r["solved"]) for r in rows if r["sampler"] == s) for s in
+          ("uniform", "mine")}
+    assert len(by["mine"]) == 5 and by["mine"] == by["uniform"]  # a user's sampler, labelled by its name
     assert "6-DoF scenes (validation)" in (out / "details.md").read_text()
 
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -266,6 +266,8 @@ class RigidPart:
     Every run is one ``Task`` of the comparison (journaled, resumable, in ``runs.csv`` and the OMPL logs); the
     report is the table per planner and sampler, the table per scene set, and the targets of each learned sampler
     (any sampler that is neither a classical option nor the ablation) marked held or not, scene set by scene set.
+    ``users``: a user's samplers by label (``NAME`` to ``SPEC``, ``learning.samplers.registry.user_sampler``; e.g. an
+    SB3 model trained on ``SamplerGym/RRT-RigidScenes-v1``), run after ``samplers`` and judged as learned ones.
     """
 
     scenes: RigidSceneSet | MeshSceneSet
@@ -275,6 +277,7 @@ class RigidPart:
     seeds: int = 1
     max_iterations: int | None = None
     name: str = ""
+    users: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         from learning.samplers.registry import sampler_names
@@ -286,6 +289,9 @@ class RigidPart:
         for sampler in self.samplers:
             if sampler not in known:
                 raise InputError(f"unknown sampler {sampler!r}; choose from {', '.join(sorted(known))}")
+        for name in self.users:
+            if name in known or name in self.samplers:
+                raise InputError(f"user sampler {name!r}: the name is a registered sampler's; choose another")
         self.scenes.queries(self.part)  # refuses a part the set has not, by name
         self.planners, self.samplers = list(self.planners), list(self.samplers)
         self.name = self.name or f"6-DoF scenes ({self.part})"
@@ -300,8 +306,10 @@ class RigidPart:
         from learning.samplers.registry import SamplerSpec
 
         verify = bool(getattr(self.scenes, "verify", True))
-        return [Task(RigidQuery(q, verify), planner, SamplerSpec.of(sampler), seed, sampler)
-                for q in self.scenes.queries(self.part) for planner in self.planners for sampler in self.samplers
+        specs = [(SamplerSpec.of(s), s) for s in self.samplers]
+        specs += [(SamplerSpec.user(name, spec), name) for name, spec in self.users.items()]
+        return [Task(RigidQuery(q, verify), planner, spec, seed, label)
+                for q in self.scenes.queries(self.part) for planner in self.planners for spec, label in specs
                 for seed in range(self.seeds)]
 
     def rows(self, runs: Sequence) -> list[RigidRow]:
