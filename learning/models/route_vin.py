@@ -41,7 +41,7 @@ from torch import nn
 
 from learning.models.cell_head import cell_head_field, padded_free_cells
 from learning.models.field import FieldEncoder, batch_of
-from planners.maps.gridsearch import MOVES, move_cost_field, padded_block_steps
+from planners.maps.gridsearch import MOVES, move_cost_field, padded_block_steps, work_array
 
 #: The moves' lengths in blocks (``MOVES``: the 8 moves of the block grid, the grid search's own order).
 LENGTHS = tuple(math.hypot(dr, dc) for dr, dc in MOVES)
@@ -187,8 +187,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         self.register_buffer("lengths", torch.tensor(LENGTHS, dtype=torch.float32).view(1, -1, 1, 1))
         self._maps: OrderedDict[tuple, MapParts] = OrderedDict()
         self._packed: list[tuple[torch.Tensor, torch.Tensor]] = []  # each 3x3 layer's weights for oneDNN, once made
-        self._work: dict[str, torch.Tensor] = {}  # a pass's working buffers, by name (``buffer``)
-        self._search: dict[str, np.ndarray] = {}  # the compiled search's working arrays (``move_cost_field``'s work)
+        self._work: dict[str, np.ndarray] = {}  # a pass's buffers and the search's working arrays, by name
 
     def clear_map_cache(self) -> None:
         """Forget every map's kept parts (``map_cache_bytes``); the prepacked weights and a pass's buffers stay
@@ -198,17 +197,12 @@ class RouteVIN(nn.Module, FieldEncoder):
     def release_buffers(self) -> None:
         """Free the working buffers a pass keeps for the next one of the same shape (``keep_buffers``)."""
         self._work.clear()
-        self._search.clear()
 
     def buffer(self, name: str, shape: tuple[int, ...]) -> torch.Tensor:
         """The kept float32 CPU buffer ``name`` of ``shape`` (``keep_buffers``): the one the last pass used where its
-        shape is the same, else a new one that replaces it. Its contents are whatever the last pass left."""
-        kept = self._work.pop(name, None)
-        if kept is None or tuple(kept.shape) != tuple(shape):
-            del kept  # freed before the new one is made: one buffer a name at a time
-            kept = torch.empty(shape, dtype=torch.float32)
-        self._work[name] = kept
-        return kept
+        shape is the same, else a new one that replaces it (``work_array``). Its contents are whatever the last pass
+        left."""
+        return torch.from_numpy(work_array(self._work, name, tuple(shape), np.float32))
 
     def weights_changed(self) -> None:
         """Forget what inference keeps from the weights: every map's parts and the prepacked local network.
@@ -230,11 +224,11 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def __getstate__(self) -> dict:
         # a copy sent elsewhere starts with no kept maps or buffers, and packs its own weights
-        return {**self.__dict__, "_maps": OrderedDict(), "_packed": [], "_work": {}, "_search": {}}
+        return {**self.__dict__, "_maps": OrderedDict(), "_packed": [], "_work": {}}
 
     def __setstate__(self, state: dict) -> None:
         # a copy pickled before the prepacked weights or the buffers existed
-        super().__setstate__({"_packed": [], "_work": {}, "_search": {}, **state})
+        super().__setstate__({"_packed": [], "_work": {}, **state})
 
     def inference_key(self) -> tuple:
         return (self.wall_cost, self.step_walls, self.fixed_point)
@@ -471,7 +465,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         out = []
         for i in range(len(c)):
             v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
-                                most=most, work=self._search if reuse else None)
+                                most=most, work=self._work if reuse else None)
             out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED,
                                        None if field is None else field[i]))
         return torch.from_numpy(batch_of(out) if field is None else field)

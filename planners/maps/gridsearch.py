@@ -325,8 +325,10 @@ def _settle_buckets(inc, goal, walls, unreached, dr, dc, width, slots, dist, sta
     return dist.reshape(h + 2, Wp)[1:-1, 1:-1].copy()
 
 
-def _work_array(work: dict | None, name: str, shape: tuple[int, ...], dtype) -> np.ndarray:
-    """The working array ``name`` kept in ``work`` where it has this shape and dtype, else a new one kept there."""
+def work_array(work: dict | None, name: str, shape: tuple[int, ...], dtype) -> np.ndarray:
+    """The working array ``name`` kept in the dict ``work`` where it has this shape and dtype, else a new one kept
+    there (the old one freed first); a new one each call where ``work`` is None. Its contents are whatever the last
+    user left. The search's ``work`` (``move_cost_field``) and the route encoder's buffers keep theirs so."""
     kept = None if work is None else work.pop(name, None)
     if kept is None or kept.shape != shape or kept.dtype != dtype:
         del kept  # freed before the new one is made
@@ -339,13 +341,13 @@ def _work_array(work: dict | None, name: str, shape: tuple[int, ...], dtype) -> 
 def _settle_moves(costs, goal, walls, unreached, open_moves, most, work=None):
     """``move_cost_field``'s search: by buckets where the prices allow it exactly, else by the heap."""
     A, h, w = costs.shape
-    inc = _work_array(work, "incoming", (h * w, A), costs.dtype)
+    inc = work_array(work, "incoming", (h * w, A), costs.dtype)
     low, high = _incoming(costs, unreached, _DR, _DC, open_moves, most, inc)
     width = low / 2
     # a sum below ``unreached`` rounds by at most unreached * eps / 2: the buckets need it well below ``width``
     if np.isfinite(low) and width > float(unreached) * float(np.finfo(costs.dtype).eps) and high / width < 1 << 22:
         n = (h + 2) * (w + 2)
-        scratch = [_work_array(work, name, (n,), dtype) for name, dtype in
+        scratch = [work_array(work, name, (n,), dtype) for name, dtype in
                    (("dist", costs.dtype), ("state", np.int8), ("next", np.int32), ("previous", np.int32),
                     ("where", np.int32))]
         return _settle_buckets(inc, goal, walls, unreached, _DR, _DC, float(width), int(high / width) + 3, *scratch)
