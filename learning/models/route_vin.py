@@ -156,14 +156,15 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: layers: there oneDNN's layout costs more than it saves (a 32-cell map's first query 0.63 against 0.53 ms, equal
     #: at 64 cells), and each new map shape's first pass costs 0.6 ms more to set up against 0.1 to 0.3 dense.
     prepacked_blocks: int = 64 * 64
-    #: Whether a compiled pass over a map whose parts inference does not keep (one above ``strip_blocks``, or any map
-    #: where ``map_cache_bytes`` is 0) writes its move costs, the head's first layer and the cell field into buffers
-    #: the encoder keeps for the next such pass of the same shape (``buffer``), and the compiled search its working
-    #: arrays likewise (``move_cost_field``'s ``work``), rather than into new memory: the same values, without the
-    #: operating system's cost of mapping the memory afresh each pass (at 4096 x 4096 cells 0.68 GB, and about 0.4 s
-    #: of a 2.4 to 2.5 s pass on the 2-core machine). They stay until ``release_buffers`` (or ``weights_changed``):
-    #: at most what one pass holds at its peak anyway (``pass_bytes``). False: new memory each pass, nothing kept. Like
-    #: the kept maps they belong to the encoder: threads that plan at once take an encoder each (or a lock).
+    #: Whether a compiled pass over a map whose parts inference does not keep (one above ``strip_blocks``, or any
+    #: map where ``map_cache_bytes`` is 0) writes its move costs, the head's first layer and the cell field into
+    #: buffers the encoder keeps for the next such pass of the same shape (``buffer``), and the compiled search its
+    #: working arrays likewise (``move_cost_field``'s ``work``), rather than into new memory: the same values,
+    #: without the operating system's cost of mapping the memory afresh each pass (at 4096 x 4096 cells 0.68 GB, and
+    #: 0.1 to 0.4 s of a 2.1 to 2.5 s pass on the 2-core machine, as its memory's state goes). They stay until
+    #: ``release_buffers`` (or ``weights_changed``): at most what one pass holds at its peak anyway
+    #: (``pass_bytes``). False: new memory each pass, nothing kept. Like the kept maps they belong to the encoder:
+    #: threads that plan at once take an encoder each (or a lock).
     keep_buffers: bool = True
 
     def __init__(self, block: int = 4, channels: int = 48, depth: int = 4, step: int | None = None) -> None:
