@@ -344,3 +344,24 @@ def test_ppo_on_the_rigid_scenes_id_is_reproducible_and_plans_as_a_users_sampler
     sampler = user_sampler(f"{tmp_path / 'a.zip'}@{RIGID_ID}")
     result = make_planner("RRT", rigid_scene("slot", 200_000), sampler=sampler, seed=0, extension_step=1.0).solve(50)
     assert result.iterations == 50 or result.solved
+
+
+def test_the_family_ppo_is_sb3s_defaults_on_the_training_maps(tmp_path):
+    """``train_default_ppo`` (``sb3_defaults.py --family``): exactly ``PPO("MultiInputPolicy", env, seed=seed)`` on the
+    family id with its map seeds limited to the training range, saved where asked."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from learning.sb3_defaults import family_id, train_default_ppo
+    from planners.maps.generators import TRAIN_SEEDS
+
+    got = train_default_ppo("forest", 64, 3, tmp_path / "m.zip")
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        env = gym.make(family_id("forest"), source_kwargs={"seeds": np.arange(*TRAIN_SEEDS)})
+        want = PPO("MultiInputPolicy", env, seed=3).learn(64)
+    finally:
+        torch.set_num_threads(threads)
+    sg, sw = got.policy.state_dict(), want.policy.state_dict()
+    assert all(torch.equal(sg[k], sw[k]) for k in sw) and (tmp_path / "m.zip").is_file()
