@@ -259,16 +259,7 @@ def _check_rigid(args) -> None:
     if args.rigid_max_iterations is not None:
         check_int_flags(args, ("rigid_max_iterations",))
     samplers = args.rigid_samplers or list(RIGID_SAMPLERS)
-    users = {}
-    for arg in args.rigid_sampler:  # each built once here, so a bad file or spec is refused before any run
-        try:
-            name, spec = registry.parse_user_sampler(arg, tuple(samplers))
-            E.user_sampler(spec)
-        except (ValueError, OSError) as exc:
-            raise InputError(f"--rigid-sampler {arg!r}: {exc}" if arg not in str(exc) else str(exc)) from exc
-        except Exception as exc:  # noqa: BLE001 - e.g. an env kwarg the env does not take (TypeError)
-            raise InputError(f"--rigid-sampler {arg!r}: {type(exc).__name__}: {exc}") from exc
-        users[name] = spec
+    users = registry.checked_user_samplers(args.rigid_sampler, "--rigid-sampler", tuple(samplers))
     try:
         scenes = RigidSceneSet(counts={args.rigid: args.rigid_scenes})
         args.parts = [RigidPart(scenes, args.rigid, planners=args.rigid_planners, samplers=samplers,
@@ -295,18 +286,13 @@ def _check_models(args) -> None:
 
         if not torch.cuda.is_available():
             _fail("--device cuda: torch sees no CUDA device here (use auto or cpu)")
-    args.user_samplers = {}
-    for arg in args.sampler:  # each built once here, so a bad file or spec is refused before any run
-        try:
-            name, spec = E.parse_user_sampler(arg)
-            E.user_sampler(spec)
-        except (ValueError, OSError) as exc:
-            _fail(f"--sampler {arg!r}: {exc}" if arg not in str(exc) else str(exc))
-        except Exception as exc:  # noqa: BLE001 - e.g. an env kwarg the env does not take (TypeError)
-            _fail(f"--sampler {arg!r}: {type(exc).__name__}: {exc}")
-        if name in args.user_samplers or name in args.extra_routes:
+    try:  # each built once here, so a bad file or spec is refused before any run
+        args.user_samplers = registry.checked_user_samplers(args.sampler, "--sampler", E.BUILTIN_SAMPLERS)
+    except InputError as exc:
+        _fail(str(exc))
+    for name in args.user_samplers:
+        if name in args.extra_routes:
             _fail(f"--sampler name {name!r} is given twice (or names a --route encoder)")
-        args.user_samplers[name] = spec
     args.map_set_queries, args.map_set_obj = [], None
     if args.map_set is not None:
         try:

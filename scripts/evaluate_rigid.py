@@ -37,7 +37,7 @@ from planners.worlds.rigid_scenes import TEST_ONLY_FAMILIES, TRAINING_FAMILIES
 
 def main(argv=None) -> int:
     from learning.evaluation.rigid import PLANNERS, SAMPLERS, evaluate_rigid, format_table, summarize
-    from learning.samplers.registry import parse_user_sampler, user_sampler
+    from learning.samplers.registry import checked_user_samplers
     from planners.worlds.rigid_scenes import RigidSceneSet
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -79,16 +79,10 @@ def main(argv=None) -> int:
     if args.out.exists() and not args.out.is_dir():
         return fail(f"--out {args.out} exists and is not a folder")
     samplers = args.samplers or list(SAMPLERS)
-    users = {}
-    for arg in args.sampler:  # each built once here, so a bad file or spec is refused before any run
-        try:
-            name, spec = parse_user_sampler(arg, tuple(samplers))
-            user_sampler(spec)
-        except (ValueError, OSError) as exc:
-            return fail(f"--sampler {arg!r}: {exc}" if arg not in str(exc) else str(exc))
-        except Exception as exc:  # noqa: BLE001 - e.g. an env kwarg the env does not take (TypeError)
-            return fail(f"--sampler {arg!r}: {type(exc).__name__}: {exc}")
-        users[name] = spec
+    try:  # each built once here, so a bad file or spec is refused before any run
+        users = checked_user_samplers(args.sampler, "--sampler", tuple(samplers))
+    except InputError as exc:
+        return fail(str(exc))
     if args.mesh and args.part != "test":
         return fail("--mesh scenes are test-only: use --part test")
     if not args.mesh and (args.omplapp or args.problems):

@@ -16,7 +16,7 @@ import importlib
 import inspect
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -358,6 +358,25 @@ def parse_user_sampler(arg: str, taken: tuple[str, ...] = ()) -> tuple[str, str]
     if name in taken or name in REGISTRY or name.startswith("goal_bias=") or "," in name:
         raise InputError(f"--sampler {arg!r}: the name {name!r} is taken or has a comma; choose another")
     return name, spec
+
+
+def checked_user_samplers(args: Sequence[str], flag: str = "--sampler", taken: tuple[str, ...] = ()) -> dict[str, str]:
+    """A command line's ``NAME=SPEC`` arguments of ``flag`` as name -> spec, each parsed (:func:`parse_user_sampler`,
+    ``taken`` the caller's own labels) and built once (:func:`user_sampler`), so that a bad file, spec or name is
+    refused before any run: an ``InputError`` naming the flag and the argument (a name given twice too)."""
+    out: dict[str, str] = {}
+    for arg in args:
+        try:
+            name, spec = parse_user_sampler(arg, taken)
+            user_sampler(spec)
+        except (ValueError, OSError) as exc:
+            raise InputError(f"{flag} {arg!r}: {exc}" if arg not in str(exc) else str(exc)) from exc
+        except Exception as exc:  # noqa: BLE001 - e.g. an env kwarg the env does not take (TypeError)
+            raise InputError(f"{flag} {arg!r}: {type(exc).__name__}: {exc}") from exc
+        if name in out:
+            raise InputError(f"{flag} name {name!r} is given twice")
+        out[name] = spec
+    return out
 
 
 def user_sampler(spec: str) -> Sampler:

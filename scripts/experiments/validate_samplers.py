@@ -23,6 +23,7 @@ import numpy as np
 sys.path.append(os.getcwd())  # --sampler NAME=module:callable finds modules in the working directory
 
 from learning import evaluation as E
+from learning.samplers.registry import checked_user_samplers
 from planners.base.fileio import InputError, check_int_flags
 from planners.maps.generators import FAMILIES, MIN_SIZE, VALIDATION_SEED0
 from planners.tools.benchmark import markdown_table
@@ -40,17 +41,11 @@ def main(argv=None) -> list[dict]:
     add_backend_arguments(ap, processes=2, backend_help="where the runs execute", processes_help="workers for them")
     args = ap.parse_args(argv)
     check_backend_arguments(ap, args)
-    samplers: dict[str, str] = {}
     try:
         check_int_flags(args, ("maps", "seeds", "size", "max_iterations"))
         if args.size < MIN_SIZE:
             raise InputError(f"--size must be at least {MIN_SIZE} (the smallest generated map), got {args.size}")
-        for arg in args.sampler:  # each built once here: a bad spec is refused before any run
-            name, spec = E.parse_user_sampler(arg)
-            if name in samplers:
-                raise InputError(f"--sampler name {name!r} is given twice")
-            E.user_sampler(spec)
-            samplers[name] = spec
+        samplers = checked_user_samplers(args.sampler, "--sampler", E.BUILTIN_SAMPLERS)
     except (ValueError, FileNotFoundError) as exc:
         ap.error(str(exc))
     protocol = E.Protocol(max_iterations=args.max_iterations)
