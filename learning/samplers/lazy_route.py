@@ -205,9 +205,7 @@ class LazyRouteSampler(RouteSampler):
         grid = self.problem.world
         self.forward_passes, self.reused_seconds, self.switched = 0, 0.0, False
         self._state = self.straight.bind(self.problem).draw_state
-        self.switch_at = min(max(switch_iteration(self.after, grid, self.step_size),
-                                 switch_iteration(self.floor, None, self.step_size)),
-                             switch_iteration(self.cap, None, self.step_size))
+        self.switch_at = switch_iteration(self.after, grid, self.step_size, self.floor, self.cap)
 
     def switch(self) -> None:
         """Compute the encoder's field for the bound query and follow it from here (once; a no-op after)."""
@@ -245,13 +243,14 @@ class LazyRouteSampler(RouteSampler):
                 f"{super().__repr__()[len('RouteSampler('):]}")
 
 
-def switch_iteration(after: float, grid: OccupancyGrid | None, step: float) -> int:
-    """``ceil(after * A)`` on a map of ``A`` step-sized squares (``after`` inf: never); without ``grid``,
-    ``ceil(after)``."""
-    if math.isinf(after):
-        return np.iinfo(np.int64).max
-    squares = 1.0 if grid is None else grid.height * grid.width * (grid.resolution / step) ** 2
-    return math.ceil(after * squares)
+def switch_iteration(after: float, grid: OccupancyGrid, step: float, floor: float = 0.0,
+                     cap: float = math.inf) -> int:
+    """``ceil(after * A)`` on a map of ``A`` step-sized squares, at least ``ceil(floor)`` and at most ``ceil(cap)``
+    (the cap wins); an infinite switch is never (the largest int64)."""
+    def up(v: float) -> int:
+        return np.iinfo(np.int64).max if math.isinf(v) else math.ceil(v)
+
+    return min(max(up(after * grid.height * grid.width * (grid.resolution / step) ** 2), up(floor)), up(cap))
 
 
 @nb.njit(cache=True)
@@ -284,8 +283,7 @@ class LazyRule(SamplerBase):
 
     def _setup(self) -> None:
         self.route.check_query(self.problem)  # refused at bind, not at the switch
-        self.switch_at = max(switch_iteration(self.after, self.problem.world, self.route.step_size),
-                             switch_iteration(self.floor, None, self.route.step_size))
+        self.switch_at = switch_iteration(self.after, self.problem.world, self.route.step_size, self.floor)
         self.rule = None
 
     @property

@@ -59,30 +59,16 @@ def _route_lazy(after: float | None = None, cap: float | None = None, stall: flo
                 device: str = "auto", *,
                 models: ModelCache | None = None) -> Sampler:
     from learning.models.route_net import load_route_net
-    from learning.samplers.lazy_route import (
-        SHIPPED_AFTER,
-        SHIPPED_CAP,
-        SHIPPED_CONNECT_AFTER,
-        SHIPPED_CONNECT_FLOOR,
-        SHIPPED_FLOOR,
-        SHIPPED_ROADMAP_AFTER,
-        SHIPPED_ROADMAP_FLOOR,
-        SHIPPED_STALL,
-        LazyRouteSampler,
-    )
+    from learning.samplers.lazy_route import LazyRouteSampler
     from learning.samplers.route import SHIPPED
 
     path = str(SHIPPED) if path is None else path
     net = load_route_net(path) if models is None else models.route_net(path)
-    return LazyRouteSampler(net, after=SHIPPED_AFTER if after is None else after,
-                            cap=SHIPPED_CAP if cap is None else cap,
-                            stall=SHIPPED_STALL if stall is None else stall,
-                            connect_after=SHIPPED_CONNECT_AFTER if connect_after is None else connect_after,
-                            roadmap_after=SHIPPED_ROADMAP_AFTER if roadmap_after is None else roadmap_after,
-                            floor=SHIPPED_FLOOR if floor is None else floor,
-                            connect_floor=SHIPPED_CONNECT_FLOOR if connect_floor is None else connect_floor,
-                            roadmap_floor=SHIPPED_ROADMAP_FLOOR if roadmap_floor is None else roadmap_floor,
-                            step_size=step_size, device=device)
+    switches = {"after": after, "cap": cap, "stall": stall, "connect_after": connect_after,
+                "roadmap_after": roadmap_after, "floor": floor, "connect_floor": connect_floor,
+                "roadmap_floor": roadmap_floor}  # None: LazyRouteSampler's own default, the shipped switch
+    return LazyRouteSampler(net, step_size=step_size, device=device,
+                            **{k: v for k, v in switches.items() if v is not None})
 
 
 def _route_ablation(step_size: float = STEP) -> Sampler:
