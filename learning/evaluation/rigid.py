@@ -106,6 +106,23 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
                     sampler_checks=sampler_checks, candidates=int(result.candidates), time=float(elapsed))
 
 
+def check_names(planners: Sequence[str], samplers: Sequence[str], users: dict[str, str]) -> None:
+    """Refuse, naming it, a planner not in ``PLANNERS``, a sampler the registry has not, or a user's sampler
+    (``users``: label -> spec) labelled as a registered one."""
+    from learning.samplers.registry import sampler_names
+
+    for name in planners:
+        if name not in PLANNERS:
+            raise InputError(f"unknown rigid-body planner {name!r}; choose from {', '.join(PLANNERS)}")
+    known = set(sampler_names())
+    for name in samplers:
+        if name not in known:
+            raise InputError(f"unknown sampler {name!r}; choose from {', '.join(sorted(known))}")
+    for name in users:
+        if name in known or name in samplers:
+            raise InputError(f"user sampler {name!r}: the name is a registered sampler's; choose another")
+
+
 def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planners: Sequence[str] = PLANNERS,
                    samplers: Sequence[str] = SAMPLERS, seeds: Iterable[int] = (0,),
                    sampler_params: dict[str, dict] | None = None, max_iterations: int | None = None,
@@ -128,19 +145,8 @@ def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planne
     Returns:
         The rows, scene by scene, then planner, sampler and seed.
     """
-    from learning.samplers.registry import sampler_names
-
-    for name in planners:
-        if name not in PLANNERS:
-            raise InputError(f"unknown rigid-body planner {name!r}; choose from {', '.join(PLANNERS)}")
-    known = set(sampler_names())
-    for name in samplers:
-        if name not in known:
-            raise InputError(f"unknown sampler {name!r}; choose from {', '.join(sorted(known))}")
     users = dict(user_samplers or {})
-    for name in users:
-        if name in known or name in samplers:
-            raise InputError(f"user sampler {name!r}: the name is a registered sampler's; choose another")
+    check_names(planners, samplers, users)
     seeds = list(seeds)
     params = sampler_params or {}
     rows = []
@@ -280,18 +286,7 @@ class RigidPart:
     users: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        from learning.samplers.registry import sampler_names
-
-        for planner in self.planners:
-            if planner not in PLANNERS:
-                raise InputError(f"unknown rigid-body planner {planner!r}; choose from {', '.join(PLANNERS)}")
-        known = set(sampler_names())
-        for sampler in self.samplers:
-            if sampler not in known:
-                raise InputError(f"unknown sampler {sampler!r}; choose from {', '.join(sorted(known))}")
-        for name in self.users:
-            if name in known or name in self.samplers:
-                raise InputError(f"user sampler {name!r}: the name is a registered sampler's; choose another")
+        check_names(self.planners, self.samplers, self.users)
         self.scenes.queries(self.part)  # refuses a part the set has not, by name
         self.planners, self.samplers = list(self.planners), list(self.samplers)
         self.name = self.name or f"6-DoF scenes ({self.part})"
