@@ -125,7 +125,10 @@ def test_a_floor_holds_each_switch_back_on_a_small_map(maps):
                                      ("RRT", {"after": 0.125, "floor": 100, "cap": 50}, 50),
                                      ("RRTConnect", {"connect_after": 0.125, "connect_floor": 100}, 100),
                                      ("PRM", {"roadmap_after": 0.125, "roadmap_floor": 100}, 100),
-                                     ("RRTConnect", {"connect_after": 0.125}, 32)):
+                                     ("RRTConnect", {"connect_after": 0.125}, 32),
+                                     ("RRTConnect", {"connect_after": 0.125, "connect_floor": 100,
+                                                     "connect_cap": 40}, 40),
+                                     ("PRM", {"roadmap_after": 1.0, "roadmap_floor": 100, "roadmap_cap": 60}, 60)):
         sampler = _lazy(**kwargs)
         planner = make_planner(planner_name, p, sampler=sampler, seed=0, extension_step=4.0)
         planner.solve(max_iterations=1)
@@ -136,9 +139,13 @@ def test_a_floor_holds_each_switch_back_on_a_small_map(maps):
         key, bound = _connect(p, never, seed)
         assert key == _connect(p, make_sampler("uniform"), seed)[0] and not bound.switched
     assert f"floor={SHIPPED_FLOOR:g}" in repr(make_sampler("route_lazy"))
-    for name in ("floor", "connect_floor", "roadmap_floor"):
+    for name in ("floor", "connect_floor", "roadmap_floor", "connect_cap", "roadmap_cap"):
         with pytest.raises(InputError, match=f"{name} = "):
             make_sampler("route_lazy", **{name: -1})
+    # RRT-Connect's cap at 0 switches at once, as its switch at 0 does, run for run
+    for seed in (0, 1):
+        assert _connect(p, _lazy(connect_after=1.0, connect_cap=0), seed)[0] == \
+            _connect(p, _lazy(connect_after=0), seed)[0]
 
 
 def test_a_run_solved_on_the_switchs_iteration_computes_no_field(maps):
@@ -276,6 +283,14 @@ def test_the_switchs_rule_takes_the_fastest_or_a_smaller_switch_within_three_per
     assert script.choose({(0.7, inf, 1000.0): 3.0, (0.7, inf, inf): 3.05}) == (0.7, inf, inf)  # the larger cap
     assert script.choose({(1.4, inf, inf, 500.0): 3.0, (1.4, inf, inf, 0.0): 3.05}) == (1.4, inf, inf, 0.0)
     assert script.choose({(1.4, inf, inf, 500.0): 3.0, (1.4, inf, inf, 0.0): 3.2}) == (1.4, inf, inf, 500.0)
+    # fewer cells whose median is not reached wins first, whatever the times
+    assert script.choose({(1.4, inf, inf, 0.0): (1, 2.0), (1.4, inf, 1000.0, 0.0): (0, 3.0)}) == (1.4, inf, 1000.0, 0.0)
+    # an unsolved run never solves: a cell half unsolved is not reached; the mean is over the cells that every
+    # candidate with the fewest such cells reaches
+    ran = {"ms": 1.0, "solved": False}
+    runs = {"a": {"x": [{"ms": 5.0, "solved": True}] * 2, "y": [ran, {"ms": 4.0, "solved": True}]},
+            "b": {"x": [{"ms": 2.0, "solved": True}] * 2, "y": [{"ms": 8.0, "solved": True}] * 2}}
+    assert script.median_ms(runs["a"]["y"]) == inf and script.objective(runs) == {"a": (1, inf), "b": (0, 4.0)}
     assert script.main(["--maps", "1", "0", "0", "--seeds", "1", "--after", "inf", "--stall", "20", "inf", "--out",
                         str(tmp_path / "rule")]) == 0
     out = capsys.readouterr().out

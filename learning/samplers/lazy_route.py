@@ -5,16 +5,17 @@ goal in about as many iterations as the encoder, and the encoder's pass over a m
 hundreds of its iterations. ``LazyRouteSampler`` starts RRT on the straight-line field and computes the encoder's
 field only if the run has not solved within a budget of iterations that grows with the map's area, as the pass's
 cost does (rent, then buy: ``after`` iterations per step-sized square of the map; on the CPU a pass costs about as
-much as 0.7 of them), at least ``floor`` and at most ``cap`` iterations whatever the area (1,000 each, so the switch
-comes at 1,000 on every map: each straight-line iteration grows dearer with the tree, and a pass has a fixed cost
-besides the one that grows with the area); from then on it is the route sampler on the encoder's field, following
-the tree grown so far. So an easy query costs what the ablation costs, and a winding one the ablation's budget, the
-encoder's pass and the encoder's iterations from the tree already there. A second switch, off by default, computes
-the field once the straight line's tree has come no closer to the goal for ``stall`` iterations: where the straight
-line is lost on a large map, it stops paying rent long before the budget runs out. Each was chosen on the validation
-maps by time to solution (``scripts/experiments/lazy_route_rule.py``: the geometric mean of the median times over
-validation maps of 128 to 512 cells, 32 to 512 for the floors); ``after=0`` with ``floor=0`` (or ``cap=0``) is the
-route sampler and ``after=inf`` with ``cap=inf`` (and no stall) its ablation, run for run.
+much as 0.7 of them), at least ``floor`` and at most ``cap`` iterations whatever the area (250 and 1,000: a pass has
+a fixed cost besides the one that grows with the area, and each straight-line iteration grows dearer with the tree,
+so the switch comes at 1,000 on every map of more than 1,429 step-sized squares, 151 x 151 cells at step 4); from
+then on it is the route sampler on the encoder's field, following the tree grown so far. So an easy query costs what
+the ablation costs, and a winding one the ablation's budget, the encoder's pass and the encoder's iterations from
+the tree already there. A second switch, off by default, computes the field once the straight line's tree has come
+no closer to the goal for ``stall`` iterations: where the straight line is lost on a large map, it stops paying rent
+long before the budget runs out. Each was chosen on the validation maps by time to solution
+(``scripts/experiments/lazy_route_rule.py``: the geometric mean of the median times over validation maps of 128 to
+512 cells, 32 to 512 for the floors, 32 to 1024 for the other planners' caps); ``after=0`` with ``floor=0`` (or
+``cap=0``) is the route sampler and ``after=inf`` with ``cap=inf`` (and no stall) its ablation, run for run.
 
 Both phases draw inside RRT's compiled loop: the loop runs up to the switch on the straight-line field, the encoder
 runs, and the loop goes on on the encoder's field, so a fused run is the run drawn through ``draw``, bit for bit.
@@ -88,17 +89,26 @@ SHIPPED_ROADMAP_AFTER = 0.35
 #: The fewest iterations (RRT, RRT-Connect) or samples (the roadmaps) before each planner's switch, whatever the
 #: map's area (``floor``, ``connect_floor``, ``roadmap_floor``; 0: none): a pass has a fixed cost besides the one that
 #: grows with the area, which on a small map the area's budget does not cover. Chosen per planner by the same rule on
-#: validation maps of 32 to 512 cells (``lazy_route_rule.py --floor --sizes 32 64 128 256 512``): the geometric mean
-#: of the median times 1.058 -> 0.708 ms for RRT (floor 1,000: with the cap, its switch comes at 1,000 iterations on
-#: every map), 0.920 -> 0.495 for RRT-Connect (2,000; 4,000 within 3%), 0.836 -> 0.498 for PRM (1,000; 2,000 within
-#: 3%). The larger the floor, the fewer runs reach the field: on these maps the classical phase alone is nearly as
-#: fast, and the field is a late safety net.
-SHIPPED_FLOOR = 1000.0
+#: validation maps of 32 to 512 cells (``lazy_route_rule.py --floor --sizes 32 64 128 256 512 --maps 8 8 8 4 2``): the
+#: geometric mean of the median times 0.955 -> 0.831 ms for RRT (floor 250; 500 and 1,000 within 3%), 0.700 -> 0.529
+#: for RRT-Connect (2,000; 4,000 lowest at 0.519), 0.654 -> 0.548 for PRM (250; 2,000 lowest at 0.533). The larger
+#: the floor, the fewer runs reach the field: on these maps the classical phase alone is nearly as fast, and the field
+#: is a late safety net.
+SHIPPED_FLOOR = 250.0
 SHIPPED_CONNECT_FLOOR = 2000.0
-SHIPPED_ROADMAP_FLOOR = 1000.0
+SHIPPED_ROADMAP_FLOOR = 250.0
+#: The most iterations (RRT-Connect) or samples (the roadmaps) before each planner's switch, whatever the map's area
+#: (``connect_cap``, ``roadmap_cap``; inf: none), as ``cap`` is RRT's. Chosen by the same rule on validation maps of
+#: 32 to 1024 cells (``lazy_route_rule.py --cap inf 1000 2000 4000 8000 --sizes 32 64 128 256 512 1024 --maps 8 8 8
+#: 4 2 1``): none. RRT-Connect's geometric means run 0.714 ms without a cap against 0.735 to 1.587 with one (at 1024
+#: cells uniform RRT-Connect solves every validation query in a few milliseconds, where its two passes cost about
+#: 140), PRM's 0.601 to 0.618 for every candidate. So on a map of 512 cells or more RRT-Connect's switch lies past
+#: 20,000 iterations: there it is uniform RRT-Connect.
+SHIPPED_CONNECT_CAP = math.inf
+SHIPPED_ROADMAP_CAP = math.inf
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
 LAZY_ATTRIBUTES = ("after", "cap", "floor", "stall", "connect_after", "roadmap_after", "connect_floor",
-                   "roadmap_floor", "straight", "switched", "switch_at")
+                   "roadmap_floor", "connect_cap", "roadmap_cap", "straight", "switched", "switch_at")
 
 
 @nb.njit(cache=True)
@@ -137,8 +147,9 @@ class LazyRouteSampler(RouteSampler):
         after: The switch in iterations per step-sized square of the map (>= 0; ``inf`` with ``cap`` ``inf``: never).
         cap: The switch at the latest at this iteration, whatever the map's area (>= 0; ``inf``: no cap).
         floor: The switch at the earliest at this iteration, whatever the map's area (>= 0; 0: none).
-        connect_after, roadmap_after, connect_floor, roadmap_floor: RRT-Connect's and the roadmaps' switches
-            (``LazyConnectSampler``, ``LazyCorridorSampler``), as ``after`` and ``floor`` are RRT's.
+        connect_after, roadmap_after, connect_floor, roadmap_floor, connect_cap, roadmap_cap: RRT-Connect's and
+            the roadmaps' switches (``LazyConnectSampler``, ``LazyCorridorSampler``), as ``after``, ``floor`` and
+            ``cap`` are RRT's.
         kwargs: ``RouteSampler``'s (its settings once the field is computed; default the shipped ones). ``batch``
             must be 1, the validated setting, so that the switch falls on one iteration whatever the loop.
     """
@@ -146,14 +157,16 @@ class LazyRouteSampler(RouteSampler):
     def __init__(self, net, *, after: float = SHIPPED_AFTER, cap: float = SHIPPED_CAP, stall: float = SHIPPED_STALL,
                  connect_after: float = SHIPPED_CONNECT_AFTER, roadmap_after: float = SHIPPED_ROADMAP_AFTER,
                  floor: float = SHIPPED_FLOOR, connect_floor: float = SHIPPED_CONNECT_FLOOR,
-                 roadmap_floor: float = SHIPPED_ROADMAP_FLOOR, **kwargs) -> None:
+                 roadmap_floor: float = SHIPPED_ROADMAP_FLOOR, connect_cap: float = SHIPPED_CONNECT_CAP,
+                 roadmap_cap: float = SHIPPED_ROADMAP_CAP, **kwargs) -> None:
         if net is None:
             raise InputError("LazyRouteSampler needs an encoder (its straight-line phase is the ablation; for the "
                              "ablation alone use RouteSampler(None) or make_sampler('route_ablation'))")
         per_square = "iterations per step-sized square of the map, >= 0"
         for name, value, low, expected in (
                 ("after", after, 0, f"{per_square} (inf, with cap=inf: never compute the field)"),
-                ("cap", cap, 0, "the most iterations before the switch, >= 0 (inf: no cap)"),
+                *((n, v, 0, "the most iterations before the switch, >= 0 (inf: no cap)")
+                  for n, v in (("cap", cap), ("connect_cap", connect_cap), ("roadmap_cap", roadmap_cap))),
                 *((n, v, 0, "the fewest iterations before the switch, >= 0 (0: none)")
                   for n, v in (("floor", floor), ("connect_floor", connect_floor), ("roadmap_floor", roadmap_floor))),
                 *((n, v, 0, f"{per_square} (inf: never compute the field)")
@@ -170,6 +183,7 @@ class LazyRouteSampler(RouteSampler):
         self.after, self.cap, self.stall = float(after), float(cap), float(stall)
         self.connect_after, self.roadmap_after = float(connect_after), float(roadmap_after)
         self.floor, self.connect_floor, self.roadmap_floor = float(floor), float(connect_floor), float(roadmap_floor)
+        self.connect_cap, self.roadmap_cap = float(connect_cap), float(roadmap_cap)
         self.straight = RouteSampler(None, step_size=self.step_size, **ABLATION_SETTINGS)
         self.switched, self.switch_at = False, 0
 
@@ -195,9 +209,9 @@ class LazyRouteSampler(RouteSampler):
         if family == FAMILY_TREE:
             return self
         if family == FAMILY_BIDIRECTIONAL:
-            return LazyConnectSampler(self.eager(), self.connect_after, self.connect_floor)
+            return LazyConnectSampler(self.eager(), self.connect_after, self.connect_floor, self.connect_cap)
         if family == FAMILY_ROADMAP:
-            return LazyCorridorSampler(self.eager(), self.roadmap_after, self.roadmap_floor)
+            return LazyCorridorSampler(self.eager(), self.roadmap_after, self.roadmap_floor, self.roadmap_cap)
         return self.eager().for_planner(family)
 
     def _setup(self) -> None:
@@ -271,19 +285,19 @@ def uniform_connect_loop(budget, state_a, state_b, buffers, rng, loop):
 class LazyRule(SamplerBase):
     """What the lazy rules for other planners share: uniform sampling, then the route field's rule for the planner.
 
-    Until ``switch_at`` (``switch_iteration(after, ...)``, at least ``floor``) the planner's uniform sampling; from it
-    the route sampler's rule for the planner (``rule_type``), bound once.
+    Until ``switch_at`` (``switch_iteration(after, ...)``, at least ``floor``, at most ``cap``) the planner's uniform
+    sampling; from it the route sampler's rule for the planner (``rule_type``), bound once.
     """
 
     #: The route field's rule this one switches to.
     rule_type: type = SamplerBase
 
-    def __init__(self, route: RouteSampler, after: float, floor: float = 0.0) -> None:
-        self.route, self.after, self.floor = route, float(after), float(floor)
+    def __init__(self, route: RouteSampler, after: float, floor: float = 0.0, cap: float = math.inf) -> None:
+        self.route, self.after, self.floor, self.cap = route, float(after), float(floor), float(cap)
 
     def _setup(self) -> None:
         self.route.check_query(self.problem)  # refused at bind, not at the switch
-        self.switch_at = switch_iteration(self.after, self.problem.world, self.route.step_size, self.floor)
+        self.switch_at = switch_iteration(self.after, self.problem.world, self.route.step_size, self.floor, self.cap)
         self.rule = None
 
     @property
@@ -312,7 +326,7 @@ class LazyRule(SamplerBase):
         return self.switch().fuse(planner)
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.route!r}, after={self.after:g}, floor={self.floor:g})"
+        return f"{type(self).__name__}({self.route!r}, after={self.after:g}, floor={self.floor:g}, cap={self.cap:g})"
 
 
 class LazyConnectSampler(LazyRule):

@@ -9,17 +9,21 @@ Every combination of ``--after``, ``--cap``, ``--floor`` and ``--stall`` candida
 sampler, as a reference unless ``--no-reference``) plans the validation maps of each family at 128, 256 and 512
 cells (``--sizes``; ``--maps`` of each size; ``planner_maps("validation", ...)``) at planner seeds 0 upwards, RRT
 step 4, at most 20,000 iterations, one process and one thread, in turn on each (query, seed) after two untimed
-warm-up queries. ``--planner RRTConnect`` does the same for RRT-Connect's switch (``connect_after``, given as
-``--after``, and ``connect_floor``, as ``--floor``: both trees uniform until then, then the route field's two
-fields), and ``--planner PRM`` for the roadmaps' (``roadmap_after`` and ``roadmap_floor``: uniform samples, then the
-field's corridor). A run's time goes from the planner's construction (the sampler's bind and its own field: no
-cache) to the end of its solve; an unsolved run counts with the time it ran.
+warm-up queries, the candidates' order turning by one from one (query, seed) to the next and the reference last (a
+run just after an encoder's pass finds the caches cold: a fixed order costs the first candidate after the reference
+up to a third of its time on the larger maps). ``--planner RRTConnect`` does the same for RRT-Connect's switch
+(``connect_after``, given as ``--after``, ``connect_floor``, as ``--floor``, and ``connect_cap``, as ``--cap``: both
+trees uniform until then, then the route field's two fields), and ``--planner PRM`` for the roadmaps'
+(``roadmap_after``, ``roadmap_floor`` and ``roadmap_cap``: uniform samples, then the field's corridor). A run's time
+goes from the planner's construction (the sampler's bind and its own field: no cache) to the end of its solve; an
+unsolved run never solves, so a cell's median is not reached where half its runs or more are unsolved (as the clock
+comparison counts them).
 
-The rule: the lowest geometric mean over the (family, size) cells of each candidate's median time wins, and a
-candidate within 3% of it with a larger ``cap`` (nearer the area's budget alone), then a smaller ``floor``, then a
-smaller ``stall``, then a smaller ``after``, wins over it (the reference takes no part). Prints a table per
-candidate (geometric mean, pooled mean time, median iterations and success per cell) and the choice; ``--out`` also
-writes the runs as JSON.
+The rule: the fewest cells whose median is not reached wins; among those, the lowest geometric mean of the median
+times over the (family, size) cells where every such candidate reaches its median, and a candidate within 3% of it
+with a larger ``cap`` (nearer the area's budget alone), then a smaller ``floor``, then a smaller ``stall``, then a
+smaller ``after``, wins over it (the reference takes no part). Prints a table per candidate (geometric mean, pooled
+mean time, median iterations and success per cell) and the choice; ``--out`` also writes the runs as JSON.
 """
 
 from __future__ import annotations
@@ -34,7 +38,14 @@ import numpy as np
 
 from learning.evaluation.every_planner import planner_maps
 from learning.models.threads import planning_threads
-from learning.samplers.lazy_route import SHIPPED_CAP, SHIPPED_CONNECT_FLOOR, SHIPPED_FLOOR, SHIPPED_ROADMAP_FLOOR
+from learning.samplers.lazy_route import (
+    SHIPPED_CAP,
+    SHIPPED_CONNECT_CAP,
+    SHIPPED_CONNECT_FLOOR,
+    SHIPPED_FLOOR,
+    SHIPPED_ROADMAP_CAP,
+    SHIPPED_ROADMAP_FLOOR,
+)
 from learning.samplers.registry import make_sampler
 from planners import make_planner
 
@@ -57,13 +68,34 @@ def run(problem, sampler, seed: int, planner_name: str = "RRT") -> dict:
             "switched": bool(planner.sampler.switched)}
 
 
-def choose(table: dict[tuple[float, ...], float]) -> tuple[float, ...]:
-    """The rule: the lowest value wins; one within ``TIE`` of it with a larger cap, then a smaller floor, then a
-    smaller (stall, after), wins over it.
+def median_ms(runs: list[dict]) -> float:
+    """The median time to solution of a cell's runs, an unsolved run never solving (inf where half or more are)."""
+    return float(np.median([r["ms"] if r["solved"] else math.inf for r in runs]))
 
-    ``table`` maps (after, stall, cap, floor) to the geometric mean of the cells' median times (a key of three
-    has no floor).
+
+def objective(runs: dict[tuple, dict[tuple, list[dict]]], judged=None) -> dict[tuple, tuple[int, float]]:
+    """Each candidate's (cells whose median is not reached, geometric mean of the median times over the cells where
+    every ``judged`` candidate (default: all) with the fewest such cells reaches its median)."""
+    medians = {k: {c: median_ms(rs) for c, rs in by.items()} for k, by in runs.items()}
+    missed = {k: sum(math.isinf(m) for m in ms.values()) for k, ms in medians.items()}
+    judged = list(runs) if judged is None else list(judged)
+    fewest = min(missed[k] for k in judged)
+    cells = [c for c in next(iter(medians.values()))
+             if all(math.isfinite(medians[k][c]) for k in judged if missed[k] == fewest)]
+    return {k: (missed[k], math.exp(np.mean([math.log(ms[c]) for c in cells])) if cells else math.inf)
+            for k, ms in medians.items()}
+
+
+def choose(table: dict[tuple[float, ...], float | tuple[int, float]]) -> tuple[float, ...]:
+    """The rule: the fewest unreached cells, then the lowest value wins; one within ``TIE`` of it with a larger cap,
+    then a smaller floor, then a smaller (stall, after), wins over it.
+
+    ``table`` maps (after, stall, cap, floor) to the geometric mean of the cells' median times, or to (unreached
+    cells, that mean) as ``objective`` gives it (a key of three has no floor).
     """
+    table = {k: v if isinstance(v, tuple) else (0, v) for k, v in table.items()}
+    fewest = min(v[0] for v in table.values())
+    table = {k: v[1] for k, v in table.items() if v[0] == fewest}
     best = min(table.values())
     return min((k for k, v in table.items() if v <= (1 + TIE) * best),
                key=lambda k: (-k[2], k[3] if len(k) > 3 else 0.0, k[1], k[0]))
@@ -83,9 +115,9 @@ def main(argv=None) -> int:
     ap.add_argument("--floor", type=float, nargs="+", default=None,
                     help="candidates for the fewest iterations before the switch (RRT: floor, RRTConnect: "
                          "connect_floor, PRM: roadmap_floor; default: the shipped one)")
-    ap.add_argument("--cap", type=float, nargs="+", default=[SHIPPED_CAP],
-                    help=f"RRT: candidates for the most iterations before the switch (default: {SHIPPED_CAP:g}, "
-                         "the shipped; inf: none)")
+    ap.add_argument("--cap", type=float, nargs="+", default=None,
+                    help="candidates for the most iterations before the switch (RRT: cap, RRTConnect: connect_cap, "
+                         "PRM: roadmap_cap; default: the shipped one; inf: none)")
     ap.add_argument("--no-reference", action="store_true", help="leave out after = 0 (the route rule)")
     ap.add_argument("--out", type=Path, default=None, help="write runs.json here (a new or empty folder)")
     args = ap.parse_args(argv)
@@ -96,8 +128,12 @@ def main(argv=None) -> int:
     if args.floor is None:
         args.floor = [{"floor": SHIPPED_FLOOR, "connect_floor": SHIPPED_CONNECT_FLOOR,
                        "roadmap_floor": SHIPPED_ROADMAP_FLOOR}[floor_name]]
+    cap_name = {"RRT": "cap", "RRTConnect": "connect_cap", "PRM": "roadmap_cap"}[args.planner]
+    if args.cap is None:
+        args.cap = [{"cap": SHIPPED_CAP, "connect_cap": SHIPPED_CONNECT_CAP,
+                     "roadmap_cap": SHIPPED_ROADMAP_CAP}[cap_name]]
     if connect:
-        args.stall, args.cap = [math.inf], [math.inf]
+        args.stall = [math.inf]
     switch = "connect_after" if args.planner == "RRTConnect" else "roadmap_after"
     if min(args.maps) < 0 or args.seeds < 1 or not all(a >= 0 for a in args.after) or \
             not all(s >= 1 for s in args.stall) or not all(c >= 0 for c in args.cap + args.floor) or \
@@ -108,10 +144,12 @@ def main(argv=None) -> int:
         ap.error(f"--out {args.out}: exists and is not empty")
     cells = {(family, size): problems for size, n in zip(args.sizes, args.maps, strict=True) if n
              for family, problems in planner_maps("validation", n, size=size).items()}
-    pairs = [] if args.no_reference else [(0.0, math.inf, math.inf, 0.0)]
-    pairs += [(a, s, c, f) for a in args.after for s in args.stall for c in args.cap for f in args.floor
-              if (a, s, c, f) not in pairs]
-    samplers = {k: make_sampler("route_lazy", **{switch: k[0], floor_name: k[3]}) if connect else
+    judged = list(dict.fromkeys((a, s, c, f) for a in args.after for s in args.stall for c in args.cap
+                                for f in args.floor))
+    reference = None if args.no_reference else (0.0, math.inf, math.inf, 0.0)
+    reference = None if reference in judged else reference
+    pairs = judged + ([reference] if reference else [])
+    samplers = {k: make_sampler("route_lazy", **{switch: k[0], floor_name: k[3], cap_name: k[2]}) if connect else
                 make_sampler("route_lazy", after=k[0], stall=k[1], cap=k[2], floor=k[3]) for k in pairs}
     runs: dict[tuple, dict] = {k: {c: [] for c in cells} for k in pairs}
     with planning_threads(1):
@@ -119,29 +157,32 @@ def main(argv=None) -> int:
         for p in warm:
             for s in samplers.values():
                 run(p, s, 0, args.planner)
+        turn = 0
         for cell, problems in cells.items():
             for p in problems:
                 for seed in range(args.seeds):
-                    for a, s in samplers.items():
-                        runs[a][cell].append(run(p, s, seed, args.planner))
-    geo = {a: math.exp(np.mean([math.log(np.median([r["ms"] for r in rs])) for rs in by.values()]))
-           for a, by in runs.items()}
-    print("| after | stall | cap | floor | geometric mean of median ms | pooled mean ms | switched | "
-          + " | ".join(f"{f} {s}: median its / ms / solved" for f, s in cells) + " |")
-    print("|---|---|---|---|---|---|---|" + "---|" * len(cells))
+                    # a run just after an encoder pass finds the caches cold: the order turns by one candidate
+                    # from one (query, seed) to the next, so that each comes first as often, the reference last
+                    k, turn = turn % len(judged), turn + 1
+                    for a in judged[k:] + judged[:k] + pairs[len(judged):]:
+                        runs[a][cell].append(run(p, samplers[a], seed, args.planner))
+    score = objective(runs, judged=[k for k in runs if k != reference])
+    print("| after | stall | cap | floor | cells not reached | geometric mean of median ms | pooled mean ms | "
+          "switched | " + " | ".join(f"{f} {s}: median its / ms / solved" for f, s in cells) + " |")
+    print("|---|---|---|---|---|---|---|---|" + "---|" * len(cells))
     for a, by in runs.items():
         every = [r for rs in by.values() for r in rs]
-        row = [f"{np.median([r['iterations'] for r in rs]):.0f} / {np.median([r['ms'] for r in rs]):.2f} / "
+        row = [f"{np.median([r['iterations'] for r in rs]):.0f} / {median_ms(rs):.2f} / "
                f"{sum(r['solved'] for r in rs)}/{len(rs)}" for rs in by.values()]
-        print(f"| {a[0]:g} | {a[1]:g} | {a[2]:g} | {a[3]:g} | {geo[a]:.3f} | {np.mean([r['ms'] for r in every]):.2f} | "
+        print(f"| {a[0]:g} | {a[1]:g} | {a[2]:g} | {a[3]:g} | {score[a][0]} | {score[a][1]:.3f} | "
+              f"{np.mean([r['ms'] for r in every]):.2f} | "
               f"{sum(r['switched'] for r in every)}/{len(every)} | " + " | ".join(row) + " |")
-    reference = (0.0, math.inf, math.inf, 0.0)
-    if args.no_reference or reference in [(a, s, c, f) for a in args.after for s in args.stall for c in args.cap
-                                          for f in args.floor]:
-        reference = None
-    after, stall, cap, floor = choose({k: v for k, v in geo.items() if k != reference})
-    print(f"\nchosen: after = {after:g}, stall = {stall:g}, cap = {cap:g}, floor = {floor:g} (lowest geometric mean "
-          f"{min(geo.values()):.3f} ms; ties within {TIE:.0%} to the larger cap, then the smaller floor, stall, after)")
+    ranked = {k: v for k, v in score.items() if k != reference}
+    after, stall, cap, floor = choose(ranked)
+    print(f"\nchosen: after = {after:g}, stall = {stall:g}, cap = {cap:g}, floor = {floor:g} (fewest cells not reached "
+          f"{min(v[0] for v in ranked.values())}, then the lowest geometric mean "
+          f"{min(v[1] for v in ranked.values() if v[0] == ranked[(after, stall, cap, floor)][0]):.3f} ms; ties "
+          f"within {TIE:.0%} to the larger cap, then the smaller floor, stall, after)")
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
         data = {" ".join(f"{v:g}" for v in a): {f"{f} {s}": rs for (f, s), rs in by.items()} for a, by in runs.items()}
