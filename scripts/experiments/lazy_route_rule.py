@@ -10,8 +10,8 @@ sampler, as a reference unless ``--no-reference``) plans the validation maps of 
 cells (``--sizes``; ``--maps`` of each size; ``planner_maps("validation", ...)``) at planner seeds 0 upwards, RRT
 step 4, at most 20,000 iterations, one process and one thread, in turn on each (query, seed) after two untimed
 warm-up queries, the candidates' order turning by one from one (query, seed) to the next and the reference last (a
-run just after an encoder's pass finds the caches cold: a fixed order costs the first candidate after the reference
-up to a third of its time on the larger maps). ``--planner RRTConnect`` does the same for RRT-Connect's switch
+run just after an encoder's pass finds the caches cold: in a fixed order the first candidate after the reference took
+up to 1.6 times as long on 1024-cell maps). ``--planner RRTConnect`` does the same for RRT-Connect's switch
 (``connect_after``, given as ``--after``, ``connect_floor``, as ``--floor``, and ``connect_cap``, as ``--cap``: both
 trees uniform until then, then the route field's two fields), and ``--planner PRM`` for the roadmaps'
 (``roadmap_after``, ``roadmap_floor`` and ``roadmap_cap``: uniform samples, then the field's corridor). A run's time
