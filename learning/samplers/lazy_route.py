@@ -4,18 +4,18 @@ On an open map the straight-line follower (the route sampler without its encoder
 goal in about as many iterations as the encoder, and the encoder's pass over a map it has not seen costs as much as
 hundreds of its iterations. ``LazyRouteSampler`` starts RRT on the straight-line field and computes the encoder's
 field only if the run has not solved within a budget of iterations that grows with the map's area, as the pass's
-cost does (rent, then buy: ``after`` iterations per step-sized square of the map; on the CPU a pass costs about as
-much as 0.7 of them), at least ``floor`` and at most ``cap`` iterations whatever the area (250 and 1,000: a pass has
-a fixed cost besides the one that grows with the area, and each straight-line iteration grows dearer with the tree,
-so the switch comes at 1,000 on every map of more than 1,429 step-sized squares, 151 x 151 cells at step 4); from
-then on it is the route sampler on the encoder's field, following the tree grown so far. So an easy query costs what
-the ablation costs, and a winding one the ablation's budget, the encoder's pass and the encoder's iterations from
-the tree already there. A second switch, off by default, computes the field once the straight line's tree has come
-no closer to the goal for ``stall`` iterations: where the straight line is lost on a large map, it stops paying rent
-long before the budget runs out. Each was chosen on the validation maps by time to solution
-(``scripts/experiments/lazy_route_rule.py``: the geometric mean of the median times over validation maps of 128 to
-512 cells, 32 to 512 for the floors, 32 to 1024 for the other planners' caps); ``after=0`` with ``floor=0`` (or
-``cap=0``) is the route sampler and ``after=inf`` with ``cap=inf`` (and no stall) its ablation, run for run.
+cost does (rent, then buy: ``after`` iterations per step-sized square of the map, 0.35), at least ``floor`` and at
+most ``cap`` iterations whatever the area (250 and 1,000: a pass has a fixed cost besides the one that grows with
+the area, and each straight-line iteration grows dearer with the tree, so the switch comes at 1,000 on every map of
+more than 2,857 step-sized squares, 214 x 214 cells at step 4); from then on it is the route sampler on the
+encoder's field, following the tree grown so far. So an easy query costs what the ablation costs, and a winding one
+the ablation's budget, the encoder's pass and the encoder's iterations from the tree already there. A second switch,
+off by default, computes the field once the straight line's tree has come no closer to the goal for ``stall``
+iterations: where the straight line is lost on a large map, it stops paying rent long before the budget runs out.
+Each was chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``: the
+geometric mean of the median times over validation maps of 128 to 512 cells, 32 to 512 for the floors, 32 to 1024
+for the other planners' caps); ``after=0`` with ``floor=0`` (or ``cap=0``) is the route sampler and ``after=inf``
+with ``cap=inf`` (and no stall) its ablation, run for run.
 
 Both phases draw inside RRT's compiled loop: the loop runs up to the switch on the straight-line field, the encoder
 runs, and the loop goes on on the encoder's field, so a fused run is the run drawn through ``draw``, bit for bit.
@@ -62,38 +62,37 @@ from planners.fused import (
 #: and the roadmaps (their uniform sampling first); RRT* and its kin take the route sampler's own rule.
 LAZY_FAMILIES = (FAMILY_TREE, FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP)
 
-#: The switch, chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``): the
-#: encoder's field is computed once the straight line has not solved within this many iterations per step-sized
-#: square of the map.
-SHIPPED_AFTER = 0.7
-#: The stall switch, chosen with ``after`` (off): the field is computed once the straight line's tree has come no
-#: closer to the goal for this many iterations. On the validation maps ``stall=200`` came within 3.05% of the chosen
-#: pair's objective, outside the rule's 3%, and cut the median time on the 512-cell maze, bugtrap and rooms maps from
-#: 41-107 ms to 31-36 ms: an option for large maps.
+#: Every switch below is chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``,
+#: one switch at a time with the others as shipped, on maps of 32 to 512 cells, 8 8 8 4 2 of each family, 2 seeds;
+#: the candidates' order turning from one query to the next). The RRT switch: the encoder's field is computed once
+#: the straight line has not solved within this many iterations per step-sized square of the map (``--after 0.35 0.7
+#: 1.4 inf``: geometric means of the median times 0.796, 0.805, 0.831 and 0.849 ms).
+SHIPPED_AFTER = 0.35
+#: The stall switch (off): the field is computed once the straight line's tree has come no closer to the goal for
+#: this many iterations (``--stall 10 25 50 100 200 inf``: 2.574 to 1.038 ms for the stalls, 0.822 for none).
 SHIPPED_STALL = math.inf
-#: The most straight-line iterations before the switch, whatever the map's area (``cap``; inf: none), chosen with
-#: ``after`` by the same rule (``lazy_route_rule.py --cap``): the straight line's iterations grow dearer as its tree
-#: grows, so on a large winding map the area's budget (11,469 iterations at 512 cells) cost many passes. On the
-#: validation maps a cap of 1,000 took the geometric mean of the median times from 1.53 to 1.35 ms (the 512-cell
-#: rooms 68 to 12 ms, mazes 28 to 10); 500, 2,000 and 4,000 came out at 1.59, 1.42 and 1.50.
+#: The most straight-line iterations before the switch, whatever the map's area (``cap``; inf: none;
+#: ``--cap 500 1000 2000 4000 inf``: 0.875, 0.827, 0.879, 0.904 and 0.928 ms): the straight line's iterations grow
+#: dearer as its tree grows, so on a large winding map the area's budget alone (5,735 iterations at 512 cells) costs
+#: several passes.
 SHIPPED_CAP = 1000.0
-#: RRT-Connect's switch (``connect_after``), chosen on the validation maps by time as ``after`` was
-#: (``lazy_route_rule.py --planner RRTConnect``): both trees grow by uniform sampling until this many iterations per
-#: step-sized square of the map, then follow the route field's two fields. On the validation maps uniform RRT-Connect
-#: is as fast (1.4% less time over all cells, within the rule's 3%): the fields are a late safety net there.
-SHIPPED_CONNECT_AFTER = 1.4
-#: The roadmaps' switch (``roadmap_after``: PRM, Lazy-PRM, OB-PRM), chosen on the validation maps by time with PRM
-#: (``lazy_route_rule.py --planner PRM``): uniform samples until this many per step-sized square of the map, then
-#: the route field's corridor.
-SHIPPED_ROADMAP_AFTER = 0.35
+#: RRT-Connect's switch (``connect_after``; ``--planner RRTConnect``): both trees grow by uniform sampling until this
+#: many iterations per step-sized square of the map, then follow the route field's two fields (0.05 to inf: 0.621,
+#: 0.621, 0.622, 0.570, 0.543, 0.548 and 0.558 ms; never switching is within 3%: on these maps the fields are a late
+#: safety net).
+SHIPPED_CONNECT_AFTER = 0.7
+#: The roadmaps' switch (``roadmap_after``: PRM, Lazy-PRM, OB-PRM; ``--planner PRM``): uniform samples until this
+#: many per step-sized square of the map, then the route field's corridor (0.05 to inf: 0.493, 0.490, 0.481, 0.476,
+#: 0.493, 0.494 and 0.489 ms; 0.1 is the smallest within 3% of the lowest).
+SHIPPED_ROADMAP_AFTER = 0.1
 #: The fewest iterations (RRT, RRT-Connect) or samples (the roadmaps) before each planner's switch, whatever the
 #: map's area (``floor``, ``connect_floor``, ``roadmap_floor``; 0: none): a pass has a fixed cost besides the one that
 #: grows with the area, which on a small map the area's budget does not cover. Chosen per planner by the same rule on
 #: validation maps of 32 to 512 cells (``lazy_route_rule.py --floor --sizes 32 64 128 256 512 --maps 8 8 8 4 2``): the
 #: geometric mean of the median times 0.955 -> 0.831 ms for RRT (floor 250; 500 and 1,000 within 3%), 0.700 -> 0.529
-#: for RRT-Connect (2,000; 4,000 lowest at 0.519), 0.654 -> 0.548 for PRM (250; 2,000 lowest at 0.533). The larger
-#: the floor, the fewer runs reach the field: on these maps the classical phase alone is nearly as fast, and the field
-#: is a late safety net.
+#: for RRT-Connect (2,000; 4,000 lowest at 0.519), 0.654 -> 0.548 for PRM (250; 2,000 lowest at 0.533), each with the
+#: switches then shipped (after 0.7, connect_after 1.4, roadmap_after 0.35). The larger the floor, the fewer runs
+#: reach the field: on these maps the classical phase alone is nearly as fast, and the field is a late safety net.
 SHIPPED_FLOOR = 250.0
 SHIPPED_CONNECT_FLOOR = 2000.0
 SHIPPED_ROADMAP_FLOOR = 250.0
@@ -102,8 +101,9 @@ SHIPPED_ROADMAP_FLOOR = 250.0
 #: 32 to 1024 cells (``lazy_route_rule.py --cap inf 1000 2000 4000 8000 --sizes 32 64 128 256 512 1024 --maps 8 8 8
 #: 4 2 1``): none. RRT-Connect's geometric means run 0.714 ms without a cap against 0.735 to 1.587 with one (at 1024
 #: cells uniform RRT-Connect solves every validation query in a few milliseconds, where its two passes cost about
-#: 140), PRM's 0.601 to 0.618 for every candidate. So on a map of 512 cells or more RRT-Connect's switch lies past
-#: 20,000 iterations: there it is uniform RRT-Connect.
+#: 140), PRM's 0.601 to 0.618 for every candidate (with connect_after 1.4 and roadmap_after 0.35, then shipped). So
+#: on a map of more than 28,571 step-sized squares (676 x 676 cells at step 4) RRT-Connect's switch lies past 20,000
+#: iterations: there it is uniform RRT-Connect.
 SHIPPED_CONNECT_CAP = math.inf
 SHIPPED_ROADMAP_CAP = math.inf
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
