@@ -291,14 +291,25 @@ def test_the_switchs_rule_takes_the_fastest_or_a_smaller_switch_within_three_per
     runs = {"a": {"x": [{"ms": 5.0, "solved": True}] * 2, "y": [ran, {"ms": 4.0, "solved": True}]},
             "b": {"x": [{"ms": 2.0, "solved": True}] * 2, "y": [{"ms": 8.0, "solved": True}] * 2}}
     assert script.median_ms(runs["a"]["y"]) == inf and script.objective(runs) == {"a": (1, inf), "b": (0, 4.0)}
+    # the paired bootstrap: a candidate faster on every run is chosen in every resample; shares sum to one
+    fast = {(1.0, inf, inf, 0.0): {"x": [{"ms": 1.0 + i, "solved": True} for i in range(5)]},
+            (2.0, inf, inf, 0.0): {"x": [{"ms": 2.0 + i, "solved": True} for i in range(5)]}}
+    assert script.stability(fast, list(fast), 50) == {(1.0, inf, inf, 0.0): 1.0, (2.0, inf, inf, 0.0): 0.0}
+    close = {(1.0, inf, inf, 0.0): {"x": [{"ms": m, "solved": True} for m in (1.0, 5.0, 2.0, 4.0, 3.0)]},
+             (2.0, inf, inf, 0.0): {"x": [{"ms": m, "solved": True} for m in (5.0, 1.0, 4.0, 2.0, 3.0)]}}
+    shares = script.stability(close, list(close), 200)
+    assert abs(sum(shares.values()) - 1.0) < 1e-12 and 0.0 < shares[(1.0, inf, inf, 0.0)] < 1.0
     assert script.main(["--maps", "1", "0", "0", "--seeds", "1", "--after", "inf", "--stall", "20", "inf", "--out",
-                        str(tmp_path / "rule")]) == 0
+                        str(tmp_path / "rule"), "--bootstrap", "20"]) == 0
     out = capsys.readouterr().out
-    assert "chosen: after = " in out and (tmp_path / "rule" / "runs.json").is_file()
+    assert "chosen: after = " in out and "stability: in 20 paired" in out
+    assert (tmp_path / "rule" / "runs.json").is_file()
     with pytest.raises(SystemExit):
         script.main(["--after", "-1"])
     with pytest.raises(SystemExit):
         script.main(["--stall", "0"])
+    with pytest.raises(SystemExit):
+        script.main(["--bootstrap", "-1"])
     with pytest.raises(SystemExit):  # one --maps count per --sizes side
         script.main(["--sizes", "32", "64", "--maps", "1"])
     with pytest.raises(SystemExit):  # an output folder with something in it is refused before any run

@@ -23,7 +23,9 @@ The rule: the fewest cells whose median is not reached wins; among those, the lo
 times over the (family, size) cells where every such candidate reaches its median, and a candidate within 3% of it
 with a larger ``cap`` (nearer the area's budget alone), then a smaller ``floor``, then a smaller ``stall``, then a
 smaller ``after``, wins over it (the reference takes no part). Prints a table per candidate (geometric mean, pooled
-mean time, median iterations and success per cell) and the choice; ``--out`` also writes the runs as JSON.
+mean time, median iterations and success per cell), the choice and how often paired bootstrap resamples of the runs
+choose each candidate (``--bootstrap``: where no candidate is chosen in most resamples, the validation runs cannot
+tell them apart); ``--out`` also writes the runs as JSON.
 """
 
 from __future__ import annotations
@@ -86,6 +88,23 @@ def objective(runs: dict[tuple, dict[tuple, list[dict]]], judged=None) -> dict[t
             for k, ms in medians.items()}
 
 
+def stability(runs: dict[tuple, dict[tuple, list[dict]]], judged, draws: int, seed: int = 0) -> dict[tuple, float]:
+    """The share of ``draws`` paired bootstrap resamples in which the rule chooses each ``judged`` candidate.
+
+    A resample draws each cell's (query, seed) runs with replacement, the same draws for every candidate (their runs
+    are in the same order), and applies ``objective`` and ``choose`` to it: how often the choice would come out the
+    same from validation runs like these.
+    """
+    rng, judged = np.random.default_rng(seed), list(judged)
+    counts = dict.fromkeys(judged, 0)
+    cells = list(runs[judged[0]])
+    for _ in range(draws):
+        picks = {c: rng.integers(0, len(runs[judged[0]][c]), len(runs[judged[0]][c])) for c in cells}
+        resampled = {k: {c: [runs[k][c][i] for i in picks[c]] for c in cells} for k in judged}
+        counts[choose(objective(resampled))] += 1
+    return {k: n / draws for k, n in counts.items()}
+
+
 def choose(table: dict[tuple[float, ...], float | tuple[int, float]]) -> tuple[float, ...]:
     """The rule: the fewest unreached cells, then the lowest value wins; one within ``TIE`` of it with a larger cap,
     then a smaller floor, then a smaller (stall, after), wins over it.
@@ -119,6 +138,9 @@ def main(argv=None) -> int:
                     help="candidates for the most iterations before the switch (RRT: cap, RRTConnect: connect_cap, "
                          "PRM: roadmap_cap; default: the shipped one; inf: none)")
     ap.add_argument("--no-reference", action="store_true", help="leave out after = 0 (the route rule)")
+    ap.add_argument("--bootstrap", type=int, default=200, metavar="N",
+                    help="paired bootstrap resamples of the runs that say how often the rule's choice comes out the "
+                         "same (default 200; 0: none)")
     ap.add_argument("--out", type=Path, default=None, help="write runs.json here (a new or empty folder)")
     args = ap.parse_args(argv)
     connect = args.planner != "RRT"  # one switch: connect_after or roadmap_after, given as --after
@@ -135,11 +157,11 @@ def main(argv=None) -> int:
     if connect:
         args.stall = [math.inf]
     switch = "connect_after" if args.planner == "RRTConnect" else "roadmap_after"
-    if min(args.maps) < 0 or args.seeds < 1 or not all(a >= 0 for a in args.after) or \
+    if min(args.maps) < 0 or args.seeds < 1 or args.bootstrap < 0 or not all(a >= 0 for a in args.after) or \
             not all(s >= 1 for s in args.stall) or not all(c >= 0 for c in args.cap + args.floor) or \
             len(args.maps) != len(args.sizes) or min(args.sizes) < 32:
-        ap.error("--maps must be >= 0, one per --sizes (each >= 32), --seeds >= 1, every --after, --cap and --floor "
-                 ">= 0 and every --stall >= 1")
+        ap.error("--maps must be >= 0, one per --sizes (each >= 32), --seeds >= 1, --bootstrap >= 0, every --after, "
+                 "--cap and --floor >= 0 and every --stall >= 1")
     if args.out is not None and args.out.exists() and any(args.out.iterdir()):
         ap.error(f"--out {args.out}: exists and is not empty")
     cells = {(family, size): problems for size, n in zip(args.sizes, args.maps, strict=True) if n
@@ -183,6 +205,11 @@ def main(argv=None) -> int:
           f"{min(v[0] for v in ranked.values())}, then the lowest geometric mean "
           f"{min(v[1] for v in ranked.values() if v[0] == ranked[(after, stall, cap, floor)][0]):.3f} ms; ties "
           f"within {TIE:.0%} to the larger cap, then the smaller floor, stall, after)")
+    if args.bootstrap and len(ranked) > 1:
+        shares = stability({k: runs[k] for k in ranked}, ranked, args.bootstrap)
+        print(f"stability: in {args.bootstrap} paired bootstrap resamples of the (query, seed) runs the rule chooses "
+              + ", ".join(f"{' '.join(f'{v:g}' for v in k)}: {share:.0%}" for k, share in shares.items())
+              + " (after stall cap floor)")
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
         data = {" ".join(f"{v:g}" for v in a): {f"{f} {s}": rs for (f, s), rs in by.items()} for a, by in runs.items()}
