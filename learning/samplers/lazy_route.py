@@ -5,7 +5,7 @@ goal in about as many iterations as the encoder, and the encoder's pass over a m
 hundreds of its iterations. ``LazyRouteSampler`` starts RRT on the straight-line field and computes the encoder's
 field only if the run has not solved within a budget of iterations that grows with the map's area, as the pass's
 cost does (rent, then buy: ``after`` iterations per step-sized square of the map, 0.35), at least ``floor`` and at
-most ``cap`` iterations whatever the area (250 and 1,000: a pass has a fixed cost besides the one that grows with
+most ``cap`` iterations whatever the area (500 and 1,000: a pass has a fixed cost besides the one that grows with
 the area, and each straight-line iteration grows dearer with the tree, so the switch comes at 1,000 on every map of
 more than 2,857 step-sized squares, 214 x 214 cells at step 4); from then on it is the route sampler on the
 encoder's field, following the tree grown so far. So an easy query costs what the ablation costs, and a winding one
@@ -63,47 +63,49 @@ from planners.fused import (
 LAZY_FAMILIES = (FAMILY_TREE, FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP)
 
 #: Every switch below is chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``,
-#: one switch at a time with the others as shipped, on maps of 32 to 512 cells, 8 8 8 4 2 of each family, 2 seeds;
-#: the candidates' order turning from one query to the next). The RRT switch: the encoder's field is computed once
-#: the straight line has not solved within this many iterations per step-sized square of the map (``--after 0.35 0.7
-#: 1.4 inf``: geometric means of the median times 0.796, 0.805, 0.831 and 0.849 ms).
+#: one switch at a time with the others as chosen before it, on maps of 32 to 512 cells, ``--maps 32 32 32 16 8``, 2
+#: seeds: 1,200 runs a candidate; the candidates' order turning from one query to the next). Each comment gives the
+#: geometric means of the median times in ms and, in brackets, how often 1,000 paired bootstrap resamples of the runs
+#: give the same choice (``--bootstrap``): most choices are near-ties. The RRT switch: the encoder's field is
+#: computed once the straight line has not solved within this many iterations per step-sized square of the map
+#: (``--after 0.35 0.7 1.4 inf``: 0.838, 0.841, 0.849, 0.857; 91%).
 SHIPPED_AFTER = 0.35
 #: The stall switch (off): the field is computed once the straight line's tree has come no closer to the goal for
-#: this many iterations (``--stall 10 25 50 100 200 inf``: 2.574 to 1.038 ms for the stalls, 0.822 for none).
+#: this many iterations (``--stall 10 25 50 100 200 inf``, on 8 8 8 4 2 maps: 2.574 to 1.038 ms for the stalls, 0.822
+#: for none; 100%).
 SHIPPED_STALL = math.inf
 #: The most straight-line iterations before the switch, whatever the map's area (``cap``; inf: none;
-#: ``--cap 500 1000 2000 4000 inf``: 0.875, 0.827, 0.879, 0.904 and 0.928 ms): the straight line's iterations grow
+#: ``--cap 500 1000 2000 4000 inf``: 0.860, 0.831, 0.882, 0.912, 0.907; 57%): the straight line's iterations grow
 #: dearer as its tree grows, so on a large winding map the area's budget alone (5,735 iterations at 512 cells) costs
 #: several passes.
 SHIPPED_CAP = 1000.0
 #: RRT-Connect's switch (``connect_after``; ``--planner RRTConnect``): both trees grow by uniform sampling until this
-#: many iterations per step-sized square of the map, then follow the route field's two fields (0.05 to inf: 0.621,
-#: 0.621, 0.622, 0.570, 0.543, 0.548 and 0.558 ms; never switching is within 3%: on these maps the fields are a late
-#: safety net).
+#: many iterations per step-sized square of the map, then follow the route field's two fields (0.05 to inf: 0.801,
+#: 0.822, 0.797, 0.696, 0.614, 0.611, 0.612; 59%, 1.4 in 38%; never switching is within 3%: on these maps the fields
+#: are a late safety net).
 SHIPPED_CONNECT_AFTER = 0.7
 #: The roadmaps' switch (``roadmap_after``: PRM, Lazy-PRM, OB-PRM; ``--planner PRM``): uniform samples until this
-#: many per step-sized square of the map, then the route field's corridor (0.05 to inf: 0.493, 0.490, 0.481, 0.476,
-#: 0.493, 0.494 and 0.489 ms; 0.1 is the smallest within 3% of the lowest).
-SHIPPED_ROADMAP_AFTER = 0.1
+#: many per step-sized square of the map, then the route field's corridor (0.05 to inf: 0.529, 0.529, 0.537, 0.529,
+#: 0.515, 0.524, 0.521; 0.05 is the smallest within 3% of the lowest; 55%).
+SHIPPED_ROADMAP_AFTER = 0.05
 #: The fewest iterations (RRT, RRT-Connect) or samples (the roadmaps) before each planner's switch, whatever the
 #: map's area (``floor``, ``connect_floor``, ``roadmap_floor``; 0: none): a pass has a fixed cost besides the one that
-#: grows with the area, which on a small map the area's budget does not cover. Chosen per planner by the same rule on
-#: validation maps of 32 to 512 cells (``lazy_route_rule.py --floor --sizes 32 64 128 256 512 --maps 8 8 8 4 2``): the
-#: geometric mean of the median times 0.955 -> 0.831 ms for RRT (floor 250; 500 and 1,000 within 3%), 0.700 -> 0.529
-#: for RRT-Connect (2,000; 4,000 lowest at 0.519), 0.654 -> 0.548 for PRM (250; 2,000 lowest at 0.533), each with the
-#: switches then shipped (after 0.7, connect_after 1.4, roadmap_after 0.35). The larger the floor, the fewer runs
-#: reach the field: on these maps the classical phase alone is nearly as fast, and the field is a late safety net.
-SHIPPED_FLOOR = 250.0
+#: grows with the area, which on a small map the area's budget does not cover (``--floor``): RRT 0, 250, 500, 1000:
+#: 1.175, 0.913, 0.870, 0.846 (500, within 3% of 1,000; 63%); RRT-Connect 0, 500, 1000, 2000, 4000: 1.088, 0.832,
+#: 0.735, 0.635, 0.626 (2,000; 62%); PRM 0, 250, 500, 1000, 2000: 0.989, 0.567, 0.545, 0.540, 0.527 (1,000; 500 in
+#: 49% of the resamples, 1,000 in 34%). The larger the floor, the fewer runs reach the field: on these maps the
+#: classical phase alone is nearly as fast, and the field is a late safety net.
+SHIPPED_FLOOR = 500.0
 SHIPPED_CONNECT_FLOOR = 2000.0
-SHIPPED_ROADMAP_FLOOR = 250.0
+SHIPPED_ROADMAP_FLOOR = 1000.0
 #: The most iterations (RRT-Connect) or samples (the roadmaps) before each planner's switch, whatever the map's area
 #: (``connect_cap``, ``roadmap_cap``; inf: none), as ``cap`` is RRT's. Chosen by the same rule on validation maps of
 #: 32 to 1024 cells (``lazy_route_rule.py --cap inf 1000 2000 4000 8000 --sizes 32 64 128 256 512 1024 --maps 8 8 8
-#: 4 2 1``): none. RRT-Connect's geometric means run 0.714 ms without a cap against 0.735 to 1.587 with one (at 1024
-#: cells uniform RRT-Connect solves every validation query in a few milliseconds, where its two passes cost about
-#: 140), PRM's 0.601 to 0.618 for every candidate (with connect_after 1.4 and roadmap_after 0.35, then shipped). So
-#: on a map of more than 28,571 step-sized squares (676 x 676 cells at step 4) RRT-Connect's switch lies past 20,000
-#: iterations: there it is uniform RRT-Connect.
+#: 4 2 1``, with connect_after 1.4 and roadmap_after 0.35): none. RRT-Connect's geometric means run 0.714 ms without
+#: a cap against 0.735 to 1.587 with one (100%; at 1024 cells uniform RRT-Connect solves every validation query in a
+#: few milliseconds, where its two passes cost about 140); PRM's candidates ran the same runs (the same 6 of 310
+#: switching), 0.601 to 0.618. So on a map of more than 28,571 step-sized squares (676 x 676 cells at step 4)
+#: RRT-Connect's switch lies past 20,000 iterations: there it is uniform RRT-Connect.
 SHIPPED_CONNECT_CAP = math.inf
 SHIPPED_ROADMAP_CAP = math.inf
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
