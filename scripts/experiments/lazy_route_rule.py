@@ -31,6 +31,7 @@ tell them apart); ``--out`` also writes the runs as JSON.
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import math
 import time
@@ -40,14 +41,7 @@ import numpy as np
 
 from learning.evaluation.every_planner import planner_maps
 from learning.models.threads import planning_threads
-from learning.samplers.lazy_route import (
-    SHIPPED_CAP,
-    SHIPPED_CONNECT_CAP,
-    SHIPPED_CONNECT_FLOOR,
-    SHIPPED_FLOOR,
-    SHIPPED_ROADMAP_CAP,
-    SHIPPED_ROADMAP_FLOOR,
-)
+from learning.samplers.lazy_route import LazyRouteSampler
 from learning.samplers.registry import make_sampler
 from planners import make_planner
 
@@ -57,6 +51,9 @@ STALL = (10.0, 25.0, 50.0, 100.0, 200.0, math.inf)
 #: RRT-Connect's and PRM's candidates (``--planner RRTConnect``: ``connect_after``, the trees' uniform budget;
 #: ``--planner PRM``: ``roadmap_after``, the roadmap's; stall unused).
 CONNECT_AFTER = (0.05, 0.1, 0.2, 0.35, 0.7, 1.4, math.inf)
+#: Each planner's switch, floor and cap among ``LazyRouteSampler``'s arguments (given as --after, --floor, --cap).
+SWITCHES = {"RRT": ("after", "floor", "cap"), "RRTConnect": ("connect_after", "connect_floor", "connect_cap"),
+            "PRM": ("roadmap_after", "roadmap_floor", "roadmap_cap")}
 #: A candidate within this share of the lowest geometric mean, with a smaller ``after``, wins over it.
 TIE = 0.03
 
@@ -146,17 +143,14 @@ def main(argv=None) -> int:
     connect = args.planner != "RRT"  # one switch: connect_after or roadmap_after, given as --after
     if args.after is None:
         args.after = list(CONNECT_AFTER if connect else AFTER)
-    floor_name = {"RRT": "floor", "RRTConnect": "connect_floor", "PRM": "roadmap_floor"}[args.planner]
+    after_name, floor_name, cap_name = SWITCHES[args.planner]
+    shipped = inspect.signature(LazyRouteSampler).parameters
     if args.floor is None:
-        args.floor = [{"floor": SHIPPED_FLOOR, "connect_floor": SHIPPED_CONNECT_FLOOR,
-                       "roadmap_floor": SHIPPED_ROADMAP_FLOOR}[floor_name]]
-    cap_name = {"RRT": "cap", "RRTConnect": "connect_cap", "PRM": "roadmap_cap"}[args.planner]
+        args.floor = [shipped[floor_name].default]
     if args.cap is None:
-        args.cap = [{"cap": SHIPPED_CAP, "connect_cap": SHIPPED_CONNECT_CAP,
-                     "roadmap_cap": SHIPPED_ROADMAP_CAP}[cap_name]]
+        args.cap = [shipped[cap_name].default]
     if connect:
         args.stall = [math.inf]
-    switch = "connect_after" if args.planner == "RRTConnect" else "roadmap_after"
     if min(args.maps) < 0 or args.seeds < 1 or args.bootstrap < 0 or not all(a >= 0 for a in args.after) or \
             not all(s >= 1 for s in args.stall) or not all(c >= 0 for c in args.cap + args.floor) or \
             len(args.maps) != len(args.sizes) or min(args.sizes) < 32:
@@ -171,8 +165,8 @@ def main(argv=None) -> int:
     reference = None if args.no_reference else (0.0, math.inf, math.inf, 0.0)
     reference = None if reference in judged else reference
     pairs = judged + ([reference] if reference else [])
-    samplers = {k: make_sampler("route_lazy", **{switch: k[0], floor_name: k[3], cap_name: k[2]}) if connect else
-                make_sampler("route_lazy", after=k[0], stall=k[1], cap=k[2], floor=k[3]) for k in pairs}
+    samplers = {k: make_sampler("route_lazy", **{after_name: k[0], floor_name: k[3], cap_name: k[2]},
+                                **({} if connect else {"stall": k[1]})) for k in pairs}
     runs: dict[tuple, dict] = {k: {c: [] for c in cells} for k in pairs}
     with planning_threads(1):
         warm = next(iter(cells.values()))[:2]
