@@ -28,7 +28,7 @@ import torch
 
 from learning.device import pin_cpu_arithmetic
 from learning.models.rigid_orientation import save_orientation_net
-from learning.training.rigid import LABELS, RigidTrainConfig, train_rigid_orientation
+from learning.training.rigid import LABELS, OPEN_TESTS, RigidTrainConfig, train_rigid_orientation
 from planners.base.fileio import InputError, atomic_write_text
 from planners.worlds.rigid_scenes import TRAINING_FAMILIES
 
@@ -49,6 +49,9 @@ def main(argv=None) -> int:
     ap.add_argument("--label", choices=LABELS, default=d.label,
                     help="classes that fit along the path's window (default) or at the point alone, or the class a "
                          "solution by long runs takes nearest the point")
+    ap.add_argument("--open-test", choices=OPEN_TESTS, default=d.open_test,
+                    help="how --label solution tells open space: the one-hot label (every point kept) or the clearance "
+                         "of jittered poses of each class (points where all six fit kept at --open-keep)")
     ap.add_argument("--window", type=float, default=d.window, help="half the window of --label window, world units")
     ap.add_argument("--no-augment", action="store_true", help="no symmetries of the grid")
     ap.add_argument("--seed", type=int, default=d.seed)
@@ -62,7 +65,7 @@ def main(argv=None) -> int:
                                   epochs=args.epochs, batch=args.batch, lr=args.lr, channels=args.channels,
                                   hidden=args.hidden, poses=args.poses, open_keep=args.open_keep,
                                   augment=not args.no_augment, seed=args.seed,
-                                  label=args.label, window=args.window).check()
+                                  label=args.label, window=args.window, open_test=args.open_test).check()
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

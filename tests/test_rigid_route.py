@@ -245,3 +245,38 @@ def test_the_ends_rule_takes_the_class_rotation_nearest_the_nearer_ends_orientat
     assert far.sum() > 20 and np.array_equal(sym[far], best[far])
     with pytest.raises(InputError, match="symmetry"):
         RigidRouteSampler(net, symmetry="nearest")
+
+
+def test_min_confidence_gives_uniform_angles_where_the_model_is_unsure_and_is_checked(slot_scene):
+    net = make_sampler("rigid_route").net
+    kw = dict(route_fraction=1.0, uniform_share=0.0, angle_noise=0.0, goal_share=0.0)
+    sure = RigidRouteSampler(net, **kw).bind(slot_scene)
+    never = RigidRouteSampler(net, min_confidence=1.0, **kw).bind(slot_scene)
+    a, b = (s.draw(np.random.default_rng(5), 200, None) for s in (sure, never))
+    assert np.array_equal(a[:, :3], b[:, :3])  # the same positions: only the angles differ
+    axis_aligned = [np.allclose(np.abs(rotation_matrix(*x[3:])).max(axis=1), 1.0) for x in b]
+    assert not any(axis_aligned) and sure.sure.all() and not never.sure.any()
+    # a gate between the route points' confidences keeps the model's class exactly where it is sure
+    c = float(np.median(sure.probs.max(axis=1)))
+    gated = RigidRouteSampler(net, min_confidence=c, **kw).bind(slot_scene)
+    g = gated.draw(np.random.default_rng(5), 200, None)
+    assert np.array_equal(gated.sure, sure.probs.max(axis=1) >= c) and 0 < gated.sure.sum() < len(gated.sure)
+    kept = np.all(np.isclose(g, a), axis=1)
+    assert kept.any() and not kept.all()
+    with pytest.raises(InputError, match="min_confidence"):
+        RigidRouteSampler(net, min_confidence=1.5)
+    assert make_sampler("rigid_route", min_confidence=c).min_confidence == c
+
+
+def test_the_clearance_open_test_keeps_passage_points_and_drops_most_open_ones():
+    from learning.training.rigid import collect_rigid_examples
+
+    base = dict(scenes_per_family=1, families=("slot",), label="solution")
+    by_label = collect_rigid_examples(RigidTrainConfig(**base))
+    by_clearance = collect_rigid_examples(RigidTrainConfig(**base, open_test="clearance"))
+    assert np.all(by_label.fits == 1)  # a one-hot label names one class: every point is kept
+    assert len(by_clearance.labels) < len(by_label.labels)
+    assert by_clearance.fits.min() >= 1 and by_clearance.fits.max() <= 6
+    assert np.allclose(by_clearance.labels.sum(axis=1), 1)
+    with pytest.raises(InputError, match="open_test"):
+        RigidTrainConfig(open_test="walls").check()

@@ -12,11 +12,12 @@ and its distribution over the six axis-aligned orientation classes there. Per sa
 
 * with probability ``goal_share`` the goal state;
 * else with probability ``route_fraction`` a route sample: its position as the ablation draws it; its
-  orientation, with probability ``uniform_share``, uniform angles, else a class drawn from the model's
-  distribution at the nearest route point, one of the class's four rotations (the box's symmetry: the same
-  volume, far apart in the planner's metric) at random (``symmetry="random"``) or the one nearest the orientation
-  of the query's end nearer the sample's route point (``symmetry="ends"``: the start's or the goal's), turned by
-  a random rotation of about ``angle_noise`` radians per axis (a Gaussian rotation vector);
+  orientation, with probability ``uniform_share`` or where the model's largest class probability at the nearest
+  route point is below ``min_confidence``, uniform angles, else a class drawn from the model's distribution there,
+  one of the class's four rotations (the box's symmetry: the same volume, far apart in the planner's metric) at
+  random (``symmetry="random"``) or the one nearest the orientation of the query's end nearer the sample's route
+  point (``symmetry="ends"``: the start's or the goal's), turned by a random rotation of about ``angle_noise``
+  radians per axis (a Gaussian rotation vector);
 * else a uniform state.
 
 Samples do not depend on the tree, so they come in batches. The orientation model learned on a box body
@@ -48,7 +49,8 @@ from planners.worlds.mesh import rotation_matrices
 #: The settings ``make_sampler("rigid_route")`` uses: chosen on the tuning scenes
 #: (``scripts/experiments/tune_rigid_learned.py``; the rotation among a class's four by
 #: ``scripts/experiments/rigid_room.py --part tuning``, with the privileged expert's classes; ``docs/rigid-scenes.md``).
-SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends"}
+SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
+                          "min_confidence": 0.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
@@ -76,11 +78,14 @@ class RigidRouteSampler(SamplerBase):
             centre that near (0: the search's route as it is).
         symmetry: Which of a class's four rotations a sample takes: ``"random"``, or ``"ends"``, the one nearest
             the orientation of the query's end (start or goal) nearer the sample's route point.
+        min_confidence: A route sample whose nearest route point's largest class probability is below this, in
+            [0, 1], takes uniform angles (0: the model's class wherever ``uniform_share`` does not say uniform).
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
-                 cell: float | None = None, centre: int = 2, symmetry: str = "random") -> None:
+                 cell: float | None = None, centre: int = 2, symmetry: str = "random",
+                 min_confidence: float = 0.0) -> None:
         who = "RigidRouteSampler"
         if symmetry not in SYMMETRY_RULES:
             raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
@@ -92,6 +97,7 @@ class RigidRouteSampler(SamplerBase):
         self.angle_noise = float(check_number(who, "angle_noise", angle_noise, low=0))
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
+        self.min_confidence = float(check_number(who, "min_confidence", min_confidence, low=0, high=1))
         self.spread = None if spread is None else float(check_number(who, "spread", spread, low=0))
         self.cell = None if cell is None else float(check_number(who, "cell", cell, low=0, low_open=True))
         if net is None and self.uniform_share < 1.0:
@@ -124,6 +130,9 @@ class RigidRouteSampler(SamplerBase):
         else:
             self.probs = np.full((0, N_CLASSES), 1.0 / N_CLASSES)
         self.cdf = np.cumsum(self.probs, axis=1)
+        # the route points whose class the samples take (without a model no sample takes one: uniform_share is 1)
+        self.sure = (self.probs.max(axis=1) >= self.min_confidence if len(self.probs) == len(self.route)
+                     else np.ones(len(self.route), dtype=bool))
         self.ends = rotation_matrices(np.stack([self.problem.start[3:6], self.problem.goal[3:6]]))
 
     def draw(self, rng, n, view):
@@ -143,9 +152,10 @@ class RigidRouteSampler(SamplerBase):
             t = (s - self.arc[i]) / np.maximum(self.arc[i + 1] - self.arc[i], 1e-300)
             p = self.route[i] + t[:, None] * (self.route[i + 1] - self.route[i]) + self.sd * pos_z[on]
             pts[on, :3] = np.clip(p, self.low[:3], np.nextafter(self.high[:3], -np.inf))
-            learned = np.flatnonzero(on)[u[on, 6 + d] >= self.uniform_share]
+            near = i + (t >= 0.5)
+            take = (u[on, 6 + d] >= self.uniform_share) & self.sure[near]
+            learned, near = np.flatnonzero(on)[take], near[take]
             if len(learned):
-                near = (i + (t >= 0.5))[u[on, 6 + d] >= self.uniform_share]
                 cls = np.minimum((self.cdf[near] < cls_u[learned, None]).sum(axis=1), N_CLASSES - 1)
                 sym = np.minimum((sym_u[learned] * 4).astype(np.int64), 3)
                 if self.symmetry == "ends":  # the rotation nearest the nearer end's orientation (largest trace)
@@ -163,4 +173,4 @@ class RigidRouteSampler(SamplerBase):
         return (f"RigidRouteSampler(route_fraction={self.route_fraction:g}, uniform_share={self.uniform_share:g}, "
                 f"angle_noise={self.angle_noise:g}, goal_share={self.goal_share:g}, "
                 f"temperature={self.temperature:g}, spread={sd}, cell={cell}, centre={self.centre}, "
-                f"symmetry={self.symmetry!r})")
+                f"symmetry={self.symmetry!r}, min_confidence={self.min_confidence:g})")

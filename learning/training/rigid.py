@@ -17,7 +17,10 @@ With ``label="solution"`` (the default), the class of the orientation a solution
 ``solution_classes``), on the route's points and the solution's own, the solution found by the privileged
 expert's long runs (``learning.references.rigid_expert.solve_reference``) in place of the witness path; a scene
 they do not solve is left out. Points where no class fits are left out, and of those where every class fits
-(open space, most of a route) only ``open_keep`` are kept, drawn at random.
+(open space, most of a route) only ``open_keep`` are kept, drawn at random. Which classes fit is the label's own
+answer for the ``point`` and ``window`` labels; for the one-hot ``solution`` label it is ``open_test``'s:
+``"label"`` (the one-hot label: one class, so every point is kept) or ``"clearance"`` (``class_validity``'s
+``"any"`` with the same ``poses`` and ``jitter``: the points the body could pass in any class).
 
 The model learns the label normalised to a distribution (cross-entropy with soft targets). Each
 example is seen under one of the 48 symmetries of the voxel grid per epoch (a permutation of the
@@ -53,6 +56,8 @@ from planners.worlds.rigid_scenes import TRAINING_FAMILIES, scene_with_witness
 
 #: The labels a model may learn (``RigidTrainConfig.label``; the module doc).
 LABELS = ("point", "window", "solution")
+#: How the ``solution`` label tells open space (``RigidTrainConfig.open_test``; the module doc).
+OPEN_TESTS = ("label", "clearance")
 
 
 def window_labels(points: np.ndarray, fit: np.ndarray, window: float) -> np.ndarray:
@@ -90,6 +95,7 @@ class RigidTrainConfig:
     open_keep: float = 0.25
     label: str = "solution"
     window: float = 6.0
+    open_test: str = "label"
 
     def check(self) -> RigidTrainConfig:
         """The config, or an ``InputError`` naming the first field out of range."""
@@ -108,6 +114,8 @@ class RigidTrainConfig:
         if self.label not in LABELS:
             raise InputError(f"label = {self.label!r}; choose from {', '.join(LABELS)}")
         check_number("RigidTrainConfig", "window", self.window, low=0)
+        if self.open_test not in OPEN_TESTS:
+            raise InputError(f"open_test = {self.open_test!r}; choose from {', '.join(OPEN_TESTS)}")
         return self
 
     def as_dict(self) -> dict:
@@ -118,13 +126,17 @@ class RigidTrainConfig:
 
 @dataclass
 class RigidExamples:
-    """Observations and labels: ``patches (n, s, s, s)``, ``directions (n, 3)``, ``labels (n, 6)``, ``scene (n,)``."""
+    """Observations and labels: ``patches (n, s, s, s)``, ``directions (n, 3)``, ``labels (n, 6)``, ``scene (n,)``.
+
+    ``fits (n,)``: how many classes fit at each point (the module doc's open-space test).
+    """
 
     patches: np.ndarray
     directions: np.ndarray
     labels: np.ndarray
     scene: np.ndarray
     names: list[str]
+    fits: np.ndarray
 
 
 def _densify(path: np.ndarray, spacing: float = 1.0) -> np.ndarray:
@@ -139,7 +151,7 @@ def _densify(path: np.ndarray, spacing: float = 1.0) -> np.ndarray:
 def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], None] | None = None) -> RigidExamples:
     """The examples of ``config``'s training scenes (the module doc)."""
     rng = np.random.default_rng(config.seed)
-    patches, dirs, labels, scene, names = [], [], [], [], []
+    patches, dirs, labels, scene, names, fits = [], [], [], [], [], []
     for family in config.families:
         seeds = rng.integers(*TRAIN_SEEDS, size=config.scenes_per_family)
         for s in seeds:
@@ -161,24 +173,28 @@ def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], N
             for pts in parts:
                 p, _ = route_observation(world, pts, half=PATCH_HALF)
                 d = route_directions(pts).astype(np.float32)
+                fit = None
                 if solution is not None:
                     y = solution_classes(pts, solution)
+                    if config.open_test == "clearance":
+                        fit = (class_validity(world, pts, label_rng, config.jitter, config.poses, "any") > 0).sum(1)
                 elif config.label == "point":
                     y = class_validity(world, pts, label_rng, config.jitter, config.poses)
                 else:
                     y = window_labels(pts, class_validity(world, pts, label_rng, config.jitter, config.poses, "any"),
                                       config.window)
-                fit = (y > 0).sum(axis=1)
+                fit = (y > 0).sum(axis=1) if fit is None else fit
                 keep = (fit > 0) & ((fit < y.shape[1]) | (label_rng.random(len(y)) < config.open_keep))
                 patches.append(p[keep])
                 dirs.append(d[keep])
                 labels.append(y[keep].astype(np.float32))
                 scene.append(np.full(int(keep.sum()), len(names)))
+                fits.append(fit[keep])
             names.append(problem.name)
             if progress is not None:
                 progress(f"{problem.name}: {sum(len(a) for a in labels)} examples so far")
     return RigidExamples(np.concatenate(patches), np.concatenate(dirs), np.concatenate(labels),
-                         np.concatenate(scene), names)
+                         np.concatenate(scene), names, np.concatenate(fits))
 
 
 def augment(patches: np.ndarray, directions: np.ndarray, labels: np.ndarray, rng: np.random.Generator):
@@ -205,14 +221,15 @@ def soft_cross_entropy(logits: torch.Tensor, labels: torch.Tensor) -> torch.Tens
     return -(target * torch.log_softmax(logits, dim=1)).sum(dim=1).mean()
 
 
-def _evaluate(net: OrientationNet, P, D, Y) -> dict:
-    """Held-out loss, and how often the most likely class is one that fits (label > 0)."""
+def _evaluate(net: OrientationNet, P, D, Y, fit_counts) -> dict:
+    """Held-out loss, and how often the most likely class is one the label names (label > 0): everywhere, and at
+    the passages' points (``fit_counts``: at most two classes fit)."""
     with torch.no_grad():
         logits = net(torch.as_tensor(P), torch.as_tensor(D))
         loss = float(soft_cross_entropy(logits, torch.as_tensor(Y)))
         top = logits.argmax(dim=1).numpy()
+    narrow = fit_counts <= 2  # points where at most two classes fit: the passages
     fits = Y[np.arange(len(Y)), top] > 0
-    narrow = (Y > 0).sum(axis=1) <= 2  # points where at most two classes fit: the passages
     return {"loss": loss, "top_fits": float(fits.mean()) if len(Y) else 0.0,
             "top_fits_narrow": float(fits[narrow].mean()) if narrow.any() else 0.0, "narrow": int(narrow.sum())}
 
@@ -261,7 +278,7 @@ def train_rigid_orientation(config: RigidTrainConfig, examples: RigidExamples | 
         net.eval()
         entry = {"epoch": epoch, "loss": round(total / max(1, len(order)), 5)}
         if test.any():
-            held_stats = _evaluate(net, ex.patches[test], ex.directions[test], ex.labels[test])
+            held_stats = _evaluate(net, ex.patches[test], ex.directions[test], ex.labels[test], ex.fits[test])
             entry.update({f"held_out_{k}": (round(v, 5) if isinstance(v, float) else v)
                           for k, v in held_stats.items()})
         log["epochs"].append(entry)
