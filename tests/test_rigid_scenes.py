@@ -299,16 +299,34 @@ def test_a_learned_samplers_targets_are_marked_per_scene_set_and_planner():
 
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**31), fill=st.floats(0.0, 0.4))
-def test_a_search_stopped_at_the_start_keeps_every_cheaper_cost_exact(seed, fill):
+def test_a_search_stopped_at_the_start_keeps_every_shortest_route_exact_and_descends_as_the_full_search(seed, fill):
+    from planners.guidance.workspace_route import STEP_LENGTHS, STEPS
+
     rng = np.random.default_rng(seed)
     free = rng.random((9, 8, 7)) >= fill
     goal, start = (int(i) for i in rng.integers(0, free.size, 2))
     free.flat[goal] = free.flat[start] = True
     full, stopped = cost_to_go(free, goal), cost_to_go(free, goal, start)
-    below = full < full.flat[start]
-    assert np.array_equal(stopped[below], full[below])
     assert stopped.flat[start] == full.flat[start]
     assert np.all(stopped >= full)
+    if not np.isfinite(full.flat[start]):
+        return
+    # every voxel of every shortest route from the start holds its exact cost: those whose cost from the start
+    # (a full search from there) plus their cost to the goal is the start's
+    from_start = cost_to_go(free, start)
+    on_route = np.isclose(from_start + full, full.flat[start], rtol=0, atol=1e-9)
+    assert np.array_equal(stopped[on_route], full[on_route])
+
+    def descent(cost):
+        v, path = np.array(np.unravel_index(start, free.shape)), []
+        while cost[tuple(v)] > 0:
+            nb = v + STEPS
+            ok = np.all((nb >= 0) & (nb < free.shape), axis=1)
+            v = nb[ok][int(np.argmin(cost[tuple(nb[ok].T)] + STEP_LENGTHS[ok]))]
+            path.append(tuple(v))
+        return path
+
+    assert descent(stopped) == descent(full)
 
 
 def test_a_users_sampler_joins_the_rigid_comparison_by_its_label(tmp_path, capsys):

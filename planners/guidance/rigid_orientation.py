@@ -30,6 +30,8 @@ import math
 
 import numpy as np
 
+from planners.kernels.rigid import add_box_cover
+
 #: (world axis of the body's long side, world axis of its middle side), the six axis-aligned classes.
 ORIENTATION_CLASSES = tuple((a, b) for a in range(3) for b in range(3) if a != b)
 N_CLASSES = len(ORIENTATION_CLASSES)
@@ -85,19 +87,7 @@ def occupancy_grid(world, cell: float = 1.0, seeds=None) -> np.ndarray:
         corners = low + cell * np.stack(np.meshgrid(*(np.arange(n) for n in shape), indexing="ij"), axis=-1)
         return world.solid_share(corners.reshape(-1, 3), cell, seeds).reshape(tuple(shape))
     grid = np.zeros(tuple(shape), dtype=np.float64)
-    edges = [low[k] + np.arange(shape[k] + 1) * cell for k in range(3)]
-    for b in np.asarray(world.boxes, dtype=np.float64).reshape(-1, 6):
-        sl, cover = [], []
-        for k in range(3):
-            i0 = max(0, int(np.floor((b[k] - low[k]) / cell)))
-            i1 = min(int(shape[k]), int(np.ceil((b[3 + k] - low[k]) / cell)))
-            if i1 <= i0:
-                break
-            lo, hi = edges[k][i0:i1], edges[k][i0 + 1:i1 + 1]
-            sl.append(slice(i0, i1))
-            cover.append(np.clip(np.minimum(hi, b[3 + k]) - np.maximum(lo, b[k]), 0.0, cell) / cell)
-        else:
-            grid[tuple(sl)] += cover[0][:, None, None] * cover[1][None, :, None] * cover[2][None, None, :]
+    add_box_cover(grid, np.ascontiguousarray(world.boxes, dtype=np.float64).reshape(-1, 6), low, float(cell))
     return np.minimum(grid, 1.0).astype(np.float32)
 
 

@@ -8,9 +8,11 @@ go (a shortest route through the workspace) and nothing about how the body must 
   origin inside the body: half its smallest side, for a box body) from every obstacle (and, in a box
   world, from the workspace's walls), a necessary condition for any pose of the body centred there. The
   world decides which voxels are free (``centre_free_voxels``): a box world exactly, a mesh world from its
-  broad phase's distance bounds. A 26-connected Dijkstra search from the goal's voxel gives the free
-  voxels their cost-to-go (edge lengths 1, sqrt 2, sqrt 3 voxels) until it settles the start's voxel; the
-  route descends it from there. An end whose voxel is not free starts from the nearest free voxel.
+  broad phase's distance bounds. A 26-connected A* search from the goal's voxel (edge lengths 1, sqrt 2,
+  sqrt 3 voxels; the heuristic the 26-connected distance to the start's voxel, scaled by ``HEURISTIC_SCALE``
+  so that every voxel of every shortest route is settled before the start) gives the voxels it settles their
+  exact cost-to-go; the route descends it from the start, to the neighbour of least cost plus step (the first
+  of equals in a fixed order). An end whose voxel is not free starts from the nearest free voxel.
 * ``WorkspaceRouteSampler``: with probability ``route_fraction`` (0.75) a position drawn uniformly by arc
   length along the route, plus isotropic Gaussian noise of ``spread`` (default the world's ``route_spread``:
   a box world's inner radius, a mesh world's ``ROUTE_SPREAD_CELLS`` route cells),
@@ -22,7 +24,6 @@ Box and mesh worlds (``RigidBodyWorld``, ``MeshWorld``); numpy and numba.
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numba as nb
@@ -30,49 +31,109 @@ import numpy as np
 
 from planners.base.fileio import InputError, check_number
 from planners.base.samplers import SamplerBase
+from planners.kernels.heap import heap_lower, heap_pop
 from planners.worlds.rigid3d import DEFAULT_CELL, MAX_VOXELS, free_voxels, inner_radius
 
 __all__ = ["DEFAULT_CELL", "MAX_VOXELS", "WorkspaceRouteSampler", "box_muller", "centre_route", "cost_to_go",
            "free_voxels", "inner_radius", "route_world", "voxel_route"]
 
 
-@nb.njit(cache=True)
-def cost_to_go(free, goal, stop=-1):
-    """26-connected Dijkstra from voxel ``goal`` (a flat index) over ``free``: costs in voxel sides, inf unreached.
+#: The A* heuristic's factor below 1 (``cost_to_go``): every voxel on a shortest route from the start then has a
+#: key strictly below the start's, so it is settled first, with its exact cost, whatever the order among equal keys.
+HEURISTIC_SCALE = 0.999
 
-    With ``stop`` (a flat index), the search ends when that voxel is settled: every voxel cheaper than it
-    holds its exact cost, every other one at least its cost (what a descent from ``stop`` needs).
-    """
+
+def _steps() -> tuple[np.ndarray, np.ndarray]:
+    """The 26 neighbour steps in the descent's fixed order, and their lengths."""
+    steps = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) if (a, b, c) != (0, 0, 0)],
+                     dtype=np.int64)
+    return steps, np.sqrt((steps * steps).sum(axis=1).astype(np.float64))
+
+
+STEPS, STEP_LENGTHS = _steps()
+
+
+@nb.njit(cache=True)
+def _octile3(di, dj, dk):
+    """The 26-connected distance of a voxel offset (edge lengths 1, sqrt 2, sqrt 3)."""
+    a, b, c = abs(di), abs(dj), abs(dk)
+    if a < b:
+        a, b = b, a
+    if b < c:
+        b, c = c, b
+    if a < b:
+        a, b = b, a
+    return c * math.sqrt(3.0) + (b - c) * math.sqrt(2.0) + (a - b)
+
+
+@nb.njit(cache=True)
+def _search(free, goal, stop, steps, lengths, scale):
     nx, ny, nz = free.shape
+    n = nx * ny * nz
     flat = free.ravel()
-    cost = np.full(flat.shape[0], np.inf)
+    cost = np.full(n, np.inf)
+    pos = np.full(n, -1, dtype=np.int64)  # heap slot; -1 never queued, -2 settled
+    keys = np.empty(n)
+    items = np.empty(n, dtype=np.int64)
+    si, sj, sk = 0, 0, 0
+    if stop >= 0:
+        si, sj, sk = stop // (ny * nz), (stop // nz) % ny, stop % nz
     cost[goal] = 0.0
-    heap = [(0.0, goal)]
-    while heap:
-        c, v = heapq.heappop(heap)
-        if c > cost[v]:
-            continue
+    size = heap_lower(keys, items, pos, 0, 0.0, goal)
+    while size > 0:
+        v = items[0]
+        size = heap_pop(keys, items, pos, size)
         if v == stop:
             break
+        c = cost[v]
         i = v // (ny * nz)
         j = (v // nz) % ny
         k = v % nz
-        for di in range(-1, 2):
-            for dj in range(-1, 2):
-                for dk in range(-1, 2):
-                    if di == 0 and dj == 0 and dk == 0:
-                        continue
-                    a, b, e = i + di, j + dj, k + dk
-                    if a < 0 or a >= nx or b < 0 or b >= ny or e < 0 or e >= nz:
-                        continue
-                    w = (a * ny + b) * nz + e
-                    if not flat[w]:
-                        continue
-                    nc = c + math.sqrt(di * di + dj * dj + dk * dk)
-                    if nc < cost[w]:
-                        cost[w] = nc
-                        heapq.heappush(heap, (nc, w))
+        for m in range(steps.shape[0]):
+            a, b, e = i + steps[m, 0], j + steps[m, 1], k + steps[m, 2]
+            if a < 0 or a >= nx or b < 0 or b >= ny or e < 0 or e >= nz:
+                continue
+            w = (a * ny + b) * nz + e
+            if not flat[w] or pos[w] == -2:
+                continue
+            nc = c + lengths[m]
+            if nc < cost[w]:
+                cost[w] = nc
+                h = scale * _octile3(a - si, b - sj, e - sk) if stop >= 0 else 0.0
+                size = heap_lower(keys, items, pos, size, nc + h, w)
     return cost.reshape(free.shape)
+
+
+def cost_to_go(free: np.ndarray, goal: int, stop: int = -1) -> np.ndarray:
+    """26-connected costs to voxel ``goal`` (a flat index) over ``free``, in voxel sides; inf where not reached.
+
+    Without ``stop``: a Dijkstra search, every free voxel's exact cost. With ``stop`` (a flat index): an A* search
+    toward it that ends once it is settled (see the module doc): ``stop`` and every voxel of every shortest route
+    from it hold their exact costs, every other voxel at least its cost (what a descent from ``stop`` needs).
+    """
+    free = np.ascontiguousarray(free, dtype=np.bool_)
+    return _search(free, int(goal), int(stop), STEPS, STEP_LENGTHS, HEURISTIC_SCALE)
+
+
+@nb.njit(cache=True)
+def _descend(cost, s, steps, lengths):
+    """Voxel indices from ``s`` down ``cost`` to a voxel of cost 0: each step to the neighbour of least cost plus
+    step length, the first of equals in ``steps``' order."""
+    nx, ny, nz = cost.shape
+    out = [(s[0], s[1], s[2])]
+    i, j, k = s[0], s[1], s[2]
+    while cost[i, j, k] > 0:
+        best, bi, bj, bk = np.inf, -1, -1, -1
+        for m in range(steps.shape[0]):
+            a, b, e = i + steps[m, 0], j + steps[m, 1], k + steps[m, 2]
+            if a < 0 or a >= nx or b < 0 or b >= ny or e < 0 or e >= nz:
+                continue
+            t = cost[a, b, e] + lengths[m]
+            if t < best:
+                best, bi, bj, bk = t, a, b, e
+        i, j, k = bi, bj, bk
+        out.append((i, j, k))
+    return out
 
 
 def box_muller(u: np.ndarray) -> np.ndarray:
@@ -117,16 +178,8 @@ def voxel_route(world, start, goal, cell: float | None = None) -> np.ndarray | N
                       int(np.ravel_multi_index(tuple(s), free.shape)))
     if not np.isfinite(cost[tuple(s)]):
         return None
-    steps = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1) if (a, b, c) != (0, 0, 0)])
-    path, v = [s], s
-    while cost[tuple(v)] > 0:
-        nb_ = v + steps
-        ok = np.all((nb_ >= 0) & (nb_ < shape), axis=1)
-        nb_, st = nb_[ok], steps[ok]
-        total = cost[nb_[:, 0], nb_[:, 1], nb_[:, 2]] + np.linalg.norm(st, axis=1)
-        v = nb_[int(np.argmin(total))]
-        path.append(v)
-    centres = low + (np.array(path) + 0.5) * cell
+    path = np.array(_descend(cost, np.asarray(s, dtype=np.int64), STEPS, STEP_LENGTHS), dtype=np.int64)
+    centres = low + (path + 0.5) * cell
     return np.concatenate([np.asarray(start[:3])[None], centres, np.asarray(goal[:3])[None]])
 
 
@@ -150,18 +203,19 @@ def centre_route(world, route: np.ndarray, reach: int, cell: float | None = None
     r = np.arange(-reach, reach + 1)
     offsets = np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
 
-    clearance = world.workspace_clearance
-    out = route.copy()
+    # every interior point at once: its candidates in ``offsets``' order, those along the route masked out
     k = len(route)
-    for i in range(1, k - 1):
-        chord = route[min(i + 2, k - 1)] - route[max(i - 2, 0)]
-        along = np.abs(offsets @ (chord / max(float(np.linalg.norm(chord)), 1e-12)))
-        v = np.clip(np.floor((route[i] - low) / cell).astype(np.int64), 0, shape - 1)
-        cand = low + (np.clip(v + offsets[along <= 0.5], 0, shape - 1) + 0.5) * cell
-        c = clearance(cand)
-        best = int(np.argmax(c))
-        if c[best] > clearance(route[i][None])[0]:
-            out[i] = cand[best]
+    inner = np.arange(1, k - 1)
+    chords = route[np.minimum(inner + 2, k - 1)] - route[np.maximum(inner - 2, 0)]
+    across = np.stack([np.abs(offsets @ (ch / max(float(np.linalg.norm(ch)), 1e-12))) <= 0.5 for ch in chords])
+    v = np.clip(np.floor((route[inner] - low) / cell).astype(np.int64), 0, shape - 1)
+    cand = low + (np.clip(v[:, None, :] + offsets[None], 0, shape - 1) + 0.5) * cell
+    c = np.full(across.shape, -np.inf)
+    c[across] = world.workspace_clearance(cand[across])
+    best = np.argmax(c, axis=1)  # the first of equals, as over the masked candidates alone
+    gain = c[np.arange(len(inner)), best] > world.workspace_clearance(route[inner])
+    out = route.copy()
+    out[inner[gain]] = cand[np.flatnonzero(gain), best[gain]]
     return out
 
 

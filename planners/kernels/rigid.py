@@ -210,3 +210,78 @@ def rigid_motion_free(geom, index, body, params, a, b):
         if not rigid_state_clear(geom, index, body, params, q, margin):
             return False
     return True
+
+
+@nb.njit(cache=True)
+def box_clearance(points, boxes, low, high):
+    """``(n,)``: each point's distance to the nearest of ``boxes`` (``(m, 6)``: low corner, high corner) or wall of
+    the workspace ``[low, high]``: 0 inside a box, negative outside the workspace."""
+    n = points.shape[0]
+    out = np.empty(n)
+    for i in range(n):
+        x, y, z = points[i, 0], points[i, 1], points[i, 2]
+        d = min(min(x - low[0], high[0] - x), min(y - low[1], high[1] - y))
+        d = min(d, min(z - low[2], high[2] - z))
+        for b in range(boxes.shape[0]):
+            gx = max(max(boxes[b, 0] - x, x - boxes[b, 3]), 0.0)
+            gy = max(max(boxes[b, 1] - y, y - boxes[b, 4]), 0.0)
+            gz = max(max(boxes[b, 2] - z, z - boxes[b, 5]), 0.0)
+            g = math.sqrt(gx * gx + gy * gy + gz * gz)
+            if g < d:
+                d = g
+        out[i] = d
+    return out
+
+
+@nb.njit(cache=True)
+def clear_box_voxels(free, boxes, ax, ay, az, radius):
+    """Mark ``False`` the voxels of ``free`` (centres ``ax``, ``ay``, ``az`` along each axis, ascending) whose centre
+    lies within ``radius`` of any of ``boxes`` (``(m, 6)``: low corner, high corner); in place."""
+    r2 = radius * radius
+    for b in range(boxes.shape[0]):
+        i0 = np.searchsorted(ax, boxes[b, 0] - radius, side="left")
+        i1 = np.searchsorted(ax, boxes[b, 3] + radius, side="right")
+        j0 = np.searchsorted(ay, boxes[b, 1] - radius, side="left")
+        j1 = np.searchsorted(ay, boxes[b, 4] + radius, side="right")
+        k0 = np.searchsorted(az, boxes[b, 2] - radius, side="left")
+        k1 = np.searchsorted(az, boxes[b, 5] + radius, side="right")
+        for i in range(i0, i1):
+            gx = max(max(boxes[b, 0] - ax[i], ax[i] - boxes[b, 3]), 0.0)
+            for j in range(j0, j1):
+                gy = max(max(boxes[b, 1] - ay[j], ay[j] - boxes[b, 4]), 0.0)
+                for k in range(k0, k1):
+                    gz = max(max(boxes[b, 2] - az[k], az[k] - boxes[b, 5]), 0.0)
+                    if not gx * gx + gy * gy + gz * gz > r2:
+                        free[i, j, k] = False
+
+
+@nb.njit(cache=True)
+def add_box_cover(grid, boxes, low, cell):
+    """Add to each voxel of ``grid`` (side ``cell`` from ``low``) the share of it that each of ``boxes`` covers
+    (the product of the box's cover along each axis), box by box; in place."""
+    shape = grid.shape
+    lo_i = np.empty(3, dtype=np.int64)
+    hi_i = np.empty(3, dtype=np.int64)
+    for b in range(boxes.shape[0]):
+        empty = False
+        for k in range(3):
+            lo_i[k] = max(0, int(math.floor((boxes[b, k] - low[k]) / cell)))
+            hi_i[k] = min(shape[k], int(math.ceil((boxes[b, 3 + k] - low[k]) / cell)))
+            if hi_i[k] <= lo_i[k]:
+                empty = True
+                break
+        if empty:
+            continue
+        for i in range(lo_i[0], hi_i[0]):
+            cx = _cover(low[0] + i * cell, low[0] + (i + 1) * cell, boxes[b, 0], boxes[b, 3], cell)
+            for j in range(lo_i[1], hi_i[1]):
+                cy = _cover(low[1] + j * cell, low[1] + (j + 1) * cell, boxes[b, 1], boxes[b, 4], cell)
+                for m in range(lo_i[2], hi_i[2]):
+                    cz = _cover(low[2] + m * cell, low[2] + (m + 1) * cell, boxes[b, 2], boxes[b, 5], cell)
+                    grid[i, j, m] += cx * cy * cz
+
+
+@nb.njit(cache=True)
+def _cover(lo, hi, blo, bhi, cell):
+    """The share of the interval ``[lo, hi]`` (length about ``cell``) inside ``[blo, bhi]``."""
+    return min(max(min(hi, bhi) - max(lo, blo), 0.0), cell) / cell

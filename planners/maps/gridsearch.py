@@ -18,6 +18,7 @@ import operator
 import numba as nb
 import numpy as np
 
+from planners.kernels.heap import heap_lower, heap_pop
 from planners.worlds.grid import OccupancyGrid
 
 SQRT2 = math.sqrt(2.0)
@@ -78,64 +79,11 @@ def _grid_cell(grid: OccupancyGrid, point, label: str) -> tuple[int, int]:
 
 
 @nb.njit(cache=True)
-def _place(keys, items, pos, j, k, v):
-    """Move entry (``k``, ``v``) up the heap from slot ``j`` to where it belongs."""
-    while j > 0:
-        p = (j - 1) >> 1
-        if keys[p] <= k:
-            break
-        keys[j] = keys[p]
-        items[j] = items[p]
-        pos[items[j]] = j
-        j = p
-    keys[j] = k
-    items[j] = v
-    pos[v] = j
-
-
-@nb.njit(cache=True)
-def _lower(keys, items, pos, size, k, v):
-    """Put ``v`` on the heap with key ``k``, or move it up after its key fell to ``k``: the heap's new size."""
-    if pos[v] == -1:
-        _place(keys, items, pos, size, k, v)
-        return size + 1
-    _place(keys, items, pos, pos[v], k, v)
-    return size
-
-
-@nb.njit(cache=True)
-def _drop_least(keys, items, pos, size):
-    """Take the least-key entry (``keys[0]``, ``items[0]``, read by the caller first) off the heap: the new size."""
-    pos[items[0]] = -2
-    size -= 1
-    if size == 0:
-        return 0
-    k, v = keys[size], items[size]
-    j = 0
-    while True:
-        c = 2 * j + 1
-        if c >= size:
-            break
-        if c + 1 < size and keys[c + 1] < keys[c]:
-            c += 1
-        if keys[c] >= k:
-            break
-        keys[j] = keys[c]
-        items[j] = items[c]
-        pos[items[j]] = j
-        j = c
-    keys[j] = k
-    items[j] = v
-    pos[v] = j
-    return size
-
-
-@nb.njit(cache=True)
 def _dijkstra(padded, goal, stop, dr, dc):
     """Octile Dijkstra from flat padded index ``goal``; stops once ``stop`` is settled (-1: never).
 
     Returns the flat distance array and, per cell, the next cell on a shortest path to the goal.
-    Uses an indexed binary heap with decrease-key (``_lower``, ``_drop_least``), so the heap never holds more
+    Uses an indexed binary heap with decrease-key (``planners.kernels.heap``), so the heap never holds more
     than H*W entries.
     """
     Wp = padded.shape[1]
@@ -148,10 +96,10 @@ def _dijkstra(padded, goal, stop, dr, dc):
     items = np.empty(n, dtype=np.int64)
     off = dr * Wp + dc
     dist[goal] = 0.0
-    size = _lower(keys, items, pos, 0, 0.0, goal)
+    size = heap_lower(keys, items, pos, 0, 0.0, goal)
     while size > 0:
         dv, v = keys[0], items[0]
-        size = _drop_least(keys, items, pos, size)
+        size = heap_pop(keys, items, pos, size)
         if v == stop:
             break
         for k in range(8):
@@ -168,7 +116,7 @@ def _dijkstra(padded, goal, stop, dr, dc):
             if nd < dist[u]:
                 dist[u] = nd
                 toward[u] = v
-                size = _lower(keys, items, pos, size, nd, u)
+                size = heap_lower(keys, items, pos, size, nd, u)
     return dist, toward
 
 
@@ -197,10 +145,10 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc, open_moves, most)
     for i in range(n):
         if goal[i // w, i % w]:
             dist[i] = 0.0
-            size = _lower(keys, items, pos, size, dist[i], i)
+            size = heap_lower(keys, items, pos, size, dist[i], i)
     while size > 0:
         dv, v = keys[0], items[0]
-        size = _drop_least(keys, items, pos, size)
+        size = heap_pop(keys, items, pos, size)
         r, c = v // w, v % w
         for a in range(A):
             br, bc = r - dr[a], c - dc[a]  # the block that move a carries onto v
@@ -214,7 +162,7 @@ def _move_cost_dijkstra(costs, goal, walls, unreached, dr, dc, open_moves, most)
             nd = costs[a, br, bc] + dv
             if nd < dist[b]:
                 dist[b] = nd
-                size = _lower(keys, items, pos, size, nd, b)
+                size = heap_lower(keys, items, pos, size, nd, b)
     return dist.reshape(h, w)
 
 

@@ -254,13 +254,10 @@ class RigidBodyWorld(WorldBase):
 
         0 inside a box, negative outside the workspace.
         """
-        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        d = np.minimum(p - self.low3, self.high3 - p).min(axis=1)
-        if len(self.boxes):
-            lo, hi = self.boxes[None, :, :3], self.boxes[None, :, 3:]
-            gap = np.maximum(np.maximum(lo - p[:, None], p[:, None] - hi), 0.0)
-            d = np.minimum(d, np.linalg.norm(gap, axis=2).min(axis=1))
-        return d
+        p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        boxes = np.ascontiguousarray(self.boxes, dtype=np.float64).reshape(-1, 6)
+        return rigid_kernels.box_clearance(p, boxes, np.asarray(self.low3, dtype=np.float64),
+                                           np.asarray(self.high3, dtype=np.float64))
 
     def free_volume(self) -> float:
         """Measure of the free states in ``(x, y, z, tx, ty, tz)`` coordinates (for RRT*/PRM* radii).
@@ -327,16 +324,9 @@ def free_voxels(boxes: np.ndarray, low: np.ndarray, high: np.ndarray, cell: floa
         idx = [slice(None)] * 3
         idx[k] = near
         free[tuple(idx)] = False
-    for b in boxes:
-        sl, gaps = [], []
-        for k in range(3):
-            i0 = int(np.searchsorted(axes[k], b[k] - radius, side="left"))
-            i1 = int(np.searchsorted(axes[k], b[3 + k] + radius, side="right"))
-            sl.append(slice(i0, i1))
-            c = axes[k][i0:i1]
-            gaps.append(np.maximum(np.maximum(b[k] - c, c - b[3 + k]), 0.0))
-        d2 = gaps[0][:, None, None] ** 2 + gaps[1][None, :, None] ** 2 + gaps[2][None, None, :] ** 2
-        free[tuple(sl)] &= d2 > radius * radius
+    if len(boxes):  # compiled: a scene of thousands of boxes costs milliseconds
+        rigid_kernels.clear_box_voxels(free, np.ascontiguousarray(boxes, dtype=np.float64).reshape(-1, 6),
+                                       *(np.ascontiguousarray(a, dtype=np.float64) for a in axes), float(radius))
     return free
 
 
