@@ -280,3 +280,19 @@ def test_the_clearance_open_test_keeps_passage_points_and_drops_most_open_ones()
     assert np.allclose(by_clearance.labels.sum(axis=1), 1)
     with pytest.raises(InputError, match="open_test"):
         RigidTrainConfig(open_test="walls").check()
+
+
+def test_the_route_benchmark_times_every_piece_of_a_bind_and_checks_its_arguments(capsys):
+    from conftest import load_script
+
+    from learning.evaluation.rigid_speed import PIECES, setup_times
+
+    rows = setup_times([rigid_scene("slot", 300_000)], repeats=1)
+    assert len(rows) == 1 and all(rows[0][p] > 0 for p in PIECES) and rows[0]["route points"] > 2
+    bench = load_script("benchmark_rigid_route")
+    assert bench.main(["--part", "validation", "--families", "shelves", "--scenes", "1", "--repeats", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "| shelves | 1 |" in out and "bind (ms)" in out
+    assert bench.main(["--scenes", "0"]) == 2
+    assert bench.main(["--part", "tuning", "--families", "elbow"]) == 2
+    assert "test-only" in capsys.readouterr().err

@@ -1,0 +1,55 @@
+"""What the 6-DoF route samplers cost per query: the route search, its centring, the model's observation and pass.
+
+    python scripts/benchmark_rigid_route.py                       # 4 test scenes of every family
+    python scripts/benchmark_rigid_route.py --part validation --scenes 10 --repeats 5
+
+``rigid_route`` does this work once per query, when a planner binds it; a solved run's time includes it. Prints
+per family the median ms of each piece and of the whole bind of ``rigid_route`` and ``rigid_route_ablation``
+(``learning.evaluation.rigid_speed.setup_times``: compilation left out, one torch thread). Wall-clock figures: run
+it on a quiet machine. Exit status: 0 done, 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+
+def main(argv=None) -> int:
+    from learning.evaluation.rigid_speed import PIECES, setup_times
+    from planners.base.fileio import InputError
+    from planners.worlds.rigid_scenes import FAMILIES, TEST_ONLY_FAMILIES, rigid_scene, scene_seeds
+
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--part", choices=("validation", "tuning", "test"), default="test")
+    ap.add_argument("--families", nargs="+", default=list(FAMILIES), choices=FAMILIES)
+    ap.add_argument("--scenes", type=int, default=4, help="scenes per family")
+    ap.add_argument("--repeats", type=int, default=3, help="timed calls of each piece (the median is kept)")
+    args = ap.parse_args(argv)
+    if args.scenes < 1 or args.repeats < 1:
+        print("error: --scenes and --repeats must be at least 1", file=sys.stderr)
+        return 2
+    families = [f for f in args.families if args.part == "test" or f not in TEST_ONLY_FAMILIES]
+    if not families:
+        print(f"error: the {args.part} part has none of the families {', '.join(args.families)} (test-only)",
+              file=sys.stderr)
+        return 2
+    print("| family | scenes | boxes | route points | " + " | ".join(f"{p} (ms)" for p in PIECES) + " |")
+    print("|---|---|---|---|" + "---|" * len(PIECES))
+    try:
+        for family in families:
+            rows = setup_times([rigid_scene(family, s) for s in scene_seeds(family, args.part, args.scenes)],
+                               args.repeats)
+            med = {k: float(np.median([r[k] for r in rows])) for k in (*PIECES, "boxes", "route points")}
+            print(f"| {family} | {len(rows)} | {med['boxes']:.0f} | {med['route points']:.0f} | "
+                  + " | ".join(f"{med[p]:.1f}" for p in PIECES) + " |", flush=True)
+    except InputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
