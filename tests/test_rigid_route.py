@@ -296,3 +296,17 @@ def test_the_route_benchmark_times_every_piece_of_a_bind_and_checks_its_argument
     assert bench.main(["--scenes", "0"]) == 2
     assert bench.main(["--part", "tuning", "--families", "elbow"]) == 2
     assert "test-only" in capsys.readouterr().err
+
+
+def test_min_route_confidence_gives_the_whole_query_uniform_angles_below_the_routes_peak(slot_scene):
+    net = make_sampler("rigid_route").net
+    kw = dict(route_fraction=1.0, uniform_share=0.0, angle_noise=0.0, goal_share=0.0)
+    plain = RigidRouteSampler(net, **kw).bind(slot_scene)
+    peak = float(plain.probs.max())
+    below = RigidRouteSampler(net, min_route_confidence=peak, **kw).bind(slot_scene)  # the peak itself passes
+    above = RigidRouteSampler(net, min_route_confidence=min(1.0, np.nextafter(peak, 2.0)), **kw).bind(slot_scene)
+    a, b, c = (s.draw(np.random.default_rng(6), 100, None) for s in (plain, below, above))
+    assert np.array_equal(a, b) and below.sure.all() and not above.sure.any()
+    assert np.array_equal(a[:, :3], c[:, :3]) and not np.isclose(a[:, 3:], c[:, 3:]).all(axis=1).any()
+    with pytest.raises(InputError, match="min_route_confidence"):
+        RigidRouteSampler(net, min_route_confidence=-0.1)

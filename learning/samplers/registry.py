@@ -131,8 +131,8 @@ def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = 
 
 def _rigid_route(uniform_share: float | None = None, angle_noise: float | None = None, goal_share: float = 0.05,
                  temperature: float = 1.0, route_fraction: float = 0.75, centre: int | None = None,
-                 path: str | None = None, symmetry: str | None = None, min_confidence: float | None = None, *,
-                 models: ModelCache | None = None) -> Sampler:
+                 path: str | None = None, symmetry: str | None = None, min_confidence: float | None = None,
+                 min_route_confidence: float | None = None, *, models: ModelCache | None = None) -> Sampler:
     from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
     from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
 
@@ -146,7 +146,9 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                              centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre,
                              symmetry=SHIPPED_RIGID_SETTINGS["symmetry"] if symmetry is None else symmetry,
                              min_confidence=SHIPPED_RIGID_SETTINGS["min_confidence"] if min_confidence is None
-                             else min_confidence)
+                             else min_confidence,
+                             min_route_confidence=SHIPPED_RIGID_SETTINGS["min_route_confidence"]
+                             if min_route_confidence is None else min_route_confidence)
 
 
 def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75, centre: int | None = None) -> Sampler:

@@ -12,8 +12,9 @@ and its distribution over the six axis-aligned orientation classes there. Per sa
 
 * with probability ``goal_share`` the goal state;
 * else with probability ``route_fraction`` a route sample: its position as the ablation draws it; its
-  orientation, with probability ``uniform_share`` or where the model's largest class probability at the nearest
-  route point is below ``min_confidence``, uniform angles, else a class drawn from the model's distribution there,
+  orientation, with probability ``uniform_share``, where the model's largest class probability at the nearest
+  route point is below ``min_confidence``, or everywhere when its largest over the whole route is below
+  ``min_route_confidence`` (a query whose passages the model does not see as needing a turn), uniform angles, else a class drawn from the model's distribution there,
   one of the class's four rotations (the box's symmetry: the same volume, far apart in the planner's metric) at
   random (``symmetry="random"``) or the one nearest the orientation of the query's end nearer the sample's route
   point (``symmetry="ends"``: the start's or the goal's), turned by a random rotation of about ``angle_noise``
@@ -50,7 +51,7 @@ from planners.worlds.mesh import rotation_matrices
 #: (``scripts/experiments/tune_rigid_learned.py``; the rotation among a class's four by
 #: ``scripts/experiments/rigid_room.py --part tuning``, with the privileged expert's classes; ``docs/rigid-scenes.md``).
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
-                          "min_confidence": 0.0}
+                          "min_confidence": 0.0, "min_route_confidence": 0.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
@@ -80,12 +81,14 @@ class RigidRouteSampler(SamplerBase):
             the orientation of the query's end (start or goal) nearer the sample's route point.
         min_confidence: A route sample whose nearest route point's largest class probability is below this, in
             [0, 1], takes uniform angles (0: the model's class wherever ``uniform_share`` does not say uniform).
+        min_route_confidence: Where the largest class probability over all the route's points is below this, in
+            [0, 1], every route sample of the query takes uniform angles (the ablation's draw).
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
                  cell: float | None = None, centre: int = 2, symmetry: str = "random",
-                 min_confidence: float = 0.0) -> None:
+                 min_confidence: float = 0.0, min_route_confidence: float = 0.0) -> None:
         who = "RigidRouteSampler"
         if symmetry not in SYMMETRY_RULES:
             raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
@@ -98,6 +101,8 @@ class RigidRouteSampler(SamplerBase):
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
         self.min_confidence = float(check_number(who, "min_confidence", min_confidence, low=0, high=1))
+        self.min_route_confidence = float(check_number(who, "min_route_confidence", min_route_confidence, low=0,
+                                                       high=1))
         self.spread = None if spread is None else float(check_number(who, "spread", spread, low=0))
         self.cell = None if cell is None else float(check_number(who, "cell", cell, low=0, low_open=True))
         if net is None and self.uniform_share < 1.0:
@@ -133,6 +138,8 @@ class RigidRouteSampler(SamplerBase):
         # the route points whose class the samples take (without a model no sample takes one: uniform_share is 1)
         self.sure = (self.probs.max(axis=1) >= self.min_confidence if len(self.probs) == len(self.route)
                      else np.ones(len(self.route), dtype=bool))
+        if len(self.probs) and self.probs.max() < self.min_route_confidence:
+            self.sure[:] = False  # the model sees no passage that needs a turn: the ablation's uniform angles
         self.ends = rotation_matrices(np.stack([self.problem.start[3:6], self.problem.goal[3:6]]))
 
     def draw(self, rng, n, view):
@@ -173,4 +180,5 @@ class RigidRouteSampler(SamplerBase):
         return (f"RigidRouteSampler(route_fraction={self.route_fraction:g}, uniform_share={self.uniform_share:g}, "
                 f"angle_noise={self.angle_noise:g}, goal_share={self.goal_share:g}, "
                 f"temperature={self.temperature:g}, spread={sd}, cell={cell}, centre={self.centre}, "
-                f"symmetry={self.symmetry!r}, min_confidence={self.min_confidence:g})")
+                f"symmetry={self.symmetry!r}, min_confidence={self.min_confidence:g}, "
+                f"min_route_confidence={self.min_route_confidence:g})")

@@ -117,11 +117,13 @@ def cost_to_go(free: np.ndarray, goal: int, stop: int = -1) -> np.ndarray:
 
 @nb.njit(cache=True)
 def _descend(cost, s, steps, lengths):
-    """Voxel indices from ``s`` down ``cost`` to a voxel of cost 0: each step to the neighbour of least cost plus
-    step length, the first of equals in ``steps``' order."""
+    """``(k, 3)`` voxel indices from ``s`` down ``cost`` to a voxel of cost 0: each step to the neighbour of least
+    cost plus step length, the first of equals in ``steps``' order."""
     nx, ny, nz = cost.shape
-    out = [(s[0], s[1], s[2])]
     i, j, k = s[0], s[1], s[2]
+    out = np.empty((int(cost[i, j, k]) + 2, 3), dtype=np.int64)  # each step lowers the cost by at least 1
+    out[0, 0], out[0, 1], out[0, 2] = i, j, k
+    n = 1
     while cost[i, j, k] > 0:
         best, bi, bj, bk = np.inf, -1, -1, -1
         for m in range(steps.shape[0]):
@@ -131,9 +133,12 @@ def _descend(cost, s, steps, lengths):
             t = cost[a, b, e] + lengths[m]
             if t < best:
                 best, bi, bj, bk = t, a, b, e
+        if n == out.shape[0]:
+            raise RuntimeError("the route's descent did not fall by a voxel side a step")
         i, j, k = bi, bj, bk
-        out.append((i, j, k))
-    return out
+        out[n, 0], out[n, 1], out[n, 2] = i, j, k
+        n += 1
+    return out[:n]
 
 
 def box_muller(u: np.ndarray) -> np.ndarray:
@@ -178,7 +183,7 @@ def voxel_route(world, start, goal, cell: float | None = None) -> np.ndarray | N
                       int(np.ravel_multi_index(tuple(s), free.shape)))
     if not np.isfinite(cost[tuple(s)]):
         return None
-    path = np.array(_descend(cost, np.asarray(s, dtype=np.int64), STEPS, STEP_LENGTHS), dtype=np.int64)
+    path = _descend(cost, np.asarray(s, dtype=np.int64), STEPS, STEP_LENGTHS)
     centres = low + (path + 0.5) * cell
     return np.concatenate([np.asarray(start[:3])[None], centres, np.asarray(goal[:3])[None]])
 
