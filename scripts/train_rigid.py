@@ -41,6 +41,7 @@ def main(argv=None) -> int:
     ap.add_argument("--epochs", type=int, default=d.epochs)
     ap.add_argument("--batch", type=int, default=d.batch)
     ap.add_argument("--lr", type=float, default=d.lr)
+    ap.add_argument("--half", type=int, default=d.half, help="half the observation patch's side, in voxels")
     ap.add_argument("--channels", type=int, default=d.channels)
     ap.add_argument("--hidden", type=int, default=d.hidden)
     ap.add_argument("--poses", type=int, default=d.poses, help="jittered poses per point and class for the label")
@@ -65,7 +66,8 @@ def main(argv=None) -> int:
                                   epochs=args.epochs, batch=args.batch, lr=args.lr, channels=args.channels,
                                   hidden=args.hidden, poses=args.poses, open_keep=args.open_keep,
                                   augment=not args.no_augment, seed=args.seed,
-                                  label=args.label, window=args.window, open_test=args.open_test).check()
+                                  label=args.label, window=args.window, open_test=args.open_test,
+                                  half=args.half).check()
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

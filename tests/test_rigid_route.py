@@ -310,3 +310,14 @@ def test_min_route_confidence_gives_the_whole_query_uniform_angles_below_the_rou
     assert np.array_equal(a[:, :3], c[:, :3]) and not np.isclose(a[:, 3:], c[:, 3:]).all(axis=1).any()
     with pytest.raises(InputError, match="min_route_confidence"):
         RigidRouteSampler(net, min_route_confidence=-0.1)
+
+
+def test_the_patch_size_is_part_of_the_recipe_and_reaches_the_model():
+    torch.set_num_threads(1)
+    config = RigidTrainConfig(scenes_per_family=1, families=("slot",), epochs=1, held_out=0.0, half=4)
+    net, log = train_rigid_orientation(config)
+    assert net.half == 4 and log["examples"] > 0
+    with pytest.raises(InputError, match="half"):
+        RigidTrainConfig(half=40).check()
+    with pytest.raises(InputError, match="half"):
+        RigidTrainConfig(half=1).check()

@@ -96,6 +96,7 @@ class RigidTrainConfig:
     label: str = "solution"
     window: float = 6.0
     open_test: str = "label"
+    half: int = PATCH_HALF
 
     def check(self) -> RigidTrainConfig:
         """The config, or an ``InputError`` naming the first field out of range."""
@@ -114,6 +115,8 @@ class RigidTrainConfig:
         if self.label not in LABELS:
             raise InputError(f"label = {self.label!r}; choose from {', '.join(LABELS)}")
         check_number("RigidTrainConfig", "window", self.window, low=0)
+        if check_int(self.half, "half", low=2) > 32:  # what load_orientation_net accepts
+            raise InputError(f"half = {self.half}: at most 32")
         if self.open_test not in OPEN_TESTS:
             raise InputError(f"open_test = {self.open_test!r}; choose from {', '.join(OPEN_TESTS)}")
         return self
@@ -171,7 +174,7 @@ def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], N
                 parts.append(_densify(witness.path))
             label_rng = np.random.default_rng([config.seed, int(s), len(names)])
             for pts in parts:
-                p, _ = route_observation(world, pts, half=PATCH_HALF)
+                p, _ = route_observation(world, pts, half=config.half)
                 d = route_directions(pts).astype(np.float32)
                 fit = None
                 if solution is not None:
@@ -253,7 +256,7 @@ def train_rigid_orientation(config: RigidTrainConfig, examples: RigidExamples | 
     train_idx = np.flatnonzero(~test)
     with torch.random.fork_rng(devices=[]):  # the weights' initialisation from the seed, the caller's state kept
         torch.manual_seed(config.seed)
-        net = OrientationNet(half=PATCH_HALF, channels=config.channels, hidden=config.hidden)
+        net = OrientationNet(half=config.half, channels=config.channels, hidden=config.hidden)
     opt = torch.optim.Adam(net.parameters(), lr=config.lr)
     steps = config.epochs * int(np.ceil(len(train_idx) / config.batch))
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, max(1, steps))
