@@ -151,7 +151,7 @@ class ExpertAngles(SamplerBase):
 
 def main(argv=None) -> int:
     from learning.evaluation.rigid import build_planner
-    from planners.worlds.rigid_scenes import RigidSceneSet
+    from planners.worlds.rigid_scenes import TRAINING_FAMILIES, RigidSceneSet
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", type=int, default=4, help="validation scenes per family")
@@ -159,6 +159,8 @@ def main(argv=None) -> int:
     ap.add_argument("--planners", nargs="+", default=["RRTConnect", "RRT"], choices=["RRTConnect", "RRT"])
     ap.add_argument("--part", default="validation", choices=["validation", "tuning"])
     ap.add_argument("--only", nargs="+", help="run only these rows (sampler names as printed)")
+    ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), choices=TRAINING_FAMILIES,
+                    help="scene families (default every training family)")
     args = ap.parse_args(argv)
     if args.scenes < 1 or args.seeds < 1:
         ap.error("--scenes and --seeds must be at least 1")
@@ -173,7 +175,7 @@ def main(argv=None) -> int:
                                                                                                     symmetry="chain"),
                 "route positions, the nearer end's axis-aligned rotation": EndAngles,
                 "rigid_expert": RigidExpertSampler}
-    scenes = RigidSceneSet()
+    scenes = RigidSceneSet(tuple(args.families), (), {args.part: args.scenes})
     if args.only:
         unknown = sorted(set(args.only) - set(samplers))
         if unknown:
