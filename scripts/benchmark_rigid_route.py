@@ -2,11 +2,14 @@
 
     python scripts/benchmark_rigid_route.py                       # 4 test scenes of every family
     python scripts/benchmark_rigid_route.py --part validation --scenes 10 --repeats 5
+    python scripts/benchmark_rigid_route.py --omplapp DIR             # OMPL.app's problems instead (mesh worlds)
 
 ``rigid_route`` does this work once per query, when a planner binds it; a solved run's time includes it. Prints
 per family the median ms of each piece and of the whole bind of ``rigid_route`` and ``rigid_route_ablation``
-(``learning.evaluation.rigid_speed.setup_times``: compilation left out, one torch thread). Wall-clock figures: run
-it on a quiet machine. Exit status: 0 done, 2 bad input.
+(``learning.evaluation.rigid_speed.setup_times``: compilation left out, one torch thread); with ``--omplapp DIR``
+(or ``$SAMPLERGYM_OMPLAPP_DIR`` with ``--omplapp`` alone) the same per OMPL.app problem (``--problems``, default
+every ``.cfg`` there; one that does not load is listed with the reason). Wall-clock figures: run it on a quiet
+machine. Exit status: 0 done, 2 bad input.
 """
 
 from __future__ import annotations
@@ -27,10 +30,18 @@ def main(argv=None) -> int:
     ap.add_argument("--families", nargs="+", default=list(FAMILIES), choices=FAMILIES)
     ap.add_argument("--scenes", type=int, default=4, help="scenes per family")
     ap.add_argument("--repeats", type=int, default=3, help="timed calls of each piece (the median is kept)")
+    ap.add_argument("--omplapp", nargs="?", const="", metavar="DIR",
+                    help="OMPL.app's problems instead of the scene set (default folder $SAMPLERGYM_OMPLAPP_DIR)")
+    ap.add_argument("--problems", nargs="+", help="OMPL.app problem names for --omplapp (default every .cfg)")
     args = ap.parse_args(argv)
     if args.scenes < 1 or args.repeats < 1:
         print("error: --scenes and --repeats must be at least 1", file=sys.stderr)
         return 2
+    if args.problems and args.omplapp is None:
+        print("error: --problems goes with --omplapp", file=sys.stderr)
+        return 2
+    if args.omplapp is not None:
+        return _omplapp(args, PIECES, setup_times)
     families = [f for f in args.families if args.part == "test" or f not in TEST_ONLY_FAMILIES]
     if not families:
         print(f"error: the {args.part} part has none of the families {', '.join(args.families)} (test-only)",
@@ -48,6 +59,40 @@ def main(argv=None) -> int:
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    return 0
+
+
+def _omplapp(args, pieces, setup_times) -> int:
+    """The table per OMPL.app problem (``--omplapp``)."""
+    from planners.base.fileio import InputError
+    from planners.worlds.omplapp import load_omplapp_cfg, omplapp_dir
+
+    try:
+        folder = omplapp_dir(args.omplapp or None)
+    except InputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    if folder is None:
+        print("error: --omplapp without a folder needs $SAMPLERGYM_OMPLAPP_DIR", file=sys.stderr)
+        return 2
+    names = args.problems or sorted(p.stem for p in folder.glob("*.cfg"))
+    if missing := [n for n in names if not (folder / f"{n}.cfg").is_file()]:
+        print(f"error: --problems {missing[0]}: no {missing[0]}.cfg in {folder}", file=sys.stderr)
+        return 2
+    print("| problem | route points | " + " | ".join(f"{p} (ms)" for p in pieces) + " |")
+    print("|---|---|" + "---|" * len(pieces))
+    for name in names:
+        try:
+            problem = load_omplapp_cfg(folder / f"{name}.cfg")
+        except InputError as e:
+            print(f"| {name} | not loaded: {e} |", flush=True)
+            continue
+        rows = setup_times([problem], args.repeats)
+        if not rows:
+            print(f"| {name} | no workspace route |", flush=True)
+            continue
+        r = rows[0]
+        print(f"| {name} | {r['route points']} | " + " | ".join(f"{r[p]:.1f}" for p in pieces) + " |", flush=True)
     return 0
 
 

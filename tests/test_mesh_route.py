@@ -148,3 +148,16 @@ def test_a_mesh_world_s_solid_share_is_the_boxes_volume_where_it_was_built_from_
     route = voxel_route(mesh.world, box.start, box.goal, 1.0)
     patches, dirs = route_observation(mesh.world, route, 1.0, seeds=seeds)
     assert np.array_equal(patches, route_patches(seen, route, mesh.world.low3, 1.0)) and len(dirs) == len(route)
+
+
+def test_the_route_benchmark_times_a_mesh_worlds_bind_as_the_sampler_sees_it():
+    from learning.evaluation.rigid_speed import PIECES, setup_times
+    from learning.samplers.rigid_route import class_frame
+    from planners.worlds.rigid_scenes import mesh_scene
+
+    problem = mesh_scene("hatch", 3_000_000)
+    (row,) = setup_times([problem], repeats=1)
+    assert all(row[p] > 0 for p in PIECES)
+    rotations, seen = class_frame(problem.world)
+    assert rotations.shape == (6, 4, 3, 3) and seen > 0
+    assert np.allclose(np.einsum("csij,csik->csjk", rotations, rotations), np.eye(3))  # still rotations

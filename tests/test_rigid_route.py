@@ -282,7 +282,7 @@ def test_the_clearance_open_test_keeps_passage_points_and_drops_most_open_ones()
         RigidTrainConfig(open_test="walls").check()
 
 
-def test_the_route_benchmark_times_every_piece_of_a_bind_and_checks_its_arguments(capsys):
+def test_the_route_benchmark_times_every_piece_of_a_bind_and_checks_its_arguments(capsys, tmp_path, monkeypatch):
     from conftest import load_script
 
     from learning.evaluation.rigid_speed import PIECES, setup_times
@@ -296,6 +296,10 @@ def test_the_route_benchmark_times_every_piece_of_a_bind_and_checks_its_argument
     assert bench.main(["--scenes", "0"]) == 2
     assert bench.main(["--part", "tuning", "--families", "elbow"]) == 2
     assert "test-only" in capsys.readouterr().err
+    monkeypatch.delenv("SAMPLERGYM_OMPLAPP_DIR", raising=False)
+    assert bench.main(["--problems", "cubicles"]) == 2 and "goes with --omplapp" in capsys.readouterr().err
+    assert bench.main(["--omplapp"]) == 2 and "SAMPLERGYM_OMPLAPP_DIR" in capsys.readouterr().err
+    assert bench.main(["--omplapp", str(tmp_path)]) == 2 and "no OMPL.app problems" in capsys.readouterr().err
 
 
 def test_min_route_confidence_gives_the_whole_query_uniform_angles_below_the_routes_peak(slot_scene):

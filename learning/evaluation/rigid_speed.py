@@ -34,6 +34,7 @@ def setup_times(problems: Sequence, repeats: int = 3) -> list[dict]:
 
     from learning.models.rigid_orientation import class_probabilities
     from learning.samplers.registry import make_sampler
+    from learning.samplers.rigid_route import class_frame
     from planners.guidance.rigid_orientation import route_observation
     from planners.guidance.workspace_route import centre_route, voxel_route
 
@@ -46,12 +47,15 @@ def setup_times(problems: Sequence, repeats: int = 3) -> list[dict]:
             world = problem.world
             learned.bind(problem), ablation.bind(problem)  # compiles what the first bind compiles
             row = {"scene": getattr(problem, "name", ""), "boxes": len(getattr(world, "boxes", ()))}
+            # the route (and its centring) at the world's own route voxels, as the sampler's bind has them
             row["route"], route = _ms(repeats, voxel_route, world, problem.start, problem.goal)
             if route is None:
                 continue
             row["centre"], centred = _ms(repeats, centre_route, world, route, learned.centre)
-            row["observation"], (patches, dirs) = _ms(repeats, route_observation, world, centred,
-                                                      half=learned.net.half)
+            seen = class_frame(world)[1]  # as the sampler's bind sees it (a mesh world: from the query's ends)
+            ends = np.stack([problem.start[:3], problem.goal[:3]])
+            row["observation"], (patches, dirs) = _ms(repeats, route_observation, world, centred, seen,
+                                                      learned.net.half, seeds=ends)
             row["model"], _ = _ms(repeats, class_probabilities, learned.net, patches, dirs)
             row["bind"], _ = _ms(repeats, learned.bind, problem)
             row["ablation bind"], _ = _ms(repeats, ablation.bind, problem)

@@ -11,14 +11,14 @@ model's observation at every route point (``planners.guidance.rigid_orientation.
 and its distribution over the six axis-aligned orientation classes there. Per sample, numpy only:
 
 * with probability ``goal_share`` the goal state;
-* else with probability ``route_fraction`` a route sample: its position as the ablation draws it; its
-  orientation, with probability ``uniform_share``, where the model's largest class probability at the nearest
-  route point is below ``min_confidence``, or everywhere when its largest over the whole route is below
-  ``min_route_confidence`` (a query whose passages the model does not see as needing a turn), uniform angles, else a class drawn from the model's distribution there,
-  one of the class's four rotations (the box's symmetry: the same volume, far apart in the planner's metric) at
-  random (``symmetry="random"``) or the one nearest the orientation of the query's end nearer the sample's route
-  point (``symmetry="ends"``: the start's or the goal's), turned by a random rotation of about ``angle_noise``
-  radians per axis (a Gaussian rotation vector);
+* else with probability ``route_fraction`` a route sample: its position as the ablation draws it; its orientation,
+  with probability ``uniform_share``, where the model's largest class probability at the nearest route point is
+  below ``min_confidence``, or everywhere when its largest over the whole route is below ``min_route_confidence`` (a
+  query whose passages the model does not see as needing a turn), uniform angles, else a class drawn from the
+  model's distribution there, one of the class's four rotations (the box's symmetry: the same volume, far apart in
+  the planner's metric) at random (``symmetry="random"``) or the one nearest the orientation of the query's end
+  nearer the sample's route point (``symmetry="ends"``: the start's or the goal's), turned by a random rotation of
+  about ``angle_noise`` radians per axis (a Gaussian rotation vector);
 * else a uniform state.
 
 Samples do not depend on the tree, so they come in batches. The orientation model learned on a box body
@@ -56,6 +56,19 @@ SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2,
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
 SYMMETRY_RULES = ("random", "ends")
+
+
+def class_frame(world, cell: float | None = None) -> tuple[np.ndarray, float]:
+    """The orientation classes' rotations in ``world`` (``(6, 4, 3, 3)``) and the voxel side the model sees there.
+
+    A box world: the body the model learned on, seen at the route's voxels (``cell``, or the world's
+    ``route_cell``). A mesh world: its body's own axes carry the classes (``body_axes``), and the model sees voxels
+    of the body's long side over ``TRAINING_LONG_SIDE`` (or ``cell`` where given).
+    """
+    if hasattr(world, "boxes"):
+        return _ROTATIONS, float(world.route_cell if cell is None else cell)
+    axes, extents = body_axes(world.body_vertices)
+    return _ROTATIONS @ axes.T, float(extents[0]) / TRAINING_LONG_SIDE if cell is None else float(cell)
 
 
 class RigidRouteSampler(SamplerBase):
@@ -115,13 +128,7 @@ class RigidRouteSampler(SamplerBase):
 
         world = route_world(self.problem.world, "RigidRouteSampler")
         cell = float(world.route_cell if self.cell is None else self.cell)
-        # a box world: the body the model learned on, seen at the route's voxels; a mesh world: its body's own
-        # axes carry the classes, and the model sees voxels of the body's long side over the training body's
-        self.rotations, seen = _ROTATIONS, cell
-        if not hasattr(world, "boxes"):
-            axes, extents = body_axes(world.body_vertices)
-            self.rotations = _ROTATIONS @ axes.T
-            seen = float(extents[0]) / TRAINING_LONG_SIDE if self.cell is None else cell
+        self.rotations, seen = class_frame(world, self.cell)
         route = voxel_route(world, self.problem.start, self.problem.goal, cell)
         self.route = np.zeros((0, 3)) if route is None else centre_route(world, route, self.centre, cell)
         seg = np.linalg.norm(np.diff(self.route, axis=0), axis=1) if len(self.route) > 1 else np.zeros(0)
