@@ -173,7 +173,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--rigid", choices=("validation", "tuning", "test"), default=None, metavar="PART",
                     help="also run the 6-DoF scene sets' PART (validation, tuning or test; docs/rigid-scenes.md): the "
                          "seed project's planners with every 6-DoF sampler, in the same journal and output set")
-    ap.add_argument("--rigid-scenes", type=int, default=2, help="--rigid: scenes per family (default 2)")
+    ap.add_argument("--rigid-scenes", type=int,
+                    help="--rigid: scenes per family (default 10, the research report's test part: 70 runs a row; "
+                         "2 with --quick)")
     ap.add_argument("--rigid-seeds", type=int, default=1, help="--rigid: planner seeds per scene (default 1)")
     ap.add_argument("--rigid-planners", nargs="+", default=list(RIGID_PLANNERS), choices=RIGID_PLANNERS,
                     help="--rigid: planners (default all)")
@@ -196,6 +198,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     if args.quick:  # Protocol.quick's fewer test queries and seeds (the tuning split unchanged)
         for k, v in QUICK.items():
             setattr(args, k, v)
+    args.rigid_scenes_given = args.rigid_scenes is not None
+    if args.rigid_scenes is None:  # not on the command line: the report's 10 scenes a family, 2 with --quick
+        args.rigid_scenes = 2 if args.quick else 10
     if args.other_planners is None:  # not on the command line: the full run's, none with --quick
         args.other_planners = [] if args.quick else list(OTHER_PLANNERS)
     if args.unseen_maps is None:
@@ -250,10 +255,11 @@ def _check_values(args) -> None:
 def _check_rigid(args) -> None:
     """``--rigid``'s flags, and its part of the comparison (``args.parts``): an ``InputError`` naming the flag."""
     args.parts = []
-    given = [f for f in ("rigid_only", "rigid_max_iterations", "rigid_samplers", "rigid_sampler") if getattr(args, f)]
+    given = [f for f in ("rigid_only", "rigid_scenes_given", "rigid_max_iterations", "rigid_samplers", "rigid_sampler")
+             if getattr(args, f)]
     if args.rigid is None:
         if given:
-            raise InputError(f"--{given[0].replace('_', '-')} needs --rigid PART")
+            raise InputError(f"--{given[0].removesuffix('_given').replace('_', '-')} needs --rigid PART")
         return
     check_int_flags(args, ("rigid_scenes", "rigid_seeds"))
     if args.rigid_max_iterations is not None:
@@ -393,7 +399,7 @@ OUTPUT_BYTES = 64 * 2**20
 def _settings(args) -> dict:
     """What decides the runs (for the journal: --resume refuses a journal of other settings)."""
     skip = {"out", "resume", "fresh", "processes", "backend", "address", "quick", "no_unseen", "map_set_queries",
-            "map_set_obj", "sampler", "models", "loaded"}
+            "map_set_obj", "sampler", "models", "loaded", "rigid_scenes_given"}
     if not args.extra_routes:  # so a run without NAME=FILE encoders keeps the journal settings it always had
         skip.add("extra_routes")
     if not args.rigid_sampler:  # likewise without a user's 6-DoF sampler

@@ -191,6 +191,7 @@ def test_evaluate_runs_the_6dof_scene_sets_as_a_part_and_checks_its_flags_first(
     for argv, needle in ((["--rigid-only"], "--rigid-only needs --rigid PART"),
                          (["--rigid", "validation", "--rigid-samplers", "nope"], "unknown sampler 'nope'"),
                          (["--rigid", "validation", "--rigid-scenes", "0"], "--rigid-scenes"),
+                         (["--rigid-scenes", "3"], "--rigid-scenes needs --rigid PART"),
                          (["--rigid-sampler", "mine=planners:UniformSampler"], "--rigid-sampler needs --rigid PART"),
                          (["--rigid", "validation", "--rigid-sampler", "uniform=planners:UniformSampler"], "taken"),
                          (["--rigid", "validation", "--rigid-sampler", "mine=nope.zip@" + RIGID_ID], "nope.zip")):
@@ -226,3 +227,10 @@ def test_which_planner_names_the_fewest_iterations_and_the_fastest_per_group_ove
     assert rows["shifted"]["fewest iterations (roadmaps: samples)"].startswith(f"RRT + {E.ROUTE}: 60 (")
     assert "## Which planner and sampler" in report.summary_markdown(res)
     assert report.which_planner(_results({"uniform": (900, 1000), E.ROUTE: (50, 60)})) == []
+
+
+def test_the_6dof_part_takes_the_reports_ten_scenes_a_family_unless_quick_or_told():
+    ev = load_script("evaluate")
+    assert ev.parse_args(["--rigid", "test"]).rigid_scenes == 10
+    assert ev.parse_args(["--quick", "--rigid", "test"]).rigid_scenes == 2
+    assert ev.parse_args(["--quick", "--rigid", "test", "--rigid-scenes", "4"]).rigid_scenes == 4
