@@ -255,11 +255,11 @@ def _check_values(args) -> None:
 def _check_rigid(args) -> None:
     """``--rigid``'s flags, and its part of the comparison (``args.parts``): an ``InputError`` naming the flag."""
     args.parts = []
-    given = [f for f in ("rigid_only", "rigid_scenes_given", "rigid_max_iterations", "rigid_samplers", "rigid_sampler")
-             if getattr(args, f)]
+    given = [f for f in ("rigid_only", "rigid_max_iterations", "rigid_samplers", "rigid_sampler") if getattr(args, f)]
+    given += ["rigid_scenes"] if args.rigid_scenes_given else []
     if args.rigid is None:
         if given:
-            raise InputError(f"--{given[0].removesuffix('_given').replace('_', '-')} needs --rigid PART")
+            raise InputError(f"--{given[0].replace('_', '-')} needs --rigid PART")
         return
     check_int_flags(args, ("rigid_scenes", "rigid_seeds"))
     if args.rigid_max_iterations is not None:
