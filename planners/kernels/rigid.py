@@ -83,19 +83,28 @@ def body_points_world(body, q):
     return out
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
-def _point_box_near(x, y, z, box, m2):
-    """True if the point ``(x, y, z)`` lies within squared distance ``m2`` of the box (closed).
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _point_box_gap2(x, y, z, box):
+    """The squared distance from the point ``(x, y, z)`` to the box (0 inside it).
 
     Without branches: a point's gap to a box along an axis is ``max(lo - x, 0, x - hi)``, and the
     squared gaps are summed in axis order, as a test axis by axis would sum them (the same answers).
-    Among many boxes, where a pose tests several boxes before it is decided, a test with early exits
-    costs about a third more (``scripts/experiments/box_index_cells.py``, docs/rigid-body.md).
     """
     dx = max(box[0] - x, 0.0, x - box[3])
     dy = max(box[1] - y, 0.0, y - box[4])
     dz = max(box[2] - z, 0.0, z - box[5])
-    return dx * dx + dy * dy + dz * dz <= m2
+    return dx * dx + dy * dy + dz * dz
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _point_box_near(x, y, z, box, m2):
+    """True if the point ``(x, y, z)`` lies within squared distance ``m2`` of the box (closed).
+
+    Among many boxes, where a pose tests several boxes before it is decided, a test with early exits
+    costs about a third more than this one without branches (``scripts/experiments/box_index_cells.py``,
+    docs/rigid-body.md).
+    """
+    return _point_box_gap2(x, y, z, box) <= m2
 
 
 #: Parameters of a world without a spatial index (bounds, delta, radius); an indexed one has ``N_INDEXED``.
@@ -223,10 +232,7 @@ def box_clearance(points, boxes, low, high):
         d = min(min(x - low[0], high[0] - x), min(y - low[1], high[1] - y))
         d = min(d, min(z - low[2], high[2] - z))
         for b in range(boxes.shape[0]):
-            gx = max(max(boxes[b, 0] - x, x - boxes[b, 3]), 0.0)
-            gy = max(max(boxes[b, 1] - y, y - boxes[b, 4]), 0.0)
-            gz = max(max(boxes[b, 2] - z, z - boxes[b, 5]), 0.0)
-            g = math.sqrt(gx * gx + gy * gy + gz * gz)
+            g = math.sqrt(_point_box_gap2(x, y, z, boxes[b]))
             if g < d:
                 d = g
         out[i] = d
