@@ -23,6 +23,9 @@ from learning.models.checkpoint import load_finite_state, read_config_state
 from planners.base.fileio import InputError, short_repr
 from planners.guidance.rigid_orientation import N_CLASSES, PATCH_HALF
 
+#: The patch half-sides a model may have (``OrientationNet.half``), inclusive: what a file and a recipe may give.
+HALF_RANGE = (2, 32)
+
 
 class OrientationNet(nn.Module):
     """Logits over the six orientation classes from ``(patch, direction)`` (the module doc).
@@ -78,7 +81,7 @@ def load_orientation_net(path: str | os.PathLike) -> OrientationNet:
     path, config, state = read_config_state(path, "orientation model", "save_orientation_net")
     if config.pop("kind", None) != "rigid_orientation":
         raise InputError(f"{path}: config kind is not 'rigid_orientation'")
-    for key, lo, hi in (("half", 2, 32), ("channels", 1, 64), ("hidden", 1, 1024)):
+    for key, lo, hi in (("half", *HALF_RANGE), ("channels", 1, 64), ("hidden", 1, 1024)):
         v = config.get(key)
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
             raise InputError(f"{path}: config {key} = {short_repr(v)}, expected an integer in [{lo}, {hi}]")

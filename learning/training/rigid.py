@@ -38,7 +38,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import torch
 
-from learning.models.rigid_orientation import OrientationNet
+from learning.models.rigid_orientation import HALF_RANGE, OrientationNet
 from learning.references.rigid_expert import solve_reference
 from planners.base.fileio import InputError, check_int, check_number
 from planners.guidance.rigid_orientation import (
@@ -115,8 +115,8 @@ class RigidTrainConfig:
         if self.label not in LABELS:
             raise InputError(f"label = {self.label!r}; choose from {', '.join(LABELS)}")
         check_number("RigidTrainConfig", "window", self.window, low=0)
-        if check_int(self.half, "half", low=2) > 32:  # what load_orientation_net accepts
-            raise InputError(f"half = {self.half}: at most 32")
+        if check_int(self.half, "half", low=HALF_RANGE[0]) > HALF_RANGE[1]:  # what a model file may hold
+            raise InputError(f"half = {self.half}: at most {HALF_RANGE[1]}")
         if self.open_test not in OPEN_TESTS:
             raise InputError(f"open_test = {self.open_test!r}; choose from {', '.join(OPEN_TESTS)}")
         return self
