@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from conftest import load_script
+
+from planners.base.fileio import InputError
 
 pytestmark = pytest.mark.experiments
 
@@ -63,3 +67,59 @@ def test_the_ompl_comparison_refuses_bad_counts():
     for bad in (["--scenes", "0"], ["--seeds", "0"], ["--time-limit", "0"], ["--families", "clutter"]):
         with pytest.raises(SystemExit):
             probe.main(bad)
+
+
+def test_the_long_runs_table_counts_an_unsolved_run_beyond_every_solved_one():
+    long_runs = load_script("experiments/omplapp_long_runs")
+    median = long_runs._median
+    assert median([10.0, 30.0, 20.0], [True, True, True]) == "20.00"
+    assert median([1000, 5, 3000, 2000], [True, False, True, True]) == "2,500"  # sorted 1000, 2000, 3000, unsolved
+    assert median([1000, 5, 3000, 2000], [True, False, False, True]) == "> 2,000"  # halfway from 2,000 to unsolved
+    assert median([1000, 5, 3000], [True, False, False]) == "> 1,000"  # the middle run is unsolved: beyond 1,000
+    rows = [{"variant": "a", "solved": s, "iterations": i, "states": i // 4, "checks": 2 * i, "seconds": i / 1e3}
+            for s, i in ((True, 4000), (False, 9000), (True, 2000))]
+    table = long_runs.summary(rows)
+    assert "| a | 2/3 | 4,000 | 1,000 | 8,000 | 4.00 |" in table
+
+
+def test_the_long_runs_solve_a_small_problem_file_and_refuse_bad_arguments(tmp_path):
+    pytest.importorskip("fcl", reason="the probe plans with FCL (the mesh extra)")
+    pytest.importorskip("trimesh", reason="the mesh extra")
+    from test_mesh_omplapp import write_problem
+
+    long_runs = load_script("experiments/omplapp_long_runs")
+    write_problem(tmp_path, name="hole")
+    out = tmp_path / "runs.jsonl"
+    assert long_runs.main(["--omplapp", str(tmp_path), "--problem", "hole", "--seeds", "2", "--time-limit", "5",
+                           "--fractions", "1e-3", "5e-4", "--out", str(out)]) == 0
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    assert [r["seed"] for r in rows] == [0, 1, 0, 1] and all(r["solved"] for r in rows)
+    assert rows[2]["delta"] == pytest.approx(0.5 * rows[0]["delta"])
+    for bad in (["--seeds", "0"], ["--fractions", "0.5"], ["--out", str(tmp_path)]):
+        with pytest.raises(SystemExit):
+            long_runs.main(["--omplapp", str(tmp_path), "--problem", "hole", "--out", str(out), *bad])
+    with pytest.raises(InputError, match="nothing.cfg"):
+        long_runs.main(["--omplapp", str(tmp_path), "--problem", "nothing", "--out", str(out)])
+
+
+def test_ompls_motions_replayed_turn_the_shortest_way_and_find_a_wall(tmp_path):
+    pytest.importorskip("fcl", reason="the probe checks with FCL (the mesh extra)")
+    pytest.importorskip("trimesh", reason="the mesh extra")
+    from test_mesh_omplapp import write_problem
+
+    from planners.worlds.omplapp import load_omplapp_cfg
+    from planners.worlds.rigid3d import rotation_matrix
+
+    long_runs = load_script("experiments/omplapp_long_runs")
+    a, b = np.array([0.0, 0, 0, 0.3, -2.0, 3.0]), np.array([1.0, 2, 0, -2.5, 1.0, 0.5])
+    poses = long_runs.slerp_poses(a, b, 0.05, 2.0)
+    assert np.allclose(poses[0], a) and np.allclose(rotation_matrix(*poses[-1, 3:]), rotation_matrix(*b[3:]))
+    turns = [np.arccos(np.clip(0.5 * (np.trace(rotation_matrix(*p[3:]).T @ rotation_matrix(*q[3:])) - 1), -1, 1))
+             for p, q in zip(poses[:-1], poses[1:], strict=True)]
+    travel = np.linalg.norm(np.diff(poses[:, :3], axis=0), axis=1) + 2.0 * np.array(turns)
+    assert np.all(travel <= 0.05 + 1e-9) and np.ptp(travel) < 1e-6  # even steps of one shortest turn
+    world = load_omplapp_cfg(write_problem(tmp_path)).world
+    through_hole = np.array([[2.0, 5, 5, 0, 0, 0], [8.0, 5, 5, 0, 0, 0]])
+    through_wall = np.array([[2.0, 5, 5, 0, 0, 0], [2.0, 1.5, 1.5, 0, 0, 0], [8.0, 1.5, 1.5, 0, 0, 0]])
+    assert long_runs.motions_through(world, through_hole, 0.05) == 0
+    assert long_runs.motions_through(world, through_wall, 0.05) == 1

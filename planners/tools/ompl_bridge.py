@@ -56,7 +56,8 @@ class OmplRun:
     time: float
     cost: float
     num_vertices: int
-    path: np.ndarray  # (n, 2) world points of OMPL's solution, start first; (0, 2) if unsolved
+    #: OMPL's solution, start first: (n, 2) world points on a grid, (n, 6) states of a rigid body; no rows if unsolved
+    path: np.ndarray
 
 
 class OmplGridPlanner:
@@ -183,7 +184,8 @@ def ompl_rigid(problem: Problem, planner: str = "RRTConnect", *, seed: int = 0, 
     OMPL.app (a motion may pass through an obstacle thinner than that), and the range is OMPL's default.
     RRT samples the goal with probability ``goal_bias`` (OMPL's default 0.05). Iterations are counted
     through the termination condition, which OMPL's planners query once per iteration. Returns the
-    run; ``path`` holds the solution's positions.
+    run; ``path`` holds the solution's states as ``(x, y, z, tx, ty, tz)`` (our angles; OMPL interpolates them as
+    quaternions, so a motion between two of them is OMPL's, not ours).
     """
     from planners.worlds.mesh import MeshWorld
     from planners.worlds.omplapp import quaternion_matrix
@@ -238,11 +240,12 @@ def ompl_rigid(problem: Problem, planner: str = "RRTConnect", *, seed: int = 0, 
     status = p.solve(ob.PlannerTerminationCondition(stop))
     dt = time.perf_counter() - t0
     solved = bool(pdef.hasExactSolution()) and str(status) == "Exact solution"
-    path = np.empty((0, 3))
+    path = np.empty((0, 6))
     cost = float("inf")
     if solved:
         solution = pdef.getSolutionPath()
-        path = np.array([(s.getX(), s.getY(), s.getZ()) for s in solution.getStates()])
+        path = np.array([(s.getX(), s.getY(), s.getZ(), *euler_from_matrix(quaternion_matrix(
+            s.rotation().x, s.rotation().y, s.rotation().z, s.rotation().w))) for s in solution.getStates()])
         cost = float(solution.length())
     data = ob.PlannerData(si)
     p.getPlannerData(data)
