@@ -100,10 +100,13 @@ def main(argv=None) -> int:
     ap.add_argument("--problem", default="Twistycool", help="the .cfg's name")
     ap.add_argument("--seeds", type=int, default=10, help="runs per variant, seeds 0 upwards")
     ap.add_argument("--time-limit", type=float, default=60.0, help="our runs' limit (s)")
-    ap.add_argument("--fractions", type=float, nargs="+", default=[1e-3], help="delta as fractions of the diagonal")
+    ap.add_argument("--fractions", type=float, nargs="*", default=[1e-3],
+                    help="delta as fractions of the diagonal; none: OMPL's runs only")
     ap.add_argument("--ompl-time-limit", type=float, default=0.0, help="OMPL's runs' limit (s); 0 runs none")
     ap.add_argument("--out", type=Path, required=True, help="a JSON-lines file of every run (written at the end)")
     args = ap.parse_args(argv)
+    if not args.fractions and not args.ompl_time_limit:
+        ap.error("nothing to run: give --fractions, --ompl-time-limit or both")
     if args.seeds < 1 or args.time_limit <= 0 or args.ompl_time_limit < 0:
         ap.error("--seeds must be at least 1, --time-limit positive and --ompl-time-limit 0 or more")
     if any(not 0 < f < 0.1 for f in args.fractions):
@@ -142,9 +145,10 @@ def main(argv=None) -> int:
             rows.append(row)
             print(json.dumps(row), flush=True)
     atomic_write_text(args.out, "".join(json.dumps(r) + "\n" for r in rows))
-    print(f"\n{args.problem}, RRT-Connect, seeds 0 to {args.seeds - 1}; ours within {args.time_limit:g} s"
-          + (f", OMPL's within {args.ompl_time_limit:g} s" if args.ompl_time_limit else "")
-          + " (an unsolved run counts as beyond every solved one)\n")
+    limits = ([f"ours within {args.time_limit:g} s"] if args.fractions else []) + \
+        ([f"OMPL's within {args.ompl_time_limit:g} s"] if args.ompl_time_limit else [])
+    print(f"\n{args.problem}, RRT-Connect, seeds 0 to {args.seeds - 1}; {', '.join(limits)} (an unsolved run counts "
+          f"as beyond every solved one)\n")
     print(summary(rows))
     replayed = [r for r in rows if "motions" in r]
     if replayed:
