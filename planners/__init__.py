@@ -2,6 +2,7 @@
 
 from planners.algorithms.obprm import OBPRM, ObstacleBasedSampler
 from planners.algorithms.prm import PRM, LazyPRM
+from planners.algorithms.restarts import luby, solve_with_restarts
 from planners.algorithms.rrt import RRT, RRTConnect
 from planners.algorithms.rrtstar import InformedRRTStar, RRTStar
 from planners.algorithms.smoothing import shortcut, simplify, smooth
@@ -79,4 +80,6 @@ __all__ = [
     "shortcut",
     "simplify",
     "smooth",
+    "luby",
+    "solve_with_restarts",
 ]

@@ -95,7 +95,16 @@ def test_the_long_runs_solve_a_small_problem_file_and_refuse_bad_arguments(tmp_p
     rows = [json.loads(line) for line in out.read_text().splitlines()]
     assert [r["seed"] for r in rows] == [0, 1, 0, 1] and all(r["solved"] for r in rows)
     assert rows[2]["delta"] == pytest.approx(0.5 * rows[0]["delta"])
-    for bad in (["--seeds", "0"], ["--fractions", "0.5"], ["--fractions"], ["--out", str(tmp_path)]):
+    assert long_runs.main(["--omplapp", str(tmp_path), "--problem", "hole", "--seeds", "1", "--no-uniform",
+                           "--samplers", "rigid_route_ablation", "--out", str(out)]) == 0
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    assert [r["variant"] for r in rows] == ["ours, delta 0.001 of the diagonal, rigid_route_ablation"]
+    assert long_runs.main(["--omplapp", str(tmp_path), "--problem", "hole", "--seeds", "1", "--luby", "3",
+                           "--out", str(out)]) == 0
+    (row,) = [json.loads(line) for line in out.read_text().splitlines()]
+    assert row["variant"].endswith("Luby restarts x 3") and row["solved"] and row["restarts"] >= 1
+    for bad in (["--seeds", "0"], ["--fractions", "0.5"], ["--fractions"], ["--out", str(tmp_path)],
+                ["--samplers", "nothing"], ["--no-uniform"]):
         with pytest.raises(SystemExit):
             long_runs.main(["--omplapp", str(tmp_path), "--problem", "hole", "--out", str(out), *bad])
     with pytest.raises(InputError, match="nothing.cfg"):

@@ -93,6 +93,7 @@ class PlanResult:
         stop_reason: "solved", "max_iterations" or "time_limit".
         planner: Planner name.
         seed: The seed that reproduces this run.
+        restarts: Attempts begun again before this one (``solve_with_restarts``; 0 for one planner's run).
     """
 
     solved: bool
@@ -107,6 +108,7 @@ class PlanResult:
     stop_reason: str
     planner: str
     seed: int
+    restarts: int = 0
 
 
 class StepResult(NamedTuple):

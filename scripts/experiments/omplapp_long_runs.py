@@ -5,18 +5,25 @@ motion resolutions, and OMPL's with the same state check.
         --seeds 10 --time-limit 60 --fractions 1e-3 2.5e-4 --ompl-time-limit 120 --out results/long_runs.jsonl
 
 A benchmark run stops at the ``.cfg``'s time limit, so where most runs fail there it says only that the median
-lies beyond it. This runs each seed until it solves or reaches a much longer limit and reports what a solve
-takes: iterations, tree states, collision checks and time. Ours is RRT-Connect with uniform sampling and the
-default settings, on the problem read with ``delta`` at each ``--fractions`` of the bounds' diagonal (every
-checked pose keeps the body ``delta / 2`` from the environment, so ``delta`` narrows each passage; the default
-is ``DEFAULT_DELTA_FRACTION``). OMPL's (``--ompl-time-limit``, the ``bench`` extra) is RRT-Connect as
-``benchmark_planners.py --rigid --rigid-ompl`` sets it up: SE(3) with quaternions, our ``is_valid`` per state,
-OMPL's discrete motion check every 1% of the space's extent with no clearance asked; each of its solutions is
-replayed as OMPL moves the body (``slerp_poses``), a pose wherever a body point has moved ``delta / 10``,
-and the motions that put the body in contact there are counted. A diagnostic: it
-chooses nothing (the problems are test problems); a resolution is chosen on the generated scenes' tuning part
-(``tune_mesh_delta.py``). The runs are made one after another in this process; the iterations do not depend
-on the machine's load, the times do.
+lies beyond it. This runs each seed until it solves or reaches a much longer limit and reports what a solve takes:
+iterations, tree states, collision checks and time. Ours is RRT-Connect with the default settings, uniform
+sampling and each of ``--samplers`` (a registry sampler, bound in the timed run), on the problem read with
+``delta`` at each ``--fractions`` of the bounds' diagonal (every checked pose keeps the body ``delta / 2`` from
+the environment, so ``delta`` narrows each passage; the default is ``DEFAULT_DELTA_FRACTION``). OMPL's
+(``--ompl-time-limit``, the ``bench`` extra) is RRT-Connect as ``benchmark_planners.py --rigid --rigid-ompl`` sets
+it up: SE(3) with quaternions, our ``is_valid`` per state, OMPL's discrete motion check every 1% of the space's extent
+with no clearance asked; each of its solutions is replayed as OMPL moves the body (``slerp_poses``), a pose
+wherever a body point has moved ``delta / 10``, and the motions that put the body in contact there are counted. A
+diagnostic: it chooses nothing (the problems are test problems); a resolution is chosen on the generated scenes'
+tuning part (``tune_mesh_delta.py``). The runs are made one after another in this process; the iterations do not
+depend on the machine's load, the times do.
+
+With ``--luby UNIT`` each of our runs restarts (``planners.solve_with_restarts``): a fresh planner, its sampler
+bound again, on a seed drawn from the run's seed and the attempt, after Luby, Sinclair and Zuckerman's universal
+sequence (1, 1, 2, 1, 1, 2, 4, ...) times ``UNIT`` iterations, the time limit over all attempts: what restarts
+give a sampler whose runs either solve soon or stall (heavy-tailed run times, as Wedge and Branicky found for
+RRT). Whatever the distribution of run times, the sequence's expected time is within a logarithmic factor of the
+best fixed cut's (Luby et al.), so ``UNIT`` matters less than a fixed cut would.
 """
 
 from __future__ import annotations
@@ -90,8 +97,9 @@ def summary(rows: list[dict]) -> str:
 
 
 def main(argv=None) -> int:
-    from planners import make_planner
+    from planners import make_planner, solve_with_restarts
     from planners.base.fileio import InputError, atomic_write_text
+    from planners.base.planner import compile_seconds
     from planners.tools import ompl_bridge
     from planners.worlds.omplapp import load_omplapp, omplapp_dir
 
@@ -102,11 +110,18 @@ def main(argv=None) -> int:
     ap.add_argument("--time-limit", type=float, default=60.0, help="our runs' limit (s)")
     ap.add_argument("--fractions", type=float, nargs="*", default=[1e-3],
                     help="delta as fractions of the diagonal; none: OMPL's runs only")
+    ap.add_argument("--samplers", nargs="*", default=[], metavar="NAME",
+                    help="registry samplers to run beside uniform sampling (make_sampler(NAME), bound per run)")
+    ap.add_argument("--no-uniform", action="store_true", help="run only the --samplers, not uniform sampling")
+    ap.add_argument("--luby", type=int, default=0, metavar="UNIT",
+                    help="restart our runs at Luby's sequence times UNIT iterations (0: no restarts)")
     ap.add_argument("--ompl-time-limit", type=float, default=0.0, help="OMPL's runs' limit (s); 0 runs none")
     ap.add_argument("--out", type=Path, required=True, help="a JSON-lines file of every run (written at the end)")
     args = ap.parse_args(argv)
     if not args.fractions and not args.ompl_time_limit:
         ap.error("nothing to run: give --fractions, --ompl-time-limit or both")
+    if args.luby < 0:
+        ap.error(f"--luby must be 0 (no restarts) or a number of iterations, got {args.luby}")
     if args.seeds < 1 or args.time_limit <= 0 or args.ompl_time_limit < 0:
         ap.error("--seeds must be at least 1, --time-limit positive and --ompl-time-limit 0 or more")
     if any(not 0 < f < 0.1 for f in args.fractions):
@@ -116,6 +131,14 @@ def main(argv=None) -> int:
     cfg = omplapp_dir(args.omplapp) / f"{args.problem}.cfg"
     if not cfg.is_file():
         raise InputError(f"--problem {args.problem}: no {cfg.name} in {cfg.parent}")
+    samplers = ([] if args.no_uniform else [None]) + list(args.samplers)
+    if args.fractions and not samplers:
+        ap.error("--no-uniform needs --samplers")
+    if args.samplers:
+        from learning.samplers.registry import make_sampler, sampler_names
+
+        if unknown := [n for n in args.samplers if n not in sampler_names()]:
+            ap.error(f"--samplers {unknown[0]}: no such sampler (known: {', '.join(sampler_names())})")
     if args.ompl_time_limit and not ompl_bridge.available():
         ap.error("--ompl-time-limit needs OMPL (pip install -c constraints.txt -e '.[bench]')")
     args.out.parent.mkdir(parents=True, exist_ok=True)
@@ -123,16 +146,27 @@ def main(argv=None) -> int:
     for fraction in args.fractions:
         world = load_omplapp(cfg).problem.world
         problem = load_omplapp(cfg, delta=fraction * float(np.linalg.norm(world.high3 - world.low3))).problem
-        make_planner("RRTConnect", problem, seed=0).solve(max_iterations=2)  # compile outside the timing
-        for seed in range(args.seeds):
-            planner = make_planner("RRTConnect", problem, seed=seed)
-            t = time.perf_counter()
-            r = planner.solve(time_limit=args.time_limit)
-            row = {"variant": f"ours, delta {fraction:g} of the diagonal", "seed": seed, "solved": bool(r.solved),
-                   "iterations": int(r.iterations), "states": int(r.num_vertices), "checks": int(r.collision_checks),
-                   "seconds": time.perf_counter() - t - planner.compile_time, "delta": problem.world.delta}
-            rows.append(row)
-            print(json.dumps(row), flush=True)
+        for name in samplers:
+            kwargs = lambda name=name: {} if name is None else {"sampler": make_sampler(name)}  # noqa: E731
+            make_planner("RRTConnect", problem, seed=0, **kwargs()).solve(max_iterations=2)  # compile first
+            variant = f"ours, delta {fraction:g} of the diagonal" + ("" if name is None else f", {name}")
+            if args.luby:
+                variant += f", Luby restarts x {args.luby}"
+            for seed in range(args.seeds):
+                t, c = time.perf_counter(), compile_seconds()
+                if args.luby:  # every attempt's bind is timed
+                    r = solve_with_restarts("RRTConnect", problem, seed=seed, unit=args.luby,
+                                            time_limit=args.time_limit, **kwargs())
+                else:
+                    planner = make_planner("RRTConnect", problem, seed=seed, **kwargs())  # a sampler's bind is timed
+                    r = planner.solve(time_limit=args.time_limit)
+                row = {"variant": variant, "seed": seed, "solved": bool(r.solved),
+                       "iterations": int(r.iterations), "states": int(r.num_vertices),
+                       "checks": int(r.collision_checks),
+                       "seconds": time.perf_counter() - t - (compile_seconds() - c),
+                       "delta": problem.world.delta, "restarts": int(r.restarts)}
+                rows.append(row)
+                print(json.dumps(row), flush=True)
     if args.ompl_time_limit:
         problem = load_omplapp(cfg).problem
         for seed in range(args.seeds):
