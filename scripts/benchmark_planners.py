@@ -205,7 +205,8 @@ def rigid(args) -> int:
     """RRT-Connect and goal-biased RRT, ours and OMPL's, on every OMPL.app problem in ``args.rigid``."""
     import time
 
-    from planners import make_planner
+    from planners import UniformSampler, make_planner, solve_with_restarts
+    from planners.base.planner import compile_seconds
     from planners.worlds.omplapp import load_omplapp, omplapp_dir
 
     folder = omplapp_dir(args.rigid)
@@ -251,23 +252,31 @@ def rigid(args) -> int:
             planner_name, kwargs = benchmark.SETUPS[label]
             for sampler_name in samplers:
 
-                def build(seed: int, problem=task.problem, planner_name=planner_name, kwargs=kwargs,
-                          sampler_name=sampler_name):
+                def arguments(planner_name=planner_name, kwargs=kwargs, sampler_name=sampler_name):
                     kw = kwargs()
                     if sampler_name is not None:  # in place of the set-up's own sampling (RRT's goal bias)
                         kw["sampler"] = make_sampler(sampler_name)
-                    return make_planner(planner_name, problem, seed=seed, **kw)
+                    return kw
 
-                build(0).solve(max_iterations=2)  # compile first
+                make_planner(planner_name, task.problem, seed=0, **arguments()).solve(max_iterations=2)  # compile
                 row = label if sampler_name is None else f"{planner_name} with {sampler_name}"
+                if args.rigid_restarts:
+                    row += f", Luby restarts x {args.rigid_restarts}"
                 rs = []
                 for seed in range(runs):
-                    t = time.perf_counter()
-                    planner = build(seed)  # binds the sampler: its set-up is part of the time
-                    t_solve = time.perf_counter()
-                    r = planner.solve(time_limit=limit)
-                    end = time.perf_counter() - planner.compile_time
-                    rs.append(_rigid_run(name, row, seed, type(planner.sampler).__name__, r.solved, r.iterations,
+                    t, c = time.perf_counter(), compile_seconds()
+                    if args.rigid_restarts:  # every attempt binds its sampler: each set-up is part of the time
+                        r = solve_with_restarts(planner_name, task.problem, seed=seed, unit=args.rigid_restarts,
+                                                time_limit=limit, **arguments())
+                        end, t_solve = time.perf_counter() - (compile_seconds() - c), t
+                        sampler_label = type(arguments().get("sampler", UniformSampler())).__name__
+                    else:
+                        planner = make_planner(planner_name, task.problem, seed=seed, **arguments())  # binds it
+                        t_solve = time.perf_counter()
+                        r = planner.solve(time_limit=limit)
+                        end = time.perf_counter() - planner.compile_time
+                        sampler_label = type(planner.sampler).__name__
+                    rs.append(_rigid_run(name, row, seed, sampler_label, r.solved, r.iterations,
                                          r.candidates, r.collision_checks, end - t, r.cost, r.num_vertices,
                                          solve_seconds=end - t_solve))
                 theirs = []
@@ -324,6 +333,9 @@ def main(argv=None) -> int:
                     help=f"only these set-ups (default: {' '.join(RIGID_SETUPS)})")
     ap.add_argument("--rigid-samplers", nargs="+", metavar="NAME",
                     help="also run our set-ups with these registry samplers (e.g. rigid_route_ablation)")
+    ap.add_argument("--rigid-restarts", type=int, default=0, metavar="UNIT",
+                    help="our runs restart after Luby's sequence times UNIT iterations (planners.solve_with_restarts; "
+                         "OMPL's do not); 0: none")
     ap.add_argument("--rigid-ompl", action="store_true",
                     help="OMPL's planners beside ours (OMPL.app's discrete motion check, our state check)")
     add_backend_arguments(ap, processes=1,
@@ -346,6 +358,7 @@ def main(argv=None) -> int:
             check_int_flags(args, ("rigid_runs",))
         if args.rigid_time_limit is not None:
             check_number("command line", "--rigid-time-limit", args.rigid_time_limit, low=0.0, low_open=True)
+        check_int_flags(args, ("rigid_restarts",), low=0)
         if args.rigid_samplers:
             from learning.samplers.registry import sampler_names
 

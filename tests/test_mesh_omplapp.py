@@ -304,3 +304,28 @@ def test_the_rigid_benchmark_writes_its_table_runs_and_planner_arena_logs(tmp_pa
     with pytest.raises(SystemExit) as refused:  # the argument checks, before anything runs
         bp.main(argv + ["--rigid-samplers", "nothing"])
     assert refused.value.code == 2
+
+
+def test_the_rigid_benchmark_restarts_our_runs_when_asked(tmp_path):
+    import csv
+
+    from conftest import load_script
+
+    from planners import solve_with_restarts
+
+    folder = tmp_path / "problems"
+    folder.mkdir()
+    write_problem(folder)
+    bp = load_script("benchmark_planners")
+    out = tmp_path / "out"
+    argv = ["--rigid", str(folder), "--rigid-runs", "2", "--rigid-time-limit", "10", "--out", str(out),
+            "--rigid-planners", "RRTConnect", "--rigid-restarts", "2"]
+    assert bp.main(argv) == 0
+    rows = list(csv.DictReader((out / "rigid_runs.csv").open()))
+    assert [r["planner"] for r in rows] == ["RRTConnect, Luby restarts x 2"] * 2
+    problem = load_omplapp_cfg(folder / "hole.cfg")
+    for seed, row in enumerate(rows):  # the run is solve_with_restarts' own, iteration for iteration
+        r = solve_with_restarts("RRTConnect", problem, seed=seed, unit=2, time_limit=10.0)
+        assert row["solved"] == "True" and int(row["iterations"]) == r.iterations
+    with pytest.raises(SystemExit):
+        bp.main(argv[:-1] + ["-1"])
