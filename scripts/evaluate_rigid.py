@@ -50,6 +50,9 @@ def main(argv=None) -> int:
     ap.add_argument("--planners", nargs="+", default=list(PLANNERS))
     ap.add_argument("--samplers", nargs="+", help=f"registry names (default {' '.join(SAMPLERS)})")
     ap.add_argument("--max-iterations", type=int, help="lower every planner's cap (quick looks only)")
+    ap.add_argument("--restarts", type=int, default=0, metavar="UNIT",
+                    help="RRT's and RRT-Connect's runs restart after Luby's sequence times UNIT iterations "
+                         "(planners.solve_with_restarts; the cap over all attempts); 0: none")
     ap.add_argument("--sampler", action="append", default=[], metavar="NAME=SPEC",
                     help="also compare a sampler of yours (repeatable): NAME=MODEL.zip@ENV_ID[@stochastic] for a "
                          "Stable-Baselines3 model trained on that SamplerGym id (e.g. SamplerGym/RRT-RigidScenes-v1), "
@@ -70,6 +73,10 @@ def main(argv=None) -> int:
         return fail(f"--scenes and --seeds must be at least 1, got {args.scenes} and {args.seeds}")
     if args.max_iterations is not None and args.max_iterations < 1:
         return fail(f"--max-iterations must be at least 1, got {args.max_iterations}")
+    if args.restarts < 0:
+        return fail(f"--restarts must be 0 (none) or a number of iterations, got {args.restarts}")
+    if args.restarts and "PRM" in args.planners:
+        return fail("--restarts is for RRT and RRTConnect: give --planners without PRM")
     try:
         sampler_params = json.loads(args.sampler_params)
     except ValueError as e:
@@ -103,12 +110,13 @@ def main(argv=None) -> int:
 
         rows = evaluate_rigid(scenes, args.part, planners=args.planners, samplers=samplers,
                               seeds=range(args.seeds), max_iterations=args.max_iterations, progress=show,
-                              sampler_params=sampler_params, user_samplers=users)
+                              sampler_params=sampler_params, user_samplers=users, restarts=args.restarts)
     except InputError as e:
         return fail(str(e))
     by_sampler = format_table(summarize(rows))
     by_family = format_table(summarize(rows, ("family", "planner", "sampler")), ("family", "planner", "sampler"))
-    text = (f"# {args.part} part: {args.scenes} scenes per family, {args.seeds} seeds\n\n"
+    text = (f"# {args.part} part: {args.scenes} scenes per family, {args.seeds} seeds"
+            + (f", runs restarting by Luby's sequence x {args.restarts} iterations" if args.restarts else "") + "\n\n"
             "Times are wall-clock seconds on whatever machine ran this (compilation left out).\n\n"
             f"{by_sampler}\n\n## By family\n\n{by_family}\n")
     print(text)

@@ -177,6 +177,24 @@ def test_the_registry_builds_the_references_and_the_comparison_counts_sampler_ch
         evaluate_rigid(ss, "validation", samplers=("nope",))
 
 
+def test_a_restarting_run_in_the_comparison_is_solve_with_restarts_own_and_counts_every_attempts_sampler_checks():
+    from learning.evaluation.rigid import planner_setup, run_one
+    from learning.samplers.registry import make_sampler
+    from planners import solve_with_restarts
+
+    problem = load_scene(WINDOW_SCENE)
+    row = run_one(problem, "RRT", "gaussian", 0, max_iterations=60, restarts=7)
+    p, kwargs = planner_setup("RRT", problem)
+    checks = []
+    r = solve_with_restarts("RRT", p, seed=0, unit=7, max_iterations=60, sampler=make_sampler("gaussian"),
+                            on_attempt=lambda pl: checks.append(pl.sampler.checks), **kwargs)
+    assert len(checks) == r.restarts + 1 >= 3  # 7, 7, 14, ... iterations: at least three attempts in 60
+    assert row.iterations == r.iterations <= 60 and row.sampler_checks == sum(checks) > 0
+    assert row.collision_checks == r.collision_checks + sum(checks)
+    with pytest.raises(InputError, match="tree planners"):
+        run_one(problem, "PRM", "uniform", 0, max_iterations=10, restarts=5)
+
+
 def test_a_box_scene_written_as_meshes_keeps_its_witness_and_omplapp_problems_join_the_test_only_set(tmp_path):
     pytest.importorskip("trimesh", reason="mesh scenes need the mesh extra (pip install samplergym[mesh])")
     pytest.importorskip("fcl", reason="mesh scenes need the mesh extra (pip install samplergym[mesh])")

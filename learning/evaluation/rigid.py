@@ -32,7 +32,7 @@ import numpy as np
 
 from learning.evaluation.protocol import Protocol
 from learning.samplers.registry import REFERENCES
-from planners import PRM, RRT, Problem, RRTConnect
+from planners import PRM, RRT, Problem, RRTConnect, solve_with_restarts
 from planners.base.fileio import InputError
 from planners.base.planner import compile_seconds
 from planners.worlds.rigid3d import PRM_SETUP, RRT_SETUP
@@ -68,36 +68,55 @@ class RigidRow:
         return asdict(self)
 
 
-def build_planner(name: str, problem: Problem, sampler, seed: int):
-    """The seed set-up of planner ``name`` on ``problem`` with ``sampler``: ``(planner, iteration cap)``."""
+def planner_setup(name: str, problem: Problem) -> tuple[Problem, dict]:
+    """The seed set-up of planner ``name`` on ``problem``: the query as it plans it and ``make_planner``'s arguments."""
     if name not in PLANNERS:
         raise InputError(f"unknown rigid-body planner {name!r}; choose from {', '.join(PLANNERS)}")
-    world = problem.world
     if name == "PRM":
-        p = problem.with_query(problem.start, problem.goal, metric="cossin")
-        return PRM(p, k=PRM_SETUP["k"], search=PRM_SETUP["search"], sampler=sampler, seed=seed), CAPS[name]
-    step = RRT_SETUP["step_fraction"] * float(np.max(world.high3 - world.low3))
+        return problem.with_query(problem.start, problem.goal, metric="cossin"), \
+            {"k": PRM_SETUP["k"], "search": PRM_SETUP["search"]}
+    step = RRT_SETUP["step_fraction"] * float(np.max(problem.world.high3 - problem.world.low3))
     p = problem.with_query(problem.start, problem.goal, metric="cossin", goal_tolerance=RRT_SETUP["goal_distance"])
-    cls = RRT if name == "RRT" else RRTConnect
-    return cls(p, step_size=step, sampler=sampler, seed=seed), CAPS[name]
+    return p, {"step_size": step}
+
+
+def build_planner(name: str, problem: Problem, sampler, seed: int):
+    """The seed set-up of planner ``name`` on ``problem`` with ``sampler``: ``(planner, iteration cap)``."""
+    p, kwargs = planner_setup(name, problem)
+    cls = {"PRM": PRM, "RRT": RRT, "RRTConnect": RRTConnect}[name]
+    return cls(p, sampler=sampler, seed=seed, **kwargs), CAPS[name]
 
 
 def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: dict | None = None,
-            scene: SceneQuery | None = None, max_iterations: int | None = None, spec: str | None = None) -> RigidRow:
+            scene: SceneQuery | None = None, max_iterations: int | None = None, spec: str | None = None,
+            restarts: int = 0) -> RigidRow:
     """One seeded run of ``planner`` with the registry's ``sampler`` (``params`` its parameters) on ``problem``.
 
     ``spec``: a user's sampler instead (``learning.samplers.registry.user_sampler``: ``MODEL.zip@ENV_ID`` for a
     Stable-Baselines3 model trained on a SamplerGym id, or ``module:callable``), labelled ``sampler`` in the row.
+    ``restarts``: a tree planner's run restarts after Luby's sequence times this many iterations
+    (``planners.solve_with_restarts``, the cap over all attempts); 0: one run.
     """
     from learning.samplers.registry import make_sampler, user_sampler
 
+    if restarts and planner == "PRM":
+        raise InputError("restarts are for the tree planners (RRT, RRTConnect): a roadmap would throw its samples away")
     made = user_sampler(spec) if spec is not None else make_sampler(sampler, **(params or {}))
     c0, t0 = compile_seconds(), time.perf_counter()
-    pl, cap = build_planner(planner, problem, made, seed)
-    cap = cap if max_iterations is None else min(cap, max_iterations)
-    result = pl.solve(max_iterations=cap)
+    if restarts:
+        counted = []
+        p, kwargs = planner_setup(planner, problem)
+        cap = CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
+        result = solve_with_restarts(planner, p, seed=seed, unit=restarts, max_iterations=cap, sampler=made,
+                                     on_attempt=lambda pl: counted.append(int(getattr(pl.sampler, "checks", 0))),
+                                     **kwargs)
+        sampler_checks = sum(counted)
+    else:
+        pl, cap = build_planner(planner, problem, made, seed)
+        cap = cap if max_iterations is None else min(cap, max_iterations)
+        result = pl.solve(max_iterations=cap)
+        sampler_checks = int(getattr(pl.sampler, "checks", 0))
     elapsed = time.perf_counter() - t0 - (compile_seconds() - c0)
-    sampler_checks = int(getattr(pl.sampler, "checks", 0))
     checks = int(result.collision_checks) + sampler_checks  # these planners leave the sampler's checks out
     return RigidRow(scene=problem.name if scene is None else scene.name,
                     family="" if scene is None else scene.family, part="" if scene is None else scene.part,
@@ -127,7 +146,7 @@ def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planne
                    samplers: Sequence[str] = SAMPLERS, seeds: Iterable[int] = (0,),
                    sampler_params: dict[str, dict] | None = None, max_iterations: int | None = None,
                    progress: Callable[[RigidRow], None] | None = None,
-                   user_samplers: dict[str, str] | None = None) -> list[RigidRow]:
+                   user_samplers: dict[str, str] | None = None, restarts: int = 0) -> list[RigidRow]:
     """Every planner with every sampler on every scene of ``part`` of ``scene_set``, once per seed.
 
     Args:
@@ -141,6 +160,7 @@ def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planne
         progress: Called with each row as it is made.
         user_samplers: A user's samplers by label (``NAME`` to ``SPEC``, as ``scripts/evaluate.py --sampler
             NAME=SPEC`` takes them: ``learning.samplers.registry.user_sampler``), run after ``samplers``.
+        restarts: The tree planners' runs restart by Luby's sequence times this many iterations (``run_one``).
 
     Returns:
         The rows, scene by scene, then planner, sampler and seed.
@@ -156,7 +176,7 @@ def evaluate_rigid(scene_set: RigidSceneSet | MeshSceneSet, part: str, *, planne
             for sampler in [*samplers, *users]:
                 for seed in seeds:
                     row = run_one(problem, planner, sampler, seed, params=params.get(sampler), scene=query,
-                                  max_iterations=max_iterations, spec=users.get(sampler))
+                                  max_iterations=max_iterations, spec=users.get(sampler), restarts=restarts)
                     rows.append(row)
                     if progress is not None:
                         progress(row)

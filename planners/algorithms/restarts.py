@@ -16,11 +16,12 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable
 
 import numpy as np
 
 from planners.base.fileio import check_int
-from planners.base.planner import PlanResult, compile_seconds
+from planners.base.planner import Planner, PlanResult, compile_seconds
 from planners.base.problem import Problem
 from planners.base.registry import make_planner, planner_class
 
@@ -42,7 +43,8 @@ def attempt_seed(seed: int, attempt: int) -> int:
 
 
 def solve_with_restarts(name: str, problem: Problem, *, seed: int, unit: int, max_iterations: int | None = None,
-                        time_limit: float | None = None, **kwargs) -> PlanResult:
+                        time_limit: float | None = None, on_attempt: Callable[[Planner], None] | None = None,
+                        **kwargs) -> PlanResult:
     """Solve ``problem`` with planner ``name``, restarting after Luby's sequence times ``unit`` iterations.
 
     Attempt ``a`` (from 1) is ``make_planner(name, problem, seed=attempt_seed(seed, a), **kwargs)`` (a sampler
@@ -58,6 +60,7 @@ def solve_with_restarts(name: str, problem: Problem, *, seed: int, unit: int, ma
         max_iterations: Iterations over all attempts together.
         time_limit: Seconds over all attempts together, building each (a sampler's bind) included and
             compilation left out (as ``Planner.solve`` leaves it out).
+        on_attempt: Called with each attempt's planner once it has run (to read its sampler's own counts).
         **kwargs: ``make_planner``'s other arguments (``sampler``, ``step_size``, ...).
 
     Returns:
@@ -90,6 +93,8 @@ def solve_with_restarts(name: str, problem: Problem, *, seed: int, unit: int, ma
             cut = min(cut, max_iterations - iterations)
         left = None if time_limit is None else time_limit - work()
         r = planner.solve(max_iterations=cut, time_limit=left) if left is None or left > 0 else planner.result()
+        if on_attempt is not None:
+            on_attempt(planner)
         first = None if r.first_solution_iteration is None else iterations + r.first_solution_iteration
         iterations += r.iterations
         checks += r.collision_checks
