@@ -132,3 +132,11 @@ def test_ompls_motions_replayed_turn_the_shortest_way_and_find_a_wall(tmp_path):
     through_wall = np.array([[2.0, 5, 5, 0, 0, 0], [2.0, 1.5, 1.5, 0, 0, 0], [8.0, 1.5, 1.5, 0, 0, 0]])
     assert long_runs.motions_through(world, through_hole, 0.05) == 0
     assert long_runs.motions_through(world, through_wall, 0.05) == 1
+
+
+def test_the_mesh_tuning_script_refuses_an_unknown_sampler_and_negative_restarts(tmp_path):
+    tune = load_script("experiments/tune_mesh_delta")
+    for bad in (["--sampler", "nothing"], ["--restarts", "0", "-5"]):
+        with pytest.raises(SystemExit):
+            tune.main(["--out", str(tmp_path / "runs.jsonl"), *bad])
+    assert not (tmp_path / "runs.jsonl").exists()  # refused before any run

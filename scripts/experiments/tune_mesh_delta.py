@@ -11,6 +11,13 @@ diagonal)``), never on OMPL.app's problems or a test scene, and prints per fract
 median time (an unsolved run counts at the limit). A scene whose box witness meets its meshes is left out
 (``mesh_scene`` refuses it), as the mesh scene set leaves it out. Runs are interleaved across fractions over
 ``--processes`` worker processes, so every fraction sees the same load.
+
+``--sampler NAME`` runs every run with a registry sampler instead of uniform sampling (a fresh one per run, bound
+in the timed run), and ``--restarts UNIT ...`` adds candidates that restart each run by Luby's sequence times
+``UNIT`` iterations (``planners.solve_with_restarts``; 0: none), the time limit over all attempts:
+
+    PYTHONPATH=$PWD python scripts/experiments/tune_mesh_delta.py --scenes 4 --seeds 2 --time-limit 20 \\
+        --fractions 1e-3 --sampler rigid_route --restarts 0 1000 --out results/mesh_restarts.jsonl
 """
 
 from __future__ import annotations
@@ -27,10 +34,11 @@ _PROBLEMS: dict = {}
 
 
 def _run(task: tuple) -> dict:
-    fraction, family, scene_seed, seed, limit = task
+    fraction, family, scene_seed, seed, limit, sampler, restarts = task
     import numpy as np
 
-    from planners import make_planner
+    from planners import make_planner, solve_with_restarts
+    from planners.base.planner import compile_seconds
     from planners.worlds.rigid_scenes import mesh_scene, rigid_scene
 
     key = (fraction, family, scene_seed)
@@ -47,12 +55,23 @@ def _run(task: tuple) -> dict:
     problem = _PROBLEMS[key]
     if isinstance(problem, str):
         return {"fraction": fraction, "family": family, "scene_seed": scene_seed, "seed": seed, "refused": problem}
-    planner = make_planner("RRTConnect", problem, seed=seed)
-    t = time.perf_counter()
-    r = planner.solve(time_limit=limit)
-    seconds = time.perf_counter() - t - planner.compile_time
-    return {"fraction": fraction, "family": family, "scene_seed": scene_seed, "seed": seed,
-            "delta": problem.world.delta,
+
+    def kwargs() -> dict:  # a fresh sampler for each run (bound in the timed run)
+        if sampler == "uniform":
+            return {}
+        from learning.samplers.registry import make_sampler
+
+        return {"sampler": make_sampler(sampler)}
+
+    make_planner("RRTConnect", problem, seed=0, **kwargs()).solve(max_iterations=2)  # the sampler's kernels
+    t, c = time.perf_counter(), compile_seconds()
+    if restarts:
+        r = solve_with_restarts("RRTConnect", problem, seed=seed, unit=restarts, time_limit=limit, **kwargs())
+    else:
+        r = make_planner("RRTConnect", problem, seed=seed, **kwargs()).solve(time_limit=limit)
+    seconds = time.perf_counter() - t - (compile_seconds() - c)
+    return {"fraction": fraction, "restarts": restarts, "family": family, "scene_seed": scene_seed, "seed": seed,
+            "delta": problem.world.delta, "sampler": sampler,
             "solved": bool(r.solved), "iterations": int(r.iterations), "checks": int(r.collision_checks),
             "seconds": float(seconds), "exact_poses": int(problem.world.exact_poses)}
 
@@ -67,14 +86,25 @@ def main(argv=None) -> int:
     ap.add_argument("--time-limit", type=float, default=10.0)
     ap.add_argument("--fractions", type=float, nargs="+", default=[1e-3, 5e-4, 2.5e-4, 1.25e-4])
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), choices=list(TRAINING_FAMILIES))
+    ap.add_argument("--sampler", default="uniform", help="a registry sampler for every run (default uniform)")
+    ap.add_argument("--restarts", type=int, nargs="+", default=[0], metavar="UNIT",
+                    help="candidates: restart by Luby's sequence times UNIT iterations (0: none; default 0)")
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--out", type=Path, required=True, help="a JSON-lines file of every run (written at the end)")
     args = ap.parse_args(argv)
     if args.out.exists() and args.out.is_dir():
         ap.error(f"--out {args.out} is a folder; give a file name")
+    if args.sampler != "uniform":
+        from learning.samplers.registry import sampler_names
+
+        if args.sampler not in sampler_names():
+            ap.error(f"--sampler {args.sampler}: no such sampler (known: {', '.join(sampler_names())})")
+    if any(u < 0 for u in args.restarts):
+        ap.error(f"--restarts takes 0 (none) or numbers of iterations, got {args.restarts}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    tasks = [(f, fam, s, seed, args.time_limit) for fam in args.families
-             for s in scene_seeds(fam, "tuning", args.scenes) for seed in range(args.seeds) for f in args.fractions]
+    tasks = [(f, fam, s, seed, args.time_limit, args.sampler, u) for fam in args.families
+             for s in scene_seeds(fam, "tuning", args.scenes) for seed in range(args.seeds) for f in args.fractions
+             for u in args.restarts]
     rows = []
     with ProcessPoolExecutor(args.processes) as pool:
         for row in pool.map(_run, tasks):
@@ -85,21 +115,23 @@ def main(argv=None) -> int:
     rows = [r for r in rows if "refused" not in r]
     if refused:
         print(f"\nleft out (the box scene's witness meets its meshes): {', '.join(refused)}")
-    print("\n| fraction | solved | median time (s), unsolved at the limit | median iterations | median checks |\n"
-          "|---|---|---|---|---|")
+    print(f"\n{args.sampler} sampling\n\n| fraction | restarts (unit) | solved | median time (s), unsolved at the "
+          "limit | median iterations | median checks |\n|---|---|---|---|---|---|")
     for f in args.fractions:
-        rs = [r for r in rows if r["fraction"] == f]
-        if not rs:
-            print(f"| {f:g} | no scene | | | |")
-            continue
-        t = statistics.median(r["seconds"] if r["solved"] else args.time_limit for r in rs)
-        print(f"| {f:g} | {sum(r['solved'] for r in rs)}/{len(rs)} | {t:.2f} | "
-              f"{statistics.median(r['iterations'] for r in rs):,.0f} | "
-              f"{statistics.median(r['checks'] for r in rs):,.0f} |")
+        for u in args.restarts:
+            rs = [r for r in rows if r["fraction"] == f and r["restarts"] == u]
+            if not rs:
+                print(f"| {f:g} | {u or 'none'} | no scene | | | |")
+                continue
+            t = statistics.median(r["seconds"] if r["solved"] else args.time_limit for r in rs)
+            print(f"| {f:g} | {u or 'none'} | {sum(r['solved'] for r in rs)}/{len(rs)} | {t:.2f} | "
+                  f"{statistics.median(r['iterations'] for r in rs):,.0f} | "
+                  f"{statistics.median(r['checks'] for r in rs):,.0f} |")
     by_family = {}
     for r in rows:
-        by_family.setdefault((r["family"], r["fraction"]), []).append(r["solved"])
-    print("\nsolved by family: " + "; ".join(f"{fam} {f:g}: {sum(v)}/{len(v)}" for (fam, f), v in by_family.items()))
+        by_family.setdefault((r["family"], r["fraction"], r["restarts"]), []).append(r["solved"])
+    print("\nsolved by family: " + "; ".join(f"{fam} {f:g}" + (f" restarts {u}" if u else "") + f": {sum(v)}/{len(v)}"
+                                            for (fam, f, u), v in by_family.items()))
     return 0
 
 
