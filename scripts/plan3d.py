@@ -17,7 +17,11 @@ an install compiles the rigid-body kernels for a while; later runs load the comp
 its per-query work (a route search, a model's pass) is timed apart from the planning.
 An OMPL.app ``.cfg`` problem (planners.worlds.omplapp; needs the ``mesh`` extra) is planned with
 RRT-Connect at its default step under ``--time-limit`` (default the file's ``time_limit``), and drawn
-with its meshes (large ones as a seeded subset of their triangles).
+with its meshes (large ones as a seeded subset of their triangles). ``--restarts UNIT`` (``.cfg`` problems)
+restarts the run by Luby's sequence times ``UNIT`` iterations (``planners.solve_with_restarts``; off by
+default: on the validation scenes restarts lose, though they cut the learned sampler's stalls on Twistycool):
+
+    python scripts/plan3d.py omplapp/resources/3D/Twistycool.cfg --sampler rigid_route --restarts 1000
 Exit status: 0 solved, 1 not solved within the budget, 2 bad input or an output that cannot be written.
 """
 
@@ -42,6 +46,8 @@ def main(argv=None) -> int:
     ap.add_argument("--sampler", default=None, metavar="NAME",
                     help="a registry sampler in place of the set-up's own (e.g. rigid_route, the learned 6-DoF "
                          "sampler; learning.sampler_names() lists them)")
+    ap.add_argument("--restarts", type=int, default=0, metavar="UNIT",
+                    help="a .cfg problem's run restarts by Luby's sequence times UNIT iterations (0: none)")
     ap.add_argument("--out", type=Path, default=Path("results/plan3d"), help="folder for plan3d.png and plan3d.gif")
     ap.add_argument("--frames", type=int, default=None,
                     help="GIF frames (default: about two seconds per 10 units of path, 20 to 150)")
@@ -62,6 +68,10 @@ def main(argv=None) -> int:
         return fail("--setup is required for a scene file (prm or rrt)")
     if args.time_limit is not None and not (args.time_limit > 0):
         return fail(f"--time-limit must be a positive number of seconds, got {args.time_limit}")
+    if args.restarts < 0:
+        return fail(f"--restarts must be 0 (none) or a number of iterations, got {args.restarts}")
+    if args.restarts and not mesh:
+        return fail("--restarts is for OMPL.app .cfg problems (RRT-Connect); a scene file plans with its set-up")
     try:
         if mesh:
             from planners.worlds.omplapp import load_omplapp
@@ -83,7 +93,16 @@ def main(argv=None) -> int:
             return fail(f"--sampler {args.sampler}: {exc}")
     t0 = time.perf_counter()  # making the planner binds its sampler (the sampler's per-query work): timed apart
     try:
-        if mesh:
+        if mesh and args.restarts:  # each attempt binds its sampler again: timed with the planning
+            from planners import solve_with_restarts
+            from planners.base.planner import compile_seconds
+
+            c0 = compile_seconds()
+            r = solve_with_restarts("RRTConnect", problem, seed=args.seed, unit=args.restarts, time_limit=limit,
+                                    **({} if sampler is None else {"sampler": sampler}))
+            compiled, t_sampler, planned = compile_seconds() - c0, 0.0, problem
+            budget, args.setup = f"{limit:g} s, restarts by Luby's sequence x {args.restarts}", "RRT-Connect"
+        elif mesh:
             from planners import RRTConnect
 
             planner, budget = RRTConnect(problem, seed=args.seed, sampler=sampler), f"{limit:g} s"
@@ -96,8 +115,10 @@ def main(argv=None) -> int:
             planner, budget = setup_planner(problem, args.setup, seed=args.seed)
     except InputError as exc:
         return fail(f"--sampler {args.sampler}: {exc}" if sampler is not None else str(exc))
-    t_sampler = time.perf_counter() - t0
-    r = planner.solve(time_limit=limit) if mesh else planner.solve(max_iterations=budget)
+    if not args.restarts:
+        t_sampler = time.perf_counter() - t0
+        r = planner.solve(time_limit=limit) if mesh else planner.solve(max_iterations=budget)
+        compiled, planned = planner.compile_time, planner.problem
 
     # imported only now: matplotlib costs a second, and bad input should fail fast
     from planners.viz.plotting import save_figure
@@ -106,11 +127,11 @@ def main(argv=None) -> int:
     files = []
     t0 = time.perf_counter()
     try:
-        fig = plot_scene(planner.problem, r.path if r.solved else None,
+        fig = plot_scene(planned, r.path if r.solved else None,
                          title=f"{problem.name}: {r.planner} ({args.setup} set-up, seed {args.seed})")
         files.append(save_figure(fig, args.out / "plan3d.png", dpi=100))
         if r.solved:
-            files.append(animate_rigid(planner.problem, r.path, args.out / "plan3d.gif", frames=args.frames))
+            files.append(animate_rigid(planned, r.path, args.out / "plan3d.gif", frames=args.frames))
     except OSError as exc:
         return fail(f"cannot write under {args.out}: {exc}")
     t_out = time.perf_counter() - t0
@@ -119,13 +140,17 @@ def main(argv=None) -> int:
     how = f", sampler {args.sampler}" if args.sampler else ""
     print(f"set-up:           {args.setup}: {r.planner}{how}, seed {args.seed}, budget {budget}{unit}")
     print(f"solved:           {r.solved} ({r.stop_reason})")
-    print(f"iterations:       {r.iterations}")
+    print(f"iterations:       {r.iterations}" + (f" over {r.restarts + 1} attempts" if args.restarts else ""))
     print(f"collision checks: {r.collision_checks}")
     print(f"vertices:         {r.num_vertices}")
-    compiled = planner.compile_time
-    print(f"time:             {t_sampler + r.time - compiled:.3f} s to {'a path' if r.solved else 'stop'}: "
-          f"{t_sampler:.3f} s making the planner and binding its sampler, {r.time - compiled:.3f} s planning; "
-          f"{compiled:.3f} s one-off compilation, {t_out:.1f} s figure and GIF")
+    if args.restarts:  # each attempt made its planner and bound its sampler inside the timed call
+        print(f"time:             {r.time - compiled:.3f} s to {'a path' if r.solved else 'stop'}, every attempt's "
+              f"planner and sampler binding included; {compiled:.3f} s one-off compilation, {t_out:.1f} s figure "
+              f"and GIF")
+    else:
+        print(f"time:             {t_sampler + r.time - compiled:.3f} s to {'a path' if r.solved else 'stop'}: "
+              f"{t_sampler:.3f} s making the planner and binding its sampler, {r.time - compiled:.3f} s planning; "
+              f"{compiled:.3f} s one-off compilation, {t_out:.1f} s figure and GIF")
     if r.solved:
         print(f"path length:      {r.cost:.2f} ({len(r.path)} states)")
     else:

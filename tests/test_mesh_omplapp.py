@@ -244,6 +244,13 @@ def test_plan3d_plans_and_draws_a_problem_file(tmp_path):
     assert (out / "plan3d.png").stat().st_size > 0 and (out / "plan3d.gif").stat().st_size > 0
     bad = plan3d(tmp_path / "nothing.cfg", "--out", out)
     assert bad.returncode == 2 and "does not exist" in bad.stderr
+    again = plan3d(write_problem(tmp_path), "--restarts", 3, "--sampler", "rigid_route_ablation", "--frames", 3,
+                   "--out", tmp_path / "again")
+    assert again.returncode == 0, again.stderr
+    assert "restarts by Luby's sequence x 3" in again.stdout and " attempts" in again.stdout
+    scene = plan3d(Path(repo / "planners" / "scenes" / "window.scene"), "--setup", "rrt", "--restarts", 5,
+                   "--out", out)
+    assert scene.returncode == 2 and "--restarts is for OMPL.app .cfg problems" in scene.stderr
 
 
 def test_ompl_runs_its_planners_on_a_problem_file(tmp_path):
