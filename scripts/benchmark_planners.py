@@ -262,14 +262,14 @@ def rigid(args) -> int:
                 row = label if sampler_name is None else f"{planner_name} with {sampler_name}"
                 if args.rigid_restarts:
                     row += f", Luby restarts x {args.rigid_restarts}"
+                    spec_label = type(arguments().get("sampler", UniformSampler())).__name__  # once, not per run
                 rs = []
                 for seed in range(runs):
                     t, c = time.perf_counter(), compile_seconds()
                     if args.rigid_restarts:  # every attempt binds its sampler: each set-up is part of the time
                         r = solve_with_restarts(planner_name, task.problem, seed=seed, unit=args.rigid_restarts,
                                                 time_limit=limit, **arguments())
-                        end, t_solve = time.perf_counter() - (compile_seconds() - c), t
-                        sampler_label = type(arguments().get("sampler", UniformSampler())).__name__
+                        end, t_solve, sampler_label = time.perf_counter() - (compile_seconds() - c), t, spec_label
                     else:
                         planner = make_planner(planner_name, task.problem, seed=seed, **arguments())  # binds it
                         t_solve = time.perf_counter()

@@ -100,7 +100,7 @@ def main(argv=None) -> int:
             c0 = compile_seconds()
             r = solve_with_restarts("RRTConnect", problem, seed=args.seed, unit=args.restarts, time_limit=limit,
                                     **({} if sampler is None else {"sampler": sampler}))
-            compiled, t_sampler, planned = compile_seconds() - c0, 0.0, problem
+            compiled, planned = compile_seconds() - c0, problem
             budget, args.setup = f"{limit:g} s, restarts by Luby's sequence x {args.restarts}", "RRT-Connect"
         elif mesh:
             from planners import RRTConnect

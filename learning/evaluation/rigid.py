@@ -102,18 +102,17 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
     if restarts and planner == "PRM":
         raise InputError("restarts are for the tree planners (RRT, RRTConnect): a roadmap would throw its samples away")
     made = user_sampler(spec) if spec is not None else make_sampler(sampler, **(params or {}))
+    cap = CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
     c0, t0 = compile_seconds(), time.perf_counter()
     if restarts:
         counted = []
         p, kwargs = planner_setup(planner, problem)
-        cap = CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
         result = solve_with_restarts(planner, p, seed=seed, unit=restarts, max_iterations=cap, sampler=made,
                                      on_attempt=lambda pl: counted.append(int(getattr(pl.sampler, "checks", 0))),
                                      **kwargs)
         sampler_checks = sum(counted)
     else:
-        pl, cap = build_planner(planner, problem, made, seed)
-        cap = cap if max_iterations is None else min(cap, max_iterations)
+        pl, _ = build_planner(planner, problem, made, seed)
         result = pl.solve(max_iterations=cap)
         sampler_checks = int(getattr(pl.sampler, "checks", 0))
     elapsed = time.perf_counter() - t0 - (compile_seconds() - c0)
