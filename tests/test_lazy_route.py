@@ -16,6 +16,7 @@ from learning.samplers.lazy_route import (
     SHIPPED_FLOOR,
     SHIPPED_ROADMAP_AFTER,
     LazyConnectSampler,
+    LazyConvergingSampler,
     LazyCorridorSampler,
     LazyRouteSampler,
 )
@@ -41,14 +42,14 @@ def _lazy(**kwargs):
     return make_sampler("route_lazy", **{"floor": 0, "connect_floor": 0, "roadmap_floor": 0, **kwargs})
 
 
-def _run(problem, sampler, seed, pieces=(), planner_name="RRT"):
+def _run(problem, sampler, seed, pieces=(), planner_name="RRT", budget=20000, **options):
     """One run solved after ``pieces`` (solves of those sizes): what must match, and the planner's bound sampler."""
-    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, extension_step=4.0)
+    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, extension_step=4.0, **options)
     for size in pieces:
         planner.solve(max_iterations=size)
-    r = planner.solve(max_iterations=20000)
-    key = (r.solved, r.iterations, r.collision_checks, r.candidates, r.num_vertices,
-           None if r.path is None else r.path.tobytes())
+    r = planner.solve(max_iterations=budget - sum(pieces))
+    key = (r.solved, r.iterations, r.collision_checks, r.candidates, r.num_vertices, r.first_solution_iteration,
+           r.cost, None if r.path is None else r.path.tobytes())
     return key, planner.sampler
 
 
@@ -243,11 +244,60 @@ def test_other_planners_take_the_route_samplers_own_rules(lazy):
     assert isinstance(connect.route, RouteSampler) and connect.route.net is lazy.net
     roadmap = lazy.for_planner("roadmap")
     assert isinstance(roadmap, LazyCorridorSampler) and roadmap.after == lazy.roadmap_after == SHIPPED_ROADMAP_AFTER
-    assert isinstance(lazy.for_planner("optimizing"), ConvergingRouteSampler)
+    star = lazy.for_planner("optimizing")
+    assert isinstance(star, LazyConvergingSampler) and isinstance(star, ConvergingRouteSampler) and star.route is lazy
     eager = lazy.eager()
     assert type(eager) is RouteSampler and eager.net is lazy.net and not hasattr(eager, "after")
     p = generate("maze", VALIDATION_SEED0 + 3, 64, goal_tolerance=4.0)
     assert make_planner("RRTConnect", p, sampler=lazy, seed=0, extension_step=4.0).solve(20000).solved
+
+
+class UnfusedStar(LazyRouteSampler):
+    """The lazy sampler with RRT*'s rule drawn through ``draw`` (no floor unless given)."""
+
+    def __init__(self, net, **kwargs):
+        super().__init__(net, **{"floor": 0, **kwargs})
+
+    def for_planner(self, family):
+        rule = super().for_planner(family)
+        if isinstance(rule, LazyConvergingSampler):
+            rule.fuse = lambda planner: None
+        return rule
+
+
+def _star(problem, sampler, seed, pieces=(), first=False, planner_name="RRTstar"):
+    """An RRT* run of 1,500 iterations, or to its first solution (``first``)."""
+    return _run(problem, sampler, seed, pieces, planner_name, budget=1500, stop_on_first_solution=first)
+
+
+def test_rrt_stars_lazy_rule_is_the_straight_line_then_the_field_then_the_corridor(maps):
+    """RRT*'s lazy rule: at once, the route rule; never, the straight line to the first solution; between, the same
+    run fused, drawn and in pieces, one pass where the run switched before its first solution and none where it did
+    not, and the corridor's two fields once the run goes on for a shorter path."""
+    route, ablation = make_sampler("route"), make_sampler("route_ablation")
+    never = _lazy(after=math.inf, cap=math.inf)
+    middle = _lazy(after=0.125)  # 256 step squares: the switch at iteration 32
+    before = after = 0
+    for p in maps:
+        for seed in (0, 1):
+            assert _star(p, _lazy(after=0), seed)[0] == _star(p, route, seed)[0]
+            key, bound = _star(p, never, seed, first=True)
+            assert key == _star(p, ablation, seed, first=True)[0]
+            assert isinstance(bound, LazyConvergingSampler) and not bound.switched and bound.forward_passes == 0
+            key, bound = _star(p, middle, seed, first=True)
+            assert _same(key, bound, _star(p, UnfusedStar(middle.net, after=0.125), seed, first=True))
+            assert key == _star(p, middle, seed, (1, 3, 12, 2), first=True)[0]
+            assert bound.forward_passes == (bound.first.symmetry_passes if bound.switched else 0)
+            assert bound.switched == (key[5] > bound.switch_at == 32)
+            before += not bound.switched
+            after += bound.switched
+            key, bound = _star(p, middle, seed)  # on past the first solution: the corridor needs both fields
+            assert _same(key, bound, _star(p, UnfusedStar(middle.net, after=0.125), seed))
+            assert key == _star(p, middle, seed, (5, 40, 200))[0]
+            assert bound.built and bound.forward_passes == 2 * bound.first.symmetry_passes
+            assert _star(p, middle, seed, planner_name="InformedRRTstar")[0] == \
+                _star(p, UnfusedStar(middle.net, after=0.125), seed, planner_name="InformedRRTstar")[0]
+    assert before and after, "the maps must give first solutions on both sides of the switch"
 
 
 def test_at_a_new_step_both_phases_measure_in_it(lazy):

@@ -20,12 +20,12 @@ that needs no tuned setting (RRT; the lazy route among them); (2) the policy at 
 tuning; (3) the ablation at its tuned settings; (4) with ``other_planners``: the goal-bias tuning of each tree
 planner on the tuning split, then (5) every other planner on every test set with uniform sampling, its classical
 option (the goal bias tuned for the set for a tree; OB-PRM's obstacle-based sampling for a roadmap), the policy,
-each route encoder, the shipped one computed lazily (``route_lazy``, where its rule differs from the route's:
-RRT-Connect and the roadmaps), its ablation, the exact reference and users' samplers, as the registry builds them
-(``make_sampler`` names handed to the planner as they are), except OB-PRM, which runs with its own obstacle-based
-sampling only (handed another sampler it is PRM with it); (6) with ``convergence``: RRT*'s cost convergence on every
-test query (``learning.evaluation.convergence``), with ``later_queries``: later queries on each roadmap built for a
-test query (``learning.evaluation.later_queries``), then each :class:`Part`.
+each route encoder, the shipped one computed lazily (``route_lazy``), its ablation, the exact reference and users'
+samplers, as the registry builds them (``make_sampler`` names handed to the planner as they are), except OB-PRM,
+which runs with its own obstacle-based sampling only (handed another sampler it is PRM with it); (6) with
+``convergence``: RRT*'s cost convergence on every test query (``learning.evaluation.convergence``), with
+``later_queries``: later queries on each roadmap built for a test query (``learning.evaluation.later_queries``), then
+each :class:`Part`.
 
 A **part** plugs a comparison of another kind into the same call, journal and output set (the 6-DoF
 scene sets, ``learning.evaluation.rigid.RigidPart``): any object with ``name``, ``protocol`` (how its runs are
@@ -58,6 +58,7 @@ from learning.evaluation.protocol import (
 )
 from learning.evaluation.roster import (
     EXACT_ROUTE,
+    LAZY_ROUTE,
     ROUTE,
     ROUTE_ABLATION,
     Task,
@@ -196,6 +197,10 @@ class Comparison:
             out[EXACT_ROUTE] = SamplerSpec.of("exact_route", step_size=step)
         return out
 
+    def lazy_spec(self) -> SamplerSpec:
+        """The shipped encoder computed lazily (``route_lazy``), at the protocol's step."""
+        return SamplerSpec.of("route_lazy", path=self.route, step_size=self.protocol.step, device=self.device)
+
     def run(self, backend: Backend, journal=None, log: Callable[[str], None] = print) -> Results:
         """Every phase's runs on ``backend``, journaled in ``journal`` (None: kept in memory); the results."""
         t0 = time.perf_counter()
@@ -277,7 +282,8 @@ class Comparison:
         p = self.protocol
         protocol = ConvergenceProtocol(step=p.step, tolerance=p.tolerance, max_iterations=int(self.convergence),
                                        seeds=p.seeds, movingai_dir=p.movingai_dir)
-        return [ConvergencePart(queries, protocol, biases, self.field_specs(), movingai_maps(queries))]
+        fields = {**self.field_specs(), LAZY_ROUTE: self.lazy_spec()}
+        return [ConvergencePart(queries, protocol, biases, fields, movingai_maps(queries))]
 
     def _later_queries_part(self, queries) -> list[Part]:
         """The later-queries part, where ``later_queries`` asks for it.
@@ -306,7 +312,7 @@ class Comparison:
         tuned = self._tuned_biases(runs + out, queries, unseen)
         routes = self.route_specs()
         learned = [spec for label, spec in self.field_specs().items() if label not in routes]  # ablation, reference
-        lazy = SamplerSpec.of("route_lazy", path=self.route, step_size=self.protocol.step, device=self.device)
+        lazy = self.lazy_spec()
         tasks = []
         for planner in self.other_planners:
             for q in queries:
@@ -324,7 +330,7 @@ class Comparison:
                 tasks.append(Task(q, planner, policy_spec(self.policy, batch), 0, "policy"))
                 for label, spec in routes.items():
                     tasks.append(Task(q, planner, spec, 0, label if label != ROUTE else ""))
-                if planner_class(planner).family in LAZY_FAMILIES:  # RRT* takes the route rule: the route's rows
+                if planner_class(planner).family in LAZY_FAMILIES:
                     tasks.append(Task(q, planner, lazy, 0))
                 tasks += [Task(q, planner, SamplerSpec.user(n, s), 0) for n, s in self.samplers.items()]
         log(f"{len(tasks)} runs of {', '.join(self.other_planners)} on every test set")

@@ -9,7 +9,8 @@ comes within a target counts at the budget.
 
 The rows: uniform RRT*, RRT* with the goal bias chosen on the tuning split, Informed RRT* (its own informed
 sampling, the registry's ``informed``), and RRT* with each
-route encoder, its ablation and the exact reference (``make_sampler`` names, handed to RRT* as they are, which
+route encoder, the shipped one computed lazily (``route_lazy``: the straight line to the first solution unless it
+takes too long), its ablation and the exact reference (``make_sampler`` names, handed to RRT* as they are, which
 binds each to its rule for RRT*). ``Comparison(convergence=BUDGET)`` adds the part (``scripts/evaluate.py
 --convergence``); ``ConvergencePart`` is a :class:`~learning.evaluation.comparison.Part` like any other.
 """
@@ -82,7 +83,8 @@ class ConvergencePart:
 
     ``biases``: the goal bias chosen on the tuning split per map set (0.05, OMPL's default, where none was);
     ``fields``: the route field's samplers by label (each route encoder, its ablation, the exact reference:
-    ``Comparison.field_specs``); ``movingai_maps``: the MovingAI map sets (pooled as one group in the report).
+    ``Comparison.field_specs``; the lazy route); ``movingai_maps``: the MovingAI map sets (pooled as one group in
+    the report).
     """
 
     queries: Sequence

@@ -27,8 +27,8 @@ FOLLOWER = "straight-line follower"
 ROUTE, ROUTE_ABLATION = "route encoder", "route ablation"
 
 
-#: The route encoder's field computed only when a query needs it (``make_sampler("route_lazy")``): with RRT the
-#: straight line first, with RRT-Connect and the roadmaps their uniform sampling first, then the field's rule.
+#: The route encoder's field computed only when a query needs it (``make_sampler("route_lazy")``): with RRT and
+#: RRT* the straight line first, with RRT-Connect and the roadmaps their uniform sampling first, then the field's rule.
 LAZY_ROUTE = "lazy route"
 
 

@@ -22,8 +22,10 @@ runs, and the loop goes on on the encoder's field, so a fused run is the run dra
 RRT-Connect takes ``LazyConnectSampler``: both trees grow by the planner's own uniform sampling (inside its compiled
 loop) until ``connect_after`` iterations per step-sized square (at least ``connect_floor``), then follow the route
 field's two fields (``BidirectionalRouteSampler``). The roadmaps take ``LazyCorridorSampler``: uniform samples until
-``roadmap_after`` per step-sized square (at least ``roadmap_floor``), then the field's corridor. RRT* takes the route
-sampler's own rule for it (``RouteSampler.for_planner``), which needs the field from the start.
+``roadmap_after`` per step-sized square (at least ``roadmap_floor``), then the field's corridor. RRT* and Informed
+RRT* take ``LazyConvergingSampler``: RRT's lazy rule to the first solution (the straight line, then the encoder's field
+at RRT's switch), then the route field's corridor inside the informed set, computing the fields it still lacks at its
+first draw after the first solution.
 """
 
 from __future__ import annotations
@@ -41,11 +43,17 @@ from learning.samplers.route import (
     route_draw,
     route_rrt_loop,
 )
-from learning.samplers.route_rules import BidirectionalRouteSampler, CorridorSampler
+from learning.samplers.route_rules import (
+    CONVERGING_SETTINGS,
+    BidirectionalRouteSampler,
+    ConvergingRouteSampler,
+    CorridorSampler,
+    route_rrtstar_loop,
+)
 from planners import OccupancyGrid
 from planners.base.fileio import InputError, short_repr
 from planners.base.planner import Planner
-from planners.base.samplers import FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP, FAMILY_TREE, SamplerBase
+from planners.base.samplers import FAMILY_BIDIRECTIONAL, FAMILY_OPTIMIZING, FAMILY_ROADMAP, FAMILY_TREE, SamplerBase
 from planners.fused import (
     B_STOP,
     CHUNK,
@@ -54,13 +62,14 @@ from planners.fused import (
     connect_loop,
     fuse_connect,
     fuse_rrt,
+    fuse_rrtstar,
     next_double,
     rrt_loop,
 )
 
-#: The planner families whose rule here differs from the route sampler's: RRT (the straight line first), RRT-Connect
-#: and the roadmaps (their uniform sampling first); RRT* and its kin take the route sampler's own rule.
-LAZY_FAMILIES = (FAMILY_TREE, FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP)
+#: The planner families whose rule here differs from the route sampler's: RRT and RRT* (the straight line first),
+#: RRT-Connect and the roadmaps (their uniform sampling first).
+LAZY_FAMILIES = (FAMILY_TREE, FAMILY_BIDIRECTIONAL, FAMILY_ROADMAP, FAMILY_OPTIMIZING)
 
 #: Every switch below is chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``,
 #: one switch at a time with the others as chosen before it, on maps of 32 to 512 cells, ``--maps 32 32 32 16 8``, 2
@@ -203,13 +212,16 @@ class LazyRouteSampler(RouteSampler):
         return out
 
     def for_planner(self, family: str) -> SamplerBase:
-        """This sampler's rule for a planner ``family``: itself for RRT, a ``LazyRule`` for RRT-Connect and roadmaps.
+        """This sampler's rule for a planner ``family``: itself for RRT, a lazy rule for the others.
 
-        ``LazyConnectSampler`` for RRT-Connect, ``LazyCorridorSampler`` for the roadmaps; the route sampler's rule for
-        RRT* (``rule_for``).
+        ``LazyConvergingSampler`` for RRT* and Informed RRT* (this sampler to the first solution, at RRT's switch),
+        ``LazyConnectSampler`` for RRT-Connect, ``LazyCorridorSampler`` for the roadmaps; the route sampler's rule
+        for a family it does not know (``rule_for``).
         """
         if family == FAMILY_TREE:
             return self
+        if family == FAMILY_OPTIMIZING:
+            return LazyConvergingSampler(self)
         if family == FAMILY_BIDIRECTIONAL:
             return LazyConnectSampler(self.eager(), self.connect_after, self.connect_floor, self.connect_cap)
         if family == FAMILY_ROADMAP:
@@ -389,6 +401,53 @@ class LazyCorridorSampler(LazyRule):
         return self._uniform(rng.random((min(n, self.switch_at - view.iteration), self.problem.dim)))
 
 
+class LazyConvergingSampler(ConvergingRouteSampler):
+    """RRT*'s lazy rule: ``LazyRouteSampler``'s to the first solution, then the corridor inside the informed set.
+
+    Up to the first solution the samples are the lazy route sampler's as RRT draws them: the straight line, and the
+    encoder's field once the run has not solved by RRT's switch (``after``, ``floor``, ``cap``, ``stall``: RRT*'s
+    iterations up to its first solution are RRT's with rewiring, so it takes RRT's switch). From the first solution
+    on, ``ConvergingRouteSampler``'s corridor at its settings: at its first draw it computes the field to the goal,
+    where the straight line solved without it, and the field to the start. So a run that stops at its first solution
+    before the switch pays no pass, and a run that goes on for a shorter path pays two.
+
+    Up to the first solution it draws inside RRT*'s compiled loop (``planners.fused.rrtstar_loop``) on either side of
+    the switch (``StarSwitchLoop``); with a stall switch (off by default) it draws through ``draw``.
+
+    Args:
+        lazy: The lazy route sampler whose rule runs to the first solution and whose encoder makes the corridor.
+        margin, floor, fill: As ``ConvergingRouteSampler``'s, after the first solution.
+    """
+
+    def __init__(self, lazy: LazyRouteSampler, margin: float = CONVERGING_SETTINGS["margin"],
+                 floor: float = CONVERGING_SETTINGS["floor"],
+                 fill: float | None = CONVERGING_SETTINGS["fill"]) -> None:
+        super().__init__(lazy, margin, floor, fill)
+
+    @property
+    def switched(self) -> bool:
+        """Whether the field to the goal has been computed (at the switch, or for the corridor)."""
+        return self.first.switched
+
+    @property
+    def switch_at(self) -> int:
+        """The iteration of the switch, as ``LazyRouteSampler``'s."""
+        return self.first.switch_at
+
+    def build_corridor(self) -> None:
+        """``ConvergingRouteSampler.build_corridor``, computing the field to the goal first where the run lacks it."""
+        if not self.built:
+            self.first.switch()
+        super().build_corridor()
+
+    def fuse(self, planner: Planner) -> StarSwitchLoop | FusedRRT | None:
+        """RRT*'s loop to the first solution with both phases' draws compiled in (None with a stall switch)."""
+        if not math.isinf(self.first.stall):
+            return None
+        fused = super().fuse(planner)
+        return fused if fused is None or self.first.switched else StarSwitchLoop(self.first, fused)
+
+
 class SwitchLoop:
     """A planner's fused loop up to a lazy sampler's switch, then the fused loop of the rule it switches to.
 
@@ -413,3 +472,36 @@ class SwitchLoop:
                     return used
             self.fused = s.switch_loop(planner)
         return used + self.fused(planner, n - used)
+
+
+class StarSwitchLoop(SwitchLoop):
+    """RRT*'s loop on the straight line up to the lazy route sampler's switch, then on the encoder's field.
+
+    As ``SwitchLoop``, with RRT*'s hand-back (``planners.fused``): once the planner has a solution the loop is
+    called as it is, and hands the draws back at its next refill, without a switch; ``refills`` counts both loops'.
+    """
+
+    __slots__ = ("before",)
+
+    def __init__(self, sampler: LazyRouteSampler, fused: FusedRRT) -> None:
+        super().__init__(sampler, fused)
+        self.before = 0  # the first loop's refills, once the second has taken over
+
+    def __call__(self, planner: Planner, n: int) -> int:
+        s, used = self.sampler, 0
+        if s.switched or planner.solved:
+            return self.fused(planner, n)
+        m = min(n, s.switch_at - planner.iterations)
+        if m > 0:
+            used = self.fused(planner, m)
+            if used < m or used == n or planner.solved:  # handed back, full, solved or the call spent
+                return used
+        s.switch()
+        self.before = self.fused.refills
+        self.fused = fuse_rrtstar(planner, route_rrtstar_loop, s.draw_state, s.batch)
+        return used + self.fused(planner, n - used)
+
+    @property
+    def refills(self) -> int:
+        """Refills drawn so far by both loops: where the planner's own schedule goes on after the hand-back."""
+        return self.before + self.fused.refills

@@ -352,9 +352,13 @@ class ConvergingRouteSampler(_CorridorRule):
 
     def _setup(self) -> None:
         self.first = self.route.bind(self.problem)  # refuses a world that is not an OccupancyGrid
-        #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
-        self.reused_seconds = self.first.reused_seconds
+        self._start_reused = 0.0  # the field to the start's encoder seconds, where a cache gave it
         self.built = False  # the corridor: built at the first draw after the first solution (``build_corridor``)
+
+    @property
+    def reused_seconds(self) -> float:
+        """Encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``), both fields so far."""
+        return self.first.reused_seconds + self._start_reused
 
     def build_corridor(self) -> None:
         """The field to the start, the corridor's stages and the informed set: once, at the first draw after a solution.
@@ -366,7 +370,7 @@ class ConvergingRouteSampler(_CorridorRule):
         p = self.problem
         to_start = self.route.cost_to_go(reversed_query(p))
         self._stages(self.first.field, to_start.field)
-        self.reused_seconds += to_start.seconds if to_start.reused else 0.0
+        self._start_reused = to_start.seconds if to_start.reused else 0.0
         self.informed = InformedSampler().bind(p)
         grid = p.world
         rows, cols = np.divmod(self.cells, grid.width)

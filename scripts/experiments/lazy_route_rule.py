@@ -14,7 +14,9 @@ run just after an encoder's pass finds the caches cold: in a fixed order the fir
 up to 1.6 times as long on 1024-cell maps). ``--planner RRTConnect`` does the same for RRT-Connect's switch
 (``connect_after``, given as ``--after``, ``connect_floor``, as ``--floor``, and ``connect_cap``, as ``--cap``: both
 trees uniform until then, then the route field's two fields), and ``--planner PRM`` for the roadmaps'
-(``roadmap_after``, ``roadmap_floor`` and ``roadmap_cap``: uniform samples, then the field's corridor). A run's time
+(``roadmap_after``, ``roadmap_floor`` and ``roadmap_cap``: uniform samples, then the field's corridor). ``--planner
+RRTstar`` runs RRT* to its first solution with RRT's switches (``LazyConvergingSampler`` takes RRT's), to compare
+the lazy rule for RRT* with the route rule (the reference). A run's time
 goes from the planner's construction (the sampler's bind and its own field: no cache) to the end of its solve; an
 unsolved run never solves, so a cell's median is not reached where half its runs or more are unsolved (as the clock
 comparison counts them).
@@ -53,14 +55,15 @@ STALL = (10.0, 25.0, 50.0, 100.0, 200.0, math.inf)
 CONNECT_AFTER = (0.05, 0.1, 0.2, 0.35, 0.7, 1.4, math.inf)
 #: Each planner's switch, floor and cap among ``LazyRouteSampler``'s arguments (given as --after, --floor, --cap).
 SWITCHES = {"RRT": ("after", "floor", "cap"), "RRTConnect": ("connect_after", "connect_floor", "connect_cap"),
-            "PRM": ("roadmap_after", "roadmap_floor", "roadmap_cap")}
+            "PRM": ("roadmap_after", "roadmap_floor", "roadmap_cap"), "RRTstar": ("after", "floor", "cap")}
 #: A candidate within this share of the lowest geometric mean, with a smaller ``after``, wins over it.
 TIE = 0.03
 
 
 def run(problem, sampler, seed: int, planner_name: str = "RRT") -> dict:
     t0 = time.perf_counter()
-    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, extension_step=STEP)
+    first = {"stop_on_first_solution": True} if planner_name == "RRTstar" else {}  # RRT*: to its first solution
+    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, extension_step=STEP, **first)
     r = planner.solve(BUDGET)
     seconds = time.perf_counter() - t0
     return {"solved": bool(r.solved), "iterations": int(r.iterations), "ms": 1e3 * seconds,
@@ -124,8 +127,9 @@ def main(argv=None) -> int:
     ap.add_argument("--maps", type=int, nargs="+", default=[8, 4, 2], metavar="N",
                     help="validation maps per family at each of --sizes (default 8 4 2)")
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per map (default 2)")
-    ap.add_argument("--planner", choices=("RRT", "RRTConnect", "PRM"), default="RRT",
-                    help="RRT (switches after and stall), RRTConnect or PRM (connect_after, roadmap_after: --after)")
+    ap.add_argument("--planner", choices=tuple(SWITCHES), default="RRT",
+                    help="RRT (switches after and stall), RRTConnect or PRM (connect_after, roadmap_after: --after), "
+                         "RRTstar (RRT's switches, to the first solution)")
     ap.add_argument("--after", type=float, nargs="+", default=None, help="candidates (default: the rule's)")
     ap.add_argument("--stall", type=float, nargs="+", default=list(STALL), help="candidates (default: the rule's)")
     ap.add_argument("--floor", type=float, nargs="+", default=None,
@@ -140,7 +144,7 @@ def main(argv=None) -> int:
                          "same (default 200; 0: none)")
     ap.add_argument("--out", type=Path, default=None, help="write runs.json here (a new or empty folder)")
     args = ap.parse_args(argv)
-    connect = args.planner != "RRT"  # one switch: connect_after or roadmap_after, given as --after
+    connect = args.planner not in ("RRT", "RRTstar")  # one switch: connect_after or roadmap_after, given as --after
     if args.after is None:
         args.after = list(CONNECT_AFTER if connect else AFTER)
     after_name, floor_name, cap_name = SWITCHES[args.planner]
