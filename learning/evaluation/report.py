@@ -436,7 +436,8 @@ def details_markdown(results, wide: dict | None = None) -> str:
                  "map sets: uniform sampling, its classical option (the goal bias tuned for each set on its tuning "
                  f"split for a tree; OB-PRM's obstacle-based sampling, `{OBSTACLE_BASED}`, for a roadmap), the policy, "
                  f"each route encoder, the {LAZY_ROUTE} (RRT*: the straight line first, RRT-Connect and the "
-                 "roadmaps: their uniform sampling first, then the field), its ablation and the exact reference, as the sampler registry builds them. "
+                 "roadmaps: their uniform sampling first, then the field), its ablation and the exact reference, "
+                 "as the sampler registry builds them. "
                  "Iterations are samples for a roadmap; checks include the sampler's own.\n\n" + markdown_table(others))
     for name, (_, report) in results.parts.items():
         text += f"\n## {name}\n\n{report.markdown.rstrip()}\n"
