@@ -55,6 +55,8 @@ from planners.tools.workflow import (
 EXIT_SOLVED, EXIT_UNSOLVED, EXIT_BAD_INPUT, EXIT_WRITE_FAILED = 0, 1, 2, 3
 #: Cells per step the shipped route encoder was trained for: its samplers' default step.
 ROUTE_STEP = 4
+#: The samplers that measure in the encoder's step (the route field's, learned, lazy, ablation and exact).
+ROUTE_SAMPLERS = ("route", "route_lazy", "route_ablation", "exact_route")
 #: Set to 1 to print, once the picking window is drawn, how map coordinates map to window pixels.
 PICK_DEBUG_ENV = "SAMPLERGYM_PICK_DEBUG"
 
@@ -245,8 +247,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sampler", default=None, metavar="NAME",
                     help=f"{', '.join(SAMPLERS)} (the planners' own), or a sampler of learning's registry: follower "
                          "(the straight-line follower), route (the shipped route encoder; default step: its block), "
-                         "route_ablation, policy (the learned policy), policy_ablation, goal_bias, expert and "
-                         "exact_route (privileged references), or NAME=SPEC (MODEL.zip@ENV_ID or module:callable). "
+                         "route_lazy (the same encoder, run only where a query needs it), route_ablation, policy (the "
+                         "learned policy), policy_ablation, goal_bias, expert and exact_route (privileged references), "
+                         "or NAME=SPEC (MODEL.zip@ENV_ID or module:callable). "
                          "Default: goal-bias for rrt and rrtstar, uniform otherwise")
     ap.add_argument("--policy", type=Path, default=None, metavar="ZIP",
                     help="checkpoint for --sampler policy (default: the shipped policy)")
@@ -361,7 +364,7 @@ def main(argv=None) -> int:
             return fail(str(exc))
         start, goal = picked
     step = args.step
-    if step is None and args.sampler in ("route", "route_ablation", "exact_route"):
+    if step is None and args.sampler in ROUTE_SAMPLERS:
         step = ROUTE_STEP * grid.resolution  # the step the encoder was trained for
     if step is None:
         w, h = grid.bounds[1] - grid.bounds[0]

@@ -148,13 +148,26 @@ def test_policy_sampler_from_the_command_line(map_png, tmp_path):
     assert not (out / "x").exists()
 
 
-@pytest.mark.parametrize("sampler", ["follower", "route"])
+@pytest.mark.parametrize("sampler", ["follower", "route", "route_lazy"])
 def test_registry_samplers_from_the_command_line(map_png, tmp_path, sampler):
     pytest.importorskip("torch")
     p = run(map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--planner", "rrt", "--sampler", sampler,
             "--out", tmp_path / "out", "--headless", "--no-gif")
     assert p.returncode in (0, 1), p.stderr
     assert f"sampler {sampler})" in p.stdout
+
+
+@pytest.mark.parametrize("sampler", ["route", "route_lazy"])
+def test_the_encoders_samplers_plan_at_its_step_where_the_maps_default_is_longer(tmp_path, sampler):
+    """On a 300-cell map the default step is 2% of the diagonal (8.5 cells); the encoder was trained for 4."""
+    pytest.importorskip("torch")
+    grid = np.zeros((300, 300), dtype=bool)
+    grid[100:200, 150] = True
+    np.save(tmp_path / "open.npy", grid)
+    p = run(tmp_path / "open.npy", "--start", 10.5, 150.5, "--goal", 290.5, 150.5, "--planner", "rrt", "--sampler",
+            sampler, "--max-iterations", 50, "--out", tmp_path / "out", "--headless", "--no-gif")
+    assert p.returncode in (0, 1), p.stderr
+    assert "(step 4, seed 0," in p.stdout
 
 
 def test_an_unknown_sampler_is_refused_before_the_map_is_read(tmp_path):
