@@ -479,3 +479,13 @@ def test_an_unknown_world_kind_is_an_error_not_another_kinds_check():
     alien = WorldKernel(7, k.grid, k.geom, k.body, k.params)
     with pytest.raises(ValueError, match="unknown world kind"):
         geometry.state_free(alien, np.array([2.5, 2.5]))
+
+
+@given(st.integers(1, 90), st.integers(1, 90), st.floats(0.3, 12.0, allow_nan=False))
+def test_the_resampled_shape_is_the_resampled_maps_shape(h, w, factor):
+    from planners.worlds.grid import resample_obstacles, resampled_shape
+
+    assert resampled_shape((h, w), factor) == resample_obstacles(np.zeros((h, w), bool), factor).shape
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="factor"):
+            resampled_shape((h, w), bad)

@@ -320,6 +320,27 @@ def test_a_map_the_encoder_refuses_is_refused_at_bind_not_at_the_switch(lazy, mo
     p = generate("forest", VALIDATION_SEED0, 64, goal_tolerance=4.0)
     with pytest.raises(InputError, match="SAMPLERGYM_MAX_ROUTE_BLOCKS"):
         make_planner("RRT", p, sampler=lazy, seed=0, step_size=4.0)
+    for planner_name in ("RRT", "RRTstar", "RRTConnect"):  # at the planner's other step: the resampled map's size
+        with pytest.raises(InputError, match=r"resampled to 43 x 43 cells.*Take a larger step"):
+            make_planner(planner_name, p, sampler=lazy, seed=0, extension_step=6.0)
+
+
+def test_a_bind_at_another_step_reads_the_maps_size_without_resampling_it(monkeypatch):
+    """A lazy sampler that never switches pays no pass, and no resampling of the map either."""
+    import planners.worlds.grid as grid_module
+
+    calls = []
+    real = grid_module.resample_obstacles
+    monkeypatch.setattr("learning.samplers.route.resample_obstacles", lambda *a: calls.append(a) or real(*a))
+    p = generate("forest", VALIDATION_SEED0, 64, goal_tolerance=4.0)
+    for planner_name in ("RRT", "RRTConnect", "PRM"):
+        planner = make_planner(planner_name, p, sampler=_lazy(after=math.inf, cap=math.inf, connect_after=math.inf,
+                                                              roadmap_after=math.inf), seed=0, extension_step=6.0)
+        assert planner.solve(max_iterations=2000).solved and not planner.sampler.switched
+    assert not calls
+    planner = make_planner("RRT", p, sampler=_lazy(after=0), seed=0, extension_step=6.0)
+    planner.solve(max_iterations=1)
+    assert len(calls) == 1 and planner.sampler.switched  # the pass reads the map resampled, once
 
 
 @pytest.mark.experiments

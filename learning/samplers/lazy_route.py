@@ -117,6 +117,8 @@ SHIPPED_ROADMAP_FLOOR = 1000.0
 #: RRT-Connect's switch lies past 20,000 iterations: there it is uniform RRT-Connect.
 SHIPPED_CONNECT_CAP = math.inf
 SHIPPED_ROADMAP_CAP = math.inf
+#: The switch of a sampler that never switches: the largest iteration there is.
+NEVER = int(np.iinfo(np.int64).max)
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
 LAZY_ATTRIBUTES = ("after", "cap", "floor", "stall", "connect_after", "roadmap_after", "connect_floor",
                    "roadmap_floor", "connect_cap", "roadmap_cap", "straight", "switched", "switch_at")
@@ -276,7 +278,7 @@ def switch_iteration(after: float, grid: OccupancyGrid, step: float, floor: floa
     """``ceil(after * A)`` on a map of ``A`` step-sized squares, at least ``ceil(floor)`` and at most ``ceil(cap)``
     (the cap wins); an infinite switch is never (the largest int64)."""
     def up(v: float) -> int:
-        return np.iinfo(np.int64).max if math.isinf(v) else math.ceil(v)
+        return NEVER if math.isinf(v) else math.ceil(v)
 
     return min(max(up(after * grid.height * grid.width * (grid.resolution / step) ** 2), up(floor)), up(cap))
 

@@ -43,7 +43,7 @@ from planners.base.samplers import check_sampler_params
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, last_in_sight, lowest_vertex_cell, walk_path
 from planners.guidance.frontier import NO_COST, Frontier, frontier_memo, frontier_sample, update_frontier
-from planners.worlds.grid import resample_obstacles
+from planners.worlds.grid import resample_obstacles, resampled_shape
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
 SHIPPED = SHIPPED_ROUTE
@@ -461,21 +461,31 @@ class RouteSampler(SamplerBase):
         a cell is blocked where any map cell it overlaps is, so a gap narrower than one can close, and no wall
         opens); its field is in steps either way.
         """
-        cells = self.step_size / grid.resolution
         goal = grid.cell_of(self.problem.goal)
-        if abs(cells - self.net.step) <= 1e-6 * self.net.step:
+        factor = self._encoder_factor(grid)
+        if factor == 1.0:
             return grid.obstacles, goal, 1.0
-        factor = cells / self.net.step
         coarse = resample_obstacles(grid.obstacles, factor)
+        g = (min(int(goal[0] / factor), coarse.shape[0] - 1), min(int(goal[1] / factor), coarse.shape[1] - 1))
+        return coarse, g, factor
+
+    def _encoder_factor(self, grid: OccupancyGrid) -> float:
+        """Map cells per encoder cell at this sampler's step (1 at the step the encoder was trained for), once the
+        map the encoder would read is shown not too large (``FieldEncoder.check_size``; an ``InputError`` if it is)."""
+        cells = self.step_size / grid.resolution
+        if abs(cells - self.net.step) <= 1e-6 * self.net.step:
+            self.net.check_size(grid.obstacles.shape)
+            return 1.0
+        factor = cells / self.net.step
+        shape = resampled_shape(grid.obstacles.shape, factor)
         try:
-            self.net.check_size(coarse.shape)
+            self.net.check_size(shape)
         except InputError as exc:
             raise InputError(f"the planner's step {self.step_size:g} is {cells:g} cells of this {grid.height} x "
                              f"{grid.width} map (resolution {grid.resolution:g}); the route encoder reads a step as "
-                             f"{self.net.step} cells, so it reads the map resampled to {coarse.shape[0]} x "
-                             f"{coarse.shape[1]} cells, and: {exc}. Take a larger step") from None
-        g = (min(int(goal[0] / factor), coarse.shape[0] - 1), min(int(goal[1] / factor), coarse.shape[1] - 1))
-        return coarse, g, factor
+                             f"{self.net.step} cells, so it reads the map resampled to {shape[0]} x {shape[1]} "
+                             f"cells, and: {exc}. Take a larger step") from None
+        return factor
 
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
         """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
@@ -522,8 +532,7 @@ class RouteSampler(SamplerBase):
         if not isinstance(grid, OccupancyGrid):
             raise InputError(f"{type(self).__name__} plans on OccupancyGrid problems")
         if self.net is not None:
-            obstacles, _, _ = self._copy_with(problem=problem)._encoder_map(grid)
-            self.net.check_size(obstacles.shape)
+            self._encoder_factor(grid)  # the size alone: a map is resampled only for a pass
 
     def has_field(self, problem: Problem) -> bool:
         """Whether ``fields`` holds the encoder's field of ``problem`` (False without an encoder or a cache)."""

@@ -13,7 +13,7 @@ from numba.core import event as _nb_event
 
 from planners.base.fileio import check_int
 from planners.base.problem import Problem
-from planners.base.samplers import FAMILY_TREE, SampleBatch, Sampler, UniformSampler
+from planners.base.samplers import FAMILY_TREE, SampleBatch, Sampler, UniformSampler, is_sampler
 from planners.datastructures.nn import insert as index_insert
 from planners.kernels import state as slots
 from planners.kernels.cache import announce as announce_compile
@@ -267,7 +267,7 @@ class Planner(abc.ABC):
         require_problem(problem)
         if sampler is None:
             sampler = UniformSampler()
-        if not isinstance(sampler, Sampler):
+        if not is_sampler(sampler):
             raise TypeError("sampler must implement bind(problem) and draw(rng, n, view), "
                             f"got {type(sampler).__name__}")
         if seed is None:
@@ -280,7 +280,7 @@ class Planner(abc.ABC):
         for_planner = getattr(sampler, "for_planner", None)
         if callable(for_planner):  # the sampler's rule for this planner family (``Sampler``)
             ruled = for_planner(self.family)
-            if not isinstance(ruled, Sampler):
+            if not is_sampler(ruled):
                 raise TypeError(f"{type(sampler).__name__}.for_planner({self.family!r}) returned a "
                                 f"{type(ruled).__name__}, not a Sampler")
             sampler = ruled

@@ -292,6 +292,15 @@ def _dilate(padded, widths, near):
 
 
 
+def resampled_shape(shape: tuple[int, int], factor: float) -> tuple[int, int]:
+    """The shape ``resample_obstacles`` gives a map of ``shape`` cells at ``factor``: ``(ceil(H / factor), ceil(W /
+    factor))``, at least one cell a side."""
+    if not (math.isfinite(factor) and factor > 0):
+        raise ValueError(f"factor must be a positive number of cells, got {factor!r}")
+    # one part in a million absorbs the rounding of i * factor at whole numbers
+    return max(1, math.ceil(shape[0] / factor - 1e-6)), max(1, math.ceil(shape[1] / factor - 1e-6))
+
+
 def resample_obstacles(obstacles: np.ndarray, factor: float) -> np.ndarray:
     """The map on cells ``factor`` times as wide, conservatively: a cell is blocked where any cell it overlaps is.
 
@@ -305,11 +314,8 @@ def resample_obstacles(obstacles: np.ndarray, factor: float) -> np.ndarray:
         A gap narrower than a new cell can close; a wall never opens.
     """
     obstacles = np.asarray(obstacles, dtype=bool)
-    if not (math.isfinite(factor) and factor > 0):
-        raise ValueError(f"factor must be a positive number of cells, got {factor!r}")
     H, W = obstacles.shape
-    # one part in a million absorbs the rounding of i * factor at whole numbers
-    h, w = max(1, math.ceil(H / factor - 1e-6)), max(1, math.ceil(W / factor - 1e-6))
+    h, w = resampled_shape((H, W), factor)
     total = np.zeros((H + 1, W + 1), dtype=np.int64)
     total[1:, 1:] = obstacles.cumsum(0).cumsum(1)
 
