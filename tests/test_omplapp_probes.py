@@ -177,3 +177,13 @@ def test_the_time_split_of_a_run_on_omplapps_cubicles(capsys):
     assert split.main(["--omplapp", str(folder), "--problem", "cubicles", "--seeds", "1"]) == 0
     out = capsys.readouterr().out
     assert "| 0 | True |" in out and "median shares of the time: FCL's distance" in out
+
+
+def test_the_grid_tuning_refuses_bad_arguments_and_unknown_problems(tmp_path):
+    tune = load_script("experiments/tune_mesh_grid")
+    for bad in (["--seeds", "0"], ["--iterations", "0"], ["--cells", "4"], ["--cells", "1024"]):
+        with pytest.raises(SystemExit):
+            tune.main(["--omplapp", str(tmp_path), *bad])
+    (tmp_path / "Easy.cfg").write_text("[problem]\n")
+    with pytest.raises(InputError, match="no nothing.cfg"):
+        tune.main(["--omplapp", str(tmp_path), "--problems", "nothing"])
