@@ -27,11 +27,11 @@ def _runs(m, sampler, times, solved=True):
 def test_each_set_against_its_faster_classical_option_and_movingai_pooled(tmp_path, capsys):
     script = load_script("experiments/clock_by_set")
     path = _write(tmp_path / "runs.csv", [
-        *_runs("maze (shifted)", "uniform", [4, 4, 4]), *_runs("maze (shifted)", "goal bias (tuned)", [2, 2, 2]),
+        *_runs("maze (shifted)", "uniform", [4, 4, 4]), *_runs("maze (shifted)", "goal_bias=0.1", [2, 2, 2]),
         *_runs("maze (shifted)", "lazy route", [1, 1, 1]),
         *_runs("spiral (unseen)", "uniform", [1, 1, 1]), *_runs("spiral (unseen)", "lazy route", [3, 3, 3]),
         *_runs("den312d", "uniform", [2, 2]), *_runs("den312d", "lazy route", [1, 1]),
-        *_runs("room-32-32-4", "uniform", [9, 9], solved=False), *_runs("room-32-32-4", "goal bias (tuned)", [4, 4]),
+        *_runs("room-32-32-4", "uniform", [9, 9], solved=False), *_runs("room-32-32-4", "obstacle-based", [4, 4]),
         *_runs("room-32-32-4", "lazy route", [1, 5]),
         *_runs("forest", "uniform", [1]), *_runs("forest", "lazy route", [50]),  # a generated set: not held apart
         *_runs("maze (shifted) (RRT* cost)", "lazy route", [99]),  # the convergence part's: left out
@@ -40,11 +40,18 @@ def test_each_set_against_its_faster_classical_option_and_movingai_pooled(tmp_pa
     rows = dict(script.ratios(runs, ["lazy route"]))
     assert rows["maze (shifted)"]["lazy route"] == 0.5  # against the tuned goal bias, the faster there
     assert rows["spiral (unseen)"]["lazy route"] == 3.0
-    # MovingAI pooled: den312d's uniform and room-32-32-4's goal bias (its uniform never solves): median 3
+    # MovingAI pooled: den312d's uniform and room-32-32-4's obstacle-based sampling (its uniform never solves): 3
     assert rows["MovingAI pooled"]["lazy route"] == pytest.approx(1.0 / 3.0)
     assert "forest" not in rows and len(rows) == 3
     assert script.main([str(path), "--samplers", "lazy route"]) == 0
     assert "lazy route on 2 of 3" in capsys.readouterr().out
+    swept = _write(tmp_path / "swept.csv", [*_runs("maze (shifted)", "goal_bias=0.1", [2]),
+                                            *_runs("maze (shifted)", "goal_bias=0.2", [3]),
+                                            *_runs("maze (shifted)", "lazy route", [1])])
+    with pytest.raises(SystemExit, match="2 goal biases"):
+        script.ratios(script.read_runs(swept, "RRTstar"), ["lazy route"])
+    with pytest.raises(SystemExit):
+        script.main([str(path), "--planner", "RRT"])
 
 
 @pytest.mark.experiments
