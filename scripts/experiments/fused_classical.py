@@ -1,0 +1,175 @@
+"""How much of a lazy sampler's lead on the clock is its compiled loop: the classical samplers drawn the same way.
+
+    PYTHONPATH=$PWD python scripts/experiments/fused_classical.py --maps 6 --seeds 2
+
+The learned samplers draw inside the planners' compiled loops (``planners.fused``): the lazy route sampler's
+classical phase (RRT's straight line, RRT-Connect's uniform trees) never leaves compiled code. The classical samplers
+(``UniformSampler``, ``GoalBiasedSampler``) draw through Python, one call per refill of the planner's buffer. Here
+``FusedUniform`` and ``FusedGoalBias`` draw the same samples value for value inside the compiled loops (RRT's,
+RRT-Connect's, RRT*'s to its first solution), so the runs are the same run for run (checked) and only the time
+differs. On the comparison's held-apart maps (``planner_maps``: shifted, unseen and MovingAI test queries, ``--maps``
+of each family or map), one process and one thread, each (query, seed) run both ways in turn after a warm-up, RRT
+with goal bias 0.05, RRT-Connect with uniform sampling and RRT* (to its first solution) with goal bias 0.05, step 4:
+prints per planner and map set the median time per query both ways and their ratio, and the ratio pooled.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+import time
+
+import numba as nb
+import numpy as np
+
+from planners.base.samplers import GoalBiasedSampler, UniformSampler
+from planners.fused import (
+    CHUNK,
+    connect_loop,
+    fuse_connect,
+    fuse_rrt,
+    fuse_rrtstar,
+    next_double,
+    rrt_loop,
+    rrtstar_loop,
+)
+
+
+@nb.njit(cache=True)
+def uniform_fill(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
+    """``UniformSampler.draw``: ``Generator.random((m, dim))`` over the bounds ``state = (low, high, goal, p)``."""
+    low, high, goal, p = state
+    for k in range(pts.shape[0]):
+        for j in range(pts.shape[1]):
+            pts[k, j] = low[j] + (high[j] - low[j]) * next_double(rng)
+
+
+@nb.njit(cache=True)
+def goal_fill(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
+    """``GoalBiasedSampler.draw``: a row of ``dim + 1`` uniforms a sample, the first deciding the goal (``p``)."""
+    low, high, goal, p = state
+    for k in range(pts.shape[0]):
+        u0 = next_double(rng)
+        for j in range(pts.shape[1]):
+            pts[k, j] = low[j] + (high[j] - low[j]) * next_double(rng)
+        if u0 < p:
+            for j in range(pts.shape[1]):
+                pts[k, j] = goal[j]
+
+
+@nb.njit(cache=True)
+def uniform_rrt(budget, state, buffers, rng, loop):
+    return rrt_loop(budget, uniform_fill, state, buffers, rng, loop)
+
+
+@nb.njit(cache=True)
+def goal_rrt(budget, state, buffers, rng, loop):
+    return rrt_loop(budget, goal_fill, state, buffers, rng, loop)
+
+
+@nb.njit(cache=True)
+def uniform_connect(budget, state_a, state_b, buffers, rng, loop):
+    return connect_loop(budget, uniform_fill, state_a, state_b, buffers, rng, loop)
+
+
+@nb.njit(cache=True)
+def goal_rrtstar(budget, state, buffers, rng, loop):
+    return rrtstar_loop(budget, goal_fill, state, buffers, rng, loop)
+
+
+def _state(sampler) -> tuple:
+    p = getattr(sampler, "p", 0.0)
+    return (np.ascontiguousarray(sampler.low), np.ascontiguousarray(sampler.high),
+            np.ascontiguousarray(sampler.problem.goal, dtype=np.float64), float(p))
+
+
+class FusedUniform(UniformSampler):
+    """``UniformSampler``, its draws inside RRT's and RRT-Connect's compiled loops (the same samples)."""
+
+    def fuse(self, planner):
+        state = _state(self)
+        return fuse_rrt(planner, uniform_rrt, state, CHUNK) or fuse_connect(planner, uniform_connect, state, state,
+                                                                            (CHUNK, CHUNK))
+
+
+class FusedGoalBias(GoalBiasedSampler):
+    """``GoalBiasedSampler``, its draws inside RRT's and RRT*'s compiled loops (the same samples)."""
+
+    def fuse(self, planner):
+        state = _state(self)
+        return fuse_rrt(planner, goal_rrt, state, CHUNK) or fuse_rrtstar(planner, goal_rrtstar, state, CHUNK)
+
+
+#: (planner, the classical sampler drawn through Python, the same drawn in the compiled loop).
+SETUPS = (("RRT", lambda: GoalBiasedSampler(0.05), lambda: FusedGoalBias(0.05)),
+          ("RRTConnect", UniformSampler, FusedUniform),
+          ("RRTstar", lambda: GoalBiasedSampler(0.05), lambda: FusedGoalBias(0.05)))
+
+
+def run(planner_name: str, problem, sampler, seed: int) -> tuple[float, tuple]:
+    """Seconds from building the planner to its first solution (or 20,000 iterations), and what must match.
+
+    RRT* stopped at its first solution runs on to the end of the samples in hand either way (the fused loop's
+    batch, the planner's slice), so there only the first solution's iteration and whether it came must match.
+    """
+    from planners import make_planner
+
+    star = planner_name == "RRTstar"
+    t0 = time.perf_counter()
+    planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, extension_step=4.0,
+                           **({"stop_on_first_solution": True} if star else {}))
+    r = planner.solve(max_iterations=20000)
+    seconds = time.perf_counter() - t0
+    return seconds, ((r.solved, r.first_solution_iteration) if star else
+                     (r.solved, r.iterations, r.collision_checks, r.num_vertices))
+
+
+def main(argv=None) -> int:
+    from learning.evaluation.every_planner import planner_maps
+    from learning.models.threads import planning_threads
+
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--maps", type=int, default=6, help="queries of each family or MovingAI map (default 6)")
+    ap.add_argument("--seeds", type=int, default=2, help="planner seeds per query (default 2)")
+    ap.add_argument("--sets", nargs="+", default=["shifted", "unseen", "movingai"],
+                    choices=["validation", "shifted", "unseen", "movingai"], help="map sets (default the held-apart)")
+    args = ap.parse_args(argv)
+    if args.maps < 1 or args.seeds < 1:
+        ap.error("--maps and --seeds must be at least 1")
+    groups = {}
+    for which in args.sets:
+        try:
+            groups.update(planner_maps(which, args.maps))
+        except Exception as e:  # the MovingAI maps are not shipped: said, and left out
+            print(f"{which}: left out ({e})")
+    print("| planner | map set | through Python (ms) | in the compiled loop (ms) | ratio |\n|---|---|---|---|---|")
+    with planning_threads(1):
+        for planner_name, drawn, fused in SETUPS:
+            warm = next(iter(groups.values()))[0]
+            run(planner_name, warm, drawn(), 0)
+            run(planner_name, warm, fused(), 0)
+            pooled = []
+            for name, problems in groups.items():
+                a, b = [], []
+                for p in problems:
+                    for seed in range(args.seeds):
+                        ta, key_a = run(planner_name, p, drawn(), seed)
+                        tb, key_b = run(planner_name, p, fused(), seed)
+                        if key_a != key_b:
+                            raise SystemExit(f"{planner_name} on {p.name}, seed {seed}: the fused run differs "
+                                             f"({key_a} against {key_b})")
+                        a.append(ta)
+                        b.append(tb)
+                ma, mb = statistics.median(a), statistics.median(b)
+                pooled += list(zip(a, b, strict=True))
+                print(f"| {planner_name} | {name} | {1e3 * ma:.3f} | {1e3 * mb:.3f} | {mb / ma:.2f} |")
+            ratio = statistics.median([y for _, y in pooled]) / statistics.median([x for x, _ in pooled])
+            geo = math.exp(statistics.mean(math.log(y / x) for x, y in pooled))
+            print(f"| {planner_name} | pooled | | | {ratio:.2f} (geometric mean of run ratios {geo:.2f}) |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
