@@ -10,7 +10,10 @@ RRT-Connect's, RRT*'s to its first solution), so the runs are the same run for r
 differs. On the comparison's held-apart maps (``planner_maps``: shifted, unseen and MovingAI test queries, ``--maps``
 of each family or map), one process and one thread, each (query, seed) run both ways in turn after a warm-up, RRT
 with goal bias 0.05, RRT-Connect with uniform sampling and RRT* (to its first solution) with goal bias 0.05, step 4:
-prints per planner and map set the median time per query both ways and their ratio, and the ratio pooled.
+prints per planner and map set the median time per query both ways and their ratio, and the ratio pooled. With
+``--lazy`` the lazy route sampler (``make_sampler("route_lazy")``) runs each (query, seed) too, and its median time is
+given over each way's: how it stands against the classical sampler drawn as the library draws it, and drawn as it is
+drawn itself.
 """
 
 from __future__ import annotations
@@ -135,6 +138,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per query (default 2)")
     ap.add_argument("--sets", nargs="+", default=["shifted", "unseen", "movingai"],
                     choices=["validation", "shifted", "unseen", "movingai"], help="map sets (default the held-apart)")
+    ap.add_argument("--lazy", action="store_true", help="also the lazy route sampler, against both ways")
     args = ap.parse_args(argv)
     if args.maps < 1 or args.seeds < 1:
         ap.error("--maps and --seeds must be at least 1")
@@ -144,15 +148,24 @@ def main(argv=None) -> int:
             groups.update(planner_maps(which, args.maps))
         except Exception as e:  # the MovingAI maps are not shipped: said, and left out
             print(f"{which}: left out ({e})")
-    print("| planner | map set | through Python (ms) | in the compiled loop (ms) | ratio |\n|---|---|---|---|---|")
+    lazy = None
+    if args.lazy:
+        from learning.samplers.registry import make_sampler
+
+        lazy = make_sampler("route_lazy")
+    print("| planner | map set | through Python (ms) | in the compiled loop (ms) | ratio |"
+          + (" lazy route (ms) | lazy / through Python | lazy / in the loop |" if lazy else "")
+          + "\n|---|---|---|---|---|" + ("---|---|---|" if lazy else ""))
     with planning_threads(1):
         for planner_name, drawn, fused in SETUPS:
             warm = next(iter(groups.values()))[0]
             run(planner_name, warm, drawn(), 0)
             run(planner_name, warm, fused(), 0)
+            if lazy:
+                run(planner_name, warm, lazy, 0)
             pooled = []
             for name, problems in groups.items():
-                a, b = [], []
+                a, b, c = [], [], []
                 for p in problems:
                     for seed in range(args.seeds):
                         ta, key_a = run(planner_name, p, drawn(), seed)
@@ -162,12 +175,19 @@ def main(argv=None) -> int:
                                              f"({key_a} against {key_b})")
                         a.append(ta)
                         b.append(tb)
+                        if lazy:
+                            c.append(run(planner_name, p, lazy, seed)[0])
                 ma, mb = statistics.median(a), statistics.median(b)
                 pooled += list(zip(a, b, strict=True))
-                print(f"| {planner_name} | {name} | {1e3 * ma:.3f} | {1e3 * mb:.3f} | {mb / ma:.2f} |")
+                row = f"| {planner_name} | {name} | {1e3 * ma:.3f} | {1e3 * mb:.3f} | {mb / ma:.2f} |"
+                if lazy:
+                    mc = statistics.median(c)
+                    row += f" {1e3 * mc:.3f} | {mc / ma:.2f} | {mc / mb:.2f} |"
+                print(row)
             ratio = statistics.median([y for _, y in pooled]) / statistics.median([x for x, _ in pooled])
             geo = math.exp(statistics.mean(math.log(y / x) for x, y in pooled))
-            print(f"| {planner_name} | pooled | | | {ratio:.2f} (geometric mean of run ratios {geo:.2f}) |")
+            print(f"| {planner_name} | pooled | | | {ratio:.2f} (geometric mean of run ratios {geo:.2f}) |"
+                  + (" | | |" if lazy else ""))
     return 0
 
 
