@@ -113,6 +113,9 @@ def test_fields_filled_ahead_in_one_batch_match_one_query_at_a_time(net, monkeyp
     with pytest.raises(InputError, match="fields cache"):
         RouteSampler(net).prefill(problems)
     assert not RouteSampler(None).has_field(problems[0])
+    monkeypatch.setenv("SAMPLERGYM_MAX_ROUTE_BLOCKS", "16")  # a map the encoder refuses has no field, and is skipped
+    refusing = RouteSampler(net, device="cpu", fields=FieldCache())
+    assert not refusing.has_field(problems[0]) and refusing.prefill(problems) == 0
 
 
 @pytest.mark.parametrize("batch", [None, True])

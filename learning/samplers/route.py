@@ -535,11 +535,15 @@ class RouteSampler(SamplerBase):
             self._encoder_factor(grid)  # the size alone: a map is resampled only for a pass
 
     def has_field(self, problem: Problem) -> bool:
-        """Whether ``fields`` holds the encoder's field of ``problem`` (False without an encoder or a cache)."""
+        """Whether ``fields`` holds the encoder's field of ``problem`` (False without an encoder or a cache, or for a
+        map the encoder refuses: its bind refuses it)."""
         grid = problem.world
         if self.net is None or self.fields is None or not isinstance(grid, OccupancyGrid):
             return False
-        obstacles, goal, _ = self._copy_with(problem=problem)._encoder_map(grid)
+        try:
+            obstacles, goal, _ = self._copy_with(problem=problem)._encoder_map(grid)
+        except InputError:
+            return False
         return self.fields.has(self.net, obstacles, goal, self.symmetry_passes)
 
     def prefill(self, problems: Sequence[Problem], *, batch: bool | None = None) -> int:
