@@ -133,6 +133,11 @@ class FusedConnect:
         """The loop's counters, laid out as ``FusedRRT.counters`` (``B_SEEN_B`` added; its loop never stops early)."""
         return self.buffers[0]
 
+    @property
+    def refills(self) -> int:
+        """Refills drawn so far, both trees' (``FusedRRT.refills``)."""
+        return int(self.buffers[0][B_REFILLS])
+
 
 def fuse_connect(planner: Planner, entry: Callable, state_a: Any, state_b: Any,
                  batches: tuple[int, int]) -> FusedConnect | None:

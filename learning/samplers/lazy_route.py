@@ -264,8 +264,11 @@ class LazyRouteSampler(RouteSampler):
         return SwitchLoop(self, fused)
 
     def switch_loop(self, planner: Planner) -> FusedRRT:
-        """Switch (``switch``) and give RRT's loop on the encoder's field (``SwitchLoop``)."""
+        """Switch (``switch``) and give RRT's loop, or RRT*'s to its first solution, on the encoder's field
+        (``SwitchLoop``)."""
         self.switch()
+        if planner.fusable_loop == "rrtstar":
+            return fuse_rrtstar(planner, route_rrtstar_loop, self._state, self.batch)
         return fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
 
     def __repr__(self) -> str:
@@ -414,7 +417,7 @@ class LazyConvergingSampler(ConvergingRouteSampler):
     before the switch pays no pass, and a run that goes on for a shorter path pays two.
 
     Up to the first solution it draws inside RRT*'s compiled loop (``planners.fused.rrtstar_loop``) on either side of
-    the switch (``StarSwitchLoop``); with a stall switch (off by default) it draws through ``draw``.
+    the switch (``SwitchLoop``); with a stall switch (off by default) it draws through ``draw``.
 
     Args:
         lazy: The lazy route sampler whose rule runs to the first solution and whose encoder makes the corridor.
@@ -442,12 +445,12 @@ class LazyConvergingSampler(ConvergingRouteSampler):
             self.first.switch()
         super().build_corridor()
 
-    def fuse(self, planner: Planner) -> StarSwitchLoop | FusedRRT | None:
+    def fuse(self, planner: Planner) -> SwitchLoop | FusedRRT | None:
         """RRT*'s loop to the first solution with both phases' draws compiled in (None with a stall switch)."""
         if not math.isinf(self.first.stall):
             return None
         fused = super().fuse(planner)
-        return fused if fused is None or self.first.switched else StarSwitchLoop(self.first, fused)
+        return fused if fused is None or self.first.switched else SwitchLoop(self.first, fused)
 
 
 class SwitchLoop:
@@ -455,55 +458,31 @@ class SwitchLoop:
 
     The rule's loop starts with buffers of its own, so what the first loop's buffer still holds is dropped: the
     samples of a uniform batch past the switch, or the sample a stalled draw ended the loop on (``B_STOP``), as the
-    sampler's ``draw`` drops them. ``sampler.switch_loop(planner)`` switches and gives the rule's loop.
+    sampler's ``draw`` drops them. ``sampler.switch_loop(planner)`` switches and gives the rule's loop. Once the
+    planner has a solution there is no switch: RRT*'s loop hands the draws back at its next refill (``HAND_BACK``),
+    and ``refills`` counts both loops' for the planner's own schedule from there.
     """
 
-    __slots__ = ("sampler", "fused")
+    __slots__ = ("sampler", "fused", "before")
 
     def __init__(self, sampler: LazyRouteSampler | LazyRule, fused: FusedRRT | FusedConnect) -> None:
         self.sampler, self.fused = sampler, fused
+        self.before = 0  # the first loop's refills, once the rule's loop has taken over
 
     def __call__(self, planner: Planner, n: int) -> int:
         s, used = self.sampler, 0
-        if not s.switched:
+        if not (s.switched or planner.solved):
             m = min(n, s.switch_at - planner.iterations)
             if m > 0:
                 used = self.fused(planner, m)
                 stopped = self.fused.counters[B_STOP]
-                if not stopped and (used < m or used == n or planner.solved):  # solved or full, or the call is spent
+                if not stopped and (used < m or used == n or planner.solved):  # solved, handed back, full or spent
                     return used
+            self.before = self.fused.refills
             self.fused = s.switch_loop(planner)
-        return used + self.fused(planner, n - used)
-
-
-class StarSwitchLoop(SwitchLoop):
-    """RRT*'s loop on the straight line up to the lazy route sampler's switch, then on the encoder's field.
-
-    As ``SwitchLoop``, with RRT*'s hand-back (``planners.fused``): once the planner has a solution the loop is
-    called as it is, and hands the draws back at its next refill, without a switch; ``refills`` counts both loops'.
-    """
-
-    __slots__ = ("before",)
-
-    def __init__(self, sampler: LazyRouteSampler, fused: FusedRRT) -> None:
-        super().__init__(sampler, fused)
-        self.before = 0  # the first loop's refills, once the second has taken over
-
-    def __call__(self, planner: Planner, n: int) -> int:
-        s, used = self.sampler, 0
-        if s.switched or planner.solved:
-            return self.fused(planner, n)
-        m = min(n, s.switch_at - planner.iterations)
-        if m > 0:
-            used = self.fused(planner, m)
-            if used < m or used == n or planner.solved:  # handed back, full, solved or the call spent
-                return used
-        s.switch()
-        self.before = self.fused.refills
-        self.fused = fuse_rrtstar(planner, route_rrtstar_loop, s.draw_state, s.batch)
         return used + self.fused(planner, n - used)
 
     @property
     def refills(self) -> int:
-        """Refills drawn so far by both loops: where the planner's own schedule goes on after the hand-back."""
+        """Refills drawn so far by both loops: where the planner's own schedule goes on after a hand-back."""
         return self.before + self.fused.refills

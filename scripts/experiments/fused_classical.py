@@ -27,31 +27,15 @@ import time
 import numba as nb
 import numpy as np
 
+from learning.samplers.lazy_route import uniform_connect_loop, uniform_draw
 from planners.base.samplers import GoalBiasedSampler, UniformSampler
-from planners.fused import (
-    CHUNK,
-    connect_loop,
-    fuse_connect,
-    fuse_rrt,
-    fuse_rrtstar,
-    next_double,
-    rrt_loop,
-    rrtstar_loop,
-)
-
-
-@nb.njit(cache=True)
-def uniform_fill(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
-    """``UniformSampler.draw``: ``Generator.random((m, dim))`` over the bounds ``state = (low, high, goal, p)``."""
-    low, high, goal, p = state
-    for k in range(pts.shape[0]):
-        for j in range(pts.shape[1]):
-            pts[k, j] = low[j] + (high[j] - low[j]) * next_double(rng)
+from planners.fused import CHUNK, fuse_connect, fuse_rrt, fuse_rrtstar, next_double, rrt_loop, rrtstar_loop
 
 
 @nb.njit(cache=True)
 def goal_fill(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
-    """``GoalBiasedSampler.draw``: a row of ``dim + 1`` uniforms a sample, the first deciding the goal (``p``)."""
+    """``GoalBiasedSampler.draw`` over ``state = (low, high, goal, p)``: a row of ``dim + 1`` uniforms a sample, the
+    first deciding the goal."""
     low, high, goal, p = state
     for k in range(pts.shape[0]):
         u0 = next_double(rng)
@@ -64,17 +48,13 @@ def goal_fill(state, X, n, best_vertex, best_distance, iteration, rng, pts, anch
 
 @nb.njit(cache=True)
 def uniform_rrt(budget, state, buffers, rng, loop):
-    return rrt_loop(budget, uniform_fill, state, buffers, rng, loop)
+    """RRT's loop drawing as ``UniformSampler`` does (the lazy RRT-Connect rule's compiled uniform draw)."""
+    return rrt_loop(budget, uniform_draw, state, buffers, rng, loop)
 
 
 @nb.njit(cache=True)
 def goal_rrt(budget, state, buffers, rng, loop):
     return rrt_loop(budget, goal_fill, state, buffers, rng, loop)
-
-
-@nb.njit(cache=True)
-def uniform_connect(budget, state_a, state_b, buffers, rng, loop):
-    return connect_loop(budget, uniform_fill, state_a, state_b, buffers, rng, loop)
 
 
 @nb.njit(cache=True)
@@ -92,9 +72,9 @@ class FusedUniform(UniformSampler):
     """``UniformSampler``, its draws inside RRT's and RRT-Connect's compiled loops (the same samples)."""
 
     def fuse(self, planner):
-        state = _state(self)
-        return fuse_rrt(planner, uniform_rrt, state, CHUNK) or fuse_connect(planner, uniform_connect, state, state,
-                                                                            (CHUNK, CHUNK))
+        box = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high))
+        return fuse_rrt(planner, uniform_rrt, box, CHUNK) or fuse_connect(planner, uniform_connect_loop, box, box,
+                                                                          (CHUNK, CHUNK))
 
 
 class FusedGoalBias(GoalBiasedSampler):
