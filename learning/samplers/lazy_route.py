@@ -59,13 +59,12 @@ from planners.fused import (
     CHUNK,
     FusedConnect,
     FusedRRT,
-    connect_loop,
     fuse_connect,
     fuse_rrt,
     fuse_rrtstar,
-    next_double,
     rrt_loop,
 )
+from planners.kernels import draws
 
 #: The planner families whose rule here differs from the route sampler's: RRT and RRT* (the straight line first),
 #: RRT-Connect and the roadmaps (their uniform sampling first).
@@ -286,21 +285,6 @@ def switch_iteration(after: float, grid: OccupancyGrid, step: float, floor: floa
     return min(max(up(after * grid.height * grid.width * (grid.resolution / step) ** 2), up(floor)), up(cap))
 
 
-@nb.njit(cache=True)
-def uniform_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
-    """Uniform samples over the bounds ``state`` = (low, high), row by row as ``Generator.random`` fills them."""
-    low, high = state
-    for k in range(pts.shape[0]):
-        for j in range(pts.shape[1]):
-            pts[k, j] = low[j] + (high[j] - low[j]) * next_double(rng)
-
-
-@nb.njit(cache=True)
-def uniform_connect_loop(budget, state_a, state_b, buffers, rng, loop):
-    """RRT-Connect's compiled loop drawing from ``uniform_draw`` for both trees (``planners.fused``)."""
-    return connect_loop(budget, uniform_draw, state_a, state_b, buffers, rng, loop)
-
-
 class LazyRule(SamplerBase):
     """What the lazy rules for other planners share: uniform sampling, then the route field's rule for the planner.
 
@@ -365,7 +349,9 @@ class LazyConnectSampler(LazyRule):
 
     def _setup(self) -> None:
         super()._setup()
-        self.bounds = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high))
+        # ``UniformSampler``'s compiled draw (``planners.kernels.draws``): the box, the goal, no goal bias
+        self.bounds = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high),
+                       np.ascontiguousarray(self.problem.goal, dtype=np.float64), 0.0)
 
     def draw(self, rng, n, view):
         if self.rule is None and view.iteration >= self.switch_at:
@@ -380,7 +366,7 @@ class LazyConnectSampler(LazyRule):
         """RRT-Connect's loop with both phases' draws compiled in, the switch between them (None for others)."""
         if self.rule is not None:
             return self.rule.fuse(planner)
-        fused = fuse_connect(planner, uniform_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
+        fused = fuse_connect(planner, draws.uniform_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
         return None if fused is None else SwitchLoop(self, fused)
 
 

@@ -173,15 +173,46 @@ class SamplerBase:
         return f"{type(self).__name__}()"
 
 
+def _fuse_classical(sampler: SamplerBase, planner, own_draw, p: float, uniform: bool):
+    """``sampler``'s draws in ``planner``'s compiled loop (``planners.kernels.draws``); None where the planner has no
+    loop, or where a subclass draws otherwise than ``own_draw`` (its ``draw`` is what it means)."""
+    if type(sampler).draw is not own_draw:
+        return None
+    from planners import fused
+    from planners.kernels import draws
+
+    state = (np.ascontiguousarray(sampler.low), np.ascontiguousarray(sampler.high),
+             np.ascontiguousarray(sampler.problem.goal, dtype=np.float64), float(p))
+    kind = planner.fusable_loop
+    if kind == "rrt":
+        return fused.fuse_rrt(planner, draws.uniform_rrt_loop if uniform else draws.goal_rrt_loop, state, fused.CHUNK)
+    if kind == "connect":
+        loop = draws.uniform_connect_loop if uniform else draws.goal_connect_loop
+        return fused.fuse_connect(planner, loop, state, state, (fused.CHUNK, fused.CHUNK))
+    if kind == "rrtstar":
+        loop = draws.uniform_rrtstar_loop if uniform else draws.goal_rrtstar_loop
+        return fused.fuse_rrtstar(planner, loop, state, fused.CHUNK)
+    return None
+
+
 class UniformSampler(SamplerBase):
-    """Uniform over the world's sampling box (obstacles included, as in OMPL's RRT)."""
+    """Uniform over the world's sampling box (obstacles included, as in OMPL's RRT).
+
+    Where the planner has a compiled loop (RRT, RRT-Connect, RRT* to its first solution) it draws the same samples
+    inside it (``fuse``), as the learned samplers do: the same run, without a return to Python per refill.
+    """
 
     def draw(self, rng, n, view):
         return self._uniform(rng.random((n, self.problem.dim)))
 
+    def fuse(self, planner):
+        """This sampler's draws in ``planner``'s compiled loop (``planners.fused``); None where it has none."""
+        return _fuse_classical(self, planner, UniformSampler.draw, 0.0, uniform=True)
+
 
 class GoalBiasedSampler(SamplerBase):
-    """The goal state with probability ``p``, otherwise uniform (OMPL's default ``p`` is 0.05).
+    """The goal state with probability ``p``, otherwise uniform (OMPL's default ``p`` is 0.05); drawn inside the
+    planner's compiled loop where it has one, as ``UniformSampler`` is.
 
     Args:
         p: Goal bias in [0, 1].
@@ -199,6 +230,10 @@ class GoalBiasedSampler(SamplerBase):
         pts = self._uniform(u[:, 1:])
         pts[u[:, 0] < self.p] = self.problem.goal
         return pts
+
+    def fuse(self, planner):
+        """This sampler's draws in ``planner``'s compiled loop (``planners.fused``); None where it has none."""
+        return _fuse_classical(self, planner, GoalBiasedSampler.draw, self.p, uniform=False)
 
     def __repr__(self) -> str:
         return f"GoalBiasedSampler({self.p:g})"
