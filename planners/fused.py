@@ -54,6 +54,10 @@ import numpy as np
 
 from planners.kernels.bitgen import bitgen_address as rng_address
 from planners.kernels.bitgen import next_double
+
+# the classical samplers' compiled draws, for a sampler whose phase draws as ``UniformSampler`` does (state: the box,
+# the goal, the goal probability)
+from planners.kernels.draws import uniform_connect_loop
 from planners.kernels.fused import (
     B_REFILLS,
     B_STOP,
@@ -73,7 +77,7 @@ if TYPE_CHECKING:
 
 __all__ = ["B_STOP", "CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT", "connect_loop", "fuse_connect",
            "fuse_rrt", "fuse_rrtstar", "growing_floor", "nearest_distance", "next_double", "refill_size",
-           "rng_address", "rrt_loop", "rrtstar_loop"]
+           "rng_address", "rrt_loop", "rrtstar_loop", "uniform_connect_loop"]
 
 
 class FusedRRT:

@@ -63,8 +63,8 @@ from planners.fused import (
     fuse_rrt,
     fuse_rrtstar,
     rrt_loop,
+    uniform_connect_loop,
 )
-from planners.kernels import draws
 
 #: The planner families whose rule here differs from the route sampler's: RRT and RRT* (the straight line first),
 #: RRT-Connect and the roadmaps (their uniform sampling first).
@@ -349,7 +349,7 @@ class LazyConnectSampler(LazyRule):
 
     def _setup(self) -> None:
         super()._setup()
-        # ``UniformSampler``'s compiled draw (``planners.kernels.draws``): the box, the goal, no goal bias
+        # ``UniformSampler``'s compiled draw (``planners.fused.uniform_connect_loop``): the box, the goal, no bias
         self.bounds = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high),
                        np.ascontiguousarray(self.problem.goal, dtype=np.float64), 0.0)
 
@@ -366,7 +366,7 @@ class LazyConnectSampler(LazyRule):
         """RRT-Connect's loop with both phases' draws compiled in, the switch between them (None for others)."""
         if self.rule is not None:
             return self.rule.fuse(planner)
-        fused = fuse_connect(planner, draws.uniform_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
+        fused = fuse_connect(planner, uniform_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
         return None if fused is None else SwitchLoop(self, fused)
 
 
