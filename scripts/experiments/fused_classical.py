@@ -1,19 +1,16 @@
-"""How much of a lazy sampler's lead on the clock is its compiled loop: the classical samplers drawn the same way.
+"""What drawing inside the compiled loops buys the classical samplers, and where the lazy route sampler stands.
 
     PYTHONPATH=$PWD python scripts/experiments/fused_classical.py --maps 6 --seeds 2
 
-The learned samplers draw inside the planners' compiled loops (``planners.fused``): the lazy route sampler's
-classical phase (RRT's straight line, RRT-Connect's uniform trees) never leaves compiled code. The classical samplers
-(``UniformSampler``, ``GoalBiasedSampler``) draw through Python, one call per refill of the planner's buffer. Here
-``FusedUniform`` and ``FusedGoalBias`` draw the same samples value for value inside the compiled loops (RRT's,
-RRT-Connect's, RRT*'s to its first solution), so the runs are the same run for run (checked) and only the time
-differs. On the comparison's held-apart maps (``planner_maps``: shifted, unseen and MovingAI test queries, ``--maps``
-of each family or map), one process and one thread, each (query, seed) run both ways in turn after a warm-up, RRT
-with goal bias 0.05, RRT-Connect with uniform sampling and RRT* (to its first solution) with goal bias 0.05, step 4:
-prints per planner and map set the median time per query both ways and their ratio, and the ratio pooled. With
-``--lazy`` the lazy route sampler (``make_sampler("route_lazy")``) runs each (query, seed) too, and its median time is
-given over each way's: how it stands against the classical sampler drawn as the library draws it, and drawn as it is
-drawn itself.
+The classical samplers (``UniformSampler``, ``GoalBiasedSampler``) draw inside the planners' compiled loops
+(``planners.fused``, ``planners.kernels.draws``), as the learned samplers do. ``DrawnUniform`` and ``DrawnGoalBias``
+are the same samplers drawn through Python, one ``draw`` call per refill of the planner's buffer, so the runs are the
+same run for run (checked) and only the time differs. On the comparison's held-apart maps (``planner_maps``: shifted,
+unseen and MovingAI test queries, ``--maps`` of each family or map), one process and one thread, each (query, seed)
+run both ways in turn after a warm-up, RRT with goal bias 0.05, RRT-Connect with uniform sampling and RRT* (to its
+first solution) with goal bias 0.05, step 4: prints per planner and map set the median time per query both ways and
+their ratio, and the ratio pooled. With ``--lazy`` the lazy route sampler (``make_sampler("route_lazy")``) runs each
+(query, seed) too, and its median time is given over each way's.
 """
 
 from __future__ import annotations
@@ -24,71 +21,25 @@ import statistics
 import sys
 import time
 
-import numba as nb
-import numpy as np
-
-from learning.samplers.lazy_route import uniform_connect_loop, uniform_draw
 from planners.base.samplers import GoalBiasedSampler, UniformSampler
-from planners.fused import CHUNK, fuse_connect, fuse_rrt, fuse_rrtstar, next_double, rrt_loop, rrtstar_loop
 
 
-@nb.njit(cache=True)
-def goal_fill(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
-    """``GoalBiasedSampler.draw`` over ``state = (low, high, goal, p)``: a row of ``dim + 1`` uniforms a sample, the
-    first deciding the goal."""
-    low, high, goal, p = state
-    for k in range(pts.shape[0]):
-        u0 = next_double(rng)
-        for j in range(pts.shape[1]):
-            pts[k, j] = low[j] + (high[j] - low[j]) * next_double(rng)
-        if u0 < p:
-            for j in range(pts.shape[1]):
-                pts[k, j] = goal[j]
+class DrawnUniform(UniformSampler):
+    """``UniformSampler`` drawn through Python, one ``draw`` call per refill of the planner's buffer (never fused)."""
+
+    fuse = None
 
 
-@nb.njit(cache=True)
-def uniform_rrt(budget, state, buffers, rng, loop):
-    """RRT's loop drawing as ``UniformSampler`` does (the lazy RRT-Connect rule's compiled uniform draw)."""
-    return rrt_loop(budget, uniform_draw, state, buffers, rng, loop)
+class DrawnGoalBias(GoalBiasedSampler):
+    """``GoalBiasedSampler`` drawn through Python (never fused)."""
 
-
-@nb.njit(cache=True)
-def goal_rrt(budget, state, buffers, rng, loop):
-    return rrt_loop(budget, goal_fill, state, buffers, rng, loop)
-
-
-@nb.njit(cache=True)
-def goal_rrtstar(budget, state, buffers, rng, loop):
-    return rrtstar_loop(budget, goal_fill, state, buffers, rng, loop)
-
-
-def _state(sampler) -> tuple:
-    p = getattr(sampler, "p", 0.0)
-    return (np.ascontiguousarray(sampler.low), np.ascontiguousarray(sampler.high),
-            np.ascontiguousarray(sampler.problem.goal, dtype=np.float64), float(p))
-
-
-class FusedUniform(UniformSampler):
-    """``UniformSampler``, its draws inside RRT's and RRT-Connect's compiled loops (the same samples)."""
-
-    def fuse(self, planner):
-        box = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high))
-        return fuse_rrt(planner, uniform_rrt, box, CHUNK) or fuse_connect(planner, uniform_connect_loop, box, box,
-                                                                          (CHUNK, CHUNK))
-
-
-class FusedGoalBias(GoalBiasedSampler):
-    """``GoalBiasedSampler``, its draws inside RRT's and RRT*'s compiled loops (the same samples)."""
-
-    def fuse(self, planner):
-        state = _state(self)
-        return fuse_rrt(planner, goal_rrt, state, CHUNK) or fuse_rrtstar(planner, goal_rrtstar, state, CHUNK)
+    fuse = None
 
 
 #: (planner, the classical sampler drawn through Python, the same drawn in the compiled loop).
-SETUPS = (("RRT", lambda: GoalBiasedSampler(0.05), lambda: FusedGoalBias(0.05)),
-          ("RRTConnect", UniformSampler, FusedUniform),
-          ("RRTstar", lambda: GoalBiasedSampler(0.05), lambda: FusedGoalBias(0.05)))
+SETUPS = (("RRT", lambda: DrawnGoalBias(0.05), lambda: GoalBiasedSampler(0.05)),
+          ("RRTConnect", DrawnUniform, UniformSampler),
+          ("RRTstar", lambda: DrawnGoalBias(0.05), lambda: GoalBiasedSampler(0.05)))
 
 
 def run(planner_name: str, problem, sampler, seed: int) -> tuple[float, tuple]:
