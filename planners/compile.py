@@ -3,8 +3,10 @@
 For each registered planner and each world kind (occupancy grid, circles and rectangles, 6-DoF rigid
 body among boxes, and among triangle meshes where the ``mesh`` extra is installed) and metric, one short
 seeded solve on a small problem runs every kernel that kind of run uses, so a later first solve loads
-them from the cache in a fraction of a second. The cache folder and how it stays honest are described
-in ``docs/compiling.md`` (``planners.kernels.cache``).
+them from the cache in a fraction of a second. From then on the classical samplers (uniform, goal bias)
+draw inside RRT's, RRT-Connect's and RRT*'s compiled loops on those world kinds
+(``draw_classical_in_loops``). The cache folder and how it stays honest are described in
+``docs/compiling.md`` (``planners.kernels.cache``).
 
     python -m planners.compile               # everything installed, with a progress bar
     python -m planners.compile --planners RRT RRTConnect --worlds grid
@@ -26,7 +28,7 @@ import numpy as np
 
 from planners.base.problem import Problem
 from planners.base.registry import make_planner, planner_names
-from planners.base.samplers import GoalBiasedSampler
+from planners.base.samplers import GoalBiasedSampler, draw_classical_in_loops
 from planners.kernels import cache
 from planners.worlds.grid import OccupancyGrid
 from planners.worlds.rigid3d import thin_wall_scene
@@ -86,14 +88,18 @@ def compile_one(planner: str, world: str, metric: str) -> float | None:
     """Run one short solve so its kernels compile into the cache; the seconds it took, or None if the
     planner does not run on that world (Informed RRT* needs a Euclidean real-vector space).
 
-    A planner with a compiled loop (RRT, RRT-Connect, RRT*) solves twice: with its default uniform sampling and with
-    goal bias (``plan.py``'s default for RRT and RRT*), whose draws are compiled into the loop apart."""
+    A planner with a compiled loop (RRT, RRT-Connect, RRT*) then has the classical samplers draw inside it
+    (``draw_classical_in_loops``) and solves twice: with its default uniform sampling and with goal bias
+    (``plan.py``'s default for RRT and RRT*), whose draws are compiled into the loop apart."""
     t0 = time.perf_counter()
     problem = WORLDS[world][0](metric)
     try:
         p = make_planner(planner, problem, seed=0)
     except ValueError:
         return None
+    if p.fusable_loop is not None:
+        draw_classical_in_loops(problem, (p.fusable_loop,))
+        p.clear()  # bound again: its sampler draws in the loop from here
     p.solve(max_iterations=ITERATIONS)
     if p.fusable_loop is not None:
         make_planner(planner, problem, sampler=GoalBiasedSampler(0.05), seed=0).solve(max_iterations=ITERATIONS)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import pytest
 
 from planners import make_planner
-from planners.base.samplers import GoalBiasedSampler, UniformSampler
+from planners.base.samplers import GoalBiasedSampler, UniformSampler, draw_classical_in_loops
 from planners.compile import NEEDS, WORLDS
+from planners.kernels import cache
 
 
 class DrawnUniform(UniformSampler):
@@ -43,6 +44,7 @@ def test_fused_classical_runs_are_the_drawn_runs(world, planner_name):
     if world in NEEDS and not NEEDS[world][0]():
         pytest.skip(f"{world} worlds need the {NEEDS[world][1]} extra")
     problem = WORLDS[world][0](WORLDS[world][1][0])
+    draw_classical_in_loops(problem)
     for fused, drawn in ((UniformSampler(), DrawnUniform()), (GoalBiasedSampler(0.1), DrawnGoalBias(0.1))):
         for seed in (0, 1):
             key, planner = _run(planner_name, problem, fused, seed)
@@ -53,9 +55,34 @@ def test_fused_classical_runs_are_the_drawn_runs(world, planner_name):
 
 def test_a_subclass_with_its_own_draw_and_a_planner_without_a_loop_are_not_fused():
     problem = WORLDS["grid"][0]("euclidean")
+    draw_classical_in_loops(problem)
     rrt = make_planner("RRT", problem, sampler=OwnDraw(), seed=0)
     assert rrt.sampler.fuse(rrt) is None
     prm = make_planner("PRM", problem, sampler=UniformSampler(), seed=0)
     assert prm.sampler.fuse(prm) is None
     own, plain = _run("RRT", problem, OwnDraw(), 0)[0], _run("RRT", problem, DrawnUniform(), 0)[0]
     assert own != plain  # its own samples, drawn through draw
+
+
+def test_they_draw_in_the_loops_only_once_the_install_chooses_to(tmp_path, monkeypatch):
+    # a fresh cache folder: a first solve compiles the planner's kernels and no classical loop
+    monkeypatch.setitem(cache._state, "dir", tmp_path)
+    grid, rigid = WORLDS["grid"][0]("euclidean"), WORLDS["rigid"][0]("cossin")
+    for name in ("RRT", "RRTConnect", "RRTstar"):
+        planner = make_planner(name, grid, sampler=GoalBiasedSampler(0.05), seed=0)
+        assert planner.sampler.fuse(planner) is None
+    draw_classical_in_loops(grid, ("connect",))
+    connect = make_planner("RRTConnect", grid, seed=0)
+    assert connect.sampler.fuse(connect) is not None
+    rrt = make_planner("RRT", grid, seed=0)
+    assert rrt.sampler.fuse(rrt) is None  # another loop: not chosen
+    other = make_planner("RRTConnect", rigid, seed=0)
+    assert other.sampler.fuse(other) is None  # another world kind: not chosen
+    chosen = sorted(p.name for p in (tmp_path / "compiled").iterdir() if p.name.startswith("classical"))
+    assert chosen == ["classical-draws-connect-GridKernel-" + type(grid.space).__name__]
+    with pytest.raises(ValueError, match="unknown loop 'prm'"):
+        draw_classical_in_loops(grid, ("prm",))
+    # the choice is the cache's: a second process (a fresh record of what it has seen) finds it
+    monkeypatch.setattr(cache, "_known", set())
+    assert cache.is_compiled("classical-draws-connect", grid.world.kernel, grid.space)
+    assert _run("RRTConnect", grid, UniformSampler(), 0)[0] == _run("RRTConnect", grid, DrawnUniform(), 0)[0]

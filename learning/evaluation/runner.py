@@ -14,6 +14,7 @@ from learning.samplers.registry import USER, ModelCache
 from learning.samplers.route import FieldCache, RouteSampler
 from planners import Problem
 from planners.base.registry import planner_class
+from planners.base.samplers import draw_classical_in_loops
 from planners.tools.benchmark import Run
 from planners.tools.parallel import Backend, make_backend
 
@@ -98,6 +99,8 @@ def run_one(task: Task, context: RunContext) -> Run:
         batch = _batch(sampler, task, problem, context)
         if batch:  # timed per field by the cache, charged below
             sampler.prefill(batch, batch=True)
+    # the classical samplers draw in the planners' compiled loops, as the learned ones do (the same runs, sooner)
+    draw_classical_in_loops(problem)
     t0 = time.perf_counter()  # wall time includes binding the sampler (the policy's per-map setup)
     # iterations to the first solution: anytime planners stop there too (Protocol.planner)
     planner, cap = protocol.planner(task.planner, problem, sampler, task.seed)

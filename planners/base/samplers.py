@@ -173,17 +173,51 @@ class SamplerBase:
         return f"{type(self).__name__}()"
 
 
+#: The planners' compiled loops the classical samplers can draw in (``Planner.fusable_loop``).
+CLASSICAL_LOOPS = ("rrt", "connect", "rrtstar")
+
+
+def _classical_label(kind: str) -> str:
+    return f"classical-draws-{kind}"
+
+
+def draw_classical_in_loops(problem: Problem, kinds: tuple[str, ...] = CLASSICAL_LOOPS) -> None:
+    """From now on, in this install, ``UniformSampler`` and ``GoalBiasedSampler`` draw inside the compiled loops of
+    the planners named by ``kinds`` (RRT's ``"rrt"``, RRT-Connect's ``"connect"``, RRT*'s ``"rrtstar"``) on
+    ``problem``'s world kind and space.
+
+    Until then they draw through Python, one ``draw`` call per refill of the planner's buffer, so a first solve
+    compiles the planner's kernels and nothing more. Either way the run is the same run; drawn in the loop it is
+    10 to 20% sooner on a 2-D map, and each loop compiles once per install at its first use (one to five seconds).
+    ``python -m planners.compile`` calls this for every world kind it compiles, and the comparisons
+    (``learning.evaluation``) for the occupancy grids they time, so that the classical samplers they are timed
+    against are at their fastest. The choice is a stamp in the compiled-kernel cache (``planners.kernels.cache``).
+    """
+    from planners.kernels import cache
+
+    for kind in kinds:
+        if kind not in CLASSICAL_LOOPS:
+            raise ValueError(f"kinds: unknown loop {kind!r}; expected some of {', '.join(CLASSICAL_LOOPS)}")
+        cache.mark_compiled(_classical_label(kind), problem.world.kernel, problem.space)
+
+
 def _fuse_classical(sampler: SamplerBase, planner, own_draw, p: float, uniform: bool):
     """``sampler``'s draws in ``planner``'s compiled loop (``planners.kernels.draws``); None where the planner has no
-    loop, or where a subclass draws otherwise than ``own_draw`` (its ``draw`` is what it means)."""
-    if type(sampler).draw is not own_draw:
+    loop, where this install has not chosen to draw there (``draw_classical_in_loops``), or where a subclass draws
+    otherwise than ``own_draw`` (its ``draw`` is what it means)."""
+    kind = planner.fusable_loop
+    if type(sampler).draw is not own_draw or kind not in CLASSICAL_LOOPS:
+        return None
+    from planners.kernels import cache
+
+    problem = sampler.problem
+    if not cache.is_compiled(_classical_label(kind), problem.world.kernel, problem.space):
         return None
     from planners import fused
     from planners.kernels import draws
 
     state = (np.ascontiguousarray(sampler.low), np.ascontiguousarray(sampler.high),
-             np.ascontiguousarray(sampler.problem.goal, dtype=np.float64), float(p))
-    kind = planner.fusable_loop
+             np.ascontiguousarray(problem.goal, dtype=np.float64), float(p))
     if kind == "rrt":
         return fused.fuse_rrt(planner, draws.uniform_rrt_loop if uniform else draws.goal_rrt_loop, state, fused.CHUNK)
     if kind == "connect":
@@ -198,8 +232,9 @@ def _fuse_classical(sampler: SamplerBase, planner, own_draw, p: float, uniform: 
 class UniformSampler(SamplerBase):
     """Uniform over the world's sampling box (obstacles included, as in OMPL's RRT).
 
-    Where the planner has a compiled loop (RRT, RRT-Connect, RRT* to its first solution) it draws the same samples
-    inside it (``fuse``), as the learned samplers do: the same run, without a return to Python per refill.
+    Where the planner has a compiled loop (RRT, RRT-Connect, RRT* to its first solution) and the install has chosen to
+    draw there (``draw_classical_in_loops``; ``python -m planners.compile`` does) it draws the same samples inside it
+    (``fuse``), as the learned samplers do: the same run, without a return to Python per refill.
     """
 
     def draw(self, rng, n, view):
@@ -212,7 +247,7 @@ class UniformSampler(SamplerBase):
 
 class GoalBiasedSampler(SamplerBase):
     """The goal state with probability ``p``, otherwise uniform (OMPL's default ``p`` is 0.05); drawn inside the
-    planner's compiled loop where it has one, as ``UniformSampler`` is.
+    planner's compiled loop as ``UniformSampler`` is.
 
     Args:
         p: Goal bias in [0, 1].

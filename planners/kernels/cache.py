@@ -34,6 +34,7 @@ NOTICE_ENV = "SAMPLERGYM_COMPILE_NOTICE"
 _PACKAGE = Path(__file__).resolve().parent.parent  # planners/
 _state = {"dir": None, "notice": None, "user_dir": False}
 _seen: set[tuple[str, str, str]] = set()
+_known: set[tuple[Path, tuple[str, str, str]]] = set()  # (cache folder, key) stamps seen in this process
 
 #: Compile seconds per planner and dimension ("RRT/2d", "PRM/6dof") as ``scripts/benchmark_first_call.py --save``
 #: measured them, for the notice's wording; a planner without a figure is quoted as a range.
@@ -145,8 +146,35 @@ def _stamp(key: tuple[str, str, str]) -> Path:
 
 
 def is_compiled(label: str, world, space) -> bool:
-    """True if this install has compiled ``label``'s kernels for this world kind and space."""
-    return _stamp(_key(label, world, space)).exists()
+    """True if this install has compiled ``label``'s kernels for this world kind and space.
+
+    A yes is remembered for the process (the cache folder only gains stamps), so a caller may ask once per query.
+    """
+    key = _key(label, world, space)
+    known = (cache_dir(), key)
+    if known in _known:
+        return True
+    if _stamp(key).exists():
+        _known.add(known)
+        return True
+    return False
+
+
+def mark_compiled(label: str, world, space) -> None:
+    """Record that this install compiles ``label``'s kernels for this world kind and space (``is_compiled`` is true
+    from now on); the compilation itself follows at their first use. A folder that cannot be written keeps the mark
+    for this process only."""
+    key = _key(label, world, space)
+    known = (cache_dir(), key)
+    if known in _known:
+        return
+    _known.add(known)
+    try:
+        stamp = _stamp(key)
+        stamp.parent.mkdir(parents=True, exist_ok=True)
+        stamp.touch()
+    except OSError:
+        pass
 
 
 def _key(label: str, world, space) -> tuple[str, str, str]:

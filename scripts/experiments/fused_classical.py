@@ -21,7 +21,7 @@ import statistics
 import sys
 import time
 
-from planners.base.samplers import GoalBiasedSampler, UniformSampler
+from planners.base.samplers import GoalBiasedSampler, UniformSampler, draw_classical_in_loops
 
 
 class DrawnUniform(UniformSampler):
@@ -51,6 +51,7 @@ def run(planner_name: str, problem, sampler, seed: int) -> tuple[float, tuple]:
     from planners import make_planner
 
     star = planner_name == "RRTstar"
+    draw_classical_in_loops(problem)  # the library's classical samplers draw in the loops; the Drawn ones never
     t0 = time.perf_counter()
     planner = make_planner(planner_name, problem, sampler=sampler, seed=seed, extension_step=4.0,
                            **({"stop_on_first_solution": True} if star else {}))
