@@ -18,7 +18,7 @@ from planners.base.fileio import atomic_write_text
 from planners.base.planner import Planner
 from planners.base.problem import Problem
 from planners.base.registry import make_planner
-from planners.base.samplers import GoalBiasedSampler, UniformSampler
+from planners.base.samplers import GoalBiasedSampler, UniformSampler, draw_classical_in_loops
 from planners.datastructures.nn import NearestNeighbors
 from planners.tools.parallel import Backend, LocalBackend
 
@@ -120,8 +120,11 @@ SETUPS: dict[str, tuple[str, Callable[[], dict]]] = {
 
 
 def make_setup(label: str, problem: Problem, *, step: float, seed: int) -> Planner:
-    """A fresh planner of the set-up ``label`` of ``SETUPS`` (``step``: the extension length)."""
+    """A fresh planner of the set-up ``label`` of ``SETUPS`` (``step``: the extension length); the classical samplers
+    draw inside its compiled loop (``draw_classical_in_loops``), so a timing does not depend on what the install
+    compiled before."""
     name, arguments = SETUPS[label]
+    draw_classical_in_loops(problem)
     return make_planner(name, problem, extension_step=step, seed=seed, **arguments())
 
 
@@ -185,6 +188,7 @@ def growth_profile(step_fn: Callable[[int], tuple[int, float]], checkpoints: Seq
 
 def ours_growth_step(problem: Problem, step: float, seed: int) -> Callable[[int], tuple[int, float]]:
     """``step_fn`` for ``growth_profile`` driving our uniform-sampling RRT."""
+    draw_classical_in_loops(problem)  # as make_setup's planners draw
     RRT(problem, step_size=step, seed=seed).solve(max_iterations=10)  # load compiled kernels first
     planner = RRT(problem, step_size=step, sampler=UniformSampler(), seed=seed)
 
