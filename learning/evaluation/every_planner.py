@@ -24,6 +24,7 @@ from learning.evaluation.convergence import BUDGET, CONVERGENCE_TARGETS, EVERY, 
 from learning.evaluation.later_queries import other_queries
 from learning.samplers.registry import ModelCache, make_sampler
 from planners import Problem, make_planner
+from planners.base.samplers import draw_classical_in_loops
 from planners.maps.generators import FAMILIES, SHIFTED_SEED0, SHIFTED_SIZES, VALIDATION_SEED0, generate
 from planners.maps.unseen import UNSEEN_FAMILIES, UNSEEN_SEED0, generate_unseen
 from planners.tools.benchmark import MAX_ITERATIONS, STEP, TOLERANCE, Run
@@ -113,6 +114,7 @@ def run_setup(setup: Setup, problem: Problem, seed: int, *, max_iterations: int 
     if sampler is None:
         sampler = setup.build(models)
     extra = {"stop_on_first_solution": True} if setup.planner in ANYTIME else {}
+    draw_classical_in_loops(problem)  # whatever the install compiled before: the same timing
     t0 = time.perf_counter()
     planner = make_planner(setup.planner, problem, extension_step=step, sampler=sampler, seed=seed, **extra)
     r = planner.solve(max_iterations=max_iterations)
