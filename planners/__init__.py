@@ -19,6 +19,7 @@ from planners.base.samplers import (
     Sampler,
     SamplerBase,
     UniformSampler,
+    draw_classical_in_loops,
 )
 from planners.base.world import World
 from planners.datastructures.nn import NearestNeighbors
@@ -73,6 +74,7 @@ __all__ = [
     "save_scene",
     "thin_wall_scene",
     "load_movingai_scenarios",
+    "draw_classical_in_loops",
     "make_planner",
     "planner_names",
     "register_planner",
