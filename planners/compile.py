@@ -4,7 +4,7 @@ For each registered planner and each world kind (occupancy grid, circles and rec
 body among boxes, and among triangle meshes where the ``mesh`` extra is installed) and metric, one short
 seeded solve on a small problem runs every kernel that kind of run uses, so a later first solve loads
 them from the cache in a fraction of a second. From then on the classical samplers (uniform, goal bias)
-draw inside RRT's, RRT-Connect's and RRT*'s compiled loops on those world kinds
+draw inside RRT's, RRT-Connect's and RRT*'s compiled loops on the 2-D world kinds
 (``draw_classical_in_loops``). The cache folder and how it stays honest are described in
 ``docs/compiling.md`` (``planners.kernels.cache``).
 
@@ -71,6 +71,10 @@ WORLDS: dict[str, tuple[Callable[[str], Problem], tuple[str, ...]]] = {
 }
 #: World kinds that need an extra, by the check that says it is installed and the extra's name.
 NEEDS = {"mesh": (mesh_installed, "mesh")}
+#: World kinds on which the classical samplers draw inside the compiled loops once compiled: the 2-D ones, where a
+#: return to Python per refill is a tenth of a solve's time or more; a 6-DoF iteration's checks take a hundred times
+#: longer than that return, so there the loops would add compiling and no speed.
+CLASSICAL_WORLDS = ("grid", "shapes")
 #: Samples per solve: enough to reach a first solution (path extraction compiles then) on these maps.
 ITERATIONS = 400
 
@@ -88,20 +92,21 @@ def compile_one(planner: str, world: str, metric: str) -> float | None:
     """Run one short solve so its kernels compile into the cache; the seconds it took, or None if the
     planner does not run on that world (Informed RRT* needs a Euclidean real-vector space).
 
-    A planner with a compiled loop (RRT, RRT-Connect, RRT*) then has the classical samplers draw inside it
-    (``draw_classical_in_loops``) and solves twice: with its default uniform sampling and with goal bias
-    (``plan.py``'s default for RRT and RRT*), whose draws are compiled into the loop apart."""
+    On a 2-D world kind (``CLASSICAL_WORLDS``) a planner with a compiled loop (RRT, RRT-Connect, RRT*) then has the
+    classical samplers draw inside it (``draw_classical_in_loops``) and solves with uniform sampling and with goal
+    bias (``plan.py``'s default for RRT and RRT*)."""
     t0 = time.perf_counter()
     problem = WORLDS[world][0](metric)
     try:
         p = make_planner(planner, problem, seed=0)
     except ValueError:
         return None
-    if p.fusable_loop is not None:
+    classical = p.fusable_loop is not None and world in CLASSICAL_WORLDS
+    if classical:
         draw_classical_in_loops(problem, (p.fusable_loop,))
         p.clear()  # bound again: its sampler draws in the loop from here
     p.solve(max_iterations=ITERATIONS)
-    if p.fusable_loop is not None:
+    if classical:
         make_planner(planner, problem, sampler=GoalBiasedSampler(0.05), seed=0).solve(max_iterations=ITERATIONS)
     return time.perf_counter() - t0
 

@@ -46,7 +46,6 @@ from planners.base.fileio import (
     check_number,
     check_output_place,
 )
-from planners.base.samplers import draw_classical_in_loops
 from planners.maps.generators import FAMILIES, check_size, generate
 from planners.tools import benchmark, ompl_bridge
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
@@ -259,7 +258,6 @@ def rigid(args) -> int:
                         kw["sampler"] = make_sampler(sampler_name)
                     return kw
 
-                draw_classical_in_loops(task.problem)  # whatever the install compiled before: the same timing
                 make_planner(planner_name, task.problem, seed=0, **arguments()).solve(max_iterations=2)  # compile
                 row = label if sampler_name is None else f"{planner_name} with {sampler_name}"
                 if args.rigid_restarts:

@@ -35,7 +35,6 @@ from learning.samplers.registry import REFERENCES
 from planners import PRM, RRT, Problem, RRTConnect, solve_with_restarts
 from planners.base.fileio import InputError
 from planners.base.planner import compile_seconds
-from planners.base.samplers import draw_classical_in_loops
 from planners.worlds.rigid3d import PRM_SETUP, RRT_SETUP
 from planners.worlds.rigid_scenes import MeshSceneSet, RigidSceneSet, SceneQuery
 
@@ -104,7 +103,6 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
         raise InputError("restarts are for the tree planners (RRT, RRTConnect): a roadmap would throw its samples away")
     made = user_sampler(spec) if spec is not None else make_sampler(sampler, **(params or {}))
     cap = CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
-    draw_classical_in_loops(problem)  # whatever the install compiled before: the same timing
     c0, t0 = compile_seconds(), time.perf_counter()
     if restarts:
         counted = []

@@ -59,11 +59,12 @@ from planners.fused import (
     CHUNK,
     FusedConnect,
     FusedRRT,
+    classical_connect_loop,
+    classical_state,
     fuse_connect,
     fuse_rrt,
     fuse_rrtstar,
     rrt_loop,
-    uniform_connect_loop,
 )
 
 #: The planner families whose rule here differs from the route sampler's: RRT and RRT* (the straight line first),
@@ -349,9 +350,8 @@ class LazyConnectSampler(LazyRule):
 
     def _setup(self) -> None:
         super()._setup()
-        # ``UniformSampler``'s compiled draw (``planners.fused.uniform_connect_loop``): the box, the goal, no bias
-        self.bounds = (np.ascontiguousarray(self.low), np.ascontiguousarray(self.high),
-                       np.ascontiguousarray(self.problem.goal, dtype=np.float64), 0.0)
+        # ``UniformSampler``'s compiled draw (``planners.fused.classical_connect_loop``): the box, no goal bias
+        self.bounds = classical_state(self.low, self.high, self.problem.goal, 0.0, biased=False)
 
     def draw(self, rng, n, view):
         if self.rule is None and view.iteration >= self.switch_at:
@@ -366,7 +366,7 @@ class LazyConnectSampler(LazyRule):
         """RRT-Connect's loop with both phases' draws compiled in, the switch between them (None for others)."""
         if self.rule is not None:
             return self.rule.fuse(planner)
-        fused = fuse_connect(planner, uniform_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
+        fused = fuse_connect(planner, classical_connect_loop, self.bounds, self.bounds, (CHUNK, CHUNK))
         return None if fused is None else SwitchLoop(self, fused)
 
 

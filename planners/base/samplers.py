@@ -188,10 +188,11 @@ def draw_classical_in_loops(problem: Problem, kinds: tuple[str, ...] = CLASSICAL
 
     Until then they draw through Python, one ``draw`` call per refill of the planner's buffer, so a first solve
     compiles the planner's kernels and nothing more. Either way the run is the same run; drawn in the loop it is
-    10 to 20% sooner on a 2-D map, and each loop compiles once per install at its first use (one to five seconds).
-    ``python -m planners.compile`` calls this for every world kind it compiles, and the comparisons
-    (``learning.evaluation``) for the occupancy grids they time, so that the classical samplers they are timed
-    against are at their fastest. The choice is a stamp in the compiled-kernel cache (``planners.kernels.cache``).
+    10 to 20% sooner on a 2-D map (a 6-DoF iteration's checks take a hundred times longer than the return to Python,
+    so there it changes nothing that shows), and each loop compiles once per install at its first use (one to three
+    seconds). ``python -m planners.compile`` calls this for the 2-D world kinds it compiles, and the 2-D comparisons
+    and benchmarks for the maps they time, so that the classical samplers they are timed against are at their
+    fastest. The choice is a stamp in the compiled-kernel cache (``planners.kernels.cache``).
     """
     from planners.kernels import cache
 
@@ -216,17 +217,12 @@ def _fuse_classical(sampler: SamplerBase, planner, own_draw, p: float, uniform: 
     from planners import fused
     from planners.kernels import draws
 
-    state = (np.ascontiguousarray(sampler.low), np.ascontiguousarray(sampler.high),
-             np.ascontiguousarray(problem.goal, dtype=np.float64), float(p))
+    state = draws.classical_state(sampler.low, sampler.high, problem.goal, p, biased=not uniform)
     if kind == "rrt":
-        return fused.fuse_rrt(planner, draws.uniform_rrt_loop if uniform else draws.goal_rrt_loop, state, fused.CHUNK)
+        return fused.fuse_rrt(planner, draws.classical_rrt_loop, state, fused.CHUNK)
     if kind == "connect":
-        loop = draws.uniform_connect_loop if uniform else draws.goal_connect_loop
-        return fused.fuse_connect(planner, loop, state, state, (fused.CHUNK, fused.CHUNK))
-    if kind == "rrtstar":
-        loop = draws.uniform_rrtstar_loop if uniform else draws.goal_rrtstar_loop
-        return fused.fuse_rrtstar(planner, loop, state, fused.CHUNK)
-    return None
+        return fused.fuse_connect(planner, draws.classical_connect_loop, state, state, (fused.CHUNK, fused.CHUNK))
+    return fused.fuse_rrtstar(planner, draws.classical_rrtstar_loop, state, fused.CHUNK)
 
 
 class UniformSampler(SamplerBase):
