@@ -86,3 +86,17 @@ def test_they_draw_in_the_loops_only_once_the_install_chooses_to(tmp_path, monke
     monkeypatch.setattr(cache, "_known", set())
     assert cache.is_compiled("classical-draws-connect", grid.world.kernel, grid.space)
     assert _run("RRTConnect", grid, UniformSampler(), 0)[0] == _run("RRTConnect", grid, DrawnUniform(), 0)[0]
+
+
+def test_planners_compile_chooses_the_loops_on_the_2d_world_kinds_only(tmp_path, monkeypatch):
+    from planners.compile import CLASSICAL_WORLDS, compile_one
+
+    monkeypatch.setitem(cache._state, "dir", tmp_path)  # stamps only: the compiled kernels stay where they are
+    assert CLASSICAL_WORLDS == ("grid", "shapes")
+    for world in ("grid", "rigid"):
+        assert compile_one("RRT", world, WORLDS[world][1][0]) is not None
+    chosen = sorted(p.name for p in (tmp_path / "compiled").iterdir() if p.name.startswith("classical"))
+    grid = WORLDS["grid"][0]("euclidean")
+    assert chosen == ["classical-draws-rrt-GridKernel-" + type(grid.space).__name__]
+    rrt = make_planner("RRT", grid, sampler=GoalBiasedSampler(0.05), seed=0)
+    assert rrt.sampler.fuse(rrt) is not None
