@@ -202,7 +202,7 @@ def draw_classical_in_loops(problem: Problem, kinds: tuple[str, ...] = CLASSICAL
         cache.mark_compiled(_classical_label(kind), problem.world.kernel, problem.space)
 
 
-def _fuse_classical(sampler: SamplerBase, planner, own_draw, p: float, uniform: bool):
+def _fuse_classical(sampler: SamplerBase, planner, own_draw, p: float, biased: bool):
     """``sampler``'s draws in ``planner``'s compiled loop (``planners.kernels.draws``); None where the planner has no
     loop, where this install has not chosen to draw there (``draw_classical_in_loops``), or where a subclass draws
     otherwise than ``own_draw`` (its ``draw`` is what it means)."""
@@ -217,7 +217,7 @@ def _fuse_classical(sampler: SamplerBase, planner, own_draw, p: float, uniform: 
     from planners import fused
     from planners.kernels import draws
 
-    state = draws.classical_state(sampler.low, sampler.high, problem.goal, p, biased=not uniform)
+    state = draws.classical_state(sampler.low, sampler.high, problem.goal, p, biased)
     if kind == "rrt":
         return fused.fuse_rrt(planner, draws.classical_rrt_loop, state, fused.CHUNK)
     if kind == "connect":
@@ -238,7 +238,7 @@ class UniformSampler(SamplerBase):
 
     def fuse(self, planner):
         """This sampler's draws in ``planner``'s compiled loop (``planners.fused``); None where it has none."""
-        return _fuse_classical(self, planner, UniformSampler.draw, 0.0, uniform=True)
+        return _fuse_classical(self, planner, UniformSampler.draw, 0.0, biased=False)
 
 
 class GoalBiasedSampler(SamplerBase):
@@ -264,7 +264,7 @@ class GoalBiasedSampler(SamplerBase):
 
     def fuse(self, planner):
         """This sampler's draws in ``planner``'s compiled loop (``planners.fused``); None where it has none."""
-        return _fuse_classical(self, planner, GoalBiasedSampler.draw, self.p, uniform=False)
+        return _fuse_classical(self, planner, GoalBiasedSampler.draw, self.p, biased=True)
 
     def __repr__(self) -> str:
         return f"GoalBiasedSampler({self.p:g})"

@@ -221,8 +221,4 @@ def announce(label: str, world, space) -> None:
               f"for this install, {expected_seconds(label, space)}; other planners, worlds and samplers compile "
               f"at their own first use (python -m planners.compile does every planner ahead; docs/compiling.md "
               f"says where the time goes; {NOTICE_ENV}=0 silences this)", file=sys.stderr, flush=True)
-    try:
-        stamp.parent.mkdir(parents=True, exist_ok=True)
-        stamp.touch()
-    except OSError:
-        pass  # a notice too many next time, nothing worse
+    mark_compiled(label, world, space)  # where the folder cannot be written: a notice too many next time

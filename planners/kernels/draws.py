@@ -14,6 +14,7 @@ chooses the goal (``GoalBiasedSampler``, whatever its ``p``) or not (``UniformSa
 from __future__ import annotations
 
 import numba as nb
+import numpy as np
 
 from planners.kernels.bitgen import next_double
 from planners.kernels.fused import connect_loop, rrt_loop, rrtstar_loop
@@ -21,8 +22,6 @@ from planners.kernels.fused import connect_loop, rrt_loop, rrtstar_loop
 
 def classical_state(low, high, goal, p: float, biased: bool) -> tuple:
     """The draw's ``state``: contiguous float64 arrays, ``p`` a float and ``biased`` a bool (one compiled type)."""
-    import numpy as np
-
     return (np.ascontiguousarray(low, dtype=np.float64), np.ascontiguousarray(high, dtype=np.float64),
             np.ascontiguousarray(goal, dtype=np.float64), float(p), bool(biased))
 
