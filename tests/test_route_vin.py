@@ -477,17 +477,25 @@ def test_kept_maps_stay_within_their_bytes_and_go_with_new_weights():
     for p in problems:
         net.predict(p.world.obstacles, p.world.cell_of(p.goal))
     assert len(net._maps) == 3
-    one = next(iter(net._maps.values())).nbytes()
+
+    def total_kept() -> int:  # the running total the cache keeps is the sum over what it holds
+        return sum(p.nbytes() for p in net._maps.parts.values())
+
+    assert net._maps.bytes == total_kept() > 0
+    one = next(iter(net._maps.parts.values())).nbytes()
     net.map_cache_bytes = 2 * one  # room for two maps: the least recently used one goes
     net.predict(problems[0].world.obstacles, problems[0].world.cell_of(problems[0].goal))
-    assert len(net._maps) == 2
+    assert len(net._maps) == 2 and net._maps.bytes == total_kept()
+    other = tuple(int(i) for i in np.argwhere(~problems[2].world.obstacles)[0])
+    net.predict(problems[2].world.obstacles, other)  # a later query on a kept map: its parts replaced
+    assert len(net._maps) == 2 and net._maps.bytes == total_kept()
     copy = pickle.loads(pickle.dumps(net))  # a copy sent to another process starts with no kept map
     assert len(copy._maps) == 0 and len(net._maps) == 2
     obstacles, goal = problems[1].world.obstacles, problems[1].world.cell_of(problems[1].goal)
     before = net.predict(obstacles, goal)
     state = {k: v * 1.5 if k.startswith("local.0") else v for k, v in net.state_dict().items()}
     net.load_state_dict(state)  # other weights: nothing kept from the old ones may serve them
-    assert len(net._maps) == 0
+    assert len(net._maps) == 0 and net._maps.bytes == 0
     whole, changed = _whole_and_reused(net, obstacles, goal)
     reached = whole < 1e5
     assert np.abs(changed - whole)[reached].max() < 1e-4 and np.array_equal(reached, changed < 1e5)
@@ -524,7 +532,7 @@ def test_cheaper_arithmetic_moves_the_field_by_its_rounding(capsys):
     assert max(rows["prepacked"], rows["channels-last float32"]) < 1e-3 < rows["bfloat16"]
     assert not script.encoder().prepacked and script.encoder(script.Prepacked).prepacked  # dense against prepacked
     shipped, layout = script.encoder(), script.encoder(script.ChannelsLast)  # another layout, the same weights
-    assert all(torch.equal(a, b) for a, b in zip(shipped.state_dict().values(), layout.state_dict().values()))
+    assert all(torch.equal(a, b) for a, b in zip(shipped.state_dict().values(), layout.state_dict().values(), strict=True))
     with pytest.raises(SystemExit) as stop:
         script.main(["--check", "fields", "--maps", "0"])
     assert stop.value.code == 2

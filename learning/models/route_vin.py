@@ -106,6 +106,39 @@ class MapParts(NamedTuple):
         return sum(t.element_size() * t.nelement() for t in (self.costs, self.hidden, self.steps))
 
 
+class KeptMaps:
+    """Maps' kept parts by key, the most recently used last, with their bytes in total kept as they change.
+
+    (A sum over every kept map at each query cost more than the query's own search once hundreds were kept.)
+    """
+
+    def __init__(self) -> None:
+        self.parts: OrderedDict[tuple, MapParts] = OrderedDict()
+        self.bytes = 0
+
+    def __len__(self) -> int:
+        return len(self.parts)
+
+    def pop(self, key: tuple) -> MapParts | None:
+        """Take the parts kept under ``key`` out (None where there are none)."""
+        parts = self.parts.pop(key, None)
+        if parts is not None:
+            self.bytes -= parts.nbytes()
+        return parts
+
+    def put(self, key: tuple, parts: MapParts, max_bytes: int) -> None:
+        """Keep ``parts`` under ``key``, most recently used, then drop the least recently used past ``max_bytes``."""
+        self.pop(key)
+        self.parts[key] = parts
+        self.bytes += parts.nbytes()
+        while self.bytes > max_bytes:  # the least recently used first (this one too, if it alone is too large)
+            self.bytes -= self.parts.popitem(last=False)[1].nbytes()
+
+    def clear(self) -> None:
+        self.parts.clear()
+        self.bytes = 0
+
+
 class RouteVIN(nn.Module, FieldEncoder):
     """Learned move costs and value iteration over the block grid (see the module docstring).
 
@@ -186,7 +219,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         self.cells = nn.Sequential(nn.Conv2d(channels + len(MOVES), channels, 1), nn.ReLU(inplace=True),
                                    nn.Conv2d(channels, block * block, 1))
         self.register_buffer("lengths", torch.tensor(LENGTHS, dtype=torch.float32).view(1, -1, 1, 1))
-        self._maps: OrderedDict[tuple, MapParts] = OrderedDict()
+        self._maps = KeptMaps()
         self._packed: list[tuple[torch.Tensor, torch.Tensor]] = []  # each 3x3 layer's weights for oneDNN, once made
         self._work: dict[str, np.ndarray] = {}  # a pass's buffers and the search's working arrays, by name
 
@@ -225,11 +258,11 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def __getstate__(self) -> dict:
         # a copy sent elsewhere starts with no kept maps or buffers, and packs its own weights
-        return {**self.__dict__, "_maps": OrderedDict(), "_packed": [], "_work": {}}
+        return {**self.__dict__, "_maps": KeptMaps(), "_packed": [], "_work": {}}
 
     def __setstate__(self, state: dict) -> None:
-        # a copy pickled before the prepacked weights or the buffers existed
-        super().__setstate__({"_packed": [], "_work": {}, **state})
+        # a copy pickled before the prepacked weights or the buffers existed; a copy keeps no maps
+        super().__setstate__({"_packed": [], "_work": {}, **state, "_maps": KeptMaps()})
 
     def inference_key(self) -> tuple:
         return (self.wall_cost, self.step_walls, self.fixed_point)
@@ -483,9 +516,7 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def keep_map(self, key: tuple, parts: MapParts) -> None:
         """Keep ``parts`` under ``key``, the most recently used last, within ``map_cache_bytes``."""
-        self._maps[key] = parts
-        while sum(p.nbytes() for p in self._maps.values()) > self.map_cache_bytes:
-            self._maps.popitem(last=False)  # the least recently used first (this one too, if it alone is too large)
+        self._maps.put(key, parts, self.map_cache_bytes)
 
     def window_parts(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> tuple[torch.Tensor, torch.Tensor]:
         """The move costs and the head's first layer over the blocks of ``window`` only (``local_window``)."""
@@ -544,7 +575,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         if window is None:
             return self.forward(x)
         key = self.map_key(x)
-        parts = self._maps.pop(key, None)
+        parts = self._maps.pop(key)
         if parts is None:  # the first query on this map: one whole pass, its parts kept with this goal in them
             if self.compiled(x):
                 parts = MapParts(*self.map_features(x), cell_steps(x, self.block), window)
