@@ -532,7 +532,8 @@ def test_cheaper_arithmetic_moves_the_field_by_its_rounding(capsys):
     assert max(rows["prepacked"], rows["channels-last float32"]) < 1e-3 < rows["bfloat16"]
     assert not script.encoder().prepacked and script.encoder(script.Prepacked).prepacked  # dense against prepacked
     shipped, layout = script.encoder(), script.encoder(script.ChannelsLast)  # another layout, the same weights
-    assert all(torch.equal(a, b) for a, b in zip(shipped.state_dict().values(), layout.state_dict().values(), strict=True))
+    pairs = zip(shipped.state_dict().values(), layout.state_dict().values(), strict=True)
+    assert all(torch.equal(a, b) for a, b in pairs)
     with pytest.raises(SystemExit) as stop:
         script.main(["--check", "fields", "--maps", "0"])
     assert stop.value.code == 2
