@@ -7,6 +7,7 @@
     python scripts/benchmark_route.py --value-iteration                          # the fixed point the former way
     python scripts/benchmark_route.py --torch-inference                          # no compiled part after the network
     python scripts/benchmark_route.py --dense-convolutions                       # the 3x3 layers as training runs them
+    python scripts/benchmark_route.py --sides 128 --kept 800                     # first queries with 800 maps kept
 
 Each row is one map side and family (a generated forest, and a maze, whose route winds furthest;
 ``--families``; ``--symmetries`` passes, the goal in a free cell):
@@ -15,7 +16,9 @@ query on its map (nothing of the map kept), with the encoder's own planning thre
 encoder that keeps a map's goal-free parts (``RouteVIN.map_cache_bytes``), the median and best of as many later
 queries on the same map, each to another goal (``later_ms``: a robot planning again on its map); and, with
 ``--batch N``, the time per query when N queries of that side go through ``predict_many`` together (the
-evaluation's batched path on a GPU).
+evaluation's batched path on a GPU); with ``--kept N``, the median and best first query on a new map (generated,
+other seeds) after the parts of N other maps are kept (``kept_ms``: a comparison's many maps, one query each, where
+the kept maps may number hundreds).
 Peak memory is the process's resident peak after the row (CPU; sides in increasing order), or the
 GPU's allocated peak for the row. A side above the encoder's block limit is shown as refused, with the
 limit's message. Times are wall times in one process; the machine's load is printed beside them.
@@ -67,7 +70,7 @@ def _timed(call, repeat: int, sync) -> list[float]:
 
 
 def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, batch: int, device,
-               family: str = "forest") -> dict:
+               family: str = "forest", kept: int = 0) -> dict:
     """One row: the encoder's time per query on a ``side`` x ``side`` map of ``family`` (see the module docstring)."""
     problem = generate(family, TEST_SEED0, side)
     obstacles = np.asarray(problem.world.obstacles)
@@ -101,6 +104,19 @@ def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, ba
         later = _timed(lambda: net.predict(obstacles, next(goals), symmetries, threads=threads), repeat, sync)
         row["later_ms"] = round(1000 * float(np.median(later)), 2)
         row["later_best_ms"] = round(1000 * min(later), 2)
+    if kept > 0 and getattr(net, "map_cache_bytes", 0) > 0:
+        forget()
+        queries = []
+        for i in range(kept + repeat + 1):  # the maps to keep, then a new one for each timed call and the warm-up
+            other = generate(family, TEST_SEED0 + 1 + i, side)
+            queries.append((np.asarray(other.world.obstacles), other.world.cell_of(other.goal)))
+        for obs, cell in queries[:kept]:
+            net.predict(obs, cell, symmetries, threads=threads)
+        fresh = iter(queries[kept:])
+        times = _timed(lambda: net.predict(*next(fresh), symmetries, threads=threads), repeat, sync)
+        row["kept_ms"] = round(1000 * float(np.median(times)), 2)
+        row["kept_best_ms"] = round(1000 * min(times), 2)
+        forget()
     if batch > 1:
         picks = np.random.default_rng(side).choice(len(free), size=batch, replace=len(free) < batch)
         queries = [(obstacles, (int(free[i][0]), int(free[i][1]))) for i in picks]
@@ -125,6 +141,8 @@ def main(argv=None) -> int:
                          "1 for the value-iteration encoder)")
     ap.add_argument("--repeat", type=int, default=5, help="timed calls per row; the table shows their median")
     ap.add_argument("--batch", type=int, default=1, help="also time N queries per predict_many call")
+    ap.add_argument("--kept", type=int, default=0,
+                    help="also time first queries on new maps with N other maps' parts kept (default 0: not)")
     ap.add_argument("--device", default="cpu", choices=DEVICES, help="cpu (default), cuda, or auto as in SB3")
     ap.add_argument("--families", nargs="+", default=["forest", "maze"], choices=FAMILIES,
                     help="generated families to time on (default forest and maze)")
@@ -138,6 +156,7 @@ def main(argv=None) -> int:
 
     def check() -> None:
         check_int_flags(args, ("repeat", "batch"))
+        check_int(args.kept, "--kept", low=0)
         for side in args.sides:
             check_int(side, "--sides", low=32)  # the smallest generated map
         for n in args.threads:
@@ -182,11 +201,13 @@ def main(argv=None) -> int:
         for family in args.families:
             for n in args.threads:
                 rows.append(bench_side(net, side, symmetries=args.symmetries, threads=n, repeat=args.repeat,
-                                       batch=args.batch, device=device, family=family))
+                                       batch=args.batch, device=device, family=family, kept=args.kept))
                 print(markdown_table([rows[-1]], [c for c in rows[-1] if c != "note"]).splitlines()[-1], flush=True)
     columns = ["family", "side", "threads", "ms_per_query", "best_ms"]
     if any("later_ms" in row for row in rows):
         columns += ["later_ms", "later_best_ms"]
+    if any("kept_ms" in row for row in rows):
+        columns += ["kept_ms", "kept_best_ms"]
     if args.batch > 1:
         columns.append(f"ms_per_query_batch_{args.batch}")
     columns += ["peak_mb", "load"]

@@ -34,6 +34,7 @@ from conftest import load_script  # noqa: E402
     ("benchmark_route", ["--threads", "0"], "--threads"),
     ("benchmark_route", ["--symmetries", "9"], "--symmetries"),
     ("benchmark_route", ["--route", "/nonexistent/route.pt"], "--route"),
+    ("benchmark_route", ["--kept", "-1"], "--kept"),
     ("benchmark_route", ["--device", "cuda"] if not __import__("torch").cuda.is_available() else ["--batch", "0"],
      "--device" if not __import__("torch").cuda.is_available() else "--batch"),
 ])
@@ -66,6 +67,16 @@ def test_benchmark_route_times_the_torch_inference_on_request(capsys):
     out = capsys.readouterr().out
     assert "torch inference" in out.splitlines()[0] and "| forest | 32 " in out
     assert RouteVIN.compiled_inference  # the script's own encoder only
+
+
+def test_benchmark_route_times_first_queries_with_other_maps_kept(capsys):
+    assert load_script("benchmark_route").main(["--sides", "32", "--repeat", "2", "--families", "forest",
+                                                "--kept", "3"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("| family |"))  # the table after the rows
+    header = [c.strip() for c in lines[at].split("|")]
+    row = next(line for line in lines[at:] if line.startswith("| forest | 32 "))
+    assert float(row.split("|")[header.index("kept_ms")]) > 0
 
 
 def test_benchmark_envs_runs_every_registered_id_and_leaves_guided_actions_to_the_2d_ones(capsys):
