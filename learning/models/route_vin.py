@@ -109,12 +109,29 @@ class MapParts(NamedTuple):
 class KeptMaps:
     """Maps' kept parts by key, the most recently used last, with their bytes in total kept as they change.
 
-    (A sum over every kept map at each query cost more than the query's own search once hundreds were kept.)
+    (A sum over every kept map at each query cost more than the query's own search once hundreds were kept.) It also
+    notes the keys of the maps queried once (``seen``, at most ``SEEN`` of them): a map's parts are kept from its second
+    query on, so a run of one query per map keeps nothing. Keeping every first query's parts put each new map's pass in
+    fresh memory, which cost a first query at 128 x 128 cells a fifth to a third more than memory used again.
     """
+
+    #: How many maps queried once are remembered (their keys only).
+    SEEN = 4096
 
     def __init__(self) -> None:
         self.parts: OrderedDict[tuple, MapParts] = OrderedDict()
         self.bytes = 0
+        self.seen: OrderedDict[tuple, None] = OrderedDict()
+
+    def seen_before(self, key: tuple) -> bool:
+        """Whether the map ``key`` was queried before (and is not kept); notes it as queried now."""
+        if key in self.seen:
+            self.seen.move_to_end(key)
+            return True
+        self.seen[key] = None
+        if len(self.seen) > self.SEEN:
+            self.seen.popitem(last=False)
+        return False
 
     def __len__(self) -> int:
         return len(self.parts)
@@ -136,6 +153,7 @@ class KeptMaps:
 
     def clear(self) -> None:
         self.parts.clear()
+        self.seen.clear()
         self.bytes = 0
 
 
@@ -566,24 +584,27 @@ class RouteVIN(nn.Module, FieldEncoder):
         The goal's channel reaches the local features of the blocks within ``depth`` blocks of the goal's block
         only (each 3x3 layer one block further), so those are computed again, from the input within ``2 * depth``
         blocks (where a crop's edge is not the map's, its zero padding reaches ``depth - 1`` blocks in; the kept
-        window is ``depth`` blocks in), and the map's parts serve every other block. The first query on a map takes
-        one whole pass and keeps its parts with its goal in them; the next one computes that goal's window again
-        without the goal before it puts in its own. The same values as one whole pass up to floating-point rounding.
-        A query whose goal channel marks other than one block takes the whole pass.
+        window is ``depth`` blocks in), and the map's parts serve every other block. The first two queries on a map
+        take one whole pass each, and the second keeps its parts with its goal in them (``KeptMaps``); the third
+        computes that goal's window again without the goal before it puts in its own. The same values as one whole pass
+        up to floating-point rounding. A query whose goal channel marks other than one block takes the whole pass.
         """
         window = self.goal_window(x)
         if window is None:
             return self.forward(x)
         key = self.map_key(x)
         parts = self._maps.pop(key)
-        if parts is None:  # the first query on this map: one whole pass, its parts kept with this goal in them
+        if parts is None:  # one whole pass; its parts kept, with this goal in them, where the map was queried before
+            keep = self._maps.seen_before(key)
             if self.compiled(x):
                 parts = MapParts(*self.map_features(x), cell_steps(x, self.block), window)
-                self.keep_map(key, parts)
+                if keep:
+                    self.keep_map(key, parts)
                 return self.compiled_field(x, parts.costs, parts.hidden, parts.steps)
             f, costs = self.move_costs(x)
             parts = MapParts(costs, self.head_inputs(f), cell_steps(x, self.block), window)
-            self.keep_map(key, parts)
+            if keep:
+                self.keep_map(key, parts)
             return self.cell_field(f, self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps))
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
             free = x.clone()
