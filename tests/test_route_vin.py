@@ -477,12 +477,12 @@ def test_a_kept_map_gives_every_goal_the_whole_pass_field(h, w, depth, density, 
 def test_kept_maps_stay_within_their_bytes_and_go_with_new_weights():
     net = load_route_net(SHIPPED)
     problems = [generate("forest", TRAIN_SEEDS[0] + i, 64) for i in range(3)]
-    for p in problems:  # a map queried once keeps nothing
+    for p in problems:  # a map queried once keeps nothing: it is held as the recent map until the next map's query
         net.predict(p.world.obstacles, p.world.cell_of(p.goal))
-    assert len(net._maps) == 0 and net._maps.bytes == 0
-    for p in problems:  # its second query keeps its parts
+        assert net._maps.recent[0] is not None and len(net._maps) == 0 and net._maps.bytes == 0
+    for p in problems:  # a second query keeps the map's parts (the last map's from where they are held)
         net.predict(p.world.obstacles, p.world.cell_of(p.goal))
-    assert len(net._maps) == 3
+    assert len(net._maps) == 3 and net._maps.recent is None
 
     def total_kept() -> int:  # the running total the cache keeps is the sum over what it holds
         return sum(p.nbytes() for p in net._maps.parts.values())

@@ -109,10 +109,12 @@ class MapParts(NamedTuple):
 class KeptMaps:
     """Maps' kept parts by key, the most recently used last, with their bytes in total kept as they change.
 
-    (A sum over every kept map at each query cost more than the query's own search once hundreds were kept.) It also
-    notes the keys of the maps queried once (``seen``, at most ``SEEN`` of them): a map's parts are kept from its second
-    query on, so a run of one query per map keeps nothing. Keeping every first query's parts put each new map's pass in
-    fresh memory, which cost a first query at 128 x 128 cells a fifth to a third more than memory used again.
+    (A sum over every kept map at each query cost more than the query's own search once hundreds were kept.) A map
+    queried once is held apart (``recent``) until another map's first query takes its place, and the keys of maps
+    queried once are noted (``seen``, at most ``SEEN`` of them): a map's parts enter the kept maps at its second
+    query, so a run of one query per map keeps one map's parts at a time, and its passes use the same memory again
+    instead of fresh memory (a first query at 128 x 128 cells costs a fifth to a third more in fresh memory), while
+    a second query right after the first (a bidirectional planner's field to the start) still finds them.
     """
 
     #: How many maps queried once are remembered (their keys only).
@@ -122,9 +124,13 @@ class KeptMaps:
         self.parts: OrderedDict[tuple, MapParts] = OrderedDict()
         self.bytes = 0
         self.seen: OrderedDict[tuple, None] = OrderedDict()
+        self.recent: tuple[tuple, MapParts] | None = None
+
+    def __len__(self) -> int:
+        return len(self.parts)
 
     def seen_before(self, key: tuple) -> bool:
-        """Whether the map ``key`` was queried before (and is not kept); notes it as queried now."""
+        """Whether the map ``key`` was queried before (and its parts are not kept); notes it as queried now."""
         if key in self.seen:
             self.seen.move_to_end(key)
             return True
@@ -133,15 +139,19 @@ class KeptMaps:
             self.seen.popitem(last=False)
         return False
 
-    def __len__(self) -> int:
-        return len(self.parts)
-
     def pop(self, key: tuple) -> MapParts | None:
-        """Take the parts kept under ``key`` out (None where there are none)."""
+        """Take the parts kept (or held as the recent map's) under ``key`` out (None where there are none)."""
         parts = self.parts.pop(key, None)
         if parts is not None:
             self.bytes -= parts.nbytes()
+            return parts
+        if self.recent is not None and self.recent[0] == key:
+            parts, self.recent = self.recent[1], None
         return parts
+
+    def hold(self, key: tuple, parts: MapParts, max_bytes: int) -> None:
+        """Hold ``parts`` as the recent map's in place of the one held before (none if they alone are too large)."""
+        self.recent = (key, parts) if parts.nbytes() <= max_bytes else None
 
     def put(self, key: tuple, parts: MapParts, max_bytes: int) -> None:
         """Keep ``parts`` under ``key``, most recently used, then drop the least recently used past ``max_bytes``."""
@@ -154,6 +164,7 @@ class KeptMaps:
     def clear(self) -> None:
         self.parts.clear()
         self.seen.clear()
+        self.recent = None
         self.bytes = 0
 
 
@@ -536,6 +547,13 @@ class RouteVIN(nn.Module, FieldEncoder):
         """Keep ``parts`` under ``key``, the most recently used last, within ``map_cache_bytes``."""
         self._maps.put(key, parts, self.map_cache_bytes)
 
+    def _keep_or_hold(self, key: tuple, parts: MapParts, keep: bool) -> None:
+        """A whole pass's parts: kept (``keep``: the map was queried before), else held as the recent map's."""
+        if keep:
+            self.keep_map(key, parts)
+        else:
+            self._maps.hold(key, parts, self.map_cache_bytes)
+
     def window_parts(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> tuple[torch.Tensor, torch.Tensor]:
         """The move costs and the head's first layer over the blocks of ``window`` only (``local_window``)."""
         f = self.local_window(x, window)
@@ -584,9 +602,10 @@ class RouteVIN(nn.Module, FieldEncoder):
         The goal's channel reaches the local features of the blocks within ``depth`` blocks of the goal's block
         only (each 3x3 layer one block further), so those are computed again, from the input within ``2 * depth``
         blocks (where a crop's edge is not the map's, its zero padding reaches ``depth - 1`` blocks in; the kept
-        window is ``depth`` blocks in), and the map's parts serve every other block. The first two queries on a map
-        take one whole pass each, and the second keeps its parts with its goal in them (``KeptMaps``); the third
-        computes that goal's window again without the goal before it puts in its own. The same values as one whole pass
+        window is ``depth`` blocks in), and the map's parts serve every other block. The first query on a map takes one
+        whole pass, its parts held with its goal in them as the recent map's (``KeptMaps``); a later query finds them
+        there or kept (or, where another map's first query took their place, takes a whole pass whose parts are kept),
+        computes the held goal's window again without its goal, and puts in its own. The same values as one whole pass
         up to floating-point rounding. A query whose goal channel marks other than one block takes the whole pass.
         """
         window = self.goal_window(x)
@@ -594,17 +613,15 @@ class RouteVIN(nn.Module, FieldEncoder):
             return self.forward(x)
         key = self.map_key(x)
         parts = self._maps.pop(key)
-        if parts is None:  # one whole pass; its parts kept, with this goal in them, where the map was queried before
+        if parts is None:  # one whole pass; its parts, with this goal in them, kept or held as the recent map's
             keep = self._maps.seen_before(key)
             if self.compiled(x):
                 parts = MapParts(*self.map_features(x), cell_steps(x, self.block), window)
-                if keep:
-                    self.keep_map(key, parts)
+                self._keep_or_hold(key, parts, keep)
                 return self.compiled_field(x, parts.costs, parts.hidden, parts.steps)
             f, costs = self.move_costs(x)
             parts = MapParts(costs, self.head_inputs(f), cell_steps(x, self.block), window)
-            if keep:
-                self.keep_map(key, parts)
+            self._keep_or_hold(key, parts, keep)
             return self.cell_field(f, self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps))
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
             free = x.clone()
