@@ -105,9 +105,7 @@ def check_fields(args) -> None:
         reach = ref < 1e5
         for name, net in nets.items():
             net.clear_map_cache()
-            first = net.predict(obstacles, goal)
-            net.predict(obstacles, goal)  # the second query keeps the map's parts
-            later = net.predict(obstacles, goal)  # a later query: the goal's window over the kept parts
+            first, later = net.predict(obstacles, goal), net.predict(obstacles, goal)
             d = max(float(np.abs(first - ref)[reach].max()), float(np.abs(later - ref)[reach].max()))
             if d > worst[name][0]:
                 worst[name] = (d, p.name)

@@ -4,12 +4,11 @@
     python scripts/experiments/compiled_fields.py --maps 2 --sides 64
 
 On the validation maps (the training families, seeds from ``VALIDATION_SEED0 + 500``, ``--maps`` per family at
-each of ``--sides``), for each map's own goal (queried twice: two whole passes, the second keeping the map's parts)
-and two more free cells of it (later queries over the kept parts): the largest difference at any reached cell
-between the shipped encoder's field as the library computes it (``RouteVIN.compiled_inference``: walls gating the
-Dijkstra, the compiled cell head, strips of rows, kept maps) and one whole torch pass (``compiled_inference`` and
-``map_cache_bytes`` off), and whether the two reach the same cells. Prints one row per family and side, and the
-verdict against ``--bound`` (default 1e-4 steps).
+each of ``--sides``), for each map's own goal and two more free cells of it, in that order on one kept map (a first
+query, then later ones): the largest difference at any reached cell between the shipped encoder's field as the
+library computes it (``RouteVIN.compiled_inference``: walls gating the Dijkstra, the compiled cell head, strips of
+rows, kept maps) and one whole torch pass (``compiled_inference`` and ``map_cache_bytes`` off), and whether the two
+reach the same cells. Prints one row per family and side, and the verdict against ``--bound`` (default 1e-4 steps).
 """
 
 from __future__ import annotations
@@ -38,8 +37,7 @@ def row(net, family: str, side: int, maps: int) -> dict:
         problem = generate(family, VALIDATION_SEED0 + 500 + i, side)
         obstacles = np.asarray(problem.world.obstacles, dtype=bool)
         net.clear_map_cache()
-        goals = goals_of(problem)
-        for goal in goals[:1] + goals:  # two whole passes (the second keeps the map's parts), then two later queries
+        for goal in goals_of(problem):
             compiled = net.predict(obstacles, goal)
             net.compiled_inference, net.map_cache_bytes = False, 0
             try:
