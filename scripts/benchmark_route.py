@@ -8,6 +8,7 @@
     python scripts/benchmark_route.py --torch-inference                          # no compiled part after the network
     python scripts/benchmark_route.py --dense-convolutions                       # the 3x3 layers as training runs them
     python scripts/benchmark_route.py --sides 128 --kept 800                     # first queries with 800 maps kept
+    python scripts/benchmark_route.py --sides 128 512 --two-fields               # a new map's fields to goal and start
 
 Each row is one map side and family (a generated forest, and a maze, whose route winds furthest;
 ``--families``; ``--symmetries`` passes, the goal in a free cell):
@@ -18,7 +19,9 @@ queries on the same map, each to another goal (``later_ms``: a robot planning ag
 ``--batch N``, the time per query when N queries of that side go through ``predict_many`` together (the
 evaluation's batched path on a GPU); with ``--kept N``, the median and best first query on a new map (generated,
 other seeds) after the parts of N other maps are kept, each queried twice (``kept_ms``: a robot's maps, or a
-comparison's with several queries each, where the kept maps may number hundreds).
+comparison's with several queries each, where the kept maps may number hundreds); with ``--two-fields``, the
+median and best time of a new map's first two queries, to its goal and then to its start, as a bidirectional planner
+or a roadmap binds the route sampler (``two_fields_ms``).
 Peak memory is the process's resident peak after the row (CPU; sides in increasing order), or the
 GPU's allocated peak for the row. A side above the encoder's block limit is shown as refused, with the
 limit's message. Times are wall times in one process; the machine's load is printed beside them.
@@ -70,7 +73,7 @@ def _timed(call, repeat: int, sync) -> list[float]:
 
 
 def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, batch: int, device,
-               family: str = "forest", kept: int = 0) -> dict:
+               family: str = "forest", kept: int = 0, two_fields: bool = False) -> dict:
     """One row: the encoder's time per query on a ``side`` x ``side`` map of ``family`` (see the module docstring)."""
     problem = generate(family, TEST_SEED0, side)
     obstacles = np.asarray(problem.world.obstacles)
@@ -118,6 +121,22 @@ def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, ba
         row["kept_ms"] = round(1000 * float(np.median(times)), 2)
         row["kept_best_ms"] = round(1000 * min(times), 2)
         forget()
+    if two_fields:
+        pairs = []
+        for i in range(repeat + 1):  # a new map for each timed call and the warm-up
+            other = generate(family, TEST_SEED0 + 1 + kept + repeat + 1 + i, side)
+            pairs.append((np.asarray(other.world.obstacles), other.world.cell_of(other.goal),
+                          other.world.cell_of(other.start)))
+        fresh_pairs = iter(pairs)
+
+        def both() -> None:
+            obs, to_goal, to_start = next(fresh_pairs)
+            net.predict(obs, to_goal, symmetries, threads=threads)
+            net.predict(obs, to_start, symmetries, threads=threads)
+
+        times = _timed(both, repeat, sync)
+        row["two_fields_ms"] = round(1000 * float(np.median(times)), 2)
+        row["two_fields_best_ms"] = round(1000 * min(times), 2)
     if batch > 1:
         picks = np.random.default_rng(side).choice(len(free), size=batch, replace=len(free) < batch)
         queries = [(obstacles, (int(free[i][0]), int(free[i][1]))) for i in picks]
@@ -144,6 +163,8 @@ def main(argv=None) -> int:
     ap.add_argument("--batch", type=int, default=1, help="also time N queries per predict_many call")
     ap.add_argument("--kept", type=int, default=0,
                     help="also time first queries on new maps with N other maps' parts kept (default 0: not)")
+    ap.add_argument("--two-fields", action="store_true",
+                    help="also time a new map's fields to its goal and then its start (a bidirectional planner's)")
     ap.add_argument("--device", default="cpu", choices=DEVICES, help="cpu (default), cuda, or auto as in SB3")
     ap.add_argument("--families", nargs="+", default=["forest", "maze"], choices=FAMILIES,
                     help="generated families to time on (default forest and maze)")
@@ -202,13 +223,16 @@ def main(argv=None) -> int:
         for family in args.families:
             for n in args.threads:
                 rows.append(bench_side(net, side, symmetries=args.symmetries, threads=n, repeat=args.repeat,
-                                       batch=args.batch, device=device, family=family, kept=args.kept))
+                                       batch=args.batch, device=device, family=family, kept=args.kept,
+                                       two_fields=args.two_fields))
                 print(markdown_table([rows[-1]], [c for c in rows[-1] if c != "note"]).splitlines()[-1], flush=True)
     columns = ["family", "side", "threads", "ms_per_query", "best_ms"]
     if any("later_ms" in row for row in rows):
         columns += ["later_ms", "later_best_ms"]
     if any("kept_ms" in row for row in rows):
         columns += ["kept_ms", "kept_best_ms"]
+    if any("two_fields_ms" in row for row in rows):
+        columns += ["two_fields_ms", "two_fields_best_ms"]
     if args.batch > 1:
         columns.append(f"ms_per_query_batch_{args.batch}")
     columns += ["peak_mb", "load"]

@@ -79,6 +79,16 @@ def test_benchmark_route_times_first_queries_with_other_maps_kept(capsys):
     assert float(row.split("|")[header.index("kept_ms")]) > 0
 
 
+def test_benchmark_route_times_a_new_maps_two_fields(capsys):
+    assert load_script("benchmark_route").main(["--sides", "32", "--repeat", "2", "--families", "maze",
+                                                "--two-fields"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("| family |"))
+    header = [c.strip() for c in lines[at].split("|")]
+    row = next(line for line in lines[at:] if line.startswith("| maze | 32 "))
+    assert float(row.split("|")[header.index("two_fields_ms")]) > 0
+
+
 def test_benchmark_envs_runs_every_registered_id_and_leaves_guided_actions_to_the_2d_ones(capsys):
     script = load_script("benchmark_envs")
     assert script.main(["--steps", "1", "--modes", "guided"]) == 0
