@@ -29,7 +29,6 @@ from learning.evaluation.roster import EXACT_ROUTE, ROUTE_ABLATION, Task, bias_s
 from learning.evaluation.tables import group_of
 from learning.samplers.registry import SamplerSpec
 from planners import make_planner
-from planners.base.samplers import draw_classical_in_loops
 from planners.tools.benchmark import Run, markdown_table, progress_json, progress_points
 
 #: How close to the best known cost the part measures (5% and 1%).
@@ -51,7 +50,6 @@ class ConvergenceProtocol(Protocol):
     every: int = EVERY
 
     def planner(self, name: str, problem, sampler, seed: int):
-        draw_classical_in_loops(problem)  # whatever the install compiled before: the same timing
         planner = make_planner(name, problem, extension_step=self.step, sampler=sampler, seed=seed)
         return planner, self.max_iterations
 

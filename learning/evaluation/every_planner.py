@@ -188,6 +188,7 @@ def convergence(maps: dict[str, list[Problem]], setups: Sequence[Setup], *, seed
         for p in problems:
             for s in setups:
                 for seed in seeds:
+                    draw_classical_in_loops(p)  # as run_one does before its timer: whatever the install compiled
                     planner, cap = protocol.planner(s.planner, p, s.build(models), seed)
                     r, progress = protocol.solve(planner, cap)
                     runs.append(Run(map=name, query=p.name, split="test", planner=s.planner, sampler=s.label,
