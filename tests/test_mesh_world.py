@@ -17,6 +17,7 @@ fcl = pytest.importorskip("fcl", reason="mesh worlds need the mesh extra (pip in
 
 from planners import GoalBiasedSampler, Problem, make_planner  # noqa: E402
 from planners.base.fileio import InputError  # noqa: E402
+from planners.kernels import mesh as mesh_kernels  # noqa: E402
 from planners.worlds.mesh import MeshWorld, read_mesh  # noqa: E402
 from planners.worlds.rigid3d import euler_from_matrix, rotation_matrix  # noqa: E402
 
@@ -230,14 +231,14 @@ def test_clustered_cover_bound_is_the_bound_over_every_point(hole_world):
     assert seen[True] > 20 and seen[False] > 20
 
 
-def test_a_motion_blocked_inside_is_found_by_one_contact_test(hole_world):
-    """Both ends far from the wall, the middle inside it: the probe at the midpoint finds it, no distance walk."""
+def test_a_motion_blocked_inside_is_found_by_the_probes(hole_world):
+    """Both ends far from the wall, the middle inside it: the probes find it before any walk."""
     w = hole_world
     a, b = [2.0, 1.5, 1.5, 0, 0, 0], [8.0, 1.5, 1.5, 0, 0, 0]
     assert w.pose_free_broad(a, w.delta) and w.pose_free_broad(b, w.delta)  # the grid alone clears both ends
-    before = w.exact_poses
+    k = w.kernel
+    assert not mesh_kernels.probes_free(k.grid, k.body, k.geom, k.params, np.array(a, float), np.array(b, float))
     assert not w.check_motion(a, b)
-    assert w.exact_poses - before == 1
     # a motion through the hole has probes in the hole, none in contact: the walk decides as before
     c, d = [2.0, 5.0, 5.0, 0, 0, 0], [8.0, 5.0, 5.0, 0, 0, 0]
     assert w.check_motion(c, d) == all(w.pose_free_exact(q, w.delta / 2) for q in states_along(w, c, d)) is True
@@ -282,9 +283,9 @@ def test_a_time_limit_holds_on_a_mesh_world(hole_world):
 
 def test_past_a_deadline_exact_checks_answer_blocked_and_only_then(hole_world):
     w = hole_world
-    a, b = [2, 4.55, 5, 0, 0, 0], [8, 4.55, 5, 0, 0, 0]  # through the hole 0.05 from its side: FCL decides
-    before = w.exact_poses
-    assert w.check_motion(a, b) and w.exact_poses > before
+    a, b = [2, 4.55, 5, 0, 0, 0], [8, 4.55, 5, 0, 0, 0]  # through the hole 0.05 from its side: the exact test decides
+    assert len(w.motion_poses(a, b)) > 4 * mesh_kernels.DEADLINE_EVERY
+    assert w.check_motion(a, b)
     w.set_deadline(0.0, lambda: 1.0)
     try:
         assert not w.check_motion(a, b)
@@ -319,3 +320,24 @@ def test_a_mesh_world_pickles_by_its_triangles(hole_world):
     assert np.array_equal(copy.grid, hole_world.grid) and copy.delta == hole_world.delta
     for q in ([5, 4.6, 5, 0, 0, 0], [5, 4.6, 5, 0, 0, PI / 4]):
         assert copy.is_valid(q) == hole_world.is_valid(q)
+
+
+@pytest.mark.parametrize("low_first", [False, True])
+def test_the_exact_clearance_is_a_lower_bound_above_the_margin_or_zero(hole_world, low_first):
+    """Where it certifies a clearance the pose has more than that (FCL's distance); where it answers 0 it has at most
+    the margin (times 1 + 2**-30)."""
+    w, k = hole_world, hole_world.kernel
+    rng = np.random.default_rng(4)
+    low, high = w.bounds
+    answers = {True: 0, False: 0}
+    for _ in range(300):
+        q = low + rng.random(6) * (high - low)
+        need = w.delta / 2 * rng.choice([1.0, 4.0, 20.0])
+        got = mesh_kernels.exact_clearance(k.body, k.params, q, need, np.bool_(low_first))
+        d = w.clearance(q)
+        if got > need:
+            assert got < d and got in need * mesh_kernels.CLEARANCE_LADDER, (q, got, d)
+        else:
+            assert got == 0.0 and d <= need * mesh_kernels.CLEARANCE_LADDER[-1] + 1e-12, (q, d)
+        answers[got > need] += 1
+    assert answers[True] > 30 and answers[False] > 30

@@ -237,9 +237,9 @@ def state_free_of(world, q) -> bool:
     On a grid the check's own source runs in the interpreter (``grid_segment_free.py_func``: the same
     float64 arithmetic, so the same answer bit for bit), so validating a query compiles nothing a
     planner does not run; a mesh world's state check runs in the interpreter too (``mesh_state_free_py``:
-    the bounds, the sphere's bound, FCL's contact test, as the compiled check does), since compiling it
-    alone costs seconds that a planner's own compilation repeats. Other world kinds call the compiled
-    ``state_free``.
+    the bounds and the sphere's bound, then the compiled exact test, as the compiled check does), since
+    compiling the whole check alone costs seconds that a planner's own compilation repeats. Other world
+    kinds call the compiled ``state_free``.
     """
     if world[0] == WORLD_GRID:
         params = world[4]
@@ -247,7 +247,7 @@ def state_free_of(world, q) -> bool:
         y = q[1] - params[2]
         return bool(grid_segment_free.py_func(world[1], params[0], x, y, x, y))
     if world[0] == WORLD_MESH:
-        return mesh_state_free_py(world[1], world[4], q)
+        return mesh_state_free_py(world[1], world[3], world[4], q)
     return bool(state_free(world, q))
 
 

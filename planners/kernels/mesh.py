@@ -17,19 +17,24 @@ of the environment (``chebyshev_grid``), built once, gives every voxel a lower b
 from any point in it to any environment triangle. The bound of a pose is that of the body's bounding
 sphere, or else the smallest over the body's cover points (points on its surface such that every
 surface point lies within ``cover`` of one) less ``cover``; a single state asks the sphere only, as
-FCL's collision test costs about what the cover points do. Where the bound does not clear ``delta /
-2``, the exact check (FCL's distance, in ``planners.worlds.mesh``) gives the clearance, through
-numba's object mode: that check is registered here under an integer id that the world's ``params``
-carry. Before the walk asks for distances pose by pose, FCL's collision test (about a tenth of a distance
-query) at a few interior poses (``PROBE_FRACTIONS``) finds most blocked motions; a pose in contact would
-make the walk fail as well. The far end, often in contact, gets the collision test before its distance;
-the walk's poses, rarely in contact, ask the distance alone (0 or less where the meshes meet).
+the exact test costs about what the cover points do. Where the bound does not clear ``delta / 2``, the
+exact test decides (``exact_clearance``): whether the body's triangles lie more than a margin from the
+environment's (``planners.kernels.triangles``), at the margins ``CLEARANCE_LADDER`` times ``delta / 2``,
+the largest one cleared being the pose's clearance. Before the walk, the same test with no margin at a
+few interior poses (``PROBE_FRACTIONS``) finds most blocked motions; a pose in contact would make the
+walk fail as well. The far end, often in contact, tries the lowest margin first; the walk's poses,
+rarely in contact, the largest. Every test runs in compiled code; the walk looks at its planner's
+deadline every ``DEADLINE_EVERY`` poses (through numba's object mode, the world registered under an
+integer id that ``params`` carry).
 
-``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, checker id, gx, gy, gz,
-h, nx, ny, nz, cover]``: the bounds of the body's origin, the motion resolution, the body's radius
-(largest distance of a body vertex from its origin), the exact check's id, the grid's corner, voxel
-side and shape, and the cover radius of the body's cover points. The grid travels as ``(nx, ny * nz)``
-uint8 (``grid``), the cover points as ``body``.
+``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, world id, gx, gy, gz,
+h, nx, ny, nz, cover, c1, c2, c3, c4]``: the bounds of the body's origin, the motion resolution, the
+body's radius (largest distance of a body vertex from its origin), the id, the grid's corner, voxel
+side and shape, the cover radius of the body's cover points, and where the parts of ``body`` end. The
+grid travels as ``(nx, ny * nz)`` uint8 (``grid``), the cover points' clusters as ``geom``, and ``body``
+holds, as rows of three, the cover points (to row ``c1``), the body's sphere tree (to ``c2``,
+``triangles.sphere_nodes``), its triangles in that tree's order (to ``c3``), the environment's box tree
+(to ``c4``, ``triangles.build_tree``) and its triangles.
 """
 
 from __future__ import annotations
@@ -43,20 +48,29 @@ import numpy as np
 
 from planners.kernels.rigid import motion_pieces, rotation_matrix
 from planners.kernels.space import SPACE_RIGID, interpolate
+from planners.kernels.triangles import sets_apart
 
 P_ID = 8
 P_GRID = 9
 P_COVER = 16
-N_PARAMS = 17
+P_PARTS = 17
+N_PARAMS = 21
 
-#: The exact checks, by id: ``check(poses, margin) -> bool`` (True when every pose keeps the body more
-#: than ``margin`` from the environment, touching counting as collision when ``margin`` is 0).
+#: The margins, in multiples of the one asked (``delta / 2``), at which ``exact_clearance`` tests a pose, largest
+#: first; the last is the margin itself, raised by a relative 2**-30 so that a pose it clears has a clearance above
+#: the value returned.
+CLEARANCE_LADDER = np.array([16.0, 4.0, 1.0 + 2.0 ** -30])
+
+#: The walk looks at its planner's deadline (``MeshWorld.set_deadline``) every this many poses.
+DEADLINE_EVERY = 16
+
+#: The worlds' deadline keepers, by id: objects with ``past_deadline() -> bool`` (``MeshWorld.set_deadline``).
 _CHECKS: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
 _IDS = itertools.count(1)
 
 
 def register_check(check) -> int:
-    """Register an exact pose check (an object with ``poses_free(poses, margin) -> bool``); returns its id.
+    """Register a world's deadline keeper (an object with ``past_deadline() -> bool``); returns its id.
 
     The registry holds it weakly: the world that owns it keeps it alive.
     """
@@ -65,23 +79,10 @@ def register_check(check) -> int:
     return ident
 
 
-def exact_poses_free(ident, poses, margin) -> bool:
-    """Run the exact check registered under ``ident`` (called from compiled code in object mode)."""
+def past_deadline(ident) -> bool:
+    """True once the deadline set on the check registered under ``ident`` has passed (object mode)."""
     check = _CHECKS.get(int(ident))
-    if check is None:
-        raise RuntimeError(f"no exact mesh check is registered under id {int(ident)} (its world was deleted)")
-    return bool(check.poses_free(poses, float(margin)))
-
-
-def exact_clearance(ident, q, contact_first=True) -> float:
-    """The exact distance from the body at pose ``q`` to the environment, 0 or less where they meet (object mode).
-
-    ``contact_first``: ask FCL's contact test before the distance (cheaper where contact is likely).
-    """
-    check = _CHECKS.get(int(ident))
-    if check is None:
-        raise RuntimeError(f"no exact mesh check is registered under id {int(ident)} (its world was deleted)")
-    return float(check.pose_clearance(q, bool(contact_first)))
+    return check is not None and bool(check.past_deadline())
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -217,21 +218,66 @@ def cover_clusters(cover: np.ndarray, h: float, side: int = 4) -> tuple[np.ndarr
     return points, rows
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
-def _pose_clearance(grid, cover, clusters, params, q, need, contact_first):
-    """The grid's bound where it exceeds ``need``, else the exact distance (FCL; 0 or less where they meet).
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _parts(body, params):
+    """The parts of a mesh world's ``body`` array: cover points, the body's tree and triangles, the environment's."""
+    first = params[P_PARTS:P_PARTS + 4]
+    return (body[:int(first[0])], body[int(first[0]):int(first[1])], body[int(first[1]):int(first[2])],
+            body[int(first[2]):int(first[3])], body[int(first[3]):])
 
-    ``contact_first``: FCL's contact test (a tenth of a distance query) before the distance, for a pose
-    that is likely in contact; without it a distance of 0 or less says contact.
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _posed(triangles, q):
+    """The rotation of pose ``q`` and the body's triangles (rows, body frame) placed at it."""
+    R = rotation_matrix(q[3], q[4], q[5])
+    out = np.empty_like(triangles)
+    for r in range(triangles.shape[0]):
+        for d in range(3):
+            out[r, d] = R[d, 0] * triangles[r, 0] + R[d, 1] * triangles[r, 1] + R[d, 2] * triangles[r, 2] + q[d]
+    return R, out
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def exact_apart(body, params, q, margin):
+    """True if the body's triangles at pose ``q`` lie more than ``margin`` from the environment's (exact, compiled).
+
+    ``margin`` 0: no triangle of the body meets one of the environment's (touching counts as meeting).
     """
-    c = clearance_bound(grid, cover, clusters, params, q, need)
+    cover, spheres, triangles, nodes, env = _parts(body, params)
+    R, placed = _posed(triangles, q)
+    return sets_apart(spheres, placed, R, q[:3], nodes, env, margin)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def exact_clearance(body, params, q, need, low_first):
+    """A lower bound above ``need`` on the body's clearance at pose ``q``, or 0 where it is ``need`` or less.
+
+    The margins ``CLEARANCE_LADDER`` times ``need`` are tried in turn, each an exact test
+    (``planners.kernels.triangles.sets_apart``), and the largest one the pose clears is the answer.
+    ``low_first``: try the lowest margin first (a pose likely to fail, where one test settles it).
+    """
+    cover, spheres, triangles, nodes, env = _parts(body, params)
+    R, placed = _posed(triangles, q)
+    t = q[:3]
+    lowest = need * CLEARANCE_LADDER[-1]
+    if low_first and not sets_apart(spheres, placed, R, t, nodes, env, lowest):
+        return 0.0
+    for k in range(CLEARANCE_LADDER.shape[0] - 1):
+        m = need * CLEARANCE_LADDER[k]
+        if sets_apart(spheres, placed, R, t, nodes, env, m):
+            return m
+    if low_first or sets_apart(spheres, placed, R, t, nodes, env, lowest):
+        return lowest
+    return 0.0
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _pose_clearance(grid, body, clusters, params, q, need, low_first):
+    """The grid's bound where it exceeds ``need``, else ``exact_clearance``'s (0 where not ``need`` clear)."""
+    c = clearance_bound(grid, _parts(body, params)[0], clusters, params, q, need)
     if c > need:
         return c
-    ident = params[P_ID]
-    pose = q.copy()
-    with nb.objmode(c="float64"):
-        c = exact_clearance(ident, pose, contact_first)
-    return c
+    return exact_clearance(body, params, q, need, low_first)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -242,16 +288,17 @@ def _in_bounds(params, q):
     return True
 
 
-def mesh_state_free_py(grid, params, q) -> bool:
-    """``mesh_motion_free(q, q)`` run by the interpreter (the same answer): for Python callers, compiling nothing big.
+def mesh_state_free_py(grid, body, params, q) -> bool:
+    """``mesh_motion_free(q, q)`` for Python callers (the same answer), compiling only the exact test.
 
-    The bounds, then the bounding sphere's grid bound (``sphere_free``'s source), else FCL's contact test.
+    The bounds, then the bounding sphere's grid bound (``sphere_free``'s source, run by the interpreter), else
+    the compiled ``exact_apart`` with no margin.
     """
     if not _in_bounds.py_func(params, q):
         return False
     if sphere_free.py_func(grid, params, q, 0.0):
         return True
-    return exact_poses_free(params[P_ID], np.ascontiguousarray(q, dtype=np.float64)[None, :], 0.0)
+    return bool(exact_apart(body, params, np.ascontiguousarray(q, dtype=np.float64), 0.0))
 
 
 #: Where a motion is blocked inside, FCL's collision test at a few of its poses (about a tenth of what its
@@ -268,41 +315,32 @@ WALK_GUESS = 1.0
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _exact_free(params, poses):
-    """FCL's contact test on the rows of ``poses`` (one call, stopping at the first in contact): True if none is.
-
-    The one object-mode block for the state check and the probes (each such block compiles on its own).
-    """
+def _past_deadline(params):
+    """True once the deadline of the world's planner has passed (``MeshWorld.set_deadline``; object mode)."""
     ident = params[P_ID]
-    ok = False
-    with nb.objmode(ok="boolean"):
-        ok = exact_poses_free(ident, poses, 0.0)
-    return ok
+    past = False
+    with nb.objmode(past="boolean"):
+        past = past_deadline(ident)
+    return past
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _probes_free(grid, cover, clusters, params, a, b):
-    """False if one of the motion's probe poses (``PROBE_FRACTIONS``) puts the body in contact (FCL's test).
+def probes_free(grid, body, clusters, params, a, b):
+    """False if one of the motion's probe poses (``PROBE_FRACTIONS``) puts the body in contact (``exact_apart``).
 
-    Poses the grid proves free are not sent; the rest go to the exact check in one call, which stops at
-    the first in contact. True says nothing more than that none of them is.
+    Poses the grid proves free are not tested. True says nothing more than that none of them is in contact.
     """
-    poses = np.empty((PROBE_FRACTIONS.shape[0], 6))
+    cover = _parts(body, params)[0]
     q = np.empty(6)
-    m = 0
     for f in PROBE_FRACTIONS:
         interpolate(SPACE_RIGID, a, b, f, q)
-        if not clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0:
-            for j in range(6):  # element by element: a row assignment compiles numba's shape-error formatting
-                poses[m, j] = q[j]
-            m += 1
-    if m == 0:
-        return True
-    return _exact_free(params, poses[:m])
+        if not clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0 and not exact_apart(body, params, q, 0.0):
+            return False
+    return True
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def mesh_motion_free(grid, cover, clusters, params, a, b):
+def mesh_motion_free(grid, body, clusters, params, a, b):
     """True if the motion a -> b keeps the body clear of the environment (see the module docs).
 
     The origin must stay within the bounds (checked at both ends: the bounds are a box and translation
@@ -312,33 +350,32 @@ def mesh_motion_free(grid, cover, clusters, params, a, b):
         return False
     n, length = motion_pieces(params, a, b)
     if length == 0.0:
-        # a single state: the sphere only (FCL's collision test costs about what the cover points do)
-        if sphere_free(grid, params, a, 0.0):
-            return True
-        poses = np.empty((1, 6))
-        for j in range(6):  # element by element: a row assignment compiles numba's shape-error formatting
-            poses[0, j] = a[j]
-        return _exact_free(params, poses)
+        # a single state: the sphere only (the exact test costs about what the cover points do)
+        return sphere_free(grid, params, a, 0.0) or exact_apart(body, params, a, 0.0)
     delta = params[6]
     margin = 0.5 * delta
     # the far end first (a blocked extension is usually blocked there): its clearance covers the travel
     # (length - cb, length]; then the interior probes; then the walk from the start (see the module docs)
-    # the contact-first choice as np.bool_, a value: a constant True or False would compile _pose_clearance once each
-    cb = _pose_clearance(grid, cover, clusters, params, b, margin, np.bool_(True))
+    # the low-first choice as np.bool_, a value: a constant True or False would compile _pose_clearance once each
+    cb = _pose_clearance(grid, body, clusters, params, b, margin, np.bool_(True))
     if not cb > margin:
         return False
-    if n >= PROBE_MIN_PIECES and not _probes_free(grid, cover, clusters, params, a, b):
+    if n >= PROBE_MIN_PIECES and not probes_free(grid, body, clusters, params, a, b):
         return False
     end = length - cb  # (end, length] is covered
     covered = -1.0  # [0, covered) is covered; nothing yet
     island_lo = island_hi = -1.0  # a stretch covered by a pose whose guess left a gap
     last = 0.0  # the travel of the last pose that extended the covered stretch
     s = 0.0
+    placed = 0
     q = np.empty(6)
     while True:
         interpolate(SPACE_RIGID, a, b, s / length, q)
-        c = _pose_clearance(grid, cover, clusters, params, q, margin, np.bool_(False))
+        c = _pose_clearance(grid, body, clusters, params, q, margin, np.bool_(False))
         if not c > margin:
+            return False
+        placed += 1
+        if placed % DEADLINE_EVERY == 0 and _past_deadline(params):
             return False
         if covered < 0.0 or s - c < covered:
             covered = s + c

@@ -1,4 +1,4 @@
-"""A 6-DoF rigid body given as a triangle mesh among a triangle-mesh environment, checked exactly with FCL.
+"""A 6-DoF rigid body given as a triangle mesh among a triangle-mesh environment, checked exactly.
 
 The state space is ``RigidBodyWorld``'s: ``q = (x, y, z, tx, ty, tz)``, a body vertex ``p`` (in the
 body's own frame) sits at ``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``; angles are sampled in
@@ -9,12 +9,15 @@ lies a travel of ``max(delta, c)`` on, ``c`` the clearance just certified, so th
 free and no obstacle, however thin, is stepped over (``planners.kernels.mesh``).
 
 A state is valid when the body's origin lies within the bounds and the body's triangles meet none of
-the environment's (FCL's collision test: two meshes collide where their surfaces touch or cross, so a
-body wholly inside a closed obstacle is not seen, as in OMPL.app; no motion from a valid state gets
-there, since it would cross the surface).
+the environment's (two meshes collide where their surfaces touch or cross, as in FCL and OMPL.app, so a
+body wholly inside a closed obstacle is not seen; no motion from a valid state gets there, since it
+would cross the surface).
 
-The meshes are read with trimesh and checked with FCL (python-fcl); both are imported only when a
-mesh world is built (the ``mesh`` extra: ``pip install samplergym[mesh]``).
+The meshes are read with trimesh. The checks that planning makes run in compiled code
+(``planners.kernels.mesh``, ``planners.kernels.triangles``: exact triangle-to-triangle tests behind
+bounding-volume trees); FCL (python-fcl) gives the distance (``MeshWorld.clearance``) and the reference
+test (``MeshWorld.pose_free_exact``) that the compiled one is tested against. Both libraries are
+imported only when a mesh world is built (the ``mesh`` extra: ``pip install samplergym[mesh]``).
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from planners.base.fileio import InputError
 from planners.base.world import WorldBase
 from planners.kernels import geometry
 from planners.kernels import mesh as mesh_kernels
+from planners.kernels import triangles as triangle_kernels
 from planners.kernels.rigid import motion_pieces
 from planners.kernels.rigid import rotation_matrix as _rotation_matrix
 from planners.kernels.space import SPACE_RIGID, interpolate
@@ -272,11 +276,12 @@ class _Deadline(threading.local):
 
 
 class _FCLCheck:
-    """The exact check: the body's and the environment's FCL bounding-volume trees, one pose at a time."""
+    """FCL's bounding-volume trees of the body and the environment: the distance (``MeshWorld.clearance``) and the
+    reference test (``MeshWorld.pose_free_exact``); also this world's deadline (``MeshWorld.set_deadline``)."""
 
     def __init__(self, body, env) -> None:
         self.deadline = _Deadline()  # per thread: a planner's time limit (set_deadline)
-        self.cut = 0  # checks answered "blocked" because the deadline had passed
+        self.cut = 0  # motion checks answered "blocked" because the deadline had passed
         fcl = _fcl()
         self._fcl = fcl
         self.body_model = self._model(*body)
@@ -285,7 +290,6 @@ class _FCLCheck:
         self.env = fcl.CollisionObject(self.env_model, fcl.Transform())
         self.collide_request = fcl.CollisionRequest()
         self.distance_request = fcl.DistanceRequest()
-        self.poses = 0  # poses checked here (those the broad phase left undecided)
 
     def _model(self, vertices, faces):
         m = self._fcl.BVHModel()
@@ -300,7 +304,6 @@ class _FCLCheck:
         With ``margin`` 0: its triangles meet none of the environment's.
         """
         fcl = self._fcl
-        self.poses += 1
         self.body.setTransform(fcl.Transform(R, t))
         result = fcl.CollisionResult()
         if fcl.collide(self.body, self.env, self.collide_request, result):
@@ -309,45 +312,17 @@ class _FCLCheck:
             return True
         return fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()) > margin
 
-    def pose_clearance(self, q: np.ndarray, contact_first: bool = True) -> float:
-        """Distance from the body at pose ``q`` to the environment; 0 or less where they meet, -1 past the deadline.
-
-        ``contact_first``: FCL's contact test (about a tenth of a distance query) first, answering -1 for a
-        pose in contact; without it FCL's distance alone, which is 0 or less for meshes that meet.
-        """
+    def past_deadline(self) -> bool:
+        """True once this thread's deadline has passed (counted in ``cut``); the compiled walk asks every few poses."""
         at = self.deadline.at
         if at is not None and self.deadline.clock() > at:
             self.cut += 1
-            return -1.0
-        fcl = self._fcl
-        self.poses += 1
-        self.body.setTransform(fcl.Transform(np.asarray(_rotation_matrix(q[3], q[4], q[5])), q[:3].copy()))
-        if contact_first and fcl.collide(self.body, self.env, self.collide_request, fcl.CollisionResult()):
-            return -1.0
-        return float(fcl.distance(self.body, self.env, self.distance_request, fcl.DistanceResult()))
-
-    def poses_free(self, poses: np.ndarray, margin: float) -> bool:
-        """True if every pose ``(x, y, z, tx, ty, tz)`` is free with ``margin``; stops at the first that is not.
-
-        Past a deadline set by ``MeshWorld.set_deadline`` it answers False without checking further.
-        """
-        at, clock = self.deadline.at, self.deadline.clock
-        if len(poses) < 8:  # numpy's per-call cost outweighs the vectorised rotations
-            rotations = [np.asarray(_rotation_matrix(q[3], q[4], q[5])) for q in poses]
-        else:
-            rotations = rotation_matrices(poses[:, 3:])
-        translations = np.ascontiguousarray(poses[:, :3])
-        for i in range(len(poses)):
-            if at is not None and i % 8 == 0 and clock() > at:
-                self.cut += 1
-                return False
-            if not self.pose_free(rotations[i], translations[i], margin):
-                return False
-        return True
+            return True
+        return False
 
 
 class MeshWorld(WorldBase):
-    """A rigid body (a triangle mesh) moving among a triangle-mesh environment; exact checks with FCL.
+    """A rigid body (a triangle mesh) moving among a triangle-mesh environment; exact checks.
 
     Args:
         environment: The obstacles: a mesh file (``read_mesh``), a ``(vertices, faces)`` pair or a
@@ -402,13 +377,20 @@ class MeshWorld(WorldBase):
                                                 side, int(shape[0]), int(shape[1]), int(shape[2]))
         self.cover, self.clusters = mesh_kernels.cover_clusters(cover_points(self.body_vertices, self.body_faces, side),
                                                                 side)
+        # the exact test's trees: the body's (spheres, they turn with it) and the environment's (boxes)
+        body_nodes, body_triangles = triangle_kernels.build_tree(self.body_vertices[self.body_faces])
+        env_nodes, env_triangles = triangle_kernels.build_tree(self.env_vertices[self.env_faces])
+        parts = [self.cover, triangle_kernels.sphere_nodes(body_nodes, body_triangles), body_triangles, env_nodes,
+                 env_triangles]
         params = np.zeros(mesh_kernels.N_PARAMS)
         params[:6] = np.concatenate([lo, hi])
         params[6], params[7], params[mesh_kernels.P_ID] = self.delta, self.radius, ident
         params[mesh_kernels.P_GRID:mesh_kernels.P_GRID + 4] = [*origin, side]
         params[mesh_kernels.P_GRID + 4:mesh_kernels.P_GRID + 7] = shape
         params[mesh_kernels.P_COVER] = side
-        self._kernel = geometry.world_kernel(geometry.WORLD_MESH, self.grid, self.clusters, self.cover, params)
+        params[mesh_kernels.P_PARTS:mesh_kernels.P_PARTS + 4] = np.cumsum([len(p) for p in parts])[:4]
+        self._kernel = geometry.world_kernel(geometry.WORLD_MESH, self.grid, self.clusters,
+                                             np.ascontiguousarray(np.concatenate(parts)), params)
         self._low = np.concatenate([lo, [-math.pi] * 3])
         self._high = np.concatenate([hi, [math.pi] * 3])
         self._low.flags.writeable = False
@@ -427,18 +409,14 @@ class MeshWorld(WorldBase):
         return self._low, self._high
 
     def set_deadline(self, at: float | None, clock=None) -> None:
-        """From now on, in this thread, answer "blocked" to exact checks once ``clock() > at`` (None: never).
+        """From now on, in this thread, motion checks still walking at ``clock() > at`` answer "blocked" (None: never).
 
-        ``Planner.solve`` sets it under a time limit, so one long motion check cannot overrun the limit;
-        answering "blocked" is conservative, the motion is left out, never wrongly accepted.
+        ``Planner.solve`` sets it under a time limit, so one long motion check cannot overrun the limit (the
+        walk looks every ``DEADLINE_EVERY`` poses); answering "blocked" is conservative, the motion is left
+        out, never wrongly accepted.
         """
         self._check.deadline.at = None if at is None else float(at)
         self._check.deadline.clock = clock
-
-    @property
-    def exact_poses(self) -> int:
-        """Poses checked by FCL so far (those the broad phase could not prove free)."""
-        return self._check.poses
 
     def body_vertices_at(self, q) -> np.ndarray:
         """``(V, 3)`` world positions of the body's vertices at state ``q``."""

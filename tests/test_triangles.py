@@ -1,0 +1,124 @@
+"""The compiled clearance test between triangle sets, against FCL's distance (the reference)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from planners.kernels.rigid import rotation_matrix
+from planners.kernels.triangles import LEAF_SIZE, build_tree, sets_apart, sphere_nodes, triangles_within
+
+fcl = pytest.importorskip("fcl", reason="the reference distance is FCL's (pip install samplergym[mesh])")
+
+
+def _object(vertices, faces):
+    m = fcl.BVHModel()
+    m.beginModel(len(vertices), len(faces))
+    m.addSubModel(np.asarray(vertices, float), np.asarray(faces, np.int64))
+    m.endModel()
+    return fcl.CollisionObject(m, fcl.Transform())
+
+
+def fcl_distance(a_vertices, a_faces, b_vertices, b_faces) -> float:
+    """FCL's distance between two triangle sets, 0 where they meet."""
+    a, b = _object(a_vertices, a_faces), _object(b_vertices, b_faces)
+    if fcl.collide(a, b, fcl.CollisionRequest(), fcl.CollisionResult()):
+        return 0.0
+    return float(fcl.distance(a, b, fcl.DistanceRequest(), fcl.DistanceResult()))
+
+
+ONE = np.array([[0, 1, 2]])
+
+
+@settings(max_examples=400, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), spread=st.sampled_from([0.1, 1.0, 3.0]),
+       shape=st.sampled_from(["general", "coplanar", "thin", "point-like"]))
+def test_two_triangles_are_within_a_margin_exactly_when_fcl_says_so(seed, spread, shape):
+    rng = np.random.default_rng(seed)
+    P = rng.normal(size=(3, 3))
+    Q = rng.normal(size=(3, 3)) + spread * rng.normal(size=3)
+    if shape == "coplanar":
+        P[:, 2] = Q[:, 2] = 0.3
+    elif shape == "thin":
+        Q[2] = Q[1] + 1e-4 * rng.normal(size=3)
+    elif shape == "point-like":
+        Q[1:] = Q[0] + 1e-9 * rng.normal(size=(2, 3))
+    d = fcl_distance(P, ONE, Q, ONE)
+    for m in (0.0, 0.5 * d, 0.99 * d, 1.01 * d, d + 0.2):
+        if abs(m - d) > 1e-7 * max(1.0, d):
+            assert triangles_within(P, 0, Q, 0, m) == (d <= m), (d, m)
+            assert triangles_within(Q, 0, P, 0, m) == (d <= m), (d, m)
+
+
+def test_linked_triangles_meet_though_no_vertex_or_edge_comes_near():
+    """An edge through the middle of the other face (a chain link): only the crossing test sees it."""
+    P = np.array([[-1.0, 0, -5], [1.0, 0, -5], [0, 0, 5]])  # upright, in the plane y = 0
+    Q = np.array([[0, -5.0, 0.5], [-0.3, 5.0, 0.5], [0.3, 5.0, 0.5]])  # flat at z = 0.5, its long edges through P
+    assert fcl_distance(P, ONE, Q, ONE) == 0.0
+    assert triangles_within(P, 0, Q, 0, 0.0)
+
+
+def test_the_tree_holds_every_triangle_once_inside_its_boxes():
+    rng = np.random.default_rng(3)
+    tris = rng.normal(size=(157, 3, 3)) * 5 + rng.normal(size=(157, 1, 3)) * 20
+    nodes, ordered = build_tree(tris)
+    ordered = ordered.reshape(-1, 3, 3)
+    assert sorted(map(tuple, ordered.reshape(len(ordered), -1))) == sorted(map(tuple, tris.reshape(len(tris), -1)))
+    seen = np.zeros(len(tris), int)
+    stack = [(0, None)]
+    while stack:
+        k, parent = stack.pop()
+        lo, hi, link = nodes[3 * k], nodes[3 * k + 1], nodes[3 * k + 2]
+        if parent is not None:  # a child's box lies in its parent's
+            assert np.all(lo >= nodes[3 * parent]) and np.all(hi <= nodes[3 * parent + 1])
+        if link[0] < 0:
+            first, count = int(link[1]), int(link[2])
+            assert 1 <= count <= LEAF_SIZE
+            seen[first:first + count] += 1
+            inside = ordered[first:first + count]
+            assert np.all(inside >= lo) and np.all(inside <= hi)
+        else:
+            stack += [(int(link[0]), k), (int(link[1]), k)]
+    assert np.all(seen == 1)
+    spheres = sphere_nodes(nodes, ordered.reshape(-1, 3))
+    assert np.all(spheres[1::3, 0] > 0)
+
+
+def _boxy(rng, n, scale):
+    """``n`` random small boxes (12 triangles each) in a cube of side ``scale``."""
+    import trimesh
+
+    parts = [trimesh.creation.box(extents=rng.uniform(0.2, 2.0, 3),
+                                  transform=trimesh.transformations.translation_matrix(rng.uniform(0, scale, 3)))
+             for _ in range(n)]
+    mesh = trimesh.util.concatenate(parts)
+    return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_body_is_more_than_a_margin_away_exactly_when_fcl_says_so(seed):
+    pytest.importorskip("trimesh", reason="the test scene is made with trimesh (pip install samplergym[mesh])")
+    import trimesh
+
+    rng = np.random.default_rng(seed)
+    env_v, env_f = _boxy(rng, 60, 12.0)
+    body = trimesh.creation.capsule(height=2.0, radius=0.4) if seed else trimesh.creation.box(extents=(3, 1, 0.5))
+    body_v, body_f = np.asarray(body.vertices, float), np.asarray(body.faces, np.int64)
+    nodes, tris = build_tree(env_v[env_f])
+    body_nodes, body_tris = build_tree(body_v[body_f])
+    spheres = sphere_nodes(body_nodes, body_tris)
+    checked = {True: 0, False: 0}
+    for _ in range(150):
+        q = np.r_[rng.uniform(0, 12, 3), rng.uniform(-np.pi, np.pi, 3)]
+        R = np.asarray(rotation_matrix(q[3], q[4], q[5]))
+        placed = body_v @ R.T + q[:3]
+        d = fcl_distance(placed, body_f, env_v, env_f)
+        for m in (0.0, 0.05, 0.3, 1.0):
+            if abs(m - d) > 1e-7:
+                got = sets_apart(spheres, np.ascontiguousarray(body_tris @ R.T + q[:3]), R, q[:3].copy(), nodes, tris,
+                                 m)
+                assert got == (d > m), (q, d, m)
+                checked[got] += 1
+    assert checked[True] > 50 and checked[False] > 50
