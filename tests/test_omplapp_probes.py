@@ -142,28 +142,24 @@ def test_the_mesh_tuning_script_refuses_an_unknown_sampler_and_negative_restarts
     assert not (tmp_path / "runs.jsonl").exists()  # refused before any run
 
 
-def test_the_time_split_wraps_a_function_and_refuses_bad_arguments(tmp_path, monkeypatch):
-    split = load_script("experiments/mesh_time_split")
-    import types
-
-    module = types.SimpleNamespace(f=lambda x: 2 * x)
-    calls = {"f": []}
-    split.timed(calls, module, "f")
-    assert module.f(3) == 6 and module.f(4) == 8 and len(calls["f"]) == 2 and all(t >= 0 for t in calls["f"])
-    for bad in (["--seeds", "-1"], ["--time-limit", "0"], ["--poses", "0"]):
+def test_the_exact_cost_script_times_a_function_and_refuses_bad_arguments(tmp_path, monkeypatch):
+    split = load_script("experiments/mesh_exact_cost")
+    answers, us = split.per_pose_us(lambda x: 2 * x, [3, 4])
+    assert answers == [6, 8] and us >= 0
+    for bad in (["--poses", "0"],):
         with pytest.raises(SystemExit):
             split.main(["--omplapp", str(tmp_path), *bad])
     with pytest.raises(InputError, match="no OMPL.app problems there"):
-        split.main(["--omplapp", str(tmp_path), "--problem", "nothing", "--seeds", "0"])
+        split.main(["--omplapp", str(tmp_path), "--problem", "nothing"])
     (tmp_path / "Easy.cfg").write_text("[problem]\n")
     with pytest.raises(InputError, match="no nothing.cfg"):
-        split.main(["--omplapp", str(tmp_path), "--problem", "nothing", "--seeds", "0"])
+        split.main(["--omplapp", str(tmp_path), "--problem", "nothing"])
     monkeypatch.setitem(__import__("sys").modules, "coal", None)  # coal absent: refused before any run, saying why
     with pytest.raises(SystemExit):
         split.main(["--omplapp", str(tmp_path), "--coal"])
 
 
-def test_the_time_split_of_a_run_on_omplapps_cubicles(capsys):
+def test_the_exact_cost_on_omplapps_cubicles_agrees_with_fcl(capsys):
     pytest.importorskip("fcl", reason="the mesh extra")
     from planners.worlds.omplapp import OMPLAPP_ENV, omplapp_dir
 
@@ -173,10 +169,10 @@ def test_the_time_split_of_a_run_on_omplapps_cubicles(capsys):
         pytest.skip(str(e))
     if folder is None or not (folder / "cubicles.cfg").is_file():
         pytest.skip(f"OMPL.app's problems not found: set {OMPLAPP_ENV} to a copy (its licence forbids shipping them)")
-    split = load_script("experiments/mesh_time_split")
-    assert split.main(["--omplapp", str(folder), "--problem", "cubicles", "--seeds", "1"]) == 0
+    split = load_script("experiments/mesh_exact_cost")
+    assert split.main(["--omplapp", str(folder), "--problem", "cubicles", "--poses", "40"]) == 0
     out = capsys.readouterr().out
-    assert "| 0 | True |" in out and "median shares of the time: FCL's distance" in out
+    assert "| FCL's distance |" in out and "every compiled answer agrees with FCL's distance: True" in out
 
 
 def test_the_grid_tuning_refuses_bad_arguments_and_unknown_problems(tmp_path):

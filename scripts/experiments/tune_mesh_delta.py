@@ -73,7 +73,7 @@ def _run(task: tuple) -> dict:
     return {"fraction": fraction, "restarts": restarts, "family": family, "scene_seed": scene_seed, "seed": seed,
             "delta": problem.world.delta, "sampler": sampler,
             "solved": bool(r.solved), "iterations": int(r.iterations), "checks": int(r.collision_checks),
-            "seconds": float(seconds), "exact_poses": int(problem.world.exact_poses)}
+            "seconds": float(seconds)}
 
 
 def main(argv=None) -> int:
