@@ -17,9 +17,9 @@ an unknown code raises.
   scene of many boxes by the spatial index's grid, whose cell lists ``grid`` holds (int64; see
   ``planners.kernels.rigid``).
 * ``WORLD_MESH``: a triangle-mesh body among a triangle-mesh environment; ``grid`` the broad phase's
-  distance grid, ``body`` the body's cover points, ``geom`` their clusters (``cover_clusters``),
-  ``params`` as ``planners.kernels.mesh`` lists them;
-  the exact check runs in FCL, reached from compiled code in object mode.
+  distance grid, ``body`` the body's cover points followed by the exact test's trees and triangles,
+  ``geom`` the cover points' clusters (``cover_clusters``), ``params`` as ``planners.kernels.mesh`` lists
+  them; the exact test is compiled too (``planners.kernels.triangles``).
 
 Obstacles are closed sets and the free space is open: a motion is valid only if it meets no point of
 any obstacle, its boundary included, and stays strictly inside the world's bounds.

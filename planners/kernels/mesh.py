@@ -301,10 +301,10 @@ def mesh_state_free_py(grid, body, params, q) -> bool:
     return bool(exact_apart(body, params, np.ascontiguousarray(q, dtype=np.float64), 0.0))
 
 
-#: Where a motion is blocked inside, FCL's collision test at a few of its poses (about a tenth of what its
-#: distance costs) finds it before the walk asks for distances pose by pose: the poses at these fractions
-#: (a bisection to depth 3), on motions at least ``PROBE_MIN_PIECES`` resolution steps long. A pose in
-#: contact makes the walk fail too, so the verdict is the same; a free motion pays up to 7 collision tests.
+#: Where a motion is blocked inside, the contact test (``exact_apart`` with no margin) at a few of its poses
+#: finds it before the walk certifies clearances pose by pose: the poses at these fractions (a bisection to
+#: depth 3), on motions at least ``PROBE_MIN_PIECES`` resolution steps long. A pose in contact makes the walk
+#: fail too, so the verdict is the same; a free motion pays up to 7 contact tests.
 PROBE_FRACTIONS = np.array([0.5, 0.25, 0.75, 0.125, 0.375, 0.625, 0.875])
 PROBE_MIN_PIECES = 8
 

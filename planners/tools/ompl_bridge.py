@@ -179,7 +179,7 @@ def ompl_rigid(problem: Problem, planner: str = "RRTConnect", *, seed: int = 0, 
     """OMPL's RRT-Connect or RRT on a ``MeshWorld`` problem, as OMPL.app sets it up, with our state check.
 
     The state space is OMPL's SE(3) (quaternions) over the world's bounds; a state is valid as
-    ``MeshWorld.is_valid`` says (FCL's collision test, one Python call per state); motions are checked
+    ``MeshWorld.is_valid`` says (the world's exact contact test, one Python call per state); motions are checked
     by OMPL's default discrete validator, every 1% of the space's extent with no clearance asked, as in
     OMPL.app (a motion may pass through an obstacle thinner than that), and the range is OMPL's default.
     RRT samples the goal with probability ``goal_bias`` (OMPL's default 0.05). Iterations are counted
