@@ -5,9 +5,11 @@ A mesh world's motion check asks at each pose it places whether the body keeps a
 question needs less: a pair closer than ``m`` ends it with "no", and every pair whose boxes lie more than
 ``m`` apart is never looked at. This module answers it exactly, in compiled code, with no call out of it.
 
-The environment's triangles sit in a bounding-box tree (``build_tree``, made once per world). For a pose,
-each of the body's triangles (in world coordinates) walks the tree with its box grown by ``m``, and each
-environment triangle whose box meets that one is compared with it (``triangles_within``):
+The environment's triangles sit in a tree of boxes and the body's in a tree of spheres (``build_tree``,
+``sphere_nodes``; made once per world): a sphere turns with the body, so the body's tree serves every pose.
+For a pose, the two trees are walked together, a pair of nodes set aside where the body node's sphere lies
+more than ``m`` from the environment node's box, and each pair of triangles in two leaves that is not set
+aside by their boxes is compared exactly (``triangles_within``):
 
 * Two triangles are more than ``m`` apart if the vertices of one lie more than ``m`` to one side of the
   other's plane.
@@ -22,9 +24,9 @@ Nothing is approximated: a test answers "more than ``m``" only when every pair's
 rounding of float64 arithmetic on the coordinates). A degenerate triangle (no area) is its edges.
 
 The tree travels as rows of three numbers, as the mesh kernels' ``body`` array carries everything
-(``planners.kernels.mesh``): a node is three rows ``(lo), (hi), (left, right, first | -count)``: its box,
-then its two children, or, for a leaf, ``left = -1``, ``right`` its first triangle and the count of its
-triangles in the third column. A triangle is three rows, its corners.
+(``planners.kernels.mesh``): a node is three rows, its box ``(lo)``, ``(hi)`` (a sphere's node: its centre and
+``(radius, 0, 0)``), and its links: ``(left, right, 0)``, its two children, or for a leaf ``(-1, first, count)``,
+its triangles. A triangle is three rows, its corners. Building the trees takes about 1.5 s per 100,000 triangles.
 """
 
 from __future__ import annotations
