@@ -231,14 +231,14 @@ def test_clustered_cover_bound_is_the_bound_over_every_point(hole_world):
     assert seen[True] > 20 and seen[False] > 20
 
 
-def test_a_motion_blocked_inside_is_found_by_the_probes(hole_world):
-    """Both ends far from the wall, the middle inside it: the probes find it before any walk."""
+def test_a_motion_blocked_inside_is_refused(hole_world):
+    """Both ends far from the wall, the middle inside it: the probe at the midpoint finds it."""
     w = hole_world
     a, b = [2.0, 1.5, 1.5, 0, 0, 0], [8.0, 1.5, 1.5, 0, 0, 0]
     assert w.pose_free_broad(a, w.delta) and w.pose_free_broad(b, w.delta)  # the grid alone clears both ends
-    k = w.kernel
-    assert not mesh_kernels.probes_free(k.grid, k.body, k.geom, k.params, np.array(a, float), np.array(b, float))
     assert not w.check_motion(a, b)
+    # the probe at the midpoint is in contact; the poses a walk from either end would certify first are not
+    assert not w.pose_free_exact(np.add(a, b) / 2) and w.pose_free_exact(a, w.delta) and w.pose_free_exact(b, w.delta)
     # a motion through the hole has probes in the hole, none in contact: the walk decides as before
     c, d = [2.0, 5.0, 5.0, 0, 0, 0], [8.0, 5.0, 5.0, 0, 0, 0]
     assert w.check_motion(c, d) == all(w.pose_free_exact(q, w.delta / 2) for q in states_along(w, c, d)) is True

@@ -325,21 +325,6 @@ def _past_deadline(params):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def probes_free(grid, body, clusters, params, a, b):
-    """False if one of the motion's probe poses (``PROBE_FRACTIONS``) puts the body in contact (``exact_apart``).
-
-    Poses the grid proves free are not tested. True says nothing more than that none of them is in contact.
-    """
-    cover = _parts(body, params)[0]
-    q = np.empty(6)
-    for f in PROBE_FRACTIONS:
-        interpolate(SPACE_RIGID, a, b, f, q)
-        if not clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0 and not exact_apart(body, params, q, 0.0):
-            return False
-    return True
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
 def mesh_motion_free(grid, body, clusters, params, a, b):
     """True if the motion a -> b keeps the body clear of the environment (see the module docs).
 
@@ -360,15 +345,21 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
     cb = _pose_clearance(grid, body, clusters, params, b, margin, np.bool_(True))
     if not cb > margin:
         return False
-    if n >= PROBE_MIN_PIECES and not probes_free(grid, body, clusters, params, a, b):
-        return False
+    q = np.empty(6)
+    if n >= PROBE_MIN_PIECES:
+        # the probes: the contact test at the poses PROBE_FRACTIONS places, those the grid proves free left out
+        cover = _parts(body, params)[0]
+        for f in PROBE_FRACTIONS:
+            interpolate(SPACE_RIGID, a, b, f, q)
+            if not clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0 and not exact_apart(body, params, q,
+                                                                                                    0.0):
+                return False
     end = length - cb  # (end, length] is covered
     covered = -1.0  # [0, covered) is covered; nothing yet
     island_lo = island_hi = -1.0  # a stretch covered by a pose whose guess left a gap
     last = 0.0  # the travel of the last pose that extended the covered stretch
     s = 0.0
     placed = 0
-    q = np.empty(6)
     while True:
         interpolate(SPACE_RIGID, a, b, s / length, q)
         c = _pose_clearance(grid, body, clusters, params, q, margin, np.bool_(False))

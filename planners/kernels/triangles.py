@@ -78,12 +78,12 @@ def build_tree(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.array(rows, dtype=np.float64), np.ascontiguousarray(tris[order].reshape(-1, 3))
 
 
-@nb.njit(cache=True, inline="always")
-def _segments_d2(p0, p1, q0, q1):
-    """Squared distance between segments ``p0 p1`` and ``q0 q1`` (rows of 3), degenerate segments included."""
-    d1x, d1y, d1z = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
-    d2x, d2y, d2z = q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]
-    rx, ry, rz = p0[0] - q0[0], p0[1] - q0[1], p0[2] - q0[2]
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _segments_d2(p, a, b, q, c, d):
+    """Squared distance between segments ``p[a] p[b]`` and ``q[c] q[d]`` (rows of 3), degenerate ones included."""
+    d1x, d1y, d1z = p[b, 0] - p[a, 0], p[b, 1] - p[a, 1], p[b, 2] - p[a, 2]
+    d2x, d2y, d2z = q[d, 0] - q[c, 0], q[d, 1] - q[c, 1], q[d, 2] - q[c, 2]
+    rx, ry, rz = p[a, 0] - q[c, 0], p[a, 1] - q[c, 1], p[a, 2] - q[c, 2]
     a = d1x * d1x + d1y * d1y + d1z * d1z
     e = d2x * d2x + d2y * d2y + d2z * d2z
     f = d2x * rx + d2y * ry + d2z * rz
@@ -116,7 +116,7 @@ def _segments_d2(p0, p1, q0, q1):
     return x * x + y * y + z * z
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _normal(t, k):
     """The (unnormalised) normal of the triangle in rows ``k, k + 1, k + 2`` of ``t``."""
     ux, uy, uz = t[k + 1, 0] - t[k, 0], t[k + 1, 1] - t[k, 1], t[k + 1, 2] - t[k, 2]
@@ -124,23 +124,7 @@ def _normal(t, k):
     return uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
 
 
-@nb.njit(cache=True)
-def _side_apart(p, i, q, j, m):
-    """True if the corners of triangle ``p[i:i+3]`` lie more than ``m`` to one side of triangle ``q[j:j+3]``'s plane."""
-    nx, ny, nz = _normal(q, j)
-    length = math.sqrt(nx * nx + ny * ny + nz * nz)
-    if length == 0.0:
-        return False
-    lo = math.inf
-    hi = -math.inf
-    for r in range(3):
-        s = (nx * (p[i + r, 0] - q[j, 0]) + ny * (p[i + r, 1] - q[j, 1]) + nz * (p[i + r, 2] - q[j, 2])) / length
-        lo = min(lo, s)
-        hi = max(hi, s)
-    return lo > m or hi < -m
-
-
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _in_face(q, j, nx, ny, nz, px, py, pz):
     """True if the point's foot on triangle ``q[j:j+3]``'s plane (normal ``n``) lies in the face (edges included)."""
     for e in range(3):
@@ -154,46 +138,51 @@ def _in_face(q, j, nx, ny, nz, px, py, pz):
     return True
 
 
-@nb.njit(cache=True)
-def _face_d2(p, r, q, j):
-    """Squared distance from point ``p[r]`` to triangle ``q[j:j+3]`` where its foot lies in the face, else inf."""
-    nx, ny, nz = _normal(q, j)
-    n2 = nx * nx + ny * ny + nz * nz
-    if n2 == 0.0 or not _in_face(q, j, nx, ny, nz, p[r, 0], p[r, 1], p[r, 2]):
-        return math.inf
-    s = nx * (p[r, 0] - q[j, 0]) + ny * (p[r, 1] - q[j, 1]) + nz * (p[r, 2] - q[j, 2])
-    return s * s / n2
-
-
-@nb.njit(cache=True)
-def _edge_crosses(p, a, b, q, j):
-    """True if segment ``p[a] p[b]`` crosses or touches triangle ``q[j:j+3]`` through its plane (not lying in it)."""
-    nx, ny, nz = _normal(q, j)
-    da = nx * (p[a, 0] - q[j, 0]) + ny * (p[a, 1] - q[j, 1]) + nz * (p[a, 2] - q[j, 2])
-    db = nx * (p[b, 0] - q[j, 0]) + ny * (p[b, 1] - q[j, 1]) + nz * (p[b, 2] - q[j, 2])
-    if (da > 0.0 and db > 0.0) or (da < 0.0 and db < 0.0) or da == db:
-        return False
-    t = da / (da - db)
-    return _in_face(q, j, nx, ny, nz, p[a, 0] + t * (p[b, 0] - p[a, 0]), p[a, 1] + t * (p[b, 1] - p[a, 1]),
-                    p[a, 2] + t * (p[b, 2] - p[a, 2]))
-
-
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def triangles_within(p, i, q, j, m):
-    """True if triangles ``p[i:i+3]`` and ``q[j:j+3]`` (corners by row) lie at most ``m`` apart (``m >= 0``)."""
-    if _side_apart(p, i, q, j, m) or _side_apart(q, j, p, i, m):
-        return False
+    """True if triangles ``p[i:i+3]`` and ``q[j:j+3]`` (corners by row) lie at most ``m`` apart (``m >= 0``).
+
+    Each check runs for both orders of the two triangles (``A`` the one whose corners or edges are tried, ``B``
+    the one whose plane and face they are tried against), in one loop, so that each is compiled once.
+    """
     m2 = m * m
-    for e in range(3):
+    for side in range(2):  # apart if the corners of one lie more than m to one side of the other's plane
+        A, a, B, b = (p, i, q, j) if side == 0 else (q, j, p, i)
+        nx, ny, nz = _normal(B, b)
+        length = math.sqrt(nx * nx + ny * ny + nz * nz)
+        if length > 0.0:
+            lo = math.inf
+            hi = -math.inf
+            for r in range(3):
+                h = nx * (A[a + r, 0] - B[b, 0]) + ny * (A[a + r, 1] - B[b, 1]) + nz * (A[a + r, 2] - B[b, 2])
+                lo = min(lo, h)
+                hi = max(hi, h)
+            if lo > m * length or -hi > m * length:
+                return False
+    for e in range(3):  # the nine pairs of edges
         for f in range(3):
-            if _segments_d2(p[i + e], p[i + (e + 1) % 3], q[j + f], q[j + (f + 1) % 3]) <= m2:
+            if _segments_d2(p, i + e, i + (e + 1) % 3, q, j + f, j + (f + 1) % 3) <= m2:
                 return True
-    for r in range(3):
-        if _face_d2(p, i + r, q, j) <= m2 or _face_d2(q, j + r, p, i) <= m2:
-            return True
-    for e in range(3):
-        if _edge_crosses(p, i + e, i + (e + 1) % 3, q, j) or _edge_crosses(q, j + e, j + (e + 1) % 3, p, i):
-            return True
+    for side in range(2):
+        A, a, B, b = (p, i, q, j) if side == 0 else (q, j, p, i)
+        nx, ny, nz = _normal(B, b)
+        n2 = nx * nx + ny * ny + nz * nz
+        if n2 == 0.0:
+            continue  # a triangle with no area is its edges
+        for r in range(3):
+            # a corner of A whose foot lies in B's face, within m of it
+            h = nx * (A[a + r, 0] - B[b, 0]) + ny * (A[a + r, 1] - B[b, 1]) + nz * (A[a + r, 2] - B[b, 2])
+            if h * h <= m2 * n2 and _in_face(B, b, nx, ny, nz, A[a + r, 0], A[a + r, 1], A[a + r, 2]):
+                return True
+            # an edge of A that crosses B's plane (not lying in it) inside B's face
+            r2 = (r + 1) % 3
+            h2 = nx * (A[a + r2, 0] - B[b, 0]) + ny * (A[a + r2, 1] - B[b, 1]) + nz * (A[a + r2, 2] - B[b, 2])
+            if (h > 0.0 and h2 > 0.0) or (h < 0.0 and h2 < 0.0) or h == h2:
+                continue
+            t = h / (h - h2)
+            if _in_face(B, b, nx, ny, nz, A[a + r, 0] + t * (A[a + r2, 0] - A[a + r, 0]),
+                        A[a + r, 1] + t * (A[a + r2, 1] - A[a + r, 1]), A[a + r, 2] + t * (A[a + r2, 2] - A[a + r, 2])):
+                return True
     return False
 
 
@@ -224,19 +213,36 @@ def sphere_nodes(nodes: np.ndarray, ordered: np.ndarray) -> np.ndarray:
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _gap(v, lo, hi):
+    """Distance from ``v`` to the interval ``[lo, hi]`` (0 inside it)."""
+    return lo - v if v < lo else (v - hi if v > hi else 0.0)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _box_gap2(nodes, r, x, y, z):
     """Squared distance from point ``(x, y, z)`` to the box of the node at row ``r`` (0 inside it)."""
-    g = 0.0
-    for d, v in ((0, x), (1, y), (2, z)):
-        if v < nodes[r, d]:
-            g += (nodes[r, d] - v) ** 2
-        elif v > nodes[r + 1, d]:
-            g += (v - nodes[r + 1, d]) ** 2
-    return g
+    gx = _gap(x, nodes[r, 0], nodes[r + 1, 0])
+    gy = _gap(y, nodes[r, 1], nodes[r + 1, 1])
+    gz = _gap(z, nodes[r, 2], nodes[r + 1, 2])
+    return gx * gx + gy * gy + gz * gz
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _box_of(t, i):
+    """The box of triangle ``t[i:i+3]``: ``(lo_x, lo_y, lo_z, hi_x, hi_y, hi_z)``."""
+    return (min(t[i, 0], min(t[i + 1, 0], t[i + 2, 0])), min(t[i, 1], min(t[i + 1, 1], t[i + 2, 1])),
+            min(t[i, 2], min(t[i + 1, 2], t[i + 2, 2])), max(t[i, 0], max(t[i + 1, 0], t[i + 2, 0])),
+            max(t[i, 1], max(t[i + 1, 1], t[i + 2, 1])), max(t[i, 2], max(t[i + 1, 2], t[i + 2, 2])))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def _boxes_apart(a, b):
+    """True if boxes ``a`` and ``b`` (``_box_of``'s) lie apart along an axis."""
+    return (b[0] > a[3] or b[3] < a[0] or b[1] > a[4] or b[4] < a[1] or b[2] > a[5] or b[5] < a[2])
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def sets_apart(spheres, body, R, t, nodes, tris, m):
     """True if every triangle of the body lies more than ``m`` from every triangle of the environment (``m >= 0``).
 
@@ -263,28 +269,18 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
         env_leaf = nodes[se + 2, 0] < 0.0
         if body_leaf and env_leaf:
             for b in range(int(spheres[sb + 2, 1]), int(spheres[sb + 2, 1] + spheres[sb + 2, 2])):
-                k = 3 * b
-                blo0 = min(body[k, 0], body[k + 1, 0], body[k + 2, 0]) - m
-                blo1 = min(body[k, 1], body[k + 1, 1], body[k + 2, 1]) - m
-                blo2 = min(body[k, 2], body[k + 1, 2], body[k + 2, 2]) - m
-                bhi0 = max(body[k, 0], body[k + 1, 0], body[k + 2, 0]) + m
-                bhi1 = max(body[k, 1], body[k + 1, 1], body[k + 2, 1]) + m
-                bhi2 = max(body[k, 2], body[k + 1, 2], body[k + 2, 2]) + m
+                lo0, lo1, lo2, hi0, hi1, hi2 = _box_of(body, 3 * b)
+                grown_box = (lo0 - m, lo1 - m, lo2 - m, hi0 + m, hi1 + m, hi2 + m)
                 for e in range(int(nodes[se + 2, 1]), int(nodes[se + 2, 1] + nodes[se + 2, 2])):
-                    j = 3 * e
-                    if (min(tris[j, 0], tris[j + 1, 0], tris[j + 2, 0]) > bhi0
-                            or max(tris[j, 0], tris[j + 1, 0], tris[j + 2, 0]) < blo0
-                            or min(tris[j, 1], tris[j + 1, 1], tris[j + 2, 1]) > bhi1
-                            or max(tris[j, 1], tris[j + 1, 1], tris[j + 2, 1]) < blo1
-                            or min(tris[j, 2], tris[j + 1, 2], tris[j + 2, 2]) > bhi2
-                            or max(tris[j, 2], tris[j + 1, 2], tris[j + 2, 2]) < blo2):
-                        continue
-                    if triangles_within(body, k, tris, j, m):
+                    if not _boxes_apart(grown_box, _box_of(tris, 3 * e)) and triangles_within(body, 3 * b, tris,
+                                                                                               3 * e, m):
                         return False
             continue
         if top + 2 > stack.shape[0]:
             grown = np.empty((2 * stack.shape[0], 2), dtype=np.int64)
-            grown[:top] = stack[:top]
+            for r in range(top):  # element by element: a slice assignment compiles numba's shape-error formatting
+                grown[r, 0] = stack[r, 0]
+                grown[r, 1] = stack[r, 1]
             stack = grown
         # open the body's node where the environment's is a leaf or the smaller of the two
         half = 0.5 * math.sqrt((nodes[se + 1, 0] - nodes[se, 0]) ** 2 + (nodes[se + 1, 1] - nodes[se, 1]) ** 2
