@@ -1,4 +1,4 @@
-"""``draw_pooled``: the pool side shared by the Gaussian, bridge-test and obstacle-based samplers.
+"""``draw_pooled``: the pool side shared by the Gaussian, bridge-test and obstacle-based samplers, and its deadline.
 
 A stand-in for a compiled sampler (``run``) makes a sample from an attempt whose first uniform is
 below ``p``, so what it returns is known from the generator's stream alone.
@@ -7,8 +7,9 @@ below ``p``, so what it returns is known from the generator's stream alone.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from planners.base.samplers import draw_pooled
+from planners.base.samplers import FIRST_SLICE_ATTEMPTS, DrawInterrupted, draw_pooled
 from planners.kernels.state import S_CHECKS, S_PENDING, S_POS
 
 PER = 3  # uniforms an attempt reads
@@ -67,3 +68,29 @@ def test_a_spent_budget_stops_the_draw_and_leaves_its_attempts_pending():
     got = draw_pooled(np.random.default_rng(0), 10, PER, PER, 4.0, coin_run(0.001, calls), budget=700)
     assert 0 < got.count < 10 and got.pending > 0
     assert got.candidates[:got.count].sum() == 700
+
+
+def test_a_deadline_slices_the_pools_without_changing_the_samples():
+    for rate in (0.5, 4.0, 200.0):
+        plain = np.random.default_rng(5)
+        want = draw_pooled(plain, 150, PER, PER, rate, coin_run(0.05))
+        calls = []
+        rng = np.random.default_rng(5)
+        got = draw_pooled(rng, 150, PER, PER, rate, coin_run(0.05, calls), deadline=lambda: False)
+        np.testing.assert_array_equal(got.points, want.points)
+        np.testing.assert_array_equal(got.candidates, want.candidates)
+        assert (got.count, got.pending, got.checks, got.rate) == (want.count, want.pending, want.checks, want.rate)
+        assert rng.random() == plain.random()  # the generator is left where the plain draw leaves it
+        assert calls[0] == FIRST_SLICE_ATTEMPTS  # the first slice is small, whatever the pool
+
+
+def test_a_passed_deadline_interrupts_the_draw():
+    asked = []
+
+    def deadline():
+        asked.append(1)
+        return len(asked) > 3  # past from the fourth slice on
+
+    with pytest.raises(DrawInterrupted):
+        draw_pooled(np.random.default_rng(0), 10_000, PER, PER, 4.0, coin_run(0.05), deadline=deadline)
+    assert len(asked) == 4

@@ -26,7 +26,9 @@ from planners import (
     UniformSampler,
     make_planner,
 )
+from planners.algorithms.obprm import ObstacleBasedSampler
 from planners.base.planner import TIME_SLICE, compile_seconds
+from planners.base.samplers import DrawInterrupted
 
 #: What a timed solve may overrun its limit by here: the stated TIME_SLICE, plus slack for a busy test machine.
 MARGIN = TIME_SLICE + 0.05
@@ -182,3 +184,32 @@ def test_lazy_prm_keeps_its_adjacency_while_the_roadmap_does_not_grow(monkeypatc
     assert any(r.solved for r in runs)
     assert [(r.solved, r.iterations, r.collision_checks, r.cost) for r in runs] == \
         [(r.solved, r.iterations, r.collision_checks, r.cost) for r in again]
+
+
+class _CutSecondDraw(ObstacleBasedSampler):
+    """OB-PRM's sampler whose second draw under a deadline spends part of the stream, then meets the deadline."""
+
+    def __init__(self, draws: list[int]) -> None:
+        super().__init__()
+        self.draws = draws  # shared by the bound copies
+
+    def draw(self, rng, n, view):
+        self.draws.append(n)
+        if len(self.draws) == 2:
+            rng.random(1000)
+            raise DrawInterrupted
+        return super().draw(rng, n, view)
+
+
+def test_a_draw_cut_at_the_deadline_is_undone_and_made_again_on_resuming():
+    obs = np.zeros((96, 96), dtype=bool)
+    obs[70:75, 60:96] = obs[70:96, 60:65] = True  # the goal's corner is walled off: no solve ends the runs
+    problem = Problem(OccupancyGrid(obs), (2.5, 2.5), (90.5, 90.5), goal_tolerance=2.0)
+    draws = []
+    timed = OBPRM(problem, sampler=_CutSecondDraw(draws), seed=4)
+    r = timed.solve(time_limit=60.0)
+    assert r.stop_reason == "time_limit" and r.iterations == 64 and draws == [64, 128]  # cut at its second draw
+    r = timed.solve(max_iterations=300)
+    untimed = OBPRM(problem, seed=4).solve(max_iterations=364)
+    assert draws[2] == 128  # the cut draw made again, whole
+    assert (r.iterations, r.collision_checks, r.num_vertices) == (364, untimed.collision_checks, untimed.num_vertices)

@@ -67,6 +67,10 @@ class ObstacleBasedSampler(SamplerBase):
     so the samples do not depend on batch sizes. Works on any world through its compiled ``kernel``
     (``OccupancyGrid``, ``GeometricWorld``, rigid-body worlds, whose walk runs in state coordinates).
 
+    Under a planner's time limit (``SamplerBase.set_deadline``) a draw runs its attempts in short
+    compiled slices and stops at the deadline (``DrawInterrupted``; the planner undoes it), so a
+    refill of many samples among meshes cannot carry a solve past its limit.
+
     If a requested batch finds no obstacle-based sample within ``MAX_ATTEMPTS_PER_SAMPLE`` attempts
     per requested sample (a world without obstacles), one uniform sample is returned instead, so a
     planner always makes progress.
@@ -114,7 +118,8 @@ class ObstacleBasedSampler(SamplerBase):
     def draw(self, rng, n, view):
         """Up to ``n`` samples (fewer only when the attempt budget runs out), with candidates per sample."""
         got = draw_pooled(rng, n, self.problem.dim, self._per, self._rate, self._attempts,
-                          budget=MAX_ATTEMPTS_PER_SAMPLE * n)
+                          budget=MAX_ATTEMPTS_PER_SAMPLE * n,
+                          deadline=self.past_deadline if self._deadline_at is not None else None)
         self.checks += got.checks
         self._rate = got.rate
         out, cand, m = got.points, got.candidates, got.count

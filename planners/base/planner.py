@@ -13,7 +13,7 @@ from numba.core import event as _nb_event
 
 from planners.base.fileio import check_int
 from planners.base.problem import Problem
-from planners.base.samplers import FAMILY_TREE, SampleBatch, Sampler, UniformSampler, is_sampler
+from planners.base.samplers import FAMILY_TREE, DrawInterrupted, SampleBatch, Sampler, UniformSampler, is_sampler
 from planners.datastructures.nn import insert as index_insert
 from planners.kernels import state as slots
 from planners.kernels.cache import announce as announce_compile
@@ -313,6 +313,8 @@ class Planner(abc.ABC):
         self._call_budget: float | None = None
         self._sample_s: float | None = None
         self._last_used = 0
+        # a timed solve hands its deadline to the sampler too; a draw it cut is undone (_refill)
+        self._draw_timed = self._draw_cut = False
         self._candidates = 0
         self._stop_reason = "max_iterations"
         self._istate = np.zeros(slots.N_ISTATE, dtype=np.int64)
@@ -351,7 +353,10 @@ class Planner(abc.ABC):
         the work is split never changes the result: a timed run ends as the same iterations untimed.
         A world with a ``set_deadline`` hook (``MeshWorld``, whose one motion check can take many
         milliseconds) is told the deadline and answers "blocked" to checks still under way past it,
-        so the last iteration ends early; what it had added stays valid.
+        so the last iteration ends early; what it had added stays valid. So is a sampler with a
+        ``set_deadline`` hook (``SamplerBase``: OB-PRM's, the Gaussian and bridge-test samplers, whose
+        draws test states): a draw it cuts at the deadline is undone, the generator put back, and made
+        again whole if the planner goes on.
 
         Args:
             max_iterations: Iterations (samples) this call may use.
@@ -373,6 +378,11 @@ class Planner(abc.ABC):
         set_deadline = getattr(self.problem.world, "set_deadline", None) if time_limit is not None else None
         if set_deadline is not None:
             set_deadline(t0 - c0 + time_limit, _work_clock)
+        # so is a sampler whose draws can be long (one that tests states): it stops a draw at the deadline
+        sampler_deadline = getattr(self.sampler, "set_deadline", None) if time_limit is not None else None
+        if sampler_deadline is not None:
+            sampler_deadline(t0 - c0 + time_limit, _work_clock)
+        self._draw_cut, self._draw_timed = False, sampler_deadline is not None
         try:
             while True:
                 if self._finished():
@@ -392,12 +402,18 @@ class Planner(abc.ABC):
                 t_call, c_call = time.perf_counter(), compile_seconds()
                 used = self._consume(int(min(budget - done, chunk)))
                 done += used
+                if self._draw_cut:  # the sampler's draw met the deadline (and was undone)
+                    reason = "time_limit"
+                    break
                 if time_limit is not None:
                     spent = time.perf_counter() - t_call - (compile_seconds() - c_call)
                     self._sample_s, self._last_used = spent / max(used, 1), used
         finally:
             if set_deadline is not None:
                 set_deadline(None, None)
+            if sampler_deadline is not None:
+                sampler_deadline(None, None)
+            self._draw_cut = self._draw_timed = False
             self._call_budget = None
             self._compile += compile_seconds() - c0
             self._time += time.perf_counter() - t0
@@ -519,8 +535,21 @@ class Planner(abc.ABC):
 
     # --- sample buffer ---------------------------------------------------------------------
 
-    def _refill(self, n: int) -> None:
-        out = self.sampler.draw(self._rng, n, self.view())
+    def _refill(self, n: int) -> bool:
+        """Draw the next ``n`` samples into the buffer; False (generator restored, buffer unchanged) if the draw was cut.
+
+        A draw cut at a time limit's deadline (``DrawInterrupted``) leaves the generator where it began, so the
+        draw made again on resuming is the one an untimed run makes.
+        """
+        before = self._rng.bit_generator.state if self._draw_timed else None
+        try:
+            out = self.sampler.draw(self._rng, n, self.view())
+        except DrawInterrupted:
+            if before is None:
+                raise
+            self._rng.bit_generator.state = before
+            self._draw_cut = True
+            return False
         if isinstance(out, SampleBatch):
             pts, anch, cand = out.points, out.anchored, out.candidates
         else:
@@ -549,6 +578,7 @@ class Planner(abc.ABC):
                 raise ValueError(f"{who}.draw returned candidate counts that do not match {m} samples")
             self._buf_cand = cand
         self._buf_pts, self._buf_anch, self._pos = pts, anch, 0
+        return True
 
     def _consume(self, n: int) -> int:
         if self._fused is not None:
@@ -563,7 +593,8 @@ class Planner(abc.ABC):
         # sampler sees) must not depend on how the caller splits its budget, so that
         # step() x N == solve(N) == solve in pieces
         if self._pos >= len(self._buf_pts):
-            self._refill(refill_size(self._refills))
+            if not self._refill(refill_size(self._refills)):
+                return 0
             self._refills += 1
         end = min(self._pos + n, len(self._buf_pts))
         self._reserve(end - self._pos)

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple, Protocol, runtime_checkable
 
@@ -145,10 +146,25 @@ def is_sampler(obj) -> bool:
     return callable(getattr(obj, "bind", None)) and callable(getattr(obj, "draw", None))
 
 
+class DrawInterrupted(Exception):
+    """Raised by a sampler's ``draw`` that found its deadline (``SamplerBase.set_deadline``) passed before it finished.
+
+    The planner that set the deadline catches it, puts its generator back where the draw began and returns: the
+    draw is made again, whole, if the planner is asked to go on, so a timed run stays the run it would be untimed.
+    """
+
+
 class SamplerBase:
-    """Default ``bind``: a shallow copy that remembers the problem and its bounds."""
+    """Default ``bind``: a shallow copy that remembers the problem and its bounds.
+
+    ``set_deadline`` is the hook through which ``Planner.solve`` hands a time limit to a sampler whose
+    draws can be long (those that test states, like OB-PRM's): such a draw looks at ``past_deadline``
+    as it goes and raises ``DrawInterrupted`` once it is past.
+    """
 
     problem: Problem | None = None
+    _deadline_at: float | None = None
+    _deadline_clock = None
 
     def bind(self, problem: Problem) -> SamplerBase:
         # a shallow copy; copy.copy's generic protocol costs ~15 us, and a bind is paid on every query
@@ -165,6 +181,16 @@ class SamplerBase:
 
     def _setup(self) -> None:
         """Hook for per-problem preparation in subclasses."""
+
+    def set_deadline(self, at: float | None, clock=None) -> None:
+        """From now on, a draw still under way at ``clock() > at`` may stop with ``DrawInterrupted`` (None: never)."""
+        self._deadline_at = None if at is None else float(at)
+        self._deadline_clock = clock
+
+    def past_deadline(self) -> bool:
+        """Whether the deadline ``set_deadline`` gave has passed (False without one)."""
+        at = self._deadline_at
+        return at is not None and self._deadline_clock() > at
 
     def _uniform(self, u: np.ndarray) -> np.ndarray:
         return self.low + (self.high - self.low) * u
@@ -328,6 +354,28 @@ class InformedSampler(SamplerBase):
         return SampleBatch(pts[:m], None, cands[:m])
 
 
+#: Under a deadline, a pooled draw runs its attempts in compiled calls of about this many seconds, the first of
+#: ``FIRST_SLICE_ATTEMPTS`` attempts, and asks the deadline before each.
+DRAW_SLICE = 0.005
+FIRST_SLICE_ATTEMPTS = 16
+
+
+def _run_sliced(u, n, m, per, run, out, cand, state, deadline, step):
+    """One pool of ``draw_pooled`` in slices of ``step`` attempts (resized to ``DRAW_SLICE``), the deadline asked before each."""
+    from planners.kernels.state import S_POS
+
+    while m < n and int(state[S_POS]) + per <= len(u):
+        if deadline():
+            raise DrawInterrupted
+        end = min(len(u), int(state[S_POS]) + step * per)
+        t = time.perf_counter()
+        m += run(u[:end], n - m, out[m:], cand[m:], state)
+        spent = time.perf_counter() - t
+        # the next slice sized from this one's speed, at most doubling (its attempts can be cheaper than the next)
+        step = max(1, min(2 * step, int(step * DRAW_SLICE / spent))) if spent > 0 else 2 * step
+    return m, step
+
+
 class PooledDraws(NamedTuple):
     """What ``draw_pooled`` returns.
 
@@ -350,7 +398,7 @@ class PooledDraws(NamedTuple):
 
 
 def draw_pooled(rng: np.random.Generator, n: int, dim: int, per: int, rate: float, run, *,
-                attempts: int | None = None, budget: int | None = None) -> PooledDraws:
+                attempts: int | None = None, budget: int | None = None, deadline=None) -> PooledDraws:
     """Up to ``n`` samples from a compiled sampler whose samples take attempts of ``per`` uniforms each.
 
     The Python side of ``planners.kernels.pool.pooled_attempts`` (the Gaussian, bridge-test and obstacle-based
@@ -359,6 +407,11 @@ def draw_pooled(rng: np.random.Generator, n: int, dim: int, per: int, rate: floa
     pool into at most ``k`` samples, returning how many; its ``state`` (``planners.kernels.state``'s ``S_*``
     slots) carries a sample's attempts from one pool to the next. ``attempts``: no sample takes more (then no
     pool is larger than the samples wanted can use); ``budget``: attempts in all, after which the draw stops.
+
+    ``deadline``: a callable that says whether the draw's time is up (a sampler's ``past_deadline``). Then each
+    pool is run in slices of whole attempts, each about ``DRAW_SLICE`` seconds, the deadline asked before each,
+    and ``DrawInterrupted`` raised once it has passed. A slice ends where the next begins, so the samples are
+    those of one call per pool.
     """
     from planners.kernels.state import N_STATE, S_CHECKS, S_PENDING, S_POS
 
@@ -366,6 +419,7 @@ def draw_pooled(rng: np.random.Generator, n: int, dim: int, per: int, rate: floa
     cand = np.zeros(n, dtype=np.int64)
     state = np.zeros(N_STATE, dtype=np.int64)
     m = used = 0
+    step = FIRST_SLICE_ATTEMPTS
     while m < n and (budget is None or used < budget):
         pool = max(64, math.ceil(1.25 * rate * (n - m)))
         if attempts is not None:
@@ -374,7 +428,10 @@ def draw_pooled(rng: np.random.Generator, n: int, dim: int, per: int, rate: floa
             pool = min(budget - used, pool)
         u = rng.random(int(pool) * per)
         state[S_POS] = 0
-        m += run(u, n - m, out[m:], cand[m:], state)
+        if deadline is None:
+            m += run(u, n - m, out[m:], cand[m:], state)
+        else:
+            m, step = _run_sliced(u, n, m, per, run, out, cand, state, deadline, step)
         used += int(state[S_POS]) // per
     pending = int(state[S_PENDING])
     if m:
@@ -429,7 +486,8 @@ class _NarrowPassageSampler(SamplerBase):
 
     def draw(self, rng, n, view):
         """``n`` samples, with the attempts behind each as candidates."""
-        got = draw_pooled(rng, n, self.problem.dim, self._per, self._rate, self._attempts, attempts=self.attempts)
+        got = draw_pooled(rng, n, self.problem.dim, self._per, self._rate, self._attempts, attempts=self.attempts,
+                          deadline=self.past_deadline if self._deadline_at is not None else None)
         self.checks += got.checks
         self._rate = got.rate
         return SampleBatch(got.points, None, got.candidates)
