@@ -536,7 +536,7 @@ class Planner(abc.ABC):
     # --- sample buffer ---------------------------------------------------------------------
 
     def _refill(self, n: int) -> bool:
-        """Draw the next ``n`` samples into the buffer; False (generator restored, buffer unchanged) if the draw was cut.
+        """The next ``n`` samples into the buffer; False (generator restored, buffer kept) if the draw was cut.
 
         A draw cut at a time limit's deadline (``DrawInterrupted``) leaves the generator where it began, so the
         draw made again on resuming is the one an untimed run makes.

@@ -361,7 +361,7 @@ FIRST_SLICE_ATTEMPTS = 16
 
 
 def _run_sliced(u, n, m, per, run, out, cand, state, deadline, step):
-    """One pool of ``draw_pooled`` in slices of ``step`` attempts (resized to ``DRAW_SLICE``), the deadline asked before each."""
+    """One pool of ``draw_pooled`` in slices of ``step`` attempts (sized to ``DRAW_SLICE``), deadline asked first."""
     from planners.kernels.state import S_POS
 
     while m < n and int(state[S_POS]) + per <= len(u):
