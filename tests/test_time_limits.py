@@ -17,6 +17,7 @@ from planners import (
     OBPRM,
     PRM,
     RRT,
+    DrawInterrupted,
     InformedRRTStar,
     LazyPRM,
     OccupancyGrid,
@@ -28,7 +29,6 @@ from planners import (
 )
 from planners.algorithms.obprm import ObstacleBasedSampler
 from planners.base.planner import TIME_SLICE, compile_seconds
-from planners.base.samplers import DrawInterrupted
 
 #: What a timed solve may overrun its limit by here: the stated TIME_SLICE, plus slack for a busy test machine.
 MARGIN = TIME_SLICE + 0.05
