@@ -9,8 +9,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planners.base.samplers import FIRST_SLICE_ATTEMPTS, DrawInterrupted, draw_pooled
+from planners.algorithms.obprm import ObstacleBasedSampler
+from planners.base.samplers import (
+    FIRST_SLICE_ATTEMPTS,
+    BridgeTestSampler,
+    DrawInterrupted,
+    GaussianSampler,
+    draw_pooled,
+)
 from planners.kernels.state import S_CHECKS, S_PENDING, S_POS
+from planners.maps.generators import generate
 
 PER = 3  # uniforms an attempt reads
 
@@ -94,3 +102,28 @@ def test_a_passed_deadline_interrupts_the_draw():
     with pytest.raises(DrawInterrupted):
         draw_pooled(np.random.default_rng(0), 10_000, PER, PER, 4.0, coin_run(0.05), deadline=deadline)
     assert len(asked) == 4
+
+
+@pytest.mark.parametrize("make", [ObstacleBasedSampler, GaussianSampler, BridgeTestSampler])
+def test_the_compiled_samplers_draw_the_same_under_a_deadline_that_does_not_pass(make):
+    problem = generate("forest", seed=3, size=64)
+    plain, timed = make().bind(problem), make().bind(problem)
+    timed.set_deadline(float("inf"), lambda: 0.0)
+    rng_a, rng_b = np.random.default_rng(11), np.random.default_rng(11)
+    for n in (64, 128, 256):
+        a, b = plain.draw(rng_a, n, None), timed.draw(rng_b, n, None)
+        np.testing.assert_array_equal(a.points, b.points)
+        np.testing.assert_array_equal(a.candidates, b.candidates)
+    assert plain.checks == timed.checks > 0
+    assert rng_a.random() == rng_b.random()
+
+
+def test_a_sampler_past_its_deadline_stops_its_draw():
+    problem = generate("forest", seed=3, size=64)
+    s = ObstacleBasedSampler().bind(problem)
+    s.set_deadline(1.0, lambda: 2.0)
+    assert s.past_deadline()
+    with pytest.raises(DrawInterrupted):
+        s.draw(np.random.default_rng(0), 64, None)
+    s.set_deadline(None)
+    assert not s.past_deadline() and len(s.draw(np.random.default_rng(0), 64, None).points) == 64
