@@ -119,7 +119,7 @@ class ObstacleBasedSampler(SamplerBase):
         """Up to ``n`` samples (fewer only when the attempt budget runs out), with candidates per sample."""
         got = draw_pooled(rng, n, self.problem.dim, self._per, self._rate, self._attempts,
                           budget=MAX_ATTEMPTS_PER_SAMPLE * n,
-                          deadline=self.past_deadline if self._deadline_at is not None else None)
+                          deadline=self.deadline_check())
         self.checks += got.checks
         self._rate = got.rate
         out, cand, m = got.points, got.candidates, got.count

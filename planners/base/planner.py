@@ -313,8 +313,8 @@ class Planner(abc.ABC):
         self._call_budget: float | None = None
         self._sample_s: float | None = None
         self._last_used = 0
-        # a timed solve hands its deadline to the sampler too; a draw it cut is undone (_refill)
-        self._draw_timed = self._draw_cut = False
+        # whether the sampler's last draw was cut at a timed solve's deadline (and undone: _refill)
+        self._draw_cut = False
         self._candidates = 0
         self._stop_reason = "max_iterations"
         self._istate = np.zeros(slots.N_ISTATE, dtype=np.int64)
@@ -374,15 +374,14 @@ class Planner(abc.ABC):
         budget = np.inf if max_iterations is None else int(max_iterations)
         done = 0
         # a world whose single checks can be long (a mesh world) is told the deadline, on the clock that
-        # leaves compilation out, and answers "blocked" to the checks still under way past it
-        set_deadline = getattr(self.problem.world, "set_deadline", None) if time_limit is not None else None
-        if set_deadline is not None:
+        # leaves compilation out, and answers "blocked" to the checks still under way past it; so is a sampler
+        # whose draws can be long (one that tests states), which stops a draw there
+        hooks = () if time_limit is None else tuple(
+            h for h in (getattr(self.problem.world, "set_deadline", None), getattr(self.sampler, "set_deadline", None))
+            if h is not None)
+        for set_deadline in hooks:
             set_deadline(t0 - c0 + time_limit, _work_clock)
-        # so is a sampler whose draws can be long (one that tests states): it stops a draw at the deadline
-        sampler_deadline = getattr(self.sampler, "set_deadline", None) if time_limit is not None else None
-        if sampler_deadline is not None:
-            sampler_deadline(t0 - c0 + time_limit, _work_clock)
-        self._draw_cut, self._draw_timed = False, sampler_deadline is not None
+        self._draw_cut = False
         try:
             while True:
                 if self._finished():
@@ -409,11 +408,9 @@ class Planner(abc.ABC):
                     spent = time.perf_counter() - t_call - (compile_seconds() - c_call)
                     self._sample_s, self._last_used = spent / max(used, 1), used
         finally:
-            if set_deadline is not None:
+            for set_deadline in hooks:
                 set_deadline(None, None)
-            if sampler_deadline is not None:
-                sampler_deadline(None, None)
-            self._draw_cut = self._draw_timed = False
+            self._draw_cut = False
             self._call_budget = None
             self._compile += compile_seconds() - c0
             self._time += time.perf_counter() - t0
@@ -541,7 +538,7 @@ class Planner(abc.ABC):
         A draw cut at a time limit's deadline (``DrawInterrupted``) leaves the generator where it began, so the
         draw made again on resuming is the one an untimed run makes.
         """
-        before = self._rng.bit_generator.state if self._draw_timed else None
+        before = self._rng.bit_generator.state if self._call_budget is not None else None  # timed: can be cut
         try:
             out = self.sampler.draw(self._rng, n, self.view())
         except DrawInterrupted:

@@ -187,6 +187,10 @@ class SamplerBase:
         self._deadline_at = None if at is None else float(at)
         self._deadline_clock = clock
 
+    def deadline_check(self):
+        """``past_deadline`` while a deadline is set, else None: what ``draw_pooled``'s ``deadline`` takes."""
+        return None if self._deadline_at is None else self.past_deadline
+
     def past_deadline(self) -> bool:
         """Whether the deadline ``set_deadline`` gave has passed (False without one)."""
         at = self._deadline_at
@@ -487,7 +491,7 @@ class _NarrowPassageSampler(SamplerBase):
     def draw(self, rng, n, view):
         """``n`` samples, with the attempts behind each as candidates."""
         got = draw_pooled(rng, n, self.problem.dim, self._per, self._rate, self._attempts, attempts=self.attempts,
-                          deadline=self.past_deadline if self._deadline_at is not None else None)
+                          deadline=self.deadline_check())
         self.checks += got.checks
         self._rate = got.rate
         return SampleBatch(got.points, None, got.candidates)
