@@ -7,8 +7,9 @@ question needs less: a pair closer than ``m`` ends it with "no", and every pair 
 
 The environment's triangles sit in a tree of boxes and the body's in a tree of spheres (``build_tree``,
 ``sphere_nodes``; made once per world): a sphere turns with the body, so the body's tree serves every pose.
-For a pose, the two trees are walked together, a pair of nodes set aside where the body node's sphere lies
-more than ``m`` from the environment node's box, and each pair of triangles in two leaves that is not set
+For a pose, the two trees are walked together, a pair of nodes set aside where the body node's sphere, or else
+its box turned with the body (as the world box that holds it), lies more than ``m`` from the environment node's
+box, and each pair of triangles in two leaves that is not set
 aside by their boxes is compared exactly (``triangles_within``):
 
 * Two triangles are more than ``m`` apart if the vertices of one lie more than ``m`` to one side of the
@@ -24,9 +25,10 @@ Nothing is approximated: a test answers "more than ``m``" only when every pair's
 rounding of float64 arithmetic on the coordinates). A degenerate triangle (no area) is its edges.
 
 The tree travels as rows of three numbers, as the mesh kernels' ``body`` array carries everything
-(``planners.kernels.mesh``): a node is three rows, its box ``(lo)``, ``(hi)`` (a sphere's node: its centre and
-``(radius, 0, 0)``), and its links: ``(left, right, h)``, its two children and its box's half diagonal ``h``, or
-for a leaf ``(-1, first, count)``, its triangles. A triangle is three rows, its corners. Building the trees takes
+(``planners.kernels.mesh``): a node is three rows, its box ``(lo)``, ``(hi)``, and its links: ``(left, right, h)``,
+its two children and its box's half diagonal ``h``, or for a leaf ``(-1, first, count)``, its triangles. A node of
+the body's tree (``sphere_nodes``) is four rows: its box's centre, ``(radius, 0, 0)`` (its sphere about that
+centre), its links, and its box's half sides. A triangle is three rows, its corners. Building the trees takes
 about 1.5 s per 100,000 triangles.
 """
 
@@ -190,11 +192,13 @@ def triangles_within(p, i, q, j, m):
 def sphere_nodes(nodes: np.ndarray, ordered: np.ndarray) -> np.ndarray:
     """The tree ``nodes`` over the triangles ``ordered`` (``build_tree``'s pair) with a bounding sphere per node.
 
-    Rows of three per node: the sphere's centre (the box's), ``(radius, 0, 0)``, and the node's links as in
-    ``build_tree``. A sphere turns with the body, so the body's tree is checked in this form.
+    Rows of four per node: the sphere's centre (the box's), ``(radius, 0, 0)``, the node's links as in
+    ``build_tree``, and the box's half sides. Spheres and boxes turn with the body, so the body's tree is
+    checked in this form. Both are grown by a relative 1e-9 (the box also by 1e-9 of the radius), so that the
+    rounding of a turned corner cannot take it out of them.
     """
     n = len(nodes) // 3
-    out = np.zeros((3 * n, 3))
+    out = np.zeros((4 * n, 3))
     corners = ordered.reshape(-1, 3, 3)
     # each node's triangles: the leaves' ranges, gathered bottom up (children come after their parent)
     spans = [(0, 0)] * n
@@ -208,9 +212,11 @@ def sphere_nodes(nodes: np.ndarray, ordered: np.ndarray) -> np.ndarray:
     for k in range(n):
         centre = 0.5 * (nodes[3 * k] + nodes[3 * k + 1])
         points = corners[spans[k][0]:spans[k][1]].reshape(-1, 3)
-        out[3 * k] = centre
-        out[3 * k + 1, 0] = float(np.sqrt(((points - centre) ** 2).sum(axis=1)).max()) * (1.0 + 1e-12)
-        out[3 * k + 2] = nodes[3 * k + 2]
+        radius = float(np.sqrt(((points - centre) ** 2).sum(axis=1)).max()) * (1.0 + 1e-9)
+        out[4 * k] = centre
+        out[4 * k + 1, 0] = radius
+        out[4 * k + 2] = nodes[3 * k + 2]
+        out[4 * k + 3] = np.abs(points - centre).max(axis=0) * (1.0 + 1e-9) + 1e-9 * radius
     return out
 
 
@@ -249,8 +255,9 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
 
     ``spheres``: the body's tree (``sphere_nodes``, body frame); ``body``: its triangles in the tree's order, in
     world coordinates at the pose ``(R, t)`` (``(3 B, 3)``); ``nodes`` and ``tris``: the environment's tree
-    (``build_tree``). The two trees are walked together, a pair of nodes set aside where the body node's sphere
-    lies more than ``m`` from the environment node's box; stops at the first pair of triangles within ``m``.
+    (``build_tree``). The two trees are walked together, a pair of nodes set aside where the body node's sphere,
+    or else the world box that holds its turned box, lies more than ``m`` from the environment node's box; stops
+    at the first pair of triangles within ``m``.
     """
     stack = np.empty((64, 2), dtype=np.int64)
     stack[0, 0] = 0
@@ -258,13 +265,23 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
     top = 1
     while top > 0:
         top -= 1
-        sb = 3 * stack[top, 0]
+        sb = 4 * stack[top, 0]
         se = 3 * stack[top, 1]
         cx = R[0, 0] * spheres[sb, 0] + R[0, 1] * spheres[sb, 1] + R[0, 2] * spheres[sb, 2] + t[0]
         cy = R[1, 0] * spheres[sb, 0] + R[1, 1] * spheres[sb, 1] + R[1, 2] * spheres[sb, 2] + t[1]
         cz = R[2, 0] * spheres[sb, 0] + R[2, 1] * spheres[sb, 1] + R[2, 2] * spheres[sb, 2] + t[2]
         reach = spheres[sb + 1, 0] + m
         if _box_gap2(nodes, se, cx, cy, cz) > reach * reach:
+            continue
+        # the node's box turned with the body lies in the world box of half sides w about the centre
+        ex, ey, ez = spheres[sb + 3, 0], spheres[sb + 3, 1], spheres[sb + 3, 2]
+        wx = abs(R[0, 0]) * ex + abs(R[0, 1]) * ey + abs(R[0, 2]) * ez
+        wy = abs(R[1, 0]) * ex + abs(R[1, 1]) * ey + abs(R[1, 2]) * ez
+        wz = abs(R[2, 0]) * ex + abs(R[2, 1]) * ey + abs(R[2, 2]) * ez
+        gx = max(nodes[se, 0] - (cx + wx), (cx - wx) - nodes[se + 1, 0], 0.0)
+        gy = max(nodes[se, 1] - (cy + wy), (cy - wy) - nodes[se + 1, 1], 0.0)
+        gz = max(nodes[se, 2] - (cz + wz), (cz - wz) - nodes[se + 1, 2], 0.0)
+        if gx * gx + gy * gy + gz * gz > m * m:
             continue
         body_leaf = spheres[sb + 2, 0] < 0.0
         env_leaf = nodes[se + 2, 0] < 0.0
@@ -290,7 +307,7 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
                 stack[top + c, 1] = se // 3
         else:
             for c in range(2):
-                stack[top + c, 0] = sb // 3
+                stack[top + c, 0] = sb // 4
                 stack[top + c, 1] = int(nodes[se + 2, 1 - c])
         top += 2
     return True
