@@ -12,6 +12,14 @@ draw inside RRT's, RRT-Connect's and RRT*'s compiled loops on the 2-D world kind
     python -m planners.compile --planners RRT RRTConnect --worlds grid
     python -m planners.compile --worlds mesh # the mesh worlds' kernels (OMPL.app's problems use them)
     python -m planners.compile --list        # what would be compiled, and where
+    python -m planners.compile --jobs 1      # in this process only
+
+The jobs come in groups that share kernels (one world family, 2-D or 6-DoF, and one metric: the same
+nearest-neighbour search and world checks), and run in worker processes, by default one a group and at most one a
+CPU the process may use (``--jobs N`` sets how many): a process runs its group's jobs one after another, so that
+what they share compiles once, then takes the largest group not begun, else joins the one with the most jobs left.
+numba replaces each cache file whole, so processes writing side by side leave no broken file (at worst a later run
+compiles a function again).
 
 A combination the planner refuses (Informed RRT* on the rigid body) is skipped.
 """
@@ -20,9 +28,12 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import multiprocessing
+import os
 import sys
 import time
 from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 
 import numpy as np
 
@@ -88,6 +99,88 @@ def jobs(planners: list[str], worlds: list[str], metrics: list[str] | None = Non
     return out
 
 
+#: The world kinds whose jobs share a space (and so a nearest-neighbour search): 2-D or 6-DoF.
+FAMILY = {"grid": "2d", "shapes": "2d", "rigid": "6dof", "mesh": "6dof"}
+
+
+def default_jobs() -> int:
+    """The most worker processes by default: the CPUs this process may run on (``os.sched_getaffinity``, else all)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on every platform
+        return max(1, os.cpu_count() or 1)
+
+
+def job_groups(todo: list[tuple[str, str, str]]) -> list[list[tuple[str, str, str]]]:
+    """``todo`` in groups of jobs that share compiled kernels (one world family and metric), in ``todo``'s order."""
+    groups: dict[tuple[str, str], list[tuple[str, str, str]]] = {}
+    for job in todo:
+        groups.setdefault((FAMILY[job[1]], job[2]), []).append(job)
+    return list(groups.values())
+
+
+#: Where a worker takes its jobs: a group, and whether from its end (a second worker in a group).
+Place = tuple[int, bool]
+
+
+class JobQueue:
+    """Hands a worker its next job: more of its own group, else the first job of the largest group not begun, else
+    the last job of the group with the most left (a second worker in a group goes on from the other end, where the
+    first worker's jobs are least alike its own)."""
+
+    def __init__(self, groups: list[list[tuple[str, str, str]]]) -> None:
+        self.left = [list(g) for g in groups]
+        self.begun = [False] * len(groups)
+
+    def next(self, place: Place | None) -> tuple[Place, tuple[str, str, str]] | None:
+        """The next job for a worker whose last job came from ``place`` (None: none yet), and where it came from;
+        None when every job is handed out."""
+        if place is not None and self.left[place[0]]:
+            group, from_end = place
+        elif fresh := [i for i, g in enumerate(self.left) if g and not self.begun[i]]:
+            group, from_end = max(fresh, key=lambda i: len(self.left[i])), False  # ties: the earliest
+        elif busy := [i for i, g in enumerate(self.left) if g]:
+            group, from_end = max(busy, key=lambda i: len(self.left[i])), True
+        else:
+            return None
+        self.begun[group] = True
+        return (group, from_end), self.left[group].pop(-1 if from_end else 0)
+
+
+def _quiet_worker() -> None:
+    cache.set_compile_notice(False)  # the parent's progress says it
+
+
+def run_jobs(todo: list[tuple[str, str, str]], workers: int, done: Callable[[tuple[str, str, str], float | None,
+             list[tuple[str, str, str]]], None]) -> None:
+    """Compile ``todo`` in ``workers`` processes (``JobQueue``'s order), calling ``done(job, seconds, running)`` as each
+    job ends; 1 worker: in this process, in ``todo``'s order. A job that fails stops the rest and raises its error."""
+    if workers <= 1:
+        for job in todo:
+            done(job, compile_one(*job), [])
+        return
+    queue = JobQueue(job_groups(todo))
+    context = multiprocessing.get_context("spawn")  # a fresh interpreter: nothing of this process's state is copied
+    lanes = [ProcessPoolExecutor(max_workers=1, mp_context=context, initializer=_quiet_worker)
+             for _ in range(min(workers, len(todo)))]
+    running: dict[Future, tuple[int, Place, tuple[str, str, str]]] = {}  # future -> (lane, place, job)
+    try:
+        for lane, executor in enumerate(lanes):
+            if (nxt := queue.next(None)) is not None:
+                running[executor.submit(compile_one, *nxt[1])] = (lane, *nxt)
+        while running:
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in finished:
+                lane, place, job = running.pop(future)
+                seconds = future.result()  # a job's error is raised here
+                if (nxt := queue.next(place)) is not None:
+                    running[lanes[lane].submit(compile_one, *nxt[1])] = (lane, *nxt)
+                done(job, seconds, [j for _, _, j in running.values()])
+    finally:
+        for executor in lanes:
+            executor.shutdown(wait=True, cancel_futures=True)
+
+
 def compile_one(planner: str, world: str, metric: str) -> float | None:
     """Run one short solve so its kernels compile into the cache; the seconds it took, or None if the
     planner does not run on that world (Informed RRT* needs a Euclidean real-vector space).
@@ -122,7 +215,13 @@ def main(argv: list[str] | None = None) -> int:
                     help="default: each world's own (grid, shapes: euclidean; rigid: cossin, se3)")
     ap.add_argument("--list", action="store_true", help="print what would be compiled and the cache folder, then exit")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar (one line per job instead)")
+    ap.add_argument("--jobs", type=int, default=None, metavar="N",
+                    help="worker processes (default: one per group of jobs that share kernels, at most one per CPU "
+                         "this process may use; 1: in this process)")
     args = ap.parse_args(argv)
+    if args.jobs is not None and args.jobs < 1:
+        print(f"--jobs: must be at least 1, got {args.jobs}", file=sys.stderr)
+        return 2
     for label, given, allowed in (("--planners", args.planners, names), ("--worlds", args.worlds or [], list(WORLDS))):
         bad = [v for v in given if v not in allowed]
         if bad:
@@ -152,20 +251,37 @@ def main(argv: list[str] | None = None) -> int:
             print(" ".join(job))
         return 0
     cache.set_compile_notice(False)  # the progress bar says it
+    # by default one process a group (so that nothing a group shares compiles twice), at most one a CPU
+    workers = min(default_jobs(), len(job_groups(todo))) if args.jobs is None else min(args.jobs, len(todo))
     t0 = time.perf_counter()
     if args.no_progress:
-        for i, job in enumerate(todo):
-            s = compile_one(*job)
-            took = "does not run there, skipped" if s is None else f"{s:.1f} s"
-            print(f"[{i + 1}/{len(todo)}] {' '.join(job)}: {took}", file=sys.stderr, flush=True)
+        count = [0]
+
+        def done(job, seconds, running):
+            count[0] += 1
+            took = "does not run there, skipped" if seconds is None else f"{seconds:.1f} s"
+            print(f"[{count[0]}/{len(todo)}] {' '.join(job)}: {took}", file=sys.stderr, flush=True)
+
+        run_jobs(todo, workers, done)
     else:
         from tqdm import tqdm
 
-        with tqdm(todo, desc="compiling kernels", unit="job", file=sys.stderr) as bar:
-            for job in bar:
-                bar.set_postfix_str(" ".join(job))
-                compile_one(*job)
-    print(f"compiled {len(todo)} planner/world/metric combinations in {time.perf_counter() - t0:.0f} s",
+        with tqdm(total=len(todo), desc="compiling kernels", unit="job", file=sys.stderr) as bar:
+            if workers <= 1:
+                for job in todo:
+                    bar.set_postfix_str(" ".join(job))
+                    compile_one(*job)
+                    bar.update(1)
+            else:
+                bar.set_postfix_str(f"{workers} processes")
+
+                def done(job, seconds, running):
+                    bar.set_postfix_str("; ".join(" ".join(j) for j in running))
+                    bar.update(1)
+
+                run_jobs(todo, workers, done)
+    processes = f" ({workers} processes)" if workers > 1 else ""
+    print(f"compiled {len(todo)} planner/world/metric combinations in {time.perf_counter() - t0:.0f} s{processes}",
           file=sys.stderr)
     return 0
 

@@ -165,7 +165,8 @@ def test_the_compile_command_checks_its_arguments_first():
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     for args, what in ((["--worlds", "cube"], "--worlds: unknown value 'cube'"),
                        (["--planners", "RRR"], "--planners: unknown value 'RRR'"),
-                       (["--worlds", "grid", "--metrics", "se3"], "--metrics: 'se3' does not fit the grid world")):
+                       (["--worlds", "grid", "--metrics", "se3"], "--metrics: 'se3' does not fit the grid world"),
+                       (["--jobs", "0"], "--jobs: must be at least 1, got 0")):
         out = subprocess.run([sys.executable, "-m", "planners.compile", *args], env=env, capture_output=True, text=True)
         assert out.returncode == 2 and what in out.stderr, out.stderr
 
@@ -179,6 +180,54 @@ def test_the_compile_command_lists_its_jobs_and_the_folder():
     assert "compiled kernels are cached in" in out.stderr
 
 
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["RRT", "PRM", "RRTConnect"]),
+                          st.sampled_from(["grid", "shapes", "rigid", "mesh"]),
+                          st.sampled_from(["euclidean", "cossin", "se3"])), min_size=1, max_size=14, unique=True),
+       st.integers(1, 5), st.randoms(use_true_random=False))
+def test_the_job_queue_hands_out_every_job_once_and_keeps_a_worker_on_its_group(todo, workers, order):
+    from planners.compile import JobQueue, job_groups
+
+    groups = job_groups(todo)
+    assert sorted(j for g in groups for j in g) == sorted(todo)
+    key = {j: i for i, g in enumerate(groups) for j in g}
+    queue = JobQueue(groups)
+    handed, places = [], {}
+    for lane in range(workers):  # every worker starts on a group of its own while there are any
+        nxt = queue.next(None)
+        if nxt is not None:
+            places[lane] = nxt[0]
+            handed.append(nxt[1])
+    assert len({p[0] for p in places.values()}) == min(workers, len(groups), len(places))
+    while places:  # workers finish in a random order
+        lane = order.choice(sorted(places))
+        place = places.pop(lane)
+        left_in_own = len([j for j in todo if key[j] == place[0] and j not in handed])
+        nxt = queue.next(place)
+        if nxt is None:
+            continue
+        if left_in_own:
+            assert nxt[0] == place and key[nxt[1]] == place[0]
+        places[lane] = nxt[0]
+        handed.append(nxt[1])
+    assert sorted(handed) == sorted(todo)
+
+
+def test_the_compile_command_in_two_processes_fills_the_cache_a_later_process_loads(tmp_path):
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path), SAMPLERGYM_COMPILE_NOTICE="0")
+    out = subprocess.run([sys.executable, "-m", "planners.compile", "--worlds", "grid", "shapes", "--planners", "RRT",
+                          "--jobs", "2", "--no-progress"], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "[2/2]" in out.stderr and "(2 processes)" in out.stderr
+    stamps = {p.name for p in (tmp_path / "compiled").iterdir()}
+    assert {"RRT-GridKernel-SpaceRnL2", "RRT-ShapesKernel-SpaceRnL2"} <= stamps
+    later = ("from planners.compile import compile_one; from planners.base.planner import compile_seconds; "
+             "compile_one('RRT', 'shapes', 'euclidean'); print(compile_seconds())")
+    out = subprocess.run([sys.executable, "-c", later], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert float(out.stdout) < 0.5  # loaded from the cache, not compiled again
 
 def test_mesh_worlds_compile_where_their_extra_is_installed_and_are_refused_by_name_where_not(monkeypatch, capsys):
     from planners import compile as pc
