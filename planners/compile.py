@@ -30,10 +30,10 @@ import argparse
 import importlib.util
 import multiprocessing
 import os
+import queue
 import sys
 import time
 from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 
 import numpy as np
 
@@ -154,31 +154,42 @@ def _quiet_worker() -> None:
 def run_jobs(todo: list[tuple[str, str, str]], workers: int, done: Callable[[tuple[str, str, str], float | None,
              list[tuple[str, str, str]]], None]) -> None:
     """Compile ``todo`` in ``workers`` processes (``JobQueue``'s order), calling ``done(job, seconds, running)`` as each
-    job ends; 1 worker: in this process, in ``todo``'s order. A job that fails stops the rest and raises its error."""
+    job ends; 1 worker: in this process, in ``todo``'s order. A job that fails, or an interrupt, stops the workers
+    (what they compiled stays in the cache) and raises."""
     if workers <= 1:
         for job in todo:
             done(job, compile_one(*job), [])
         return
-    queue = JobQueue(job_groups(todo))
+    jobs = JobQueue(job_groups(todo))
     context = multiprocessing.get_context("spawn")  # a fresh interpreter: nothing of this process's state is copied
-    lanes = [ProcessPoolExecutor(max_workers=1, mp_context=context, initializer=_quiet_worker)
-             for _ in range(min(workers, len(todo)))]
-    running: dict[Future, tuple[int, Place, tuple[str, str, str]]] = {}  # future -> (lane, place, job)
+    # one pool of one process a worker, so that a worker keeps what it compiled in memory for its group's next job
+    pools = [context.Pool(1, initializer=_quiet_worker) for _ in range(min(workers, len(todo)))]
+    ended: queue.SimpleQueue = queue.SimpleQueue()  # (lane, place, job, seconds, error), from the pools' threads
+    running: dict[int, tuple[str, str, str]] = {}
+
+    def submit(lane: int, place: Place, job: tuple[str, str, str]) -> None:
+        running[lane] = job
+        pools[lane].apply_async(compile_one, job,
+                                callback=lambda s, a=(lane, place, job): ended.put((*a, s, None)),
+                                error_callback=lambda e, a=(lane, place, job): ended.put((*a, None, e)))
+
     try:
-        for lane, executor in enumerate(lanes):
-            if (nxt := queue.next(None)) is not None:
-                running[executor.submit(compile_one, *nxt[1])] = (lane, *nxt)
+        for lane in range(len(pools)):
+            if (nxt := jobs.next(None)) is not None:
+                submit(lane, *nxt)
         while running:
-            finished, _ = wait(running, return_when=FIRST_COMPLETED)
-            for future in finished:
-                lane, place, job = running.pop(future)
-                seconds = future.result()  # a job's error is raised here
-                if (nxt := queue.next(place)) is not None:
-                    running[lanes[lane].submit(compile_one, *nxt[1])] = (lane, *nxt)
-                done(job, seconds, [j for _, _, j in running.values()])
+            lane, place, job, seconds, error = ended.get()
+            del running[lane]
+            if error is not None:
+                raise RuntimeError(f"compiling {' '.join(job)} failed: {error}") from error
+            if (nxt := jobs.next(place)) is not None:
+                submit(lane, *nxt)
+            done(job, seconds, list(running.values()))
     finally:
-        for executor in lanes:
-            executor.shutdown(wait=True, cancel_futures=True)
+        for pool in pools:
+            pool.terminate()
+        for pool in pools:
+            pool.join()
 
 
 def compile_one(planner: str, world: str, metric: str) -> float | None:
@@ -254,7 +265,20 @@ def main(argv: list[str] | None = None) -> int:
     # by default one process a group (so that nothing a group shares compiles twice), at most one a CPU
     workers = min(default_jobs(), len(job_groups(todo))) if args.jobs is None else min(args.jobs, len(todo))
     t0 = time.perf_counter()
-    if args.no_progress:
+    try:
+        _compile_all(todo, workers, args.no_progress)
+    except KeyboardInterrupt:
+        print("interrupted: what compiled so far stays in the cache", file=sys.stderr)
+        return 130
+    processes = f" ({workers} processes)" if workers > 1 else ""
+    print(f"compiled {len(todo)} planner/world/metric combinations in {time.perf_counter() - t0:.0f} s{processes}",
+          file=sys.stderr)
+    return 0
+
+
+def _compile_all(todo: list[tuple[str, str, str]], workers: int, no_progress: bool) -> None:
+    """``run_jobs`` with a progress bar, or one line per job (``no_progress``)."""
+    if no_progress:
         count = [0]
 
         def done(job, seconds, running):
@@ -280,10 +304,6 @@ def main(argv: list[str] | None = None) -> int:
                     bar.update(1)
 
                 run_jobs(todo, workers, done)
-    processes = f" ({workers} processes)" if workers > 1 else ""
-    print(f"compiled {len(todo)} planner/world/metric combinations in {time.perf_counter() - t0:.0f} s{processes}",
-          file=sys.stderr)
-    return 0
 
 
 if __name__ == "__main__":
