@@ -263,6 +263,9 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
     stack[0, 0] = 0
     stack[0, 1] = 0
     top = 1
+    # a node's turned centre and its triangles' turned corners are rounded apart by a few units in the last place of
+    # the coordinates: a pair is set aside only where its bound clears the margin by far more than that
+    far = m + 1e-12 * (abs(t[0]) + abs(t[1]) + abs(t[2]) + spheres[1, 0])
     while top > 0:
         top -= 1
         sb = 4 * stack[top, 0]
@@ -270,7 +273,7 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
         cx = R[0, 0] * spheres[sb, 0] + R[0, 1] * spheres[sb, 1] + R[0, 2] * spheres[sb, 2] + t[0]
         cy = R[1, 0] * spheres[sb, 0] + R[1, 1] * spheres[sb, 1] + R[1, 2] * spheres[sb, 2] + t[1]
         cz = R[2, 0] * spheres[sb, 0] + R[2, 1] * spheres[sb, 1] + R[2, 2] * spheres[sb, 2] + t[2]
-        reach = spheres[sb + 1, 0] + m
+        reach = spheres[sb + 1, 0] + far
         if _box_gap2(nodes, se, cx, cy, cz) > reach * reach:
             continue
         # the node's box turned with the body lies in the world box of half sides w about the centre
@@ -281,7 +284,7 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
         gx = max(nodes[se, 0] - (cx + wx), (cx - wx) - nodes[se + 1, 0], 0.0)
         gy = max(nodes[se, 1] - (cy + wy), (cy - wy) - nodes[se + 1, 1], 0.0)
         gz = max(nodes[se, 2] - (cz + wz), (cz - wz) - nodes[se + 1, 2], 0.0)
-        if gx * gx + gy * gy + gz * gz > m * m:
+        if gx * gx + gy * gy + gz * gz > far * far:
             continue
         body_leaf = spheres[sb + 2, 0] < 0.0
         env_leaf = nodes[se + 2, 0] < 0.0
