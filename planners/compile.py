@@ -31,9 +31,10 @@ import importlib.util
 import multiprocessing
 import os
 import queue
+import signal
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
@@ -149,16 +150,18 @@ class JobQueue:
 
 def _quiet_worker() -> None:
     cache.set_compile_notice(False)  # the parent's progress says it
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the parent, which stops the workers
 
 
-def run_jobs(todo: list[tuple[str, str, str]], workers: int, done: Callable[[tuple[str, str, str], float | None,
-             list[tuple[str, str, str]]], None]) -> None:
-    """Compile ``todo`` in ``workers`` processes (``JobQueue``'s order), calling ``done(job, seconds, running)`` as each
-    job ends; 1 worker: in this process, in ``todo``'s order. A job that fails, or an interrupt, stops the workers
-    (what they compiled stays in the cache) and raises."""
+def run_jobs(todo: list[tuple[str, str, str]], workers: int) -> Iterator[tuple[tuple[str, str, str], float | None,
+                                                                            list[tuple[str, str, str]]]]:
+    """Compile ``todo`` in ``workers`` processes (``JobQueue``'s order), yielding ``(job, seconds, running)`` as each
+    job ends, ``running`` the jobs still under way (1 worker: in this process, in ``todo``'s order, ``running`` the
+    next job). A job that fails, or an interrupt, stops the workers (what they compiled stays in the cache) and
+    raises."""
     if workers <= 1:
-        for job in todo:
-            done(job, compile_one(*job), [])
+        for i, job in enumerate(todo):
+            yield job, compile_one(*job), todo[i + 1:i + 2]
         return
     jobs = JobQueue(job_groups(todo))
     context = multiprocessing.get_context("spawn")  # a fresh interpreter: nothing of this process's state is copied
@@ -184,7 +187,7 @@ def run_jobs(todo: list[tuple[str, str, str]], workers: int, done: Callable[[tup
                 raise RuntimeError(f"compiling {' '.join(job)} failed: {error}") from error
             if (nxt := jobs.next(place)) is not None:
                 submit(lane, *nxt)
-            done(job, seconds, list(running.values()))
+            yield job, seconds, list(running.values())
     finally:
         for pool in pools:
             pool.terminate()
@@ -279,31 +282,17 @@ def main(argv: list[str] | None = None) -> int:
 def _compile_all(todo: list[tuple[str, str, str]], workers: int, no_progress: bool) -> None:
     """``run_jobs`` with a progress bar, or one line per job (``no_progress``)."""
     if no_progress:
-        count = [0]
-
-        def done(job, seconds, running):
-            count[0] += 1
+        for i, (job, seconds, _) in enumerate(run_jobs(todo, workers)):
             took = "does not run there, skipped" if seconds is None else f"{seconds:.1f} s"
-            print(f"[{count[0]}/{len(todo)}] {' '.join(job)}: {took}", file=sys.stderr, flush=True)
+            print(f"[{i + 1}/{len(todo)}] {' '.join(job)}: {took}", file=sys.stderr, flush=True)
+        return
+    from tqdm import tqdm
 
-        run_jobs(todo, workers, done)
-    else:
-        from tqdm import tqdm
-
-        with tqdm(total=len(todo), desc="compiling kernels", unit="job", file=sys.stderr) as bar:
-            if workers <= 1:
-                for job in todo:
-                    bar.set_postfix_str(" ".join(job))
-                    compile_one(*job)
-                    bar.update(1)
-            else:
-                bar.set_postfix_str(f"{workers} processes")
-
-                def done(job, seconds, running):
-                    bar.set_postfix_str("; ".join(" ".join(j) for j in running))
-                    bar.update(1)
-
-                run_jobs(todo, workers, done)
+    with tqdm(total=len(todo), desc="compiling kernels", unit="job", file=sys.stderr) as bar:
+        bar.set_postfix_str(f"{workers} processes" if workers > 1 else " ".join(todo[0]) if todo else "")
+        for _, _, running in run_jobs(todo, workers):
+            bar.set_postfix_str("; ".join(" ".join(j) for j in running))
+            bar.update(1)
 
 
 if __name__ == "__main__":
