@@ -48,8 +48,8 @@ def main(argv=None) -> int:
     ap.add_argument("--open-keep", type=float, default=d.open_keep,
                     help="share of the points where every class fits that are kept")
     ap.add_argument("--label", choices=LABELS, default=d.label,
-                    help="classes that fit along the path's window (default) or at the point alone, or the class a "
-                         "solution by long runs takes nearest the point")
+                    help="the class a solution by long runs takes nearest the point (default), or the classes that "
+                         "fit along the path's window, or at the point alone")
     ap.add_argument("--open-test", choices=OPEN_TESTS, default=d.open_test,
                     help="how --label solution tells open space: the one-hot label (every point kept) or the clearance "
                          "of jittered poses of each class (points where all six fit kept at --open-keep)")
