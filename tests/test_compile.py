@@ -180,8 +180,6 @@ def test_the_compile_command_lists_its_jobs_and_the_folder():
     assert "compiled kernels are cached in" in out.stderr
 
 
-
-
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(st.sampled_from(["RRT", "PRM", "RRTConnect"]),
                           st.sampled_from(["grid", "shapes", "rigid", "mesh"]),
@@ -228,6 +226,7 @@ def test_the_compile_command_in_two_processes_fills_the_cache_a_later_process_lo
     out = subprocess.run([sys.executable, "-c", later], env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-2000:]
     assert float(out.stdout) < 0.5  # loaded from the cache, not compiled again
+
 
 def test_mesh_worlds_compile_where_their_extra_is_installed_and_are_refused_by_name_where_not(monkeypatch, capsys):
     from planners import compile as pc

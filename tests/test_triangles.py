@@ -86,7 +86,6 @@ def test_the_tree_holds_every_triangle_once_inside_its_boxes():
     assert np.all(spheres[1::4, 0] > 0) and np.all(spheres[3::4] >= 0)
 
 
-
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2**31 - 1), st.floats(-3.2, 3.2), st.floats(-3.2, 3.2), st.floats(-3.2, 3.2),
        st.floats(-1e3, 1e3))
@@ -109,12 +108,13 @@ def test_a_body_nodes_turned_box_holds_its_turned_triangles(seed, a, b, c, shift
                 ranges.append((int(spheres[4 * n + 2, 1]), int(spheres[4 * n + 2, 2])))
             else:
                 stack += [int(spheres[4 * n + 2, 0]), int(spheres[4 * n + 2, 1])]
-        corners = np.concatenate([placed[f:f + n].reshape(-1, 3) for f, n in ranges])
+        corners = np.concatenate([placed[first:first + count].reshape(-1, 3) for first, count in ranges])
         # as sets_apart computes them: the turned centre and the world box's half sides
         cw = np.array([R[d, 0] * centre[0] + R[d, 1] * centre[1] + R[d, 2] * centre[2] + t[d] for d in range(3)])
         w = np.array([abs(R[d, 0]) * half[0] + abs(R[d, 1]) * half[1] + abs(R[d, 2]) * half[2] for d in range(3)])
         assert np.all(corners >= cw - w) and np.all(corners <= cw + w), (k, link)
         assert np.all(np.linalg.norm(corners - cw, axis=1) <= spheres[4 * k + 1, 0])
+
 
 def _boxy(rng, n, scale):
     """``n`` random small boxes (12 triangles each) in a cube of side ``scale``."""
