@@ -15,13 +15,15 @@ time (the process's own) says what the wall time would be on an idle machine whe
     python scripts/benchmark_first_call.py --rows rrt-goal --breakdown 10   # where the compile time goes
     python scripts/benchmark_first_call.py --omplapp DIR --rows mesh-easy mesh-cubicles   # OMPL.app's problems
 
-The mesh rows (``mesh-easy``, ``mesh-cubicles``: RRT-Connect on OMPL.app's Easy and cubicles, meshes read and
-checked exactly, under the ``.cfg``'s time limit) need the ``mesh`` extra and OMPL.app's files (``--omplapp DIR``
-or ``SAMPLERGYM_OMPLAPP_DIR``; not shipped); "start to solved" then includes reading the meshes.
+The mesh rows (``mesh-easy``, ``mesh-cubicles``: RRT-Connect on OMPL.app's Easy and cubicles; ``mesh-cubicles-prm``:
+PRM on cubicles; meshes read and checked exactly, under the ``.cfg``'s time limit) need the ``mesh`` extra and
+OMPL.app's files (``--omplapp DIR`` or ``SAMPLERGYM_OMPLAPP_DIR``; not shipped); "start to solved" then includes
+reading the meshes.
 
 ``--save`` writes, per row, the CPU seconds compiling added (empty-cache run minus filled-cache run) to
-``planners/kernels/compile_seconds.json`` with the machine's CPU count and the date; the one-line
-notice before a first compilation quotes them (``planners.kernels.cache``).
+``planners/kernels/compile_seconds.json`` with the machine's CPU count and the date, keyed by planner and world kind
+(``RRT/2d``, ``PRM/6dof`` for the box world, ``RRTConnect/mesh``); the one-line notice before a first compilation
+quotes them (``planners.kernels.cache``).
 
 Prints a Markdown table (the minimum over ``--repeat`` runs of each figure: other load on the machine
 only ever adds time). With ``--against DIR`` the rows also run on that checkout, the two codes taking turns
@@ -57,9 +59,10 @@ ROWS = {
     "prm-6dof": ("6-DoF PRM", "PRM", "rigid", None),
     "mesh-easy": ("RRT-Connect, OMPL.app's Easy (meshes)", "RRTConnect", "omplapp:Easy", None),
     "mesh-cubicles": ("RRT-Connect, OMPL.app's cubicles (meshes)", "RRTConnect", "omplapp:cubicles", None),
+    "mesh-cubicles-prm": ("PRM, OMPL.app's cubicles (meshes)", "PRM", "omplapp:cubicles", None),
 }
 #: Rows that need OMPL.app's files: run only when named, with ``--omplapp DIR`` or ``SAMPLERGYM_OMPLAPP_DIR``.
-MESH_ROWS = ("mesh-easy", "mesh-cubicles")
+MESH_ROWS = ("mesh-easy", "mesh-cubicles", "mesh-cubicles-prm")
 
 # Only public names that every version of the library has, so --code can point at older checkouts.
 CHILD = r"""
@@ -142,9 +145,11 @@ def main(argv: list[str] | None = None) -> int:
                     help="another checkout, timed in turns with --code run by run (an A/B comparison)")
     ap.add_argument("--repeat", type=int, default=1, help="runs per row; the table shows the minimum of each figure")
     ap.add_argument("--breakdown", type=int, default=0, metavar="N",
-                    help="after each row, the N functions whose compilation took the most CPU time (nested ones excluded)")
+                    help="after each row, the N functions whose compilation took the most CPU time "
+                         "(nested ones excluded)")
     ap.add_argument("--save", action="store_true",
-                    help="store each row's compile CPU seconds in the timed checkout's planners/kernels/compile_seconds.json")
+                    help="store each row's compile CPU seconds in the timed checkout's "
+                         "planners/kernels/compile_seconds.json")
     args = ap.parse_args(argv)
     bad = [r for r in args.rows if r not in ROWS]
     if bad:
@@ -206,9 +211,9 @@ def main(argv: list[str] | None = None) -> int:
         c = {k: min(r[k] for r in cold) for k in ("total", "cpu", "compile")}
         w = {k: min(r[k] for r in warm) for k in ("total", "first_solve", "cpu")}
         _, name, world, _ = ROWS[row]
-        if row not in MESH_ROWS:  # the notice quotes the planar and box-world figures
-            key = f"{name}/{'6dof' if world == 'rigid' else '2d'}"
-            saved[key] = max(saved.get(key, 0.0), round(c["cpu"] - w["cpu"], 1))
+        # the notice's keys (planners.kernels.cache.figure_kind): the planar worlds, the box world, the mesh worlds
+        key = f"{name}/{'mesh' if row in MESH_ROWS else '6dof' if world == 'rigid' else '2d'}"
+        saved[key] = max(saved.get(key, 0.0), round(c["cpu"] - w["cpu"], 1))
         its = cold[0]["iterations"] if cold[0]["solved"] else f"unsolved after {cold[0]['iterations']}"
         print(f"| {ROWS[row][0]} | {c['total']:.1f} s | {c['cpu']:.1f} s | {c['compile']:.1f} s | {w['total']:.1f} s "
               f"| {w['first_solve']:.2f} s | {its} |", flush=True)
@@ -228,10 +233,15 @@ def main(argv: list[str] | None = None) -> int:
     print(f"load after: {os.getloadavg()[0]:.1f}")
     if args.save:
         old = json.loads(save_to.read_text()) if save_to.is_file() else {}
+        # a date per figure: a --save of some rows leaves the others' figures and dates as they were
+        dates = old.setdefault("dates", {})
+        for key in old.get("seconds", {}):
+            dates.setdefault(key, str(old.get("measured", "")).split(":")[0])
         old.setdefault("seconds", {}).update(saved)
+        dates.update({key: datetime.date.today().isoformat() for key in saved})
         old["cpus"] = os.cpu_count()
-        old["measured"] = (f"{datetime.date.today().isoformat()}: CPU seconds a first solve spends compiling "
-                           "(empty-cache run minus filled-cache run, scripts/benchmark_first_call.py --save)")
+        old["measured"] = ("CPU seconds a first solve spends compiling (empty-cache run minus filled-cache run, "
+                           "scripts/benchmark_first_call.py --save), each measured on the date \"dates\" gives")
         save_to.write_text(json.dumps(old, indent=1, sort_keys=True) + "\n")
         print(f"saved {len(saved)} figures to {save_to}")
     return 0

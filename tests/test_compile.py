@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from planners import OccupancyGrid
+from planners import OccupancyGrid, RigidBodyWorld
 from planners.kernels import cache, geometry
 from planners.kernels.space import (
     METRIC_COSSIN,
@@ -117,15 +117,26 @@ def test_the_notice_shows_once_per_install(fresh_notice, monkeypatch, capsys):
 
 def test_the_notice_quotes_the_measured_figure_or_a_range(tmp_path):
     rn, rigid = make_space(SPACE_RN, METRIC_L2, 1.0), make_space(SPACE_RIGID, METRIC_COSSIN, 1.0)
+    grid = OccupancyGrid(np.zeros((4, 4), dtype=bool)).kernel
+    boxes = RigidBodyWorld().kernel
+    mesh = type("MeshKernel", (), {})()  # the kind is read off the kernel's type name
     figures = tmp_path / "compile_seconds.json"
-    assert cache.expected_seconds("RRT", rn, figures) == cache.UNMEASURED  # no file
+    assert cache.expected_seconds("RRT", grid, rn, figures) == cache.UNMEASURED  # no file
     figures.write_text(json.dumps({"seconds": {"RRT/2d": 4.26, "PRM/6dof": 0.2}, "cpus": 2}))
-    assert cache.expected_seconds("RRT", rn, figures) == "about 4 s of CPU time (measured on a 2-CPU machine)"
-    assert cache.expected_seconds("PRM", rigid, figures).startswith("about 1 s ")
-    # no figure for that row: the range the measured rows span
-    assert cache.expected_seconds("RRT", rigid, figures) == "about 1-5 s of CPU time (measured on a 2-CPU machine)"
+    assert cache.expected_seconds("RRT", grid, rn, figures) == "about 4 s of CPU time (measured on a 2-CPU machine)"
+    assert cache.expected_seconds("PRM", boxes, rigid, figures).startswith("about 1 s ")
+    # no figure for that row: the range its kind's rows span, else every row's
+    assert cache.expected_seconds("RRT", boxes, rigid, figures) == "about 1 s of CPU time (measured on a 2-CPU machine)"
+    assert cache.expected_seconds("RRT", mesh, rigid, figures).startswith("about 1-5 s of CPU time ")
+    figures.write_text(json.dumps({"seconds": {"RRT/2d": 4.26, "PRM/6dof": 0.2, "RRTConnect/mesh": 17.4,
+                                               "PRM/mesh": 24.6}, "cpus": 2}))
+    # a mesh world is quoted its own figures, not the box world's
+    assert cache.expected_seconds("RRTConnect", mesh, rigid, figures).startswith("about 17 s ")
+    assert cache.expected_seconds("PRM", mesh, rigid, figures).startswith("about 25 s ")
+    assert cache.expected_seconds("RRT", mesh, rigid, figures).startswith("about 17-25 s ")
+    assert cache.expected_seconds("PRM", boxes, rigid, figures).startswith("about 1 s ")
     figures.write_text("{not json")
-    assert cache.expected_seconds("RRT", rn, figures) == cache.UNMEASURED
+    assert cache.expected_seconds("RRT", grid, rn, figures) == cache.UNMEASURED
 
 
 @pytest.mark.parametrize("how", ["env", "function"])

@@ -36,8 +36,9 @@ _state = {"dir": None, "notice": None, "user_dir": False}
 _seen: set[tuple[str, str, str]] = set()
 _known: set[tuple[Path, tuple[str, str, str]]] = set()  # (cache folder, key) stamps seen in this process
 
-#: Compile seconds per planner and dimension ("RRT/2d", "PRM/6dof") as ``scripts/benchmark_first_call.py --save``
-#: measured them, for the notice's wording; a planner without a figure is quoted as a range.
+#: Compile seconds per planner and world kind ("RRT/2d": the planar worlds, "PRM/6dof": the rigid body among boxes,
+#: "RRTConnect/mesh": the mesh worlds) as ``scripts/benchmark_first_call.py --save`` measured them, for the notice's
+#: wording; a planner without a figure of its own is quoted as the range its kind's figures span.
 FIGURES = Path(__file__).resolve().parent / "compile_seconds.json"
 #: What the notice says when the figures file cannot be read (a planner without a row of its own is quoted
 #: as the range the measured rows span).
@@ -161,9 +162,11 @@ def is_compiled(label: str, world, space) -> bool:
 
 
 def mark_compiled(label: str, world, space) -> None:
-    """Record that this install compiles ``label``'s kernels for this world kind and space (``is_compiled`` is true
-    from now on); the compilation itself follows at their first use. A folder that cannot be written keeps the mark
-    for this process only."""
+    """Record that this install compiles ``label``'s kernels for this world kind and space.
+
+    ``is_compiled`` is true from now on; the compilation itself follows at their first use. A folder that cannot be
+    written keeps the mark for this process only.
+    """
     key = _key(label, world, space)
     known = (cache_dir(), key)
     if known in _known:
@@ -181,20 +184,36 @@ def _key(label: str, world, space) -> tuple[str, str, str]:
     return (label, type(world).__name__, type(space).__name__)
 
 
-def expected_seconds(label: str, space, figures: Path = FIGURES) -> str:
-    """How long compiling ``label``'s kernels takes, in words: the figure measured for it, else a range."""
-    dims = "2d" if type(space).__name__.startswith("SpaceRn") else "6dof"
+def figure_kind(world, space) -> str:
+    """The world kind ``compile_seconds.json`` keys its figures by: "mesh", "6dof" or "2d".
+
+    "6dof" is the rigid body among boxes, "2d" the occupancy grids and the circle and rectangle worlds; ``world`` is a
+    world's kernel, as ``announce`` takes it.
+    """
+    if type(world).__name__ == "MeshKernel":
+        return "mesh"
+    return "2d" if type(space).__name__.startswith("SpaceRn") else "6dof"
+
+
+def expected_seconds(label: str, world, space, figures: Path = FIGURES) -> str:
+    """How long compiling ``label``'s kernels for this world kind takes, in words.
+
+    The figure measured for it, else the range its kind's figures span (any kind's, where the kind has none).
+    """
+    kind = figure_kind(world, space)
     try:
         data = json.loads(figures.read_text())
         measured, cpus = {k: float(v) for k, v in data["seconds"].items()}, int(data["cpus"])
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return UNMEASURED
-    seconds = measured.get(f"{label}/{dims}")
-    if seconds is None:  # no row for this one: the range the measured rows span
-        if not measured:
+    seconds = measured.get(f"{label}/{kind}")
+    if seconds is None:  # no row for this one: the range its kind's rows span, else all rows'
+        alike = [v for k, v in measured.items() if k.endswith(f"/{kind}")] or list(measured.values())
+        if not alike:
             return UNMEASURED
-        low, high = min(measured.values()), max(measured.values())
-        return f"about {max(1, math.floor(low))}-{max(1, math.ceil(high))} s of CPU time (measured on a {cpus}-CPU machine)"
+        low, high = max(1, math.floor(min(alike))), max(1, math.ceil(max(alike)))
+        span = f"{low}" if low == high else f"{low}-{high}"
+        return f"about {span} s of CPU time (measured on a {cpus}-CPU machine)"
     return f"about {max(1, round(seconds))} s of CPU time (measured on a {cpus}-CPU machine)"
 
 
@@ -218,7 +237,7 @@ def announce(label: str, world, space) -> None:
         return
     if _notice_on():
         print(f"samplergym: compiling the {label} kernels for {_KINDS.get(type(world).__name__, 'this world')} once "
-              f"for this install, {expected_seconds(label, space)}; other planners, worlds and samplers compile "
+              f"for this install, {expected_seconds(label, world, space)}; other planners, worlds and samplers compile "
               f"at their own first use (python -m planners.compile does every planner ahead; docs/compiling.md "
               f"says where the time goes; {NOTICE_ENV}=0 silences this)", file=sys.stderr, flush=True)
     mark_compiled(label, world, space)  # where the folder cannot be written: a notice too many next time
