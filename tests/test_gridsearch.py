@@ -13,7 +13,14 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from planners import OccupancyGrid, load_movingai_scenarios
-from planners.maps.gridsearch import connected, distance_field, free_components, shortest_path, shortest_path_length
+from planners.maps.gridsearch import (
+    block_steps,
+    connected,
+    distance_field,
+    free_components,
+    shortest_path,
+    shortest_path_length,
+)
 
 STEPS = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if (dr, dc) != (0, 0)]
 
@@ -235,3 +242,12 @@ def test_move_cost_field_on_move_lengths_is_the_octile_distance_and_refuses_bad_
         move_cost_field(lengths, goal[:4], walls, 1e6)
     with pytest.raises(ValueError, match="float32 or float64"):
         move_cost_field(lengths.astype(np.int64), goal, walls, 1e6)
+
+
+@given(seed=st.integers(0, 10_000), rows=st.integers(1, 12), cols=st.integers(1, 12), block=st.sampled_from([1, 2, 3]),
+       density=st.floats(0.0, 0.7))
+def test_block_steps_look_up_what_the_cell_pairs_give(seed, rows, cols, block, density):
+    """The window table's moves are the moves each block's cell pairs allow, on any map (blocks past the table's size
+    test their pairs either way)."""
+    free = np.random.default_rng(seed).random((rows * block, cols * block)) >= density
+    assert np.array_equal(block_steps(free, block), block_steps(free, block, lookup=False))

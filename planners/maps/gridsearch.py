@@ -304,20 +304,18 @@ def _settle_moves(costs, goal, walls, unreached, open_moves, most, work=None):
 
 
 @nb.njit(cache=True)
-def _block_steps(p, block, dr, dc):
-    """(8, h, w) bool: whether some free cell of each block steps into its neighbour block by each move.
+def _block_pairs(block, Wp, dr, dc):
+    """Every (cell of a block, step) that leaves the block, grouped by the block move it makes.
 
-    ``p``: the map's free cells (nonzero) padded with one blocked cell on every side. Each block move is tried
-    by the (cell of the block, step) pairs that make it, the first that the map allows deciding it.
+    Returns ``(start, src, step, side_r, side_c)``: move ``a``'s pairs are ``start[a]:start[a + 1]``; ``src`` is the
+    cell's offset from the block's window corner (one cell up and left of the block) in a map ``Wp`` cells wide,
+    ``step`` the offset to the cell it steps to, and, for a diagonal step, ``side_r`` and ``side_c`` the offsets to
+    the two cells beside it (0 otherwise): the step is allowed where all four are free.
     """
-    H, W = p.shape[0] - 2, p.shape[1] - 2
-    Wp = W + 2
-    h, w = H // block, W // block
     A = len(dr)
     move = np.full((3, 3), -1, dtype=np.int64)  # (block row move + 1, block column move + 1) -> move index
     for a in range(A):
         move[dr[a] + 1, dc[a] + 1] = a
-    # every (place in a block, step) that leaves the block, grouped by the block move it makes
     count = np.zeros(A + 1, dtype=np.int64)
     for i in range(block):
         for j in range(block):
@@ -327,9 +325,9 @@ def _block_steps(p, block, dr, dc):
                     count[move[mr + 1, mc + 1] + 1] += 1
     start = np.cumsum(count)
     fill = start.copy()
-    src = np.empty(start[A], dtype=np.int64)  # the cell, from its block's corner in the padded map
-    step = np.empty(start[A], dtype=np.int64)  # to the cell it steps to
-    side_r = np.zeros(start[A], dtype=np.int64)  # and, for a diagonal step, to the two cells beside it
+    src = np.empty(start[A], dtype=np.int64)
+    step = np.empty(start[A], dtype=np.int64)
+    side_r = np.zeros(start[A], dtype=np.int64)
     side_c = np.zeros(start[A], dtype=np.int64)
     for i in range(block):
         for j in range(block):
@@ -343,8 +341,71 @@ def _block_steps(p, block, dr, dc):
                     step[t] = dr[k] * Wp + dc[k]
                     if k >= 4:  # no corner cutting
                         side_r[t], side_c[t] = dr[k] * Wp, dc[k]
+    return start, src, step, side_r, side_c
+
+
+@nb.njit(cache=True)
+def _window_table(block, dr, dc):
+    """The block moves each window of cells allows: ``table[bits]``, bit ``a`` set where move ``a`` is open.
+
+    A window is a block and the cells around it, ``side = block + 2`` cells a side, its cell at (row, column) the
+    bit ``column * side + row`` of ``bits`` (set where the cell is free).
+    """
+    side = block + 2
+    start, src, step, side_r, side_c = _block_pairs(block, side, dr, dc)
+    A = len(dr)
+    pattern = np.zeros(start[A], dtype=np.int64)
+    for t in range(start[A]):
+        for off in (src[t], src[t] + step[t], src[t] + side_r[t], src[t] + side_c[t]):
+            row = off // side
+            pattern[t] |= np.int64(1) << np.int64((off - row * side) * side + row)
+    table = np.zeros(1 << (side * side), dtype=np.uint8)
+    for bits in range(1 << (side * side)):
+        for a in range(A):
+            for t in range(start[a], start[a + 1]):
+                if (bits & pattern[t]) == pattern[t]:
+                    table[bits] |= np.uint8(1 << a)
+                    break
+    return table
+
+
+@nb.njit(cache=True)
+def _block_steps(p, block, dr, dc, table):
+    """(8, h, w) bool: whether some free cell of each block steps into its neighbour block by each move.
+
+    ``p``: the map's free cells (nonzero) padded with one blocked cell on every side. Each block move is tried
+    by the (cell of the block, step) pairs that make it (``_block_pairs``), the first that the map allows deciding
+    it. ``table``: ``_window_table(block, ...)`` where it is small enough to keep (blocks of up to
+    ``WINDOW_TABLE_BLOCK`` cells), else empty: each block's window is then read once, along a row of blocks by
+    the columns the last window did not hold, and looked up (the same answers).
+    """
+    H, W = p.shape[0] - 2, p.shape[1] - 2
+    Wp = W + 2
+    h, w = H // block, W // block
+    A = len(dr)
     flat = p.ravel()
     out = np.zeros((A, h, w), dtype=np.uint8)
+    if table.shape[0]:
+        side = block + 2
+        row = np.empty(w, dtype=np.uint8)  # a row of blocks' moves, written out plane by plane
+        for r in range(h):
+            top = r * block * Wp
+            bits = 0
+            for c in range(w):
+                first = 0  # the window's first column not held from the last window
+                if c > 0:
+                    bits >>= block * side
+                    first = side - block
+                for j in range(first, side):
+                    at = top + c * block + j
+                    for i in range(side):
+                        bits |= np.int64(flat[at + i * Wp] != 0) << (j * side + i)
+                row[c] = table[bits]
+            for a in range(A):
+                for c in range(w):
+                    out[a, r, c] = (row[c] >> a) & 1
+        return out.view(np.bool_)
+    start, src, step, side_r, side_c = _block_pairs(block, Wp, dr, dc)
     for r in range(h):
         for c in range(w):
             corner = r * block * Wp + c * block
@@ -356,6 +417,21 @@ def _block_steps(p, block, dr, dc):
                         out[a, r, c] = 1
                         break
     return out.view(np.bool_)
+
+
+#: Blocks of up to this many cells a side look their moves up in a table of every window (``_window_table``:
+#: 2 ** 16 bytes for blocks of 2 cells, made once per process).
+WINDOW_TABLE_BLOCK = 2
+_WINDOW_TABLES: dict[int, np.ndarray] = {}
+
+
+def _steps(p: np.ndarray, block: int, lookup: bool) -> np.ndarray:
+    """``_block_steps`` of padded map ``p``, with the window table of ``block`` where one is kept and ``lookup``."""
+    table = _WINDOW_TABLES.get(block)
+    if table is None:
+        table = _window_table(block, _DR, _DC) if block <= WINDOW_TABLE_BLOCK else np.zeros(0, dtype=np.uint8)
+        _WINDOW_TABLES[block] = table
+    return _block_steps(p, block, _DR, _DC, table if lookup else table[:0])
 
 
 @nb.njit(cache=True)
@@ -465,7 +541,7 @@ def move_cost_field(costs: np.ndarray, goal: np.ndarray, walls: np.ndarray, unre
                          work)
 
 
-def block_steps(free: np.ndarray, block: int) -> np.ndarray:
+def block_steps(free: np.ndarray, block: int, *, lookup: bool = True) -> np.ndarray:
     """Whether any free cell of each ``block`` x ``block`` block can step into its neighbour block, per move.
 
     A step goes from a free cell to one of its 8 neighbours that is free, a diagonal one only if both cells
@@ -474,6 +550,9 @@ def block_steps(free: np.ndarray, block: int) -> np.ndarray:
     Args:
         free: (H, W) bool, True where a cell is free; H and W whole multiples of ``block``.
         block: Cells per block side.
+        lookup: Blocks of up to ``WINDOW_TABLE_BLOCK`` cells: read each block's window of cells once and look its
+            moves up in a table of every window (made once per process); False: test each move's cell pairs in
+            turn. The same answers; the lookup is the faster.
 
     Returns:
         (8, H // block, W // block) bool, the moves in ``MOVES`` order.
@@ -483,18 +562,18 @@ def block_steps(free: np.ndarray, block: int) -> np.ndarray:
         raise ValueError(f"free must be an (H, W) map of whole {block}-cell blocks, got shape {free.shape}")
     p = np.zeros((free.shape[0] + 2, free.shape[1] + 2), dtype=np.uint8)
     p[1:-1, 1:-1] = free
-    return _block_steps(p, int(block), _DR, _DC)
+    return _steps(p, int(block), bool(lookup))
 
 
-def padded_block_steps(padded: np.ndarray, block: int) -> np.ndarray:
-    """``block_steps`` of a map already padded with one blocked cell on every side.
+def padded_block_steps(padded: np.ndarray, block: int, *, lookup: bool = True) -> np.ndarray:
+    """``block_steps`` of a map already padded with one blocked cell on every side (``lookup`` as there).
 
     ``padded``: (H + 2, W + 2) uint8, nonzero where a cell is free (H and W whole multiples of ``block``).
     """
     padded = np.ascontiguousarray(padded, dtype=np.uint8)
     if padded.ndim != 2 or (padded.shape[0] - 2) % block or (padded.shape[1] - 2) % block:
         raise ValueError(f"padded must be an (H + 2, W + 2) map of whole {block}-cell blocks, got {padded.shape}")
-    return _block_steps(padded, int(block), _DR, _DC)
+    return _steps(padded, int(block), bool(lookup))
 
 
 def _search(grid: OccupancyGrid, start, goal):
