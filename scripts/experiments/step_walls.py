@@ -6,30 +6,21 @@
 ``planners.maps.gridsearch.padded_block_steps`` at the encoder's blocks of 2 cells, on a generated forest and maze of
 each side (seed 123): ``lookup=True`` (the default, each block's window read once and its moves looked up in a
 table of every window) against ``lookup=False`` (each move's cell pairs tested in turn). Both in this process, in
-turns, the order flipping each round; each round's figure is the best of ``--repeat`` calls. Prints, per map, both
-medians over the rounds in milliseconds, the median of the rounds' ratios, and whether the two gave the same walls.
+turns, the order flipping each round; each round's figure is the best of ``--repeat`` calls after an untimed one.
+Prints, per map, both medians over the rounds in milliseconds, the median of the rounds' ratios, and whether the two
+gave the same walls.
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import numpy as np
+from route_breakdown import best_ms  # scripts/experiments, this script's folder
 
 from planners.maps.generators import generate
 from planners.maps.gridsearch import padded_block_steps
-
-
-def best_ms(call, repeat: int) -> float:
-    """The least wall time of ``repeat`` calls, in milliseconds."""
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return 1e3 * min(times)
 
 
 def main(argv=None) -> int:
