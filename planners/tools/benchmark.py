@@ -246,6 +246,17 @@ def summarize(records: Sequence[Run], by: Sequence[str] = ("map", "planner")) ->
     return rows
 
 
+def best_ms(call: Callable[[], object], repeat: int) -> float:
+    """The least wall time of ``repeat`` calls of ``call`` after one untimed call, in milliseconds."""
+    call()
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - start)
+    return 1e3 * min(times)
+
+
 def markdown_table(rows: Sequence[dict], columns: Sequence[str] | None = None, floatfmt: str = ".3g") -> str:
     """A GitHub-flavoured Markdown table of dict rows."""
     if not rows:

@@ -16,7 +16,6 @@ the conversions come on top).
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 import torch
@@ -28,18 +27,7 @@ from learning.models.route_vin import REACH, UNREACHED, cell_steps
 from learning.models.shipped import SHIPPED_ROUTE
 from planners.maps.generators import FAMILIES, generate
 from planners.maps.gridsearch import move_cost_field
-from planners.tools.benchmark import markdown_table
-
-
-def best_ms(call, repeat: int) -> float:
-    """The least wall time of ``repeat`` calls after one untimed call, in milliseconds."""
-    call()
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return 1e3 * min(times)
+from planners.tools.benchmark import best_ms, markdown_table
 
 
 def dense_features(net, x):

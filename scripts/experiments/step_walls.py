@@ -17,10 +17,10 @@ import argparse
 import statistics
 
 import numpy as np
-from route_breakdown import best_ms  # scripts/experiments, this script's folder
 
 from planners.maps.generators import generate
 from planners.maps.gridsearch import padded_block_steps
+from planners.tools.benchmark import best_ms
 
 
 def main(argv=None) -> int:
