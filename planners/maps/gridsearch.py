@@ -373,11 +373,11 @@ def _window_table(block, dr, dc):
 def _block_steps(p, block, dr, dc, table):
     """(8, h, w) bool: whether some free cell of each block steps into its neighbour block by each move.
 
-    ``p``: the map's free cells (nonzero) padded with one blocked cell on every side. Each block move is tried
-    by the (cell of the block, step) pairs that make it (``_block_pairs``), the first that the map allows deciding
-    it. ``table``: ``_window_table(block, ...)`` where it is small enough to keep (blocks of up to
-    ``WINDOW_TABLE_BLOCK`` cells), else empty: each block's window is then read once, along a row of blocks by
-    the columns the last window did not hold, and looked up (the same answers).
+    ``p``: the map's free cells (nonzero) padded with one blocked cell on every side. ``table``:
+    ``_window_table(block, ...)`` (blocks of up to ``WINDOW_TABLE_BLOCK`` cells): each block's window is read once,
+    along a row of blocks by the columns the last window does not hold, and its moves looked up. ``table`` empty:
+    each block move is tried by the (cell of the block, step) pairs that make it (``_block_pairs``), the first that
+    the map allows deciding it. The same answers either way.
     """
     H, W = p.shape[0] - 2, p.shape[1] - 2
     Wp = W + 2
