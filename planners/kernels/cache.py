@@ -41,7 +41,7 @@ _known: set[tuple[Path, tuple[str, str, str]]] = set()  # (cache folder, key) st
 #: wording; a planner without a figure of its own is quoted as the range its kind's figures span.
 FIGURES = Path(__file__).resolve().parent / "compile_seconds.json"
 #: What the notice says when the figures file cannot be read (a planner without a row of its own is quoted
-#: as the range the measured rows span).
+#: as the range its world kind's rows span).
 UNMEASURED = "some seconds to a minute"
 
 
