@@ -234,11 +234,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.save:
         old = json.loads(save_to.read_text()) if save_to.is_file() else {}
         # a date per figure: a --save of some rows leaves the others' figures and dates as they were
-        dates = old.setdefault("dates", {})
-        for key in old.get("seconds", {}):
-            dates.setdefault(key, str(old.get("measured", "")).split(":")[0])
         old.setdefault("seconds", {}).update(saved)
-        dates.update({key: datetime.date.today().isoformat() for key in saved})
+        old.setdefault("dates", {}).update({key: datetime.date.today().isoformat() for key in saved})
         old["cpus"] = os.cpu_count()
         old["measured"] = ("CPU seconds a first solve spends compiling (empty-cache run minus filled-cache run, "
                            "scripts/benchmark_first_call.py --save), each measured on the date \"dates\" gives")

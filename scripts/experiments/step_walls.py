@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import statistics
+from functools import partial
 
 import numpy as np
 
@@ -44,8 +45,7 @@ def main(argv=None) -> int:
             for k in range(args.rounds):
                 calls = [(fast, True), (slow, False)]
                 for out, lookup in (calls if k % 2 == 0 else calls[::-1]):
-                    call = lambda p=padded, lookup=lookup: padded_block_steps(p, 2, lookup=lookup)  # noqa: E731
-                    out.append(best_ms(call, args.repeat))
+                    out.append(best_ms(partial(padded_block_steps, padded, 2, lookup=lookup), args.repeat))
             ratio = statistics.median(f / s for f, s in zip(fast, slow, strict=True))
             print(f"| {family} | {side} | {statistics.median(fast):.3f} | {statistics.median(slow):.3f} | "
                   f"{ratio:.2f} | {'yes' if same else 'NO'} |", flush=True)
