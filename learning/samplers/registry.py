@@ -12,6 +12,7 @@ distance (a grid search) and say what perfect route knowledge reaches; in 6-DoF,
 
 from __future__ import annotations
 
+import functools
 import importlib
 import inspect
 import json
@@ -206,6 +207,16 @@ def sampler_names() -> tuple[str, ...]:
     return tuple(REGISTRY)
 
 
+@functools.cache
+def _factory_parameters(factory: Callable) -> tuple[tuple[str, ...], bool]:
+    """A registered factory's parameters a user may pass, and whether it takes ``models``.
+
+    Read once per factory: ``inspect.signature`` costs about as much as making a classical sampler.
+    """
+    signature = inspect.signature(factory).parameters
+    return tuple(k for k, p in signature.items() if p.kind is not p.KEYWORD_ONLY), "models" in signature
+
+
 def make_sampler(name: str, *, models: ModelCache | None = None, **params: Any) -> Sampler:
     """The sampler registered as ``name`` with ``params``; an unknown name or parameter is an ``InputError``.
 
@@ -215,14 +226,13 @@ def make_sampler(name: str, *, models: ModelCache | None = None, **params: Any) 
     if name not in REGISTRY:
         raise InputError(f"unknown sampler {name!r}; choose from {', '.join(REGISTRY)}")
     factory = REGISTRY[name][0]
-    signature = inspect.signature(factory).parameters
-    allowed = [k for k, p in signature.items() if p.kind is not p.KEYWORD_ONLY]
+    allowed, takes_models = _factory_parameters(factory)
     unknown = sorted(set(params) - set(allowed))
     if unknown:
         raise InputError(f"sampler {name!r} takes no parameter {', '.join(unknown)}; it takes "
                          f"{', '.join(allowed) or 'none'}")
     check_sampler_params(f"sampler {name!r}", step_size=params.get("step_size"), batch=params.get("batch"))
-    if models is not None and "models" in signature:
+    if models is not None and takes_models:
         return factory(**params, models=models)
     return factory(**params)
 

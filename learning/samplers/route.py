@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from learning.device import resolve_device
+from learning.device import move_to, resolve_device
 from learning.models.field import FieldEncoder
 from learning.models.route_net import load_route_net
 from learning.models.shipped import SHIPPED_ROUTE
@@ -428,7 +428,7 @@ class RouteSampler(SamplerBase):
             planning_thread_count(threads)  # refused now, by name, rather than at the first query
         self.threads, self.fields = threads, fields
         if net is not None:
-            net.to(self.device)
+            move_to(net, self.device)
         self.forward_passes, self.reused_seconds = 0, 0.0
 
     @classmethod
