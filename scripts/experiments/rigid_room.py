@@ -13,12 +13,13 @@ centred workspace route with uniform angles. Two probes split the room between t
   nearest the solution's (the orientation model's six classes with the box's symmetry): what the model's classes
   could give if it always named the solution's class (with the solution's own rotation among the class's four,
   or, ``the same, ...``, one at random, the one nearest the nearer end's orientation, or each route point's
-  nearest the previous point's, chained from the nearer end's orientation);
+  nearest the previous point's, chained from the nearer end's orientation or from the start's all along);
 * ``route positions, the nearer end's axis-aligned rotation``: no solution and no model: every turned sample takes
   the axis-aligned rotation nearest the orientation of the query's end (start or goal) nearer to it.
 
-Runs these samplers with RRT-Connect and RRT (the seed set-ups) on the validation part of the box scene
-set (never test, never OMPL.app) and prints success and median iterations (an unsolved run at its cap) per row.
+Runs these samplers (and ``rigid_route``, the learned sampler) with RRT-Connect and RRT, or PRM (``--planners``; the
+seed set-ups) on the validation or tuning part of the box scene set (never test, never OMPL.app) and prints success
+and median iterations (PRM: samples; an unsolved run at its cap) per row.
 A look at where learning has room, not a choice of any setting.
 """
 
@@ -76,11 +77,12 @@ class EndAngles(SamplerBase):
         return pts
 
 
-def chain_rotations(route: np.ndarray, states: np.ndarray, problem) -> np.ndarray:
+def chain_rotations(route: np.ndarray, states: np.ndarray, problem, start_only: bool = False) -> np.ndarray:
     """Per route point, an axis-aligned rotation of the solution's class there, each the nearest to the one before.
 
     From the start's orientation forward and from the goal's backward; each point takes the chain from the end
-    nearer along the route (half its arc length). The class at a route point is the nearest solution state's.
+    nearer along the route (half its arc length), or (``start_only``) the chain from the start everywhere. The class
+    at a route point is the nearest solution state's.
     """
     near = ((route[:, None, :] - states[None, :, :3]) ** 2).sum(axis=2).argmin(axis=1)
     cls = nearest_class(rotation_matrices(states[near, 3:]))[0]
@@ -96,6 +98,8 @@ def chain_rotations(route: np.ndarray, states: np.ndarray, problem) -> np.ndarra
 
     ends = rotation_matrices(np.stack([problem.start[3:], problem.goal[3:]]))
     forward, backward = walk(range(len(route)), ends[0]), walk(range(len(route) - 1, -1, -1), ends[1])
+    if start_only:
+        return forward
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(route, axis=0), axis=1))])
     return np.where((arc <= arc[-1] / 2)[:, None, None], forward, backward)
 
@@ -115,9 +119,9 @@ class ExpertAngles(SamplerBase):
     def _setup(self) -> None:
         self.positions = make_sampler("rigid_route_ablation").bind(self.problem)
         self.expert = RigidExpertSampler().bind(self.problem)
-        if self.symmetry == "chain" and self.expert.states is not None:
-            self.route, self.chain = self.positions.route, chain_rotations(self.positions.route, self.expert.states,
-                                                                            self.problem)
+        if self.symmetry in ("chain", "chain from the start") and self.expert.states is not None:
+            self.route, self.chain = self.positions.route, chain_rotations(
+                self.positions.route, self.expert.states, self.problem, self.symmetry == "chain from the start")
 
     def draw(self, rng, n, view):
         pts = self.positions.draw(rng, n, view)
@@ -140,7 +144,7 @@ class ExpertAngles(SamplerBase):
                     ends = rotation_matrices(np.stack([self.problem.start[3:], self.problem.goal[3:]]))
                     near_goal = nearer_end(pts[turn], self.problem.start, self.problem.goal)
                     sym = np.einsum("nsij,nij->ns", rots[cls], ends[near_goal]).argmax(axis=1)
-                elif self.symmetry == "chain":  # nearest the chained rotation at the nearest route point
+                elif self.symmetry.startswith("chain"):  # nearest the chained rotation at the nearest route point
                     j = ((pts[turn, None, :3] - self.route[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
                     sym = np.einsum("nsij,nij->ns", rots[cls], self.chain[j]).argmax(axis=1)
                 target = rots[cls, sym]
@@ -156,7 +160,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", type=int, default=4, help="validation scenes per family")
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per scene")
-    ap.add_argument("--planners", nargs="+", default=["RRTConnect", "RRT"], choices=["RRTConnect", "RRT"])
+    ap.add_argument("--planners", nargs="+", default=["RRTConnect", "RRT"], choices=["RRTConnect", "RRT", "PRM"],
+                    help="planners at their seed set-ups (PRM: samples, not iterations)")
     ap.add_argument("--part", default="validation", choices=["validation", "tuning"])
     ap.add_argument("--only", nargs="+", help="run only these rows (sampler names as printed)")
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), choices=TRAINING_FAMILIES,
@@ -173,7 +178,10 @@ def main(argv=None) -> int:
                                                                                                   symmetry="ends"),
                 "the same, the class's rotation chained from the nearer end": lambda: ExpertAngles(snap=True,
                                                                                                     symmetry="chain"),
+                "the same, the class's rotation chained from the start": lambda: ExpertAngles(
+                    snap=True, symmetry="chain from the start"),
                 "route positions, the nearer end's axis-aligned rotation": EndAngles,
+                "rigid_route": lambda: make_sampler("rigid_route"),
                 "rigid_expert": RigidExpertSampler}
     scenes = RigidSceneSet(tuple(args.families), (), {args.part: args.scenes})
     if args.only:
