@@ -9,7 +9,12 @@ import torch
 from learning.models.rigid_orientation import OrientationNet, load_orientation_net, save_orientation_net
 from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
 from learning.samplers.registry import make_sampler
-from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
+from learning.samplers.rigid_route import (
+    SHIPPED_RIGID_ROADMAP,
+    SHIPPED_RIGID_SETTINGS,
+    RigidRouteSampler,
+    rotation_chain,
+)
 from learning.training.rigid import RigidTrainConfig, augment, train_rigid_orientation
 from planners.base.fileio import InputError
 from planners.guidance.rigid_orientation import (
@@ -110,6 +115,61 @@ def test_the_registry_name_plans_with_rrt_connect(slot_scene):
     with pytest.raises(InputError, match="takes no parameter"):
         make_sampler("rigid_route", colour=1)
 
+
+
+def test_a_roadmap_takes_its_own_validated_rule_and_a_users_setting_holds_for_every_planner(slot_scene):
+    from planners import PRM, RRT, RRTConnect
+
+    s = make_sampler("rigid_route")
+    tree = (SHIPPED_RIGID_SETTINGS["symmetry"], SHIPPED_RIGID_SETTINGS["route_fraction"])
+    assert (s.symmetry, s.route_fraction) == tree
+    for family in ("tree", "bidirectional", "optimizing"):
+        assert s.for_planner(family) is s
+    r = s.for_planner("roadmap")
+    assert r is not s and (r.symmetry, r.route_fraction) == (SHIPPED_RIGID_ROADMAP["symmetry"],
+                                                            SHIPPED_RIGID_ROADMAP["route_fraction"])
+    assert (s.symmetry, s.route_fraction) == tree  # the trees' rule unchanged
+    # the planners ask for it when handed the sampler
+    assert PRM(slot_scene, sampler=s, seed=0).sampler.symmetry == SHIPPED_RIGID_ROADMAP["symmetry"]
+    assert RRT(slot_scene, sampler=s, seed=0).sampler.symmetry == SHIPPED_RIGID_SETTINGS["symmetry"]
+    assert RRTConnect(slot_scene, sampler=s, seed=0).sampler.route_fraction == SHIPPED_RIGID_SETTINGS["route_fraction"]
+    # a setting the user gives holds for a roadmap too; the one not given is the roadmap's own
+    mine = make_sampler("rigid_route", symmetry="random").for_planner("roadmap")
+    assert (mine.symmetry, mine.route_fraction) == ("random", SHIPPED_RIGID_ROADMAP["route_fraction"])
+    mine = make_sampler("rigid_route", route_fraction=0.5, symmetry="ends").for_planner("roadmap")
+    assert (mine.symmetry, mine.route_fraction) == ("ends", 0.5)
+    assert make_sampler("rigid_route_ablation").for_planner("roadmap").route_fraction == 0.75  # its own, tuned
+    with pytest.raises(InputError, match="no setting colour"):
+        RigidRouteSampler(s.net, roadmap={"colour": 1})
+    with pytest.raises(InputError, match="roadmap symmetry"):
+        RigidRouteSampler(s.net, roadmap={"symmetry": "spiral"})
+    with pytest.raises(InputError, match="roadmap route_fraction"):
+        RigidRouteSampler(s.net, roadmap={"route_fraction": 1.5})
+
+
+def test_the_rotation_chain_keeps_each_point_nearest_the_one_before_from_its_nearer_end():
+    rots = class_rotations()
+    rng = np.random.default_rng(0)
+    classes = rng.integers(6, size=30)
+    ends = rots[[2, 5], [1, 3]]  # a start and a goal orientation
+    arc = np.cumsum(rng.random(30))
+    arc -= arc[0]
+    half = arc <= arc[-1] / 2
+    for start_only in (False, True):
+        chain = rotation_chain(rots, classes, ends, arc, start_only=start_only)
+        forward = half | start_only
+        for i in range(30):
+            cand = rots[classes[i]]
+            assert any(np.allclose(chain[i], c) for c in cand)  # one of its class's four
+            if forward[i]:
+                before = ends[0] if i == 0 else chain[i - 1]
+            else:
+                before = ends[1] if i == 29 else chain[i + 1]
+            assert np.allclose(chain[i], cand[np.einsum("sij,ij->s", cand, before).argmax()])
+    # one class all along: the walk never turns, and starts at the class's rotation nearest the start's
+    same = rotation_chain(rots, np.full(30, 4), ends, arc, start_only=True)
+    first = rots[4][np.einsum("sij,ij->s", rots[4], ends[0]).argmax()]
+    assert np.allclose(same, same[0]) and np.allclose(same[0], first)
 
 @pytest.mark.parametrize("label", ["solution", "window"])
 def test_training_is_reproducible_on_a_tiny_set(label):

@@ -131,15 +131,17 @@ def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = 
 
 
 def _rigid_route(uniform_share: float | None = None, angle_noise: float | None = None, goal_share: float = 0.05,
-                 temperature: float = 1.0, route_fraction: float = 0.75, centre: int | None = None,
+                 temperature: float = 1.0, route_fraction: float | None = None, centre: int | None = None,
                  path: str | None = None, symmetry: str | None = None, min_confidence: float | None = None,
                  min_route_confidence: float | None = None, *, models: ModelCache | None = None) -> Sampler:
     from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
-    from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
+    from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS, RigidRouteSampler
 
     path = str(SHIPPED_RIGID_ORIENTATION) if path is None else path
     net = (ModelCache() if models is None else models).orientation_net(path)
-    return RigidRouteSampler(net, route_fraction=route_fraction,
+    given = {"symmetry": symmetry, "route_fraction": route_fraction}
+    return RigidRouteSampler(net, route_fraction=SHIPPED_RIGID_SETTINGS["route_fraction"] if route_fraction is None
+                             else route_fraction,
                              uniform_share=SHIPPED_RIGID_SETTINGS["uniform_share"] if uniform_share is None
                              else uniform_share,
                              angle_noise=SHIPPED_RIGID_SETTINGS["angle_noise"] if angle_noise is None else angle_noise,
@@ -149,7 +151,9 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                              min_confidence=SHIPPED_RIGID_SETTINGS["min_confidence"] if min_confidence is None
                              else min_confidence,
                              min_route_confidence=SHIPPED_RIGID_SETTINGS["min_route_confidence"]
-                             if min_route_confidence is None else min_route_confidence)
+                             if min_route_confidence is None else min_route_confidence,
+                             # a roadmap's own validated settings, where the user set none of them
+                             roadmap={k: v for k, v in SHIPPED_RIGID_ROADMAP.items() if given[k] is None})
 
 
 def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75, centre: int | None = None) -> Sampler:

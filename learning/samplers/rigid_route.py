@@ -16,8 +16,10 @@ and its distribution over the six axis-aligned orientation classes there. Per sa
   below ``min_confidence``, or everywhere when its largest over the whole route is below ``min_route_confidence`` (a
   query whose passages the model does not see as needing a turn), uniform angles, else a class drawn from the
   model's distribution there, one of the class's four rotations (the box's symmetry: the same volume, far apart in
-  the planner's metric) at random (``symmetry="random"``) or the one nearest the orientation of the query's end
-  nearer the sample's route point (``symmetry="ends"``: the start's or the goal's), turned by a random rotation of
+  the planner's metric) at random (``symmetry="random"``), the one nearest the orientation of the query's end
+  nearer the sample's route point (``symmetry="ends"``: the start's or the goal's; the trees' rule), or the one
+  nearest a chain of rotations walked along the route from the ends (``symmetry="chain"``, ``rotation_chain``:
+  the roadmaps' rule, with every route sample on the route; ``for_planner``), turned by a random rotation of
   about ``angle_noise`` radians per axis (a Gaussian rotation vector);
 * else a uniform state.
 
@@ -30,10 +32,12 @@ the world's ``solid_share`` (its surfaces and what they enclose, seen from the q
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from planners.base.fileio import InputError, check_int, check_number
-from planners.base.samplers import SamplerBase
+from planners.base.samplers import FAMILY_ROADMAP, SamplerBase
 from planners.guidance.rigid_orientation import (
     N_CLASSES,
     TRAINING_LONG_SIDE,
@@ -51,11 +55,15 @@ from planners.worlds.mesh import rotation_matrices
 #: (``scripts/experiments/tune_rigid_learned.py``; the rotation among a class's four by
 #: ``scripts/experiments/rigid_room.py --part tuning``, with the privileged expert's classes; ``docs/rigid-scenes.md``).
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
-                          "min_confidence": 0.0, "min_route_confidence": 0.0}
+                          "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75}
+#: What a roadmap planner takes instead (``RigidRouteSampler.for_planner``): every route sample on the route, each
+#: rotation from the chain along it; chosen for PRM on the tuning scenes, kept by the validation scenes
+#: (``docs/rigid-scenes.md``). The trees keep ``SHIPPED_RIGID_SETTINGS``' (the chain lost on the tuning scenes).
+SHIPPED_RIGID_ROADMAP = {"symmetry": "chain", "route_fraction": 1.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
-SYMMETRY_RULES = ("random", "ends")
+SYMMETRY_RULES = ("random", "ends", "chain", "chain_start")
 
 
 def class_frame(world, cell: float | None = None) -> tuple[np.ndarray, float]:
@@ -70,6 +78,29 @@ def class_frame(world, cell: float | None = None) -> tuple[np.ndarray, float]:
     axes, extents = body_axes(world.body_vertices)
     return _ROTATIONS @ axes.T, float(extents[0]) / TRAINING_LONG_SIDE if cell is None else float(cell)
 
+
+
+def rotation_chain(rotations: np.ndarray, classes: np.ndarray, ends: np.ndarray, arc: np.ndarray,
+                   start_only: bool = False) -> np.ndarray:
+    """``(n, 3, 3)``: per route point, the one of its class's four rotations nearest the point before's.
+
+    Walked from the start's orientation (``ends[0]``) forward and from the goal's (``ends[1]``) backward; each point
+    takes the walk from the end nearer along the route (``arc``: its cumulative length), or (``start_only``) the walk
+    from the start everywhere.
+    """
+    def walk(order, first):
+        out, cur = np.empty((len(classes), 3, 3)), first
+        for i in order:
+            cand = rotations[classes[i]]
+            cur = cand[np.einsum("sij,ij->s", cand, cur).argmax()]
+            out[i] = cur
+        return out
+
+    forward = walk(range(len(classes)), ends[0])
+    if start_only:
+        return forward
+    backward = walk(range(len(classes) - 1, -1, -1), ends[1])
+    return np.where((arc <= arc[-1] / 2)[:, None, None], forward, backward)
 
 class RigidRouteSampler(SamplerBase):
     """Route positions with learned orientations (see the module doc).
@@ -90,18 +121,25 @@ class RigidRouteSampler(SamplerBase):
             mesh world the body's long side over ``TRAINING_LONG_SIDE`` for the observation.
         centre: Reach in voxels of ``centre_route``: each interior route point moves to the clearest voxel
             centre that near (0: the search's route as it is).
-        symmetry: Which of a class's four rotations a sample takes: ``"random"``, or ``"ends"``, the one nearest
-            the orientation of the query's end (start or goal) nearer the sample's route point.
+        symmetry: Which of a class's four rotations a sample takes: ``"random"``; ``"ends"``, the one nearest
+            the orientation of the query's end (start or goal) nearer the sample's route point; ``"chain"``, the one
+            nearest a chain of rotations along the route (each route point's most probable class, its rotation the
+            nearest to the point before's, from the start's orientation forward and from the goal's backward, each
+            point taking the chain from the end nearer along the route); ``"chain_start"``, the chain from the start
+            everywhere.
         min_confidence: A route sample whose nearest route point's largest class probability is below this, in
             [0, 1], takes uniform angles (0: the model's class wherever ``uniform_share`` does not say uniform).
         min_route_confidence: Where the largest class probability over all the route's points is below this, in
             [0, 1], every route sample of the query takes uniform angles (the ablation's draw).
+        roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``):
+            ``symmetry`` and ``route_fraction`` (``make_sampler`` gives the validated ``SHIPPED_RIGID_ROADMAP``).
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
                  cell: float | None = None, centre: int = 2, symmetry: str = "random",
-                 min_confidence: float = 0.0, min_route_confidence: float = 0.0) -> None:
+                 min_confidence: float = 0.0, min_route_confidence: float = 0.0,
+                 roadmap: dict | None = None) -> None:
         who = "RigidRouteSampler"
         if symmetry not in SYMMETRY_RULES:
             raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
@@ -121,6 +159,32 @@ class RigidRouteSampler(SamplerBase):
         if net is None and self.uniform_share < 1.0:
             raise InputError(f"{who}: without an orientation model every route sample takes uniform angles: "
                              f"uniform_share must be 1, got {self.uniform_share:g}")
+        self.roadmap = dict(roadmap or {})
+        unknown = sorted(set(self.roadmap) - {"symmetry", "route_fraction"})
+        if unknown:
+            raise InputError(f"{who}: roadmap = {self.roadmap!r}: no setting {', '.join(unknown)}; a roadmap takes "
+                             f"its own symmetry and route_fraction")
+        if self.roadmap.get("symmetry", symmetry) not in SYMMETRY_RULES:
+            raise InputError(f"{who}: roadmap symmetry = {self.roadmap['symmetry']!r}; choose from "
+                             f"{', '.join(SYMMETRY_RULES)}")
+        if "route_fraction" in self.roadmap:
+            self.roadmap["route_fraction"] = float(check_number(who, "roadmap route_fraction",
+                                                                self.roadmap["route_fraction"], low=0, high=1))
+
+    def for_planner(self, family: str) -> SamplerBase:
+        """This sampler with its ``roadmap`` settings for a roadmap planner (``"roadmap"``); else this sampler.
+
+        A roadmap keeps every sample and joins each to its few nearest, so it needs samples in a passage's
+        orientation all along the route at once, each near its neighbours' rotation: on the validation scenes the
+        chain rule with every route sample on the route connects a fifth more queries (``docs/rigid-scenes.md``).
+        """
+        if family != FAMILY_ROADMAP or not self.roadmap:
+            return self
+        out = copy.copy(self)
+        out.symmetry = self.roadmap.get("symmetry", self.symmetry)
+        out.route_fraction = self.roadmap.get("route_fraction", self.route_fraction)
+        out.roadmap = {}
+        return out
 
     def _setup(self) -> None:
         from learning.models.rigid_orientation import class_probabilities
@@ -148,6 +212,9 @@ class RigidRouteSampler(SamplerBase):
         if len(self.probs) and self.probs.max() < self.min_route_confidence:
             self.sure[:] = False  # the model sees no passage that needs a turn: the ablation's uniform angles
         self.ends = rotation_matrices(np.stack([self.problem.start[3:6], self.problem.goal[3:6]]))
+        if self.symmetry in ("chain", "chain_start") and len(self.probs) == len(self.route) and len(self.route):
+            self.chain = rotation_chain(self.rotations, self.probs.argmax(axis=1), self.ends, self.arc,
+                                        start_only=self.symmetry == "chain_start")
 
     def draw(self, rng, n, view):
         # one row of uniforms per sample keeps the stream identical whatever the batch size: a coin, an
@@ -175,6 +242,8 @@ class RigidRouteSampler(SamplerBase):
                 if self.symmetry == "ends":  # the rotation nearest the nearer end's orientation (largest trace)
                     end = nearer_end(self.route[near], self.problem.start, self.problem.goal)
                     sym = np.einsum("nsij,nij->ns", self.rotations[cls], self.ends[end]).argmax(axis=1)
+                elif self.symmetry in ("chain", "chain_start"):  # the rotation nearest the chain's at the route point
+                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], self.chain[near]).argmax(axis=1)
                 base = self.rotations[cls, sym]
                 turn = small_rotations(self.angle_noise * rot_z[learned])
                 pts[learned, 3:] = euler_from_matrices(turn @ base)
@@ -188,4 +257,5 @@ class RigidRouteSampler(SamplerBase):
                 f"angle_noise={self.angle_noise:g}, goal_share={self.goal_share:g}, "
                 f"temperature={self.temperature:g}, spread={sd}, cell={cell}, centre={self.centre}, "
                 f"symmetry={self.symmetry!r}, min_confidence={self.min_confidence:g}, "
-                f"min_route_confidence={self.min_route_confidence:g})")
+                f"min_route_confidence={self.min_route_confidence:g}"
+                + (f", roadmap={self.roadmap!r})" if self.roadmap else ")"))
