@@ -126,9 +126,10 @@ def test_a_roadmap_takes_its_own_validated_rule_and_a_users_setting_holds_for_ev
     for family in ("tree", "bidirectional", "optimizing"):
         assert s.for_planner(family) is s
     r = s.for_planner("roadmap")
-    assert r is not s and (r.symmetry, r.route_fraction) == (SHIPPED_RIGID_ROADMAP["symmetry"],
-                                                            SHIPPED_RIGID_ROADMAP["route_fraction"])
+    assert r is not s and all(getattr(r, k) == v for k, v in SHIPPED_RIGID_ROADMAP.items())
     assert (s.symmetry, s.route_fraction) == tree  # the trees' rule unchanged
+    assert (s.uniform_share, s.angle_noise) == (SHIPPED_RIGID_SETTINGS["uniform_share"],
+                                                SHIPPED_RIGID_SETTINGS["angle_noise"])
     # the planners ask for it when handed the sampler
     assert PRM(slot_scene, sampler=s, seed=0).sampler.symmetry == SHIPPED_RIGID_ROADMAP["symmetry"]
     assert RRT(slot_scene, sampler=s, seed=0).sampler.symmetry == SHIPPED_RIGID_SETTINGS["symmetry"]
@@ -136,8 +137,13 @@ def test_a_roadmap_takes_its_own_validated_rule_and_a_users_setting_holds_for_ev
     # a setting the user gives holds for a roadmap too; the one not given is the roadmap's own
     mine = make_sampler("rigid_route", symmetry="random").for_planner("roadmap")
     assert (mine.symmetry, mine.route_fraction) == ("random", SHIPPED_RIGID_ROADMAP["route_fraction"])
-    mine = make_sampler("rigid_route", route_fraction=0.5, symmetry="ends").for_planner("roadmap")
-    assert (mine.symmetry, mine.route_fraction) == ("ends", 0.5)
+    mine = make_sampler("rigid_route", route_fraction=0.5, symmetry="ends", angle_noise=0.2).for_planner("roadmap")
+    assert (mine.symmetry, mine.route_fraction, mine.angle_noise) == ("ends", 0.5, 0.2)
+    assert mine.uniform_share == SHIPPED_RIGID_ROADMAP["uniform_share"]
+    # the roadmap's unturned axis-aligned rotations: every route sample of a class at one of its four rotations
+    q = PRM(slot_scene, sampler=make_sampler("rigid_route", goal_share=0.0), seed=0).sampler.draw(
+        np.random.default_rng(5), 64, None)
+    assert np.allclose(np.abs(np.array([rotation_matrix(*x[3:]) for x in q])).max(axis=1), 1.0)
     assert make_sampler("rigid_route_ablation").for_planner("roadmap").route_fraction == 0.75  # its own, tuned
     with pytest.raises(InputError, match="no setting colour"):
         RigidRouteSampler(s.net, roadmap={"colour": 1})
@@ -145,6 +151,10 @@ def test_a_roadmap_takes_its_own_validated_rule_and_a_users_setting_holds_for_ev
         RigidRouteSampler(s.net, roadmap={"symmetry": "spiral"})
     with pytest.raises(InputError, match="roadmap route_fraction"):
         RigidRouteSampler(s.net, roadmap={"route_fraction": 1.5})
+    with pytest.raises(InputError, match="roadmap angle_noise"):
+        RigidRouteSampler(s.net, roadmap={"angle_noise": -0.1})
+    with pytest.raises(InputError, match="roadmap uniform_share must be 1"):
+        RigidRouteSampler(None, uniform_share=1.0, roadmap={"uniform_share": 0.0})
 
 
 def test_the_rotation_chain_keeps_each_point_nearest_the_one_before_from_its_nearer_end():

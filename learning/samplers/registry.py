@@ -139,7 +139,8 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
 
     path = str(SHIPPED_RIGID_ORIENTATION) if path is None else path
     net = (ModelCache() if models is None else models).orientation_net(path)
-    given = {"symmetry": symmetry, "route_fraction": route_fraction}
+    given = {"symmetry": symmetry, "route_fraction": route_fraction, "uniform_share": uniform_share,
+             "angle_noise": angle_noise}
     return RigidRouteSampler(net, route_fraction=SHIPPED_RIGID_SETTINGS["route_fraction"] if route_fraction is None
                              else route_fraction,
                              uniform_share=SHIPPED_RIGID_SETTINGS["uniform_share"] if uniform_share is None

@@ -57,13 +57,16 @@ from planners.worlds.mesh import rotation_matrices
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
                           "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75}
 #: What a roadmap planner takes instead (``RigidRouteSampler.for_planner``): every route sample on the route, each
-#: rotation from the chain along it; chosen for PRM on the tuning scenes, kept by the validation scenes
-#: (``docs/rigid-scenes.md``). The trees keep ``SHIPPED_RIGID_SETTINGS``' (the chain lost on the tuning scenes).
-SHIPPED_RIGID_ROADMAP = {"symmetry": "chain", "route_fraction": 1.0}
+#: in the model's class (no uniform angles) at the rotation of the chain along the route, unturned; chosen for PRM on
+#: the tuning scenes, kept by the validation scenes (``docs/rigid-scenes.md``). The trees keep
+#: ``SHIPPED_RIGID_SETTINGS``' (the chain lost on the tuning scenes, a smaller angle noise on the validation scenes).
+SHIPPED_RIGID_ROADMAP = {"symmetry": "chain", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
 SYMMETRY_RULES = ("random", "ends", "chain", "chain_start")
+#: The settings a roadmap may take apart from the trees' (``RigidRouteSampler``'s ``roadmap``).
+ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise")
 
 
 def class_frame(world, cell: float | None = None) -> tuple[np.ndarray, float]:
@@ -131,8 +134,8 @@ class RigidRouteSampler(SamplerBase):
             [0, 1], takes uniform angles (0: the model's class wherever ``uniform_share`` does not say uniform).
         min_route_confidence: Where the largest class probability over all the route's points is below this, in
             [0, 1], every route sample of the query takes uniform angles (the ablation's draw).
-        roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``):
-            ``symmetry`` and ``route_fraction`` (``make_sampler`` gives the validated ``SHIPPED_RIGID_ROADMAP``).
+        roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``): any of
+            ``ROADMAP_SETTINGS`` (``make_sampler`` gives the validated ``SHIPPED_RIGID_ROADMAP``).
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
@@ -160,16 +163,19 @@ class RigidRouteSampler(SamplerBase):
             raise InputError(f"{who}: without an orientation model every route sample takes uniform angles: "
                              f"uniform_share must be 1, got {self.uniform_share:g}")
         self.roadmap = dict(roadmap or {})
-        unknown = sorted(set(self.roadmap) - {"symmetry", "route_fraction"})
+        unknown = sorted(set(self.roadmap) - set(ROADMAP_SETTINGS))
         if unknown:
             raise InputError(f"{who}: roadmap = {self.roadmap!r}: no setting {', '.join(unknown)}; a roadmap takes "
-                             f"its own symmetry and route_fraction")
+                             f"its own {', '.join(ROADMAP_SETTINGS)}")
         if self.roadmap.get("symmetry", symmetry) not in SYMMETRY_RULES:
             raise InputError(f"{who}: roadmap symmetry = {self.roadmap['symmetry']!r}; choose from "
                              f"{', '.join(SYMMETRY_RULES)}")
-        if "route_fraction" in self.roadmap:
-            self.roadmap["route_fraction"] = float(check_number(who, "roadmap route_fraction",
-                                                                self.roadmap["route_fraction"], low=0, high=1))
+        for key, high in (("route_fraction", 1), ("uniform_share", 1), ("angle_noise", None)):
+            if key in self.roadmap:
+                self.roadmap[key] = float(check_number(who, f"roadmap {key}", self.roadmap[key], low=0, high=high))
+        if net is None and self.roadmap.get("uniform_share", 1.0) < 1.0:
+            raise InputError(f"{who}: without an orientation model a roadmap's route samples take uniform angles too: "
+                             f"roadmap uniform_share must be 1, got {self.roadmap['uniform_share']:g}")
 
     def for_planner(self, family: str) -> SamplerBase:
         """This sampler with its ``roadmap`` settings for a roadmap planner (``"roadmap"``); else this sampler.
@@ -181,8 +187,8 @@ class RigidRouteSampler(SamplerBase):
         if family != FAMILY_ROADMAP or not self.roadmap:
             return self
         out = copy.copy(self)
-        out.symmetry = self.roadmap.get("symmetry", self.symmetry)
-        out.route_fraction = self.roadmap.get("route_fraction", self.route_fraction)
+        for key, value in self.roadmap.items():
+            setattr(out, key, value)
         out.roadmap = {}
         return out
 
