@@ -32,6 +32,7 @@ import numpy as np
 
 from learning.references.rigid_expert import RigidExpertSampler, nearest_cover
 from learning.samplers.registry import make_sampler
+from learning.samplers.rigid_route import rotation_chain
 from planners.base.samplers import SamplerBase
 from planners.guidance.rigid_orientation import (
     class_rotations,
@@ -80,28 +81,15 @@ class EndAngles(SamplerBase):
 def chain_rotations(route: np.ndarray, states: np.ndarray, problem, start_only: bool = False) -> np.ndarray:
     """Per route point, an axis-aligned rotation of the solution's class there, each the nearest to the one before.
 
-    From the start's orientation forward and from the goal's backward; each point takes the chain from the end
-    nearer along the route (half its arc length), or (``start_only``) the chain from the start everywhere. The class
-    at a route point is the nearest solution state's.
+    ``rigid_route``'s ``rotation_chain`` with the class at a route point the nearest solution state's (not the
+    model's): from the start's orientation forward and from the goal's backward, each point taking the chain from the
+    end nearer along the route, or (``start_only``) the chain from the start everywhere.
     """
     near = ((route[:, None, :] - states[None, :, :3]) ** 2).sum(axis=2).argmin(axis=1)
     cls = nearest_class(rotation_matrices(states[near, 3:]))[0]
-    rots = class_rotations()
-
-    def walk(order, first):
-        out, cur = np.empty((len(route), 3, 3)), first
-        for i in order:
-            cand = rots[cls[i]]
-            cur = cand[np.einsum("sij,ij->s", cand, cur).argmax()]
-            out[i] = cur
-        return out
-
     ends = rotation_matrices(np.stack([problem.start[3:], problem.goal[3:]]))
-    forward, backward = walk(range(len(route)), ends[0]), walk(range(len(route) - 1, -1, -1), ends[1])
-    if start_only:
-        return forward
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(route, axis=0), axis=1))])
-    return np.where((arc <= arc[-1] / 2)[:, None, None], forward, backward)
+    return rotation_chain(class_rotations(), cls, ends, arc, start_only=start_only)
 
 
 class ExpertAngles(SamplerBase):
