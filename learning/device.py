@@ -46,7 +46,6 @@ def resolve_device(name: str, flag: str = "--device") -> torch.device:
     return torch.device(name)
 
 
-
 def move_to(module: torch.nn.Module, device: torch.device) -> torch.nn.Module:
     """``module.to(device)``, skipped where every parameter and buffer of ``module`` is there already.
 
@@ -60,6 +59,7 @@ def move_to(module: torch.nn.Module, device: torch.device) -> torch.nn.Module:
     if all(t.device == want for t in itertools.chain(module.parameters(), module.buffers())):
         return module
     return module.to(device)
+
 
 def deterministic(device: torch.device) -> None:
     """Ask torch for deterministic kernels on ``device`` (cuDNN's autotuner off, deterministic convolutions).
