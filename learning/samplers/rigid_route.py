@@ -245,11 +245,11 @@ class RigidRouteSampler(SamplerBase):
             if len(learned):
                 cls = np.minimum((self.cdf[near] < cls_u[learned, None]).sum(axis=1), N_CLASSES - 1)
                 sym = np.minimum((sym_u[learned] * 4).astype(np.int64), 3)
-                if self.symmetry == "ends":  # the rotation nearest the nearer end's orientation (largest trace)
-                    end = nearer_end(self.route[near], self.problem.start, self.problem.goal)
-                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], self.ends[end]).argmax(axis=1)
-                elif self.symmetry in ("chain", "chain_start"):  # the rotation nearest the chain's at the route point
-                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], self.chain[near]).argmax(axis=1)
+                if self.symmetry != "random":  # the rotation nearest a reference's (largest trace): the nearer
+                    # end's orientation, or the chain's at the route point
+                    ref = (self.ends[nearer_end(self.route[near], self.problem.start, self.problem.goal)]
+                           if self.symmetry == "ends" else self.chain[near])
+                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], ref).argmax(axis=1)
                 base = self.rotations[cls, sym]
                 turn = small_rotations(self.angle_noise * rot_z[learned])
                 pts[learned, 3:] = euler_from_matrices(turn @ base)
