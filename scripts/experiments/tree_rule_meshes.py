@@ -1,0 +1,139 @@
+"""Which of ``rigid_route``'s rules the trees should take on mesh worlds: the trees' own or the roadmaps'.
+
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --part tuning --scenes 4 --seeds 2 \\
+        --time-limit 10 --out results/tree_rule_meshes.jsonl
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --omplapp DIR --problems Twistycooler Apartment \\
+        --planners RRTConnect --seeds 4 --time-limit 20 --out results/tree_rule_omplapp.jsonl
+
+``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) and a
+roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation, every route sample on the route, no uniform
+angles, no angle noise). This runs the trees with each rule (``--rules``; ``uniform``: the planner's own sampling)
+under a time limit, on a part of the training box-scene families written as mesh worlds (``mesh_scene`` at the
+default motion resolution; a scene whose box witness meets its meshes is left out, as the mesh scene set leaves it
+out), or with ``--omplapp DIR`` on OMPL.app's ``.cfg`` problems named by ``--problems``. It prints per planner and
+rule the runs solved, the median time (the sampler's set-up included; an unsolved run at the limit) and the median
+iterations, and writes every run to ``--out`` (JSON lines). Choose on the tuning part and OMPL.app's tuning problems
+only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import statistics
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+#: The rules compared: sampler settings handed to ``make_sampler("rigid_route", ...)`` (None: no sampler).
+RULES = {"uniform": None, "trees": {},
+         "roadmap": {"symmetry": "chain", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0}}
+_PROBLEMS: dict = {}
+
+
+def _problem(source: tuple):
+    if source not in _PROBLEMS:
+        if source[0] == "omplapp":
+            from planners.worlds.omplapp import load_omplapp_cfg
+
+            _PROBLEMS[source] = load_omplapp_cfg(Path(source[1]) / f"{source[2]}.cfg")
+        else:
+            from planners.worlds.mesh import DEFAULT_DELTA_FRACTION
+            from planners.worlds.rigid_scenes import mesh_scene, rigid_scene
+
+            _, family, scene_seed = source
+            world = rigid_scene(family, scene_seed).world
+            diagonal = math.dist(world.low3, world.high3)
+            try:
+                _PROBLEMS[source] = mesh_scene(family, scene_seed, delta=DEFAULT_DELTA_FRACTION * diagonal)
+            except RuntimeError as e:  # the box witness meets the meshes: not a mesh scene (as MeshSceneSet)
+                _PROBLEMS[source] = str(e)
+    return _PROBLEMS[source]
+
+
+def _run(task: tuple) -> dict:
+    source, planner, seed, rule, limit = task
+    from learning.samplers.registry import make_sampler
+    from planners import make_planner
+    from planners.base.planner import compile_seconds
+
+    row = {"source": [source[-1]] if source[0] == "omplapp" else list(source[1:]), "planner": planner, "seed": seed,
+           "rule": rule}
+    problem = _problem(source)
+    if isinstance(problem, str):
+        return {**row, "refused": problem}
+
+    def kwargs() -> dict:  # a fresh sampler for each run, bound in the timed run
+        return {} if RULES[rule] is None else {"sampler": make_sampler("rigid_route", **RULES[rule])}
+
+    make_planner(planner, problem, seed=0, **kwargs()).solve(max_iterations=2)  # compile outside the timing
+    t, c = time.perf_counter(), compile_seconds()
+    r = make_planner(planner, problem, seed=seed, **kwargs()).solve(time_limit=limit)
+    seconds = time.perf_counter() - t - (compile_seconds() - c)
+    return {**row, "solved": bool(r.solved), "iterations": int(r.iterations), "seconds": float(seconds),
+            "limit": limit}
+
+
+def main(argv=None) -> int:
+    from planners.base.fileio import atomic_write_text
+    from planners.worlds.rigid_scenes import TRAINING_FAMILIES, scene_seeds
+
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--part", default="tuning", choices=["tuning", "validation"])
+    ap.add_argument("--scenes", type=int, default=4, help="scenes per family")
+    ap.add_argument("--families", nargs="+", default=[f for f in TRAINING_FAMILIES if f != "clutter"],
+                    choices=list(TRAINING_FAMILIES), help="default: every training family but clutter, whose box "
+                    "witnesses meet their meshes")
+    ap.add_argument("--omplapp", type=Path, help="OMPL.app's resources/3D folder: run --problems there instead")
+    ap.add_argument("--problems", nargs="+", default=["Twistycooler", "Apartment"],
+                    help="OMPL.app problems (with --omplapp; default its tuning problems)")
+    ap.add_argument("--planners", nargs="+", default=["RRTConnect", "RRT"], choices=["RRTConnect", "RRT"])
+    ap.add_argument("--rules", nargs="+", default=["trees", "roadmap"], choices=list(RULES))
+    ap.add_argument("--seeds", type=int, default=2, help="planner seeds per scene (0, 1, ...)")
+    ap.add_argument("--time-limit", type=float, default=10.0)
+    ap.add_argument("--processes", type=int, default=2)
+    ap.add_argument("--out", type=Path, required=True, help="a JSON-lines file of every run (written at the end)")
+    args = ap.parse_args(argv)
+    if args.out.is_dir():
+        ap.error(f"--out {args.out} is a folder; give a file name")
+    if args.omplapp is not None:
+        missing = [p for p in args.problems if not (args.omplapp / f"{p}.cfg").is_file()]
+        if missing:
+            ap.error(f"--omplapp {args.omplapp}: no {', '.join(p + '.cfg' for p in missing)} there")
+        sources = [("omplapp", str(args.omplapp), p) for p in args.problems]
+    else:
+        sources = [("scene", f, s) for f in args.families for s in scene_seeds(f, args.part, args.scenes)]
+    if not (args.time_limit > 0 and args.seeds > 0 and args.processes > 0):
+        ap.error("--time-limit, --seeds and --processes must be positive")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    tasks = [(src, planner, seed, rule, args.time_limit) for src in sources for planner in args.planners
+             for seed in range(args.seeds) for rule in args.rules]
+    rows = []
+    with ProcessPoolExecutor(args.processes) as pool:  # rules interleaved, so every rule sees the same load
+        for row in pool.map(_run, tasks):
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+    atomic_write_text(args.out, "".join(json.dumps(r) + "\n" for r in rows))
+    refused = sorted({"-".join(map(str, r["source"])) for r in rows if "refused" in r})
+    if refused:
+        print(f"\nleft out (the box scene's witness meets its meshes): {', '.join(refused)}")
+    rows = [r for r in rows if "refused" not in r]
+    print("\n| scenes | planner | rule | solved | median time (s), unsolved at the limit | median iterations |\n"
+          "|---|---|---|---|---|---|")
+    groups = sorted({r["source"][0] for r in rows}) if args.omplapp is not None else []
+    for group in [*groups, None]:  # each OMPL.app problem, then every run; scenes: every run
+        for planner in args.planners:
+            for rule in args.rules:
+                rs = [r for r in rows if r["planner"] == planner and r["rule"] == rule
+                      and group in (None, r["source"][0])]
+                if rs:
+                    t = statistics.median(r["seconds"] if r["solved"] else r["limit"] for r in rs)
+                    print(f"| {group or 'all'} | {planner} | {rule} | {sum(r['solved'] for r in rs)}/{len(rs)} | "
+                          f"{t:.3f} | {statistics.median(r['iterations'] for r in rs):,.0f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
