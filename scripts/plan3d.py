@@ -16,8 +16,12 @@ an install compiles the rigid-body kernels for a while; later runs load the comp
 ``rigid_route``, the learned 6-DoF sampler (box scenes, mesh scenes and ``.cfg`` problems), or ``gaussian``);
 its per-query work (a route search, a model's pass) is timed apart from the planning.
 An OMPL.app ``.cfg`` problem (planners.worlds.omplapp; needs the ``mesh`` extra) is planned with
-RRT-Connect at its default step under ``--time-limit`` (default the file's ``time_limit``), and drawn
-with its meshes (large ones as a seeded subset of their triangles). ``--restarts UNIT`` (``.cfg`` problems)
+RRT-Connect at its default step under ``--time-limit`` (default the file's ``time_limit``), or with
+``--setup`` by that set-up within the same limit, and drawn with its meshes (large ones as a seeded subset
+of their triangles). The seed project's PRM with the learned sampler connects Twistycool's passage:
+
+    python scripts/plan3d.py omplapp/resources/3D/Twistycool.cfg --setup prm --sampler rigid_route
+ ``--restarts UNIT`` (``.cfg`` problems)
 restarts the run by Luby's sequence times ``UNIT`` iterations (``planners.solve_with_restarts``; off by
 default: on the validation scenes restarts lose, though they cut the learned sampler's stalls on Twistycool):
 
@@ -40,7 +44,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scene", type=Path, help="scene file (format: planners.worlds.rigid3d.load_scene) or an "
                                              "OMPL.app .cfg problem")
-    ap.add_argument("--setup", choices=SETUPS, help="the seed project's PRM or RRT set-up (scene files; required)")
+    ap.add_argument("--setup", choices=SETUPS, help="the seed project's PRM or RRT set-up (required for a scene file; "
+                                                    "for a .cfg problem, in place of RRT-Connect)")
     ap.add_argument("--time-limit", type=float, help="seconds for a .cfg problem (default: its time_limit)")
     ap.add_argument("--seed", type=int, default=0, help="planner seed (>= 0)")
     ap.add_argument("--sampler", default=None, metavar="NAME",
@@ -70,8 +75,9 @@ def main(argv=None) -> int:
         return fail(f"--time-limit must be a positive number of seconds, got {args.time_limit}")
     if args.restarts < 0:
         return fail(f"--restarts must be 0 (none) or a number of iterations, got {args.restarts}")
-    if args.restarts and not mesh:
-        return fail("--restarts is for OMPL.app .cfg problems (RRT-Connect); a scene file plans with its set-up")
+    if args.restarts and not (mesh and args.setup is None):
+        return fail("--restarts is for OMPL.app .cfg problems planned with RRT-Connect; a set-up (--setup) plans "
+                    "without restarts")
     try:
         if mesh:
             from planners.worlds.omplapp import load_omplapp
@@ -91,18 +97,20 @@ def main(argv=None) -> int:
             sampler = make_sampler(args.sampler)
         except (InputError, OSError) as exc:
             return fail(f"--sampler {args.sampler}: {exc}")
-    t0 = time.perf_counter()  # making the planner binds its sampler (the sampler's per-query work): timed apart
+    from planners.base.planner import compile_seconds
+
+    # making the planner binds its sampler (the sampler's per-query work): timed apart, its compilation apart too
+    c_bind, t0 = compile_seconds(), time.perf_counter()
     try:
         if mesh and args.restarts:  # each attempt binds its sampler again: timed with the planning
             from planners import solve_with_restarts
-            from planners.base.planner import compile_seconds
 
             c0 = compile_seconds()
             r = solve_with_restarts("RRTConnect", problem, seed=args.seed, unit=args.restarts, time_limit=limit,
                                     **({} if sampler is None else {"sampler": sampler}))
             compiled, planned = compile_seconds() - c0, problem
             budget, args.setup = f"{limit:g} s, restarts by Luby's sequence x {args.restarts}", "RRT-Connect"
-        elif mesh:
+        elif mesh and args.setup is None:
             from planners import RRTConnect
 
             planner, budget = RRTConnect(problem, seed=args.seed, sampler=sampler), f"{limit:g} s"
@@ -116,9 +124,14 @@ def main(argv=None) -> int:
     except InputError as exc:
         return fail(f"--sampler {args.sampler}: {exc}" if sampler is not None else str(exc))
     if not args.restarts:
-        t_sampler = time.perf_counter() - t0
-        r = planner.solve(time_limit=limit) if mesh else planner.solve(max_iterations=budget)
-        compiled, planned = planner.compile_time, planner.problem
+        c_bind = compile_seconds() - c_bind  # a first run compiles the world's and the sampler's kernels here
+        t_sampler = time.perf_counter() - t0 - c_bind
+        if mesh and args.setup in SETUPS:  # the set-up's budget, within the problem's time limit too
+            r = planner.solve(max_iterations=budget, time_limit=limit)
+            budget = f"{budget} iterations, {limit:g} s"
+        else:
+            r = planner.solve(time_limit=limit) if mesh else planner.solve(max_iterations=budget)
+        compiled, planned = planner.compile_time + c_bind, planner.problem
 
     # imported only now: matplotlib costs a second, and bad input should fail fast
     from planners.viz.plotting import save_figure
@@ -136,7 +149,7 @@ def main(argv=None) -> int:
         return fail(f"cannot write under {args.out}: {exc}")
     t_out = time.perf_counter() - t0
     print(f"scene:            {args.scene} ({problem.world!r})")
-    unit = "" if mesh else " iterations"
+    unit = "" if mesh else " iterations"  # a .cfg problem's budget names its own units
     how = f", sampler {args.sampler}" if args.sampler else ""
     print(f"set-up:           {args.setup}: {r.planner}{how}, seed {args.seed}, budget {budget}{unit}")
     print(f"solved:           {r.solved} ({r.stop_reason})")
@@ -148,8 +161,9 @@ def main(argv=None) -> int:
               f"planner and sampler binding included; {compiled:.3f} s one-off compilation, {t_out:.1f} s figure "
               f"and GIF")
     else:
-        print(f"time:             {t_sampler + r.time - compiled:.3f} s to {'a path' if r.solved else 'stop'}: "
-              f"{t_sampler:.3f} s making the planner and binding its sampler, {r.time - compiled:.3f} s planning; "
+        print(f"time:             {t_sampler + r.time - planner.compile_time:.3f} s to "
+              f"{'a path' if r.solved else 'stop'}: {t_sampler:.3f} s making the planner and binding its sampler, "
+              f"{r.time - planner.compile_time:.3f} s planning; "
               f"{compiled:.3f} s one-off compilation, {t_out:.1f} s figure and GIF")
     if r.solved:
         print(f"path length:      {r.cost:.2f} ({len(r.path)} states)")

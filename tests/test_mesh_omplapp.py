@@ -251,6 +251,14 @@ def test_plan3d_plans_and_draws_a_problem_file(tmp_path):
     scene = plan3d(Path(repo / "planners" / "scenes" / "window.scene"), "--setup", "rrt", "--restarts", 5,
                    "--out", out)
     assert scene.returncode == 2 and "--restarts is for OMPL.app .cfg problems" in scene.stderr
+    # a .cfg problem with the seed project's PRM set-up: its samples, within the problem's time limit too
+    roadmap = plan3d(write_problem(tmp_path), "--setup", "prm", "--time-limit", 20, "--frames", 3,
+                     "--out", tmp_path / "prm")
+    assert roadmap.returncode == 0, roadmap.stderr
+    assert "set-up:           prm: PRM, seed 0, budget 5000 iterations, 20 s" in roadmap.stdout
+    assert (tmp_path / "prm" / "plan3d.gif").stat().st_size > 0
+    both = plan3d(write_problem(tmp_path), "--setup", "prm", "--restarts", 5, "--out", out)
+    assert both.returncode == 2 and "a set-up (--setup) plans without restarts" in both.stderr
 
 
 def test_ompl_runs_its_planners_on_a_problem_file(tmp_path):

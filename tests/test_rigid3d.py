@@ -555,6 +555,10 @@ def test_seed_project_setups_solve_the_window_scene(setup):
             assert 20 < dense[i, 1] < 40 and 10 < dense[i, 2] < 30, dense[i]
     with pytest.raises(ValueError, match="setup must be one of"):
         setup_planner(problem, "rrt*")
+    from planners.maps.generators import generate
+
+    with pytest.raises(TypeError, match="6-DoF rigid-body problem"):
+        setup_planner(generate("forest", 1, 32), "prm")  # a 2-D map has no set-up
 
 
 def test_dijkstra_and_astar_find_equally_short_roadmap_paths():

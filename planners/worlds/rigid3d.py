@@ -493,7 +493,7 @@ def setup_planner(problem: Problem, setup: str, *, seed: int = 0):
       problem's goal tolerance is replaced), 5% goal bias, at most 20,000 iterations.
 
     Args:
-        problem: A ``RigidBodyWorld`` problem.
+        problem: A 6-DoF problem: a ``RigidBodyWorld``'s (boxes) or a ``MeshWorld``'s (meshes, an OMPL.app ``.cfg``).
         setup: ``"prm"`` or ``"rrt"`` (``SETUPS``).
         seed: Seed of the planner's generator.
 
@@ -504,8 +504,9 @@ def setup_planner(problem: Problem, setup: str, *, seed: int = 0):
     from planners.algorithms.rrt import RRT
     from planners.base.samplers import GoalBiasedSampler
 
-    if not isinstance(problem, Problem) or not isinstance(problem.world, RigidBodyWorld):
-        raise TypeError(f"setup_planner needs a RigidBodyWorld problem, got {problem!r}")
+    # a box world or a mesh world (planners.worlds.mesh imports this module: its class is not named here)
+    if not isinstance(problem, Problem) or problem.dim != 6 or getattr(problem.world, "high3", None) is None:
+        raise TypeError(f"setup_planner needs a 6-DoF rigid-body problem (a box or mesh world), got {problem!r}")
     if setup not in SETUPS:
         raise InputError(f"setup must be one of {SETUPS}, got {setup!r}")
     if setup == "prm":
