@@ -21,9 +21,10 @@ RRT-Connect at its default step under ``--time-limit`` (default the file's ``tim
 of their triangles). The seed project's PRM with the learned sampler connects Twistycool's passage:
 
     python scripts/plan3d.py omplapp/resources/3D/Twistycool.cfg --setup prm --sampler rigid_route
- ``--restarts UNIT`` (``.cfg`` problems)
-restarts the run by Luby's sequence times ``UNIT`` iterations (``planners.solve_with_restarts``; off by
-default: on the validation scenes restarts lose, though they cut the learned sampler's stalls on Twistycool):
+
+``--restarts UNIT`` (``.cfg`` problems with RRT-Connect) restarts the run by Luby's sequence times ``UNIT``
+iterations (``planners.solve_with_restarts``; off by default: on the validation scenes restarts lose, though
+they cut the learned sampler's stalls on Twistycool):
 
     python scripts/plan3d.py omplapp/resources/3D/Twistycool.cfg --sampler rigid_route --restarts 1000
 Exit status: 0 solved, 1 not solved within the budget, 2 bad input or an output that cannot be written.
