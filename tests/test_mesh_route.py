@@ -150,6 +150,40 @@ def test_a_mesh_world_s_solid_share_is_the_boxes_volume_where_it_was_built_from_
     assert np.array_equal(patches, route_patches(seen, route, mesh.world.low3, 1.0)) and len(dirs) == len(route)
 
 
+def test_a_mesh_world_s_shares_by_axis_and_kept_fills_are_the_pointwise_ones():
+    import itertools
+
+    from planners.guidance.rigid_orientation import occupancy_grid
+    from planners.kernels import mesh as mesh_kernels
+    from planners.worlds.rigid_scenes import as_mesh_scene, rigid_scene
+
+    box = rigid_scene("shelves", 200_001)
+    world = as_mesh_scene(box).world
+    seeds = np.stack([box.start[:3], box.goal[:3]])
+    for cell, low in ((1.0, world.low3), (2.7, world.low3 - 0.3)):  # a lattice off the grid's, partly outside it
+        shape = np.floor((world.high3 - low) / cell).astype(np.int64) + 1
+        corners = low + cell * np.stack(np.meshgrid(*(np.arange(n) for n in shape), indexing="ij"), axis=-1)
+        pointwise = world.solid_share(corners.reshape(-1, 3), cell, seeds).reshape(tuple(shape))
+        assert np.array_equal(world.solid_share_grid(low, cell, np.zeros(3, dtype=int), shape, seeds), pointwise)
+        lo, hi = np.array([1, 2, 0]), shape - np.array([0, 1, 2])
+        part = world.solid_share_grid(low, cell, lo, hi, seeds)
+        assert np.array_equal(part, pointwise[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]])
+    assert np.array_equal(occupancy_grid(world, 1.0, seeds), world.solid_share_grid(
+        world.low3, 1.0, np.zeros(3, dtype=int), np.maximum(1, np.floor(world.high3 - world.low3)).astype(int), seeds))
+    # the kept parts of the open voxels: what one fill from every seed (and the voxels about it) reaches
+    shape = np.array(world.grid_shape)
+    nx, ny, nz = world.grid_shape
+    rng = np.random.default_rng(3)
+    for points in [seeds, rng.uniform(world.low3, world.high3, (6, 3)), rng.uniform(world.low3, world.high3, (1, 3)),
+                   seeds]:
+        near = (points[:, None] - world.grid_origin + world.route_cell
+                * np.array(list(itertools.product((-1, 0, 1), repeat=3)))).reshape(-1, 3)
+        at = np.floor(near / world.route_cell).astype(np.int64)
+        at = at[np.all((at >= 0) & (at < shape), axis=1)]
+        once = mesh_kernels.reach_open(world.grid, nx, ny, nz, (at[:, 0] * ny + at[:, 1]) * nz + at[:, 2])
+        assert np.array_equal(world.reached_from(points), once)
+
+
 def test_the_route_benchmark_times_a_mesh_worlds_bind_as_the_sampler_sees_it():
     from learning.evaluation.rigid_speed import PIECES, setup_times
     from learning.samplers.rigid_route import class_frame

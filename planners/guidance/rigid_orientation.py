@@ -84,8 +84,7 @@ def occupancy_grid(world, cell: float = 1.0, seeds=None) -> np.ndarray:
     if not hasattr(world, "boxes"):
         if seeds is None:
             raise ValueError("occupancy_grid of a mesh world needs seeds: points in its free space")
-        corners = low + cell * np.stack(np.meshgrid(*(np.arange(n) for n in shape), indexing="ij"), axis=-1)
-        return world.solid_share(corners.reshape(-1, 3), cell, seeds).reshape(tuple(shape))
+        return world.solid_share_grid(low, cell, np.zeros(3, dtype=np.int64), shape, seeds)
     grid = np.zeros(tuple(shape), dtype=np.float64)
     add_box_cover(grid, np.ascontiguousarray(world.boxes, dtype=np.float64).reshape(-1, 6), low, float(cell))
     return np.minimum(grid, 1.0).astype(np.float32)
@@ -125,21 +124,22 @@ def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF,
     directions = route_directions(route).astype(np.float32)
     if hasattr(world, "boxes"):
         return route_patches(occupancy_grid(world, cell), route, world.low3, cell, half), directions
-    # a mesh world: only the voxels the patches cover, each once (as route_patches over occupancy_grid would give)
+    # a mesh world: the voxels of the box the patches span only (as route_patches over occupancy_grid would give)
     if seeds is None and len(route):
         seeds = np.asarray(route, dtype=np.float64)[[0, -1], :3]
-    low, shape = _voxels(world, cell)
     side = 2 * half + 1
-    window = np.stack(np.meshgrid(*[np.arange(-half, half + 1)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
-    vox = voxel_index(route, low, cell, shape)[:, None, :] + window[None]  # (n, side^3, 3)
-    inside = np.all((vox >= 0) & (vox < shape), axis=2)
-    # each voxel once, in the voxels' row-major order (a flat index sorts as the rows would, and far faster)
-    flat, inverse = np.unique(np.ravel_multi_index(tuple(vox[inside].T), tuple(shape)), return_inverse=True)
-    patches = np.ones(inside.shape, dtype=np.float32)  # outside the workspace counts as covered
-    if len(flat):
-        keys = np.stack(np.unravel_index(flat, tuple(shape)), axis=1)
-        patches[inside] = world.solid_share(low + cell * keys, cell, seeds)[inverse.reshape(-1)]
-    return patches.reshape(-1, side, side, side), directions
+    if not len(route):
+        return np.ones((0, side, side, side), dtype=np.float32), directions
+    low, shape = _voxels(world, cell)
+    idx = voxel_index(route, low, cell, shape)
+    lo, hi = np.maximum(idx.min(axis=0) - half, 0), np.minimum(idx.max(axis=0) + half + 1, shape)
+    # outside the workspace counts as covered: the box's shares padded with ones, each patch a window of it
+    padded = np.ones(tuple(int(n) for n in hi - lo + 2 * half), dtype=np.float32)
+    padded[half:half + hi[0] - lo[0], half:half + hi[1] - lo[1], half:half + hi[2] - lo[2]] = \
+        world.solid_share_grid(low, cell, lo, hi, seeds)
+    windows = np.lib.stride_tricks.sliding_window_view(padded, (side, side, side))
+    at = idx - lo
+    return np.ascontiguousarray(windows[at[:, 0], at[:, 1], at[:, 2]]), directions
 
 
 def class_validity(world, points, rng: np.random.Generator, jitter: float, k: int, reduce: str = "mean") -> np.ndarray:

@@ -276,8 +276,11 @@ class _Deadline(threading.local):
 
 
 class _FCLCheck:
-    """FCL's bounding-volume trees of the body and the environment: the distance (``MeshWorld.clearance``) and the
-    reference test (``MeshWorld.pose_free_exact``); also this world's deadline (``MeshWorld.set_deadline``)."""
+    """FCL's bounding-volume trees of the body and the environment.
+
+    For the distance (``MeshWorld.clearance``) and the reference test (``MeshWorld.pose_free_exact``); also this
+    world's deadline (``MeshWorld.set_deadline``).
+    """
 
     def __init__(self, body, env) -> None:
         self.deadline = _Deadline()  # per thread: a planner's time limit (set_deadline)
@@ -373,6 +376,7 @@ class MeshWorld(WorldBase):
         self._grid_origin, self._grid_shape = origin, shape
         self.route_cell = side  # the workspace route's voxel (planners.guidance.workspace_route)
         self._inner_radius: float | None = None
+        self._open_parts: list[np.ndarray] = []  # parts of the open voxels found so far (``reached_from``)
         self.grid = mesh_kernels.chebyshev_grid(self.env_vertices, self.env_faces.astype(np.int64), origin,
                                                 side, int(shape[0]), int(shape[1]), int(shape[2]))
         self.cover, self.clusters = mesh_kernels.cover_clusters(cover_points(self.body_vertices, self.body_faces, side),
@@ -477,6 +481,16 @@ class MeshWorld(WorldBase):
         """
         return max(self.inner_radius, ROUTE_SPREAD_CELLS * self.route_cell)
 
+    @property
+    def grid_origin(self) -> np.ndarray:
+        """The broad phase's grid (``grid``, ``(nx, ny * nz)`` voxels of side ``route_cell``): its low corner."""
+        return self._grid_origin.copy()
+
+    @property
+    def grid_shape(self) -> tuple[int, int, int]:
+        """The broad phase's grid: its voxels along each axis, ``(nx, ny, nz)``."""
+        return tuple(int(n) for n in self._grid_shape)
+
     def workspace_clearance(self, points) -> np.ndarray:
         """``(n,)``: a lower bound on each point's distance to the environment's triangles.
 
@@ -517,6 +531,62 @@ class MeshWorld(WorldBase):
         d = self._distance_bound(x[:, None, None], y[None, :, None], z[None, None, :])
         return (d > self.inner_radius) & (d > 0)
 
+    #: The most parts of the open voxels a world keeps (``reached_from``): each is a bool over the broad phase's grid.
+    OPEN_PARTS = 4
+
+    def reached_from(self, seeds) -> np.ndarray:
+        """``(nx, ny * nz)`` bool: the broad phase's voxels reached from ``seeds`` without crossing a triangle.
+
+        The voxels of the points ``seeds`` and those about them start the fill (a seed beside a surface still starts
+        it); a voxel that meets a triangle is never entered. The world keeps the parts it has filled (up to
+        ``OPEN_PARTS``), so a later query whose seeds lie in them fills nothing again: the same voxels as one fill
+        from every seed, which reaches the union of the seeds' parts.
+        """
+        nx, ny, nz = (int(n) for n in self._grid_shape)
+        around = self.route_cell * np.array(list(itertools.product((-1, 0, 1), repeat=3)))
+        near = (np.asarray(seeds, dtype=np.float64).reshape(-1, 1, 3) - self._grid_origin + around).reshape(-1, 3)
+        i, r, inside = self._grid_cells(*near.T)
+        starts = np.unique((i * ny * nz + r)[inside])
+        starts = starts[self.grid.reshape(-1)[starts] != 0]  # a voxel that meets a triangle starts nothing
+        reached = np.zeros((nx, ny * nz), dtype=bool)
+        for v in starts:
+            if reached.reshape(-1)[v]:
+                continue
+            part = next((q for q in self._open_parts if q.reshape(-1)[v]), None)
+            if part is None:
+                part = mesh_kernels.reach_open(self.grid, nx, ny, nz, np.array([v], dtype=np.int64))
+                part.flags.writeable = False
+                self._open_parts = [part, *self._open_parts][:self.OPEN_PARTS]
+            reached |= part
+        return reached
+
+    def solid_share_grid(self, low, cell: float, lo, hi, seeds, samples: int = 3) -> np.ndarray:
+        """``solid_share`` of the cubes of side ``cell`` whose low corners are ``low + cell * k``, ``lo <= k < hi``.
+
+        ``(hi - lo)`` float32 over the three axes: the same values as ``solid_share`` of those corners, bit for bit,
+        from each axis's voxels of the broad phase looked up once per axis rather than once per point.
+        """
+        cell = float(cell)
+        if not (cell > 0 and math.isfinite(cell)):
+            raise InputError(f"cell must be a positive number, got {cell!r}")
+        low = np.asarray(low, dtype=np.float64)
+        lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
+        shape = self._grid_shape
+        reached = self.reached_from(seeds).reshape(tuple(int(n) for n in shape))
+        offsets = (np.arange(samples) + 0.5) / samples * cell
+        index, inside = [], []
+        for ax in range(3):  # each axis's broad-phase voxel at each sample offset, as _grid_cells gives it
+            rel = (low[ax] + cell * np.arange(lo[ax], hi[ax])) - self._grid_origin[ax]
+            at = [np.floor((rel + o) / self.route_cell).astype(np.int64) for o in offsets]
+            index.append([np.clip(a, 0, int(shape[ax]) - 1) for a in at])
+            inside.append([(a >= 0) & (a < int(shape[ax])) for a in at])
+        share = np.zeros(tuple(int(n) for n in hi - lo))
+        for a, b, c in itertools.product(range(samples), repeat=3):
+            solid = ~(reached[index[0][a]][:, index[1][b]][:, :, index[2][c]]
+                      & inside[0][a][:, None, None] & inside[1][b][None, :, None] & inside[2][c][None, None, :])
+            share += solid
+        return (share / samples ** 3).astype(np.float32)
+
     def solid_share(self, corners, cell: float, seeds, samples: int = 3) -> np.ndarray:
         """``(k,)`` float32: the share of each cube of side ``cell`` (low corners ``corners``, ``(k, 3)``) in solid.
 
@@ -530,12 +600,7 @@ class MeshWorld(WorldBase):
         cell = float(cell)
         if not (cell > 0 and math.isfinite(cell)):
             raise InputError(f"cell must be a positive number, got {cell!r}")
-        nx, ny, nz = (int(n) for n in self._grid_shape)
-        # the seeds' voxels and their neighbours: a seed beside a surface still starts the fill
-        around = self.route_cell * np.array(list(itertools.product((-1, 0, 1), repeat=3)))
-        near = (np.asarray(seeds, dtype=np.float64).reshape(-1, 1, 3) - self._grid_origin + around).reshape(-1, 3)
-        i, r, inside = self._grid_cells(*near.T)
-        reached = mesh_kernels.reach_open(self.grid, nx, ny, nz, (i * ny * nz + r)[inside])
+        reached = self.reached_from(seeds)
         corners = np.asarray(corners, dtype=np.float64).reshape(-1, 3) - self._grid_origin
         offsets = (np.arange(samples) + 0.5) / samples * cell
         share = np.zeros(len(corners))
