@@ -171,6 +171,25 @@ def test_a_mesh_world_s_shares_by_axis_and_kept_fills_are_the_pointwise_ones():
     assert np.array_equal(occupancy_grid(world, 1.0, seeds), world.solid_share_grid(
         world.low3, 1.0, np.zeros(3, dtype=int), np.maximum(1, np.floor(world.high3 - world.low3)).astype(int), seeds))
     # the kept parts of the open voxels: what one fill from every seed (and the voxels about it) reaches
+    # the sampler's observation over runs of compact boxes: each patch as point by point over its own voxels
+    from planners.guidance.rigid_orientation import route_boxes, route_observation, voxel_index
+
+    rng = np.random.default_rng(5)  # a long diagonal route (many boxes), jittered
+    walk = np.linspace(world.low3, world.high3 - 1e-6, 80) + rng.uniform(-0.5, 0.5, (80, 3))
+    walk = np.clip(walk, world.low3, world.high3 - 1e-6)
+    for cell in (1.0, 0.7):
+        patches, _ = route_observation(world, walk, cell, 3, seeds=seeds)
+        low, lattice = world.low3, np.maximum(1, np.floor((world.high3 - world.low3) / cell)).astype(int)
+        idx = voxel_index(walk, low, cell, lattice)
+        window = np.stack(np.meshgrid(*[np.arange(-3, 4)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
+        vox = idx[:, None, :] + window[None]
+        inside = np.all((vox >= 0) & (vox < lattice), axis=2)
+        expected = np.ones(inside.shape, dtype=np.float32)
+        expected[inside] = world.solid_share(low + cell * vox[inside], cell, seeds)
+        assert np.array_equal(patches, expected.reshape(-1, 7, 7, 7))
+        runs = route_boxes(idx, 3)
+        assert len(runs) > 1 and runs[0][0] == 0 and runs[-1][1] == len(walk)
+        assert all(b0 == a1 for (_, b0), (a1, _) in zip(runs, runs[1:], strict=False))  # in order, each point once
     shape = np.array(world.grid_shape)
     nx, ny, nz = world.grid_shape
     rng = np.random.default_rng(3)

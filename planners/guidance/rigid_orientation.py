@@ -132,14 +132,44 @@ def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF,
         return np.ones((0, side, side, side), dtype=np.float32), directions
     low, shape = _voxels(world, cell)
     idx = voxel_index(route, low, cell, shape)
-    lo, hi = np.maximum(idx.min(axis=0) - half, 0), np.minimum(idx.max(axis=0) + half + 1, shape)
-    # outside the workspace counts as covered: the box's shares padded with ones, each patch a window of it
-    padded = np.ones(tuple(int(n) for n in hi - lo + 2 * half), dtype=np.float32)
-    padded[half:half + hi[0] - lo[0], half:half + hi[1] - lo[1], half:half + hi[2] - lo[2]] = \
-        world.solid_share_grid(low, cell, lo, hi, seeds)
-    windows = np.lib.stride_tricks.sliding_window_view(padded, (side, side, side))
-    at = idx - lo
-    return np.ascontiguousarray(windows[at[:, 0], at[:, 1], at[:, 2]]), directions
+    reached = world.reached_from(seeds)
+    patches = np.empty((len(idx), side, side, side), dtype=np.float32)
+    for a, b in route_boxes(idx, half):  # runs of route points whose patches span a compact box
+        lo, hi = np.maximum(idx[a:b].min(axis=0) - half, 0), np.minimum(idx[a:b].max(axis=0) + half + 1, shape)
+        # outside the workspace counts as covered: the box's shares padded with ones, each patch a window of it
+        padded = np.ones(tuple(int(n) for n in hi - lo + 2 * half), dtype=np.float32)
+        padded[half:half + hi[0] - lo[0], half:half + hi[1] - lo[1], half:half + hi[2] - lo[2]] = \
+            world.share_grid_of(reached, low, cell, lo, hi)
+        windows = np.lib.stride_tricks.sliding_window_view(padded, (side, side, side))
+        at = idx[a:b] - lo
+        patches[a:b] = windows[at[:, 0], at[:, 1], at[:, 2]]
+    return patches, directions
+
+
+#: ``route_boxes``: a run's box holds at most this many times the voxels of its points' patches.
+BOX_VOXELS_PER_PATCH = 4
+
+
+def route_boxes(idx, half: int = PATCH_HALF) -> list[tuple[int, int]]:
+    """Runs ``[a, b)`` of consecutive route voxels ``idx`` (``(n, 3)``) whose patches (``half`` about each) span a box.
+
+    A run grows while its box holds at most ``BOX_VOXELS_PER_PATCH`` times its patches' voxels, so the occupancy
+    computed over the boxes follows the route (a long diagonal route is many small boxes, not the workspace's cube).
+    """
+    idx = np.asarray(idx, dtype=np.int64).reshape(-1, 3)
+    patch = (2 * half + 1) ** 3
+    runs, a = [], 0
+    lo = hi = idx[0] if len(idx) else None
+    for i in range(1, len(idx)):
+        lo_i, hi_i = np.minimum(lo, idx[i]), np.maximum(hi, idx[i])
+        if np.prod(hi_i - lo_i + 2 * half + 1) > BOX_VOXELS_PER_PATCH * (i - a + 1) * patch:
+            runs.append((a, i))
+            a, lo, hi = i, idx[i], idx[i]
+        else:
+            lo, hi = lo_i, hi_i
+    if len(idx):
+        runs.append((a, len(idx)))
+    return runs
 
 
 def class_validity(world, points, rng: np.random.Generator, jitter: float, k: int, reduce: str = "mean") -> np.ndarray:

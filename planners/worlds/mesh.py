@@ -566,13 +566,17 @@ class MeshWorld(WorldBase):
         ``(hi - lo)`` float32 over the three axes: the same values as ``solid_share`` of those corners, bit for bit,
         from each axis's voxels of the broad phase looked up once per axis rather than once per point.
         """
+        return self.share_grid_of(self.reached_from(seeds), low, cell, lo, hi, samples)
+
+    def share_grid_of(self, reached, low, cell: float, lo, hi, samples: int = 3) -> np.ndarray:
+        """``solid_share_grid`` from ``reached`` (``reached_from``'s voxels), for many boxes of one query."""
         cell = float(cell)
         if not (cell > 0 and math.isfinite(cell)):
             raise InputError(f"cell must be a positive number, got {cell!r}")
         low = np.asarray(low, dtype=np.float64)
         lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
         shape = self._grid_shape
-        reached = self.reached_from(seeds).reshape(tuple(int(n) for n in shape))
+        reached = np.asarray(reached).reshape(tuple(int(n) for n in shape))
         offsets = (np.arange(samples) + 0.5) / samples * cell
         index, inside = [], []
         for ax in range(3):  # each axis's broad-phase voxel at each sample offset, as _grid_cells gives it
