@@ -13,7 +13,8 @@ pose under four rotations (``class_rotations``).
 * ``route_directions(route, reach)``: the route's unit direction at each of its points.
 * ``route_observation(world, route)``: both, at every route point: the observation of the learned
   orientation model (``learning.models.rigid_orientation``), computed once per query. A mesh world's
-  occupancy is its ``solid_share`` (surfaces and what they enclose, seen from the query's free space).
+  occupancy is its ``solid_share`` (surfaces and what they enclose, seen from the query's free space),
+  computed over the boxes of runs of the route (``route_boxes``).
 * ``body_axes(vertices)``: a body's long, middle and short axes, which carry the classes to a mesh body.
 * ``permute_class`` / ``CLASS_PERMUTATIONS``: how the classes move when the world's axes are permuted
   (the training's augmentation).
