@@ -133,14 +133,13 @@ def route_observation(world, route, cell: float = 1.0, half: int = PATCH_HALF,
         return np.ones((0, side, side, side), dtype=np.float32), directions
     low, shape = _voxels(world, cell)
     idx = voxel_index(route, low, cell, shape)
-    reached = world.reached_from(seeds)
     patches = np.empty((len(idx), side, side, side), dtype=np.float32)
     for a, b in route_boxes(idx, half):  # runs of route points whose patches span a compact box
         lo, hi = np.maximum(idx[a:b].min(axis=0) - half, 0), np.minimum(idx[a:b].max(axis=0) + half + 1, shape)
         # outside the workspace counts as covered: the box's shares padded with ones, each patch a window of it
         padded = np.ones(tuple(int(n) for n in hi - lo + 2 * half), dtype=np.float32)
         padded[half:half + hi[0] - lo[0], half:half + hi[1] - lo[1], half:half + hi[2] - lo[2]] = \
-            world.share_grid_of(reached, low, cell, lo, hi)
+            world.solid_share_grid(low, cell, lo, hi, seeds)  # the world's kept fill: no fill again per box
         windows = np.lib.stride_tricks.sliding_window_view(padded, (side, side, side))
         at = idx[a:b] - lo
         patches[a:b] = windows[at[:, 0], at[:, 1], at[:, 2]]

@@ -540,7 +540,7 @@ class MeshWorld(WorldBase):
         The voxels of the points ``seeds`` and those about them start the fill (a seed beside a surface still starts
         it); a voxel that meets a triangle is never entered. The world keeps the parts it has filled (up to
         ``OPEN_PARTS``), so a later query whose seeds lie in them fills nothing again: the same voxels as one fill
-        from every seed, which reaches the union of the seeds' parts.
+        from every seed, which reaches the union of the seeds' parts. Read-only: it may be a kept part itself.
         """
         nx, ny, nz = (int(n) for n in self._grid_shape)
         around = self.route_cell * np.array(list(itertools.product((-1, 0, 1), repeat=3)))
@@ -548,16 +548,19 @@ class MeshWorld(WorldBase):
         i, r, inside = self._grid_cells(*near.T)
         starts = np.unique((i * ny * nz + r)[inside])
         starts = starts[self.grid.reshape(-1)[starts] != 0]  # a voxel that meets a triangle starts nothing
-        reached = np.zeros((nx, ny * nz), dtype=bool)
+        reached = None
         for v in starts:
-            if reached.reshape(-1)[v]:
+            if reached is not None and reached.reshape(-1)[v]:
                 continue
             part = next((q for q in self._open_parts if q.reshape(-1)[v]), None)
             if part is None:
                 part = mesh_kernels.reach_open(self.grid, nx, ny, nz, np.array([v], dtype=np.int64))
                 part.flags.writeable = False
                 self._open_parts = [part, *self._open_parts][:self.OPEN_PARTS]
-            reached |= part
+            reached = part if reached is None else reached | part
+        if reached is None:  # no seed in open space: nothing reached
+            return np.zeros((nx, ny * nz), dtype=bool)
+        reached.flags.writeable = False
         return reached
 
     def solid_share_grid(self, low, cell: float, lo, hi, seeds, samples: int = 3) -> np.ndarray:
@@ -566,17 +569,13 @@ class MeshWorld(WorldBase):
         ``(hi - lo)`` float32 over the three axes: the same values as ``solid_share`` of those corners, bit for bit,
         from each axis's voxels of the broad phase looked up once per axis rather than once per point.
         """
-        return self.share_grid_of(self.reached_from(seeds), low, cell, lo, hi, samples)
-
-    def share_grid_of(self, reached, low, cell: float, lo, hi, samples: int = 3) -> np.ndarray:
-        """``solid_share_grid`` from ``reached`` (``reached_from``'s voxels), for many boxes of one query."""
         cell = float(cell)
         if not (cell > 0 and math.isfinite(cell)):
             raise InputError(f"cell must be a positive number, got {cell!r}")
         low = np.asarray(low, dtype=np.float64)
         lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
         shape = self._grid_shape
-        reached = np.asarray(reached).reshape(tuple(int(n) for n in shape))
+        reached = self.reached_from(seeds).reshape(tuple(int(n) for n in shape))
         offsets = (np.arange(samples) + 0.5) / samples * cell
         index, inside = [], []
         for ax in range(3):  # each axis's broad-phase voxel at each sample offset, as _grid_cells gives it
