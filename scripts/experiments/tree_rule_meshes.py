@@ -27,9 +27,10 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP
+
 #: The rules compared: sampler settings handed to ``make_sampler("rigid_route", ...)`` (None: no sampler).
-RULES = {"uniform": None, "trees": {},
-         "roadmap": {"symmetry": "chain", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0}}
+RULES = {"uniform": None, "trees": {}, "roadmap": dict(SHIPPED_RIGID_ROADMAP)}
 _PROBLEMS: dict = {}
 
 
