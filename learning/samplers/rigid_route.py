@@ -18,9 +18,10 @@ and its distribution over the six axis-aligned orientation classes there. Per sa
   model's distribution there, one of the class's four rotations (the box's symmetry: the same volume, far apart in
   the planner's metric) at random (``symmetry="random"``), the one nearest the orientation of the query's end
   nearer the sample's route point (``symmetry="ends"``: the start's or the goal's; the trees' rule), or the one
-  nearest a chain of rotations walked along the route from the ends (``symmetry="chain"``, ``rotation_chain``:
-  the roadmaps' rule, with every route sample on the route; ``for_planner``), turned by a random rotation of
-  about ``angle_noise`` radians per axis (a Gaussian rotation vector);
+  nearest a chain of rotations walked along the route (``rotation_chain``: from the start all along,
+  ``symmetry="chain_start"``, the roadmaps' rule, with every route sample on the route; ``for_planner``; or from
+  both ends, ``"chain"``), turned by a random rotation of about ``angle_noise`` radians per axis (a Gaussian
+  rotation vector);
 * else a uniform state.
 
 Samples do not depend on the tree, so they come in batches. The orientation model learned on a box body
@@ -57,10 +58,12 @@ from planners.worlds.mesh import rotation_matrices
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
                           "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75}
 #: What a roadmap planner takes instead (``RigidRouteSampler.for_planner``): every route sample on the route, each
-#: in the model's class (no uniform angles) at the rotation of the chain along the route, unturned; chosen for PRM on
-#: the tuning scenes, kept by the validation scenes (``docs/rigid-scenes.md``). The trees keep
-#: ``SHIPPED_RIGID_SETTINGS``' (the chain lost on the tuning scenes, a smaller angle noise on the validation scenes).
-SHIPPED_RIGID_ROADMAP = {"symmetry": "chain", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0}
+#: in the model's class (no uniform angles) at the rotation of the chain walked from the start all along the route
+#: (where walks from both ends meet, in a passage, two rotations a half turn apart may leave the roadmap in two
+#: parts), unturned; chosen for PRM on the tuning scenes, kept by the validation scenes (``docs/rigid-scenes.md``).
+#: The trees keep ``SHIPPED_RIGID_SETTINGS``' (the chain lost on the tuning scenes, a smaller angle noise on the
+#: validation scenes).
+SHIPPED_RIGID_ROADMAP = {"symmetry": "chain_start", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
@@ -182,7 +185,7 @@ class RigidRouteSampler(SamplerBase):
 
         A roadmap keeps every sample and joins each to its few nearest, so it needs samples in a passage's
         orientation all along the route at once, each at its neighbours' rotation: on the validation scenes PRM with
-        ``SHIPPED_RIGID_ROADMAP`` connects 106 of 120 queries, with the trees' settings 84 (``docs/rigid-scenes.md``).
+        ``SHIPPED_RIGID_ROADMAP`` connects 116 of 120 queries, with the trees' settings 84 (``docs/rigid-scenes.md``).
         """
         if family != FAMILY_ROADMAP or not self.roadmap:
             return self
