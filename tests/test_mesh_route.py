@@ -109,6 +109,30 @@ def test_the_route_samplers_plan_a_mesh_world_seeded(world):
     assert runs[0].solved and np.array_equal(runs[0].path, runs[1].path)
 
 
+def test_on_a_mesh_world_every_planner_takes_the_roadmaps_rule_and_a_users_setting_holds(world):
+    from learning.samplers.registry import make_sampler
+    from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS
+    from planners.worlds.rigid_scenes import rigid_scene
+
+    problem = Problem(world, np.array([2.0, 2.0, 8.0, 0, 0, 0]), np.array([8.0, 8.0, 2.0, 0, 0, 0]),
+                      goal_tolerance=0.5)
+    for name in ("RRT", "RRTConnect", "PRM"):
+        bound = make_planner(name, problem, seed=0, sampler=make_sampler("rigid_route")).sampler
+        assert all(getattr(bound, k) == v for k, v in SHIPPED_RIGID_ROADMAP.items()), name
+        assert bound.chain.shape == (len(bound.route), 3, 3)
+    # a box world: the trees keep their own rule
+    tree = make_planner("RRT", rigid_scene("slot", 12345), seed=0, sampler=make_sampler("rigid_route")).sampler
+    assert all(getattr(tree, k) == SHIPPED_RIGID_SETTINGS[k] for k in SHIPPED_RIGID_ROADMAP)
+    # what a user sets holds on a mesh world too; what they leave is the roadmaps'
+    mine = make_sampler("rigid_route", symmetry="ends", angle_noise=0.2)
+    bound = make_planner("RRTConnect", problem, seed=0, sampler=mine).sampler
+    assert (bound.symmetry, bound.angle_noise) == ("ends", 0.2)
+    assert (bound.route_fraction, bound.uniform_share) == (SHIPPED_RIGID_ROADMAP["route_fraction"],
+                                                          SHIPPED_RIGID_ROADMAP["uniform_share"])
+    # the sampler handed over is unchanged: as given, the rest the trees'
+    assert (mine.symmetry, mine.route_fraction) == ("ends", SHIPPED_RIGID_SETTINGS["route_fraction"])
+
+
 def test_the_learned_orientations_put_a_mesh_body_s_long_side_along_a_world_axis():
     from learning.samplers.registry import make_sampler
     from planners.guidance.rigid_orientation import body_axes

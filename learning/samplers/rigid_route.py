@@ -61,8 +61,9 @@ SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2,
 #: in the model's class (no uniform angles) at the rotation of the chain walked from the start all along the route
 #: (where walks from both ends meet, in a passage, two rotations a half turn apart may leave the roadmap in two
 #: parts), unturned; chosen for PRM on the tuning scenes, kept by the validation scenes (``docs/rigid-scenes.md``).
-#: The trees keep ``SHIPPED_RIGID_SETTINGS``' (the chain lost on the tuning scenes, a smaller angle noise on the
-#: validation scenes).
+#: On box worlds the trees keep ``SHIPPED_RIGID_SETTINGS``' (the chain lost on the tuning scenes, a smaller angle
+#: noise on the validation scenes); on mesh worlds they take these too (``bind``: on the training families written as
+#: meshes, tuning and validation parts, in 0.7 to 0.8 of the time; ``scripts/experiments/tree_rule_meshes.py``).
 SHIPPED_RIGID_ROADMAP = {"symmetry": "chain_start", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0}
 
 _ROTATIONS = class_rotations()
@@ -137,8 +138,9 @@ class RigidRouteSampler(SamplerBase):
             [0, 1], takes uniform angles (0: the model's class wherever ``uniform_share`` does not say uniform).
         min_route_confidence: Where the largest class probability over all the route's points is below this, in
             [0, 1], every route sample of the query takes uniform angles (the ablation's draw).
-        roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``): any of
-            ``ROADMAP_SETTINGS`` (``make_sampler`` gives the validated ``SHIPPED_RIGID_ROADMAP``).
+        roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and
+            every planner on a mesh world (at ``bind``): any of ``ROADMAP_SETTINGS`` (``make_sampler`` gives the
+            validated ``SHIPPED_RIGID_ROADMAP``).
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
@@ -200,6 +202,10 @@ class RigidRouteSampler(SamplerBase):
         from learning.models.threads import planning_threads
 
         world = route_world(self.problem.world, "RigidRouteSampler")
+        if self.roadmap and not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too
+            for key, value in self.roadmap.items():
+                setattr(self, key, value)
+            self.roadmap = {}
         cell = float(world.route_cell if self.cell is None else self.cell)
         self.rotations, seen = class_frame(world, self.cell)
         route = voxel_route(world, self.problem.start, self.problem.goal, cell)

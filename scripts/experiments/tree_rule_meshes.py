@@ -5,9 +5,10 @@
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --omplapp DIR --problems Twistycooler Apartment \\
         --planners RRTConnect --seeds 4 --time-limit 20 --out results/tree_rule_omplapp.jsonl
 
-``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) and a
-roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation, every route sample on the route, no uniform
-angles, no angle noise). This runs the trees with each rule (``--rules``; ``uniform``: the planner's own sampling)
+``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) on box worlds
+and a roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation from the start, every route sample on the
+route, no uniform angles, no angle noise); on mesh worlds the trees take the roadmaps' rule too, as this script's runs
+chose. This runs the trees with each rule (``--rules``; ``uniform``: the planner's own sampling)
 under a time limit, on a part of the training box-scene families written as mesh worlds (``mesh_scene`` at the
 default motion resolution; a scene whose box witness meets its meshes is left out, as the mesh scene set leaves it
 out), or with ``--omplapp DIR`` on OMPL.app's ``.cfg`` problems named by ``--problems``. It prints per planner and
@@ -27,10 +28,13 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP
+from learning.samplers.rigid_route import ROADMAP_SETTINGS, SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS
 
-#: The rules compared: sampler settings handed to ``make_sampler("rigid_route", ...)`` (None: no sampler).
-RULES = {"uniform": None, "trees": {}, "roadmap": dict(SHIPPED_RIGID_ROADMAP)}
+#: The rules compared: sampler settings handed to ``make_sampler("rigid_route", ...)`` (None: no sampler). The trees'
+#: rule is given whole: settings a user gives hold on every world, where ``make_sampler("rigid_route")`` alone gives
+#: a tree on a mesh world the roadmaps' rule.
+RULES = {"uniform": None, "trees": {k: SHIPPED_RIGID_SETTINGS[k] for k in ROADMAP_SETTINGS},
+         "roadmap": dict(SHIPPED_RIGID_ROADMAP)}
 _PROBLEMS: dict = {}
 
 
