@@ -46,6 +46,9 @@ def main(argv=None) -> int:
     ap.add_argument("--test-only", nargs="*", default=list(TEST_ONLY_FAMILIES),
                     help="test-only families (in --part test only)")
     ap.add_argument("--scenes", type=int, default=2, help="scenes per family")
+    ap.add_argument("--first-scene", type=int, default=0, metavar="K",
+                    help="each family's scenes of --part from its K-th on (0: its first; fresh scenes beside ones "
+                         "already looked at)")
     ap.add_argument("--seeds", type=int, default=1, help="planner seeds per scene (0, 1, ...)")
     ap.add_argument("--planners", nargs="+", default=list(PLANNERS))
     ap.add_argument("--samplers", nargs="+", help=f"registry names (default {' '.join(SAMPLERS)})")
@@ -71,6 +74,10 @@ def main(argv=None) -> int:
 
     if args.scenes < 1 or args.seeds < 1:
         return fail(f"--scenes and --seeds must be at least 1, got {args.scenes} and {args.seeds}")
+    if args.first_scene < 0:
+        return fail(f"--first-scene must be 0 or more, got {args.first_scene}")
+    if args.first_scene and args.mesh:
+        return fail("--first-scene is for the generated box scenes; the mesh scene set is test-only")
     if args.max_iterations is not None and args.max_iterations < 1:
         return fail(f"--max-iterations must be at least 1, got {args.max_iterations}")
     if args.restarts < 0:
@@ -100,7 +107,8 @@ def main(argv=None) -> int:
 
             scenes = MeshSceneSet(args.test_only, args.scenes, args.omplapp, args.problems)
         else:
-            scenes = RigidSceneSet(args.families, args.test_only, {args.part: args.scenes})
+            scenes = RigidSceneSet(args.families, args.test_only, {args.part: args.scenes},
+                                   first={args.part: args.first_scene})
         print(scenes.describe(), flush=True)
 
         def show(row) -> None:
@@ -115,7 +123,8 @@ def main(argv=None) -> int:
         return fail(str(e))
     by_sampler = format_table(summarize(rows))
     by_family = format_table(summarize(rows, ("family", "planner", "sampler")), ("family", "planner", "sampler"))
-    text = (f"# {args.part} part: {args.scenes} scenes per family, {args.seeds} seeds"
+    text = (f"# {args.part} part: {args.scenes} scenes per family"
+            + (f" from its scene {args.first_scene} on" if args.first_scene else "") + f", {args.seeds} seeds"
             + (f", runs restarting by Luby's sequence x {args.restarts} iterations" if args.restarts else "") + "\n\n"
             "Times are wall-clock seconds on whatever machine ran this (compilation left out).\n\n"
             f"{by_sampler}\n\n## By family\n\n{by_family}\n")

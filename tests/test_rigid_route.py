@@ -260,6 +260,14 @@ def test_the_training_script_writes_weights_and_recipe_and_the_comparison_takes_
     assert evaluate_rigid.main(["--sampler-params", "[1]", "--out", str(tmp_path / "e")]) == 2
     assert evaluate_rigid.main(["--sampler-params", "{", "--out", str(tmp_path / "e")]) == 2
     assert "sampler-params" in capsys.readouterr().err
+    assert evaluate_rigid.main(["--first-scene", "-1", "--out", str(tmp_path / "e")]) == 2
+    assert evaluate_rigid.main(["--first-scene", "2", "--mesh", "--part", "test", "--out", str(tmp_path / "e")]) == 2
+    assert "--first-scene" in capsys.readouterr().err
+    # a part from a later scene on: the runs name those scenes
+    assert evaluate_rigid.main(["--families", "slot", "--scenes", "1", "--first-scene", "16", "--planners", "RRT",
+                                "--samplers", "uniform", "--max-iterations", "20", "--out", str(tmp_path / "f")]) == 0
+    assert [r["scene"] for r in json.loads((tmp_path / "f" / "rows.json").read_text())] == ["slot-200016"]
+    assert "from its scene 16 on" in (tmp_path / "f" / "summary.md").read_text()
 
 
 def test_the_own_ablation_draws_the_learned_samplers_positions_with_uniform_angles_and_needs_no_model():

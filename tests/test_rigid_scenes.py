@@ -68,6 +68,17 @@ def test_parts_take_the_generated_maps_seed_ranges_and_never_share_a_scene():
     assert {q.family for q in ss.queries("tuning")} == set(TRAINING_FAMILIES)
     assert not set(TEST_ONLY_FAMILIES) & set(TRAINING_FAMILIES)
     assert ss.record()["parts"]["test"][-1] == f"elbow-{UNSEEN_SEED0 + 2}"
+    # a part from a later scene on: the scenes after those of a smaller set, and nothing else moves
+    later = RigidSceneSet(counts={"validation": 2, "test": 1}, first={"validation": 3, "test": 2}, verify=False)
+    assert [q.seed for q in later.queries("validation") if q.family == "slot"] == [VALIDATION_SEED0 + 3,
+                                                                                    VALIDATION_SEED0 + 4]
+    assert not {q.name for q in later.queries("validation")} & names["validation"]
+    assert later.record()["parts"]["test"][-1] == f"elbow-{UNSEEN_SEED0 + 2}"
+    assert later.queries("tuning") == RigidSceneSet(verify=False).queries("tuning")
+    assert f"seeds from {VALIDATION_SEED0 + 3}" in later.describe()
+    assert scene_seeds("slot", "tuning", 2, first=5) == [TUNING_SEED0 + 5, TUNING_SEED0 + 6]
+    with pytest.raises(InputError, match="first"):
+        RigidSceneSet(first={"train": 1})
 
 
 @pytest.mark.parametrize("family", FAMILIES)

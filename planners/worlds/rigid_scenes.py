@@ -82,8 +82,8 @@ SCENE_TRIES = 8
 _SEED0 = {"validation": VALIDATION_SEED0, "tuning": TUNING_SEED0, "test": TEST_SEED0}
 
 
-def scene_seeds(family: str, part: str, count: int) -> list[int]:
-    """The seeds of ``count`` scenes of ``family`` in ``part``.
+def scene_seeds(family: str, part: str, count: int, first: int = 0) -> list[int]:
+    """The seeds of ``count`` scenes of ``family`` in ``part``, from its ``first``-th scene on (0: its first).
 
     Validation, tuning and test scenes take consecutive seeds from the part's first seed; the
     test-only families take theirs from ``UNSEEN_SEED0``, in the test part only.
@@ -92,15 +92,16 @@ def scene_seeds(family: str, part: str, count: int) -> list[int]:
     """
     _check_family(family)
     check_int(count, "count", low=0)
+    check_int(first, "first", low=0)
     if part not in PARTS:
         raise InputError(f"unknown part {part!r}; choose from {', '.join(PARTS)}")
     if family in TEST_ONLY_FAMILIES:
         if part != "test":
             raise InputError(f"scene family {family!r} is test-only: it has no {part!r} part")
-        return [UNSEEN_SEED0 + i for i in range(count)]
+        return [UNSEEN_SEED0 + i for i in range(first, first + count)]
     if part == "train":
         raise InputError("the train part draws its seeds from TRAIN_SEEDS (RigidSceneSet.sample), it has no fixed list")
-    return [_SEED0[part] + i for i in range(count)]
+    return [_SEED0[part] + i for i in range(first, first + count)]
 
 
 def _check_family(family) -> None:
@@ -467,11 +468,13 @@ class RigidSceneSet:
             validation, tuning and test scenes are consecutive seeds from each part's first seed.
         test_only: Test-only families (default all of ``TEST_ONLY_FAMILIES``), in the test part only.
         counts: Scenes per family in ``validation``, ``tuning`` and ``test`` (``DEFAULT_COUNTS``).
+        first: Per part, the index of its first scene in the set (default 0): a part's scenes from there on, so
+            that a rule can be judged on scenes nobody has looked at beside the ones that were.
         verify: Prove every scene solvable (``rigid_scene``); off only for quick looks.
     """
 
     def __init__(self, families=TRAINING_FAMILIES, test_only=TEST_ONLY_FAMILIES, counts: dict | None = None,
-                 *, verify: bool = True) -> None:
+                 *, first: dict | None = None, verify: bool = True) -> None:
         for f in families:
             if f not in TRAINING_FAMILIES:
                 raise InputError(f"{f!r} is not a training scene family; choose from {', '.join(TRAINING_FAMILIES)}")
@@ -485,6 +488,11 @@ class RigidSceneSet:
             if part not in DEFAULT_COUNTS:
                 raise InputError(f"counts: unknown part {part!r}; give counts for {', '.join(DEFAULT_COUNTS)}")
             self.counts[part] = check_int(n, f"counts[{part!r}]", low=0)
+        self.first = dict.fromkeys(DEFAULT_COUNTS, 0)
+        for part, n in (first or {}).items():
+            if part not in DEFAULT_COUNTS:
+                raise InputError(f"first: unknown part {part!r}; give first scenes for {', '.join(DEFAULT_COUNTS)}")
+            self.first[part] = check_int(n, f"first[{part!r}]", low=0)
         self.verify = bool(verify)
         self._cache: dict[tuple[str, int], Problem] = {}
 
@@ -493,7 +501,8 @@ class RigidSceneSet:
         if part not in DEFAULT_COUNTS:
             raise InputError(f"part must be one of {', '.join(DEFAULT_COUNTS)} (train is drawn: sample), got {part!r}")
         fams = self.families + (self.test_only if part == "test" else ())
-        return [SceneQuery(f, s, part) for f in fams for s in scene_seeds(f, part, self.counts[part])]
+        return [SceneQuery(f, s, part) for f in fams
+                for s in scene_seeds(f, part, self.counts[part], self.first[part])]
 
     def problem(self, query: SceneQuery) -> Problem:
         """The scene of ``query`` (generated and verified once, then kept)."""
@@ -518,9 +527,11 @@ class RigidSceneSet:
                  f"test-only families {', '.join(self.test_only) or 'none'}",
                  f"  train: seeds drawn from [{TRAIN_SEEDS[0]}, {TRAIN_SEEDS[1]})"]
         for part in DEFAULT_COUNTS:
-            lines.append(f"  {part}: {self.counts[part]} scenes per family, seeds from {_SEED0[part]}")
+            seed0 = _SEED0[part] + self.first[part]
+            lines.append(f"  {part}: {self.counts[part]} scenes per family, seeds from {seed0}")
         if self.test_only:
-            lines.append(f"  test-only families: {self.counts['test']} test scenes each, seeds from {UNSEEN_SEED0}")
+            lines.append(f"  test-only families: {self.counts['test']} test scenes each, seeds from "
+                         f"{UNSEEN_SEED0 + self.first['test']}")
         return "\n".join(lines)
 
     def record(self) -> dict:
