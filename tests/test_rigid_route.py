@@ -270,6 +270,36 @@ def test_the_training_script_writes_weights_and_recipe_and_the_comparison_takes_
     assert "from its scene 16 on" in (tmp_path / "f" / "summary.md").read_text()
 
 
+def test_a_passage_weight_crowds_route_positions_where_the_route_is_tight_and_zero_leaves_the_draws_as_they_were():
+    from planners.worlds.rigid_scenes import rigid_scene
+
+    problem = rigid_scene("slot", 200_000)
+    kw = {"route_fraction": 1.0, "goal_share": 0.0}
+    plain = make_sampler("rigid_route", **kw).bind(problem)
+    same = make_sampler("rigid_route", passage_weight=0.0, **kw).bind(problem)
+    tight = make_sampler("rigid_route", passage_weight=16.0, **kw).bind(problem)
+    a, b = (x.draw(np.random.default_rng(2), 300, None) for x in (plain, same))
+    assert np.array_equal(a, b)
+    # the draws' own weighting: segment lengths times 1 + weight x the patch's solid share, so the tight segments
+    # (the slot's wall) hold a larger part of the route as drawn than of its length
+    seg = np.diff(tight.arc)
+    drawn = np.diff(tight.warc) / tight.warc[-1]
+    assert np.all(drawn >= 0) and np.isclose(drawn.sum(), 1.0) and np.array_equal(plain.warc, plain.arc)
+    wall = problem.world.boxes[:, 0].min(), problem.world.boxes[:, 3].max()  # the wall across x, with its slot
+    mid = 0.5 * (tight.route[:-1, 0] + tight.route[1:, 0])
+    near = (mid > wall[0] - 5) & (mid < wall[1] + 5)
+    assert near.any() and drawn[near].sum() > seg[near].sum() / seg.sum() + 0.1
+    # and the positions follow it: more of them near the wall than without the weight
+    q = tight.draw(np.random.default_rng(3), 2000, None)[:, 0]
+    p = plain.draw(np.random.default_rng(3), 2000, None)[:, 0]
+    assert np.mean((q > wall[0] - 5) & (q < wall[1] + 5)) > np.mean((p > wall[0] - 5) & (p < wall[1] + 5))
+    # the ablation computes the same occupancy without a model, so its positions crowd the same way
+    abl = make_sampler("rigid_route_ablation", passage_weight=16.0).bind(problem)
+    assert abl.net is None and np.allclose(abl.warc, tight.warc)
+    with pytest.raises(InputError, match="passage_weight"):
+        make_sampler("rigid_route", passage_weight=-1.0)
+
+
 def test_the_own_ablation_draws_the_learned_samplers_positions_with_uniform_angles_and_needs_no_model():
     from planners.worlds.rigid_scenes import rigid_scene
 

@@ -133,14 +133,15 @@ def _rigid_workspace_route(route_fraction: float = 0.75, spread: float | None = 
 def _rigid_route(uniform_share: float | None = None, angle_noise: float | None = None, goal_share: float = 0.05,
                  temperature: float = 1.0, route_fraction: float | None = None, centre: int | None = None,
                  path: str | None = None, symmetry: str | None = None, min_confidence: float | None = None,
-                 min_route_confidence: float | None = None, *, models: ModelCache | None = None) -> Sampler:
+                 min_route_confidence: float | None = None, passage_weight: float | None = None, *,
+                 models: ModelCache | None = None) -> Sampler:
     from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
     from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS, RigidRouteSampler
 
     path = str(SHIPPED_RIGID_ORIENTATION) if path is None else path
     net = (ModelCache() if models is None else models).orientation_net(path)
     given = {"symmetry": symmetry, "route_fraction": route_fraction, "uniform_share": uniform_share,
-             "angle_noise": angle_noise}
+             "angle_noise": angle_noise, "passage_weight": passage_weight}
     return RigidRouteSampler(net, route_fraction=SHIPPED_RIGID_SETTINGS["route_fraction"] if route_fraction is None
                              else route_fraction,
                              uniform_share=SHIPPED_RIGID_SETTINGS["uniform_share"] if uniform_share is None
@@ -153,15 +154,19 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                              else min_confidence,
                              min_route_confidence=SHIPPED_RIGID_SETTINGS["min_route_confidence"]
                              if min_route_confidence is None else min_route_confidence,
+                             passage_weight=SHIPPED_RIGID_SETTINGS["passage_weight"] if passage_weight is None
+                             else passage_weight,
                              # a roadmap's own validated settings, where the user set none of them
                              roadmap={k: v for k, v in SHIPPED_RIGID_ROADMAP.items() if given[k] is None})
 
 
-def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75, centre: int | None = None) -> Sampler:
+def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75, centre: int | None = None,
+                          passage_weight: float = 0.0) -> Sampler:
     from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS, RigidRouteSampler
 
     return RigidRouteSampler(None, route_fraction=route_fraction, uniform_share=1.0, goal_share=goal_share,
-                             centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre)
+                             centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre,
+                             passage_weight=passage_weight)
 
 
 def _rigid_expert(attempts: int = 4, budget: int = 100_000, uniform_share: float = 0.1, goal_share: float = 0.05,

@@ -41,6 +41,7 @@ from planners.base.fileio import InputError, check_int, check_number
 from planners.base.samplers import FAMILY_ROADMAP, SamplerBase
 from planners.guidance.rigid_orientation import (
     N_CLASSES,
+    PATCH_HALF,
     TRAINING_LONG_SIDE,
     body_axes,
     class_rotations,
@@ -56,7 +57,8 @@ from planners.worlds.mesh import rotation_matrices
 #: (``scripts/experiments/tune_rigid_learned.py``; the rotation among a class's four by
 #: ``scripts/experiments/rigid_room.py --part tuning``, with the privileged expert's classes; ``docs/rigid-scenes.md``).
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
-                          "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75}
+                          "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75,
+                          "passage_weight": 0.0}
 #: What a roadmap planner takes instead (``RigidRouteSampler.for_planner``): every route sample on the route, each
 #: in the model's class (no uniform angles) at the rotation of the chain walked from the start all along the route
 #: (where walks from both ends meet, in a passage, two rotations a half turn apart may leave the roadmap in two
@@ -70,7 +72,7 @@ _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
 SYMMETRY_RULES = ("random", "ends", "chain", "chain_start")
 #: The settings a roadmap may take apart from the trees' (``RigidRouteSampler``'s ``roadmap``).
-ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise")
+ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise", "passage_weight")
 
 
 def class_frame(world, cell: float | None = None) -> tuple[np.ndarray, float]:
@@ -138,6 +140,9 @@ class RigidRouteSampler(SamplerBase):
             [0, 1], takes uniform angles (0: the model's class wherever ``uniform_share`` does not say uniform).
         min_route_confidence: Where the largest class probability over all the route's points is below this, in
             [0, 1], every route sample of the query takes uniform angles (the ablation's draw).
+        passage_weight: Route positions are drawn along the route with density ``1 + passage_weight * share``, share
+            the solid share of the route point's observation patch (0 in the open; per segment the mean of its
+            ends): 0 spreads them uniformly in arc length, a larger value crowds them where the route is tight.
         roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and
             every planner on a mesh world (at ``bind``): any of ``ROADMAP_SETTINGS`` (``make_sampler`` gives the
             validated ``SHIPPED_RIGID_ROADMAP``).
@@ -147,7 +152,7 @@ class RigidRouteSampler(SamplerBase):
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
                  cell: float | None = None, centre: int = 2, symmetry: str = "random",
                  min_confidence: float = 0.0, min_route_confidence: float = 0.0,
-                 roadmap: dict | None = None) -> None:
+                 roadmap: dict | None = None, passage_weight: float = 0.0) -> None:
         who = "RigidRouteSampler"
         if symmetry not in SYMMETRY_RULES:
             raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
@@ -157,6 +162,7 @@ class RigidRouteSampler(SamplerBase):
         self.route_fraction = float(check_number(who, "route_fraction", route_fraction, low=0, high=1))
         self.uniform_share = float(check_number(who, "uniform_share", uniform_share, low=0, high=1))
         self.angle_noise = float(check_number(who, "angle_noise", angle_noise, low=0))
+        self.passage_weight = float(check_number(who, "passage_weight", passage_weight, low=0))
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
         self.min_confidence = float(check_number(who, "min_confidence", min_confidence, low=0, high=1))
@@ -175,7 +181,7 @@ class RigidRouteSampler(SamplerBase):
         if self.roadmap.get("symmetry", symmetry) not in SYMMETRY_RULES:
             raise InputError(f"{who}: roadmap symmetry = {self.roadmap['symmetry']!r}; choose from "
                              f"{', '.join(SYMMETRY_RULES)}")
-        for key, high in (("route_fraction", 1), ("uniform_share", 1), ("angle_noise", None)):
+        for key, high in (("route_fraction", 1), ("uniform_share", 1), ("angle_noise", None), ("passage_weight", None)):
             if key in self.roadmap:
                 self.roadmap[key] = float(check_number(who, f"roadmap {key}", self.roadmap[key], low=0, high=high))
         if net is None and self.roadmap.get("uniform_share", 1.0) < 1.0:
@@ -213,14 +219,23 @@ class RigidRouteSampler(SamplerBase):
         seg = np.linalg.norm(np.diff(self.route, axis=0), axis=1) if len(self.route) > 1 else np.zeros(0)
         self.arc = np.concatenate([[0.0], np.cumsum(seg)])
         self.sd = world.route_spread if self.spread is None else self.spread
-        if len(self.route) and self.net is not None:
+        patches = None
+        if len(self.route) and (self.net is not None or self.passage_weight > 0):
             seeds = np.stack([self.problem.start[:3], self.problem.goal[:3]])
-            patches, dirs = route_observation(world, self.route, seen, self.net.half, seeds=seeds)
+            half = PATCH_HALF if self.net is None else self.net.half
+            patches, dirs = route_observation(world, self.route, seen, half, seeds=seeds)
+        if patches is not None and self.net is not None:
             with planning_threads():  # one torch thread unless SAMPLERGYM_TORCH_THREADS says otherwise
                 self.probs = class_probabilities(self.net, patches, dirs, self.temperature)
         else:
             self.probs = np.full((0, N_CLASSES), 1.0 / N_CLASSES)
         self.cdf = np.cumsum(self.probs, axis=1)
+        # the route's length as the draws see it: each segment weighted by how tight the route is there
+        self.warc = self.arc
+        if self.passage_weight > 0 and len(self.route) > 1:
+            share = patches.reshape(len(patches), -1).mean(axis=1, dtype=np.float64)
+            self.warc = np.concatenate([[0.0], np.cumsum(np.diff(self.arc) * (
+                1.0 + self.passage_weight * 0.5 * (share[:-1] + share[1:])))])
         # the route points whose class the samples take (without a model no sample takes one: uniform_share is 1)
         self.sure = (self.probs.max(axis=1) >= self.min_confidence if len(self.probs) == len(self.route)
                      else np.ones(len(self.route), dtype=bool))
@@ -243,9 +258,9 @@ class RigidRouteSampler(SamplerBase):
         if self.arc[-1] > 0:
             on = (u[:, 0] >= self.goal_share) & (u[:, 0] < self.goal_share + (1.0 - self.goal_share)
                                                  * self.route_fraction)
-            s = u[on, 1] * self.arc[-1]
-            i = np.clip(np.searchsorted(self.arc, s, side="right") - 1, 0, len(self.route) - 2)
-            t = (s - self.arc[i]) / np.maximum(self.arc[i + 1] - self.arc[i], 1e-300)
+            s = u[on, 1] * self.warc[-1]
+            i = np.clip(np.searchsorted(self.warc, s, side="right") - 1, 0, len(self.route) - 2)
+            t = (s - self.warc[i]) / np.maximum(self.warc[i + 1] - self.warc[i], 1e-300)
             p = self.route[i] + t[:, None] * (self.route[i + 1] - self.route[i]) + self.sd * pos_z[on]
             pts[on, :3] = np.clip(p, self.low[:3], np.nextafter(self.high[:3], -np.inf))
             near = i + (t >= 0.5)
