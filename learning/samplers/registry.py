@@ -375,9 +375,12 @@ def parse_user_sampler(arg: str, taken: tuple[str, ...] = ()) -> tuple[str, str]
 
 
 def checked_user_samplers(args: Sequence[str], flag: str = "--sampler", taken: tuple[str, ...] = ()) -> dict[str, str]:
-    """A command line's ``NAME=SPEC`` arguments of ``flag`` as name -> spec, each parsed (:func:`parse_user_sampler`,
-    ``taken`` the caller's own labels) and built once (:func:`user_sampler`), so that a bad file, spec or name is
-    refused before any run: an ``InputError`` naming the flag and the argument (a name given twice too)."""
+    """A command line's ``NAME=SPEC`` arguments of ``flag`` as name -> spec, each parsed and built once.
+
+    Each is parsed (:func:`parse_user_sampler`, ``taken`` the caller's own labels) and built (:func:`user_sampler`),
+    so that a bad file, spec or name is refused before any run: an ``InputError`` naming the flag and the argument (a
+    name given twice too).
+    """
     out: dict[str, str] = {}
     for arg in args:
         try:
