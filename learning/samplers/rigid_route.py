@@ -198,20 +198,22 @@ class RigidRouteSampler(SamplerBase):
         if family != FAMILY_ROADMAP or not self.roadmap:
             return self
         out = copy.copy(self)
-        for key, value in self.roadmap.items():
-            setattr(out, key, value)
-        out.roadmap = {}
+        out._take_roadmap()
         return out
+
+    def _take_roadmap(self) -> None:
+        """Take the ``roadmap`` settings in place of the trees' (once: they are then this sampler's own)."""
+        for key, value in self.roadmap.items():
+            setattr(self, key, value)
+        self.roadmap = {}
 
     def _setup(self) -> None:
         from learning.models.rigid_orientation import class_probabilities
         from learning.models.threads import planning_threads
 
         world = route_world(self.problem.world, "RigidRouteSampler")
-        if self.roadmap and not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too
-            for key, value in self.roadmap.items():
-                setattr(self, key, value)
-            self.roadmap = {}
+        if not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too
+            self._take_roadmap()
         cell = float(world.route_cell if self.cell is None else self.cell)
         self.rotations, seen = class_frame(world, self.cell)
         route = voxel_route(world, self.problem.start, self.problem.goal, cell)

@@ -275,6 +275,14 @@ class _Deadline(threading.local):
     clock = None
 
 
+def _positive_cell(cell) -> float:
+    """``cell`` as a float, or an ``InputError`` unless it is a positive finite number."""
+    cell = float(cell)
+    if not (cell > 0 and math.isfinite(cell)):
+        raise InputError(f"cell must be a positive number, got {cell!r}")
+    return cell
+
+
 class _FCLCheck:
     """FCL's bounding-volume trees of the body and the environment.
 
@@ -569,9 +577,7 @@ class MeshWorld(WorldBase):
         ``(hi - lo)`` float32 over the three axes: the same values as ``solid_share`` of those corners, bit for bit,
         from each axis's voxels of the broad phase looked up once per axis rather than once per point.
         """
-        cell = float(cell)
-        if not (cell > 0 and math.isfinite(cell)):
-            raise InputError(f"cell must be a positive number, got {cell!r}")
+        cell = _positive_cell(cell)
         low = np.asarray(low, dtype=np.float64)
         lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
         shape = self._grid_shape
@@ -600,9 +606,7 @@ class MeshWorld(WorldBase):
         is measured at ``samples``^3 points spread evenly over it. For the learned orientation model's
         observation (``planners.guidance.rigid_orientation``).
         """
-        cell = float(cell)
-        if not (cell > 0 and math.isfinite(cell)):
-            raise InputError(f"cell must be a positive number, got {cell!r}")
+        cell = _positive_cell(cell)
         reached = self.reached_from(seeds)
         corners = np.asarray(corners, dtype=np.float64).reshape(-1, 3) - self._grid_origin
         offsets = (np.arange(samples) + 0.5) / samples * cell
