@@ -145,6 +145,14 @@ def test_a_roadmap_takes_its_own_validated_rule_and_a_users_setting_holds_for_ev
         np.random.default_rng(5), 64, None)
     assert np.allclose(np.abs(np.array([rotation_matrix(*x[3:]) for x in q])).max(axis=1), 1.0)
     assert make_sampler("rigid_route_ablation").for_planner("roadmap").route_fraction == 0.75  # its own, tuned
+    # the ablation's route positions are the learned sampler's: a roadmap's crowd into the passages as they do, a
+    # tree's do not (on a box world), and a weight the user gives holds for both
+    abl = make_sampler("rigid_route_ablation")
+    assert abl.passage_weight == 0.0 and SHIPPED_RIGID_ROADMAP["passage_weight"] > 0
+    assert abl.for_planner("roadmap").passage_weight == SHIPPED_RIGID_ROADMAP["passage_weight"]
+    assert r.passage_weight == SHIPPED_RIGID_ROADMAP["passage_weight"] and s.passage_weight == 0.0
+    mine = make_sampler("rigid_route_ablation", passage_weight=2.0)
+    assert mine.passage_weight == mine.for_planner("roadmap").passage_weight == 2.0
     with pytest.raises(InputError, match="no setting colour"):
         RigidRouteSampler(s.net, roadmap={"colour": 1})
     with pytest.raises(InputError, match="roadmap symmetry"):

@@ -66,7 +66,10 @@ SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2,
 #: On box worlds the trees keep ``SHIPPED_RIGID_SETTINGS``' (the chain lost on the tuning scenes, a smaller angle
 #: noise on the validation scenes); on mesh worlds they take these too (``bind``: on the training families written as
 #: meshes, tuning and validation parts, in 0.7 to 0.8 of the time; ``scripts/experiments/tree_rule_meshes.py``).
-SHIPPED_RIGID_ROADMAP = {"symmetry": "chain_start", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0}
+#: Route positions are drawn 1 + 16 times as densely where the route's patch is solid (``passage_weight``): more
+#: samples in the passages, fewer in the open (PRM's tuning and validation scenes; the mesh trees' time too).
+SHIPPED_RIGID_ROADMAP = {"symmetry": "chain_start", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0,
+                         "passage_weight": 16.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.

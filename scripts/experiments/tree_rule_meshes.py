@@ -4,11 +4,14 @@
         --time-limit 10 --out results/tree_rule_meshes.jsonl
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --omplapp DIR --problems Twistycooler Apartment \\
         --planners RRTConnect --seeds 4 --time-limit 20 --out results/tree_rule_omplapp.jsonl
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --part tuning --scenes 8 --seeds 2 \\
+        --rules trees roadmap --rule 'pw0={"passage_weight": 0}' --out results/tree_rule_pw.jsonl
 
 ``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) on box worlds
 and a roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation from the start, every route sample on the
 route, no uniform angles, no angle noise); on mesh worlds the trees take the roadmaps' rule too, as this script's runs
-chose. This runs the trees with each rule (``--rules``; ``uniform``: the planner's own sampling)
+chose. This runs the trees with each rule (``--rules``; ``uniform``: the planner's own sampling; ``--rule NAME=JSON``:
+the roadmaps' rule with some settings changed)
 under a time limit, on a part of the training box-scene families written as mesh worlds (``mesh_scene`` at the
 default motion resolution; a scene whose box witness meets its meshes is left out, as the mesh scene set leaves it
 out), or with ``--omplapp DIR`` on OMPL.app's ``.cfg`` problems named by ``--problems``. It prints per planner and
@@ -59,7 +62,7 @@ def _problem(source: tuple):
 
 
 def _run(task: tuple) -> dict:
-    source, planner, seed, rule, limit = task
+    source, planner, seed, (rule, settings), limit = task
     from learning.samplers.registry import make_sampler
     from planners import make_planner
     from planners.base.planner import compile_seconds
@@ -71,7 +74,7 @@ def _run(task: tuple) -> dict:
         return {**row, "refused": problem}
 
     def kwargs() -> dict:  # a fresh sampler for each run, bound in the timed run
-        return {} if RULES[rule] is None else {"sampler": make_sampler("rigid_route", **RULES[rule])}
+        return {} if settings is None else {"sampler": make_sampler("rigid_route", **settings)}
 
     make_planner(planner, problem, seed=0, **kwargs()).solve(max_iterations=2)  # compile outside the timing
     t, c = time.perf_counter(), compile_seconds()
@@ -96,6 +99,9 @@ def main(argv=None) -> int:
                     help="OMPL.app problems (with --omplapp; default its tuning problems)")
     ap.add_argument("--planners", nargs="+", default=["RRTConnect", "RRT"], choices=["RRTConnect", "RRT"])
     ap.add_argument("--rules", nargs="+", default=["trees", "roadmap"], choices=list(RULES))
+    ap.add_argument("--rule", action="append", default=[], metavar="NAME=JSON",
+                    help="one more rule: the roadmaps' rule with these settings changed, e.g. "
+                    "'pw16={\"passage_weight\": 16}' (repeatable)")
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per scene (0, 1, ...)")
     ap.add_argument("--time-limit", type=float, default=10.0)
     ap.add_argument("--processes", type=int, default=2)
@@ -110,11 +116,24 @@ def main(argv=None) -> int:
         sources = [("omplapp", str(args.omplapp), p) for p in args.problems]
     else:
         sources = [("scene", f, s) for f in args.families for s in scene_seeds(f, args.part, args.scenes)]
+    rules = {name: RULES[name] for name in args.rules}
+    for spec in args.rule:
+        name, sep, text = spec.partition("=")
+        try:
+            changes = json.loads(text) if sep else None
+        except json.JSONDecodeError as e:
+            ap.error(f"--rule {spec!r}: the settings are not JSON ({e})")
+        if not name or name in rules or not isinstance(changes, dict):
+            ap.error(f"--rule {spec!r}: expected NAME=JSON with a new name and a JSON object of settings")
+        unknown = sorted(set(changes) - set(ROADMAP_SETTINGS))
+        if unknown:
+            ap.error(f"--rule {spec!r}: unknown settings {unknown}; expected some of {list(ROADMAP_SETTINGS)}")
+        rules[name] = {**SHIPPED_RIGID_ROADMAP, **changes}
     if not (args.time_limit > 0 and args.seeds > 0 and args.processes > 0):
         ap.error("--time-limit, --seeds and --processes must be positive")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    tasks = [(src, planner, seed, rule, args.time_limit) for src in sources for planner in args.planners
-             for seed in range(args.seeds) for rule in args.rules]
+    tasks = [(src, planner, seed, item, args.time_limit) for src in sources for planner in args.planners
+             for seed in range(args.seeds) for item in rules.items()]
     rows = []
     with ProcessPoolExecutor(args.processes) as pool:  # rules interleaved, so every rule sees the same load
         for row in pool.map(_run, tasks):
@@ -130,7 +149,7 @@ def main(argv=None) -> int:
     groups = sorted({r["source"][0] for r in rows}) if args.omplapp is not None else []
     for group in [*groups, None]:  # each OMPL.app problem, then every run; scenes: every run
         for planner in args.planners:
-            for rule in args.rules:
+            for rule in rules:
                 rs = [r for r in rows if r["planner"] == planner and r["rule"] == rule
                       and group in (None, r["source"][0])]
                 if rs:
