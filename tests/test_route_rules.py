@@ -24,6 +24,7 @@ from learning.samplers.route_rules import (
     query_cells,
     reversed_query,
     route_sums,
+    walled_between,
 )
 from planners import OccupancyGrid, Problem, TreeView, UniformSampler, make_planner
 from planners.base.fileio import InputError
@@ -375,6 +376,48 @@ def test_bad_corridor_settings_are_refused_by_name():
         CorridorSampler(make_sampler("route_ablation"), -1.0)
     with pytest.raises(InputError, match="floor"):
         CorridorSampler(make_sampler("route_ablation"), 0.3, 1.5)
+
+
+def test_bad_tightness_settings_are_refused_by_name():
+    for tight in (-1.0, math.inf, math.nan, True, "8"):
+        with pytest.raises(InputError, match="tight"):
+            CorridorSampler(make_sampler("route_ablation"), 0.3, 0.3, 1.0, tight)
+
+
+def test_tightness_marks_the_gap_in_a_wall_and_not_the_open():
+    p = wall_problem()
+    grid = p.world
+    between = walled_between(grid, 2).reshape(grid.shape)
+    assert between[3, 15:17].all()  # the gap's middle row: the wall two cells above and below
+    assert not between[2, 15:17].any() and walled_between(grid, 3).reshape(grid.shape)[2:5, 15:17].all()
+    assert not between[10:22, 4:12].any()  # the open half, no wall within two cells
+    assert set(np.unique(between)) <= {0.0, 1.0}
+    # outside the map counts as a wall: a cell in a corner is between walls, one on an edge's middle is not
+    assert between[0, 0] == 1 and between[16, 0] == 0
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_a_tight_corridor_draws_more_often_in_the_passage_and_tight_zero_draws_every_cell_alike(seed):
+    p = wall_problem()
+    plain = CorridorSampler(make_sampler("exact_route", step_size=4.0), 0.3, 0.0, None, 0.0).bind(p)
+    tight = CorridorSampler(make_sampler("exact_route", step_size=4.0), 0.3, 0.0, None, 8.0).bind(p)
+    assert plain.cum is None and np.array_equal(plain.cells, tight.cells)
+    # half a step is two cells: a cell weighs 9 where walls lie within two cells on two opposite sides, else 1
+    weights = np.diff(np.concatenate([[0.0], tight.cum]))
+    assert set(np.round(weights, 9)) <= {1.0, 9.0}
+    middle = np.isin(tight.cells, [3 * 32 + 15, 3 * 32 + 16])
+    assert middle.any() and np.all(weights[middle] == 9.0)
+    # the draws follow the weights: the gap's middle row holds more of them than without
+    share_plain, share_tight = middle.mean(), weights[middle].sum() / tight.cum[-1]
+    assert share_tight > 1.5 * share_plain
+    a, b = (s.draw(np.random.default_rng(seed), 4000, None) for s in (plain, tight))
+
+    def in_middle(pts):
+        return int(np.sum((pts[:, 0] >= 15) & (pts[:, 0] < 17) & (pts[:, 1] >= 3) & (pts[:, 1] < 4)))
+
+    assert in_middle(b) > in_middle(a)
+    assert abs(in_middle(b) - 4000 * share_tight) < 6 * math.sqrt(4000 * share_tight)
 
 
 def test_the_reversed_query_swaps_start_and_goal():

@@ -2,6 +2,10 @@
 
     python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2                 # the roadmaps' corridor
     python scripts/experiments/tune_route_rules.py --fields route --margins 0.3 --floors 0.3 --fills 1 2 4 8 none
+    python scripts/experiments/tune_route_rules.py --fields route --margins 0.3 --floors 0.3 --fills 1 \
+        --tights 0 1 2 4 8 16 --tight-kind between                                      # passages weighted
+    python scripts/experiments/tune_route_rules.py --first-map 6 --maps 12 --fields route --margins 0.3 \
+        --floors 0.3 --fills 1 --tights 0 8                                             # on maps not looked at
     python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2 --connect       # RRT-Connect: one tree or two
     python scripts/experiments/tune_route_rules.py --maps 2 --seeds 2 --rrtstar       # RRT*'s rule after a solution
 
@@ -17,9 +21,11 @@ informed set only), and the RRT rule throughout; prints the median iterations to
 any of them reached (``learning.evaluation.every_planner.convergence``), per family, and their geometric means.
 
 For each field (the route encoder, its straight-line ablation, the exact cost-to-go) and each corridor
-``margin``, uniform ``floor`` and ``fill`` (``--fills``: draws per step-sized square of a stage of the
-corridor before it widens) of the grid, PRM and Lazy-PRM run on the five families' validation maps
-(``learning.evaluation.every_planner.planner_maps("validation")``; never test maps); prints the median samples per
+``margin``, uniform ``floor``, ``fill`` (``--fills``: draws per step-sized square of a stage of the
+corridor before it widens) and ``tight`` (``--tights``, ``--tight-kind``: the extra weight of a corridor cell where the
+map is tight; by default each field's own) of the grid, PRM and Lazy-PRM run on the five families' validation maps
+(``learning.evaluation.every_planner.planner_maps("validation")``, from each family's ``--first-map``-th; never
+test maps); prints the median samples per
 family and their geometric mean, the score the settings are chosen by (lowest), with the success share.
 """
 
@@ -34,12 +40,38 @@ from learning.evaluation.every_planner import Setup, convergence, planner_maps, 
 from learning.samplers.registry import ModelCache, make_sampler
 from learning.samplers.route import RouteSampler
 from learning.samplers.route_rules import (
+    ABLATION_CORRIDOR,
+    CORRIDOR_SETTINGS,
     BidirectionalRouteSampler,
     ConvergingRouteSampler,
     CorridorSampler,
     reversed_query,
 )
-from planners import SamplerBase
+from planners import OccupancyGrid, SamplerBase
+
+
+def blocked_shares(grid: OccupancyGrid, h: int) -> np.ndarray:
+    """Each cell's share of blocked cells in the square of half side ``h`` about it (outside the map: blocked), flat."""
+    blocked = np.pad(np.asarray(grid.obstacles, dtype=np.int64), h, constant_values=1)
+    total = np.pad(blocked.cumsum(0).cumsum(1), ((1, 0), (1, 0)))  # summed-area table
+    side = 2 * h + 1
+    rows, cols = grid.shape
+    inside = (total[side:side + rows, side:side + cols] - total[:rows, side:side + cols]
+              - total[side:side + rows, :cols] + total[:rows, :cols])
+    return (inside / float(side * side)).ravel()
+
+
+class SharedCorridor(CorridorSampler):
+    """The corridor with a cell weighted by its share of blocked cells within half a step (``--tight-kind share``).
+
+    Tried beside the shipped rule (walls on two opposite sides, ``walled_between``): on the validation maps it moves
+    samples next to any obstacle, a forest's trees among them, and loses there.
+    """
+
+    def cell_weights(self, grid, step_cells):
+        if self.tight == 0:
+            return None
+        return 1.0 + self.tight * blocked_shares(grid, max(1, round(step_cells / 2)))
 
 
 class MirroredField(RouteSampler):
@@ -110,13 +142,24 @@ def main(argv=None) -> int:
     ap.add_argument("--fills", nargs="+", default=[None], type=lambda v: None if v == "none" else float(v),
                     help="draws per step-sized square of a stage of the roadmaps' corridor before it widens "
                     "('none': never)")
+    ap.add_argument("--tights", type=float, nargs="+", default=None,
+                    help="the roadmaps' corridor: extra weight of a cell by its tightness within half a step "
+                    "(CorridorSampler's tight; 0: every corridor cell alike; default: each field's own)")
+    ap.add_argument("--tight-kind", default="between", choices=["between", "share"],
+                    help="tightness: walls on two opposite sides of a cell (the shipped rule), or the share of "
+                    "blocked cells about it")
+    ap.add_argument("--first-map", type=int, default=0,
+                    help="each family's validation maps from its K-th on (fresh maps beside ones already looked at)")
     ap.add_argument("--fields", nargs="+", default=["route", "route_ablation", "exact_route"])
     ap.add_argument("--planners", nargs="+", default=["PRM", "LazyPRM"])
     ap.add_argument("--connect", action="store_true", help="RRT-Connect: the start tree guided, or both")
     ap.add_argument("--rrtstar", action="store_true", help="RRT*: the rule after the first solution")
     ap.add_argument("--budget", type=int, default=3000, help="RRT* iterations per run with --rrtstar")
     args = ap.parse_args(argv)
-    maps = planner_maps("validation", args.maps)
+    if args.first_map < 0:
+        ap.error(f"--first-map must be >= 0, got {args.first_map}")
+    maps = {f: problems[args.first_map:] for f, problems in
+            planner_maps("validation", args.first_map + args.maps).items()}
     models = ModelCache()
     if args.rrtstar:
         for field in args.fields:
@@ -148,14 +191,18 @@ def main(argv=None) -> int:
                 print(geomean_row(f"RRTConnect {field:15s} {rule:16s}", per_family), flush=True)
         return 0
     for planner in args.planners:
-        for field, margin, floor, fill in itertools.product(args.fields, args.margins, args.floors, args.fills):
+        for field, margin, floor, fill, tight in itertools.product(args.fields, args.margins, args.floors,
+                                                                   args.fills, args.tights or [None]):
+            own = ABLATION_CORRIDOR if field == "route_ablation" else CORRIDOR_SETTINGS
+            tight = own["tight"] if tight is None else tight
+            kind = CorridorSampler if args.tight_kind == "between" else SharedCorridor
             per_family = [summarize_runs([run_setup(Setup(field, planner, field), p, s, models=models,
-                                                    sampler=CorridorSampler(make_sampler(field, models=models),
-                                                                            margin, floor, fill))
+                                                    sampler=kind(make_sampler(field, models=models),
+                                                                 margin, floor, fill, tight))
                                           for p in problems for s in range(args.seeds)])
                           for problems in maps.values()]
             print(geomean_row(f"{planner:8s} {field:15s} margin {margin:4.2f} floor {floor:4.2f} "
-                              f"fill {fill}", per_family), flush=True)
+                              f"fill {fill} tight {tight:g} {args.tight_kind}", per_family), flush=True)
     return 0
 
 
