@@ -394,6 +394,9 @@ def test_tightness_marks_the_gap_in_a_wall_and_not_the_open():
     assert set(np.unique(between)) <= {0.0, 1.0}
     # outside the map counts as a wall: a cell in a corner is between walls, one on an edge's middle is not
     assert between[0, 0] == 1 and between[16, 0] == 0
+    # asked for some cells, the same values as for the whole map
+    some = np.random.default_rng(0).choice(grid.obstacles.size, 200, replace=False)
+    assert np.array_equal(walled_between(grid, 2, some), between.ravel()[some])
 
 
 @settings(max_examples=10, deadline=None)

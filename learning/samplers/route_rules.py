@@ -10,11 +10,12 @@ handed to:
   a field to the start (a second pass with start and goal swapped), each by ``RouteSampler``'s rule, uniform
   floor included; each draw serves the tree whose turn it is (``TreeView.tree``). Its draws run inside
   RRT-Connect's compiled loop (``planners.fused.connect_loop``), as the route sampler's run inside RRT's.
-- ``CorridorSampler`` (PRM, Lazy-PRM, OB-PRM): uniform over the cells whose cost from the start plus cost to
-  the goal is within ``margin`` of the lowest, a corridor around the routes the field calls short, with a
-  ``floor`` share of uniform samples so the roadmap stays complete; while the roadmap stays unconnected the
-  corridor widens in stages, each once it has had ``fill`` draws per step-sized square of its cells
-  (``corridor_stages``), out to every cell the field reaches.
+- ``CorridorSampler`` (PRM, Lazy-PRM, OB-PRM): over the cells whose cost from the start plus cost to the goal
+  is within ``margin`` of the lowest, a corridor around the routes the field calls short, a cell in a passage
+  (walls within half a step on two opposite sides, ``walled_between``) drawn ``1 + tight`` times as often as
+  another, with a ``floor`` share of uniform samples so the roadmap stays complete; while the roadmap stays
+  unconnected the corridor widens in stages, each once it has had ``fill`` draws per step-sized square of its
+  cells (``corridor_stages``), out to every cell the field reaches.
 - ``ConvergingRouteSampler`` (RRT*, Informed RRT*): ``RouteSampler``'s rule to the first solution, then the
   corridor cells inside the informed set (the states that could lie on a shorter path), widening in the same
   stages, with a ``floor`` share from the informed set itself (``InformedSampler``). The field to the start is
@@ -187,21 +188,26 @@ def _check_fill(who: str, value) -> float | None:
     return None if value is None else float(value)
 
 
-def walled_between(grid: OccupancyGrid, h: int) -> np.ndarray:
-    """1 where a cell has blocked cells within ``h`` on both sides along one of four axes (a passage), else 0; flat."""
+def walled_between(grid: OccupancyGrid, h: int, cells: np.ndarray | None = None) -> np.ndarray:
+    """1.0 where a cell has blocked cells within ``h`` on both sides along one of four axes (a passage), else 0.0.
+
+    For the flat cell indices ``cells`` (None: every cell, in the grid's order); outside the map counts as blocked.
+    The work follows ``len(cells)``, not the map's size.
+    """
     blocked = np.pad(np.asarray(grid.obstacles, dtype=bool), h, constant_values=True)
     rows, cols = grid.shape
-    out = np.zeros((rows, cols), dtype=bool)
+    flat = np.arange(rows * cols) if cells is None else np.asarray(cells, dtype=np.int64)
+    r, c = np.divmod(flat, cols)
+    r, c = r + h, c + h
+    out = np.zeros(len(flat), dtype=bool)
     for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        sides = []
-        for sign in (1, -1):
-            hit = np.zeros((rows, cols), dtype=bool)
-            for k in range(1, h + 1):
-                r0, c0 = h + sign * k * dr, h + sign * k * dc
-                hit |= blocked[r0:r0 + rows, c0:c0 + cols]
-            sides.append(hit)
-        out |= sides[0] & sides[1]
-    return out.ravel().astype(np.float64)
+        ahead = np.zeros(len(flat), dtype=bool)
+        behind = np.zeros(len(flat), dtype=bool)
+        for k in range(1, h + 1):
+            ahead |= blocked[r + k * dr, c + k * dc]
+            behind |= blocked[r - k * dr, c - k * dc]
+        out |= ahead & behind
+    return out.astype(np.float64)
 
 
 def cell_points(grid: OccupancyGrid, cells: np.ndarray, u: np.ndarray, low: np.ndarray, high: np.ndarray,
@@ -309,19 +315,19 @@ class _CorridorRule(SamplerBase):
         step_cells = self.route.step_size / p.world.resolution
         self.cells, self.counts, self.starts = corridor_stages(
             to_goal, to_start, query_cells(p), self.margin, self.fill, step_cells ** 2)
-        weights = self.cell_weights(p.world, step_cells) if len(self.cells) else None
+        weights = self.cell_weights(p.world, step_cells, self.cells) if len(self.cells) else None
         #: the corridor cells' weights summed in stage order (None: every cell alike)
-        self.cum = None if weights is None else np.cumsum(np.asarray(weights, dtype=np.float64)[self.cells])
+        self.cum = None if weights is None else np.cumsum(np.asarray(weights, dtype=np.float64))
 
-    def cell_weights(self, grid: OccupancyGrid, step_cells: float) -> np.ndarray | None:
-        """Each cell's weight (flat) in the corridor's draws; None where ``tight`` is 0: every corridor cell alike.
+    def cell_weights(self, grid: OccupancyGrid, step_cells: float, cells: np.ndarray) -> np.ndarray | None:
+        """The weights of ``cells`` (flat indices) in the corridor's draws; None where ``tight`` is 0: all alike.
 
         The weight is ``1 + tight`` where the cell has walls within half a step on two opposite sides
         (``walled_between``), else 1.
         """
         if self.tight == 0:
             return None
-        return 1.0 + self.tight * walled_between(grid, max(1, round(step_cells / 2)))
+        return 1.0 + self.tight * walled_between(grid, max(1, round(step_cells / 2)), cells)
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}({self.route!r}, margin={self.margin:g}, floor={self.floor:g}, "

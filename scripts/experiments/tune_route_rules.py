@@ -68,10 +68,10 @@ class SharedCorridor(CorridorSampler):
     samples next to any obstacle, a forest's trees among them, and loses there.
     """
 
-    def cell_weights(self, grid, step_cells):
+    def cell_weights(self, grid, step_cells, cells):
         if self.tight == 0:
             return None
-        return 1.0 + self.tight * blocked_shares(grid, max(1, round(step_cells / 2)))
+        return 1.0 + self.tight * blocked_shares(grid, max(1, round(step_cells / 2)))[cells]
 
 
 class MirroredField(RouteSampler):
