@@ -164,11 +164,12 @@ def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75
                           passage_weight: float | None = None) -> Sampler:
     from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS, RigidRouteSampler
 
-    # the learned sampler's route positions without its model: a roadmap (and every planner on a mesh world) takes
-    # the roadmaps' passage weight, as ``rigid_route`` does, unless the user gives one
+    # the learned sampler's route positions without its model: the trees take the trees' passage weight and a roadmap
+    # (and every planner on a mesh world) the roadmaps', as ``rigid_route`` does, unless the user gives one
     return RigidRouteSampler(None, route_fraction=route_fraction, uniform_share=1.0, goal_share=goal_share,
                              centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre,
-                             passage_weight=0.0 if passage_weight is None else passage_weight,
+                             passage_weight=SHIPPED_RIGID_SETTINGS["passage_weight"] if passage_weight is None
+                             else passage_weight,
                              roadmap=None if passage_weight is not None
                              else {"passage_weight": SHIPPED_RIGID_ROADMAP["passage_weight"]})
 
