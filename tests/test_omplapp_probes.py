@@ -188,7 +188,9 @@ def test_the_grid_tuning_refuses_bad_arguments_and_unknown_problems(tmp_path):
 def test_the_tree_rule_script_refuses_bad_arguments_before_any_run(tmp_path):
     rules = load_script("experiments/tree_rule_meshes")
     out = tmp_path / "runs.jsonl"
-    for bad in (["--time-limit", "0"], ["--seeds", "0"], ["--rules", "nothing"], ["--omplapp", str(tmp_path)]):
+    for bad in (["--time-limit", "0"], ["--seeds", "0"], ["--rules", "nothing"], ["--omplapp", str(tmp_path)],
+                ["--rule", "pw16"], ["--rule", "pw16={nope"], ["--rule", 'trees={"passage_weight": 1}'],
+                ["--rule", 'x={"colour": 1}']):
         with pytest.raises(SystemExit):
             rules.main(["--out", str(out), *bad])
     with pytest.raises(SystemExit):
@@ -202,10 +204,14 @@ def test_the_tree_rule_script_runs_each_rule_on_a_mesh_scene():
 
     rules = load_script("experiments/tree_rule_meshes")
     source = ("scene", "slot", scene_seeds("slot", "tuning", 1)[0])
-    rows = [rules._run((source, "RRTConnect", 0, rule, 1.0)) for rule in ("uniform", "trees", "roadmap")]
+    named = [(rule, rules.RULES[rule]) for rule in ("uniform", "trees", "roadmap")]
+    rows = [rules._run((source, "RRTConnect", 0, item, 1.0)) for item in named]
     assert [r["rule"] for r in rows] == ["uniform", "trees", "roadmap"]
     for r in rows:  # a scene the mesh scene set keeps; each run within its limit (compiling left out)
         assert "refused" not in r and r["iterations"] > 0 and 0 <= r["seconds"] <= 1.0 + 0.5
     assert rows[1]["solved"] and rows[2]["solved"]  # the learned rules pass the slot
-    again = rules._run((source, "RRTConnect", 0, "roadmap", 1.0))
+    again = rules._run((source, "RRTConnect", 0, named[2], 1.0))
     assert again["iterations"] == rows[2]["iterations"]  # seeded: the same run twice
+    # a rule of one's own: the roadmaps' rule with a setting changed, named on the command line
+    assert rules._run((source, "RRTConnect", 0, ("pw0", {**rules.RULES["roadmap"], "passage_weight": 0.0}),
+                       1.0))["rule"] == "pw0"
