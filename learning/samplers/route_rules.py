@@ -112,9 +112,9 @@ def _check_share(who: str, name: str, value) -> float:
     return float(value)
 
 
-def _check_margin(who: str, value) -> float:
+def _check_nonnegative(who: str, name: str, value, meaning: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not 0 <= value < math.inf:
-        raise InputError(f"{who}: margin = {short_repr(value)}, expected a finite number >= 0 (a share of the route)")
+        raise InputError(f"{who}: {name} = {short_repr(value)}, expected a finite number >= 0 ({meaning})")
     return float(value)
 
 
@@ -298,13 +298,10 @@ class _CorridorRule(SamplerBase):
                  tight: float = 0.0) -> None:
         who = type(self).__name__
         self.route = route
-        self.margin = _check_margin(who, margin)
+        self.margin = _check_nonnegative(who, "margin", margin, "a share of the route")
         self.floor = _check_share(who, "floor", floor)
         self.fill = _check_fill(who, fill)
-        if isinstance(tight, bool) or not isinstance(tight, int | float | np.floating) or not 0 <= tight < math.inf:
-            raise InputError(f"{who}: tight = {short_repr(tight)}, expected a finite number >= 0 (the extra weight "
-                             "of a corridor cell where the map is tight)")
-        self.tight = float(tight)
+        self.tight = _check_nonnegative(who, "tight", tight, "the extra weight of a corridor cell in a passage")
 
     def _stages(self, to_goal: np.ndarray, to_start: np.ndarray) -> None:
         """Set ``cells``, ``counts`` and ``starts``: ``corridor_stages`` at this rule's settings and route step.
