@@ -6,6 +6,8 @@
         --planners RRTConnect --seeds 4 --time-limit 20 --out results/tree_rule_omplapp.jsonl
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --part tuning --scenes 8 --seeds 2 \\
         --rules trees roadmap --rule 'pw0={"passage_weight": 0}' --out results/tree_rule_pw.jsonl
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --families twist --scenes 2 --seeds 2 \
+        --planners RRTConnect --rules uniform trees roadmap --out results/tree_rule_twist.jsonl
 
 ``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) on box worlds
 and a roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation from the start, every route sample on the
@@ -14,7 +16,8 @@ chose. This runs the trees with each rule (``--rules``; ``uniform``: the planner
 the roadmaps' rule with some settings changed)
 under a time limit, on a part of the training box-scene families written as mesh worlds (``mesh_scene`` at the
 default motion resolution; a scene whose box witness meets its meshes is left out, as the mesh scene set leaves it
-out), or with ``--omplapp DIR`` on OMPL.app's ``.cfg`` problems named by ``--problems``. It prints per planner and
+out; ``--families twist``: the twisted slot below, a passage only a roll about the body's long axis passes), or
+with ``--omplapp DIR`` on OMPL.app's ``.cfg`` problems named by ``--problems``. It prints per planner and
 rule the runs solved, the median time (the sampler's set-up included; an unsolved run at the limit) and the median
 iterations, and writes every run to ``--out`` (JSON lines). Choose on the tuning part and OMPL.app's tuning problems
 only.
@@ -31,7 +34,10 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+import numpy as np
+
 from learning.samplers.rigid_route import ROADMAP_SETTINGS, SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS
+from planners.maps.generators import TUNING_SEED0, VALIDATION_SEED0
 
 #: The rules compared: sampler settings handed to ``make_sampler("rigid_route", ...)`` (None: no sampler). The trees'
 #: rule is given whole: settings a user gives hold on every world, where ``make_sampler("rigid_route")`` alone gives
@@ -41,12 +47,89 @@ RULES = {"uniform": None, "trees": {k: SHIPPED_RIGID_SETTINGS[k] for k in ROADMA
 _PROBLEMS: dict = {}
 
 
+#: The twisted slot (``--families twist``; this script's own tuning material, never a test): in a 40 x 30 x 24
+#: workspace, a wall across x, 1.5 to 2.2 thick (thinner than the body's short side, so the body cannot lie inside
+#: it), with a slot 7.5 to 8.3 by 4.9 to 5.1 rolled 43 to 47 degrees either way about x; the start and the goal stand
+#: 8 to 20 before and after the wall, within 5 of the slot's axis, at random angles, as Twistycool's face its hole.
+#: The body (10 x 5 x 2.5) passes long side first, rolled with the slot within about 36 degrees: no axis-aligned
+#: orientation fits it, as none fits Twistycool's passage. Written as meshes directly (a box scene has no rolled
+#: wall): the slab with a square hole around the slot, and four boxes in the slot's own frame that fill the hole but
+#: for the slot. Every scene has a witness path (``verify_scene``) through the slot.
+TWIST_SEED0 = {"tuning": TUNING_SEED0, "validation": VALIDATION_SEED0}
+TWIST_DRAWS = 8
+#: The twisted slot's workspace (the box scenes' is 100 x 60 x 40).
+TWIST_SPACE = (40.0, 30.0, 24.0)
+
+
+def _rolled_box(x0: float, x1: float, u: tuple, v: tuple, centre: tuple, phi: float):
+    """The box ``[x0, x1] x u x v`` of the slot's frame (rolled ``phi`` about x, origin at ``centre`` in (y, z))."""
+    from planners.worlds.rigid_scenes import box_mesh
+
+    verts, faces = box_mesh((x0, u[0], v[0], x1, u[1], v[1]))
+    c, s = math.cos(phi), math.sin(phi)
+    y = centre[0] + c * verts[:, 1] - s * verts[:, 2]
+    z = centre[1] + s * verts[:, 1] + c * verts[:, 2]
+    return np.stack([verts[:, 0], y, z], axis=1), faces  # a rotation keeps the faces' winding
+
+
+def _draw_near(rng: np.random.Generator, world, low: tuple, high: tuple, seed: int) -> np.ndarray:
+    """A state between x ``low[0]`` and ``high[0]``, within 5 of the slot's axis, at random angles, well clear."""
+    from planners.worlds.rigid_scenes import QUERY_CLEARANCE
+
+    for _ in range(4000):
+        q = np.concatenate([rng.uniform((low[0], low[1] - 5.0, low[2] - 5.0), (high[0], high[1] + 5.0, high[2] + 5.0)),
+                            rng.uniform(-math.pi, math.pi, 3)])
+        if world.is_valid(q) and world.clearance(q) > QUERY_CLEARANCE:
+            return q
+    raise RuntimeError(f"twist-{seed}: no state with clearance {QUERY_CLEARANCE:g} between x {low[0]} and {high[0]}")
+
+
+def twisted_slot(seed: int):
+    """The twisted-slot scene of ``seed`` as a mesh world (a ``Problem``), with a witness path through its slot."""
+    from planners.base.problem import Problem
+    from planners.worlds.mesh import DEFAULT_DELTA_FRACTION, MeshWorld
+    from planners.worlds.rigid_scenes import BODY_SIDES, GOAL_DISTANCE, box_mesh, carve, verify_scene
+
+    rng = np.random.default_rng(seed)
+    size = np.array(TWIST_SPACE)
+    half = np.array(BODY_SIDES) / 2
+    for attempt in range(TWIST_DRAWS):
+        c, t = rng.uniform(17.0, 23.0), rng.uniform(1.5, 2.2)
+        w, h = rng.uniform(7.5, 8.3), rng.uniform(4.9, 5.1)
+        phi = math.radians(rng.uniform(43.0, 47.0)) * (1 if rng.random() < 0.5 else -1)
+        hole = 4.0  # half the square hole's side; the rolled boxes cover it whole
+        reach = hole * (abs(math.cos(phi)) + abs(math.sin(phi))) + 0.5
+        centre = tuple(float(rng.uniform(3.0 + reach * math.sqrt(2), size[k] - 3.0 - reach * math.sqrt(2)))
+                       for k in (1, 2))
+        a, b = c - t / 2, c + t / 2
+        square = np.array([a - 1.0, centre[0] - hole, centre[1] - hole, b + 1.0, centre[0] + hole, centre[1] + hole])
+        meshes = [box_mesh(box) for box in carve(np.array([a, 0.0, 0.0, b, size[1], size[2]]), [square])]
+        meshes += [_rolled_box(a, b, u, v, centre, phi) for u, v in
+                   [((-reach, -w / 2), (-reach, reach)), ((w / 2, reach), (-reach, reach)),
+                    ((-w / 2, w / 2), (-reach, -h / 2)), ((-w / 2, w / 2), (h / 2, reach))]]
+        verts = np.concatenate([v for v, _ in meshes])
+        faces = np.concatenate([f + 8 * i for i, (_, f) in enumerate(meshes)])
+        world = MeshWorld((verts, faces), box_mesh(np.concatenate([-half, half])), low=(0, 0, 0), high=TWIST_SPACE,
+                          delta=DEFAULT_DELTA_FRACTION * float(np.linalg.norm(size)), name=f"twist-{seed}")
+
+        start = _draw_near(rng, world, (a - 20.0, *centre), (a - 8.0, *centre), seed)
+        goal = _draw_near(rng, world, (b + 8.0, *centre), (b + 20.0, *centre), seed)
+        problem = Problem(world, start, goal, goal_tolerance=GOAL_DISTANCE, metric="cossin", name=f"twist-{seed}")
+        before = np.array([a - 6.5, *centre, phi, 0.0, 0.0])
+        after = np.array([b + 6.5, *centre, phi, 0.0, 0.0])
+        if verify_scene(problem, [(before, after)], seed + 1000 * attempt) is not None:
+            return problem
+    raise RuntimeError(f"twist-{seed}: no draw of {TWIST_DRAWS} had a witness path")
+
+
 def _problem(source: tuple):
     if source not in _PROBLEMS:
         if source[0] == "omplapp":
             from planners.worlds.omplapp import load_omplapp_cfg
 
             _PROBLEMS[source] = load_omplapp_cfg(Path(source[1]) / f"{source[2]}.cfg")
+        elif source[1] == "twist":
+            _PROBLEMS[source] = twisted_slot(source[2])
         else:
             from planners.worlds.mesh import DEFAULT_DELTA_FRACTION
             from planners.worlds.rigid_scenes import mesh_scene, rigid_scene
@@ -92,8 +175,8 @@ def main(argv=None) -> int:
     ap.add_argument("--part", default="tuning", choices=["tuning", "validation"])
     ap.add_argument("--scenes", type=int, default=4, help="scenes per family")
     ap.add_argument("--families", nargs="+", default=[f for f in TRAINING_FAMILIES if f != "clutter"],
-                    choices=list(TRAINING_FAMILIES), help="default: every training family but clutter, whose box "
-                    "witnesses meet their meshes")
+                    choices=[*TRAINING_FAMILIES, "twist"], help="default: every training family but clutter, whose "
+                    "box witnesses meet their meshes; 'twist': the twisted slot, this script's own mesh family")
     ap.add_argument("--omplapp", type=Path, help="OMPL.app's resources/3D folder: run --problems there instead")
     ap.add_argument("--problems", nargs="+", default=["Twistycooler", "Apartment"],
                     help="OMPL.app problems (with --omplapp; default its tuning problems)")
@@ -115,7 +198,10 @@ def main(argv=None) -> int:
             ap.error(f"--omplapp {args.omplapp}: no {', '.join(p + '.cfg' for p in missing)} there")
         sources = [("omplapp", str(args.omplapp), p) for p in args.problems]
     else:
-        sources = [("scene", f, s) for f in args.families for s in scene_seeds(f, args.part, args.scenes)]
+        sources = [("scene", f, s) for f in args.families if f != "twist"
+                   for s in scene_seeds(f, args.part, args.scenes)]
+        if "twist" in args.families:
+            sources += [("scene", "twist", TWIST_SEED0[args.part] + i) for i in range(args.scenes)]
     rules = {name: RULES[name] for name in args.rules}
     for spec in args.rule:
         name, sep, text = spec.partition("=")
