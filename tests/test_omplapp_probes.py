@@ -227,16 +227,11 @@ def test_the_twisted_slot_passes_only_a_body_rolled_with_it():
     world = problem.world
     assert world.is_valid(problem.start) and world.is_valid(problem.goal)
     assert np.array_equal(rules.twisted_slot(seed).start, problem.start)  # seeded: the same scene twice
-    # the slot's centre and roll: the first draw's, as twisted_slot makes them (its witness passed on the first draw)
-    rng = np.random.default_rng(seed)
-    c, _ = rng.uniform(17.0, 23.0), rng.uniform(1.5, 2.2)
-    rng.uniform(7.5, 8.3), rng.uniform(4.9, 5.1)
-    phi = math.radians(rng.uniform(43.0, 47.0)) * (1 if rng.random() < 0.5 else -1)
-    reach = 4.0 * (abs(math.cos(phi)) + abs(math.sin(phi))) + 0.5
-    centre = [float(rng.uniform(3.0 + reach * math.sqrt(2), s - 3.0 - reach * math.sqrt(2)))
-              for s in rules.TWIST_SPACE[1:]]
-    assert world.check_motion(np.array([c - 8.0, *centre, phi, 0.0, 0.0]), np.array([c + 8.0, *centre, phi, 0.0, 0.0]))
-    quarter = (-math.pi / 2, 0.0, math.pi / 2, math.pi)
+    # the first draw's slot (its witness passed on the first draw): a body rolled with it passes straight through
+    c, t, _, _, phi, centre = rules.twist_geometry(np.random.default_rng(seed))
+    before, after = np.array([c - t / 2 - 4.5, *centre, phi, 0.0, 0.0]), np.array([c + t / 2 + 4.5, *centre, phi, 0, 0])
+    assert world.check_motion(before, after)
+    quarter = (-math.pi / 2, 0.0, math.pi / 2, math.pi)  # and no axis-aligned orientation fits in the slot
     assert not any(world.is_valid(np.array([c, *centre, a, b, d])) for a in quarter for b in quarter for d in quarter)
     with pytest.raises(SystemExit):  # twist has tuning and validation parts only
         rules.main(["--families", "twist", "--part", "test", "--out", "x.jsonl"])

@@ -530,9 +530,11 @@ class MeshWorld(WorldBase):
     def centre_free_voxels(self, cell: float) -> np.ndarray:
         """``(nx, ny, nz)`` bool over voxels of side ``cell`` from ``low3``: where the body's centre may be.
 
-        Centres whose distance bound to the environment exceeds the inner radius and is positive (a
-        necessary condition for a valid pose centred there; a closed obstacle's inside stays cut off by
-        the band about its surface).
+        Centres whose distance bound to the environment exceeds the inner radius and is positive (a closed
+        obstacle's inside stays cut off by the band about its surface). The bound is a lower one, so a centre
+        kept here has its inner ball clear; beside walls oblique to the grid it falls short of the distance (by
+        up to sqrt(3) times and two voxels), and a passage whose sides are oblique can be cut off although the
+        inner ball passes it.
         """
         x, y, z = (a - o for a, o in zip(voxel_axes(self.low3, self.high3, cell), self._grid_origin, strict=True))
         # axis by axis, broadcast: no (n, 3) array of centres

@@ -6,8 +6,8 @@
         --planners RRTConnect --seeds 4 --time-limit 20 --out results/tree_rule_omplapp.jsonl
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --part tuning --scenes 8 --seeds 2 \\
         --rules trees roadmap --rule 'pw0={"passage_weight": 0}' --out results/tree_rule_pw.jsonl
-    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --families twist --scenes 2 --seeds 2 \
-        --planners RRTConnect --rules uniform trees roadmap --out results/tree_rule_twist.jsonl
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --families twist --part tuning --scenes 8 \\
+        --seeds 2 --rules roadmap --rule 'pw0={"passage_weight": 0}' --out results/tree_rule_twist.jsonl
 
 ``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) on box worlds
 and a roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation from the start, every route sample on the
@@ -47,18 +47,21 @@ RULES = {"uniform": None, "trees": {k: SHIPPED_RIGID_SETTINGS[k] for k in ROADMA
 _PROBLEMS: dict = {}
 
 
-#: The twisted slot (``--families twist``; this script's own tuning material, never a test): in a 40 x 30 x 24
-#: workspace, a wall across x, 1.5 to 2.2 thick (thinner than the body's short side, so the body cannot lie inside
-#: it), with a slot 7.5 to 8.3 by 4.9 to 5.1 rolled 43 to 47 degrees either way about x; the start and the goal stand
-#: 8 to 20 before and after the wall, within 5 of the slot's axis, at random angles, as Twistycool's face its hole.
-#: The body (10 x 5 x 2.5) passes long side first, rolled with the slot within about 36 degrees: no axis-aligned
-#: orientation fits it, as none fits Twistycool's passage. Written as meshes directly (a box scene has no rolled
-#: wall): the slab with a square hole around the slot, and four boxes in the slot's own frame that fill the hole but
-#: for the slot. Every scene has a witness path (``verify_scene``) through the slot.
+#: The twisted slot (``--families twist``; this script's own tuning material, never a test): a compact body (6 x 5 x 3,
+#: Twistycool's robot is compact too) in a 34 x 30 x 30 workspace, a wall across x, 1.5 to 2.2 thick (thinner than the
+#: body's short side, so the body cannot lie inside it), with a slot 7.0 to 7.4 by 4.9 to 5.1 rolled 42 to 48 degrees
+#: either way about x; the start and the goal stand 0.8 to 2 body lengths before and after the wall, within 5 of the
+#: slot's axis, at random angles, as Twistycool's face its hole. The body passes with its 5 x 3 face rolled with the
+#: slot within about 30 degrees: no axis-aligned orientation fits, as none fits Twistycool's passage. Written as meshes
+#: directly (a box scene has no rolled wall): the slab with a square hole around the slot, and four boxes in the slot's
+#: own frame that fill the hole but for the slot. Every scene has a witness path (``verify_scene``) through the slot.
 TWIST_SEED0 = {"tuning": TUNING_SEED0, "validation": VALIDATION_SEED0}
 TWIST_DRAWS = 8
-#: The twisted slot's workspace (the box scenes' is 100 x 60 x 40).
-TWIST_SPACE = (40.0, 30.0, 24.0)
+#: The twisted slot's workspace and body (the box scenes' are 100 x 60 x 40 and 10 x 5 x 2.5).
+TWIST_SPACE = (34.0, 30.0, 30.0)
+TWIST_BODY = (6.0, 5.0, 3.0)
+#: Half the side of the square hole around the slot, which the rolled boxes fill but for the slot.
+TWIST_HOLE = 5.0
 
 
 def _rolled_box(x0: float, x1: float, u: tuple, v: tuple, centre: tuple, phi: float):
@@ -84,23 +87,31 @@ def _draw_near(rng: np.random.Generator, world, low: tuple, high: tuple, seed: i
     raise RuntimeError(f"twist-{seed}: no state with clearance {QUERY_CLEARANCE:g} between x {low[0]} and {high[0]}")
 
 
+def twist_geometry(rng: np.random.Generator) -> tuple:
+    """One twisted slot: the wall's middle and thickness, the slot's sides, its roll and its centre in (y, z)."""
+    size = TWIST_SPACE
+    c, t = rng.uniform(0.42 * size[0], 0.58 * size[0]), rng.uniform(1.5, 2.2)
+    w, h = rng.uniform(7.0, 7.4), rng.uniform(4.9, 5.1)
+    phi = math.radians(rng.uniform(42.0, 48.0)) * (1 if rng.random() < 0.5 else -1)
+    reach = TWIST_HOLE * (abs(math.cos(phi)) + abs(math.sin(phi))) + 0.5  # the rolled boxes' reach from the centre
+    centre = tuple(float(rng.uniform(3.0 + reach * math.sqrt(2), size[k] - 3.0 - reach * math.sqrt(2))) for k in (1, 2))
+    return float(c), float(t), float(w), float(h), phi, centre
+
+
 def twisted_slot(seed: int):
     """The twisted-slot scene of ``seed`` as a mesh world (a ``Problem``), with a witness path through its slot."""
     from planners.base.problem import Problem
     from planners.worlds.mesh import DEFAULT_DELTA_FRACTION, MeshWorld
-    from planners.worlds.rigid_scenes import BODY_SIDES, GOAL_DISTANCE, box_mesh, carve, verify_scene
+    from planners.worlds.rigid_scenes import GOAL_DISTANCE, box_mesh, carve, verify_scene
 
     rng = np.random.default_rng(seed)
     size = np.array(TWIST_SPACE)
-    half = np.array(BODY_SIDES) / 2
+    half = np.array(TWIST_BODY) / 2
+    length = TWIST_BODY[0]
     for attempt in range(TWIST_DRAWS):
-        c, t = rng.uniform(17.0, 23.0), rng.uniform(1.5, 2.2)
-        w, h = rng.uniform(7.5, 8.3), rng.uniform(4.9, 5.1)
-        phi = math.radians(rng.uniform(43.0, 47.0)) * (1 if rng.random() < 0.5 else -1)
-        hole = 4.0  # half the square hole's side; the rolled boxes cover it whole
+        c, t, w, h, phi, centre = twist_geometry(rng)
+        hole = TWIST_HOLE
         reach = hole * (abs(math.cos(phi)) + abs(math.sin(phi))) + 0.5
-        centre = tuple(float(rng.uniform(3.0 + reach * math.sqrt(2), size[k] - 3.0 - reach * math.sqrt(2)))
-                       for k in (1, 2))
         a, b = c - t / 2, c + t / 2
         square = np.array([a - 1.0, centre[0] - hole, centre[1] - hole, b + 1.0, centre[0] + hole, centre[1] + hole])
         meshes = [box_mesh(box) for box in carve(np.array([a, 0.0, 0.0, b, size[1], size[2]]), [square])]
@@ -111,12 +122,12 @@ def twisted_slot(seed: int):
         faces = np.concatenate([f + 8 * i for i, (_, f) in enumerate(meshes)])
         world = MeshWorld((verts, faces), box_mesh(np.concatenate([-half, half])), low=(0, 0, 0), high=TWIST_SPACE,
                           delta=DEFAULT_DELTA_FRACTION * float(np.linalg.norm(size)), name=f"twist-{seed}")
-
-        start = _draw_near(rng, world, (a - 20.0, *centre), (a - 8.0, *centre), seed)
-        goal = _draw_near(rng, world, (b + 8.0, *centre), (b + 20.0, *centre), seed)
+        start = _draw_near(rng, world, (a - 2 * length, *centre), (a - 0.8 * length, *centre), seed)
+        goal = _draw_near(rng, world, (b + 0.8 * length, *centre), (b + 2 * length, *centre), seed)
         problem = Problem(world, start, goal, goal_tolerance=GOAL_DISTANCE, metric="cossin", name=f"twist-{seed}")
-        before = np.array([a - 6.5, *centre, phi, 0.0, 0.0])
-        after = np.array([b + 6.5, *centre, phi, 0.0, 0.0])
+        off = length / 2 + 1.5
+        before = np.array([a - off, *centre, phi, 0.0, 0.0])
+        after = np.array([b + off, *centre, phi, 0.0, 0.0])
         if verify_scene(problem, [(before, after)], seed + 1000 * attempt) is not None:
             return problem
     raise RuntimeError(f"twist-{seed}: no draw of {TWIST_DRAWS} had a witness path")
