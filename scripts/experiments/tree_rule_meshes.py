@@ -87,13 +87,18 @@ def _draw_near(rng: np.random.Generator, world, low: tuple, high: tuple, seed: i
     raise RuntimeError(f"twist-{seed}: no state with clearance {QUERY_CLEARANCE:g} between x {low[0]} and {high[0]}")
 
 
+def _twist_reach(phi: float) -> float:
+    """How far the rolled boxes reach from the slot's centre along y and z (their half side, in the slot's frame)."""
+    return TWIST_HOLE * (abs(math.cos(phi)) + abs(math.sin(phi))) + 0.5
+
+
 def twist_geometry(rng: np.random.Generator) -> tuple:
     """One twisted slot: the wall's middle and thickness, the slot's sides, its roll and its centre in (y, z)."""
     size = TWIST_SPACE
     c, t = rng.uniform(0.42 * size[0], 0.58 * size[0]), rng.uniform(1.5, 2.2)
     w, h = rng.uniform(7.0, 7.4), rng.uniform(4.9, 5.1)
     phi = math.radians(rng.uniform(42.0, 48.0)) * (1 if rng.random() < 0.5 else -1)
-    reach = TWIST_HOLE * (abs(math.cos(phi)) + abs(math.sin(phi))) + 0.5  # the rolled boxes' reach from the centre
+    reach = _twist_reach(phi)
     centre = tuple(float(rng.uniform(3.0 + reach * math.sqrt(2), size[k] - 3.0 - reach * math.sqrt(2))) for k in (1, 2))
     return float(c), float(t), float(w), float(h), phi, centre
 
@@ -110,8 +115,7 @@ def twisted_slot(seed: int):
     length = TWIST_BODY[0]
     for attempt in range(TWIST_DRAWS):
         c, t, w, h, phi, centre = twist_geometry(rng)
-        hole = TWIST_HOLE
-        reach = hole * (abs(math.cos(phi)) + abs(math.sin(phi))) + 0.5
+        reach, hole = _twist_reach(phi), TWIST_HOLE
         a, b = c - t / 2, c + t / 2
         square = np.array([a - 1.0, centre[0] - hole, centre[1] - hole, b + 1.0, centre[0] + hole, centre[1] + hole])
         meshes = [box_mesh(box) for box in carve(np.array([a, 0.0, 0.0, b, size[1], size[2]]), [square])]
