@@ -12,6 +12,7 @@ from test_mesh_world import box, wall_with_hole  # noqa: E402  (the same wall wi
 
 from planners import Problem, make_planner  # noqa: E402
 from planners.guidance.workspace_route import centre_route, voxel_route  # noqa: E402
+from planners.kernels.mesh import squared_distance_voxels  # noqa: E402
 from planners.worlds.mesh import MeshWorld, solid_inner_radius  # noqa: E402
 
 
@@ -58,9 +59,23 @@ def test_the_clearance_bound_never_exceeds_the_distance_to_the_environment(world
     bound = world.workspace_clearance(pts)
     exact = triangle_distances(wall_with_hole(), pts)
     assert np.all(bound <= exact + 1e-9)
-    # a Chebyshev bound in voxels: the distance is at most sqrt(3) times it, plus two voxels
-    assert np.all(exact <= np.sqrt(3) * (bound + 2 * world.route_cell))
+    # the Euclidean term: where the bound is positive, the distance exceeds it by at most 2 sqrt(3) voxels
+    assert np.all(exact[bound > 0] <= bound[bound > 0] + 2 * np.sqrt(3) * world.route_cell + 1e-9)
+    assert np.all(exact <= np.sqrt(3) * (bound + 2 * world.route_cell))  # never worse than the Chebyshev bound alone
     assert world.workspace_clearance([[100.0, 0.0, 0.0]])[0] == 0.0  # outside the grid: no bound
+
+
+def test_the_squared_distances_are_the_brute_force_ones_with_the_layer_around_the_grid():
+    rng = np.random.default_rng(4)
+    for _ in range(40):
+        nx, ny, nz = (int(n) for n in rng.integers(1, 9, size=3))
+        grid = (rng.random((nx, ny * nz)) > rng.uniform(0.0, 0.3)).astype(np.uint8)  # 0: a voxel meets a triangle
+        touched = np.ones((nx + 2, ny + 2, nz + 2), dtype=bool)  # the layer around the grid counts as met
+        touched[1:-1, 1:-1, 1:-1] = grid.reshape(nx, ny, nz) == 0
+        sites = np.argwhere(touched) - 1
+        cells = np.indices((nx, ny, nz)).reshape(3, -1).T
+        brute = ((cells[:, None, :] - sites[None]) ** 2).sum(axis=2).min(axis=1)
+        assert np.array_equal(squared_distance_voxels(grid, nx, ny, nz).reshape(-1), brute.astype(np.float32))
 
 
 def test_free_voxels_leave_out_the_wall_and_keep_the_hole(world):
@@ -118,8 +133,10 @@ def test_on_a_mesh_world_every_planner_takes_the_roadmaps_rule_and_a_users_setti
                       goal_tolerance=0.5)
     for name in ("RRT", "RRTConnect", "PRM"):
         bound = make_planner(name, problem, seed=0, sampler=make_sampler("rigid_route")).sampler
-        assert all(getattr(bound, k) == v for k, v in SHIPPED_RIGID_ROADMAP.items()), name
+        assert all(getattr(bound, k) == v for k, v in SHIPPED_RIGID_ROADMAP.items() if k != "uniform_ramp"), name
         assert bound.chain.shape == (len(bound.route), 3, 3)
+        # the trees turn to uniform angles as a query goes on; a roadmap keeps every sample and never does
+        assert bound.uniform_ramp == (0.0 if name == "PRM" else SHIPPED_RIGID_ROADMAP["uniform_ramp"]), name
     # a box world: the trees keep their own rule
     tree = make_planner("RRT", rigid_scene("slot", 12345), seed=0, sampler=make_sampler("rigid_route")).sampler
     assert all(getattr(tree, k) == SHIPPED_RIGID_SETTINGS[k] for k in SHIPPED_RIGID_ROADMAP)
@@ -148,7 +165,7 @@ def test_the_learned_orientations_put_a_mesh_body_s_long_side_along_a_world_axis
     problem = Problem(world, np.array([2.0, 5.0, 5.0, 0, 0, 0]), np.array([8.0, 5.0, 5.0, 0, 0, 0]),
                       goal_tolerance=0.5)
     sampler = make_sampler("rigid_route", uniform_share=0.0, angle_noise=0.0, goal_share=0.0,
-                           route_fraction=1.0).bind(problem)
+                           route_fraction=1.0, uniform_ramp=0).bind(problem)
     assert sampler.probs.shape == (len(sampler.route), 6) and np.allclose(sampler.probs.sum(axis=1), 1.0)
     q = sampler.draw(np.random.default_rng(0), 100, None)
     long_side = np.array([np.asarray(rotation_matrix(*a)) @ axes[:, 0] for a in q[:, 3:]])

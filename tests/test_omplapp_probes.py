@@ -233,5 +233,10 @@ def test_the_twisted_slot_passes_only_a_body_rolled_with_it():
     assert world.check_motion(before, after)
     quarter = (-math.pi / 2, 0.0, math.pi / 2, math.pi)  # and no axis-aligned orientation fits in the slot
     assert not any(world.is_valid(np.array([c, *centre, a, b, d])) for a in quarter for b in quarter for d in quarter)
+    # the workspace route goes through the slot: its free voxels' Euclidean bound sees the oblique walls' distance
+    from planners.guidance.workspace_route import voxel_route
+
+    route = voxel_route(world, problem.start, problem.goal, world.route_cell)
+    assert route is not None and route[0, 0] < c < route[-1, 0]
     with pytest.raises(SystemExit):  # twist has tuning and validation parts only
         rules.main(["--families", "twist", "--part", "test", "--out", "x.jsonl"])

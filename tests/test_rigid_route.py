@@ -106,6 +106,34 @@ def test_draws_are_valid_shaped_seeded_and_batch_invariant(slot_scene):
     assert np.allclose(np.abs(R).max(axis=1), 1.0)
 
 
+def test_a_uniform_ramp_turns_the_route_samples_to_uniform_angles_as_the_query_goes_on(slot_scene):
+    net = make_sampler("rigid_route").net
+    kw = dict(route_fraction=1.0, uniform_share=0.0, angle_noise=0.0, goal_share=0.0)
+
+    ramp = RigidRouteSampler(net, uniform_ramp=1000, **kw).bind(slot_scene)
+    rng = np.random.default_rng(6)
+    q = np.concatenate([ramp.draw(rng, 700, None), ramp.draw(rng, 1300, None)])  # batches: the count runs on
+    off_axis = np.array([not np.allclose(np.abs(rotation_matrix(*x[3:])).max(axis=1), 1.0) for x in q])
+    assert off_axis[1000:].all()  # past the ramp every route sample takes uniform angles
+    early, late = off_axis[:250].mean(), off_axis[750:1000].mean()  # about k / 1000 on the way
+    assert early < 0.3 < 0.6 < late
+    # without the ramp the same stream keeps the model's classes; its positions are the same
+    plain = RigidRouteSampler(net, **kw).bind(slot_scene).draw(np.random.default_rng(6), 2000, None)
+    assert np.array_equal(plain[:, :3], q[:, :3])
+    assert all(np.allclose(np.abs(rotation_matrix(*x[3:])).max(axis=1), 1.0) for x in plain)
+    # seeded and batch invariant; a new query (bind) starts the count again
+    again = RigidRouteSampler(net, uniform_ramp=1000, **kw).bind(slot_scene).draw(np.random.default_rng(6), 2000, None)
+    assert np.array_equal(again, q)
+    assert np.array_equal(ramp.bind(slot_scene).draw(np.random.default_rng(6), 2000, None), q)
+    # a roadmap keeps every sample it draws: it never ramps
+    assert RigidRouteSampler(net, uniform_ramp=1000, **kw).for_planner("roadmap").uniform_ramp == 0.0
+    assert make_sampler("rigid_route", uniform_ramp=50).uniform_ramp == 50.0
+    with pytest.raises(InputError, match="uniform_ramp"):
+        RigidRouteSampler(net, uniform_ramp=-1)
+    with pytest.raises(InputError, match="roadmap uniform_ramp"):
+        RigidRouteSampler(net, roadmap={"uniform_ramp": -1})
+
+
 def test_the_registry_name_plans_with_rrt_connect(slot_scene):
     from learning.evaluation.rigid import run_one
 
@@ -126,7 +154,8 @@ def test_a_roadmap_takes_its_own_validated_rule_and_a_users_setting_holds_for_ev
     for family in ("tree", "bidirectional", "optimizing"):
         assert s.for_planner(family) is s
     r = s.for_planner("roadmap")
-    assert r is not s and all(getattr(r, k) == v for k, v in SHIPPED_RIGID_ROADMAP.items())
+    assert r is not s and all(getattr(r, k) == v for k, v in SHIPPED_RIGID_ROADMAP.items() if k != "uniform_ramp")
+    assert r.uniform_ramp == 0.0 and s.uniform_ramp == SHIPPED_RIGID_SETTINGS["uniform_ramp"]  # a roadmap never ramps
     assert (s.symmetry, s.route_fraction) == tree  # the trees' rule unchanged
     assert (s.uniform_share, s.angle_noise) == (SHIPPED_RIGID_SETTINGS["uniform_share"],
                                                 SHIPPED_RIGID_SETTINGS["angle_noise"])

@@ -586,3 +586,87 @@ def reach_open(grid, nx, ny, nz, seeds):
                 queue[n] = a * nyz + r
                 n += 1
     return seen
+
+
+@nb.njit(cache=True)
+def _lower_envelope(f, n, sites, bounds, out):
+    """One line of the squared distance transform (Felzenszwalb and Huttenlocher's lower envelope of parabolas).
+
+    ``out[q] = min over p of (q - p) ** 2 + f[p]`` for ``q`` in ``0 .. n - 1``, ``p`` over ``-1 .. n``, where ``f``
+    holds the line's values at index ``p + 1`` and the two ends ``f[0]``, ``f[n + 1]`` (the layer around the grid).
+    ``sites`` (``n + 2`` ints) and ``bounds`` (``n + 3``) are work space.
+    """
+    k = 0
+    sites[0] = -1
+    bounds[0] = -np.inf
+    bounds[1] = np.inf
+    for q in range(0, n + 1):
+        fq = f[q + 1] + q * q
+        while True:
+            p = sites[k]
+            s = (fq - (f[p + 1] + p * p)) / (2.0 * (q - p))
+            if s <= bounds[k] and k > 0:
+                k -= 1
+            else:
+                break
+        k += 1
+        sites[k] = q
+        bounds[k] = s
+        bounds[k + 1] = np.inf
+    k = 0
+    for q in range(n):
+        while bounds[k + 1] < q:
+            k += 1
+        p = sites[k]
+        out[q] = (q - p) * (q - p) + f[p + 1]
+
+
+@nb.njit(cache=True)
+def squared_distance_voxels(grid, nx, ny, nz):
+    """``(nx, ny * nz)`` float32: each voxel's squared distance, in voxels, to the nearest voxel that meets a triangle.
+
+    Centre to centre; a voxel meets a triangle where ``grid`` (``chebyshev_grid``'s) is 0, and the layer of voxels
+    around the grid counts as such, as ``chebyshev_grid`` counts it. Exact (separable: along z, then y, then x); the
+    values are integers.
+    """
+    nyz = ny * nz
+    out = np.empty((nx, nyz), dtype=np.float32)
+    # along z: the distance to the nearest such voxel on the line (the layer at -1 and nz included)
+    for i in range(nx):
+        for j in range(ny):
+            base = j * nz
+            last = -1
+            for k in range(nz):
+                if grid[i, base + k] == 0:
+                    last = k
+                out[i, base + k] = k - last
+            after = nz
+            for k in range(nz - 1, -1, -1):
+                if grid[i, base + k] == 0:
+                    after = k
+                d = out[i, base + k]
+                d = d if d < after - k else after - k
+                out[i, base + k] = d * d
+    most = nx if nx > ny else ny
+    f = np.zeros(most + 2)
+    line = np.empty(most)
+    sites = np.empty(most + 2, dtype=np.int64)
+    bounds = np.empty(most + 3)
+    for i in range(nx):  # along y
+        for k in range(nz):
+            for j in range(ny):
+                f[j + 1] = out[i, j * nz + k]
+            f[0] = 0.0
+            f[ny + 1] = 0.0
+            _lower_envelope(f, ny, sites, bounds, line)
+            for j in range(ny):
+                out[i, j * nz + k] = line[j]
+    for r in range(nyz):  # along x
+        for i in range(nx):
+            f[i + 1] = out[i, r]
+        f[0] = 0.0
+        f[nx + 1] = 0.0
+        _lower_envelope(f, nx, sites, bounds, line)
+        for i in range(nx):
+            out[i, r] = line[i]
+    return out
