@@ -22,8 +22,8 @@ default motion resolution; a scene whose box witness meets its meshes is left ou
 out; ``--families twist``: the twisted slot below, a passage only a roll about the body's long axis passes), or
 with ``--omplapp DIR`` on OMPL.app's ``.cfg`` problems named by ``--problems``. It prints per planner and
 rule the runs solved, the median time (the sampler's set-up included; an unsolved run at the limit) and the median
-iterations, and writes every run to ``--out`` (JSON lines). Choose on the tuning part and OMPL.app's tuning problems
-only.
+iterations (``--setup seed``: at the seed project's set-ups, whose small step takes a query thousands of iterations),
+and writes every run to ``--out`` (JSON lines). Choose on the tuning part and OMPL.app's tuning problems only.
 """
 
 from __future__ import annotations
@@ -163,7 +163,8 @@ def _problem(source: tuple):
 
 
 def _run(task: tuple) -> dict:
-    source, planner, seed, (rule, settings), limit = task
+    source, planner, seed, (rule, settings), limit, setup = task
+    from learning.evaluation.rigid import CAPS, planner_setup
     from learning.samplers.registry import make_sampler
     from planners import make_planner
     from planners.base.planner import compile_seconds
@@ -174,12 +175,17 @@ def _run(task: tuple) -> dict:
     if isinstance(problem, str):
         return {**row, "refused": problem}
 
+    cap, given = None, {}
+    if setup == "seed":  # the seed project's set-ups: their step, goal distance and iteration cap
+        problem, given = planner_setup(planner, problem)
+        cap = CAPS[planner]
+
     def kwargs() -> dict:  # a fresh sampler for each run, bound in the timed run
-        return {} if settings is None else {"sampler": make_sampler("rigid_route", **settings)}
+        return given if settings is None else {**given, "sampler": make_sampler("rigid_route", **settings)}
 
     make_planner(planner, problem, seed=0, **kwargs()).solve(max_iterations=2)  # compile outside the timing
     t, c = time.perf_counter(), compile_seconds()
-    r = make_planner(planner, problem, seed=seed, **kwargs()).solve(time_limit=limit)
+    r = make_planner(planner, problem, seed=seed, **kwargs()).solve(max_iterations=cap, time_limit=limit)
     seconds = time.perf_counter() - t - (compile_seconds() - c)
     return {**row, "solved": bool(r.solved), "iterations": int(r.iterations), "seconds": float(seconds),
             "limit": limit}
@@ -205,6 +211,9 @@ def main(argv=None) -> int:
                     "'pw16={\"passage_weight\": 16}' (repeatable)")
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per scene (0, 1, ...)")
     ap.add_argument("--time-limit", type=float, default=10.0)
+    ap.add_argument("--setup", default="default", choices=["default", "seed"],
+                    help="the planners' defaults, or the seed project's set-ups (step 0.01 of the workspace, goal "
+                    "distance 1.0, at most 20,000 iterations; learning.evaluation.rigid.planner_setup)")
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--out", type=Path, required=True, help="a JSON-lines file of every run (written at the end)")
     args = ap.parse_args(argv)
@@ -236,7 +245,7 @@ def main(argv=None) -> int:
     if not (args.time_limit > 0 and args.seeds > 0 and args.processes > 0):
         ap.error("--time-limit, --seeds and --processes must be positive")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    tasks = [(src, planner, seed, item, args.time_limit) for src in sources for planner in args.planners
+    tasks = [(src, planner, seed, item, args.time_limit, args.setup) for src in sources for planner in args.planners
              for seed in range(args.seeds) for item in rules.items()]
     rows = []
     with ProcessPoolExecutor(args.processes) as pool:  # rules interleaved, so every rule sees the same load
