@@ -205,16 +205,19 @@ def test_the_tree_rule_script_runs_each_rule_on_a_mesh_scene():
     rules = load_script("experiments/tree_rule_meshes")
     source = ("scene", "slot", scene_seeds("slot", "tuning", 1)[0])
     named = [(rule, rules.RULES[rule]) for rule in ("uniform", "trees", "roadmap")]
-    rows = [rules._run((source, "RRTConnect", 0, item, 1.0)) for item in named]
+    rows = [rules._run((source, "RRTConnect", 0, item, 1.0, "default")) for item in named]
     assert [r["rule"] for r in rows] == ["uniform", "trees", "roadmap"]
     for r in rows:  # a scene the mesh scene set keeps; each run within its limit (compiling left out)
         assert "refused" not in r and r["iterations"] > 0 and 0 <= r["seconds"] <= 1.0 + 0.5
     assert rows[1]["solved"] and rows[2]["solved"]  # the learned rules pass the slot
-    again = rules._run((source, "RRTConnect", 0, named[2], 1.0))
+    again = rules._run((source, "RRTConnect", 0, named[2], 1.0, "default"))
     assert again["iterations"] == rows[2]["iterations"]  # seeded: the same run twice
     # a rule of one's own: the roadmaps' rule with a setting changed, named on the command line
     assert rules._run((source, "RRTConnect", 0, ("pw0", {**rules.RULES["roadmap"], "passage_weight": 0.0}),
-                       1.0))["rule"] == "pw0"
+                       1.0, "default"))["rule"] == "pw0"
+    # the seed project's set-up: its small step takes more iterations on the same scene, seed and rule
+    seeded = rules._run((source, "RRTConnect", 0, named[2], 1.0, "seed"))
+    assert "refused" not in seeded and seeded["iterations"] > 0 and seeded["iterations"] != rows[2]["iterations"]
 
 
 def test_the_twisted_slot_passes_only_a_body_rolled_with_it():
