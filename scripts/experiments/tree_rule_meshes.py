@@ -9,12 +9,12 @@
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --families twist --part tuning --scenes 8 \\
         --seeds 2 --rules roadmap --rule 'pw0={"passage_weight": 0}' --out results/tree_rule_twist.jsonl
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --families twist --part tuning --scenes 8 \\
-        --seeds 2 --rules roadmap --rule 'r0={"uniform_ramp": 0}' --rule 'r4k={"uniform_ramp": 4000}' --out FILE
+        --seeds 2 --rules roadmap --rule 'r0={"uniform_ramp": 0}' --rule 'r1k={"uniform_ramp": 1000}' --out FILE
 
 ``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) on box worlds
 and a roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation from the start, every route sample on the
 route, no uniform angles, no angle noise); on mesh worlds the trees take the roadmaps' rule too, as this script's runs
-chose, and turn their route samples to uniform angles over their first 1,000 samples (``uniform_ramp``, which a
+chose, and turn their route samples to uniform angles over their first 4,000 samples (``uniform_ramp``, which a
 roadmap drops; chosen on the twisted slot and the families here). This runs the trees with each rule (``--rules``;
 ``uniform``: the planner's own sampling; ``--rule NAME=JSON``: the roadmaps' rule with some settings changed) under a
 time limit, on a part of the training box-scene families written as mesh worlds (``mesh_scene`` at the
