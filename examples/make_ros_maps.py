@@ -48,6 +48,7 @@ def write(out: Path, folder: str, family: str, seed: int, side: int, resolution:
 
 
 def main(argv: list[str] | None = None) -> None:
+    """Write the maps under ``--out``."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=Path("tests/data/ros"), help="folder to write the maps under")
     args = ap.parse_args(argv)

@@ -127,7 +127,8 @@ Place = tuple[int, bool]
 class JobQueue:
     """Hands a worker its next job: more of its own group, else the first job of the largest group not begun, else
     the last job of the group with the most left (a second worker in a group goes on from the other end, where the
-    first worker's jobs are least alike its own)."""
+    first worker's jobs are least alike its own).
+    """
 
     def __init__(self, groups: list[list[tuple[str, str, str]]]) -> None:
         self.left = [list(g) for g in groups]
@@ -135,7 +136,8 @@ class JobQueue:
 
     def next(self, place: Place | None) -> tuple[Place, tuple[str, str, str]] | None:
         """The next job for a worker whose last job came from ``place`` (None: none yet), and where it came from;
-        None when every job is handed out."""
+        None when every job is handed out.
+        """
         if place is not None and self.left[place[0]]:
             group, from_end = place
         elif fresh := [i for i, g in enumerate(self.left) if g and not self.begun[i]]:
@@ -158,7 +160,8 @@ def run_jobs(todo: list[tuple[str, str, str]], workers: int) -> Iterator[tuple[t
     """Compile ``todo`` in ``workers`` processes (``JobQueue``'s order), yielding ``(job, seconds, running)`` as each
     job ends, ``running`` the jobs still under way (1 worker: in this process, in ``todo``'s order, ``running`` the
     next job). A job that fails, or an interrupt, stops the workers (what they compiled stays in the cache) and
-    raises."""
+    raises.
+    """
     if workers <= 1:
         for i, job in enumerate(todo):
             yield job, compile_one(*job), todo[i + 1:i + 2]
@@ -201,7 +204,8 @@ def compile_one(planner: str, world: str, metric: str) -> float | None:
 
     On a 2-D world kind (``CLASSICAL_WORLDS``) a planner with a compiled loop (RRT, RRT-Connect, RRT*) then has the
     classical samplers draw inside it (``draw_classical_in_loops``) and solves with uniform sampling and with goal
-    bias (``plan.py``'s default for RRT and RRT*)."""
+    bias (``plan.py``'s default for RRT and RRT*).
+    """
     t0 = time.perf_counter()
     problem = WORLDS[world][0](metric)
     try:

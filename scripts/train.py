@@ -42,7 +42,6 @@ from learning.training.policy import TrainConfig, open_map_sets, read_state, tra
 from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, check_output_place
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments, make_backend
 
-
 #: Free disk a run needs: checkpoints of a few MB, DAgger data of tens of MB, TensorBoard events.
 NEED_BYTES = 200 * 2**20
 

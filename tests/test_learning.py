@@ -299,7 +299,6 @@ def test_short_training_beats_uniform_sampling(trained):
 
 def test_train_script_builds_a_flag_for_every_config_field():
     import importlib.util
-    from pathlib import Path
 
     path = Path(__file__).resolve().parents[1] / "scripts" / "train.py"
     spec = importlib.util.spec_from_file_location("train_script", path)
@@ -312,7 +311,6 @@ def test_train_script_builds_a_flag_for_every_config_field():
 
 def _script(name):
     import importlib.util
-    from pathlib import Path
 
     script = Path(__file__).resolve().parents[1] / "scripts" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(f"{name.replace('/', '_')}_script", script)

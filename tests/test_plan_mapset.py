@@ -67,10 +67,12 @@ def _manifest_without_tuning(tmp_path) -> str:
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--map-set", "{ros}", "--split", "testing"], "--split 'testing': expected one of train, validation, tuning, test"),
+    (["--map-set", "{ros}", "--split", "testing"],
+     "--split 'testing': expected one of train, validation, tuning, test"),
     (["--map-set", "{ros}", "--query", "10"], "--query 10: the 'test' part of map set ros holds 10 queries"),
     (["--map-set", "{ros}", "--split", "train", "--query", "-1"], "--query -1: expected a query number from 0"),
-    (["--map-set", "{manifest}", "--split", "tuning"], "--split tuning: the 'tuning' part of map set set holds no query"),
+    (["--map-set", "{manifest}", "--split", "tuning"],
+     "--split tuning: the 'tuning' part of map set set holds no query"),
     (["--map-set", "{manifest}", "--split", "tuning", "--list-queries"], "--split tuning: the 'tuning' part"),
     (["--map-set", "{ros}/missing"], "--map-set {ros}/missing:"),
     (["--map-set", "generated", "--split-seed", "1"], "--split-seed: map set 'generated' has its own maps"),

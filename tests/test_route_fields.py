@@ -35,7 +35,7 @@ def _count_passes(monkeypatch) -> list[int]:
 
 
 def _problems(n: int = 2, size: int = 64):
-    return [generate(f, TEST_SEED0 + 3 + i, size) for i, f in zip(range(n), ("bugtrap", "rooms", "maze"))]
+    return [generate(f, TEST_SEED0 + 3 + i, size) for i, f in zip(range(n), ("bugtrap", "rooms", "maze"), strict=False)]
 
 
 def test_the_cache_gives_predicts_field_and_runs_the_encoder_once_per_query(net, monkeypatch):

@@ -12,8 +12,8 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from conftest import load_script  # noqa: E402
 
-from learning.training.sweep import BASELINE_GRID, baseline_score  # noqa: E402
 from learning.training.policy import TrainConfig  # noqa: E402
+from learning.training.sweep import BASELINE_GRID, baseline_score  # noqa: E402
 from planners import RRT, GoalBiasedSampler  # noqa: E402
 from planners.maps.generators import VALIDATION_SEED0, generate  # noqa: E402
 

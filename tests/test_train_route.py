@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 import torch
-
 from conftest import load_script, npy_map_folder
+
 from learning.device import CPU_ARITHMETIC, pin_cpu_arithmetic, resolve_device
 from learning.models.route_net import load_route_net
 from planners.base.fileio import MANIFEST, run_lock

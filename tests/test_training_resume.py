@@ -17,8 +17,8 @@ from pathlib import Path
 
 import pytest
 import torch
-
 from conftest import load_script, npy_map_folder
+
 from learning.models.checkpoint import read_sb3_zip
 from learning.training.policy import TrainConfig, read_state, train
 from planners.base.fileio import InputError

@@ -135,7 +135,8 @@ def solution_ms(runs: Sequence[Run]) -> float:
 
 def _cell(runs: Sequence[Run]) -> str:
     """A method's table cell: its median time to solution (ms) and the share solved; where that median is not
-    reached, "> " the median time its runs took."""
+    reached, "> " the median time its runs took.
+    """
     ms, solved = solution_ms(runs), f"{np.mean([r.solved for r in runs]):.0%}"
     if math.isfinite(ms):
         return f"{ms:.3g} ({solved})"

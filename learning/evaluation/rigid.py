@@ -126,7 +126,8 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
 
 def check_names(planners: Sequence[str], samplers: Sequence[str], users: dict[str, str]) -> None:
     """Refuse, naming it, a planner not in ``PLANNERS``, a sampler the registry has not, or a user's sampler
-    (``users``: label -> spec) labelled as a registered one."""
+    (``users``: label -> spec) labelled as a registered one.
+    """
     from learning.samplers.registry import sampler_names
 
     for name in planners:

@@ -30,9 +30,9 @@ from learning.models.field import (  # re-exported (``__all__``): where users of
 from learning.models.route_vin import RouteVIN
 from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, output_set, short_repr
 
-__all__ = ["BATCH_BYTES", "BYTES_PER_BLOCK", "GOAL_CHANNELS", "KINDS", "MAX_BLOCKS", "MAX_BLOCKS_ENV", "AxialAttention",
-           "FieldEncoder", "RouteNet", "RouteVIN", "UNet", "load_route_net", "make_route_net", "max_blocks", "route_input",
-           "save_route_net", "save_route_set", "symmetry", "unturn"]
+__all__ = ["BATCH_BYTES", "BYTES_PER_BLOCK", "GOAL_CHANNELS", "KINDS", "MAX_BLOCKS", "MAX_BLOCKS_ENV",
+           "AxialAttention", "FieldEncoder", "RouteNet", "RouteVIN", "UNet", "load_route_net", "make_route_net",
+           "max_blocks", "route_input", "save_route_net", "save_route_set", "symmetry", "unturn"]
 
 
 class AxialAttention(nn.Module):
@@ -64,7 +64,8 @@ class AxialAttention(nn.Module):
         """``_along`` without gradients on the CPU, a few sequences at a time (``CHUNK_FLOATS``): each sequence's
         result is the same bit for bit, and the attention weights of a chunk stay in the cache instead of all of
         them going through memory (at 128 x 128 blocks, 8 symmetries: 537 MB at once). A GPU takes the whole
-        pass at once: there each chunk would cost kernel launches, not save memory traffic."""
+        pass at once: there each chunk would cost kernel launches, not save memory traffic.
+        """
         if torch.is_grad_enabled() or x.device.type != "cpu":
             return self._along(x, attn, i)
         n = max(1, self.CHUNK_FLOATS // (self.HEADS * x.shape[1] * x.shape[1]))
@@ -186,7 +187,8 @@ def make_route_net(kind: str = "unet", block: int = 4, channels: int = 24, depth
                    attention_level: int = 0, trained_side: int = 0, step: int | None = None) -> RouteNet | RouteVIN:
     """A new encoder of ``kind``: "unet" (``RouteNet``) or "vin" (``RouteVIN``, whose ``depth`` is its local layers,
     which takes no attention, and whose ``step`` in cells may be several blocks); a ``ValueError`` naming what
-    does not fit."""
+    does not fit.
+    """
     if kind == "vin":
         if attention or attention_level:
             raise ValueError(f"attention = {attention}, attention_level = {attention_level}: the value-iteration "

@@ -254,7 +254,8 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def clear_map_cache(self) -> None:
         """Forget every map's kept parts (``map_cache_bytes``); the prepacked weights and a pass's buffers stay
-        (``weights_changed``, ``release_buffers``)."""
+        (``weights_changed``, ``release_buffers``).
+        """
         self._maps.clear()
 
     def release_buffers(self) -> None:
@@ -264,7 +265,8 @@ class RouteVIN(nn.Module, FieldEncoder):
     def buffer(self, name: str, shape: tuple[int, ...]) -> torch.Tensor:
         """The kept float32 CPU buffer ``name`` of ``shape`` (``keep_buffers``): the one the last pass used where its
         shape is the same, else a new one that replaces it (``work_array``). Its contents are whatever the last pass
-        left."""
+        left.
+        """
         return torch.from_numpy(work_array(self._work, name, tuple(shape), np.float32))
 
     def weights_changed(self) -> None:
@@ -451,7 +453,8 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def packed_local(self, y: torch.Tensor) -> torch.Tensor:
         """``self.local(y)`` (dense float32, padded by one a layer), its activations in oneDNN's layout between
-        layers (``packs``)."""
+        layers (``packs``).
+        """
         y = y.to_mkldnn()
         for weight, bias in self.packed_weights():
             y = torch.mkldnn_convolution(y, weight, bias, [1, 1], [1, 1], [1, 1], 1).relu_()
@@ -459,7 +462,8 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def inference_costs(self, x: torch.Tensor, packed: bool) -> tuple[torch.Tensor, torch.Tensor]:
         """``move_costs`` as the compiled inference runs it over ``x`` (the map or a strip of it): prepacked where
-        ``packed`` (``packs`` of the whole map)."""
+        ``packed`` (``packs`` of the whole map).
+        """
         if not packed:
             return self.move_costs(x)
         f = self.packed_local(x)

@@ -265,7 +265,8 @@ class LazyRouteSampler(RouteSampler):
 
     def switch_loop(self, planner: Planner) -> FusedRRT:
         """Switch (``switch``) and give RRT's loop, or RRT*'s to its first solution, on the encoder's field
-        (``SwitchLoop``)."""
+        (``SwitchLoop``).
+        """
         self.switch()
         if planner.fusable_loop == "rrtstar":
             return fuse_rrtstar(planner, route_rrtstar_loop, self._state, self.batch)
@@ -279,7 +280,8 @@ class LazyRouteSampler(RouteSampler):
 def switch_iteration(after: float, grid: OccupancyGrid, step: float, floor: float = 0.0,
                      cap: float = math.inf) -> int:
     """``ceil(after * A)`` on a map of ``A`` step-sized squares, at least ``ceil(floor)`` and at most ``ceil(cap)``
-    (the cap wins); an infinite switch is never (the largest int64)."""
+    (the cap wins); an infinite switch is never (the largest int64).
+    """
     def up(v: float) -> int:
         return NEVER if math.isinf(v) else math.ceil(v)
 

@@ -471,7 +471,8 @@ class RouteSampler(SamplerBase):
 
     def _encoder_factor(self, grid: OccupancyGrid) -> float:
         """Map cells per encoder cell at this sampler's step (1 at the step the encoder was trained for), once the
-        map the encoder would read is shown not too large (``FieldEncoder.check_size``; an ``InputError`` if it is)."""
+        map the encoder would read is shown not too large (``FieldEncoder.check_size``; an ``InputError`` if it is).
+        """
         cells = self.step_size / grid.resolution
         if abs(cells - self.net.step) <= 1e-6 * self.net.step:
             self.net.check_size(grid.obstacles.shape)
@@ -536,7 +537,8 @@ class RouteSampler(SamplerBase):
 
     def has_field(self, problem: Problem) -> bool:
         """Whether ``fields`` holds the encoder's field of ``problem`` (False without an encoder or a cache, or for a
-        map the encoder refuses: its bind refuses it)."""
+        map the encoder refuses: its bind refuses it).
+        """
         grid = problem.world
         if self.net is None or self.fields is None or not isinstance(grid, OccupancyGrid):
             return False

@@ -20,7 +20,6 @@ from learning.training.imitation import Dataset
 from learning.training.logs import ResumableCSV
 from planners.base.fileio import InputError, atomic_path, atomic_write_text, check_number, short_repr
 
-
 #: Key of the run state inside a checkpoint's ``data`` entry.
 STATE_KEY = "samplergym_state"
 #: Key of the sampler config inside a checkpoint's ``data`` entry (read by ``PolicySampler.load``).

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from learning.references.expert import GeodesicExpert
 from learning.models.fast_policy import FastActor
+from learning.references.expert import GeodesicExpert
 from learning.samplers.policy import sample_classes
 from planners import RRT, Problem, SamplerBase
 from planners.guidance.guided import ANGLES, FRONTIER, GuidedSampling

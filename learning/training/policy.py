@@ -48,6 +48,8 @@ from planners.tools.parallel import Backend
 __all__ = ["CONFIG_KEY", "STATE_KEY", "TrainConfig", "make_env", "open_map_sets", "read_state",
            "sampler_validation_score", "train", "validation_score"]
 
+_CPU = torch.device("cpu")
+
 
 def train(cfg: TrainConfig, out_dir: str | os.PathLike, *, resume: bool = False, progress: bool = True,
           log_stdout: bool = True, backend: Backend | None = None, device: str | torch.device = "cpu") -> Path:
@@ -141,7 +143,7 @@ class _TrainingRun:
 
     def __init__(self, cfg: TrainConfig, run: Path, state: dict, env, logger: RunLogger, csv_log: ResumableCSV, *,
                  resume: bool, progress: bool, backend: Backend | None = None, sets: MixedMapSet | None = None,
-                 device: torch.device = torch.device("cpu")) -> None:
+                 device: torch.device = _CPU) -> None:
         from stable_baselines3 import PPO
 
         from learning.models.extractor import policy_kwargs

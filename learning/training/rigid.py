@@ -226,7 +226,8 @@ def soft_cross_entropy(logits: torch.Tensor, labels: torch.Tensor) -> torch.Tens
 
 def _evaluate(net: OrientationNet, P, D, Y, fit_counts) -> dict:
     """Held-out loss, and how often the most likely class is one the label names (label > 0): everywhere, and at
-    the passages' points (``fit_counts``: at most two classes fit)."""
+    the passages' points (``fit_counts``: at most two classes fit).
+    """
     with torch.no_grad():
         logits = net(torch.as_tensor(P), torch.as_tensor(D))
         loss = float(soft_cross_entropy(logits, torch.as_tensor(Y)))

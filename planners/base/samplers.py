@@ -235,7 +235,8 @@ def draw_classical_in_loops(problem: Problem, kinds: tuple[str, ...] = CLASSICAL
 def _fuse_classical(sampler: SamplerBase, planner, own_draw, p: float, biased: bool):
     """``sampler``'s draws in ``planner``'s compiled loop (``planners.kernels.draws``); None where the planner has no
     loop, where this install has not chosen to draw there (``draw_classical_in_loops``), or where a subclass draws
-    otherwise than ``own_draw`` (its ``draw`` is what it means)."""
+    otherwise than ``own_draw`` (its ``draw`` is what it means).
+    """
     kind = planner.fusable_loop
     if type(sampler).draw is not own_draw or kind not in CLASSICAL_LOOPS:
         return None

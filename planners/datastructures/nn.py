@@ -223,7 +223,8 @@ def _heap_push(hd, hi, cnt, k, d, idx):
     """Bounded max-heap of (reduced distance, index) with at most k entries; returns the count.
 
     A call, not inlined: its body inlined at the traversal's two offers doubled the k-nearest query's
-    compilation (LLVM inlines the call where it pays)."""
+    compilation (LLVM inlines the call where it pays).
+    """
     if cnt < k:
         i = cnt
         cnt += 1
@@ -258,7 +259,7 @@ def _heap_push(hd, hi, cnt, k, d, idx):
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _offer_knn(hd, hi, cnt, k, d, idx, r):
-    """k nearest: keep ``idx`` in the bounded heap if it is among the ``k`` nearest so far; returns the count."""
+    """K nearest: keep ``idx`` in the bounded heap if it is among the ``k`` nearest so far; returns the count."""
     return _heap_push(hd, hi, cnt, k, d, idx)
 
 
@@ -273,11 +274,13 @@ def _offer_radius(hd, hi, cnt, k, d, idx, r):
 
 def _query(rdist, box_rdist, plane_rdist, offer, knn):
     """The k-nearest (``knn``) or within-radius traversal of one metric, with its ``offer`` (``_offer_knn`` or
-    ``_offer_radius``) built in; inlined into ``nearest_k_*`` / ``nearest_r_*``."""
+    ``_offer_radius``) built in; inlined into ``nearest_k_*`` / ``nearest_r_*``.
+    """
 
     def query(P, perm, split, box, n, q, k, r, hd, hi):
         """The ``k`` nearest (``knn``: a bounded max-heap of ``k`` in ``hd, hi``) or all points within reduced
-        radius ``r`` (appended to ``hi``); returns how many are held. ``offer`` records a candidate."""
+        radius ``r`` (appended to ``hi``); returns how many are held. ``offer`` records a candidate.
+        """
         st = np.empty(2 * STACK, dtype=np.int64)
         sb = np.empty(STACK)
         cnt = 0

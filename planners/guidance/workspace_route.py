@@ -118,7 +118,8 @@ def cost_to_go(free: np.ndarray, goal: int, stop: int = -1) -> np.ndarray:
 @nb.njit(cache=True)
 def _descend(cost, s, steps, lengths):
     """``(k, 3)`` voxel indices from ``s`` down ``cost`` to a voxel of cost 0: each step to the neighbour of least
-    cost plus step length, the first of equals in ``steps``' order."""
+    cost plus step length, the first of equals in ``steps``' order.
+    """
     nx, ny, nz = cost.shape
     i, j, k = s[0], s[1], s[2]
     out = np.empty((int(cost[i, j, k]) + 2, 3), dtype=np.int64)  # each step lowers the cost by at least 1

@@ -29,7 +29,8 @@ def classical_state(low, high, goal, p: float, biased: bool) -> tuple:
 @nb.njit(cache=True)
 def classical_fill(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
     """``UniformSampler.draw`` (``Generator.random((m, dim))`` row by row over the box) or, with ``biased``,
-    ``GoalBiasedSampler.draw`` (``dim + 1`` uniforms a sample, the first choosing the goal with probability ``p``)."""
+    ``GoalBiasedSampler.draw`` (``dim + 1`` uniforms a sample, the first choosing the goal with probability ``p``).
+    """
     low, high, goal, p, biased = state
     for k in range(pts.shape[0]):
         u0 = next_double(rng) if biased else 1.0

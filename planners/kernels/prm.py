@@ -68,17 +68,22 @@ def uf_make(uf, v, dgoal):
 class Neighbourhood(NamedTuple):
     """The vertices a new roadmap vertex tries to connect to: its ``k`` nearest (``k > 0``) or all within the
     connection radius (``k == 0``). ``neighbourhood`` makes the subclass of its kind, which numba types
-    separately, so a roadmap kernel compiled for it contains only that query's k-d traversal."""
+    separately, so a roadmap kernel compiled for it contains only that query's k-d traversal.
+    """
 
     k: int
 
 
 class KNearest(Neighbourhood):
+    """The ``k`` nearest nodes."""
+
     __slots__ = ()
     KNN = True
 
 
 class WithinRadius(Neighbourhood):
+    """Every node within a radius."""
+
     __slots__ = ()
     KNN = False
 
@@ -90,7 +95,8 @@ def neighbourhood(k: int) -> Neighbourhood:
 
 def neighbours(store, n, space, q, qe, nbhd, radius, out, out_d):
     """The ``nbhd.k`` nearest (``k > 0``) or all within ``radius`` (``k == 0``) of the first n vertices (compiled
-    code only)."""
+    code only).
+    """
     raise NotImplementedError("neighbours runs in compiled code only")
 
 

@@ -224,7 +224,8 @@ def rigid_motion_free(geom, index, body, params, a, b):
 @nb.njit(cache=True)
 def box_clearance(points, boxes, low, high):
     """``(n,)``: each point's distance to the nearest of ``boxes`` (``(m, 6)``: low corner, high corner) or wall of
-    the workspace ``[low, high]``: 0 inside a box, negative outside the workspace."""
+    the workspace ``[low, high]``: 0 inside a box, negative outside the workspace.
+    """
     n = points.shape[0]
     out = np.empty(n)
     for i in range(n):
@@ -242,7 +243,8 @@ def box_clearance(points, boxes, low, high):
 @nb.njit(cache=True)
 def clear_box_voxels(free, boxes, ax, ay, az, radius):
     """Mark ``False`` the voxels of ``free`` (centres ``ax``, ``ay``, ``az`` along each axis, ascending) whose centre
-    lies within ``radius`` of any of ``boxes`` (``(m, 6)``: low corner, high corner); in place."""
+    lies within ``radius`` of any of ``boxes`` (``(m, 6)``: low corner, high corner); in place.
+    """
     r2 = radius * radius
     for b in range(boxes.shape[0]):
         i0 = np.searchsorted(ax, boxes[b, 0] - radius, side="left")
@@ -264,7 +266,8 @@ def clear_box_voxels(free, boxes, ax, ay, az, radius):
 @nb.njit(cache=True)
 def add_box_cover(grid, boxes, low, cell):
     """Add to each voxel of ``grid`` (side ``cell`` from ``low``) the share of it that each of ``boxes`` covers
-    (the product of the box's cover along each axis), box by box; in place."""
+    (the product of the box's cover along each axis), box by box; in place.
+    """
     shape = grid.shape
     lo_i = np.empty(3, dtype=np.int64)
     hi_i = np.empty(3, dtype=np.int64)

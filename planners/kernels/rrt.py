@@ -74,7 +74,8 @@ def rrt_iterate(sample, anchored, tree, istate, fstate, last, world, space, goal
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def scratch_rows(scratch, tree):
     """The sample, embedding and new-state buffers of a kernel, rows of the caller's ``scratch`` (three rows
-    at least as wide as the tree's states and embedding; no array is allocated in the kernel)."""
+    at least as wide as the tree's states and embedding; no array is allocated in the kernel).
+    """
     return scratch[0, :tree.X.shape[1]], scratch[1, :tree.E.shape[1]], scratch[2, :tree.X.shape[1]]
 
 

@@ -241,26 +241,36 @@ class Space(NamedTuple):
 
 
 class SpaceRnL2(Space):
+    """R^n with the Euclidean metric."""
+
     __slots__ = ()
     KIND, METRIC = SPACE_RN, METRIC_L2
 
 
 class SpaceRnL1(Space):
+    """R^n with the L1 metric."""
+
     __slots__ = ()
     KIND, METRIC = SPACE_RN, METRIC_L1
 
 
 class SpaceRnLinf(Space):
+    """R^n with the L-infinity metric."""
+
     __slots__ = ()
     KIND, METRIC = SPACE_RN, METRIC_LINF
 
 
 class SpaceRigidCossin(Space):
+    """The rigid body's states with the ``cossin`` metric."""
+
     __slots__ = ()
     KIND, METRIC = SPACE_RIGID, METRIC_COSSIN
 
 
 class SpaceRigidSE3(Space):
+    """The rigid body's states with the ``se3`` metric."""
+
     __slots__ = ()
     KIND, METRIC = SPACE_RIGID, METRIC_SE3
 
@@ -313,7 +323,8 @@ def _space_interpolate(space, a, b, t, out):
 
 def space_embedding(space, q, out):
     """The nearest-neighbour embedding of ``q`` (compiled code only): ``q`` itself in a real-vector space,
-    else written into ``out`` and ``out`` returned. A typed space compiles only its kind's branch."""
+    else written into ``out`` and ``out`` returned. A typed space compiles only its kind's branch.
+    """
     raise NotImplementedError("space_embedding runs in compiled code only")
 
 
@@ -369,7 +380,10 @@ def distance_of(space, a: np.ndarray, b: np.ndarray) -> float:
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def copy_into(out, q):
-    """``out[:] = q`` for two vectors of one length. (The slice assignment compiles numba's shape-mismatch
-    message formatting, seconds of compilation per kernel that uses it.)"""
+    """``out[:] = q`` for two vectors of one length.
+
+    (The slice assignment compiles numba's shape-mismatch message formatting, seconds of compilation per kernel
+    that uses it.)
+    """
     for i in range(q.shape[0]):
         out[i] = q[i]

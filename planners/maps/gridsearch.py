@@ -276,7 +276,8 @@ def _settle_buckets(inc, goal, walls, unreached, dr, dc, width, slots, dist, sta
 def work_array(work: dict | None, name: str, shape: tuple[int, ...], dtype) -> np.ndarray:
     """The working array ``name`` kept in the dict ``work`` where it has this shape and dtype, else a new one kept
     there (the old one freed first); a new one each call where ``work`` is None. Its contents are whatever the last
-    user left. The search's ``work`` (``move_cost_field``) and the route encoder's buffers keep theirs so."""
+    user left. The search's ``work`` (``move_cost_field``) and the route encoder's buffers keep theirs so.
+    """
     kept = None if work is None else work.pop(name, None)
     if kept is None or kept.shape != shape or kept.dtype != dtype:
         del kept  # freed before the new one is made

@@ -88,7 +88,7 @@ def stroke_map(rng: np.random.Generator, size: int) -> np.ndarray:
             continue
         radius = float(rng.integers(1, int(round(_scaled(size, 3))) + 1)) / 2 + _PAD
         points = _pen_path(rng, size)
-        for a, b in zip(points[:-1], points[1:]):
+        for a, b in zip(points[:-1], points[1:], strict=True):
             length = float(np.hypot(*(b - a)))
             if length > 4 * gap_hi and rng.random() < 0.3:
                 # a gap in this piece: draw the piece in two parts around it

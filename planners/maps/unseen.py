@@ -33,8 +33,8 @@ import numpy as np
 
 from planners.base.fileio import check_int
 from planners.base.problem import Problem
-from planners.maps.gridsearch import distance_field, free_components
 from planners.maps.generators import seeded_map
+from planners.maps.gridsearch import distance_field, free_components
 from planners.worlds.grid import OccupancyGrid
 
 UNSEEN_FAMILIES = ("spiral", "warehouse", "baffles")

@@ -122,7 +122,8 @@ SETUPS: dict[str, tuple[str, Callable[[], dict]]] = {
 def make_setup(label: str, problem: Problem, *, step: float, seed: int) -> Planner:
     """A fresh planner of the set-up ``label`` of ``SETUPS`` (``step``: the extension length); the classical samplers
     draw inside its compiled loop (``draw_classical_in_loops``), so a timing does not depend on what the install
-    compiled before."""
+    compiled before.
+    """
     name, arguments = SETUPS[label]
     draw_classical_in_loops(problem)
     return make_planner(name, problem, extension_step=step, seed=seed, **arguments())

@@ -513,6 +513,7 @@ def plan_on_image(map_source: str | os.PathLike | OccupancyGrid, start, goal, *,
         gif_px: Longest side of the animation in pixels.
         save_path: Where to export the final path (smoothed if smoothing is on): ``.csv``,
             ``.json`` or ``.npy`` (``export_path``); None exports nothing. Unsolved: nothing written.
+        step: The same as ``step_size`` (give one of them).
 
     Raises:
         FileNotFoundError, ValueError: Bad map file, start, goal or option; nothing has been written.

@@ -184,7 +184,7 @@ def map_legend_handles(world, *, trees: tuple[str, ...] = (), raw_path: bool = F
                      label="walls (the map's own)" if inflated else "obstacles")]
     if inflated:
         handles.append(Patch(facecolor=INFLATED_COLOR, label=f"robot radius zone ({world.inflation:g})"))
-    handles += [Line2D([], [], color=c, linewidth=1.5, label=t) for t, c in zip(trees, TREE_COLORS)]
+    handles += [Line2D([], [], color=c, linewidth=1.5, label=t) for t, c in zip(trees, TREE_COLORS, strict=False)]
     if raw_path:
         handles.append(Line2D([], [], color=RAW_PATH_COLOR, linewidth=1.2, label="raw path"))
     if smoothed_path:

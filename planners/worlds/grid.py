@@ -294,7 +294,8 @@ def _dilate(padded, widths, near):
 
 def resampled_shape(shape: tuple[int, int], factor: float) -> tuple[int, int]:
     """The shape ``resample_obstacles`` gives a map of ``shape`` cells at ``factor``: ``(ceil(H / factor), ceil(W /
-    factor))``, at least one cell a side."""
+    factor))``, at least one cell a side.
+    """
     if not (math.isfinite(factor) and factor > 0):
         raise ValueError(f"factor must be a positive number of cells, got {factor!r}")
     # one part in a million absorbs the rounding of i * factor at whole numbers
