@@ -259,7 +259,7 @@ def _heap_push(hd, hi, cnt, k, d, idx):
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _offer_knn(hd, hi, cnt, k, d, idx, r):
-    """K nearest: keep ``idx`` in the bounded heap if it is among the ``k`` nearest so far; returns the count."""
+    """The ``k`` nearest: keep ``idx`` in the bounded heap if among the ``k`` nearest so far; returns the count."""
     return _heap_push(hd, hi, cnt, k, d, idx)
 
 
