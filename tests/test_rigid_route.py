@@ -134,6 +134,38 @@ def test_a_uniform_ramp_turns_the_route_samples_to_uniform_angles_as_the_query_g
         RigidRouteSampler(net, roadmap={"uniform_ramp": -1})
 
 
+def test_uniform_first_draws_uniform_states_before_the_route_and_the_route_then_starts_its_own_count(slot_scene):
+    net = make_sampler("rigid_route").net
+    kw = dict(route_fraction=1.0, uniform_share=0.0, angle_noise=0.0, goal_share=0.0, uniform_ramp=300)
+    lazy = RigidRouteSampler(net, uniform_first=500, **kw).bind(slot_scene)
+    assert not lazy.routed  # the route waits for the first sample after the uniform ones
+    rng = np.random.default_rng(7)
+    head = np.concatenate([lazy.draw(rng, 200, None), lazy.draw(rng, 300, None)])
+    assert not lazy.routed
+    low, high = slot_scene.world.bounds
+    assert ((head >= low) & (head < high)).all()
+    off_axis = np.array([not np.allclose(np.abs(rotation_matrix(*x[3:])).max(axis=1), 1.0) for x in head])
+    assert off_axis.all()  # uniform angles, not the model's classes
+    tail = lazy.draw(rng, 1000, None)
+    assert lazy.routed
+    # from sample 500 on, the draws are the route sampler's from its first sample (its ramp counted from there):
+    # the same stream's rows after the first 500, drawn by the sampler without uniform states first
+    burnt = np.random.default_rng(7)
+    burnt.random((500, 13 + slot_scene.dim))
+    eager = RigidRouteSampler(net, **kw).bind(slot_scene)
+    assert eager.routed
+    assert np.array_equal(eager.draw(burnt, 1000, None), tail)
+    # seeded, batch invariant across the switch
+    again = RigidRouteSampler(net, uniform_first=500, **kw).bind(slot_scene).draw(np.random.default_rng(7), 1500, None)
+    assert np.array_equal(again, np.concatenate([head, tail]))
+    # a roadmap keeps every sample: it draws the route from its first; the registry takes it; bad values are refused
+    assert RigidRouteSampler(net, uniform_first=500, **kw).for_planner("roadmap").uniform_first == 0.0
+    assert make_sampler("rigid_route", uniform_first=50).uniform_first == 50.0
+    with pytest.raises(InputError, match="uniform_first"):
+        RigidRouteSampler(net, uniform_first=float("inf"))
+    with pytest.raises(InputError, match="roadmap uniform_first"):
+        RigidRouteSampler(net, roadmap={"uniform_first": -1})
+
 def test_the_registry_name_plans_with_rrt_connect(slot_scene):
     from learning.evaluation.rigid import run_one
 

@@ -61,7 +61,7 @@ from planners.worlds.mesh import rotation_matrices
 #: on the tuning scenes and kept on validation scenes no rule had looked at.
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
                           "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75,
-                          "passage_weight": 16.0, "uniform_ramp": 0.0}
+                          "passage_weight": 16.0, "uniform_ramp": 0.0, "uniform_first": 0.0}
 #: What a roadmap planner takes instead (``RigidRouteSampler.for_planner``): every route sample on the route, each
 #: in the model's class (no uniform angles) at the rotation of the chain walked from the start all along the route
 #: (where walks from both ends meet, in a passage, two rotations a half turn apart may leave the roadmap in two
@@ -75,15 +75,17 @@ SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2,
 #: (``uniform_ramp``; a roadmap drops it): on the twisted slot, a passage no class's rotation passes, they then solve
 #: every tuning and validation run, and the training families as meshes, at the default step and at the seed
 #: project's small one (where the classes take thousands of samples and a 1,000-sample ramp lost), take 0.97 to 1.01
-#: of the time without the ramp.
+#: of the time without the ramp. They compute the route at their first sample (``uniform_first`` 0): uniform states
+#: first cost them 1.7 to 3.8 times the time on the training families as meshes (2,500 to 10,000 of them).
 SHIPPED_RIGID_ROADMAP = {"symmetry": "chain_start", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0,
-                         "passage_weight": 16.0, "uniform_ramp": 4000.0}
+                         "passage_weight": 16.0, "uniform_ramp": 4000.0, "uniform_first": 0.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
 SYMMETRY_RULES = ("random", "ends", "chain", "chain_start")
 #: The settings a roadmap may take apart from the trees' (``RigidRouteSampler``'s ``roadmap``).
-ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise", "passage_weight", "uniform_ramp")
+ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise", "passage_weight", "uniform_ramp",
+                    "uniform_first")
 
 
 def class_frame(world, cell: float | None = None) -> tuple[np.ndarray, float]:
@@ -155,10 +157,16 @@ class RigidRouteSampler(SamplerBase):
             the solid share of the route point's observation patch (0 in the open; per segment the mean of its
             ends): 0 spreads them uniformly in arc length, a larger value crowds them where the route is tight.
         uniform_ramp: Samples over which the route samples' share of uniform angles rises to 1 (a tree's, 0: it
-            stays ``uniform_share``): the ``k``-th sample the sampler draws for its query takes uniform angles with
+            stays ``uniform_share``): the ``k``-th sample the sampler draws for its query (counted from the route's
+            first, after ``uniform_first``) takes uniform angles with
             probability ``uniform_share + (1 - uniform_share) * min(1, k / uniform_ramp)``, so a query the model's
             classes do not solve soon comes to the ablation's angles. A roadmap planner keeps every sample it draws
             and ignores it (``for_planner``).
+        uniform_first: Samples a tree draws before the route (a tree's; 0: none): the first ``uniform_first`` samples
+            of a query are uniform states (the goal with probability ``goal_share``), and the route, its centring and
+            the model's pass are computed at the first sample after them, so a query that uniform sampling solves
+            that soon never pays for them, and one it does not goes on from the trees grown so far. A roadmap planner
+            ignores it (``for_planner``).
         roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and
             every planner on a mesh world (at ``bind``): any of ``ROADMAP_SETTINGS`` (``make_sampler`` gives the
             validated ``SHIPPED_RIGID_ROADMAP``).
@@ -168,7 +176,8 @@ class RigidRouteSampler(SamplerBase):
                  goal_share: float = 0.05, temperature: float = 1.0, spread: float | None = None,
                  cell: float | None = None, centre: int = 2, symmetry: str = "random",
                  min_confidence: float = 0.0, min_route_confidence: float = 0.0,
-                 roadmap: dict | None = None, passage_weight: float = 0.0, uniform_ramp: float = 0.0) -> None:
+                 roadmap: dict | None = None, passage_weight: float = 0.0, uniform_ramp: float = 0.0,
+                 uniform_first: float = 0.0) -> None:
         who = "RigidRouteSampler"
         if symmetry not in SYMMETRY_RULES:
             raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
@@ -180,6 +189,7 @@ class RigidRouteSampler(SamplerBase):
         self.angle_noise = float(check_number(who, "angle_noise", angle_noise, low=0))
         self.passage_weight = float(check_number(who, "passage_weight", passage_weight, low=0))
         self.uniform_ramp = float(check_number(who, "uniform_ramp", uniform_ramp, low=0))
+        self.uniform_first = float(check_number(who, "uniform_first", uniform_first, low=0))
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
         self.min_confidence = float(check_number(who, "min_confidence", min_confidence, low=0, high=1))
@@ -199,7 +209,7 @@ class RigidRouteSampler(SamplerBase):
             raise InputError(f"{who}: roadmap symmetry = {self.roadmap['symmetry']!r}; choose from "
                              f"{', '.join(SYMMETRY_RULES)}")
         for key, high in (("route_fraction", 1), ("uniform_share", 1), ("angle_noise", None), ("passage_weight", None),
-                          ("uniform_ramp", None)):
+                          ("uniform_ramp", None), ("uniform_first", None)):
             if key in self.roadmap:
                 self.roadmap[key] = float(check_number(who, f"roadmap {key}", self.roadmap[key], low=0, high=high))
         if net is None and self.roadmap.get("uniform_share", 1.0) < 1.0:
@@ -213,11 +223,12 @@ class RigidRouteSampler(SamplerBase):
         orientation all along the route at once, each at its neighbours' rotation: on the validation scenes PRM with
         ``SHIPPED_RIGID_ROADMAP`` connects 116 of 120 queries, with the trees' settings 84 (``docs/rigid-scenes.md``).
         """
-        if family != FAMILY_ROADMAP or not (self.roadmap or self.uniform_ramp):
+        if family != FAMILY_ROADMAP or not (self.roadmap or self.uniform_ramp or self.uniform_first):
             return self
         out = copy.copy(self)
         out._take_roadmap()
         out.uniform_ramp = 0.0  # a roadmap keeps every sample: no query is ever stuck on the ones it drew
+        out.uniform_first = 0.0
         return out
 
     def _take_roadmap(self) -> None:
@@ -227,13 +238,25 @@ class RigidRouteSampler(SamplerBase):
         self.roadmap = {}
 
     def _setup(self) -> None:
+        world = route_world(self.problem.world, "RigidRouteSampler")
+        self._drawn = 0  # samples drawn for this query (``uniform_ramp``, ``uniform_first``)
+        if not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too
+            self._take_roadmap()
+        self._first = int(np.ceil(self.uniform_first))  # the uniform states before the route
+        self.route = None
+        if self._first == 0:
+            self._route_setup(world)
+
+    @property
+    def routed(self) -> bool:
+        """Whether this query's route has been computed (at ``bind``, or after ``uniform_first`` samples)."""
+        return self.route is not None
+
+    def _route_setup(self, world) -> None:
+        """The query's route, its centring, the model's classes along it (once per query)."""
         from learning.models.rigid_orientation import class_probabilities
         from learning.models.threads import planning_threads
 
-        world = route_world(self.problem.world, "RigidRouteSampler")
-        self._drawn = 0  # samples drawn for this query (``uniform_ramp``)
-        if not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too
-            self._take_roadmap()
         cell = float(world.route_cell if self.cell is None else self.cell)
         self.rotations, seen = class_frame(world, self.cell)
         route = voxel_route(world, self.problem.start, self.problem.goal, cell)
@@ -274,6 +297,21 @@ class RigidRouteSampler(SamplerBase):
         # a class, a symmetry, two Box-Muller pairs for the rotation noise
         d = self.problem.dim
         u = rng.random((n, 13 + d))
+        first = max(0, min(n, self._first - self._drawn))
+        if first:  # the uniform states before the route (``uniform_first``)
+            pts = self._uniform(u[:first, 2:2 + d])
+            pts[u[:first, 0] < self.goal_share] = self.problem.goal
+            self._drawn += first
+            if first == n:
+                return pts
+            return np.concatenate([pts, self._draw_routed(u[first:])])
+        return self._draw_routed(u)
+
+    def _draw_routed(self, u: np.ndarray) -> np.ndarray:
+        """The samples of the rows ``u`` (one row of uniforms per sample), the route's from the first on."""
+        if self.route is None:
+            self._route_setup(route_world(self.problem.world, "RigidRouteSampler"))
+        n, d = len(u), self.problem.dim
         pos_z = box_muller(u[:, 2 + d:6 + d])[:, :3]
         cls_u, sym_u, rot_z = u[:, 7 + d], u[:, 8 + d], box_muller(u[:, 9 + d:13 + d])[:, :3]
         pts = self._uniform(u[:, 2:2 + d])
@@ -288,7 +326,7 @@ class RigidRouteSampler(SamplerBase):
             near = i + (t >= 0.5)
             share = self.uniform_share
             if self.uniform_ramp > 0:
-                k = self._drawn + np.flatnonzero(on)
+                k = self._drawn - self._first + np.flatnonzero(on)  # counted from the route's first sample
                 share = share + (1.0 - share) * np.minimum(1.0, k / self.uniform_ramp)
             take = (u[on, 6 + d] >= share) & self.sure[near]
             learned, near = np.flatnonzero(on)[take], near[take]
@@ -316,4 +354,5 @@ class RigidRouteSampler(SamplerBase):
                 f"symmetry={self.symmetry!r}, min_confidence={self.min_confidence:g}, "
                 f"min_route_confidence={self.min_route_confidence:g}"
                 + (f", uniform_ramp={self.uniform_ramp:g}" if self.uniform_ramp else "")
+                + (f", uniform_first={self.uniform_first:g}" if self.uniform_first else "")
                 + (f", roadmap={self.roadmap!r})" if self.roadmap else ")"))
