@@ -166,6 +166,39 @@ def test_uniform_first_draws_uniform_states_before_the_route_and_the_route_then_
     with pytest.raises(InputError, match="roadmap uniform_first"):
         RigidRouteSampler(net, roadmap={"uniform_first": -1})
 
+def test_a_stall_window_runs_the_ramp_only_while_the_trees_stand_still_on_the_route(slot_scene):
+    from types import SimpleNamespace
+
+    net = make_sampler("rigid_route").net
+    kw = dict(route_fraction=1.0, uniform_share=0.0, angle_noise=0.0, goal_share=0.0, uniform_ramp=1000)
+
+    def off_axis(q):
+        return np.array([not np.allclose(np.abs(rotation_matrix(*x[3:])).max(axis=1), 1.0) for x in q])
+
+    # trees that never move (no view: nothing reached): the ramp starts after the window and then runs as before
+    still = RigidRouteSampler(net, stall_window=500, **kw).bind(slot_scene)
+    rng = np.random.default_rng(8)
+    q = np.concatenate([still.draw(rng, 250, None) for _ in range(10)])
+    assert not off_axis(q[:500]).any()  # the classes until the window has passed
+    assert off_axis(q[1500:]).all()  # a ramp of 1,000 samples from sample 500 on
+    # a start tree that moves along the route by more than a route voxel at every refill keeps the classes
+    moving = RigidRouteSampler(net, stall_window=500, **kw).bind(slot_scene)
+    route, rng, tree, drawn = moving.route, np.random.default_rng(8), [slot_scene.start], []
+    for i in range(10):
+        view = SimpleNamespace(vertices=np.array(tree), num_vertices=len(tree), goal_tree=None)
+        drawn.append(moving.draw(rng, 250, view))
+        reach = route[min(len(route) - 1, (i + 1) * max(1, len(route) // 10))]
+        tree.append(np.concatenate([reach, slot_scene.start[3:]]))
+    assert not off_axis(np.concatenate(drawn)[:2000]).any()
+    # 0 is the plain ramp; a roadmap ignores it; the registry takes it; bad values are refused
+    plain = RigidRouteSampler(net, **kw).bind(slot_scene).draw(np.random.default_rng(8), 2500, None)
+    assert off_axis(plain[1000:]).all() and not np.array_equal(plain, q)
+    assert RigidRouteSampler(net, stall_window=500, **kw).for_planner("roadmap").stall_window == 0.0
+    assert make_sampler("rigid_route", stall_window=50).stall_window == 50.0
+    with pytest.raises(InputError, match="stall_window"):
+        RigidRouteSampler(net, stall_window=-1)
+
+
 def test_the_registry_name_plans_with_rrt_connect(slot_scene):
     from learning.evaluation.rigid import run_one
 

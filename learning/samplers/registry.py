@@ -134,7 +134,8 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                  temperature: float = 1.0, route_fraction: float | None = None, centre: int | None = None,
                  path: str | None = None, symmetry: str | None = None, min_confidence: float | None = None,
                  min_route_confidence: float | None = None, passage_weight: float | None = None,
-                 uniform_ramp: float | None = None, uniform_first: float | None = None, *,
+                 uniform_ramp: float | None = None, uniform_first: float | None = None,
+                 stall_window: float | None = None, *,
                  models: ModelCache | None = None) -> Sampler:
     from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
     from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS, RigidRouteSampler
@@ -143,7 +144,7 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
     net = (ModelCache() if models is None else models).orientation_net(path)
     given = {"symmetry": symmetry, "route_fraction": route_fraction, "uniform_share": uniform_share,
              "angle_noise": angle_noise, "passage_weight": passage_weight, "uniform_ramp": uniform_ramp,
-             "uniform_first": uniform_first}
+             "uniform_first": uniform_first, "stall_window": stall_window}
     return RigidRouteSampler(net, route_fraction=SHIPPED_RIGID_SETTINGS["route_fraction"] if route_fraction is None
                              else route_fraction,
                              uniform_share=SHIPPED_RIGID_SETTINGS["uniform_share"] if uniform_share is None
@@ -162,6 +163,8 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                              else uniform_ramp,
                              uniform_first=SHIPPED_RIGID_SETTINGS["uniform_first"] if uniform_first is None
                              else uniform_first,
+                             stall_window=SHIPPED_RIGID_SETTINGS["stall_window"] if stall_window is None
+                             else stall_window,
                              # a roadmap's own validated settings, where the user set none of them
                              roadmap={k: v for k, v in SHIPPED_RIGID_ROADMAP.items() if given[k] is None})
 

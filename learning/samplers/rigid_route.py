@@ -61,7 +61,7 @@ from planners.worlds.mesh import rotation_matrices
 #: on the tuning scenes and kept on validation scenes no rule had looked at.
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
                           "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75,
-                          "passage_weight": 16.0, "uniform_ramp": 0.0, "uniform_first": 0.0}
+                          "passage_weight": 16.0, "uniform_ramp": 0.0, "uniform_first": 0.0, "stall_window": 0.0}
 #: What a roadmap planner takes instead (``RigidRouteSampler.for_planner``): every route sample on the route, each
 #: in the model's class (no uniform angles) at the rotation of the chain walked from the start all along the route
 #: (where walks from both ends meet, in a passage, two rotations a half turn apart may leave the roadmap in two
@@ -78,14 +78,15 @@ SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2,
 #: of the time without the ramp. They compute the route at their first sample (``uniform_first`` 0): uniform states
 #: first cost them 1.7 to 3.8 times the time on the training families as meshes (2,500 to 10,000 of them).
 SHIPPED_RIGID_ROADMAP = {"symmetry": "chain_start", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0,
-                         "passage_weight": 16.0, "uniform_ramp": 4000.0, "uniform_first": 0.0}
+                         "passage_weight": 16.0, "uniform_ramp": 4000.0, "uniform_first": 0.0,
+                         "stall_window": 0.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
 SYMMETRY_RULES = ("random", "ends", "chain", "chain_start")
 #: The settings a roadmap may take apart from the trees' (``RigidRouteSampler``'s ``roadmap``).
 ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise", "passage_weight", "uniform_ramp",
-                    "uniform_first")
+                    "uniform_first", "stall_window")
 
 
 def class_frame(world, cell: float | None = None) -> tuple[np.ndarray, float]:
@@ -162,6 +163,14 @@ class RigidRouteSampler(SamplerBase):
             probability ``uniform_share + (1 - uniform_share) * min(1, k / uniform_ramp)``, so a query the model's
             classes do not solve soon comes to the ablation's angles. A roadmap planner keeps every sample it draws
             and ignores it (``for_planner``).
+        stall_window: With a ``uniform_ramp``, the ramp's ``k`` counts only the samples drawn while the trees are
+            stalled (0: every sample): while the gap along the route between the trees (the goal tree's least arc
+            position reached, or the route's end for a single tree, less the start tree's greatest; a vertex's arc
+            position is its nearest route point's) has not shrunk by a route voxel over the last ``stall_window``
+            samples. A query whose trees keep moving along the route keeps the model's classes; one whose trees
+            stand at a passage the classes do not pass turns to uniform angles. The draws then follow the trees
+            (the planner's ``TreeView`` at each refill), so a seeded run is the same run, but a batch drawn whole is
+            not the same as the same rows drawn in parts. A roadmap planner ignores it.
         uniform_first: Samples a tree draws before the route (a tree's; 0: none): the first ``uniform_first`` samples
             of a query are uniform states (the goal with probability ``goal_share``), and the route, its centring and
             the model's pass are computed at the first sample after them, so a query that uniform sampling solves
@@ -177,7 +186,7 @@ class RigidRouteSampler(SamplerBase):
                  cell: float | None = None, centre: int = 2, symmetry: str = "random",
                  min_confidence: float = 0.0, min_route_confidence: float = 0.0,
                  roadmap: dict | None = None, passage_weight: float = 0.0, uniform_ramp: float = 0.0,
-                 uniform_first: float = 0.0) -> None:
+                 uniform_first: float = 0.0, stall_window: float = 0.0) -> None:
         who = "RigidRouteSampler"
         if symmetry not in SYMMETRY_RULES:
             raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
@@ -190,6 +199,7 @@ class RigidRouteSampler(SamplerBase):
         self.passage_weight = float(check_number(who, "passage_weight", passage_weight, low=0))
         self.uniform_ramp = float(check_number(who, "uniform_ramp", uniform_ramp, low=0))
         self.uniform_first = float(check_number(who, "uniform_first", uniform_first, low=0))
+        self.stall_window = float(check_number(who, "stall_window", stall_window, low=0))
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
         self.min_confidence = float(check_number(who, "min_confidence", min_confidence, low=0, high=1))
@@ -209,7 +219,7 @@ class RigidRouteSampler(SamplerBase):
             raise InputError(f"{who}: roadmap symmetry = {self.roadmap['symmetry']!r}; choose from "
                              f"{', '.join(SYMMETRY_RULES)}")
         for key, high in (("route_fraction", 1), ("uniform_share", 1), ("angle_noise", None), ("passage_weight", None),
-                          ("uniform_ramp", None), ("uniform_first", None)):
+                          ("uniform_ramp", None), ("uniform_first", None), ("stall_window", None)):
             if key in self.roadmap:
                 self.roadmap[key] = float(check_number(who, f"roadmap {key}", self.roadmap[key], low=0, high=high))
         if net is None and self.roadmap.get("uniform_share", 1.0) < 1.0:
@@ -228,7 +238,7 @@ class RigidRouteSampler(SamplerBase):
         out = copy.copy(self)
         out._take_roadmap()
         out.uniform_ramp = 0.0  # a roadmap keeps every sample: no query is ever stuck on the ones it drew
-        out.uniform_first = 0.0
+        out.uniform_first = out.stall_window = 0.0
         return out
 
     def _take_roadmap(self) -> None:
@@ -243,6 +253,10 @@ class RigidRouteSampler(SamplerBase):
         if not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too
             self._take_roadmap()
         self._first = int(np.ceil(self.uniform_first))  # the uniform states before the route
+        # the stall clock (``stall_window``): the trees' arc positions reached, the vertices seen, the gap's last
+        # shrinking, the samples drawn while stalled
+        self._reach, self._seen, self._gap, self._moved, self._clock = [0.0, None], [0, 0], np.inf, 0, 0
+        self._stalled = False
         self.route = None
         if self._first == 0:
             self._route_setup(world)
@@ -297,6 +311,8 @@ class RigidRouteSampler(SamplerBase):
         # a class, a symmetry, two Box-Muller pairs for the rotation noise
         d = self.problem.dim
         u = rng.random((n, 13 + d))
+        if self.uniform_ramp > 0 and self.stall_window > 0 and self.route is not None:
+            self._watch(view)
         first = max(0, min(n, self._first - self._drawn))
         if first:  # the uniform states before the route (``uniform_first``)
             pts = self._uniform(u[:first, 2:2 + d])
@@ -306,6 +322,23 @@ class RigidRouteSampler(SamplerBase):
                 return pts
             return np.concatenate([pts, self._draw_routed(u[first:])])
         return self._draw_routed(u)
+
+    def _watch(self, view) -> None:
+        """Update the stall clock's view of the trees (``stall_window``) from the planner's ``view``."""
+        if view is not None and len(self.route) > 1:
+            if self._reach[1] is None:
+                self._reach[1] = float(self.arc[-1])
+            trees = ((0, view.vertices, max), (1, getattr(view, "goal_tree", None), min))
+            for side, states, best in trees:
+                if states is not None and len(states) > self._seen[side]:
+                    new = states[self._seen[side]:, :3]
+                    near = ((new[:, None, :] - self.route[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
+                    self._reach[side] = best(self._reach[side], float(best(self.arc[near])))
+                    self._seen[side] = len(states)
+            gap = self._reach[1] - self._reach[0]
+            if gap < self._gap - float(self.problem.world.route_cell):
+                self._gap, self._moved = gap, self._drawn
+        self._stalled = self._drawn - self._moved >= self.stall_window
 
     def _draw_routed(self, u: np.ndarray) -> np.ndarray:
         """The samples of the rows ``u`` (one row of uniforms per sample), the route's from the first on."""
@@ -326,7 +359,10 @@ class RigidRouteSampler(SamplerBase):
             near = i + (t >= 0.5)
             share = self.uniform_share
             if self.uniform_ramp > 0:
-                k = self._drawn - self._first + np.flatnonzero(on)  # counted from the route's first sample
+                if self.stall_window > 0:  # the stall clock: it runs only while the trees stand still
+                    k = self._clock + (np.flatnonzero(on) if self._stalled else 0)
+                else:
+                    k = self._drawn - self._first + np.flatnonzero(on)  # counted from the route's first sample
                 share = share + (1.0 - share) * np.minimum(1.0, k / self.uniform_ramp)
             take = (u[on, 6 + d] >= share) & self.sure[near]
             learned, near = np.flatnonzero(on)[take], near[take]
@@ -343,6 +379,8 @@ class RigidRouteSampler(SamplerBase):
                 pts[learned, 3:] = euler_from_matrices(turn @ base)
         pts[u[:, 0] < self.goal_share] = self.problem.goal
         self._drawn += n
+        if self._stalled:
+            self._clock += n
         return pts
 
     def __repr__(self) -> str:
@@ -355,4 +393,5 @@ class RigidRouteSampler(SamplerBase):
                 f"min_route_confidence={self.min_route_confidence:g}"
                 + (f", uniform_ramp={self.uniform_ramp:g}" if self.uniform_ramp else "")
                 + (f", uniform_first={self.uniform_first:g}" if self.uniform_first else "")
+                + (f", stall_window={self.stall_window:g}" if self.stall_window else "")
                 + (f", roadmap={self.roadmap!r})" if self.roadmap else ")"))
