@@ -165,6 +165,11 @@ class RigidRouteSampler(SamplerBase):
             probability ``uniform_share + (1 - uniform_share) * min(1, k / uniform_ramp)``, so a query the model's
             classes do not solve soon comes to the ablation's angles. A roadmap planner keeps every sample it draws
             and ignores it (``for_planner``).
+        uniform_first: Samples a tree draws before the route (a tree's; 0: none): the first ``uniform_first`` samples
+            of a query are uniform states (the goal with probability ``goal_share``), and the route, its centring and
+            the model's pass are computed at the first sample after them, so a query that uniform sampling solves
+            that soon never pays for them, and one it does not goes on from the trees grown so far. A roadmap planner
+            ignores it (``for_planner``).
         stall_window: With a ``uniform_ramp``, the ramp's ``k`` counts only the samples drawn while the trees are
             stalled (0: every sample): while the gap along the route between the trees (the goal tree's least arc
             position reached, or the route's end for a single tree, less the start tree's greatest; a vertex's arc
@@ -173,11 +178,6 @@ class RigidRouteSampler(SamplerBase):
             stand at a passage the classes do not pass turns to uniform angles. The draws then follow the trees
             (the planner's ``TreeView`` at each refill), so a seeded run is the same run, but a batch drawn whole is
             not the same as the same rows drawn in parts. A roadmap planner ignores it.
-        uniform_first: Samples a tree draws before the route (a tree's; 0: none): the first ``uniform_first`` samples
-            of a query are uniform states (the goal with probability ``goal_share``), and the route, its centring and
-            the model's pass are computed at the first sample after them, so a query that uniform sampling solves
-            that soon never pays for them, and one it does not goes on from the trees grown so far. A roadmap planner
-            ignores it (``for_planner``).
         roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and
             every planner on a mesh world (at ``bind``): any of ``ROADMAP_SETTINGS`` (``make_sampler`` gives the
             validated ``SHIPPED_RIGID_ROADMAP``).
@@ -333,9 +333,10 @@ class RigidRouteSampler(SamplerBase):
             trees = ((0, view.vertices, max), (1, getattr(view, "goal_tree", None), min))
             for side, states, best in trees:
                 if states is not None and len(states) > self._seen[side]:
-                    new = states[self._seen[side]:, :3]
-                    near = ((new[:, None, :] - self.route[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
-                    self._reach[side] = best(self._reach[side], float(best(self.arc[near])))
+                    for lo in range(self._seen[side], len(states), 256):  # bounded memory on long routes
+                        new = states[lo:lo + 256, :3]
+                        near = ((new[:, None, :] - self.route[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
+                        self._reach[side] = best(self._reach[side], float(best(self.arc[near])))
                     self._seen[side] = len(states)
             gap = self._reach[1] - self._reach[0]
             if gap < self._gap - float(self.problem.world.route_cell):
@@ -346,6 +347,7 @@ class RigidRouteSampler(SamplerBase):
         """The samples of the rows ``u`` (one row of uniforms per sample), the route's from the first on."""
         if self.route is None:
             self._route_setup(route_world(self.problem.world, "RigidRouteSampler"))
+            self._moved = self._drawn  # the stall window starts with the route
         n, d = len(u), self.problem.dim
         pos_z = box_muller(u[:, 2 + d:6 + d])[:, :3]
         cls_u, sym_u, rot_z = u[:, 7 + d], u[:, 8 + d], box_muller(u[:, 9 + d:13 + d])[:, :3]
