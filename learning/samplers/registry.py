@@ -145,26 +145,9 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
     given = {"symmetry": symmetry, "route_fraction": route_fraction, "uniform_share": uniform_share,
              "angle_noise": angle_noise, "passage_weight": passage_weight, "uniform_ramp": uniform_ramp,
              "uniform_first": uniform_first, "stall_window": stall_window}
-    return RigidRouteSampler(net, route_fraction=SHIPPED_RIGID_SETTINGS["route_fraction"] if route_fraction is None
-                             else route_fraction,
-                             uniform_share=SHIPPED_RIGID_SETTINGS["uniform_share"] if uniform_share is None
-                             else uniform_share,
-                             angle_noise=SHIPPED_RIGID_SETTINGS["angle_noise"] if angle_noise is None else angle_noise,
-                             goal_share=goal_share, temperature=temperature,
-                             centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre,
-                             symmetry=SHIPPED_RIGID_SETTINGS["symmetry"] if symmetry is None else symmetry,
-                             min_confidence=SHIPPED_RIGID_SETTINGS["min_confidence"] if min_confidence is None
-                             else min_confidence,
-                             min_route_confidence=SHIPPED_RIGID_SETTINGS["min_route_confidence"]
-                             if min_route_confidence is None else min_route_confidence,
-                             passage_weight=SHIPPED_RIGID_SETTINGS["passage_weight"] if passage_weight is None
-                             else passage_weight,
-                             uniform_ramp=SHIPPED_RIGID_SETTINGS["uniform_ramp"] if uniform_ramp is None
-                             else uniform_ramp,
-                             uniform_first=SHIPPED_RIGID_SETTINGS["uniform_first"] if uniform_first is None
-                             else uniform_first,
-                             stall_window=SHIPPED_RIGID_SETTINGS["stall_window"] if stall_window is None
-                             else stall_window,
+    tree = {"centre": centre, "min_confidence": min_confidence, "min_route_confidence": min_route_confidence, **given}
+    return RigidRouteSampler(net, goal_share=goal_share, temperature=temperature,
+                             **{k: SHIPPED_RIGID_SETTINGS[k] if v is None else v for k, v in tree.items()},
                              # a roadmap's own validated settings, where the user set none of them
                              roadmap={k: v for k, v in SHIPPED_RIGID_ROADMAP.items() if given[k] is None})
 

@@ -255,10 +255,6 @@ class RigidRouteSampler(SamplerBase):
         if not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too
             self._take_roadmap()
         self._first = int(np.ceil(self.uniform_first))  # the uniform states before the route
-        # the stall clock (``stall_window``): the trees' arc positions reached, the vertices seen, the gap's last
-        # shrinking, the samples drawn while stalled
-        self._reach, self._seen, self._gap, self._moved, self._clock = [0.0, None], [0, 0], np.inf, 0, 0
-        self._stalled = False
         self.route = None
         if self._first == 0:
             self._route_setup(world)
@@ -306,6 +302,10 @@ class RigidRouteSampler(SamplerBase):
         if self.symmetry in ("chain", "chain_start") and len(self.probs) == len(self.route) and len(self.route):
             self.chain = rotation_chain(self.rotations, self.probs.argmax(axis=1), self.ends, self.arc,
                                         start_only=self.symmetry == "chain_start")
+        # the stall clock (``stall_window``), from the route's first sample: the arc positions the start and goal
+        # trees have reached, their vertices seen, the gap's last shrinking, the samples drawn while stalled
+        self._reach, self._seen, self._gap, self._moved = [0.0, float(self.arc[-1])], [0, 0], np.inf, self._drawn
+        self._clock, self._stalled = 0, False
 
     def draw(self, rng, n, view):
         # one row of uniforms per sample keeps the stream identical whatever the batch size: a coin, an
@@ -328,9 +328,7 @@ class RigidRouteSampler(SamplerBase):
     def _watch(self, view) -> None:
         """Update the stall clock's view of the trees (``stall_window``) from the planner's ``view``."""
         if view is not None and len(self.route) > 1:
-            if self._reach[1] is None:
-                self._reach[1] = float(self.arc[-1])
-            trees = ((0, view.vertices, max), (1, getattr(view, "goal_tree", None), min))
+            trees = ((0, view.vertices, max), (1, view.goal_tree, min))
             for side, states, best in trees:
                 if states is not None and len(states) > self._seen[side]:
                     for lo in range(self._seen[side], len(states), 256):  # bounded memory on long routes
@@ -347,7 +345,6 @@ class RigidRouteSampler(SamplerBase):
         """The samples of the rows ``u`` (one row of uniforms per sample), the route's from the first on."""
         if self.route is None:
             self._route_setup(route_world(self.problem.world, "RigidRouteSampler"))
-            self._moved = self._drawn  # the stall window starts with the route
         n, d = len(u), self.problem.dim
         pos_z = box_muller(u[:, 2 + d:6 + d])[:, :3]
         cls_u, sym_u, rot_z = u[:, 7 + d], u[:, 8 + d], box_muller(u[:, 9 + d:13 + d])[:, :3]

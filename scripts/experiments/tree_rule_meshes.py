@@ -10,7 +10,7 @@
         --seeds 2 --rules roadmap --rule 'pw0={"passage_weight": 0}' --out results/tree_rule_twist.jsonl
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --families twist --part tuning --scenes 8 \\
         --seeds 2 --rules roadmap --rule 'r0={"uniform_ramp": 0}' --rule 'r1k={"uniform_ramp": 1000}' --out FILE
-    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --part tuning --scenes 8 --seeds 2 \
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --part tuning --scenes 8 --seeds 2 \\
         --rules roadmap --rule 'u2500={"uniform_first": 2500}' --rule 'u10000={"uniform_first": 10000}' --out FILE
 
 ``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) on box worlds
