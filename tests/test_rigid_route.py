@@ -10,6 +10,7 @@ from learning.models.rigid_orientation import OrientationNet, load_orientation_n
 from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
 from learning.samplers.registry import make_sampler
 from learning.samplers.rigid_route import (
+    FOLLOW_BATCH,
     SHIPPED_RIGID_ROADMAP,
     SHIPPED_RIGID_SETTINGS,
     RigidRouteSampler,
@@ -197,6 +198,58 @@ def test_a_stall_window_runs_the_ramp_only_while_the_trees_stand_still_on_the_ro
     assert make_sampler("rigid_route", stall_window=50).stall_window == 50.0
     with pytest.raises(InputError, match="stall_window"):
         RigidRouteSampler(net, stall_window=-1)
+
+
+def test_follow_draws_the_route_samples_in_windows_about_the_trees_reach(slot_scene):
+    from types import SimpleNamespace
+
+    net = make_sampler("rigid_route").net
+    kw = dict(route_fraction=1.0, uniform_share=0.0, angle_noise=0.0, goal_share=0.0, spread=0.0, follow=2.0)
+    world = slot_scene.world
+
+    def arcs(sampler, q):  # each sample's arc position: its nearest route point's, within a segment of its own
+        near = ((q[:, None, :3] - sampler.route[None]) ** 2).sum(axis=2).argmin(axis=1)
+        return sampler.arc[near]
+
+    # no tree seen yet: every route sample within the window about the start (a draw returns at most FOLLOW_BATCH)
+    s = RigidRouteSampler(net, **kw).bind(slot_scene)
+    span, total = 2.0 * world.radius, s.arc[-1]
+    assert span < total / 2  # the window is a part of the route
+    span += np.diff(s.arc).max()  # a sample's nearest route point may lie a segment beyond it
+    q = s.draw(np.random.default_rng(3), 500, None)
+    assert len(q) == FOLLOW_BATCH
+    assert arcs(s, q).max() <= span + 1e-9
+    # a start tree that reached the route's middle, and a goal tree: half the samples about each tree's reach
+    mid = s.route[int(np.searchsorted(s.arc, total / 2))]
+    tree = np.array([slot_scene.start, np.concatenate([mid, slot_scene.start[3:]])])
+    # the start tree's vertex at the middle is seen in two steps: a jump beyond the window does not count at once
+    view = SimpleNamespace(vertices=tree[:1], num_vertices=1, goal_tree=slot_scene.goal[None])
+    s.draw(np.random.default_rng(4), 64, view)
+    far = SimpleNamespace(vertices=tree, num_vertices=2, goal_tree=slot_scene.goal[None])
+    a = arcs(s, s.draw(np.random.default_rng(5), 64, far))
+    assert s._reach[0] == 0.0  # the jump was not taken
+    assert ((a <= span + 1e-9) | (a >= total - span - 1e-9)).all() and (a <= span).any() and (a > total / 2).any()
+    # reached in steps within the window, it counts
+    steps = [s.route[int(np.searchsorted(s.arc, x))]
+             for x in np.arange(0.5 * world.radius, total / 2, 0.5 * world.radius)]
+    for k in range(len(steps)):
+        near = np.array([np.concatenate([p, slot_scene.start[3:]]) for p in steps[:k + 1]])
+        s.draw(np.random.default_rng(6), 64, SimpleNamespace(vertices=np.concatenate([tree, near]), num_vertices=0,
+                                                           goal_tree=slot_scene.goal[None]))
+    assert s._reach[0] >= total / 2 - world.radius
+    a = arcs(s, s.draw(np.random.default_rng(7), 64, SimpleNamespace(vertices=np.concatenate([tree, near]),
+                                                                     num_vertices=0, goal_tree=slot_scene.goal[None])))
+    start_side = np.abs(a - s._reach[0]) <= span + 1e-9
+    goal_side = a >= total - span - 1e-9
+    assert (start_side | goal_side).all() and start_side.any() and goal_side.any()
+    # 0 draws along the whole route; a roadmap ignores it; the registry takes it; bad values are refused
+    whole = RigidRouteSampler(net, **{**kw, "follow": 0.0}).bind(slot_scene)
+    assert arcs(whole, whole.draw(np.random.default_rng(3), 500, None)).max() > total / 2
+    assert RigidRouteSampler(net, **kw).for_planner("roadmap").follow == 0.0
+    assert make_sampler("rigid_route", follow=4).follow == 4.0 and "follow=4" in repr(make_sampler("rigid_route",
+                                                                                                     follow=4))
+    with pytest.raises(InputError, match="follow"):
+        RigidRouteSampler(net, follow=-1)
 
 
 def test_the_registry_name_plans_with_rrt_connect(slot_scene):

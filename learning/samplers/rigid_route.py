@@ -61,7 +61,8 @@ from planners.worlds.mesh import rotation_matrices
 #: on the tuning scenes and kept on validation scenes no rule had looked at.
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
                           "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75,
-                          "passage_weight": 16.0, "uniform_ramp": 0.0, "uniform_first": 0.0, "stall_window": 0.0}
+                          "passage_weight": 16.0, "uniform_ramp": 0.0, "uniform_first": 0.0, "stall_window": 0.0,
+                          "follow": 0.0}
 #: What a roadmap planner takes instead (``RigidRouteSampler.for_planner``): every route sample on the route, each
 #: in the model's class (no uniform angles) at the rotation of the chain walked from the start all along the route
 #: (where walks from both ends meet, in a passage, two rotations a half turn apart may leave the roadmap in two
@@ -78,17 +79,21 @@ SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2,
 #: of the time without the ramp. They compute the route at their first sample (``uniform_first`` 0): uniform states
 #: first cost them 1.7 to 3.8 times the time on the training families as meshes (2,500 to 10,000 of them). The ramp
 #: counts every route sample (``stall_window`` 0): clocked only while the trees stand still (1,000 samples), it took
-#: RRT-Connect twice the time on the validation twisted slots.
+#: RRT-Connect twice the time on the validation twisted slots. They draw the route samples along the whole route
+#: (``follow`` 0): in windows about the trees' reach (4 body radii) they missed the training families' bar at the
+#: default step (1.02 times the time) though the twisted slots took 0.66 of it.
 SHIPPED_RIGID_ROADMAP = {"symmetry": "chain_start", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0,
                          "passage_weight": 16.0, "uniform_ramp": 4000.0, "uniform_first": 0.0,
-                         "stall_window": 0.0}
+                         "stall_window": 0.0, "follow": 0.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
 SYMMETRY_RULES = ("random", "ends", "chain", "chain_start")
 #: The settings a roadmap may take apart from the trees' (``RigidRouteSampler``'s ``roadmap``).
 ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise", "passage_weight", "uniform_ramp",
-                    "uniform_first", "stall_window")
+                    "uniform_first", "stall_window", "follow")
+#: Most samples one draw returns where the draws follow the trees (``follow``): the window moves at least this often.
+FOLLOW_BATCH = 64
 
 
 def class_frame(world, cell: float | None = None) -> tuple[np.ndarray, float]:
@@ -178,6 +183,14 @@ class RigidRouteSampler(SamplerBase):
             stand at a passage the classes do not pass turns to uniform angles. The draws then follow the trees
             (the planner's ``TreeView`` at each refill), so a seeded run is the same run, but a batch drawn whole is
             not the same as the same rows drawn in parts. A roadmap planner ignores it.
+        follow: Half-width, in body radii (the world's ``radius``), of the window of arc length the route samples are
+            drawn in (a tree's; 0: the whole route): about the start tree's greatest arc position reached, and with
+            RRT-Connect half of them about the goal tree's least, so the samples lead each tree along the route
+            rather than spreading over all of it. A new vertex's arc position is its nearest route point's among those
+            within its tree's window, and counts only where that point lies within the half-width of it, so a
+            tree's reach cannot jump through a wall to a far part of the route. A draw
+            then returns at most ``FOLLOW_BATCH`` samples and follows the trees (``stall_window``'s caveat on
+            batches holds). A roadmap planner ignores it.
         roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and
             every planner on a mesh world (at ``bind``): any of ``ROADMAP_SETTINGS`` (``make_sampler`` gives the
             validated ``SHIPPED_RIGID_ROADMAP``).
@@ -188,7 +201,7 @@ class RigidRouteSampler(SamplerBase):
                  cell: float | None = None, centre: int = 2, symmetry: str = "random",
                  min_confidence: float = 0.0, min_route_confidence: float = 0.0,
                  roadmap: dict | None = None, passage_weight: float = 0.0, uniform_ramp: float = 0.0,
-                 uniform_first: float = 0.0, stall_window: float = 0.0) -> None:
+                 uniform_first: float = 0.0, stall_window: float = 0.0, follow: float = 0.0) -> None:
         who = "RigidRouteSampler"
         if symmetry not in SYMMETRY_RULES:
             raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
@@ -202,6 +215,7 @@ class RigidRouteSampler(SamplerBase):
         self.uniform_ramp = float(check_number(who, "uniform_ramp", uniform_ramp, low=0))
         self.uniform_first = float(check_number(who, "uniform_first", uniform_first, low=0))
         self.stall_window = float(check_number(who, "stall_window", stall_window, low=0))
+        self.follow = float(check_number(who, "follow", follow, low=0))
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
         self.min_confidence = float(check_number(who, "min_confidence", min_confidence, low=0, high=1))
@@ -221,7 +235,7 @@ class RigidRouteSampler(SamplerBase):
             raise InputError(f"{who}: roadmap symmetry = {self.roadmap['symmetry']!r}; choose from "
                              f"{', '.join(SYMMETRY_RULES)}")
         for key, high in (("route_fraction", 1), ("uniform_share", 1), ("angle_noise", None), ("passage_weight", None),
-                          ("uniform_ramp", None), ("uniform_first", None), ("stall_window", None)):
+                          ("uniform_ramp", None), ("uniform_first", None), ("stall_window", None), ("follow", None)):
             if key in self.roadmap:
                 self.roadmap[key] = float(check_number(who, f"roadmap {key}", self.roadmap[key], low=0, high=high))
         if net is None and self.roadmap.get("uniform_share", 1.0) < 1.0:
@@ -235,12 +249,12 @@ class RigidRouteSampler(SamplerBase):
         orientation all along the route at once, each at its neighbours' rotation: on the validation scenes PRM with
         ``SHIPPED_RIGID_ROADMAP`` connects 116 of 120 queries, with the trees' settings 84 (``docs/rigid-scenes.md``).
         """
-        if family != FAMILY_ROADMAP or not (self.roadmap or self.uniform_ramp or self.uniform_first):
+        if family != FAMILY_ROADMAP or not (self.roadmap or self.uniform_ramp or self.uniform_first or self.follow):
             return self
         out = copy.copy(self)
         out._take_roadmap()
         out.uniform_ramp = 0.0  # a roadmap keeps every sample: no query is ever stuck on the ones it drew
-        out.uniform_first = out.stall_window = 0.0
+        out.uniform_first = out.stall_window = out.follow = 0.0
         return out
 
     def _take_roadmap(self) -> None:
@@ -304,16 +318,20 @@ class RigidRouteSampler(SamplerBase):
                                         start_only=self.symmetry == "chain_start")
         # the stall clock (``stall_window``), from the route's first sample: the arc positions the start and goal
         # trees have reached, their vertices seen, the gap's last shrinking, the samples drawn while stalled
+        # and the windows the route samples follow (``follow``): half-width in arc length, and whether a goal tree grows
         self._reach, self._seen, self._gap, self._moved = [0.0, float(self.arc[-1])], [0, 0], np.inf, self._drawn
         self._clock, self._stalled = 0, False
+        self._span, self._two = self.follow * float(world.radius), False
 
     def draw(self, rng, n, view):
         # one row of uniforms per sample keeps the stream identical whatever the batch size: a coin, an
         # arc length, a uniform state, two Box-Muller pairs for the position, a coin for uniform angles,
         # a class, a symmetry, two Box-Muller pairs for the rotation noise
         d = self.problem.dim
+        if self.follow > 0:
+            n = min(n, FOLLOW_BATCH)
         u = rng.random((n, 13 + d))
-        if self.uniform_ramp > 0 and self.stall_window > 0 and self.route is not None:
+        if self.route is not None and (self.follow > 0 or (self.uniform_ramp > 0 and self.stall_window > 0)):
             self._watch(view)
         first = max(0, min(n, self._first - self._drawn))
         if first:  # the uniform states before the route (``uniform_first``)
@@ -326,20 +344,31 @@ class RigidRouteSampler(SamplerBase):
         return self._draw_routed(u)
 
     def _watch(self, view) -> None:
-        """Update the stall clock's view of the trees (``stall_window``) from the planner's ``view``."""
+        """Update the trees' reach along the route (``stall_window``, ``follow``) from the planner's ``view``."""
         if view is not None and len(self.route) > 1:
+            self._two = self._two or view.goal_tree is not None
             trees = ((0, view.vertices, max), (1, view.goal_tree, min))
             for side, states, best in trees:
                 if states is not None and len(states) > self._seen[side]:
                     for lo in range(self._seen[side], len(states), 256):  # bounded memory on long routes
+                        first, last = 0, len(self.route)  # the route points a vertex may take: with ``follow``,
+                        if self.follow > 0:  # those within its tree's window
+                            if side == 0:
+                                last = max(1, int(np.searchsorted(self.arc, self._reach[0] + self._span, "right")))
+                            else:
+                                first = min(last - 1, int(np.searchsorted(self.arc, self._reach[1] - self._span)))
                         new = states[lo:lo + 256, :3]
-                        near = ((new[:, None, :] - self.route[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
-                        self._reach[side] = best(self._reach[side], float(best(self.arc[near])))
+                        d2 = ((new[:, None, :] - self.route[None, first:last, :]) ** 2).sum(axis=2)
+                        near = first + d2.argmin(axis=1)
+                        if self.follow > 0:  # and only a vertex within the window's half-width of its point
+                            near = near[d2.min(axis=1) <= self._span ** 2]
+                        if len(near):
+                            self._reach[side] = best(self._reach[side], float(best(self.arc[near])))
                     self._seen[side] = len(states)
             gap = self._reach[1] - self._reach[0]
             if gap < self._gap - float(self.problem.world.route_cell):
                 self._gap, self._moved = gap, self._drawn
-        self._stalled = self._drawn - self._moved >= self.stall_window
+        self._stalled = self.stall_window > 0 and self._drawn - self._moved >= self.stall_window
 
     def _draw_routed(self, u: np.ndarray) -> np.ndarray:
         """The samples of the rows ``u`` (one row of uniforms per sample), the route's from the first on."""
@@ -352,7 +381,7 @@ class RigidRouteSampler(SamplerBase):
         if self.arc[-1] > 0:
             on = (u[:, 0] >= self.goal_share) & (u[:, 0] < self.goal_share + (1.0 - self.goal_share)
                                                  * self.route_fraction)
-            s = u[on, 1] * self.warc[-1]
+            s = self._follow_arc(u[on, 1]) if self.follow > 0 else u[on, 1] * self.warc[-1]
             i = np.clip(np.searchsorted(self.warc, s, side="right") - 1, 0, len(self.route) - 2)
             t = (s - self.warc[i]) / np.maximum(self.warc[i + 1] - self.warc[i], 1e-300)
             p = self.route[i] + t[:, None] * (self.route[i + 1] - self.route[i]) + self.sd * pos_z[on]
@@ -384,6 +413,21 @@ class RigidRouteSampler(SamplerBase):
             self._clock += n
         return pts
 
+    def _follow_arc(self, v: np.ndarray) -> np.ndarray:
+        """Weighted arc positions (``warc``) for uniforms ``v``, within the trees' windows (``follow``).
+
+        With a goal tree, ``v`` below one half falls in the start tree's window and the rest in the goal tree's.
+        """
+        total = float(self.arc[-1])
+        reach = np.full(len(v), self._reach[0])
+        if self._two:
+            goal = v >= 0.5
+            reach[goal] = self._reach[1]
+            v = np.where(goal, 2.0 * v - 1.0, 2.0 * v)
+        a = np.interp(np.clip(reach - self._span, 0.0, total), self.arc, self.warc)
+        b = np.interp(np.clip(reach + self._span, 0.0, total), self.arc, self.warc)
+        return a + v * (b - a)
+
     def __repr__(self) -> str:
         sd = "the world's" if self.spread is None else f"{self.spread:g}"
         cell = "the world's" if self.cell is None else f"{self.cell:g}"
@@ -395,4 +439,5 @@ class RigidRouteSampler(SamplerBase):
                 + (f", uniform_ramp={self.uniform_ramp:g}" if self.uniform_ramp else "")
                 + (f", uniform_first={self.uniform_first:g}" if self.uniform_first else "")
                 + (f", stall_window={self.stall_window:g}" if self.stall_window else "")
+                + (f", follow={self.follow:g}" if self.follow else "")
                 + (f", roadmap={self.roadmap!r})" if self.roadmap else ")"))
