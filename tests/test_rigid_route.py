@@ -242,6 +242,15 @@ def test_follow_draws_the_route_samples_in_windows_about_the_trees_reach(slot_sc
     start_side = np.abs(a - s._reach[0]) <= span + 1e-9
     goal_side = a >= total - span - 1e-9
     assert (start_side | goal_side).all() and start_side.any() and goal_side.any()
+    # follow_share: that share of the route samples in the windows, the rest along the whole route
+    half = RigidRouteSampler(net, **kw, follow_share=0.5).bind(slot_scene)
+    a = arcs(half, np.concatenate([half.draw(np.random.default_rng(9), 64, None) for _ in range(8)]))
+    assert 0.35 < (a <= span).mean() < 0.8 and (a > total / 2).any()
+    one = RigidRouteSampler(net, **kw, follow_share=1.0).bind(slot_scene)
+    assert np.array_equal(one.draw(np.random.default_rng(3), 64, None),
+                          RigidRouteSampler(net, **kw).bind(slot_scene).draw(np.random.default_rng(3), 64, None))
+    with pytest.raises(InputError, match="follow_share"):
+        RigidRouteSampler(net, follow=2, follow_share=1.5)
     # 0 draws along the whole route; a roadmap ignores it; the registry takes it; bad values are refused
     whole = RigidRouteSampler(net, **{**kw, "follow": 0.0}).bind(slot_scene)
     assert arcs(whole, whole.draw(np.random.default_rng(3), 500, None)).max() > total / 2

@@ -135,7 +135,8 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
                  path: str | None = None, symmetry: str | None = None, min_confidence: float | None = None,
                  min_route_confidence: float | None = None, passage_weight: float | None = None,
                  uniform_ramp: float | None = None, uniform_first: float | None = None,
-                 stall_window: float | None = None, follow: float | None = None, *,
+                 stall_window: float | None = None, follow: float | None = None,
+                 follow_share: float | None = None, *,
                  models: ModelCache | None = None) -> Sampler:
     from learning.models.shipped import SHIPPED_RIGID_ORIENTATION
     from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS, RigidRouteSampler
@@ -144,7 +145,8 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
     net = (ModelCache() if models is None else models).orientation_net(path)
     given = {"symmetry": symmetry, "route_fraction": route_fraction, "uniform_share": uniform_share,
              "angle_noise": angle_noise, "passage_weight": passage_weight, "uniform_ramp": uniform_ramp,
-             "uniform_first": uniform_first, "stall_window": stall_window, "follow": follow}
+             "uniform_first": uniform_first, "stall_window": stall_window, "follow": follow,
+             "follow_share": follow_share}
     tree = {"centre": centre, "min_confidence": min_confidence, "min_route_confidence": min_route_confidence, **given}
     return RigidRouteSampler(net, goal_share=goal_share, temperature=temperature,
                              **{k: SHIPPED_RIGID_SETTINGS[k] if v is None else v for k, v in tree.items()},

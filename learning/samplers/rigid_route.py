@@ -62,7 +62,7 @@ from planners.worlds.mesh import rotation_matrices
 SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2, "symmetry": "ends",
                           "min_confidence": 0.0, "min_route_confidence": 0.0, "route_fraction": 0.75,
                           "passage_weight": 16.0, "uniform_ramp": 0.0, "uniform_first": 0.0, "stall_window": 0.0,
-                          "follow": 0.0}
+                          "follow": 0.0, "follow_share": 1.0}
 #: What a roadmap planner takes instead (``RigidRouteSampler.for_planner``): every route sample on the route, each
 #: in the model's class (no uniform angles) at the rotation of the chain walked from the start all along the route
 #: (where walks from both ends meet, in a passage, two rotations a half turn apart may leave the roadmap in two
@@ -84,14 +84,14 @@ SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2,
 #: default step (1.02 times the time) though the twisted slots took 0.66 of it.
 SHIPPED_RIGID_ROADMAP = {"symmetry": "chain_start", "route_fraction": 1.0, "uniform_share": 0.0, "angle_noise": 0.0,
                          "passage_weight": 16.0, "uniform_ramp": 4000.0, "uniform_first": 0.0,
-                         "stall_window": 0.0, "follow": 0.0}
+                         "stall_window": 0.0, "follow": 0.0, "follow_share": 1.0}
 
 _ROTATIONS = class_rotations()
 #: ``RigidRouteSampler``'s ways to pick among a class's four rotations.
 SYMMETRY_RULES = ("random", "ends", "chain", "chain_start")
 #: The settings a roadmap may take apart from the trees' (``RigidRouteSampler``'s ``roadmap``).
 ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise", "passage_weight", "uniform_ramp",
-                    "uniform_first", "stall_window", "follow")
+                    "uniform_first", "stall_window", "follow", "follow_share")
 #: Most samples one draw returns where the draws follow the trees (``follow``): the window moves at least this often.
 FOLLOW_BATCH = 64
 
@@ -191,6 +191,8 @@ class RigidRouteSampler(SamplerBase):
             tree's reach cannot jump through a wall to a far part of the route. A draw
             then returns at most ``FOLLOW_BATCH`` samples and follows the trees (``stall_window``'s caveat on
             batches holds). A roadmap planner ignores it.
+        follow_share: With ``follow``, the probability in [0, 1] that a route sample is drawn in the trees' windows;
+            the others are drawn along the whole route, as without ``follow``.
         roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and
             every planner on a mesh world (at ``bind``): any of ``ROADMAP_SETTINGS`` (``make_sampler`` gives the
             validated ``SHIPPED_RIGID_ROADMAP``).
@@ -201,7 +203,8 @@ class RigidRouteSampler(SamplerBase):
                  cell: float | None = None, centre: int = 2, symmetry: str = "random",
                  min_confidence: float = 0.0, min_route_confidence: float = 0.0,
                  roadmap: dict | None = None, passage_weight: float = 0.0, uniform_ramp: float = 0.0,
-                 uniform_first: float = 0.0, stall_window: float = 0.0, follow: float = 0.0) -> None:
+                 uniform_first: float = 0.0, stall_window: float = 0.0, follow: float = 0.0,
+                 follow_share: float = 1.0) -> None:
         who = "RigidRouteSampler"
         if symmetry not in SYMMETRY_RULES:
             raise InputError(f"{who}: symmetry = {symmetry!r}; choose from {', '.join(SYMMETRY_RULES)}")
@@ -216,6 +219,7 @@ class RigidRouteSampler(SamplerBase):
         self.uniform_first = float(check_number(who, "uniform_first", uniform_first, low=0))
         self.stall_window = float(check_number(who, "stall_window", stall_window, low=0))
         self.follow = float(check_number(who, "follow", follow, low=0))
+        self.follow_share = float(check_number(who, "follow_share", follow_share, low=0, high=1))
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.temperature = float(check_number(who, "temperature", temperature, low=0, low_open=True))
         self.min_confidence = float(check_number(who, "min_confidence", min_confidence, low=0, high=1))
@@ -235,7 +239,8 @@ class RigidRouteSampler(SamplerBase):
             raise InputError(f"{who}: roadmap symmetry = {self.roadmap['symmetry']!r}; choose from "
                              f"{', '.join(SYMMETRY_RULES)}")
         for key, high in (("route_fraction", 1), ("uniform_share", 1), ("angle_noise", None), ("passage_weight", None),
-                          ("uniform_ramp", None), ("uniform_first", None), ("stall_window", None), ("follow", None)):
+                          ("uniform_ramp", None), ("uniform_first", None), ("stall_window", None), ("follow", None),
+                          ("follow_share", 1)):
             if key in self.roadmap:
                 self.roadmap[key] = float(check_number(who, f"roadmap {key}", self.roadmap[key], low=0, high=high))
         if net is None and self.roadmap.get("uniform_share", 1.0) < 1.0:
@@ -416,8 +421,13 @@ class RigidRouteSampler(SamplerBase):
     def _follow_arc(self, v: np.ndarray) -> np.ndarray:
         """Weighted arc positions (``warc``) for uniforms ``v``, within the trees' windows (``follow``).
 
-        With a goal tree, ``v`` below one half falls in the start tree's window and the rest in the goal tree's.
+        ``v`` below ``follow_share`` falls in the windows (with a goal tree, its lower half in the start tree's and
+        its upper half in the goal tree's), the rest anywhere along the route.
         """
+        p = self.follow_share
+        whole = v >= p
+        out = (v - p) / max(1.0 - p, 1e-300) * self.warc[-1]
+        v = v / max(p, 1e-300)
         total = float(self.arc[-1])
         reach = np.full(len(v), self._reach[0])
         if self._two:
@@ -426,7 +436,7 @@ class RigidRouteSampler(SamplerBase):
             v = np.where(goal, 2.0 * v - 1.0, 2.0 * v)
         a = np.interp(np.clip(reach - self._span, 0.0, total), self.arc, self.warc)
         b = np.interp(np.clip(reach + self._span, 0.0, total), self.arc, self.warc)
-        return a + v * (b - a)
+        return np.where(whole, out, a + v * (b - a))
 
     def __repr__(self) -> str:
         sd = "the world's" if self.spread is None else f"{self.spread:g}"
@@ -440,4 +450,5 @@ class RigidRouteSampler(SamplerBase):
                 + (f", uniform_first={self.uniform_first:g}" if self.uniform_first else "")
                 + (f", stall_window={self.stall_window:g}" if self.stall_window else "")
                 + (f", follow={self.follow:g}" if self.follow else "")
+                + (f", follow_share={self.follow_share:g}" if self.follow and self.follow_share < 1 else "")
                 + (f", roadmap={self.roadmap!r})" if self.roadmap else ")"))
