@@ -243,3 +243,22 @@ def test_the_twisted_slot_passes_only_a_body_rolled_with_it():
     assert route is not None and route[0, 0] < c < route[-1, 0]
     with pytest.raises(SystemExit):  # twist has tuning and validation parts only
         rules.main(["--families", "twist", "--part", "test", "--out", "x.jsonl"])
+
+
+def test_the_route_beside_omplapps_solution(tmp_path, capsys):
+    probe = load_script("experiments/route_vs_solution")
+    with pytest.raises(SystemExit):  # no .cfg with a .path there: refused before any work, naming the problem
+        probe.main(["--omplapp", str(tmp_path), "--problems", "Easy"])
+    assert "Easy" in capsys.readouterr().err
+    pytest.importorskip("fcl", reason="the mesh extra")
+    from planners.worlds.omplapp import OMPLAPP_ENV, omplapp_dir
+
+    try:
+        folder = omplapp_dir()
+    except InputError as e:
+        pytest.skip(str(e))
+    if folder is None or not (folder / "Easy.path").is_file():
+        pytest.skip(f"OMPL.app's problems not found: set {OMPLAPP_ENV} to a copy (its licence forbids shipping them)")
+    assert probe.main(["--omplapp", str(folder), "--problems", "Easy"]) == 0
+    row = capsys.readouterr().out.strip().splitlines()[-1]
+    assert row.startswith("| Easy |") and row.endswith("| 40 of 40 |")
