@@ -25,6 +25,20 @@ DAE = """<node name="SketchUp">
 </node>"""
 
 
+def omplapp_folder(needed: str):
+    """The user's copy of OMPL.app's problems holding ``needed`` (with the mesh extra), or skip, saying why."""
+    pytest.importorskip("fcl", reason="the mesh extra")
+    from planners.worlds.omplapp import OMPLAPP_ENV, omplapp_dir
+
+    try:
+        folder = omplapp_dir()
+    except InputError as e:
+        pytest.skip(str(e))
+    if folder is None or not (folder / needed).is_file():
+        pytest.skip(f"OMPL.app's problems not found: set {OMPLAPP_ENV} to a copy (its licence forbids shipping them)")
+    return folder
+
+
 def test_each_instanced_part_is_kept_left_out_or_turned_back():
     frames = load_script("experiments/omplapp_frames")
     assert frames.with_readings(DAE, ("as given", "as given")) == DAE
@@ -160,15 +174,7 @@ def test_the_exact_cost_script_times_a_function_and_refuses_bad_arguments(tmp_pa
 
 
 def test_the_exact_cost_on_omplapps_cubicles_agrees_with_fcl(capsys):
-    pytest.importorskip("fcl", reason="the mesh extra")
-    from planners.worlds.omplapp import OMPLAPP_ENV, omplapp_dir
-
-    try:
-        folder = omplapp_dir()
-    except InputError as e:
-        pytest.skip(str(e))
-    if folder is None or not (folder / "cubicles.cfg").is_file():
-        pytest.skip(f"OMPL.app's problems not found: set {OMPLAPP_ENV} to a copy (its licence forbids shipping them)")
+    folder = omplapp_folder("cubicles.cfg")
     split = load_script("experiments/mesh_exact_cost")
     assert split.main(["--omplapp", str(folder), "--problem", "cubicles", "--poses", "40"]) == 0
     out = capsys.readouterr().out
@@ -250,15 +256,7 @@ def test_the_route_beside_omplapps_solution(tmp_path, capsys):
     with pytest.raises(SystemExit):  # no .cfg with a .path there: refused before any work, naming the problem
         probe.main(["--omplapp", str(tmp_path), "--problems", "Easy"])
     assert "Easy" in capsys.readouterr().err
-    pytest.importorskip("fcl", reason="the mesh extra")
-    from planners.worlds.omplapp import OMPLAPP_ENV, omplapp_dir
-
-    try:
-        folder = omplapp_dir()
-    except InputError as e:
-        pytest.skip(str(e))
-    if folder is None or not (folder / "Easy.path").is_file():
-        pytest.skip(f"OMPL.app's problems not found: set {OMPLAPP_ENV} to a copy (its licence forbids shipping them)")
+    folder = omplapp_folder("Easy.path")
     assert probe.main(["--omplapp", str(folder), "--problems", "Easy"]) == 0
     row = capsys.readouterr().out.strip().splitlines()[-1]
     assert row.startswith("| Easy |") and row.endswith("| 40 of 40 |")
