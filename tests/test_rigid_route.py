@@ -259,6 +259,12 @@ def test_follow_draws_the_route_samples_in_windows_about_the_trees_reach(slot_sc
                                                                                                      follow=4))
     with pytest.raises(InputError, match="follow"):
         RigidRouteSampler(net, follow=-1)
+    # the draws follow the trees, and a seeded run is the same run
+    from planners import RRTConnect
+
+    runs = [RRTConnect(slot_scene, sampler=make_sampler("rigid_route", follow=2), seed=4).solve(max_iterations=2000)
+            for _ in range(2)]
+    assert runs[0].solved and runs[0].iterations == runs[1].iterations and np.array_equal(runs[0].path, runs[1].path)
 
 
 def test_the_registry_name_plans_with_rrt_connect(slot_scene):
