@@ -185,6 +185,9 @@ def map_problem(map, start=None, goal=None, goal_tolerance: float = 4.0, thresho
                 resolution: float = 1.0, **kwargs) -> MapSource:
     """A source for the user's own map: a fixed query when ``start`` and ``goal`` are given, else random ones.
 
+    A path ending in ``.cfg`` (an OMPL.app problem) or ``.scene`` (a box scene) is that one 6-DoF problem, with the
+    start and goal the file gives (``scene_file_source``).
+
     Args:
         map: A map file, a 2-D obstacle array (True = blocked) or an ``OccupancyGrid``.
         start: Start point (x, y) in world units, or None (random queries, as ``FileSource``).
@@ -194,6 +197,11 @@ def map_problem(map, start=None, goal=None, goal_tolerance: float = 4.0, thresho
         resolution: World units per cell.
         **kwargs: Further ``FileSource`` options (random queries only).
     """
+    if isinstance(map, (str, os.PathLike)) and str(map).lower().endswith(SCENE_SUFFIXES):
+        if start is not None or goal is not None:
+            raise InputError(f"map {str(map)!r}: a {Path(map).suffix} file holds its own start and goal; give "
+                             f"neither start nor goal with it")
+        return scene_file_source(map)
     grid = _as_grid(map, threshold, resolution)
     if (start is None) != (goal is None):
         raise InputError(f"give both start and goal, or neither (random queries); got start={start!r}, "

@@ -418,13 +418,19 @@ def test_the_scene_sets_are_an_environment_source_part_by_part_and_a_scene_file_
     assert names <= want and len(names) > 1
     with pytest.raises(InputError, match="part must be"):
         SceneSetSource("bogus")
-    from planners.worlds.rigid3d import WINDOW_SCENE
+    from planners.worlds.rigid3d import WINDOW_SCENE, load_scene
 
     env = gym.make("samplergym:SamplerGym/Planning-v1", map_source=str(WINDOW_SCENE), step_size=0.5)
     obs, _ = env.reset(seed=0)
     assert env.unwrapped.dim == 6 and obs.shape == env.observation_space.shape
     with pytest.raises(InputError, match="source options"):
         gym.make("samplergym:SamplerGym/Planning-v1", map_source="window.scene", source_kwargs={"n_boxes": 3})
+    # map=, the keyword for one map, takes a problem file too, with the start and goal it holds
+    env = gym.make("samplergym:SamplerGym/RRT-RigidBody-v1", map=str(WINDOW_SCENE))
+    again, _ = env.reset(seed=0)
+    assert env.unwrapped.dim == 6 and np.array_equal(env.unwrapped.problem.start, load_scene(WINDOW_SCENE).start)
+    with pytest.raises(InputError, match="holds its own start and goal"):
+        gym.make("samplergym:SamplerGym/RRT-RigidBody-v1", map=str(WINDOW_SCENE), start=(1, 2, 3), goal=(4, 5, 6))
 
 
 def test_rrt_connect_observation_shows_both_trees_and_whose_turn():
