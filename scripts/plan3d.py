@@ -37,7 +37,7 @@ import sys
 import time
 from pathlib import Path
 
-from planners.base.fileio import InputError
+from planners.base.fileio import InputError, check_output_place
 from planners.worlds.rigid3d import SETUPS, load_scene, setup_planner
 
 
@@ -67,8 +67,10 @@ def main(argv=None) -> int:
         return fail(f"--seed must be >= 0, got {args.seed}")
     if args.frames is not None and args.frames < 2:
         return fail(f"--frames must be at least 2, got {args.frames}")
-    if args.out.exists() and not args.out.is_dir():
-        return fail(f"--out {args.out} exists and is not a folder")
+    try:
+        check_output_place(args.out, "--out")  # before the solve: a file there, a figure's name, no write access
+    except InputError as exc:
+        return fail(str(exc))
     mesh = args.scene.suffix.lower() == ".cfg"
     if not mesh and args.setup is None:
         return fail("--setup is required for a scene file (prm or rrt)")

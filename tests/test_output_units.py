@@ -171,6 +171,12 @@ def test_output_places_are_checked_by_name(tmp_path):
     with pytest.raises(InputError, match="MiB free on its disk"):
         check_output_place(tmp_path / "new", "--out", need_bytes=1 << 62)
     assert check_output_place(tmp_path / "new" / "deeper", "--out") == tmp_path / "new" / "deeper"
+    # a folder still to be made under a figure's name is refused; one already there, or a file's place, is not
+    with pytest.raises(InputError, match="--out .*plan.PNG: .*ends in .PNG like a file's; give a folder"):
+        check_output_place(tmp_path / "plan.PNG", "--out")
+    (tmp_path / "old.png").mkdir()
+    assert check_output_place(tmp_path / "old.png", "--out") == tmp_path / "old.png"
+    assert check_output_place(tmp_path / "fig.png", "--figure", folder=False) == tmp_path / "fig.png"
     if os.geteuid() != 0:
         ro = tmp_path / "ro"
         ro.mkdir()

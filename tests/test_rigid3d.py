@@ -625,6 +625,8 @@ def test_plan3d_script(tmp_path):
     assert not (tmp_path / "bad").exists()
     proc = run(WINDOW_SCENE, "--setup", "prm", "--seed", "-1", "--out", tmp_path / "neg")
     assert proc.returncode == 2 and "--seed" in proc.stderr
+    proc = run(WINDOW_SCENE, "--setup", "prm", "--out", tmp_path / "window.png")  # a figure's name for the folder
+    assert proc.returncode == 2 and "give a folder" in proc.stderr and not (tmp_path / "window.png").exists()
 
 
 def test_plan3d_plans_with_any_registry_sampler_and_refuses_an_unknown_one(tmp_path):

@@ -238,15 +238,34 @@ def _name_max(path: Path) -> int:
         return 255
 
 
+#: Endings of figure and animation files: a folder still to be made under such a name is a file name given by mistake.
+FIGURE_SUFFIXES = (".png", ".gif", ".jpg", ".jpeg", ".svg", ".pdf")
+
+
+def refuse_figure_name_for_folder(path: str | os.PathLike, name: str) -> None:
+    """Refuse ``path``, a folder the command names its files in, where it is not there yet and ends like a figure.
+
+    An ``InputError`` naming ``name`` (a flag): ``--out plan.png`` (``FIGURE_SUFFIXES``) would make a folder
+    ``plan.png/``.
+    """
+    path = Path(path)
+    if not path.exists() and path.suffix.lower() in FIGURE_SUFFIXES:
+        raise InputError(f"{name} {path}: the folder the command writes its files into (it names them), but the "
+                         f"name ends in {path.suffix} like a file's; give a folder")
+
+
 def check_output_place(path: str | os.PathLike, name: str, *, folder: bool = True, need_bytes: int = 0) -> Path:
     """Refuse an output place before any work starts: an ``InputError`` naming ``name`` (a flag) and the path.
 
     ``path`` is a folder to create or fill (``folder=True``) or a file to create or replace. Refused:
-    a file where a folder must go (or the reverse), a place below a file, a folder that cannot be written,
+    a file where a folder must go (or the reverse), a folder still to be made under a figure's name
+    (``refuse_figure_name_for_folder``), a place below a file, a folder that cannot be written,
     a name too long for the temporary files written beside it, and fewer than ``need_bytes`` free on its
     disk (where ``shutil.disk_usage`` can tell).
     """
     path = Path(path)
+    if folder:
+        refuse_figure_name_for_folder(path, name)
     room = _name_max(path) - _TEMP_DECORATION
     if len(os.fsencode(path.name)) > room:
         raise InputError(f"{name} {short_repr(str(path))}: the name {short_repr(path.name, 40)} is "
