@@ -514,3 +514,15 @@ def test_the_every_planner_script_prints_each_planners_rows_and_refuses_bad_coun
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == 5 * 5 and {line.split()[2] for line in lines if line.startswith("forest ")} == {
         "uniform", "goal", "route", "route_ablation", "exact_route"}
+
+
+@pytest.mark.parametrize("name", ["route", "route_ablation", "exact_route", "route_lazy", "policy"])
+def test_a_2d_sampler_handed_a_6dof_body_names_the_world_and_the_sampler_that_fits(name):
+    from learning.samplers.registry import make_sampler
+    from planners import PRM, RRT, RRTConnect
+    from planners.worlds.rigid3d import WINDOW_SCENE, load_scene
+
+    problem = load_scene(WINDOW_SCENE)
+    for planner in (RRT, RRTConnect, PRM):
+        with pytest.raises(ValueError, match=r"2-D occupancy maps .*got a RigidBodyWorld; .*rigid_route"):
+            planner(problem, sampler=make_sampler(name), seed=0).solve(max_iterations=5)

@@ -270,7 +270,8 @@ class PolicySampler(SamplerBase):
         # tenth of a bugtrap query
         grid = self.problem.world
         if not isinstance(grid, OccupancyGrid):
-            raise ValueError("PolicySampler plans on OccupancyGrid problems (2-D maps of any size)")
+            raise ValueError(f"PolicySampler plans on 2-D occupancy maps of any size (OccupancyGrid), got a "
+                             f"{type(grid).__name__}; for the 6-DoF body take make_sampler(\"rigid_route\")")
         key = (grid.resolution, grid.shape)
         geometry = self._geometry.get(key)
         if geometry is None:  # shared with the other copies bound from the same sampler

@@ -49,6 +49,14 @@ from planners.worlds.grid import resample_obstacles, resampled_shape
 SHIPPED = SHIPPED_ROUTE
 
 
+def require_grid(who: str, world) -> OccupancyGrid:
+    """``world`` if it is a 2-D occupancy map, else an ``InputError`` saying what it is and which sampler fits it."""
+    if not isinstance(world, OccupancyGrid):
+        raise InputError(f"{who} plans on 2-D occupancy maps (OccupancyGrid), got a {type(world).__name__}; for the "
+                         f"6-DoF body take make_sampler(\"rigid_route\")")
+    return world
+
+
 #: How the shipped encoder is used, chosen on the validation maps (README): its field ranks the tree's
 #: vertices and places the target 3 steps ahead (spread half a step), walking across the field's ripples
 #: up to a tenth of a step deep plus a hundredth of the cost-to-go and ending where the walk leaves the
@@ -529,9 +537,7 @@ class RouteSampler(SamplerBase):
 
         Off an ``OccupancyGrid``, or a map its encoder refuses at this step (too large: ``FieldEncoder.check_size``).
         """
-        grid = problem.world
-        if not isinstance(grid, OccupancyGrid):
-            raise InputError(f"{type(self).__name__} plans on OccupancyGrid problems")
+        grid = require_grid(type(self).__name__, problem.world)
         if self.net is not None:
             self._encoder_factor(grid)  # the size alone: a map is resampled only for a pass
 
@@ -576,9 +582,7 @@ class RouteSampler(SamplerBase):
         return out
 
     def _setup(self) -> None:
-        grid = self.problem.world
-        if not isinstance(grid, OccupancyGrid):
-            raise InputError("RouteSampler plans on OccupancyGrid problems")
+        grid = require_grid("RouteSampler", self.problem.world)
         self.forward_passes, self.reused_seconds = 0, 0.0
         field, ranking = self._fields(grid)
         field[grid.obstacles] = np.inf
@@ -651,9 +655,7 @@ class RouteSampler(SamplerBase):
         array, ``inf`` on obstacles, with the encoder seconds behind it and whether they were the cache's
         (``reused``, as ``reused_seconds``).
         """
-        grid = problem.world
-        if not isinstance(grid, OccupancyGrid):
-            raise InputError("RouteSampler plans on OccupancyGrid problems")
+        grid = require_grid("RouteSampler", problem.world)
         probe = self._copy_with(problem=problem)
         t0 = time.perf_counter()
         field = np.array(probe._fields(grid)[0], dtype=np.float64)

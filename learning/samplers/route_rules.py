@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 import numba as nb
 import numpy as np
 
-from learning.samplers.route import RouteSampler, route_draw
+from learning.samplers.route import RouteSampler, require_grid, route_draw
 from planners import InformedSampler, OccupancyGrid, Problem
 from planners.base.fileio import InputError, short_repr
 from planners.base.samplers import (
@@ -255,8 +255,7 @@ class BidirectionalRouteSampler(SamplerBase):
 
     def _setup(self) -> None:
         p = self.problem
-        if not isinstance(p.world, OccupancyGrid):
-            raise InputError("BidirectionalRouteSampler plans on OccupancyGrid problems")
+        require_grid("BidirectionalRouteSampler", p.world)
         self.to_goal = self.route.bind(p)
         self.to_start = (self.route if self.backward is None else self.backward).bind(reversed_query(p))
         self._start = np.asarray(p.start, dtype=np.float64)
@@ -361,8 +360,7 @@ class CorridorSampler(_CorridorRule):
 
     def _setup(self) -> None:
         p = self.problem
-        if not isinstance(p.world, OccupancyGrid):
-            raise InputError("CorridorSampler plans on OccupancyGrid problems")
+        require_grid("CorridorSampler", p.world)
         to_goal, to_start = self.route.cost_to_go(p), self.route.cost_to_go(reversed_query(p))
         self._stages(to_goal.field, to_start.field)
         self.drawn = 0
