@@ -12,6 +12,8 @@
         --seeds 2 --rules roadmap --rule 'r0={"uniform_ramp": 0}' --rule 'r1k={"uniform_ramp": 1000}' --out FILE
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --part tuning --scenes 8 --seeds 2 \\
         --rules roadmap --rule 'u2500={"uniform_first": 2500}' --rule 'u10000={"uniform_first": 10000}' --out FILE
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --families twist --part tuning --scenes 8 \\
+        --seeds 2 --rules roadmap --rule 'f4={"follow": 4}' --rule 'g4h={"follow": 4, "follow_share": 0.5}' --out FILE
 
 ``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) on box worlds
 and a roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation from the start, every route sample on the
