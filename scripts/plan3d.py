@@ -38,6 +38,7 @@ import time
 from pathlib import Path
 
 from planners.base.fileio import InputError, check_output_place
+from planners.maps.readers import MAP_READERS
 from planners.worlds.rigid3d import SETUPS, load_scene, setup_planner
 
 
@@ -72,6 +73,9 @@ def main(argv=None) -> int:
     except InputError as exc:
         return fail(str(exc))
     mesh = args.scene.suffix.lower() == ".cfg"
+    if args.scene.suffix.lower() in MAP_READERS:
+        return fail(f"{args.scene} is a 2-D map ({args.scene.suffix}); plan it with scripts/plan.py. plan3d.py takes "
+                    "a box .scene or an OMPL.app .cfg")
     if not mesh and args.setup is None:
         return fail("--setup is required for a scene file (prm or rrt)")
     if args.time_limit is not None and not (args.time_limit > 0):

@@ -70,12 +70,15 @@ def test_options_and_no_gif(map_png, tmp_path):
     (["{bad}", "--start", 5, 5, "--goal", 90, 40], "cannot read"),
     (["{map}", "--start", 5, 5, "--goal", 90, 40, "--planner", "obprm", "--sampler", "uniform"], "own sampler"),
     (["{map}", "--start", 5, 5, "--goal", 90, 40, "--out", "{out}.png"], "like a file's; give a folder"),
+    (["{scene}", "--start", 5, 5, "--goal", 90, 40], "is a 6-DoF problem (an OMPL.app .cfg or a box scene)"),
 ])
 def test_bad_input_gives_a_clear_error_and_no_output(map_png, tmp_path, args, message):
     bad = tmp_path / "notes.png"
     bad.write_text("not an image")
     out = tmp_path / "out"
-    args = [str(a).format(map=map_png, bad=bad, out=out) for a in args]
+    from planners.worlds.rigid3d import WINDOW_SCENE
+
+    args = [str(a).format(map=map_png, bad=bad, out=out, scene=WINDOW_SCENE) for a in args]
     p = run(*args, "--out", out, "--headless") if "--out" not in args else run(*args, "--headless")
     assert p.returncode == 2
     assert message in p.stderr, p.stderr

@@ -627,6 +627,9 @@ def test_plan3d_script(tmp_path):
     assert proc.returncode == 2 and "--seed" in proc.stderr
     proc = run(WINDOW_SCENE, "--setup", "prm", "--out", tmp_path / "window.png")  # a figure's name for the folder
     assert proc.returncode == 2 and "give a folder" in proc.stderr and not (tmp_path / "window.png").exists()
+    (tmp_path / "floor.png").write_bytes(b"")  # a 2-D map's name: pointed to plan.py before the file is read
+    proc = run(tmp_path / "floor.png", "--setup", "rrt", "--out", tmp_path / "floor")
+    assert proc.returncode == 2 and "is a 2-D map (.png); plan it with scripts/plan.py" in proc.stderr
 
 
 def test_plan3d_plans_with_any_registry_sampler_and_refuses_an_unknown_one(tmp_path):

@@ -174,6 +174,10 @@ def read_map(path: str | os.PathLike, *, threshold: float = 0.5, resolution: flo
                                 else f"map path {str(path)!r} is not a file")
     suffix = path.suffix.lower()
     reader = MAP_READERS.get(suffix)
+    if suffix in (".cfg", ".scene"):
+        raise InputError(f"map file {str(path)!r}: a {suffix} file is a 6-DoF problem (an OMPL.app .cfg or a box "
+                         f"scene), not a 2-D map; plan it with scripts/plan3d.py, or load it with "
+                         f"planners.worlds.omplapp.load_omplapp or planners.worlds.rigid3d.load_scene")
     if reader is None:
         kinds = ", ".join(dict.fromkeys(_DESCRIPTIONS.values()))
         raise InputError(f"map file {str(path)!r}: unknown kind {suffix or '(no suffix)'!r}; use {kinds}")
