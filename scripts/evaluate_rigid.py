@@ -31,12 +31,12 @@ import json
 import sys
 from pathlib import Path
 
-from planners.base.fileio import InputError, atomic_write_text
+from planners.base.fileio import InputError, atomic_write_text, check_output_place
 from planners.worlds.rigid_scenes import TEST_ONLY_FAMILIES, TRAINING_FAMILIES
 
 
 def main(argv=None) -> int:
-    from learning.evaluation.rigid import PLANNERS, SAMPLERS, evaluate_rigid, format_table, summarize
+    from learning.evaluation.rigid import PLANNERS, SAMPLERS, check_names, evaluate_rigid, format_table, summarize
     from learning.samplers.registry import checked_user_samplers
     from planners.worlds.rigid_scenes import RigidSceneSet
 
@@ -90,11 +90,11 @@ def main(argv=None) -> int:
         return fail(f"--sampler-params is not JSON: {e}")
     if not (isinstance(sampler_params, dict) and all(isinstance(v, dict) for v in sampler_params.values())):
         return fail("--sampler-params must be a JSON object of objects: {\"NAME\": {\"KEY\": VALUE}}")
-    if args.out.exists() and not args.out.is_dir():
-        return fail(f"--out {args.out} exists and is not a folder")
     samplers = args.samplers or list(SAMPLERS)
     try:  # each built once here, so a bad file or spec is refused before any run
+        check_output_place(args.out, "--out")  # a file there, a figure's name, no write access: before the scenes
         users = checked_user_samplers(args.sampler, "--sampler", tuple(samplers))
+        check_names(args.planners, samplers, users)  # and the names before the scenes are made
     except InputError as exc:
         return fail(str(exc))
     if args.mesh and args.part != "test":

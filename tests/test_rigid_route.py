@@ -432,6 +432,13 @@ def test_the_training_script_writes_weights_and_recipe_and_the_comparison_takes_
     assert evaluate_rigid.main(["--first-scene", "-1", "--out", str(tmp_path / "e")]) == 2
     assert evaluate_rigid.main(["--first-scene", "2", "--mesh", "--part", "test", "--out", str(tmp_path / "e")]) == 2
     assert "--first-scene" in capsys.readouterr().err
+    # names and the output place are refused before the scenes are made (nothing printed of them, nothing written)
+    assert evaluate_rigid.main(["--samplers", "nosuch", "--out", str(tmp_path / "e")]) == 2
+    assert evaluate_rigid.main(["--planners", "XX", "--out", str(tmp_path / "e")]) == 2
+    assert evaluate_rigid.main(["--out", str(tmp_path / "e.png")]) == 2
+    out = capsys.readouterr()
+    assert "unknown sampler 'nosuch'" in out.err and "'XX'" in out.err and "give a folder" in out.err
+    assert "scenes" not in out.out and not (tmp_path / "e").exists() and not (tmp_path / "e.png").exists()
     # a part from a later scene on: the runs name those scenes
     assert evaluate_rigid.main(["--families", "slot", "--scenes", "1", "--first-scene", "16", "--planners", "RRT",
                                 "--samplers", "uniform", "--max-iterations", "20", "--out", str(tmp_path / "f")]) == 0
