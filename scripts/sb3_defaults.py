@@ -26,7 +26,7 @@ from learning.sb3_defaults import (
     train_ppo_on,
     tune_batch,
 )
-from planners.base.fileio import InputError, check_flags, check_int_flags
+from planners.base.fileio import InputError, check_flags, check_int_flags, check_output_place
 from planners.maps.generators import FAMILIES
 
 
@@ -56,6 +56,7 @@ def main(argv=None) -> None:
             raise InputError(f"--family: {a.family!r} is not a generated family; choose from {', '.join(FAMILIES)}")
         if a.batch is not None:
             check_int_flags(a, ("batch",))
+        check_output_place(a.out, "--out")  # before any training
 
     check_flags(check)
     out = Path(a.out)

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import shutil
 import sys
 from pathlib import Path
 
@@ -29,7 +28,7 @@ import torch
 from learning.device import pin_cpu_arithmetic
 from learning.models.rigid_orientation import save_orientation_net
 from learning.training.rigid import LABELS, OPEN_TESTS, RigidTrainConfig, train_rigid_orientation
-from planners.base.fileio import InputError, atomic_write_text
+from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, check_output_place
 from planners.worlds.rigid_scenes import TRAINING_FAMILIES
 
 
@@ -68,6 +67,10 @@ def main(argv=None) -> int:
                                   augment=not args.no_augment, seed=args.seed,
                                   label=args.label, window=args.window, open_test=args.open_test,
                                   half=args.half).check()
+        # the output places before the training's minutes: a file where the folder goes, no write access
+        check_output_place(args.out, "--out")
+        if args.export is not None:
+            check_output_place(args.export, "--export", folder=False)
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -80,7 +83,7 @@ def main(argv=None) -> int:
     atomic_write_text(args.out / "rigid_route.json", meta)
     print(f"wrote {weights} ({weights.stat().st_size:,} bytes) and rigid_route.json; {log['seconds']} s")
     if args.export is not None:
-        shutil.copyfile(weights, args.export)
+        atomic_write_bytes(args.export, weights.read_bytes())  # a kill leaves the old file or the new, whole
         atomic_write_text(args.export.with_suffix(".json"), meta)
         print(f"exported to {args.export}")
     return 0

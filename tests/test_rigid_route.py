@@ -610,3 +610,17 @@ def test_the_patch_size_is_part_of_the_recipe_and_reaches_the_model():
         RigidTrainConfig(half=40).check()
     with pytest.raises(InputError, match="half"):
         RigidTrainConfig(half=1).check()
+
+
+def test_the_training_scripts_refuse_an_unusable_output_place_before_training(tmp_path, capsys):
+    from conftest import load_script
+
+    (tmp_path / "file").write_text("x")
+    train_rigid, sb3 = load_script("train_rigid"), load_script("sb3_defaults")
+    assert train_rigid.main(["--out", str(tmp_path / "file" / "run")]) == 2
+    assert train_rigid.main(["--out", str(tmp_path / "run"), "--export", str(tmp_path / "file" / "w.pt")]) == 2
+    with pytest.raises(SystemExit) as done:
+        sb3.main(["--out", str(tmp_path / "file" / "models")])
+    assert done.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("is a file, so nothing can be created below it") == 3 and not (tmp_path / "run").exists()
