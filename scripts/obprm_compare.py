@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from planners.algorithms.obprm import compare_prm_variants
-from planners.base.fileio import atomic_write_text
+from planners.base.fileio import InputError, atomic_write_text, check_output_place
 from planners.tools.benchmark import MAX_ITERATIONS, markdown_table
 
 COLUMNS = ["map", "planner", "runs", "success", "median_samples", "median_candidates", "median_checks",
@@ -37,6 +37,10 @@ def main(argv=None) -> int:
         args.seeds, args.max_iterations = min(args.seeds, 5), min(args.max_iterations, 5000)
     if args.seeds < 1 or args.max_iterations < 1 or args.size < 32 or min(args.gaps) < 1:
         ap.error("--seeds and --max-iterations must be positive, --size >= 32, gaps >= 1")
+    try:
+        check_output_place(args.out, "--out")  # before the runs
+    except InputError as exc:
+        ap.error(str(exc))
     rows, runs = compare_prm_variants(seeds=args.seeds, size=args.size, gaps=args.gaps,
                                       max_iterations=args.max_iterations,
                                       progress=lambda line: print(line, file=sys.stderr, flush=True))

@@ -16,6 +16,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from planners.base.fileio import InputError, check_output_place
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -27,6 +29,10 @@ def main(argv=None) -> int:
                     help="best goal bias per family (from evaluate.py's summary); default 0.2 for all")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
+    try:
+        check_output_place(args.out, "--out")  # before the figures' runs
+    except InputError as exc:
+        ap.error(str(exc))
 
     import time
 
