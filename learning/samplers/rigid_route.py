@@ -355,26 +355,33 @@ class RigidRouteSampler(SamplerBase):
             self._two = self._two or view.goal_tree is not None
             trees = ((0, view.vertices, max), (1, view.goal_tree, min))
             for side, states, best in trees:
-                if states is not None and len(states) > self._seen[side]:
-                    for lo in range(self._seen[side], len(states), 256):  # bounded memory on long routes
-                        first, last = 0, len(self.route)  # the route points a vertex may take: with ``follow``,
-                        if self.follow > 0:  # those within its tree's window
-                            if side == 0:
-                                last = max(1, int(np.searchsorted(self.arc, self._reach[0] + self._span, "right")))
-                            else:
-                                first = min(last - 1, int(np.searchsorted(self.arc, self._reach[1] - self._span)))
-                        new = states[lo:lo + 256, :3]
-                        d2 = ((new[:, None, :] - self.route[None, first:last, :]) ** 2).sum(axis=2)
-                        near = first + d2.argmin(axis=1)
-                        if self.follow > 0:  # and only a vertex within the window's half-width of its point
-                            near = near[d2.min(axis=1) <= self._span ** 2]
-                        if len(near):
-                            self._reach[side] = best(self._reach[side], float(best(self.arc[near])))
-                    self._seen[side] = len(states)
+                if states is None:
+                    continue
+                for lo in range(self._seen[side], len(states), 256):  # bounded memory on long routes
+                    near = self._route_points(side, states[lo:lo + 256, :3])
+                    if len(near):
+                        self._reach[side] = best(self._reach[side], float(best(self.arc[near])))
+                self._seen[side] = max(self._seen[side], len(states))
             gap = self._reach[1] - self._reach[0]
             if gap < self._gap - float(self.problem.world.route_cell):
                 self._gap, self._moved = gap, self._drawn
         self._stalled = self.stall_window > 0 and self._drawn - self._moved >= self.stall_window
+
+    def _route_points(self, side: int, points: np.ndarray) -> np.ndarray:
+        """The route point nearest each of a tree's new vertices ``points`` (``side`` 0: the start tree, 1: the goal's).
+
+        With ``follow``, among the route points within the tree's window only, and only for a vertex within the
+        window's half-width of its point.
+        """
+        first, last = 0, len(self.route)
+        if self.follow > 0:
+            if side == 0:
+                last = max(1, int(np.searchsorted(self.arc, self._reach[0] + self._span, "right")))
+            else:
+                first = min(last - 1, int(np.searchsorted(self.arc, self._reach[1] - self._span)))
+        d2 = ((points[:, None, :] - self.route[None, first:last, :]) ** 2).sum(axis=2)
+        near = first + d2.argmin(axis=1)
+        return near[d2.min(axis=1) <= self._span ** 2] if self.follow > 0 else near
 
     def _draw_routed(self, u: np.ndarray) -> np.ndarray:
         """The samples of the rows ``u`` (one row of uniforms per sample), the route's from the first on."""
