@@ -17,6 +17,7 @@ from planners.base.fileio import InputError, short_repr
 from planners.maps.generators import FAMILIES, TRAIN_SEEDS, generate
 from planners.maps.gridsearch import free_components
 from planners.maps.mapset import PARTS, MapSet, MixedMapSet
+from planners.maps.readers import SCENE_SUFFIXES
 
 MapSource = Callable[[np.random.Generator], Problem]
 
@@ -330,8 +331,6 @@ def scene_file_source(path: str | os.PathLike) -> ProblemListSource:
     return source
 
 
-#: File endings that ``make_source`` reads as a 6-DoF problem rather than a 2-D map.
-SCENE_SUFFIXES = (".cfg", ".scene")
 
 
 def make_source(source: str | MapSource, **kwargs) -> MapSource:

@@ -38,7 +38,7 @@ import time
 from pathlib import Path
 
 from planners import planner_names
-from planners.base.fileio import InputError, refuse_figure_name_for_folder
+from planners.base.fileio import InputError
 from planners.base.registry import planner_class, planner_name_arg
 from planners.maps.mapset import PARTS, MapQuery, MapSet
 from planners.tools.workflow import (
@@ -332,7 +332,6 @@ def main(argv=None) -> int:
     try:
         if args.save_path is not None:
             check_path_file(args.save_path)
-        refuse_figure_name_for_folder(args.out, "--out")
         check_output_dir(args.out)
     except OutputError as exc:
         return fail(str(exc), EXIT_WRITE_FAILED)

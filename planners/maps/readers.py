@@ -134,6 +134,8 @@ Reader = Callable[..., OccupancyGrid]
 
 #: Registered readers by lower-case suffix, and a description of each format for messages.
 MAP_READERS: dict[str, Reader] = {}
+#: File endings of a 6-DoF problem (an OMPL.app ``.cfg``, a box ``.scene``), never a 2-D map.
+SCENE_SUFFIXES = (".cfg", ".scene")
 _DESCRIPTIONS: dict[Reader, str] = {}
 
 
@@ -174,7 +176,7 @@ def read_map(path: str | os.PathLike, *, threshold: float = 0.5, resolution: flo
                                 else f"map path {str(path)!r} is not a file")
     suffix = path.suffix.lower()
     reader = MAP_READERS.get(suffix)
-    if suffix in (".cfg", ".scene"):
+    if suffix in SCENE_SUFFIXES:
         raise InputError(f"map file {str(path)!r}: a {suffix} file is a 6-DoF problem (an OMPL.app .cfg or a box "
                          f"scene), not a 2-D map; plan it with scripts/plan3d.py, or load it with "
                          f"planners.worlds.omplapp.load_omplapp or planners.worlds.rigid3d.load_scene")

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from planners.algorithms.smoothing import smooth as smooth_path
-from planners.base.fileio import InputError, atomic_path, check_int
+from planners.base.fileio import InputError, atomic_path, check_int, refuse_figure_name_for_folder
 from planners.base.planner import Planner, PlannerData, PlanResult, compile_seconds
 from planners.base.problem import Problem
 from planners.base.registry import make_planner, one_step_size, planner_class
@@ -425,8 +425,12 @@ def check_path_file(path: str | os.PathLike) -> Path:
 
 
 def check_output_dir(folder: str | os.PathLike) -> Path:
-    """Raise ``OutputError`` now if files cannot be written into ``folder`` (created later if missing)."""
+    """Raise ``OutputError`` now if files cannot be written into ``folder`` (created later if missing).
+
+    A folder still to be made under a figure's name is an ``InputError`` (``refuse_figure_name_for_folder``).
+    """
     folder = Path(folder)
+    refuse_figure_name_for_folder(folder, "output folder")
     probe = folder
     while not probe.exists():  # the nearest existing ancestor is the one that must be a writable folder
         if probe.parent == probe:
