@@ -267,6 +267,64 @@ def test_follow_draws_the_route_samples_in_windows_about_the_trees_reach(slot_sc
     assert runs[0].solved and runs[0].iterations == runs[1].iterations and np.array_equal(runs[0].path, runs[1].path)
 
 
+@pytest.mark.parametrize("settings", [{}, {"symmetry": "random"}, {"symmetry": "chain_start", "uniform_share": 0.0},
+                                      {"passage_weight": 0.0, "min_confidence": 0.6},
+                                      {"uniform_ramp": 100.0, "goal_share": 0.2}])
+def test_the_compiled_follow_draw_makes_the_numpy_draws_samples(slot_scene, settings):
+    # with follow_share 0 every route sample is drawn along the whole route, as without follow: the compiled draw
+    # (planners.guidance.route_draws) then gives the numpy draw's samples from the same rows, to the last bits of
+    # the logarithm, arcsine and arctangent, which the C library computes there and numpy's vector code here
+    net = make_sampler("rigid_route").net
+    compiled = RigidRouteSampler(net, **settings, follow=2.0, follow_share=0.0).bind(slot_scene)
+    plain = RigidRouteSampler(net, **settings).bind(slot_scene)
+    for seed in range(4):
+        a = compiled.draw(np.random.default_rng(seed), 64, None)
+        b = plain.draw(np.random.default_rng(seed), 64, None)
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    assert compiled._drawn == plain._drawn == 256
+
+
+def test_the_trees_reach_along_the_route_is_the_nearest_route_points_within_the_window():
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from planners.guidance.route_draws import route_reach
+
+    route = np.cumsum(np.r_[[[0.0, 0.0, 0.0]], np.tile([[1.0, 0.0, 0.0]], (9, 1)), np.tile([[0.0, 1.0, 0.0]], (10, 1))],
+                      axis=0)
+    arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(route, axis=0), axis=1))]
+
+    def reference(states, seen, reach, side, span, follow):  # the numpy watch the kernel replaces
+        best = max if side == 0 else min
+        for lo in range(seen, len(states), 256):
+            first, last = 0, len(route)
+            if follow:
+                if side == 0:
+                    last = max(1, int(np.searchsorted(arc, reach + span, "right")))
+                else:
+                    first = min(last - 1, int(np.searchsorted(arc, reach - span)))
+            d2 = ((states[lo:lo + 256, None, :3] - route[None, first:last]) ** 2).sum(axis=2)
+            near = first + d2.argmin(axis=1)
+            if follow:
+                near = near[d2.min(axis=1) <= span ** 2]
+            if len(near):
+                reach = best(reach, float(best(arc[near])))
+        return reach
+
+    @settings(max_examples=60, deadline=None)
+    @given(st.integers(0, 2 ** 32 - 1), st.integers(0, 600), st.sampled_from([0, 1]), st.floats(0.5, 8.0),
+           st.booleans())
+    def check(seed, n, side, span, follow):
+        rng = np.random.default_rng(seed)
+        states = np.c_[rng.uniform(-2, 12, (n, 2)), rng.uniform(-1, 1, (n, 1)), rng.uniform(-3, 3, (n, 3))]
+        seen = int(rng.integers(0, n + 1))
+        reach = 0.0 if side == 0 else float(arc[-1])
+        assert route_reach(states, seen, route, arc, reach, side, span, follow) == \
+            reference(states, seen, reach, side, span, follow)
+
+    check()
+
+
 def test_the_registry_name_plans_with_rrt_connect(slot_scene):
     from learning.evaluation.rigid import run_one
 

@@ -8,7 +8,8 @@ uniform states), about the route pulled to the middle of its passages (``centre_
 voxels), and replaces its uniform angles by the orientation model's
 (``learning.models.rigid_orientation.OrientationNet``). Per query, once: the route, its centring, the
 model's observation at every route point (``planners.guidance.rigid_orientation.route_observation``)
-and its distribution over the six axis-aligned orientation classes there. Per sample, numpy only:
+and its distribution over the six axis-aligned orientation classes there. Per sample, numpy (where the route
+samples follow the trees, ``follow``, one compiled call per draw: ``planners.guidance.route_draws``):
 
 * with probability ``goal_share`` the goal state;
 * else with probability ``route_fraction`` a route sample: its position as the ablation draws it; its orientation,
@@ -51,6 +52,7 @@ from planners.guidance.rigid_orientation import (
     route_observation,
     small_rotations,
 )
+from planners.guidance.route_draws import follow_draw, route_reach
 from planners.guidance.workspace_route import box_muller, centre_route, route_world, voxel_route
 from planners.worlds.mesh import rotation_matrices
 
@@ -191,7 +193,8 @@ class RigidRouteSampler(SamplerBase):
             within its tree's window, and counts only where that point lies within the half-width of it, so a
             tree's reach cannot jump through a wall to a far part of the route. A draw
             then returns at most ``FOLLOW_BATCH`` samples and follows the trees (``stall_window``'s caveat on
-            batches holds). A roadmap planner ignores it.
+            batches holds); it is compiled (``planners.guidance.route_draws``: about 0.04 ms for 64 samples, where
+            numpy's per-call work took 0.2). A roadmap planner ignores it.
         follow_share: With ``follow``, the probability in [0, 1] that a route sample is drawn in the trees' windows;
             the others are drawn along the whole route, as without ``follow``.
         roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and
@@ -319,9 +322,15 @@ class RigidRouteSampler(SamplerBase):
         if len(self.probs) and self.probs.max() < self.min_route_confidence:
             self.sure[:] = False  # the model sees no passage that needs a turn: the ablation's uniform angles
         self.ends = rotation_matrices(np.stack([self.problem.start[3:6], self.problem.goal[3:6]]))
-        if self.symmetry in ("chain", "chain_start") and len(self.probs) == len(self.route) and len(self.route):
-            self.chain = rotation_chain(self.rotations, self.probs.argmax(axis=1), self.ends, self.arc,
-                                        start_only=self.symmetry == "chain_start")
+        # the rotation each route point's samples come nearest among their class's four (not with "random"): the
+        # orientation of the query's end nearer the point, or the chain's at the point
+        self.refs = np.zeros((len(self.route), 3, 3))
+        if self.symmetry == "ends":
+            self.refs = self.ends[nearer_end(self.route, self.problem.start, self.problem.goal)]
+        elif self.symmetry in ("chain", "chain_start") and len(self.probs) == len(self.route) and len(self.route):
+            self.refs = rotation_chain(self.rotations, self.probs.argmax(axis=1), self.ends, self.arc,
+                                       start_only=self.symmetry == "chain_start")
+        self._top = np.nextafter(self.high[:3], -np.inf)  # a position's upper clip: inside the bounds
         # the stall clock (``stall_window``), from the route's first sample: the arc positions the start and goal
         # trees have reached, their vertices seen, the gap's last shrinking, the samples drawn while stalled
         # and the windows the route samples follow (``follow``): half-width in arc length, and whether a goal tree grows
@@ -353,40 +362,25 @@ class RigidRouteSampler(SamplerBase):
         """Update the trees' reach along the route (``stall_window``, ``follow``) from the planner's ``view``."""
         if view is not None and len(self.route) > 1:
             self._two = self._two or view.goal_tree is not None
-            trees = ((0, view.vertices, max), (1, view.goal_tree, min))
-            for side, states, best in trees:
+            for side, states in ((0, view.vertices), (1, view.goal_tree)):
                 if states is None:
                     continue
-                for lo in range(self._seen[side], len(states), 256):  # bounded memory on long routes
-                    near = self._route_points(side, states[lo:lo + 256, :3])
-                    if len(near):
-                        self._reach[side] = best(self._reach[side], float(best(self.arc[near])))
+                if len(states) > self._seen[side]:
+                    self._reach[side] = float(route_reach(states, self._seen[side], self.route, self.arc,
+                                                          float(self._reach[side]), side, float(self._span),
+                                                          self.follow > 0))
                 self._seen[side] = max(self._seen[side], len(states))
             gap = self._reach[1] - self._reach[0]
             if gap < self._gap - float(self.problem.world.route_cell):
                 self._gap, self._moved = gap, self._drawn
         self._stalled = self.stall_window > 0 and self._drawn - self._moved >= self.stall_window
 
-    def _route_points(self, side: int, points: np.ndarray) -> np.ndarray:
-        """The route point nearest each of a tree's new vertices ``points`` (``side`` 0: the start tree, 1: the goal's).
-
-        With ``follow``, among the route points within the tree's window only, and only for a vertex within the
-        window's half-width of its point.
-        """
-        first, last = 0, len(self.route)
-        if self.follow > 0:
-            if side == 0:
-                last = max(1, int(np.searchsorted(self.arc, self._reach[0] + self._span, "right")))
-            else:
-                first = min(last - 1, int(np.searchsorted(self.arc, self._reach[1] - self._span)))
-        d2 = ((points[:, None, :] - self.route[None, first:last, :]) ** 2).sum(axis=2)
-        near = first + d2.argmin(axis=1)
-        return near[d2.min(axis=1) <= self._span ** 2] if self.follow > 0 else near
-
     def _draw_routed(self, u: np.ndarray) -> np.ndarray:
         """The samples of the rows ``u`` (one row of uniforms per sample), the route's from the first on."""
         if self.route is None:
             self._route_setup(route_world(self.problem.world, "RigidRouteSampler"))
+        if self.follow > 0:
+            return self._draw_following(u)
         n, d = len(u), self.problem.dim
         pos_z = box_muller(u[:, 2 + d:6 + d])[:, :3]
         cls_u, sym_u, rot_z = u[:, 7 + d], u[:, 8 + d], box_muller(u[:, 9 + d:13 + d])[:, :3]
@@ -394,11 +388,11 @@ class RigidRouteSampler(SamplerBase):
         if self.arc[-1] > 0:
             on = (u[:, 0] >= self.goal_share) & (u[:, 0] < self.goal_share + (1.0 - self.goal_share)
                                                  * self.route_fraction)
-            s = self._follow_arc(u[on, 1]) if self.follow > 0 else u[on, 1] * self.warc[-1]
+            s = u[on, 1] * self.warc[-1]
             i = np.clip(np.searchsorted(self.warc, s, side="right") - 1, 0, len(self.route) - 2)
             t = (s - self.warc[i]) / np.maximum(self.warc[i + 1] - self.warc[i], 1e-300)
             p = self.route[i] + t[:, None] * (self.route[i + 1] - self.route[i]) + self.sd * pos_z[on]
-            pts[on, :3] = np.clip(p, self.low[:3], np.nextafter(self.high[:3], -np.inf))
+            pts[on, :3] = np.clip(p, self.low[:3], self._top)
             near = i + (t >= 0.5)
             share = self.uniform_share
             if self.uniform_ramp > 0:
@@ -414,9 +408,7 @@ class RigidRouteSampler(SamplerBase):
                 sym = np.minimum((sym_u[learned] * 4).astype(np.int64), 3)
                 if self.symmetry != "random":  # the rotation nearest a reference's (largest trace): the nearer
                     # end's orientation, or the chain's at the route point
-                    ref = (self.ends[nearer_end(self.route[near], self.problem.start, self.problem.goal)]
-                           if self.symmetry == "ends" else self.chain[near])
-                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], ref).argmax(axis=1)
+                    sym = np.einsum("nsij,nij->ns", self.rotations[cls], self.refs[near]).argmax(axis=1)
                 base = self.rotations[cls, sym]
                 turn = small_rotations(self.angle_noise * rot_z[learned])
                 pts[learned, 3:] = euler_from_matrices(turn @ base)
@@ -426,25 +418,32 @@ class RigidRouteSampler(SamplerBase):
             self._clock += n
         return pts
 
-    def _follow_arc(self, v: np.ndarray) -> np.ndarray:
-        """Weighted arc positions (``warc``) for uniforms ``v``, within the trees' windows (``follow``).
-
-        ``v`` below ``follow_share`` falls in the windows (with a goal tree, its lower half in the start tree's and
-        its upper half in the goal tree's), the rest anywhere along the route.
+    def _draw_following(self, u: np.ndarray) -> np.ndarray:
+        """``_draw_routed`` with ``follow``, compiled (``planners.guidance.route_draws.follow_draw``): the route
+        samples drawn within the trees' windows, ``follow_share`` of them (with a goal tree, half about each tree's
+        reach), the rest along the whole route.
         """
-        p = self.follow_share
-        whole = v >= p
-        out = (v - p) / max(1.0 - p, 1e-300) * self.warc[-1]
-        v = v / max(p, 1e-300)
+        n, d = len(u), self.problem.dim
         total = float(self.arc[-1])
-        reach = np.full(len(v), self._reach[0])
-        if self._two:
-            goal = v >= 0.5
-            reach[goal] = self._reach[1]
-            v = np.where(goal, 2.0 * v - 1.0, 2.0 * v)
-        a = np.interp(np.clip(reach - self._span, 0.0, total), self.arc, self.warc)
-        b = np.interp(np.clip(reach + self._span, 0.0, total), self.arc, self.warc)
-        return np.where(whole, out, a + v * (b - a))
+        reach = np.array([self._reach[0], self._reach[1]])
+        ends = np.clip(np.stack([reach - self._span, reach + self._span], axis=1), 0.0, total)
+        windows = np.interp(ends, self.arc, self.warc)  # (tree, low/high) in weighted arc length
+        k0, k_step = 0, False
+        if self.uniform_ramp > 0:
+            if self.stall_window > 0:  # the stall clock: it runs only while the trees stand still
+                k0, k_step = self._clock, self._stalled
+            else:
+                k0, k_step = self._drawn - self._first, True  # counted from the route's first sample
+        pts = np.empty((n, d))
+        follow_draw(u, pts, self.low, self.high, self._top, np.asarray(self.problem.goal, dtype=np.float64),
+                    float(self.goal_share), float(self.route_fraction), self.route, self.warc, windows, self._two,
+                    float(self.follow_share), float(self.sd), float(self.uniform_share), float(self.uniform_ramp),
+                    float(k0), bool(k_step), self.sure, self.cdf, self.rotations, self.refs,
+                    self.symmetry != "random", float(self.angle_noise))
+        self._drawn += n
+        if self._stalled:
+            self._clock += n
+        return pts
 
     def __repr__(self) -> str:
         sd = "the world's" if self.spread is None else f"{self.spread:g}"
