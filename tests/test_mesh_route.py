@@ -134,7 +134,7 @@ def test_on_a_mesh_world_every_planner_takes_the_roadmaps_rule_and_a_users_setti
     for name in ("RRT", "RRTConnect", "PRM"):
         bound = make_planner(name, problem, seed=0, sampler=make_sampler("rigid_route")).sampler
         assert all(getattr(bound, k) == v for k, v in SHIPPED_RIGID_ROADMAP.items() if k != "uniform_ramp"), name
-        assert bound.chain.shape == (len(bound.route), 3, 3)
+        assert bound.refs.shape == (len(bound.route), 3, 3)
         # the trees turn to uniform angles as a query goes on; a roadmap keeps every sample and never does
         assert bound.uniform_ramp == (0.0 if name == "PRM" else SHIPPED_RIGID_ROADMAP["uniform_ramp"]), name
     # a box world: the trees keep their own rule

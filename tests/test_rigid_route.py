@@ -508,7 +508,7 @@ def test_a_passage_weight_crowds_route_positions_where_the_route_is_tight_and_ze
     from planners.worlds.rigid_scenes import rigid_scene
 
     problem = rigid_scene("slot", 200_000)
-    kw = {"route_fraction": 1.0, "goal_share": 0.0}
+    kw = {"route_fraction": 1.0, "goal_share": 0.0, "follow": 0.0}  # along the whole route
     plain = make_sampler("rigid_route", passage_weight=0.0, **kw).bind(problem)
     tight = make_sampler("rigid_route", passage_weight=16.0, **kw).bind(problem)
     shipped = make_sampler("rigid_route", **kw).bind(problem)  # the trees' default on a box world: the same weight
@@ -529,7 +529,7 @@ def test_a_passage_weight_crowds_route_positions_where_the_route_is_tight_and_ze
     p = plain.draw(np.random.default_rng(3), 2000, None)[:, 0]
     assert np.mean((q > wall[0] - 5) & (q < wall[1] + 5)) > np.mean((p > wall[0] - 5) & (p < wall[1] + 5))
     # the ablation computes the same occupancy without a model, so its positions crowd the same way
-    abl = make_sampler("rigid_route_ablation", passage_weight=16.0).bind(problem)
+    abl = make_sampler("rigid_route_ablation", passage_weight=16.0, follow=0.0).bind(problem)
     assert abl.net is None and np.allclose(abl.warc, tight.warc)
     with pytest.raises(InputError, match="passage_weight"):
         make_sampler("rigid_route", passage_weight=-1.0)

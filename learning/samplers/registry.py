@@ -155,17 +155,17 @@ def _rigid_route(uniform_share: float | None = None, angle_noise: float | None =
 
 
 def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75, centre: int | None = None,
-                          passage_weight: float | None = None) -> Sampler:
+                          passage_weight: float | None = None, follow: float | None = None) -> Sampler:
     from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS, RigidRouteSampler
 
-    # the learned sampler's route positions without its model: the trees take the trees' passage weight and a roadmap
-    # (and every planner on a mesh world) the roadmaps', as ``rigid_route`` does, unless the user gives one
+    # the learned sampler's route positions without its model: the trees take the trees' passage weight and windows
+    # that follow them, and a roadmap (and every planner on a mesh world) the roadmaps', as ``rigid_route`` does,
+    # unless the user gives them
+    given = {"passage_weight": passage_weight, "follow": follow}
     return RigidRouteSampler(None, route_fraction=route_fraction, uniform_share=1.0, goal_share=goal_share,
                              centre=SHIPPED_RIGID_SETTINGS.get("centre", 0) if centre is None else centre,
-                             passage_weight=SHIPPED_RIGID_SETTINGS["passage_weight"] if passage_weight is None
-                             else passage_weight,
-                             roadmap=None if passage_weight is not None
-                             else {"passage_weight": SHIPPED_RIGID_ROADMAP["passage_weight"]})
+                             **{k: SHIPPED_RIGID_SETTINGS[k] if v is None else v for k, v in given.items()},
+                             roadmap={k: SHIPPED_RIGID_ROADMAP[k] for k, v in given.items() if v is None} or None)
 
 
 def _rigid_expert(attempts: int = 4, budget: int = 100_000, uniform_share: float = 0.1, goal_share: float = 0.05,

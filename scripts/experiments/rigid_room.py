@@ -58,17 +58,18 @@ class ExpertPositions(RigidExpertSampler):
 class EndAngles(SamplerBase):
     """The ablation's positions, turned to the axis-aligned rotation nearest the nearer end's: no solution, no model."""
 
-    def __init__(self, uniform_share: float = 0.1, angle_noise: float = 0.1) -> None:
-        self.uniform_share, self.angle_noise = float(uniform_share), float(angle_noise)
+    def __init__(self, uniform_share: float = 0.1, angle_noise: float = 0.1, follow: float = 0.0) -> None:
+        self.uniform_share, self.angle_noise, self.follow = float(uniform_share), float(angle_noise), float(follow)
 
     def _setup(self) -> None:
-        self.positions = make_sampler("rigid_route_ablation").bind(self.problem)
+        self.positions = make_sampler("rigid_route_ablation", follow=self.follow).bind(self.problem)
         ends = rotation_matrices(np.stack([self.problem.start[3:], self.problem.goal[3:]]))
         cls, sym = nearest_class(ends)
         self.targets = class_rotations()[cls, sym]
 
     def draw(self, rng, n, view):
         pts = self.positions.draw(rng, n, view)
+        n = len(pts)  # a draw that follows the trees returns fewer
         u = rng.random((n, 4))
         turn = ~np.all(pts == self.problem.goal, axis=1) & (u[:, 0] >= self.uniform_share)
         if turn.any():
@@ -100,12 +101,12 @@ class ExpertAngles(SamplerBase):
     """
 
     def __init__(self, uniform_share: float = 0.1, angle_noise: float = 0.1, snap: bool = False,
-                 symmetry: str = "solution") -> None:
+                 symmetry: str = "solution", follow: float = 0.0) -> None:
         self.uniform_share, self.angle_noise, self.snap = float(uniform_share), float(angle_noise), bool(snap)
-        self.symmetry = symmetry
+        self.symmetry, self.follow = symmetry, float(follow)
 
     def _setup(self) -> None:
-        self.positions = make_sampler("rigid_route_ablation").bind(self.problem)
+        self.positions = make_sampler("rigid_route_ablation", follow=self.follow).bind(self.problem)
         self.expert = RigidExpertSampler().bind(self.problem)
         if self.symmetry in ("chain", "chain from the start") and self.expert.states is not None:
             self.route, self.chain = self.positions.route, chain_rotations(
@@ -113,6 +114,7 @@ class ExpertAngles(SamplerBase):
 
     def draw(self, rng, n, view):
         pts = self.positions.draw(rng, n, view)
+        n = len(pts)  # a draw that follows the trees returns fewer
         states = self.expert.states
         if states is None:
             return pts
@@ -154,22 +156,30 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="+", help="run only these rows (sampler names as printed)")
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), choices=TRAINING_FAMILIES,
                     help="scene families (default every training family)")
+    ap.add_argument("--follow", type=float, default=0.0, metavar="F",
+                    help="the route samples of the ablation's positions (and of rigid_route) in windows of F body "
+                         "radii about the trees' reach (rigid_route's follow); default 0: along the whole route, as "
+                         "the runs the docs quote drew them")
     args = ap.parse_args(argv)
     if args.scenes < 1 or args.seeds < 1:
         ap.error("--scenes and --seeds must be at least 1")
-    samplers = {"rigid_route_ablation": lambda: make_sampler("rigid_route_ablation"),
+    if not args.follow >= 0:
+        ap.error(f"--follow must be at least 0, got {args.follow:g}")
+    f = args.follow
+    samplers = {"rigid_route_ablation": lambda: make_sampler("rigid_route_ablation", follow=f),
                 "expert positions, uniform angles": ExpertPositions,
-                "route positions, expert angles": ExpertAngles,
-                "route positions, expert angles snapped to a class": lambda: ExpertAngles(snap=True),
-                "the same, the class's rotation at random": lambda: ExpertAngles(snap=True, symmetry="random"),
-                "the same, the class's rotation nearest the nearer end's": lambda: ExpertAngles(snap=True,
-                                                                                                  symmetry="ends"),
-                "the same, the class's rotation chained from the nearer end": lambda: ExpertAngles(snap=True,
-                                                                                                    symmetry="chain"),
+                "route positions, expert angles": lambda: ExpertAngles(follow=f),
+                "route positions, expert angles snapped to a class": lambda: ExpertAngles(snap=True, follow=f),
+                "the same, the class's rotation at random": lambda: ExpertAngles(snap=True, symmetry="random",
+                                                                                  follow=f),
+                "the same, the class's rotation nearest the nearer end's": lambda: ExpertAngles(
+                    snap=True, symmetry="ends", follow=f),
+                "the same, the class's rotation chained from the nearer end": lambda: ExpertAngles(
+                    snap=True, symmetry="chain", follow=f),
                 "the same, the class's rotation chained from the start": lambda: ExpertAngles(
-                    snap=True, symmetry="chain from the start"),
-                "route positions, the nearer end's axis-aligned rotation": EndAngles,
-                "rigid_route": lambda: make_sampler("rigid_route"),
+                    snap=True, symmetry="chain from the start", follow=f),
+                "route positions, the nearer end's axis-aligned rotation": lambda: EndAngles(follow=f),
+                "rigid_route": lambda: make_sampler("rigid_route", follow=f),
                 "rigid_expert": RigidExpertSampler}
     scenes = RigidSceneSet(tuple(args.families), (), {args.part: args.scenes})
     if args.only:
