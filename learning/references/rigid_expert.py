@@ -59,7 +59,8 @@ def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000) 
     """A solution of ``problem`` by long runs, densified: ``(states or None, seconds, iterations run)``.
 
     RRT-Connect at the seed set-up's step (0.01 of the workspace's longest side) on the ``cossin`` metric, with
-    the centred workspace route and uniform angles as its sampler (``rigid_route_ablation``), seeds
+    the centred workspace route and uniform angles as its sampler (``rigid_route_ablation`` drawing along the whole
+    route, ``follow`` 0: the runs the shipped orientation model's labels came from), seeds
     ``REFERENCE_SEEDS`` in turn until one solves within ``budget`` iterations; the path is shortened
     (``smooth``) and densified to half a step between states.
     """
@@ -72,7 +73,7 @@ def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000) 
     p = problem.with_query(problem.start, problem.goal, metric="cossin")
     t0, ran = time.perf_counter(), 0
     for k, seed in enumerate(REFERENCE_SEEDS[:attempts]):
-        result = RRTConnect(p, step_size=step, sampler=make_sampler("rigid_route_ablation"),
+        result = RRTConnect(p, step_size=step, sampler=make_sampler("rigid_route_ablation", follow=0.0),
                             seed=seed).solve(max_iterations=budget)
         ran += int(result.iterations)
         if result.solved:
