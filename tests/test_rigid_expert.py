@@ -78,3 +78,38 @@ def test_it_is_a_reference_not_a_competitor_and_refuses_what_it_cannot_plan(slot
         RigidExpertSampler(attempts=0)
     with pytest.raises(InputError, match="at most 16"):
         RigidExpertSampler(attempts=17)
+
+
+def test_where_rigid_route_follows_the_trees_the_expert_follows_them_along_its_solution(slot_scene):
+    from types import SimpleNamespace
+
+    from learning.samplers.rigid_route import SHIPPED_RIGID_SETTINGS
+
+    kw = dict(uniform_share=0.0, goal_share=0.0, angle_noise=0.0, spread=0.0)
+    s = RigidExpertSampler(**kw).bind(slot_scene)  # a box world's trees: rigid_route's follow
+    assert s.follow == SHIPPED_RIGID_SETTINGS["follow"] > 0 and "follow=" in repr(s)
+    span = s.follow * slot_scene.world.radius
+    arc = s._arc
+
+    def arcs(q):  # each sample's arc position along the solution: its state's
+        return arc[np.abs(q[:, None, :] - s.states[None]).max(axis=2).argmin(axis=1)]
+
+    q = s.draw(np.random.default_rng(3), 500, None)
+    assert len(q) == 64 and arcs(q).max() <= span + 1e-9  # about the start, before any tree is seen
+    # a start tree at the solution's middle, reached in steps, and a goal tree: half about each tree's reach
+    mid = int(np.searchsorted(arc, arc[-1] / 2))
+    steps = [s.states[int(np.searchsorted(arc, x))] for x in np.arange(0.5, arc[mid], 0.5 * span)]
+    for k in range(1, len(steps) + 1):
+        s.draw(np.random.default_rng(k), 64, SimpleNamespace(vertices=np.array(steps[:k]), goal_tree=None))
+    assert s._reach[0] >= arc[mid] - span
+    view = SimpleNamespace(vertices=np.array(steps), goal_tree=slot_scene.goal[None])
+    a = arcs(s.draw(np.random.default_rng(9), 64, view))
+    near_start, near_goal = np.abs(a - s._reach[0]) <= span + 1e-9, a >= arc[-1] - span - 1e-9
+    assert (near_start | near_goal).all() and near_start.any() and near_goal.any()
+    # 0 draws along the whole solution, as a roadmap does whatever it is given
+    whole = RigidExpertSampler(**kw, follow=0.0).bind(slot_scene)
+    assert arcs(whole.draw(np.random.default_rng(3), 500, None)).max() > arc[-1] / 2
+    assert RigidExpertSampler(**kw).for_planner("roadmap").follow == 0.0
+    assert make_sampler("rigid_expert", follow=4).follow == 4.0
+    with pytest.raises(InputError, match="follow"):
+        RigidExpertSampler(follow=-1.0)

@@ -11,6 +11,10 @@ Per sample: the goal with probability ``goal_share``; else with probability ``1 
 solution (uniform in its arc length, the planner's own interpolation between its states) with Gaussian noise of
 the world's ``route_spread`` on the position and a random rotation of about ``angle_noise`` radians per axis; else
 a uniform state. Where the long runs find no solution, every sample is uniform and ``solved_reference`` is False.
+Where ``rigid_route``'s samples follow the trees (``follow``: a box world's trees), so do the expert's: its states
+are drawn within ``follow`` body radii of the solution's arc length (its positions') about the start tree's greatest
+arc position reached along it, and with RRT-Connect half of them about the goal tree's least, so that it bounds the
+learned sampler's room where the samples go and when.
 
 Its long runs are kept per query (``SOLUTIONS``, keyed by the world's content and the query): later binds of the
 same query, in the same process, take them from there. The time a run of it reports includes them at the first
@@ -27,8 +31,9 @@ import numpy as np
 
 from planners.base.fileio import InputError, check_int, check_number
 from planners.base.problem import Problem
-from planners.base.samplers import SamplerBase
+from planners.base.samplers import FAMILY_ROADMAP, SamplerBase
 from planners.guidance.rigid_orientation import euler_from_matrices, small_rotations, wrap_angles
+from planners.guidance.route_draws import route_reach
 from planners.guidance.workspace_route import box_muller
 from planners.worlds.mesh import rotation_matrices
 from planners.worlds.rigid3d import RRT_SETUP, densify
@@ -37,6 +42,8 @@ from planners.worlds.rigid3d import RRT_SETUP, densify
 REFERENCE_SEEDS = tuple(7919 + k for k in range(16))
 #: Solutions kept per process, most recent first out.
 KEPT_SOLUTIONS = 64
+#: Most samples one draw returns where the draws follow the trees (``follow``), as ``rigid_route``'s.
+FOLLOW_BATCH = 64
 #: query key -> (dense states of the solution or None, seconds its long runs took, iterations they ran).
 SOLUTIONS: OrderedDict[str, tuple[np.ndarray | None, float, int]] = OrderedDict()
 
@@ -93,10 +100,14 @@ class RigidExpertSampler(SamplerBase):
         angle_noise: Standard deviation, radians, of each component of the rotation vector turning a solution's
             orientation.
         spread: Standard deviation of the position noise; None: the world's ``route_spread``.
+        follow: Half-width, in body radii, of the window of the solution's arc length its states are drawn in,
+            about the trees' reach along it (``rigid_route``'s ``follow``; 0: the whole solution; None: as
+            ``rigid_route`` on the world, a box world's trees 2, a mesh world's 0). A roadmap ignores it.
     """
 
     def __init__(self, attempts: int = 4, budget: int = 100_000, uniform_share: float = 0.1,
-                 goal_share: float = 0.05, angle_noise: float = 0.1, spread: float | None = None) -> None:
+                 goal_share: float = 0.05, angle_noise: float = 0.1, spread: float | None = None,
+                 follow: float | None = None) -> None:
         who = "RigidExpertSampler"
         self.attempts = check_int(attempts, f"{who}: attempts", low=1)
         if self.attempts > len(REFERENCE_SEEDS):
@@ -106,6 +117,16 @@ class RigidExpertSampler(SamplerBase):
         self.goal_share = float(check_number(who, "goal_share", goal_share, low=0, high=1))
         self.angle_noise = float(check_number(who, "angle_noise", angle_noise, low=0))
         self.spread = None if spread is None else float(check_number(who, "spread", spread, low=0))
+        self.follow = None if follow is None else float(check_number(who, "follow", follow, low=0))
+
+    def for_planner(self, family: str) -> SamplerBase:
+        """A roadmap keeps every sample: it draws along the whole solution (``follow`` 0); the trees as given."""
+        if family != FAMILY_ROADMAP or self.follow == 0.0:
+            return self
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__)
+        out.follow = 0.0
+        return out
 
     def _setup(self) -> None:
         world = self.problem.world
@@ -121,11 +142,26 @@ class RigidExpertSampler(SamplerBase):
         self.states, self.reference_seconds, self.reference_iterations = SOLUTIONS[key]
         self.solved_reference = self.states is not None
         self.sd = world.route_spread if self.spread is None else self.spread
+        if self.follow is None:  # as rigid_route's trees on this world
+            from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS
+
+            self.follow = (SHIPPED_RIGID_SETTINGS if hasattr(world, "boxes") else SHIPPED_RIGID_ROADMAP)["follow"]
+        # the trees' reach along the solution's positions (``follow``): arc positions, vertices seen, a goal tree
+        pos = np.zeros((0, 3)) if self.states is None else np.ascontiguousarray(self.states[:, :3])
+        self._pos = pos
+        self._arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pos, axis=0), axis=1))]) \
+            if len(pos) else np.zeros(1)
+        self._reach, self._seen, self._two = [0.0, float(self._arc[-1])], [0, 0], False
+        self._span = self.follow * float(world.radius)
 
     def draw(self, rng, n, view):
         # one row of uniforms per sample, whatever its kind: a coin, a place on the solution, a uniform state,
         # two Box-Muller pairs for the position and two for the rotation
         d = self.problem.dim
+        following = self.follow > 0 and self.states is not None and len(self.states) > 1
+        if following:
+            n = min(n, FOLLOW_BATCH)
+            self._watch(view)
         u = rng.random((n, 2 + d + 8))
         pts = self._uniform(u[:, 2:2 + d])
         if self.states is not None:
@@ -133,7 +169,8 @@ class RigidExpertSampler(SamplerBase):
                                                    * (1.0 - self.uniform_share))
             m = int(along.sum())
             if m:
-                idx = np.minimum((u[along, 1] * len(self.states)).astype(np.int64), len(self.states) - 1)
+                idx = (self._window_states(u[along, 1]) if following else
+                       np.minimum((u[along, 1] * len(self.states)).astype(np.int64), len(self.states) - 1))
                 base = self.states[idx]
                 z = box_muller(u[along, 2 + d:2 + d + 8])
                 pos = base[:, :3] + self.sd * z[:, :3]
@@ -143,11 +180,35 @@ class RigidExpertSampler(SamplerBase):
         pts[u[:, 0] < self.goal_share] = self.problem.goal
         return pts
 
+    def _watch(self, view) -> None:
+        """The trees' reach along the solution's positions from the planner's ``view`` (``follow``)."""
+        if view is None:
+            return
+        self._two = self._two or view.goal_tree is not None
+        for side, states in ((0, view.vertices), (1, view.goal_tree)):
+            if states is not None and len(states) > self._seen[side]:
+                self._reach[side] = float(route_reach(states, self._seen[side], self._pos, self._arc,
+                                                      float(self._reach[side]), side, float(self._span), True))
+                self._seen[side] = len(states)
+
+    def _window_states(self, v: np.ndarray) -> np.ndarray:
+        """Indices of solution states for uniforms ``v``: uniform among those within the trees' windows."""
+        reach = np.full(len(v), self._reach[0])
+        if self._two:  # half about the goal tree's reach
+            goal = v >= 0.5
+            reach[goal] = self._reach[1]
+            v = np.where(goal, 2.0 * v - 1.0, 2.0 * v)
+        last = len(self.states) - 1
+        lo = np.minimum(np.searchsorted(self._arc, reach - self._span, side="left"), last)
+        hi = np.maximum(np.searchsorted(self._arc, reach + self._span, side="right"), lo + 1)
+        return np.minimum(lo + (v * (hi - lo)).astype(np.int64), hi - 1)
+
     def __repr__(self) -> str:
         sd = "the world's" if self.spread is None else f"{self.spread:g}"
+        follow = "" if self.follow is None else f", follow={self.follow:g}"
         return (f"RigidExpertSampler(attempts={self.attempts}, budget={self.budget}, "
                 f"uniform_share={self.uniform_share:g}, goal_share={self.goal_share:g}, "
-                f"angle_noise={self.angle_noise:g}, spread={sd})")
+                f"angle_noise={self.angle_noise:g}, spread={sd}{follow})")
 
 
 def nearest_cover(angles: np.ndarray, near: np.ndarray) -> np.ndarray:

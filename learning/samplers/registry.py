@@ -169,10 +169,10 @@ def _rigid_route_ablation(goal_share: float = 0.05, route_fraction: float = 0.75
 
 
 def _rigid_expert(attempts: int = 4, budget: int = 100_000, uniform_share: float = 0.1, goal_share: float = 0.05,
-                  angle_noise: float = 0.1) -> Sampler:
+                  angle_noise: float = 0.1, follow: float | None = None) -> Sampler:
     from learning.references.rigid_expert import RigidExpertSampler
 
-    return RigidExpertSampler(attempts, budget, uniform_share, goal_share, angle_noise)
+    return RigidExpertSampler(attempts, budget, uniform_share, goal_share, angle_noise, follow=follow)
 
 
 #: name -> (factory, one line for help texts).
