@@ -48,8 +48,9 @@ from planners.maps.generators import TUNING_SEED0, VALIDATION_SEED0
 
 #: The rules compared: sampler settings handed to ``make_sampler("rigid_route", ...)`` (None: no sampler). The trees'
 #: rule is given whole: settings a user gives hold on every world, where ``make_sampler("rigid_route")`` alone gives
-#: a tree on a mesh world the roadmaps' rule.
-RULES = {"uniform": None, "trees": {k: SHIPPED_RIGID_SETTINGS[k] for k in ROADMAP_SETTINGS},
+#: a tree on a mesh world the roadmaps' rule. It draws along the whole route (``follow`` 0), as the runs the docs quote
+#: did, whatever a box world's trees take (``--rule`` asks ``follow`` of meshes).
+RULES = {"uniform": None, "trees": {**{k: SHIPPED_RIGID_SETTINGS[k] for k in ROADMAP_SETTINGS}, "follow": 0.0},
          "roadmap": dict(SHIPPED_RIGID_ROADMAP)}
 _PROBLEMS: dict = {}
 
