@@ -49,6 +49,7 @@ class ExpertPositions(RigidExpertSampler):
 
     def draw(self, rng, n, view):
         pts = super().draw(rng, n, view)
+        n = len(pts)  # a draw that follows the trees returns fewer
         goal = np.all(pts == self.problem.goal, axis=1)
         angles = self._uniform(rng.random((n, self.problem.dim)))[:, 3:]
         pts[~goal, 3:] = angles[~goal]
@@ -157,9 +158,9 @@ def main(argv=None) -> int:
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), choices=TRAINING_FAMILIES,
                     help="scene families (default every training family)")
     ap.add_argument("--follow", type=float, default=0.0, metavar="F",
-                    help="the route samples of the ablation's positions (and of rigid_route) in windows of F body "
-                         "radii about the trees' reach (rigid_route's follow); default 0: along the whole route, as "
-                         "the runs the docs quote drew them")
+                    help="the route samples of the ablation's positions (and of rigid_route, and the expert's along "
+                         "its solution) in windows of F body radii about the trees' reach (rigid_route's follow); "
+                         "default 0: along the whole route, as the runs the docs quote drew them")
     args = ap.parse_args(argv)
     if args.scenes < 1 or args.seeds < 1:
         ap.error("--scenes and --seeds must be at least 1")
@@ -167,7 +168,7 @@ def main(argv=None) -> int:
         ap.error(f"--follow must be at least 0, got {args.follow:g}")
     f = args.follow
     samplers = {"rigid_route_ablation": lambda: make_sampler("rigid_route_ablation", follow=f),
-                "expert positions, uniform angles": ExpertPositions,
+                "expert positions, uniform angles": lambda: ExpertPositions(follow=f),
                 "route positions, expert angles": lambda: ExpertAngles(follow=f),
                 "route positions, expert angles snapped to a class": lambda: ExpertAngles(snap=True, follow=f),
                 "the same, the class's rotation at random": lambda: ExpertAngles(snap=True, symmetry="random",
@@ -180,7 +181,7 @@ def main(argv=None) -> int:
                     snap=True, symmetry="chain from the start", follow=f),
                 "route positions, the nearer end's axis-aligned rotation": lambda: EndAngles(follow=f),
                 "rigid_route": lambda: make_sampler("rigid_route", follow=f),
-                "rigid_expert": RigidExpertSampler}
+                "rigid_expert": lambda: RigidExpertSampler(follow=f)}
     scenes = RigidSceneSet(tuple(args.families), (), {args.part: args.scenes})
     if args.only:
         unknown = sorted(set(args.only) - set(samplers))
