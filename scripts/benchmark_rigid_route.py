@@ -5,7 +5,8 @@
     python scripts/benchmark_rigid_route.py --omplapp DIR             # OMPL.app's problems instead (mesh worlds)
 
 ``rigid_route`` does this work once per query, when a planner binds it; a solved run's time includes it. Prints
-per family the median ms of each piece and of the whole bind of ``rigid_route`` and ``rigid_route_ablation``
+per family the median ms of each piece and of the whole bind of ``rigid_route`` and ``rigid_route_ablation``, and of
+one draw of its samples (64 that follow the trees, compiled; 64 and 1,024 along the whole route, numpy)
 (``learning.evaluation.rigid_speed.setup_times``: compilation left out, one torch thread); with ``--omplapp DIR``
 (or ``$SAMPLERGYM_OMPLAPP_DIR`` with ``--omplapp`` alone) the same per OMPL.app problem (``--problems``, default
 every ``.cfg`` there; one that does not load is listed with the reason). Wall-clock figures: run it on a quiet
@@ -55,11 +56,16 @@ def main(argv=None) -> int:
                                args.repeats)
             med = {k: float(np.median([r[k] for r in rows])) for k in (*PIECES, "boxes", "route points")}
             print(f"| {family} | {len(rows)} | {med['boxes']:.0f} | {med['route points']:.0f} | "
-                  + " | ".join(f"{med[p]:.1f}" for p in PIECES) + " |", flush=True)
+                  + " | ".join(_fmt(p, med[p]) for p in PIECES) + " |", flush=True)
     except InputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0
+
+
+def _fmt(piece: str, ms: float) -> str:
+    """A piece's ms: a draw's to hundredths (tens of microseconds), the rest to tenths."""
+    return f"{ms:.2f}" if piece.startswith("draw") else f"{ms:.1f}"
 
 
 def _omplapp(args, pieces, setup_times) -> int:
@@ -92,7 +98,7 @@ def _omplapp(args, pieces, setup_times) -> int:
             print(f"| {name} | no workspace route |", flush=True)
             continue
         r = rows[0]
-        print(f"| {name} | {r['route points']} | " + " | ".join(f"{r[p]:.1f}" for p in pieces) + " |", flush=True)
+        print(f"| {name} | {r['route points']} | " + " | ".join(_fmt(p, r[p]) for p in pieces) + " |", flush=True)
     return 0
 
 

@@ -4,7 +4,9 @@
 A* search, ``voxel_route``), its centring (``centre_route``), the orientation model's observation at every route
 point (``route_observation``) and the model's pass (``class_probabilities``). ``setup_times`` times each piece and
 the whole bind of ``rigid_route`` and of its ablation, per scene, after one untimed bind of each scene (so the
-figures leave compilation out).
+figures leave compilation out), and then what its draws cost per call: 64 samples in windows that follow the trees
+(``follow`` 2, the compiled draw a box world's trees take) and 64 and 1,024 along the whole route (``follow`` 0, the
+numpy draw of a mesh world's trees and of every roadmap), each the median of ``DRAW_CALLS`` calls after an untimed one.
 """
 
 from __future__ import annotations
@@ -14,8 +16,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-#: The pieces ``setup_times`` reports, in the order a bind runs them, then the two binds.
-PIECES = ("route", "centre", "observation", "model", "bind", "ablation bind")
+#: The pieces ``setup_times`` reports, in the order a bind runs them, then the two binds, then the draws.
+PIECES = ("route", "centre", "observation", "model", "bind", "ablation bind", "draw 64 following",
+          "draw 64 whole route", "draw 1,024 whole route")
+#: Timed calls of each draw (the median is kept): a draw costs tens of microseconds.
+DRAW_CALLS = 100
 
 
 def _ms(repeats: int, fn, *args, **kwargs) -> tuple[float, object]:
@@ -39,6 +44,7 @@ def setup_times(problems: Sequence, repeats: int = 3) -> list[dict]:
     from planners.guidance.workspace_route import centre_route, voxel_route
 
     learned, ablation = make_sampler("rigid_route"), make_sampler("rigid_route_ablation")
+    following, whole = make_sampler("rigid_route", follow=2.0), make_sampler("rigid_route", follow=0.0)
     threads = torch.get_num_threads()
     torch.set_num_threads(1)  # as the sampler's pass runs (learning.models.threads.planning_threads)
     rows = []
@@ -59,6 +65,12 @@ def setup_times(problems: Sequence, repeats: int = 3) -> list[dict]:
             row["model"], _ = _ms(repeats, class_probabilities, learned.net, patches, dirs)
             row["bind"], _ = _ms(repeats, learned.bind, problem)
             row["ablation bind"], _ = _ms(repeats, ablation.bind, problem)
+            rng = np.random.default_rng(0)
+            for name, sampler, n in (("draw 64 following", following, 64), ("draw 64 whole route", whole, 64),
+                                     ("draw 1,024 whole route", whole, 1024)):
+                bound = sampler.bind(problem)
+                bound.draw(rng, n, None)  # compiles what the first draw compiles
+                row[name], _ = _ms(DRAW_CALLS, bound.draw, rng, n, None)
             row["route points"] = len(centred)
             rows.append(row)
     finally:

@@ -195,8 +195,8 @@ class RigidRouteSampler(SamplerBase):
             within its tree's window, and counts only where that point lies within the half-width of it, so a
             tree's reach cannot jump through a wall to a far part of the route. A draw
             then returns at most ``FOLLOW_BATCH`` samples and follows the trees (``stall_window``'s caveat on
-            batches holds); it is compiled (``planners.guidance.route_draws``: about 0.04 ms for 64 samples, where
-            numpy's per-call work took 0.2). A roadmap planner ignores it.
+            batches holds); it is compiled (``planners.guidance.route_draws``: 0.03 to 0.05 ms for 64 samples, where
+            numpy's draw takes 0.2 to 0.3; ``scripts/benchmark_rigid_route.py``). A roadmap planner ignores it.
         follow_share: With ``follow``, the probability in [0, 1] that a route sample is drawn in the trees' windows;
             the others are drawn along the whole route, as without ``follow``.
         roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and

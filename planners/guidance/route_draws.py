@@ -1,8 +1,8 @@
 """Compiled draws along a 6-DoF workspace route: the route samples that follow the trees, and the trees' reach.
 
 ``learning.samplers.rigid_route.RigidRouteSampler`` with ``follow`` draws at most 64 samples at a time, so that its
-windows move with the trees; drawn with numpy, each such draw costs about 0.2 ms of per-call work, more than a box
-world's whole iteration. ``follow_draw`` makes the same samples from the same rows of uniforms in one call:
+windows move with the trees; drawn with numpy, each such draw costs 0.2 to 0.3 ms, most of it per-call work, more
+than a box world's whole iteration. ``follow_draw`` makes the same samples from the same rows of uniforms in one call:
 every value as the numpy draw computes it (the same operations in the same order), the logarithm, arcsine and
 arctangent aside, which the C library computes here and numpy's own vector code there, so the two agree to the
 last bit or two of those (``tests/test_rigid_route.py`` checks them against each other). ``route_reach`` is the
