@@ -42,6 +42,13 @@ from planners.worlds.rigid3d import RRT_SETUP, densify
 REFERENCE_SEEDS = tuple(7919 + k for k in range(16))
 #: Solutions kept per process, most recent first out.
 KEPT_SOLUTIONS = 64
+#: The expert's long runs' sampler (``rigid_route_ablation``'s settings): the route positions crowded where the route
+#: is tight, along the whole route (the runs behind the expert's rows in the docs).
+REFERENCE_ABLATION = {"follow": 0.0}
+#: The long runs that label the orientation model's training examples (``learning.training.rigid``): the route
+#: positions at uniform arc length along the whole route, as the ablation drew them when the shipped model was
+#: trained, whatever it ships with now.
+LABEL_ABLATION = {"passage_weight": 0.0, "follow": 0.0}
 #: Most samples one draw returns where the draws follow the trees (``follow``), as ``rigid_route``'s.
 FOLLOW_BATCH = 64
 #: query key -> (dense states of the solution or None, seconds its long runs took, iterations they ran).
@@ -62,12 +69,13 @@ def query_key(problem: Problem, attempts: int, budget: int) -> str:
     return h.hexdigest()
 
 
-def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000) -> tuple[np.ndarray | None, float, int]:
+def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000,
+                    settings: dict | None = None) -> tuple[np.ndarray | None, float, int]:
     """A solution of ``problem`` by long runs, densified: ``(states or None, seconds, iterations run)``.
 
     RRT-Connect at the seed set-up's step (0.01 of the workspace's longest side) on the ``cossin`` metric, with
-    the centred workspace route and uniform angles as its sampler (``rigid_route_ablation`` drawing along the whole
-    route, ``follow`` 0: the runs the shipped orientation model's labels came from), seeds
+    the centred workspace route and uniform angles as its sampler (``rigid_route_ablation`` with ``settings``,
+    by default ``REFERENCE_ABLATION``; the training labels take ``LABEL_ABLATION``), seeds
     ``REFERENCE_SEEDS`` in turn until one solves within ``budget`` iterations; the path is shortened
     (``smooth``) and densified to half a step between states.
     """
@@ -79,8 +87,9 @@ def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000) 
     step = RRT_SETUP["step_fraction"] * float(np.max(world.high3 - world.low3))
     p = problem.with_query(problem.start, problem.goal, metric="cossin")
     t0, ran = time.perf_counter(), 0
+    given = REFERENCE_ABLATION if settings is None else settings
     for k, seed in enumerate(REFERENCE_SEEDS[:attempts]):
-        result = RRTConnect(p, step_size=step, sampler=make_sampler("rigid_route_ablation", follow=0.0),
+        result = RRTConnect(p, step_size=step, sampler=make_sampler("rigid_route_ablation", **given),
                             seed=seed).solve(max_iterations=budget)
         ran += int(result.iterations)
         if result.solved:

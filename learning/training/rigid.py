@@ -39,7 +39,7 @@ import numpy as np
 import torch
 
 from learning.models.rigid_orientation import HALF_RANGE, OrientationNet
-from learning.references.rigid_expert import solve_reference
+from learning.references.rigid_expert import LABEL_ABLATION, solve_reference
 from planners.base.fileio import InputError, check_int, check_number
 from planners.guidance.rigid_orientation import (
     AXIS_PERMUTATIONS,
@@ -164,7 +164,7 @@ def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], N
             parts = [] if route is None else [route]
             solution = None
             if config.label == "solution":  # the expert's long runs (learning.references.rigid_expert)
-                solution = solve_reference(problem)[0]
+                solution = solve_reference(problem, settings=LABEL_ABLATION)[0]
                 if solution is None:
                     if progress is not None:
                         progress(f"{problem.name}: no solution by the long runs, left out")
