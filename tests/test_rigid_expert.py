@@ -113,3 +113,17 @@ def test_where_rigid_route_follows_the_trees_the_expert_follows_them_along_its_s
     assert make_sampler("rigid_expert", follow=4).follow == 4.0
     with pytest.raises(InputError, match="follow"):
         RigidExpertSampler(follow=-1.0)
+
+
+def test_the_training_labels_long_runs_draw_along_the_whole_route_at_uniform_arc_length(slot_scene, monkeypatch):
+    import learning.training.rigid as training
+
+    seen = []
+    monkeypatch.setattr(training, "solve_reference", lambda problem, **kw: seen.append(kw) or (None, 0.0, 0))
+    with pytest.raises(RuntimeError, match="no training examples: none of the 1 scenes of slot"):
+        training.collect_rigid_examples(training.RigidTrainConfig(scenes_per_family=1, families=("slot",)))
+    assert seen == [{"settings": rigid_expert.LABEL_ABLATION}]
+    # those settings: the ablation as it drew when the shipped model was trained, whatever it ships with now
+    labels = make_sampler("rigid_route_ablation", **rigid_expert.LABEL_ABLATION).bind(slot_scene)
+    assert labels.follow == 0.0 and np.array_equal(labels.warc, labels.arc)
+    assert make_sampler("rigid_route_ablation").bind(slot_scene).follow > 0  # what it ships with on a box world

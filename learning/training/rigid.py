@@ -196,6 +196,10 @@ def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], N
             names.append(problem.name)
             if progress is not None:
                 progress(f"{problem.name}: {sum(len(a) for a in labels)} examples so far")
+    if not patches:
+        raise RuntimeError(f"no training examples: none of the {len(config.families) * config.scenes_per_family} "
+                           f"scenes of {', '.join(config.families)} gave one (label {config.label!r}: "
+                           "the long runs found no solution in any)")
     return RigidExamples(np.concatenate(patches), np.concatenate(dirs), np.concatenate(labels),
                          np.concatenate(scene), names, np.concatenate(fits))
 
