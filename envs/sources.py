@@ -331,8 +331,6 @@ def scene_file_source(path: str | os.PathLike) -> ProblemListSource:
     return source
 
 
-
-
 def make_source(source: str | MapSource, **kwargs) -> MapSource:
     """Build a map source from a name: a family, ``"movingai"``, ``"files"``, ``"rigid"`` or ``"rigid_scenes"``.
 

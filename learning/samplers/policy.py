@@ -39,7 +39,8 @@ import numpy as np
 from learning.models.checkpoint import read_sb3_zip
 from learning.models.fast_policy import FastActor, actor_logits, softmax_cdf
 from learning.models.shipped import SHIPPED_POLICY, SHIPPED_POLICY_BATCH
-from planners import OccupancyGrid, SampleBatch, SamplerBase
+from learning.samplers.route import require_grid
+from planners import SampleBatch, SamplerBase
 from planners.base.fileio import InputError, check_number
 from planners.base.planner import Planner
 from planners.base.samplers import check_sampler_params
@@ -268,10 +269,7 @@ class PolicySampler(SamplerBase):
         # the guided geometry of planners.guidance.guided.GuidedSampling (the training environment's), built
         # without its objects: a bind is paid on every query, and built in Python it cost about a
         # tenth of a bugtrap query
-        grid = self.problem.world
-        if not isinstance(grid, OccupancyGrid):
-            raise ValueError(f"PolicySampler plans on 2-D occupancy maps of any size (OccupancyGrid), got a "
-                             f"{type(grid).__name__}; for the 6-DoF body take make_sampler(\"rigid_route\")")
+        grid = require_grid("PolicySampler", self.problem.world)
         key = (grid.resolution, grid.shape)
         geometry = self._geometry.get(key)
         if geometry is None:  # shared with the other copies bound from the same sampler
