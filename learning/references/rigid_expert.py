@@ -23,6 +23,7 @@ bind of a query in a process; its iterations are what it is for.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import time
 from collections import OrderedDict
@@ -33,7 +34,7 @@ from planners.base.fileio import InputError, check_int, check_number
 from planners.base.problem import Problem
 from planners.base.samplers import FAMILY_ROADMAP, SamplerBase
 from planners.guidance.rigid_orientation import euler_from_matrices, small_rotations, wrap_angles
-from planners.guidance.route_draws import route_reach
+from planners.guidance.route_draws import watch_reach
 from planners.guidance.workspace_route import box_muller
 from planners.worlds.mesh import rotation_matrices
 from planners.worlds.rigid3d import RRT_SETUP, densify
@@ -132,8 +133,7 @@ class RigidExpertSampler(SamplerBase):
         """A roadmap keeps every sample: it draws along the whole solution (``follow`` 0); the trees as given."""
         if family != FAMILY_ROADMAP or self.follow == 0.0:
             return self
-        out = object.__new__(type(self))
-        out.__dict__.update(self.__dict__)
+        out = copy.copy(self)
         out.follow = 0.0
         return out
 
@@ -191,14 +191,9 @@ class RigidExpertSampler(SamplerBase):
 
     def _watch(self, view) -> None:
         """The trees' reach along the solution's positions from the planner's ``view`` (``follow``)."""
-        if view is None:
-            return
-        self._two = self._two or view.goal_tree is not None
-        for side, states in ((0, view.vertices), (1, view.goal_tree)):
-            if states is not None and len(states) > self._seen[side]:
-                self._reach[side] = float(route_reach(states, self._seen[side], self._pos, self._arc,
-                                                      float(self._reach[side]), side, float(self._span), True))
-                self._seen[side] = len(states)
+        if view is not None:
+            two = watch_reach(view, self._pos, self._arc, self._reach, self._seen, self._span, True)
+            self._two = self._two or two
 
     def _window_states(self, v: np.ndarray) -> np.ndarray:
         """Indices of solution states for uniforms ``v``: uniform among those within the trees' windows."""

@@ -52,7 +52,7 @@ from planners.guidance.rigid_orientation import (
     route_observation,
     small_rotations,
 )
-from planners.guidance.route_draws import follow_draw, route_reach
+from planners.guidance.route_draws import follow_draw, watch_reach
 from planners.guidance.workspace_route import box_muller, centre_route, route_world, voxel_route
 from planners.worlds.mesh import rotation_matrices
 
@@ -363,15 +363,8 @@ class RigidRouteSampler(SamplerBase):
     def _watch(self, view) -> None:
         """Update the trees' reach along the route (``stall_window``, ``follow``) from the planner's ``view``."""
         if view is not None and len(self.route) > 1:
-            self._two = self._two or view.goal_tree is not None
-            for side, states in ((0, view.vertices), (1, view.goal_tree)):
-                if states is None:
-                    continue
-                if len(states) > self._seen[side]:
-                    self._reach[side] = float(route_reach(states, self._seen[side], self.route, self.arc,
-                                                          float(self._reach[side]), side, float(self._span),
-                                                          self.follow > 0))
-                self._seen[side] = max(self._seen[side], len(states))
+            two = watch_reach(view, self.route, self.arc, self._reach, self._seen, self._span, self.follow > 0)
+            self._two = self._two or two
             gap = self._reach[1] - self._reach[0]
             if gap < self._gap - float(self.problem.world.route_cell):
                 self._gap, self._moved = gap, self._drawn

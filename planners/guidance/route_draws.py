@@ -176,3 +176,17 @@ def route_reach(states, seen, route, arc, reach, side, span, follow):
         if found:
             reach = max(reach, best) if side == 0 else min(reach, best)
     return reach
+
+
+def watch_reach(view, route, arc, reach: list, seen: list, span: float, follow: bool) -> bool:
+    """Bring the trees' reach along ``route`` up to the planner's ``view``; whether it has a goal tree.
+
+    ``reach`` and ``seen`` hold the start tree's and the goal tree's values (their reach, their vertices counted so
+    far) and are updated in place with ``route_reach`` over each tree's new vertices.
+    """
+    for side, states in ((0, view.vertices), (1, view.goal_tree)):
+        if states is not None and len(states) > seen[side]:
+            reach[side] = float(route_reach(states, seen[side], route, arc, float(reach[side]), side, float(span),
+                                            follow))
+            seen[side] = len(states)
+    return view.goal_tree is not None
