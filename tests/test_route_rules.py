@@ -23,12 +23,15 @@ from learning.samplers.route_rules import (
     corridor_stages,
     query_cells,
     reversed_query,
+    route_chain,
     route_sums,
+    sight_chain,
     walled_between,
 )
 from planners import OccupancyGrid, Problem, TreeView, UniformSampler, make_planner
 from planners.base.fileio import InputError
 from planners.base.samplers import PLANNER_FAMILIES, TREE_GOAL, TREE_START, SamplerBase
+from planners.guidance.follow import last_in_sight
 from planners.maps.gridsearch import distance_field
 
 
@@ -526,3 +529,73 @@ def test_a_2d_sampler_handed_a_6dof_body_names_the_world_and_the_sampler_that_fi
     for planner in (RRT, RRTConnect, PRM):
         with pytest.raises(ValueError, match=r"2-D occupancy maps .*got a RigidBodyWorld; .*rigid_route"):
             planner(problem, sampler=make_sampler(name), seed=0).solve(max_iterations=5)
+
+
+def in_sight(blocked: np.ndarray, a: int, b: int) -> bool:
+    """Whether the centres of flat cells ``a`` and ``b`` see each other (the grid's segment test)."""
+    return last_in_sight(blocked, np.array([a, b], dtype=np.int64), 2) == b
+
+
+@settings(max_examples=15, deadline=None)
+@given(data=st.data(), link=st.integers(1, 40))
+def test_the_chain_is_the_walks_corners_each_in_sight_of_the_one_before(data, link):
+    p = random_walled_problem(data, 40, wall=2, gap=3, tolerance=1.0)
+    grid = p.world
+    blocked = np.asarray(grid.obstacles, dtype=bool)
+    exact = make_sampler("exact_route", step_size=1.0).bind(p)
+    (rs, cs), (rg, cg) = query_cells(p)
+    w = grid.width
+    start, goal = rs * w + cs, rg * w + cg
+    points, last = sight_chain(exact.field, blocked, start, link, 0.0, 0.0)
+    assert exact.field.ravel()[last] == 0.0  # the exact field's walk reaches the goal's tolerance
+    chain = [start] + points
+    assert chain[-1] == last
+    for a, b in zip(chain[:-1], chain[1:], strict=True):
+        assert in_sight(blocked, a, b)
+        # at most ``link`` moves of the walk apart: a move changes row or column by at most one
+        assert max(abs(a // w - b // w), abs(a % w - b % w)) <= link
+    # the chain the corridor draws leaves out the start's and the goal's own cells
+    links = route_chain(exact.field, exact.field, blocked, ((rs, cs), (rg, cg)), link)
+    if in_sight(blocked, last, goal):  # then the walk from the start is the whole chain
+        assert list(links) == [c for c in points if c not in (start, goal)]
+    else:
+        assert list(links[:len(points)]) == [c for c in points if c not in (start, goal)]
+
+
+def test_where_the_walk_stops_short_the_chain_goes_on_from_the_goal_end():
+    p = wall_problem()
+    blocked = np.asarray(p.world.obstacles, dtype=bool)
+    straight = make_sampler("route_ablation", step_size=2.0)
+    to_goal, to_start = straight.bind(p).field, straight.bind(reversed_query(p)).field
+    ends = query_cells(p)
+    forward, last = sight_chain(to_goal, blocked, ends[0][0] * 32 + ends[0][1], 64, 0.0, 0.0)
+    assert last != ends[1][0] * 32 + ends[1][1]  # the straight line's walk stops at the wall
+    links = route_chain(to_goal, to_start, blocked, ends, 64)
+    w = 32
+    assert len(links) > len(forward)
+    assert all(c % w < 15 for c in forward) and any(c % w > 16 for c in links[len(forward):])
+
+
+def test_a_corridor_with_a_chain_draws_the_chain_first_then_the_corridor_and_prm_connects_along_it():
+    p = wall_problem()
+    route = make_sampler("exact_route", step_size=4.0)
+    plain = CorridorSampler(route, 0.3, 0.3, 1.0, 8.0, 0.0).bind(p)
+    chained = CorridorSampler(route, 0.3, 0.3, 1.0, 8.0, 64.0).bind(p)
+    assert len(plain.links) == 0 and len(chained.links) >= 2  # the gap's two sides at least
+    rng_a, rng_b = np.random.default_rng(5), np.random.default_rng(5)
+    k = len(chained.links)
+    a, b = chained.draw(rng_a, k + 50, None), plain.draw(rng_b, k + 50, None)
+    cells = (b[:, 1].astype(int) * 32 + b[:, 0].astype(int))
+    drawn = a[:k, 1].astype(int) * 32 + a[:k, 0].astype(int)
+    assert np.array_equal(drawn, chained.links)  # each chain point in its cell, in order
+    assert np.array_equal(a[k:], b[k:]) and len(cells) == k + 50  # then the corridor's draws, the stream unchanged
+    r = make_planner("PRM", p, sampler=CorridorSampler(route, 0.3, 0.3, 1.0, 8.0, 64.0), seed=0).solve(
+        max_iterations=2000)
+    assert r.solved and r.iterations <= k
+    assert "chain=64" in repr(chained) and "chain" not in repr(plain)
+
+
+@pytest.mark.parametrize("chain", [-1.0, math.inf, math.nan, True, "4"])
+def test_a_chain_that_is_not_a_finite_number_of_steps_is_refused(chain):
+    with pytest.raises(InputError, match="chain"):
+        CorridorSampler(make_sampler("route_ablation"), 0.3, 0.3, 1.0, 8.0, chain)

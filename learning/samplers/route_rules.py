@@ -10,12 +10,13 @@ handed to:
   a field to the start (a second pass with start and goal swapped), each by ``RouteSampler``'s rule, uniform
   floor included; each draw serves the tree whose turn it is (``TreeView.tree``). Its draws run inside
   RRT-Connect's compiled loop (``planners.fused.connect_loop``), as the route sampler's run inside RRT's.
-- ``CorridorSampler`` (PRM, Lazy-PRM, OB-PRM): over the cells whose cost from the start plus cost to the goal
-  is within ``margin`` of the lowest, a corridor around the routes the field calls short, a cell in a passage
-  (walls within half a step on two opposite sides, ``walled_between``) drawn ``1 + tight`` times as often as
-  another, with a ``floor`` share of uniform samples so the roadmap stays complete; while the roadmap stays
-  unconnected the corridor widens in stages, each once it has had ``fill`` draws per step-sized square of its
-  cells (``corridor_stages``), out to every cell the field reaches.
+- ``CorridorSampler`` (PRM, Lazy-PRM, OB-PRM): first a chain along the route (``route_chain``: the corners of the
+  route sampler's walk down the field from the start, each in sight of the one before), then over the cells whose
+  cost from the start plus cost to the goal is within ``margin`` of the lowest, a corridor around the routes the
+  field calls short, a cell in a passage (walls within half a step on two opposite sides, ``walled_between``)
+  drawn ``1 + tight`` times as often as another, with a ``floor`` share of uniform samples so the roadmap stays
+  complete; while the roadmap stays unconnected the corridor widens in stages, each once it has had ``fill``
+  draws per step-sized square of its cells (``corridor_stages``), out to every cell the field reaches.
 - ``ConvergingRouteSampler`` (RRT*, Informed RRT*): ``RouteSampler``'s rule to the first solution, then the
   corridor cells inside the informed set (the states that could lie on a shorter path), widening in the same
   stages, with a ``floor`` share from the informed set itself (``InformedSampler``). The field to the start is
@@ -55,6 +56,7 @@ from planners.fused import (
     nearest_distance,
     rrtstar_loop,
 )
+from planners.guidance.follow import last_in_sight, walk_path
 
 if TYPE_CHECKING:
     from planners.base.planner import Planner
@@ -64,12 +66,15 @@ if TYPE_CHECKING:
 #: roadmap stays unconnected it widens once each stage has had one draw per step-sized square of its cells (the
 #: smallest fill of 1, 2, 4, 8 that leaves the validation maps' samples as they were). A cell with walls within
 #: half a step on two opposite sides (a passage) is drawn 9 times as often as one without (``tight`` 8 of 0 to 16;
-#: kept by validation maps no rule had looked at). The exact reference takes the same settings.
-CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3, "fill": 1.0, "tight": 8.0}
+#: kept by validation maps no rule had looked at). Its first draws are a chain along the route, the walk's corners at
+#: most 64 steps of walk apart (``chain`` 64 of 4, 16, 64: 0.25 of the samples without a chain on the validation
+#: maps, 0.24 on fresh ones). The exact reference takes the same settings.
+CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3, "fill": 1.0, "tight": 8.0, "chain": 64.0}
 #: The straight-line ablation's corridor, tuned for it on the same maps: an ellipse about the start and the
 #: goal, 60% longer than the straight line; it widens as the learned field's does; a passage cell drawn 17 times
-#: as often (``tight`` 16, chosen for it the same way).
-ABLATION_CORRIDOR = {"margin": 0.6, "floor": 0.3, "fill": 1.0, "tight": 16.0}
+#: as often (``tight`` 16, chosen for it the same way). No chain: along the straight line none of 4, 16 or 64
+#: steps took it under 0.9 of the samples without one on the validation maps (0.96 at best).
+ABLATION_CORRIDOR = {"margin": 0.6, "floor": 0.3, "fill": 1.0, "tight": 16.0, "chain": 0.0}
 #: RRT*'s corridor after the first solution, chosen on the validation maps (``tune_route_rules.py --rrtstar``):
 #: cells within 10% of the shortest route the field sees, and a tenth of the samples from the informed set; it
 #: widens once each stage has had 8 draws per step-sized square (the smallest fill of 1 to 32 that leaves the
@@ -229,6 +234,46 @@ def cell_points(grid: OccupancyGrid, cells: np.ndarray, u: np.ndarray, low: np.n
     return np.minimum(np.maximum(pts, low), np.nextafter(high, low))
 
 
+def sight_chain(field: np.ndarray, blocked: np.ndarray, cell: int, link: int, ripple: float,
+                growth: float) -> tuple[list[int], int]:
+    """The corners of the walk down ``field`` from ``cell``: each point the last of the walk in sight of the one before.
+
+    The walk is the route sampler's (``planners.guidance.follow.walk_path``: down the field, crossing ripples
+    shallower than ``ripple`` and ``growth``), as far as it goes; from ``cell`` each next point is the last cell of the
+    walk's next ``link`` cells still in sight of the point before it (``last_in_sight``), so the segment between two
+    points meets no wall. Returns the points (flat indices; ``cell`` not among them) and the walk's last cell.
+    """
+    visited = np.empty(blocked.size + 2, np.int64)
+    moves = walk_path(field, blocked, cell, float(blocked.size), ripple, growth, visited)
+    points, at = [], 0
+    while at < moves - 1:
+        end = min(moves, at + link + 1)
+        corner = last_in_sight(blocked, visited[at:end], end - at)
+        ahead = at + 1 + int(np.flatnonzero(visited[at + 1:end] == corner)[0]) if corner != visited[at] else at + 1
+        points.append(int(visited[ahead]))
+        at = ahead
+    return points, int(visited[moves - 1])
+
+
+def route_chain(to_goal: np.ndarray, to_start: np.ndarray, blocked: np.ndarray, ends: tuple, link: int,
+                ripple: float = 0.0, growth: float = 0.0) -> np.ndarray:
+    """Flat indices of the cells of a chain along the route the fields give: the walk's corners (``sight_chain``).
+
+    The walk down ``to_goal`` from the start's cell; where it ends out of the goal's sight (a pit of a learned
+    field, or a wall across the straight line), the corners of the walk down ``to_start`` from the goal's cell
+    follow, from the goal end. The goal's cell itself is left out (the goal is a vertex already). ``ends``: the
+    start's and the goal's (row, col); ``link``: the most cells of walk between two points.
+    """
+    (rs, cs), (rg, cg) = ((int(a), int(b)) for a, b in ends)
+    cols = blocked.shape[1]
+    goal = rg * cols + cg
+    forward, last = sight_chain(to_goal, blocked, rs * cols + cs, link, ripple, growth)
+    if last_in_sight(blocked, np.array([last, goal], dtype=np.int64), 2) != goal:
+        backward, _ = sight_chain(to_start, blocked, goal, link, ripple, growth)
+        forward += backward
+    return np.asarray([c for c in forward if c != goal and c != rs * cols + cs], dtype=np.int64)
+
+
 @nb.njit(cache=True)
 def route_connect_loop(budget, state_a, state_b, buffers, rng, loop):
     """RRT-Connect's compiled loop drawing from ``route_draw`` for both trees (``planners.fused``)."""
@@ -351,18 +396,30 @@ class CorridorSampler(_CorridorRule):
         fill: Draws per step-sized square of a stage's cells before the corridor widens; None: never.
         tight: A corridor cell with walls within half a step on two opposite sides (a passage) is drawn with
             weight ``1 + tight``, any other with weight 1 (0: every cell alike).
+        chain: The first draws are a chain along the route the fields give (``route_chain``): the corners of
+            the route sampler's walk down the field to the goal from the start (and, where that walk stops short,
+            down the field to the start from the goal), each in sight of the one before and at most ``chain``
+            steps of walk after it, each uniform in its cell; the corridor's draws follow (the chain's count
+            toward its stages). 0: no chain.
     """
 
     def __init__(self, route: RouteSampler, margin: float = CORRIDOR_SETTINGS["margin"],
                  floor: float = CORRIDOR_SETTINGS["floor"], fill: float | None = CORRIDOR_SETTINGS["fill"],
-                 tight: float = CORRIDOR_SETTINGS["tight"]) -> None:
+                 tight: float = CORRIDOR_SETTINGS["tight"], chain: float = CORRIDOR_SETTINGS["chain"]) -> None:
         super().__init__(route, margin, floor, fill, tight)
+        self.chain = _check_nonnegative(type(self).__name__, "chain", chain, "steps of arc between the chain's points")
 
     def _setup(self) -> None:
         p = self.problem
         require_grid("CorridorSampler", p.world)
         to_goal, to_start = self.route.cost_to_go(p), self.route.cost_to_go(reversed_query(p))
         self._stages(to_goal.field, to_start.field)
+        link = math.ceil(self.chain * self.route.step_size / p.world.resolution)  # in cells of walk
+        #: the chain's cells (flat indices), drawn first, in order
+        self.links = (route_chain(to_goal.field, to_start.field, np.asarray(p.world.obstacles, dtype=bool),
+                                  query_cells(p), link, getattr(self.route, "ripple", 0.0),
+                                  getattr(self.route, "ripple_growth", 0.0)) if link > 0
+                      else np.empty(0, dtype=np.int64))
         self.drawn = 0
         self.forward_passes = 0 if self.route.net is None else 2 * self.route.symmetry_passes
         #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
@@ -376,8 +433,16 @@ class CorridorSampler(_CorridorRule):
             guided = u[:, 0] >= self.floor
             pts[guided] = cell_points(self.problem.world, self.cells, u[guided, 1:4], self.low, self.high,
                                       self.counts[stage[guided]], self.cum)
+        linked = min(n, max(0, len(self.links) - self.drawn))
+        if linked:  # the chain's points, uniform in their cells
+            pts[:linked] = cell_points(self.problem.world, self.links[self.drawn:self.drawn + linked],
+                                       np.column_stack([(np.arange(linked) + 0.5) / linked, u[:linked, 2:4]]),
+                                       self.low, self.high)
         self.drawn += n
         return pts
+
+    def __repr__(self) -> str:
+        return super().__repr__()[:-1] + (f", chain={self.chain:g})" if self.chain else ")")
 
 
 class ConvergingRouteSampler(_CorridorRule):

@@ -6,6 +6,8 @@
         --tights 0 1 2 4 8 16 --tight-kind between                                      # passages weighted
     python scripts/experiments/tune_route_rules.py --first-map 6 --maps 12 --fields route --margins 0.3 \
         --floors 0.3 --fills 1 --tights 0 8                                             # on maps not looked at
+    python scripts/experiments/tune_route_rules.py --fields route --margins 0.3 --floors 0.3 --fills 1 \
+        --chains 0 4 16 64                                                              # a chain along the route
     python scripts/experiments/tune_route_rules.py --maps 6 --seeds 2 --connect       # RRT-Connect: one tree or two
     python scripts/experiments/tune_route_rules.py --maps 2 --seeds 2 --rrtstar       # RRT*'s rule after a solution
 
@@ -145,6 +147,9 @@ def main(argv=None) -> int:
     ap.add_argument("--tights", type=float, nargs="+", default=None,
                     help="the roadmaps' corridor: extra weight of a cell by its tightness within half a step "
                     "(CorridorSampler's tight; 0: every corridor cell alike; default: each field's own)")
+    ap.add_argument("--chains", type=float, nargs="+", default=None,
+                    help="the roadmaps' corridor: the most steps of walk between two points of its chain along the "
+                    "route (CorridorSampler's chain; 0: none; default: each field's own)")
     ap.add_argument("--tight-kind", default="between", choices=["between", "share"],
                     help="tightness: walls on two opposite sides of a cell (the shipped rule), or the share of "
                     "blocked cells about it")
@@ -191,18 +196,20 @@ def main(argv=None) -> int:
                 print(geomean_row(f"RRTConnect {field:15s} {rule:16s}", per_family), flush=True)
         return 0
     for planner in args.planners:
-        for field, margin, floor, fill, tight in itertools.product(args.fields, args.margins, args.floors,
-                                                                   args.fills, args.tights or [None]):
+        for field, margin, floor, fill, tight, chain in itertools.product(
+                args.fields, args.margins, args.floors, args.fills, args.tights or [None], args.chains or [None]):
             own = ABLATION_CORRIDOR if field == "route_ablation" else CORRIDOR_SETTINGS
             tight = own["tight"] if tight is None else tight
+            chain = own["chain"] if chain is None else chain
             kind = CorridorSampler if args.tight_kind == "between" else SharedCorridor
             per_family = [summarize_runs([run_setup(Setup(field, planner, field), p, s, models=models,
                                                     sampler=kind(make_sampler(field, models=models),
-                                                                 margin, floor, fill, tight))
+                                                                 margin, floor, fill, tight, chain))
                                           for p in problems for s in range(args.seeds)])
                           for problems in maps.values()]
             print(geomean_row(f"{planner:8s} {field:15s} margin {margin:4.2f} floor {floor:4.2f} "
-                              f"fill {fill} tight {tight:g} {args.tight_kind}", per_family), flush=True)
+                              f"fill {fill} tight {tight:g} {args.tight_kind} chain {chain:g}", per_family),
+                  flush=True)
     return 0
 
 
