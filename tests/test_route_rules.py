@@ -484,9 +484,11 @@ def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run():
     route = shipped_sampler(device="cpu")
     route.fields = cache
     runs = [make_planner("PRM", p, sampler=route, seed=0) for _ in range(2)]
-    assert cache.misses == 2 and cache.hits == 2  # a field to the goal and one to the start, computed once
+    assert cache.misses == 1 and cache.hits == 1  # bound: the field to the goal (the chain's), computed once
+    assert np.array_equal(runs[0].sampler.cells, runs[1].sampler.cells)  # the corridor needs the field to the start
+    assert cache.misses == 2 and cache.hits == 2  # computed once too
     assert runs[0].sampler.reused_seconds == 0 and runs[1].sampler.reused_seconds > 0
-    assert np.array_equal(runs[0].sampler.cells, runs[1].sampler.cells) and runs[1].sampler.forward_passes == 2
+    assert runs[1].sampler.forward_passes == 2
 
 
 def test_rrtstar_pays_the_field_to_the_start_only_once_it_has_a_solution():
@@ -584,7 +586,9 @@ def test_a_corridor_with_a_chain_draws_the_chain_first_then_the_corridor_and_prm
     assert len(plain.links) == 0 and len(chained.links) >= 2  # the gap's two sides at least
     rng_a, rng_b = np.random.default_rng(5), np.random.default_rng(5)
     k = len(chained.links)
-    a, b = chained.draw(rng_a, k + 50, None), plain.draw(rng_b, k + 50, None)
+    a = chained.draw(rng_a, k + 50, None)
+    assert len(a) == k  # the chain alone
+    a, b = np.concatenate([a, chained.draw(rng_a, 50, None)]), plain.draw(rng_b, k + 50, None)
     cells = (b[:, 1].astype(int) * 32 + b[:, 0].astype(int))
     drawn = a[:k, 1].astype(int) * 32 + a[:k, 0].astype(int)
     assert np.array_equal(drawn, chained.links)  # each chain point in its cell, in order
@@ -599,3 +603,24 @@ def test_a_corridor_with_a_chain_draws_the_chain_first_then_the_corridor_and_prm
 def test_a_chain_that_is_not_a_finite_number_of_steps_is_refused(chain):
     with pytest.raises(InputError, match="chain"):
         CorridorSampler(make_sampler("route_ablation"), 0.3, 0.3, 1.0, 8.0, chain)
+
+
+def test_a_chain_that_connects_the_roadmap_never_pays_the_field_to_the_start():
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("rooms", VALIDATION_SEED0 + 7, 64, goal_tolerance=4.0)
+    bound = CorridorSampler(make_sampler("route", step_size=4.0)).bind(p)
+    k = len(bound.links)
+    assert k > 0 and not bound.built and bound.forward_passes == 1  # the field to the goal only
+    rng = np.random.default_rng(0)
+    chain = bound.draw(rng, 1000, None)
+    assert len(chain) == k  # the chain alone, whatever the batch asked
+    assert not bound.built and bound.forward_passes == 1
+    after = bound.draw(rng, 10, None)
+    assert len(after) == 10 and bound.built and bound.forward_passes == 2  # then the corridor, from both fields
+    # the same samples as one whose corridor was built at bind, drawn in one batch: the stream is 4 uniforms a sample
+    eager = CorridorSampler(make_sampler("route", step_size=4.0)).bind(p)
+    eager.build_corridor()
+    assert np.array_equal(eager.draw(np.random.default_rng(0), k + 10, None), np.concatenate([chain, after]))
+    r = make_planner("PRM", p, sampler=make_sampler("route"), seed=0).solve(max_iterations=5000)
+    assert r.solved and p.world.path_valid(r.path)

@@ -255,21 +255,22 @@ def sight_chain(field: np.ndarray, blocked: np.ndarray, cell: int, link: int, ri
     return points, int(visited[moves - 1])
 
 
-def route_chain(to_goal: np.ndarray, to_start: np.ndarray, blocked: np.ndarray, ends: tuple, link: int,
+def route_chain(to_goal: np.ndarray, to_start, blocked: np.ndarray, ends: tuple, link: int,
                 ripple: float = 0.0, growth: float = 0.0) -> np.ndarray:
     """Flat indices of the cells of a chain along the route the fields give: the walk's corners (``sight_chain``).
 
     The walk down ``to_goal`` from the start's cell; where it ends out of the goal's sight (a pit of a learned
     field, or a wall across the straight line), the corners of the walk down ``to_start`` from the goal's cell
-    follow, from the goal end. The goal's cell itself is left out (the goal is a vertex already). ``ends``: the
-    start's and the goal's (row, col); ``link``: the most cells of walk between two points.
+    follow, from the goal end. The goal's cell itself is left out (the goal is a vertex already). ``to_start``: the
+    field, or a callable that returns it (called only where the walk from the start ends out of the goal's sight);
+    ``ends``: the start's and the goal's (row, col); ``link``: the most cells of walk between two points.
     """
     (rs, cs), (rg, cg) = ((int(a), int(b)) for a, b in ends)
     cols = blocked.shape[1]
     goal = rg * cols + cg
     forward, last = sight_chain(to_goal, blocked, rs * cols + cs, link, ripple, growth)
     if last_in_sight(blocked, np.array([last, goal], dtype=np.int64), 2) != goal:
-        backward, _ = sight_chain(to_start, blocked, goal, link, ripple, growth)
+        backward, _ = sight_chain(to_start() if callable(to_start) else to_start, blocked, goal, link, ripple, growth)
         forward += backward
     return np.asarray([c for c in forward if c != goal and c != rs * cols + cs], dtype=np.int64)
 
@@ -379,7 +380,10 @@ class CorridorSampler(_CorridorRule):
     """Roadmaps' rule: uniform over the corridor where the field says a short route runs, with a uniform floor.
 
     The corridor is the free cells whose cost from the start plus cost to the goal (two passes of the field,
-    the second with start and goal swapped) is within ``margin`` of the lowest (``corridor_cells``). While the
+    the second with start and goal swapped) is within ``margin`` of the lowest (``corridor_cells``). With a
+    ``chain``, the second pass waits until the chain needs it (its walk ended out of the goal's sight) or a draw
+    goes past the chain (``build_corridor``), so a roadmap that the chain connects pays one pass; a draw before
+    that returns the chain's samples only. While the
     roadmap stays unconnected the corridor widens in stages: with ``L`` the route's length as the fields give it
     (``route_sums``), stage 1 holds the cells within ``(1 + margin) x L`` (plus one step) and each later stage
     doubles that bound, until every cell the field reaches is in; each stage lasts until it has had ``fill``
@@ -412,20 +416,61 @@ class CorridorSampler(_CorridorRule):
     def _setup(self) -> None:
         p = self.problem
         require_grid("CorridorSampler", p.world)
-        to_goal, to_start = self.route.cost_to_go(p), self.route.cost_to_go(reversed_query(p))
-        self._stages(to_goal.field, to_start.field)
+        self._to_goal, self._to_start = self.route.cost_to_go(p), None
+        self.built = False  # the corridor: built where the chain needs the field to the start, or after the chain
         link = math.ceil(self.chain * self.route.step_size / p.world.resolution)  # in cells of walk
         #: the chain's cells (flat indices), drawn first, in order
-        self.links = (route_chain(to_goal.field, to_start.field, np.asarray(p.world.obstacles, dtype=bool),
-                                  query_cells(p), link, getattr(self.route, "ripple", 0.0),
-                                  getattr(self.route, "ripple_growth", 0.0)) if link > 0
-                      else np.empty(0, dtype=np.int64))
+        self.links = (route_chain(self._to_goal.field, lambda: self.start_field().field,
+                                  np.asarray(p.world.obstacles, dtype=bool), query_cells(p), link,
+                                  getattr(self.route, "ripple", 0.0), getattr(self.route, "ripple_growth", 0.0))
+                      if link > 0 else np.empty(0, dtype=np.int64))
         self.drawn = 0
-        self.forward_passes = 0 if self.route.net is None else 2 * self.route.symmetry_passes
-        #: encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)
-        self.reused_seconds = sum(f.seconds for f in (to_goal, to_start) if f.reused)
+        if not len(self.links) or self._to_start is not None:
+            self.build_corridor()
+
+    def start_field(self):
+        """The field to the start (the query with start and goal swapped), computed once, when first needed."""
+        if self._to_start is None:
+            self._to_start = self.route.cost_to_go(reversed_query(self.problem))
+        return self._to_start
+
+    def build_corridor(self) -> None:
+        """The corridor's stages (``cells``, ``counts``, ``starts``, ``cum``): once, from both fields.
+
+        Without a chain, or where the chain needs the field to the start, at ``bind``; otherwise at the first draw
+        after the chain, so that a roadmap the chain connects never pays the second field.
+        """
+        if not self.built:
+            self._stages(self._to_goal.field, self.start_field().field)
+            self.built = True
+
+    def __getattr__(self, name: str):
+        # the corridor's stages, read before the first draw that needs them: built then (``build_corridor``)
+        if name in ("cells", "counts", "starts", "cum") and "_to_goal" in self.__dict__ and not self.built:
+            self.build_corridor()
+            return self.__dict__[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    @property
+    def forward_passes(self) -> int:
+        """The encoder's passes this query took: the field to the goal, and the field to the start once computed."""
+        return 0 if self.route.net is None else (1 + (self._to_start is not None)) * self.route.symmetry_passes
+
+    @property
+    def reused_seconds(self) -> float:
+        """Encoder seconds of fields taken from a cache (``RouteSampler.reused_seconds``)."""
+        return sum(f.seconds for f in (self._to_goal, self._to_start) if f is not None and f.reused)
 
     def draw(self, rng, n, view):
+        if not self.built:
+            if self.drawn < len(self.links):  # the chain alone: the corridor waits until it is drawn
+                m = min(n, len(self.links) - self.drawn)
+                u = rng.random((m, 4))
+                pts = cell_points(self.problem.world, self.links[self.drawn:self.drawn + m],
+                                  np.column_stack([(np.arange(m) + 0.5) / m, u[:, 2:4]]), self.low, self.high)
+                self.drawn += m
+                return pts
+            self.build_corridor()
         u = rng.random((n, 4))
         pts = self._uniform(u[:, 2:4].copy())
         if self.counts[0]:
@@ -434,7 +479,7 @@ class CorridorSampler(_CorridorRule):
             pts[guided] = cell_points(self.problem.world, self.cells, u[guided, 1:4], self.low, self.high,
                                       self.counts[stage[guided]], self.cum)
         linked = min(n, max(0, len(self.links) - self.drawn))
-        if linked:  # the chain's points, uniform in their cells
+        if linked:  # the chain's points, uniform in their cells (a chain that needed both fields at bind)
             pts[:linked] = cell_points(self.problem.world, self.links[self.drawn:self.drawn + linked],
                                        np.column_stack([(np.arange(linked) + 0.5) / linked, u[:linked, 2:4]]),
                                        self.low, self.high)
