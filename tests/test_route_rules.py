@@ -592,6 +592,7 @@ def test_a_corridor_with_a_chain_draws_the_chain_first_then_the_corridor_and_prm
     cells = (b[:, 1].astype(int) * 32 + b[:, 0].astype(int))
     drawn = a[:k, 1].astype(int) * 32 + a[:k, 0].astype(int)
     assert np.array_equal(drawn, chained.links)  # each chain point in its cell, in order
+    assert np.all(a[:k] % 1.0 == 0.5)  # at its centre, where the walk's sight test ran
     assert np.array_equal(a[k:], b[k:]) and len(cells) == k + 50  # then the corridor's draws, the stream unchanged
     r = make_planner("PRM", p, sampler=CorridorSampler(route, 0.3, 0.3, 1.0, 8.0, 64.0), seed=0).solve(
         max_iterations=2000)

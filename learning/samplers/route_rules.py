@@ -68,7 +68,9 @@ if TYPE_CHECKING:
 #: half a step on two opposite sides (a passage) is drawn 9 times as often as one without (``tight`` 8 of 0 to 16;
 #: kept by validation maps no rule had looked at). Its first draws are a chain along the route, the walk's corners at
 #: most 64 steps of walk apart (``chain`` 64 of 4, 16, 64: 0.25 of the samples without a chain on the validation
-#: maps, 0.24 on fresh ones). The exact reference takes the same settings.
+#: maps, 0.24 on fresh ones), each at its cell's centre (0.71 of the samples and 0.49 of the time of points uniform
+#: in their cells, on validation maps no other rule had seen: a jittered point clips corners the walk's sight test
+#: passed, and the corridor, with the second field, is paid). The exact reference takes the same settings.
 CORRIDOR_SETTINGS = {"margin": 0.3, "floor": 0.3, "fill": 1.0, "tight": 8.0, "chain": 64.0}
 #: The straight-line ablation's corridor, tuned for it on the same maps: an ellipse about the start and the
 #: goal, 60% longer than the straight line; it widens as the learned field's does; a passage cell drawn 17 times
@@ -403,7 +405,7 @@ class CorridorSampler(_CorridorRule):
         chain: The first draws are a chain along the route the fields give (``route_chain``): the corners of
             the route sampler's walk down the field to the goal from the start (and, where that walk stops short,
             down the field to the start from the goal), each in sight of the one before and at most ``chain``
-            steps of walk after it, each uniform in its cell; the corridor's draws follow (the chain's count
+            steps of walk after it, each at its cell's centre; the corridor's draws follow (the chain's count
             toward its stages). 0: no chain.
     """
 
@@ -465,9 +467,8 @@ class CorridorSampler(_CorridorRule):
         if not self.built:
             if self.drawn < len(self.links):  # the chain alone: the corridor waits until it is drawn
                 m = min(n, len(self.links) - self.drawn)
-                u = rng.random((m, 4))
-                pts = cell_points(self.problem.world, self.links[self.drawn:self.drawn + m],
-                                  np.column_stack([(np.arange(m) + 0.5) / m, u[:, 2:4]]), self.low, self.high)
+                rng.random((m, 4))  # 4 uniforms a sample, as every draw takes
+                pts = self.chain_points(self.drawn, m)
                 self.drawn += m
                 return pts
             self.build_corridor()
@@ -479,12 +480,17 @@ class CorridorSampler(_CorridorRule):
             pts[guided] = cell_points(self.problem.world, self.cells, u[guided, 1:4], self.low, self.high,
                                       self.counts[stage[guided]], self.cum)
         linked = min(n, max(0, len(self.links) - self.drawn))
-        if linked:  # the chain's points, uniform in their cells (a chain that needed both fields at bind)
-            pts[:linked] = cell_points(self.problem.world, self.links[self.drawn:self.drawn + linked],
-                                       np.column_stack([(np.arange(linked) + 0.5) / linked, u[:linked, 2:4]]),
-                                       self.low, self.high)
+        if linked:  # the chain's points (a chain that needed both fields at bind)
+            pts[:linked] = self.chain_points(self.drawn, linked)
         self.drawn += n
         return pts
+
+    def chain_points(self, first: int, m: int) -> np.ndarray:
+        """The chain's points ``first`` to ``first + m`` (``links``): the centres of their cells, where the walk's sight
+        test ran, so that the segments between them are the ones it found free.
+        """
+        centres = np.column_stack([(np.arange(m) + 0.5) / m, np.full((m, 2), 0.5)])
+        return cell_points(self.problem.world, self.links[first:first + m], centres, self.low, self.high)
 
     def __repr__(self) -> str:
         return super().__repr__()[:-1] + (f", chain={self.chain:g})" if self.chain else ")")
