@@ -467,8 +467,7 @@ class CorridorSampler(_CorridorRule):
         if not self.built:
             if self.drawn < len(self.links):  # the chain alone: the corridor waits until it is drawn
                 m = min(n, len(self.links) - self.drawn)
-                rng.random((m, 4))  # 4 uniforms a sample, as every draw takes
-                pts = self.chain_points(self.drawn, m)
+                pts = self.chain_points(self.drawn, rng.random((m, 4))[:, 2:4])  # 4 uniforms a sample, as every draw
                 self.drawn += m
                 return pts
             self.build_corridor()
@@ -481,14 +480,16 @@ class CorridorSampler(_CorridorRule):
                                       self.counts[stage[guided]], self.cum)
         linked = min(n, max(0, len(self.links) - self.drawn))
         if linked:  # the chain's points (a chain that needed both fields at bind)
-            pts[:linked] = self.chain_points(self.drawn, linked)
+            pts[:linked] = self.chain_points(self.drawn, u[:linked, 2:4])
         self.drawn += n
         return pts
 
-    def chain_points(self, first: int, m: int) -> np.ndarray:
-        """The chain's points ``first`` to ``first + m`` (``links``): the centres of their cells, where the walk's sight
-        test ran, so that the segments between them are the ones it found free.
+    def chain_points(self, first: int, u: np.ndarray) -> np.ndarray:
+        """The chain's points ``first`` to ``first + len(u)`` (``links``): the centres of their cells, where the walk's
+        sight test ran, so that the segments between them are the ones it found free (``u``: the samples' uniforms
+        for a point within the cell, unused here; a subclass may place the points by them).
         """
+        m = len(u)
         centres = np.column_stack([(np.arange(m) + 0.5) / m, np.full((m, 2), 0.5)])
         return cell_points(self.problem.world, self.links[first:first + m], centres, self.low, self.high)
 
