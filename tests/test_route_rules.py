@@ -625,3 +625,48 @@ def test_a_chain_that_connects_the_roadmap_never_pays_the_field_to_the_start():
     assert np.array_equal(eager.draw(np.random.default_rng(0), k + 10, None), np.concatenate([chain, after]))
     r = make_planner("PRM", p, sampler=make_sampler("route"), seed=0).solve(max_iterations=5000)
     assert r.solved and p.world.path_valid(r.path)
+
+
+class EdgeRecorder(UniformSampler):
+    """Uniform sampling that records the edge a roadmap told it (``at_edge``)."""
+
+    told: list = []
+
+    def at_edge(self, length):
+        EdgeRecorder.told.append(length)
+        return self
+
+
+@pytest.mark.parametrize(("planner", "kwargs", "told"), [
+    ("PRM", {}, [None]), ("PRM", {"max_edge_length": 3.0}, [3.0]), ("LazyPRM", {"max_edge_length": 5.0}, [5.0]),
+    ("PRM", {"connection": "radius", "radius": 2.0, "max_edge_length": 5.0}, [2.0]),
+    ("PRM", {"connection": "radius"}, [None]),  # PRM*'s radius shrinks as the roadmap grows: no limit known
+    ("RRT", {}, []), ("RRTConnect", {}, [])])
+def test_a_roadmap_tells_the_sampler_its_longest_edge(planner, kwargs, told):
+    EdgeRecorder.told = []
+    make_planner(planner, wall_problem(), sampler=EdgeRecorder(), seed=0, **kwargs)
+    assert EdgeRecorder.told == told
+
+
+@pytest.mark.parametrize("edge", [2.0, 3.0, 6.0])
+def test_the_chain_keeps_to_the_roadmaps_longest_edge(edge):
+    p = wall_problem()
+    bound = CorridorSampler(make_sampler("exact_route", step_size=4.0)).at_edge(edge).bind(p)
+    free = CorridorSampler(make_sampler("exact_route", step_size=4.0)).bind(p)
+    (rs, cs), _ = query_cells(p)
+    chain = [rs * 32 + cs, *bound.links]
+    assert len(bound.links) > len(free.links) >= 2  # more links where each is shorter
+    for a, b in zip(chain[:-1], chain[1:], strict=True):
+        assert math.hypot(a // 32 - b // 32, a % 32 - b % 32) <= edge
+    assert "edge=3" in repr(CorridorSampler(make_sampler("route_ablation")).at_edge(3.0))
+    r = make_planner("PRM", p, sampler=make_sampler("exact_route", step_size=4.0), seed=0,
+                     max_edge_length=edge).solve(max_iterations=5000)
+    assert r.solved and r.iterations <= len(bound.links) + 1
+    # below a cell's diagonal no link fits: no chain
+    assert len(CorridorSampler(make_sampler("exact_route", step_size=4.0)).at_edge(1.0).bind(p).links) == 0
+
+
+def test_the_lazy_corridor_hands_the_roadmaps_edge_to_the_corridor_it_switches_to():
+    p = wall_problem()
+    lazy = make_sampler("route_lazy").for_planner("roadmap").at_edge(3.0).bind(p)
+    assert lazy.switch().edge == 3.0

@@ -30,6 +30,7 @@ first draw after the first solution.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numba as nb
@@ -385,6 +386,19 @@ class LazyCorridorSampler(LazyRule):
     """
 
     rule_type = CorridorSampler
+    #: the roadmap's longest edge (``at_edge``), which the corridor's chain keeps to after the switch
+    edge: float | None = None
+
+    def at_edge(self, length: float | None) -> LazyCorridorSampler:
+        """This rule for a roadmap whose edges are at most ``length`` long (``Sampler``; the corridor's ``at_edge``)."""
+        out = copy.copy(self)
+        out.edge = length
+        return out
+
+    def switch(self) -> SamplerBase:
+        if self.rule is None:
+            self.rule = CorridorSampler(self.route).at_edge(self.edge).bind(self.problem)
+        return self.rule
 
     def draw(self, rng, n, view):
         if self.rule is None and view.iteration >= self.switch_at:

@@ -30,6 +30,7 @@ The settings (``CORRIDOR_SETTINGS``, ``CONVERGING_SETTINGS``; the straight-line 
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import TYPE_CHECKING
 
@@ -414,13 +415,27 @@ class CorridorSampler(_CorridorRule):
                  tight: float = CORRIDOR_SETTINGS["tight"], chain: float = CORRIDOR_SETTINGS["chain"]) -> None:
         super().__init__(route, margin, floor, fill, tight)
         self.chain = _check_nonnegative(type(self).__name__, "chain", chain, "steps of arc between the chain's points")
+        #: the roadmap's longest edge (``at_edge``; None: no limit): no link of the chain is longer
+        self.edge: float | None = None
+
+    def at_edge(self, length: float | None) -> CorridorSampler:
+        """This corridor for a roadmap whose edges are at most ``length`` long (None: no limit; ``Sampler``).
+
+        The chain's links are then at most ``length`` apart: a link of ``k`` moves of the walk spans at most
+        ``k`` cell diagonals, so it takes at most ``length / (sqrt(2) * resolution)`` moves (none: no chain).
+        """
+        out = copy.copy(self)
+        out.edge = None if length is None else float(length)
+        return out
 
     def _setup(self) -> None:
         p = self.problem
         require_grid("CorridorSampler", p.world)
         self._to_goal, self._to_start = self.route.cost_to_go(p), None
         self.built = False  # the corridor: built where the chain needs the field to the start, or after the chain
-        link = math.ceil(self.chain * self.route.step_size / p.world.resolution)  # in cells of walk
+        link = math.ceil(self.chain * self.route.step_size / p.world.resolution)  # in moves of the walk
+        if self.edge is not None:  # no link longer than the roadmap's longest edge
+            link = min(link, math.floor(self.edge / (math.sqrt(2.0) * p.world.resolution)))
         #: the chain's cells (flat indices), drawn first, in order
         self.links = (route_chain(self._to_goal.field, lambda: self.start_field().field,
                                   np.asarray(p.world.obstacles, dtype=bool), query_cells(p), link,
@@ -494,7 +509,8 @@ class CorridorSampler(_CorridorRule):
         return cell_points(self.problem.world, self.links[first:first + m], centres, self.low, self.high)
 
     def __repr__(self) -> str:
-        return super().__repr__()[:-1] + (f", chain={self.chain:g})" if self.chain else ")")
+        edge = f", edge={self.edge:g}" if self.edge is not None else ""
+        return super().__repr__()[:-1] + (f", chain={self.chain:g}" if self.chain else "") + edge + ")"
 
 
 class ConvergingRouteSampler(_CorridorRule):

@@ -90,6 +90,9 @@ class PRM(Planner):
         self.k = int(k) if connection == "knn" else 0
         self.max_edge_length = float(max_edge_length) if max_edge_length is not None else None
         self.radius = float(radius) if radius is not None else None
+        # the longest edge it adds, as far as known before it runs (PRM*'s radius shrinks as it grows: not counted)
+        limits = [v for v in (self.max_edge_length, self.radius if connection == "radius" else None) if v is not None]
+        self.edge_limit = min(limits) if limits else None
         d = problem.dim
         mu = problem.world.free_volume()
         # PRM* constant (Karaman & Frazzoli 2011), with OMPL's 1.1 safety factor

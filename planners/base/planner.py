@@ -13,7 +13,15 @@ from numba.core import event as _nb_event
 
 from planners.base.fileio import check_int
 from planners.base.problem import Problem
-from planners.base.samplers import FAMILY_TREE, DrawInterrupted, SampleBatch, Sampler, UniformSampler, is_sampler
+from planners.base.samplers import (
+    FAMILY_ROADMAP,
+    FAMILY_TREE,
+    DrawInterrupted,
+    SampleBatch,
+    Sampler,
+    UniformSampler,
+    is_sampler,
+)
 from planners.datastructures.nn import insert as index_insert
 from planners.kernels import state as slots
 from planners.kernels.cache import announce as announce_compile
@@ -262,6 +270,8 @@ class Planner(abc.ABC):
     #: How the planner uses its samples, told to a sampler's ``for_planner`` hook before binding (``Sampler``):
     #: one of ``planners.base.samplers.PLANNER_FAMILIES``.
     family: ClassVar[str] = FAMILY_TREE
+    #: The longest edge a roadmap planner may add (None: no limit), told to a sampler's ``at_edge`` hook (``Sampler``).
+    edge_limit: float | None = None
 
     def __init__(self, problem: Problem, *, sampler: Sampler | None = None, seed: int | None = None) -> None:
         require_problem(problem)
@@ -284,6 +294,9 @@ class Planner(abc.ABC):
                 raise TypeError(f"{type(sampler).__name__}.for_planner({self.family!r}) returned a "
                                 f"{type(ruled).__name__}, not a Sampler")
             sampler = ruled
+        at_edge = getattr(sampler, "at_edge", None)
+        if self.family == FAMILY_ROADMAP and callable(at_edge):  # the roadmap's longest edge (``Sampler``)
+            sampler = at_edge(self.edge_limit)
         self.problem = problem
         self.seed = int(seed)
         self._sampler_spec = sampler

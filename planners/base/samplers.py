@@ -43,6 +43,10 @@ never picks a per-planner variant. The families:
   (``TreeView.best_cost``).
 
 A family a sampler does not know should get its plain rule back (``for_planner`` returns ``self``).
+
+A sampler whose samples must lie within a roadmap edge of each other (a chain of samples along a route) may also
+define ``at_edge(length) -> Sampler``: the same sampler for a roadmap whose edges are at most ``length`` long (None:
+no limit). A roadmap planner calls it, after ``for_planner``, before binding, with ``Planner.edge_limit``.
 """
 
 from __future__ import annotations
