@@ -414,7 +414,8 @@ class CorridorSampler(_CorridorRule):
                  floor: float = CORRIDOR_SETTINGS["floor"], fill: float | None = CORRIDOR_SETTINGS["fill"],
                  tight: float = CORRIDOR_SETTINGS["tight"], chain: float = CORRIDOR_SETTINGS["chain"]) -> None:
         super().__init__(route, margin, floor, fill, tight)
-        self.chain = _check_nonnegative(type(self).__name__, "chain", chain, "steps of arc between the chain's points")
+        self.chain = _check_nonnegative(type(self).__name__, "chain", chain,
+                                        "the most steps of walk between two points of the chain")
         #: the roadmap's longest edge (``at_edge``; None: no limit): no link of the chain is longer
         self.edge: float | None = None
 
