@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, RouteSampler, shipped_ablation
 from planners.base.fileio import InputError
-from planners.guidance.follow import last_in_sight, next_cell, walk_field, walk_path
+from planners.guidance.follow import SCAN_VISITS, last_in_sight, next_cell, walk_field, walk_path
 from planners.kernels.geometry import grid_segment_free
 from planners.maps.gridsearch import distance_field
 
@@ -172,6 +172,63 @@ def test_walk_path_keeps_the_walks_cells_in_order(seed, tolerance, length, growt
     W = field.shape[1]
     for a, b in itertools.pairwise(cells):
         assert max(abs(a // W - b // W), abs(a % W - b % W)) == 1 and not blocked[b // W, b % W]
+
+
+def python_walk(field, blocked, cell, tolerance, growth):
+    """The tolerant walk over the whole map in plain Python, its visits in a set: what ``walk_path`` must return."""
+    H, W = field.shape
+    cells, seen = [cell], {cell}
+    v, low = cell, field[cell // W, cell % W]
+    while True:
+        r, c = divmod(v, W)
+        best, out = math.inf, -1
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if (dr, dc) == (0, 0) or not (0 <= rr < H and 0 <= cc < W) or blocked[rr, cc]:
+                    continue
+                if dr and dc and (blocked[r + dr, c] or blocked[r, c + dc]):
+                    continue
+                if rr * W + cc not in seen and field[rr, cc] < best:
+                    best, out = field[rr, cc], rr * W + cc
+        if out < 0 or best >= low + tolerance + growth * max(low, 0.0):
+            return cells
+        v, low = out, min(low, best)
+        cells.append(v)
+        seen.add(v)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.5, 5.0), st.sampled_from([0.0, 0.01]))
+def test_a_walk_over_the_whole_map_looks_its_visits_up_in_a_set_and_walks_the_same(seed, tolerance, growth):
+    """Buffers longer than ``SCAN_VISITS`` keep the visits in a hash set (grown as the walk goes): the same cells."""
+    field, blocked = random_map(seed, side=30, density=0.1)
+    free = np.flatnonzero(~blocked)
+    cell = int(free[seed % free.size])
+    path = np.empty(blocked.size + 2, np.int64)
+    assert path.size > SCAN_VISITS
+    moves = walk_path(field, blocked, cell, float(blocked.size), tolerance, growth, path)
+    assert list(path[:moves]) == python_walk(field, blocked, cell, tolerance, growth)
+
+
+def test_a_long_walk_grows_its_set_past_its_first_size():
+    """Along a serpentine corridor of 860 cells (rows joined at alternate ends) whose every third cell is a ripple
+    higher than the cell behind: only the visits keep the walk going on; the set is grown three times."""
+    blocked = np.ones((41, 40), dtype=bool)
+    blocked[0::2] = False
+    order = []
+    for r in range(0, 41, 2):
+        order += [r * 40 + c for c in (range(40) if r % 4 == 0 else range(39, -1, -1))]
+        if r < 40:
+            c = 39 if r % 4 == 0 else 0
+            blocked[r + 1, c] = False
+            order.append((r + 1) * 40 + c)
+    field = np.full(blocked.shape, np.inf)
+    along = np.arange(len(order))
+    field.ravel()[order] = len(order) - along + 2.5 * (along % 3 == 2)  # the far end lowest, ripples of 2.5
+    path = np.empty(blocked.size + 2, np.int64)
+    moves = walk_path(field, blocked, order[0], float(blocked.size), 3.0, 0.0, path)
+    assert list(path[:moves]) == order == python_walk(field, blocked, order[0], 3.0, 0.0)
 
 
 def in_sight(blocked, a, b):

@@ -19,11 +19,43 @@ from planners.kernels.geometry import grid_segment_free
 NO_VISITS = np.empty(0, dtype=np.int64)
 
 
+#: Walks whose buffer holds more cells than this look their visits up in a hash set (``walk_path``): a scan of
+#: the cells walked so far costs as much as a set's lookup for a few dozen of them, and grows with the walk.
+SCAN_VISITS = 64
+
+
 @nb.njit(cache=True, inline="always")
-def lowest_unvisited(field, blocked, r, c, visited, moves):
+def _hashed(table, u):
+    """The slot of ``table`` (power-of-two long; -1: empty) holding cell ``u``, or the empty one where it would go."""
+    mask = table.shape[0] - 1
+    i = (u * 2654435761) & mask  # Knuth's multiplicative hash; open addressing, linear probing
+    while table[i] != -1 and table[i] != u:
+        i = (i + 1) & mask
+    return i
+
+
+@nb.njit(cache=True)
+def _add_visit(table, filled, u):
+    """``table`` with cell ``u`` added (doubled and rehashed when half full); returns the table and its count."""
+    if 2 * (filled + 1) > table.shape[0]:
+        bigger = np.full(2 * table.shape[0], -1, np.int64)
+        for v in table:
+            if v != -1:
+                bigger[_hashed(bigger, v)] = v
+        table = bigger
+    i = _hashed(table, u)
+    if table[i] == -1:
+        table[i] = u
+        filled += 1
+    return table, filled
+
+
+@nb.njit(cache=True, inline="always")
+def lowest_unvisited(field, blocked, r, c, visited, moves, table):
     """The lowest free neighbour of (r, c) not among ``visited[:moves]``, first in row-major order on ties.
 
-    Octile moves with no corner cutting; -1 where there is none.
+    Octile moves with no corner cutting; -1 where there is none. ``table``: the same visits as a hash set
+    (``_add_visit``), looked up instead of scanning ``visited``; empty: scan.
     """
     H, W = field.shape
     best = np.inf
@@ -37,10 +69,13 @@ def lowest_unvisited(field, blocked, r, c, visited, moves):
                 continue
             u = rr * W + cc
             seen = False
-            for i in range(moves):
-                if visited[i] == u:
-                    seen = True
-                    break
+            if table.shape[0] > 0:
+                seen = table[_hashed(table, u)] == u
+            else:
+                for i in range(moves):
+                    if visited[i] == u:
+                        seen = True
+                        break
             if not seen and field[rr, cc] < best:
                 best = field[rr, cc]
                 out = u
@@ -56,7 +91,7 @@ def next_cell(field, blocked, r, c):
     """
     if not np.isfinite(field[r, c]):
         return -1
-    u = lowest_unvisited(field, blocked, r, c, NO_VISITS, 0)
+    u = lowest_unvisited(field, blocked, r, c, NO_VISITS, 0, NO_VISITS)
     W = field.shape[1]
     return u if u >= 0 and field[u // W, u % W] < field[r, c] else -1
 
@@ -85,7 +120,8 @@ def walk_path(field, blocked, cell, length, tolerance, growth, visited):
     """``walk_field``'s walk, its cells in order (``cell`` first) kept in ``visited``; the number of cells.
 
     ``visited`` should be at least ``int(length) + 2`` long (a shorter one ends the walk after
-    ``len(visited) - 1`` moves).
+    ``len(visited) - 1`` moves). A walk with room for more than ``SCAN_VISITS`` cells keeps its visits in a hash
+    set as well, so a walk over the whole map costs in proportion to its length, not its square.
     """
     W = field.shape[1]
     strict = tolerance <= 0.0 and growth <= 0.0
@@ -96,11 +132,16 @@ def walk_path(field, blocked, cell, length, tolerance, growth, visited):
     moves = 1
     if not np.isfinite(low):
         return moves
+    hashed = not strict and visited.shape[0] > SCAN_VISITS
+    table = np.full(256 if hashed else 0, -1, np.int64)
+    filled = 0
+    if hashed:
+        table, filled = _add_visit(table, filled, v)
     while acc < length and moves < visited.shape[0]:
         if strict:
             u = next_cell(field, blocked, v // W, v % W)
         else:
-            u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves)
+            u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves, table)
             if u >= 0 and field[u // W, u % W] >= low + tolerance + growth * max(low, 0.0):
                 u = -1
         if u < 0:
@@ -111,6 +152,8 @@ def walk_path(field, blocked, cell, length, tolerance, growth, visited):
         v = u
         visited[moves] = v  # each move covers at least one cell of path: int(length) + 2 entries suffice
         moves += 1
+        if hashed:
+            table, filled = _add_visit(table, filled, v)
         low = min(low, field[v // W, v % W])
     return moves
 
