@@ -19,6 +19,7 @@ from learning.samplers.route_rules import (
     BidirectionalRouteSampler,
     ConvergingRouteSampler,
     CorridorSampler,
+    WalkField,
     corridor_cells,
     corridor_stages,
     query_cells,
@@ -26,12 +27,13 @@ from learning.samplers.route_rules import (
     route_chain,
     route_sums,
     sight_chain,
+    walk_field_to_start,
     walled_between,
 )
 from planners import OccupancyGrid, Problem, TreeView, UniformSampler, make_planner
 from planners.base.fileio import InputError
 from planners.base.samplers import PLANNER_FAMILIES, TREE_GOAL, TREE_START, SamplerBase
-from planners.guidance.follow import last_in_sight
+from planners.guidance.follow import last_in_sight, path_field, walk_path
 from planners.maps.gridsearch import distance_field
 
 
@@ -336,6 +338,53 @@ def test_the_goal_tree_follows_the_field_to_the_start():
     pts = np.concatenate([bound.draw(np.random.default_rng(s), 1, view) for s in range(40)])
     # the route to the start leaves the goal downwards, to the gap near row 3
     assert np.median(pts[:, 1]) < p.goal[1] - 2
+
+
+def test_the_goal_tree_reads_its_field_off_the_walk_to_the_goal_and_pays_no_second_pass():
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("rooms", VALIDATION_SEED0 + 7, 64, goal_tolerance=4.0)
+    route = make_sampler("route").at_step(4.0)
+    bound = BidirectionalRouteSampler(route).bind(p)
+    assert isinstance(bound.to_start, WalkField) and bound.forward_passes == route.symmetry_passes
+    blocked = np.asarray(p.world.obstacles, dtype=bool)
+    (rs, cs), (rg, cg) = query_cells(p)
+    W = blocked.shape[1]
+    walk = np.empty(blocked.size + 2, np.int64)
+    moves = walk_path(bound.to_goal.field, blocked, rs * W + cs, float(blocked.size), route.ripple,
+                      route.ripple_growth, walk)
+    if walk[moves - 1] != rg * W + cg:
+        walk[moves], moves = rg * W + cg, moves + 1
+    expected = np.where(blocked, np.inf, path_field(blocked, walk, moves) * p.world.resolution / 4.0)
+    assert np.array_equal(bound.to_start.field, expected)  # in steps, to the start along the walk
+    both = BidirectionalRouteSampler(route, goal_tree="pass").bind(p)
+    assert not isinstance(both.to_start, WalkField) and both.forward_passes == 2 * route.symmetry_passes
+    r = make_planner("RRTConnect", p, sampler=route, seed=0, extension_step=4.0).solve(max_iterations=5000)
+    assert r.solved and p.world.path_valid(r.path)
+
+
+def test_a_walk_that_ends_out_of_the_goals_sight_gives_no_field_and_the_goal_tree_takes_the_second_pass():
+    p = wall_problem()
+    blocked = np.asarray(p.world.obstacles, dtype=bool)
+    to_goal = distance_field(blocked, p.world.cell_of(p.goal))
+    pit = to_goal.copy()
+    pit[:, :14] = np.where(blocked[:, :14], np.inf, 0.0)  # flat before the wall: the walk stops where it starts
+    ends = query_cells(p)
+    assert walk_field_to_start(pit, blocked, ends) is None
+    assert walk_field_to_start(to_goal, blocked, ends) is not None
+
+    class Pitted(RouteSampler):
+        def _fields(self, grid):
+            return pit.copy(), pit.copy()
+
+    bound = BidirectionalRouteSampler(Pitted(None, step_size=2.0)).bind(p)
+    assert not isinstance(bound.to_start, WalkField)  # the route sampler's own field to the start
+
+
+@pytest.mark.parametrize("goal_tree", ["both", "", None, 1])
+def test_an_unknown_goal_tree_field_is_refused_by_name(goal_tree):
+    with pytest.raises(InputError, match="goal_tree = .*expected one of walk, pass"):
+        BidirectionalRouteSampler(make_sampler("route_ablation"), goal_tree=goal_tree)
 
 
 def test_after_a_solution_rrtstar_samples_stay_in_the_informed_set():

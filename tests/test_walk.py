@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 
 from learning.samplers.route import ABLATION_SETTINGS, SHIPPED_SETTINGS, RouteSampler, shipped_ablation
 from planners.base.fileio import InputError
-from planners.guidance.follow import SCAN_VISITS, last_in_sight, next_cell, walk_field, walk_path
+from planners.guidance.follow import SCAN_VISITS, last_in_sight, next_cell, path_field, walk_field, walk_path
 from planners.kernels.geometry import grid_segment_free
-from planners.maps.gridsearch import distance_field
+from planners.maps.gridsearch import distance_field, free_components
 
 MOVES = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc]
 
@@ -229,6 +229,29 @@ def test_a_long_walk_grows_its_set_past_its_first_size():
     path = np.empty(blocked.size + 2, np.int64)
     moves = walk_path(field, blocked, order[0], float(blocked.size), 3.0, 0.0, path)
     assert list(path[:moves]) == order == python_walk(field, blocked, order[0], 3.0, 0.0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10_000))
+def test_the_path_field_falls_along_the_path_to_its_first_cell_and_towards_the_path_elsewhere(seed):
+    """The path: a strict walk down the grid search's field. Along it, its length so far; from any cell of its
+    component a strict walk down the path field ends at the path's first cell; elsewhere infinite."""
+    rng = np.random.default_rng(seed)
+    blocked = rng.random((16, 16)) < 0.25
+    free = np.flatnonzero(~blocked)
+    a, b = (int(v) for v in rng.choice(free, 2, replace=False))
+    W = blocked.shape[1]
+    exact = distance_field(blocked, (a // W, a % W))  # the walk down it from b ends at a, where a is reachable
+    path = np.empty(blocked.size + 2, np.int64)
+    moves = walk_path(exact, blocked, b, float(blocked.size), 0.0, 0.0, path)
+    field = path_field(blocked, path, moves)
+    steps = [math.dist(divmod(int(u), W), divmod(int(v), W)) for u, v in itertools.pairwise(path[:moves])]
+    assert np.allclose(field.ravel()[path[:moves]], np.concatenate([[0.0], np.cumsum(steps)]))
+    labels = free_components(blocked).ravel()
+    mine = labels == labels[b]
+    assert np.isfinite(field.ravel()[mine]).all() and np.isinf(field.ravel()[~mine]).all()
+    for cell in np.flatnonzero(mine):
+        assert walk_field(field, blocked, int(cell), float(blocked.size)) == b
 
 
 def in_sight(blocked, a, b):

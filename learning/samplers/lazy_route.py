@@ -315,7 +315,7 @@ class LazyRule(SamplerBase):
 
     @property
     def forward_passes(self) -> int:
-        """The encoder's passes this query took (0 before the switch, two fields after)."""
+        """The encoder's passes this query took (0 before the switch, the rule's after)."""
         return 0 if self.rule is None else self.rule.forward_passes
 
     @property
@@ -342,7 +342,7 @@ class LazyConnectSampler(LazyRule):
 
     Until iteration ``switch_at`` (``switch_iteration(after, ...)``) each sample is uniform over the map, drawn in
     the planner's batches inside its compiled loop; at it, unless the trees have met, the batch's samples past it are
-    dropped, the route sampler's two fields are computed and ``BidirectionalRouteSampler``'s rule goes on from the
+    dropped, the route sampler's fields are computed and ``BidirectionalRouteSampler``'s rule goes on from the
     trees grown so far.
 
     Args:

@@ -15,6 +15,8 @@ from planners import OccupancyGrid, Problem
 from planners.guidance.frontier import frontier_shape
 from planners.kernels.geometry import grid_segment_free
 
+#: The length of a diagonal move, in cells.
+SQRT2 = math.sqrt(2.0)
 #: ``lowest_unvisited``'s visits when none are excluded.
 NO_VISITS = np.empty(0, dtype=np.int64)
 
@@ -51,23 +53,34 @@ def _add_visit(table, filled, u):
 
 
 @nb.njit(cache=True, inline="always")
+def octile_move(blocked, r, c, dr, dc):
+    """The flat index of the free cell one move (dr, dc) from (r, c), or -1: off the map, blocked, no move, or a
+    diagonal that cuts a blocked corner.
+    """
+    H, W = blocked.shape
+    rr, cc = r + dr, c + dc
+    if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
+        return -1
+    if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
+        return -1
+    return rr * W + cc
+
+
+@nb.njit(cache=True, inline="always")
 def lowest_unvisited(field, blocked, r, c, visited, moves, table):
     """The lowest free neighbour of (r, c) not among ``visited[:moves]``, first in row-major order on ties.
 
     Octile moves with no corner cutting; -1 where there is none. ``table``: the same visits as a hash set
     (``_add_visit``), looked up instead of scanning ``visited``; empty: scan.
     """
-    H, W = field.shape
+    W = field.shape[1]
     best = np.inf
     out = -1
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
-            rr, cc = r + dr, c + dc
-            if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
+            u = octile_move(blocked, r, c, dr, dc)
+            if u < 0:
                 continue
-            if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
-                continue
-            u = rr * W + cc
             seen = False
             if table.shape[0] > 0:
                 seen = table[_hashed(table, u)] == u
@@ -76,8 +89,8 @@ def lowest_unvisited(field, blocked, r, c, visited, moves, table):
                     if visited[i] == u:
                         seen = True
                         break
-            if not seen and field[rr, cc] < best:
-                best = field[rr, cc]
+            if not seen and field[u // W, u % W] < best:
+                best = field[u // W, u % W]
                 out = u
     return out
 
@@ -175,6 +188,45 @@ def last_in_sight(blocked, path, moves):
         if not grid_segment_free(blocked, 1.0, x0, y0, u % W + 0.5, u // W + 0.5):
             return path[i - 1]
     return end
+
+
+@nb.njit(cache=True)
+def path_field(blocked, path, moves):
+    """A cost to ``path[0]`` of every cell by way of ``path[:moves]`` (a walk: octile moves, no cell twice), in cells.
+
+    On the path, the length of the path up to the cell; off it, that of the path cell a breadth-first search from
+    all of the path's cells (octile moves, no corner cutting) reaches it from, plus the lengths of the moves from
+    there. It falls along the path towards its first cell and away from the path everywhere else, so a walk down it
+    joins the path and follows it back. Infinite at blocked cells and cells the path's component does not hold.
+    """
+    H, W = blocked.shape
+    out = np.full(H * W, np.inf)
+    queue = np.empty(H * W, np.int64)
+    tail = 0
+    s = 0.0
+    for i in range(moves):
+        u = path[i]
+        if i:
+            v = path[i - 1]
+            dr, dc = u // W - v // W, u % W - v % W
+            s += math.sqrt(float(dr * dr + dc * dc))
+        if out[u] == np.inf:
+            out[u] = s
+            queue[tail] = u
+            tail += 1
+    head = 0
+    while head < tail:
+        v = queue[head]
+        head += 1
+        r, c = v // W, v % W
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                u = octile_move(blocked, r, c, dr, dc)
+                if u >= 0 and out[u] == np.inf:
+                    out[u] = out[v] + (SQRT2 if dr != 0 and dc != 0 else 1.0)
+                    queue[tail] = u
+                    tail += 1
+    return out.reshape(H, W)
 
 
 @nb.njit(cache=True)

@@ -206,6 +206,7 @@ def main(argv=None) -> int:
         for field in args.fields:
             rules = (("start tree only", StartTreeOnly), ("both trees", BidirectionalRouteSampler),
                      ("one field, mirrored", lambda r: BidirectionalRouteSampler(r, mirrored(r))),
+                     ("goal tree on walk", lambda r: BidirectionalRouteSampler(r, goal_tree="walk")),
                      ("goal tree straight", lambda r: BidirectionalRouteSampler(
                          r, make_sampler("route_ablation", models=models))))
             for rule, wrap in rules:
