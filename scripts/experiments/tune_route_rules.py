@@ -15,10 +15,12 @@
 
 ``--connect``: RRT-Connect with the RRT rule handed as it is (it guides the start tree, and its samples on the goal
 tree's turns pull the goal tree towards the start tree's target) against both trees guided, each by its own field
-(``BidirectionalRouteSampler``), against one field read both ways (the goal tree follows the field to the goal
-mirrored, ``MirroredField``), and against the goal tree on the straight-line field to the start (the ablation's: no
-second pass), for each field; prints median iterations per family and their geometric mean, and the geometric mean
-of the median time per query (each run a first query on its map: the encoder's kept map parts are cleared first).
+(``BidirectionalRouteSampler(goal_tree="pass")``: two passes), against one field read both ways (the goal tree
+follows the field to the goal mirrored, ``MirroredField``), against the goal tree on the field read off the walk down
+the field to the goal (``goal_tree="walk"``, shipped: one pass), and against the goal tree on the straight-line field
+to the start (the ablation's: no second pass), for each field; prints median iterations per family and their
+geometric mean, and the geometric mean of the median time per query (each run a first query on its map: the
+encoder's kept map parts are cleared first).
 
 ``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin, floor and fill (floor 1: the RRT rule, then the
 informed set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of the best cost
@@ -204,7 +206,8 @@ def main(argv=None) -> int:
         return 0
     if args.connect:
         for field in args.fields:
-            rules = (("start tree only", StartTreeOnly), ("both trees", BidirectionalRouteSampler),
+            rules = (("start tree only", StartTreeOnly),
+                     ("both trees", lambda r: BidirectionalRouteSampler(r, goal_tree="pass")),
                      ("one field, mirrored", lambda r: BidirectionalRouteSampler(r, mirrored(r))),
                      ("goal tree on walk", lambda r: BidirectionalRouteSampler(r, goal_tree="walk")),
                      ("goal tree straight", lambda r: BidirectionalRouteSampler(
