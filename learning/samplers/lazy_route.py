@@ -93,7 +93,7 @@ SHIPPED_CAP = 1000.0
 #: many iterations per step-sized square of the map, then follow the route field's two fields (0.05 to inf: 0.801,
 #: 0.822, 0.797, 0.696, 0.614, 0.611, 0.612; 59%, 1.4 in 38%; never switching is within 3%: on these maps the fields
 #: are a late safety net). Asked again once the goal tree's field came off the walk (one pass for both trees), floor
-#: 2,000: 0.943, 0.944, 0.915, 0.801, 0.714, 0.694, 0.706 (0.7 in 49%, 1.4 in 50%).
+#: 2,000: 0.876, 0.876, 0.855, 0.759, 0.672, 0.667, 0.680 (0.7 in 67%, 1.4 in 32%).
 SHIPPED_CONNECT_AFTER = 0.7
 #: The roadmaps' switch (``roadmap_after``: PRM, Lazy-PRM, OB-PRM; ``--planner PRM``): uniform samples until this
 #: many per step-sized square of the map, then the route field's corridor (0.05 to inf: 0.529, 0.529, 0.537, 0.529,
@@ -103,7 +103,7 @@ SHIPPED_ROADMAP_AFTER = 0.05
 #: map's area (``floor``, ``connect_floor``, ``roadmap_floor``; 0: none): a pass has a fixed cost besides the one that
 #: grows with the area, which on a small map the area's budget does not cover (``--floor``): RRT 0, 250, 500, 1000:
 #: 1.175, 0.913, 0.870, 0.846 (500, within 3% of 1,000; 63%); RRT-Connect 0, 500, 1000, 2000, 4000: 1.088, 0.832,
-#: 0.735, 0.635, 0.626 (2,000; 62%; with one pass for both trees, 0 to 2,000: 0.985, 0.809, 0.702, 0.636, 94%); PRM,
+#: 0.735, 0.635, 0.626 (2,000; 62%; with one pass for both trees, 0 to 2,000: 1.264, 1.038, 0.911, 0.813, 98%); PRM,
 #: asked again once the corridor began with a chain along the route, 0, 250, 500, 1000: 0.835, 0.469, 0.449, 0.447
 #: ms (500, within 3% of 1,000; 98% of the resamples; before the chain, with 2000 among them, 0.989, 0.567, 0.545,
 #: 0.540, 0.527 chose 1,000). The larger the floor, the fewer runs reach the field: on these maps the classical phase

@@ -334,9 +334,9 @@ def walk_field_to_start(to_goal: np.ndarray, blocked: np.ndarray, ends: tuple, r
 #: Where RRT-Connect's goal tree takes its field to the start from (``BidirectionalRouteSampler``): "walk", read off the
 #: walk down the field to the goal (no second pass where that walk reaches the goal's sight), or "pass", the field's
 #: own second pass with start and goal swapped. "walk" was chosen on the validation maps
-#: (``tune_route_rules.py --connect``): a geometric mean of 23.7 iterations over the five families against two
-#: passes' 24.6 (exact field: 25.0 against 24.8), 4.1 against 5.4 ms a first query, and on 12 maps a family no rule
-#: had looked at 23.1 against 23.0 (exact: 23.5 and 23.5).
+#: (``tune_route_rules.py --connect``): a geometric mean of 21.6 iterations over the five families against two
+#: passes' 24.6 (exact field: 22.5 against 24.8), 5.9 against 8.4 ms a first query, and on 12 maps a family no rule
+#: had looked at 23.5 against 23.0 (exact: 24.8 against 23.5).
 GOAL_TREE_FIELDS = ("walk", "pass")
 
 

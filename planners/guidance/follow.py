@@ -195,11 +195,13 @@ def path_field(blocked, path, moves):
     """A cost to ``path[0]`` of every cell by way of ``path[:moves]`` (a walk: octile moves, no cell twice), in cells.
 
     On the path, the length of the path up to the cell; off it, that of the path cell a breadth-first search from
-    all of the path's cells (octile moves, no corner cutting) reaches it from, plus the lengths of the moves from
-    there. It falls along the path towards its first cell and away from the path everywhere else, so a walk down it
-    joins the path and follows it back. Infinite at blocked cells and cells the path's component does not hold.
+    all of the path's cells (octile moves, no corner cutting; a cell's straight neighbours before its diagonal ones)
+    reaches it from, plus the lengths of the moves from there. It falls along the path towards its first cell and
+    away from the path everywhere else, so a walk down it joins the path and follows it back. Infinite at blocked
+    cells and cells the path's component does not hold. One pass over the map's cells: about 10 ns a cell.
     """
     H, W = blocked.shape
+    wall = blocked.ravel()
     out = np.full(H * W, np.inf)
     queue = np.empty(H * W, np.int64)
     tail = 0
@@ -215,17 +217,49 @@ def path_field(blocked, path, moves):
             queue[tail] = u
             tail += 1
     head = 0
+    # each neighbour written out: a loop over the eight moves takes three times as long
     while head < tail:
         v = queue[head]
         head += 1
-        r, c = v // W, v % W
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                u = octile_move(blocked, r, c, dr, dc)
-                if u >= 0 and out[u] == np.inf:
-                    out[u] = out[v] + (SQRT2 if dr != 0 and dc != 0 else 1.0)
-                    queue[tail] = u
-                    tail += 1
+        r = v // W
+        c = v - r * W
+        x = out[v]
+        up = r > 0 and not wall[v - W]
+        down = r < H - 1 and not wall[v + W]
+        left = c > 0 and not wall[v - 1]
+        right = c < W - 1 and not wall[v + 1]
+        if up and out[v - W] == np.inf:
+            out[v - W] = x + 1.0
+            queue[tail] = v - W
+            tail += 1
+        if down and out[v + W] == np.inf:
+            out[v + W] = x + 1.0
+            queue[tail] = v + W
+            tail += 1
+        if left and out[v - 1] == np.inf:
+            out[v - 1] = x + 1.0
+            queue[tail] = v - 1
+            tail += 1
+        if right and out[v + 1] == np.inf:
+            out[v + 1] = x + 1.0
+            queue[tail] = v + 1
+            tail += 1
+        if up and left and not wall[v - W - 1] and out[v - W - 1] == np.inf:
+            out[v - W - 1] = x + SQRT2
+            queue[tail] = v - W - 1
+            tail += 1
+        if up and right and not wall[v - W + 1] and out[v - W + 1] == np.inf:
+            out[v - W + 1] = x + SQRT2
+            queue[tail] = v - W + 1
+            tail += 1
+        if down and left and not wall[v + W - 1] and out[v + W - 1] == np.inf:
+            out[v + W - 1] = x + SQRT2
+            queue[tail] = v + W - 1
+            tail += 1
+        if down and right and not wall[v + W + 1] and out[v + W + 1] == np.inf:
+            out[v + W + 1] = x + SQRT2
+            queue[tail] = v + W + 1
+            tail += 1
     return out.reshape(H, W)
 
 
