@@ -27,6 +27,7 @@ from learning.samplers.route_rules import (
     route_chain,
     route_sums,
     sight_chain,
+    walk_field_steps,
     walk_field_to_start,
     walled_between,
 )
@@ -403,7 +404,8 @@ def test_after_a_solution_rrtstars_corridor_widens_by_stage_inside_the_informed_
     exact = CorridorSampler(make_sampler("exact_route", step_size=2.0), 0.0, 0.0, None).bind(p)
     to_start = distance_field(p.world.obstacles, p.world.cell_of(p.start)).ravel()
     off = np.setdiff1d(np.flatnonzero(np.isfinite(to_start)), exact.cells[:exact.counts[0]])
-    bound = ConvergingRouteSampler(DippedExact(off[np.argmin(to_start[off])]), 0.0, 0.0, 1.0).bind(p)
+    bound = ConvergingRouteSampler(DippedExact(off[np.argmin(to_start[off])]), 0.0, 0.0, 1.0,
+                                   start_field="pass").bind(p)  # the dip's corridor from both fields
     cost = 60.0  # an informed set that leaves some corridor cells out
     view = TreeView(p, np.array([p.start]), np.array([-1]), 1, 0, 1.0, cost, 100)
     rng = np.random.default_rng(5)
@@ -540,21 +542,36 @@ def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run():
     assert runs[1].sampler.forward_passes == 2
 
 
-def test_rrtstar_pays_the_field_to_the_start_only_once_it_has_a_solution():
+@pytest.mark.parametrize("start_field", ["pass", "walk"])
+def test_rrtstar_pays_the_field_to_the_start_only_once_it_has_a_solution(start_field):
+    """With the field to the start read off the walk, no second pass at all; with a pass, one once it has a solution."""
     from learning.samplers.route import FieldCache, shipped_sampler
     from planners.maps.generators import VALIDATION_SEED0, generate
 
-    p = generate("forest", VALIDATION_SEED0 + 1, 64, goal_tolerance=4.0)
+    p = generate("rooms", VALIDATION_SEED0 + 7, 64, goal_tolerance=4.0)
     cache = FieldCache()
     route = shipped_sampler(device="cpu")
     route.fields = cache
-    first = make_planner("RRTstar", p, sampler=route, seed=0, stop_on_first_solution=True, step_size=4.0)
+    plain = shipped_sampler(device="cpu").at_step(4.0)  # no cache: the walk on this map reaches the goal's sight
+    assert walk_field_steps(plain, p, plain.cost_to_go(p).field) is not None
+
+    def rule():
+        return ConvergingRouteSampler(route, start_field=start_field)
+
+    first = make_planner("RRTstar", p, sampler=rule(), seed=0, stop_on_first_solution=True, step_size=4.0)
     r = first.solve(max_iterations=5000)
     assert r.solved and cache.misses == 1 and first.sampler.forward_passes == 1 and not first.sampler.built
-    anytime = make_planner("RRTstar", p, sampler=route, seed=0, step_size=4.0)
+    anytime = make_planner("RRTstar", p, sampler=rule(), seed=0, step_size=4.0)
     more = anytime.solve(max_iterations=r.iterations + 50)
     assert (more.first_solution_iteration, anytime.sampler.built) == (r.iterations, True)
-    assert cache.misses == 2 and anytime.sampler.forward_passes == 2 and anytime.sampler.reused_seconds > 0
+    passes = 1 if start_field == "walk" else 2
+    assert cache.misses == passes and anytime.sampler.forward_passes == passes and anytime.sampler.reused_seconds > 0
+
+
+def test_rrtstar_takes_its_corridors_field_to_the_start_off_the_walk_by_default():
+    assert ConvergingRouteSampler(make_sampler("route")).start_field == "walk"
+    with pytest.raises(InputError, match="start_field = .*expected one of walk, pass"):
+        ConvergingRouteSampler(make_sampler("route"), start_field="both")
 
 
 def test_the_every_planner_script_prints_each_planners_rows_and_refuses_bad_counts(capsys):

@@ -418,8 +418,9 @@ class LazyConvergingSampler(ConvergingRouteSampler):
     encoder's field once the run has not solved by RRT's switch (``after``, ``floor``, ``cap``, ``stall``: RRT*'s
     iterations up to its first solution are RRT's with rewiring, so it takes RRT's switch). From the first solution
     on, ``ConvergingRouteSampler``'s corridor at its settings: at its first draw it computes the field to the goal,
-    where the straight line solved without it, and the field to the start. So a run that stops at its first solution
-    before the switch pays no pass, and a run that goes on for a shorter path pays two.
+    where the straight line solved without it, and reads the field to the start off the walk down it (a second pass
+    where that walk ends out of the goal's sight). So a run that stops at its first solution before the switch pays no
+    pass, and a run that goes on for a shorter path pays one (or two).
 
     Up to the first solution it draws inside RRT*'s compiled loop (``planners.fused.rrtstar_loop``) on either side of
     the switch (``SwitchLoop``); with a stall switch (off by default) it draws through ``draw``.

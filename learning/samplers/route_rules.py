@@ -22,9 +22,10 @@ handed to:
   draws per step-sized square of its cells (``corridor_stages``), out to every cell the field reaches.
 - ``ConvergingRouteSampler`` (RRT*, Informed RRT*): ``RouteSampler``'s rule to the first solution, then the
   corridor cells inside the informed set (the states that could lie on a shorter path), widening in the same
-  stages, with a ``floor`` share from the informed set itself (``InformedSampler``). The field to the start is
-  computed at the first draw after the first solution, so a run that stops there pays one field; the draws up
-  to it run inside RRT*'s compiled loop (``planners.fused.rrtstar_loop``).
+  stages, with a ``floor`` share from the informed set itself (``InformedSampler``). The corridor's field to the
+  start is read off the walk down the field to the goal at the first draw after the first solution (a second pass
+  only where that walk ends out of the goal's sight); the draws up to it run inside RRT*'s compiled loop
+  (``planners.fused.rrtstar_loop``).
 
 The settings (``CORRIDOR_SETTINGS``, ``CONVERGING_SETTINGS``; the straight-line ablation's own,
 ``ABLATION_CORRIDOR``, ``ABLATION_CONVERGING``) were chosen on validation maps
@@ -89,6 +90,12 @@ CONVERGING_SETTINGS = {"margin": 0.1, "floor": 0.1, "fill": 8.0}
 #: The straight-line ablation's, tuned for it on the same maps: an ellipse twice as long as the straight line;
 #: it widens as the learned field's does.
 ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1, "fill": 8.0}
+#: Where RRT*'s corridor takes its field to the start (``ConvergingRouteSampler``'s ``start_field``): read off the walk
+#: down the field to the goal, chosen on the validation maps (``tune_route_rules.py --rrtstar --start-fields pass
+#: walk``): to within 5% and 1% of the best cost in a geometric mean of 899 and 2,150 iterations against the second
+#: pass's 984 and 2,377 (2 maps a family), and 872 and 2,250 against 901 and 2,218 on 6 maps a family no rule had
+#: looked at (at most 1.05 times the pass's, and one pass fewer).
+CONVERGING_START_FIELD = "walk"
 #: Corridor cells are those within ``margin`` times the shortest route plus this many steps.
 WIDTH_STEPS = 1.0
 #: Samples per draw once RRT* has a solution (the informed set shrinks as the solution improves).
@@ -331,6 +338,20 @@ def walk_field_to_start(to_goal: np.ndarray, blocked: np.ndarray, ends: tuple, r
     return path_field(blocked, visited, moves)
 
 
+def walk_field_steps(route: RouteSampler, problem: Problem, to_goal: np.ndarray) -> np.ndarray | None:
+    """``walk_field_to_start`` for ``route`` on ``problem`` from its field to the goal, in steps (None where the walk
+    ends out of the goal's sight), ``inf`` on obstacles; None for the straight-line ablation, whose own field to the
+    start costs no pass.
+    """
+    if route.net is None and type(route) is RouteSampler:
+        return None
+    grid = problem.world
+    blocked = np.asarray(grid.obstacles, dtype=bool)
+    cells = walk_field_to_start(to_goal, blocked, query_cells(problem), getattr(route, "ripple", 0.0),
+                                getattr(route, "ripple_growth", 0.0))
+    return None if cells is None else cells * (grid.resolution / route.step_size)
+
+
 #: Where RRT-Connect's goal tree takes its field to the start from (``BidirectionalRouteSampler``): "walk", read off the
 #: walk down the field to the goal (no second pass where that walk reaches the goal's sight), or "pass", the field's
 #: own second pass with start and goal swapped. "walk" was chosen on the validation maps
@@ -370,14 +391,8 @@ class BidirectionalRouteSampler(SamplerBase):
     def _goal_tree_sampler(self, p: Problem) -> RouteSampler:
         if self.backward is not None:
             return self.backward
-        straight = self.route.net is None and type(self.route) is RouteSampler
-        if self.goal_tree == "walk" and not straight:
-            grid = p.world
-            cells = walk_field_to_start(self.to_goal.field, np.asarray(grid.obstacles, dtype=bool), query_cells(p),
-                                        self.route.ripple, self.route.ripple_growth)
-            if cells is not None:
-                return WalkField(self.route, cells * (grid.resolution / self.route.step_size))
-        return self.route
+        field = walk_field_steps(self.route, p, self.to_goal.field) if self.goal_tree == "walk" else None
+        return self.route if field is None else WalkField(self.route, field)
 
     @property
     def forward_passes(self) -> int:
@@ -595,11 +610,18 @@ class ConvergingRouteSampler(_CorridorRule):
     Args:
         route: The route sampler whose rule runs to the first solution and whose field makes the corridor.
         margin, floor, fill: As ``CorridorSampler``'s, after the first solution.
+        start_field: Where the corridor's field to the start comes from (``GOAL_TREE_FIELDS``): "pass", the field's
+            second pass with start and goal swapped; "walk", read off the walk down the field to the goal
+            (``walk_field_to_start``; the pass where that walk ends out of the goal's sight).
     """
 
     def __init__(self, route: RouteSampler, margin: float = CONVERGING_SETTINGS["margin"],
-                 floor: float = CONVERGING_SETTINGS["floor"], fill: float | None = CONVERGING_SETTINGS["fill"]) -> None:
+                 floor: float = CONVERGING_SETTINGS["floor"], fill: float | None = CONVERGING_SETTINGS["fill"],
+                 start_field: str = CONVERGING_START_FIELD) -> None:
         super().__init__(route, margin, floor, fill)
+        if start_field not in GOAL_TREE_FIELDS:
+            raise InputError(f"start_field = {short_repr(start_field)}, expected one of {', '.join(GOAL_TREE_FIELDS)}")
+        self.start_field = start_field
 
     def _setup(self) -> None:
         self.first = self.route.bind(self.problem)  # refuses a world that is not an OccupancyGrid
@@ -619,9 +641,12 @@ class ConvergingRouteSampler(_CorridorRule):
         if self.built:
             return
         p = self.problem
-        to_start = self.route.cost_to_go(reversed_query(p))
-        self._stages(self.first.field, to_start.field)
-        self._start_reused = to_start.seconds if to_start.reused else 0.0
+        walked = walk_field_steps(self.route, p, self.first.field) if self.start_field == "walk" else None
+        self._start_passes = 0 if walked is not None or self.route.net is None else self.route.symmetry_passes
+        if walked is None:
+            to_start = self.route.cost_to_go(reversed_query(p))
+            walked, self._start_reused = to_start.field, (to_start.seconds if to_start.reused else 0.0)
+        self._stages(self.first.field, walked)
         self.informed = InformedSampler().bind(p)
         grid = p.world
         rows, cols = np.divmod(self.cells, grid.width)
@@ -636,8 +661,7 @@ class ConvergingRouteSampler(_CorridorRule):
     @property
     def forward_passes(self) -> int:
         """The encoder's passes this query took (the field to the goal; the field to the start once built)."""
-        return self.first.forward_passes + (0 if self.route.net is None or not self.built
-                                            else self.route.symmetry_passes)
+        return self.first.forward_passes + (self._start_passes if self.built else 0)
 
     def fuse(self, planner: Planner) -> FusedRRT | None:
         """RRT*'s loop with the route rule's draws compiled in up to the first solution (the same samples as ``draw``).

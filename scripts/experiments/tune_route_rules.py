@@ -22,9 +22,10 @@ to the start (the ablation's: no second pass), for each field; prints median ite
 geometric mean, and the geometric mean of the median time per query (each run a first query on its map: the
 encoder's kept map parts are cleared first).
 
-``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin, floor and fill (floor 1: the RRT rule, then the
-informed set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of the best cost
-any of them reached (``learning.evaluation.every_planner.convergence``), per family, and their geometric means.
+``--rrtstar``: RRT* with ``ConvergingRouteSampler`` at each margin, floor, fill and ``--start-fields`` (floor 1: the
+RRT rule, then the informed set only), and the RRT rule throughout; prints the median iterations to within 5% and 1% of
+the best cost any of them reached (``learning.evaluation.every_planner.convergence``), per family, and their geometric
+means.
 
 For each field (the route encoder, its straight-line ablation, the exact cost-to-go) and each corridor
 ``margin``, uniform ``floor``, ``fill`` (``--fills``: draws per step-sized square of a stage of the
@@ -181,6 +182,8 @@ def main(argv=None) -> int:
     ap.add_argument("--connect", action="store_true", help="RRT-Connect: the start tree guided, or both")
     ap.add_argument("--rrtstar", action="store_true", help="RRT*: the rule after the first solution")
     ap.add_argument("--budget", type=int, default=3000, help="RRT* iterations per run with --rrtstar")
+    ap.add_argument("--start-fields", nargs="+", default=["pass"], choices=["pass", "walk"],
+                    help="with --rrtstar: the corridor's field to the start, a second pass or read off the walk")
     args = ap.parse_args(argv)
     if args.first_map < 0:
         ap.error(f"--first-map must be >= 0, got {args.first_map}")
@@ -191,10 +194,11 @@ def main(argv=None) -> int:
         for field in args.fields:
             setups = [Setup("RRT rule throughout", "RRTstar", field, make=lambda f=field: StartTreeOnly(
                 make_sampler(f, models=models)))]
-            setups += [Setup(f"margin {m:g} floor {fl:g} fill {fi}", "RRTstar", field,
-                             make=lambda f=field, m=m, fl=fl, fi=fi: ConvergingRouteSampler(
-                                 make_sampler(f, models=models), m, fl, fi))
-                       for m, fl, fi in itertools.product(args.margins, args.floors, args.fills)]
+            setups += [Setup(f"margin {m:g} floor {fl:g} fill {fi} start {sf}", "RRTstar", field,
+                             make=lambda f=field, m=m, fl=fl, fi=fi, sf=sf: ConvergingRouteSampler(
+                                 make_sampler(f, models=models), m, fl, fi, start_field=sf))
+                       for m, fl, fi, sf in itertools.product(args.margins, args.floors, args.fills,
+                                                              args.start_fields)]
             rows = convergence(maps, setups, seeds=tuple(range(args.seeds)), budget=args.budget)
             for s in setups:
                 mine = [r for r in rows if r["sampler"] == s.label]
