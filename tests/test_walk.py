@@ -366,6 +366,12 @@ def test_the_walk_cost_script_times_each_walk_and_refuses_no_walks(capsys):
     with pytest.raises(SystemExit) as stop:
         script.main(["--walks", "0"])
     assert stop.value.code == 2
+    assert script.main(["--whole", "--walks", "20", "--side", "64"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("whole route, shipped") and "moves per walk" in line and line.endswith("ns per move")
+    with pytest.raises(SystemExit) as stop:
+        script.main(["--whole", "--side", "8"])
+    assert stop.value.code == 2
 
 
 @pytest.mark.experiments
