@@ -34,7 +34,7 @@ from learning.samplers.route_rules import (
 from planners import OccupancyGrid, Problem, TreeView, UniformSampler, make_planner
 from planners.base.fileio import InputError
 from planners.base.samplers import PLANNER_FAMILIES, TREE_GOAL, TREE_START, SamplerBase
-from planners.guidance.follow import last_in_sight, path_field, walk_path
+from planners.guidance.follow import last_in_sight, path_field, walk_field, walk_path
 from planners.maps.gridsearch import distance_field
 
 
@@ -364,7 +364,8 @@ def test_the_goal_tree_reads_its_field_off_the_walk_to_the_goal_and_pays_no_seco
     assert r.solved and p.world.path_valid(r.path)
 
 
-def test_a_walk_that_ends_out_of_the_goals_sight_gives_no_field_and_the_goal_tree_takes_the_second_pass():
+def test_a_walk_that_ends_out_of_the_goals_sight_gives_its_field_as_far_as_it_went_or_none():
+    """RRT-Connect's goal tree takes the walk's field as far as it went; RRT*'s corridor (no ``partial``) the pass."""
     p = wall_problem()
     blocked = np.asarray(p.world.obstacles, dtype=bool)
     to_goal = distance_field(blocked, p.world.cell_of(p.goal))
@@ -373,13 +374,25 @@ def test_a_walk_that_ends_out_of_the_goals_sight_gives_no_field_and_the_goal_tre
     ends = query_cells(p)
     assert walk_field_to_start(pit, blocked, ends) is None
     assert walk_field_to_start(to_goal, blocked, ends) is not None
+    (rs, cs), _ = ends
+    start = np.array([rs * blocked.shape[1] + cs], dtype=np.int64)  # the walk: the start's cell alone
+    assert np.array_equal(walk_field_to_start(pit, blocked, ends, partial=True), path_field(blocked, start, 1))
 
     class Pitted(RouteSampler):
         def _fields(self, grid):
             return pit.copy(), pit.copy()
 
-    bound = BidirectionalRouteSampler(Pitted(None, step_size=2.0)).bind(p)
-    assert not isinstance(bound.to_start, WalkField)  # the route sampler's own field to the start
+    pitted = Pitted(None, step_size=2.0)
+    bound = BidirectionalRouteSampler(pitted).bind(p)
+    assert isinstance(bound.to_start, WalkField)  # no second pass: the field of the walk as far as it went
+    walked = walk_field_to_start(pit, blocked, ends, pitted.ripple, pitted.ripple_growth, partial=True)
+    assert np.array_equal(bound.to_start.field, np.where(blocked, np.inf, walked / 2.0))  # in steps of 2 cells
+    W = blocked.shape[1]
+    (rg, cg) = ends[1]
+    assert np.isfinite(walked[rg, cg])  # from the goal a strict walk down it reaches the start
+    assert walk_field(walked, blocked, rg * W + cg, float(blocked.size)) == start[0]
+    starred = ConvergingRouteSampler(pitted, start_field="walk").bind(p)
+    assert walk_field_steps(pitted, p, starred.first.field) is None  # the corridor would take the pass
 
 
 @pytest.mark.parametrize("goal_tree", ["both", "", None, 1])

@@ -10,9 +10,9 @@ handed to:
   a field to the start, each by ``RouteSampler``'s rule, uniform floor included; each draw serves the tree whose
   turn it is (``TreeView.tree``). The field to the start is read off the route sampler's walk down the field to the
   goal from the start (``walk_field_to_start``: along the walk its length from the start, off it the way back to
-  the walk), so both trees take one pass; only where that walk ends out of the goal's sight is it a second pass
-  with start and goal swapped. Its draws run inside
-  RRT-Connect's compiled loop (``planners.fused.connect_loop``), as the route sampler's run inside RRT's.
+  the walk; where the walk ends out of the goal's sight, the walk as far as it went), so both trees take one pass.
+  Its draws run inside RRT-Connect's compiled loop (``planners.fused.connect_loop``), as the route sampler's run
+  inside RRT's.
 - ``CorridorSampler`` (PRM, Lazy-PRM, OB-PRM): first a chain along the route (``route_chain``: the corners of the
   route sampler's walk down the field from the start, each in sight of the one before), then over the cells whose
   cost from the start plus cost to the goal is within ``margin`` of the lowest, a corridor around the routes the
@@ -316,13 +316,14 @@ class WalkField(RouteSampler):
 
 
 def walk_field_to_start(to_goal: np.ndarray, blocked: np.ndarray, ends: tuple, ripple: float = 0.0,
-                        growth: float = 0.0) -> np.ndarray | None:
+                        growth: float = 0.0, partial: bool = False) -> np.ndarray | None:
     """A field to the start (in cells) read off the walk down ``to_goal`` from the start, or None.
 
     The walk is the route sampler's (``walk_path``, crossing ripples shallower than ``ripple`` and ``growth``); where it
     ends in sight of the goal (the goal's cell then closing it), the field is ``planners.guidance.follow.path_field`` of
     it: along the walk its length from the start, off it the way back to the walk. Where the walk ends out of the
-    goal's sight, None: the walk says nothing of the route's last part.
+    goal's sight (a pit of a learned field), the walk says nothing of the route's last part: None, or with ``partial``
+    the field of the walk as far as it went (from the goal, the way to the walk's nearest part, then along it).
     """
     (rs, cs), (rg, cg) = ((int(a), int(b)) for a, b in ends)
     cols = blocked.shape[1]
@@ -332,32 +333,35 @@ def walk_field_to_start(to_goal: np.ndarray, blocked: np.ndarray, ends: tuple, r
     last = visited[moves - 1]
     if last != goal:
         if last_in_sight(blocked, np.array([last, goal], dtype=np.int64), 2) != goal:
-            return None
+            return path_field(blocked, visited, moves) if partial else None
         visited[moves] = goal  # the segment to the goal's centre is free: a walk of straight cells would cross it
         moves += 1
     return path_field(blocked, visited, moves)
 
 
-def walk_field_steps(route: RouteSampler, problem: Problem, to_goal: np.ndarray) -> np.ndarray | None:
-    """``walk_field_to_start`` for ``route`` on ``problem`` from its field to the goal, in steps (None where the walk
-    ends out of the goal's sight), ``inf`` on obstacles; None for the straight-line ablation, whose own field to the
-    start costs no pass.
+def walk_field_steps(route: RouteSampler, problem: Problem, to_goal: np.ndarray,
+                     partial: bool = False) -> np.ndarray | None:
+    """``walk_field_to_start`` for ``route`` on ``problem`` from its field to the goal, in steps (with ``partial`` as
+    there), ``inf`` on obstacles; None where it gives none, and for the straight-line ablation, whose own field to
+    the start costs no pass.
     """
     if route.net is None and type(route) is RouteSampler:
         return None
     grid = problem.world
     blocked = np.asarray(grid.obstacles, dtype=bool)
     cells = walk_field_to_start(to_goal, blocked, query_cells(problem), getattr(route, "ripple", 0.0),
-                                getattr(route, "ripple_growth", 0.0))
+                                getattr(route, "ripple_growth", 0.0), partial)
     return None if cells is None else cells * (grid.resolution / route.step_size)
 
 
 #: Where RRT-Connect's goal tree takes its field to the start from (``BidirectionalRouteSampler``): "walk", read off the
-#: walk down the field to the goal (no second pass where that walk reaches the goal's sight), or "pass", the field's
-#: own second pass with start and goal swapped. "walk" was chosen on the validation maps
-#: (``tune_route_rules.py --connect``): a geometric mean of 21.6 iterations over the five families against two
-#: passes' 24.6 (exact field: 22.5 against 24.8), 5.9 against 8.4 ms a first query, and on 12 maps a family no rule
-#: had looked at 23.5 against 23.0 (exact: 24.8 against 23.5).
+#: walk down the field to the goal (no second pass), or "pass", the field's own second pass with start and goal
+#: swapped. "walk" was chosen on the validation maps (``tune_route_rules.py --connect``): a geometric mean of 21.6
+#: iterations over the five families against two passes' 24.6 (exact field: 22.5 against 24.8), 5.9 against 8.4 ms
+#: a first query, and on 12 maps a family no rule had looked at 23.5 against 23.0 (exact: 24.8 against 23.5). Where
+#: the walk ends out of the goal's sight, its field as far as it went (``partial``) rather than the pass: on validation
+#: maps of 256 and 512 cells (16 and 8 a family, where 10% and 12% of the walks end so), 36.9 against 36.1 and 73.8
+#: against 72.8 iterations, every run solved (at 128 cells no validation walk ends so).
 GOAL_TREE_FIELDS = ("walk", "pass")
 
 
@@ -370,9 +374,8 @@ class BidirectionalRouteSampler(SamplerBase):
             ``route`` (its field to the start, as ``goal_tree`` says).
         goal_tree: Where the goal tree's field to the start comes from without a ``backward`` (``GOAL_TREE_FIELDS``):
             "walk" reads it off the route sampler's walk down the field to the goal from the start
-            (``walk_field_to_start``), one pass for both trees, and takes the second pass only where that walk ends
-            out of the goal's sight; "pass" always takes the second pass. The straight-line ablation's field to the
-            start costs no pass: it takes its own.
+            (``walk_field_to_start``, as far as the walk goes), one pass for both trees; "pass" takes the second pass.
+            The straight-line ablation's field to the start costs no pass: it takes its own.
     """
 
     def __init__(self, route: RouteSampler, backward: RouteSampler | None = None, goal_tree: str = "walk") -> None:
@@ -391,7 +394,7 @@ class BidirectionalRouteSampler(SamplerBase):
     def _goal_tree_sampler(self, p: Problem) -> RouteSampler:
         if self.backward is not None:
             return self.backward
-        field = walk_field_steps(self.route, p, self.to_goal.field) if self.goal_tree == "walk" else None
+        field = walk_field_steps(self.route, p, self.to_goal.field, partial=True) if self.goal_tree == "walk" else None
         return self.route if field is None else WalkField(self.route, field)
 
     @property
