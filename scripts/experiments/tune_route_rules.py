@@ -17,8 +17,9 @@
 tree's turns pull the goal tree towards the start tree's target) against both trees guided, each by its own field
 (``BidirectionalRouteSampler(goal_tree="pass")``: two passes), against one field read both ways (the goal tree
 follows the field to the goal mirrored, ``MirroredField``), against the goal tree on the field read off the walk down
-the field to the goal (``goal_tree="walk"``, shipped: one pass), and against the goal tree on the straight-line field
-to the start (the ablation's: no second pass), for each field; prints median iterations per family and their
+the field to the goal (``goal_tree="walk"``, shipped: one pass; ``WalkElsePass``: a second pass where the walk ends
+out of the goal's sight), and against the goal tree on the straight-line field to the start (the ablation's: no
+second pass), for each field, on validation maps of ``--size`` cells; prints median iterations per family and their
 geometric mean, and the geometric mean of the median time per query (each run a first query on its map: the
 encoder's kept map parts are cleared first).
 
@@ -52,8 +53,10 @@ from learning.samplers.route_rules import (
     BidirectionalRouteSampler,
     ConvergingRouteSampler,
     CorridorSampler,
+    WalkField,
     cell_points,
     reversed_query,
+    walk_field_steps,
 )
 from planners import OccupancyGrid, SamplerBase
 
@@ -123,6 +126,15 @@ def mirrored(route: RouteSampler) -> RouteSampler:
     return out
 
 
+class WalkElsePass(BidirectionalRouteSampler):
+    """The goal tree on the walk's field where the walk reaches the goal's sight, else on the second pass (the shipped
+    rule takes the walk's field as far as it went there)."""
+
+    def _goal_tree_sampler(self, p):
+        field = walk_field_steps(self.route, p, self.to_goal.field)
+        return self.route if field is None else WalkField(self.route, field)
+
+
 class StartTreeOnly(SamplerBase):
     """The route sampler's RRT rule handed to RRT-Connect as it is (no ``for_planner``): the start tree's."""
 
@@ -184,11 +196,14 @@ def main(argv=None) -> int:
     ap.add_argument("--budget", type=int, default=3000, help="RRT* iterations per run with --rrtstar")
     ap.add_argument("--start-fields", nargs="+", default=["pass"], choices=["pass", "walk"],
                     help="with --rrtstar: the corridor's field to the start, a second pass or read off the walk")
+    ap.add_argument("--size", type=int, default=128, help="the validation maps' side in cells (default 128)")
     args = ap.parse_args(argv)
     if args.first_map < 0:
         ap.error(f"--first-map must be >= 0, got {args.first_map}")
+    if args.size < 32:
+        ap.error(f"--size takes a map side of at least 32 cells, got {args.size}")
     maps = {f: problems[args.first_map:] for f, problems in
-            planner_maps("validation", args.first_map + args.maps).items()}
+            planner_maps("validation", args.first_map + args.maps, size=args.size).items()}
     models = ModelCache()
     if args.rrtstar:
         for field in args.fields:
@@ -214,6 +229,7 @@ def main(argv=None) -> int:
                      ("both trees", lambda r: BidirectionalRouteSampler(r, goal_tree="pass")),
                      ("one field, mirrored", lambda r: BidirectionalRouteSampler(r, mirrored(r))),
                      ("goal tree on walk", lambda r: BidirectionalRouteSampler(r, goal_tree="walk")),
+                     ("walk, else a pass", WalkElsePass),
                      ("goal tree straight", lambda r: BidirectionalRouteSampler(
                          r, make_sampler("route_ablation", models=models))))
             for rule, wrap in rules:
