@@ -102,11 +102,29 @@ WIDTH_STEPS = 1.0
 CONVERGING_BATCH = 64
 
 
+def is_straight_line(route: RouteSampler) -> bool:
+    """Whether ``route`` is the straight-line ablation (no encoder, the plain route sampler): its rules take their own
+    settings, and its field to the start costs no pass.
+    """
+    return route.net is None and type(route) is RouteSampler
+
+
+def whole_walk(field: np.ndarray, blocked: np.ndarray, cell: int, ripple: float, growth: float) -> np.ndarray:
+    """The route sampler's walk down ``field`` from ``cell`` as far as it goes (``walk_path``): its cells, in order."""
+    visited = np.empty(blocked.size + 2, np.int64)
+    return visited[:walk_path(field, blocked, cell, float(blocked.size), ripple, growth, visited)]
+
+
+def in_sight(blocked: np.ndarray, a: int, b: int) -> bool:
+    """Whether the centres of flat cells ``a`` and ``b`` see each other (``last_in_sight`` of the two)."""
+    return last_in_sight(blocked, np.array([a, b], dtype=np.int64), 2) == b
+
+
 def rule_for(route: RouteSampler, family: str) -> SamplerBase:
     """``route``'s rule for planner ``family`` (``RouteSampler.for_planner``); ``route`` itself for RRT."""
     if family == FAMILY_BIDIRECTIONAL:
         return BidirectionalRouteSampler(route)
-    straight = route.net is None and type(route) is RouteSampler  # the straight line: the ablation's own settings
+    straight = is_straight_line(route)
     if family == FAMILY_ROADMAP:
         return CorridorSampler(route, **(ABLATION_CORRIDOR if straight else CORRIDOR_SETTINGS))
     if family == FAMILY_OPTIMIZING:
@@ -256,8 +274,8 @@ def sight_chain(field: np.ndarray, blocked: np.ndarray, cell: int, link: int, ri
     walk's next ``link`` cells still in sight of the point before it (``last_in_sight``), so the segment between two
     points meets no wall. Returns the points (flat indices; ``cell`` not among them) and the walk's last cell.
     """
-    visited = np.empty(blocked.size + 2, np.int64)
-    moves = walk_path(field, blocked, cell, float(blocked.size), ripple, growth, visited)
+    visited = whole_walk(field, blocked, cell, ripple, growth)
+    moves = len(visited)
     points, at = [], 0
     while at < moves - 1:
         end = min(moves, at + link + 1)
@@ -282,7 +300,7 @@ def route_chain(to_goal: np.ndarray, to_start, blocked: np.ndarray, ends: tuple,
     cols = blocked.shape[1]
     goal = rg * cols + cg
     forward, last = sight_chain(to_goal, blocked, rs * cols + cs, link, ripple, growth)
-    if last_in_sight(blocked, np.array([last, goal], dtype=np.int64), 2) != goal:
+    if not in_sight(blocked, last, goal):
         backward, _ = sight_chain(to_start() if callable(to_start) else to_start, blocked, goal, link, ripple, growth)
         forward += backward
     return np.asarray([c for c in forward if c != goal and c != rs * cols + cs], dtype=np.int64)
@@ -328,15 +346,12 @@ def walk_field_to_start(to_goal: np.ndarray, blocked: np.ndarray, ends: tuple, r
     (rs, cs), (rg, cg) = ((int(a), int(b)) for a, b in ends)
     cols = blocked.shape[1]
     goal = rg * cols + cg
-    visited = np.empty(blocked.size + 2, np.int64)
-    moves = walk_path(to_goal, blocked, rs * cols + cs, float(blocked.size), ripple, growth, visited)
-    last = visited[moves - 1]
-    if last != goal:
-        if last_in_sight(blocked, np.array([last, goal], dtype=np.int64), 2) != goal:
-            return path_field(blocked, visited, moves) if partial else None
-        visited[moves] = goal  # the segment to the goal's centre is free: a walk of straight cells would cross it
-        moves += 1
-    return path_field(blocked, visited, moves)
+    walk = whole_walk(to_goal, blocked, rs * cols + cs, ripple, growth)
+    if walk[-1] != goal:
+        if not in_sight(blocked, int(walk[-1]), goal):
+            return path_field(blocked, walk, len(walk)) if partial else None
+        walk = np.append(walk, goal)  # the segment to the goal's centre is free: a walk of cells would cross it
+    return path_field(blocked, walk, len(walk))
 
 
 def walk_field_steps(route: RouteSampler, problem: Problem, to_goal: np.ndarray,
@@ -345,7 +360,7 @@ def walk_field_steps(route: RouteSampler, problem: Problem, to_goal: np.ndarray,
     there), ``inf`` on obstacles; None where it gives none, and for the straight-line ablation, whose own field to
     the start costs no pass.
     """
-    if route.net is None and type(route) is RouteSampler:
+    if is_straight_line(route):
         return None
     grid = problem.world
     blocked = np.asarray(grid.obstacles, dtype=bool)
