@@ -67,29 +67,44 @@ def octile_move(blocked, r, c, dr, dc):
 
 
 @nb.njit(cache=True, inline="always")
-def lowest_unvisited(field, blocked, r, c, visited, moves, table):
+def lowest_unvisited(field, blocked, r, c, visited, moves):
     """The lowest free neighbour of (r, c) not among ``visited[:moves]``, first in row-major order on ties.
 
-    Octile moves with no corner cutting; -1 where there is none. ``table``: the same visits as a hash set
-    (``_add_visit``), looked up instead of scanning ``visited``; empty: scan.
+    Octile moves with no corner cutting; -1 where there is none. It runs in RRT's loop at every walk: its neighbour
+    test is written out here (through ``octile_move`` the same walks took twice as long).
     """
+    H, W = field.shape
+    best = np.inf
+    out = -1
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            rr, cc = r + dr, c + dc
+            if (dr == 0 and dc == 0) or rr < 0 or rr >= H or cc < 0 or cc >= W or blocked[rr, cc]:
+                continue
+            if dr != 0 and dc != 0 and (blocked[r + dr, c] or blocked[r, c + dc]):
+                continue
+            u = rr * W + cc
+            seen = False
+            for i in range(moves):
+                if visited[i] == u:
+                    seen = True
+                    break
+            if not seen and field[rr, cc] < best:
+                best = field[rr, cc]
+                out = u
+    return out
+
+
+@nb.njit(cache=True, inline="always")
+def lowest_unhashed(field, blocked, r, c, table):
+    """``lowest_unvisited`` with the visits in a hash set (``_add_visit``): each looked up in constant time."""
     W = field.shape[1]
     best = np.inf
     out = -1
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
             u = octile_move(blocked, r, c, dr, dc)
-            if u < 0:
-                continue
-            seen = False
-            if table.shape[0] > 0:
-                seen = table[_hashed(table, u)] == u
-            else:
-                for i in range(moves):
-                    if visited[i] == u:
-                        seen = True
-                        break
-            if not seen and field[u // W, u % W] < best:
+            if u >= 0 and table[_hashed(table, u)] != u and field[u // W, u % W] < best:
                 best = field[u // W, u % W]
                 out = u
     return out
@@ -104,7 +119,7 @@ def next_cell(field, blocked, r, c):
     """
     if not np.isfinite(field[r, c]):
         return -1
-    u = lowest_unvisited(field, blocked, r, c, NO_VISITS, 0, NO_VISITS)
+    u = lowest_unvisited(field, blocked, r, c, NO_VISITS, 0)
     W = field.shape[1]
     return u if u >= 0 and field[u // W, u % W] < field[r, c] else -1
 
@@ -134,7 +149,8 @@ def walk_path(field, blocked, cell, length, tolerance, growth, visited):
 
     ``visited`` should be at least ``int(length) + 2`` long (a shorter one ends the walk after
     ``len(visited) - 1`` moves). A walk with room for more than ``SCAN_VISITS`` cells keeps its visits in a hash
-    set as well, so a walk over the whole map costs in proportion to its length, not its square.
+    set as well (``_walk_hashed``), so a walk over the whole map costs in proportion to its length, not its square;
+    a shorter one (RRT's, each iteration) scans them, as this loop does.
     """
     W = field.shape[1]
     strict = tolerance <= 0.0 and growth <= 0.0
@@ -145,16 +161,13 @@ def walk_path(field, blocked, cell, length, tolerance, growth, visited):
     moves = 1
     if not np.isfinite(low):
         return moves
-    hashed = not strict and visited.shape[0] > SCAN_VISITS
-    table = np.full(256 if hashed else 0, -1, np.int64)
-    filled = 0
-    if hashed:
-        table, filled = _add_visit(table, filled, v)
+    if not strict and visited.shape[0] > SCAN_VISITS:
+        return _walk_hashed(field, blocked, low, length, tolerance, growth, visited)
     while acc < length and moves < visited.shape[0]:
         if strict:
             u = next_cell(field, blocked, v // W, v % W)
         else:
-            u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves, table)
+            u = lowest_unvisited(field, blocked, v // W, v % W, visited, moves)
             if u >= 0 and field[u // W, u % W] >= low + tolerance + growth * max(low, 0.0):
                 u = -1
         if u < 0:
@@ -165,8 +178,31 @@ def walk_path(field, blocked, cell, length, tolerance, growth, visited):
         v = u
         visited[moves] = v  # each move covers at least one cell of path: int(length) + 2 entries suffice
         moves += 1
-        if hashed:
-            table, filled = _add_visit(table, filled, v)
+        low = min(low, field[v // W, v % W])
+    return moves
+
+
+@nb.njit(cache=True)
+def _walk_hashed(field, blocked, low, length, tolerance, growth, visited):
+    """``walk_path``'s tolerant walk on from ``visited[0]`` (its value ``low``), its visits also in a hash set
+    (``_add_visit``), each looked up in constant time; the number of cells.
+    """
+    W = field.shape[1]
+    acc = 0.0
+    v = visited[0]
+    moves = 1
+    table, filled = _add_visit(np.full(256, -1, np.int64), 0, v)
+    while acc < length and moves < visited.shape[0]:
+        u = lowest_unhashed(field, blocked, v // W, v % W, table)
+        if u < 0 or field[u // W, u % W] >= low + tolerance + growth * max(low, 0.0):
+            break
+        dr = u // W - v // W
+        dc = u % W - v % W
+        acc += math.sqrt(float(dr * dr + dc * dc))
+        v = u
+        visited[moves] = v
+        moves += 1
+        table, filled = _add_visit(table, filled, v)
         low = min(low, field[v // W, v % W])
     return moves
 
