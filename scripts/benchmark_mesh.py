@@ -8,10 +8,10 @@
 The motions are seeded random collision-free ones (so each is followed to its end): from a valid
 state, a move of up to ``--reach`` of the bounds' diagonal along each axis and up to 0.5 rad about
 each. For each problem it prints: the poses per motion a travel of ``delta`` apart; FCL alone at
-each of them (a collision test and, where free, a distance test against the clearance delta / 2,
-one Python call per pose), per pose and per motion; the world's motion check (the grid's bounds, the
-compiled exact test at a few margins where they do not suffice, steps as long as the clearance
-certified), per motion and per pose a travel of ``delta`` apart; and the cost of single states (a
+each of them (a collision test and, where free, a distance test against the band every checked pose
+keeps, ``delta / 8`` by default; one Python call per pose), per pose and per motion; the world's motion
+check (the grid's bounds, the compiled exact test at a few margins where they do not suffice, steps as
+long as the clearance certified), per motion and per pose a travel of ``delta`` apart; and the cost of single states (a
 collision test, no clearance), FCL alone and the world's check.
 
 With ``--solutions`` it replays instead every ``.path`` solution OMPL.app ships beside a ``.cfg`` of the
@@ -154,7 +154,7 @@ def measure(problem, args) -> list[str]:
     ours = time.perf_counter() - t
     # FCL alone, one call per pose, at every pose a travel of delta apart
     t = time.perf_counter()
-    assert all(w.pose_free_exact(q, w.delta / 2) for q in dense)
+    assert all(w.pose_free_exact(q, w.band) for q in dense)
     fcl_alone = time.perf_counter() - t
     # single states: a collision test only
     low, high = w.bounds

@@ -18,7 +18,7 @@ fcl = pytest.importorskip("fcl", reason="mesh worlds need the mesh extra (pip in
 from planners import GoalBiasedSampler, Problem, make_planner  # noqa: E402
 from planners.base.fileio import InputError  # noqa: E402
 from planners.kernels import mesh as mesh_kernels  # noqa: E402
-from planners.worlds.mesh import MeshWorld, read_mesh  # noqa: E402
+from planners.worlds.mesh import DEFAULT_BAND_FRACTION, MeshWorld, read_mesh  # noqa: E402
 from planners.worlds.rigid3d import euler_from_matrix, rotation_matrix  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -169,7 +169,7 @@ def test_broad_phase_never_contradicts_fcl():
 
 def test_motion_check_agrees_with_fcl_along_the_motion(hole_world):
     # accepted: FCL finds every pose free at a quarter of the resolution; refused: some pose comes
-    # closer than delta / 2 (plus the travel between the poses sampled here)
+    # closer than the band (plus the travel between the poses sampled here)
     w = hole_world
     rng = np.random.default_rng(4)
     seen = {True: 0, False: 0}
@@ -181,7 +181,7 @@ def test_motion_check_agrees_with_fcl_along_the_motion(hole_world):
         if got:
             assert all(w.pose_free_exact(q) for q in fine), (a, b)
         else:
-            assert not all(w.pose_free_exact(q, w.delta / 2 + w.delta / 8) for q in fine), (a, b)
+            assert not all(w.pose_free_exact(q, w.band + w.delta / 8) for q in fine), (a, b)
         seen[got] += 1
     assert seen[True] and seen[False]
 
@@ -198,6 +198,47 @@ def test_a_motion_through_a_thin_wall_is_rejected():
     c, d = [4.7, 2.5, 2.5, 0, 0, 0], [4.7, 2.5, 2.5, 0, 0, 3.0]
     assert w.is_valid(c) and w.is_valid(d) and not w.is_valid([4.7, 2.5, 2.5, 0, 0, PI / 2])
     assert not w.check_motion(c, d)
+
+
+def test_a_narrow_band_lets_the_body_through_a_gap_the_default_band_closes_and_still_cannot_tunnel():
+    """A slot leaves the body less than ``delta / 2`` on each side: a band of ``delta / 2`` refuses the motion through
+    it, the default band of ``delta / 8`` accepts it, with every pose along it free by FCL's test, and still refuses
+    the thin wall."""
+    delta = 0.4
+    side = 1.0 + 2 * 0.1  # the slot leaves 0.1 on each side of a unit cube: above delta / 8, below delta / 2
+    walls = trimesh.util.concatenate([box((0.5, 10, (10 - side) / 2), (5, 5, (10 - side) / 4)),
+                                      box((0.5, 10, (10 - side) / 2), (5, 5, 10 - (10 - side) / 4))])
+    body = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    a, b = [2.0, 5, 5, 0, 0, 0], [8.0, 5, 5, 0, 0, 0]
+    wide = MeshWorld(walls, body, low=(0, 0, 0), high=(10, 10, 10), delta=delta, band=delta / 2)
+    narrow = MeshWorld(walls, body, low=(0, 0, 0), high=(10, 10, 10), delta=delta)
+    assert wide.band == delta / 2 and "band=0.2" in repr(wide)
+    assert narrow.band == delta / 8 == DEFAULT_BAND_FRACTION * delta and "band" not in repr(narrow)
+    assert wide.is_valid(a) and wide.is_valid(b)
+    assert not wide.check_motion(a, b)
+    assert narrow.check_motion(a, b)
+    assert all(narrow.pose_free_exact(q) for q in states_along(narrow, a, b, delta / 16))
+    # a motion a hair's breadth nearer the wall than the band is refused
+    assert not narrow.check_motion([2.0, 5, 5 - 0.07, 0, 0, 0], [8.0, 5, 5 - 0.07, 0, 0, 0])
+    hair = box((1e-4, 10, 10), (5, 5, 5))
+    thin = MeshWorld(hair, trimesh.creation.box(extents=(0.2, 1.0, 0.25)), low=(0, 0, 0), high=(10, 10, 10),
+                     band=1e-3)
+    assert not thin.check_motion([2.125, 2.5, 2.5, 0, 0, 0], [8.125, 2.5, 2.5, 0, 0, 0])
+    assert not thin.check_motion([4.7, 2.5, 2.5, 0, 0, 0], [4.7, 2.5, 2.5, 0, 0, 3.0])
+    # a pickled copy keeps the band
+    import pickle
+
+    assert pickle.loads(pickle.dumps(wide)).band == wide.band
+
+
+@pytest.mark.parametrize("band", [0.0, -0.1, 0.3, float("nan"), "wide"])
+def test_a_band_outside_zero_to_half_delta_is_refused(band):
+    with pytest.raises(InputError, match=r"band must .*delta / 2 = 0\.2"):
+        MeshWorld(wall_with_hole(), trimesh.creation.box(extents=(1.0, 1.0, 1.0)), low=(0, 0, 0), high=(10, 10, 10),
+                  delta=0.4, band=band)
+    with pytest.raises(InputError, match=r"band 1e-06 is too fine .* use band >= 0\.000127"):
+        MeshWorld(wall_with_hole(), trimesh.creation.box(extents=(1.0, 1.0, 1.0)), low=(0, 0, 0), high=(10, 10, 10),
+                  delta=0.4, band=1e-6)
 
 
 def test_clustered_cover_bound_is_the_bound_over_every_point(hole_world):
@@ -241,7 +282,7 @@ def test_a_motion_blocked_inside_is_refused(hole_world):
     assert not w.pose_free_exact(np.add(a, b) / 2) and w.pose_free_exact(a, w.delta) and w.pose_free_exact(b, w.delta)
     # a motion through the hole has probes in the hole, none in contact: the walk decides as before
     c, d = [2.0, 5.0, 5.0, 0, 0, 0], [8.0, 5.0, 5.0, 0, 0, 0]
-    assert w.check_motion(c, d) == all(w.pose_free_exact(q, w.delta / 2) for q in states_along(w, c, d)) is True
+    assert w.check_motion(c, d) == all(w.pose_free_exact(q, w.band) for q in states_along(w, c, d)) is True
 
 
 BIASED = {"step_size": 1.0, "sampler": GoalBiasedSampler(0.05)}
@@ -332,12 +373,14 @@ def test_the_exact_clearance_is_a_lower_bound_above_the_margin_or_zero(hole_worl
     answers = {True: 0, False: 0}
     for _ in range(300):
         q = low + rng.random(6) * (high - low)
-        need = w.delta / 2 * rng.choice([1.0, 4.0, 20.0])
+        need = w.delta / 2 * rng.choice([0.25, 1.0, 4.0, 20.0])
         got = mesh_kernels.exact_clearance(k.body, k.params, q, need, np.bool_(low_first))
         d = w.clearance(q)
+        lowest = need * mesh_kernels.BAND_RAISE
+        rungs = [m for m in w.delta / 2 * mesh_kernels.CLEARANCE_LADDER if m > lowest] + [lowest]
         if got > need:
-            assert got < d and got in need * mesh_kernels.CLEARANCE_LADDER, (q, got, d)
+            assert got < d and got in rungs, (q, got, d)
         else:
-            assert got == 0.0 and d <= need * mesh_kernels.CLEARANCE_LADDER[-1] + 1e-12, (q, d)
+            assert got == 0.0 and d <= lowest + 1e-12, (q, d)
         answers[got > need] += 1
     assert answers[True] > 30 and answers[False] > 30

@@ -3,34 +3,36 @@
 State ``q = (x, y, z, tx, ty, tz)`` as for ``planners.kernels.rigid``: a body vertex ``p`` sits at
 ``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``. Along a motion no body point travels more than
 ``s`` when the motion's parameter advances by ``s / L``, ``L`` the travel bound of ``motion_pieces``
-(``|dt| + r (|dtx| + |dty| + |dtz|)``). Every checked pose must keep the body more than ``delta / 2``
-from the environment, and a pose at travel ``s`` with clearance ``c`` covers the stretch ``(s - c, s + c)``:
-no pose there brings the body into contact (conservative advancement, both ways). The far end is checked
-first and covers the end of the motion; the walk then covers it from the start, placing each next pose
-``c`` (the clearance just certified, ``WALK_GUESS``) beyond the covered stretch and at least ``delta``
-on, and where that pose's own clearance leaves a gap, checking next the pose that the one-sided rule
-places (``max(delta, c)`` after the last): two poses with clearances above ``delta / 2`` that far apart
-cover everything between them, so no obstacle, however thin, is stepped over.
+(``|dt| + r (|dtx| + |dty| + |dtz|)``). Every checked pose must keep the body more than the world's band ``b``
+(``params[P_BAND]``, ``delta / 8`` by default) from the environment, and a pose at travel ``s`` with clearance
+``c`` covers the stretch ``(s - c, s + c)``: no pose there brings the body into contact (conservative
+advancement, both ways). The far end is checked first and covers the end of the motion; the walk then covers
+it from the start, placing each next pose ``c`` (the clearance just certified, ``WALK_GUESS``) beyond the
+covered stretch and at least ``2 b`` on, and where that pose's own clearance leaves a gap, checking next the
+pose that the one-sided rule places (``max(2 b, c)`` after the last): two poses with clearances above ``b``
+that far apart cover everything between them, so no obstacle, however thin, is stepped over. A band below
+``delta / 2`` narrows each passage less and costs more poses only where the body passes within ``delta / 2``
+of the environment.
 
 Each pose's clearance comes first from a broad phase that can only certify: a Chebyshev distance grid
 of the environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance
 from any point in it to any environment triangle. The bound of a pose is that of the body's bounding
 sphere, or else the smallest over the body's cover points (points on its surface such that every
 surface point lies within ``cover`` of one) less ``cover``; a single state asks the sphere only, as
-the exact test costs about what the cover points do. Where the bound does not clear ``delta / 2``, the
+the exact test costs about what the cover points do. Where the bound does not clear the band, the
 exact test decides (``exact_clearance``): whether the body's triangles lie more than a margin from the
-environment's (``planners.kernels.triangles``), at the margins ``CLEARANCE_LADDER`` times ``delta / 2``,
-the largest one cleared being the pose's clearance. Before the walk, the same test with no margin at a
-few interior poses (``PROBE_FRACTIONS``) finds most blocked motions; a pose in contact would make the
-walk fail as well. The far end, often in contact, tries the lowest margin first; the walk's poses,
-rarely in contact, the largest. Every test runs in compiled code; the walk looks at its planner's
+environment's (``planners.kernels.triangles``), at the margins ``CLEARANCE_LADDER`` times ``delta / 2`` that
+lie above the band and then at the band, the largest one cleared being the pose's clearance. Before the walk,
+the same test with no margin at a few interior poses (``PROBE_FRACTIONS``) finds most blocked motions; a pose
+in contact would make the walk fail as well. The far end, often in contact, tries the lowest margin first; the
+walk's poses, rarely in contact, the largest. Every test runs in compiled code; the walk looks at its planner's
 deadline every ``DEADLINE_EVERY`` poses (through numba's object mode, the world registered under an
 integer id that ``params`` carry).
 
 ``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, world id, gx, gy, gz,
-h, nx, ny, nz, cover, c1, c2, c3, c4]``: the bounds of the body's origin, the motion resolution, the
+h, nx, ny, nz, cover, c1, c2, c3, c4, band]``: the bounds of the body's origin, the motion resolution, the
 body's radius (largest distance of a body vertex from its origin), the id, the grid's corner, voxel
-side and shape, the cover radius of the body's cover points, and where the parts of ``body`` end. The
+side and shape, the cover radius of the body's cover points, where the parts of ``body`` end, and the band. The
 grid travels as ``(nx, ny * nz)`` uint8 (``grid``), the cover points' clusters as ``geom``, and ``body``
 holds, as rows of three, the cover points (to row ``c1``), the body's sphere tree (to ``c2``,
 ``triangles.sphere_nodes``), its triangles in that tree's order (to ``c3``), the environment's box tree
@@ -54,12 +56,14 @@ P_ID = 8
 P_GRID = 9
 P_COVER = 16
 P_PARTS = 17
-N_PARAMS = 21
+P_BAND = 21
+N_PARAMS = 22
 
-#: The margins, in multiples of the one asked (``delta / 2``), at which ``exact_clearance`` tests a pose, largest
-#: first; the last is the margin itself, raised by a relative 2**-30 so that a pose it clears has a clearance above
-#: the value returned.
-CLEARANCE_LADDER = np.array([16.0, 4.0, 1.0 + 2.0 ** -30])
+#: The margins, in multiples of ``delta / 2``, at which ``exact_clearance`` tests a pose, largest first, those above
+#: the world's band; then the band itself, raised by a relative ``BAND_RAISE`` so that a pose it clears has a
+#: clearance above the value returned.
+CLEARANCE_LADDER = np.array([16.0, 4.0, 1.0])
+BAND_RAISE = 1.0 + 2.0 ** -30
 
 #: The walk looks at its planner's deadline (``MeshWorld.set_deadline``) every this many poses.
 DEADLINE_EVERY = 16
@@ -252,18 +256,22 @@ def exact_apart(body, params, q, margin):
 def exact_clearance(body, params, q, need, low_first):
     """A lower bound above ``need`` on the body's clearance at pose ``q``, or 0 where it is ``need`` or less.
 
-    The margins ``CLEARANCE_LADDER`` times ``need`` are tried in turn, each an exact test
-    (``planners.kernels.triangles.sets_apart``), and the largest one the pose clears is the answer.
-    ``low_first``: try the lowest margin first (a pose likely to fail, where one test settles it).
+    The margins ``CLEARANCE_LADDER`` times ``delta / 2`` above ``need`` are tried in turn, then ``need`` itself
+    (raised by ``BAND_RAISE``), each an exact test (``planners.kernels.triangles.sets_apart``); the largest one
+    the pose clears is the answer. ``low_first``: try ``need`` first (a pose likely to fail, where one test
+    settles it).
     """
     cover, spheres, triangles, nodes, env = _parts(body, params)
     R, placed = _posed(triangles, q)
     t = q[:3]
-    lowest = need * CLEARANCE_LADDER[-1]
+    lowest = need * BAND_RAISE
     if low_first and not sets_apart(spheres, placed, R, t, nodes, env, lowest):
         return 0.0
-    for k in range(CLEARANCE_LADDER.shape[0] - 1):
-        m = need * CLEARANCE_LADDER[k]
+    half = 0.5 * params[6]
+    for k in range(CLEARANCE_LADDER.shape[0]):
+        m = half * CLEARANCE_LADDER[k]
+        if m <= lowest:
+            break
         if sets_apart(spheres, placed, R, t, nodes, env, m):
             return m
     if low_first or sets_apart(spheres, placed, R, t, nodes, env, lowest):
@@ -337,8 +345,8 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
     if length == 0.0:
         # a single state: the sphere only (the exact test costs about what the cover points do)
         return sphere_free(grid, params, a, 0.0) or exact_apart(body, params, a, 0.0)
-    delta = params[6]
-    margin = 0.5 * delta
+    margin = params[P_BAND]
+    least = 2.0 * margin  # the least step from the last pose: two poses clear by more than ``margin`` cover it
     # the far end first (a blocked extension is usually blocked there): its clearance covers the travel
     # (length - cb, length]; then the interior probes; then the walk from the start (see the module docs)
     # the low-first choice as np.bool_, a value: a constant True or False would compile _pose_clearance once each
@@ -376,17 +384,17 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
             if covered > end:
                 return True
             # guess that the next pose's clearance is about this one's: place it that far beyond the
-            # covered stretch, at least ``delta`` on, and no farther than halfway to the covered end
-            s = max(last + delta, min(covered + WALK_GUESS * c, 0.5 * (covered + end)))
+            # covered stretch, at least ``least`` on, and no farther than halfway to the covered end
+            s = max(last + least, min(covered + WALK_GUESS * c, 0.5 * (covered + end)))
         else:
             # the guess left a gap: keep what this pose covers and place the next as the one-sided rule does
             if s + c > end:
                 end = s - c
             else:
                 island_lo, island_hi = s - c, s + c
-            s = max(covered, last + delta)
+            s = max(covered, last + least)
         if s >= end:
-            # less than delta / 2 is left between the covered stretches: a pose halfway closes it
+            # less than the band is left between the covered stretches: a pose halfway closes it
             s = 0.5 * (covered + end)
 
 

@@ -4,9 +4,9 @@ The state space is ``RigidBodyWorld``'s: ``q = (x, y, z, tx, ty, tz)``, a body v
 body's own frame) sits at ``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``; angles are sampled in
 ``[-pi, pi)`` and a motion turns along the shorter arc. The same metrics (``cossin``, ``se3``) and the
 same bound on a body point's travel apply (``|dt| + r (|dtx| + |dty| + |dtz|)``, ``r`` the body
-radius): every checked pose keeps the body more than ``delta / 2`` from the environment and the next
-lies a travel of ``max(delta, c)`` on, ``c`` the clearance just certified, so the poses between stay
-free and no obstacle, however thin, is stepped over (``planners.kernels.mesh``).
+radius): every checked pose keeps the body more than the band ``b`` (``delta / 8`` by default) from the
+environment and the next lies a travel of ``max(2 b, c)`` on, ``c`` the clearance just certified, so the
+poses between stay free and no obstacle, however thin, is stepped over (``planners.kernels.mesh``).
 
 A state is valid when the body's origin lies within the bounds and the body's triangles meet none of
 the environment's (two meshes collide where their surfaces touch or cross, as in FCL and OMPL.app, so a
@@ -39,6 +39,7 @@ from planners.kernels.rigid import motion_pieces
 from planners.kernels.rigid import rotation_matrix as _rotation_matrix
 from planners.kernels.space import SPACE_RIGID, interpolate
 from planners.worlds.rigid3d import (
+    MAX_MOTION_POSES,
     RigidBodyWorld,
     body_radius,
     check_resolution,
@@ -53,6 +54,9 @@ from planners.worlds.rigid3d import (
 MESH_SUFFIXES = (".obj", ".stl", ".dae", ".ply", ".off")
 #: Default motion resolution, as a fraction of the bounds' diagonal.
 DEFAULT_DELTA_FRACTION = 1e-3
+#: Default band (the clearance every checked pose keeps), as a fraction of ``delta``: chosen on the generated mesh
+#: scenes' tuning part (``scripts/experiments/tune_mesh_delta.py --bands``; docs/rigid-body.md).
+DEFAULT_BAND_FRACTION = 0.125
 #: Voxels along the longest side of the broad phase's grid (the grid covers the bounds grown by the
 #: body radius).
 DEFAULT_GRID_CELLS = 128
@@ -342,10 +346,13 @@ class MeshWorld(WorldBase):
             body's origin there, its rotation turns the body about its origin.
         low: Corner of the box the body's origin stays in (OMPL.app's ``volume.min``).
         high: Opposite corner (``volume.max``).
-        delta: Motion resolution (> 0): every checked pose keeps the body more than ``delta / 2``
-            from the environment, and the poses checked from the start on lie a travel of at least
-            ``delta`` apart (more where the clearance allows). Default ``DEFAULT_DELTA_FRACTION`` of the
-            bounds' diagonal.
+        delta: Motion resolution (> 0): the clearance ladder's rungs are multiples of ``delta / 2``.
+            Default ``DEFAULT_DELTA_FRACTION`` of the bounds' diagonal.
+        band: The clearance every checked pose keeps (``0 < band <= delta / 2``; default
+            ``DEFAULT_BAND_FRACTION`` of ``delta``): the poses checked from the start on lie a travel of at
+            least ``2 band`` apart (more where the clearance allows), so a passage is narrowed by ``band`` on
+            each side, and a smaller band costs more poses only where the body passes within ``delta / 2``
+            of the environment.
         rot_weight: Weight of the rotation angle in the ``"se3"`` metric; default the body radius.
         grid_cells: Voxels along the longest side of the broad phase's grid (8 to 512).
         name: A label for ``repr``.
@@ -355,7 +362,7 @@ class MeshWorld(WorldBase):
     space_kind = SPACE_RIGID
     metrics = RigidBodyWorld.metrics
 
-    def __init__(self, environment, robot, *, low, high, delta: float | None = None,
+    def __init__(self, environment, robot, *, low, high, delta: float | None = None, band: float | None = None,
                  rot_weight: float | None = None, grid_cells: int = DEFAULT_GRID_CELLS, name: str = "") -> None:
         lo, hi = workspace_bounds(low, high)
         self.env_vertices, self.env_faces = _as_mesh(environment, "environment")
@@ -366,6 +373,13 @@ class MeshWorld(WorldBase):
         diagonal = float(np.linalg.norm(hi - lo))
         self.delta = positive_delta(DEFAULT_DELTA_FRACTION * diagonal if delta is None else delta)
         check_resolution(self.delta, lo, hi, self.radius)
+        self.band = motion_band(band, self.delta)
+        longest = float(np.linalg.norm(hi - lo)) + 3.0 * math.pi * self.radius  # as check_resolution measures it
+        if longest / (2.0 * self.band) > MAX_MOTION_POSES:  # the walk's poses lie at least twice the band apart
+            raise InputError(f"band {self.band:g} is too fine for this world: its longest motion ({longest:.4g}) would "
+                             f"be checked at up to {longest / (2.0 * self.band):.3g} poses, twice the band apart, more "
+                             f"than MAX_MOTION_POSES = {MAX_MOTION_POSES:,}; use band >= "
+                             f"{longest / (2.0 * MAX_MOTION_POSES):.3g}")
         self.rot_weight = rotation_weight(rot_weight, self.radius)
         if isinstance(grid_cells, bool) or not isinstance(grid_cells, (int, np.integer)) or not 8 <= grid_cells <= 512:
             raise InputError(f"grid_cells must be an integer from 8 to 512, got {grid_cells!r}")
@@ -402,6 +416,7 @@ class MeshWorld(WorldBase):
         params[mesh_kernels.P_GRID + 4:mesh_kernels.P_GRID + 7] = shape
         params[mesh_kernels.P_COVER] = side
         params[mesh_kernels.P_PARTS:mesh_kernels.P_PARTS + 4] = np.cumsum([len(p) for p in parts])[:4]
+        params[mesh_kernels.P_BAND] = self.band
         self._kernel = geometry.world_kernel(geometry.WORLD_MESH, self.grid, self.clusters,
                                              np.ascontiguousarray(np.concatenate(parts)), params)
         self._low = np.concatenate([lo, [-math.pi] * 3])
@@ -413,7 +428,8 @@ class MeshWorld(WorldBase):
     def __reduce__(self):
         # FCL's trees do not pickle: a copy (another process's) is built again from the triangles
         return _rebuild, ((self.env_vertices, self.env_faces), (self.body_vertices, self.body_faces),
-                          {"low": self.low3, "high": self.high3, "delta": self.delta, "rot_weight": self.rot_weight,
+                          {"low": self.low3, "high": self.high3, "delta": self.delta, "band": self.band,
+                           "rot_weight": self.rot_weight,
                            "grid_cells": self.grid_cells, "name": self.name})
 
     @property
@@ -439,8 +455,8 @@ class MeshWorld(WorldBase):
     def motion_poses(self, a, b) -> np.ndarray:
         """Poses from ``a`` to ``b`` a travel of at most ``delta`` apart (``(n + 1, 6)``; one for ``a == b``).
 
-        ``check_motion(a, b)`` certifies each of them free with a clearance above ``delta / 2``, and the
-        poses between free; it tests fewer of them where the clearance allows longer steps.
+        Where ``check_motion(a, b)`` is True every one of them is free, and every pose between: it certifies
+        the whole motion, testing fewer poses where the clearance allows longer steps.
         """
         a = np.ascontiguousarray(self._state(a, "a"))
         b = np.ascontiguousarray(self._state(b, "b"))
@@ -652,8 +668,22 @@ class MeshWorld(WorldBase):
 
     def __repr__(self) -> str:
         label = f"{self.name!r}, " if self.name else ""
+        band = "" if self.band == DEFAULT_BAND_FRACTION * self.delta else f", band={self.band:g}"
         return (f"MeshWorld({label}{len(self.env_faces)} environment triangles, {len(self.body_faces)} body "
-                f"triangles, delta={self.delta:g})")
+                f"triangles, delta={self.delta:g}{band})")
+
+
+def motion_band(band, delta: float) -> float:
+    """The band a mesh world's checked poses keep clear: ``band``, or ``DEFAULT_BAND_FRACTION * delta`` where None."""
+    if band is None:
+        return DEFAULT_BAND_FRACTION * delta
+    try:
+        value = float(band)
+    except (TypeError, ValueError):
+        raise InputError(f"band must be a number in (0, delta / 2 = {0.5 * delta:g}], got {band!r}") from None
+    if not (math.isfinite(value) and 0.0 < value <= 0.5 * delta):
+        raise InputError(f"band must lie in (0, delta / 2 = {0.5 * delta:g}], got {band!r}")
+    return value
 
 
 def _rebuild(environment, robot, kwargs) -> MeshWorld:

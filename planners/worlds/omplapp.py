@@ -168,7 +168,8 @@ def _read_cfg(path: Path) -> configparser.ConfigParser:
     return cfg
 
 
-def _world(path: Path, prob: configparser.SectionProxy, delta: float | None, grid_cells: int | None) -> MeshWorld:
+def _world(path: Path, prob: configparser.SectionProxy, delta: float | None, grid_cells: int | None,
+           band: float | None = None) -> MeshWorld:
     meshes = {}
     for key in ("world", "robot"):
         name = prob.get(key)
@@ -189,14 +190,14 @@ def _world(path: Path, prob: configparser.SectionProxy, delta: float | None, gri
     name = prob.get("name", path.stem).strip() or path.stem
     try:
         return MeshWorld(env, robot, low=low, high=high, name=name,
-                         delta=DEFAULT_DELTA_FRACTION * diagonal if delta is None else delta,
+                         delta=DEFAULT_DELTA_FRACTION * diagonal if delta is None else delta, band=band,
                          **({} if grid_cells is None else {"grid_cells": grid_cells}))
     except InputError as e:
         raise InputError(f"{path}: {e}") from None
 
 
 def load_omplapp_world(path: str | os.PathLike, *, delta: float | None = None,
-                       grid_cells: int | None = None) -> MeshWorld:
+                       grid_cells: int | None = None, band: float | None = None) -> MeshWorld:
     """The world of an OMPL.app ``.cfg`` file alone: its meshes in OMPL.app's frame and its bounds, no query.
 
     For other queries in OMPL.app's environments, and for replaying a shipped solution whose problem does
@@ -206,11 +207,11 @@ def load_omplapp_world(path: str | os.PathLike, *, delta: float | None = None,
         InputError: A missing or malformed key or a missing mesh.
     """
     path = Path(path)
-    return _world(path, _read_cfg(path)["problem"], delta, grid_cells)
+    return _world(path, _read_cfg(path)["problem"], delta, grid_cells, band)
 
 
 def load_omplapp(path: str | os.PathLike, *, delta: float | None = None, goal_tolerance: float | None = None,
-                 grid_cells: int | None = None) -> OMPLAppTask:
+                 grid_cells: int | None = None, band: float | None = None) -> OMPLAppTask:
     """Read an OMPL.app ``.cfg`` problem file and its meshes (found beside it).
 
     Args:
@@ -220,6 +221,7 @@ def load_omplapp(path: str | os.PathLike, *, delta: float | None = None, goal_to
         goal_tolerance: Goal tolerance of the problem; default ``DEFAULT_TOLERANCE_FRACTION`` of the
             bounds' diagonal.
         grid_cells: The broad phase's grid resolution (``MeshWorld``'s default where None).
+        band: The clearance every checked pose keeps (``MeshWorld``); default ``delta / 8``.
 
     Returns:
         An ``OMPLAppTask``: the problem (start and goal as ``(x, y, z, tx, ty, tz)``, bounds from
@@ -233,7 +235,7 @@ def load_omplapp(path: str | os.PathLike, *, delta: float | None = None, goal_to
     cfg = _read_cfg(path)
     prob = cfg["problem"]
     start, goal = _pose(path, prob, "start"), _pose(path, prob, "goal")
-    world = _world(path, prob, delta, grid_cells)
+    world = _world(path, prob, delta, grid_cells, band)
     diagonal = float(np.linalg.norm(world.high3 - world.low3))
     try:
         tol = DEFAULT_TOLERANCE_FRACTION * diagonal if goal_tolerance is None else goal_tolerance

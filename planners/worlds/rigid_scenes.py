@@ -556,13 +556,13 @@ def box_mesh(box) -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
-def as_mesh_scene(problem: Problem, delta: float | None = None) -> Problem:
+def as_mesh_scene(problem: Problem, delta: float | None = None, band: float | None = None) -> Problem:
     """A box scene written as a mesh world (``planners.worlds.mesh.MeshWorld``, the ``mesh`` extra).
 
     The environment is every box as a closed mesh, the robot the body's box (its points' bounding box)
     as one; the bounds, start, goal, tolerance and metric are the box scene's, and so is ``delta``
-    unless one is given (``MeshWorld``'s ``delta``). Checks are then exact on the body's whole surface,
-    not on its points.
+    unless one is given (``MeshWorld``'s ``delta``; ``band``, ``MeshWorld``'s, default ``delta / 8``).
+    Checks are then exact on the body's whole surface, not on its points.
     """
     from planners.worlds.mesh import MeshWorld
 
@@ -572,23 +572,24 @@ def as_mesh_scene(problem: Problem, delta: float | None = None) -> Problem:
     faces = np.concatenate([f + 8 * i for i, (_, f) in enumerate(meshes)]) if meshes else np.zeros((0, 3), int)
     body = np.concatenate([world.body.min(axis=0), world.body.max(axis=0)])
     mesh_world = MeshWorld((verts, faces), box_mesh(body), low=world.low3, high=world.high3,
-                           delta=world.delta if delta is None else delta,
+                           delta=world.delta if delta is None else delta, band=band,
                            name=f"{problem.name}-mesh")
     return Problem(mesh_world, problem.start, problem.goal, goal_tolerance=problem.goal_tolerance,
                    metric=problem.metric, name=f"{problem.name}-mesh")
 
 
-def mesh_scene(family: str, seed: int, delta: float | None = None) -> Problem:
+def mesh_scene(family: str, seed: int, delta: float | None = None, band: float | None = None) -> Problem:
     """``rigid_scene(family, seed)`` as a mesh world, refused unless its witness path is free there too.
 
-    ``delta``: the mesh world's motion resolution (``as_mesh_scene``; default the box scene's).
+    ``delta``, ``band``: the mesh world's motion resolution and band (``as_mesh_scene``; default the box
+    scene's ``delta`` and ``MeshWorld``'s band).
 
     Raises:
         RuntimeError: The box scene's witness path meets the mesh environment (the body's surface
             reaches where its points did not).
     """
     problem, witness = scene_with_witness(family, seed)
-    mesh = as_mesh_scene(problem, delta)
+    mesh = as_mesh_scene(problem, delta, band)
     if not mesh.world.path_valid(witness.path):
         raise RuntimeError(f"{problem.name}: the witness path of the box scene meets the mesh environment")
     return mesh

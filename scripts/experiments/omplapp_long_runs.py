@@ -8,8 +8,9 @@ A benchmark run stops at the ``.cfg``'s time limit, so where most runs fail ther
 lies beyond it. This runs each seed until it solves or reaches a much longer limit and reports what a solve takes:
 iterations, tree states, collision checks and time. Ours is RRT-Connect with the default settings, uniform
 sampling and each of ``--samplers`` (a registry sampler, bound in the timed run), on the problem read with
-``delta`` at each ``--fractions`` of the bounds' diagonal (every checked pose keeps the body ``delta / 2`` from
-the environment, so ``delta`` narrows each passage; the default is ``DEFAULT_DELTA_FRACTION``). OMPL's
+``delta`` at each ``--fractions`` of the bounds' diagonal and each ``--bands`` (every checked pose keeps the body
+the band from the environment, so the band narrows each passage; the defaults are ``DEFAULT_DELTA_FRACTION`` and
+``DEFAULT_BAND_FRACTION``). OMPL's
 (``--ompl-time-limit``, the ``bench`` extra) is RRT-Connect as ``benchmark_planners.py --rigid --rigid-ompl`` sets
 it up: SE(3) with quaternions, our ``is_valid`` per state, OMPL's discrete motion check every 1% of the space's extent
 with no clearance asked; each of its solutions is replayed as OMPL moves the body (``slerp_poses``), a pose
@@ -101,6 +102,7 @@ def main(argv=None) -> int:
     from planners.base.fileio import InputError, atomic_write_text
     from planners.base.planner import compile_seconds
     from planners.tools import ompl_bridge
+    from planners.worlds.mesh import DEFAULT_BAND_FRACTION
     from planners.worlds.omplapp import load_omplapp, omplapp_dir
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -110,6 +112,9 @@ def main(argv=None) -> int:
     ap.add_argument("--time-limit", type=float, default=60.0, help="our runs' limit (s)")
     ap.add_argument("--fractions", type=float, nargs="*", default=[1e-3],
                     help="delta as fractions of the diagonal; none: OMPL's runs only")
+    ap.add_argument("--bands", type=float, nargs="+", default=[0.25], metavar="SHARE",
+                    help="the band every checked pose keeps, as shares of delta / 2 (MeshWorld's band; default 0.25: "
+                         "delta / 8)")
     ap.add_argument("--samplers", nargs="*", default=[], metavar="NAME",
                     help="registry samplers to run beside uniform sampling (make_sampler(NAME), bound per run)")
     ap.add_argument("--no-uniform", action="store_true", help="run only the --samplers, not uniform sampling")
@@ -126,6 +131,8 @@ def main(argv=None) -> int:
         ap.error("--seeds must be at least 1, --time-limit positive and --ompl-time-limit 0 or more")
     if any(not 0 < f < 0.1 for f in args.fractions):
         ap.error(f"--fractions must lie in (0, 0.1), got {args.fractions}")
+    if any(not 0 < b <= 1 for b in args.bands):
+        ap.error(f"--bands must lie in (0, 1], got {args.bands}")
     if args.out.exists() and args.out.is_dir():
         ap.error(f"--out {args.out} is a folder; give a file name")
     cfg = omplapp_dir(args.omplapp) / f"{args.problem}.cfg"
@@ -143,13 +150,16 @@ def main(argv=None) -> int:
         ap.error("--ompl-time-limit needs OMPL (pip install -c constraints.txt -e '.[bench]')")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     rows = []
-    for fraction in args.fractions:
-        world = load_omplapp(cfg).problem.world
-        problem = load_omplapp(cfg, delta=fraction * float(np.linalg.norm(world.high3 - world.low3))).problem
+    world = load_omplapp(cfg).problem.world
+    for fraction, share in [(f, b) for f in args.fractions for b in args.bands]:
+        delta = fraction * float(np.linalg.norm(world.high3 - world.low3))
+        problem = load_omplapp(cfg, delta=delta, band=share * 0.5 * delta).problem
         for name in samplers:
             kwargs = lambda name=name: {} if name is None else {"sampler": make_sampler(name)}  # noqa: E731
             make_planner("RRTConnect", problem, seed=0, **kwargs()).solve(max_iterations=2)  # compile first
-            variant = f"ours, delta {fraction:g} of the diagonal" + ("" if name is None else f", {name}")
+            variant = (f"ours, delta {fraction:g} of the diagonal"
+                       + ("" if share == 2 * DEFAULT_BAND_FRACTION else f", band {share:g} delta / 2")
+                       + ("" if name is None else f", {name}"))
             if args.luby:
                 variant += f", Luby restarts x {args.luby}"
             for seed in range(args.seeds):
@@ -164,7 +174,7 @@ def main(argv=None) -> int:
                        "iterations": int(r.iterations), "states": int(r.num_vertices),
                        "checks": int(r.collision_checks),
                        "seconds": time.perf_counter() - t - (compile_seconds() - c),
-                       "delta": problem.world.delta, "restarts": int(r.restarts)}
+                       "delta": problem.world.delta, "band": problem.world.band, "restarts": int(r.restarts)}
                 rows.append(row)
                 print(json.dumps(row), flush=True)
     if args.ompl_time_limit:

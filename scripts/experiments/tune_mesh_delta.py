@@ -1,16 +1,21 @@
-"""Which motion resolution (``DEFAULT_DELTA_FRACTION``) a mesh world should default to, on generated mesh scenes.
+"""Which motion resolution (``DEFAULT_DELTA_FRACTION``) and band (``DEFAULT_BAND_FRACTION``) a mesh world should
+default to, on generated mesh scenes.
 
     PYTHONPATH=$PWD python scripts/experiments/tune_mesh_delta.py --scenes 2 --seeds 2 --time-limit 10 \\
-        --fractions 1e-3 5e-4 2.5e-4 1.25e-4 --out results/tune_mesh_delta.jsonl
+        --fractions 1e-3 5e-4 2.5e-4 1.25e-4 --bands 1 --out results/tune_mesh_delta.jsonl
 
-Every pose a mesh world checks keeps the body ``delta / 2`` from the environment, so ``delta`` narrows each
-passage by that much on each side; a smaller ``delta`` costs more poses per motion near the walls. This runs
+Every pose a mesh world checks keeps the body the band from the environment, so the band narrows each passage
+by that much on each side; a smaller ``delta`` or band costs more poses per motion near the walls. This runs
 our RRT-Connect (default settings, uniform sampling) under a time limit on the *tuning* part of the
 training box-scene families written as mesh worlds (``mesh_scene(family, seed, delta=fraction x the bounds'
 diagonal)``), never on OMPL.app's problems or a test scene, and prints per fraction the solved runs and the
 median time (an unsolved run counts at the limit). A scene whose box witness meets its meshes is left out
 (``mesh_scene`` refuses it), as the mesh scene set leaves it out. Runs are interleaved across fractions over
 ``--processes`` worker processes, so every fraction sees the same load.
+
+``--bands SHARE ...`` gives the band every checked pose keeps (``MeshWorld``'s ``band``) as shares of ``delta / 2``
+(default 0.25, ``MeshWorld``'s default ``delta / 8``); a scene is left out where the widest band, ``delta / 2``,
+refuses its witness, so every band plans the same scenes.
 
 ``--sampler NAME`` runs every run with a registry sampler instead of uniform sampling (a fresh one per run, bound
 in the timed run), and ``--restarts UNIT ...`` adds candidates that restart each run by Luby's sequence times
@@ -34,27 +39,32 @@ _PROBLEMS: dict = {}
 
 
 def _run(task: tuple) -> dict:
-    fraction, family, scene_seed, seed, limit, sampler, restarts = task
+    fraction, share, family, scene_seed, seed, limit, sampler, restarts = task
     import numpy as np
 
     from planners import make_planner, solve_with_restarts
     from planners.base.planner import compile_seconds
-    from planners.worlds.rigid_scenes import mesh_scene, rigid_scene
+    from planners.worlds.rigid_scenes import as_mesh_scene, mesh_scene, rigid_scene
 
-    key = (fraction, family, scene_seed)
+    key = (fraction, share, family, scene_seed)
     if key not in _PROBLEMS:
         box = rigid_scene(family, scene_seed)
         lo, hi = box.world.low3, box.world.high3
+        delta = fraction * float(np.linalg.norm(hi - lo))
         try:
-            problem = mesh_scene(family, scene_seed, delta=fraction * float(np.linalg.norm(hi - lo)))
+            problem = mesh_scene(family, scene_seed, delta=delta, band=0.5 * delta)
         except RuntimeError as e:  # the box scene's witness meets the meshes: not a mesh scene (as MeshSceneSet)
             _PROBLEMS[key] = str(e)
-            return {"fraction": fraction, "family": family, "scene_seed": scene_seed, "seed": seed, "refused": str(e)}
+            return {"fraction": fraction, "band": share, "family": family, "scene_seed": scene_seed, "seed": seed,
+                    "refused": str(e)}
+        if share != 1:  # the same scene (accepted at the widest band) with the band asked
+            problem = as_mesh_scene(box, delta, share * 0.5 * delta)
         make_planner("RRTConnect", problem, seed=0).solve(max_iterations=2)  # compile outside the timing
         _PROBLEMS[key] = problem
     problem = _PROBLEMS[key]
     if isinstance(problem, str):
-        return {"fraction": fraction, "family": family, "scene_seed": scene_seed, "seed": seed, "refused": problem}
+        return {"fraction": fraction, "band": share, "family": family, "scene_seed": scene_seed, "seed": seed,
+                "refused": problem}
 
     def kwargs() -> dict:  # a fresh sampler for each run (bound in the timed run)
         if sampler == "uniform":
@@ -70,8 +80,8 @@ def _run(task: tuple) -> dict:
     else:
         r = make_planner("RRTConnect", problem, seed=seed, **kwargs()).solve(time_limit=limit)
     seconds = time.perf_counter() - t - (compile_seconds() - c)
-    return {"fraction": fraction, "restarts": restarts, "family": family, "scene_seed": scene_seed, "seed": seed,
-            "delta": problem.world.delta, "sampler": sampler,
+    return {"fraction": fraction, "band": share, "restarts": restarts, "family": family, "scene_seed": scene_seed,
+            "seed": seed, "delta": problem.world.delta, "sampler": sampler,
             "solved": bool(r.solved), "iterations": int(r.iterations), "checks": int(r.collision_checks),
             "seconds": float(seconds)}
 
@@ -85,6 +95,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per scene")
     ap.add_argument("--time-limit", type=float, default=10.0)
     ap.add_argument("--fractions", type=float, nargs="+", default=[1e-3, 5e-4, 2.5e-4, 1.25e-4])
+    ap.add_argument("--bands", type=float, nargs="+", default=[0.25], metavar="SHARE",
+                    help="the band every checked pose keeps, as shares of delta / 2 (default 0.25: delta / 8)")
     ap.add_argument("--families", nargs="+", default=list(TRAINING_FAMILIES), choices=list(TRAINING_FAMILIES))
     ap.add_argument("--sampler", default="uniform", help="a registry sampler for every run (default uniform)")
     ap.add_argument("--restarts", type=int, nargs="+", default=[0], metavar="UNIT",
@@ -99,12 +111,14 @@ def main(argv=None) -> int:
 
         if args.sampler not in sampler_names():
             ap.error(f"--sampler {args.sampler}: no such sampler (known: {', '.join(sampler_names())})")
+    if any(not 0 < b <= 1 for b in args.bands):
+        ap.error(f"--bands must lie in (0, 1], got {args.bands}")
     if any(u < 0 for u in args.restarts):
         ap.error(f"--restarts takes 0 (none) or numbers of iterations, got {args.restarts}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    tasks = [(f, fam, s, seed, args.time_limit, args.sampler, u) for fam in args.families
+    tasks = [(f, b, fam, s, seed, args.time_limit, args.sampler, u) for fam in args.families
              for s in scene_seeds(fam, "tuning", args.scenes) for seed in range(args.seeds) for f in args.fractions
-             for u in args.restarts]
+             for b in args.bands for u in args.restarts]
     rows = []
     with ProcessPoolExecutor(args.processes) as pool:
         for row in pool.map(_run, tasks):
@@ -115,23 +129,23 @@ def main(argv=None) -> int:
     rows = [r for r in rows if "refused" not in r]
     if refused:
         print(f"\nleft out (the box scene's witness meets its meshes): {', '.join(refused)}")
-    print(f"\n{args.sampler} sampling\n\n| fraction | restarts (unit) | solved | median time (s), unsolved at the "
-          "limit | median iterations | median checks |\n|---|---|---|---|---|---|")
-    for f in args.fractions:
-        for u in args.restarts:
-            rs = [r for r in rows if r["fraction"] == f and r["restarts"] == u]
-            if not rs:
-                print(f"| {f:g} | {u or 'none'} | no scene | | | |")
-                continue
-            t = statistics.median(r["seconds"] if r["solved"] else args.time_limit for r in rs)
-            print(f"| {f:g} | {u or 'none'} | {sum(r['solved'] for r in rs)}/{len(rs)} | {t:.2f} | "
-                  f"{statistics.median(r['iterations'] for r in rs):,.0f} | "
-                  f"{statistics.median(r['checks'] for r in rs):,.0f} |")
+    print(f"\n{args.sampler} sampling\n\n| fraction | band (of delta / 2) | restarts (unit) | solved | "
+          "median time (s), unsolved at the limit | median iterations | median checks |\n|---|---|---|---|---|---|---|")
+    for f, b, u in [(f, b, u) for f in args.fractions for b in args.bands for u in args.restarts]:
+        rs = [r for r in rows if r["fraction"] == f and r["band"] == b and r["restarts"] == u]
+        if not rs:
+            print(f"| {f:g} | {b:g} | {u or 'none'} | no scene | | | |")
+            continue
+        t = statistics.median(r["seconds"] if r["solved"] else args.time_limit for r in rs)
+        print(f"| {f:g} | {b:g} | {u or 'none'} | {sum(r['solved'] for r in rs)}/{len(rs)} | {t:.2f} | "
+              f"{statistics.median(r['iterations'] for r in rs):,.0f} | "
+              f"{statistics.median(r['checks'] for r in rs):,.0f} |")
     by_family = {}
     for r in rows:
-        by_family.setdefault((r["family"], r["fraction"], r["restarts"]), []).append(r["solved"])
-    print("\nsolved by family: " + "; ".join(f"{fam} {f:g}" + (f" restarts {u}" if u else "") + f": {sum(v)}/{len(v)}"
-                                            for (fam, f, u), v in by_family.items()))
+        by_family.setdefault((r["family"], r["fraction"], r["band"], r["restarts"]), []).append(r["solved"])
+    print("\nsolved by family: " + "; ".join(f"{fam} {f:g}" + f" band {b:g}"
+                                            + (f" restarts {u}" if u else "") + f": {sum(v)}/{len(v)}"
+                                            for (fam, f, b, u), v in by_family.items()))
     return 0
 
 
