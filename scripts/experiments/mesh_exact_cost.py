@@ -6,8 +6,9 @@
 On ``--poses`` random poses of an OMPL.app problem whose clearance (FCL's distance) lies between 0 and ten times the
 world's ``delta`` (the poses a motion check cannot settle with its grid), it prints the microseconds per pose of
 FCL's contact test and distance (one Python call each), of the world's compiled exact test
-(``planners.kernels.mesh.exact_apart``) with no margin and at each margin of ``CLEARANCE_LADDER`` times
-``delta / 2``, and of ``exact_clearance`` as the walk asks it (largest margin first), with how many poses each
+(``planners.kernels.mesh.exact_apart``) with no margin and at each margin the walk asks (``CLEARANCE_LADDER``
+times ``delta / 2`` above the world's band, and the band), and of ``exact_clearance`` as the walk asks it
+(largest margin first), with how many poses each
 margin clears and whether every answer agrees with FCL's distance. The compiled calls are timed from Python, so
 each includes a call's overhead (about a microsecond) that the motion check, calling from compiled code, does not
 pay.
@@ -115,7 +116,7 @@ def main(argv=None) -> int:
     world = load_omplapp(cfg).problem.world
     k = world.kernel
     states, clearances = near_poses(world, args.poses, seed=0)
-    need = world.delta / 2
+    need = world.band
     mesh_kernels.exact_apart(k.body, k.params, states[0], need)  # compile outside the timing
     mesh_kernels.exact_clearance(k.body, k.params, states[0], need, np.bool_(False))
     rows = []
@@ -124,7 +125,8 @@ def main(argv=None) -> int:
     _, us = per_pose_us(world.clearance, states)
     rows.append(("FCL's distance", us, "", ""))
     agree = True
-    for m in (0.0, *(need * mesh_kernels.CLEARANCE_LADDER[::-1])):
+    rungs = [m for m in world.delta / 2 * mesh_kernels.CLEARANCE_LADDER if m > need * mesh_kernels.BAND_RAISE]
+    for m in (0.0, need * mesh_kernels.BAND_RAISE, *rungs[::-1]):
         got, us = per_pose_us(lambda q, m=m: mesh_kernels.exact_apart(k.body, k.params, q, m), states)
         agree &= all(g == (c > m) for g, c in zip(got, clearances, strict=True) if abs(c - m) > 1e-9)
         rows.append((f"compiled test, margin {m / world.delta:.3g} delta", us, f"{np.mean(got):.2f}", ""))
