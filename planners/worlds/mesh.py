@@ -39,7 +39,6 @@ from planners.kernels.rigid import motion_pieces
 from planners.kernels.rigid import rotation_matrix as _rotation_matrix
 from planners.kernels.space import SPACE_RIGID, interpolate
 from planners.worlds.rigid3d import (
-    MAX_MOTION_POSES,
     RigidBodyWorld,
     body_radius,
     check_resolution,
@@ -374,12 +373,7 @@ class MeshWorld(WorldBase):
         self.delta = positive_delta(DEFAULT_DELTA_FRACTION * diagonal if delta is None else delta)
         check_resolution(self.delta, lo, hi, self.radius)
         self.band = motion_band(band, self.delta)
-        longest = float(np.linalg.norm(hi - lo)) + 3.0 * math.pi * self.radius  # as check_resolution measures it
-        if longest / (2.0 * self.band) > MAX_MOTION_POSES:  # the walk's poses lie at least twice the band apart
-            raise InputError(f"band {self.band:g} is too fine for this world: its longest motion ({longest:.4g}) would "
-                             f"be checked at up to {longest / (2.0 * self.band):.3g} poses, twice the band apart, more "
-                             f"than MAX_MOTION_POSES = {MAX_MOTION_POSES:,}; use band >= "
-                             f"{longest / (2.0 * MAX_MOTION_POSES):.3g}")
+        check_resolution(self.band, lo, hi, self.radius, "band", apart=2.0)  # the walk's least step is twice the band
         self.rot_weight = rotation_weight(rot_weight, self.radius)
         if isinstance(grid_cells, bool) or not isinstance(grid_cells, (int, np.integer)) or not 8 <= grid_cells <= 512:
             raise InputError(f"grid_cells must be an integer from 8 to 512, got {grid_cells!r}")

@@ -430,19 +430,22 @@ def body_radius(points: np.ndarray) -> float:
         return float(np.linalg.norm(points, axis=1).max())
 
 
-def check_resolution(delta: float, lo: np.ndarray, hi: np.ndarray, radius: float) -> None:
+def check_resolution(delta: float, lo: np.ndarray, hi: np.ndarray, radius: float, name: str = "delta",
+                     apart: float = 1.0) -> None:
     """Refuse a ``delta`` that would cut the longest motion into more than ``MAX_MOTION_POSES`` poses.
 
     The longest motion is the workspace diagonal plus a half turn about each axis (``3 pi radius``):
-    the bound on a body point's travel that ``planners.kernels.rigid.motion_pieces`` cuts by.
+    the bound on a body point's travel that ``planners.kernels.rigid.motion_pieces`` cuts by. ``name``: the
+    setting the message names; ``apart``: the poses lie ``apart`` times it apart (a mesh world's band: 2).
     """
+    step = apart * delta
     with np.errstate(over="ignore"):  # a huge workspace or body gives inf here, refused just below
         longest = float(np.linalg.norm(hi - lo)) + 3.0 * math.pi * radius
-    if not longest / delta <= MAX_MOTION_POSES:
-        raise InputError(f"delta {delta:g} is too fine for this world: its longest motion ({longest:.4g}: the "
+    if not longest / step <= MAX_MOTION_POSES:
+        raise InputError(f"{name} {delta:g} is too fine for this world: its longest motion ({longest:.4g}: the "
                          f"workspace diagonal plus a half turn about each axis) would be checked at "
-                         f"{longest / delta:.3g} poses, more than MAX_MOTION_POSES = {MAX_MOTION_POSES:,}; "
-                         f"use delta >= {longest / MAX_MOTION_POSES:.3g}")
+                         f"{longest / step:.3g} poses, more than MAX_MOTION_POSES = {MAX_MOTION_POSES:,}; "
+                         f"use {name} >= {longest / (apart * MAX_MOTION_POSES):.3g}")
 
 
 def rotation_weight(rot_weight, radius: float) -> float:
