@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from planners.kernels.rigid import rotation_matrix
-from planners.kernels.triangles import LEAF_SIZE, build_tree, sets_apart, sphere_nodes, triangles_within
+from planners.kernels.triangles import LEAF_SIZE, build_tree, sets_apart, sets_clearance, sphere_nodes, triangles_within
 
 fcl = pytest.importorskip("fcl", reason="the reference distance is FCL's (pip install samplergym[mesh])")
 
@@ -127,18 +127,23 @@ def _boxy(rng, n, scale):
     return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
 
 
-@pytest.mark.parametrize("seed", [0, 1])
-def test_a_body_is_more_than_a_margin_away_exactly_when_fcl_says_so(seed):
+def _scene(rng, capsule: bool):
+    """60 random boxes and a body (a capsule or a box), with the trees the exact test walks."""
     pytest.importorskip("trimesh", reason="the test scene is made with trimesh (pip install samplergym[mesh])")
     import trimesh
 
-    rng = np.random.default_rng(seed)
     env_v, env_f = _boxy(rng, 60, 12.0)
-    body = trimesh.creation.capsule(height=2.0, radius=0.4) if seed else trimesh.creation.box(extents=(3, 1, 0.5))
+    body = trimesh.creation.capsule(height=2.0, radius=0.4) if capsule else trimesh.creation.box(extents=(3, 1, 0.5))
     body_v, body_f = np.asarray(body.vertices, float), np.asarray(body.faces, np.int64)
     nodes, tris = build_tree(env_v[env_f])
     body_nodes, body_tris = build_tree(body_v[body_f])
-    spheres = sphere_nodes(body_nodes, body_tris)
+    return env_v, env_f, body_v, body_f, nodes, tris, body_tris, sphere_nodes(body_nodes, body_tris)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_body_is_more_than_a_margin_away_exactly_when_fcl_says_so(seed):
+    rng = np.random.default_rng(seed)
+    env_v, env_f, body_v, body_f, nodes, tris, body_tris, spheres = _scene(rng, capsule=bool(seed))
     checked = {True: 0, False: 0}
     for _ in range(150):
         q = np.r_[rng.uniform(0, 12, 3), rng.uniform(-np.pi, np.pi, 3)]
@@ -152,3 +157,25 @@ def test_a_body_is_more_than_a_margin_away_exactly_when_fcl_says_so(seed):
                 assert got == (d > m), (q, d, m)
                 checked[got] += 1
     assert checked[True] > 50 and checked[False] > 50
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_one_walk_finds_the_largest_margin_a_pose_clears(seed):
+    """``sets_clearance`` answers, in one walk, what testing its margins one at a time answers; FCL agrees."""
+    rng = np.random.default_rng(seed + 10)
+    env_v, env_f, body_v, body_f, nodes, tris, body_tris, spheres = _scene(rng, capsule=bool(seed))
+    margins = np.array([2.0, 0.8, 0.3, 0.05, 0.0])
+    seen = set()
+    for _ in range(150):
+        q = np.r_[rng.uniform(0, 12, 3), rng.uniform(-np.pi, np.pi, 3)]
+        R = np.asarray(rotation_matrix(q[3], q[4], q[5]))
+        placed = np.ascontiguousarray(body_tris @ R.T + q[:3])
+        k = sets_clearance(spheres, placed, R, q[:3].copy(), nodes, tris, margins)
+        one_by_one = next((j for j, m in enumerate(margins)
+                           if sets_apart(spheres, placed, R, q[:3].copy(), nodes, tris, m)), len(margins))
+        assert k == one_by_one, (q, k, one_by_one)
+        d = fcl_distance(body_v @ R.T + q[:3], body_f, env_v, env_f)
+        if all(abs(m - d) > 1e-7 for m in margins):
+            assert k == next((j for j, m in enumerate(margins) if d > m), len(margins)), (q, d, k)
+        seen.add(k)
+    assert len(seen) >= 4  # poses at several rungs, in contact among them

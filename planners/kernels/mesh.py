@@ -50,7 +50,7 @@ import numpy as np
 
 from planners.kernels.rigid import motion_pieces, rotation_matrix
 from planners.kernels.space import SPACE_RIGID, interpolate
-from planners.kernels.triangles import sets_apart
+from planners.kernels.triangles import sets_apart, sets_clearance
 
 P_ID = 8
 P_GRID = 9
@@ -110,53 +110,6 @@ def sphere_free(grid, params, q, margin):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _cover_voxel(params, R, cover, p, q):
-    """The voxel of cover point ``p`` of the body turned by ``R`` and placed at ``q`` (``_voxel``'s pair)."""
-    wx = R[0, 0] * cover[p, 0] + R[0, 1] * cover[p, 1] + R[0, 2] * cover[p, 2] + q[0]
-    wy = R[1, 0] * cover[p, 0] + R[1, 1] * cover[p, 1] + R[1, 2] * cover[p, 2] + q[1]
-    wz = R[2, 0] * cover[p, 0] + R[2, 1] * cover[p, 1] + R[2, 2] * cover[p, 2] + q[2]
-    return _voxel(params, wx, wy, wz)
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
-def broad_phase_free(grid, cover, params, q, margin):
-    """True if the broad phase proves the pose ``q`` keeps the body more than ``margin`` from the environment.
-
-    False means undecided, never "in collision".
-    """
-    if sphere_free(grid, params, q, margin):
-        return True
-    h = params[P_GRID + 3]
-    # the cover points, each with its cover radius
-    need = margin + params[P_COVER]
-    R = rotation_matrix(q[3], q[4], q[5])
-    for p in range(cover.shape[0]):
-        i, jk = _cover_voxel(params, R, cover, p, q)
-        if i < 0 or not (grid[i, jk] - 1.0) * h > need:
-            return False
-    return True
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
-def _cluster_floor(grid, clusters, params, R, q, c):
-    """A lower bound, in voxel values, on ``grid`` at every cover point of cluster ``c``; -1 where unknown.
-
-    The cluster's points lie within its radius of its centre, so their voxels lie within ``slack`` voxels of
-    the centre's (Chebyshev index distance), and the grid's values change by at most 1 per voxel.
-    """
-    i, jk = _cover_voxel(params, R, clusters, c, q)
-    if i < 0:
-        return -1.0
-    slack = clusters[c, 3]
-    nx, ny, nz = params[P_GRID + 4], params[P_GRID + 5], params[P_GRID + 6]
-    j = jk // int(nz)
-    k = jk - j * int(nz)
-    if i < slack or j < slack or k < slack or i + slack >= nx or j + slack >= ny or k + slack >= nz:
-        return -1.0  # near the grid's edge: a point may lie outside it
-    return grid[i, jk] - slack
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True)
 def clearance_bound(grid, cover, clusters, params, q, need):
     """A lower bound on the distance from the body at ``q`` to the environment, from the grid alone.
 
@@ -165,7 +118,11 @@ def clearance_bound(grid, cover, clusters, params, q, need):
 
     The cover points come in clusters (``cover_clusters``): the cluster with the lowest floor is read
     first, then each other cluster only where its floor could undercut the lowest point found so far,
-    which gives the smallest bound over all points, exactly as reading every point would.
+    which gives the smallest bound over all points, exactly as reading every point would. A cluster's
+    floor is a lower bound, in voxel values, on ``grid`` at each of its points: they lie within its radius
+    of its centre, so their voxels lie within ``slack`` voxels of the centre's (Chebyshev index distance),
+    and the grid's values change by at most 1 per voxel; near the grid's edge, where a point may lie
+    outside it, the floor is unknown (-1).
     """
     h = params[P_GRID + 3]
     i, jk = _voxel(params, q[0], q[1], q[2])
@@ -174,28 +131,60 @@ def clearance_bound(grid, cover, clusters, params, q, need):
     bound = (grid[i, jk] - 1.0) * h - params[7]
     if bound > need:
         return bound
+    gx, gy, gz = params[P_GRID], params[P_GRID + 1], params[P_GRID + 2]
+    nx, ny, nz = int(params[P_GRID + 4]), int(params[P_GRID + 5]), int(params[P_GRID + 6])
+    # the rotation and the grid's constants read once for every point: read from their arrays point by point, each
+    # point's voxel through ``_voxel``, they cost four times as much (the same arithmetic, term for term)
     R = rotation_matrix(q[3], q[4], q[5])
-    floors = np.empty(clusters.shape[0])
+    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    q0, q1, q2 = q[0], q[1], q[2]
+    n = clusters.shape[0]
+    floors = np.empty(n)
     first = 0
-    for c in range(clusters.shape[0]):
-        floors[c] = _cluster_floor(grid, clusters, params, R, q, c)
+    for c in range(n):
+        x, y, z = clusters[c, 0], clusters[c, 1], clusters[c, 2]
+        i = int(math.floor((r00 * x + r01 * y + r02 * z + q0 - gx) / h))
+        j = int(math.floor((r10 * x + r11 * y + r12 * z + q1 - gy) / h))
+        k = int(math.floor((r20 * x + r21 * y + r22 * z + q2 - gz) / h))
+        slack = clusters[c, 3]
+        if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
+            floors[c] = -1.0
+        elif i < slack or j < slack or k < slack or i + slack >= nx or j + slack >= ny or k + slack >= nz:
+            floors[c] = -1.0  # near the grid's edge: a point may lie outside it
+        else:
+            floors[c] = grid[i, j * nz + k] - slack
         if floors[c] < floors[first]:
             first = c
+    cover_radius = params[P_COVER]
     lowest = np.inf
-    for n in range(clusters.shape[0] + 1):
-        c = first if n == 0 else n - 1
-        if n > 0 and (c == first or (floors[c] - 1.0) * h - params[P_COVER] >= lowest):
+    for m in range(n + 1):
+        c = first if m == 0 else m - 1
+        if m > 0 and (c == first or (floors[c] - 1.0) * h - cover_radius >= lowest):
             continue
-        for p in range(int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < clusters.shape[0] else cover.shape[0]):
-            i, jk = _cover_voxel(params, R, cover, p, q)
-            if i < 0:
+        for p in range(int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < n else cover.shape[0]):
+            x, y, z = cover[p, 0], cover[p, 1], cover[p, 2]
+            i = int(math.floor((r00 * x + r01 * y + r02 * z + q0 - gx) / h))
+            j = int(math.floor((r10 * x + r11 * y + r12 * z + q1 - gy) / h))
+            k = int(math.floor((r20 * x + r21 * y + r22 * z + q2 - gz) / h))
+            if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
                 return bound
-            d = (grid[i, jk] - 1.0) * h - params[P_COVER]
+            d = (grid[i, j * nz + k] - 1.0) * h - cover_radius
             if d < lowest:
                 lowest = d
                 if lowest <= need:
                     return max(bound, lowest)
     return max(bound, lowest)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def broad_phase_free(grid, cover, clusters, params, q, margin):
+    """True if the broad phase proves the pose ``q`` keeps the body more than ``margin`` from the environment.
+
+    False means undecided, never "in collision". ``clearance_bound``'s verdict.
+    """
+    return clearance_bound(grid, cover, clusters, params, q, margin) > margin
 
 
 def cover_clusters(cover: np.ndarray, h: float, side: int = 4) -> tuple[np.ndarray, np.ndarray]:
@@ -256,10 +245,10 @@ def exact_apart(body, params, q, margin):
 def exact_clearance(body, params, q, need, low_first):
     """A lower bound above ``need`` on the body's clearance at pose ``q``, or 0 where it is ``need`` or less.
 
-    The margins ``CLEARANCE_LADDER`` times ``delta / 2`` above ``need`` are tried in turn, then ``need`` itself
-    (raised by ``BAND_RAISE``), each an exact test (``planners.kernels.triangles.sets_apart``); the largest one
-    the pose clears is the answer. ``low_first``: try ``need`` first (a pose likely to fail, where one test
-    settles it).
+    The largest of the margins ``CLEARANCE_LADDER`` times ``delta / 2`` above ``need``, and ``need`` itself (raised
+    by ``BAND_RAISE``), that the pose clears: the exact test (``planners.kernels.triangles.sets_clearance``) asks
+    them all in one walk of the two trees, largest first. ``low_first``: test ``need`` alone first (a pose likely to
+    fail, where that one test settles it).
     """
     cover, spheres, triangles, nodes, env = _parts(body, params)
     R, placed = _posed(triangles, q)
@@ -268,13 +257,20 @@ def exact_clearance(body, params, q, need, low_first):
     if low_first and not sets_apart(spheres, placed, R, t, nodes, env, lowest):
         return 0.0
     half = 0.5 * params[6]
-    for k in range(CLEARANCE_LADDER.shape[0]):
-        m = half * CLEARANCE_LADDER[k]
-        if m <= lowest:
-            break
-        if sets_apart(spheres, placed, R, t, nodes, env, m):
-            return m
-    if low_first or sets_apart(spheres, placed, R, t, nodes, env, lowest):
+    rungs = 0
+    while rungs < CLEARANCE_LADDER.shape[0] and half * CLEARANCE_LADDER[rungs] > lowest:
+        rungs += 1
+    if low_first and rungs == 0:
+        return lowest
+    margins = np.empty(rungs + (0 if low_first else 1))
+    for k in range(rungs):
+        margins[k] = half * CLEARANCE_LADDER[k]
+    if not low_first:
+        margins[rungs] = lowest
+    k = sets_clearance(spheres, placed, R, t, nodes, env, margins)
+    if k < rungs:
+        return margins[k]
+    if k == rungs:  # the band cleared (low first: tested before)
         return lowest
     return 0.0
 

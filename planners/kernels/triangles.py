@@ -255,17 +255,34 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
 
     ``spheres``: the body's tree (``sphere_nodes``, body frame); ``body``: its triangles in the tree's order, in
     world coordinates at the pose ``(R, t)`` (``(3 B, 3)``); ``nodes`` and ``tris``: the environment's tree
-    (``build_tree``). The two trees are walked together, a pair of nodes set aside where the body node's sphere,
-    or else the world box that holds its turned box, lies more than ``m`` from the environment node's box; stops
-    at the first pair of triangles within ``m``.
+    (``build_tree``). ``sets_clearance`` with the one margin.
+    """
+    margins = np.empty(1)
+    margins[0] = m
+    return sets_clearance(spheres, body, R, t, nodes, tris, margins) == 0
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def sets_clearance(spheres, body, R, t, nodes, tris, margins):
+    """The first ``k`` such that every body triangle lies more than ``margins[k]`` from every environment triangle.
+
+    ``margins`` decrease (all ``>= 0``); ``len(margins)`` where the last is not cleared either. The arguments are
+    ``sets_apart``'s. The two trees are walked together once, a pair of nodes set aside where the body node's
+    sphere, or else the world box that holds its turned box, lies more than the margin asked so far from the
+    environment node's box; a pair of triangles within it moves the margin asked to the next one that pair
+    clears (a pair set aside, or cleared, at one margin is so at every smaller one). The answer is the first margin
+    at which testing each margin in turn with its own walk would succeed, in one walk.
     """
     stack = np.empty((64, 2), dtype=np.int64)
     stack[0, 0] = 0
     stack[0, 1] = 0
     top = 1
+    k = 0
+    m = margins[0]
     # a node's turned centre and its triangles' turned corners are rounded apart by a few units in the last place of
     # the coordinates: a pair is set aside only where its bound clears the margin by far more than that
-    far = m + 1e-12 * (abs(t[0]) + abs(t[1]) + abs(t[2]) + spheres[1, 0])
+    rounding = 1e-12 * (abs(t[0]) + abs(t[1]) + abs(t[2]) + spheres[1, 0])
+    far = m + rounding
     while top > 0:
         top -= 1
         sb = 4 * stack[top, 0]
@@ -291,11 +308,15 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
         if body_leaf and env_leaf:
             for b in range(int(spheres[sb + 2, 1]), int(spheres[sb + 2, 1] + spheres[sb + 2, 2])):
                 lo0, lo1, lo2, hi0, hi1, hi2 = _box_of(body, 3 * b)
-                grown_box = (lo0 - m, lo1 - m, lo2 - m, hi0 + m, hi1 + m, hi2 + m)
                 for e in range(int(nodes[se + 2, 1]), int(nodes[se + 2, 1] + nodes[se + 2, 2])):
-                    if not _boxes_apart(grown_box, _box_of(tris, 3 * e)) and triangles_within(body, 3 * b, tris,
-                                                                                               3 * e, m):
-                        return False
+                    box = _box_of(tris, 3 * e)
+                    while not _boxes_apart((lo0 - m, lo1 - m, lo2 - m, hi0 + m, hi1 + m, hi2 + m), box) and \
+                            triangles_within(body, 3 * b, tris, 3 * e, m):
+                        k += 1
+                        if k == margins.shape[0]:
+                            return k
+                        m = margins[k]
+                        far = m + rounding
             continue
         if top + 2 > stack.shape[0]:
             grown = np.empty((2 * stack.shape[0], 2), dtype=np.int64)
@@ -313,4 +334,4 @@ def sets_apart(spheres, body, R, t, nodes, tris, m):
                 stack[top + c, 0] = sb // 4
                 stack[top + c, 1] = int(nodes[se + 2, 1 - c])
         top += 2
-    return True
+    return k

@@ -470,7 +470,8 @@ class MeshWorld(WorldBase):
     def pose_free_broad(self, q, margin: float = 0.0) -> bool:
         """The broad phase alone: True only where it proves the pose free with ``margin`` (else undecided)."""
         q = np.ascontiguousarray(self._state(q))
-        return bool(mesh_kernels.broad_phase_free(self.grid, self.cover, self._kernel.params, q, float(margin)))
+        return bool(mesh_kernels.broad_phase_free(self.grid, self.cover, self.clusters, self._kernel.params, q,
+                                                     float(margin)))
 
     def clearance(self, q) -> float:
         """Distance from the body at ``q`` to the environment (FCL; 0 or less where they meet)."""
