@@ -161,7 +161,8 @@ def test_a_body_is_more_than_a_margin_away_exactly_when_fcl_says_so(seed):
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_one_walk_finds_the_largest_margin_a_pose_clears(seed):
-    """``sets_clearance`` answers, in one walk, what testing its margins one at a time answers; FCL agrees."""
+    """``sets_clearance`` answers, in one walk, what testing its margins one at a time answers, with any hint; FCL
+    agrees."""
     rng = np.random.default_rng(seed + 10)
     env_v, env_f, body_v, body_f, nodes, tris, body_tris, spheres = _scene(rng, capsule=bool(seed))
     margins = np.array([2.0, 0.8, 0.3, 0.05, 0.0])
@@ -170,7 +171,13 @@ def test_one_walk_finds_the_largest_margin_a_pose_clears(seed):
         q = np.r_[rng.uniform(0, 12, 3), rng.uniform(-np.pi, np.pi, 3)]
         R = np.asarray(rotation_matrix(q[3], q[4], q[5]))
         placed = np.ascontiguousarray(body_tris @ R.T + q[:3])
-        k = sets_clearance(spheres, placed, R, q[:3].copy(), nodes, tris, margins)
+        hint = np.full(2, -1, dtype=np.int64)
+        k = sets_clearance(spheres, placed, R, q[:3].copy(), nodes, tris, margins, hint)
+        # any pair as the hint (the last pose's, or one far off): the same answer
+        for b, e in ((hint[0], hint[1]), (rng.integers(len(body_tris) // 3), rng.integers(len(tris) // 3))):
+            if b >= 0:
+                pair = np.array([b, e], dtype=np.int64)
+                assert sets_clearance(spheres, placed, R, q[:3].copy(), nodes, tris, margins, pair) == k
         one_by_one = next((j for j, m in enumerate(margins)
                            if sets_apart(spheres, placed, R, q[:3].copy(), nodes, tris, m)), len(margins))
         assert k == one_by_one, (q, k, one_by_one)

@@ -231,30 +231,34 @@ def _posed(triangles, q):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def exact_apart(body, params, q, margin):
+def exact_apart(body, params, q, margin, hint=None):
     """True if the body's triangles at pose ``q`` lie more than ``margin`` from the environment's (exact, compiled).
 
-    ``margin`` 0: no triangle of the body meets one of the environment's (touching counts as meeting).
+    ``margin`` 0: no triangle of the body meets one of the environment's (touching counts as meeting). ``hint``:
+    ``sets_clearance``'s (the same answer with any).
     """
     cover, spheres, triangles, nodes, env = _parts(body, params)
     R, placed = _posed(triangles, q)
-    return sets_apart(spheres, placed, R, q[:3], nodes, env, margin)
+    return sets_apart(spheres, placed, R, q[:3], nodes, env, margin, hint)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def exact_clearance(body, params, q, need, low_first):
+def exact_clearance(body, params, q, need, low_first, hint=None):
     """A lower bound above ``need`` on the body's clearance at pose ``q``, or 0 where it is ``need`` or less.
 
     The largest of the margins ``CLEARANCE_LADDER`` times ``delta / 2`` above ``need``, and ``need`` itself (raised
     by ``BAND_RAISE``), that the pose clears: the exact test (``planners.kernels.triangles.sets_clearance``) asks
     them all in one walk of the two trees, largest first. ``low_first``: test ``need`` alone first (a pose likely to
-    fail, where that one test settles it).
+    fail, where that one test settles it). ``hint``: ``sets_clearance``'s (the same answer with any); the walk of a
+    motion passes one from pose to pose.
     """
+    if hint is None:
+        hint = np.full(2, -1, dtype=np.int64)
     cover, spheres, triangles, nodes, env = _parts(body, params)
     R, placed = _posed(triangles, q)
     t = q[:3]
     lowest = need * BAND_RAISE
-    if low_first and not sets_apart(spheres, placed, R, t, nodes, env, lowest):
+    if low_first and not sets_apart(spheres, placed, R, t, nodes, env, lowest, hint):
         return 0.0
     half = 0.5 * params[6]
     rungs = 0
@@ -267,7 +271,7 @@ def exact_clearance(body, params, q, need, low_first):
         margins[k] = half * CLEARANCE_LADDER[k]
     if not low_first:
         margins[rungs] = lowest
-    k = sets_clearance(spheres, placed, R, t, nodes, env, margins)
+    k = sets_clearance(spheres, placed, R, t, nodes, env, margins, hint)
     if k < rungs:
         return margins[k]
     if k == rungs:  # the band cleared (low first: tested before)
@@ -276,12 +280,12 @@ def exact_clearance(body, params, q, need, low_first):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _pose_clearance(grid, body, clusters, params, q, need, low_first):
+def _pose_clearance(grid, body, clusters, params, q, need, low_first, hint):
     """The grid's bound where it exceeds ``need``, else ``exact_clearance``'s (0 where not ``need`` clear)."""
     c = clearance_bound(grid, _parts(body, params)[0], clusters, params, q, need)
     if c > need:
         return c
-    return exact_clearance(body, params, q, need, low_first)
+    return exact_clearance(body, params, q, need, low_first, hint)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -345,8 +349,10 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
     least = 2.0 * margin  # the least step from the last pose: two poses clear by more than ``margin`` cover it
     # the far end first (a blocked extension is usually blocked there): its clearance covers the travel
     # (length - cb, length]; then the interior probes; then the walk from the start (see the module docs)
-    # the low-first choice as np.bool_, a value: a constant True or False would compile _pose_clearance once each
-    cb = _pose_clearance(grid, body, clusters, params, b, margin, np.bool_(True))
+    # the low-first choice as np.bool_, a value: a constant True or False would compile _pose_clearance once each;
+    # the exact test's hint passes from pose to pose (``sets_clearance``)
+    hint = np.full(2, -1, dtype=np.int64)
+    cb = _pose_clearance(grid, body, clusters, params, b, margin, np.bool_(True), hint)
     if not cb > margin:
         return False
     q = np.empty(6)
@@ -356,7 +362,7 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
         for f in PROBE_FRACTIONS:
             interpolate(SPACE_RIGID, a, b, f, q)
             if not clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0 and not exact_apart(body, params, q,
-                                                                                                    0.0):
+                                                                                                    0.0, hint):
                 return False
     end = length - cb  # (end, length] is covered
     covered = -1.0  # [0, covered) is covered; nothing yet
@@ -366,7 +372,7 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
     placed = 0
     while True:
         interpolate(SPACE_RIGID, a, b, s / length, q)
-        c = _pose_clearance(grid, body, clusters, params, q, margin, np.bool_(False))
+        c = _pose_clearance(grid, body, clusters, params, q, margin, np.bool_(False), hint)
         if not c > margin:
             return False
         placed += 1

@@ -250,20 +250,22 @@ def _boxes_apart(a, b):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def sets_apart(spheres, body, R, t, nodes, tris, m):
+def sets_apart(spheres, body, R, t, nodes, tris, m, hint=None):
     """True if every triangle of the body lies more than ``m`` from every triangle of the environment (``m >= 0``).
 
     ``spheres``: the body's tree (``sphere_nodes``, body frame); ``body``: its triangles in the tree's order, in
     world coordinates at the pose ``(R, t)`` (``(3 B, 3)``); ``nodes`` and ``tris``: the environment's tree
-    (``build_tree``). ``sets_clearance`` with the one margin.
+    (``build_tree``). ``sets_clearance`` with the one margin (and its ``hint``, where given).
     """
     margins = np.empty(1)
     margins[0] = m
-    return sets_clearance(spheres, body, R, t, nodes, tris, margins) == 0
+    if hint is None:
+        return sets_clearance(spheres, body, R, t, nodes, tris, margins, np.full(2, -1, dtype=np.int64)) == 0
+    return sets_clearance(spheres, body, R, t, nodes, tris, margins, hint) == 0
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def sets_clearance(spheres, body, R, t, nodes, tris, margins):
+def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
     """The first ``k`` such that every body triangle lies more than ``margins[k]`` from every environment triangle.
 
     ``margins`` decrease (all ``>= 0``); ``len(margins)`` where the last is not cleared either. The arguments are
@@ -272,6 +274,11 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins):
     environment node's box; a pair of triangles within it moves the margin asked to the next one that pair
     clears (a pair set aside, or cleared, at one margin is so at every smaller one). The answer is the first margin
     at which testing each margin in turn with its own walk would succeed, in one walk.
+
+    ``hint``: a pair of triangles ``(body, environment)`` to test before the walk (``-1``: none), where the last
+    pair that moved the margin is written back. A nearby pose's pair (the walk of a motion poses the body again a
+    little further on) is often the closest again, so the walk starts at the margin that pair leaves and sets aside
+    more; a pair within a margin is one the walk would reach, so the answer is the same with any hint.
     """
     stack = np.empty((64, 2), dtype=np.int64)
     stack[0, 0] = 0
@@ -283,6 +290,17 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins):
     # the coordinates: a pair is set aside only where its bound clears the margin by far more than that
     rounding = 1e-12 * (abs(t[0]) + abs(t[1]) + abs(t[2]) + spheres[1, 0])
     far = m + rounding
+    if hint[0] >= 0:
+        b, e = hint[0], hint[1]
+        lo0, lo1, lo2, hi0, hi1, hi2 = _box_of(body, 3 * b)
+        box = _box_of(tris, 3 * e)
+        while not _boxes_apart((lo0 - m, lo1 - m, lo2 - m, hi0 + m, hi1 + m, hi2 + m), box) and \
+                triangles_within(body, 3 * b, tris, 3 * e, m):
+            k += 1
+            if k == margins.shape[0]:
+                return k
+            m = margins[k]
+            far = m + rounding
     while top > 0:
         top -= 1
         sb = 4 * stack[top, 0]
@@ -312,6 +330,8 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins):
                     box = _box_of(tris, 3 * e)
                     while not _boxes_apart((lo0 - m, lo1 - m, lo2 - m, hi0 + m, hi1 + m, hi2 + m), box) and \
                             triangles_within(body, 3 * b, tris, 3 * e, m):
+                        hint[0] = b
+                        hint[1] = e
                         k += 1
                         if k == margins.shape[0]:
                             return k
