@@ -374,7 +374,8 @@ def test_the_exact_clearance_is_a_lower_bound_above_the_margin_or_zero(hole_worl
     for _ in range(300):
         q = low + rng.random(6) * (high - low)
         need = w.delta / 2 * rng.choice([0.25, 1.0, 4.0, 20.0])
-        got = mesh_kernels.exact_clearance(k.body, k.params, q, need, np.bool_(low_first))
+        none = np.full(2, -1, dtype=np.int64)  # no hint
+        got = mesh_kernels.exact_clearance(k.body, k.params, q, need, np.bool_(low_first), none)
         d = w.clearance(q)
         lowest = need * mesh_kernels.BAND_RAISE
         rungs = [m for m in w.delta / 2 * mesh_kernels.CLEARANCE_LADDER if m > lowest] + [lowest]

@@ -50,7 +50,7 @@ import numpy as np
 
 from planners.kernels.rigid import motion_pieces, rotation_matrix
 from planners.kernels.space import SPACE_RIGID, interpolate
-from planners.kernels.triangles import sets_apart, sets_clearance
+from planners.kernels.triangles import sets_clearance
 
 P_ID = 8
 P_GRID = 9
@@ -231,35 +231,38 @@ def _posed(triangles, q):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def exact_apart(body, params, q, margin, hint=None):
+def exact_apart(body, params, q, margin, hint):
     """True if the body's triangles at pose ``q`` lie more than ``margin`` from the environment's (exact, compiled).
 
     ``margin`` 0: no triangle of the body meets one of the environment's (touching counts as meeting). ``hint``:
-    ``sets_clearance``'s (the same answer with any).
+    ``sets_clearance``'s (the same answer with any; ``np.full(2, -1)`` for none).
     """
     cover, spheres, triangles, nodes, env = _parts(body, params)
     R, placed = _posed(triangles, q)
-    return sets_apart(spheres, placed, R, q[:3], nodes, env, margin, hint)
+    margins = np.empty(1)
+    margins[0] = margin
+    return sets_clearance(spheres, placed, R, q[:3], nodes, env, margins, hint) == 0
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def exact_clearance(body, params, q, need, low_first, hint=None):
+def exact_clearance(body, params, q, need, low_first, hint):
     """A lower bound above ``need`` on the body's clearance at pose ``q``, or 0 where it is ``need`` or less.
 
     The largest of the margins ``CLEARANCE_LADDER`` times ``delta / 2`` above ``need``, and ``need`` itself (raised
     by ``BAND_RAISE``), that the pose clears: the exact test (``planners.kernels.triangles.sets_clearance``) asks
     them all in one walk of the two trees, largest first. ``low_first``: test ``need`` alone first (a pose likely to
-    fail, where that one test settles it). ``hint``: ``sets_clearance``'s (the same answer with any); the walk of a
-    motion passes one from pose to pose.
+    fail, where that one test settles it). ``hint``: ``sets_clearance``'s (the same answer with any; ``np.full(2,
+    -1)`` for none); the walk of a motion passes one from pose to pose.
     """
-    if hint is None:
-        hint = np.full(2, -1, dtype=np.int64)
     cover, spheres, triangles, nodes, env = _parts(body, params)
     R, placed = _posed(triangles, q)
     t = q[:3]
     lowest = need * BAND_RAISE
-    if low_first and not sets_apart(spheres, placed, R, t, nodes, env, lowest, hint):
-        return 0.0
+    if low_first:
+        band = np.empty(1)
+        band[0] = lowest
+        if sets_clearance(spheres, placed, R, t, nodes, env, band, hint) > 0:
+            return 0.0
     half = 0.5 * params[6]
     rungs = 0
     while rungs < CLEARANCE_LADDER.shape[0] and half * CLEARANCE_LADDER[rungs] > lowest:
@@ -306,7 +309,8 @@ def mesh_state_free_py(grid, body, params, q) -> bool:
         return False
     if sphere_free.py_func(grid, params, q, 0.0):
         return True
-    return bool(exact_apart(body, params, np.ascontiguousarray(q, dtype=np.float64), 0.0))
+    none = np.full(2, -1, dtype=np.int64)  # no hint
+    return bool(exact_apart(body, params, np.ascontiguousarray(q, dtype=np.float64), 0.0, none))
 
 
 #: Where a motion is blocked inside, the contact test (``exact_apart`` with no margin) at a few of its poses
@@ -344,7 +348,7 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
     n, length = motion_pieces(params, a, b)
     if length == 0.0:
         # a single state: the sphere only (the exact test costs about what the cover points do)
-        return sphere_free(grid, params, a, 0.0) or exact_apart(body, params, a, 0.0)
+        return sphere_free(grid, params, a, 0.0) or exact_apart(body, params, a, 0.0, np.full(2, -1, dtype=np.int64))
     margin = params[P_BAND]
     least = 2.0 * margin  # the least step from the last pose: two poses clear by more than ``margin`` cover it
     # the far end first (a blocked extension is usually blocked there): its clearance covers the travel

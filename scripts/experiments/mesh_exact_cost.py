@@ -117,8 +117,9 @@ def main(argv=None) -> int:
     k = world.kernel
     states, clearances = near_poses(world, args.poses, seed=0)
     need = world.band
-    mesh_kernels.exact_apart(k.body, k.params, states[0], need)  # compile outside the timing
-    mesh_kernels.exact_clearance(k.body, k.params, states[0], need, np.bool_(False))
+    none = np.full(2, -1, dtype=np.int64)  # no hint: each pose tested on its own, as from Python
+    mesh_kernels.exact_apart(k.body, k.params, states[0], need, none)  # compile outside the timing
+    mesh_kernels.exact_clearance(k.body, k.params, states[0], need, np.bool_(False), none)
     rows = []
     _, us = per_pose_us(lambda q: world.pose_free_exact(q), states)
     rows.append(("FCL's contact test", us, "", ""))
@@ -127,10 +128,11 @@ def main(argv=None) -> int:
     agree = True
     rungs = [m for m in world.delta / 2 * mesh_kernels.CLEARANCE_LADDER if m > need * mesh_kernels.BAND_RAISE]
     for m in (0.0, need * mesh_kernels.BAND_RAISE, *rungs[::-1]):
-        got, us = per_pose_us(lambda q, m=m: mesh_kernels.exact_apart(k.body, k.params, q, m), states)
+        got, us = per_pose_us(lambda q, m=m: mesh_kernels.exact_apart(k.body, k.params, q, m, none), states)
         agree &= all(g == (c > m) for g, c in zip(got, clearances, strict=True) if abs(c - m) > 1e-9)
         rows.append((f"compiled test, margin {m / world.delta:.3g} delta", us, f"{np.mean(got):.2f}", ""))
-    got, us = per_pose_us(lambda q: mesh_kernels.exact_clearance(k.body, k.params, q, need, np.bool_(False)), states)
+    got, us = per_pose_us(lambda q: mesh_kernels.exact_clearance(k.body, k.params, q, need, np.bool_(False), none),
+                              states)
     got = np.array(got)
     agree &= bool(np.all(got[got > need] < clearances[got > need]))
     rows.append(("exact_clearance (the walk's ladder)", us, f"{np.mean(got > need):.2f}",
