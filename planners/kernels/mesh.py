@@ -22,7 +22,9 @@ surface point lies within ``cover`` of one) less ``cover``; a single state asks 
 the exact test costs about what the cover points do. Where the bound does not clear the band, the
 exact test decides (``exact_clearance``): whether the body's triangles lie more than a margin from the
 environment's (``planners.kernels.triangles``), at the margins ``CLEARANCE_LADDER`` times ``delta / 2`` that
-lie above the band and then at the band, the largest one cleared being the pose's clearance. Before the walk,
+lie above the band and then at the band, the largest one cleared being the pose's clearance (all of them in one walk
+of the two trees, ``sets_clearance``, which a motion's walk hands, pose to pose, the pair of triangles that last set
+its margin). Before the walk,
 the same test with no margin at a few interior poses (``PROBE_FRACTIONS``) finds most blocked motions; a pose
 in contact would make the walk fail as well. The far end, often in contact, tries the lowest margin first; the
 walk's poses, rarely in contact, the largest. Every test runs in compiled code; the walk looks at its planner's
