@@ -153,7 +153,7 @@ def test_a_body_is_more_than_a_margin_away_exactly_when_fcl_says_so(seed):
         for m in (0.0, 0.05, 0.3, 1.0):
             if abs(m - d) > 1e-7:
                 got = sets_apart(spheres, np.ascontiguousarray(body_tris @ R.T + q[:3]), R, q[:3].copy(), nodes, tris,
-                                 m)
+                                 m, np.full(2, -1, dtype=np.int64))
                 assert got == (d > m), (q, d, m)
                 checked[got] += 1
     assert checked[True] > 50 and checked[False] > 50
@@ -179,7 +179,8 @@ def test_one_walk_finds_the_largest_margin_a_pose_clears(seed):
                 pair = np.array([b, e], dtype=np.int64)
                 assert sets_clearance(spheres, placed, R, q[:3].copy(), nodes, tris, margins, pair) == k
         one_by_one = next((j for j, m in enumerate(margins)
-                           if sets_apart(spheres, placed, R, q[:3].copy(), nodes, tris, m)), len(margins))
+                           if sets_apart(spheres, placed, R, q[:3].copy(), nodes, tris, m, np.full(2, -1))),
+                          len(margins))
         assert k == one_by_one, (q, k, one_by_one)
         d = fcl_distance(body_v @ R.T + q[:3], body_f, env_v, env_f)
         if all(abs(m - d) > 1e-7 for m in margins):

@@ -52,7 +52,7 @@ import numpy as np
 
 from planners.kernels.rigid import motion_pieces, rotation_matrix
 from planners.kernels.space import SPACE_RIGID, interpolate
-from planners.kernels.triangles import sets_clearance
+from planners.kernels.triangles import sets_apart, sets_clearance
 
 P_ID = 8
 P_GRID = 9
@@ -241,9 +241,7 @@ def exact_apart(body, params, q, margin, hint):
     """
     cover, spheres, triangles, nodes, env = _parts(body, params)
     R, placed = _posed(triangles, q)
-    margins = np.empty(1)
-    margins[0] = margin
-    return sets_clearance(spheres, placed, R, q[:3], nodes, env, margins, hint) == 0
+    return sets_apart(spheres, placed, R, q[:3], nodes, env, margin, hint)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -260,11 +258,8 @@ def exact_clearance(body, params, q, need, low_first, hint):
     R, placed = _posed(triangles, q)
     t = q[:3]
     lowest = need * BAND_RAISE
-    if low_first:
-        band = np.empty(1)
-        band[0] = lowest
-        if sets_clearance(spheres, placed, R, t, nodes, env, band, hint) > 0:
-            return 0.0
+    if low_first and not sets_apart(spheres, placed, R, t, nodes, env, lowest, hint):
+        return 0.0
     half = 0.5 * params[6]
     rungs = 0
     while rungs < CLEARANCE_LADDER.shape[0] and half * CLEARANCE_LADDER[rungs] > lowest:

@@ -250,16 +250,16 @@ def _boxes_apart(a, b):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def sets_apart(spheres, body, R, t, nodes, tris, m):
+def sets_apart(spheres, body, R, t, nodes, tris, m, hint):
     """True if every triangle of the body lies more than ``m`` from every triangle of the environment (``m >= 0``).
 
     ``spheres``: the body's tree (``sphere_nodes``, body frame); ``body``: its triangles in the tree's order, in
     world coordinates at the pose ``(R, t)`` (``(3 B, 3)``); ``nodes`` and ``tris``: the environment's tree
-    (``build_tree``). ``sets_clearance`` with the one margin and no hint.
+    (``build_tree``). ``sets_clearance`` with the one margin; ``hint`` is its (``np.full(2, -1)`` for none).
     """
     margins = np.empty(1)
     margins[0] = m
-    return sets_clearance(spheres, body, R, t, nodes, tris, margins, np.full(2, -1, dtype=np.int64)) == 0
+    return sets_clearance(spheres, body, R, t, nodes, tris, margins, hint) == 0
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
