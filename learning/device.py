@@ -7,8 +7,10 @@ weights as before the option existed.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import os
+from collections.abc import Iterator
 
 import torch
 
@@ -44,6 +46,35 @@ def resolve_device(name: str, flag: str = "--device") -> torch.device:
         if index >= torch.cuda.device_count():
             raise InputError(f"{flag} {name}: torch sees {torch.cuda.device_count()} CUDA GPU(s)")
     return torch.device(name)
+
+
+@contextlib.contextmanager
+def full_float32(device: torch.device) -> Iterator[None]:
+    """Full float32 for cuDNN's float32 convolutions in the span, where ``device`` is a CUDA GPU; elsewhere nothing.
+
+    torch lets cuDNN round a float32 convolution's inputs to TF32 (10 bits of mantissa) by default. The route
+    encoder's field is a shortest path over the move costs its convolutions give, so that rounding moves every value
+    away from the field the CPU computes, the one the validation chose. The setting is torch's process-wide switch;
+    the one before is restored on the way out.
+    """
+    if device.type != "cuda":
+        yield
+        return
+    conv = getattr(torch.backends.cudnn, "conv", None)
+    if conv is not None and hasattr(conv, "fp32_precision"):  # torch 2.9 on
+        before = conv.fp32_precision
+        conv.fp32_precision = "ieee"
+        try:
+            yield
+        finally:
+            conv.fp32_precision = before
+    else:
+        before = torch.backends.cudnn.allow_tf32
+        torch.backends.cudnn.allow_tf32 = False
+        try:
+            yield
+        finally:
+            torch.backends.cudnn.allow_tf32 = before
 
 
 def move_to(module: torch.nn.Module, device: torch.device) -> torch.nn.Module:

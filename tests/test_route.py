@@ -13,8 +13,9 @@ from conftest import fine_check_path, load_script
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from learning.device import full_float32, move_to
 from learning.models.route_net import RouteNet, load_route_net, route_input, save_route_net
-from learning.models.shipped import SHIPPED_ROUTE_TEACHER
+from learning.models.shipped import SHIPPED_ROUTE, SHIPPED_ROUTE_TEACHER
 from learning.samplers.route import (
     ABLATION_SETTINGS,
     R_GSEEN,
@@ -31,6 +32,9 @@ from planners import RRT, GeometricWorld, OccupancyGrid, Problem, RRTConnect
 from planners.base.fileio import InputError
 from planners.maps.generators import FAMILIES, TEST_SEED0, VALIDATION_SEED0, generate
 from planners.maps.gridsearch import distance_field
+
+#: How far, in steps, the shipped encoder's field on a GPU may lie from the CPU's (convolutions in full float32).
+GPU_FIELD_TOLERANCE = 1e-3
 
 
 def test_the_input_holds_every_cell_of_each_block_and_pads_with_blocked_cells():
@@ -466,6 +470,59 @@ def test_the_device_follows_sb3s_convention_and_the_cpu_gives_the_validated_runs
     from learning.samplers.registry import make_sampler
 
     assert make_sampler("route", path=str(small_net), device="cpu").device == torch.device("cpu")
+
+
+def test_full_float32_turns_cudnns_tf32_off_on_a_gpu_only_and_restores_the_switch():
+    conv = getattr(torch.backends.cudnn, "conv", None)
+    new_api = conv is not None and hasattr(conv, "fp32_precision")
+
+    def read():
+        return conv.fp32_precision if new_api else torch.backends.cudnn.allow_tf32
+
+    before = read()
+    with full_float32(torch.device("cpu")):
+        assert read() == before
+    with full_float32(torch.device("cuda")):  # only the process's switch: no GPU is touched
+        assert read() == ("ieee" if new_api else False)
+    assert read() == before
+    with pytest.raises(RuntimeError, match="inside"), full_float32(torch.device("cuda")):
+        raise RuntimeError("inside")
+    assert read() == before
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU; torch sees none on this machine")
+def test_on_a_gpu_the_shipped_encoder_gives_the_cpus_field_one_query_or_many():
+    cpu = load_route_net(SHIPPED_ROUTE)
+    gpu = move_to(load_route_net(SHIPPED_ROUTE), torch.device("cuda"))
+    for family in FAMILIES:
+        p = generate(family, VALIDATION_SEED0 + 7, 128)
+        obstacles, goal = np.asarray(p.world.obstacles), p.world.cell_of(p.goal)
+        a, b = cpu.predict(obstacles, goal), gpu.predict(obstacles, goal)
+        reached = a < cpu.unreached_steps / 2
+        assert np.array_equal(reached, b < cpu.unreached_steps / 2), family
+        assert np.abs(a - b)[reached].max() <= GPU_FIELD_TOLERANCE, family
+    free = np.argwhere(~obstacles.astype(bool))[::97][:8]
+    queries = [(obstacles, (int(r), int(c))) for r, c in free]
+    for one, many in zip([gpu.predict(*q) for q in queries], gpu.predict_many(queries), strict=True):
+        reached = one < gpu.unreached_steps / 2
+        assert np.array_equal(reached, many < gpu.unreached_steps / 2)
+        assert np.abs(one - many)[reached].max() <= GPU_FIELD_TOLERANCE
+
+
+@pytest.mark.experiments
+def test_the_gpu_probe_compares_reached_cells_and_refuses_a_machine_without_cuda(tmp_path, capsys):
+    probe = load_script("experiments/gpu_route")
+    net = load_route_net(SHIPPED_ROUTE)
+    a = np.array([[1.0, 2.0], [3.0, net.unreached_steps]])
+    b = np.array([[1.5, 2.0], [net.unreached_steps, net.unreached_steps]])
+    d = probe._difference(net, a, b)
+    assert (d["max"], d["median"], d["reach_differs"], d["cells"]) == (0.5, 0.25, 1, 2)
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a GPU")
+    with pytest.raises(SystemExit) as stop:
+        probe.main(["--out", str(tmp_path / "gpu.json")])
+    assert stop.value.code == 2 and "torch sees no CUDA GPU" in capsys.readouterr().err
+    assert not (tmp_path / "gpu.json").exists()
 
 
 @given(family=st.sampled_from(FAMILIES), seed=st.integers(0, 10**6), size=st.sampled_from([32, 64, 96]))

@@ -14,6 +14,7 @@ import os
 import numpy as np
 import torch
 
+from learning.device import full_float32
 from learning.models.threads import planning_threads
 from planners.base.fileio import InputError, short_repr
 
@@ -113,6 +114,9 @@ class FieldEncoder:
     symmetries: int = 8
     #: The field's value, in steps, where the encoder sees no route to the goal (None: it always gives one).
     unreached_steps: float | None = None
+    #: Passes on a CUDA GPU with cuDNN's convolutions in full float32 (``learning.device.full_float32``), as the CPU
+    #: computes them; False leaves torch's TF32 default (``scripts/experiments/gpu_route.py`` compares the two).
+    full_float32: bool = True
 
     def pass_bytes(self, h: int, w: int) -> int:
         """About how many bytes one pass over an ``h`` x ``w`` block grid holds at its peak (one symmetry)."""
@@ -120,7 +124,7 @@ class FieldEncoder:
 
     def inference_key(self) -> tuple:
         """The settings a pass depends on besides the weights, the device and the query (part of a kept field's key)."""
-        return ()
+        return (self.full_float32,)
 
     def open_walls(self) -> contextlib.AbstractContextManager | None:
         """A context in which passes run without the encoder's learned wall rule; None where it has none.
@@ -186,7 +190,8 @@ class FieldEncoder:
                 by_shape.setdefault(obs.shape, []).append((i, k, route_input(obs, goal, self.block)))
         totals: list[np.ndarray | None] = [None] * len(queries)
         device = next(self.parameters()).device
-        with planning_threads(threads), torch.inference_mode():
+        precision = full_float32(device) if self.full_float32 else contextlib.nullcontext()
+        with planning_threads(threads), torch.inference_mode(), precision:
             for (h, w), group in by_shape.items():
                 blocks = group[0][2].shape[1] * group[0][2].shape[2]
                 size = max(1, min(len(group), BATCH_BYTES // (BYTES_PER_BLOCK * blocks)))

@@ -296,7 +296,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         super().__setstate__({"_packed": [], "_work": {}, **state, "_maps": KeptMaps()})
 
     def inference_key(self) -> tuple:
-        return (self.wall_cost, self.step_walls, self.fixed_point)
+        return (*super().inference_key(), self.wall_cost, self.step_walls, self.fixed_point)
 
     def open_walls(self) -> contextlib.AbstractContextManager | None:
         """Passes without the learned wall rule (``wall_cost`` None) inside the context; the step walls stay."""
