@@ -7,8 +7,8 @@ State ``q = (x, y, z, tx, ty, tz)`` as for ``planners.kernels.rigid``: a body ve
 (``params[P_BAND]``, ``delta / 8`` by default) from the environment, and a pose at travel ``s`` with clearance
 ``c`` covers the stretch ``(s - c, s + c)``: no pose there brings the body into contact (conservative
 advancement, both ways). The far end is checked first and covers the end of the motion; the walk then covers
-it from the start, placing each next pose ``c`` (the clearance just certified, ``WALK_GUESS``) beyond the
-covered stretch and at least ``2 b`` on, and where that pose's own clearance leaves a gap, checking next the
+it from the start, placing each next pose just under ``c`` (the clearance just certified, times ``WALK_GUESS``)
+beyond the covered stretch and at least ``2 b`` on, and where that pose's own clearance leaves a gap, checking next the
 pose that the one-sided rule places (``max(2 b, c)`` after the last): two poses with clearances above ``b``
 that far apart cover everything between them, so no obstacle, however thin, is stepped over. A band below
 ``delta / 2`` narrows each passage less and costs more poses only where the body passes within ``delta / 2``
@@ -319,8 +319,10 @@ PROBE_MIN_PIECES = 8
 
 #: The walk places its next pose this many times the last clearance beyond the stretch already covered
 #: (two-sided conservative advancement: the pose covers as much behind it as ahead of it when its
-#: clearance is at least that).
-WALK_GUESS = 1.0
+#: clearance is at least that). Just under 1: the exact test's clearances are the ladder's rungs, so the next
+#: pose's often equals the last one's, and a pose placed a whole clearance on would only touch the covered end
+#: (the stretches are open), a gap that costs another pose.
+WALK_GUESS = 0.99
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
