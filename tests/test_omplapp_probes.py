@@ -260,3 +260,18 @@ def test_the_route_beside_omplapps_solution(tmp_path, capsys):
     assert probe.main(["--omplapp", str(folder), "--problems", "Easy"]) == 0
     row = capsys.readouterr().out.strip().splitlines()[-1]
     assert row.startswith("| Easy |") and row.endswith("| 40 of 40 |")
+
+
+def test_the_walk_replay_is_the_compiled_check_and_counts_fewer_gaps_below_a_whole_clearance(capsys, monkeypatch):
+    folder = omplapp_folder("Easy.cfg")
+    replay = load_script("experiments/walk_poses")
+    argv = ["--omplapp", str(folder), "--problems", "Easy", "--iterations", "300", "--motions", "150",
+            "--guesses", "1", "0.99"]
+    assert replay.main(argv) == 0  # 1 where the copy's verdicts at the shipped guess differ from the compiled check's
+    rows = [line.split("|") for line in capsys.readouterr().out.splitlines() if line.startswith("| Easy")]
+    whole, shipped = ({"guess": float(r[2]), "walk": float(r[3]), "gaps": float(r[5]), "free": r[6]} for r in rows)
+    assert (whole["guess"], shipped["guess"]) == (1.0, 0.99) and whole["free"] == shipped["free"]
+    assert shipped["gaps"] < whole["gaps"] and shipped["walk"] < whole["walk"]
+    with pytest.raises(SystemExit):
+        replay.main([*argv[:4], "--guesses", "1.5"])
+    assert "--guesses 1.5" in capsys.readouterr().err
