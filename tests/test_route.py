@@ -488,6 +488,10 @@ def test_full_float32_turns_cudnns_tf32_off_on_a_gpu_only_and_restores_the_switc
     with pytest.raises(RuntimeError, match="inside"), full_float32(torch.device("cuda")):
         raise RuntimeError("inside")
     assert read() == before
+    net = load_route_net(SHIPPED_ROUTE)
+    key = net.inference_key()
+    net.full_float32 = False  # a field kept under one setting is not served for the other
+    assert net.inference_key() != key
 
 
 @pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU; torch sees none on this machine")
