@@ -25,7 +25,8 @@ environment's (``planners.kernels.triangles``), at the margins ``CLEARANCE_LADDE
 lie above the band and then at the band, the largest one cleared being the pose's clearance (all of them in one walk
 of the two trees, ``sets_clearance``, which a motion's walk hands, pose to pose, the pair of triangles that last set
 its margin). Before the walk,
-the same test with no margin at a few interior poses (``PROBE_FRACTIONS``) finds most blocked motions; a pose
+the same test with no margin at a few interior poses (``PROBE_FRACTIONS``; those whose bounding sphere the grid
+clears left out) finds most blocked motions; a pose
 in contact would make the walk fail as well. The far end, often in contact, tries the lowest margin first; the
 walk's poses, rarely in contact, the largest. Every test runs in compiled code; the walk looks at its planner's
 deadline every ``DEADLINE_EVERY`` poses (through numba's object mode, the world registered under an
@@ -360,12 +361,11 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
         return False
     q = np.empty(6)
     if n >= PROBE_MIN_PIECES:
-        # the probes: the contact test at the poses PROBE_FRACTIONS places, those the grid proves free left out
-        cover = _parts(body, params)[0]
+        # the probes: the contact test at the poses PROBE_FRACTIONS places, those whose bounding sphere the grid
+        # proves free left out (the cover points' bound costs a free pose more than the contact test does)
         for f in PROBE_FRACTIONS:
             interpolate(SPACE_RIGID, a, b, f, q)
-            if not clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0 and not exact_apart(body, params, q,
-                                                                                                    0.0, hint):
+            if not sphere_free(grid, params, q, 0.0) and not exact_apart(body, params, q, 0.0, hint):
                 return False
     end = length - cb  # (end, length] is covered
     covered = -1.0  # [0, covered) is covered; nothing yet

@@ -74,8 +74,7 @@ def walk(kernel, a, b, guess: float, counts: dict) -> bool:
     if n >= M.PROBE_MIN_PIECES:
         for f in M.PROBE_FRACTIONS:
             interpolate(SPACE_RIGID, a, b, f, q)
-            if not M.clearance_bound(grid, cover, clusters, params, q, 0.0) > 0.0 and not M.exact_apart(
-                    body, params, q, 0.0, hint):
+            if not M.sphere_free(grid, params, q, 0.0) and not M.exact_apart(body, params, q, 0.0, hint):
                 return False
     end, covered, island_lo, island_hi, last, s = length - cb, -1.0, -1.0, -1.0, 0.0, 0.0
     while True:
