@@ -2,7 +2,8 @@
 
 ``auto`` takes CUDA when torch sees a GPU and the CPU otherwise; ``cuda`` on a machine without one is
 refused by name before any work. The CPU is the default of every training command and gives the same
-weights as before the option existed.
+weights as before the option existed. ``full_float32`` holds a GPU's convolutions to full float32 where a
+result must be the CPU's (the route encoder's field at planning time).
 """
 
 from __future__ import annotations
