@@ -262,7 +262,7 @@ def test_the_route_beside_omplapps_solution(tmp_path, capsys):
     assert row.startswith("| Easy |") and row.endswith("| 40 of 40 |")
 
 
-def test_the_walk_replay_is_the_compiled_check_and_counts_fewer_gaps_below_a_whole_clearance(capsys, monkeypatch):
+def test_the_walk_replay_is_the_compiled_check_and_counts_fewer_gaps_below_a_whole_clearance(capsys):
     folder = omplapp_folder("Easy.cfg")
     replay = load_script("experiments/walk_poses")
     argv = ["--omplapp", str(folder), "--problems", "Easy", "--iterations", "300", "--motions", "150",

@@ -1,36 +1,34 @@
 """Compiled motion checks for a rigid body given as a triangle mesh among a triangle-mesh environment.
 
 State ``q = (x, y, z, tx, ty, tz)`` as for ``planners.kernels.rigid``: a body vertex ``p`` sits at
-``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``. Along a motion no body point travels more than
-``s`` when the motion's parameter advances by ``s / L``, ``L`` the travel bound of ``motion_pieces``
+``H p + (x, y, z)`` with ``H = Ry(ty) Rx(tx) Rz(tz)``. Along a motion no body point travels more than ``s`` when
+the motion's parameter advances by ``s / L``, ``L`` the travel bound of ``motion_pieces``
 (``|dt| + r (|dtx| + |dty| + |dtz|)``). Every checked pose must keep the body more than the world's band ``b``
 (``params[P_BAND]``, ``delta / 8`` by default) from the environment, and a pose at travel ``s`` with clearance
 ``c`` covers the stretch ``(s - c, s + c)``: no pose there brings the body into contact (conservative
 advancement, both ways). The far end is checked first and covers the end of the motion; the walk then covers
 it from the start, placing each next pose just under ``c`` (the clearance just certified, times ``WALK_GUESS``)
-beyond the covered stretch and at least ``2 b`` on, and where that pose's own clearance leaves a gap, checking next the
-pose that the one-sided rule places (``max(2 b, c)`` after the last): two poses with clearances above ``b``
-that far apart cover everything between them, so no obstacle, however thin, is stepped over. A band below
+beyond the covered stretch and at least ``2 b`` on, and where that pose's own clearance leaves a gap, checking
+next the pose that the one-sided rule places (``max(2 b, c)`` after the last): two poses with clearances above
+``b`` that far apart cover everything between them, so no obstacle, however thin, is stepped over. A band below
 ``delta / 2`` narrows each passage less and costs more poses only where the body passes within ``delta / 2``
 of the environment.
 
-Each pose's clearance comes first from a broad phase that can only certify: a Chebyshev distance grid
-of the environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance
-from any point in it to any environment triangle. The bound of a pose is that of the body's bounding
-sphere, or else the smallest over the body's cover points (points on its surface such that every
-surface point lies within ``cover`` of one) less ``cover``; a single state asks the sphere only, as
-the exact test costs about what the cover points do. Where the bound does not clear the band, the
-exact test decides (``exact_clearance``): whether the body's triangles lie more than a margin from the
-environment's (``planners.kernels.triangles``), at the margins ``CLEARANCE_LADDER`` times ``delta / 2`` that
-lie above the band and then at the band, the largest one cleared being the pose's clearance (all of them in one walk
-of the two trees, ``sets_clearance``, which a motion's walk hands, pose to pose, the pair of triangles that last set
-its margin). Before the walk,
-the same test with no margin at a few interior poses (``PROBE_FRACTIONS``; those whose bounding sphere the grid
-clears left out) finds most blocked motions; a pose
-in contact would make the walk fail as well. The far end, often in contact, tries the lowest margin first; the
-walk's poses, rarely in contact, the largest. Every test runs in compiled code; the walk looks at its planner's
-deadline every ``DEADLINE_EVERY`` poses (through numba's object mode, the world registered under an
-integer id that ``params`` carry).
+Each pose's clearance comes first from a broad phase that can only certify: a Chebyshev distance grid of the
+environment (``chebyshev_grid``), built once, gives every voxel a lower bound on the distance from any point in it to
+any environment triangle. The bound of a pose is that of the body's bounding sphere, or else the smallest over the
+body's cover points (points on its surface such that every surface point lies within ``cover`` of one) less
+``cover``; a single state asks the sphere only, as the exact test costs about what the cover points do. Where the
+bound does not clear the band, the exact test decides (``exact_clearance``): whether the body's triangles lie more
+than a margin from the environment's (``planners.kernels.triangles``), at the margins ``CLEARANCE_LADDER`` times
+``delta / 2`` that lie above the band and then at the band, the largest one cleared being the pose's clearance (all
+of them in one walk of the two trees, ``sets_clearance``, which a motion's walk hands, pose to pose, the pair of
+triangles that last set its margin). Before the walk, the same test with no margin at a few interior poses
+(``PROBE_FRACTIONS``; those whose bounding sphere the grid clears left out) finds most blocked motions; a pose in
+contact would make the walk fail as well. The far end, often in contact, tries the lowest margin first; the walk's
+poses, rarely in contact, the largest. Every test runs in compiled code; the walk looks at its planner's deadline
+every ``DEADLINE_EVERY`` poses (through numba's object mode, the world registered under an integer id that ``params``
+carry).
 
 ``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, world id, gx, gy, gz,
 h, nx, ny, nz, cover, c1, c2, c3, c4, band]``: the bounds of the body's origin, the motion resolution, the
