@@ -55,9 +55,10 @@ import numpy as np
 from planners.kernels.bitgen import bitgen_address as rng_address
 from planners.kernels.bitgen import next_double
 
-# the classical samplers' compiled draws, for a sampler whose phase draws as ``UniformSampler`` does (state:
-# ``classical_state``, the box, the goal, the goal probability and whether a sample chooses the goal first)
-from planners.kernels.draws import classical_connect_loop, classical_state
+# the classical samplers' compiled draws, for a sampler whose phase draws as ``UniformSampler`` or
+# ``GoalBiasedSampler`` does (state: ``classical_state``, the box, the goal, the goal probability and whether a sample
+# chooses the goal first)
+from planners.kernels.draws import classical_connect_loop, classical_rrt_loop, classical_state
 from planners.kernels.fused import (
     B_REFILLS,
     B_STOP,
@@ -76,8 +77,8 @@ if TYPE_CHECKING:
     from planners.base.planner import Planner
 
 __all__ = ["B_STOP", "CHUNK", "FIRST_REFILL", "HAND_BACK", "FusedConnect", "FusedRRT", "classical_connect_loop",
-           "classical_state", "connect_loop", "fuse_connect", "fuse_rrt", "fuse_rrtstar", "growing_floor",
-           "nearest_distance", "next_double", "refill_size", "rng_address", "rrt_loop", "rrtstar_loop"]
+           "classical_rrt_loop", "classical_state", "connect_loop", "fuse_connect", "fuse_rrt", "fuse_rrtstar",
+           "growing_floor", "nearest_distance", "next_double", "refill_size", "rng_address", "rrt_loop", "rrtstar_loop"]
 
 
 class FusedRRT:

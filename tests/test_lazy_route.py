@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from conftest import load_script, random_walled_problem
 from hypothesis import given, settings
@@ -247,9 +248,13 @@ def test_other_planners_take_the_route_samplers_own_rules(lazy):
     roadmap = lazy.for_planner("roadmap")
     assert isinstance(roadmap, LazyCorridorSampler) and roadmap.after == lazy.roadmap_after == SHIPPED_ROADMAP_AFTER
     star = lazy.for_planner("optimizing")
-    assert isinstance(star, LazyConvergingSampler) and isinstance(star, ConvergingRouteSampler) and star.route is lazy
+    assert isinstance(star, LazyConvergingSampler) and isinstance(star, ConvergingRouteSampler)
+    # RRT*'s loop to its first solution reads the straight line's state: no goal-in-sight phase before it
+    assert type(star.route) is LazyRouteSampler and star.route.net is lazy.net and star.route.after == lazy.after
+    assert lazy.goal_in_sight and not star.route.goal_in_sight
     eager = lazy.eager()
     assert type(eager) is RouteSampler and eager.net is lazy.net and not hasattr(eager, "after")
+    assert not hasattr(eager, "goal_in_sight") and not hasattr(eager, "in_sight_until")
     p = generate("maze", VALIDATION_SEED0 + 3, 64, goal_tolerance=4.0)
     assert make_planner("RRTConnect", p, sampler=lazy, seed=0, extension_step=4.0).solve(20000).solved
 
@@ -389,3 +394,60 @@ def test_the_switchs_rule_takes_the_fastest_or_a_smaller_switch_within_three_per
         script.main(["--sizes", "32", "64", "--maps", "1"])
     with pytest.raises(SystemExit):  # an output folder with something in it is refused before any run
         script.main(["--out", str(tmp_path)])
+
+
+def _open_query(tolerance: float = 2.0):
+    """A 64-cell map with one wall; the start sees the goal (the wall lies off the line between them)."""
+    from planners import OccupancyGrid, Problem
+
+    obs = np.zeros((64, 64), dtype=bool)
+    obs[40:64, 30:33] = True
+    return Problem(OccupancyGrid(obs), (4.5, 6.5), (58.5, 30.5), goal_tolerance=tolerance)
+
+
+class ShortSight(LazyRouteSampler):
+    """The goal-in-sight phase cut after two iterations, as where a step along the free line were refused."""
+
+    def _in_sight(self) -> int:
+        return min(super()._in_sight(), 2)
+
+
+class ShortSightUnfused(ShortSight):
+    fuse = None
+
+
+def test_a_goal_in_sight_is_reached_in_the_fewest_iterations_with_no_field(lazy):
+    p = _open_query()
+    assert p.world.check_motion(p.start, p.goal)
+    fewest = math.ceil((math.dist(p.start, p.goal) - p.goal_tolerance) / 4.0)
+    drawn = Unfused(lazy.net)
+    for seed in (0, 1, 2):
+        key, bound = _run(p, lazy, seed)
+        assert key[0] and key[1] == fewest and key[2] == fewest  # every iteration one step along the free line
+        assert not bound.switched and bound.forward_passes == 0 and bound.draw_state is None
+        assert _same(key, bound, _run(p, drawn, seed)) and key == _run(p, lazy, seed, pieces=(1, 2, 3))[0]
+    # without it, the straight line's phase from the first iteration: the ablation, run for run
+    never = _lazy(after=math.inf, cap=math.inf, goal_in_sight=False)
+    key, bound = _run(p, never, 0)
+    assert key == _run(p, make_sampler("route_ablation"), 0)[0] and bound.draw_state is not None
+
+
+def test_a_goal_out_of_sight_changes_nothing(maps):
+    for p in maps:
+        assert not p.world.check_motion(p.start, p.goal)
+        for seed in (0, 1):
+            key, bound = _run(p, _lazy(after=0.125), seed)
+            assert bound.in_sight_until == 0
+            assert _same(key, bound, _run(p, _lazy(after=0.125, goal_in_sight=False), seed))
+
+
+def test_a_sight_phase_that_ends_unsolved_goes_on_on_the_straight_line_fused_as_drawn(lazy):
+    p = _open_query(tolerance=1.0)
+    for seed in (0, 1):
+        key, bound = _run(p, ShortSight(lazy.net), seed)
+        assert key[0] and key[1] > 2 and bound.in_sight_until == 0 and bound.draw_state is not None
+        assert _same(key, bound, _run(p, ShortSightUnfused(lazy.net), seed))
+        assert key == _run(p, ShortSight(lazy.net), seed, pieces=(1, 1, 1, 4))[0]
+    for bad in (1, "yes", 0.0):
+        with pytest.raises(InputError, match="goal_in_sight = "):
+            make_sampler("route_lazy", goal_in_sight=bad)

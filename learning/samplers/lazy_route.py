@@ -26,6 +26,13 @@ field's two fields (``BidirectionalRouteSampler``). The roadmaps take ``LazyCorr
 RRT* take ``LazyConvergingSampler``: RRT's lazy rule to the first solution (the straight line, then the encoder's field
 at RRT's switch), then the route field's corridor inside the informed set, computing the fields it still lacks at its
 first draw after the first solution.
+
+Before either phase, RRT asks whether it needs one: where the straight motion from the start to the goal is free (the
+planner's own motion check, one call), the goal is in sight, and RRT draws the goal itself (``GoalBiasedSampler(1.0)``'s
+draws, in the same compiled loop as the classical samplers) for as many iterations as steps along that line, plus one:
+each extends the tree a step along the free line, so the run solves in the fewest iterations there are, with no field
+and no set-up beyond the check. A run that has not solved by then (a step the motion check refuses where the whole line
+passed) goes on with the straight line's phase from the tree grown so far. ``goal_in_sight=False`` leaves this out.
 """
 
 from __future__ import annotations
@@ -61,6 +68,7 @@ from planners.fused import (
     FusedConnect,
     FusedRRT,
     classical_connect_loop,
+    classical_rrt_loop,
     classical_state,
     fuse_connect,
     fuse_rrt,
@@ -125,7 +133,8 @@ SHIPPED_ROADMAP_CAP = math.inf
 NEVER = int(np.iinfo(np.int64).max)
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
 LAZY_ATTRIBUTES = ("after", "cap", "floor", "stall", "connect_after", "roadmap_after", "connect_floor",
-                   "roadmap_floor", "connect_cap", "roadmap_cap", "straight", "switched", "switch_at")
+                   "roadmap_floor", "connect_cap", "roadmap_cap", "straight", "switched", "switch_at", "goal_in_sight",
+                   "in_sight_until")
 
 
 @nb.njit(cache=True)
@@ -167,6 +176,9 @@ class LazyRouteSampler(RouteSampler):
         connect_after, roadmap_after, connect_floor, roadmap_floor, connect_cap, roadmap_cap: RRT-Connect's and
             the roadmaps' switches (``LazyConnectSampler``, ``LazyCorridorSampler``), as ``after``, ``floor`` and
             ``cap`` are RRT's.
+        goal_in_sight: With RRT, draw the goal itself first where the start sees it (the module's docstring);
+            False: the straight line's phase from the first iteration (with ``after`` and ``cap`` inf, the ablation
+            run for run).
         kwargs: ``RouteSampler``'s (its settings once the field is computed; default the shipped ones). ``batch``
             must be 1, the validated setting, so that the switch falls on one iteration whatever the loop.
     """
@@ -175,7 +187,7 @@ class LazyRouteSampler(RouteSampler):
                  connect_after: float = SHIPPED_CONNECT_AFTER, roadmap_after: float = SHIPPED_ROADMAP_AFTER,
                  floor: float = SHIPPED_FLOOR, connect_floor: float = SHIPPED_CONNECT_FLOOR,
                  roadmap_floor: float = SHIPPED_ROADMAP_FLOOR, connect_cap: float = SHIPPED_CONNECT_CAP,
-                 roadmap_cap: float = SHIPPED_ROADMAP_CAP, **kwargs) -> None:
+                 roadmap_cap: float = SHIPPED_ROADMAP_CAP, goal_in_sight: bool = True, **kwargs) -> None:
         if net is None:
             raise InputError("LazyRouteSampler needs an encoder (its straight-line phase is the ablation; for the "
                              "ablation alone use RouteSampler(None) or make_sampler('route_ablation'))")
@@ -192,6 +204,8 @@ class LazyRouteSampler(RouteSampler):
                                     "stall)")):
             if isinstance(value, bool) or not isinstance(value, int | float | np.floating) or not value >= low:
                 raise InputError(f"{name} = {short_repr(value)}: expected {expected}")
+        if not isinstance(goal_in_sight, bool | np.bool_):
+            raise InputError(f"goal_in_sight = {short_repr(goal_in_sight)}: expected True or False")
         if kwargs.get("batch", 1) != 1:
             raise InputError(f"batch = {short_repr(kwargs['batch'])}: LazyRouteSampler draws one sample at a time "
                              f"(batch 1)")
@@ -203,6 +217,7 @@ class LazyRouteSampler(RouteSampler):
         self.connect_cap, self.roadmap_cap = float(connect_cap), float(roadmap_cap)
         self.straight = RouteSampler(None, step_size=self.step_size, **ABLATION_SETTINGS)
         self.switched, self.switch_at = False, 0
+        self.goal_in_sight, self.in_sight_until = bool(goal_in_sight), 0
 
     def at_step(self, step_size: float) -> LazyRouteSampler:
         """``RouteSampler.at_step``, for both phases."""
@@ -226,8 +241,8 @@ class LazyRouteSampler(RouteSampler):
         """
         if family == FAMILY_TREE:
             return self
-        if family == FAMILY_OPTIMIZING:
-            return LazyConvergingSampler(self)
+        if family == FAMILY_OPTIMIZING:  # the straight line first: RRT*'s loop to its first solution takes its state
+            return LazyConvergingSampler(self._copy_with(goal_in_sight=False))
         if family == FAMILY_BIDIRECTIONAL:
             return LazyConnectSampler(self.eager(), self.connect_after, self.connect_floor, self.connect_cap)
         if family == FAMILY_ROADMAP:
@@ -238,16 +253,42 @@ class LazyRouteSampler(RouteSampler):
         self.check_query(self.problem)  # a map the encoder refuses is refused at bind, not at the switch
         grid = self.problem.world
         self.forward_passes, self.reused_seconds, self.switched = 0, 0.0, False
-        self._state = self.straight.bind(self.problem).draw_state
         self.switch_at = switch_iteration(self.after, grid, self.step_size, self.floor, self.cap)
+        self.in_sight_until = self._in_sight() if self.goal_in_sight else 0
+        self._state = None if self.in_sight_until else self.straight.bind(self.problem).draw_state
+
+    def _in_sight(self) -> int:
+        """The iteration the goal-in-sight phase ends at (0: the start does not see the goal): the steps along the
+        free line from the start to the goal, plus one.
+        """
+        p = self.problem
+        if not p.world.check_motion(p.start, p.goal):
+            return 0
+        return math.ceil(math.dist(p.start, p.goal) / self.step_size) + 1  # a grid's metric is Euclidean
+
+    def leave_sight(self) -> None:
+        """End the goal-in-sight phase: the straight line's phase goes on from the tree grown so far (a no-op after)."""
+        if self.in_sight_until:
+            self.in_sight_until = 0
+            if not self.switched:
+                self._state = self.straight.bind(self.problem).draw_state
 
     def switch(self) -> None:
         """Compute the encoder's field for the bound query and follow it from here (once; a no-op after)."""
         if not self.switched:
+            self.in_sight_until = 0
             super()._setup()
             self.switched = True
 
     def draw(self, rng, n, view):
+        if self.in_sight_until:
+            if view.iteration < self.in_sight_until:
+                # a whole batch of GoalBiasedSampler(1.0)'s uniforms, as the fused loop draws them, the rows past the
+                # phase's end dropped, as it drops them
+                u = rng.random((min(n, CHUNK), self.problem.dim + 1))
+                rows = min(len(u), self.in_sight_until - view.iteration)
+                return np.repeat(np.asarray(self.problem.goal, dtype=np.float64)[None], rows, axis=0)
+            self.leave_sight()
         if not self.switched and view.iteration >= self.switch_at:
             self.switch()
         pts = super().draw(rng, n, view)
@@ -257,7 +298,13 @@ class LazyRouteSampler(RouteSampler):
         return pts
 
     def fuse(self, planner: Planner) -> SwitchLoop | FusedRRT | None:
-        """RRT's loop with both phases' draws compiled in, the switch between them (None for other planners)."""
+        """RRT's loop with both phases' draws compiled in, the switch between them (None for other planners); with the
+        goal in sight, the classical loop drawing the goal first (``GoalInSight``).
+        """
+        if self.in_sight_until:
+            state = classical_state(self.low, self.high, self.problem.goal, 1.0, True)
+            fused = fuse_rrt(planner, classical_rrt_loop, state, CHUNK)
+            return None if fused is None else SwitchLoop(GoalInSight(self), fused)
         if self.switched or math.isinf(self.stall):  # no stall switch: the route sampler's own loop to the switch
             fused = fuse_rrt(planner, route_rrt_loop, self._state, self.batch)
             return fused if fused is None or self.switched else SwitchLoop(self, fused)
@@ -278,7 +325,30 @@ class LazyRouteSampler(RouteSampler):
 
     def __repr__(self) -> str:
         return (f"LazyRouteSampler(after={self.after:g}, cap={self.cap:g}, floor={self.floor:g}, stall={self.stall:g}, "
-                f"{super().__repr__()[len('RouteSampler('):]}")
+                f"goal_in_sight={self.goal_in_sight}, {super().__repr__()[len('RouteSampler('):]}")
+
+
+class GoalInSight:
+    """A lazy route sampler's goal-in-sight phase as ``SwitchLoop`` sees a phase: its end (``switch_at``), whether it
+    has ended (``switched``), and the loop that follows it (``switch_loop``: the straight line's, ``fuse``).
+    """
+
+    __slots__ = ("lazy",)
+
+    def __init__(self, lazy: LazyRouteSampler) -> None:
+        self.lazy = lazy
+
+    @property
+    def switched(self) -> bool:
+        return not self.lazy.in_sight_until
+
+    @property
+    def switch_at(self) -> int:
+        return self.lazy.in_sight_until
+
+    def switch_loop(self, planner: Planner):
+        self.lazy.leave_sight()
+        return self.lazy.fuse(planner)
 
 
 def switch_iteration(after: float, grid: OccupancyGrid, step: float, floor: float = 0.0,
@@ -471,7 +541,7 @@ class SwitchLoop:
 
     __slots__ = ("sampler", "fused", "before")
 
-    def __init__(self, sampler: LazyRouteSampler | LazyRule, fused: FusedRRT | FusedConnect) -> None:
+    def __init__(self, sampler: LazyRouteSampler | LazyRule | GoalInSight, fused: FusedRRT | FusedConnect) -> None:
         self.sampler, self.fused = sampler, fused
         self.before = 0  # the first loop's refills, once the rule's loop has taken over
 

@@ -57,9 +57,8 @@ def _route_lazy(after: float | None = None, cap: float | None = None, stall: flo
                 connect_after: float | None = None,
                 roadmap_after: float | None = None, floor: float | None = None, connect_floor: float | None = None,
                 roadmap_floor: float | None = None, connect_cap: float | None = None,
-                roadmap_cap: float | None = None, step_size: float = STEP, path: str | None = None,
-                device: str = "auto", *,
-                models: ModelCache | None = None) -> Sampler:
+                roadmap_cap: float | None = None, goal_in_sight: bool | None = None, step_size: float = STEP,
+                path: str | None = None, device: str = "auto", *, models: ModelCache | None = None) -> Sampler:
     from learning.models.route_net import load_route_net
     from learning.samplers.lazy_route import LazyRouteSampler
     from learning.samplers.route import SHIPPED
@@ -69,7 +68,7 @@ def _route_lazy(after: float | None = None, cap: float | None = None, stall: flo
     switches = {"after": after, "cap": cap, "stall": stall, "connect_after": connect_after,
                 "roadmap_after": roadmap_after, "floor": floor, "connect_floor": connect_floor,
                 "roadmap_floor": roadmap_floor, "connect_cap": connect_cap,
-                "roadmap_cap": roadmap_cap}  # None: LazyRouteSampler's own default, the shipped switch
+                "roadmap_cap": roadmap_cap, "goal_in_sight": goal_in_sight}  # None: LazyRouteSampler's own default
     return LazyRouteSampler(net, step_size=step_size, device=device,
                             **{k: v for k, v in switches.items() if v is not None})
 
@@ -183,12 +182,12 @@ REGISTRY: dict[str, tuple[Callable[..., Sampler], str]] = {
                  "exists (Euclidean real-vector worlds)"),
     "follower": (_follower, "the straight-line follower: the route sampler on the straight-line distance"),
     "route": (_route, "the shipped route encoder at its validated settings"),
-    "route_lazy": (_route_lazy, "the route encoder's field computed only where needed: RRT follows the straight "
-                   "line first and runs the encoder if that has not solved within after= iterations per step-sized "
-                   "square of the map (at least floor=, at most cap= iterations), or has stalled stall= iterations; "
-                   "RRT-Connect's trees grow uniformly until connect_after= of them (at least connect_floor=, at most "
-                   "connect_cap=), a roadmap's samples until roadmap_after= (at least roadmap_floor=, at most "
-                   "roadmap_cap=)"),
+    "route_lazy": (_route_lazy, "the route encoder's field computed only where needed: RRT draws the goal where "
+                   "the start sees it (goal_in_sight=), else follows the straight line first and runs the encoder if "
+                   "that has not solved within after= iterations per step-sized square of the map (at least floor=, "
+                   "at most cap= iterations), or has stalled stall= iterations; RRT-Connect's trees grow uniformly "
+                   "until connect_after= of them (at least connect_floor=, at most connect_cap=), a roadmap's samples "
+                   "until roadmap_after= (at least roadmap_floor=, at most roadmap_cap=)"),
     "route_ablation": (_route_ablation, "the route sampler without its encoder, tuned for itself"),
     "policy": (_policy, "the learned sampler policy (shipped at its validated batch, or path=)"),
     "policy_ablation": (_policy_ablation, "the policy's action classes at a constant distribution (frontier=)"),

@@ -71,13 +71,13 @@ class WorldBase:
     def is_valid(self, q) -> bool:
         """True if state ``q`` is collision-free and inside the bounds."""
         q = self._state(q)
-        return bool(np.all(np.isfinite(q))) and geometry.state_free_of(self._kernel, q)
+        return bool(np.isfinite(q).all()) and geometry.state_free_of(self._kernel, q)
 
     def check_motion(self, a, b) -> bool:
         """True if the straight motion ``a -> b`` is collision-free (exact; see the world's docs)."""
         a = self._state(a, "a")
         b = self._state(b, "b")
-        if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        if not (np.isfinite(a).all() and np.isfinite(b).all()):
             return False
         return bool(geometry.motion_free(self._kernel, a, b))
 
