@@ -14,8 +14,8 @@ off by default, computes the field once the straight line's tree has come no clo
 iterations: where the straight line is lost on a large map, it stops paying rent long before the budget runs out.
 Each was chosen on the validation maps by time to solution (``scripts/experiments/lazy_route_rule.py``: the
 geometric mean of the median times over validation maps of 32 to 512 cells, 32 to 1024 for the other planners'
-caps); ``after=0`` with ``floor=0`` (or ``cap=0``) is the route sampler and ``after=inf`` with ``cap=inf`` (and no
-stall) its ablation, run for run.
+caps); with ``goal_in_sight=False`` (below), ``after=0`` with ``floor=0`` (or ``cap=0``) is the route sampler and
+``after=inf`` with ``cap=inf`` (and no stall) its ablation, run for run.
 
 Both phases draw inside RRT's compiled loop: the loop runs up to the switch on the straight-line field, the encoder
 runs, and the loop goes on on the encoder's field, so a fused run is the run drawn through ``draw``, bit for bit.
