@@ -77,7 +77,7 @@ def test_the_registry_builds_it_at_the_validated_switch(lazy):
 
 def test_switching_at_once_is_the_route_sampler_and_never_is_its_ablation(lazy, maps):
     route, ablation = make_sampler("route"), make_sampler("route_ablation")
-    at_once, never = _lazy(after=0), _lazy(after=math.inf, cap=math.inf)
+    at_once, never = _lazy(after=0, goal_in_sight=False), _lazy(after=math.inf, cap=math.inf, goal_in_sight=False)
     for p in maps:
         for seed in (0, 1):
             assert _run(p, at_once, seed)[0] == _run(p, route, seed)[0]
