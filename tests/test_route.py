@@ -24,6 +24,8 @@ from learning.samplers.route import (
     RouteSampler,
     shipped_ablation,
     shipped_sampler,
+    straight_field,
+    straight_field_blocked,
     straight_line_sampler,
     straight_where_unreached,
 )
@@ -649,3 +651,15 @@ def test_open_walls_refuses_a_map_not_in_the_comparison_and_prints_a_row_per_map
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| random")]
     assert len(rows) == 1 and rows[0].split("|")[2].strip() == "0/5"  # no door shut on an open map: one pass
     assert rows[0].split("|")[3] == rows[0].split("|")[4]  # so the same runs either way
+
+
+@settings(max_examples=40, deadline=None)
+@given(h=st.integers(1, 40), w=st.integers(1, 40), density=st.floats(0.0, 1.0), seed=st.integers(0, 2**31 - 1),
+       gx=st.floats(-5.0, 45.0), gy=st.floats(-5.0, 45.0), res=st.sampled_from([0.05, 0.5, 1.0, 3.0]),
+       step=st.floats(0.1, 20.0))
+def test_the_straight_field_with_its_obstacles_in_one_pass_is_the_field_then_the_mask(h, w, density, seed, gx, gy,
+                                                                                     res, step):
+    blocked = (np.random.default_rng(seed).random((h, w)) < density).astype(np.uint8)
+    expected = straight_field(h, w, gx, gy, res, step)
+    expected[blocked.astype(bool)] = np.inf
+    assert np.array_equal(straight_field_blocked(blocked, gx, gy, res, step), expected)

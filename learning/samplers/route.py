@@ -108,6 +108,23 @@ def straight_field(H, W, gx, gy, res, step):
 
 
 @nb.njit(cache=True)
+def straight_field_blocked(blocked, gx, gy, res, step):
+    """``straight_field`` over the grid ``blocked`` (nonzero: an obstacle), ``inf`` on its obstacles, in one pass.
+
+    The same values as ``straight_field`` followed by setting the obstacles to ``inf``, whose boolean mask cost
+    about as much as the field itself on a 128-cell map.
+    """
+    H, W = blocked.shape
+    out = np.empty((H, W))
+    for r in range(H):
+        dy = r + 0.5 - gy
+        for c in range(W):
+            dx = c + 0.5 - gx
+            out[r, c] = math.inf if blocked[r, c] else math.sqrt(dx * dx + dy * dy) * res / step
+    return out
+
+
+@nb.njit(cache=True)
 def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anchored):
     """Fill ``pts`` with samples of ``RouteSampler`` (see its docstring): the draw of ``planners.fused``'s contract.
 
@@ -447,9 +464,13 @@ class RouteSampler(SamplerBase):
         """
         return cls(load_route_net(path), **kwargs)
 
-    def _straight(self, grid: OccupancyGrid) -> np.ndarray:
-        """The straight-line distance to the goal of every grid cell's centre, in steps."""
+    def _straight(self, grid: OccupancyGrid, blocked: bool = False) -> np.ndarray:
+        """The straight-line distance to the goal of every grid cell's centre, in steps (``blocked``: ``inf`` on
+        the obstacles).
+        """
         gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
+        if blocked:
+            return straight_field_blocked(grid.kernel.grid, gx, gy, grid.resolution, self.step_size)
         return straight_field(grid.height, grid.width, gx, gy, grid.resolution, self.step_size)
 
     def at_step(self, step_size: float) -> RouteSampler:
@@ -499,7 +520,7 @@ class RouteSampler(SamplerBase):
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
         """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
         if self.net is None:
-            return self._straight(grid), None
+            return self._straight(grid, blocked=True), None  # its obstacles already inf
         obstacles, goal, factor = self._encoder_map(grid)
         learned = self._predict(obstacles, goal)
         self.forward_passes = self.symmetry_passes
@@ -585,7 +606,8 @@ class RouteSampler(SamplerBase):
         grid = require_grid("RouteSampler", self.problem.world)
         self.forward_passes, self.reused_seconds = 0, 0.0
         field, ranking = self._fields(grid)
-        field[grid.obstacles] = np.inf
+        if self.net is not None:  # the straight line's field comes with its obstacles at inf
+            field[grid.obstacles] = np.inf
         self.field = field
         res, origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
         r, c = grid.cell_of(self.problem.start)

@@ -115,6 +115,7 @@ class MirroredField(RouteSampler):
         forward, _ = forward._fields(grid)
         r, c = grid.cell_of(self.problem.goal)
         mirrored = np.maximum(forward[r, c] - forward, 0.0)
+        mirrored[grid.obstacles] = np.inf  # the straight line's field comes with them at inf, its mirror without
         return mirrored, mirrored
 
 
