@@ -127,3 +127,28 @@ def test_a_compiled_only_function_refuses_python_and_runs_its_source_as_py_func(
     with pytest.raises(NotImplementedError, match="compiled code only"):
         index.insert(P, perm, split, box, 0)
     assert index.insert.py_func(P, perm, split, box, 0) == 1 and perm[0] == 0
+
+
+@pytest.mark.parametrize("dim, metric, coarse", [(2, "euclidean", False), (3, "manhattan", True),
+                                                 (9, "euclidean", False), (6, "chebyshev", True)])
+def test_a_large_index_with_its_leading_trees_merged_matches_brute_force(dim, metric, coarse):
+    """Past ``BIG_FROM`` chunks the leading trees are one (rebuilt at 640, 768, 896 and 1,024 chunks here)."""
+    from planners.datastructures.nn import BIG_FROM, CHUNK
+
+    rng = np.random.default_rng(dim)
+    n = 1100 * CHUNK + 37  # past four rebuilds of the large tree, with a forest and a tail after it
+    assert n > 2 * BIG_FROM * CHUNK
+    pts = rng.random((n, dim)) * 10
+    if coarse:  # ties and duplicates
+        pts = np.round(pts * 3)
+    nn = NearestNeighbors(dim, metric, capacity=8)
+    for chunk in np.array_split(pts, 5):
+        nn.add(chunk)
+    for q in rng.random((25, dim)) * 12 - 1:
+        d = np.linalg.norm(pts - q, ord=ORD[metric], axis=1)
+        i, dist = nn.nearest(q)
+        assert dist == pytest.approx(d.min(), abs=1e-9) and d[i] == pytest.approx(d.min(), abs=1e-9)
+        idx, dk = nn.nearest_k(q, 6)
+        assert np.allclose(dk, np.sort(d)[:6]) and np.allclose(d[idx], dk)
+        r = np.sort(d)[11] + 1e-7
+        assert np.array_equal(nn.nearest_r(q, r), np.flatnonzero(d <= r))

@@ -8,6 +8,13 @@ sizes are the binary digits of ``n // CHUNK`` (times ``CHUNK``), and the last ``
 tail that is scanned directly. Inserting is amortised O(log^2 n), a query O(log^2 n), in any
 dimension and for the L1, L2 and L-infinity metrics.
 
+A query searches every tree, and on a large index the smaller trees cost as much as the largest: at 60,000
+points of a 6-DoF tree the forest's six trees take about twice as long as one tree over them all. So from
+``BIG_FROM`` chunks on, the leading ``TOP_BITS`` binary digits of ``n // CHUNK`` are one tree (``_big_chunks``),
+rebuilt whole each time they change (four times per doubling of the index: about twice the forest's building),
+and the digits below it are the forest's trees after it; below ``BIG_FROM`` chunks, and up to the first rebuild
+after it, the layout is the forest's alone.
+
 The level layout is a pure function of ``n``, so the index state is just ``points[:n]``, ``perm`` and
 ``split``: ``perm[a:b]`` stores the implicit tree of range ``[a, b)`` (the median of every sub-range
 sits at its middle position) and ``split[mid]`` the dimension that node splits on.
@@ -23,6 +30,9 @@ from planners.kernels.space import METRIC_L1, METRIC_L2, METRIC_LINF, OVERLOAD_J
 CHUNK = 64
 LEAF = 16
 STACK = 256
+#: From this many chunks (32,768 points) on, the leading ``TOP_BITS`` digits of the chunk count form one tree.
+BIG_FROM = 1 << 9
+TOP_BITS = 3
 
 
 # --- one metric's building blocks ----------------------------------------------------------------
@@ -154,6 +164,19 @@ def _select(P, perm, lo, hi, k, sd):
             break
 
 
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _big_chunks(m):
+    """The chunks the one large tree covers, ``[0, CHUNK * result)``, for ``m`` chunks: 0 below ``BIG_FROM``, else
+    ``m`` with all but its leading ``TOP_BITS`` binary digits cleared.
+    """
+    if m < BIG_FROM:
+        return 0
+    s = 0
+    while (m >> s) >= (1 << TOP_BITS):
+        s += 1
+    return (m >> s) << s
+
+
 @compiled_only
 def build(P, perm, split, box, lo, hi):
     """Build the implicit k-d tree of points [lo, hi); ``box[mid]`` gets each subtree's bounds.
@@ -210,6 +233,10 @@ def insert(P, perm, split, box, n):
     n += 1
     if n % CHUNK == 0:
         m = n // CHUNK
+        if _big_chunks(m) != _big_chunks(m - 1):  # the large tree's digits changed: it takes every chunk
+            build(P, perm, split, box, 0, n)
+            return n
+        # the forest's rule below it: the new chunk merges the trailing trees its carry reaches
         size = CHUNK
         while m % 2 == 0:
             m //= 2
@@ -288,11 +315,13 @@ def _query(rdist, box_rdist, plane_rdist, offer, knn):
         for i in range(full, n):
             cnt = offer(hd, hi, cnt, k, rdist(q, P, i), i, r)
         m = n // CHUNK
+        big = _big_chunks(m)
+        rest = m - big  # the forest's trees after the large one
         start = 0
-        bit = 62
+        bit = 63  # 63: the large tree, then the forest's trees, largest first
         while bit >= 0:
-            if (m >> bit) & 1:
-                size = CHUNK << bit
+            if (big if bit == 63 else (rest >> bit) & 1):
+                size = big * CHUNK if bit == 63 else CHUNK << bit
                 st[0] = start
                 st[1] = start + size
                 sb[0] = box_rdist(q, box, start + size // 2)
@@ -364,11 +393,13 @@ def _traversals(rdist, box_rdist, plane_rdist, name):
         best = np.inf
         bi = -1
         m = n // CHUNK
+        big = _big_chunks(m)
+        rest = m - big  # the forest's trees after the large one
         sp = 0
         start = m * CHUNK
         bit = 0
-        while bit <= 62 and (m >> bit) != 0:
-            if (m >> bit) & 1:
+        while bit <= 62 and (rest >> bit) != 0:
+            if (rest >> bit) & 1:
                 size = CHUNK << bit
                 start -= size
                 st[2 * sp] = start
@@ -376,6 +407,11 @@ def _traversals(rdist, box_rdist, plane_rdist, name):
                 sb[sp] = box_rdist(q, box, start + size // 2)
                 sp += 1
             bit += 1
+        if big:
+            st[2 * sp] = 0
+            st[2 * sp + 1] = big * CHUNK
+            sb[sp] = box_rdist(q, box, big * CHUNK // 2)
+            sp += 1
         st[2 * sp] = m * CHUNK
         st[2 * sp + 1] = n
         sb[sp] = 0.0
