@@ -164,7 +164,7 @@ def _select(P, perm, lo, hi, k, sd):
             break
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def _big_chunks(m):
     """The chunks the one large tree covers, ``[0, CHUNK * result)``, for ``m`` chunks: 0 below ``BIG_FROM``, else
     ``m`` with all but its leading ``TOP_BITS`` binary digits cleared.
