@@ -91,28 +91,14 @@ R_SEEN, R_CELL, R_PROGRESS, R_CLOSER, R_FSEEN, R_FCOUNT, R_GSEEN, R_GCOUNT = ran
 
 
 @nb.njit(cache=True)
-def straight_field(H, W, gx, gy, res, step):
-    """The distance from ``(gx, gy)`` to every cell centre of an ``H x W`` grid, times ``res / step``.
+def straight_field(blocked, gx, gy, res, step):
+    """The distance from ``(gx, gy)`` to every cell centre of the grid ``blocked``, times ``res / step``; ``inf`` on
+    its obstacles (nonzero cells).
 
-    Compiled, and a square root rather than ``hypot`` (which guards against overflow these distances
-    cannot reach), because it was most of a straight-line query's set-up: 0.13 ms at 128 x 128 with
-    numpy's ``hypot``, against goal bias's whole 0.3 ms query.
-    """
-    out = np.empty((H, W))
-    for r in range(H):
-        dy = r + 0.5 - gy
-        for c in range(W):
-            dx = c + 0.5 - gx
-            out[r, c] = math.sqrt(dx * dx + dy * dy) * res / step
-    return out
-
-
-@nb.njit(cache=True)
-def straight_field_blocked(blocked, gx, gy, res, step):
-    """``straight_field`` over the grid ``blocked`` (nonzero: an obstacle), ``inf`` on its obstacles, in one pass.
-
-    The same values as ``straight_field`` followed by setting the obstacles to ``inf``, whose boolean mask cost
-    about as much as the field itself on a 128-cell map.
+    Compiled, one pass, and a square root rather than ``hypot`` (which guards against overflow these distances
+    cannot reach), because it was most of a straight-line query's set-up: 0.13 ms at 128 x 128 with numpy's
+    ``hypot``, against goal bias's whole 0.3 ms query; setting the obstacles by a boolean mask afterwards cost about
+    as much as the field again.
     """
     H, W = blocked.shape
     out = np.empty((H, W))
@@ -464,14 +450,10 @@ class RouteSampler(SamplerBase):
         """
         return cls(load_route_net(path), **kwargs)
 
-    def _straight(self, grid: OccupancyGrid, blocked: bool = False) -> np.ndarray:
-        """The straight-line distance to the goal of every grid cell's centre, in steps (``blocked``: ``inf`` on
-        the obstacles).
-        """
+    def _straight(self, grid: OccupancyGrid) -> np.ndarray:
+        """The straight-line distance to the goal of every grid cell's centre, in steps; ``inf`` on the obstacles."""
         gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
-        if blocked:
-            return straight_field_blocked(grid.kernel.grid, gx, gy, grid.resolution, self.step_size)
-        return straight_field(grid.height, grid.width, gx, gy, grid.resolution, self.step_size)
+        return straight_field(grid.kernel.grid, gx, gy, grid.resolution, self.step_size)
 
     def at_step(self, step_size: float) -> RouteSampler:
         """This sampler measuring in the planner's step (``step_size``, world units): planners call it when bound.
@@ -520,7 +502,7 @@ class RouteSampler(SamplerBase):
     def _fields(self, grid: OccupancyGrid) -> tuple[np.ndarray, np.ndarray | None]:
         """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
         if self.net is None:
-            return self._straight(grid, blocked=True), None  # its obstacles already inf
+            return self._straight(grid), None
         obstacles, goal, factor = self._encoder_map(grid)
         learned = self._predict(obstacles, goal)
         self.forward_passes = self.symmetry_passes
