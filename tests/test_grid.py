@@ -224,6 +224,17 @@ def test_batched_checks_match_single():
     assert not g.check_motion((1.0, np.nan), (2.0, 2.0))
 
 
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("where", [0, 1])
+def test_a_state_with_a_non_finite_entry_is_neither_valid_nor_moved_from_or_to(bad, where):
+    g = OccupancyGrid(np.zeros((8, 8), bool))
+    q = np.array([2.0, 3.0])
+    q[where] = bad
+    assert g.is_valid((2.0, 3.0)) and g.check_motion((2.0, 3.0), (5.0, 5.0))
+    assert not g.is_valid(q)
+    assert not g.check_motion(q, (5.0, 5.0)) and not g.check_motion((5.0, 5.0), q)
+
+
 # --- origin (maps placed in a world frame) ------------------------------------------------------
 
 

@@ -358,6 +358,11 @@ def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
         RRT(Problem(GeometricWorld(10, 10, []), [1, 1], [9, 9]), step_size=4.0, sampler=shipped, seed=0)
     with pytest.raises(InputError, match="step_size"):
         shipped.at_step(float("inf"))
+    at = shipped.at_step(1.0)
+    assert at.at_step(1.0) is at and at.at_step(2.0).step_size == 2.0  # the same step: the same sampler
+    for bad in (True, "1.0", np.nan):  # another type, or no number, is refused even where it compares equal
+        with pytest.raises(InputError, match="step_size"):
+            at.at_step(bad)
     with pytest.raises(InputError, match="stuck"):
         RouteSampler(shipped.net, stuck=0)
     with pytest.raises(InputError, match="tau"):

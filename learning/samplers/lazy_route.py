@@ -264,7 +264,8 @@ class LazyRouteSampler(RouteSampler):
         p = self.problem
         if not p.world.check_motion(p.start, p.goal):
             return 0
-        return math.ceil(math.dist(p.start, p.goal) / self.step_size) + 1  # a grid's metric is Euclidean
+        (sx, sy), (gx, gy) = p.start.tolist(), p.goal.tolist()
+        return math.ceil(math.hypot(gx - sx, gy - sy) / self.step_size) + 1  # a grid's metric is Euclidean
 
     def leave_sight(self) -> None:
         """End the goal-in-sight phase: the straight line's phase goes on from the tree grown so far (a no-op after)."""

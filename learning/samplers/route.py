@@ -461,6 +461,8 @@ class RouteSampler(SamplerBase):
         Every distance it takes in steps (lookahead, spread, the frontier's temperature) follows, and the encoder
         reads the map at that step (``_encoder_map``).
         """
+        if type(step_size) is float and step_size == self.step_size:  # a planner's own step, as every query brings
+            return self
         check_sampler_params(type(self).__name__, step_size=step_size)
         return self if float(step_size) == self.step_size else self._copy_with(step_size=float(step_size))
 
