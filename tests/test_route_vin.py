@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import pickle
 
@@ -472,6 +473,43 @@ def test_a_kept_map_gives_every_goal_the_whole_pass_field(h, w, depth, density, 
         reached = whole < 1e5
         assert np.array_equal(reached, reused < 1e5)
         assert np.abs(reused - whole)[reached].max(initial=0.0) < 1e-4
+
+
+@settings(max_examples=25, deadline=None)
+@given(h=st.integers(4, 40), w=st.integers(4, 40), density=st.sampled_from([0.0, 0.2, 0.4]), seed=st.integers(0, 2**16),
+       goal=st.tuples(st.floats(0, 1), st.floats(0, 1)), other=st.tuples(st.floats(0, 1), st.floats(0, 1)),
+       packed=st.booleans())
+def test_the_same_goal_again_reads_the_held_parts_as_the_whole_pass_made_them(h, w, density, seed, goal, other, packed):
+    torch.manual_seed(seed)
+    net = make_route_net("vin", block=2, channels=8, depth=2, step=2).eval()
+    net.prepacked_blocks = 0 if packed else 10**9
+    net.wall_cost = 1.2  # many moves priced as walls, so the pass without them differs
+    obstacles = np.random.default_rng(seed).random((h, w)) < density
+    g = (min(h - 1, int(goal[0] * h)), min(w - 1, int(goal[1] * w)))
+    o = (min(h - 1, int(other[0] * h)), min(w - 1, int(other[1] * w)))
+    obstacles[g] = obstacles[o] = False
+
+    def whole(goal_cell, open_walls):  # one whole compiled pass, nothing kept before it
+        net.clear_map_cache()
+        with net.open_walls() if open_walls else contextlib.nullcontext():
+            return net.predict(obstacles, goal_cell)
+
+    expected = [whole(g, False), whole(g, True), whole(g, False), whole(o, False)]
+    net.clear_map_cache()
+    first = net.predict(obstacles, g)  # a whole pass, its parts held with this goal in them
+
+    def no_window(*args):
+        raise AssertionError("the same goal again computed a goal's window")
+
+    net.window_parts = no_window  # the parts hold this goal already: no window is computed again
+    with net.open_walls():
+        again = net.predict(obstacles, g)  # the route sampler's second pass: the same goal, without the learned walls
+    assert np.array_equal(first, expected[0]) and np.array_equal(again, expected[1])
+    assert np.array_equal(net.predict(obstacles, g), expected[2])  # and again, from the parts now kept
+    del net.window_parts  # back to the class's method
+    later = net.predict(obstacles, o)  # another goal: the held goal's window taken out, its own put in
+    reached = expected[3] < 1e5
+    assert np.array_equal(reached, later < 1e5) and np.abs(later - expected[3])[reached].max(initial=0.0) < 1e-4
 
 
 def test_kept_maps_stay_within_their_bytes_and_go_with_new_weights():

@@ -94,13 +94,14 @@ class MapParts(NamedTuple):
     on the local features, before the block values join (``RouteVIN.head_inputs``, 1, C, h, w); ``steps``:
     ``cell_steps`` (1, 8, h, w). ``goal_window``: the blocks (rows ``k0:k1``, columns ``j0:j1``) where ``costs`` and
     ``hidden`` still hold the first query's goal (they were kept from its whole pass), or None where they hold the
-    map alone everywhere.
+    map alone everywhere; ``goal_block``: that goal's block (row, column), where ``goal_window`` is not None.
     """
 
     costs: torch.Tensor
     hidden: torch.Tensor
     steps: torch.Tensor
     goal_window: tuple[int, int, int, int] | None = None
+    goal_block: tuple[int, int] | None = None
 
     def nbytes(self) -> int:
         return sum(t.element_size() * t.nelement() for t in (self.costs, self.hidden, self.steps))
@@ -563,13 +564,21 @@ class RouteVIN(nn.Module, FieldEncoder):
         f = self.local_window(x, window)
         return self.prices(f), self.head_inputs(f)
 
-    def goal_window(self, x: torch.Tensor) -> tuple[int, int, int, int] | None:
-        """The blocks whose features the goal reaches: within ``depth`` of its block; None unless one is marked."""
-        h, w = x.shape[-2:]
+    def goal_block(self, x: torch.Tensor) -> tuple[int, int] | None:
+        """The block (row, column) the goal's channel marks; None unless it marks exactly one."""
         marked = np.flatnonzero(x[0, self.block * self.block].cpu().numpy() > 0.5)
-        if len(marked) != 1:
+        return divmod(int(marked[0]), x.shape[-1]) if len(marked) == 1 else None
+
+    def goal_window(self, x: torch.Tensor, block: tuple[int, int] | None = None) -> tuple[int, int, int, int] | None:
+        """The blocks whose features the goal reaches: within ``depth`` of its block; None unless one is marked.
+
+        ``block``: ``goal_block(x)`` where the caller has it already.
+        """
+        h, w = x.shape[-2:]
+        block = self.goal_block(x) if block is None else block
+        if block is None:
             return None
-        gr, gc = divmod(int(marked[0]), w)
+        gr, gc = block
         d = self.depth
         return max(0, gr - d), min(h, gr + d + 1), max(0, gc - d), min(w, gc + d + 1)
 
@@ -610,23 +619,31 @@ class RouteVIN(nn.Module, FieldEncoder):
         whole pass, its parts held with its goal in them as the recent map's (``KeptMaps``); a later query finds them
         there or kept (or, where another map's first query took their place, takes a whole pass whose parts are kept),
         computes the held goal's window again without its goal, and puts in its own. The same values as one whole pass
-        up to floating-point rounding. A query whose goal channel marks other than one block takes the whole pass.
+        up to floating-point rounding. The same goal again (the route sampler's second pass, without the learned walls)
+        reads the parts as they are: the whole pass's values exactly. A query whose goal channel marks other than one
+        block takes the whole pass.
         """
-        window = self.goal_window(x)
-        if window is None:
+        block = self.goal_block(x)
+        if block is None:
             return self.forward(x)
+        window = self.goal_window(x, block)
         key = self.map_key(x)
         parts = self._maps.pop(key)
         if parts is None:  # one whole pass; its parts, with this goal in them, kept or held as the recent map's
             keep = self._maps.seen_before(key)
             if self.compiled(x):
-                parts = MapParts(*self.map_features(x), cell_steps(x, self.block), window)
+                parts = MapParts(*self.map_features(x), cell_steps(x, self.block), window, block)
                 self._keep_or_hold(key, parts, keep)
                 return self.compiled_field(x, parts.costs, parts.hidden, parts.steps)
             f, costs = self.move_costs(x)
-            parts = MapParts(costs, self.head_inputs(f), cell_steps(x, self.block), window)
+            parts = MapParts(costs, self.head_inputs(f), cell_steps(x, self.block), window, block)
             self._keep_or_hold(key, parts, keep)
             return self.cell_field(f, self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps))
+        if parts.goal_window is not None and parts.goal_block == block:
+            # the parts hold this very goal (the same query again, as the route sampler asks it without the learned
+            # walls): the whole pass's own values, read as they are (nothing here writes into them)
+            self.keep_map(key, parts)
+            return self._field_from_parts(x, parts.costs, parts.hidden, parts.steps)
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
             free = x.clone()
             free[:, self.block * self.block] = 0.0
@@ -639,9 +656,16 @@ class RouteVIN(nn.Module, FieldEncoder):
         win = (slice(None), slice(None), slice(k0, k1), slice(j0, j1))
         costs, pre = parts.costs.clone(), parts.hidden.clone()
         costs[win], pre[win] = self.window_parts(x, window)
+        return self._field_from_parts(x, costs, pre, parts.steps)
+
+    def _field_from_parts(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
+                          steps: torch.Tensor) -> torch.Tensor:
+        """The field of the query ``x`` from its map's learned ``costs``, the cell head's first layer ``pre`` and the
+        ``steps`` (``reusing_field``), none of them written into.
+        """
         if self.compiled(x):
-            return self.compiled_field(x, costs, pre, parts.steps)
-        v = self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps)
+            return self.compiled_field(x, costs, pre, steps)
+        v = self.inference_values(x, costs, *self.goal_and_walls(x), steps)
         # the cell head's 1x1 layers as matrix products over the blocks (cheaper than convolutions this thin)
         h, w = x.shape[-2:]
         first, last = self.cells[0], self.cells[2]
