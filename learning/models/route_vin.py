@@ -620,8 +620,8 @@ class RouteVIN(nn.Module, FieldEncoder):
         there or kept (or, where another map's first query took their place, takes a whole pass whose parts are kept),
         computes the held goal's window again without its goal, and puts in its own. The same values as one whole pass
         up to floating-point rounding. The same goal again (the route sampler's second pass, without the learned walls)
-        reads the parts as they are: the whole pass's values exactly. A query whose goal channel marks other than one
-        block takes the whole pass.
+        reads the parts as they are: the whole pass's values (bit for bit on the compiled inference). A query whose goal
+        channel marks other than one block takes the whole pass.
         """
         block = self.goal_block(x)
         if block is None:
@@ -641,7 +641,7 @@ class RouteVIN(nn.Module, FieldEncoder):
             return self.cell_field(f, self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps))
         if parts.goal_window is not None and parts.goal_block == block:
             # the parts hold this very goal (the same query again, as the route sampler asks it without the learned
-            # walls): the whole pass's own values, read as they are (nothing here writes into them)
+            # walls): the whole pass's own parts, read as they are (nothing here writes into them)
             self.keep_map(key, parts)
             return self._field_from_parts(x, parts.costs, parts.hidden, parts.steps)
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
