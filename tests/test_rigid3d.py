@@ -658,3 +658,22 @@ def test_benchmark_boxes_times_every_planner_it_can_and_refuses_unknown_names(ca
     assert "InformedRRTstar: does not plan the 6-DoF body" in out
     assert bench.main(["--planners", "nope"]) == 2
     assert "--planners nope: unknown" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("metric", ["cossin", "se3"])
+@pytest.mark.parametrize("step", [0.004, 0.002])
+def test_rrt_connect_s_connect_stays_within_its_trees_where_a_turn_takes_more_steps_than_reserved(metric, step):
+    # a turn's chord shrinks by less than a step per extension, so one connect across a large turn in a small
+    # workspace takes more steps than the workspace's diagonal over the step (what the trees reserve per sample):
+    # before the guard this wrote past the trees' arrays and crashed the process
+    w = RigidBodyWorld([], body=np.array([[0.01, 0.0, 0.0], [-0.01, 0.0, 0.0]]), low=(0, 0, 0), high=(1, 1, 1),
+                       delta=0.002)
+    start, goal = np.array([0.5, 0.5, 0.5, 0.0, 0.0, 0.0]), np.array([0.5, 0.5, 0.5, 1.5, 3.0, 3.0])
+    problem = Problem(w, start, goal, goal_tolerance=1e-3, metric=metric)
+    planners = [RRTConnect(problem, step_size=step, seed=0) for _ in range(2)]
+    results = [p.solve(max_iterations=50) for p in planners]
+    assert all(r.solved for r in results)
+    assert results[0].iterations == results[1].iterations and np.array_equal(results[0].path, results[1].path)
+    data = planners[0].planner_data()
+    assert len(data.vertices) == planners[0].num_vertices > math.sqrt(3) / step  # more than the diagonal's steps
+    assert w.path_valid(results[0].path) and np.allclose(results[0].path[[0, -1]], [start, goal])

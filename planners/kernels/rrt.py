@@ -136,6 +136,12 @@ def connect_run(samples, anchored, ta, tb, istate, fstate, last, world, space, g
                     break
                 v = near
             else:
+                if n >= Xc.shape[0]:
+                    # the tree is full: ``max_connect`` bounds a connect's steps where each step brings the target a
+                    # step nearer, which a rigid body's metrics do not promise (a turn's chord shrinks by less than
+                    # the step); the connect stops here, as if trapped, and the planner makes room before the next
+                    # sample. Only a connect that would have run past the arrays stops this way.
+                    break
                 istate[slots.I_CHECKS] += 1
                 if not motion_free(world, Xc[near], new):
                     break
