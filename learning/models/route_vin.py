@@ -569,15 +569,9 @@ class RouteVIN(nn.Module, FieldEncoder):
         marked = np.flatnonzero(x[0, self.block * self.block].cpu().numpy() > 0.5)
         return divmod(int(marked[0]), x.shape[-1]) if len(marked) == 1 else None
 
-    def goal_window(self, x: torch.Tensor, block: tuple[int, int] | None = None) -> tuple[int, int, int, int] | None:
-        """The blocks whose features the goal reaches: within ``depth`` of its block; None unless one is marked.
-
-        ``block``: ``goal_block(x)`` where the caller has it already.
-        """
+    def goal_window(self, x: torch.Tensor, block: tuple[int, int]) -> tuple[int, int, int, int]:
+        """The blocks whose features a goal in ``block`` (``goal_block(x)``) reaches: within ``depth`` of it."""
         h, w = x.shape[-2:]
-        block = self.goal_block(x) if block is None else block
-        if block is None:
-            return None
         gr, gc = block
         d = self.depth
         return max(0, gr - d), min(h, gr + d + 1), max(0, gc - d), min(w, gc + d + 1)
