@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from learning.samplers.lazy_route import (
+    LINK_VERTICES,
     SHIPPED_AFTER,
     SHIPPED_CAP,
     SHIPPED_CONNECT_AFTER,
@@ -23,8 +24,14 @@ from learning.samplers.lazy_route import (
 )
 from learning.samplers.registry import make_sampler
 from learning.samplers.route import RouteSampler
-from learning.samplers.route_rules import ConvergingRouteSampler, WalkField, walk_field_steps
-from planners import make_planner
+from learning.samplers.route_rules import (
+    ConvergingRouteSampler,
+    CorridorSampler,
+    WalkField,
+    query_cells,
+    walk_field_steps,
+)
+from planners import OccupancyGrid, Problem, make_planner
 from planners.base.fileio import InputError
 from planners.maps.generators import VALIDATION_SEED0, generate
 
@@ -240,6 +247,51 @@ def test_a_roadmaps_lazy_rule_is_uniform_then_the_corridor(maps, planner_name):
     assert switched and kept, "the maps must give runs on both sides of the switch"
 
 
+def rooms_problem(side: int = 256, room: int = 32, door: int = 3) -> Problem:
+    """A square of rooms, each wall of a room with one door, start and goal in opposite corner rooms."""
+    obs = np.zeros((side, side), dtype=bool)
+    for k in range(room, side, room):
+        obs[k - 1:k + 1, :] = True
+        obs[:, k - 1:k + 1] = True
+    for r in range(0, side, room):
+        for c in range(room, side, room):
+            obs[r + room // 2:r + room // 2 + door, c - 1:c + 1] = False
+            obs[c - 1:c + 1, r + room // 2:r + room // 2 + door] = False
+    return Problem(OccupancyGrid(obs), (5.5, 5.5), (side - 5.5, side - 5.5), goal_tolerance=2.0, name="rooms")
+
+
+def test_a_roadmaps_lazy_chain_after_the_switch_is_short_enough_to_connect():
+    # a roadmap connects a new vertex to its nearest ones: after the switch the route's chain is drawn a second time
+    # with links no longer than a disc holding LINK_VERTICES of the vertices there, so the chain connects the query
+    # where the uniform phase left the roadmap in pieces (with the first chain alone, seed 2 took 402 samples after a
+    # chain of 15)
+    p = rooms_problem()
+    first = CorridorSampler(make_sampler("route")).bind(p).links
+    (rs, cs), _ = query_cells(p)
+    switched = 0
+    for seed in range(4):
+        planner = make_planner("PRM", p, sampler=_lazy(roadmap_floor=200, roadmap_after=0), seed=seed)
+        planner.solve(max_iterations=200)
+        vertices = planner.view().num_vertices - 2
+        result = planner.solve(max_iterations=20000)
+        lazy = planner.sampler
+        assert result.solved
+        if not lazy.switched:
+            continue
+        switched += 1
+        bound = math.sqrt(LINK_VERTICES * p.world.free_volume() / (math.pi * vertices))
+        assert lazy.rule.edge is None and lazy.rule.then == pytest.approx(bound)
+        links = lazy.rule.links
+        assert np.array_equal(links[:len(first)], first) and len(links) > 2 * len(first)  # the long chain, then short
+        second = [rs * 256 + cs, *links[len(first):]]
+        for a, b in zip(second[:-1], second[1:], strict=True):
+            assert math.hypot(a // 256 - b // 256, a % 256 - b % 256) <= bound
+        assert result.iterations - 200 <= len(links) + 10
+    assert switched >= 2, "the map must give runs that reach the switch"
+    # a switch on a roadmap of no other vertices has no second chain: the route sampler's corridor
+    assert LazyCorridorSampler(make_sampler("route"), 0.0).bind(p).switch(0).then is None
+
+
 def test_other_planners_take_the_route_samplers_own_rules(lazy):
     assert lazy.for_planner("tree") is lazy
     connect = lazy.for_planner("bidirectional")
@@ -350,6 +402,19 @@ def test_a_bind_at_another_step_reads_the_maps_size_without_resampling_it(monkey
     planner = make_planner("RRT", p, sampler=_lazy(after=0), seed=0, extension_step=6.0)
     planner.solve(max_iterations=1)
     assert len(calls) == 1 and planner.sampler.switched  # the pass reads the map resampled, once
+
+
+@pytest.mark.experiments
+def test_the_chain_links_rule_takes_the_smallest_bound_within_three_percent_and_restores_the_shipped_one(capsys):
+    script = load_script("experiments/lazy_chain_links")
+    assert script.choose({1.0: 10.25, 3.0: 10.0, math.inf: 11.0}) == 1.0
+    assert script.choose({1.0: 10.4, 3.0: 10.0, 8.0: 10.2}) == 3.0
+    assert script.main(["--sizes", "64", "--maps", "2", "--at", "5", "--repeat", "1", "--bounds", "1", "inf"]) == 0
+    out = capsys.readouterr().out
+    assert "switch at 5 samples:" in out and "chosen: " in out
+    assert script.lazy_route.LINK_VERTICES == LINK_VERTICES  # the shipped bound again after the runs
+    with pytest.raises(SystemExit):
+        script.main(["--bounds", "0"])
 
 
 @pytest.mark.experiments

@@ -129,6 +129,18 @@ SHIPPED_ROADMAP_FLOOR = 500.0
 #: RRT-Connect's switch lies past 20,000 iterations: there it is uniform RRT-Connect.
 SHIPPED_CONNECT_CAP = math.inf
 SHIPPED_ROADMAP_CAP = math.inf
+#: After the roadmaps' switch the corridor's chain along the route is drawn twice: with its own links, then with links
+#: no longer than the radius of a disc that holds this many of the roadmap's vertices on average
+#: (``LazyCorridorSampler.link_bound``, ``CorridorSampler.then_links``). A roadmap connects a new vertex to its nearest
+#: ones (10 by default), so on a roadmap that the uniform phase left in pieces the first chain's long links are seldom
+#: tried and the chain fell apart; on one whose pieces are large the first chain connects it alone. Chosen on the
+#: validation maps by time to solution (``scripts/experiments/lazy_chain_links.py``: the switch forced at 150 and at
+#: 400 samples on 12 validation maps of each family at 256 and 512 cells, the 20 and 7 that reach it; pooled
+#: geometric means for 1 / 3 / 8 / no second chain: 17.63 / 17.53 / 17.51 / 18.81 ms): every bound within 3% of the
+#: best, so the smallest. A new point of the second chain then has one vertex nearer than the point before on
+#: average, which is among its 10 nearest but for about one link in ten million (a Poisson count of mean 1 reaching
+#: 10).
+LINK_VERTICES = 1.0
 #: The switch of a sampler that never switches: the largest iteration there is.
 NEVER = int(np.iinfo(np.int64).max)
 #: What ``LazyRouteSampler`` adds to ``RouteSampler``'s attributes (left out of ``eager``).
@@ -452,7 +464,9 @@ class LazyCorridorSampler(LazyRule):
 
     Until sample ``switch_at`` (``switch_iteration(after, ...)``) the samples are uniform over the map (a roadmap draws
     in batches through ``draw``: a batch stops at the switch); at it, unless the roadmap has connected the query, the
-    route sampler's two fields are computed and the corridor's samples go on (its own stages, from its first draw).
+    route sampler's two fields are computed and the corridor's samples go on (its own stages, from its first draw),
+    its chain along the route drawn twice: with its own links, then with links short enough for a roadmap of the
+    vertices there to try them (``switch``).
 
     Args:
         route: The route sampler whose fields the corridor reads (``LazyRouteSampler.eager``).
@@ -469,14 +483,36 @@ class LazyCorridorSampler(LazyRule):
         out.edge = length
         return out
 
-    def switch(self) -> SamplerBase:
+    def switch(self, vertices: int = 0) -> SamplerBase:
+        """Compute the fields and follow the corridor from a roadmap of ``vertices`` other vertices (once).
+
+        ``vertices``: the roadmap's vertices besides the query's start and goal (0: no bound from them).
+
+        The corridor's chain is drawn first, each link in sight of the one before; a roadmap connects a new vertex to
+        its nearest ones, so a link longer than the spacing of the vertices already there is seldom tried (the
+        previous chain point is not among the nearest), and where the uniform phase left the roadmap in small pieces
+        the chain falls apart into them. So after a switch the chain is drawn again with no link longer than
+        ``link_bound(vertices)``, the radius of a disc that holds ``LINK_VERTICES`` of the roadmap's vertices on
+        average (``CorridorSampler.then_links``); a roadmap the first chain connects never reaches the second.
+        """
         if self.rule is None:
-            self.rule = CorridorSampler(self.route).at_edge(self.edge).bind(self.problem)
+            bound = self.link_bound(vertices)
+            rule = CorridorSampler(self.route).at_edge(self.edge)
+            self.rule = (rule if math.isinf(bound) else rule.then_links(bound)).bind(self.problem)
         return self.rule
+
+    def link_bound(self, vertices: int) -> float:
+        """The radius of a disc holding ``LINK_VERTICES`` of ``vertices`` spread uniformly over the free space.
+
+        inf for a roadmap of no vertices.
+        """
+        if vertices <= 0:
+            return math.inf
+        return math.sqrt(LINK_VERTICES * self.problem.world.free_volume() / (math.pi * vertices))
 
     def draw(self, rng, n, view):
         if self.rule is None and view.iteration >= self.switch_at:
-            self.switch()
+            self.switch(view.num_vertices - 2)  # the roadmap's vertices besides the query's start and goal
         if self.rule is not None:
             return self.rule.draw(rng, n, view)
         return self._uniform(rng.random((min(n, self.switch_at - view.iteration), self.problem.dim)))

@@ -520,6 +520,8 @@ class CorridorSampler(_CorridorRule):
                                         "the most steps of walk between two points of the chain")
         #: the roadmap's longest edge (``at_edge``; None: no limit): no link of the chain is longer
         self.edge: float | None = None
+        #: a second chain's longest link (``then_links``; None: no second chain), drawn after the first
+        self.then: float | None = None
 
     def at_edge(self, length: float | None) -> CorridorSampler:
         """This corridor for a roadmap whose edges are at most ``length`` long (None: no limit; ``Sampler``).
@@ -531,6 +533,27 @@ class CorridorSampler(_CorridorRule):
         out.edge = None if length is None else float(length)
         return out
 
+    def then_links(self, length: float | None) -> CorridorSampler:
+        """This corridor with a second chain along the same route, its links at most ``length`` long (None: none).
+
+        The second chain's points follow the first chain's, before the corridor's draws: a roadmap that the first
+        chain's long links leave unconnected (each new point is connected to its nearest vertices, which need not
+        include the point before) gets links short enough to be tried. Its links keep to the roadmap's longest edge
+        as well.
+        """
+        out = copy.copy(self)
+        out.then = None if length is None else float(length)
+        return out
+
+    def _links(self, moves: int) -> np.ndarray:
+        """The chain's cells (flat indices) with at most ``moves`` moves of the walk a link (none below one move)."""
+        p = self.problem
+        if moves <= 0:
+            return np.empty(0, dtype=np.int64)
+        return route_chain(self._to_goal.field, lambda: self.start_field().field,
+                           np.asarray(p.world.obstacles, dtype=bool), query_cells(p), moves,
+                           getattr(self.route, "ripple", 0.0), getattr(self.route, "ripple_growth", 0.0))
+
     def _setup(self) -> None:
         p = self.problem
         require_grid("CorridorSampler", p.world)
@@ -539,11 +562,12 @@ class CorridorSampler(_CorridorRule):
         link = math.ceil(self.chain * self.route.step_size / p.world.resolution)  # in moves of the walk
         if self.edge is not None:  # no link longer than the roadmap's longest edge
             link = min(link, math.floor(self.edge / (math.sqrt(2.0) * p.world.resolution)))
-        #: the chain's cells (flat indices), drawn first, in order
-        self.links = (route_chain(self._to_goal.field, lambda: self.start_field().field,
-                                  np.asarray(p.world.obstacles, dtype=bool), query_cells(p), link,
-                                  getattr(self.route, "ripple", 0.0), getattr(self.route, "ripple_growth", 0.0))
-                      if link > 0 else np.empty(0, dtype=np.int64))
+        #: the chain's cells (flat indices), drawn first, in order (then the second chain's, ``then_links``)
+        self.links = self._links(link)
+        if self.then is not None and len(self.links):
+            shorter = min(link, math.floor(self.then / (math.sqrt(2.0) * p.world.resolution)))
+            if shorter < link:
+                self.links = np.concatenate([self.links, self._links(shorter)])
         self.drawn = 0
         if not len(self.links) or self._to_start is not None:
             self.build_corridor()
@@ -613,6 +637,7 @@ class CorridorSampler(_CorridorRule):
 
     def __repr__(self) -> str:
         edge = f", edge={self.edge:g}" if self.edge is not None else ""
+        edge += f", then={self.then:g}" if self.then is not None else ""
         return super().__repr__()[:-1] + (f", chain={self.chain:g}" if self.chain else "") + edge + ")"
 
 
