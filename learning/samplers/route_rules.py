@@ -541,6 +541,10 @@ class CorridorSampler(_CorridorRule):
         include the point before) gets links short enough to be tried. Its links keep to the roadmap's longest edge
         as well.
         """
+        if length is not None and not (isinstance(length, (int, float, np.number)) and not isinstance(length, bool)
+                                       and math.isfinite(length) and length > 0):
+            raise ValueError(f"{type(self).__name__}.then_links: the second chain's longest link must be a positive "
+                             f"finite number or None, got {length!r}")
         out = copy.copy(self)
         out.then = None if length is None else float(length)
         return out
