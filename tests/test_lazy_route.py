@@ -280,7 +280,7 @@ def test_a_roadmaps_lazy_chain_after_the_switch_is_short_enough_to_connect():
             continue
         switched += 1
         bound = math.sqrt(LINK_VERTICES * p.world.free_volume() / (math.pi * vertices))
-        assert lazy.rule.edge is None and lazy.rule.then == pytest.approx(bound)
+        assert lazy.rule.edge is None and lazy.rule.second_link == pytest.approx(bound)
         links = lazy.rule.links
         assert np.array_equal(links[:len(first)], first) and len(links) > 2 * len(first)  # the long chain, then short
         second = [rs * 256 + cs, *links[len(first):]]
@@ -289,7 +289,7 @@ def test_a_roadmaps_lazy_chain_after_the_switch_is_short_enough_to_connect():
         assert result.iterations - 200 <= len(links) + 10
     assert switched >= 2, "the map must give runs that reach the switch"
     # a switch on a roadmap of no other vertices has no second chain: the route sampler's corridor
-    assert LazyCorridorSampler(make_sampler("route"), 0.0).bind(p).switch(0).then is None
+    assert LazyCorridorSampler(make_sampler("route"), 0.0).bind(p).switch(0).second_link is None
 
 
 def test_other_planners_take_the_route_samplers_own_rules(lazy):

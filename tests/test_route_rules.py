@@ -749,7 +749,7 @@ def test_a_second_chain_follows_the_first_with_shorter_links_and_refuses_a_lengt
     p = wall_problem()
     route = make_sampler("exact_route", step_size=4.0)
     first = CorridorSampler(route).bind(p).links
-    both = CorridorSampler(route).then_links(2.0).bind(p)
+    both = CorridorSampler(route).second_chain(2.0).bind(p)
     assert np.array_equal(both.links[:len(first)], first) and len(both.links) > 2 * len(first)
     (rs, cs), _ = query_cells(p)
     second = [rs * 32 + cs, *both.links[len(first):]]
@@ -757,11 +757,11 @@ def test_a_second_chain_follows_the_first_with_shorter_links_and_refuses_a_lengt
         assert math.hypot(a // 32 - b // 32, a % 32 - b % 32) <= 2.0
     # no shorter than the first's links, or below a cell's diagonal: no second chain
     for length in (1e9, 1.0):
-        assert np.array_equal(CorridorSampler(route).then_links(length).bind(p).links, first)
-    assert "then=2" in repr(CorridorSampler(route).then_links(2.0))
+        assert np.array_equal(CorridorSampler(route).second_chain(length).bind(p).links, first)
+    assert "second_link=2" in repr(CorridorSampler(route).second_chain(2.0))
     for bad in (0.0, -1.0, math.nan, math.inf, True, "2"):
         with pytest.raises(ValueError, match="second chain's longest link"):
-            CorridorSampler(route).then_links(bad)
+            CorridorSampler(route).second_chain(bad)
 
 
 def test_the_lazy_corridor_hands_the_roadmaps_edge_to_the_corridor_it_switches_to():

@@ -131,9 +131,9 @@ SHIPPED_CONNECT_CAP = math.inf
 SHIPPED_ROADMAP_CAP = math.inf
 #: After the roadmaps' switch the corridor's chain along the route is drawn twice: with its own links, then with links
 #: no longer than the radius of a disc that holds this many of the roadmap's vertices on average
-#: (``LazyCorridorSampler.link_bound``, ``CorridorSampler.then_links``). A roadmap connects a new vertex to its nearest
-#: ones (10 by default), so on a roadmap that the uniform phase left in pieces the first chain's long links are seldom
-#: tried and the chain fell apart; on one whose pieces are large the first chain connects it alone. Chosen on the
+#: (``LazyCorridorSampler.link_bound``, ``CorridorSampler.second_chain``). A roadmap connects a new vertex to its
+#: nearest ones (10 by default), so on a roadmap that the uniform phase left in pieces the first chain's long links are
+#: seldom tried and the chain fell apart; on one whose pieces are large the first chain connects it alone. Chosen on the
 #: validation maps by time to solution (``scripts/experiments/lazy_chain_links.py``: the switch forced at 150 and at
 #: 400 samples on 12 validation maps of each family at 256 and 512 cells, the 20 and 7 that reach it; pooled
 #: geometric means for 1 / 3 / 8 / no second chain: 17.63 / 17.53 / 17.51 / 18.81 ms): every bound within 3% of the
@@ -493,12 +493,12 @@ class LazyCorridorSampler(LazyRule):
         previous chain point is not among the nearest), and where the uniform phase left the roadmap in small pieces
         the chain falls apart into them. So after a switch the chain is drawn again with no link longer than
         ``link_bound(vertices)``, the radius of a disc that holds ``LINK_VERTICES`` of the roadmap's vertices on
-        average (``CorridorSampler.then_links``); a roadmap the first chain connects never reaches the second.
+        average (``CorridorSampler.second_chain``); a roadmap the first chain connects never reaches the second.
         """
         if self.rule is None:
             bound = self.link_bound(vertices)
             rule = CorridorSampler(self.route).at_edge(self.edge)
-            self.rule = (rule if math.isinf(bound) else rule.then_links(bound)).bind(self.problem)
+            self.rule = (rule if math.isinf(bound) else rule.second_chain(bound)).bind(self.problem)
         return self.rule
 
     def link_bound(self, vertices: int) -> float:

@@ -520,8 +520,8 @@ class CorridorSampler(_CorridorRule):
                                         "the most steps of walk between two points of the chain")
         #: the roadmap's longest edge (``at_edge``; None: no limit): no link of the chain is longer
         self.edge: float | None = None
-        #: a second chain's longest link (``then_links``; None: no second chain), drawn after the first
-        self.then: float | None = None
+        #: a second chain's longest link (``second_chain``; None: no second chain), drawn after the first
+        self.second_link: float | None = None
 
     def at_edge(self, length: float | None) -> CorridorSampler:
         """This corridor for a roadmap whose edges are at most ``length`` long (None: no limit; ``Sampler``).
@@ -533,7 +533,7 @@ class CorridorSampler(_CorridorRule):
         out.edge = None if length is None else float(length)
         return out
 
-    def then_links(self, length: float | None) -> CorridorSampler:
+    def second_chain(self, length: float | None) -> CorridorSampler:
         """This corridor with a second chain along the same route, its links at most ``length`` long (None: none).
 
         The second chain's points follow the first chain's, before the corridor's draws: a roadmap that the first
@@ -543,10 +543,10 @@ class CorridorSampler(_CorridorRule):
         """
         if length is not None and not (isinstance(length, (int, float, np.number)) and not isinstance(length, bool)
                                        and math.isfinite(length) and length > 0):
-            raise ValueError(f"{type(self).__name__}.then_links: the second chain's longest link must be a positive "
+            raise ValueError(f"{type(self).__name__}.second_chain: the second chain's longest link must be a positive "
                              f"finite number or None, got {length!r}")
         out = copy.copy(self)
-        out.then = None if length is None else float(length)
+        out.second_link = None if length is None else float(length)
         return out
 
     def _links(self, moves: int) -> np.ndarray:
@@ -566,10 +566,10 @@ class CorridorSampler(_CorridorRule):
         link = math.ceil(self.chain * self.route.step_size / p.world.resolution)  # in moves of the walk
         if self.edge is not None:  # no link longer than the roadmap's longest edge
             link = min(link, math.floor(self.edge / (math.sqrt(2.0) * p.world.resolution)))
-        #: the chain's cells (flat indices), drawn first, in order (then the second chain's, ``then_links``)
+        #: the chain's cells (flat indices), drawn first, in order (then the second chain's, ``second_chain``)
         self.links = self._links(link)
-        if self.then is not None and len(self.links):
-            shorter = min(link, math.floor(self.then / (math.sqrt(2.0) * p.world.resolution)))
+        if self.second_link is not None and len(self.links):
+            shorter = min(link, math.floor(self.second_link / (math.sqrt(2.0) * p.world.resolution)))
             if shorter < link:
                 self.links = np.concatenate([self.links, self._links(shorter)])
         self.drawn = 0
@@ -641,7 +641,7 @@ class CorridorSampler(_CorridorRule):
 
     def __repr__(self) -> str:
         edge = f", edge={self.edge:g}" if self.edge is not None else ""
-        edge += f", then={self.then:g}" if self.then is not None else ""
+        edge += f", second_link={self.second_link:g}" if self.second_link is not None else ""
         return super().__repr__()[:-1] + (f", chain={self.chain:g}" if self.chain else "") + edge + ")"
 
 
