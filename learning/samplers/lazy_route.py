@@ -132,12 +132,12 @@ SHIPPED_ROADMAP_CAP = math.inf
 #: After the roadmaps' switch the corridor's chain along the route is drawn twice: with its own links, then with links
 #: no longer than the radius of a disc that holds this many of the roadmap's vertices on average
 #: (``LazyCorridorSampler.link_bound``, ``CorridorSampler.second_chain``). A roadmap connects a new vertex to its
-#: nearest ones (10 by default), so on a roadmap that the uniform phase left in pieces the first chain's long links are
-#: seldom tried and the chain fell apart; on one whose pieces are large the first chain connects it alone. Chosen on the
-#: validation maps by time to solution (``scripts/experiments/lazy_chain_links.py``: the switch forced at 150 and at
-#: 400 samples on 12 validation maps of each family at 256 and 512 cells, the 20 and 7 that reach it; pooled
-#: geometric means for 1 / 3 / 8 / no second chain: 17.63 / 17.53 / 17.51 / 18.81 ms): every bound within 3% of the
-#: best, so the smallest. A new point of the second chain then has one vertex nearer than the point before on
+#: nearest ones (10 by default), so on a roadmap that the uniform phase left in pieces the first chain's long links
+#: are seldom tried and a single chain falls apart; on one whose pieces are large the first chain connects it alone.
+#: Chosen on the validation maps by time to solution (``scripts/experiments/lazy_chain_links.py``: the switch forced
+#: at 150 and at 400 samples on 12 validation maps of each family at 256 and 512 cells, the 20 and 7 that reach it;
+#: pooled geometric means for 1 / 3 / 8 / no second chain: 17.63 / 17.53 / 17.51 / 18.81 ms): every bound within 3%
+#: of the best, so the smallest. A new point of the second chain then has one vertex nearer than the point before on
 #: average, which is among its 10 nearest but for about one link in ten million (a Poisson count of mean 1 reaching
 #: 10).
 LINK_VERTICES = 1.0
