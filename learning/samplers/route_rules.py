@@ -549,6 +549,10 @@ class CorridorSampler(_CorridorRule):
         out.second_link = None if length is None else float(length)
         return out
 
+    def _moves(self, length: float) -> int:
+        """The most moves of the walk a link no longer than ``length`` may take (a move spans a cell's diagonal)."""
+        return math.floor(length / (math.sqrt(2.0) * self.problem.world.resolution))
+
     def _links(self, moves: int) -> np.ndarray:
         """The chain's cells (flat indices) with at most ``moves`` moves of the walk a link (none below one move)."""
         p = self.problem
@@ -565,11 +569,11 @@ class CorridorSampler(_CorridorRule):
         self.built = False  # the corridor: built where the chain needs the field to the start, or after the chain
         link = math.ceil(self.chain * self.route.step_size / p.world.resolution)  # in moves of the walk
         if self.edge is not None:  # no link longer than the roadmap's longest edge
-            link = min(link, math.floor(self.edge / (math.sqrt(2.0) * p.world.resolution)))
+            link = min(link, self._moves(self.edge))
         #: the chain's cells (flat indices), drawn first, in order (then the second chain's, ``second_chain``)
         self.links = self._links(link)
         if self.second_link is not None and len(self.links):
-            shorter = min(link, math.floor(self.second_link / (math.sqrt(2.0) * p.world.resolution)))
+            shorter = min(link, self._moves(self.second_link))
             if shorter < link:
                 self.links = np.concatenate([self.links, self._links(shorter)])
         self.drawn = 0
