@@ -30,6 +30,7 @@ from learning.samplers.route_rules import (
     walk_field_steps,
     walk_field_to_start,
     walled_between,
+    whole_walk,
 )
 from planners import OccupancyGrid, Problem, TreeView, UniformSampler, make_planner
 from planners.base.fileio import InputError
@@ -641,6 +642,62 @@ def test_the_chain_is_the_walks_corners_each_in_sight_of_the_one_before(data, li
         assert list(links) == [c for c in points if c not in (start, goal)]
     else:
         assert list(links[:len(points)]) == [c for c in points if c not in (start, goal)]
+
+
+def numpy_walled_between(blocked: np.ndarray, h: int, cells: np.ndarray) -> np.ndarray:
+    """``walled_between`` written as whole-array steps over a padded map: the definition the compiled loop keeps."""
+    padded = np.pad(blocked, h, constant_values=True)
+    r, c = np.divmod(cells, blocked.shape[1])
+    r, c = r + h, c + h
+    out = np.zeros(len(cells), dtype=bool)
+    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        ahead = np.zeros(len(cells), dtype=bool)
+        behind = np.zeros(len(cells), dtype=bool)
+        for k in range(1, h + 1):
+            ahead |= padded[r + k * dr, c + k * dc]
+            behind |= padded[r - k * dr, c - k * dc]
+        out |= ahead & behind
+    return out.astype(np.float64)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), h=st.integers(1, 6), rows=st.integers(1, 24), cols=st.integers(1, 24),
+       density=st.floats(0.0, 0.6))
+def test_walled_between_is_its_definition_on_random_maps(seed, h, rows, cols, density):
+    rng = np.random.default_rng(seed)
+    blocked = rng.random((rows, cols)) < density
+    grid = OccupancyGrid(blocked)
+    every = np.arange(blocked.size)
+    assert np.array_equal(walled_between(grid, h), numpy_walled_between(blocked, h, every))
+    some = rng.choice(blocked.size, min(blocked.size, 7), replace=False)
+    assert np.array_equal(walled_between(grid, h, some), numpy_walled_between(blocked, h, some))
+
+
+def python_sight_chain(field, blocked, cell, link, ripple, growth):
+    """``sight_chain``'s corners found one by one in Python: the definition the compiled loop keeps."""
+    visited = whole_walk(field, blocked, cell, ripple, growth)
+    moves = len(visited)
+    points, at = [], 0
+    while at < moves - 1:
+        end = min(moves, at + link + 1)
+        corner = last_in_sight(blocked, visited[at:end], end - at)
+        ahead = at + 1 + int(np.flatnonzero(visited[at + 1:end] == corner)[0]) if corner != visited[at] else at + 1
+        points.append(int(visited[ahead]))
+        at = ahead
+    return points, int(visited[moves - 1])
+
+
+@settings(max_examples=20, deadline=None)
+@given(data=st.data(), link=st.integers(1, 80), ripple=st.sampled_from([0.0, 0.5, 2.0]))
+def test_the_compiled_chain_is_the_python_chain(data, link, ripple):
+    p = random_walled_problem(data, 40, wall=2, gap=3, tolerance=1.0)
+    blocked = np.asarray(p.world.obstacles, dtype=bool)
+    for name in ("exact_route", "route_ablation"):
+        field = make_sampler(name, step_size=1.0).bind(p).field
+        (rs, cs), _ = query_cells(p)
+        start = rs * p.world.width + cs
+        assert sight_chain(field, blocked, start, link, ripple, 0.1) == python_sight_chain(
+            field, blocked, start, link, ripple, 0.1)
 
 
 def test_where_the_walk_stops_short_the_chain_goes_on_from_the_goal_end():

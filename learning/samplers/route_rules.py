@@ -228,22 +228,43 @@ def walled_between(grid: OccupancyGrid, h: int, cells: np.ndarray | None = None)
     """1.0 where a cell has blocked cells within ``h`` on both sides along one of four axes (a passage), else 0.0.
 
     For the flat cell indices ``cells`` (None: every cell, in the grid's order); outside the map counts as blocked.
-    The work follows ``len(cells)``, not the map's size.
+    The work follows ``len(cells)``, not the map's size (``walled_cells``, compiled).
     """
-    blocked = np.pad(np.asarray(grid.obstacles, dtype=bool), h, constant_values=True)
-    rows, cols = grid.shape
-    flat = np.arange(rows * cols) if cells is None else np.asarray(cells, dtype=np.int64)
-    r, c = np.divmod(flat, cols)
-    r, c = r + h, c + h
-    out = np.zeros(len(flat), dtype=bool)
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        ahead = np.zeros(len(flat), dtype=bool)
-        behind = np.zeros(len(flat), dtype=bool)
-        for k in range(1, h + 1):
-            ahead |= blocked[r + k * dr, c + k * dc]
-            behind |= blocked[r - k * dr, c - k * dc]
-        out |= ahead & behind
-    return out.astype(np.float64)
+    blocked = np.asarray(grid.obstacles, dtype=bool)
+    flat = np.arange(blocked.size, dtype=np.int64) if cells is None else np.asarray(cells, dtype=np.int64)
+    out = np.zeros(len(flat), dtype=np.float64)
+    walled_cells(blocked, int(h), flat, out)
+    return out
+
+
+@nb.njit(cache=True)
+def _blocked_at(blocked, r, c):
+    return r < 0 or c < 0 or r >= blocked.shape[0] or c >= blocked.shape[1] or blocked[r, c]
+
+
+@nb.njit(cache=True)
+def walled_cells(blocked, h, cells, out):
+    """``walled_between``'s loop: ``out[i]`` = 1.0 where flat cell ``cells[i]`` has a blocked cell (or the map's
+    edge) within ``h`` cells ahead and one within ``h`` behind along a row, a column or a diagonal.
+    """
+    W = blocked.shape[1]
+    for i in range(cells.shape[0]):
+        r, c = cells[i] // W, cells[i] % W
+        for d in range(4):
+            dr, dc = (0, 1) if d == 0 else ((1, 0) if d == 1 else ((1, 1) if d == 2 else (1, -1)))
+            ahead = False
+            for k in range(1, h + 1):
+                if _blocked_at(blocked, r + k * dr, c + k * dc):
+                    ahead = True
+                    break
+            if not ahead:
+                continue
+            for k in range(1, h + 1):
+                if _blocked_at(blocked, r - k * dr, c - k * dc):
+                    out[i] = 1.0
+                    break
+            if out[i] == 1.0:
+                break
 
 
 def cell_points(grid: OccupancyGrid, cells: np.ndarray, u: np.ndarray, low: np.ndarray, high: np.ndarray,
@@ -272,18 +293,38 @@ def sight_chain(field: np.ndarray, blocked: np.ndarray, cell: int, link: int, ri
     The walk is the route sampler's (``planners.guidance.follow.walk_path``: down the field, crossing ripples
     shallower than ``ripple`` and ``growth``), as far as it goes; from ``cell`` each next point is the last cell of the
     walk's next ``link`` cells still in sight of the point before it (``last_in_sight``), so the segment between two
-    points meets no wall. Returns the points (flat indices; ``cell`` not among them) and the walk's last cell.
+    points meets no wall (``walk_corners``, compiled). Returns the points (flat indices; ``cell`` not among them) and
+    the walk's last cell.
     """
     visited = whole_walk(field, blocked, cell, ripple, growth)
-    moves = len(visited)
-    points, at = [], 0
+    corners = np.empty(len(visited), dtype=np.int64)
+    count = walk_corners(blocked, visited, min(int(link), len(visited)), corners)
+    return corners[:count].tolist(), int(visited[-1])
+
+
+@nb.njit(cache=True)
+def walk_corners(blocked, visited, link, corners):
+    """``sight_chain``'s loop over the walk ``visited``: writes the corners to ``corners``; their number.
+
+    From the walk's first cell, the next corner is the last of the walk's next ``link`` cells in sight of the corner
+    before (the next cell of the walk where not even that one is), until the walk's last cell.
+    """
+    moves = visited.shape[0]
+    count = 0
+    at = 0
     while at < moves - 1:
         end = min(moves, at + link + 1)
         corner = last_in_sight(blocked, visited[at:end], end - at)
-        ahead = at + 1 + int(np.flatnonzero(visited[at + 1:end] == corner)[0]) if corner != visited[at] else at + 1
-        points.append(int(visited[ahead]))
+        ahead = at + 1
+        if corner != visited[at]:
+            for j in range(at + 1, end):
+                if visited[j] == corner:
+                    ahead = j
+                    break
+        corners[count] = visited[ahead]
+        count += 1
         at = ahead
-    return points, int(visited[moves - 1])
+    return count
 
 
 def route_chain(to_goal: np.ndarray, to_start, blocked: np.ndarray, ends: tuple, link: int,
