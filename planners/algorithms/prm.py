@@ -238,7 +238,8 @@ class PRM(Planner):
         csr = self._adjacency()
         return prm_kernels.astar_csr(self._store.X, csr, self._edges[2], self._edges[3], self._vstat,
                                      int(self._istate[slots.I_QS]), int(self._istate[slots.I_QG]), self._space,
-                                     np.bool_(only_valid), np.bool_(self.search == "astar"))
+                                     np.bool_(only_valid), np.bool_(self.search == "astar"),
+                                     np.full(len(csr[0]) - 1, -1.0))
 
     def _path(self) -> np.ndarray:
         verts = self._lazy_path if self.lazy else self._shortest(only_valid=True)[0]

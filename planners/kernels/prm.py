@@ -252,17 +252,26 @@ def build_csr(edges, n, ne):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True):
+def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic, h):
     """Shortest path src -> dst as (vertex indices, edge indices); empty arrays if none.
 
     Follows edges that are valid (``only_valid``) or not known invalid, between vertices not known
     invalid, reading the statuses live so one adjacency serves a whole lazy search. The heuristic
-    is the metric distance to ``dst`` (admissible: edges are straight); ``heuristic=False`` makes
-    the search Dijkstra's (same path length, more vertices expanded).
+    is ``h`` (one entry per vertex; below 0: not known yet, then the metric distance to ``dst``, which is
+    admissible as edges are straight, written there when first needed); ``heuristic=False`` makes
+    the search Dijkstra's (same path length, more vertices expanded; ``h`` unread).
+
+    Adaptive A* (S. Koenig, M. Likhachev, "Adaptive A*", AAMAS 2005): after a search that reaches ``dst``
+    at cost g*, every vertex it expanded gets ``h = g* - g``, a larger heuristic that stays consistent as
+    long as no edge gets shorter (edges dropped as invalid only lengthen routes). So Lazy-PRM's searches
+    of one roadmap, between which checks only drop edges and vertices, pass the same ``h`` on and each
+    expands fewer vertices than the one before would from scratch; it finds a shortest path all the same.
     """
     deg, adj_v, adj_e = csr
     kind, metric, rot_weight = space
     n = deg.shape[0] - 1
+    expanded = np.empty(n, dtype=np.int64)
+    ne = 0
     g = np.full(n, np.inf)
     via_v = np.full(n, -1, dtype=np.int64)
     via_e = np.full(n, -1, dtype=np.int64)
@@ -270,7 +279,9 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
     hf = np.empty(deg[n] + 1)
     hv = np.empty(deg[n] + 1, dtype=np.int64)
     g[src] = 0.0
-    hf[0] = space_distance(space, X[src], X[dst]) if heuristic else 0.0
+    if heuristic and h[src] < 0.0:
+        h[src] = space_distance(space, X[src], X[dst])
+    hf[0] = h[src] if heuristic else 0.0
     hv[0] = src
     hn = 1
     while hn > 0:
@@ -296,6 +307,8 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
         if closed[v]:
             continue
         closed[v] = True
+        expanded[ne] = v
+        ne += 1
         if v == dst:
             break
         for j in range(deg[v], deg[v + 1]):
@@ -310,7 +323,11 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
                 g[u] = nd
                 via_v[u] = v
                 via_e[u] = e
-                f = nd + space_distance(space, X[u], X[dst]) if heuristic else nd
+                f = nd
+                if heuristic:
+                    if h[u] < 0.0:
+                        h[u] = space_distance(space, X[u], X[dst])
+                    f += h[u]
                 i = hn
                 hn += 1
                 while i > 0:
@@ -324,6 +341,9 @@ def astar_csr(X, csr, ew, es, vstat, src, dst, space, only_valid, heuristic=True
                 hv[i] = u
     if not closed[dst] or vstat[src] == slots.V_INVALID:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    if heuristic:  # Adaptive A*'s update: what the next search of this roadmap starts from
+        for i in range(ne):
+            h[expanded[i]] = g[dst] - g[expanded[i]]
     k = 1
     v = dst
     while v != src:
@@ -353,7 +373,10 @@ def lazy_resolve(store, edges, csr, uf, vstat, istate, fstate, world, space, goa
     within 3%.
 
     ``csr`` is the roadmap's adjacency (``build_csr`` of its vertices and edges), which the caller keeps while
-    the roadmap does not grow: statuses are read live, so one adjacency serves every search.
+    the roadmap does not grow: statuses are read live, so one adjacency serves every search. The searches of one
+    call share their heuristic (``astar_csr``'s Adaptive A*): between them checks only drop edges and vertices, so
+    each search starts from what the ones before learned of the distances to the goal and finds a shortest path
+    all the same (the same path wherever the shortest is unique).
 
     Returns the valid path's vertex indices (and marks the planner solved), or an empty array after
     rebuilding the components when start and goal turn out to be disconnected, or an empty array
@@ -362,15 +385,16 @@ def lazy_resolve(store, edges, csr, uf, vstat, istate, fstate, world, space, goa
     """
     X = store.X
     eu, ev, ew, es = edges
+    h = np.full(csr[0].shape[0] - 1, -1.0)  # the searches' heuristic, carried from one to the next (Adaptive A*)
     rounds = 0
     while True:
         if rounds >= max_rounds:
             return np.empty(0, dtype=np.int64)
         rounds += 1
-        # the flags as np.bool_ values, as PRM passes them from Python: a constant (or an omitted default) would
-        # compile astar_csr a second time
+        # the flags as np.bool_ values, as PRM passes them from Python: a constant would compile astar_csr a
+        # second time
         verts, eds = astar_csr(X, csr, ew, es, vstat, istate[slots.I_QS], istate[slots.I_QG], space, np.bool_(False),
-                               np.bool_(True))
+                               np.bool_(True), h)
         if verts.shape[0] == 0:
             rebuild_components(store, edges, uf, vstat, istate, goal, space)
             refresh_anchor(uf, istate, fstate)
