@@ -88,3 +88,33 @@ def test_bad_flags_are_refused_before_any_work(tmp_path, capsys, flags, named):
         bench.main([*flags, "--out", str(tmp_path / "o")])
     assert exc.value.code == 2 and named in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_timed_runs_pay_their_query_s_field_not_the_warm_up_s():
+    # the untimed warm-up's field carries a process's first pass (tens of ms): a timed run must not be charged it
+    from learning import evaluation as E
+    from learning.models.shipped import SHIPPED_ROUTE
+
+    protocol = E.Protocol()
+    queries = E.generated_queries(["forest"], protocol.size, 1, 0)
+    context = E.RunContext(protocol)
+    tasks = [t for t in C.clock_tasks(queries, protocol, str(SHIPPED_ROUTE), {}, 2) if t.sampler_label == C.ROUTE]
+    runs = C.run_clock(tasks, context)
+    assert len(runs) == 2 and all(r.solved for r in runs)
+    # the timed runs computed their query's field once (the first seed) and reused it once (the second)
+    assert (context.fields.misses, context.fields.hits) == (1, 1)
+
+
+def test_the_models_forget_their_encoders_kept_maps():
+    from learning.samplers.registry import ModelCache
+
+    class Keeps:
+        forgot = 0
+
+        def clear_map_cache(self):
+            self.forgot += 1
+
+    models = ModelCache()
+    models.routes.update({"a": Keeps(), "b": object()})  # an encoder that keeps no maps has nothing to forget
+    models.forget_maps()
+    assert models.routes["a"].forgot == 1

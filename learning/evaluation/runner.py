@@ -87,6 +87,15 @@ class RunContext:
         """The problem of ``query`` under the protocol, from ``problems`` where it was built recently."""
         return self.problems.get(query, self.protocol, self.scenarios)
 
+    def forget_queries(self) -> None:
+        """Forget every query's field and what the route encoders keep of each map (the models stay loaded).
+
+        After an untimed warm-up: no timed run then reuses the warm-up's field, which carries the one-off cost of a
+        process's first pass (tens of milliseconds), nor finds its map's parts kept.
+        """
+        self.fields = FieldCache(self.fields.max_bytes)
+        self.models.forget_maps()
+
 
 def run_one(task: Task, context: RunContext) -> Run:
     """Execute one run (a top-level function so workers can receive it) under ``context``'s protocol."""

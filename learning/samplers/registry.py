@@ -306,6 +306,15 @@ class ModelCache:
                                                                                               **kwargs))
         return self.policies[key]
 
+    def forget_maps(self) -> None:
+        """Have every route encoder forget the maps' parts it keeps (``RouteVIN.clear_map_cache``; an encoder that
+        keeps none has nothing to forget): each map's next query pays its whole pass, as a first query does.
+        """
+        for net in self.routes.values():
+            forget = getattr(net, "clear_map_cache", None)
+            if forget is not None:
+                forget()
+
     def user(self, spec: str) -> Sampler:
         """The user's sampler of ``spec`` (:func:`user_sampler`), built on first use."""
         if spec not in self.users:
