@@ -139,3 +139,45 @@ def test_the_runner_runs_the_encoder_once_per_query_across_seeds(monkeypatch, ba
         kept = context.fields.get(net, p.world.obstacles, p.world.cell_of(p.goal), net.symmetries)
         assert kept.reused and all(r.wall_time >= kept.seconds for r in three)
     assert len(pickle.loads(pickle.dumps(context)).fields) == 0  # each worker fills its own
+
+
+def test_a_field_s_seconds_leave_numba_s_compiling_out(net, monkeypatch):
+    import time
+
+    import learning.samplers.route as route
+
+    p = _problems(1)[0]
+    FieldCache().get(net, p.world.obstacles, p.world.cell_of(p.goal), 1)  # its kernels compiled, for real, first
+    compiled = [0.0]  # what numba has compiled so far, as the patched clock reads it
+    monkeypatch.setattr(route, "compile_seconds", lambda: compiled[0])
+    real = net.predict
+
+    def first_call(*args, **kwargs):  # a kernel's first call: 0.2 s of compiling, then the pass
+        time.sleep(0.2)
+        compiled[0] += 0.2
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(net, "predict", first_call)
+    out = FieldCache().get(net, p.world.obstacles, p.world.cell_of(p.goal), 1)
+    assert not out.reused and 0 < out.seconds < 0.15
+
+
+def test_a_run_s_time_leaves_numba_s_compiling_out_and_records_it(monkeypatch):
+    import time
+
+    from learning.evaluation import runner
+
+    ticks = iter([0.0, 0.2])
+
+    def compile_seconds():  # 0.2 s of compiling during the run (slept at its end, so the run's clock sees it)
+        t = next(ticks)
+        if t:
+            time.sleep(t)
+        return t
+
+    q = E.generated_queries(["forest"], 64, 1, 0)[0]
+    task, context = E.Task(q, "RRT", E.SamplerSpec.of("uniform"), 0), E.RunContext(E.Protocol())
+    E.run_one(task, context)  # its kernels compiled, for real, first
+    monkeypatch.setattr(runner, "compile_seconds", compile_seconds)
+    run = E.run_one(task, context)
+    assert run.solved and run.compile_time == pytest.approx(0.2) and 0 < run.wall_time < 0.15

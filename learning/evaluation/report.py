@@ -349,11 +349,15 @@ def _which_planner_section(results) -> str:
 def _clock_note(results) -> str:
     loads = "; ".join(f"{what}: {seconds * 1e3:.0f} ms"
                       for what, seconds in sorted(results.comparison.models.load_seconds.items()))
+    compiling = [r.compile_time for r in results.runs + results.pool if r.compile_time > 0]
+    compiled, count = sum(compiling), len(compiling)
     return ("RRT on the test split: median wall time per query in ms, from the planner's start to its first "
             "solution, the sampler's own work for the query included (the route encoder's pass, the exact "
             "reference's and the expert's grid search, the policy's set-up); the fastest sampler of each set in "
             "bold, the privileged expert aside. An unsolved run counts with the time it ran. Loading a model is "
             "paid once per process, not per query, and is left out" + (f" ({loads})" if loads else "")
+            + "; so is numba's compiling, a kernel's first call in a process (as time limits leave it out)"
+            + (f": {compiled:.1f} s over {count} runs" if count else ": none in these runs")
             + f". All runs share one machine, {results.processes} process(es) of one thread each.")
 
 

@@ -13,6 +13,7 @@ from learning.evaluation.roster import Task
 from learning.samplers.registry import USER, ModelCache
 from learning.samplers.route import FieldCache, RouteSampler
 from planners import Problem
+from planners.base.planner import compile_seconds
 from planners.base.registry import planner_class
 from planners.base.samplers import draw_classical_in_loops
 from planners.tools.benchmark import Run
@@ -110,14 +111,17 @@ def run_one(task: Task, context: RunContext) -> Run:
             sampler.prefill(batch, batch=True)
     # the classical samplers draw in the planners' compiled loops, as the learned ones do (the same runs, sooner)
     draw_classical_in_loops(problem)
-    t0 = time.perf_counter()  # wall time includes binding the sampler (the policy's per-map setup)
+    # wall time includes binding the sampler (the policy's per-map setup) and leaves out numba's compiling (a kernel's
+    # first call in a process, paid once as loading a model is; time limits leave it out too), which the run records
+    c0, t0 = compile_seconds(), time.perf_counter()
     # iterations to the first solution: anytime planners stop there too (Protocol.planner)
     planner, cap = protocol.planner(task.planner, problem, sampler, task.seed)
     r, progress = protocol.solve(planner, cap, task.query)
     answered = planner.problem  # the problem the run answered (a roadmap's later query: not the one it was built for)
     bound = answered.iteration_lower_bound(protocol.step)  # None where its shortest path is unknown: -1 in a Run
     # and the encoder's time for this query's field where it was computed before (kept across seeds, batched)
-    wall = time.perf_counter() - t0 + float(getattr(planner.sampler, "reused_seconds", 0.0))
+    compiled = compile_seconds() - c0
+    wall = time.perf_counter() - t0 - compiled + float(getattr(planner.sampler, "reused_seconds", 0.0))
     its = r.first_solution_iteration if r.solved else r.iterations
     checks = r.collision_checks
     if not planner_class(task.planner).own_sampler:  # OB-PRM counts its sampler's own checks; others do not
@@ -128,7 +132,7 @@ def run_one(task: Task, context: RunContext) -> Run:
                collision_checks=checks, wall_time=wall, us_per_iteration=wall / max(r.iterations, 1) * 1e6,
                path_cost=r.cost if r.solved else math.inf,
                forward_passes=int(getattr(planner.sampler, "forward_passes", 0)), vertices=int(r.num_vertices),
-               sampler_spec=task.sampler.to_json(), progress=progress)
+               sampler_spec=task.sampler.to_json(), progress=progress, compile_time=compiled)
 
 
 def _batch(sampler: RouteSampler, task: Task, problem: Problem, context: RunContext) -> list[Problem]:

@@ -46,13 +46,14 @@ class Run:
     lower_bound: int  # ``Problem.iteration_lower_bound``, -1 when unknown
     candidates: int  # samples drawn (a planner may draw several per iteration)
     collision_checks: int
-    wall_time: float  # seconds: the solve (benchmarks), or the solve and binding the sampler (evaluation)
+    wall_time: float  # seconds: the solve (benchmarks), or the bind and the solve less compiling (evaluation)
     us_per_iteration: float
     path_cost: float  # inf when unsolved
     forward_passes: int  # a learned sampler's network evaluations
     vertices: int
     sampler_spec: str = ""  # the sampler's name and parameters as JSON (evaluation runs), "" where not recorded
     progress: str = ""  # an anytime run's best cost as it fell: JSON ``[[time, iterations, cost], ...]`` or ""
+    compile_time: float = 0.0  # seconds numba spent compiling (or loading cached code) in the run, not in wall_time
 
 
 #: Per-run properties of the OMPL logs: (OMPL property, type, ``Run`` field).
