@@ -416,7 +416,7 @@ def _wait_for_runs(out: Path, n: int, proc: subprocess.Popen, limit: float = 240
 
 
 def _csv_without_times(path: Path) -> list[dict]:
-    return [{k: v for k, v in r.items() if k not in ("wall_time", "us_per_iteration")}
+    return [{k: v for k, v in r.items() if k not in ("wall_time", "us_per_iteration", "compile_time")}
             for r in csv.DictReader(path.open())]
 
 

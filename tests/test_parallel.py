@@ -42,7 +42,7 @@ def _runs(runs) -> list[dict]:
     out = []
     for r in runs:
         d = asdict(r)
-        d.pop("wall_time"), d.pop("us_per_iteration")
+        d.pop("wall_time"), d.pop("us_per_iteration"), d.pop("compile_time")
         out.append(d)
     return out
 
