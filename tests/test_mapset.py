@@ -255,6 +255,9 @@ def test_open_refuses_what_is_not_a_map_set(tmp_path):
         MapSet.open(tmp_path / "missing")
     with pytest.raises(InputError, match="unknown map families"):
         MapSet.open("generated:forests")
+    # one map file is not a set: the message says how it is read instead
+    with pytest.raises(InputError, match="is one map file, read by itself"):
+        MapSet.open(str(ROS / "maze" / "map.yaml"))
 
 
 def test_mixed_map_set_draws_by_weight(tmp_path):

@@ -221,7 +221,9 @@ class MapSet:
             return FileMapSet(path, **kwargs)
         raise InputError(f"map set {text!r}: expected a folder of maps, a manifest .json, "
                          f"'generated[:FAMILIES[@SIZE]]', 'shifted[:FAMILIES]' or 'movingai[:DIR]'"
-                         + ("" if path.exists() else f"; {text!r} does not exist"))
+                         + (f"; {text!r} does not exist" if not path.exists() else
+                            f"; {text!r} is one map file, read by itself (read_map, or plan.py's map argument), not "
+                            "as a map set" if path.is_file() else ""))
 
     # --- the interface -------------------------------------------------------------------------
 
