@@ -144,12 +144,12 @@ def test_the_runner_runs_the_encoder_once_per_query_across_seeds(monkeypatch, ba
 def test_a_field_s_seconds_leave_numba_s_compiling_out(net, monkeypatch):
     import time
 
-    import learning.samplers.route as route
+    import planners.base.planner as planner  # the clock that work_clock reads, patched
 
     p = _problems(1)[0]
     FieldCache().get(net, p.world.obstacles, p.world.cell_of(p.goal), 1)  # its kernels compiled, for real, first
     compiled = [0.0]  # what numba has compiled so far, as the patched clock reads it
-    monkeypatch.setattr(route, "compile_seconds", lambda: compiled[0])
+    monkeypatch.setattr(planner, "compile_seconds", lambda: compiled[0])
     real = net.predict
 
     def first_call(*args, **kwargs):  # a kernel's first call: 0.2 s of compiling, then the pass

@@ -23,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-import time
 from collections import OrderedDict
 from collections.abc import Sequence
 from typing import NamedTuple
@@ -38,7 +37,7 @@ from learning.models.shipped import SHIPPED_ROUTE
 from learning.models.threads import planning_thread_count
 from planners import OccupancyGrid, Problem, SamplerBase
 from planners.base.fileio import InputError, short_repr
-from planners.base.planner import Planner, compile_seconds
+from planners.base.planner import Planner, work_clock
 from planners.base.samplers import check_sampler_params
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, last_in_sight, lowest_vertex_cell, walk_path
@@ -233,15 +232,6 @@ class CachedField(NamedTuple):
     field: np.ndarray
     seconds: float
     reused: bool
-
-
-def work_clock() -> float:
-    """Seconds on this thread's clock without numba's compiling (``planners.base.planner.compile_seconds``).
-
-    A field's time is the work of its passes: a kernel compiled (or loaded from the cache) on its first call is paid
-    once per process, as loading the model is, and time limits leave it out too.
-    """
-    return time.perf_counter() - compile_seconds()
 
 
 class FieldCache:

@@ -65,8 +65,10 @@ class _CompileTimer(_nb_event.Listener):
 _nb_event.register("numba:compiler_lock", _CompileTimer())
 
 
-def _work_clock() -> float:
-    """Seconds on this thread's clock that leaves numba compilation out (time limits run on it)."""
+def work_clock() -> float:
+    """Seconds on this thread's clock that leaves numba compilation out (time limits, and the evaluation's times of
+    a run and of a route field, run on it).
+    """
     return time.perf_counter() - compile_seconds()
 
 
@@ -393,7 +395,7 @@ class Planner(abc.ABC):
             h for h in (getattr(self.problem.world, "set_deadline", None), getattr(self.sampler, "set_deadline", None))
             if h is not None)
         for set_deadline in hooks:
-            set_deadline(t0 - c0 + time_limit, _work_clock)
+            set_deadline(t0 - c0 + time_limit, work_clock)
         self._draw_cut = False
         try:
             while True:
