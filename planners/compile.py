@@ -112,9 +112,11 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def job_groups(todo: list[tuple[str, str, str]]) -> list[list[tuple[str, str, str]]]:
-    """``todo`` in groups of jobs that share compiled kernels (one world family and metric), in ``todo``'s order."""
-    groups: dict[tuple[str, str], list[tuple[str, str, str]]] = {}
+def job_groups(todo: list[tuple[str, ...]]) -> list[list[tuple[str, ...]]]:
+    """``todo`` in groups of jobs that share compiled kernels (one world family and metric, the jobs' second and third
+    entries), in ``todo``'s order.
+    """
+    groups: dict[tuple[str, str], list[tuple[str, ...]]] = {}
     for job in todo:
         groups.setdefault((FAMILY[job[1]], job[2]), []).append(job)
     return list(groups.values())
@@ -155,16 +157,22 @@ def _quiet_worker() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the parent, which stops the workers
 
 
-def run_jobs(todo: list[tuple[str, str, str]], workers: int) -> Iterator[tuple[tuple[str, str, str], float | None,
-                                                                            list[tuple[str, str, str]]]]:
+def run_jobs(todo: list[tuple[str, ...]], workers: int,
+             compile: Callable[..., float | None] | None = None) -> Iterator[tuple[tuple[str, ...], float | None,
+                                                                                  list[tuple[str, ...]]]]:
     """Compile ``todo`` in ``workers`` processes (``JobQueue``'s order), yielding ``(job, seconds, running)`` as each
     job ends, ``running`` the jobs still under way (1 worker: in this process, in ``todo``'s order, ``running`` the
     next job). A job that fails, or an interrupt, stops the workers (what they compiled stays in the cache) and
     raises.
+
+    ``compile`` runs one job, ``compile(*job)`` (default ``compile_one``: jobs of (planner, world kind, metric); a
+    module-level function, so a worker process can receive it); the world kind and metric come second and third,
+    as they group the jobs (``job_groups``).
     """
+    compile = compile_one if compile is None else compile
     if workers <= 1:
         for i, job in enumerate(todo):
-            yield job, compile_one(*job), todo[i + 1:i + 2]
+            yield job, compile(*job), todo[i + 1:i + 2]
         return
     jobs = JobQueue(job_groups(todo))
     context = multiprocessing.get_context("spawn")  # a fresh interpreter: nothing of this process's state is copied
@@ -175,7 +183,7 @@ def run_jobs(todo: list[tuple[str, str, str]], workers: int) -> Iterator[tuple[t
 
     def submit(lane: int, place: Place, job: tuple[str, str, str]) -> None:
         running[lane] = job
-        pools[lane].apply_async(compile_one, job,
+        pools[lane].apply_async(compile, job,
                                 callback=lambda s, a=(lane, place, job): ended.put((*a, s, None)),
                                 error_callback=lambda e, a=(lane, place, job): ended.put((*a, None, e)))
 
@@ -222,29 +230,44 @@ def compile_one(planner: str, world: str, metric: str) -> float | None:
     return time.perf_counter() - t0
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Command line entry point."""
+def command_parser(prog: str, doc: str) -> argparse.ArgumentParser:
+    """A compile command's parser with the options every compile command takes (``--planners``, ``--list``,
+    ``--no-progress``, ``--jobs``); ``doc``'s first line describes it.
+    """
     names = list(planner_names())
-    ap = argparse.ArgumentParser(prog="python -m planners.compile", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog=prog, description=doc.split("\n")[0])
     ap.add_argument("--planners", nargs="+", default=names, metavar="NAME", help=f"default: all ({', '.join(names)})")
-    ap.add_argument("--worlds", nargs="+", default=None, metavar="KIND",
-                    help=f"default: all whose extras are installed ({', '.join(WORLDS)})")
-    ap.add_argument("--metrics", nargs="+", default=None, metavar="METRIC",
-                    help="default: each world's own (grid, shapes: euclidean; rigid: cossin, se3)")
     ap.add_argument("--list", action="store_true", help="print what would be compiled and the cache folder, then exit")
     ap.add_argument("--no-progress", action="store_true", help="no progress bar (one line per job instead)")
     ap.add_argument("--jobs", type=int, default=None, metavar="N",
                     help="worker processes (default: one per group of jobs that share kernels, at most one per CPU "
                          "this process may use; 1: in this process)")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def refusal(args: argparse.Namespace, values: dict[str, tuple[list[str], list[str]]]) -> str | None:
+    """Why a compile command's ``args`` are refused (``--jobs`` below 1, ``--planners`` or an option of ``values``,
+    ``{flag: (given, allowed)}``, naming what is not allowed), or None.
+    """
     if args.jobs is not None and args.jobs < 1:
-        print(f"--jobs: must be at least 1, got {args.jobs}", file=sys.stderr)
+        return f"--jobs: must be at least 1, got {args.jobs}"
+    for label, (given, allowed) in {"--planners": (args.planners, list(planner_names())), **values}.items():
+        if bad := [v for v in given if v not in allowed]:
+            return f"{label}: unknown value {bad[0]!r}; expected one of {', '.join(allowed)}"
+    return None
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line entry point."""
+    ap = command_parser("python -m planners.compile", __doc__)
+    ap.add_argument("--worlds", nargs="+", default=None, metavar="KIND",
+                    help=f"default: all whose extras are installed ({', '.join(WORLDS)})")
+    ap.add_argument("--metrics", nargs="+", default=None, metavar="METRIC",
+                    help="default: each world's own (grid, shapes: euclidean; rigid: cossin, se3)")
+    args = ap.parse_args(argv)
+    if why := refusal(args, {"--worlds": (args.worlds or [], list(WORLDS))}):
+        print(why, file=sys.stderr)
         return 2
-    for label, given, allowed in (("--planners", args.planners, names), ("--worlds", args.worlds or [], list(WORLDS))):
-        bad = [v for v in given if v not in allowed]
-        if bad:
-            print(f"{label}: unknown value {bad[0]!r}; expected one of {', '.join(allowed)}", file=sys.stderr)
-            return 2
     missing = [w for w in NEEDS if not NEEDS[w][0]()]
     if args.worlds is None:
         args.worlds = [w for w in WORLDS if w not in missing]
@@ -263,30 +286,39 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError as e:
             print(f"--metrics: {m!r} does not fit the {w} world ({e})", file=sys.stderr)
             return 2
+    return run_command(todo, args.jobs, list_only=args.list, no_progress=args.no_progress)
+
+
+def run_command(todo: list[tuple[str, ...]], jobs: int | None, *, list_only: bool = False, no_progress: bool = False,
+                compile: Callable[..., float | None] | None = None, what: str = "planner/world/metric") -> int:
+    """What a compile command does once its arguments are checked: say where the cache is, then list ``todo``
+    (``list_only``) or compile it (``compile_all``, in ``jobs`` processes; None: one a group of jobs that share
+    kernels, at most one a CPU) and say how long it took; the exit status (130 when interrupted).
+    """
     print(f"compiled kernels are cached in {cache.cache_dir()}", file=sys.stderr)
-    if args.list:
+    if list_only:
         for job in todo:
             print(" ".join(job))
         return 0
     cache.set_compile_notice(False)  # the progress bar says it
     # by default one process a group (so that nothing a group shares compiles twice), at most one a CPU
-    workers = min(default_jobs(), len(job_groups(todo))) if args.jobs is None else min(args.jobs, len(todo))
+    workers = min(default_jobs(), len(job_groups(todo))) if jobs is None else min(jobs, len(todo))
     t0 = time.perf_counter()
     try:
-        _compile_all(todo, workers, args.no_progress)
+        compile_all(todo, workers, no_progress, compile)
     except KeyboardInterrupt:
         print("interrupted: what compiled so far stays in the cache", file=sys.stderr)
         return 130
     processes = f" ({workers} processes)" if workers > 1 else ""
-    print(f"compiled {len(todo)} planner/world/metric combinations in {time.perf_counter() - t0:.0f} s{processes}",
-          file=sys.stderr)
+    print(f"compiled {len(todo)} {what} combinations in {time.perf_counter() - t0:.0f} s{processes}", file=sys.stderr)
     return 0
 
 
-def _compile_all(todo: list[tuple[str, str, str]], workers: int, no_progress: bool) -> None:
+def compile_all(todo: list[tuple[str, ...]], workers: int, no_progress: bool,
+                compile: Callable[..., float | None] | None = None) -> None:
     """``run_jobs`` with a progress bar, or one line per job (``no_progress``)."""
     if no_progress:
-        for i, (job, seconds, _) in enumerate(run_jobs(todo, workers)):
+        for i, (job, seconds, _) in enumerate(run_jobs(todo, workers, compile)):
             took = "does not run there, skipped" if seconds is None else f"{seconds:.1f} s"
             print(f"[{i + 1}/{len(todo)}] {' '.join(job)}: {took}", file=sys.stderr, flush=True)
         return
@@ -294,7 +326,7 @@ def _compile_all(todo: list[tuple[str, str, str]], workers: int, no_progress: bo
 
     with tqdm(total=len(todo), desc="compiling kernels", unit="job", file=sys.stderr) as bar:
         bar.set_postfix_str(f"{workers} processes" if workers > 1 else " ".join(todo[0]) if todo else "")
-        for _, _, running in run_jobs(todo, workers):
+        for _, _, running in run_jobs(todo, workers, compile):
             bar.set_postfix_str("; ".join(" ".join(j) for j in running))
             bar.update(1)
 

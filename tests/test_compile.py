@@ -172,14 +172,19 @@ def test_the_typed_grid_check_agrees_with_the_run_time_dispatch(xy):
     assert out[0, 0] == out[1, 0]
 
 
-def test_the_compile_command_checks_its_arguments_first():
+@pytest.mark.parametrize("command, args, what", [
+    ("planners.compile", ["--worlds", "cube"], "--worlds: unknown value 'cube'"),
+    ("planners.compile", ["--planners", "RRR"], "--planners: unknown value 'RRR'"),
+    ("planners.compile", ["--worlds", "grid", "--metrics", "se3"], "--metrics: 'se3' does not fit the grid world"),
+    ("planners.compile", ["--jobs", "0"], "--jobs: must be at least 1, got 0"),
+    ("learning.compile", ["--samplers", "uniform"], "--samplers: unknown value 'uniform'"),
+    ("learning.compile", ["--planners", "RRR"], "--planners: unknown value 'RRR'"),
+    ("learning.compile", ["--jobs", "0"], "--jobs: must be at least 1, got 0"),
+])
+def test_the_compile_commands_check_their_arguments_first(command, args, what):
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    for args, what in ((["--worlds", "cube"], "--worlds: unknown value 'cube'"),
-                       (["--planners", "RRR"], "--planners: unknown value 'RRR'"),
-                       (["--worlds", "grid", "--metrics", "se3"], "--metrics: 'se3' does not fit the grid world"),
-                       (["--jobs", "0"], "--jobs: must be at least 1, got 0")):
-        out = subprocess.run([sys.executable, "-m", "planners.compile", *args], env=env, capture_output=True, text=True)
-        assert out.returncode == 2 and what in out.stderr, out.stderr
+    out = subprocess.run([sys.executable, "-m", command, *args], env=env, capture_output=True, text=True)
+    assert out.returncode == 2 and what in out.stderr, out.stderr
 
 
 def test_the_compile_command_lists_its_jobs_and_the_folder():
@@ -282,3 +287,28 @@ def test_rrtstar_reusing_what_rrt_compiled_gives_the_same_results(tmp_path):
     alone = run(tmp_path / "alone", "RRTstar")
     assert run(tmp_path / "shared", "RRT", "RRTstar") == alone
     assert run(tmp_path / "shared", "RRTstar") == alone
+
+
+def test_the_learned_samplers_compile_command_lists_each_sampler_on_its_worlds():
+    from planners.compile import mesh_installed
+
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, "-m", "learning.compile", "--list", "--samplers", "route", "rigid_route",
+                          "--planners", "RRT"], env=env, capture_output=True, text=True, check=True)
+    meshes = ["RRT mesh cossin rigid_route", "RRT mesh se3 rigid_route"] if mesh_installed() else []
+    assert out.stdout.split("\n")[:-1] == ["RRT grid euclidean route", "RRT rigid cossin rigid_route",
+                                           "RRT rigid se3 rigid_route", *meshes]
+    assert "compiled kernels are cached in" in out.stderr
+
+
+def test_a_learned_sampler_compiled_ahead_loads_from_the_cache_in_a_later_process():
+    from learning.compile import compile_sampler
+
+    assert compile_sampler("RRT", "rigid", "cossin", "route") is None  # a 2-D sampler refuses the rigid body: skipped
+    assert compile_sampler("RRT", "grid", "euclidean", "follower") > 0
+    env = dict(os.environ, PYTHONPATH=str(ROOT), SAMPLERGYM_COMPILE_NOTICE="0")
+    later = ("from learning.compile import compile_sampler; from planners.base.planner import compile_seconds; "
+             "compile_sampler('RRT', 'grid', 'euclidean', 'follower'); print(compile_seconds())")
+    out = subprocess.run([sys.executable, "-c", later], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert float(out.stdout) < 0.5  # loaded from the cache, not compiled again

@@ -1,0 +1,86 @@
+"""Compile the learned samplers' kernels into the cache ahead of use: ``python -m learning.compile``.
+
+``python -m planners.compile`` compiles every planner's own kernels; a learned sampler's compiled parts (the route
+field's draw inside each planner's loop, the encoder's Dijkstra and cell head, the policy's network, the 6-DoF
+route's search) compile at their first use, without a notice: after ``planners.compile`` alone, a first
+``plan.py --sampler route`` still waits about 20 s for them on a 2-core machine. This runs, for each learned sampler
+and each planner, one short seeded solve on ``planners.compile``'s small problems (the 2-D samplers on the
+occupancy grid, the 6-DoF ones on the rigid body among boxes and, with the ``mesh`` extra, among triangle meshes), in
+worker processes as ``planners.compile`` runs its jobs, into the same cache folder; the planners' own kernels compile
+on the way where they were not compiled before.
+
+    python -m learning.compile                      # every learned sampler with every planner, a progress bar
+    python -m learning.compile --samplers route route_lazy --planners RRT RRTConnect
+    python -m learning.compile --list               # what would be compiled, and where
+    python -m learning.compile --jobs 1             # in this process only
+
+A combination that the sampler or the planner refuses is skipped.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+from planners.base.fileio import InputError
+from planners.base.registry import make_planner
+from planners.compile import ITERATIONS, NEEDS, WORLDS, command_parser, refusal, run_command
+
+#: The learned samplers (and their ablations and references) of the 2-D maps, compiled on the occupancy grid.
+GRID_SAMPLERS = ("route", "route_lazy", "route_ablation", "follower", "exact_route", "expert", "policy",
+                 "policy_ablation")
+#: The 6-DoF ones, compiled on the rigid body among boxes and among meshes (the world's default metrics).
+RIGID_SAMPLERS = ("rigid_route", "rigid_route_ablation", "rigid_workspace_route")
+#: Sampler -> the world kinds it is compiled on.
+SAMPLER_WORLDS = {**{s: ("grid",) for s in GRID_SAMPLERS}, **{s: ("rigid", "mesh") for s in RIGID_SAMPLERS}}
+
+
+def jobs(samplers: list[str], planners: list[str], installed: list[str]) -> list[tuple[str, str, str, str]]:
+    """(planner, world kind, metric, sampler) jobs: each sampler with each planner on each of its world kinds
+    among ``installed``, at each of the world's default metrics.
+    """
+    out = []
+    for s in samplers:
+        for w in SAMPLER_WORLDS[s]:
+            if w in installed:
+                out += [(p, w, m, s) for m in WORLDS[w][1] for p in planners]
+    return out
+
+
+def compile_sampler(planner: str, world: str, metric: str, sampler: str) -> float | None:
+    """One short seeded solve of ``planner`` with ``sampler`` on ``world``'s small problem, so that what the pair runs
+    compiles into the cache; the seconds it took, or None where the sampler or the planner refuses the problem.
+    """
+    from learning.samplers.registry import make_sampler
+
+    t0 = time.perf_counter()
+    problem = WORLDS[world][0](metric)
+    try:
+        p = make_planner(planner, problem, sampler=make_sampler(sampler), seed=0)
+    except (InputError, ValueError):
+        return None
+    p.solve(max_iterations=ITERATIONS)
+    return time.perf_counter() - t0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line entry point."""
+    learned = list(SAMPLER_WORLDS)
+    ap = command_parser("python -m learning.compile", __doc__)
+    ap.add_argument("--samplers", nargs="+", default=learned, metavar="NAME",
+                    help=f"default: all ({', '.join(learned)})")
+    args = ap.parse_args(argv)
+    if why := refusal(args, {"--samplers": (args.samplers, learned)}):
+        print(why, file=sys.stderr)
+        return 2
+    installed = [w for w in WORLDS if w not in NEEDS or NEEDS[w][0]()]
+    for w in sorted({w for s in args.samplers for w in SAMPLER_WORLDS[s]} - set(installed)):
+        print(f"{w} worlds: not compiled, the {NEEDS[w][1]} extra is not installed "
+              f"(pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')", file=sys.stderr)
+    todo = jobs(args.samplers, args.planners, installed)
+    return run_command(todo, args.jobs, list_only=args.list, no_progress=args.no_progress, compile=compile_sampler,
+                       what="planner/world/metric/sampler")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
