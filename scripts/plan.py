@@ -410,6 +410,9 @@ def main(argv=None) -> int:
           f"set-up {t['sampler']:.3f} s (a route encoder's pass, a grid search; the first compiles its kernels) and "
           f"{t['plan']:.3f} s planning"
           f"{first_use}")
+    if compiled >= 1.0:  # a first use compiled kernels: they can be compiled once, ahead
+        print("                  (python -m planners.compile and python -m learning.compile compile the planners' and "
+              "the learned samplers' kernels once, ahead)")
     print(f"                  (and load {t_load:.3f} s, smooth {t['smooth']:.3f} s, figure {t['figure']:.3f} s, "
           f"gif {t['gif']:.3f} s)")
     if getattr(out.planner.sampler, "switched", False):  # a lazy route sampler ran its encoder inside the planning

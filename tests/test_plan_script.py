@@ -332,3 +332,14 @@ def test_binding_the_sampler_is_timed_apart_from_planning(map_png):
     assert out.result.solved
     assert set(out.timings) >= {"load", "sampler", "plan"}
     assert out.timings["sampler"] > 0 and out.planner.sampler.forward_passes == 1
+
+
+@pytest.mark.slow  # the planner's kernels compile from an empty cache (5 to 10 s)
+def test_a_first_use_that_compiles_says_how_to_compile_ahead(map_png, tmp_path):
+    hint = "python -m learning.compile compile the planners' and the learned samplers' kernels once, ahead"
+    args = (map_png, "--start", 5.5, 30.5, "--goal", 90.5, 40.5, "--headless", "--no-gif", "--planner", "rrt")
+    cold = run(*args, "--out", tmp_path / "a", env_extra={"NUMBA_CACHE_DIR": str(tmp_path / "cache")})
+    assert cold.returncode == 0 and hint in cold.stdout, cold.stdout + cold.stderr
+    warm = run(*args, "--out", tmp_path / "b", env_extra={"NUMBA_CACHE_DIR": str(tmp_path / "cache")})
+    assert warm.returncode == 0 and hint not in warm.stdout, warm.stdout + warm.stderr
+
