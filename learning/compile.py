@@ -24,7 +24,7 @@ import time
 
 from planners.base.fileio import InputError
 from planners.base.registry import make_planner
-from planners.compile import ITERATIONS, NEEDS, WORLDS, command_parser, refusal, run_command
+from planners.compile import ITERATIONS, WORLDS, command_parser, installed_worlds, refusal, run_command
 
 #: The learned samplers (and their ablations and references) of the 2-D maps, compiled on the occupancy grid.
 GRID_SAMPLERS = ("route", "route_lazy", "route_ablation", "follower", "exact_route", "expert", "policy",
@@ -73,11 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     if why := refusal(args, {"--samplers": (args.samplers, learned)}):
         print(why, file=sys.stderr)
         return 2
-    installed = [w for w in WORLDS if w not in NEEDS or NEEDS[w][0]()]
-    for w in sorted({w for s in args.samplers for w in SAMPLER_WORLDS[s]} - set(installed)):
-        print(f"{w} worlds: not compiled, the {NEEDS[w][1]} extra is not installed "
-              f"(pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')", file=sys.stderr)
-    todo = jobs(args.samplers, args.planners, installed)
+    todo = jobs(args.samplers, args.planners, installed_worlds(w for s in args.samplers for w in SAMPLER_WORLDS[s]))
     return run_command(todo, args.jobs, list_only=args.list, no_progress=args.no_progress, compile=compile_sampler,
                        what="planner/world/metric/sampler")
 

@@ -34,7 +34,7 @@ import queue
 import signal
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -179,9 +179,9 @@ def run_jobs(todo: list[tuple[str, ...]], workers: int,
     # one pool of one process a worker, so that a worker keeps what it compiled in memory for its group's next job
     pools = [context.Pool(1, initializer=_quiet_worker) for _ in range(min(workers, len(todo)))]
     ended: queue.SimpleQueue = queue.SimpleQueue()  # (lane, place, job, seconds, error), from the pools' threads
-    running: dict[int, tuple[str, str, str]] = {}
+    running: dict[int, tuple[str, ...]] = {}
 
-    def submit(lane: int, place: Place, job: tuple[str, str, str]) -> None:
+    def submit(lane: int, place: Place, job: tuple[str, ...]) -> None:
         running[lane] = job
         pools[lane].apply_async(compile, job,
                                 callback=lambda s, a=(lane, place, job): ended.put((*a, s, None)),
@@ -230,6 +230,17 @@ def compile_one(planner: str, world: str, metric: str) -> float | None:
     return time.perf_counter() - t0
 
 
+def installed_worlds(wanted: Iterable[str]) -> list[str]:
+    """The world kinds of ``wanted`` whose extras are installed, in ``WORLDS``' order; one line on stderr for each
+    one left out, naming the extra that brings it.
+    """
+    wanted = set(wanted)
+    for w in (w for w in NEEDS if w in wanted and not NEEDS[w][0]()):
+        print(f"{w} worlds: not compiled, the {NEEDS[w][1]} extra is not installed "
+              f"(pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')", file=sys.stderr)
+    return [w for w in WORLDS if w in wanted and (w not in NEEDS or NEEDS[w][0]())]
+
+
 def command_parser(prog: str, doc: str) -> argparse.ArgumentParser:
     """A compile command's parser with the options every compile command takes (``--planners``, ``--list``,
     ``--no-progress``, ``--jobs``); ``doc``'s first line describes it.
@@ -270,10 +281,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     missing = [w for w in NEEDS if not NEEDS[w][0]()]
     if args.worlds is None:
-        args.worlds = [w for w in WORLDS if w not in missing]
-        for w in missing:
-            print(f"{w} worlds: not compiled, the {NEEDS[w][1]} extra is not installed "
-                  f"(pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')", file=sys.stderr)
+        args.worlds = installed_worlds(WORLDS)
     elif absent := [w for w in args.worlds if w in missing]:
         w = absent[0]
         print(f"--worlds {w}: needs the {NEEDS[w][1]} extra (pip install -c constraints.txt -e '.[{NEEDS[w][1]}]')",

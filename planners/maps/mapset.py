@@ -219,11 +219,14 @@ class MapSet:
         path = Path(text)
         if path.is_dir() or path.suffix.lower() == ".json":
             return FileMapSet(path, **kwargs)
+        if not path.exists():
+            why = f"; {text!r} does not exist"
+        elif path.is_file():
+            why = f"; {text!r} is one map file, read by itself (read_map, or plan.py's map argument), not as a map set"
+        else:
+            why = ""
         raise InputError(f"map set {text!r}: expected a folder of maps, a manifest .json, "
-                         f"'generated[:FAMILIES[@SIZE]]', 'shifted[:FAMILIES]' or 'movingai[:DIR]'"
-                         + (f"; {text!r} does not exist" if not path.exists() else
-                            f"; {text!r} is one map file, read by itself (read_map, or plan.py's map argument), not "
-                            "as a map set" if path.is_file() else ""))
+                         f"'generated[:FAMILIES[@SIZE]]', 'shifted[:FAMILIES]' or 'movingai[:DIR]'{why}")
 
     # --- the interface -------------------------------------------------------------------------
 
