@@ -22,6 +22,7 @@ from learning.samplers.route import (
     SHIPPED,
     SHIPPED_SETTINGS,
     RouteSampler,
+    ranked_where_unreached,
     shipped_ablation,
     shipped_sampler,
     straight_field,
@@ -353,6 +354,23 @@ def test_cells_the_encoder_sees_no_route_from_follow_the_straight_line_behind_ev
     assert np.array_equal(straight_where_unreached(field[:, :2], straight[:, :2], 2.5e5), field[:, :2])
 
 
+@settings(max_examples=60, deadline=None)
+@given(h=st.integers(1, 12), w=st.integers(1, 12), seed=st.integers(0, 2**16), cut=st.floats(0.0, 1.0),
+       blocked=st.floats(0.0, 0.5), res=st.sampled_from([0.05, 1.0, 2.5]), step=st.sampled_from([1.0, 4.0]))
+def test_the_compiled_ranking_of_unreached_cells_is_the_straight_lines_bit_for_bit(h, w, seed, cut, blocked, res, step):
+    rng = np.random.default_rng(seed)
+    field = rng.random((h, w)) * 50
+    field[rng.random((h, w)) < cut] = 5e5 + rng.random() * 10  # cells the encoder sees no route from
+    field[rng.random((h, w)) < 0.1] = np.inf
+    walls = (rng.random((h, w)) < blocked).astype(np.uint8)
+    gx, gy = rng.random() * w, rng.random() * h
+    expected = straight_where_unreached(field, straight_field(walls, gx, gy, res, step), 2.5e5)
+    got = ranked_where_unreached(field, walls, gx, gy, res, step, 2.5e5)
+    assert np.array_equal(got, expected)
+    if not np.any(np.isfinite(field) & (field >= 2.5e5)):
+        assert got is field  # nothing to rank: the field itself, as the definition returns it
+
+
 def test_the_route_sampler_refuses_what_it_cannot_plan_on(shipped):
     with pytest.raises(InputError, match="OccupancyGrid"):
         RRT(Problem(GeometricWorld(10, 10, []), [1, 1], [9, 9]), step_size=4.0, sampler=shipped, seed=0)
@@ -655,6 +673,10 @@ def test_open_walls_refuses_a_map_not_in_the_comparison_and_prints_a_row_per_map
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| random")]
     assert len(rows) == 1 and rows[0].split("|")[2].strip() == "0/5"  # no door shut on an open map: one pass
     assert rows[0].split("|")[3] == rows[0].split("|")[4]  # so the same runs either way
+    assert all(float(cell) > 0 for cell in rows[0].split("|")[5:7])  # the field's time, one pass and two calls
+    with pytest.raises(SystemExit):
+        script.main(["--maps", "random-32-32-10", "--repeat", "0", "--movingai", str(movingai)])
+    assert "--repeat 0" in capsys.readouterr().err
 
 
 @settings(max_examples=40, deadline=None)

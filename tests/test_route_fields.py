@@ -10,6 +10,7 @@ import pytest
 import learning.evaluation as E
 from learning.models.field import FieldEncoder
 from learning.models.route_net import RouteNet, load_route_net
+from learning.models.route_vin import RouteVIN
 from learning.samplers.route import SHIPPED, FieldCache, RouteSampler, shipped_sampler
 from planners import RRT
 from planners.base.fileio import InputError
@@ -22,15 +23,32 @@ def net() -> RouteNet:
 
 
 def _count_passes(monkeypatch) -> list[int]:
-    """Patch ``FieldEncoder.predict_many`` (every encoder's) to record how many queries each call computes."""
+    """Patch ``FieldEncoder.predict_many`` and ``predict_reaching`` (every encoder's; ``RouteVIN``'s one pass) to
+    record how many queries each call computes (a ``predict_many`` inside a ``predict_reaching`` counted once).
+    """
     calls: list[int] = []
-    many = FieldEncoder.predict_many
+    many, reaching, vin_reaching = FieldEncoder.predict_many, FieldEncoder.predict_reaching, RouteVIN.predict_reaching
+    inside = []
 
     def counted(self, queries, *args, **kwargs):
-        calls.append(len(queries))
+        if not inside:
+            calls.append(len(queries))
         return many(self, queries, *args, **kwargs)
 
+    def counted_reaching(original):
+        def call(self, *args, **kwargs):
+            if not inside:
+                calls.append(1)
+            inside.append(1)
+            try:
+                return original(self, *args, **kwargs)
+            finally:
+                inside.pop()
+        return call
+
     monkeypatch.setattr(FieldEncoder, "predict_many", counted)
+    monkeypatch.setattr(FieldEncoder, "predict_reaching", counted_reaching(reaching))
+    monkeypatch.setattr(RouteVIN, "predict_reaching", counted_reaching(vin_reaching))
     return calls
 
 
@@ -136,7 +154,8 @@ def test_the_runner_runs_the_encoder_once_per_query_across_seeds(monkeypatch, ba
     net = context.models.route_net(str(SHIPPED))
     for q, three in zip(queries, (runs[:3], runs[3:]), strict=True):
         p = context.protocol.problem(q, context.scenarios)
-        kept = context.fields.get(net, p.world.obstacles, p.world.cell_of(p.goal), net.symmetries)
+        kept = context.fields.get(net, p.world.obstacles, p.world.cell_of(p.goal), net.symmetries,
+                                  start_cell=p.world.cell_of(p.start))
         assert kept.reused and all(r.wall_time >= kept.seconds for r in three)
     assert len(pickle.loads(pickle.dumps(context)).fields) == 0  # each worker fills its own
 

@@ -286,12 +286,19 @@ def test_where_the_learned_walls_shut_every_route_from_the_start_the_sampler_ran
         assert net.wall_cost is None
         opened = net.predict(grid.obstacles, grid.cell_of(beyond.goal))
     assert net.wall_cost == 32.0 and "wall_cost" not in net.__dict__  # back to the class's value
+    field, was_opened = net.predict_reaching(grid.obstacles, grid.cell_of(beyond.goal), grid.cell_of(beyond.start))
+    assert was_opened and np.array_equal(field, opened)  # in one pass: the second pass's field
     cache = FieldCache()
     s = RouteSampler(net, fields=cache).bind(beyond)
-    assert s.forward_passes == 2 and len(cache) == 2  # the walled and the open field are kept apart
+    assert s.forward_passes == 2 and len(cache) == 1  # one field for this start's query: the open one
     assert np.array_equal(s.field, opened) and s.field.max() < 1e3
     again = RouteSampler(net, fields=cache).bind(beyond)
-    assert again.forward_passes == 2 and cache.hits == 2 and np.array_equal(again.field, opened)
+    assert again.forward_passes == 2 and cache.hits == 1 and np.array_equal(again.field, opened)
+    assert again.reused_seconds > 0
+    filled = FieldCache()  # the walled field filled ahead (as on a GPU): the open one computed at the bind, kept apart
+    assert RouteSampler(net, fields=filled).prefill([beyond], batch=True) == 1
+    s = RouteSampler(net, fields=filled).bind(beyond)
+    assert s.forward_passes == 2 and len(filled) == 2 and np.array_equal(s.field, opened) and s.reused_seconds > 0
     s = RouteSampler(net).bind(near)  # the start is reached: one pass, the walls kept
     assert s.forward_passes == 1 and s.field[:, 10:].min() > s.field[:, :8].max()
     net.wall_cost = None
@@ -723,3 +730,69 @@ def test_the_cell_head_writes_into_the_array_given_and_refuses_one_that_does_not
     for bad in (np.empty((10, 13), np.float32), np.empty((10, 14)), np.empty((14, 10), np.float32).T):
         with pytest.raises(ValueError, match="out must be a C-contiguous"):
             cell_head_field(v, pre, *weights, 2, 4.0, 1e6, bad)
+
+
+@settings(max_examples=30, deadline=None)
+@given(h=st.integers(1, 9), w=st.integers(1, 9), block=st.sampled_from([1, 2, 3]), channels=st.integers(1, 6),
+       seed=st.integers(0, 2**16), unreached=st.floats(0.0, 0.5))
+def test_the_cell_head_at_one_cell_is_the_whole_heads_value_there(h, w, block, channels, seed, unreached):
+    from learning.models.cell_head import cell_head_at, cell_head_field
+
+    rng = np.random.default_rng(seed)
+    v = (rng.random((h, w)) * 20).astype(np.float32)
+    v[rng.random((h, w)) < unreached] = 1e6  # blocks the goal does not reach, beside reached ones
+    pre = rng.normal(size=(channels, h, w)).astype(np.float32)
+    weights = rng.normal(size=(channels, 8)), rng.normal(size=(block * block, channels)), rng.normal(size=block * block)
+    whole = cell_head_field(v, pre, *weights, block, 4.0, 1e6)
+    for cell in np.ndindex(whole.shape):
+        assert cell_head_at(v, pre, *weights, block, 4.0, 1e6, cell) == whole[cell]  # bit for bit
+    with pytest.raises(ValueError, match="outside"):
+        cell_head_at(v, pre, *weights, block, 4.0, 1e6, (h * block, 0))
+
+
+def _two_calls(net: RouteVIN, obstacles, goal, start):
+    """``FieldEncoder.predict_reaching``: ``predict``, and ``predict`` again inside ``open_walls`` where it shuts."""
+    from learning.models.field import FieldEncoder
+
+    return FieldEncoder.predict_reaching(net, obstacles, goal, start)
+
+
+@settings(max_examples=40, deadline=None)
+@given(h=st.integers(4, 36), w=st.integers(4, 36), density=st.sampled_from([0.0, 0.2, 0.35]),
+       seed=st.integers(0, 2**16), queries=st.lists(st.tuples(*[st.floats(0, 1)] * 4), min_size=1, max_size=3),
+       kept=st.sampled_from(["kept", "none", "strips"]), step_walls=st.booleans())
+def test_one_pass_that_checks_the_start_gives_the_two_passes_field_and_answer(h, w, density, seed, queries, kept,
+                                                                             step_walls):
+    torch.manual_seed(seed)
+    net = make_route_net("vin", block=2, channels=8, depth=2, step=2).eval()
+    net.wall_cost, net.step_walls = 1.2, step_walls  # many moves priced as walls: starts shut and open both
+    if kept == "none":
+        net.map_cache_bytes = 0  # every pass whole, into the kept buffers
+    elif kept == "strips":
+        net.map_cache_bytes, net.strip_blocks = 0, 8  # and in strips of rows
+    obstacles = np.random.default_rng(seed).random((h, w)) < density
+    for gr, gc, sr, sc in queries:  # later queries on the same map read its kept parts (where kept)
+        goal = (min(h - 1, int(gr * h)), min(w - 1, int(gc * w)))
+        start = (min(h - 1, int(sr * h)), min(w - 1, int(sc * w)))
+        obstacles[goal] = obstacles[start] = False
+        for _ in range(2):  # the same query again: the same goal's parts
+            field, opened = net.predict_reaching(obstacles, goal, start)
+            net.clear_map_cache()
+            expected, was_opened = _two_calls(net, obstacles, goal, start)
+            assert opened == was_opened and np.array_equal(field, expected)
+            assert opened == bool(net.predict(obstacles, goal)[start] >= 0.5 * net.unreached_steps)
+
+
+def test_the_shipped_encoder_in_one_pass_opens_the_walls_where_two_passes_would():
+    net = load_route_net(SHIPPED)
+    p = generate("rooms", 9, 32)  # a generated map whose start the learned walls shut
+    obstacles, goal, start = p.world.obstacles, p.world.cell_of(p.goal), p.world.cell_of(p.start)
+    field, opened = net.predict_reaching(obstacles, goal, start)
+    expected, was_opened = _two_calls(net, obstacles, goal, start)
+    assert opened and was_opened and np.array_equal(field, expected) and field[start] < 1e3
+    other = generate("rooms", 0, 32)
+    field, opened = net.predict_reaching(other.world.obstacles, other.world.cell_of(other.goal),
+                                         other.world.cell_of(other.start))
+    assert not opened and np.array_equal(field, net.predict(other.world.obstacles, other.world.cell_of(other.goal)))
+    with net.open_walls():  # without a learned wall rule there is nothing to open: the plain pass
+        assert net.predict_reaching(obstacles, goal, start)[1] is False

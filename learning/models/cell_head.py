@@ -63,6 +63,30 @@ def _cell_head(v, pre, w_rel, w_out, b_out, block, reach, unreached, dr, dc, out
 
 
 @nb.njit(cache=True)
+def _cell_head_at(v, pre, w_rel, w_out, b_out, block, reach, unreached, dr, dc, row, col):
+    # ``_cell_head``'s arithmetic, in its order, for the one cell (row, col) of the field
+    h, w = v.shape
+    r, c = row // block, col // block
+    j = (row % block) * block + col % block
+    zero = np.float32(0.0)
+    rel = np.empty(len(dr), dtype=np.float32)
+    for a in range(len(dr)):
+        rr, cc = r + dr[a], c + dc[a]
+        there = unreached
+        if 0 <= rr < h and 0 <= cc < w:
+            there = v[rr, cc]
+        d = there - v[r, c]
+        rel[a] = min(max(d, -reach), reach)
+    acc = b_out[j]
+    for k in range(pre.shape[0]):
+        hid = pre[k, r, c]
+        for a in range(len(dr)):
+            hid += w_rel[k, a] * rel[a]
+        acc += w_out[j, k] * max(hid, zero)
+    return v[r, c] + acc
+
+
+@nb.njit(cache=True)
 def _padded_free(cells, block, out):
     for i in range(block):
         for j in range(block):
@@ -120,3 +144,23 @@ def cell_head_field(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np
         raise ValueError(f"out must be a C-contiguous ({h * block}, {w * block}) float32 array, got {out.shape} "
                          f"{out.dtype}")
     return _cell_head(v, pre, w_rel, w_out, b_out, int(block), f32(reach), f32(unreached), _DR, _DC, out)
+
+
+def cell_head_at(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np.ndarray, b_out: np.ndarray,
+                 block: int, reach: float, unreached: float, cell: tuple[int, int]) -> float:
+    """``cell_head_field(...)[cell]`` alone: the cost-to-go of one cell, from its block's values and features.
+
+    The same arithmetic in the same order, so the same float32 value; it reads one block where the whole head reads
+    them all (``RouteVIN.predict_reaching`` asks it whether the field reaches the query's start before the whole head
+    runs). Arrays as ``cell_head_field`` takes them (float32, C-contiguous); ``cell``: (row, column) within
+    ``(h * block, w * block)``.
+    """
+    h, w = v.shape
+    row, col = int(cell[0]), int(cell[1])
+    if not (0 <= row < h * block and 0 <= col < w * block):
+        raise ValueError(f"cell {cell} is outside the {h * block} x {w * block} field")
+    f32 = np.float32
+    return float(_cell_head_at(np.ascontiguousarray(v, dtype=f32), np.ascontiguousarray(pre, dtype=f32),
+                               np.ascontiguousarray(w_rel, dtype=f32), np.ascontiguousarray(w_out, dtype=f32),
+                               np.ascontiguousarray(b_out, dtype=f32), int(block), f32(reach), f32(unreached),
+                               _DR, _DC, row, col))

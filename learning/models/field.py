@@ -203,9 +203,33 @@ class FieldEncoder:
                         # float64 sums, in the order the symmetries come (the first one taken as it is)
                         turned = unturn(field, k).astype(np.float64)
                         totals[i] = turned if totals[i] is None else totals[i] + turned
-        for total in totals:
-            total *= self.block / (self.step * symmetries)
-            side = max(total.shape)
-            if self.trained_side and side > self.trained_side:
-                total *= side / self.trained_side
-        return totals
+        return [self.in_steps(total, symmetries) for total in totals]
+
+    def in_steps(self, total: np.ndarray, symmetries: int = 1) -> np.ndarray:
+        """A pass's field in blocks (float64; over ``symmetries`` turns, their sum) as ``predict`` gives it: the mean,
+        in steps, rescaled past ``trained_side``. In place; returns ``total``.
+        """
+        total *= self.block / (self.step * symmetries)
+        side = max(total.shape)
+        if self.trained_side and side > self.trained_side:
+            total *= side / self.trained_side
+        return total
+
+    def shuts(self, field: np.ndarray, start_cell: tuple[int, int]) -> bool:
+        """Whether ``predict``'s ``field`` sees no route from ``start_cell`` (at least half ``unreached_steps``)."""
+        return self.unreached_steps is not None and bool(field[start_cell] >= 0.5 * self.unreached_steps)
+
+    def predict_reaching(self, obstacles: np.ndarray, goal_cell: tuple[int, int], start_cell: tuple[int, int],
+                         symmetries: int = 1, *, threads: int | None = None) -> tuple[np.ndarray, bool]:
+        """``predict``'s field, or the field without the encoder's learned wall rule (``open_walls``) where that rule
+        shuts every route from ``start_cell`` (``shuts``): (the field, whether it is the one without the rule).
+
+        What the route sampler asks for a query. Here two ``predict`` calls where the start is shut; an encoder may
+        compute both in one pass (``RouteVIN`` does: the same values).
+        """
+        field = self.predict(obstacles, goal_cell, symmetries, threads=threads)
+        opened = self.open_walls() if self.shuts(field, start_cell) else None
+        if opened is None:
+            return field, False
+        with opened:
+            return self.predict(obstacles, goal_cell, symmetries, threads=threads), True

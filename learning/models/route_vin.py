@@ -39,8 +39,9 @@ import numpy as np
 import torch
 from torch import nn
 
-from learning.models.cell_head import cell_head_field, padded_free_cells
-from learning.models.field import FieldEncoder, batch_of
+from learning.models.cell_head import cell_head_at, cell_head_field, padded_free_cells
+from learning.models.field import FieldEncoder, batch_of, route_input
+from learning.models.threads import planning_threads
 from planners.maps.gridsearch import MOVES, move_cost_field, padded_block_steps, work_array
 
 #: The moves' lengths in blocks (``MOVES``: the 8 moves of the block grid, the grid search's own order).
@@ -105,6 +106,25 @@ class MapParts(NamedTuple):
 
     def nbytes(self) -> int:
         return sum(t.element_size() * t.nelement() for t in (self.costs, self.hidden, self.steps))
+
+
+class Reach:
+    """A query's start, whose route a compiled pass checks before its cell head (``RouteVIN.predict_reaching``).
+
+    ``cell``: the start's (row, column) in the map's cells; ``limit``: the field's value there, in blocks, at or above
+    which the learned walls have shut every route from it (``FieldEncoder.shuts``, in blocks); ``opened``: set by the
+    pass where they had, and it searched again without them.
+    """
+
+    def __init__(self, cell: tuple[int, int], scale: float, limit: float) -> None:
+        self.cell, self.scale, self.limit = (int(cell[0]), int(cell[1])), scale, limit
+        self.opened = False
+
+    def shut(self, value: float) -> bool:
+        """Whether a start whose cell head gives ``value`` (blocks, float32) sees no route: as ``FieldEncoder.shuts``
+        reads ``predict``'s field (float64, in steps: the value times ``scale``).
+        """
+        return float(np.float64(value) * self.scale) >= self.limit
 
 
 class KeptMaps:
@@ -315,6 +335,27 @@ class RouteVIN(nn.Module, FieldEncoder):
             else:
                 self.wall_cost = kept
 
+    def predict_reaching(self, obstacles: np.ndarray, goal_cell: tuple[int, int], start_cell: tuple[int, int],
+                         symmetries: int = 1, *, threads: int | None = None) -> tuple[np.ndarray, bool]:
+        """``FieldEncoder.predict_reaching`` in one pass where the inference is compiled: the local network runs once
+        (or its map's kept parts serve), the search runs with the learned walls, the cell head is read at the start
+        alone, and where no route leaves it the search runs again without them; the whole cell head then runs once.
+        The same field and answer as the two ``predict`` calls (``compiled_field``'s ``reach``), without the first
+        pass's cell head and a second pass's set-up. Elsewhere (symmetries, a GPU, the torch pass) the two calls.
+        """
+        compiled = (type(symmetries) is int and symmetries == 1 and self.wall_cost is not None
+                    and self.compiled_inference and self.fixed_point == "dijkstra"
+                    and type(self).cell_field is RouteVIN.cell_field and next(self.parameters()).device.type == "cpu")
+        if not compiled:
+            return super().predict_reaching(obstacles, goal_cell, start_cell, symmetries, threads=threads)
+        self.check_size(obstacles.shape)
+        h, w = obstacles.shape
+        reach = Reach(start_cell, self.block / self.step, 0.5 * self.unreached_steps)
+        x = torch.from_numpy(batch_of([route_input(obstacles, goal_cell, self.block)]))
+        with planning_threads(threads), torch.inference_mode():
+            field = self.infer(x, reach)[0, :h, :w].numpy().astype(np.float64)
+        return self.in_steps(field), reach.opened
+
     def goal_and_walls(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """From ``route_input``'s channels: (the goal's block, the blocks with no free cell), (B, h, w) bool each."""
         cells = self.block * self.block
@@ -509,7 +550,8 @@ class RouteVIN(nn.Module, FieldEncoder):
         return costs, pre
 
     def compiled_field(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
-                       steps: torch.Tensor | None = None, reuse: bool = False) -> torch.Tensor:
+                       steps: torch.Tensor | None = None, reuse: bool = False,
+                       reach: Reach | None = None) -> torch.Tensor:
         """``cell_field`` of ``inference_values``, compiled: (B, H, W) on the CPU, from the learned ``costs``.
 
         Inference's walls gate the Dijkstra's moves (``move_cost_field``'s ``open_moves`` and ``most``) rather
@@ -517,7 +559,10 @@ class RouteVIN(nn.Module, FieldEncoder):
         the cell head runs compiled (``learning.models.cell_head``) from ``pre`` (``head_inputs``), the same
         values up to the rounding of another order of summation. ``steps``: ``cell_steps(x, block)`` where the
         caller has it already. ``reuse``: the field is written into the kept buffer ``"field"`` (``buffer``), which
-        the next such pass overwrites, and the search keeps its working arrays for the next one.
+        the next such pass overwrites, and the search keeps its working arrays for the next one. ``reach`` (a batch of
+        one): where the learned walls shut every route from its start (the cell head read at the start alone), the
+        search runs again without them (the step walls stay), as a pass inside ``open_walls`` would, and the cell head
+        runs once, on those values (``reach.opened``).
         """
         b = self.block
         goal, walls = (t.numpy() for t in self.goal_and_walls(x))
@@ -531,9 +576,16 @@ class RouteVIN(nn.Module, FieldEncoder):
         c, p = costs.numpy(), pre.numpy()
         field = self.buffer("field", (len(c), c.shape[2] * b, c.shape[3] * b)).numpy() if reuse else None
         out = []
+        if reach is not None and len(c) != 1:
+            raise ValueError(f"a pass that checks a start's route takes one query, not {len(c)}")
         for i in range(len(c)):
             v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
                                 most=most, work=self._work if reuse else None)
+            if reach is not None and most is not None \
+                    and reach.shut(cell_head_at(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED, reach.cell)):
+                v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
+                                    most=None, work=self._work if reuse else None)
+                reach.opened = True
             out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED,
                                        None if field is None else field[i]))
         return torch.from_numpy(batch_of(out) if field is None else field)
@@ -603,7 +655,7 @@ class RouteVIN(nn.Module, FieldEncoder):
                 y = layer(y)
         return y[:, :, k0 - r0:k1 - r0, j0 - c0:j1 - c0]
 
-    def reusing_field(self, x: torch.Tensor) -> torch.Tensor:
+    def reusing_field(self, x: torch.Tensor, reach: Reach | None = None) -> torch.Tensor:
         """``forward`` of one query (``x``: (1, block**2 + 1, h, w)) over its map's kept parts (``MapParts``).
 
         The goal's channel reaches the local features of the blocks within ``depth`` blocks of the goal's block
@@ -615,11 +667,14 @@ class RouteVIN(nn.Module, FieldEncoder):
         computes the held goal's window again without its goal, and puts in its own. The same values as one whole pass
         up to floating-point rounding. The same goal again (the route sampler's second pass, without the learned walls)
         reads the parts as they are: the whole pass's values (bit for bit on the compiled inference). A query whose goal
-        channel marks other than one block takes the whole pass.
+        channel marks other than one block takes the whole pass. ``reach``: as ``compiled_field`` takes it (the
+        compiled inference only).
         """
+        if reach is not None and not self.compiled(x):
+            raise ValueError("a pass that checks a start's route runs compiled (RouteVIN.compiled)")
         block = self.goal_block(x)
         if block is None:
-            return self.forward(x)
+            return self.forward(x) if reach is None else self.compiled_field(x, *self.map_features(x), reach=reach)
         window = self.goal_window(x, block)
         key = self.map_key(x)
         parts = self._maps.pop(key)
@@ -628,7 +683,7 @@ class RouteVIN(nn.Module, FieldEncoder):
             if self.compiled(x):
                 parts = MapParts(*self.map_features(x), cell_steps(x, self.block), window, block)
                 self._keep_or_hold(key, parts, keep)
-                return self.compiled_field(x, parts.costs, parts.hidden, parts.steps)
+                return self.compiled_field(x, parts.costs, parts.hidden, parts.steps, reach=reach)
             f, costs = self.move_costs(x)
             parts = MapParts(costs, self.head_inputs(f), cell_steps(x, self.block), window, block)
             self._keep_or_hold(key, parts, keep)
@@ -637,7 +692,7 @@ class RouteVIN(nn.Module, FieldEncoder):
             # the parts hold this very goal (the same query again, as the route sampler asks it without the learned
             # walls): the whole pass's own parts, read as they are (nothing here writes into them)
             self.keep_map(key, parts)
-            return self._field_from_parts(x, parts.costs, parts.hidden, parts.steps)
+            return self._field_from_parts(x, parts.costs, parts.hidden, parts.steps, reach)
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
             free = x.clone()
             free[:, self.block * self.block] = 0.0
@@ -650,15 +705,15 @@ class RouteVIN(nn.Module, FieldEncoder):
         win = (slice(None), slice(None), slice(k0, k1), slice(j0, j1))
         costs, pre = parts.costs.clone(), parts.hidden.clone()
         costs[win], pre[win] = self.window_parts(x, window)
-        return self._field_from_parts(x, costs, pre, parts.steps)
+        return self._field_from_parts(x, costs, pre, parts.steps, reach)
 
     def _field_from_parts(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
-                          steps: torch.Tensor) -> torch.Tensor:
+                          steps: torch.Tensor, reach: Reach | None = None) -> torch.Tensor:
         """The field of the query ``x`` from its map's learned ``costs``, the cell head's first layer ``pre`` and the
         ``steps`` (``reusing_field``), none of them written into.
         """
         if self.compiled(x):
-            return self.compiled_field(x, costs, pre, steps)
+            return self.compiled_field(x, costs, pre, steps, reach=reach)
         v = self.inference_values(x, costs, *self.goal_and_walls(x), steps)
         # the cell head's 1x1 layers as matrix products over the blocks (cheaper than convolutions this thin)
         h, w = x.shape[-2:]
@@ -669,22 +724,28 @@ class RouteVIN(nn.Module, FieldEncoder):
         offsets = torch.addmm(last.bias[:, None], last.weight[:, :, 0, 0], hidden).view(1, -1, h, w)
         return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
 
-    def infer(self, x: torch.Tensor) -> torch.Tensor:
+    def infer(self, x: torch.Tensor, reach: Reach | None = None) -> torch.Tensor:
         """``forward`` at inference (``FieldEncoder.predict``): on the CPU, over each map's kept parts where they fit.
 
         Each query of the batch takes ``reusing_field`` on the CPU when ``map_cache_bytes`` allows it and its map
         runs in one piece; otherwise, and on a GPU (where one batched pass costs little more than one query), the
         whole batch takes ``forward``, into the kept buffers where the pass is compiled and ``keep_buffers`` holds:
         then the result is the buffer ``"field"``, which the next such pass overwrites (``predict`` copies it).
+        ``reach``: a query's start, as ``compiled_field`` takes it (one query, on the compiled inference).
         """
         h, w = x.shape[-2:]
         if x.device.type != "cpu" or self.map_cache_bytes <= 0 or self.strip_rows(h, w) < h:
             x = x[:, :self.block * self.block + 1]
-            if self.keep_buffers and self.compiled(x):
-                return self.compiled_field(x, *self.map_features(x, reuse=True), reuse=True)
+            if self.compiled(x) and (self.keep_buffers or reach is not None):
+                reuse = self.keep_buffers
+                return self.compiled_field(x, *self.map_features(x, reuse=reuse), reuse=reuse, reach=reach)
+            if reach is not None:
+                raise ValueError("a pass that checks a start's route runs compiled (RouteVIN.compiled)")
             return self(x)
         with torch.no_grad():
             x = x[:, :self.block * self.block + 1]
+            if reach is not None:
+                return self.reusing_field(x, reach)
             return torch.cat([self.reusing_field(x[i:i + 1]) for i in range(x.shape[0])])
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
