@@ -763,6 +763,38 @@ def test_a_chain_that_connects_the_roadmap_never_pays_the_field_to_the_start():
     assert r.solved and p.world.path_valid(r.path)
 
 
+def test_a_corridor_may_read_its_field_to_the_start_off_the_walk_and_pay_no_second_pass():
+    from planners.maps.generators import VALIDATION_SEED0, generate
+
+    p = generate("rooms", VALIDATION_SEED0 + 7, 64, goal_tolerance=4.0)
+    route = make_sampler("route", step_size=4.0)
+    walked = CorridorSampler(route, start_field="walk").bind(p)
+    passed = CorridorSampler(route, start_field="pass").bind(p)
+    walked.build_corridor()
+    passed.build_corridor()
+    assert walked.forward_passes == 1 and passed.forward_passes == 2  # the walk's field costs no pass
+    expected = walk_field_steps(route, p, walked._to_goal.field)
+    assert expected is not None and np.array_equal(walked.field_to_start().field, expected)
+    assert not np.array_equal(walked.field_to_start().field, passed.field_to_start().field)
+    assert len(walked.cells) and walked.problem.world.obstacles.ravel()[walked.cells].sum() == 0
+    r = make_planner("PRM", p, sampler=CorridorSampler(route, start_field="walk"), seed=0).solve(max_iterations=5000)
+    assert r.solved and p.world.path_valid(r.path)
+    with pytest.raises(InputError, match="start_field = 'both'"):
+        CorridorSampler(route, start_field="both")
+
+
+def test_where_the_walk_ends_out_of_the_goals_sight_a_walking_corridor_takes_the_pass(monkeypatch):
+    import learning.samplers.route_rules as rules
+
+    p = wall_problem()
+    route = make_sampler("exact_route", step_size=4.0)
+    monkeypatch.setattr(rules, "walk_field_steps", lambda *args, **kwargs: None)  # a walk that ends in a pit
+    bound = CorridorSampler(route, start_field="walk").bind(p)
+    bound.build_corridor()
+    expected = route.cost_to_go(reversed_query(p)).field
+    assert np.array_equal(bound.field_to_start().field, expected)
+
+
 class EdgeRecorder(UniformSampler):
     """Uniform sampling that records the edge a roadmap told it (``at_edge``)."""
 

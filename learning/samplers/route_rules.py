@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 import numba as nb
 import numpy as np
 
-from learning.samplers.route import RouteSampler, require_grid, route_draw
+from learning.samplers.route import CachedField, RouteSampler, require_grid, route_draw
 from planners import InformedSampler, OccupancyGrid, Problem
 from planners.base.fileio import InputError, short_repr
 from planners.base.samplers import (
@@ -96,6 +96,10 @@ ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1, "fill": 8.0}
 #: pass's 984 and 2,377 (2 maps a family), and 872 and 2,250 against 901 and 2,218 on 6 maps a family no rule had
 #: looked at (at most 1.05 times the pass's, and one pass fewer).
 CONVERGING_START_FIELD = "walk"
+#: Where the roadmaps' corridor takes its field to the start (``CorridorSampler``'s ``start_field``): "pass", the
+#: field's second pass with start and goal swapped, or "walk", read off the walk down the field to the goal (the pass
+#: where that walk ends out of the goal's sight).
+CORRIDOR_START_FIELD = "pass"
 #: Corridor cells are those within ``margin`` times the shortest route plus this many steps.
 WIDTH_STEPS = 1.0
 #: Samples per draw once RRT* has a solution (the informed set shrinks as the solution improves).
@@ -555,10 +559,14 @@ class CorridorSampler(_CorridorRule):
 
     def __init__(self, route: RouteSampler, margin: float = CORRIDOR_SETTINGS["margin"],
                  floor: float = CORRIDOR_SETTINGS["floor"], fill: float | None = CORRIDOR_SETTINGS["fill"],
-                 tight: float = CORRIDOR_SETTINGS["tight"], chain: float = CORRIDOR_SETTINGS["chain"]) -> None:
+                 tight: float = CORRIDOR_SETTINGS["tight"], chain: float = CORRIDOR_SETTINGS["chain"],
+                 start_field: str = CORRIDOR_START_FIELD) -> None:
         super().__init__(route, margin, floor, fill, tight)
         self.chain = _check_nonnegative(type(self).__name__, "chain", chain,
                                         "the most steps of walk between two points of the chain")
+        if start_field not in GOAL_TREE_FIELDS:
+            raise InputError(f"start_field = {short_repr(start_field)}, expected one of {', '.join(GOAL_TREE_FIELDS)}")
+        self.start_field = start_field
         #: the roadmap's longest edge (``at_edge``; None: no limit): no link of the chain is longer
         self.edge: float | None = None
         #: a second chain's longest link (``second_chain``; None: no second chain), drawn after the first
@@ -599,14 +607,14 @@ class CorridorSampler(_CorridorRule):
         p = self.problem
         if moves <= 0:
             return np.empty(0, dtype=np.int64)
-        return route_chain(self._to_goal.field, lambda: self.start_field().field,
+        return route_chain(self._to_goal.field, lambda: self.field_to_start().field,
                            np.asarray(p.world.obstacles, dtype=bool), query_cells(p), moves,
                            getattr(self.route, "ripple", 0.0), getattr(self.route, "ripple_growth", 0.0))
 
     def _setup(self) -> None:
         p = self.problem
         require_grid("CorridorSampler", p.world)
-        self._to_goal, self._to_start = self.route.cost_to_go(p), None
+        self._to_goal, self._to_start, self._start_walked = self.route.cost_to_go(p), None, False
         self.built = False  # the corridor: built where the chain needs the field to the start, or after the chain
         link = math.ceil(self.chain * self.route.step_size / p.world.resolution)  # in moves of the walk
         if self.edge is not None:  # no link longer than the roadmap's longest edge
@@ -621,10 +629,17 @@ class CorridorSampler(_CorridorRule):
         if not len(self.links) or self._to_start is not None:
             self.build_corridor()
 
-    def start_field(self):
-        """The field to the start (the query with start and goal swapped), computed once, when first needed."""
+    def field_to_start(self) -> CachedField:
+        """The field to the start, once, when first needed: read off the walk down the field to the goal where
+        ``start_field`` is "walk" and that walk ends in the goal's sight, else the field's pass of the query with start
+        and goal swapped.
+        """
         if self._to_start is None:
-            self._to_start = self.route.cost_to_go(reversed_query(self.problem))
+            p = self.problem
+            walked = walk_field_steps(self.route, p, self._to_goal.field) if self.start_field == "walk" else None
+            self._start_walked = walked is not None
+            self._to_start = (CachedField(walked, 0.0, False) if walked is not None
+                              else self.route.cost_to_go(reversed_query(p)))
         return self._to_start
 
     def build_corridor(self) -> None:
@@ -634,7 +649,7 @@ class CorridorSampler(_CorridorRule):
         after the chain, so that a roadmap the chain connects never pays the second field.
         """
         if not self.built:
-            self._stages(self._to_goal.field, self.start_field().field)
+            self._stages(self._to_goal.field, self.field_to_start().field)
             self.built = True
 
     def __getattr__(self, name: str):
@@ -647,7 +662,8 @@ class CorridorSampler(_CorridorRule):
     @property
     def forward_passes(self) -> int:
         """The encoder's passes this query took: the field to the goal, and the field to the start once computed."""
-        return 0 if self.route.net is None else (1 + (self._to_start is not None)) * self.route.symmetry_passes
+        second = self._to_start is not None and not self._start_walked
+        return 0 if self.route.net is None else (1 + second) * self.route.symmetry_passes
 
     @property
     def reused_seconds(self) -> float:

@@ -196,7 +196,8 @@ def main(argv=None) -> int:
     ap.add_argument("--rrtstar", action="store_true", help="RRT*: the rule after the first solution")
     ap.add_argument("--budget", type=int, default=3000, help="RRT* iterations per run with --rrtstar")
     ap.add_argument("--start-fields", nargs="+", default=["pass"], choices=["pass", "walk"],
-                    help="with --rrtstar: the corridor's field to the start, a second pass or read off the walk")
+                    help="the corridor's field to the start (RRT*'s with --rrtstar, else the roadmaps'): a second "
+                    "pass, or read off the walk down the field to the goal")
     ap.add_argument("--size", type=int, default=128, help="the validation maps' side in cells (default 128)")
     args = ap.parse_args(argv)
     if args.first_map < 0:
@@ -240,8 +241,9 @@ def main(argv=None) -> int:
                 print(geomean_row(f"RRTConnect {field:15s} {rule:16s}", per_family), flush=True)
         return 0
     for planner in args.planners:
-        for field, margin, floor, fill, tight, chain in itertools.product(
-                args.fields, args.margins, args.floors, args.fills, args.tights or [None], args.chains or [None]):
+        for field, margin, floor, fill, tight, chain, start in itertools.product(
+                args.fields, args.margins, args.floors, args.fills, args.tights or [None], args.chains or [None],
+                args.start_fields):
             own = ABLATION_CORRIDOR if field == "route_ablation" else CORRIDOR_SETTINGS
             tight = own["tight"] if tight is None else tight
             chain = own["chain"] if chain is None else chain
@@ -252,11 +254,12 @@ def main(argv=None) -> int:
                 kind = JitteredChain
             per_family = [summarize_runs([run_setup(Setup(field, planner, field), p, s, models=models,
                                                     sampler=kind(make_sampler(field, models=models),
-                                                                 margin, floor, fill, tight, chain))
+                                                                 margin, floor, fill, tight, chain, start))
                                           for p in problems for s in range(args.seeds)])
                           for problems in maps.values()]
             print(geomean_row(f"{planner:8s} {field:15s} margin {margin:4.2f} floor {floor:4.2f} fill {fill} "
-                              f"tight {tight:g} {args.tight_kind} chain {chain:g} {args.chain_points}", per_family),
+                              f"tight {tight:g} {args.tight_kind} chain {chain:g} {args.chain_points} start {start}",
+                              per_family),
                   flush=True)
     return 0
 
