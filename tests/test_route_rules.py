@@ -16,6 +16,7 @@ from learning.evaluation.every_planner import Setup, run_setup
 from learning.samplers.registry import make_sampler
 from learning.samplers.route import RouteSampler
 from learning.samplers.route_rules import (
+    CORRIDOR_START_FIELD,
     BidirectionalRouteSampler,
     ConvergingRouteSampler,
     CorridorSampler,
@@ -540,7 +541,8 @@ def test_a_roadmap_query_moves_the_corridor_and_later_queries_are_counted():
     assert rows[0]["success"] == 1.0 and 0.0 <= rows[0]["served"] <= 1.0 and rows[0]["later"] >= 0
 
 
-def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run():
+@pytest.mark.parametrize("start_field", ["pass", "walk"])
+def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run(start_field):
     from learning.samplers.route import FieldCache, shipped_sampler
     from planners.maps.generators import VALIDATION_SEED0, generate
 
@@ -548,12 +550,14 @@ def test_a_roadmap_takes_both_fields_from_the_cache_on_a_second_run():
     cache = FieldCache()
     route = shipped_sampler(device="cpu")
     route.fields = cache
-    runs = [make_planner("PRM", p, sampler=route, seed=0) for _ in range(2)]
+    sampler = route if start_field == CORRIDOR_START_FIELD else CorridorSampler(route, start_field=start_field)
+    runs = [make_planner("PRM", p, sampler=sampler, seed=0) for _ in range(2)]
     assert cache.misses == 1 and cache.hits == 1  # bound: the field to the goal (the chain's), computed once
     assert np.array_equal(runs[0].sampler.cells, runs[1].sampler.cells)  # the corridor needs the field to the start
-    assert cache.misses == 2 and cache.hits == 2  # computed once too
+    passes = 2 if start_field == "pass" else 1  # a pass computed once too, or read off the walk (the default)
+    assert (cache.misses, cache.hits) == (passes, passes)
     assert runs[0].sampler.reused_seconds == 0 and runs[1].sampler.reused_seconds > 0
-    assert runs[1].sampler.forward_passes == 2
+    assert runs[1].sampler.forward_passes == passes
 
 
 @pytest.mark.parametrize("start_field", ["pass", "walk"])
@@ -746,7 +750,7 @@ def test_a_chain_that_connects_the_roadmap_never_pays_the_field_to_the_start():
     from planners.maps.generators import VALIDATION_SEED0, generate
 
     p = generate("rooms", VALIDATION_SEED0 + 7, 64, goal_tolerance=4.0)
-    bound = CorridorSampler(make_sampler("route", step_size=4.0)).bind(p)
+    bound = CorridorSampler(make_sampler("route", step_size=4.0), start_field="pass").bind(p)
     k = len(bound.links)
     assert k > 0 and not bound.built and bound.forward_passes == 1  # the field to the goal only
     rng = np.random.default_rng(0)
@@ -756,7 +760,7 @@ def test_a_chain_that_connects_the_roadmap_never_pays_the_field_to_the_start():
     after = bound.draw(rng, 10, None)
     assert len(after) == 10 and bound.built and bound.forward_passes == 2  # then the corridor, from both fields
     # the same samples as one whose corridor was built at bind, drawn in one batch: the stream is 4 uniforms a sample
-    eager = CorridorSampler(make_sampler("route", step_size=4.0)).bind(p)
+    eager = CorridorSampler(make_sampler("route", step_size=4.0), start_field="pass").bind(p)
     eager.build_corridor()
     assert np.array_equal(eager.draw(np.random.default_rng(0), k + 10, None), np.concatenate([chain, after]))
     r = make_planner("PRM", p, sampler=make_sampler("route"), seed=0).solve(max_iterations=5000)

@@ -98,8 +98,14 @@ ABLATION_CONVERGING = {"margin": 1.0, "floor": 0.1, "fill": 8.0}
 CONVERGING_START_FIELD = "walk"
 #: Where the roadmaps' corridor takes its field to the start (``CorridorSampler``'s ``start_field``): "pass", the
 #: field's second pass with start and goal swapped, or "walk", read off the walk down the field to the goal (the pass
-#: where that walk ends out of the goal's sight).
-CORRIDOR_START_FIELD = "pass"
+#: where that walk ends out of the goal's sight). "walk" by the rule RRT*'s corridor was chosen by, fixed before the
+#: runs (``tune_route_rules.py --start-fields pass walk``: at most 1.05 times the pass's samples, as many runs
+#: connected): on the validation maps at 128, 256 and 512 cells (6, 16 and 8 a family), 12 fresh ones a family and
+#: the MovingAI tuning scenarios (``--movingai-tuning``), PRM and Lazy-PRM take the same median samples either way
+#: (geometric means 3.1, 3.6, 3.9, 3.5 and 12.7), every run connected: the chain along the route connects those
+#: roadmaps before the corridor is built, so the rule decides where the chain does not (a roadmap the lazy sampler's
+#: uniform phase left in pieces), with one pass fewer.
+CORRIDOR_START_FIELD = "walk"
 #: Corridor cells are those within ``margin`` times the shortest route plus this many steps.
 WIDTH_STEPS = 1.0
 #: Samples per draw once RRT* has a solution (the informed set shrinks as the solution improves).

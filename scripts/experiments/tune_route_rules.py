@@ -45,6 +45,7 @@ import itertools
 import numpy as np
 
 from learning.evaluation.every_planner import Setup, convergence, planner_maps, run_setup, summarize_runs
+from learning.evaluation.protocol import MOVINGAI_MAPS, Protocol, movingai_queries
 from learning.samplers.registry import ModelCache, make_sampler
 from learning.samplers.route import RouteSampler
 from learning.samplers.route_rules import (
@@ -58,7 +59,7 @@ from learning.samplers.route_rules import (
     reversed_query,
     walk_field_steps,
 )
-from planners import OccupancyGrid, SamplerBase
+from planners import OccupancyGrid, SamplerBase, movingai_dir
 
 
 def blocked_shares(grid: OccupancyGrid, h: int) -> np.ndarray:
@@ -168,6 +169,15 @@ def connect_probe(field: str, wrap, problem, seed: int, models: ModelCache) -> d
     return run_setup(Setup(field, "RRTConnect", field), problem, seed, models=models, sampler=wrap(route))
 
 
+def movingai_tuning_maps(directory: str) -> dict[str, list]:
+    """The tuning scenarios of the comparison's MovingAI maps in ``directory`` (its split), by map."""
+    protocol, cache = Protocol(), {}
+    d = str(movingai_dir(directory))
+    queries = [q for q in movingai_queries(d, MOVINGAI_MAPS, protocol.scenarios, protocol.tuning_scenarios,
+                                           protocol.tolerance, cache) if q.split == "tuning"]
+    return {m: [q.problem(d, protocol.tolerance, cache) for q in queries if q.family == m] for m in MOVINGAI_MAPS}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--maps", type=int, default=6, help="validation maps per family")
@@ -199,13 +209,19 @@ def main(argv=None) -> int:
                     help="the corridor's field to the start (RRT*'s with --rrtstar, else the roadmaps'): a second "
                     "pass, or read off the walk down the field to the goal")
     ap.add_argument("--size", type=int, default=128, help="the validation maps' side in cells (default 128)")
+    ap.add_argument("--movingai-tuning", metavar="DIR", default=None,
+                    help="instead of the validation maps, the tuning scenarios of the comparison's MovingAI maps "
+                    "in DIR (its tuning split, never its test scenarios), by map")
     args = ap.parse_args(argv)
     if args.first_map < 0:
         ap.error(f"--first-map must be >= 0, got {args.first_map}")
     if args.size < 32:
         ap.error(f"--size takes a map side of at least 32 cells, got {args.size}")
-    maps = {f: problems[args.first_map:] for f, problems in
-            planner_maps("validation", args.first_map + args.maps, size=args.size).items()}
+    if args.movingai_tuning is not None:
+        maps = movingai_tuning_maps(args.movingai_tuning)
+    else:
+        maps = {f: problems[args.first_map:] for f, problems in
+                planner_maps("validation", args.first_map + args.maps, size=args.size).items()}
     models = ModelCache()
     if args.rrtstar:
         for field in args.fields:
