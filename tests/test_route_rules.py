@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 
 import envs  # noqa: F401 - registers the environments
 from learning.evaluation.every_planner import Setup, run_setup
+from learning.evaluation.protocol import MOVINGAI_MAPS, Protocol, movingai_queries
 from learning.samplers.registry import make_sampler
 from learning.samplers.route import RouteSampler
 from learning.samplers.route_rules import (
@@ -861,3 +862,21 @@ def test_the_lazy_corridor_hands_the_roadmaps_edge_to_the_corridor_it_switches_t
     p = wall_problem()
     lazy = make_sampler("route_lazy").for_planner("roadmap").at_edge(3.0).bind(p)
     assert lazy.switch().edge == 3.0
+
+
+@pytest.mark.experiments
+def test_the_rule_tuning_script_asks_the_corridors_field_to_the_start_on_the_movingai_tuning_split(movingai, capsys):
+    from conftest import load_script
+
+    script = load_script("experiments/tune_route_rules")
+    maps = script.movingai_tuning_maps(str(movingai))
+    assert set(maps) <= set(MOVINGAI_MAPS) and all(len(v) == Protocol().tuning_scenarios for v in maps.values())
+    tests = {q.problem(str(movingai), 4.0).name for q in movingai_queries(
+        str(movingai), list(maps), Protocol().scenarios, Protocol().tuning_scenarios, 4.0) if q.split == "test"}
+    assert tests and not tests & {p.name for v in maps.values() for p in v}  # never a test scenario
+    assert script.main(["--fields", "route", "--planners", "PRM", "--seeds", "1", "--margins", "0.3", "--floors",
+                        "0.3", "--fills", "1", "--start-fields", "pass", "walk", "--movingai-tuning",
+                        str(movingai)]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("PRM")]
+    assert len(rows) == 2 and "start pass" in rows[0] and "start walk" in rows[1]
+    assert all(float(r.split("geomean")[1].split()[0]) >= 1 and "success" in r for r in rows)  # samples per query
