@@ -796,3 +796,8 @@ def test_the_shipped_encoder_in_one_pass_opens_the_walls_where_two_passes_would(
     assert not opened and np.array_equal(field, net.predict(other.world.obstacles, other.world.cell_of(other.goal)))
     with net.open_walls():  # without a learned wall rule there is nothing to open: the plain pass
         assert net.predict_reaching(obstacles, goal, start)[1] is False
+    for bad, match in (((32, 0), r"\(32, 0\) is outside the 32 x 32 map"), ((0, -1), "outside"), ("a", "row, column")):
+        with pytest.raises(InputError, match=match):
+            net.predict_reaching(obstacles, goal, bad)
+        with pytest.raises(InputError, match=match), net.open_walls():  # the two calls' path refuses it alike
+            net.predict_reaching(obstacles, goal, bad)

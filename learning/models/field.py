@@ -88,6 +88,18 @@ def symmetry(obstacles: np.ndarray, goal_cell: tuple[int, int], k: int) -> tuple
     return np.ascontiguousarray(obs), (int(r), int(c))
 
 
+def check_start(obstacles: np.ndarray, start_cell) -> tuple[int, int]:
+    """``start_cell`` as (row, column) ints, or an ``InputError`` where it is not a cell of the map ``obstacles``."""
+    try:
+        r, c = (int(v) for v in start_cell)
+    except (TypeError, ValueError):
+        raise InputError(f"start_cell = {short_repr(start_cell)}: expected a (row, column) cell") from None
+    h, w = np.shape(obstacles)[:2]
+    if not (0 <= r < h and 0 <= c < w):
+        raise InputError(f"start_cell = ({r}, {c}) is outside the {h} x {w} map")
+    return r, c
+
+
 def batch_of(arrays) -> np.ndarray:
     """``np.stack(arrays)``, except that a single array becomes a batch of one as a view, without a copy."""
     return arrays[0][None] if len(arrays) == 1 else np.stack(arrays)
@@ -227,6 +239,7 @@ class FieldEncoder:
         What the route sampler asks for a query. Here two ``predict`` calls where the start is shut; an encoder may
         compute both in one pass (``RouteVIN`` does: the same values).
         """
+        check_start(obstacles, start_cell)
         field = self.predict(obstacles, goal_cell, symmetries, threads=threads)
         opened = self.open_walls() if self.shuts(field, start_cell) else None
         if opened is None:

@@ -40,7 +40,7 @@ import torch
 from torch import nn
 
 from learning.models.cell_head import cell_head_at, cell_head_field, padded_free_cells
-from learning.models.field import FieldEncoder, batch_of, route_input
+from learning.models.field import FieldEncoder, batch_of, check_start, route_input
 from learning.models.threads import planning_threads
 from planners.maps.gridsearch import MOVES, move_cost_field, padded_block_steps, work_array
 
@@ -350,7 +350,7 @@ class RouteVIN(nn.Module, FieldEncoder):
             return super().predict_reaching(obstacles, goal_cell, start_cell, symmetries, threads=threads)
         self.check_size(obstacles.shape)
         h, w = obstacles.shape
-        reach = Reach(start_cell, self.block / self.step, 0.5 * self.unreached_steps)
+        reach = Reach(check_start(obstacles, start_cell), self.block / self.step, 0.5 * self.unreached_steps)
         x = torch.from_numpy(batch_of([route_input(obstacles, goal_cell, self.block)]))
         with planning_threads(threads), torch.inference_mode():
             field = self.infer(x, reach)[0, :h, :w].numpy().astype(np.float64)
