@@ -111,9 +111,10 @@ class MapParts(NamedTuple):
 class Reach:
     """A query's start, whose route a compiled pass checks before its cell head (``RouteVIN.predict_reaching``).
 
-    ``cell``: the start's (row, column) in the map's cells; ``limit``: the field's value there, in blocks, at or above
-    which the learned walls have shut every route from it (``FieldEncoder.shuts``, in blocks); ``opened``: set by the
-    pass where they had, and it searched again without them.
+    ``cell``: the start's (row, column) in the map's cells; ``scale``: steps per block of the cell head's values
+    (``block / step``); ``limit``: the field's value there, in steps, at or above which the learned walls have shut
+    every route from it (half ``unreached_steps``, as ``FieldEncoder.shuts`` reads it); ``opened``: set by the pass
+    where they had, and it searched again without them.
     """
 
     def __init__(self, cell: tuple[int, int], scale: float, limit: float) -> None:
@@ -665,7 +666,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         whole pass, its parts held with its goal in them as the recent map's (``KeptMaps``); a later query finds them
         there or kept (or, where another map's first query took their place, takes a whole pass whose parts are kept),
         computes the held goal's window again without its goal, and puts in its own. The same values as one whole pass
-        up to floating-point rounding. The same goal again (the route sampler's second pass, without the learned walls)
+        up to floating-point rounding. The same goal again (a ``predict`` inside ``open_walls``)
         reads the parts as they are: the whole pass's values (bit for bit on the compiled inference). A query whose goal
         channel marks other than one block takes the whole pass. ``reach``: as ``compiled_field`` takes it (the
         compiled inference only).
@@ -689,8 +690,8 @@ class RouteVIN(nn.Module, FieldEncoder):
             self._keep_or_hold(key, parts, keep)
             return self.cell_field(f, self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps))
         if parts.goal_window is not None and parts.goal_block == block:
-            # the parts hold this very goal (the same query again, as the route sampler asks it without the learned
-            # walls): the whole pass's own parts, read as they are (nothing here writes into them)
+            # the parts hold this very goal (the same query again, as a pass without the learned walls asks it): the
+            # whole pass's own parts, read as they are (nothing here writes into them)
             self.keep_map(key, parts)
             return self._field_from_parts(x, parts.costs, parts.hidden, parts.steps, reach)
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
