@@ -144,6 +144,8 @@ def main(argv=None) -> int:
                       f"({verdict[f'{p}slow held']} of {verdict['slow sets']} where the fastest takes more than "
                       f"{C.SLOW_MS:g} ms); pooled / OMPL RRT-Connect: {verdict[f'{p}pooled / OMPL RRT-Connect']:.2f}."
                       "\n\n" for learned, p in C.LEARNED.items())
+            + f"The best learned method per set: targets held on {verdict['any held']} of {verdict['sets']} sets"
+            + (f" (not on {', '.join(verdict['none held'])}).\n\n" if verdict["none held"] else ".\n\n")
             + markdown_table(rows) + "\n## The fastest method by map size\n\n" + markdown_table(by_size))
     with output_set(args.out) as tmp:
         write_runs_csv(runs, tmp / "runs.csv")

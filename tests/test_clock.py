@@ -39,14 +39,16 @@ def test_the_table_names_the_fastest_classical_option_and_judges_the_targets():
     assert winding["lazy route / fastest"] == "0.44" and winding["lazy target"].startswith("holds (<= 0.5")
     assert open_["lazy target"] == "holds (<= 1.2)"
     assert verdict["lazy held"] == 2 and verdict["lazy slow held"] == 1
+    assert verdict["any held"] == 2 and verdict["none held"] == []  # by the best learned method per set
     assert pooled["lazy route / OMPL RRT-Connect"] == f"{verdict['lazy pooled / OMPL RRT-Connect']:.2f}"
 
 
 def test_an_unsolved_run_never_solves_so_a_method_that_gives_up_fast_is_not_the_fastest():
     runs = [_run("m", C.ROUTE, 2.0), _run("m", C.ROUTE, 100.0, solved=False, seed=1), _run("m", C.TUNED, 1.0),
             _run("m", C.TUNED, 1.0, seed=1)]
-    rows, _ = C.clock_table(runs)
+    rows, verdict = C.clock_table(runs)
     assert rows[0][C.ROUTE] == "> 51 (50%)"  # half unsolved: the median time to solution is not reached
+    assert verdict["any held"] == 0 and verdict["none held"] == ["m"]
     assert rows[0]["target"].startswith("fails")
     three = [_run("m", C.ROUTE, ms, solved=ms < 50, seed=i) for i, ms in enumerate((2.0, 3.0, 90.0))]
     assert C.solution_ms(three) == 3.0 and math.isinf(C.solution_ms(three[1:]))
@@ -79,6 +81,7 @@ def test_the_clock_benchmark_times_every_method_on_the_same_queries(tmp_path, ca
     lines = (out / "runs.csv").read_text().splitlines()
     assert len(lines) == 1 + 2 * 9  # two queries, one seed, nine methods
     assert "The fastest method by map size" in text and "| up to 128 |" in text
+    assert "The best learned method per set: targets held on " in text and " of 1 sets" in text
 
 
 @pytest.mark.parametrize("flags, named", [(["--maps", "0"], "--maps"), (["--route", "nowhere.pt"], "--route")])

@@ -152,7 +152,9 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
     with the share solved in brackets, "fastest classical", and for each learned method (``LEARNED``, its prefix
     before each name) "route / fastest" and "target" ("holds" or "fails"); the verdict holds the counts of sets
     ("sets", "slow sets") and, per learned method, of those meeting each target ("held", "slow held") and, where
-    OMPL ran, the pooled ratio to OMPL's RRT-Connect ("pooled / OMPL RRT-Connect"). Where no classical option solves
+    OMPL ran, the pooled ratio to OMPL's RRT-Connect ("pooled / OMPL RRT-Connect"); and, taking the best learned
+    method per set, the count of sets where one of them holds the targets ("any held") and the sets where none does
+    ("none held", in table order). Where no classical option solves
     more than half the runs, a learned method that does holds its targets (it is faster than every one of them), and
     one that does not fails them.
     """
@@ -165,7 +167,7 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
     methods = [m for m in (ROUTE, LAZY, LAZY_CONNECT, LAZY_PRM, ABLATION, EXACT, TUNED, CONNECT, PRM, OMPL_CONNECT)
                if any(m in v for v in by.values())]
     rows, slow_total = [], 0
-    verdict: dict = {"sets": len(names) - 1, "slow sets": 0}
+    verdict: dict = {"sets": len(names) - 1, "slow sets": 0, "any held": 0, "none held": []}
     for prefix in LEARNED.values():
         verdict |= {f"{prefix}held": 0, f"{prefix}slow held": 0, f"{prefix}pooled / OMPL RRT-Connect": math.nan}
     for name in names:
@@ -182,6 +184,7 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
             row["fastest classical"] = (f"{fastest} ({best:.3g} ms)" if math.isfinite(best) else
                                         "none solves more than half")
             slow_total += slow and name != POOLED
+        held_here = False
         for learned, prefix in LEARNED.items():
             if learned in ms and classical:
                 ratio = ms[learned] / max(best, 1e-9) if math.isfinite(ms[learned]) else math.inf
@@ -192,9 +195,14 @@ def clock_table(runs: Sequence[Run], order: Sequence[str] = ()) -> tuple[list[di
                 if name != POOLED:
                     verdict[f"{prefix}held"] += ok
                     verdict[f"{prefix}slow held"] += slow and ratio <= WHERE_SLOW
+                    held_here = held_here or ok
             if name == POOLED and learned in ms and OMPL_CONNECT in ms:
                 verdict[f"{prefix}pooled / OMPL RRT-Connect"] = ratio = ms[learned] / max(ms[OMPL_CONNECT], 1e-9)
                 row[f"{prefix}route / OMPL RRT-Connect"] = f"{ratio:.2f}"
+        if name != POOLED:
+            verdict["any held"] += held_here
+            if not held_here:
+                verdict["none held"].append(name)
         rows.append(row)
     verdict["slow sets"] = slow_total
     return rows, verdict
