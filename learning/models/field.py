@@ -231,17 +231,19 @@ class FieldEncoder:
         """Whether ``predict``'s ``field`` sees no route from ``start_cell`` (at least half ``unreached_steps``)."""
         return self.unreached_steps is not None and bool(field[start_cell] >= 0.5 * self.unreached_steps)
 
-    def predict_reaching(self, obstacles: np.ndarray, goal_cell: tuple[int, int], start_cell: tuple[int, int],
+    def predict_reaching(self, obstacles: np.ndarray, goal_cell: tuple[int, int], start_cell: tuple[int, int] | None,
                          symmetries: int = 1, *, threads: int | None = None) -> tuple[np.ndarray, bool]:
         """``predict``'s field, or the field without the encoder's learned wall rule (``open_walls``) where that rule
         shuts every route from ``start_cell`` (``shuts``): (the field, whether it is the one without the rule).
 
-        What the route sampler asks for a query. Here two ``predict`` calls where the start is shut; an encoder may
-        compute both in one pass (``RouteVIN`` does: the same values).
+        What the route sampler asks for a query (``start_cell`` None: ``predict``'s field, no start to reach). Here
+        two ``predict`` calls where the start is shut; an encoder may compute both in one pass (``RouteVIN`` does: the
+        same values).
         """
-        check_start(obstacles, start_cell)
+        if start_cell is not None:
+            check_start(obstacles, start_cell)
         field = self.predict(obstacles, goal_cell, symmetries, threads=threads)
-        opened = self.open_walls() if self.shuts(field, start_cell) else None
+        opened = self.open_walls() if start_cell is not None and self.shuts(field, start_cell) else None
         if opened is None:
             return field, False
         with opened:

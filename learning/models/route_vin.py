@@ -336,7 +336,7 @@ class RouteVIN(nn.Module, FieldEncoder):
             else:
                 self.wall_cost = kept
 
-    def predict_reaching(self, obstacles: np.ndarray, goal_cell: tuple[int, int], start_cell: tuple[int, int],
+    def predict_reaching(self, obstacles: np.ndarray, goal_cell: tuple[int, int], start_cell: tuple[int, int] | None,
                          symmetries: int = 1, *, threads: int | None = None) -> tuple[np.ndarray, bool]:
         """``FieldEncoder.predict_reaching`` in one pass where the inference is compiled: the local network runs once
         (or its map's kept parts serve), the search runs with the learned walls, the cell head is read at the start
@@ -344,10 +344,9 @@ class RouteVIN(nn.Module, FieldEncoder):
         The same field and answer as the two ``predict`` calls (``compiled_field``'s ``reach``), without the first
         pass's cell head and a second pass's set-up. Elsewhere (symmetries, a GPU, the torch pass) the two calls.
         """
-        compiled = (type(symmetries) is int and symmetries == 1 and self.wall_cost is not None
-                    and self.compiled_inference and self.fixed_point == "dijkstra"
-                    and type(self).cell_field is RouteVIN.cell_field and next(self.parameters()).device.type == "cpu")
-        if not compiled:
+        one_pass = (start_cell is not None and type(symmetries) is int and symmetries == 1
+                    and self.wall_cost is not None and self.compiles() and next(self.parameters()).device.type == "cpu")
+        if not one_pass:
             return super().predict_reaching(obstacles, goal_cell, start_cell, symmetries, threads=threads)
         self.check_size(obstacles.shape)
         h, w = obstacles.shape
@@ -467,8 +466,14 @@ class RouteVIN(nn.Module, FieldEncoder):
         It does where ``compiled_inference`` holds, on the CPU, without gradients, with the fixed point by Dijkstra
         and the class's own cell head (a subclass that overrides ``cell_field`` keeps its own).
         """
-        return (self.compiled_inference and x.device.type == "cpu" and not torch.is_grad_enabled()
-                and self.fixed_point == "dijkstra" and type(self).cell_field is RouteVIN.cell_field)
+        return x.device.type == "cpu" and not torch.is_grad_enabled() and self.compiles()
+
+    def compiles(self) -> bool:
+        """Whether this encoder's CPU inference without gradients is the compiled one (``compiled``):
+        ``compiled_inference``, the fixed point by Dijkstra and the class's own cell head.
+        """
+        return (self.compiled_inference and self.fixed_point == "dijkstra"
+                and type(self).cell_field is RouteVIN.cell_field)
 
     def head_inputs(self, f: torch.Tensor) -> torch.Tensor:
         """The cell head's first layer on the local features ``f`` (B, C, h, w), its bias included (``pre``)."""

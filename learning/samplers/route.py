@@ -368,10 +368,7 @@ class FieldCache:
             return CachedField(field.copy(), seconds, True, opened)
         self.misses += 1
         t0 = work_clock()
-        if start_cell is None:
-            field, opened = net.predict(obstacles, goal_cell, symmetries, threads=threads), False
-        else:
-            field, opened = net.predict_reaching(obstacles, goal_cell, start_cell, symmetries, threads=threads)
+        field, opened = net.predict_reaching(obstacles, goal_cell, start_cell, symmetries, threads=threads)
         seconds = work_clock() - t0
         self._keep(key, net, field, seconds, opened)
         return CachedField(field.copy(), seconds, False, opened)
@@ -525,8 +522,12 @@ class RouteSampler(SamplerBase):
 
     def _straight(self, grid: OccupancyGrid) -> np.ndarray:
         """The straight-line distance to the goal of every grid cell's centre, in steps; ``inf`` on the obstacles."""
+        return straight_field(grid.kernel.grid, *self._goal_in_cells(grid), grid.resolution, self.step_size)
+
+    def _goal_in_cells(self, grid: OccupancyGrid) -> tuple[float, float]:
+        """The goal's (x, y) in the grid's cells from its origin, where the straight line is measured from."""
         gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
-        return straight_field(grid.kernel.grid, gx, gy, grid.resolution, self.step_size)
+        return gx, gy
 
     def at_step(self, step_size: float) -> RouteSampler:
         """This sampler measuring in the planner's step (``step_size``, world units): planners call it when bound.
@@ -587,9 +588,8 @@ class RouteSampler(SamplerBase):
             cols = np.minimum(((np.arange(grid.width) + 0.5) / factor).astype(np.int64), learned.shape[1] - 1)
             learned = learned[rows][:, cols]
         if self.net.unreached_steps is not None:
-            gx, gy = (self.problem.goal[:2] - grid.origin) / grid.resolution
-            learned = ranked_where_unreached(learned, grid.kernel.grid, gx, gy, grid.resolution, self.step_size,
-                                             0.5 * self.net.unreached_steps)
+            learned = ranked_where_unreached(learned, grid.kernel.grid, *self._goal_in_cells(grid), grid.resolution,
+                                             self.step_size, 0.5 * self.net.unreached_steps)
         progress = self._straight(grid) if self._uses == "frontier" else learned
         return progress, (None if self._uses == "progress" else learned)
 
@@ -610,8 +610,6 @@ class RouteSampler(SamplerBase):
         net, symmetries = self.net, self.symmetry_passes
         if self.fields is None:
             self.reused_seconds = 0.0
-            if start is None:
-                return net.predict(obstacles, goal, symmetries, threads=self.threads), False
             return net.predict_reaching(obstacles, goal, start, symmetries, threads=self.threads)
         kept = self.fields.get(net, obstacles, goal, symmetries, threads=self.threads, start_cell=start)
         self.reused_seconds = kept.seconds if kept.reused else 0.0

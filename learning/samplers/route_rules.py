@@ -431,6 +431,28 @@ def walk_field_steps(route: RouteSampler, problem: Problem, to_goal: np.ndarray,
 GOAL_TREE_FIELDS = ("walk", "pass")
 
 
+def _check_field_source(name: str, value) -> str:
+    """``value`` where it is one of ``GOAL_TREE_FIELDS`` (where a field to the start comes from), else an ``InputError``
+    naming the setting ``name``.
+    """
+    if value not in GOAL_TREE_FIELDS:
+        raise InputError(f"{name} = {short_repr(value)}, expected one of {', '.join(GOAL_TREE_FIELDS)}")
+    return value
+
+
+def corridor_field_to_start(route: RouteSampler, problem: Problem, to_goal: np.ndarray,
+                            source: str) -> tuple[CachedField, bool]:
+    """A corridor's field to the start of ``problem``, and whether it was read off the walk (no pass).
+
+    With ``source`` "walk", read off the walk down ``to_goal`` (``walk_field_steps``) where that walk ends in the goal's
+    sight; otherwise (and with "pass") ``route``'s field of the query with start and goal swapped (``cost_to_go``).
+    """
+    walked = walk_field_steps(route, problem, to_goal) if source == "walk" else None
+    if walked is not None:
+        return CachedField(walked, 0.0, False), True
+    return route.cost_to_go(reversed_query(problem)), False
+
+
 class BidirectionalRouteSampler(SamplerBase):
     """RRT-Connect's rule: each tree follows the field to the other end (see the module docstring).
 
@@ -445,9 +467,7 @@ class BidirectionalRouteSampler(SamplerBase):
     """
 
     def __init__(self, route: RouteSampler, backward: RouteSampler | None = None, goal_tree: str = "walk") -> None:
-        if goal_tree not in GOAL_TREE_FIELDS:
-            raise InputError(f"goal_tree = {short_repr(goal_tree)}, expected one of {', '.join(GOAL_TREE_FIELDS)}")
-        self.route, self.backward, self.goal_tree = route, backward, goal_tree
+        self.route, self.backward, self.goal_tree = route, backward, _check_field_source("goal_tree", goal_tree)
 
     def _setup(self) -> None:
         p = self.problem
@@ -570,9 +590,7 @@ class CorridorSampler(_CorridorRule):
         super().__init__(route, margin, floor, fill, tight)
         self.chain = _check_nonnegative(type(self).__name__, "chain", chain,
                                         "the most steps of walk between two points of the chain")
-        if start_field not in GOAL_TREE_FIELDS:
-            raise InputError(f"start_field = {short_repr(start_field)}, expected one of {', '.join(GOAL_TREE_FIELDS)}")
-        self.start_field = start_field
+        self.start_field = _check_field_source("start_field", start_field)
         #: the roadmap's longest edge (``at_edge``; None: no limit): no link of the chain is longer
         self.edge: float | None = None
         #: a second chain's longest link (``second_chain``; None: no second chain), drawn after the first
@@ -641,11 +659,8 @@ class CorridorSampler(_CorridorRule):
         and goal swapped.
         """
         if self._to_start is None:
-            p = self.problem
-            walked = walk_field_steps(self.route, p, self._to_goal.field) if self.start_field == "walk" else None
-            self._start_walked = walked is not None
-            self._to_start = (CachedField(walked, 0.0, False) if walked is not None
-                              else self.route.cost_to_go(reversed_query(p)))
+            self._to_start, self._start_walked = corridor_field_to_start(self.route, self.problem,
+                                                                         self._to_goal.field, self.start_field)
         return self._to_start
 
     def build_corridor(self) -> None:
@@ -733,9 +748,7 @@ class ConvergingRouteSampler(_CorridorRule):
                  floor: float = CONVERGING_SETTINGS["floor"], fill: float | None = CONVERGING_SETTINGS["fill"],
                  start_field: str = CONVERGING_START_FIELD) -> None:
         super().__init__(route, margin, floor, fill)
-        if start_field not in GOAL_TREE_FIELDS:
-            raise InputError(f"start_field = {short_repr(start_field)}, expected one of {', '.join(GOAL_TREE_FIELDS)}")
-        self.start_field = start_field
+        self.start_field = _check_field_source("start_field", start_field)
 
     def _setup(self) -> None:
         self.first = self.route.bind(self.problem)  # refuses a world that is not an OccupancyGrid
@@ -755,12 +768,10 @@ class ConvergingRouteSampler(_CorridorRule):
         if self.built:
             return
         p = self.problem
-        walked = walk_field_steps(self.route, p, self.first.field) if self.start_field == "walk" else None
-        self._start_passes = 0 if walked is not None or self.route.net is None else self.route.symmetry_passes
-        if walked is None:
-            to_start = self.route.cost_to_go(reversed_query(p))
-            walked, self._start_reused = to_start.field, (to_start.seconds if to_start.reused else 0.0)
-        self._stages(self.first.field, walked)
+        to_start, walked = corridor_field_to_start(self.route, p, self.first.field, self.start_field)
+        self._start_passes = 0 if walked or self.route.net is None else self.route.symmetry_passes
+        self._start_reused = to_start.seconds if to_start.reused else 0.0
+        self._stages(self.first.field, to_start.field)
         self.informed = InformedSampler().bind(p)
         grid = p.world
         rows, cols = np.divmod(self.cells, grid.width)
