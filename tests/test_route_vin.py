@@ -459,15 +459,25 @@ def _whole_and_reused(net: RouteVIN, obstacles: np.ndarray, goal: tuple[int, int
     return whole, net.predict(obstacles, goal)
 
 
+#: How a compiled pass runs the local network on these small maps: through torch's dense layers, its prepacked
+#: ones, or compiled with its heads (``RouteVIN.numba_local_blocks``).
+LAYERS = ("dense", "prepacked", "compiled")
+
+
+def _with_layers(net: RouteVIN, layers: str) -> RouteVIN:
+    net.prepacked_blocks = 0 if layers == "prepacked" else 10**9
+    net.numba_local_blocks = 10**9 if layers == "compiled" else 0
+    return net
+
+
 @settings(max_examples=40, deadline=None)
 @given(h=st.integers(4, 40), w=st.integers(4, 40), depth=st.integers(1, 4), density=st.sampled_from([0.0, 0.2, 0.4]),
        seed=st.integers(0, 2**16), goals=st.lists(st.tuples(st.floats(0, 1), st.floats(0, 1)), min_size=1, max_size=3),
-       wall_cost=st.sampled_from([None, 1.2, 32.0]), step_walls=st.booleans(), packed=st.booleans())
+       wall_cost=st.sampled_from([None, 1.2, 32.0]), step_walls=st.booleans(), layers=st.sampled_from(LAYERS))
 def test_a_kept_map_gives_every_goal_the_whole_pass_field(h, w, depth, density, seed, goals, wall_cost, step_walls,
-                                                          packed):
+                                                          layers):
     torch.manual_seed(seed)  # the weights only; the map and goals come from the seeded generator below
-    net = make_route_net("vin", block=2, channels=8, depth=depth, step=2).eval()
-    net.prepacked_blocks = 0 if packed else 10**9  # these small maps through the prepacked layers, or dense
+    net = _with_layers(make_route_net("vin", block=2, channels=8, depth=depth, step=2).eval(), layers)
     net.wall_cost, net.step_walls = wall_cost, step_walls  # 1.2: many moves priced as walls, on both paths
     obstacles = np.random.default_rng(seed).random((h, w)) < density
     corner = next((tuple(int(i) for i in c) for c in np.argwhere(~obstacles)), None)
@@ -485,11 +495,10 @@ def test_a_kept_map_gives_every_goal_the_whole_pass_field(h, w, depth, density, 
 @settings(max_examples=25, deadline=None)
 @given(h=st.integers(4, 40), w=st.integers(4, 40), density=st.sampled_from([0.0, 0.2, 0.4]), seed=st.integers(0, 2**16),
        goal=st.tuples(st.floats(0, 1), st.floats(0, 1)), other=st.tuples(st.floats(0, 1), st.floats(0, 1)),
-       packed=st.booleans())
-def test_the_same_goal_again_reads_the_held_parts_as_the_whole_pass_made_them(h, w, density, seed, goal, other, packed):
+       layers=st.sampled_from(LAYERS))
+def test_the_same_goal_again_reads_the_held_parts_as_the_whole_pass_made_them(h, w, density, seed, goal, other, layers):
     torch.manual_seed(seed)
-    net = make_route_net("vin", block=2, channels=8, depth=2, step=2).eval()
-    net.prepacked_blocks = 0 if packed else 10**9
+    net = _with_layers(make_route_net("vin", block=2, channels=8, depth=2, step=2).eval(), layers)
     net.wall_cost = 1.2  # many moves priced as walls, so the pass without them differs
     obstacles = np.random.default_rng(seed).random((h, w)) < density
     g = (min(h - 1, int(goal[0] * h)), min(w - 1, int(goal[1] * w)))
@@ -577,10 +586,13 @@ def test_cheaper_arithmetic_moves_the_field_by_its_rounding(capsys):
     assert script.main(["--check", "fields", "--maps", "1", "--sides", "32", "--families", "forest", "maze"]) == 0
     rows = {line.split(" | ")[0].strip("| "): float(line.split(" | ")[1])
             for line in capsys.readouterr().out.splitlines()
-            if line.startswith(("| prepacked", "| channels", "| bfloat16"))}
-    # float32 in another layout differs by rounding only; bfloat16 keeps 8 bits of mantissa, so it moves further
-    assert set(rows) == {"prepacked", "channels-last float32", "bfloat16"}
-    assert max(rows["prepacked"], rows["channels-last float32"]) < 1e-3 < rows["bfloat16"]
+            if line.startswith(("| prepacked", "| compiled", "| channels", "| bfloat16"))}
+    # float32 in another layout or order differs by rounding only; bfloat16 keeps 8 bits of mantissa: it moves further
+    assert set(rows) == {"prepacked", "compiled", "channels-last float32", "bfloat16"}
+    assert max(rows["prepacked"], rows["compiled"], rows["channels-last float32"]) < 1e-3 < rows["bfloat16"]
+    with torch.no_grad():  # torch's dense layers against the compiled ones, on any map
+        assert script.encoder(script.CompiledLocal).compiled_local(torch.zeros(1, 5, 512, 512))
+        assert not script.encoder().compiled_local(torch.zeros(1, 5, 8, 8))
     assert not script.encoder().prepacked and script.encoder(script.Prepacked).prepacked  # dense against prepacked
     shipped, layout = script.encoder(), script.encoder(script.ChannelsLast)  # another layout, the same weights
     pairs = zip(shipped.state_dict().values(), layout.state_dict().values(), strict=True)
@@ -590,10 +602,13 @@ def test_cheaper_arithmetic_moves_the_field_by_its_rounding(capsys):
     assert stop.value.code == 2
 
 
+@pytest.mark.parametrize("local", ["torch", "compiled"])
 @pytest.mark.parametrize("family", ["maze", "bugtrap", "forest"])
-def test_the_compiled_inference_gives_the_torch_pass_field(family, monkeypatch):
-    """Walls gating the Dijkstra, the compiled cell head and the strips of rows: the torch pass's field within 1e-4."""
+def test_the_compiled_inference_gives_the_torch_pass_field(family, local, monkeypatch):
+    """Walls gating the Dijkstra, the compiled cell head and the strips of rows (or the compiled local network): the
+    torch pass's field within 1e-4."""
     net = load_route_net(SHIPPED)
+    net.numba_local_blocks = 10**9 if local == "compiled" else 0  # the local network compiled, or torch's in strips
     problem = generate(family, TRAIN_SEEDS[0] + 5, 96)
     obstacles = problem.world.obstacles
     free = np.argwhere(~obstacles)
@@ -628,6 +643,7 @@ def test_the_prepacked_convolutions_give_the_dense_field_and_follow_the_weights(
     load, training, a pickled copy) are packed again, and an encoder that prices its own moves keeps its own."""
     dense, packed = load_route_net(SHIPPED), load_route_net(SHIPPED)
     dense.prepacked = False
+    dense.numba_local_blocks = packed.numba_local_blocks = 0  # torch's layers on every map and window
     problem = generate(family, TRAIN_SEEDS[0] + 7, 128)
     obstacles = problem.world.obstacles
     free = np.argwhere(~obstacles)

@@ -39,6 +39,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from learning.models import local_net
 from learning.models.cell_head import cell_head_at, cell_head_field, padded_free_cells
 from learning.models.field import FieldEncoder, batch_of, check_start, route_input
 from learning.models.threads import planning_threads
@@ -240,6 +241,15 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: layers: there oneDNN's layout costs more than it saves (a 32-cell map's first query 0.63 against 0.53 ms, equal
     #: at 64 cells), and each new map shape's first pass costs 0.6 ms more to set up against 0.1 to 0.3 dense.
     prepacked_blocks: int = 64 * 64
+    #: The most blocks the local network reads in a compiled pass (the map, or a later query's window and its
+    #: margin: at most ``(4 * depth + 1) ** 2``) for it and its heads to run compiled (``compiled_local``,
+    #: ``learning.models.local_net``) rather than through torch: on small regions torch's cost is its calls, the
+    #: more so where a query runs between planners, as in a planning loop. The same values up to rounding (up to
+    #: 8.4e-5 steps on the validation maps). Chosen by time in planning conditions
+    #: (``scripts/experiments/compiled_local.py``: validation maps of 32 to 128 cells, a planner's run before each
+    #: field): a first query at 32 to 96 cells takes 0.69 to 0.83 of torch's time, at 128 cells (torch's layers
+    #: prepacked) 1.04 to 1.09; a later query's window 0.57 to 0.75 at every side.
+    numba_local_blocks: int = 48 * 48
     #: Whether a compiled pass over a map whose parts inference does not keep (one above ``strip_blocks``, or any
     #: map where ``map_cache_bytes`` is 0) writes its move costs, the head's first layer and the cell field into
     #: buffers the encoder keeps for the next such pass of the same shape (``buffer``), and the compiled search its
@@ -273,6 +283,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         self._maps = KeptMaps()
         self._packed: list[tuple[torch.Tensor, torch.Tensor]] = []  # each 3x3 layer's weights for oneDNN, once made
         self._work: dict[str, np.ndarray] = {}  # a pass's buffers and the search's working arrays, by name
+        self._arrays: dict[str, tuple[np.ndarray, ...]] = {}  # weights as the compiled inference reads them, once made
 
     def clear_map_cache(self) -> None:
         """Forget every map's kept parts (``map_cache_bytes``); the prepacked weights and a pass's buffers stay
@@ -299,6 +310,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         """
         self._maps.clear()
         self._packed.clear()
+        self._arrays.clear()
         self.release_buffers()
 
     def train(self, mode: bool = True) -> RouteVIN:
@@ -311,11 +323,11 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def __getstate__(self) -> dict:
         # a copy sent elsewhere starts with no kept maps or buffers, and packs its own weights
-        return {**self.__dict__, "_maps": KeptMaps(), "_packed": [], "_work": {}}
+        return {**self.__dict__, "_maps": KeptMaps(), "_packed": [], "_work": {}, "_arrays": {}}
 
     def __setstate__(self, state: dict) -> None:
         # a copy pickled before the prepacked weights or the buffers existed; a copy keeps no maps
-        super().__setstate__({"_packed": [], "_work": {}, **state, "_maps": KeptMaps()})
+        super().__setstate__({"_packed": [], "_work": {}, "_arrays": {}, **state, "_maps": KeptMaps()})
 
     def inference_key(self) -> tuple:
         return (*super().inference_key(), self.wall_cost, self.step_walls, self.fixed_point)
@@ -368,7 +380,10 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def prices(self, f: torch.Tensor) -> torch.Tensor:
         """The move costs (B, 8, h, w) in blocks from the local features ``f``: each at least half its length."""
-        return self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
+        if torch.is_grad_enabled():
+            return self.lengths * (0.5 + torch.exp(self.cost(f).clamp_max(WALL_LOG)))
+        c = self.cost(f)  # at inference the same operations in place, the same values: fewer tensors made
+        return c.clamp_max_(WALL_LOG).exp_().add_(0.5).mul_(self.lengths)
 
     @staticmethod
     def iterate(costs: torch.Tensor, goal: torch.Tensor, walls: torch.Tensor, v: torch.Tensor | None = None, *,
@@ -534,6 +549,8 @@ class RouteVIN(nn.Module, FieldEncoder):
         outputs beyond one strip. ``reuse``: the two outputs are the kept buffers (``buffer``), which the next such
         pass overwrites.
         """
+        if self.compiled_local(x):
+            return self.numba_parts(x, reuse=reuse)
         h, w = x.shape[-2:]
         d = self.depth
         rows = max(8 * d, self.feature_bytes // (4 * self.channels * w * x.shape[0]))
@@ -571,14 +588,13 @@ class RouteVIN(nn.Module, FieldEncoder):
         runs once, on those values (``reach.opened``).
         """
         b = self.block
-        goal, walls = (t.numpy() for t in self.goal_and_walls(x))
+        cells = x.numpy()
+        goal, walls = cells[:, b * b] > 0.5, cells[:, :b * b].min(1) > 0.5  # goal_and_walls, in numpy
         gate = None
         if self.step_walls:
             gate = (cell_steps(x, b) if steps is None else steps).numpy()
-        most = None if self.wall_cost is None else (self.wall_cost * self.lengths).view(-1).numpy()
-        first, last = self.cells[0], self.cells[2]
-        w_rel = first.weight[:, self.channels:, 0, 0].numpy()
-        w_out, b_out = last.weight[:, :, 0, 0].numpy(), last.bias.numpy()
+        lengths, w_rel, w_out, b_out = self.head_arrays()
+        most = None if self.wall_cost is None else np.float32(self.wall_cost) * lengths
         c, p = costs.numpy(), pre.numpy()
         field = self.buffer("field", (len(c), c.shape[2] * b, c.shape[3] * b)).numpy() if reuse else None
         out = []
@@ -595,6 +611,84 @@ class RouteVIN(nn.Module, FieldEncoder):
             out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED,
                                        None if field is None else field[i]))
         return torch.from_numpy(batch_of(out) if field is None else field)
+
+    def head_arrays(self) -> tuple[np.ndarray, ...]:
+        """What the compiled search and cell head read of the weights, as numpy views made once (until
+        ``weights_changed``): the moves' lengths, the cell head's weights on the block values, its last layer's
+        weights and bias.
+        """
+        if "head" not in self._arrays:
+            first, last = self.cells[0], self.cells[2]
+            self._arrays["head"] = tuple(t.detach().numpy() for t in (
+                self.lengths.view(-1), first.weight[:, self.channels:, 0, 0], last.weight[:, :, 0, 0], last.bias))
+        return self._arrays["head"]
+
+    def local_arrays(self) -> tuple[np.ndarray, ...]:
+        """The local network and its two 1x1 heads as ``learning.models.local_net`` reads them, made once (until
+        ``weights_changed``): the first 3x3 layer, the others stacked (``grouped``), the cost head's weights and bias,
+        the cell head's first layer's weights on the features and its bias.
+        """
+        if "local" not in self._arrays:
+            convs = [m for m in self.local if isinstance(m, nn.Conv2d)]
+            w0, b0 = local_net.grouped(convs[0].weight.detach().numpy(), convs[0].bias.detach().numpy())
+            rest = [local_net.grouped(m.weight.detach().numpy(), m.bias.detach().numpy(), len(w0)) for m in convs[1:]]
+            ws = np.stack([w for w, _ in rest]) if rest else np.zeros((0, len(w0), len(w0), 3, 3), np.float32)
+            bs = np.stack([b for _, b in rest]) if rest else np.zeros((0, len(w0)), np.float32)
+            first = self.cells[0]
+            self._arrays["local"] = (w0, b0, np.ascontiguousarray(ws), np.ascontiguousarray(bs),
+                                     *(np.ascontiguousarray(t.detach().numpy(), dtype=np.float32) for t in (
+                                         self.cost.weight[:, :, 0, 0], self.cost.bias,
+                                         first.weight[:, :self.channels, 0, 0], first.bias)))
+        return self._arrays["local"]
+
+    def compiled_local(self, x: torch.Tensor, window: tuple[int, int, int, int] | None = None) -> bool:
+        """Whether the compiled inference computes the local network and its heads over ``x`` (the map; over the region
+        its ``window`` reads, where given) compiled (``learning.models.local_net``) rather than through torch: on
+        float32 input, over a region of at most ``numba_local_blocks`` blocks, where the encoder keeps the class's own
+        local network and heads.
+        """
+        r0, r1, c0, c1 = self.window_region(x, window)
+        return ((r1 - r0) * (c1 - c0) <= self.numba_local_blocks and x.dtype == torch.float32 and self.compiled(x)
+                and all(getattr(getattr(self, name), "__func__", None) is getattr(RouteVIN, name)
+                        for name in ("move_costs", "prices", "head_inputs")))
+
+    def window_region(self, x: torch.Tensor, window: tuple[int, int, int, int] | None = None
+                      ) -> tuple[int, int, int, int]:
+        """The blocks (rows ``r0:r1``, columns ``c0:c1``) the local network reads for the blocks of ``window`` (the
+        whole map where None): ``depth`` blocks beyond it, within the map.
+        """
+        h, w = x.shape[-2:]
+        if window is None:
+            return 0, h, 0, w
+        k0, k1, j0, j1 = window
+        d = self.depth
+        return max(0, k0 - d), min(h, k1 + d), max(0, j0 - d), min(w, j1 + d)
+
+    def numba_parts(self, x: torch.Tensor, window: tuple[int, int, int, int] | None = None, reuse: bool = False
+                    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """``map_features`` (``window`` None; ``reuse`` as it takes it) or ``window_parts`` of ``x``, compiled
+        (``compiled_local``).
+        """
+        h, w = x.shape[-2:]
+        k0, k1, j0, j1 = (0, h, 0, w) if window is None else window
+        d = self.depth
+        r0, r1, c0, c1 = self.window_region(x, window)
+        pads = (int(r0 == 0), int(r1 == h), int(c0 == 0), int(c1 == w))
+        w0, b0, ws, bs, w_cost, b_cost, w_pre, b_pre = self.local_arrays()
+        lengths = self.head_arrays()[0]
+        cells = x.numpy()
+        shapes = (len(cells), len(MOVES), k1 - k0, j1 - j0), (len(cells), self.channels, k1 - k0, j1 - j0)
+        if reuse:
+            costs, pre = self.buffer("costs", shapes[0]).numpy(), self.buffer("pre", shapes[1]).numpy()
+        else:
+            costs, pre = (np.empty(shape, dtype=np.float32) for shape in shapes)
+        regions = cells[:, :, r0:r1, c0:c1]
+        # where a side is not the map's edge the layers shrink the region by one block each: depth blocks in all
+        r0, c0 = r0 + d * (1 - pads[0]), c0 + d * (1 - pads[2])
+        for i, region in enumerate(regions):
+            f = local_net.local_features(region, w0, b0, ws, bs, pads)[:, k0 - r0:k1 - r0, j0 - c0:j1 - c0]
+            costs[i], pre[i] = local_net.block_heads(f, self.channels, w_cost, b_cost, lengths, WALL_LOG, w_pre, b_pre)
+        return torch.from_numpy(costs), torch.from_numpy(pre)
 
     def map_key(self, x: torch.Tensor) -> tuple:
         """The key of a map's kept parts: the input's shape, device and cells (not the goal).
@@ -619,6 +713,8 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def window_parts(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> tuple[torch.Tensor, torch.Tensor]:
         """The move costs and the head's first layer over the blocks of ``window`` only (``local_window``)."""
+        if self.compiled_local(x, window):
+            return self.numba_parts(x, window)
         f = self.local_window(x, window)
         return self.prices(f), self.head_inputs(f)
 
@@ -646,8 +742,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         """
         h, w = x.shape[-2:]
         k0, k1, j0, j1 = window
-        d = self.depth
-        r0, r1, c0, c1 = max(0, k0 - d), min(h, k1 + d), max(0, j0 - d), min(w, j1 + d)
+        r0, r1, c0, c1 = self.window_region(x, window)
         y = x[:, :, r0:r1, c0:c1]
         if self.compiled(x) and self.packs(x):
             return self.packed_local(y)[:, :, k0 - r0:k1 - r0, j0 - c0:j1 - c0]

@@ -1,14 +1,17 @@
-"""The shipped route encoder with other arithmetic for its convolutions: prepacked, channels-last and bfloat16.
+"""The shipped route encoder with other arithmetic for its convolutions: prepacked, compiled, channels-last, bfloat16.
 
     python scripts/experiments/cheap_arithmetic.py --check fields        # how far each variant's field moves
     python scripts/experiments/cheap_arithmetic.py --check iterations    # bfloat16's RRT iterations (vin_validation)
     python scripts/experiments/cheap_arithmetic.py --check iterations --variant prepacked
+    python scripts/experiments/cheap_arithmetic.py --check iterations --variant compiled --sides 32 64 128
     python scripts/experiments/cheap_arithmetic.py --check time          # a pass at 128 cells, each way
 
 The variants keep the shipped weights and change only how the local network's 3x3 convolutions run at
-inference, each against the dense float32 convolutions that training runs (``RouteVIN.prepacked`` off): on
-weights prepacked for oneDNN, the activations in its blocked layout from layer to layer (``prepacked``: what the
-library ships); on channels-last tensors in float32 (another memory layout, so oneDNN sums in another order); or
+inference, each against the dense float32 convolutions that training runs (``RouteVIN.prepacked`` off, and
+``numba_local_blocks`` 0): on weights prepacked for oneDNN, the activations in its blocked layout from layer to layer
+(``prepacked``: what the library ships on larger maps); compiled in numba with the heads (``compiled``: what it ships
+on small maps and later queries' windows); on channels-last tensors in float32 (another memory layout, so oneDNN sums
+in another order); or
 in bfloat16 on channels-last tensors (the heads, the fixed point and everything after stay float32). bfloat16
 is fast only on a CPU that computes it natively (AMX, AVX-512 BF16).
 
@@ -65,12 +68,25 @@ class BFloat16(CheapConvolutions):
 
 
 class Prepacked(RouteVIN):
-    """``RouteVIN`` as shipped: the compiled inference runs the local network prepacked for oneDNN."""
+    """``RouteVIN`` with the local network prepacked for oneDNN on every map (as shipped on maps of at least
+    ``prepacked_blocks`` blocks), never compiled.
+    """
 
     prepacked = True
+    numba_local_blocks = 0
 
 
-VARIANTS = {"prepacked": Prepacked, "channels-last float32": ChannelsLast, "bfloat16": BFloat16}
+class CompiledLocal(RouteVIN):
+    """``RouteVIN`` with the local network and its heads compiled on every map and window
+    (``learning.models.local_net``; as shipped on regions of at most ``numba_local_blocks`` blocks).
+    """
+
+    prepacked = False
+    numba_local_blocks = 1 << 62
+
+
+VARIANTS = {"prepacked": Prepacked, "compiled": CompiledLocal, "channels-last float32": ChannelsLast,
+            "bfloat16": BFloat16}
 
 
 def encoder(variant: type[RouteVIN] | None = None) -> RouteVIN:
@@ -79,6 +95,7 @@ def encoder(variant: type[RouteVIN] | None = None) -> RouteVIN:
     net = load_route_net(SHIPPED_ROUTE).eval()
     if variant is None:
         net.prepacked = False
+        net.numba_local_blocks = 0
         return net
     net.__class__ = variant  # the same module, its inference methods swapped: an experiment, not the library
     if issubclass(variant, CheapConvolutions):
@@ -158,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     """Command line entry point."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--check", choices=("fields", "iterations", "time"), required=True)
-    ap.add_argument("--variant", choices=("bfloat16", "prepacked"), default="bfloat16",
+    ap.add_argument("--variant", choices=("bfloat16", "prepacked", "compiled"), default="bfloat16",
                     help="--check iterations: the variant run against the dense convolutions (default bfloat16)")
     ap.add_argument("--maps", type=int, default=6, help="validation maps per family and side (default 6)")
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
