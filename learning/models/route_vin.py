@@ -89,6 +89,16 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
     return torch.from_numpy(batch_of(steps)).to(x.device)
 
 
+def _patched(kept: torch.Tensor, window: tuple[int, int, int, int], values: torch.Tensor) -> torch.Tensor:
+    """A copy of the CPU tensor ``kept`` (B, C, h, w) with the blocks of ``window`` (rows ``k0:k1``, columns ``j0:j1``)
+    set to ``values``, made in numpy (fewer calls than torch's clone and assignment, the same values).
+    """
+    k0, k1, j0, j1 = window
+    out = kept.numpy().copy()
+    out[:, :, k0:k1, j0:j1] = values.numpy()
+    return torch.from_numpy(out)
+
+
 class MapParts(NamedTuple):
     """What a pass computes from a map, kept for the next query on the same map (``RouteVIN``).
 
@@ -365,7 +375,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         reach = Reach(check_start(obstacles, start_cell), self.block / self.step, 0.5 * self.unreached_steps)
         x = torch.from_numpy(batch_of([route_input(obstacles, goal_cell, self.block)]))
         with planning_threads(threads), torch.inference_mode():
-            field = self.infer(x, reach)[0, :h, :w].numpy().astype(np.float64)
+            field = self.infer(x, reach).numpy()[0, :h, :w].astype(np.float64)
         return self.in_steps(field), reach.opened
 
     def goal_and_walls(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -695,7 +705,7 @@ class RouteVIN(nn.Module, FieldEncoder):
 
         Cells of 0 and 1 only (``route_input``'s) are hashed as bits; any other values byte for byte.
         """
-        cells = x[:, :self.block * self.block].cpu().numpy()
+        cells = x.cpu().numpy()[:, :self.block * self.block]
         blocked = cells >= 0.5
         data = np.packbits(blocked) if np.array_equal(cells, blocked) else np.ascontiguousarray(cells)
         return tuple(x.shape), str(x.device), hashlib.blake2b(data.tobytes(), digest_size=16).digest()
@@ -720,7 +730,7 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def goal_block(self, x: torch.Tensor) -> tuple[int, int] | None:
         """The block (row, column) the goal's channel marks; None unless it marks exactly one."""
-        marked = np.flatnonzero(x[0, self.block * self.block].cpu().numpy() > 0.5)
+        marked = np.flatnonzero(x.cpu().numpy()[0, self.block * self.block] > 0.5)
         return divmod(int(marked[0]), x.shape[-1]) if len(marked) == 1 else None
 
     def goal_window(self, x: torch.Tensor, block: tuple[int, int]) -> tuple[int, int, int, int]:
@@ -795,18 +805,15 @@ class RouteVIN(nn.Module, FieldEncoder):
             self.keep_map(key, parts)
             return self._field_from_parts(x, parts.costs, parts.hidden, parts.steps, reach)
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
-            free = x.clone()
-            free[:, self.block * self.block] = 0.0
-            k0, k1, j0, j1 = parts.goal_window
-            costs, hidden = parts.costs.clone(), parts.hidden.clone()
-            costs[:, :, k0:k1, j0:j1], hidden[:, :, k0:k1, j0:j1] = self.window_parts(free, parts.goal_window)
-            parts = MapParts(costs, hidden, parts.steps)
+            free = torch.from_numpy(x.numpy().copy())  # the map without a goal (copies in numpy: fewer calls)
+            free.numpy()[:, self.block * self.block] = 0.0
+            costs, hidden = self.window_parts(free, parts.goal_window)
+            parts = MapParts(_patched(parts.costs, parts.goal_window, costs),
+                             _patched(parts.hidden, parts.goal_window, hidden), parts.steps)
         self.keep_map(key, parts)
-        k0, k1, j0, j1 = window
-        win = (slice(None), slice(None), slice(k0, k1), slice(j0, j1))
-        costs, pre = parts.costs.clone(), parts.hidden.clone()
-        costs[win], pre[win] = self.window_parts(x, window)
-        return self._field_from_parts(x, costs, pre, parts.steps, reach)
+        costs, pre = self.window_parts(x, window)
+        return self._field_from_parts(x, _patched(parts.costs, window, costs), _patched(parts.hidden, window, pre),
+                                      parts.steps, reach)
 
     def _field_from_parts(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
                           steps: torch.Tensor, reach: Reach | None = None) -> torch.Tensor:
