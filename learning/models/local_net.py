@@ -146,31 +146,29 @@ def _exp_costs(row, length, wall_log, bits):
 
 
 @nb.njit(cache=True, fastmath={"contract"})
+def _one_by_one(features, channels, w, b, out):
+    """``out[k] = b[k] + sum over j < channels of w[k, j] * features[j]``: a 1x1 layer over flat rows, in that order."""
+    for k in range(out.shape[0]):
+        row = out[k]
+        for i in range(len(row)):
+            row[i] = b[k]
+        for j in range(channels):
+            wv = w[k, j]
+            src = features[j]
+            for i in range(len(row)):
+                row[i] += wv * src[i]
+
+
+@nb.njit(cache=True)
 def _heads(f, channels, w_cost, b_cost, lengths, wall_log, w_pre, b_pre, costs, pre):
     m = f.shape[1] * f.shape[2]
     ff = f.reshape(f.shape[0], m)
     cf = costs.reshape(costs.shape[0], m)
-    pf = pre.reshape(pre.shape[0], m)
+    _one_by_one(ff, channels, w_cost, b_cost, cf)
     bits = np.empty(m, dtype=np.int32)
     for k in range(cf.shape[0]):
-        row = cf[k]
-        for i in range(m):
-            row[i] = b_cost[k]
-        for j in range(channels):
-            wv = w_cost[k, j]
-            src = ff[j]
-            for i in range(m):
-                row[i] += wv * src[i]
-        _exp_costs(row, lengths[k], wall_log, bits)
-    for k in range(pf.shape[0]):
-        row = pf[k]
-        for i in range(m):
-            row[i] = b_pre[k]
-        for j in range(channels):
-            wv = w_pre[k, j]
-            src = ff[j]
-            for i in range(m):
-                row[i] += wv * src[i]
+        _exp_costs(cf[k], lengths[k], wall_log, bits)
+    _one_by_one(ff, channels, w_pre, b_pre, pre.reshape(pre.shape[0], m))
 
 
 def block_heads(f: np.ndarray, channels: int, w_cost: np.ndarray, b_cost: np.ndarray, lengths: np.ndarray,
