@@ -7,7 +7,8 @@ planning loop; ``scripts/experiments/compiled_local.py`` measures both). ``local
 (zero padding, ReLU) in one compiled call, and ``block_heads`` the cost head (``RouteVIN.prices``) and the cell
 head's first layer on the features (``RouteVIN.head_inputs``) in another: float32 throughout, the same
 arithmetic in another order of summation (each output's sum runs bias first, then input channel by channel, each
-channel's nine taps row by row; multiply-adds may fuse), so the values are torch's up to rounding. Training and
+channel's nine taps row by row, and a 1x1 layer's inputs four at a time; multiply-adds may fuse), so the values are
+torch's up to rounding. Training and
 larger maps keep torch (``RouteVIN.numba_local_blocks``).
 """
 
@@ -64,25 +65,32 @@ def _conv3x3(plane, w, b, out):
 @nb.njit(cache=True)
 def _local(x, w_first, b_first, w_rest, b_rest, top, bottom, left, right):
     zero = np.float32(0.0)
-    y = x
     layers = 1 + w_rest.shape[0]
+    c, h, wd = x.shape
+    plane = np.zeros((c, h + top + bottom, wd + left + right), dtype=np.float32)
+    plane[:, top:top + h, left:left + wd] = x
     for layer in range(layers):
         w = w_first if layer == 0 else w_rest[layer - 1]
         b = b_first if layer == 0 else b_rest[layer - 1]
-        c, h, wd = y.shape
-        hp, wp = h + top + bottom, wd + left + right
-        plane = np.zeros((c, hp, wp), dtype=np.float32)
-        plane[:, top:top + h, left:left + wd] = y
-        ho, wo = hp - 2, wp - 2
+        wp = plane.shape[2]
+        ho, wo = plane.shape[1] - 2, wp - 2
         out = np.empty((w.shape[0], (ho - 1) * wp + wo), dtype=np.float32)  # row stride wp, the last row's tail cut
         _conv3x3(plane, w, b, out)
-        y = np.empty((w.shape[0], ho, wo), dtype=np.float32)
+        last = layer == layers - 1
+        # rectified into the next layer's input, with its zero padding (or, after the last layer, the features)
+        r0, c0 = (0, 0) if last else (top, left)
+        if last:
+            plane = np.empty((w.shape[0], ho, wo), dtype=np.float32)
+        else:
+            plane = np.zeros((w.shape[0], ho + top + bottom, wo + left + right), dtype=np.float32)
         for k in range(w.shape[0]):
             for r in range(ho):
+                src = out[k, r * wp:r * wp + wo]  # row views: contiguous loads, never an offset index
+                dst = plane[k, r0 + r, c0:c0 + wo]
                 for col in range(wo):
-                    v = out[k, r * wp + col]
-                    y[k, r, col] = v if v > zero else zero
-    return y
+                    v = src[col]
+                    dst[col] = v if v > zero else zero
+    return plane
 
 
 def grouped(weights: np.ndarray, bias: np.ndarray, inputs: int | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -145,18 +153,36 @@ def _exp_costs(row, length, wall_log, bits):
         row[i] = length * (half + row[i] * scale[i])
 
 
+#: Positions a pass of ``_one_by_one`` covers at once, so that its input rows stay in the CPU's first cache.
+_CHUNK = 512
+
+
 @nb.njit(cache=True, fastmath={"contract"})
 def _one_by_one(features, channels, w, b, out):
-    """``out[k] = b[k] + sum over j < channels of w[k, j] * features[j]``: a 1x1 layer over flat rows, in that order."""
-    for k in range(out.shape[0]):
-        row = out[k]
-        for i in range(len(row)):
-            row[i] = b[k]
-        for j in range(channels):
-            wv = w[k, j]
-            src = features[j]
+    """``out[k] = b[k] + sum over j < channels of w[k, j] * features[j]``: a 1x1 layer over flat rows, the inputs
+    summed in that order, four at a time (one load and store of an output for four of its terms).
+    """
+    m = out.shape[1]
+    for start in range(0, m, _CHUNK):
+        stop = min(m, start + _CHUNK)
+        for k in range(out.shape[0]):
+            row = out[k, start:stop]
             for i in range(len(row)):
-                row[i] += wv * src[i]
+                row[i] = b[k]
+            j = 0
+            while j + 4 <= channels:
+                w0, w1, w2, w3 = w[k, j], w[k, j + 1], w[k, j + 2], w[k, j + 3]
+                s0, s1 = features[j, start:stop], features[j + 1, start:stop]
+                s2, s3 = features[j + 2, start:stop], features[j + 3, start:stop]
+                for i in range(len(row)):
+                    row[i] = row[i] + w0 * s0[i] + w1 * s1[i] + w2 * s2[i] + w3 * s3[i]
+                j += 4
+            while j < channels:
+                wv = w[k, j]
+                src = features[j, start:stop]
+                for i in range(len(row)):
+                    row[i] += wv * src[i]
+                j += 1
 
 
 @nb.njit(cache=True)

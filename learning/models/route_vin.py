@@ -259,7 +259,7 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: (``scripts/experiments/compiled_local.py``: validation maps of 32 to 128 cells, a planner's run before each
     #: field): a first query at 32 to 96 cells takes 0.69 to 0.83 of torch's time, at 128 cells (torch's layers
     #: prepacked) 1.04 to 1.09; a later query's window 0.57 to 0.75 at every side.
-    numba_local_blocks: int = 48 * 48
+    numba_local_blocks: int = 56 * 56
     #: Whether a compiled pass over a map whose parts inference does not keep (one above ``strip_blocks``, or any
     #: map where ``map_cache_bytes`` is 0) writes its move costs, the head's first layer and the cell field into
     #: buffers the encoder keeps for the next such pass of the same shape (``buffer``), and the compiled search its
