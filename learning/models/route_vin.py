@@ -255,10 +255,10 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: margin: at most ``(4 * depth + 1) ** 2``) for it and its heads to run compiled (``compiled_local``,
     #: ``learning.models.local_net``) rather than through torch: on small regions torch's cost is its calls, the
     #: more so where a query runs between planners, as in a planning loop. The same values up to rounding (up to
-    #: 8.4e-5 steps on the validation maps). Chosen by time in planning conditions
-    #: (``scripts/experiments/compiled_local.py``: validation maps of 32 to 128 cells, a planner's run before each
-    #: field): a first query at 32 to 96 cells takes 0.69 to 0.83 of torch's time, at 128 cells (torch's layers
-    #: prepacked) 1.04 to 1.09; a later query's window 0.57 to 0.75 at every side.
+    #: 1.14e-4 steps on the validation maps, every validation median of iterations the same). Chosen by time in
+    #: planning conditions (``scripts/experiments/compiled_local.py``: validation maps of 32 to 128 cells, a planner's
+    #: run before each field): a first query at 32 to 112 cells takes 0.65 to 0.83 of torch's time, at 128 cells
+    #: (torch's layers prepacked) 0.97 and 1.02; a later query's window 0.53 to 0.72 at every side.
     numba_local_blocks: int = 56 * 56
     #: Whether a compiled pass over a map whose parts inference does not keep (one above ``strip_blocks``, or any
     #: map where ``map_cache_bytes`` is 0) writes its move costs, the head's first layer and the cell field into
