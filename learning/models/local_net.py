@@ -8,8 +8,7 @@ planning loop; ``scripts/experiments/compiled_local.py`` measures both). ``local
 head's first layer on the features (``RouteVIN.head_inputs``) in another: float32 throughout, the same
 arithmetic in another order of summation (each output's sum runs bias first, then input channel by channel, each
 channel's nine taps row by row, and a 1x1 layer's inputs four at a time; multiply-adds may fuse), so the values are
-torch's up to rounding. Training and
-larger maps keep torch (``RouteVIN.numba_local_blocks``).
+torch's up to rounding. Training and larger maps keep torch (``RouteVIN.numba_local_blocks``).
 """
 
 from __future__ import annotations
