@@ -119,3 +119,13 @@ def test_the_compiled_local_script_times_both_ways_and_refuses_bad_counts(capsys
     with pytest.raises(SystemExit) as stop:
         script.main(["--maps", "0"])
     assert stop.value.code == 2
+
+
+def test_the_heads_run_compiled_over_torchs_layers_unless_turned_off():
+    problem = generate("maze", TRAIN_SEEDS[0] + 4, 128)  # above the compiled layers' limit: torch's layers
+    obstacles, goal = problem.world.obstacles, problem.world.cell_of(problem.goal)
+    compiled, through_torch = load_route_net(SHIPPED), load_route_net(SHIPPED)
+    through_torch.compiled_heads = False
+    a, b = compiled.predict(obstacles, goal), through_torch.predict(obstacles, goal)
+    reached = b < 1e5
+    assert np.array_equal(reached, a < 1e5) and 0 < np.abs(a - b)[reached].max() < 1e-4

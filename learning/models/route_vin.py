@@ -260,6 +260,11 @@ class RouteVIN(nn.Module, FieldEncoder):
     #: run before each field): a first query at 32 to 112 cells takes 0.65 to 0.83 of torch's time, at 128 cells
     #: (torch's layers prepacked) 0.97 and 1.02; a later query's window 0.53 to 0.72 at every side.
     numba_local_blocks: int = 56 * 56
+    #: Whether a compiled pass over a larger region, whose local network runs through torch, runs its two 1x1 heads
+    #: compiled (``strip_parts``, ``learning.models.local_net.block_heads``): the same values up to rounding (the
+    #: field within 1.03e-4 steps of the dense pass on the validation maps, every validation median the same), 0.90
+    #: to 0.97 of a first query's time at 128 cells. False: ``prices`` and ``head_inputs`` through torch.
+    compiled_heads: bool = True
     #: Whether a compiled pass over a map whose parts inference does not keep (one above ``strip_blocks``, or any
     #: map where ``map_cache_bytes`` is 0) writes its move costs, the head's first layer and the cell field into
     #: buffers the encoder keeps for the next such pass of the same shape (``buffer``), and the compiled search its
@@ -565,8 +570,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         d = self.depth
         rows = max(8 * d, self.feature_bytes // (4 * self.channels * w * x.shape[0]))
         if rows >= h:
-            f, costs = self.inference_costs(x, self.packs(x))
-            return costs, self.head_inputs(f)
+            return self.strip_parts(x, self.packs(x))
         packed = self.packs(x)  # decided on the whole map, so its later windows run as its strips do
         if reuse:
             costs = self.buffer("costs", (x.shape[0], len(MOVES), h, w))
@@ -577,10 +581,27 @@ class RouteVIN(nn.Module, FieldEncoder):
         for r0 in range(0, h, rows):
             r1 = min(h, r0 + rows)
             lo, hi = max(0, r0 - d), min(h, r1 + d)
-            f, c = self.inference_costs(x[:, :, lo:hi], packed)
-            costs[:, :, r0:r1] = c[:, :, r0 - lo:r1 - lo]
-            pre[:, :, r0:r1] = self.head_inputs(f[:, :, r0 - lo:r1 - lo])
+            costs[:, :, r0:r1], pre[:, :, r0:r1] = self.strip_parts(x[:, :, lo:hi], packed, (r0 - lo, r1 - lo))
         return costs, pre
+
+    def strip_parts(self, x: torch.Tensor, packed: bool, rows: tuple[int, int] | None = None
+                    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """The move costs and the head's first layer of the blocks of ``x`` (the map or a strip of it; of its block
+        rows ``rows`` only, where given) as the compiled inference computes them: the local network through torch
+        (prepacked where ``packed``), and its two heads compiled (``learning.models.local_net.block_heads``) where
+        ``compiled_heads`` holds and the encoder keeps the class's own network and heads (``owns_local``), else
+        ``move_costs`` and ``head_inputs``.
+        """
+        a, b = (0, x.shape[-2]) if rows is None else rows
+        if not (self.compiled_heads and self.owns_local() and x.dtype == torch.float32):
+            f, costs = self.inference_costs(x, packed)
+            return costs[:, :, a:b], self.head_inputs(f[:, :, a:b])
+        f = (self.packed_local(x) if packed else self.local(x))[:, :, a:b].numpy()
+        lengths = self.head_arrays()[0]
+        w_cost, b_cost, w_pre, b_pre = self.local_arrays()[4:]
+        parts = [local_net.block_heads(one, self.channels, w_cost, b_cost, lengths, WALL_LOG, w_pre, b_pre)
+                 for one in f]
+        return (torch.from_numpy(batch_of([c for c, _ in parts])), torch.from_numpy(batch_of([p for _, p in parts])))
 
     def compiled_field(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
                        steps: torch.Tensor | None = None, reuse: bool = False,
@@ -659,8 +680,14 @@ class RouteVIN(nn.Module, FieldEncoder):
         """
         r0, r1, c0, c1 = self.window_region(x, window)
         return ((r1 - r0) * (c1 - c0) <= self.numba_local_blocks and x.dtype == torch.float32 and self.compiled(x)
-                and all(getattr(getattr(self, name), "__func__", None) is getattr(RouteVIN, name)
-                        for name in ("move_costs", "prices", "head_inputs")))
+                and self.owns_local())
+
+    def owns_local(self) -> bool:
+        """Whether the encoder keeps the class's own local network and heads (``move_costs``, ``prices`` and
+        ``head_inputs``; a subclass or an instance that overrides one keeps its own, through torch).
+        """
+        return all(getattr(getattr(self, name), "__func__", None) is getattr(RouteVIN, name)
+                   for name in ("move_costs", "prices", "head_inputs"))
 
     def window_region(self, x: torch.Tensor, window: tuple[int, int, int, int] | None = None
                       ) -> tuple[int, int, int, int]:

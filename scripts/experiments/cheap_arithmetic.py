@@ -4,16 +4,17 @@
     python scripts/experiments/cheap_arithmetic.py --check iterations    # bfloat16's RRT iterations (vin_validation)
     python scripts/experiments/cheap_arithmetic.py --check iterations --variant prepacked
     python scripts/experiments/cheap_arithmetic.py --check iterations --variant compiled --sides 32 64 128
+    python scripts/experiments/cheap_arithmetic.py --check iterations --variant "compiled heads"
     python scripts/experiments/cheap_arithmetic.py --check time          # a pass at 128 cells, each way
 
-The variants keep the shipped weights and change only how the local network's 3x3 convolutions run at
-inference, each against the dense float32 convolutions that training runs (``RouteVIN.prepacked`` off, and
-``numba_local_blocks`` 0): on weights prepacked for oneDNN, the activations in its blocked layout from layer to layer
-(``prepacked``: what the library ships on larger maps); compiled in numba with the heads (``compiled``: what it ships
-on small maps and later queries' windows); on channels-last tensors in float32 (another memory layout, so oneDNN sums
-in another order); or
-in bfloat16 on channels-last tensors (the heads, the fixed point and everything after stay float32). bfloat16
-is fast only on a CPU that computes it natively (AMX, AVX-512 BF16).
+The variants keep the shipped weights and change only how the local network's 3x3 convolutions (and its two 1x1
+heads) run at inference, each against the dense float32 layers that training runs, heads through torch
+(``RouteVIN.prepacked`` off, ``numba_local_blocks`` 0, ``compiled_heads`` off): on weights prepacked for oneDNN, the
+activations in its blocked layout from layer to layer (``prepacked``), with the two 1x1 heads compiled too
+(``compiled heads``: what the library ships on larger maps); compiled in numba with the heads (``compiled``: what it
+ships on small maps and later queries' windows); on channels-last tensors in float32 (another memory layout, so
+oneDNN sums in another order); or in bfloat16 on channels-last tensors (the heads, the fixed point and everything
+after stay float32). bfloat16 is fast only on a CPU that computes it natively (AMX, AVX-512 BF16).
 
 ``fields``: on the validation maps (the training families, seeds from ``VALIDATION_SEED0 + 500``, ``--maps``
 per family at each of ``--sides``, each map's own goal), the largest difference from the dense field at any
@@ -69,11 +70,20 @@ class BFloat16(CheapConvolutions):
 
 class Prepacked(RouteVIN):
     """``RouteVIN`` with the local network prepacked for oneDNN on every map (as shipped on maps of at least
-    ``prepacked_blocks`` blocks), never compiled.
+    ``prepacked_blocks`` blocks), never compiled, its heads through torch.
     """
 
     prepacked = True
     numba_local_blocks = 0
+    compiled_heads = False
+
+
+class PrepackedCompiledHeads(Prepacked):
+    """``Prepacked`` with its two 1x1 heads compiled (``RouteVIN.compiled_heads``): as shipped on maps of at least
+    ``prepacked_blocks`` blocks.
+    """
+
+    compiled_heads = True
 
 
 class CompiledLocal(RouteVIN):
@@ -85,8 +95,8 @@ class CompiledLocal(RouteVIN):
     numba_local_blocks = 1 << 62
 
 
-VARIANTS = {"prepacked": Prepacked, "compiled": CompiledLocal, "channels-last float32": ChannelsLast,
-            "bfloat16": BFloat16}
+VARIANTS = {"prepacked": Prepacked, "compiled heads": PrepackedCompiledHeads, "compiled": CompiledLocal,
+            "channels-last float32": ChannelsLast, "bfloat16": BFloat16}
 
 
 def encoder(variant: type[RouteVIN] | None = None) -> RouteVIN:
@@ -94,8 +104,7 @@ def encoder(variant: type[RouteVIN] | None = None) -> RouteVIN:
     the dense float32 convolutions as training runs them."""
     net = load_route_net(SHIPPED_ROUTE).eval()
     if variant is None:
-        net.prepacked = False
-        net.numba_local_blocks = 0
+        net.prepacked, net.numba_local_blocks, net.compiled_heads = False, 0, False
         return net
     net.__class__ = variant  # the same module, its inference methods swapped: an experiment, not the library
     if issubclass(variant, CheapConvolutions):
@@ -175,7 +184,7 @@ def main(argv: list[str] | None = None) -> int:
     """Command line entry point."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--check", choices=("fields", "iterations", "time"), required=True)
-    ap.add_argument("--variant", choices=("bfloat16", "prepacked", "compiled"), default="bfloat16",
+    ap.add_argument("--variant", choices=("bfloat16", "prepacked", "compiled heads", "compiled"), default="bfloat16",
                     help="--check iterations: the variant run against the dense convolutions (default bfloat16)")
     ap.add_argument("--maps", type=int, default=6, help="validation maps per family and side (default 6)")
     ap.add_argument("--sides", type=int, nargs="+", default=[128, 256])
