@@ -597,11 +597,15 @@ class RouteVIN(nn.Module, FieldEncoder):
             f, costs = self.inference_costs(x, packed)
             return costs[:, :, a:b], self.head_inputs(f[:, :, a:b])
         f = (self.packed_local(x) if packed else self.local(x))[:, :, a:b].numpy()
-        lengths = self.head_arrays()[0]
-        w_cost, b_cost, w_pre, b_pre = self.local_arrays()[4:]
-        parts = [local_net.block_heads(one, self.channels, w_cost, b_cost, lengths, WALL_LOG, w_pre, b_pre)
-                 for one in f]
+        parts = [self.block_heads(one) for one in f]
         return (torch.from_numpy(batch_of([c for c, _ in parts])), torch.from_numpy(batch_of([p for _, p in parts])))
+
+    def block_heads(self, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The move costs and the head's first layer of one query's local features ``f`` (C, h, w), compiled
+        (``learning.models.local_net.block_heads`` on this encoder's weights).
+        """
+        w_cost, b_cost, w_pre, b_pre = self.local_arrays()[4:]
+        return local_net.block_heads(f, self.channels, w_cost, b_cost, self.head_arrays()[0], WALL_LOG, w_pre, b_pre)
 
     def compiled_field(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
                        steps: torch.Tensor | None = None, reuse: bool = False,
@@ -711,8 +715,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         d = self.depth
         r0, r1, c0, c1 = self.window_region(x, window)
         pads = (int(r0 == 0), int(r1 == h), int(c0 == 0), int(c1 == w))
-        w0, b0, ws, bs, w_cost, b_cost, w_pre, b_pre = self.local_arrays()
-        lengths = self.head_arrays()[0]
+        w0, b0, ws, bs = self.local_arrays()[:4]
         cells = x.numpy()
         shapes = (len(cells), len(MOVES), k1 - k0, j1 - j0), (len(cells), self.channels, k1 - k0, j1 - j0)
         if reuse:
@@ -724,7 +727,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         r0, c0 = r0 + d * (1 - pads[0]), c0 + d * (1 - pads[2])
         for i, region in enumerate(regions):
             f = local_net.local_features(region, w0, b0, ws, bs, pads)[:, k0 - r0:k1 - r0, j0 - c0:j1 - c0]
-            costs[i], pre[i] = local_net.block_heads(f, self.channels, w_cost, b_cost, lengths, WALL_LOG, w_pre, b_pre)
+            costs[i], pre[i] = self.block_heads(f)
         return torch.from_numpy(costs), torch.from_numpy(pre)
 
     def map_key(self, x: torch.Tensor) -> tuple:
