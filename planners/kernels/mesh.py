@@ -49,7 +49,7 @@ import weakref
 import numba as nb
 import numpy as np
 
-from planners.kernels.rigid import motion_pieces, rotation_matrix
+from planners.kernels.rigid import motion_pieces, rotation_entries, rotation_matrix
 from planners.kernels.space import SPACE_RIGID, interpolate
 from planners.kernels.triangles import sets_apart, sets_clearance
 
@@ -136,10 +136,7 @@ def clearance_bound(grid, cover, clusters, params, q, need):
     nx, ny, nz = int(params[P_GRID + 4]), int(params[P_GRID + 5]), int(params[P_GRID + 6])
     # the rotation and the grid's constants read once for every point: read from their arrays point by point, each
     # point's voxel through ``_voxel``, they cost four times as much (the same arithmetic, term for term)
-    R = rotation_matrix(q[3], q[4], q[5])
-    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
-    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
-    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(q[3], q[4], q[5])
     q0, q1, q2 = q[0], q[1], q[2]
     n = clusters.shape[0]
     floors = np.empty(n)

@@ -30,9 +30,9 @@ import numpy as np
 from planners.kernels.space import SPACE_RIGID, interpolate, wrap_angle
 
 
-@nb.njit(cache=True, no_cfunc_wrapper=True)
-def rotation_matrix(tx, ty, tz):
-    """H = Ry(ty) @ Rx(tx) @ Rz(tz).
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def rotation_entries(tx, ty, tz):
+    """``rotation_matrix(tx, ty, tz)``'s nine entries, row by row, as values (no array to allocate).
 
     The products are written out: numba's matrix product needs scipy (not a core dependency), and
     a BLAS call costs more than these few multiplications.
@@ -44,16 +44,19 @@ def rotation_matrix(tx, ty, tz):
     a0, b0, c0 = cy, sy * sx, sy * cx
     a1, b1, c1 = 0.0, cx, -sx
     a2, b2, c2 = -sy, cy * sx, cy * cx
+    return (a0 * cz + b0 * sz, b0 * cz - a0 * sz, c0,
+            a1 * cz + b1 * sz, b1 * cz - a1 * sz, c1,
+            a2 * cz + b2 * sz, b2 * cz - a2 * sz, c2)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def rotation_matrix(tx, ty, tz):
+    """H = Ry(ty) @ Rx(tx) @ Rz(tz) (``rotation_entries`` as a 3 x 3 array)."""
+    e = rotation_entries(tx, ty, tz)
     H = np.empty((3, 3))
-    H[0, 0] = a0 * cz + b0 * sz
-    H[0, 1] = b0 * cz - a0 * sz
-    H[0, 2] = c0
-    H[1, 0] = a1 * cz + b1 * sz
-    H[1, 1] = b1 * cz - a1 * sz
-    H[1, 2] = c1
-    H[2, 0] = a2 * cz + b2 * sz
-    H[2, 1] = b2 * cz - a2 * sz
-    H[2, 2] = c2
+    H[0, 0], H[0, 1], H[0, 2] = e[0], e[1], e[2]
+    H[1, 0], H[1, 1], H[1, 2] = e[3], e[4], e[5]
+    H[2, 0], H[2, 1], H[2, 2] = e[6], e[7], e[8]
     return H
 
 

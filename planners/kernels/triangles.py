@@ -42,6 +42,12 @@ import numpy as np
 #: Most triangles in a leaf of the environment's tree.
 LEAF_SIZE = 4
 
+#: Rows of the walk's stack in ``sets_clearance``. Each pair taken off it puts back at most two pairs one level
+#: deeper in one of the two trees, so it never holds more than the two trees' depths plus one; ``build_tree`` splits
+#: at the median, so a tree over fewer than 2**31 triangles is at most 30 levels deep. A stack that grew inside the
+#: walk would be a variable reassigned in its loop, which numba reference-counts at every step of the loop.
+STACK_ROWS = 64
+
 
 def build_tree(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A bounding-box tree over ``triangles`` (``(T, 3, 3)``, corners by row).
@@ -82,11 +88,22 @@ def build_tree(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _segments_d2(p, a, b, q, c, d):
-    """Squared distance between segments ``p[a] p[b]`` and ``q[c] q[d]`` (rows of 3), degenerate ones included."""
-    d1x, d1y, d1z = p[b, 0] - p[a, 0], p[b, 1] - p[a, 1], p[b, 2] - p[a, 2]
-    d2x, d2y, d2z = q[d, 0] - q[c, 0], q[d, 1] - q[c, 1], q[d, 2] - q[c, 2]
-    rx, ry, rz = p[a, 0] - q[c, 0], p[a, 1] - q[c, 1], p[a, 2] - q[c, 2]
+def corners(t, i):
+    """The corners of triangle ``t[i:i+3]`` (rows of 3) as three ``(x, y, z)`` tuples: values, not views of ``t``.
+
+    The pair test below takes its triangles so: a variable naming either of two arrays, chosen in a loop, would be
+    reference-counted at every choice, and an array handed to a compiled function at every call.
+    """
+    return ((t[i, 0], t[i, 1], t[i, 2]), (t[i + 1, 0], t[i + 1, 1], t[i + 1, 2]),
+            (t[i + 2, 0], t[i + 2, 1], t[i + 2, 2]))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _segments_d2(p0, p1, q0, q1):
+    """Squared distance between segments ``p0 p1`` and ``q0 q1`` (``(x, y, z)`` tuples), degenerate ones included."""
+    d1x, d1y, d1z = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+    d2x, d2y, d2z = q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]
+    rx, ry, rz = p0[0] - q0[0], p0[1] - q0[1], p0[2] - q0[2]
     a = d1x * d1x + d1y * d1y + d1z * d1z
     e = d2x * d2x + d2y * d2y + d2z * d2z
     f = d2x * rx + d2y * ry + d2z * rz
@@ -120,73 +137,115 @@ def _segments_d2(p, a, b, q, c, d):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _normal(t, k):
-    """The (unnormalised) normal of the triangle in rows ``k, k + 1, k + 2`` of ``t``."""
-    ux, uy, uz = t[k + 1, 0] - t[k, 0], t[k + 1, 1] - t[k, 1], t[k + 1, 2] - t[k, 2]
-    vx, vy, vz = t[k + 2, 0] - t[k, 0], t[k + 2, 1] - t[k, 1], t[k + 2, 2] - t[k, 2]
+def _normal(t0, t1, t2):
+    """The (unnormalised) normal of the triangle with corners ``t0, t1, t2``."""
+    ux, uy, uz = t1[0] - t0[0], t1[1] - t0[1], t1[2] - t0[2]
+    vx, vy, vz = t2[0] - t0[0], t2[1] - t0[1], t2[2] - t0[2]
     return uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _in_face(q, j, nx, ny, nz, px, py, pz):
-    """True if the point's foot on triangle ``q[j:j+3]``'s plane (normal ``n``) lies in the face (edges included)."""
-    for e in range(3):
-        a = j + e
-        b = j + (e + 1) % 3
-        # the side of edge a -> b the point lies on, within the plane: n . ((b - a) x (p - a))
-        ex, ey, ez = q[b, 0] - q[a, 0], q[b, 1] - q[a, 1], q[b, 2] - q[a, 2]
-        wx, wy, wz = px - q[a, 0], py - q[a, 1], pz - q[a, 2]
-        if nx * (ey * wz - ez * wy) + ny * (ez * wx - ex * wz) + nz * (ex * wy - ey * wx) < 0.0:
-            return False
-    return True
+def _edge_side(a, b, nx, ny, nz, px, py, pz):
+    """The side of edge ``a -> b`` the point lies on, within the plane of normal ``n``: ``n . ((b - a) x (p - a))``."""
+    ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    wx, wy, wz = px - a[0], py - a[1], pz - a[2]
+    return nx * (ey * wz - ez * wy) + ny * (ez * wx - ex * wz) + nz * (ex * wy - ey * wx)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _in_face(t0, t1, t2, nx, ny, nz, px, py, pz):
+    """True if the point's foot on triangle ``t0 t1 t2``'s plane (normal ``n``) lies in the face (edges included)."""
+    return not (_edge_side(t0, t1, nx, ny, nz, px, py, pz) < 0.0 or _edge_side(t1, t2, nx, ny, nz, px, py, pz) < 0.0
+                or _edge_side(t2, t0, nx, ny, nz, px, py, pz) < 0.0)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _height(nx, ny, nz, b0, a):
+    """``n . (a - b0)``: how far corner ``a`` lies above the plane through ``b0`` of normal ``n`` (times ``|n|``)."""
+    return nx * (a[0] - b0[0]) + ny * (a[1] - b0[1]) + nz * (a[2] - b0[2])
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _beside_plane(a0, a1, a2, b0, b1, b2, m):
+    """True if the corners ``a0, a1, a2`` lie more than ``m`` to one side of the plane of triangle ``b0 b1 b2``."""
+    nx, ny, nz = _normal(b0, b1, b2)
+    length = math.sqrt(nx * nx + ny * ny + nz * nz)
+    if length > 0.0:
+        lo = math.inf
+        hi = -math.inf
+        h = _height(nx, ny, nz, b0, a0)
+        lo = min(lo, h)
+        hi = max(hi, h)
+        h = _height(nx, ny, nz, b0, a1)
+        lo = min(lo, h)
+        hi = max(hi, h)
+        h = _height(nx, ny, nz, b0, a2)
+        lo = min(lo, h)
+        hi = max(hi, h)
+        if lo > m * length or -hi > m * length:
+            return True
+    return False
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _corner_or_crossing(a, a2, b0, b1, b2, nx, ny, nz, n2, m2):
+    """True if corner ``a`` lies within ``sqrt(m2)`` of the plane of ``b0 b1 b2`` (normal ``n``, ``n2 = |n|^2``) with
+    its foot in the face, or the edge ``a -> a2`` crosses the plane (not lying in it) inside the face.
+    """
+    h = _height(nx, ny, nz, b0, a)
+    if h * h <= m2 * n2 and _in_face(b0, b1, b2, nx, ny, nz, a[0], a[1], a[2]):
+        return True
+    h2 = _height(nx, ny, nz, b0, a2)
+    if (h > 0.0 and h2 > 0.0) or (h < 0.0 and h2 < 0.0) or h == h2:
+        return False
+    t = h / (h - h2)
+    return _in_face(b0, b1, b2, nx, ny, nz, a[0] + t * (a2[0] - a[0]), a[1] + t * (a2[1] - a[1]),
+                    a[2] + t * (a2[2] - a[2]))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _meets_face(a0, a1, a2, b0, b1, b2, m2):
+    """True if a corner of ``a0 a1 a2`` within ``sqrt(m2)`` of the plane of ``b0 b1 b2`` has its foot in that face,
+    or an edge crosses the plane inside the face, corner by corner (false where ``b`` has no area: it is its edges).
+    """
+    nx, ny, nz = _normal(b0, b1, b2)
+    n2 = nx * nx + ny * ny + nz * nz
+    if n2 == 0.0:
+        return False
+    return (_corner_or_crossing(a0, a1, b0, b1, b2, nx, ny, nz, n2, m2)
+            or _corner_or_crossing(a1, a2, b0, b1, b2, nx, ny, nz, n2, m2)
+            or _corner_or_crossing(a2, a0, b0, b1, b2, nx, ny, nz, n2, m2))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
+def corners_within(p, q, m):
+    """True if the triangles with corners ``p`` and ``q`` (``corners``' tuples) lie at most ``m`` apart (``m >= 0``).
+
+    Each check runs for both orders of the two triangles (the one whose corners or edges are tried, and the one
+    whose plane and face they are tried against).
+    """
+    p0, p1, p2 = p
+    q0, q1, q2 = q
+    # apart if the corners of one lie more than m to one side of the other's plane
+    if _beside_plane(p0, p1, p2, q0, q1, q2, m) or _beside_plane(q0, q1, q2, p0, p1, p2, m):
+        return False
+    m2 = m * m
+    # the nine pairs of edges
+    if (_segments_d2(p0, p1, q0, q1) <= m2 or _segments_d2(p0, p1, q1, q2) <= m2 or _segments_d2(p0, p1, q2, q0) <= m2
+            or _segments_d2(p1, p2, q0, q1) <= m2 or _segments_d2(p1, p2, q1, q2) <= m2
+            or _segments_d2(p1, p2, q2, q0) <= m2 or _segments_d2(p2, p0, q0, q1) <= m2
+            or _segments_d2(p2, p0, q1, q2) <= m2 or _segments_d2(p2, p0, q2, q0) <= m2):
+        return True
+    return _meets_face(p0, p1, p2, q0, q1, q2, m2) or _meets_face(q0, q1, q2, p0, p1, p2, m2)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def triangles_within(p, i, q, j, m):
     """True if triangles ``p[i:i+3]`` and ``q[j:j+3]`` (corners by row) lie at most ``m`` apart (``m >= 0``).
 
-    Each check runs for both orders of the two triangles (``A`` the one whose corners or edges are tried, ``B``
-    the one whose plane and face they are tried against), in one loop, so that each is compiled once.
+    ``corners_within`` of their ``corners``.
     """
-    m2 = m * m
-    for side in range(2):  # apart if the corners of one lie more than m to one side of the other's plane
-        A, a, B, b = (p, i, q, j) if side == 0 else (q, j, p, i)
-        nx, ny, nz = _normal(B, b)
-        length = math.sqrt(nx * nx + ny * ny + nz * nz)
-        if length > 0.0:
-            lo = math.inf
-            hi = -math.inf
-            for r in range(3):
-                h = nx * (A[a + r, 0] - B[b, 0]) + ny * (A[a + r, 1] - B[b, 1]) + nz * (A[a + r, 2] - B[b, 2])
-                lo = min(lo, h)
-                hi = max(hi, h)
-            if lo > m * length or -hi > m * length:
-                return False
-    for e in range(3):  # the nine pairs of edges
-        for f in range(3):
-            if _segments_d2(p, i + e, i + (e + 1) % 3, q, j + f, j + (f + 1) % 3) <= m2:
-                return True
-    for side in range(2):
-        A, a, B, b = (p, i, q, j) if side == 0 else (q, j, p, i)
-        nx, ny, nz = _normal(B, b)
-        n2 = nx * nx + ny * ny + nz * nz
-        if n2 == 0.0:
-            continue  # a triangle with no area is its edges
-        for r in range(3):
-            # a corner of A whose foot lies in B's face, within m of it
-            h = nx * (A[a + r, 0] - B[b, 0]) + ny * (A[a + r, 1] - B[b, 1]) + nz * (A[a + r, 2] - B[b, 2])
-            if h * h <= m2 * n2 and _in_face(B, b, nx, ny, nz, A[a + r, 0], A[a + r, 1], A[a + r, 2]):
-                return True
-            # an edge of A that crosses B's plane (not lying in it) inside B's face
-            r2 = (r + 1) % 3
-            h2 = nx * (A[a + r2, 0] - B[b, 0]) + ny * (A[a + r2, 1] - B[b, 1]) + nz * (A[a + r2, 2] - B[b, 2])
-            if (h > 0.0 and h2 > 0.0) or (h < 0.0 and h2 < 0.0) or h == h2:
-                continue
-            t = h / (h - h2)
-            if _in_face(B, b, nx, ny, nz, A[a + r, 0] + t * (A[a + r2, 0] - A[a + r, 0]),
-                        A[a + r, 1] + t * (A[a + r2, 1] - A[a + r, 1]), A[a + r, 2] + t * (A[a + r2, 2] - A[a + r, 2])):
-                return True
-    return False
+    return corners_within(corners(p, i), corners(q, j), m)
 
 
 def sphere_nodes(nodes: np.ndarray, ordered: np.ndarray) -> np.ndarray:
@@ -236,11 +295,11 @@ def _box_gap2(nodes, r, x, y, z):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def _box_of(t, i):
-    """The box of triangle ``t[i:i+3]``: ``(lo_x, lo_y, lo_z, hi_x, hi_y, hi_z)``."""
-    return (min(t[i, 0], min(t[i + 1, 0], t[i + 2, 0])), min(t[i, 1], min(t[i + 1, 1], t[i + 2, 1])),
-            min(t[i, 2], min(t[i + 1, 2], t[i + 2, 2])), max(t[i, 0], max(t[i + 1, 0], t[i + 2, 0])),
-            max(t[i, 1], max(t[i + 1, 1], t[i + 2, 1])), max(t[i, 2], max(t[i + 1, 2], t[i + 2, 2])))
+def _box_of(c):
+    """The box of the triangle with corners ``c`` (``corners``'): ``(lo_x, lo_y, lo_z, hi_x, hi_y, hi_z)``."""
+    c0, c1, c2 = c
+    return (min(c0[0], min(c1[0], c2[0])), min(c0[1], min(c1[1], c2[1])), min(c0[2], min(c1[2], c2[2])),
+            max(c0[0], max(c1[0], c2[0])), max(c0[1], max(c1[1], c2[1])), max(c0[2], max(c1[2], c2[2])))
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -278,7 +337,7 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
     little further on) is often the closest again, so the walk starts at the margin that pair leaves and sets aside
     more; a pair within a margin is one the walk would reach, so the answer is the same with any hint.
     """
-    stack = np.empty((64, 2), dtype=np.int64)
+    stack = np.empty((STACK_ROWS, 2), dtype=np.int64)
     stack[0, 0] = 0
     stack[0, 1] = 0
     top = 1
@@ -290,10 +349,12 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
     far = m + rounding
     if hint[0] >= 0:
         b, e = hint[0], hint[1]
-        lo0, lo1, lo2, hi0, hi1, hi2 = _box_of(body, 3 * b)
-        box = _box_of(tris, 3 * e)
+        P = corners(body, 3 * b)
+        Q = corners(tris, 3 * e)
+        lo0, lo1, lo2, hi0, hi1, hi2 = _box_of(P)
+        box = _box_of(Q)
         while not _boxes_apart((lo0 - m, lo1 - m, lo2 - m, hi0 + m, hi1 + m, hi2 + m), box) and \
-                triangles_within(body, 3 * b, tris, 3 * e, m):
+                corners_within(P, Q, m):
             k += 1
             if k == margins.shape[0]:
                 return k
@@ -323,11 +384,13 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
         env_leaf = nodes[se + 2, 0] < 0.0
         if body_leaf and env_leaf:
             for b in range(int(spheres[sb + 2, 1]), int(spheres[sb + 2, 1] + spheres[sb + 2, 2])):
-                lo0, lo1, lo2, hi0, hi1, hi2 = _box_of(body, 3 * b)
+                P = corners(body, 3 * b)
+                lo0, lo1, lo2, hi0, hi1, hi2 = _box_of(P)
                 for e in range(int(nodes[se + 2, 1]), int(nodes[se + 2, 1] + nodes[se + 2, 2])):
-                    box = _box_of(tris, 3 * e)
+                    Q = corners(tris, 3 * e)
+                    box = _box_of(Q)
                     while not _boxes_apart((lo0 - m, lo1 - m, lo2 - m, hi0 + m, hi1 + m, hi2 + m), box) and \
-                            triangles_within(body, 3 * b, tris, 3 * e, m):
+                            corners_within(P, Q, m):
                         hint[0] = b
                         hint[1] = e
                         k += 1
@@ -336,12 +399,6 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
                         m = margins[k]
                         far = m + rounding
             continue
-        if top + 2 > stack.shape[0]:
-            grown = np.empty((2 * stack.shape[0], 2), dtype=np.int64)
-            for r in range(top):  # element by element: a slice assignment compiles numba's shape-error formatting
-                grown[r, 0] = stack[r, 0]
-                grown[r, 1] = stack[r, 1]
-            stack = grown
         # open the body's node where the environment's is a leaf or the smaller of the two
         if not body_leaf and (env_leaf or spheres[sb + 1, 0] >= nodes[se + 2, 2]):  # the box's half diagonal
             for c in range(2):
