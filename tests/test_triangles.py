@@ -116,6 +116,11 @@ def test_a_body_nodes_turned_box_holds_its_turned_triangles(seed, a, b, c, shift
         assert np.all(np.linalg.norm(corners - cw, axis=1) <= spheres[4 * k + 1, 0])
 
 
+def pose(R):
+    """The rotation ``R`` as the exact test takes it: its nine entries, row by row, as a tuple."""
+    return tuple(float(x) for x in np.asarray(R).ravel())
+
+
 def _boxy(rng, n, scale):
     """``n`` random small boxes (12 triangles each) in a cube of side ``scale``."""
     import trimesh
@@ -152,8 +157,8 @@ def test_a_body_is_more_than_a_margin_away_exactly_when_fcl_says_so(seed):
         d = fcl_distance(placed, body_f, env_v, env_f)
         for m in (0.0, 0.05, 0.3, 1.0):
             if abs(m - d) > 1e-7:
-                got = sets_apart(spheres, np.ascontiguousarray(body_tris @ R.T + q[:3]), R, q[:3].copy(), nodes, tris,
-                                 m, np.full(2, -1, dtype=np.int64))
+                got = sets_apart(spheres, np.ascontiguousarray(body_tris @ R.T + q[:3]), pose(R), tuple(q[:3]), nodes,
+                                 tris, m, np.full(2, -1, dtype=np.int64))
                 assert got == (d > m), (q, d, m)
                 checked[got] += 1
     assert checked[True] > 50 and checked[False] > 50
@@ -172,14 +177,14 @@ def test_one_walk_finds_the_largest_margin_a_pose_clears(seed):
         R = np.asarray(rotation_matrix(q[3], q[4], q[5]))
         placed = np.ascontiguousarray(body_tris @ R.T + q[:3])
         hint = np.full(2, -1, dtype=np.int64)
-        k = sets_clearance(spheres, placed, R, q[:3].copy(), nodes, tris, margins, hint)
+        k = sets_clearance(spheres, placed, pose(R), tuple(q[:3]), nodes, tris, margins, hint)
         # any pair as the hint (the last pose's, or one far off): the same answer
         for b, e in ((hint[0], hint[1]), (rng.integers(len(body_tris) // 3), rng.integers(len(tris) // 3))):
             if b >= 0:
                 pair = np.array([b, e], dtype=np.int64)
-                assert sets_clearance(spheres, placed, R, q[:3].copy(), nodes, tris, margins, pair) == k
+                assert sets_clearance(spheres, placed, pose(R), tuple(q[:3]), nodes, tris, margins, pair) == k
         one_by_one = next((j for j, m in enumerate(margins)
-                           if sets_apart(spheres, placed, R, q[:3].copy(), nodes, tris, m, np.full(2, -1))),
+                           if sets_apart(spheres, placed, pose(R), tuple(q[:3]), nodes, tris, m, np.full(2, -1))),
                           len(margins))
         assert k == one_by_one, (q, k, one_by_one)
         d = fcl_distance(body_v @ R.T + q[:3], body_f, env_v, env_f)

@@ -49,7 +49,7 @@ import weakref
 import numba as nb
 import numpy as np
 
-from planners.kernels.rigid import motion_pieces, rotation_entries, rotation_matrix
+from planners.kernels.rigid import motion_pieces, rotation_entries
 from planners.kernels.space import SPACE_RIGID, interpolate
 from planners.kernels.triangles import sets_apart, sets_clearance
 
@@ -219,13 +219,16 @@ def _parts(body, params):
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
 def _posed(triangles, q):
-    """The rotation of pose ``q`` and the body's triangles (rows, body frame) placed at it."""
-    R = rotation_matrix(q[3], q[4], q[5])
+    """The rotation of pose ``q`` (``rotation_entries``') and the body's triangles (rows, body frame) placed at it."""
+    rot = rotation_entries(q[3], q[4], q[5])
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rot
+    x, y, z = q[0], q[1], q[2]
     out = np.empty_like(triangles)
     for r in range(triangles.shape[0]):
-        for d in range(3):
-            out[r, d] = R[d, 0] * triangles[r, 0] + R[d, 1] * triangles[r, 1] + R[d, 2] * triangles[r, 2] + q[d]
-    return R, out
+        out[r, 0] = r00 * triangles[r, 0] + r01 * triangles[r, 1] + r02 * triangles[r, 2] + x
+        out[r, 1] = r10 * triangles[r, 0] + r11 * triangles[r, 1] + r12 * triangles[r, 2] + y
+        out[r, 2] = r20 * triangles[r, 0] + r21 * triangles[r, 1] + r22 * triangles[r, 2] + z
+    return rot, out
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -236,8 +239,8 @@ def exact_apart(body, params, q, margin, hint):
     ``sets_clearance``'s (the same answer with any; ``np.full(2, -1)`` for none).
     """
     cover, spheres, triangles, nodes, env = _parts(body, params)
-    R, placed = _posed(triangles, q)
-    return sets_apart(spheres, placed, R, q[:3], nodes, env, margin, hint)
+    rot, placed = _posed(triangles, q)
+    return sets_apart(spheres, placed, rot, (q[0], q[1], q[2]), nodes, env, margin, hint)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -251,10 +254,10 @@ def exact_clearance(body, params, q, need, low_first, hint):
     -1)`` for none); the walk of a motion passes one from pose to pose.
     """
     cover, spheres, triangles, nodes, env = _parts(body, params)
-    R, placed = _posed(triangles, q)
-    t = q[:3]
+    rot, placed = _posed(triangles, q)
+    t = (q[0], q[1], q[2])
     lowest = need * BAND_RAISE
-    if low_first and not sets_apart(spheres, placed, R, t, nodes, env, lowest, hint):
+    if low_first and not sets_apart(spheres, placed, rot, t, nodes, env, lowest, hint):
         return 0.0
     half = 0.5 * params[6]
     rungs = 0
@@ -267,7 +270,7 @@ def exact_clearance(body, params, q, need, low_first, hint):
         margins[k] = half * CLEARANCE_LADDER[k]
     if not low_first:
         margins[rungs] = lowest
-    k = sets_clearance(spheres, placed, R, t, nodes, env, margins, hint)
+    k = sets_clearance(spheres, placed, rot, t, nodes, env, margins, hint)
     if k < rungs:
         return margins[k]
     if k == rungs:  # the band cleared (low first: tested before)

@@ -309,20 +309,22 @@ def _boxes_apart(a, b):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def sets_apart(spheres, body, R, t, nodes, tris, m, hint):
+def sets_apart(spheres, body, rot, t, nodes, tris, m, hint):
     """True if every triangle of the body lies more than ``m`` from every triangle of the environment (``m >= 0``).
 
     ``spheres``: the body's tree (``sphere_nodes``, body frame); ``body``: its triangles in the tree's order, in
-    world coordinates at the pose ``(R, t)`` (``(3 B, 3)``); ``nodes`` and ``tris``: the environment's tree
-    (``build_tree``). ``sets_clearance`` with the one margin; ``hint`` is its (``np.full(2, -1)`` for none).
+    world coordinates at the pose ``(rot, t)`` (``(3 B, 3)``): ``rot`` the rotation's nine entries row by row and
+    ``t`` the translation, as tuples (``planners.kernels.rigid.rotation_entries``: values, where arrays would be
+    allocated and reference-counted at every pose); ``nodes`` and ``tris``: the environment's tree (``build_tree``).
+    ``sets_clearance`` with the one margin; ``hint`` is its (``np.full(2, -1)`` for none).
     """
     margins = np.empty(1)
     margins[0] = m
-    return sets_clearance(spheres, body, R, t, nodes, tris, margins, hint) == 0
+    return sets_clearance(spheres, body, rot, t, nodes, tris, margins, hint) == 0
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
-def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
+def sets_clearance(spheres, body, rot, t, nodes, tris, margins, hint):
     """The first ``k`` such that every body triangle lies more than ``margins[k]`` from every environment triangle.
 
     ``margins`` decrease (all ``>= 0``); ``len(margins)`` where the last is not cleared either. The arguments are
@@ -337,6 +339,10 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
     little further on) is often the closest again, so the walk starts at the margin that pair leaves and sets aside
     more; a pair within a margin is one the walk would reach, so the answer is the same with any hint.
     """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rot
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = (abs(r00), abs(r01), abs(r02), abs(r10), abs(r11), abs(r12),
+                                                   abs(r20), abs(r21), abs(r22))
+    t0, t1, t2 = t
     stack = np.empty((STACK_ROWS, 2), dtype=np.int64)
     stack[0, 0] = 0
     stack[0, 1] = 0
@@ -345,7 +351,7 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
     m = margins[0]
     # a node's turned centre and its triangles' turned corners are rounded apart by a few units in the last place of
     # the coordinates: a pair is set aside only where its bound clears the margin by far more than that
-    rounding = 1e-12 * (abs(t[0]) + abs(t[1]) + abs(t[2]) + spheres[1, 0])
+    rounding = 1e-12 * (abs(t0) + abs(t1) + abs(t2) + spheres[1, 0])
     far = m + rounding
     if hint[0] >= 0:
         b, e = hint[0], hint[1]
@@ -364,17 +370,17 @@ def sets_clearance(spheres, body, R, t, nodes, tris, margins, hint):
         top -= 1
         sb = 4 * stack[top, 0]
         se = 3 * stack[top, 1]
-        cx = R[0, 0] * spheres[sb, 0] + R[0, 1] * spheres[sb, 1] + R[0, 2] * spheres[sb, 2] + t[0]
-        cy = R[1, 0] * spheres[sb, 0] + R[1, 1] * spheres[sb, 1] + R[1, 2] * spheres[sb, 2] + t[1]
-        cz = R[2, 0] * spheres[sb, 0] + R[2, 1] * spheres[sb, 1] + R[2, 2] * spheres[sb, 2] + t[2]
+        cx = r00 * spheres[sb, 0] + r01 * spheres[sb, 1] + r02 * spheres[sb, 2] + t0
+        cy = r10 * spheres[sb, 0] + r11 * spheres[sb, 1] + r12 * spheres[sb, 2] + t1
+        cz = r20 * spheres[sb, 0] + r21 * spheres[sb, 1] + r22 * spheres[sb, 2] + t2
         reach = spheres[sb + 1, 0] + far
         if _box_gap2(nodes, se, cx, cy, cz) > reach * reach:
             continue
         # the node's box turned with the body lies in the world box of half sides w about the centre
         ex, ey, ez = spheres[sb + 3, 0], spheres[sb + 3, 1], spheres[sb + 3, 2]
-        wx = abs(R[0, 0]) * ex + abs(R[0, 1]) * ey + abs(R[0, 2]) * ez
-        wy = abs(R[1, 0]) * ex + abs(R[1, 1]) * ey + abs(R[1, 2]) * ez
-        wz = abs(R[2, 0]) * ex + abs(R[2, 1]) * ey + abs(R[2, 2]) * ez
+        wx = a00 * ex + a01 * ey + a02 * ez
+        wy = a10 * ex + a11 * ey + a12 * ez
+        wz = a20 * ex + a21 * ey + a22 * ez
         gx = max(nodes[se, 0] - (cx + wx), (cx - wx) - nodes[se + 1, 0], 0.0)
         gy = max(nodes[se, 1] - (cy + wy), (cy - wy) - nodes[se + 1, 1], 0.0)
         gz = max(nodes[se, 2] - (cz + wz), (cz - wz) - nodes[se + 1, 2], 0.0)
