@@ -66,6 +66,9 @@ N_PARAMS = 22
 CLEARANCE_LADDER = np.array([16.0, 4.0, 1.0])
 BAND_RAISE = 1.0 + 2.0 ** -30
 
+#: Cover points ``clearance_bound`` reads between its looks at whether the least bound so far settles the answer.
+LEAST_RUN = 16
+
 #: The walk looks at its planner's deadline (``MeshWorld.set_deadline``) every this many poses.
 DEADLINE_EVERY = 16
 
@@ -115,7 +118,7 @@ def clearance_bound(grid, cover, clusters, params, q, need):
     """A lower bound on the distance from the body at ``q`` to the environment, from the grid alone.
 
     The sphere's bound first; where it is not above ``need``, the cover points' (stopping as soon as
-    one shows the bound cannot exceed ``need``). A result at or below ``need`` says nothing.
+    the points read show the bound cannot exceed ``need``). A result at or below ``need`` says nothing.
 
     The cover points come in clusters (``cover_clusters``): the cluster with the lowest floor is read
     first, then each other cluster only where its floor could undercut the lowest point found so far,
@@ -123,7 +126,10 @@ def clearance_bound(grid, cover, clusters, params, q, need):
     floor is a lower bound, in voxel values, on ``grid`` at each of its points: they lie within its radius
     of its centre, so their voxels lie within ``slack`` voxels of the centre's (Chebyshev index distance),
     and the grid's values change by at most 1 per voxel; near the grid's edge, where a point may lie
-    outside it, the floor is unknown (-1).
+    outside it, the floor is unknown (``-inf``) and each point's voxel is checked. A cluster is read for its
+    least voxel value (the bound grows with the value, so its least bound is that value's), ``LEAST_RUN``
+    points at a time in loops without an exit (``_least_voxel``): the bound returned above ``need`` is the
+    same, bit for bit, as a point-by-point reading's, and at or below ``need`` both say "undecided".
     """
     h = params[P_GRID + 3]
     i, jk = _voxel(params, q[0], q[1], q[2])
@@ -147,10 +153,8 @@ def clearance_bound(grid, cover, clusters, params, q, need):
         j = int(math.floor((r10 * x + r11 * y + r12 * z + q1 - gy) / h))
         k = int(math.floor((r20 * x + r21 * y + r22 * z + q2 - gz) / h))
         slack = clusters[c, 3]
-        if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
-            floors[c] = -1.0
-        elif i < slack or j < slack or k < slack or i + slack >= nx or j + slack >= ny or k + slack >= nz:
-            floors[c] = -1.0  # near the grid's edge: a point may lie outside it
+        if i < slack or j < slack or k < slack or i + slack >= nx or j + slack >= ny or k + slack >= nz:
+            floors[c] = -np.inf  # at or near the grid's edge: a point may lie outside it
         else:
             floors[c] = grid[i, j * nz + k] - slack
         if floors[c] < floors[first]:
@@ -161,19 +165,51 @@ def clearance_bound(grid, cover, clusters, params, q, need):
         c = first if m == 0 else m - 1
         if m > 0 and (c == first or (floors[c] - 1.0) * h - cover_radius >= lowest):
             continue
-        for p in range(int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < n else cover.shape[0]):
-            x, y, z = cover[p, 0], cover[p, 1], cover[p, 2]
+        if floors[c] == -np.inf:  # a point may lie outside the grid: each one checked
+            least = 255
+            for p in range(int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < n else cover.shape[0]):
+                x, y, z = cover[p, 0], cover[p, 1], cover[p, 2]
+                i = int(math.floor((r00 * x + r01 * y + r02 * z + q0 - gx) / h))
+                j = int(math.floor((r10 * x + r11 * y + r12 * z + q1 - gy) / h))
+                k = int(math.floor((r20 * x + r21 * y + r22 * z + q2 - gz) / h))
+                if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
+                    return bound
+                least = min(least, grid[i, j * nz + k])
+        else:  # every point's voxel lies within ``slack`` of the centre's: inside the grid
+            least = _least_voxel(grid, cover, int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < n else
+                                 cover.shape[0], r00, r01, r02, r10, r11, r12, r20, r21, r22, q0, q1, q2, gx, gy, gz,
+                                 h, nz, cover_radius, need)
+        # the cluster's least voxel value gives its least bound: the bound grows with the value
+        d = (least - 1.0) * h - cover_radius
+        if d < lowest:
+            lowest = d
+            if lowest <= need:
+                return max(bound, lowest)
+    return max(bound, lowest)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _least_voxel(grid, cover, first, end, r00, r01, r02, r10, r11, r12, r20, r21, r22, q0, q1, q2, gx, gy, gz, h, nz,
+                 cover_radius, need):
+    """The least ``grid`` value at the cover points ``first:end`` posed (the rotation's entries, the translation
+    ``q``; the grid's origin ``g``, voxel side ``h``), each in the grid; or, as soon as the least so far bounds the
+    clearance at or below ``need``, that value. ``LEAST_RUN`` points at a time, in loops with no exit that the
+    compiler runs several points at a time; the same arithmetic, term for term, as ``clearance_bound``'s other points.
+    """
+    least = 255
+    p = first
+    while p < end:
+        stop = min(p + LEAST_RUN, end)
+        for r in range(p, stop):
+            x, y, z = cover[r, 0], cover[r, 1], cover[r, 2]
             i = int(math.floor((r00 * x + r01 * y + r02 * z + q0 - gx) / h))
             j = int(math.floor((r10 * x + r11 * y + r12 * z + q1 - gy) / h))
             k = int(math.floor((r20 * x + r21 * y + r22 * z + q2 - gz) / h))
-            if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
-                return bound
-            d = (grid[i, j * nz + k] - 1.0) * h - cover_radius
-            if d < lowest:
-                lowest = d
-                if lowest <= need:
-                    return max(bound, lowest)
-    return max(bound, lowest)
+            least = min(least, grid[i, j * nz + k])
+        if (least - 1.0) * h - cover_radius <= need:
+            return least
+        p = stop
+    return least
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
