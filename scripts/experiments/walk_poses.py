@@ -11,13 +11,20 @@ walk's next pose (the last clearance times each of ``--guesses``). Prints per pr
 walk's poses, those of them the exact test decides, the gaps (a pose whose clearance did not reach back over the
 covered stretch), and how many motions were free; the copy's verdicts at the shipped ``WALK_GUESS`` are checked
 against the compiled check's, motion by motion.
+
+With ``--costs``, a second table times the compiled pieces on the same motions (best of 7 passes, one thread): the
+grid's bound (``clearance_bound``) on every pose the walk at ``WALK_GUESS`` asks it about, by its answer (the
+bounding sphere proves the pose clear, the cover points do, or undecided, where the exact test follows), and the
+compiled motion check per motion.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 
+import numba as nb
 import numpy as np
 
 from planners import make_planner
@@ -58,6 +65,8 @@ def walk(kernel, a, b, guess: float, counts: dict) -> bool:
     hint = np.full(2, -1, dtype=np.int64)
 
     def pose(q, need, low_first, where):
+        if "asked" in counts:
+            counts["asked"].append(np.r_[q, need])
         c = M.clearance_bound(grid, cover, clusters, params, q, need)
         if c > need:
             return c
@@ -101,6 +110,46 @@ def walk(kernel, a, b, guess: float, counts: dict) -> bool:
             s = 0.5 * (covered + end)
 
 
+@nb.njit
+def _bounds(grid, cover, clusters, params, asked):
+    """``clearance_bound`` at each row ``(q, need)`` of ``asked``, in one compiled loop."""
+    out = np.empty(asked.shape[0])
+    for i in range(asked.shape[0]):
+        out[i] = M.clearance_bound(grid, cover, clusters, params, asked[i, :6], asked[i, 6])
+    return out
+
+
+def _best(f, *args, repeat: int = 7) -> float:
+    f(*args)
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        f(*args)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def costs(name: str, kernel, a: np.ndarray, b: np.ndarray) -> str:
+    """The ``--costs`` row of one problem (see the module docstring)."""
+    counts: dict = {"asked": []}
+    for x, y in zip(a, b, strict=True):
+        walk(kernel, x, y, M.WALK_GUESS, counts)
+    asked = np.array(counts["asked"])
+    grid, clusters, params = kernel.grid, kernel.geom, kernel.params
+    cover = kernel.body[:int(params[M.P_PARTS])]
+    got = _bounds(grid, cover, clusters, params, asked)
+    sphere = np.array([M.sphere_free(grid, params, q[:6], q[6]) for q in asked])
+    kinds = {"sphere": sphere, "cover points": ~sphere & (got > asked[:, 6]), "undecided": got <= asked[:, 6]}
+    cells = []
+    for mask in kinds.values():
+        part = np.ascontiguousarray(asked[mask])
+        each = _best(_bounds, grid, cover, clusters, params, part) / len(part) * 1e6 if len(part) else np.nan
+        cells.append(f"{mask.sum() / len(a):.2f}, {each:.2f}")
+    out = np.zeros(len(a), dtype=np.bool_)
+    motion = _best(geometry.motions_free, kernel, a, b, out) / len(a) * 1e6
+    return f"| {name} | {len(asked) / len(a):.2f} | " + " | ".join(cells) + f" | {motion:.2f} |"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--omplapp", help="OMPL.app's resources/3D folder (or SAMPLERGYM_OMPLAPP_DIR)")
@@ -109,6 +158,7 @@ def main(argv=None) -> int:
     ap.add_argument("--iterations", type=int, default=20000, help="RRT-Connect's iterations before the motions")
     ap.add_argument("--motions", type=int, default=3000)
     ap.add_argument("--seed", type=int, default=3)
+    ap.add_argument("--costs", action="store_true", help="also time the compiled pieces (module docstring)")
     args = ap.parse_args(argv)
     folder = None
 
@@ -131,10 +181,13 @@ def main(argv=None) -> int:
     check_flags(check)
     print("| problem | guess | walk poses per motion | of them exact | gaps | free motions |")
     print("|---|---|---|---|---|---|")
+    rows = []
     for name in args.problems:
         problem = load_omplapp(folder / f"{name}.cfg").problem
         kernel = problem.world.kernel
         a, b = motions(problem, args.iterations, args.motions, args.seed)
+        if args.costs:
+            rows.append(costs(name, kernel, a, b))
         compiled = np.zeros(len(a), dtype=np.bool_)
         geometry.motions_free(kernel, a, b, compiled)
         for guess in args.guesses:
@@ -146,6 +199,11 @@ def main(argv=None) -> int:
             per = {k: v / len(a) for k, v in counts.items()}
             print(f"| {name} | {guess:g} | {per.get('walk', 0):.2f} | {per.get('walk exact', 0):.2f} | "
                   f"{per.get('gaps', 0):.2f} | {int(free.sum())} of {len(a)} |", flush=True)
+    if rows:
+        print("\n| problem | grid bounds asked per motion | sphere proves: per motion, us each | cover points prove: "
+              "per motion, us each | undecided: per motion, us each | motion check, us per motion |")
+        print("|---|---|---|---|---|---|")
+        print("\n".join(rows))
     return 0
 
 
