@@ -145,76 +145,69 @@ def _normal(t0, t1, t2):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _edge_side(a, b, nx, ny, nz, px, py, pz):
-    """The side of edge ``a -> b`` the point lies on, within the plane of normal ``n``: ``n . ((b - a) x (p - a))``."""
-    ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-    wx, wy, wz = px - a[0], py - a[1], pz - a[2]
-    return nx * (ey * wz - ez * wy) + ny * (ez * wx - ex * wz) + nz * (ex * wy - ey * wx)
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _in_face(t0, t1, t2, nx, ny, nz, px, py, pz):
-    """True if the point's foot on triangle ``t0 t1 t2``'s plane (normal ``n``) lies in the face (edges included)."""
-    return not (_edge_side(t0, t1, nx, ny, nz, px, py, pz) < 0.0 or _edge_side(t1, t2, nx, ny, nz, px, py, pz) < 0.0
-                or _edge_side(t2, t0, nx, ny, nz, px, py, pz) < 0.0)
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
 def _height(nx, ny, nz, b0, a):
     """``n . (a - b0)``: how far corner ``a`` lies above the plane through ``b0`` of normal ``n`` (times ``|n|``)."""
     return nx * (a[0] - b0[0]) + ny * (a[1] - b0[1]) + nz * (a[2] - b0[2])
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _beside_plane(a0, a1, a2, b0, b1, b2, m):
-    """True if the corners ``a0, a1, a2`` lie more than ``m`` to one side of the plane of triangle ``b0 b1 b2``."""
+def _in_face(t, nx, ny, nz, px, py, pz):
+    """True if the point's foot on triangle ``t``'s plane (normal ``n``) lies in the face (edges included)."""
+    for e in range(3):
+        a = t[e]
+        b = t[(e + 1) % 3]
+        # the side of edge a -> b the point lies on, within the plane: n . ((b - a) x (p - a))
+        ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+        wx, wy, wz = px - a[0], py - a[1], pz - a[2]
+        if nx * (ey * wz - ez * wy) + ny * (ez * wx - ex * wz) + nz * (ex * wy - ey * wx) < 0.0:
+            return False
+    return True
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _beside_plane(a, b, m):
+    """True if the corners of triangle ``a`` lie more than ``m`` to one side of triangle ``b``'s plane."""
+    b0, b1, b2 = b
     nx, ny, nz = _normal(b0, b1, b2)
     length = math.sqrt(nx * nx + ny * ny + nz * nz)
     if length > 0.0:
         lo = math.inf
         hi = -math.inf
-        h = _height(nx, ny, nz, b0, a0)
-        lo = min(lo, h)
-        hi = max(hi, h)
-        h = _height(nx, ny, nz, b0, a1)
-        lo = min(lo, h)
-        hi = max(hi, h)
-        h = _height(nx, ny, nz, b0, a2)
-        lo = min(lo, h)
-        hi = max(hi, h)
+        for r in range(3):
+            h = _height(nx, ny, nz, b0, a[r])
+            lo = min(lo, h)
+            hi = max(hi, h)
         if lo > m * length or -hi > m * length:
             return True
     return False
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _corner_or_crossing(a, a2, b0, b1, b2, nx, ny, nz, n2, m2):
-    """True if corner ``a`` lies within ``sqrt(m2)`` of the plane of ``b0 b1 b2`` (normal ``n``, ``n2 = |n|^2``) with
-    its foot in the face, or the edge ``a -> a2`` crosses the plane (not lying in it) inside the face.
+def _meets_face(a, b, m2):
+    """True if a corner of triangle ``a`` within ``sqrt(m2)`` of triangle ``b``'s plane has its foot in that face, or
+    an edge of ``a`` crosses the plane (not lying in it) inside the face, corner by corner (false where ``b`` has no
+    area: it is its edges).
     """
-    h = _height(nx, ny, nz, b0, a)
-    if h * h <= m2 * n2 and _in_face(b0, b1, b2, nx, ny, nz, a[0], a[1], a[2]):
-        return True
-    h2 = _height(nx, ny, nz, b0, a2)
-    if (h > 0.0 and h2 > 0.0) or (h < 0.0 and h2 < 0.0) or h == h2:
-        return False
-    t = h / (h - h2)
-    return _in_face(b0, b1, b2, nx, ny, nz, a[0] + t * (a2[0] - a[0]), a[1] + t * (a2[1] - a[1]),
-                    a[2] + t * (a2[2] - a[2]))
-
-
-@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _meets_face(a0, a1, a2, b0, b1, b2, m2):
-    """True if a corner of ``a0 a1 a2`` within ``sqrt(m2)`` of the plane of ``b0 b1 b2`` has its foot in that face,
-    or an edge crosses the plane inside the face, corner by corner (false where ``b`` has no area: it is its edges).
-    """
+    b0, b1, b2 = b
     nx, ny, nz = _normal(b0, b1, b2)
     n2 = nx * nx + ny * ny + nz * nz
     if n2 == 0.0:
         return False
-    return (_corner_or_crossing(a0, a1, b0, b1, b2, nx, ny, nz, n2, m2)
-            or _corner_or_crossing(a1, a2, b0, b1, b2, nx, ny, nz, n2, m2)
-            or _corner_or_crossing(a2, a0, b0, b1, b2, nx, ny, nz, n2, m2))
+    for r in range(3):
+        c = a[r]
+        # a corner of a whose foot lies in b's face, within m of it
+        h = _height(nx, ny, nz, b0, c)
+        if h * h <= m2 * n2 and _in_face(b, nx, ny, nz, c[0], c[1], c[2]):
+            return True
+        # an edge of a that crosses b's plane (not lying in it) inside b's face
+        c2 = a[(r + 1) % 3]
+        h2 = _height(nx, ny, nz, b0, c2)
+        if (h > 0.0 and h2 > 0.0) or (h < 0.0 and h2 < 0.0) or h == h2:
+            continue
+        t = h / (h - h2)
+        if _in_face(b, nx, ny, nz, c[0] + t * (c2[0] - c[0]), c[1] + t * (c2[1] - c[1]), c[2] + t * (c2[2] - c[2])):
+            return True
+    return False
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
@@ -222,21 +215,19 @@ def corners_within(p, q, m):
     """True if the triangles with corners ``p`` and ``q`` (``corners``' tuples) lie at most ``m`` apart (``m >= 0``).
 
     Each check runs for both orders of the two triangles (the one whose corners or edges are tried, and the one
-    whose plane and face they are tried against).
+    whose plane and face they are tried against), each through one function called twice: the corners are values,
+    so choosing the order costs nothing (a variable that names either of two arrays would be reference-counted at
+    every choice).
     """
-    p0, p1, p2 = p
-    q0, q1, q2 = q
     # apart if the corners of one lie more than m to one side of the other's plane
-    if _beside_plane(p0, p1, p2, q0, q1, q2, m) or _beside_plane(q0, q1, q2, p0, p1, p2, m):
+    if _beside_plane(p, q, m) or _beside_plane(q, p, m):
         return False
     m2 = m * m
-    # the nine pairs of edges
-    if (_segments_d2(p0, p1, q0, q1) <= m2 or _segments_d2(p0, p1, q1, q2) <= m2 or _segments_d2(p0, p1, q2, q0) <= m2
-            or _segments_d2(p1, p2, q0, q1) <= m2 or _segments_d2(p1, p2, q1, q2) <= m2
-            or _segments_d2(p1, p2, q2, q0) <= m2 or _segments_d2(p2, p0, q0, q1) <= m2
-            or _segments_d2(p2, p0, q1, q2) <= m2 or _segments_d2(p2, p0, q2, q0) <= m2):
-        return True
-    return _meets_face(p0, p1, p2, q0, q1, q2, m2) or _meets_face(q0, q1, q2, p0, p1, p2, m2)
+    for e in range(3):  # the nine pairs of edges
+        for f in range(3):
+            if _segments_d2(p[e], p[(e + 1) % 3], q[f], q[(f + 1) % 3]) <= m2:
+                return True
+    return _meets_face(p, q, m2) or _meets_face(q, p, m2)
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
