@@ -2,13 +2,23 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from planners.kernels.rigid import rotation_matrix
-from planners.kernels.triangles import LEAF_SIZE, build_tree, sets_apart, sets_clearance, sphere_nodes, triangles_within
+from planners.kernels.triangles import (
+    LEAF_SIZE,
+    STACK_ROWS,
+    build_tree,
+    sets_apart,
+    sets_clearance,
+    sphere_nodes,
+    triangles_within,
+)
 
 fcl = pytest.importorskip("fcl", reason="the reference distance is FCL's (pip install samplergym[mesh])")
 
@@ -84,6 +94,31 @@ def test_the_tree_holds_every_triangle_once_inside_its_boxes():
     assert np.all(seen == 1)
     spheres = sphere_nodes(nodes, ordered.reshape(-1, 3))
     assert np.all(spheres[1::4, 0] > 0) and np.all(spheres[3::4] >= 0)
+
+
+def _depth(nodes) -> int:
+    """Levels of ``build_tree``'s tree below its root (0 for a lone leaf)."""
+    deepest, stack = 0, [(0, 0)]
+    while stack:
+        k, level = stack.pop()
+        deepest = max(deepest, level)
+        link = nodes[3 * k + 2]
+        if link[0] >= 0:
+            stack += [(int(link[0]), level + 1), (int(link[1]), level + 1)]
+    return deepest
+
+
+@pytest.mark.parametrize("count", [1, 4, 5, 157, 4097, 20000])
+def test_the_walks_fixed_stack_holds_two_trees_of_any_loadable_size(count):
+    """``sets_clearance``'s stack never holds more than the two trees' depths and one pairs; the median split keeps a
+    tree over T triangles within ceil(log2(T / LEAF_SIZE)) levels, so STACK_ROWS covers trees of up to 2**31 each."""
+    rng = np.random.default_rng(count)
+    # clustered triangles, as a mesh's are: the split is by count, whatever the coordinates
+    tris = rng.normal(size=(count, 3, 3)) + np.repeat(rng.normal(size=(-(-count // 50), 1, 3)) * 30, 50, 0)[:count]
+    levels = _depth(build_tree(tris)[0])
+    assert levels <= max(0, math.ceil(math.log2(count / LEAF_SIZE)))
+    worst = math.ceil(math.log2(2**31 / LEAF_SIZE))
+    assert 2 * worst + 1 <= STACK_ROWS
 
 
 @settings(max_examples=40, deadline=None)
