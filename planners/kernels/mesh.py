@@ -142,16 +142,14 @@ def clearance_bound(grid, cover, clusters, params, q, need):
     nx, ny, nz = int(params[P_GRID + 4]), int(params[P_GRID + 5]), int(params[P_GRID + 6])
     # the rotation and the grid's constants read once for every point: read from their arrays point by point, each
     # point's voxel through ``_voxel``, they cost four times as much (the same arithmetic, term for term)
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(q[3], q[4], q[5])
-    q0, q1, q2 = q[0], q[1], q[2]
+    rot = rotation_entries(q[3], q[4], q[5])
+    t = (q[0], q[1], q[2])
+    g = (gx, gy, gz)
     n = clusters.shape[0]
     floors = np.empty(n)
     first = 0
     for c in range(n):
-        x, y, z = clusters[c, 0], clusters[c, 1], clusters[c, 2]
-        i = int(math.floor((r00 * x + r01 * y + r02 * z + q0 - gx) / h))
-        j = int(math.floor((r10 * x + r11 * y + r12 * z + q1 - gy) / h))
-        k = int(math.floor((r20 * x + r21 * y + r22 * z + q2 - gz) / h))
+        i, j, k = _posed_voxel(clusters[c, 0], clusters[c, 1], clusters[c, 2], rot, t, g, h)
         slack = clusters[c, 3]
         if i < slack or j < slack or k < slack or i + slack >= nx or j + slack >= ny or k + slack >= nz:
             floors[c] = -np.inf  # at or near the grid's edge: a point may lie outside it
@@ -168,17 +166,13 @@ def clearance_bound(grid, cover, clusters, params, q, need):
         if floors[c] == -np.inf:  # a point may lie outside the grid: each one checked
             least = 255
             for p in range(int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < n else cover.shape[0]):
-                x, y, z = cover[p, 0], cover[p, 1], cover[p, 2]
-                i = int(math.floor((r00 * x + r01 * y + r02 * z + q0 - gx) / h))
-                j = int(math.floor((r10 * x + r11 * y + r12 * z + q1 - gy) / h))
-                k = int(math.floor((r20 * x + r21 * y + r22 * z + q2 - gz) / h))
+                i, j, k = _posed_voxel(cover[p, 0], cover[p, 1], cover[p, 2], rot, t, g, h)
                 if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
                     return bound
                 least = min(least, grid[i, j * nz + k])
         else:  # every point's voxel lies within ``slack`` of the centre's: inside the grid
             least = _least_voxel(grid, cover, int(clusters[c, 4]), int(clusters[c + 1, 4]) if c + 1 < n else
-                                 cover.shape[0], r00, r01, r02, r10, r11, r12, r20, r21, r22, q0, q1, q2, gx, gy, gz,
-                                 h, nz, cover_radius, need)
+                                 cover.shape[0], rot, t, g, h, nz, cover_radius, need)
         # the cluster's least voxel value gives its least bound: the bound grows with the value
         d = (least - 1.0) * h - cover_radius
         if d < lowest:
@@ -189,22 +183,28 @@ def clearance_bound(grid, cover, clusters, params, q, need):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
-def _least_voxel(grid, cover, first, end, r00, r01, r02, r10, r11, r12, r20, r21, r22, q0, q1, q2, gx, gy, gz, h, nz,
-                 cover_radius, need):
-    """The least ``grid`` value at the cover points ``first:end`` posed (the rotation's entries, the translation
-    ``q``; the grid's origin ``g``, voxel side ``h``), each in the grid; or, as soon as the least so far bounds the
-    clearance at or below ``need``, that value. ``LEAST_RUN`` points at a time, in loops with no exit that the
-    compiler runs several points at a time; the same arithmetic, term for term, as ``clearance_bound``'s other points.
+def _posed_voxel(x, y, z, rot, t, g, h):
+    """The grid voxel ``(i, j, k)`` of the body-frame point ``(x, y, z)`` turned by ``rot`` (``rotation_entries``'),
+    moved by ``t``, in the grid of origin ``g`` and voxel side ``h`` (unchecked against the grid's shape).
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rot
+    return (int(math.floor((r00 * x + r01 * y + r02 * z + t[0] - g[0]) / h)),
+            int(math.floor((r10 * x + r11 * y + r12 * z + t[1] - g[1]) / h)),
+            int(math.floor((r20 * x + r21 * y + r22 * z + t[2] - g[2]) / h)))
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True, inline="always")
+def _least_voxel(grid, cover, first, end, rot, t, g, h, nz, cover_radius, need):
+    """The least ``grid`` value at the cover points ``first:end`` posed (``_posed_voxel``), each in the grid; or, as
+    soon as the least so far bounds the clearance at or below ``need``, that value. ``LEAST_RUN`` points at a time, in
+    loops with no exit that the compiler runs several points at a time.
     """
     least = 255
     p = first
     while p < end:
         stop = min(p + LEAST_RUN, end)
         for r in range(p, stop):
-            x, y, z = cover[r, 0], cover[r, 1], cover[r, 2]
-            i = int(math.floor((r00 * x + r01 * y + r02 * z + q0 - gx) / h))
-            j = int(math.floor((r10 * x + r11 * y + r12 * z + q1 - gy) / h))
-            k = int(math.floor((r20 * x + r21 * y + r22 * z + q2 - gz) / h))
+            i, j, k = _posed_voxel(cover[r, 0], cover[r, 1], cover[r, 2], rot, t, g, h)
             least = min(least, grid[i, j * nz + k])
         if (least - 1.0) * h - cover_radius <= need:
             return least
