@@ -58,15 +58,16 @@ def motions(problem, iterations: int, count: int, seed: int) -> tuple[np.ndarray
     return np.array(starts), np.array(ends)
 
 
-def walk(kernel, a, b, guess: float, counts: dict) -> bool:
-    """``mesh_motion_free(a, b)`` with the next pose ``guess`` times the last clearance on, counting into ``counts``."""
+def walk(kernel, a, b, guess: float, counts: dict, asked: list | None = None) -> bool:
+    """``mesh_motion_free(a, b)`` with the next pose ``guess`` times the last clearance on, counting into ``counts``
+    (and each pose the grid's bound is asked about, with its margin, appended to ``asked`` where given)."""
     grid, clusters, body, params = kernel.grid, kernel.geom, kernel.body, kernel.params
     cover = body[:int(params[M.P_PARTS])]
     hint = np.full(2, -1, dtype=np.int64)
 
     def pose(q, need, low_first, where):
-        if "asked" in counts:
-            counts["asked"].append(np.r_[q, need])
+        if asked is not None:
+            asked.append(np.r_[q, need])
         c = M.clearance_bound(grid, cover, clusters, params, q, need)
         if c > need:
             return c
@@ -131,10 +132,10 @@ def _best(f, *args, repeat: int = 7) -> float:
 
 def costs(name: str, kernel, a: np.ndarray, b: np.ndarray) -> str:
     """The ``--costs`` row of one problem (see the module docstring)."""
-    counts: dict = {"asked": []}
+    rows: list = []
     for x, y in zip(a, b, strict=True):
-        walk(kernel, x, y, M.WALK_GUESS, counts)
-    asked = np.array(counts["asked"])
+        walk(kernel, x, y, M.WALK_GUESS, {}, rows)
+    asked = np.array(rows)
     grid, clusters, params = kernel.grid, kernel.geom, kernel.params
     cover = kernel.body[:int(params[M.P_PARTS])]
     got = _bounds(grid, cover, clusters, params, asked)
