@@ -20,7 +20,10 @@ _DC = np.array([dc for _, dc in MOVES], dtype=np.int64)
 
 
 @nb.njit(cache=True)
-def _cell_head(v, pre, w_rel, w_out, b_out, block, reach, unreached, dr, dc, out):
+def cell_head_rows(v, pre, w_rel, w_out, b_out, block, reach, unreached, dr, dc, out):
+    """Compiled (for compiled callers): ``cell_head_field`` into ``out``, the arrays as it checks them (``reach`` and
+    ``unreached`` float32; ``dr``, ``dc`` the moves' offsets in ``MOVES`` order), unchecked.
+    """
     h, w = v.shape
     C = pre.shape[0]
     A = len(dr)
@@ -63,8 +66,10 @@ def _cell_head(v, pre, w_rel, w_out, b_out, block, reach, unreached, dr, dc, out
 
 
 @nb.njit(cache=True)
-def _cell_head_at(v, pre, w_rel, w_out, b_out, block, reach, unreached, dr, dc, row, col):
-    # ``_cell_head``'s arithmetic, in its order, for the one cell (row, col) of the field
+def cell_head_value(v, pre, w_rel, w_out, b_out, block, reach, unreached, dr, dc, row, col):
+    """Compiled: ``cell_head_at`` (``cell_head_rows``' arithmetic, in its order, for the one cell (``row``, ``col``)
+    of the field), the arrays as ``cell_head_rows`` takes them, unchecked.
+    """
     h, w = v.shape
     r, c = row // block, col // block
     j = (row % block) * block + col % block
@@ -143,7 +148,7 @@ def cell_head_field(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np
     elif out.shape != (h * block, w * block) or out.dtype != f32 or not out.flags.c_contiguous:
         raise ValueError(f"out must be a C-contiguous ({h * block}, {w * block}) float32 array, got {out.shape} "
                          f"{out.dtype}")
-    return _cell_head(v, pre, w_rel, w_out, b_out, int(block), f32(reach), f32(unreached), _DR, _DC, out)
+    return cell_head_rows(v, pre, w_rel, w_out, b_out, int(block), f32(reach), f32(unreached), _DR, _DC, out)
 
 
 def cell_head_at(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np.ndarray, b_out: np.ndarray,
@@ -160,7 +165,7 @@ def cell_head_at(v: np.ndarray, pre: np.ndarray, w_rel: np.ndarray, w_out: np.nd
     if not (0 <= row < h * block and 0 <= col < w * block):
         raise ValueError(f"cell {cell} is outside the {h * block} x {w * block} field")
     f32 = np.float32
-    return float(_cell_head_at(np.ascontiguousarray(v, dtype=f32), np.ascontiguousarray(pre, dtype=f32),
+    return float(cell_head_value(np.ascontiguousarray(v, dtype=f32), np.ascontiguousarray(pre, dtype=f32),
                                np.ascontiguousarray(w_rel, dtype=f32), np.ascontiguousarray(w_out, dtype=f32),
                                np.ascontiguousarray(b_out, dtype=f32), int(block), f32(reach), f32(unreached),
                                _DR, _DC, row, col))

@@ -63,7 +63,10 @@ def _conv3x3(plane, w, b, out):
 
 
 @nb.njit(cache=True)
-def _local(x, w_first, b_first, w_rest, b_rest, top, bottom, left, right):
+def local_layers(x, w_first, b_first, w_rest, b_rest, top, bottom, left, right):
+    """Compiled (for compiled callers): ``local_features`` of ``x`` (cin, h, w; float32, any strides), its ``pads``
+    as four ints, the weights as it takes them, unchecked.
+    """
     zero = np.float32(0.0)
     layers = 1 + w_rest.shape[0]
     c, h, wd = x.shape
@@ -118,7 +121,7 @@ def local_features(x: np.ndarray, w_first: np.ndarray, b_first: np.ndarray, w_re
     side (``RouteVIN.local_window``).
     """
     top, bottom, left, right = (int(p) for p in pads)
-    return _local(np.ascontiguousarray(x, dtype=np.float32), w_first, b_first, w_rest, b_rest, top, bottom, left,
+    return local_layers(np.ascontiguousarray(x, dtype=np.float32), w_first, b_first, w_rest, b_rest, top, bottom, left,
                   right)
 
 
@@ -186,7 +189,10 @@ def _one_by_one(features, channels, w, b, out):
 
 
 @nb.njit(cache=True)
-def _heads(f, channels, w_cost, b_cost, lengths, wall_log, w_pre, b_pre, costs, pre):
+def heads_into(f, channels, w_cost, b_cost, lengths, wall_log, w_pre, b_pre, costs, pre):
+    """Compiled (for compiled callers): ``block_heads`` of the C-contiguous features ``f``, written into ``costs``
+    (8, h, w) and ``pre`` (C, h, w), C-contiguous float32; ``wall_log`` float32; unchecked.
+    """
     m = f.shape[1] * f.shape[2]
     ff = f.reshape(f.shape[0], m)
     cf = costs.reshape(costs.shape[0], m)
@@ -208,5 +214,5 @@ def block_heads(f: np.ndarray, channels: int, w_cost: np.ndarray, b_cost: np.nda
     h, w = f.shape[1:]
     costs = np.empty((len(w_cost), h, w), dtype=np.float32)
     pre = np.empty((len(w_pre), h, w), dtype=np.float32)
-    _heads(f, channels, w_cost, b_cost, lengths, np.float32(wall_log), w_pre, b_pre, costs, pre)
+    heads_into(f, channels, w_cost, b_cost, lengths, np.float32(wall_log), w_pre, b_pre, costs, pre)
     return costs, pre

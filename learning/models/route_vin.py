@@ -39,8 +39,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from learning.models import local_net
-from learning.models.cell_head import cell_head_at, cell_head_field, padded_free_cells
+from learning.models import local_net, vin_query
+from learning.models.cell_head import padded_free_cells
 from learning.models.field import FieldEncoder, batch_of, check_start, route_input
 from learning.models.threads import planning_threads
 from planners.maps.gridsearch import MOVES, move_cost_field, padded_block_steps, work_array
@@ -366,13 +366,14 @@ class RouteVIN(nn.Module, FieldEncoder):
     def predict_reaching(self, obstacles: np.ndarray, goal_cell: tuple[int, int], start_cell: tuple[int, int] | None,
                          symmetries: int = 1, *, threads: int | None = None) -> tuple[np.ndarray, bool]:
         """``FieldEncoder.predict_reaching`` in one pass where the inference is compiled: the local network runs once
-        (or its map's kept parts serve), the search runs with the learned walls, the cell head is read at the start
-        alone, and where no route leaves it the search runs again without them; the whole cell head then runs once.
+        (or its map's kept parts serve), the search runs with the learned walls (or a walk over their open moves finds
+        the start unreached), the cell head is read at the start alone, and where no route leaves it the search runs
+        again without them; the whole cell head then runs once, all of it after the convolutions in one compiled call.
         The same field and answer as the two ``predict`` calls (``compiled_field``'s ``reach``), without the first
         pass's cell head and a second pass's set-up. Elsewhere (symmetries, a GPU, the torch pass) the two calls.
         """
         one_pass = (start_cell is not None and type(symmetries) is int and symmetries == 1
-                    and self.wall_cost is not None and self.compiles() and next(self.parameters()).device.type == "cpu")
+                    and self.wall_cost is not None and self.compiles() and self.lengths.device.type == "cpu")
         if not one_pass:
             return super().predict_reaching(obstacles, goal_cell, start_cell, symmetries, threads=threads)
         self.check_size(obstacles.shape)
@@ -493,10 +494,11 @@ class RouteVIN(nn.Module, FieldEncoder):
     def compiled(self, x: torch.Tensor) -> bool:
         """Whether this pass takes the compiled inference (``compiled_field``).
 
-        It does where ``compiled_inference`` holds, on the CPU, without gradients, with the fixed point by Dijkstra
-        and the class's own cell head (a subclass that overrides ``cell_field`` keeps its own).
+        It does where ``compiled_inference`` holds, on float32 input on the CPU, without gradients, with the fixed point
+        by Dijkstra and the class's own cell head (a subclass that overrides ``cell_field`` keeps its own).
         """
-        return x.device.type == "cpu" and not torch.is_grad_enabled() and self.compiles()
+        return (x.device.type == "cpu" and x.dtype == torch.float32 and not torch.is_grad_enabled()
+                and self.compiles())
 
     def compiles(self) -> bool:
         """Whether this encoder's CPU inference without gradients is the compiled one (``compiled``):
@@ -615,37 +617,77 @@ class RouteVIN(nn.Module, FieldEncoder):
         Inference's walls gate the Dijkstra's moves (``move_cost_field``'s ``open_moves`` and ``most``) rather
         than being written into a copy of ``costs``, so the block values are ``inference_values``' bit for bit;
         the cell head runs compiled (``learning.models.cell_head``) from ``pre`` (``head_inputs``), the same
-        values up to the rounding of another order of summation. ``steps``: ``cell_steps(x, block)`` where the
-        caller has it already. ``reuse``: the field is written into the kept buffer ``"field"`` (``buffer``), which
-        the next such pass overwrites, and the search keeps its working arrays for the next one. ``reach`` (a batch of
-        one): where the learned walls shut every route from its start (the cell head read at the start alone), the
-        search runs again without them (the step walls stay), as a pass inside ``open_walls`` would, and the cell head
-        runs once, on those values (``reach.opened``).
+        values up to the rounding of another order of summation. Each query is one compiled call
+        (``learning.models.vin_query.query_field``). ``steps``: ``cell_steps(x, block)`` where the caller has it
+        already. ``reuse``: the field is written into the kept buffer ``"field"`` (``buffer``), which the next such
+        pass overwrites, and the search keeps its working arrays for the next one (``search_work``). ``reach`` (a
+        batch of one): where the learned walls shut every route from its start (the cell head read at the start
+        alone; where a walk over the open moves finds the start's block unreached, from the walk alone), the search
+        runs again without them (the step walls stay), as a pass inside ``open_walls`` would, and the cell head runs
+        once, on those values (``reach.opened``).
         """
         b = self.block
-        cells = x.numpy()
-        goal, walls = cells[:, b * b] > 0.5, cells[:, :b * b].min(1) > 0.5  # goal_and_walls, in numpy
-        gate = None
+        n, _, h, w = costs.shape
+        if reach is not None and n != 1:
+            raise ValueError(f"a pass that checks a start's route takes one query, not {n}")
         if self.step_walls:
-            gate = (cell_steps(x, b) if steps is None else steps).numpy()
-        lengths, w_rel, w_out, b_out = self.head_arrays()
-        most = None if self.wall_cost is None else np.float32(self.wall_cost) * lengths
-        c, p = costs.numpy(), pre.numpy()
-        field = self.buffer("field", (len(c), c.shape[2] * b, c.shape[3] * b)).numpy() if reuse else None
-        out = []
-        if reach is not None and len(c) != 1:
-            raise ValueError(f"a pass that checks a start's route takes one query, not {len(c)}")
-        for i in range(len(c)):
-            v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
-                                most=most, work=self._work if reuse else None)
-            if reach is not None and most is not None \
-                    and reach.shut(cell_head_at(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED, reach.cell)):
-                v = move_cost_field(c[i], goal[i], walls[i], UNREACHED, open_moves=None if gate is None else gate[i],
-                                    most=None, work=self._work if reuse else None)
+            gate = np.ascontiguousarray((cell_steps(x, b) if steps is None else steps).numpy())
+        else:
+            gate = np.ones(costs.shape, dtype=bool)
+        cells = x.numpy()
+        c, p = np.ascontiguousarray(costs.numpy()), np.ascontiguousarray(pre.numpy())
+        field = (self.buffer("field", (n, h * b, w * b)).numpy() if reuse
+                 else np.empty((n, h * b, w * b), dtype=np.float32))
+        settings = self.query_settings(reach)
+        work = self.search_work(h, w) if reuse else vin_query.NO_WORK
+        for i in range(n):
+            if vin_query.query_field(cells[i], b, c[i], p[i], gate[i], *settings, *work, field[i]):
                 reach.opened = True
-            out.append(cell_head_field(v, p[i], w_rel, w_out, b_out, b, REACH, UNREACHED,
-                                       None if field is None else field[i]))
-        return torch.from_numpy(batch_of(out) if field is None else field)
+        return torch.from_numpy(field)
+
+    def query_settings(self, reach: Reach | None) -> tuple:
+        """What ``learning.models.vin_query`` reads besides a query's arrays: inference's learned walls (their caps
+        and whether they apply), the cell head's weights on the block values and its last layer, ``REACH`` and
+        ``UNREACHED`` in float32, and the start to check (``reach``; None: none).
+        """
+        lengths, w_rel, w_out, b_out = self.head_arrays()
+        capped = self.wall_cost is not None
+        most = np.float32(self.wall_cost) * lengths if capped else lengths
+        check = reach is not None
+        cell, scale, limit = (reach.cell, reach.scale, reach.limit) if check else ((0, 0), 1.0, 0.0)
+        return (most, capped, w_rel, w_out, b_out, np.float32(REACH), np.float32(UNREACHED), check, cell[0], cell[1],
+                float(scale), float(limit))
+
+    def search_work(self, h: int, w: int) -> tuple[np.ndarray, ...]:
+        """The compiled search's working arrays for an ``h`` x ``w`` block grid, kept for the next pass of the same
+        shape (``keep_buffers``; ``work_array``).
+        """
+        n = (h + 2) * (w + 2)
+        return tuple(work_array(self._work, name, shape, dtype) for name, shape, dtype in (
+            ("incoming", (h * w, len(MOVES)), np.float32), ("dist", (n,), np.float32), ("state", (n,), np.int8),
+            ("next", (n,), np.int32), ("previous", (n,), np.int32), ("where", (n,), np.int32),
+            ("seen", (h * w,), np.uint8)))
+
+    def window_field(self, x: torch.Tensor, parts: MapParts, window: tuple[int, int, int, int],
+                     reach: Reach | None = None) -> torch.Tensor:
+        """``_field_from_parts`` of ``window_parts`` patched into the map's kept ``parts`` (``reusing_field``), in one
+        compiled call (``learning.models.vin_query.window_field``): where the window runs compiled
+        (``compiled_local``). The same values, bit for bit; ``parts`` are not written.
+        """
+        h, w = x.shape[-2:]
+        b = self.block
+        r0, r1, c0, c1 = self.window_region(x, window)
+        pads = (int(r0 == 0), int(r1 == h), int(c0 == 0), int(c1 == w))
+        gate = parts.steps.numpy()[0] if self.step_walls else np.ones((len(MOVES), h, w), dtype=bool)
+        field = np.empty((1, h * b, w * b), dtype=np.float32)
+        w0, b0, ws, bs, w_cost, b_cost, w_pre, b_pre = self.local_arrays()
+        k0, k1, j0, j1 = window
+        if vin_query.window_field(x.numpy()[0], b, (r0, r1, c0, c1), pads, (k0, k1, j0, j1), w0, b0, ws, bs,
+                                  self.channels, w_cost, b_cost, self.head_arrays()[0], np.float32(WALL_LOG), w_pre,
+                                  b_pre, parts.costs.numpy()[0], parts.hidden.numpy()[0], gate,
+                                  *self.query_settings(reach), *vin_query.NO_WORK, field[0]):
+            reach.opened = True
+        return torch.from_numpy(field)
 
     def head_arrays(self) -> tuple[np.ndarray, ...]:
         """What the compiled search and cell head read of the weights, as numpy views made once (until
@@ -841,6 +883,8 @@ class RouteVIN(nn.Module, FieldEncoder):
             parts = MapParts(_patched(parts.costs, parts.goal_window, costs),
                              _patched(parts.hidden, parts.goal_window, hidden), parts.steps)
         self.keep_map(key, parts)
+        if self.compiled_local(x, window):
+            return self.window_field(x, parts, window, reach)
         costs, pre = self.window_parts(x, window)
         return self._field_from_parts(x, _patched(parts.costs, window, costs), _patched(parts.hidden, window, pre),
                                       parts.steps, reach)

@@ -287,21 +287,84 @@ def work_array(work: dict | None, name: str, shape: tuple[int, ...], dtype) -> n
     return kept
 
 
+@nb.njit(cache=True)
+def incoming_prices(costs, unreached, open_moves, most, inc):
+    """Compiled (for compiled callers; ``move_cost_field`` checks what it hands on): each block's incoming moves'
+    prices into ``inc`` (h * w, 8), ``unreached`` where that move cannot be taken; returns the least and the largest
+    price of a move that can be taken (``inf`` and 0 where none can).
+
+    ``costs`` (8, h, w); ``open_moves`` (8, h, w) bool with ``most`` (8,) the caps, or an empty ``open_moves`` for
+    no gate and no cap, as ``move_cost_field`` takes them.
+    """
+    return _incoming(costs, unreached, _DR, _DC, open_moves, most, inc)
+
+
+@nb.njit(cache=True)
+def settle_prices(inc, low, high, costs, goal, walls, unreached, open_moves, most, dist, state, nxt, prv, where):
+    """Compiled: ``move_cost_field``'s values from ``incoming_prices``' ``inc``, ``low`` and ``high`` (of the same
+    ``costs``, ``open_moves`` and ``most``): by buckets where the prices allow it exactly, else by the heap.
+
+    ``dist`` (of ``costs``' dtype), ``state`` (int8), ``nxt``, ``prv`` and ``where`` (int32): working arrays of
+    ``(h + 2) * (w + 2)``, whatever they hold.
+    """
+    eps = 1.1920928955078125e-07 if costs.itemsize == 4 else 2.220446049250313e-16  # the dtype's machine epsilon
+    width = low / 2
+    # a sum below ``unreached`` rounds by at most unreached * eps / 2: the buckets need it well below ``width``
+    if np.isfinite(low) and width > float(unreached) * eps and high / width < 1 << 22:
+        return _settle_buckets(inc, goal, walls, unreached, _DR, _DC, float(width), int(high / width) + 3, dist, state,
+                               nxt, prv, where)
+    return _move_cost_dijkstra(costs, goal, walls, unreached, _DR, _DC, open_moves, most)
+
+
+@nb.njit(cache=True)
+def reaches_block(inc, goal, walls, unreached, row, col, seen):
+    """Compiled: whether the search over ``incoming_prices``' ``inc`` reaches block (``row``, ``col``) from a
+    ``goal`` block at all, by a breadth-first walk that stops there: the blocks the search would settle below
+    ``unreached``, wherever no route's sum of prices comes near it. ``seen`` (h * w, uint8) marks each block walked
+    (whatever it held before).
+    """
+    h, w = goal.shape
+    A = inc.shape[1]
+    seen[:] = 0
+    queue = np.empty(h * w, dtype=np.int64)
+    top = 0
+    for r in range(h):
+        for c in range(w):
+            if goal[r, c]:
+                seen[r * w + c] = 1
+                queue[top] = r * w + c
+                top += 1
+    target = row * w + col
+    at = 0
+    while at < top:
+        v = queue[at]
+        at += 1
+        if v == target:
+            return True
+        r, c = v // w, v % w
+        for a in range(A):
+            if not inc[v, a] < unreached:
+                continue
+            br, bc = r - _DR[a], c - _DC[a]  # the block that move a carries onto v (on the grid: its price is open)
+            b = br * w + bc
+            if seen[b] or walls[br, bc]:
+                continue
+            seen[b] = 1
+            queue[top] = b
+            top += 1
+    return False
+
+
 def _settle_moves(costs, goal, walls, unreached, open_moves, most, work=None):
     """``move_cost_field``'s search: by buckets where the prices allow it exactly, else by the heap."""
     A, h, w = costs.shape
     inc = work_array(work, "incoming", (h * w, A), costs.dtype)
-    low, high = _incoming(costs, unreached, _DR, _DC, open_moves, most, inc)
-    width = low / 2
-    # a sum below ``unreached`` rounds by at most unreached * eps / 2: the buckets need it well below ``width``
-    if np.isfinite(low) and width > float(unreached) * float(np.finfo(costs.dtype).eps) and high / width < 1 << 22:
-        n = (h + 2) * (w + 2)
-        scratch = [work_array(work, name, (n,), dtype) for name, dtype in
-                   (("dist", costs.dtype), ("state", np.int8), ("next", np.int32), ("previous", np.int32),
-                    ("where", np.int32))]
-        return _settle_buckets(inc, goal, walls, unreached, _DR, _DC, float(width), int(high / width) + 3, *scratch)
-    del inc
-    return _move_cost_dijkstra(costs, goal, walls, unreached, _DR, _DC, open_moves, most)
+    low, high = incoming_prices(costs, unreached, open_moves, most, inc)
+    n = (h + 2) * (w + 2)
+    scratch = [work_array(work, name, (n,), dtype) for name, dtype in
+               (("dist", costs.dtype), ("state", np.int8), ("next", np.int32), ("previous", np.int32),
+                ("where", np.int32))]
+    return settle_prices(inc, low, high, costs, goal, walls, unreached, open_moves, most, *scratch)
 
 
 @nb.njit(cache=True)
