@@ -85,38 +85,43 @@ def cell_steps(x: torch.Tensor, block: int) -> torch.Tensor:
     cutting): a block move no step makes crosses a wall, however the network prices it. Compiled
     (``planners.maps.gridsearch.padded_block_steps``), on the CPU whatever the device.
     """
-    steps = [padded_block_steps(padded_free_cells(c, block), block) for c in x[:, :block * block].cpu().numpy()]
-    return torch.from_numpy(batch_of(steps)).to(x.device)
+    return torch.from_numpy(block_moves(x.cpu().numpy(), block)).to(x.device)
 
 
-def _patched(kept: torch.Tensor, window: tuple[int, int, int, int], values: torch.Tensor) -> torch.Tensor:
-    """A copy of the CPU tensor ``kept`` (B, C, h, w) with the blocks of ``window`` (rows ``k0:k1``, columns ``j0:j1``)
-    set to ``values``, made in numpy (fewer calls than torch's clone and assignment, the same values).
+def block_moves(cells: np.ndarray, block: int) -> np.ndarray:
+    """``cell_steps`` of ``route_input``'s channels as a numpy array (B, block**2 + ..., h, w): (B, 8, h, w) bool."""
+    return batch_of([padded_block_steps(padded_free_cells(c[:block * block], block), block) for c in cells])
+
+
+def _patched(kept: np.ndarray, window: tuple[int, int, int, int], values: np.ndarray) -> np.ndarray:
+    """A copy of ``kept`` (B, C, h, w) with the blocks of ``window`` (rows ``k0:k1``, columns ``j0:j1``) set to
+    ``values``.
     """
     k0, k1, j0, j1 = window
-    out = kept.numpy().copy()
-    out[:, :, k0:k1, j0:j1] = values.numpy()
-    return torch.from_numpy(out)
+    out = kept.copy()
+    out[:, :, k0:k1, j0:j1] = values
+    return out
 
 
 class MapParts(NamedTuple):
     """What a pass computes from a map, kept for the next query on the same map (``RouteVIN``).
 
-    ``costs``: the learned move costs, before inference's walls (1, 8, h, w); ``hidden``: the cell head's first layer
-    on the local features, before the block values join (``RouteVIN.head_inputs``, 1, C, h, w); ``steps``:
-    ``cell_steps`` (1, 8, h, w). ``goal_window``: the blocks (rows ``k0:k1``, columns ``j0:j1``) where ``costs`` and
-    ``hidden`` still hold the first query's goal (they were kept from its whole pass), or None where they hold the
-    map alone everywhere; ``goal_block``: that goal's block (row, column), where ``goal_window`` is not None.
+    Numpy arrays on the CPU, which no query writes into. ``costs``: the learned move costs, before inference's walls
+    (1, 8, h, w); ``hidden``: the cell head's first layer on the local features, before the block values join
+    (``RouteVIN.head_inputs``, 1, C, h, w); ``steps``: ``cell_steps`` (1, 8, h, w). ``goal_window``: the blocks (rows
+    ``k0:k1``, columns ``j0:j1``) where ``costs`` and ``hidden`` still hold the first query's goal (they were kept from
+    its whole pass), or None where they hold the map alone everywhere; ``goal_block``: that goal's block (row,
+    column), where ``goal_window`` is not None.
     """
 
-    costs: torch.Tensor
-    hidden: torch.Tensor
-    steps: torch.Tensor
+    costs: np.ndarray
+    hidden: np.ndarray
+    steps: np.ndarray
     goal_window: tuple[int, int, int, int] | None = None
     goal_block: tuple[int, int] | None = None
 
     def nbytes(self) -> int:
-        return sum(t.element_size() * t.nelement() for t in (self.costs, self.hidden, self.steps))
+        return self.costs.nbytes + self.hidden.nbytes + self.steps.nbytes
 
 
 class Reach:
@@ -377,12 +382,16 @@ class RouteVIN(nn.Module, FieldEncoder):
         if not one_pass:
             return super().predict_reaching(obstacles, goal_cell, start_cell, symmetries, threads=threads)
         self.check_size(obstacles.shape)
-        h, w = obstacles.shape
+        H, W = obstacles.shape
         reach = Reach(check_start(obstacles, start_cell), self.block / self.step, 0.5 * self.unreached_steps)
-        x = torch.from_numpy(batch_of([route_input(obstacles, goal_cell, self.block)]))
-        with planning_threads(threads), torch.inference_mode():
-            field = self.infer(x, reach).numpy()[0, :h, :w].astype(np.float64)
-        return self.in_steps(field), reach.opened
+        cells = route_input(obstacles, goal_cell, self.block)[None, :self.block * self.block + 1]
+        h, w = cells.shape[-2:]
+        if self.map_cache_bytes > 0 and self.strip_rows(h, w) >= h and self.local_compiles(cells):
+            field = self.kept_field(cells, reach)  # every step compiled: no torch call at all
+        else:
+            with planning_threads(threads), torch.inference_mode():
+                field = self.infer(torch.from_numpy(cells), reach).numpy()
+        return self.in_steps(field[0, :H, :W].astype(np.float64)), reach.opened
 
     def goal_and_walls(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """From ``route_input``'s channels: (the goal's block, the blocks with no free cell), (B, h, w) bool each."""
@@ -626,16 +635,23 @@ class RouteVIN(nn.Module, FieldEncoder):
         runs again without them (the step walls stay), as a pass inside ``open_walls`` would, and the cell head runs
         once, on those values (``reach.opened``).
         """
+        return torch.from_numpy(self.query_fields(x.numpy(), costs.numpy(), pre.numpy(),
+                                                  None if steps is None else steps.numpy(), reuse, reach))
+
+    def query_fields(self, cells: np.ndarray, costs: np.ndarray, pre: np.ndarray, steps: np.ndarray | None = None,
+                     reuse: bool = False, reach: Reach | None = None) -> np.ndarray:
+        """``compiled_field`` on numpy arrays: ``route_input``'s channels (B, block**2 + 1, h, w), the learned
+        ``costs``, ``pre`` and ``steps`` (``block_moves``; None: from ``cells``); (B, H, W) float32.
+        """
         b = self.block
         n, _, h, w = costs.shape
         if reach is not None and n != 1:
             raise ValueError(f"a pass that checks a start's route takes one query, not {n}")
         if self.step_walls:
-            gate = np.ascontiguousarray((cell_steps(x, b) if steps is None else steps).numpy())
+            gate = np.ascontiguousarray(block_moves(cells, b) if steps is None else steps)
         else:
             gate = np.ones(costs.shape, dtype=bool)
-        cells = x.numpy()
-        c, p = np.ascontiguousarray(costs.numpy()), np.ascontiguousarray(pre.numpy())
+        c, p = np.ascontiguousarray(costs), np.ascontiguousarray(pre)
         field = (self.buffer("field", (n, h * b, w * b)).numpy() if reuse
                  else np.empty((n, h * b, w * b), dtype=np.float32))
         settings = self.query_settings(reach)
@@ -643,7 +659,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         for i in range(n):
             if vin_query.query_field(cells[i], b, c[i], p[i], gate[i], *settings, *work, field[i]):
                 reach.opened = True
-        return torch.from_numpy(field)
+        return field
 
     def query_settings(self, reach: Reach | None) -> tuple:
         """What ``learning.models.vin_query`` reads besides a query's arrays: inference's learned walls (their caps
@@ -668,26 +684,27 @@ class RouteVIN(nn.Module, FieldEncoder):
             ("next", (n,), np.int32), ("previous", (n,), np.int32), ("where", (n,), np.int32),
             ("seen", (h * w,), np.uint8)))
 
-    def window_field(self, x: torch.Tensor, parts: MapParts, window: tuple[int, int, int, int],
-                     reach: Reach | None = None) -> torch.Tensor:
-        """``_field_from_parts`` of ``window_parts`` patched into the map's kept ``parts`` (``reusing_field``), in one
-        compiled call (``learning.models.vin_query.window_field``): where the window runs compiled
-        (``compiled_local``). The same values, bit for bit; ``parts`` are not written.
+    def window_field(self, cells: np.ndarray, parts: MapParts, window: tuple[int, int, int, int],
+                     reach: Reach | None = None) -> np.ndarray:
+        """``query_fields`` of ``window_parts_of`` patched into the map's kept ``parts`` (``kept_field``), in one
+        compiled call (``learning.models.vin_query.window_field``): where the window runs compiled (``local_compiles``).
+        The same values, bit for bit; ``parts`` are not written. ``cells``: the query's ``route_input`` channels (1,
+        block**2 + 1, h, w); (1, H, W) float32.
         """
-        h, w = x.shape[-2:]
+        h, w = cells.shape[-2:]
         b = self.block
-        r0, r1, c0, c1 = self.window_region(x, window)
+        r0, r1, c0, c1 = self.window_region(cells, window)
         pads = (int(r0 == 0), int(r1 == h), int(c0 == 0), int(c1 == w))
-        gate = parts.steps.numpy()[0] if self.step_walls else np.ones((len(MOVES), h, w), dtype=bool)
+        gate = parts.steps[0] if self.step_walls else np.ones((len(MOVES), h, w), dtype=bool)
         field = np.empty((1, h * b, w * b), dtype=np.float32)
         w0, b0, ws, bs, w_cost, b_cost, w_pre, b_pre = self.local_arrays()
         k0, k1, j0, j1 = window
-        if vin_query.window_field(x.numpy()[0], b, (r0, r1, c0, c1), pads, (k0, k1, j0, j1), w0, b0, ws, bs,
+        if vin_query.window_field(cells[0], b, (r0, r1, c0, c1), pads, (k0, k1, j0, j1), w0, b0, ws, bs,
                                   self.channels, w_cost, b_cost, self.head_arrays()[0], np.float32(WALL_LOG), w_pre,
-                                  b_pre, parts.costs.numpy()[0], parts.hidden.numpy()[0], gate,
-                                  *self.query_settings(reach), *vin_query.NO_WORK, field[0]):
+                                  b_pre, parts.costs[0], parts.hidden[0], gate, *self.query_settings(reach),
+                                  *vin_query.NO_WORK, field[0]):
             reach.opened = True
-        return torch.from_numpy(field)
+        return field
 
     def head_arrays(self) -> tuple[np.ndarray, ...]:
         """What the compiled search and cell head read of the weights, as numpy views made once (until
@@ -724,9 +741,14 @@ class RouteVIN(nn.Module, FieldEncoder):
         float32 input, over a region of at most ``numba_local_blocks`` blocks, where the encoder keeps the class's own
         local network and heads.
         """
+        return x.dtype == torch.float32 and self.compiled(x) and self.local_compiles(x, window)
+
+    def local_compiles(self, x: torch.Tensor | np.ndarray, window: tuple[int, int, int, int] | None = None) -> bool:
+        """``compiled_local`` of a pass already known to be compiled on float32 input: the region's size and the
+        class's own local network and heads.
+        """
         r0, r1, c0, c1 = self.window_region(x, window)
-        return ((r1 - r0) * (c1 - c0) <= self.numba_local_blocks and x.dtype == torch.float32 and self.compiled(x)
-                and self.owns_local())
+        return (r1 - r0) * (c1 - c0) <= self.numba_local_blocks and self.owns_local()
 
     def owns_local(self) -> bool:
         """Whether the encoder keeps the class's own local network and heads (``move_costs``, ``prices`` and
@@ -752,13 +774,17 @@ class RouteVIN(nn.Module, FieldEncoder):
         """``map_features`` (``window`` None; ``reuse`` as it takes it) or ``window_parts`` of ``x``, compiled
         (``compiled_local``).
         """
-        h, w = x.shape[-2:]
+        return tuple(torch.from_numpy(a) for a in self.local_parts(x.numpy(), window, reuse))
+
+    def local_parts(self, cells: np.ndarray, window: tuple[int, int, int, int] | None = None, reuse: bool = False
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """``numba_parts`` of ``route_input``'s channels ``cells`` as numpy arrays."""
+        h, w = cells.shape[-2:]
         k0, k1, j0, j1 = (0, h, 0, w) if window is None else window
         d = self.depth
-        r0, r1, c0, c1 = self.window_region(x, window)
+        r0, r1, c0, c1 = self.window_region(cells, window)
         pads = (int(r0 == 0), int(r1 == h), int(c0 == 0), int(c1 == w))
         w0, b0, ws, bs = self.local_arrays()[:4]
-        cells = x.numpy()
         shapes = (len(cells), len(MOVES), k1 - k0, j1 - j0), (len(cells), self.channels, k1 - k0, j1 - j0)
         if reuse:
             costs, pre = self.buffer("costs", shapes[0]).numpy(), self.buffer("pre", shapes[1]).numpy()
@@ -770,17 +796,20 @@ class RouteVIN(nn.Module, FieldEncoder):
         for i, region in enumerate(regions):
             f = local_net.local_features(region, w0, b0, ws, bs, pads)[:, k0 - r0:k1 - r0, j0 - c0:j1 - c0]
             costs[i], pre[i] = self.block_heads(f)
-        return torch.from_numpy(costs), torch.from_numpy(pre)
+        return costs, pre
 
-    def map_key(self, x: torch.Tensor) -> tuple:
+    def map_key(self, x: torch.Tensor | np.ndarray) -> tuple:
         """The key of a map's kept parts: the input's shape, device and cells (not the goal).
 
-        Cells of 0 and 1 only (``route_input``'s) are hashed as bits; any other values byte for byte.
+        Cells of 0 and 1 only (``route_input``'s) are hashed as bits; any other values byte for byte. ``x``: a
+        tensor, or a numpy array on the CPU.
         """
-        cells = x.cpu().numpy()[:, :self.block * self.block]
+        numpy = isinstance(x, np.ndarray)
+        cells = (x if numpy else x.cpu().numpy())[:, :self.block * self.block]
         blocked = cells >= 0.5
         data = np.packbits(blocked) if np.array_equal(cells, blocked) else np.ascontiguousarray(cells)
-        return tuple(x.shape), str(x.device), hashlib.blake2b(data.tobytes(), digest_size=16).digest()
+        digest = hashlib.blake2b(data.tobytes(), digest_size=16).digest()
+        return tuple(x.shape), "cpu" if numpy else str(x.device), digest
 
     def keep_map(self, key: tuple, parts: MapParts) -> None:
         """Keep ``parts`` under ``key``, the most recently used last, within ``map_cache_bytes``."""
@@ -800,9 +829,18 @@ class RouteVIN(nn.Module, FieldEncoder):
         f = self.local_window(x, window)
         return self.prices(f), self.head_inputs(f)
 
-    def goal_block(self, x: torch.Tensor) -> tuple[int, int] | None:
-        """The block (row, column) the goal's channel marks; None unless it marks exactly one."""
-        marked = np.flatnonzero(x.cpu().numpy()[0, self.block * self.block] > 0.5)
+    def window_parts_of(self, cells: np.ndarray, window: tuple[int, int, int, int], compiled: bool
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """``window_parts`` of ``route_input``'s channels ``cells`` as numpy arrays, on a pass compiled or not."""
+        if compiled and self.local_compiles(cells, window):
+            return self.local_parts(cells, window)
+        return tuple(t.numpy() for t in self.window_parts(torch.from_numpy(cells), window))
+
+    def goal_block(self, x: torch.Tensor | np.ndarray) -> tuple[int, int] | None:
+        """The block (row, column) the goal's channel marks; None unless it marks exactly one (``x``: a tensor, or a
+        numpy array).
+        """
+        marked = np.flatnonzero((x if isinstance(x, np.ndarray) else x.cpu().numpy())[0, self.block * self.block] > 0.5)
         return divmod(int(marked[0]), x.shape[-1]) if len(marked) == 1 else None
 
     def goal_window(self, x: torch.Tensor, block: tuple[int, int]) -> tuple[int, int, int, int]:
@@ -853,50 +891,73 @@ class RouteVIN(nn.Module, FieldEncoder):
         channel marks other than one block takes the whole pass. ``reach``: as ``compiled_field`` takes it (the
         compiled inference only).
         """
-        if reach is not None and not self.compiled(x):
+        compiled = self.compiled(x)
+        if reach is not None and not compiled:
             raise ValueError("a pass that checks a start's route runs compiled (RouteVIN.compiled)")
-        block = self.goal_block(x)
+        return torch.from_numpy(self.kept_field(x.numpy(), reach, compiled))
+
+    def kept_field(self, cells: np.ndarray, reach: Reach | None = None, compiled: bool = True) -> np.ndarray:
+        """``reusing_field`` of ``route_input``'s channels ``cells`` (1, block**2 + 1, h, w) on the CPU, as numpy:
+        (1, H, W) float32. ``compiled``: whether the pass is the compiled inference (``compiled``); a compiled pass over
+        a map whose local network runs compiled (``local_compiles``) makes no torch call. ``reach``: compiled only.
+        """
+        b = self.block
+        block = self.goal_block(cells)
         if block is None:
-            return self.forward(x) if reach is None else self.compiled_field(x, *self.map_features(x), reach=reach)
-        window = self.goal_window(x, block)
-        key = self.map_key(x)
+            if not compiled:
+                return self.forward(torch.from_numpy(cells)).numpy()
+            return self.query_fields(cells, *self.whole_parts(cells), reach=reach)
+        window = self.goal_window(cells, block)
+        key = self.map_key(cells)
         parts = self._maps.pop(key)
         if parts is None:  # one whole pass; its parts, with this goal in them, kept or held as the recent map's
             keep = self._maps.seen_before(key)
-            if self.compiled(x):
-                parts = MapParts(*self.map_features(x), cell_steps(x, self.block), window, block)
+            if compiled:
+                parts = MapParts(*self.whole_parts(cells), block_moves(cells, b), window, block)
                 self._keep_or_hold(key, parts, keep)
-                return self.compiled_field(x, parts.costs, parts.hidden, parts.steps, reach=reach)
+                return self.query_fields(cells, parts.costs, parts.hidden, parts.steps, reach=reach)
+            x = torch.from_numpy(cells)
             f, costs = self.move_costs(x)
-            parts = MapParts(costs, self.head_inputs(f), cell_steps(x, self.block), window, block)
+            parts = MapParts(costs.numpy(), self.head_inputs(f).numpy(), block_moves(cells, b), window, block)
             self._keep_or_hold(key, parts, keep)
-            return self.cell_field(f, self.inference_values(x, costs, *self.goal_and_walls(x), parts.steps))
+            steps = torch.from_numpy(parts.steps)
+            return self.cell_field(f, self.inference_values(x, costs, *self.goal_and_walls(x), steps)).numpy()
         if parts.goal_window is not None and parts.goal_block == block:
             # the parts hold this very goal (the same query again, as a pass without the learned walls asks it): the
             # whole pass's own parts, read as they are (nothing here writes into them)
             self.keep_map(key, parts)
-            return self._field_from_parts(x, parts.costs, parts.hidden, parts.steps, reach)
+            return self.parts_field(cells, parts.costs, parts.hidden, parts.steps, reach, compiled)
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
-            free = torch.from_numpy(x.numpy().copy())  # the map without a goal (copies in numpy: fewer calls)
-            free.numpy()[:, self.block * self.block] = 0.0
-            costs, hidden = self.window_parts(free, parts.goal_window)
+            free = cells.copy()
+            free[:, b * b] = 0.0
+            costs, hidden = self.window_parts_of(free, parts.goal_window, compiled)
             parts = MapParts(_patched(parts.costs, parts.goal_window, costs),
                              _patched(parts.hidden, parts.goal_window, hidden), parts.steps)
         self.keep_map(key, parts)
-        if self.compiled_local(x, window):
-            return self.window_field(x, parts, window, reach)
-        costs, pre = self.window_parts(x, window)
-        return self._field_from_parts(x, _patched(parts.costs, window, costs), _patched(parts.hidden, window, pre),
-                                      parts.steps, reach)
+        if compiled and self.local_compiles(cells, window):
+            return self.window_field(cells, parts, window, reach)
+        costs, pre = self.window_parts_of(cells, window, compiled)
+        return self.parts_field(cells, _patched(parts.costs, window, costs), _patched(parts.hidden, window, pre),
+                                parts.steps, reach, compiled)
 
-    def _field_from_parts(self, x: torch.Tensor, costs: torch.Tensor, pre: torch.Tensor,
-                          steps: torch.Tensor, reach: Reach | None = None) -> torch.Tensor:
-        """The field of the query ``x`` from its map's learned ``costs``, the cell head's first layer ``pre`` and the
-        ``steps`` (``reusing_field``), none of them written into.
+    def whole_parts(self, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``map_features`` of ``route_input``'s channels ``cells`` as numpy arrays, on a compiled pass: compiled where
+        the map's local network is (``local_compiles``), else through torch.
         """
-        if self.compiled(x):
-            return self.compiled_field(x, costs, pre, steps, reach=reach)
-        v = self.inference_values(x, costs, *self.goal_and_walls(x), steps)
+        if self.local_compiles(cells):
+            return self.local_parts(cells)
+        return tuple(t.numpy() for t in self.map_features(torch.from_numpy(cells)))
+
+    def parts_field(self, cells: np.ndarray, costs: np.ndarray, pre: np.ndarray, steps: np.ndarray,
+                    reach: Reach | None = None, compiled: bool = True) -> np.ndarray:
+        """The field of the query ``cells`` from its map's learned ``costs``, the cell head's first layer ``pre`` and
+        the ``steps`` (``kept_field``), none of them written into: ``query_fields`` where ``compiled``, else through
+        torch.
+        """
+        if compiled:
+            return self.query_fields(cells, costs, pre, steps, reach=reach)
+        x, pre = torch.from_numpy(cells), torch.from_numpy(pre)
+        v = self.inference_values(x, torch.from_numpy(costs), *self.goal_and_walls(x), torch.from_numpy(steps))
         # the cell head's 1x1 layers as matrix products over the blocks (cheaper than convolutions this thin)
         h, w = x.shape[-2:]
         first, last = self.cells[0], self.cells[2]
@@ -904,7 +965,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         hidden = torch.addmm(pre[0].reshape(self.channels, -1), first.weight[:, self.channels:, 0, 0],
                              rel[0].reshape(len(MOVES), -1)).relu_()
         offsets = torch.addmm(last.bias[:, None], last.weight[:, :, 0, 0], hidden).view(1, -1, h, w)
-        return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0]
+        return nn.functional.pixel_shuffle(v.unsqueeze(1) + offsets, self.block)[:, 0].numpy()
 
     def infer(self, x: torch.Tensor, reach: Reach | None = None) -> torch.Tensor:
         """``forward`` at inference (``FieldEncoder.predict``): on the CPU, over each map's kept parts where they fit.
