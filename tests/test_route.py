@@ -50,6 +50,36 @@ def test_the_input_holds_every_cell_of_each_block_and_pads_with_blocked_cells():
     assert x[16].sum() == 1 and x[16, 1, 2] == 1  # the goal's block
 
 
+def _input_in_numpy(obstacles, goal_cell, block):
+    """``route_input`` in numpy: the padded map's blocks laid out as channels, the goal's block, the offsets to it."""
+    H, W = obstacles.shape
+    h, w = -(-H // block), -(-W // block)
+    out = np.empty((block * block + 3, h, w), dtype=np.float32)
+    pad = np.ones((h * block, w * block), dtype=np.float32)
+    pad[:H, :W] = obstacles
+    out[:block * block] = pad.reshape(h, block, w, block).transpose(1, 3, 0, 2).reshape(block * block, h, w)
+    gr, gc = goal_cell[0] // block, goal_cell[1] // block
+    out[block * block] = 0.0
+    if 0 <= gr < h and 0 <= gc < w:
+        out[block * block, gr, gc] = 1.0
+    out[block * block + 1] = ((gc - np.arange(w)) / w)[None, :]
+    out[block * block + 2] = ((gr - np.arange(h)) / h)[:, None]
+    return out
+
+
+@settings(max_examples=80, deadline=None)
+@given(h=st.integers(1, 30), w=st.integers(1, 30), block=st.integers(1, 4), seed=st.integers(0, 2**16),
+       kind=st.sampled_from(["bool", "uint8", "float", "reversed"]),
+       goal=st.tuples(st.integers(-3, 33), st.integers(-3, 33)))
+def test_the_compiled_input_is_the_numpy_layout_bit_for_bit(h, w, block, seed, kind, goal):
+    rng = np.random.default_rng(seed)
+    obstacles = rng.random((h, w)) < 0.3
+    obstacles = {"bool": obstacles, "uint8": obstacles.astype(np.uint8), "float": rng.random((h, w)),
+                 "reversed": obstacles[:, ::-1]}[kind]  # and a view with negative strides
+    got, want = route_input(obstacles, goal, block), _input_in_numpy(obstacles, goal, block)
+    assert got.dtype == np.float32 and np.array_equal(got, want)
+
+
 def test_cost_targets_are_the_distance_field_in_steps():
     p = generate("bugtrap", TEST_SEED0, 64)
     goal = p.world.cell_of(p.goal)
