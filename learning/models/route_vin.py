@@ -805,9 +805,9 @@ class RouteVIN(nn.Module, FieldEncoder):
         tensor, or a numpy array on the CPU.
         """
         numpy = isinstance(x, np.ndarray)
-        cells = (x if numpy else x.cpu().numpy())[:, :self.block * self.block]
-        blocked = cells >= 0.5
-        data = np.packbits(blocked) if np.array_equal(cells, blocked) else np.ascontiguousarray(cells)
+        cells, k = (x if numpy else x.cpu().numpy()), self.block * self.block
+        bits = np.empty(-(-len(cells) * k * cells.shape[-2] * cells.shape[-1] // 8), dtype=np.uint8)
+        data = bits if vin_query.blocked_bits(cells, k, bits) else np.ascontiguousarray(cells[:, :k])
         digest = hashlib.blake2b(data.tobytes(), digest_size=16).digest()
         return tuple(x.shape), "cpu" if numpy else str(x.device), digest
 
@@ -840,8 +840,8 @@ class RouteVIN(nn.Module, FieldEncoder):
         """The block (row, column) the goal's channel marks; None unless it marks exactly one (``x``: a tensor, or a
         numpy array).
         """
-        marked = np.flatnonzero((x if isinstance(x, np.ndarray) else x.cpu().numpy())[0, self.block * self.block] > 0.5)
-        return divmod(int(marked[0]), x.shape[-1]) if len(marked) == 1 else None
+        at = vin_query.single_mark((x if isinstance(x, np.ndarray) else x.cpu().numpy())[0, self.block * self.block])
+        return divmod(int(at), x.shape[-1]) if at >= 0 else None
 
     def goal_window(self, x: torch.Tensor, block: tuple[int, int]) -> tuple[int, int, int, int]:
         """The blocks whose features a goal in ``block`` (``goal_block(x)``) reaches: within ``depth`` of it."""

@@ -37,6 +37,47 @@ NO_WORK = (np.empty((0, len(MOVES)), dtype=np.float32), np.empty(0, dtype=np.flo
 
 
 @nb.njit(cache=True)
+def blocked_bits(cells, k, bits):
+    """``np.packbits(cells[:, :k] >= 0.5)`` into ``bits`` (uint8, one byte per 8 cells, the last padded with zeros), for
+    ``cells`` (B, C, h, w); returns whether each of those cells is 0 or 1 (``np.array_equal`` of them and their bits).
+    """
+    n, _, h, w = cells.shape
+    binary = True
+    count = 0
+    byte = 0
+    for b in range(n):
+        for c in range(k):
+            for r in range(h):
+                for q in range(w):
+                    v = cells[b, c, r, q]
+                    on = v >= 0.5
+                    if binary and not v == (1.0 if on else 0.0):
+                        binary = False
+                    byte = (byte << 1) | on
+                    count += 1
+                    if count % 8 == 0:
+                        bits[count // 8 - 1] = byte
+                        byte = 0
+    if count % 8:
+        bits[count // 8] = byte << (8 - count % 8)
+    return binary
+
+
+@nb.njit(cache=True)
+def single_mark(plane):
+    """The flat index of the one entry of ``plane`` (h, w) above 0.5, or -1 where not exactly one is."""
+    h, w = plane.shape
+    at = -1
+    for r in range(h):
+        for c in range(w):
+            if plane[r, c] > 0.5:
+                if at >= 0:
+                    return -1
+                at = r * w + c
+    return at
+
+
+@nb.njit(cache=True)
 def _walls_and_goal(cells, block):
     """From ``route_input``'s channels (block**2 + 1, h, w): the blocks with no free cell, and the goal's blocks."""
     k = block * block
