@@ -3,8 +3,9 @@
 ``python -m planners.compile`` compiles every planner's own kernels; a learned sampler's compiled parts (the route
 field's draw inside each planner's loop, the encoder's Dijkstra and cell head, the policy's network, the 6-DoF
 route's search) compile at their first use, without a notice: after ``planners.compile`` alone, a first
-``plan.py --sampler route`` still waits about 20 s for them on a 2-core machine. This runs, for each learned sampler
-and each planner, one short seeded solve on ``planners.compile``'s small problems (the 2-D samplers on the
+``plan.py --sampler route`` still waits about 27 s for them on a 2-core machine. This runs, for each learned sampler
+and each planner, two short seeded solves (a query and the reverse one on the same map) on ``planners.compile``'s
+small problems (the 2-D samplers on the
 occupancy grid, the 6-DoF ones on the rigid body among boxes and, with the ``mesh`` extra, among triangle meshes), in
 worker processes as ``planners.compile`` runs its jobs, into the same cache folder; the planners' own kernels compile
 on the way where they were not compiled before.
@@ -56,10 +57,15 @@ def compile_sampler(planner: str, world: str, metric: str, sampler: str) -> floa
     t0 = time.perf_counter()
     problem = WORLDS[world][0](metric)
     try:
-        p = make_planner(planner, problem, sampler=make_sampler(sampler), seed=0)
+        learned = make_sampler(sampler)
+        p = make_planner(planner, problem, sampler=learned, seed=0)
     except (InputError, ValueError):
         return None
     p.solve(max_iterations=ITERATIONS)
+    # a later query on the same map with the same sampler: what it runs over what it keeps of a map (the route
+    # encoder's window of the goal)
+    make_planner(planner, problem.with_query(problem.goal, problem.start), sampler=learned, seed=0).solve(
+        max_iterations=ITERATIONS)
     return time.perf_counter() - t0
 
 
