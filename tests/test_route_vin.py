@@ -817,3 +817,25 @@ def test_the_shipped_encoder_in_one_pass_opens_the_walls_where_two_passes_would(
             net.predict_reaching(obstacles, goal, bad)
         with pytest.raises(InputError, match=match), net.open_walls():  # the two calls' path refuses it alike
             net.predict_reaching(obstacles, goal, bad)
+
+
+def test_a_query_on_a_small_map_makes_no_torch_call_and_gives_the_torch_pass_field(monkeypatch):
+    net = load_route_net(SHIPPED)
+    p = generate("rooms", 9, 32)  # a map the learned walls shut the start of: every step of the one pass taken
+    obstacles, goal, start = p.world.obstacles, p.world.cell_of(p.goal), p.world.cell_of(p.start)
+    free = np.argwhere(~obstacles)
+    queries = [(goal, start), (tuple(free[0]), start), (tuple(free[-1]), tuple(free[len(free) // 2]))]
+    with torch.inference_mode():  # the fields the torch pass gives (kept parts and all), before torch is shut
+        net.clear_map_cache()
+        want = [_two_calls(net, obstacles, g, s) for g, s in queries]
+
+    def no_torch(*args, **kwargs):
+        raise AssertionError("a query on a small map called torch")
+
+    net.clear_map_cache()
+    for name in ("from_numpy", "inference_mode", "no_grad"):
+        monkeypatch.setattr(torch, name, no_torch)
+    got = [net.predict_reaching(obstacles, g, s) for g, s in queries]  # a first query, then later ones on its parts
+    monkeypatch.undo()
+    for (field, opened), (expected, was_opened) in zip(got, want, strict=True):
+        assert opened == was_opened and np.array_equal(field, expected)
