@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from learning.models.cell_head import cell_head_at, cell_head_field
-from learning.models.vin_query import NO_WORK, blocked_bits, query_field, single_mark
+from learning.models.vin_query import NO_WORK, blocked_cells, query_field, single_mark
 from planners.maps.gridsearch import MOVES, incoming_prices, move_cost_field, reaches_block
 
 
@@ -86,16 +86,16 @@ def test_the_walk_reaches_a_block_exactly_where_the_search_gives_it_a_value(h, w
 @settings(max_examples=60, deadline=None)
 @given(n=st.integers(1, 2), channels=st.integers(2, 6), h=st.integers(1, 12), w=st.integers(1, 12),
        seed=st.integers(0, 2**16), odd=st.sampled_from([None, 0.3, np.nan, -0.0]), dtype=st.sampled_from(["f4", "f8"]))
-def test_the_compiled_map_bits_and_goal_mark_are_numpys(n, channels, h, w, seed, odd, dtype):
+def test_the_compiled_map_flags_and_goal_mark_are_numpys(n, channels, h, w, seed, odd, dtype):
     rng = np.random.default_rng(seed)
     cells = (rng.random((n, channels, h, w)) < 0.4).astype(dtype)
     if odd is not None:
         cells[0, 0, rng.integers(h), rng.integers(w)] = odd  # a value other than 0 or 1: the key takes the bytes
     k = int(rng.integers(1, channels))
     blocked = cells[:, :k] >= 0.5
-    bits = np.empty(-(-blocked.size // 8), dtype=np.uint8)
-    assert blocked_bits(cells, k, bits) == np.array_equal(cells[:, :k], blocked)
-    assert np.array_equal(bits, np.packbits(blocked))
+    flags = np.empty(blocked.size, dtype=bool)
+    assert blocked_cells(cells, k, flags) == np.array_equal(cells[:, :k], blocked)
+    assert np.array_equal(flags, blocked.ravel())
     plane = cells[0, k]
     marked = np.flatnonzero(plane > 0.5)
     assert single_mark(plane) == (marked[0] if len(marked) == 1 else -1)

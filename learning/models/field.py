@@ -61,11 +61,17 @@ def _route_input(obstacles, gr, gc, block, out):
     for i in range(block):
         for j in range(block):
             channel = out[i * block + j]
+            inside = min(w, -(-(W - j) // block))  # the blocks whose cell (i, j) lies on the map's columns
             for r in range(h):
+                line = channel[r]
                 row = r * block + i
-                for c in range(w):
-                    col = c * block + j
-                    channel[r, c] = np.float32(obstacles[row, col]) if row < H and col < W else one
+                if row >= H:
+                    line[:] = one
+                    continue
+                cells_row = obstacles[row]
+                for c in range(inside):
+                    line[c] = np.float32(cells_row[c * block + j])
+                line[inside:] = one
     out[cells] = 0.0
     if 0 <= gr < h and 0 <= gc < w:
         out[cells, gr, gc] = one

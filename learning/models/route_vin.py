@@ -806,8 +806,8 @@ class RouteVIN(nn.Module, FieldEncoder):
         """
         numpy = isinstance(x, np.ndarray)
         cells, k = (x if numpy else x.cpu().numpy()), self.block * self.block
-        bits = np.empty(-(-len(cells) * k * cells.shape[-2] * cells.shape[-1] // 8), dtype=np.uint8)
-        data = bits if vin_query.blocked_bits(cells, k, bits) else np.ascontiguousarray(cells[:, :k])
+        flags = np.empty(len(cells) * k * cells.shape[-2] * cells.shape[-1], dtype=bool)
+        data = np.packbits(flags) if vin_query.blocked_cells(cells, k, flags) else np.ascontiguousarray(cells[:, :k])
         digest = hashlib.blake2b(data.tobytes(), digest_size=16).digest()
         return tuple(x.shape), "cpu" if numpy else str(x.device), digest
 

@@ -37,30 +37,25 @@ NO_WORK = (np.empty((0, len(MOVES)), dtype=np.float32), np.empty(0, dtype=np.flo
 
 
 @nb.njit(cache=True)
-def blocked_bits(cells, k, bits):
-    """``np.packbits(cells[:, :k] >= 0.5)`` into ``bits`` (uint8, one byte per 8 cells, the last padded with zeros), for
-    ``cells`` (B, C, h, w); returns whether each of those cells is 0 or 1 (``np.array_equal`` of them and their bits).
+def blocked_cells(cells, k, flags):
+    """``cells[:, :k] >= 0.5`` into ``flags`` (bool, C order, at least as long), for ``cells`` (B, C, h, w); returns
+    whether each of those cells is 0 or 1 (``np.array_equal`` of them and their flags).
     """
     n, _, h, w = cells.shape
-    binary = True
-    count = 0
-    byte = 0
+    other = 0  # cells other than 0 and 1: unequal to their flags, as numpy compares a float with a bool
+    at = 0
     for b in range(n):
         for c in range(k):
             for r in range(h):
+                row = cells[b, c, r]
+                out = flags[at:at + w]
+                for q in range(w):  # two loops over the row, each of which runs in vectors
+                    out[q] = row[q] >= 0.5
                 for q in range(w):
-                    v = cells[b, c, r, q]
-                    on = v >= 0.5
-                    if binary and not v == (1.0 if on else 0.0):
-                        binary = False
-                    byte = (byte << 1) | on
-                    count += 1
-                    if count % 8 == 0:
-                        bits[count // 8 - 1] = byte
-                        byte = 0
-    if count % 8:
-        bits[count // 8] = byte << (8 - count % 8)
-    return binary
+                    v = row[q]
+                    other += (v != 0.0) & (v != 1.0)
+                at += w
+    return other == 0
 
 
 @nb.njit(cache=True)
