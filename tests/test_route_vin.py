@@ -517,12 +517,12 @@ def test_the_same_goal_again_reads_the_held_parts_as_the_whole_pass_made_them(h,
     def no_window(*args):
         raise AssertionError("the same goal again computed a goal's window")
 
-    net.window_parts_of = net.window_field = no_window  # the parts hold this goal already: no window is computed
+    net.window_parts = net.window_field = no_window  # the parts hold this goal already: no window is computed
     with net.open_walls():
         again = net.predict(obstacles, g)  # the route sampler's second pass: the same goal, without the learned walls
     assert np.array_equal(first, expected[0]) and np.array_equal(again, expected[1])
     assert np.array_equal(net.predict(obstacles, g), expected[2])  # and again, from the parts now kept
-    del net.window_parts_of, net.window_field  # back to the class's methods
+    del net.window_parts, net.window_field  # back to the class's methods
     later = net.predict(obstacles, o)  # another goal: the held goal's window taken out, its own put in
     reached = expected[3] < 1e5
     assert np.array_equal(reached, later < 1e5) and np.abs(later - expected[3])[reached].max(initial=0.0) < 1e-4

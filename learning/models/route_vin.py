@@ -576,7 +576,7 @@ class RouteVIN(nn.Module, FieldEncoder):
         pass overwrites.
         """
         if self.compiled_local(x):
-            return self.numba_parts(x, reuse=reuse)
+            return tuple(torch.from_numpy(a) for a in self.local_parts(x.numpy(), reuse=reuse))
         h, w = x.shape[-2:]
         d = self.depth
         rows = max(8 * d, self.feature_bytes // (4 * self.channels * w * x.shape[0]))
@@ -686,7 +686,7 @@ class RouteVIN(nn.Module, FieldEncoder):
 
     def window_field(self, cells: np.ndarray, parts: MapParts, window: tuple[int, int, int, int],
                      reach: Reach | None = None) -> np.ndarray:
-        """``query_fields`` of ``window_parts_of`` patched into the map's kept ``parts`` (``kept_field``), in one
+        """``query_fields`` of ``window_parts`` patched into the map's kept ``parts`` (``kept_field``), in one
         compiled call (``learning.models.vin_query.window_field``): where the window runs compiled (``local_compiles``).
         The same values, bit for bit; ``parts`` are not written. ``cells``: the query's ``route_input`` channels (1,
         block**2 + 1, h, w); (1, H, W) float32.
@@ -769,16 +769,11 @@ class RouteVIN(nn.Module, FieldEncoder):
         d = self.depth
         return max(0, k0 - d), min(h, k1 + d), max(0, j0 - d), min(w, j1 + d)
 
-    def numba_parts(self, x: torch.Tensor, window: tuple[int, int, int, int] | None = None, reuse: bool = False
-                    ) -> tuple[torch.Tensor, torch.Tensor]:
-        """``map_features`` (``window`` None; ``reuse`` as it takes it) or ``window_parts`` of ``x``, compiled
-        (``compiled_local``).
-        """
-        return tuple(torch.from_numpy(a) for a in self.local_parts(x.numpy(), window, reuse))
-
     def local_parts(self, cells: np.ndarray, window: tuple[int, int, int, int] | None = None, reuse: bool = False
                     ) -> tuple[np.ndarray, np.ndarray]:
-        """``numba_parts`` of ``route_input``'s channels ``cells`` as numpy arrays."""
+        """``map_features`` (``window`` None; ``reuse`` as it takes it) or ``window_parts`` of ``route_input``'s
+        channels ``cells``, compiled (``local_compiles``), as numpy arrays.
+        """
         h, w = cells.shape[-2:]
         k0, k1, j0, j1 = (0, h, 0, w) if window is None else window
         d = self.depth
@@ -822,19 +817,16 @@ class RouteVIN(nn.Module, FieldEncoder):
         else:
             self._maps.hold(key, parts, self.map_cache_bytes)
 
-    def window_parts(self, x: torch.Tensor, window: tuple[int, int, int, int]) -> tuple[torch.Tensor, torch.Tensor]:
-        """The move costs and the head's first layer over the blocks of ``window`` only (``local_window``)."""
-        if self.compiled_local(x, window):
-            return self.numba_parts(x, window)
-        f = self.local_window(x, window)
-        return self.prices(f), self.head_inputs(f)
-
-    def window_parts_of(self, cells: np.ndarray, window: tuple[int, int, int, int], compiled: bool
-                        ) -> tuple[np.ndarray, np.ndarray]:
-        """``window_parts`` of ``route_input``'s channels ``cells`` as numpy arrays, on a pass compiled or not."""
+    def window_parts(self, cells: np.ndarray, window: tuple[int, int, int, int], compiled: bool
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """The move costs and the head's first layer over the blocks of ``window`` only, from ``route_input``'s
+        channels ``cells``, as numpy arrays: compiled where the pass is and the window's region runs compiled
+        (``local_compiles``), else through torch (``local_window``).
+        """
         if compiled and self.local_compiles(cells, window):
             return self.local_parts(cells, window)
-        return tuple(t.numpy() for t in self.window_parts(torch.from_numpy(cells), window))
+        f = self.local_window(torch.from_numpy(cells), window)
+        return self.prices(f).numpy(), self.head_inputs(f).numpy()
 
     def goal_block(self, x: torch.Tensor | np.ndarray) -> tuple[int, int] | None:
         """The block (row, column) the goal's channel marks; None unless it marks exactly one (``x``: a tensor, or a
@@ -930,13 +922,13 @@ class RouteVIN(nn.Module, FieldEncoder):
         if parts.goal_window is not None:  # the first goal's window, without a goal, once
             free = cells.copy()
             free[:, b * b] = 0.0
-            costs, hidden = self.window_parts_of(free, parts.goal_window, compiled)
+            costs, hidden = self.window_parts(free, parts.goal_window, compiled)
             parts = MapParts(_patched(parts.costs, parts.goal_window, costs),
                              _patched(parts.hidden, parts.goal_window, hidden), parts.steps)
         self.keep_map(key, parts)
         if compiled and self.local_compiles(cells, window):
             return self.window_field(cells, parts, window, reach)
-        costs, pre = self.window_parts_of(cells, window, compiled)
+        costs, pre = self.window_parts(cells, window, compiled)
         return self.parts_field(cells, _patched(parts.costs, window, costs), _patched(parts.hidden, window, pre),
                                 parts.steps, reach, compiled)
 
