@@ -66,7 +66,25 @@ def compile_sampler(planner: str, world: str, metric: str, sampler: str) -> floa
     # encoder's window of the goal)
     make_planner(planner, problem.with_query(problem.goal, problem.start), sampler=learned, seed=0).solve(
         max_iterations=ITERATIONS)
+    if (sampler, world, planner) == ("route", "grid", "RRT"):  # a map the encoder reads coarser (its coarsening and
+        # the field's interpolation; at the step the encoder reads a step as its own)
+        make_planner(planner, coarse_problem(), sampler=learned, step_size=4.0, seed=0).solve(max_iterations=ITERATIONS)
     return time.perf_counter() - t0
+
+
+def coarse_problem():
+    """A map large enough, and open enough, that the route encoder reads it coarser (``RouteSampler.coarse_side``):
+    a wall across, with a wide gap.
+    """
+    import numpy as np
+
+    from learning.samplers.route import COARSE_SIDE
+    from planners import OccupancyGrid, Problem
+
+    side = 2 * COARSE_SIDE
+    obstacles = np.zeros((side, side), dtype=bool)
+    obstacles[side // 2, side // 8:] = True
+    return Problem(OccupancyGrid(obstacles), [side - 8.5, 8.5], [side - 8.5, side - 8.5], goal_tolerance=4.0)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -447,13 +447,53 @@ def test_a_step_of_another_number_of_cells_reads_the_map_resampled_to_the_encode
     planner = RRT(p, step_size=0.03 * cells_per_step, sampler=shipped, seed=1)
     sampler = planner.sampler
     assert sampler.step_size == pytest.approx(0.03 * cells_per_step)  # the planner's, not the sampler's own 4
-    obstacles, goal, factor = sampler._encoder_map(grid)
+    obstacles, goal, factor, k = sampler._encoder_map(grid)
+    assert k == 1  # 100 cells a side is read at full resolution
     assert factor == pytest.approx(cells_per_step / 4)
     assert obstacles.shape == tuple(int(np.ceil(100 / factor - 1e-6)) for _ in range(2)) and obstacles.any()
     assert sampler.field.shape == (100, 100) and np.isfinite(sampler.field[~grid.obstacles]).all()
     # the field leads through the gap: past it is cheaper than before it, and before it, far from it dearer
     assert sampler.field[70, 5] < sampler.field[30, 5] < sampler.field[30, 60]
     assert planner.solve(max_iterations=20000).solved
+
+
+def test_a_large_map_whose_passages_allow_it_is_read_coarser_and_its_field_still_leads():
+    shipped = RouteSampler.load(SHIPPED_ROUTE)  # the shipped encoder: the field's values are compared
+    obstacles = np.zeros((512, 512), bool)
+    obstacles[256, 40:] = True  # a wall across, with a gap of 40 cells at columns 0-39
+    grid = OccupancyGrid(obstacles)
+    p = Problem(grid, [480.5, 30.5], [480.5, 480.5], goal_tolerance=4.0)
+    planner = RRT(p, step_size=4.0, sampler=shipped, seed=0)
+    coarse = planner.sampler
+    assert coarse._encoder_map(grid)[3] == 4  # 512 cells read as 128
+    full = RRT(p, step_size=4.0, sampler=shipped._copy_with(coarse_side=0), seed=0).sampler
+    assert full._encoder_map(grid)[3] == 1
+    free = ~obstacles
+    assert np.isfinite(coarse.field[free]).all()
+    # the same route: past the gap cheaper than before it, far from it dearer; the values close to full resolution's
+    f = coarse.field
+    assert f[300, 20] < f[200, 20] < f[200, 400] and f[480, 480] < f[30, 480]
+    assert np.corrcoef(f[free], full.field[free])[0, 1] > 0.999
+    assert np.abs(f[free] - full.field[free]).max() < 5  # steps, on routes of up to 270
+    assert planner.solve(max_iterations=20000).solved
+
+
+def test_a_map_read_coarser_keeps_its_start_and_goal_in_free_coarse_cells(shipped):
+    obstacles = np.zeros((512, 512), bool)
+    obstacles[256, 40:] = True
+    grid = OccupancyGrid(obstacles)
+    p = Problem(grid, [100.5, 257.5], [480.5, 480.5], goal_tolerance=4.0)  # the start right below the wall
+    sampler = RRT(p, step_size=4.0, sampler=shipped, seed=0).sampler
+    obstacles_read, goal, factor, k = sampler._encoder_map(grid)
+    assert k == 1  # rows 256 and 257 share a coarse cell at 2 already
+    p = Problem(grid, [100.5, 259.5], [480.5, 480.5], goal_tolerance=4.0)
+    assert RRT(p, step_size=4.0, sampler=shipped, seed=0).sampler._encoder_map(grid)[3] == 2
+
+
+@pytest.mark.parametrize("side", [-1, 1.5, True, "128"])
+def test_coarse_side_must_be_a_whole_number_of_cells(small_net, side):
+    with pytest.raises(InputError, match="coarse_side"):
+        RouteSampler.load(small_net, coarse_side=side)
 
 
 def test_a_step_too_fine_for_the_encoders_limit_is_refused_saying_to_take_a_larger_step(shipped, monkeypatch):

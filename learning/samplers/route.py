@@ -42,6 +42,7 @@ from planners.base.samplers import check_sampler_params
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, last_in_sight, lowest_vertex_cell, walk_path
 from planners.guidance.frontier import NO_COST, Frontier, frontier_memo, frontier_sample, update_frontier
+from planners.maps.coarsen import block_any, coarsest_keeping, free_at
 from planners.worlds.grid import resample_obstacles, resampled_shape
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
@@ -78,6 +79,18 @@ ABLATION_SETTINGS = {"stuck": 1, "tau": 0.5, "lookahead": 2.5, "sigma": 0.5, "ri
 #: does not widen (it is the policy's baseline, as published).
 FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "ripple_growth": 0.0, "sight": False,
                      "widen": "off"}
+
+
+#: ``RouteSampler``'s ``coarse_side``: a map of at least 256 of the encoder's cells a side is read coarser, down to
+#: 128 a side, where that closes no passage. Chosen on validation maps of 256 and 512 cells by the rule of
+#: ``scripts/experiments/coarse_fields.py`` (iterations at a geometric mean of 1.04 times full resolution's, the time
+#: of a query at 0.43 times; 64 a side took 1.13 times the iterations).
+COARSE_SIDE = 128
+#: ``RouteSampler``'s ``coarse_most``: a coarse cell at most a planner step across (4 of the encoder's cells). On
+#: validation maps of 1,024 cells (the same script, ``--sides 1024 --maps 4 --most 4``, then ``--most 64``) reading them
+#: 4 times coarser took 1.04 times full resolution's iterations at 0.29 of the time, and 8 times 1.11 (the worst row
+#: 1.23) at 0.25.
+COARSE_MOST = 4
 
 
 #: ``RouteSampler``'s ways to widen a stalled search (its ``widen``; see ``route_draw``): never; the frontier of
@@ -245,6 +258,106 @@ def ranked_where_unreached(field: np.ndarray, blocked: np.ndarray, gx: float, gy
     """
     return _ranked_where_unreached(np.asarray(field, dtype=np.float64), blocked, float(gx), float(gy), float(res),
                                    float(step), float(unreached))
+
+
+@nb.njit(cache=True)
+def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
+    """A field over the grid ``blocked`` (H, W) from ``coarse``, the field of the same map read ``factor`` times coarser
+    (whole, ``shut`` its blocked cells), in the field's unit; ``cell`` is a grid cell's length in it.
+
+    A free cell of a free coarse cell takes the bilinear interpolation between the centres of the coarse cells around
+    it, over those that are free, have a value below ``unreached`` and meet its own coarse cell along a side or
+    through a free one (a coarse cell's own value at or above ``unreached``, where the encoder sees no route, is
+    kept): read nearest-cell, a coarse field is flat over each coarse cell, and a walk down it wanders on the flats.
+    A free cell of a blocked coarse cell (beside a wall) takes its nearest valued free neighbour's value plus the
+    way to it (two sweeps each way of a distance transform over those cells); ``inf`` on obstacles and where no value
+    reaches.
+    """
+    H, W = blocked.shape
+    h, w = coarse.shape
+    own_row, low_row, up_row = _coarse_axis(H, h, factor)
+    own_col, low_col, up_col = _coarse_axis(W, w, factor)
+    ok = np.empty((h, w), dtype=np.bool_)  # the coarse cells that serve an interpolation
+    for i in range(h):
+        for j in range(w):
+            ok[i, j] = not shut[i, j] and coarse[i, j] < unreached
+    quad = np.zeros((h + 1, w + 1), dtype=np.bool_)  # [i + 1, j + 1]: whether cells i..i+1, j..j+1 all serve
+    for i in range(h - 1):
+        for j in range(w - 1):
+            quad[i + 1, j + 1] = ok[i, j] and ok[i + 1, j] and ok[i, j + 1] and ok[i + 1, j + 1]
+    out = np.empty((H, W))
+    band = np.empty(H * W, dtype=np.int32)  # the free cells of blocked coarse cells
+    n = 0
+    for r in range(H):
+        ia, i0, fy = own_row[r], int(low_row[r]), up_row[r]
+        for c in range(W):
+            ja = own_col[c]
+            if blocked[r, c]:
+                out[r, c] = math.inf
+                continue
+            if shut[ia, ja]:
+                out[r, c] = math.inf
+                band[n] = r * W + c
+                n += 1
+                continue
+            own = coarse[ia, ja]
+            if not own < unreached:
+                out[r, c] = own
+                continue
+            j0, fx = int(low_col[c]), up_col[c]
+            if quad[i0 + 1, j0 + 1]:  # the four serve: bilinear as it stands
+                top = coarse[i0, j0] + fx * (coarse[i0, j0 + 1] - coarse[i0, j0])
+                bottom = coarse[i0 + 1, j0] + fx * (coarse[i0 + 1, j0 + 1] - coarse[i0 + 1, j0])
+                out[r, c] = top + fy * (bottom - top)
+                continue
+            total, weight = 0.0, 0.0
+            for di in range(2):
+                i = i0 + di
+                wy = fy if di else 1.0 - fy
+                for dj in range(2):
+                    j = j0 + dj
+                    if i < 0 or j < 0 or i >= h or j >= w or not ok[i, j]:
+                        continue
+                    if i != ia and j != ja and shut[i, ja] and shut[ia, j]:
+                        continue  # meets the cell's own only at a corner
+                    wt = wy * (fx if dj else 1.0 - fx) + 1e-12
+                    total += wt * coarse[i, j]
+                    weight += wt
+            out[r, c] = total / weight
+    diagonal = cell * math.sqrt(2.0)
+    for sweep in range(4):  # the cells beside walls, twice each way (a wall's coarse cell: a few cells to cross)
+        for m in range(n):
+            v = band[m] if sweep % 2 == 0 else band[n - 1 - m]
+            r, c = v // W, v % W
+            best = out[r, c]
+            for dr in range(-1, 2):
+                for dc in range(-1, 2):
+                    r2, c2 = r + dr, c + dc
+                    if (dr == 0 and dc == 0) or r2 < 0 or c2 < 0 or r2 >= H or c2 >= W or blocked[r2, c2]:
+                        continue
+                    if dr != 0 and dc != 0 and (blocked[r2, c] or blocked[r, c2]):
+                        continue  # no corner cut
+                    d = out[r2, c2] + (diagonal if dr != 0 and dc != 0 else cell)
+                    if d < best:
+                        best = d
+            out[r, c] = best
+    return out
+
+
+@nb.njit(cache=True)
+def _coarse_axis(N, n, factor):
+    """Per grid row (or column) of ``N``: the coarse one its centre lies in (of ``n``), the coarse centre at or before
+    it and its share of the way to the next one (the bilinear interpolation's lower index and weight).
+    """
+    own = np.empty(N, dtype=np.int64)
+    low = np.empty(N)
+    up = np.empty(N)
+    for r in range(N):
+        own[r] = min(int((r + 0.5) / factor), n - 1)
+        y = (r + 0.5) / factor - 0.5
+        low[r] = math.floor(y)
+        up[r] = y - math.floor(y)
+    return own, low, up
 
 
 def fine_frontier(grid: OccupancyGrid, cost: np.ndarray | None) -> tuple:
@@ -467,6 +580,10 @@ class RouteSampler(SamplerBase):
             narrower than a step whose cells next to the tree have blocked centres; ``"empty"`` turns to a frontier
             of one-grid-cell cells while the step-wide one is empty, ``"stalled"`` also draws half the frontier's
             samples from it once the field's progress has stalled ``patience`` iterations.
+        coarse_side, coarse_most: The encoder reads a map whose longer side is at least twice ``coarse_side`` of its
+            cells coarser, by the largest power of two up to ``coarse_most`` that keeps that side at least
+            ``coarse_side`` long, closes no passage and leaves the start and the goal free
+            (``planners.maps.coarsen``); ``coarse_side`` 0: every map at full resolution.
     """
 
     #: Where the encoder's field replaces the straight line: the progress and the frontier's ranking.
@@ -485,7 +602,8 @@ class RouteSampler(SamplerBase):
                  stuck: int = 1, uniform_floor: float = 0.05, batch: int = 1, patience: int = 200,
                  max_floor: float = 0.5, tau: float = 0.5, device: str = "auto", threads: int | None = None,
                  fields: FieldCache | None = None, ripple: float = 0.1,
-                 ripple_growth: float = 0.01, sight: bool = True, widen: str = "stalled") -> None:
+                 ripple_growth: float = 0.01, sight: bool = True, widen: str = "stalled",
+                 coarse_side: int = COARSE_SIDE, coarse_most: int = COARSE_MOST) -> None:
         if not (ripple >= 0 and ripple_growth >= 0):
             raise InputError(f"ripple = {short_repr(ripple)}, ripple_growth = {short_repr(ripple_growth)}: expected a "
                              f"depth in steps >= 0 and a growth per step of cost-to-go >= 0")
@@ -504,6 +622,13 @@ class RouteSampler(SamplerBase):
         if widen not in WIDEN_MODES:
             raise InputError(f"widen = {short_repr(widen)}: expected one of {', '.join(WIDEN_MODES)}")
         self.widen = widen
+        if isinstance(coarse_side, bool) or not isinstance(coarse_side, int | np.integer) or coarse_side < 0:
+            raise InputError(f"coarse_side = {short_repr(coarse_side)}: expected a whole number of the encoder's cells "
+                             f">= 0 (0: read every map at full resolution)")
+        if isinstance(coarse_most, bool) or not isinstance(coarse_most, int | np.integer) or coarse_most < 1:
+            raise InputError(f"coarse_most = {short_repr(coarse_most)}: expected a whole number >= 1 (the most times "
+                             f"coarser a map is read; 1: never)")
+        self.coarse_side, self.coarse_most = int(coarse_side), int(coarse_most)
         self.device = resolve_device(device, "device =")
         if threads is not None:
             planning_thread_count(threads)  # refused now, by name, rather than at the first query
@@ -540,21 +665,38 @@ class RouteSampler(SamplerBase):
         check_sampler_params(type(self).__name__, step_size=step_size)
         return self if float(step_size) == self.step_size else self._copy_with(step_size=float(step_size))
 
-    def _encoder_map(self, grid: OccupancyGrid) -> tuple[np.ndarray, tuple[int, int], float]:
-        """What the encoder reads for this query: (obstacles, goal cell, map cells per encoder cell).
+    def _encoder_map(self, grid: OccupancyGrid) -> tuple[np.ndarray, tuple[int, int], float, int]:
+        """What the encoder reads for this query: (obstacles, goal cell, map cells per encoder cell, coarsening).
 
         The encoder was trained for a step of ``net.step`` cells. Where the step is another number of this map's
         cells, it reads the map resampled so that a step is ``net.step`` of its cells (``resample_obstacles``:
         a cell is blocked where any map cell it overlaps is, so a gap narrower than one can close, and no wall
-        opens); its field is in steps either way.
+        opens); its field is in steps either way. A large map it reads coarser still where that closes no passage
+        (``coarse_side``): coarsened ``k`` times (the last element; 1: not), the field it gives is in steps of
+        ``k`` planner steps.
         """
-        goal = grid.cell_of(self.problem.goal)
+        goal, start = grid.cell_of(self.problem.goal), grid.cell_of(self.problem.start)
         factor = self._encoder_factor(grid)
-        if factor == 1.0:
-            return grid.obstacles, goal, 1.0
-        coarse = resample_obstacles(grid.obstacles, factor)
-        g = (min(int(goal[0] / factor), coarse.shape[0] - 1), min(int(goal[1] / factor), coarse.shape[1] - 1))
-        return coarse, g, factor
+        obstacles = grid.obstacles
+        if factor != 1.0:
+            obstacles = resample_obstacles(obstacles, factor)
+            goal, start = ((min(int(r / factor), obstacles.shape[0] - 1), min(int(c / factor), obstacles.shape[1] - 1))
+                           for r, c in (goal, start))
+        k = self._coarsening(obstacles, (start, goal))
+        if k == 1:
+            return obstacles, goal, factor, 1
+        coarse = block_any(np.ascontiguousarray(obstacles, dtype=np.bool_), k)
+        return coarse, (goal[0] // k, goal[1] // k), factor * k, k
+
+    def _coarsening(self, obstacles: np.ndarray, cells: tuple) -> int:
+        """How many times coarser the encoder reads ``obstacles`` (its own cells): the largest power of two up to
+        ``coarse_most`` that keeps the longer side at least ``coarse_side`` cells, closes no passage and leaves
+        ``cells`` free (``coarsest_keeping``, ``free_at``); 1 with ``coarse_side`` 0.
+        """
+        if not self.coarse_side:
+            return 1
+        most = min(max(obstacles.shape) // self.coarse_side, self.coarse_most)
+        return free_at(obstacles, coarsest_keeping(obstacles, most), cells) if most >= 2 else 1
 
     def _encoder_factor(self, grid: OccupancyGrid) -> float:
         """Map cells per encoder cell at this sampler's step (1 at the step the encoder was trained for), once the
@@ -579,17 +721,21 @@ class RouteSampler(SamplerBase):
         """Cost-to-go per grid cell in steps: (for the progress, for the frontier or None for the straight line)."""
         if self.net is None:
             return self._straight(grid), None
-        obstacles, goal, factor = self._encoder_map(grid)
+        obstacles, goal, factor, k = self._encoder_map(grid)
         # where the learned walls shut every route from the start, the field ranks without them (one more pass)
         learned, opened = self._predict(obstacles, goal, self._encoder_start(grid, factor, obstacles.shape))
         self.forward_passes = self.symmetry_passes * (2 if opened else 1)
-        if factor != 1.0:  # each map cell takes the value of the encoder's cell its centre lies in
+        if k != 1:  # in steps of k planner steps, interpolated between the coarse cells' centres
+            unreached = math.inf if self.net.unreached_steps is None else 0.5 * self.net.unreached_steps * k
+            learned = interpolated_field(np.asarray(learned, dtype=np.float64) * float(k), obstacles, grid.kernel.grid,
+                                         factor, grid.resolution / self.step_size, unreached)
+        elif factor != 1.0:  # each map cell takes the value of the encoder's cell its centre lies in
             rows = np.minimum(((np.arange(grid.height) + 0.5) / factor).astype(np.int64), learned.shape[0] - 1)
             cols = np.minimum(((np.arange(grid.width) + 0.5) / factor).astype(np.int64), learned.shape[1] - 1)
             learned = learned[rows][:, cols]
         if self.net.unreached_steps is not None:
             learned = ranked_where_unreached(learned, grid.kernel.grid, *self._goal_in_cells(grid), grid.resolution,
-                                             self.step_size, 0.5 * self.net.unreached_steps)
+                                             self.step_size, 0.5 * self.net.unreached_steps * k)
         progress = self._straight(grid) if self._uses == "frontier" else learned
         return progress, (None if self._uses == "progress" else learned)
 
@@ -633,7 +779,7 @@ class RouteSampler(SamplerBase):
             return False
         try:
             probe = self._copy_with(problem=problem)
-            obstacles, goal, factor = probe._encoder_map(grid)
+            obstacles, goal, factor, _ = probe._encoder_map(grid)
         except InputError:
             return False
         start = probe._encoder_start(grid, factor, obstacles.shape)
@@ -653,7 +799,7 @@ class RouteSampler(SamplerBase):
             grid = problem.world
             if isinstance(grid, OccupancyGrid):
                 try:
-                    obstacles, goal, _ = self._copy_with(problem=problem)._encoder_map(grid)
+                    obstacles, goal, _, _ = self._copy_with(problem=problem)._encoder_map(grid)
                 except InputError:
                     continue
                 queries.append((obstacles, goal))
