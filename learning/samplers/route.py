@@ -360,19 +360,47 @@ def _coarse_axis(N, n, factor):
     return own, low, up
 
 
-def fine_frontier(grid: OccupancyGrid, cost: np.ndarray | None) -> tuple:
+def fine_frontier(grid: OccupancyGrid, ranked: np.ndarray | None = None, pos: np.ndarray | None = None) -> tuple:
     """The frontier of one-grid-cell cells that ``route_draw`` widens a stalled search to (``RouteSampler.widen``).
 
     ``(free, cov, pos, front, dist, cost, memo)`` as ``planners.guidance.frontier.Frontier``'s, over the grid's own
-    cells, ranked by ``cost`` (per grid cell, in grid cells, ``inf`` where blocked; None: the straight line). Only
-    ``pos`` and the ranking are written here; the other arrays are touched only if a run ever needs this frontier.
+    cells, ranked by ``ranked`` (flat, per grid cell, in grid cells, 1e9 where blocked or unreached: ``rankings``;
+    None: the straight line) with ``pos`` (``-1`` everywhere; made here where None). Only ``pos`` and the ranking are
+    written; the other arrays are touched only if a run ever needs this frontier.
     """
     H, W = grid.height, grid.width
-    pos = np.empty((H, W), dtype=np.int64)
-    pos[:] = -1
-    ranked = NO_COST if cost is None else np.where(np.isfinite(cost), cost, 1e9).reshape(-1)
+    if pos is None:
+        pos = np.empty((H, W), dtype=np.int64)
+        pos[:] = -1
     return (np.zeros((H, W), dtype=np.uint8), np.zeros((H, W), dtype=np.bool_), pos, np.empty(H * W, np.int64),
-            np.empty(H * W), ranked, frontier_memo(H * W))
+            np.empty(H * W), NO_COST if ranked is None else ranked, frontier_memo(H * W))
+
+
+@nb.njit(cache=True)
+def rankings(field, blocked, ranking, step, res, shut):
+    """The frontier's rankings of a route field, in one pass: ``(cells, ranked, pos)``.
+
+    ``cells`` is ``ranking`` (float64) per grid cell in grid cells (``ranking * step / res``, ``inf`` on the
+    obstacles ``blocked``), ``ranked`` the same flat with 1e9 where it is not finite, and ``pos`` ``-1`` everywhere
+    (``Frontier``'s positions, none yet); with ``shut``, ``field`` takes ``inf`` on the obstacles too (in place;
+    ``ranking`` may be ``field`` itself). The values numpy's ``where`` and the two products give, bit for bit.
+    """
+    H, W = blocked.shape
+    cells = np.empty((H, W))
+    ranked = np.empty(H * W)
+    pos = np.empty((H, W), dtype=np.int64)
+    for r in range(H):
+        for c in range(W):
+            if blocked[r, c]:
+                if shut:
+                    field[r, c] = math.inf
+                v = math.inf
+            else:
+                v = ranking[r, c] * step / res
+            cells[r, c] = v
+            ranked[r * W + c] = v if math.isfinite(v) else 1e9
+            pos[r, c] = -1
+    return cells, ranked, pos
 
 
 class CachedField(NamedTuple):
@@ -816,13 +844,19 @@ class RouteSampler(SamplerBase):
         grid = require_grid("RouteSampler", self.problem.world)
         self.forward_passes, self.reused_seconds = 0, 0.0
         field, ranking = self._fields(grid)
-        if self.net is not None:  # the straight line's field comes with its obstacles at inf
-            field[grid.obstacles] = np.inf
-        self.field = field
         res, origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
+        # the frontier's ranking, per grid cell and in grid cells (None: the straight line), and the field with its
+        # obstacles at inf (the straight line's comes so)
+        if ranking is None or ranking.dtype != np.float64 or field.dtype != np.float64:  # numpy's way, its types
+            if self.net is not None:
+                field[grid.obstacles] = np.inf
+            cells = None if ranking is None else np.where(grid.obstacles, np.inf, ranking) * self.step_size / res
+            fine = fine_frontier(grid, None if cells is None else np.where(np.isfinite(cells), cells, 1e9).reshape(-1))
+        else:
+            cells, ranked, pos = rankings(field, grid.obstacles, ranking, self.step_size, res, self.net is not None)
+            fine = fine_frontier(grid, ranked, pos)
+        self.field = field
         r, c = grid.cell_of(self.problem.start)
-        # the frontier's ranking, per grid cell and in grid cells (None: the straight line)
-        cells = None if ranking is None else np.where(grid.obstacles, np.inf, ranking) * self.step_size / res
         f = Frontier(self.problem, self.step_size, self.tau,
                      None if cells is None else frontier_costs(cells, grid, self.step_size))
         frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
@@ -837,8 +871,8 @@ class RouteSampler(SamplerBase):
         params = np.array([self.lookahead, self.sigma, self.stuck, self.uniform_floor, self.max_floor, self.patience,
                            self.ripple, self.ripple_growth, float(self.sight), float(WIDEN_MODES.index(self.widen))],
                           dtype=np.float64)
-        self._state = (field, grid.kernel.grid, res, origin, self.step_size, frontier, fine_frontier(grid, cells), ints,
-                       floats, params, scratch, self.low, self.high)
+        self._state = (field, grid.kernel.grid, res, origin, self.step_size, frontier, fine, ints, floats, params,
+                       scratch, self.low, self.high)
 
     def draw(self, rng, n, view):
         pts = np.empty((min(n, self.batch), 2))
