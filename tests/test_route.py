@@ -494,6 +494,16 @@ def test_a_map_read_coarser_keeps_its_start_and_goal_in_free_coarse_cells(shippe
 def test_coarse_side_must_be_a_whole_number_of_cells(small_net, side):
     with pytest.raises(InputError, match="coarse_side"):
         RouteSampler.load(small_net, coarse_side=side)
+    with pytest.raises(InputError, match="coarse_most"):
+        RouteSampler.load(small_net, coarse_most=0)
+
+
+def test_the_registry_takes_coarse_side_for_the_encoders_samplers():
+    from learning.samplers.registry import make_sampler
+
+    assert make_sampler("route", coarse_side=0).coarse_side == 0
+    assert make_sampler("route_lazy", coarse_side=0).coarse_side == 0
+    assert make_sampler("route").coarse_side == make_sampler("route_lazy").coarse_side == 128
 
 
 def test_a_step_too_fine_for_the_encoders_limit_is_refused_saying_to_take_a_larger_step(shipped, monkeypatch):

@@ -45,12 +45,13 @@ def _follower(step_size: float = STEP) -> Sampler:
     return RouteSampler(None, step_size=step_size, **FOLLOWER_SETTINGS)
 
 
-def _route(step_size: float = STEP, path: str | None = None, device: str = "auto", *,
+def _route(step_size: float = STEP, path: str | None = None, device: str = "auto", coarse_side: int | None = None, *,
            models: ModelCache | None = None) -> Sampler:
     from learning.samplers.route import SHIPPED, shipped_sampler
 
     path = str(SHIPPED) if path is None else path
-    return shipped_sampler(path if models is None else models.route_net(path), step_size, device=device)
+    coarse = {} if coarse_side is None else {"coarse_side": coarse_side}  # None: RouteSampler's own default
+    return shipped_sampler(path if models is None else models.route_net(path), step_size, device=device, **coarse)
 
 
 def _route_lazy(after: float | None = None, cap: float | None = None, stall: float | None = None,
@@ -58,7 +59,8 @@ def _route_lazy(after: float | None = None, cap: float | None = None, stall: flo
                 roadmap_after: float | None = None, floor: float | None = None, connect_floor: float | None = None,
                 roadmap_floor: float | None = None, connect_cap: float | None = None,
                 roadmap_cap: float | None = None, goal_in_sight: bool | None = None, step_size: float = STEP,
-                path: str | None = None, device: str = "auto", *, models: ModelCache | None = None) -> Sampler:
+                path: str | None = None, device: str = "auto", coarse_side: int | None = None, *,
+                models: ModelCache | None = None) -> Sampler:
     from learning.models.route_net import load_route_net
     from learning.samplers.lazy_route import LazyRouteSampler
     from learning.samplers.route import SHIPPED
@@ -68,7 +70,8 @@ def _route_lazy(after: float | None = None, cap: float | None = None, stall: flo
     switches = {"after": after, "cap": cap, "stall": stall, "connect_after": connect_after,
                 "roadmap_after": roadmap_after, "floor": floor, "connect_floor": connect_floor,
                 "roadmap_floor": roadmap_floor, "connect_cap": connect_cap,
-                "roadmap_cap": roadmap_cap, "goal_in_sight": goal_in_sight}  # None: LazyRouteSampler's own default
+                "roadmap_cap": roadmap_cap, "goal_in_sight": goal_in_sight,
+                "coarse_side": coarse_side}  # None: LazyRouteSampler's own default
     return LazyRouteSampler(net, step_size=step_size, device=device,
                             **{k: v for k, v in switches.items() if v is not None})
 

@@ -942,13 +942,15 @@ _NO_ANCHORS = np.zeros(0, dtype=np.int8)
 
 
 def shipped_sampler(encoder: FieldEncoder | str | os.PathLike = SHIPPED, step_size: float = 4.0, *,
-                    device: str = "auto", threads: int | None = None) -> RouteSampler:
+                    device: str = "auto", threads: int | None = None, coarse_side: int = COARSE_SIDE) -> RouteSampler:
     """An encoder (loaded, or a file; default the shipped one) at the validated ``SHIPPED_SETTINGS``.
 
-    ``evaluate.py``'s "route encoder"; ``device`` and ``threads`` as for ``RouteSampler``.
+    ``evaluate.py``'s "route encoder"; ``device``, ``threads`` and ``coarse_side`` (0: every map at full resolution)
+    as for ``RouteSampler``.
     """
     net = encoder if isinstance(encoder, FieldEncoder) else load_route_net(encoder)
-    return RouteSampler(net, step_size=step_size, device=device, threads=threads, **SHIPPED_SETTINGS)
+    return RouteSampler(net, step_size=step_size, device=device, threads=threads, coarse_side=coarse_side,
+                        **SHIPPED_SETTINGS)
 
 
 def shipped_ablation(step_size: float = 4.0) -> RouteSampler:
