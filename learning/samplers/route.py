@@ -84,7 +84,7 @@ FOLLOWER_SETTINGS = {"lookahead": 1.0, "stuck": 4, "tau": 1.0, "ripple": 0.0, "r
 #: ``RouteSampler``'s ``coarse_side``: a map of at least 256 of the encoder's cells a side is read coarser, down to
 #: 128 a side, where that closes no passage. Chosen on validation maps of 256 and 512 cells by the rule of
 #: ``scripts/experiments/coarse_fields.py`` (iterations at a geometric mean of 1.04 times full resolution's, the time
-#: of a query at 0.43 times; 64 a side took 1.13 times the iterations).
+#: of a query at 0.43 times; 64 a side took 1.13 times the iterations, read up to 8 times coarser, and 1.07 at most 4).
 COARSE_SIDE = 128
 #: ``RouteSampler``'s ``coarse_most``: a coarse cell at most a planner step across (4 of the encoder's cells). On
 #: validation maps of 1,024 cells (the same script, ``--sides 1024 --maps 4 --most 4``, then ``--most 64``) reading them
@@ -271,7 +271,7 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
     kept): read nearest-cell, a coarse field is flat over each coarse cell, and a walk down it wanders on the flats.
     A free cell of a blocked coarse cell (beside a wall) takes its nearest valued free neighbour's value plus the
     way to it (two sweeps each way of a distance transform over those cells); ``inf`` on obstacles and where no value
-    reaches.
+    reaches. Returns the field and whether a value at or above ``unreached`` may be in it (False: none is).
     """
     H, W = blocked.shape
     h, w = coarse.shape
@@ -288,6 +288,7 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
     out = np.empty((H, W))
     band = np.empty(H * W, dtype=np.int32)  # the free cells of blocked coarse cells
     n = 0
+    high = False  # whether a value at or above unreached was written
     for r in range(H):
         ia, i0, fy = own_row[r], int(low_row[r]), up_row[r]
         for c in range(W):
@@ -303,12 +304,14 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
             own = coarse[ia, ja]
             if not own < unreached:
                 out[r, c] = own
+                high = high or own >= unreached
                 continue
             j0, fx = int(low_col[c]), up_col[c]
             if quad[i0 + 1, j0 + 1]:  # the four serve: bilinear as it stands
                 top = coarse[i0, j0] + fx * (coarse[i0, j0 + 1] - coarse[i0, j0])
                 bottom = coarse[i0 + 1, j0] + fx * (coarse[i0 + 1, j0 + 1] - coarse[i0 + 1, j0])
                 out[r, c] = top + fy * (bottom - top)
+                high = high or out[r, c] >= unreached
                 continue
             total, weight = 0.0, 0.0
             for di in range(2):
@@ -324,6 +327,7 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
                     total += wt * coarse[i, j]
                     weight += wt
             out[r, c] = total / weight
+            high = high or out[r, c] >= unreached
     diagonal = cell * math.sqrt(2.0)
     for sweep in range(4):  # the cells beside walls, twice each way (a wall's coarse cell: a few cells to cross)
         for m in range(n):
@@ -341,7 +345,8 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
                     if d < best:
                         best = d
             out[r, c] = best
-    return out
+            high = high or best >= unreached
+    return out, high
 
 
 @nb.njit(cache=True)
@@ -753,15 +758,16 @@ class RouteSampler(SamplerBase):
         # where the learned walls shut every route from the start, the field ranks without them (one more pass)
         learned, opened = self._predict(obstacles, goal, self._encoder_start(grid, factor, obstacles.shape))
         self.forward_passes = self.symmetry_passes * (2 if opened else 1)
+        high = True  # whether a value may be at or above the unreached one
         if k != 1:  # in steps of k planner steps, interpolated between the coarse cells' centres
             unreached = math.inf if self.net.unreached_steps is None else 0.5 * self.net.unreached_steps * k
-            learned = interpolated_field(np.asarray(learned, dtype=np.float64) * float(k), obstacles, grid.kernel.grid,
-                                         factor, grid.resolution / self.step_size, unreached)
+            learned, high = interpolated_field(np.asarray(learned, dtype=np.float64) * float(k), obstacles,
+                                               grid.kernel.grid, factor, grid.resolution / self.step_size, unreached)
         elif factor != 1.0:  # each map cell takes the value of the encoder's cell its centre lies in
             rows = np.minimum(((np.arange(grid.height) + 0.5) / factor).astype(np.int64), learned.shape[0] - 1)
             cols = np.minimum(((np.arange(grid.width) + 0.5) / factor).astype(np.int64), learned.shape[1] - 1)
             learned = learned[rows][:, cols]
-        if self.net.unreached_steps is not None:
+        if self.net.unreached_steps is not None and high:  # (with none, it returns the field as it is)
             learned = ranked_where_unreached(learned, grid.kernel.grid, *self._goal_in_cells(grid), grid.resolution,
                                              self.step_size, 0.5 * self.net.unreached_steps * k)
         progress = self._straight(grid) if self._uses == "frontier" else learned
