@@ -9,6 +9,7 @@
     python scripts/benchmark_route.py --dense-convolutions                       # the 3x3 layers as training runs them
     python scripts/benchmark_route.py --sides 128 --kept 800                     # first queries with 800 maps kept
     python scripts/benchmark_route.py --sides 128 512 --two-fields               # a new map's fields to goal and start
+    python scripts/benchmark_route.py --sides 256 512 1024 4096 --sampler        # and what a planner gets: the sampler
 
 Each row is one map side and family (a generated forest, and a maze, whose route winds furthest;
 ``--families``; ``--symmetries`` passes, the goal in a free cell):
@@ -21,7 +22,10 @@ evaluation's batched path on a GPU); with ``--kept N``, the median and best firs
 other seeds) after the parts of N other maps are kept, each queried twice (``kept_ms``: a robot's maps, or a
 comparison's with several queries each, where the kept maps may number hundreds); with ``--two-fields``, the
 median and best time of a new map's first two queries, to its goal and then to its start, as a bidirectional planner
-or a roadmap binds the route sampler (``two_fields_ms``).
+or a roadmap binds the route sampler (``two_fields_ms``); with ``--sampler``, the median and best time of the route
+sampler's bind on a first query of the map (``make_sampler("route")`` as a planner binds it: the field the planner
+gets, its set-up around it, and the map read coarser where that closes no passage, ``coarser`` times; nothing of the
+map kept, ``sampler_ms``).
 Peak memory is the process's resident peak after the row (CPU; sides in increasing order), or the
 GPU's allocated peak for the row. A side above the encoder's block limit is shown as refused, with the
 limit's message. Times are wall times in one process; the machine's load is printed beside them.
@@ -48,7 +52,9 @@ import torch
 from learning.device import DEVICES, resolve_device
 from learning.models.route_net import load_route_net
 from learning.models.shipped import SHIPPED_ROUTE
+from learning.samplers.route import shipped_sampler
 from planners.base.fileio import InputError, check_flags, check_int, check_int_flags
+from planners.maps.coarsen import forget_kept
 from planners.maps.generators import FAMILIES, TEST_SEED0, generate
 from planners.tools.benchmark import markdown_table
 
@@ -73,7 +79,7 @@ def _timed(call, repeat: int, sync) -> list[float]:
 
 
 def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, batch: int, device,
-               family: str = "forest", kept: int = 0, two_fields: bool = False) -> dict:
+               family: str = "forest", kept: int = 0, two_fields: bool = False, sampler: bool = False) -> dict:
     """One row: the encoder's time per query on a ``side`` x ``side`` map of ``family`` (see the module docstring)."""
     problem = generate(family, TEST_SEED0, side)
     obstacles = np.asarray(problem.world.obstacles)
@@ -137,6 +143,18 @@ def bench_side(net, side: int, *, symmetries: int, threads: int, repeat: int, ba
         times = _timed(both, repeat, sync)
         row["two_fields_ms"] = round(1000 * float(np.median(times)), 2)
         row["two_fields_best_ms"] = round(1000 * min(times), 2)
+    if sampler:
+        route = shipped_sampler(net, float(net.step), device=str(device), threads=threads)
+
+        def bind() -> None:  # a first query on the map: nothing of it kept, its passages checked again
+            forget()
+            forget_kept()
+            route.bind(problem)
+
+        times = _timed(bind, repeat, sync)
+        row["sampler_ms"] = round(1000 * float(np.median(times)), 1)
+        row["sampler_best_ms"] = round(1000 * min(times), 1)
+        row["coarser"] = route.bind(problem).coarsening
     if batch > 1:
         picks = np.random.default_rng(side).choice(len(free), size=batch, replace=len(free) < batch)
         queries = [(obstacles, (int(free[i][0]), int(free[i][1]))) for i in picks]
@@ -165,6 +183,8 @@ def main(argv=None) -> int:
                     help="also time first queries on new maps with N other maps' parts kept (default 0: not)")
     ap.add_argument("--two-fields", action="store_true",
                     help="also time a new map's fields to its goal and then its start (a bidirectional planner's)")
+    ap.add_argument("--sampler", action="store_true",
+                    help="also time the route sampler's bind on a first query (what a planner gets by default)")
     ap.add_argument("--device", default="cpu", choices=DEVICES, help="cpu (default), cuda, or auto as in SB3")
     ap.add_argument("--families", nargs="+", default=["forest", "maze"], choices=FAMILIES,
                     help="generated families to time on (default forest and maze)")
@@ -224,7 +244,7 @@ def main(argv=None) -> int:
             for n in args.threads:
                 rows.append(bench_side(net, side, symmetries=args.symmetries, threads=n, repeat=args.repeat,
                                        batch=args.batch, device=device, family=family, kept=args.kept,
-                                       two_fields=args.two_fields))
+                                       two_fields=args.two_fields, sampler=args.sampler))
                 print(markdown_table([rows[-1]], [c for c in rows[-1] if c != "note"]).splitlines()[-1], flush=True)
     columns = ["family", "side", "threads", "ms_per_query", "best_ms"]
     if any("later_ms" in row for row in rows):
@@ -233,6 +253,8 @@ def main(argv=None) -> int:
         columns += ["kept_ms", "kept_best_ms"]
     if any("two_fields_ms" in row for row in rows):
         columns += ["two_fields_ms", "two_fields_best_ms"]
+    if any("sampler_ms" in row for row in rows):
+        columns += ["sampler_ms", "sampler_best_ms", "coarser"]
     if args.batch > 1:
         columns.append(f"ms_per_query_batch_{args.batch}")
     columns += ["peak_mb", "load"]

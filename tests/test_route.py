@@ -771,3 +771,14 @@ def test_the_straight_field_with_its_obstacles_in_one_pass_is_the_field_then_the
     expected = np.sqrt(dx * dx + dy * dy) * res / step  # the field, the same operations in the same order
     expected[blocked.astype(bool)] = np.inf  # then the mask
     assert np.array_equal(straight_field(blocked, gx, gy, res, step), expected)
+
+
+def test_the_route_benchmark_times_the_sampler_a_planner_gets_with_its_coarse_read(capsys):
+    bench = load_script("benchmark_route")
+    assert bench.main(["--sides", "256", "--families", "maze", "--repeat", "1", "--sampler"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    header = next(line for line in lines if line.startswith("| family"))
+    row = [line for line in lines if line.startswith("| maze | 256")][-1]
+    cells = dict(zip([c.strip() for c in header.strip("|").split("|")], [c.strip() for c in row.strip("|").split("|")],
+                     strict=True))
+    assert cells["coarser"] == "2" and float(cells["sampler_ms"]) > 0  # a generated maze's corridors: 256 read as 128

@@ -669,6 +669,7 @@ class RouteSampler(SamplerBase):
         if net is not None:
             move_to(net, self.device)
         self.forward_passes, self.reused_seconds = 0, 0.0
+        self.coarsening = 1  # how many times coarser the encoder read the last field's map (``coarse_side``)
 
     @classmethod
     def load(cls, path: str | os.PathLike = SHIPPED_ROUTE, **kwargs) -> RouteSampler:
@@ -755,6 +756,7 @@ class RouteSampler(SamplerBase):
         if self.net is None:
             return self._straight(grid), None
         obstacles, goal, factor, k = self._encoder_map(grid)
+        self.coarsening = k
         # where the learned walls shut every route from the start, the field ranks without them (one more pass)
         learned, opened = self._predict(obstacles, goal, self._encoder_start(grid, factor, obstacles.shape))
         self.forward_passes = self.symmetry_passes * (2 if opened else 1)

@@ -207,6 +207,11 @@ def coarsest_keeping(obstacles: np.ndarray, most: int) -> int:
     return k
 
 
+def forget_kept() -> None:
+    """Forget the kept answers (``coarsest_keeping``): the next query on any map scans it again, as a first one does."""
+    _KEPT.clear()
+
+
 def free_at(obstacles: np.ndarray, k: int, cells) -> int:
     """The largest power of two ``j <= k`` at which every cell of ``cells`` ((row, col) pairs) lies in a free cell of
     ``block_any(obstacles, j)`` (1 at the least: a free cell of ``obstacles`` itself).
