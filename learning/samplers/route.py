@@ -383,15 +383,15 @@ def fine_frontier(grid: OccupancyGrid, ranked: np.ndarray | None = None, pos: np
 
 @nb.njit(cache=True)
 def rankings(field, blocked, ranking, step, res, shut):
-    """The frontier's rankings of a route field, in one pass: ``(cells, ranked, pos)``.
+    """The fine frontier's ranking of a route field, in one pass: ``(ranked, pos)``.
 
-    ``cells`` is ``ranking`` (float64) per grid cell in grid cells (``ranking * step / res``, ``inf`` on the
-    obstacles ``blocked``), ``ranked`` the same flat with 1e9 where it is not finite, and ``pos`` ``-1`` everywhere
-    (``Frontier``'s positions, none yet); with ``shut``, ``field`` takes ``inf`` on the obstacles too (in place;
-    ``ranking`` may be ``field`` itself). The values numpy's ``where`` and the two products give, bit for bit.
+    ``ranked`` is ``ranking`` (float64) per grid cell in grid cells, flat (``ranking * step / res``; 1e9 on the
+    obstacles ``blocked`` and where it is not finite), and ``pos`` ``-1`` everywhere (``Frontier``'s positions, none
+    yet); with ``shut``, ``field`` takes ``inf`` on the obstacles (in place; ``ranking`` may be ``field`` itself). The
+    values numpy's ``where`` and the two products give, bit for bit (the step-wide frontier reads the same values
+    through ``frontier_costs``' ``times``, ``over`` and ``blocked``).
     """
     H, W = blocked.shape
-    cells = np.empty((H, W))
     ranked = np.empty(H * W)
     pos = np.empty((H, W), dtype=np.int64)
     for r in range(H):
@@ -402,10 +402,9 @@ def rankings(field, blocked, ranking, step, res, shut):
                 v = math.inf
             else:
                 v = ranking[r, c] * step / res
-            cells[r, c] = v
             ranked[r * W + c] = v if math.isfinite(v) else 1e9
             pos[r, c] = -1
-    return cells, ranked, pos
+    return ranked, pos
 
 
 class CachedField(NamedTuple):
@@ -860,13 +859,15 @@ class RouteSampler(SamplerBase):
                 field[grid.obstacles] = np.inf
             cells = None if ranking is None else np.where(grid.obstacles, np.inf, ranking) * self.step_size / res
             fine = fine_frontier(grid, None if cells is None else np.where(np.isfinite(cells), cells, 1e9).reshape(-1))
+            costs = None if cells is None else frontier_costs(cells, grid, self.step_size)
         else:
-            cells, ranked, pos = rankings(field, grid.obstacles, ranking, self.step_size, res, self.net is not None)
+            ranked, pos = rankings(field, grid.obstacles, ranking, self.step_size, res, self.net is not None)
             fine = fine_frontier(grid, ranked, pos)
+            costs = frontier_costs(ranking, grid, self.step_size, times=self.step_size, over=res,
+                                   blocked=grid.obstacles)
         self.field = field
         r, c = grid.cell_of(self.problem.start)
-        f = Frontier(self.problem, self.step_size, self.tau,
-                     None if cells is None else frontier_costs(cells, grid, self.step_size))
+        f = Frontier(self.problem, self.step_size, self.tau, costs)
         frontier = (f.world, f.counts, f.cell, f.goal, f.free, f.cov, f.pos, f.front, f.dist, f.tau, f.W,
                     np.ascontiguousarray(f.world.params[1:3]), f.cost, f.memo)
         ints = np.array([0, r * grid.width + c, 0, 0, 0, 0, 0, 0], dtype=np.int64)

@@ -356,32 +356,40 @@ class FieldFollower:
         return self.origin + np.array([(v % self.W + 0.5) * self.res, (v // self.W + 0.5) * self.res])
 
 
-def frontier_costs(field: np.ndarray, grid: OccupancyGrid, cell: float) -> np.ndarray:
+def frontier_costs(field: np.ndarray, grid: OccupancyGrid, cell: float, *, times: float = 1.0, over: float = 1.0,
+                   blocked: np.ndarray | None = None) -> np.ndarray:
     """Cost-to-go of each frontier cell (flat, in frontier cells) read from a per-grid-cell ``field`` (in cells).
 
     ``cell`` is the frontier's cell width (``planners.guidance.frontier.Frontier``). A frontier cell's
     cost is the field at its centre cell (the frontier checks that it is free), or the block's best
-    cell where the centre has none; 1e9 where neither has one.
+    cell where the centre has none; 1e9 where neither has one. The field is read as ``field * times / over``, ``inf``
+    where ``blocked`` (a grid-shaped mask; None: none): a field in other units, read without a converted copy.
     """
     H, W = frontier_shape(grid, cell)
     k = max(1, int(round(cell / grid.resolution)))  # grid cells per frontier cell
     out = np.empty(H * W)
-    _frontier_costs(np.ascontiguousarray(field, dtype=np.float64), H, W, k, float(grid.resolution), float(cell), out)
+    mask = np.zeros((0, 0), dtype=np.bool_) if blocked is None else np.ascontiguousarray(blocked, dtype=np.bool_)
+    _frontier_costs(np.ascontiguousarray(field, dtype=np.float64), H, W, k, float(grid.resolution), float(cell), out,
+                    float(times), float(over), mask)
     return out
 
 
 @nb.njit(cache=True)
-def _frontier_costs(field, H, W, k, res, cell, out):
+def _frontier_costs(field, H, W, k, res, cell, out, times, over, blocked):
     """``frontier_costs``' values: each frontier cell's centre, else its block's least (``inf`` off the field)."""
     h, w = field.shape
+    masked = blocked.shape[0] > 0
     for R in range(H):
         for C in range(W):
             r, c = R * k + k // 2, C * k + k // 2
-            v = field[r, c] if r < h and c < w else np.inf
+            v = np.inf
+            if r < h and c < w and not (masked and blocked[r, c]):
+                v = field[r, c] * times / over
             if not np.isfinite(v):
                 v = np.inf
                 for i in range(R * k, min(h, R * k + k)):
                     for j in range(C * k, min(w, C * k + k)):
-                        v = min(v, field[i, j])
+                        if not (masked and blocked[i, j]):
+                            v = min(v, field[i, j] * times / over)
             cost = v * res / cell
             out[R * W + C] = cost if np.isfinite(cost) else 1e9
