@@ -42,7 +42,7 @@ from planners.base.samplers import check_sampler_params
 from planners.fused import FusedRRT, fuse_rrt, growing_floor, next_double, rng_address, rrt_loop
 from planners.guidance.follow import frontier_costs, last_in_sight, lowest_vertex_cell, walk_path
 from planners.guidance.frontier import NO_COST, Frontier, frontier_memo, frontier_sample, update_frontier
-from planners.maps.coarsen import block_any, coarsest_keeping, free_at
+from planners.maps.coarsen import coarsest_keeping, free_at
 from planners.worlds.grid import resample_obstacles, resampled_shape
 
 #: The shipped encoder (package data; its recipe and time are in ``learning/data/route.json``).
@@ -290,7 +290,7 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
     n = 0
     high = False  # whether a value at or above unreached was written
     for r in range(H):
-        ia, i0, fy = own_row[r], int(low_row[r]), up_row[r]
+        ia, i0, fy = own_row[r], low_row[r], up_row[r]
         for c in range(W):
             ja = own_col[c]
             if blocked[r, c]:
@@ -306,7 +306,7 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
                 out[r, c] = own
                 high = high or own >= unreached
                 continue
-            j0, fx = int(low_col[c]), up_col[c]
+            j0, fx = low_col[c], up_col[c]
             if quad[i0 + 1, j0 + 1]:  # the four serve: bilinear as it stands
                 top = coarse[i0, j0] + fx * (coarse[i0, j0 + 1] - coarse[i0, j0])
                 bottom = coarse[i0 + 1, j0] + fx * (coarse[i0 + 1, j0 + 1] - coarse[i0 + 1, j0])
@@ -355,7 +355,7 @@ def _coarse_axis(N, n, factor):
     it and its share of the way to the next one (the bilinear interpolation's lower index and weight).
     """
     own = np.empty(N, dtype=np.int64)
-    low = np.empty(N)
+    low = np.empty(N, dtype=np.int64)
     up = np.empty(N)
     for r in range(N):
         own[r] = min(int((r + 0.5) / factor), n - 1)
@@ -718,8 +718,7 @@ class RouteSampler(SamplerBase):
         k = self._coarsening(obstacles, (start, goal))
         if k == 1:
             return obstacles, goal, factor, 1
-        coarse = block_any(np.ascontiguousarray(obstacles, dtype=np.bool_), k)
-        return coarse, (goal[0] // k, goal[1] // k), factor * k, k
+        return resample_obstacles(obstacles, k), (goal[0] // k, goal[1] // k), factor * k, k
 
     def _coarsening(self, obstacles: np.ndarray, cells: tuple) -> int:
         """How many times coarser the encoder reads ``obstacles`` (its own cells): the largest power of two up to
@@ -854,13 +853,11 @@ class RouteSampler(SamplerBase):
         res, origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
         # the frontier's ranking, per grid cell and in grid cells (None: the straight line), and the field with its
         # obstacles at inf (the straight line's comes so)
-        if ranking is None or ranking.dtype != np.float64 or field.dtype != np.float64:  # numpy's way, its types
+        if ranking is None:
             if self.net is not None:
                 field[grid.obstacles] = np.inf
-            cells = None if ranking is None else np.where(grid.obstacles, np.inf, ranking) * self.step_size / res
-            fine = fine_frontier(grid, None if cells is None else np.where(np.isfinite(cells), cells, 1e9).reshape(-1))
-            costs = None if cells is None else frontier_costs(cells, grid, self.step_size)
-        else:
+            fine, costs = fine_frontier(grid), None
+        else:  # fields are float64 (``FieldEncoder.predict``, the straight line's, the exact one's)
             ranked, pos = rankings(field, grid.obstacles, ranking, self.step_size, res, self.net is not None)
             fine = fine_frontier(grid, ranked, pos)
             costs = frontier_costs(ranking, grid, self.step_size, times=self.step_size, over=res,

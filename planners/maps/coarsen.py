@@ -1,8 +1,8 @@
 """A map read at a coarser resolution, and whether that keeps its passages.
 
-``block_any`` reads a map on cells ``k`` times as wide, a cell blocked where any of its cells is (as
-``planners.worlds.grid.resample_obstacles`` does at a whole factor, compiled). That never opens a wall but can close
-a gap narrower than a coarse cell, and a closed gap changes the routes. ``keeps_passages`` says whether it closed
+``block_any`` reads a map on cells ``k`` times as wide, a cell blocked where any of its cells is (what
+``planners.worlds.grid.resample_obstacles`` gives at a whole factor, which it calls). That never opens a wall but can
+close a gap narrower than a coarse cell, and a closed gap changes the routes. ``keeps_passages`` says whether it closed
 none: the obstacles keep their number of 8-connected pieces (the map's outside counted as one obstacle), so no gap
 between two of them closed, no 4-connected free region falls apart into two (a gap between an obstacle and itself),
 and none with as many cells as a coarse cell vanishes. Smaller pockets may vanish; a query's start and goal must
