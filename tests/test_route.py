@@ -22,6 +22,7 @@ from learning.samplers.route import (
     SHIPPED,
     SHIPPED_SETTINGS,
     RouteSampler,
+    interpolated_field,
     ranked_where_unreached,
     shipped_ablation,
     shipped_sampler,
@@ -32,6 +33,7 @@ from learning.samplers.route import (
 from learning.training.route import cost_targets, train_route_net
 from planners import RRT, GeometricWorld, OccupancyGrid, Problem, RRTConnect
 from planners.base.fileio import InputError
+from planners.maps.coarsen import block_any
 from planners.maps.generators import FAMILIES, TEST_SEED0, VALIDATION_SEED0, generate
 from planners.maps.gridsearch import distance_field
 
@@ -476,6 +478,64 @@ def test_a_large_map_whose_passages_allow_it_is_read_coarser_and_its_field_still
     assert np.corrcoef(f[free], full.field[free])[0, 1] > 0.999
     assert np.abs(f[free] - full.field[free]).max() < 5  # steps, on routes of up to 270
     assert planner.solve(max_iterations=20000).solved
+
+
+def _interpolated_by_definition(coarse, shut, blocked, factor, cell, unreached):
+    """``interpolated_field`` as its docstring says, cell by cell in Python (small maps only)."""
+    H, W = blocked.shape
+    h, w = coarse.shape
+    out, band = np.full((H, W), np.inf), []
+    ok = ~shut & (coarse < unreached)
+    for r in range(H):
+        for c in range(W):
+            ia, ja = min(int((r + 0.5) / factor), h - 1), min(int((c + 0.5) / factor), w - 1)
+            if blocked[r, c]:
+                continue
+            if shut[ia, ja]:
+                band.append((r, c))
+                continue
+            if not coarse[ia, ja] < unreached:
+                out[r, c] = coarse[ia, ja]
+                continue
+            y, x = (r + 0.5) / factor - 0.5, (c + 0.5) / factor - 0.5
+            i0, j0, fy, fx = int(np.floor(y)), int(np.floor(x)), y - np.floor(y), x - np.floor(x)
+            if 0 <= i0 < h - 1 and 0 <= j0 < w - 1 and ok[i0:i0 + 2, j0:j0 + 2].all():
+                top = coarse[i0, j0] + fx * (coarse[i0, j0 + 1] - coarse[i0, j0])
+                bottom = coarse[i0 + 1, j0] + fx * (coarse[i0 + 1, j0 + 1] - coarse[i0 + 1, j0])
+                out[r, c] = top + fy * (bottom - top)
+                continue
+            total = weight = 0.0
+            for i, wy in ((i0, 1.0 - fy), (i0 + 1, fy)):
+                for j, wx in ((j0, 1.0 - fx), (j0 + 1, fx)):
+                    if 0 <= i < h and 0 <= j < w and ok[i, j] and not (i != ia and j != ja and shut[i, ja]
+                                                                      and shut[ia, j]):
+                        total += (wy * wx + 1e-12) * coarse[i, j]
+                        weight += wy * wx + 1e-12
+            out[r, c] = total / weight
+    for sweep in range(4):  # Gauss-Seidel over the band, forwards then backwards, twice
+        for r, c in (band if sweep % 2 == 0 else band[::-1]):
+            for dr in (-1, 0, 1):
+                for dc in (-1, 0, 1):
+                    r2, c2 = r + dr, c + dc
+                    if (dr or dc) and 0 <= r2 < H and 0 <= c2 < W and not blocked[r2, c2] and not (
+                            dr and dc and (blocked[r2, c] or blocked[r, c2])):
+                        out[r, c] = min(out[r, c], out[r2, c2] + cell * (np.sqrt(2.0) if dr and dc else 1.0))
+    return out
+
+
+@settings(max_examples=40, deadline=None)
+@given(side=st.integers(4, 10), factor=st.sampled_from([2, 4]), seed=st.integers(0, 2**16),
+       density=st.floats(0.0, 0.4), unreached=st.sampled_from([np.inf, 30.0]))
+def test_the_interpolated_field_is_its_definition_bit_for_bit(side, factor, seed, density, unreached):
+    rng = np.random.default_rng(seed)
+    blocked = (rng.random((side * factor, side * factor + factor)) < density).astype(np.uint8)
+    shut = block_any(blocked.astype(bool), factor)
+    coarse = np.where(shut, np.inf, rng.random(shut.shape) * 40)
+    cell = 1.0 / factor
+    got, high = interpolated_field(coarse, shut, blocked, float(factor), cell, unreached)
+    expected = _interpolated_by_definition(coarse, shut, blocked, factor, cell, unreached)
+    assert np.array_equal(got, expected)
+    assert high or not (got[np.isfinite(got)] >= unreached).any()
 
 
 def test_a_map_read_coarser_keeps_its_start_and_goal_in_free_coarse_cells(shipped):

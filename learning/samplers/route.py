@@ -329,22 +329,46 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
             out[r, c] = total / weight
             high = high or out[r, c] >= unreached
     diagonal = cell * math.sqrt(2.0)
+    # which of its 8 neighbours each band cell reads (bit k: the k-th of rows -1..1 by columns -1..1, itself left out):
+    # free, on the map and, diagonally, with no corner cut; found once for the four sweeps
+    reads = np.empty(n, dtype=np.uint8)
+    for m in range(n):
+        r, c = band[m] // W, band[m] % W
+        bits, bit = 0, 1
+        for dr in range(-1, 2):
+            for dc in range(-1, 2):
+                if dr == 0 and dc == 0:
+                    continue
+                r2, c2 = r + dr, c + dc
+                if not (r2 < 0 or c2 < 0 or r2 >= H or c2 >= W or blocked[r2, c2]
+                        or (dr != 0 and dc != 0 and (blocked[r2, c] or blocked[r, c2]))):
+                    bits |= bit
+                bit <<= 1
+        reads[m] = bits
+    flat = out.ravel()
     for sweep in range(4):  # the cells beside walls, twice each way (a wall's coarse cell: a few cells to cross)
         for m in range(n):
-            v = band[m] if sweep % 2 == 0 else band[n - 1 - m]
-            r, c = v // W, v % W
-            best = out[r, c]
-            for dr in range(-1, 2):
-                for dc in range(-1, 2):
-                    r2, c2 = r + dr, c + dc
-                    if (dr == 0 and dc == 0) or r2 < 0 or c2 < 0 or r2 >= H or c2 >= W or blocked[r2, c2]:
-                        continue
-                    if dr != 0 and dc != 0 and (blocked[r2, c] or blocked[r, c2]):
-                        continue  # no corner cut
-                    d = out[r2, c2] + (diagonal if dr != 0 and dc != 0 else cell)
-                    if d < best:
-                        best = d
-            out[r, c] = best
+            if sweep % 2:
+                m = n - 1 - m
+            v, bits = band[m], reads[m]
+            best = flat[v]
+            if bits & 1:
+                best = min(best, flat[v - W - 1] + diagonal)
+            if bits & 2:
+                best = min(best, flat[v - W] + cell)
+            if bits & 4:
+                best = min(best, flat[v - W + 1] + diagonal)
+            if bits & 8:
+                best = min(best, flat[v - 1] + cell)
+            if bits & 16:
+                best = min(best, flat[v + 1] + cell)
+            if bits & 32:
+                best = min(best, flat[v + W - 1] + diagonal)
+            if bits & 64:
+                best = min(best, flat[v + W] + cell)
+            if bits & 128:
+                best = min(best, flat[v + W + 1] + diagonal)
+            flat[v] = best
             high = high or best >= unreached
     return out, high
 
