@@ -22,8 +22,11 @@ from learning.samplers.route import (
     SHIPPED,
     SHIPPED_SETTINGS,
     RouteSampler,
+    fine_frontier,
     interpolated_field,
+    obstacles_at_inf,
     ranked_where_unreached,
+    ready_fine_frontier,
     shipped_ablation,
     shipped_sampler,
     straight_field,
@@ -384,6 +387,30 @@ def test_cells_the_encoder_sees_no_route_from_follow_the_straight_line_behind_ev
     out = straight_where_unreached(field, straight, 2.5e5)
     assert np.array_equal(out, [[0.0, 2.0, 3.0 + 4.0], [3.0, np.inf, 3.0 + 5.0]])
     assert np.array_equal(straight_where_unreached(field[:, :2], straight[:, :2], 2.5e5), field[:, :2])
+
+
+@settings(max_examples=40, deadline=None)
+@given(h=st.integers(1, 12), w=st.integers(1, 12), seed=st.integers(0, 2**16), res=st.sampled_from([0.05, 1.0, 2.5]),
+       step=st.sampled_from([1.0, 4.0]), ranked=st.booleans())
+def test_the_fine_frontier_made_at_its_first_use_is_numpys_ranking_bit_for_bit(h, w, seed, res, step, ranked):
+    rng = np.random.default_rng(seed)
+    walls = rng.random((h, w)) < 0.3
+    field = rng.random((h, w)) * 50
+    field[rng.random((h, w)) < 0.1] = np.inf
+    grid = OccupancyGrid(walls, resolution=res)
+    fine = fine_frontier(grid, field if ranked else None)
+    ready_fine_frontier(fine, grid.kernel.grid, step, res)
+    assert (fine[2] == -1).all()  # no cell in the frontier yet
+    if ranked:
+        expected = np.where(walls, np.inf, field * step / res).ravel()
+        assert np.array_equal(fine[5], np.where(np.isfinite(expected), expected, 1e9))
+    else:
+        assert fine[5].size == 0  # ranked by the straight line
+    at_inf = field.copy()
+    obstacles_at_inf(at_inf, walls)
+    expected = field.copy()
+    expected[walls] = np.inf
+    assert np.array_equal(at_inf, expected)
 
 
 @settings(max_examples=60, deadline=None)

@@ -189,6 +189,8 @@ def route_draw(state, X, n, best_vertex, best_distance, iteration, rng, pts, anc
     fine_all = frontier_mode and widen >= 1 and not coarse
     fine_half = frontier_mode and widen >= 2 and coarse and iteration - ints[R_PROGRESS] >= patience
     if (fine_all or fine_half) and n > ints[R_GSEEN]:
+        if ints[R_GSEEN] == 0:  # its first use
+            ready_fine_frontier(fine, blocked, step, res)
         ints[R_GCOUNT] = update_frontier(world, counts, X[ints[R_GSEEN]:n], res, fgoal, fine[0], fine[1], fine[2],
                                          fine[3], fine[4], ints[R_GCOUNT], fine[5])
         ints[R_GSEEN] = n
@@ -389,46 +391,51 @@ def _coarse_axis(N, n, factor):
     return own, low, up
 
 
-def fine_frontier(grid: OccupancyGrid, ranked: np.ndarray | None = None, pos: np.ndarray | None = None) -> tuple:
+def fine_frontier(grid: OccupancyGrid, ranking: np.ndarray | None = None) -> tuple:
     """The frontier of one-grid-cell cells that ``route_draw`` widens a stalled search to (``RouteSampler.widen``).
 
-    ``(free, cov, pos, front, dist, cost, memo)`` as ``planners.guidance.frontier.Frontier``'s, over the grid's own
-    cells, ranked by ``ranked`` (flat, per grid cell, in grid cells, 1e9 where blocked or unreached: ``rankings``;
-    None: the straight line) with ``pos`` (``-1`` everywhere; made here where None). Only ``pos`` and the ranking are
-    written; the other arrays are touched only if a run ever needs this frontier.
+    ``(free, cov, pos, front, dist, cost, memo, ranking)``: the first seven as ``planners.guidance.frontier.Frontier``'s,
+    over the grid's own cells, ranked by ``ranking`` (a route field, float64, per grid cell, in steps; None: the
+    straight line), which the eighth keeps. Nothing is written: most runs never need this frontier, so its positions
+    and its ranking are made at its first use (``ready_fine_frontier``).
     """
     H, W = grid.height, grid.width
-    if pos is None:
-        pos = np.empty((H, W), dtype=np.int64)
-        pos[:] = -1
-    return (np.zeros((H, W), dtype=np.uint8), np.zeros((H, W), dtype=np.bool_), pos, np.empty(H * W, np.int64),
-            np.empty(H * W), NO_COST if ranked is None else ranked, frontier_memo(H * W))
+    source = _NO_RANKING if ranking is None else np.ascontiguousarray(ranking, dtype=np.float64)
+    return (np.zeros((H, W), dtype=np.uint8), np.zeros((H, W), dtype=np.bool_), np.empty((H, W), dtype=np.int64),
+            np.empty(H * W, np.int64), np.empty(H * W), NO_COST if ranking is None else np.empty(H * W),
+            frontier_memo(H * W), source)
+
+
+#: ``fine_frontier``'s ranking where there is none (the straight line)
+_NO_RANKING = np.empty((0, 0))
 
 
 @nb.njit(cache=True)
-def rankings(field, blocked, ranking, step, res, shut):
-    """The fine frontier's ranking of a route field, in one pass: ``(ranked, pos)``.
-
-    ``ranked`` is ``ranking`` (float64) per grid cell in grid cells, flat (``ranking * step / res``; 1e9 on the
-    obstacles ``blocked`` and where it is not finite), and ``pos`` ``-1`` everywhere (``Frontier``'s positions, none
-    yet); with ``shut``, ``field`` takes ``inf`` on the obstacles (in place; ``ranking`` may be ``field`` itself). The
-    values numpy's ``where`` and the two products give, bit for bit (the step-wide frontier reads the same values
-    through ``frontier_costs``' ``times``, ``over`` and ``blocked``).
+def ready_fine_frontier(fine, blocked, step, res):
+    """Make ``fine_frontier``'s positions (``-1``: no cell in the frontier yet) and ranking, in one pass: the ranking
+    per grid cell in grid cells, flat (``ranking * step / res``; 1e9 on the obstacles ``blocked`` and where it is not
+    finite). The step-wide frontier reads the same values through ``frontier_costs``' ``times``, ``over`` and
+    ``blocked``.
     """
+    pos, cost, ranking = fine[2], fine[5], fine[7]
+    H, W = pos.shape
+    ranked = cost.shape[0] > 0
+    for r in range(H):
+        for c in range(W):
+            pos[r, c] = -1
+            if ranked:
+                v = math.inf if blocked[r, c] else ranking[r, c] * step / res
+                cost[r * W + c] = v if math.isfinite(v) else 1e9
+
+
+@nb.njit(cache=True)
+def obstacles_at_inf(field, blocked):
+    """``field[blocked] = inf``, in place, in one pass (``field`` float64, the shape of ``blocked``)."""
     H, W = blocked.shape
-    ranked = np.empty(H * W)
-    pos = np.empty((H, W), dtype=np.int64)
     for r in range(H):
         for c in range(W):
             if blocked[r, c]:
-                if shut:
-                    field[r, c] = math.inf
-                v = math.inf
-            else:
-                v = ranking[r, c] * step / res
-            ranked[r * W + c] = v if math.isfinite(v) else 1e9
-            pos[r, c] = -1
-    return ranked, pos
+                field[r, c] = math.inf
 
 
 class CachedField(NamedTuple):
@@ -877,13 +884,12 @@ class RouteSampler(SamplerBase):
         res, origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
         # the frontier's ranking, per grid cell and in grid cells (None: the straight line), and the field with its
         # obstacles at inf (the straight line's comes so)
+        if self.net is not None and self.coarsening == 1:  # (read coarser, the interpolation set them so)
+            obstacles_at_inf(field, grid.obstacles)
         if ranking is None:
-            if self.net is not None:
-                field[grid.obstacles] = np.inf
             fine, costs = fine_frontier(grid), None
         else:  # fields are float64 (``FieldEncoder.predict``, the straight line's, the exact one's)
-            ranked, pos = rankings(field, grid.obstacles, ranking, self.step_size, res, self.net is not None)
-            fine = fine_frontier(grid, ranked, pos)
+            fine = fine_frontier(grid, ranking)
             costs = frontier_costs(ranking, grid, self.step_size, times=self.step_size, over=res,
                                    blocked=grid.obstacles)
         self.field = field
