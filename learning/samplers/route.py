@@ -394,10 +394,10 @@ def _coarse_axis(N, n, factor):
 def fine_frontier(grid: OccupancyGrid, ranking: np.ndarray | None = None) -> tuple:
     """The frontier of one-grid-cell cells that ``route_draw`` widens a stalled search to (``RouteSampler.widen``).
 
-    ``(free, cov, pos, front, dist, cost, memo, ranking)``: the first seven as ``planners.guidance.frontier.Frontier``'s,
-    over the grid's own cells, ranked by ``ranking`` (a route field, float64, per grid cell, in steps; None: the
-    straight line), which the eighth keeps. Nothing is written: most runs never need this frontier, so its positions
-    and its ranking are made at its first use (``ready_fine_frontier``).
+    ``(free, cov, pos, front, dist, cost, memo, ranking)``: the first seven as
+    ``planners.guidance.frontier.Frontier``'s, over the grid's own cells, ranked by ``ranking`` (a route field,
+    float64, per grid cell, in steps; None: the straight line), which the eighth keeps. Nothing is written: most runs
+    never need this frontier, so its positions and its ranking are made at its first use (``ready_fine_frontier``).
     """
     H, W = grid.height, grid.width
     source = _NO_RANKING if ranking is None else np.ascontiguousarray(ranking, dtype=np.float64)
