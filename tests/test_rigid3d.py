@@ -282,6 +282,15 @@ def test_cossin_metric_wraps():
         assert p.distance(a, b + [0, 0, 0, 2 * PI, -2 * PI, 0]) == pytest.approx(p.distance(a, b))
 
 
+def test_the_problems_space_is_made_once_and_follows_the_worlds_rotation_weight():
+    p = thin_wall_scene(metric="se3")
+    assert p.space is p.space and p.space.rot_weight == p.world.rot_weight
+    a, b = np.array([1, 1, 1, 0, 0, 0.5]), np.array([1, 1, 1, 0, 0, -0.5])
+    assert p.distance(a, b) == pytest.approx(p.world.rot_weight)
+    p.world.rot_weight = 2.0  # a weight set after the problem was made: the kernels take it
+    assert p.space.rot_weight == 2.0 and p.distance(a, b) == pytest.approx(2.0)
+
+
 def test_se3_distance_wraps():
     p = thin_wall_scene(metric="se3")
     w = p.world.rot_weight

@@ -198,7 +198,7 @@ class VertexStore:
 
     def _alloc(self, cap: int, keep: int) -> None:
         def grown(name, shape, dtype, fill=0):
-            new = np.full(shape, fill, dtype=dtype)
+            new = np.zeros(shape, dtype=dtype) if fill == 0 else np.full(shape, fill, dtype=dtype)
             old = getattr(self, name, None)
             if old is not None and keep:
                 new[:keep] = old[:keep]

@@ -77,9 +77,13 @@ class Problem:
 
     @property
     def space(self) -> tuple[int, int, float]:
-        """``(kind, metric, rot_weight)`` for the compiled kernels."""
-        return make_space(int(self.world.space_kind), int(METRIC_NAMES[self.metric]),
-                          float(getattr(self.world, "rot_weight", 1.0)))
+        """``(kind, metric, rot_weight)`` for the compiled kernels (made once per rotation weight of the world)."""
+        weight = float(getattr(self.world, "rot_weight", 1.0))
+        kept = self.__dict__.get("_space")
+        if kept is None or kept[0] != weight:
+            kept = weight, make_space(int(self.world.space_kind), int(METRIC_NAMES[self.metric]), weight)
+            object.__setattr__(self, "_space", kept)
+        return kept[1]
 
     def distance(self, a, b) -> float:
         """Distance between two states in this problem's metric."""
