@@ -171,27 +171,41 @@ def frontier_memo(capacity: int) -> tuple:
     """What ``frontier_sample`` keeps between calls for a frontier of up to ``capacity`` cells.
 
     ``(weights, cells, cdf, meta)``: each list entry's weight and the cell it was computed for, the running sum,
-    and (the lowest distance the weights were computed against, entries valid). Allocated, not written: a page
-    is touched only once the frontier reaches it.
+    and (the distance the weights are taken from, entries valid). Allocated, not written: a page is touched only
+    once the frontier reaches it.
     """
     return np.empty(capacity), np.empty(capacity, dtype=np.int64), np.empty(capacity), np.array([np.nan, 0.0])
+
+
+#: How far the frontier's lowest distance may fall below (``BELOW``) or rise above (``ABOVE``) the distance its kept
+#: weights are taken from, in units of ``tau``, before ``frontier_sample`` takes them all again from the lowest one:
+#: a weight stays below e^600 (1e7 of them sum to under 1e268) and the best one above e^-64.
+REBASE_BELOW, REBASE_ABOVE = 600.0, 64.0
 
 
 @nb.njit(cache=True)
 def frontier_sample(front, count, W, cell, origin, dist, tau, u_pick, u_xy, out, memo):
     """Frontier cells drawn with weight exp(-(d - d_min) / tau), a uniform (world) point in each.
 
-    ``memo`` (``frontier_memo``) keeps the weights and their running sum between calls: while ``d_min`` is that of
-    the last call, the sum up to the first entry whose cell changed stands, and an entry whose cell is the one of
-    the last call keeps its weight, so a call computes the exponentials of the entries that changed only (a
-    frontier of grid cells holds thousands); the sum adds the same values in the same order as a fresh
-    computation: the same samples, bit for bit. A frontier's cell keeps its distance once it has one.
+    ``memo`` (``frontier_memo``) keeps the weights and their running sum between calls. The weights are taken from a
+    reference distance ``r`` rather than from ``d_min`` itself, exp(-(d - r) / tau): the same weights up to a common
+    factor, so the same distribution. ``r`` is ``d_min`` when they are all taken, and stays while ``d_min`` moves
+    less than ``REBASE_BELOW`` taus below it and ``REBASE_ABOVE`` above: a tree that gains on the goal lowers
+    ``d_min`` at most of its steps, and taking every weight again at each would be most of a draw (a frontier of
+    grid cells holds thousands). While ``r`` stands, the sum up to the first entry whose cell changed stands, and an
+    entry whose cell is the one of the last call keeps its weight, so a call computes the exponentials of the
+    entries that changed only; the sum adds the same values in the same order as a fresh memo with the same ``r``:
+    the same samples, bit for bit. Against weights taken from ``d_min`` itself the running sums differ in their last
+    bits, and a draw differs only where its uniform falls that close to the boundary between two cells. A
+    frontier's cell keeps its distance once it has one.
     """
     if count == 0:
         return 0
     weights, cells, cdf, meta = memo
     dmin = frontier_dmin(front, count, dist)
-    valid = min(int(meta[1]), count) if meta[0] == dmin else 0
+    ref, valid = meta[0], min(int(meta[1]), count)
+    if not (ref - REBASE_BELOW * tau <= dmin <= ref + REBASE_ABOVE * tau):  # (a fresh memo's reference is NaN)
+        ref, valid = dmin, 0
     start = 0  # the running sum up to the first entry that changed stands
     while start < valid and cells[start] == front[start]:
         start += 1
@@ -199,11 +213,11 @@ def frontier_sample(front, count, W, cell, origin, dist, tau, u_pick, u_xy, out,
     for i in range(start, count):
         c = front[i]
         if i >= valid or cells[i] != c:
-            weights[i] = math.exp(-(dist[c] - dmin) / tau)
+            weights[i] = math.exp(-(dist[c] - ref) / tau)
             cells[i] = c
         acc += weights[i]
         cdf[i] = acc
-    meta[0], meta[1] = dmin, count
+    meta[0], meta[1] = ref, count
     for k in range(u_pick.shape[0]):
         f = front[cdf_search(cdf, count, u_pick[k] * acc)]
         out[k, 0] = origin[0] + (f % W + u_xy[k, 0]) * cell
