@@ -391,6 +391,10 @@ def _coarse_axis(N, n, factor):
     return own, low, up
 
 
+#: ``fine_frontier``'s ranking where there is none (the straight line)
+_NO_RANKING = np.empty((0, 0))
+
+
 def fine_frontier(grid: OccupancyGrid, ranking: np.ndarray | None = None) -> tuple:
     """The frontier of one-grid-cell cells that ``route_draw`` widens a stalled search to (``RouteSampler.widen``).
 
@@ -404,10 +408,6 @@ def fine_frontier(grid: OccupancyGrid, ranking: np.ndarray | None = None) -> tup
     return (np.zeros((H, W), dtype=np.uint8), np.zeros((H, W), dtype=np.bool_), np.empty((H, W), dtype=np.int64),
             np.empty(H * W, np.int64), np.empty(H * W), NO_COST if ranking is None else np.empty(H * W),
             frontier_memo(H * W), source)
-
-
-#: ``fine_frontier``'s ranking where there is none (the straight line)
-_NO_RANKING = np.empty((0, 0))
 
 
 @nb.njit(cache=True)
@@ -882,9 +882,9 @@ class RouteSampler(SamplerBase):
         self.forward_passes, self.reused_seconds = 0, 0.0
         field, ranking = self._fields(grid)
         res, origin = grid.resolution, np.ascontiguousarray(grid.origin, dtype=np.float64)
-        # the frontier's ranking, per grid cell and in grid cells (None: the straight line), and the field with its
-        # obstacles at inf (the straight line's comes so)
-        if self.net is not None and self.coarsening == 1:  # (read coarser, the interpolation set them so)
+        # the field with its obstacles at inf (the straight line's comes so, and the interpolation of a map read
+        # coarser sets them), and the frontiers ranked by ``ranking`` (None: the straight line)
+        if self.net is not None and self.coarsening == 1:
             obstacles_at_inf(field, grid.obstacles)
         if ranking is None:
             fine, costs = fine_frontier(grid), None
