@@ -273,7 +273,7 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
     kept): read nearest-cell, a coarse field is flat over each coarse cell, and a walk down it wanders on the flats.
     A free cell of a blocked coarse cell (beside a wall) takes its nearest valued free neighbour's value plus the
     way to it (two sweeps each way of a distance transform over those cells); ``inf`` on obstacles and where no value
-    reaches. Returns the field and whether a value at or above ``unreached`` may be in it (False: none is).
+    reaches. Returns the field and whether a finite value at or above ``unreached`` is in it.
     """
     H, W = blocked.shape
     h, w = coarse.shape
@@ -306,7 +306,7 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
             own = coarse[ia, ja]
             if not own < unreached:
                 out[r, c] = own
-                high = high or own >= unreached
+                high = high or own < math.inf
                 continue
             j0, fx = low_col[c], up_col[c]
             if quad[i0 + 1, j0 + 1]:  # the four serve: bilinear as it stands
@@ -348,30 +348,26 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
                 bit <<= 1
         reads[m] = bits
     flat = out.ravel()
+    last = H * W - 1
     for sweep in range(4):  # the cells beside walls, twice each way (a wall's coarse cell: a few cells to cross)
         for m in range(n):
             if sweep % 2:
                 m = n - 1 - m
             v, bits = band[m], reads[m]
-            best = flat[v]
-            if bits & 1:
-                best = min(best, flat[v - W - 1] + diagonal)
-            if bits & 2:
-                best = min(best, flat[v - W] + cell)
-            if bits & 4:
-                best = min(best, flat[v - W + 1] + diagonal)
-            if bits & 8:
-                best = min(best, flat[v - 1] + cell)
-            if bits & 16:
-                best = min(best, flat[v + 1] + cell)
-            if bits & 32:
-                best = min(best, flat[v + W - 1] + diagonal)
-            if bits & 64:
-                best = min(best, flat[v + W] + cell)
-            if bits & 128:
-                best = min(best, flat[v + W + 1] + diagonal)
+            # each neighbour's way in (inf where it is not read: the min is the same), without a branch per neighbour;
+            # the indices kept on the map, where a cell on its edge does not read beyond it
+            a0 = flat[max(v - W - 1, 0)] + diagonal if bits & 1 else math.inf
+            a1 = flat[max(v - W, 0)] + cell if bits & 2 else math.inf
+            a2 = flat[max(v - W + 1, 0)] + diagonal if bits & 4 else math.inf
+            a3 = flat[max(v - 1, 0)] + cell if bits & 8 else math.inf
+            a4 = flat[min(v + 1, last)] + cell if bits & 16 else math.inf
+            a5 = flat[min(v + W - 1, last)] + diagonal if bits & 32 else math.inf
+            a6 = flat[min(v + W, last)] + cell if bits & 64 else math.inf
+            a7 = flat[min(v + W + 1, last)] + diagonal if bits & 128 else math.inf
+            best = min(min(flat[v], min(a0, a1)), min(min(a2, a3), min(min(a4, a5), min(a6, a7))))
             flat[v] = best
-            high = high or best >= unreached
+            if sweep == 3:  # its last value
+                high = high or unreached <= best < math.inf
     return out, high
 
 
