@@ -348,23 +348,28 @@ def interpolated_field(coarse, shut, blocked, factor, cell, unreached):
                 bit <<= 1
         reads[m] = bits
     flat = out.ravel()
-    last = H * W - 1
     for sweep in range(4):  # the cells beside walls, twice each way (a wall's coarse cell: a few cells to cross)
         for m in range(n):
             if sweep % 2:
                 m = n - 1 - m
             v, bits = band[m], reads[m]
-            # each neighbour's way in (inf where it is not read: the min is the same), without a branch per neighbour;
-            # the indices kept on the map, where a cell on its edge does not read beyond it
-            a0 = flat[max(v - W - 1, 0)] + diagonal if bits & 1 else math.inf
-            a1 = flat[max(v - W, 0)] + cell if bits & 2 else math.inf
-            a2 = flat[max(v - W + 1, 0)] + diagonal if bits & 4 else math.inf
-            a3 = flat[max(v - 1, 0)] + cell if bits & 8 else math.inf
-            a4 = flat[min(v + 1, last)] + cell if bits & 16 else math.inf
-            a5 = flat[min(v + W - 1, last)] + diagonal if bits & 32 else math.inf
-            a6 = flat[min(v + W, last)] + cell if bits & 64 else math.inf
-            a7 = flat[min(v + W + 1, last)] + diagonal if bits & 128 else math.inf
-            best = min(min(flat[v], min(a0, a1)), min(min(a2, a3), min(min(a4, a5), min(a6, a7))))
+            best = flat[v]
+            if bits & 1:
+                best = min(best, flat[v - W - 1] + diagonal)
+            if bits & 2:
+                best = min(best, flat[v - W] + cell)
+            if bits & 4:
+                best = min(best, flat[v - W + 1] + diagonal)
+            if bits & 8:
+                best = min(best, flat[v - 1] + cell)
+            if bits & 16:
+                best = min(best, flat[v + 1] + cell)
+            if bits & 32:
+                best = min(best, flat[v + W - 1] + diagonal)
+            if bits & 64:
+                best = min(best, flat[v + W] + cell)
+            if bits & 128:
+                best = min(best, flat[v + W + 1] + diagonal)
             flat[v] = best
             if sweep == 3:  # its last value
                 high = high or unreached <= best < math.inf
@@ -785,7 +790,7 @@ class RouteSampler(SamplerBase):
         # where the learned walls shut every route from the start, the field ranks without them (one more pass)
         learned, opened = self._predict(obstacles, goal, self._encoder_start(grid, factor, obstacles.shape))
         self.forward_passes = self.symmetry_passes * (2 if opened else 1)
-        high = True  # whether a value may be at or above the unreached one
+        high = True  # whether a finite value may be at or above the unreached one
         if k != 1:  # in steps of k planner steps, interpolated between the coarse cells' centres
             unreached = math.inf if self.net.unreached_steps is None else 0.5 * self.net.unreached_steps * k
             learned, high = interpolated_field(np.asarray(learned, dtype=np.float64) * float(k), obstacles,
