@@ -148,11 +148,13 @@ def test_ompls_motions_replayed_turn_the_shortest_way_and_find_a_wall(tmp_path):
     assert long_runs.motions_through(world, through_wall, 0.05) == 1
 
 
-def test_the_mesh_tuning_script_refuses_an_unknown_sampler_and_negative_restarts(tmp_path):
+def test_the_mesh_tuning_script_refuses_an_unknown_sampler_negative_restarts_and_bad_steps(tmp_path, capsys):
     tune = load_script("experiments/tune_mesh_delta")
-    for bad in (["--sampler", "nothing"], ["--restarts", "0", "-5"]):
+    for bad, said in ((["--sampler", "nothing"], "no such sampler"), (["--restarts", "0", "-5"], "--restarts takes"),
+                      (["--steps", "1", "0"], "--steps must lie in (0, 4]"), (["--steps", "5"], "--steps must lie")):
         with pytest.raises(SystemExit):
             tune.main(["--out", str(tmp_path / "runs.jsonl"), *bad])
+        assert said in capsys.readouterr().err
     assert not (tmp_path / "runs.jsonl").exists()  # refused before any run
 
 

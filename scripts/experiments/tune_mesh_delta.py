@@ -17,6 +17,9 @@ median time (an unsolved run counts at the limit). A scene whose box witness mee
 (default 0.25, ``MeshWorld``'s default ``delta / 8``); a scene is left out where the widest band, ``delta / 2``,
 refuses its witness, so every band plans the same scenes.
 
+``--steps SHARE ...`` gives RRT-Connect's step as shares of its default (0.2 of the state box's diagonal, OMPL's
+default range; default 1).
+
 ``--sampler NAME`` runs every run with a registry sampler instead of uniform sampling (a fresh one per run, bound
 in the timed run), and ``--restarts UNIT ...`` adds candidates that restart each run by Luby's sequence times
 ``UNIT`` iterations (``planners.solve_with_restarts``; 0: none), the time limit over all attempts:
@@ -39,7 +42,7 @@ _PROBLEMS: dict = {}
 
 
 def _run(task: tuple) -> dict:
-    fraction, share, family, scene_seed, seed, limit, sampler, restarts = task
+    fraction, share, family, scene_seed, seed, limit, sampler, restarts, step_share = task
     import numpy as np
 
     from planners import make_planner, solve_with_restarts
@@ -66,12 +69,15 @@ def _run(task: tuple) -> dict:
         return {"fraction": fraction, "band": share, "family": family, "scene_seed": scene_seed, "seed": seed,
                 "refused": problem}
 
-    def kwargs() -> dict:  # a fresh sampler for each run (bound in the timed run)
+    def kwargs() -> dict:  # a fresh sampler for each run (bound in the timed run), the step asked
+        from planners.algorithms.rrt import default_step
+
+        out = {"step_size": step_share * default_step(problem, None)}
         if sampler == "uniform":
-            return {}
+            return out
         from learning.samplers.registry import make_sampler
 
-        return {"sampler": make_sampler(sampler)}
+        return {**out, "sampler": make_sampler(sampler)}
 
     make_planner("RRTConnect", problem, seed=0, **kwargs()).solve(max_iterations=2)  # the sampler's kernels
     t, c = time.perf_counter(), compile_seconds()
@@ -80,7 +86,8 @@ def _run(task: tuple) -> dict:
     else:
         r = make_planner("RRTConnect", problem, seed=seed, **kwargs()).solve(time_limit=limit)
     seconds = time.perf_counter() - t - (compile_seconds() - c)
-    return {"fraction": fraction, "band": share, "restarts": restarts, "family": family, "scene_seed": scene_seed,
+    return {"fraction": fraction, "band": share, "restarts": restarts, "step": step_share, "family": family,
+            "scene_seed": scene_seed,
             "seed": seed, "delta": problem.world.delta, "sampler": sampler,
             "solved": bool(r.solved), "iterations": int(r.iterations), "checks": int(r.collision_checks),
             "seconds": float(seconds)}
@@ -101,6 +108,8 @@ def main(argv=None) -> int:
     ap.add_argument("--sampler", default="uniform", help="a registry sampler for every run (default uniform)")
     ap.add_argument("--restarts", type=int, nargs="+", default=[0], metavar="UNIT",
                     help="candidates: restart by Luby's sequence times UNIT iterations (0: none; default 0)")
+    ap.add_argument("--steps", type=float, nargs="+", default=[1.0], metavar="SHARE",
+                    help="candidates: RRT-Connect's step as shares of its default (default 1)")
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--out", type=Path, required=True, help="a JSON-lines file of every run (written at the end)")
     args = ap.parse_args(argv)
@@ -113,12 +122,14 @@ def main(argv=None) -> int:
             ap.error(f"--sampler {args.sampler}: no such sampler (known: {', '.join(sampler_names())})")
     if any(not 0 < b <= 1 for b in args.bands):
         ap.error(f"--bands must lie in (0, 1], got {args.bands}")
+    if any(not 0 < x <= 4 for x in args.steps):
+        ap.error(f"--steps must lie in (0, 4], got {args.steps}")
     if any(u < 0 for u in args.restarts):
         ap.error(f"--restarts takes 0 (none) or numbers of iterations, got {args.restarts}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    tasks = [(f, b, fam, s, seed, args.time_limit, args.sampler, u) for fam in args.families
+    tasks = [(f, b, fam, s, seed, args.time_limit, args.sampler, u, x) for fam in args.families
              for s in scene_seeds(fam, "tuning", args.scenes) for seed in range(args.seeds) for f in args.fractions
-             for b in args.bands for u in args.restarts]
+             for b in args.bands for u in args.restarts for x in args.steps]
     rows = []
     with ProcessPoolExecutor(args.processes) as pool:
         for row in pool.map(_run, tasks):
@@ -129,23 +140,25 @@ def main(argv=None) -> int:
     rows = [r for r in rows if "refused" not in r]
     if refused:
         print(f"\nleft out (the box scene's witness meets its meshes): {', '.join(refused)}")
-    print(f"\n{args.sampler} sampling\n\n| fraction | band (of delta / 2) | restarts (unit) | solved | "
-          "median time (s), unsolved at the limit | median iterations | median checks |\n|---|---|---|---|---|---|---|")
-    for f, b, u in [(f, b, u) for f in args.fractions for b in args.bands for u in args.restarts]:
-        rs = [r for r in rows if r["fraction"] == f and r["band"] == b and r["restarts"] == u]
+    print(f"\n{args.sampler} sampling\n\n| fraction | band (of delta / 2) | restarts (unit) | step (of default) | "
+          "solved | median time (s), unsolved at the limit | median iterations | median checks |\n"
+          "|---|---|---|---|---|---|---|---|")
+    for f, b, u, x in [(f, b, u, x) for f in args.fractions for b in args.bands for u in args.restarts
+                       for x in args.steps]:
+        rs = [r for r in rows if r["fraction"] == f and r["band"] == b and r["restarts"] == u and r["step"] == x]
         if not rs:
-            print(f"| {f:g} | {b:g} | {u or 'none'} | no scene | | | |")
+            print(f"| {f:g} | {b:g} | {u or 'none'} | {x:g} | no scene | | | |")
             continue
         t = statistics.median(r["seconds"] if r["solved"] else args.time_limit for r in rs)
-        print(f"| {f:g} | {b:g} | {u or 'none'} | {sum(r['solved'] for r in rs)}/{len(rs)} | {t:.2f} | "
+        print(f"| {f:g} | {b:g} | {u or 'none'} | {x:g} | {sum(r['solved'] for r in rs)}/{len(rs)} | {t:.2f} | "
               f"{statistics.median(r['iterations'] for r in rs):,.0f} | "
               f"{statistics.median(r['checks'] for r in rs):,.0f} |")
     by_family = {}
     for r in rows:
-        by_family.setdefault((r["family"], r["fraction"], r["band"], r["restarts"]), []).append(r["solved"])
-    print("\nsolved by family: " + "; ".join(f"{fam} {f:g}" + f" band {b:g}"
-                                            + (f" restarts {u}" if u else "") + f": {sum(v)}/{len(v)}"
-                                            for (fam, f, b, u), v in by_family.items()))
+        by_family.setdefault((r["family"], r["fraction"], r["band"], r["restarts"], r["step"]), []).append(r["solved"])
+    print("\nsolved by family: " + "; ".join(f"{fam} {f:g}" + f" band {b:g}" + (f" restarts {u}" if u else "")
+                                            + (f" step {x:g}" if x != 1 else "") + f": {sum(v)}/{len(v)}"
+                                            for (fam, f, b, u, x), v in by_family.items()))
     return 0
 
 
