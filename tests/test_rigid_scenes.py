@@ -206,6 +206,16 @@ def test_a_restarting_run_in_the_comparison_is_solve_with_restarts_own_and_count
         run_one(problem, "PRM", "uniform", 0, max_iterations=10, restarts=5)
 
 
+def test_a_box_scene_whose_goal_meets_its_meshes_is_refused_as_a_witness_that_meets_them():
+    pytest.importorskip("trimesh", reason="mesh scenes need the mesh extra (pip install samplergym[mesh])")
+    pytest.importorskip("fcl", reason="mesh scenes need the mesh extra (pip install samplergym[mesh])")
+    from planners.worlds.rigid_scenes import mesh_scene
+
+    # this validation clutter scene's goal puts the body's surface into a box its points missed
+    with pytest.raises(RuntimeError, match="witness path .* meets the mesh environment at its ends"):
+        mesh_scene("clutter", VALIDATION_SEED0 + 1)
+
+
 def test_a_box_scene_written_as_meshes_keeps_its_witness_and_omplapp_problems_join_the_test_only_set(tmp_path):
     pytest.importorskip("trimesh", reason="mesh scenes need the mesh extra (pip install samplergym[mesh])")
     pytest.importorskip("fcl", reason="mesh scenes need the mesh extra (pip install samplergym[mesh])")

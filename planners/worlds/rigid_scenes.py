@@ -586,10 +586,14 @@ def mesh_scene(family: str, seed: int, delta: float | None = None, band: float |
 
     Raises:
         RuntimeError: The box scene's witness path meets the mesh environment (the body's surface
-            reaches where its points did not).
+            reaches where its points did not), its start or goal included.
     """
     problem, witness = scene_with_witness(family, seed)
-    mesh = as_mesh_scene(problem, delta, band)
+    try:
+        mesh = as_mesh_scene(problem, delta, band)
+    except InputError as e:  # the start or the goal, the witness's ends, meets the mesh environment
+        raise RuntimeError(f"{problem.name}: the witness path of the box scene meets the mesh environment "
+                           f"at its ends ({e})") from e
     if not mesh.world.path_valid(witness.path):
         raise RuntimeError(f"{problem.name}: the witness path of the box scene meets the mesh environment")
     return mesh
