@@ -17,8 +17,11 @@ median time (an unsolved run counts at the limit). A scene whose box witness mee
 (default 0.25, ``MeshWorld``'s default ``delta / 8``); a scene is left out where the widest band, ``delta / 2``,
 refuses its witness, so every band plans the same scenes.
 
-``--steps SHARE ...`` gives RRT-Connect's step as shares of its default (0.2 of the state box's diagonal, OMPL's
-default range; default 1).
+``--part validation`` runs the validation part's scenes instead, where a choice made on the tuning part is
+confirmed (never the test part).
+
+``--planner RRT`` runs goal-biased RRT (its default bias) instead of RRT-Connect. ``--steps SHARE ...`` gives the
+planner's step as shares of its default on the world (``planners.algorithms.rrt.default_step``; default 1).
 
 ``--sampler NAME`` runs every run with a registry sampler instead of uniform sampling (a fresh one per run, bound
 in the timed run), and ``--restarts UNIT ...`` adds candidates that restart each run by Luby's sequence times
@@ -42,7 +45,7 @@ _PROBLEMS: dict = {}
 
 
 def _run(task: tuple) -> dict:
-    fraction, share, family, scene_seed, seed, limit, sampler, restarts, step_share = task
+    fraction, share, family, scene_seed, seed, limit, sampler, restarts, step_share, planner = task
     import numpy as np
 
     from planners import make_planner, solve_with_restarts
@@ -62,7 +65,7 @@ def _run(task: tuple) -> dict:
                     "refused": str(e)}
         if share != 1:  # the same scene (accepted at the widest band) with the band asked
             problem = as_mesh_scene(box, delta, share * 0.5 * delta)
-        make_planner("RRTConnect", problem, seed=0).solve(max_iterations=2)  # compile outside the timing
+        make_planner(planner, problem, seed=0).solve(max_iterations=2)  # compile outside the timing
         _PROBLEMS[key] = problem
     problem = _PROBLEMS[key]
     if isinstance(problem, str):
@@ -79,14 +82,15 @@ def _run(task: tuple) -> dict:
 
         return {**out, "sampler": make_sampler(sampler)}
 
-    make_planner("RRTConnect", problem, seed=0, **kwargs()).solve(max_iterations=2)  # the sampler's kernels
+    make_planner(planner, problem, seed=0, **kwargs()).solve(max_iterations=2)  # the sampler's kernels
     t, c = time.perf_counter(), compile_seconds()
     if restarts:
-        r = solve_with_restarts("RRTConnect", problem, seed=seed, unit=restarts, time_limit=limit, **kwargs())
+        r = solve_with_restarts(planner, problem, seed=seed, unit=restarts, time_limit=limit, **kwargs())
     else:
-        r = make_planner("RRTConnect", problem, seed=seed, **kwargs()).solve(time_limit=limit)
+        r = make_planner(planner, problem, seed=seed, **kwargs()).solve(time_limit=limit)
     seconds = time.perf_counter() - t - (compile_seconds() - c)
-    return {"fraction": fraction, "band": share, "restarts": restarts, "step": step_share, "family": family,
+    return {"planner": planner, "fraction": fraction, "band": share, "restarts": restarts, "step": step_share,
+            "family": family,
             "scene_seed": scene_seed,
             "seed": seed, "delta": problem.world.delta, "sampler": sampler,
             "solved": bool(r.solved), "iterations": int(r.iterations), "checks": int(r.collision_checks),
@@ -98,7 +102,9 @@ def main(argv=None) -> int:
     from planners.worlds.rigid_scenes import TRAINING_FAMILIES, scene_seeds
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--scenes", type=int, default=2, help="tuning scenes per family")
+    ap.add_argument("--scenes", type=int, default=2, help="scenes per family")
+    ap.add_argument("--part", choices=["tuning", "validation"], default="tuning",
+                    help="the scene sets' part the scenes come from (default tuning)")
     ap.add_argument("--seeds", type=int, default=2, help="planner seeds per scene")
     ap.add_argument("--time-limit", type=float, default=10.0)
     ap.add_argument("--fractions", type=float, nargs="+", default=[1e-3, 5e-4, 2.5e-4, 1.25e-4])
@@ -110,6 +116,8 @@ def main(argv=None) -> int:
                     help="candidates: restart by Luby's sequence times UNIT iterations (0: none; default 0)")
     ap.add_argument("--steps", type=float, nargs="+", default=[1.0], metavar="SHARE",
                     help="candidates: RRT-Connect's step as shares of its default (default 1)")
+    ap.add_argument("--planner", choices=["RRTConnect", "RRT"], default="RRTConnect",
+                    help="the planner of every run, at its default settings (default RRTConnect)")
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--out", type=Path, required=True, help="a JSON-lines file of every run (written at the end)")
     args = ap.parse_args(argv)
@@ -127,8 +135,8 @@ def main(argv=None) -> int:
     if any(u < 0 for u in args.restarts):
         ap.error(f"--restarts takes 0 (none) or numbers of iterations, got {args.restarts}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    tasks = [(f, b, fam, s, seed, args.time_limit, args.sampler, u, x) for fam in args.families
-             for s in scene_seeds(fam, "tuning", args.scenes) for seed in range(args.seeds) for f in args.fractions
+    tasks = [(f, b, fam, s, seed, args.time_limit, args.sampler, u, x, args.planner) for fam in args.families
+             for s in scene_seeds(fam, args.part, args.scenes) for seed in range(args.seeds) for f in args.fractions
              for b in args.bands for u in args.restarts for x in args.steps]
     rows = []
     with ProcessPoolExecutor(args.processes) as pool:
@@ -140,8 +148,8 @@ def main(argv=None) -> int:
     rows = [r for r in rows if "refused" not in r]
     if refused:
         print(f"\nleft out (the box scene's witness meets its meshes): {', '.join(refused)}")
-    print(f"\n{args.sampler} sampling\n\n| fraction | band (of delta / 2) | restarts (unit) | step (of default) | "
-          "solved | median time (s), unsolved at the limit | median iterations | median checks |\n"
+    print(f"\n{args.planner}, {args.sampler} sampling\n\n| fraction | band (of delta / 2) | restarts (unit) | "
+          "step (of default) | solved | median time (s), unsolved at the limit | median iterations | median checks |\n"
           "|---|---|---|---|---|---|---|---|")
     for f, b, u, x in [(f, b, u, x) for f in args.fractions for b in args.bands for u in args.restarts
                        for x in args.steps]:
