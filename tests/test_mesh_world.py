@@ -305,6 +305,23 @@ def test_planners_go_through_the_hole_and_repeat_with_the_seed(wide_hole_world, 
     assert len(cross) and all(np.all(np.abs(dense[i, 1:3] - 5.0) < 1.5) for i in cross)  # through the hole
 
 
+def test_the_tree_planners_default_step_is_the_mesh_worlds_share_of_the_box_diagonal(hole_world):
+    from planners.base.world import DEFAULT_RANGE_FRACTION
+    from planners.maps.generators import generate
+    from planners.worlds.mesh import MESH_RANGE_FRACTION
+
+    problem = Problem(hole_world, [2, 3, 3, 0, 0, 0], [8, 7, 7, 0, 0, 0], goal_tolerance=0.5)
+    low, high = hole_world.bounds
+    diagonal = float(np.linalg.norm(high - low))
+    for name in ("RRT", "RRTConnect", "RRTstar"):
+        assert make_planner(name, problem, seed=0).step_size == pytest.approx(MESH_RANGE_FRACTION * diagonal), name
+        assert make_planner(name, problem, seed=0, step_size=1.5).step_size == 1.5, name  # one given is kept
+    grid = generate("forest", 0, 64)  # other worlds keep OMPL's default range
+    low, high = grid.world.bounds
+    assert make_planner("RRT", grid, seed=0).step_size == pytest.approx(
+        DEFAULT_RANGE_FRACTION * float(np.linalg.norm(np.asarray(high) - np.asarray(low))))
+
+
 def test_a_time_limit_holds_on_a_mesh_world(hole_world):
     # an unsolvable query (the goal is walled in), so only the time limit stops the planner
     env = trimesh.util.concatenate([wall_with_hole(), box((3, 3, 0.2), (8, 8, 6.5)), box((3, 3, 0.2), (8, 8, 9.5)),

@@ -12,11 +12,10 @@ from planners.base.planner import Planner, PlannerData, TreeView, VertexStore, r
 from planners.base.problem import Problem
 from planners.base.registry import register_planner
 from planners.base.samplers import FAMILY_BIDIRECTIONAL, Sampler
+from planners.base.world import DEFAULT_RANGE_FRACTION
 from planners.kernels import rrt as rrt_kernels
 from planners.kernels import state as slots
 
-#: OMPL's default range: this fraction of the sampling box's diagonal (MAX_MOTION_DISTANCE_FRACTION).
-DEFAULT_RANGE_FRACTION = 0.2
 #: Most steps across the sampling box's diagonal a planner accepts unless raised: RRT-Connect reserves
 #: room for one connect across the whole box (two trees x (diagonal / step) vertices of 80 bytes in 2-D,
 #: about 300 in 6-DoF): 10^5 steps is 16 MB in 2-D and 60 MB in 6-DoF (twice that while an array grows).
@@ -31,10 +30,13 @@ def max_steps_limit() -> int:
 
 
 def default_step(problem: Problem, step_size: float | None) -> float:
-    """Validate ``step_size``; None means 0.2 x the diagonal of the sampling box (OMPL's default)."""
+    """Validate ``step_size``; None means the world's ``range_fraction`` of the sampling box's diagonal (0.2, OMPL's
+    default range, unless the world sets its own: a mesh world's is 0.02).
+    """
     if step_size is None:
         low, high = problem.world.bounds
-        return DEFAULT_RANGE_FRACTION * float(np.linalg.norm(np.asarray(high) - np.asarray(low)))
+        fraction = getattr(problem.world, "range_fraction", DEFAULT_RANGE_FRACTION)  # a world of the user's own may not
+        return fraction * float(np.linalg.norm(np.asarray(high) - np.asarray(low)))
     try:
         step = float(step_size)
     except (TypeError, ValueError):
@@ -77,7 +79,7 @@ class RRT(Planner):
 
     Args:
         problem: The planning problem.
-        step_size: Maximum extension per iteration (OMPL's ``range``); None = 0.2 x box diagonal.
+        step_size: Maximum extension per iteration (OMPL's ``range``); None: the world's default (``default_step``).
         sampler: Where to sample; default ``UniformSampler()``. Goal bias is
             ``GoalBiasedSampler(p)``.
         seed: Seed of the planner's generator.

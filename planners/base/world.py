@@ -61,10 +61,17 @@ def _finite(q: np.ndarray) -> bool:
     return all(map(math.isfinite, q.tolist()))
 
 
+#: OMPL's default range: this fraction of the sampling box's diagonal (MAX_MOTION_DISTANCE_FRACTION), the RRT
+#: family's default step on a world that does not set its own (``WorldBase.range_fraction``).
+DEFAULT_RANGE_FRACTION = 0.2
+
+
 class WorldBase:
     """Python-facing checks shared by all worlds, via the compiled dispatch."""
 
     dim: int
+    #: The RRT family's default step (OMPL's ``range``) on this world, as a fraction of the sampling box's diagonal.
+    range_fraction: float = DEFAULT_RANGE_FRACTION
 
     @property
     def kernel(self) -> WorldKernel:

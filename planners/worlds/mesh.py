@@ -56,6 +56,10 @@ DEFAULT_DELTA_FRACTION = 1e-3
 #: Default band (the clearance every checked pose keeps), as a fraction of ``delta``: chosen on the generated mesh
 #: scenes' tuning part (``scripts/experiments/tune_mesh_delta.py --bands``; docs/rigid-body.md).
 DEFAULT_BAND_FRACTION = 0.125
+#: The RRT family's default step on a mesh world (``WorldBase.range_fraction``), as a fraction of the state box's
+#: diagonal: a tenth of OMPL's default range, chosen for RRT-Connect on the generated mesh scenes' tuning part
+#: (``scripts/experiments/tune_mesh_delta.py --steps``; docs/rigid-body.md).
+MESH_RANGE_FRACTION = 0.02
 #: Voxels along the longest side of the broad phase's grid (the grid covers the bounds grown by the
 #: body radius).
 DEFAULT_GRID_CELLS = 128
@@ -360,6 +364,7 @@ class MeshWorld(WorldBase):
     dim = RigidBodyWorld.dim
     space_kind = SPACE_RIGID
     metrics = RigidBodyWorld.metrics
+    range_fraction = MESH_RANGE_FRACTION
 
     def __init__(self, environment, robot, *, low, high, delta: float | None = None, band: float | None = None,
                  rot_weight: float | None = None, grid_cells: int = DEFAULT_GRID_CELLS, name: str = "") -> None:

@@ -20,8 +20,9 @@ refuses its witness, so every band plans the same scenes.
 ``--part validation`` runs the validation part's scenes instead, where a choice made on the tuning part is
 confirmed (never the test part).
 
-``--planner RRT`` runs goal-biased RRT (its default bias) instead of RRT-Connect. ``--steps SHARE ...`` gives the
-planner's step as shares of its default on the world (``planners.algorithms.rrt.default_step``; default 1).
+``--planner RRT`` runs RRT (its default, uniform sampling; ``--sampler goal_bias`` for the bias) instead of
+RRT-Connect. ``--steps SHARE ...`` gives the planner's step as shares of its default on the world
+(``planners.algorithms.rrt.default_step``; default 1).
 
 ``--sampler NAME`` runs every run with a registry sampler instead of uniform sampling (a fresh one per run, bound
 in the timed run), and ``--restarts UNIT ...`` adds candidates that restart each run by Luby's sequence times
