@@ -221,6 +221,9 @@ def rigid(args) -> int:
     samplers = [None] + list(args.rigid_samplers or ())  # None: the set-up's own sampling
     if args.rigid_samplers:
         from learning.samplers.registry import make_sampler
+    from planners.base.world import DEFAULT_RANGE_FRACTION
+    from planners.worlds.mesh import MESH_RANGE_FRACTION
+
     use_ompl = args.rigid_ompl and ompl_bridge.available()
     if args.rigid_ompl and not use_ompl:
         print("OMPL not installed (pip install -c constraints.txt -e '.[bench]'); running without it", file=sys.stderr)
@@ -228,9 +231,10 @@ def rigid(args) -> int:
             "states | median checks | time per iteration (us) |\n|---|---|---|---|---|---|---|---|---|---|\n")
     out = io.StringIO()
     out.write(f"# RRT-Connect and RRT on OMPL.app's problems\n\n{platform.processor() or platform.machine()}, "
-              f"Python {platform.python_version()}, default step (0.2 of the state box's diagonal), RRT's goal bias "
-              f"0.05, seeds 0 to runs - 1; time excludes compilation; 'ours / OMPL' is the ratio of the median "
-              f"times of the same planner, where both solve at least half the runs; time per iteration is the "
+              f"Python {platform.python_version()}, our default step ({MESH_RANGE_FRACTION:g} of the state box's "
+              f"diagonal; OMPL's keep their default range, {DEFAULT_RANGE_FRACTION:g} of the space's extent), RRT's "
+              f"goal bias 0.05, seeds 0 to runs - 1; time excludes compilation; 'ours / OMPL' is the ratio of the "
+              f"median times of the same planner, where both solve at least half the runs; time per iteration is the "
               f"median over runs of the solve's own time (a sampler's set-up is in the median time only).\n\n" + head)
     print(out.getvalue(), end="", flush=True)
     records: list[benchmark.Run] = []
