@@ -21,8 +21,9 @@ refuses its witness, so every band plans the same scenes.
 confirmed (never the test part).
 
 ``--planner RRT`` runs RRT (its default, uniform sampling; ``--sampler goal_bias`` for the bias) instead of
-RRT-Connect. ``--steps SHARE ...`` gives the planner's step as shares of its default on the world
-(``planners.algorithms.rrt.default_step``; default 1).
+RRT-Connect. ``--steps SHARE ...`` gives the planner's step as shares of OMPL's default range (0.2 of the state box's
+diagonal, ``planners.base.world.DEFAULT_RANGE_FRACTION``), so a command names the same steps whatever the world's
+default; without it the planner takes its default step (a mesh world's is 0.1 of that range).
 
 ``--sampler NAME`` runs every run with a registry sampler instead of uniform sampling (a fresh one per run, bound
 in the timed run), and ``--restarts UNIT ...`` adds candidates that restart each run by Luby's sequence times
@@ -74,9 +75,11 @@ def _run(task: tuple) -> dict:
                 "refused": problem}
 
     def kwargs() -> dict:  # a fresh sampler for each run (bound in the timed run), the step asked
-        from planners.algorithms.rrt import default_step
+        from planners.base.world import DEFAULT_RANGE_FRACTION
 
-        out = {"step_size": step_share * default_step(problem, None)}
+        low, high = problem.world.bounds
+        ompl_range = DEFAULT_RANGE_FRACTION * float(np.linalg.norm(np.asarray(high) - np.asarray(low)))
+        out = {} if step_share is None else {"step_size": step_share * ompl_range}
         if sampler == "uniform":
             return out
         from learning.samplers.registry import make_sampler
@@ -98,6 +101,10 @@ def _run(task: tuple) -> dict:
             "seconds": float(seconds)}
 
 
+def _step(share: float | None) -> str:
+    return "default" if share is None else f"{share:g}"
+
+
 def main(argv=None) -> int:
     from planners.base.fileio import atomic_write_text
     from planners.worlds.rigid_scenes import TRAINING_FAMILIES, scene_seeds
@@ -115,8 +122,8 @@ def main(argv=None) -> int:
     ap.add_argument("--sampler", default="uniform", help="a registry sampler for every run (default uniform)")
     ap.add_argument("--restarts", type=int, nargs="+", default=[0], metavar="UNIT",
                     help="candidates: restart by Luby's sequence times UNIT iterations (0: none; default 0)")
-    ap.add_argument("--steps", type=float, nargs="+", default=[1.0], metavar="SHARE",
-                    help="candidates: RRT-Connect's step as shares of its default (default 1)")
+    ap.add_argument("--steps", type=float, nargs="+", default=[None], metavar="SHARE",
+                    help="candidates: the planner's step as shares of OMPL's default range (default: its own default)")
     ap.add_argument("--planner", choices=["RRTConnect", "RRT"], default="RRTConnect",
                     help="the planner of every run, at its default settings (default RRTConnect)")
     ap.add_argument("--processes", type=int, default=2)
@@ -131,7 +138,7 @@ def main(argv=None) -> int:
             ap.error(f"--sampler {args.sampler}: no such sampler (known: {', '.join(sampler_names())})")
     if any(not 0 < b <= 1 for b in args.bands):
         ap.error(f"--bands must lie in (0, 1], got {args.bands}")
-    if any(not 0 < x <= 4 for x in args.steps):
+    if any(x is not None and not 0 < x <= 4 for x in args.steps):
         ap.error(f"--steps must lie in (0, 4], got {args.steps}")
     if any(u < 0 for u in args.restarts):
         ap.error(f"--restarts takes 0 (none) or numbers of iterations, got {args.restarts}")
@@ -150,23 +157,24 @@ def main(argv=None) -> int:
     if refused:
         print(f"\nleft out (the box scene's witness meets its meshes): {', '.join(refused)}")
     print(f"\n{args.planner}, {args.sampler} sampling\n\n| fraction | band (of delta / 2) | restarts (unit) | "
-          "step (of default) | solved | median time (s), unsolved at the limit | median iterations | median checks |\n"
+          "step (of OMPL's range) | solved | median time (s), unsolved at the limit | median iterations | "
+          "median checks |\n"
           "|---|---|---|---|---|---|---|---|")
     for f, b, u, x in [(f, b, u, x) for f in args.fractions for b in args.bands for u in args.restarts
                        for x in args.steps]:
         rs = [r for r in rows if r["fraction"] == f and r["band"] == b and r["restarts"] == u and r["step"] == x]
         if not rs:
-            print(f"| {f:g} | {b:g} | {u or 'none'} | {x:g} | no scene | | | |")
+            print(f"| {f:g} | {b:g} | {u or 'none'} | {_step(x)} | no scene | | | |")
             continue
         t = statistics.median(r["seconds"] if r["solved"] else args.time_limit for r in rs)
-        print(f"| {f:g} | {b:g} | {u or 'none'} | {x:g} | {sum(r['solved'] for r in rs)}/{len(rs)} | {t:.2f} | "
+        print(f"| {f:g} | {b:g} | {u or 'none'} | {_step(x)} | {sum(r['solved'] for r in rs)}/{len(rs)} | {t:.2f} | "
               f"{statistics.median(r['iterations'] for r in rs):,.0f} | "
               f"{statistics.median(r['checks'] for r in rs):,.0f} |")
     by_family = {}
     for r in rows:
         by_family.setdefault((r["family"], r["fraction"], r["band"], r["restarts"], r["step"]), []).append(r["solved"])
     print("\nsolved by family: " + "; ".join(f"{fam} {f:g}" + f" band {b:g}" + (f" restarts {u}" if u else "")
-                                            + (f" step {x:g}" if x != 1 else "") + f": {sum(v)}/{len(v)}"
+                                            + (f" step {x:g}" if x is not None else "") + f": {sum(v)}/{len(v)}"
                                             for (fam, f, b, u, x), v in by_family.items()))
     return 0
 
