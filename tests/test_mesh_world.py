@@ -353,6 +353,19 @@ def test_past_a_deadline_exact_checks_answer_blocked_and_only_then(hole_world):
     assert w.check_motion(a, b)
 
 
+def test_past_a_deadline_a_run_of_short_motions_answers_blocked_within_the_looks_interval(hole_world):
+    w = hole_world
+    a, b = [2, 4.55, 5, 0, 0, 0], [2.05, 4.55, 5, 0, 0, 0]  # a few poses near the hole's side: never a look of its own
+    assert len(w.motion_poses(a, b)) < mesh_kernels.DEADLINE_EVERY and w.check_motion(a, b)
+    w.set_deadline(0.0, lambda: 1.0)
+    try:
+        answers = [w.check_motion(a, b) for _ in range(mesh_kernels.DEADLINE_EVERY + 1)]
+    finally:
+        w.set_deadline(None)
+    assert not all(answers)  # the poses count across motions towards the next look
+    assert w.check_motion(a, b)
+
+
 def test_motion_poses_are_the_poses_checked(hole_world):
     a, b = [2, 5, 5, 0.1, 0, 3.0], [8, 5, 5, 0, 0, -3.0]  # across +-pi, the short way
     P = hole_world.motion_poses(a, b)

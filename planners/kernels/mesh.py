@@ -26,14 +26,16 @@ of them in one walk of the two trees, ``sets_clearance``, which a motion's walk 
 triangles that last set its margin). Before the walk, the same test with no margin at a few interior poses
 (``PROBE_FRACTIONS``; those whose bounding sphere the grid clears left out) finds most blocked motions; a pose in
 contact would make the walk fail as well. The far end, often in contact, tries the lowest margin first; the walk's
-poses, rarely in contact, the largest. Every test runs in compiled code; the walk looks at its planner's deadline
-every ``DEADLINE_EVERY`` poses (through numba's object mode, the world registered under an integer id that ``params``
-carry).
+poses, rarely in contact, the largest. Every test runs in compiled code; the checks look at their planner's deadline
+every ``DEADLINE_EVERY`` poses, counted across motions (far ends, probes and the walk's poses alike, so a run of short
+motions looks as often as one long one), through numba's object mode, the world registered under an integer id that
+``params`` carry; past it a check answers "blocked".
 
 ``params`` of a mesh world: ``[xlo, ylo, zlo, xhi, yhi, zhi, delta, radius, world id, gx, gy, gz,
-h, nx, ny, nz, cover, c1, c2, c3, c4, band]``: the bounds of the body's origin, the motion resolution, the
+h, nx, ny, nz, cover, c1, c2, c3, c4, band, ticks]``: the bounds of the body's origin, the motion resolution, the
 body's radius (largest distance of a body vertex from its origin), the id, the grid's corner, voxel
-side and shape, the cover radius of the body's cover points, where the parts of ``body`` end, and the band. The
+side and shape, the cover radius of the body's cover points, where the parts of ``body`` end, the band, and the poses
+checked since the deadline was last looked at (the one entry the checks write). The
 grid travels as ``(nx, ny * nz)`` uint8 (``grid``), the cover points' clusters as ``geom``, and ``body``
 holds, as rows of three, the cover points (to row ``c1``), the body's sphere tree (to ``c2``,
 ``triangles.sphere_nodes``), its triangles in that tree's order (to ``c3``), the environment's box tree
@@ -58,7 +60,8 @@ P_GRID = 9
 P_COVER = 16
 P_PARTS = 17
 P_BAND = 21
-N_PARAMS = 22
+P_TICKS = 22
+N_PARAMS = 23
 
 #: The margins, in multiples of ``delta / 2``, at which ``exact_clearance`` tests a pose, largest first, those above
 #: the world's band; then the band itself, raised by a relative ``BAND_RAISE`` so that a pose it clears has a
@@ -69,7 +72,8 @@ BAND_RAISE = 1.0 + 2.0 ** -30
 #: Cover points ``clearance_bound`` reads between its looks at whether the least bound so far settles the answer.
 LEAST_RUN = 16
 
-#: The walk looks at its planner's deadline (``MeshWorld.set_deadline``) every this many poses.
+#: The motion checks look at their planner's deadline (``MeshWorld.set_deadline``) every this many poses, counted
+#: across motions (``params[P_TICKS]``): a short motion's few poses count towards the next look too.
 DEADLINE_EVERY = 16
 
 #: The worlds' deadline keepers, by id: objects with ``past_deadline() -> bool`` (``MeshWorld.set_deadline``).
@@ -371,6 +375,17 @@ def _past_deadline(params):
 
 
 @nb.njit(cache=True, no_cfunc_wrapper=True)
+def _tick_past_deadline(params, poses):
+    """Count ``poses`` more checked poses; at every ``DEADLINE_EVERY``-th, whether the deadline has passed."""
+    ticks = params[P_TICKS] + poses
+    if ticks < DEADLINE_EVERY:
+        params[P_TICKS] = ticks
+        return False
+    params[P_TICKS] = 0.0
+    return _past_deadline(params)
+
+
+@nb.njit(cache=True, no_cfunc_wrapper=True)
 def mesh_motion_free(grid, body, clusters, params, a, b):
     """True if the motion a -> b keeps the body clear of the environment (see the module docs).
 
@@ -390,11 +405,15 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
     # the low-first choice as np.bool_, a value: a constant True or False would compile _pose_clearance once each;
     # the exact test's hint passes from pose to pose (``sets_clearance``)
     hint = np.full(2, -1, dtype=np.int64)
+    if _tick_past_deadline(params, 1.0):  # past the deadline a check answers "blocked" (module docs)
+        return False
     cb = _pose_clearance(grid, body, clusters, params, b, margin, np.bool_(True), hint)
     if not cb > margin:
         return False
     q = np.empty(6)
     if n >= PROBE_MIN_PIECES:
+        if _tick_past_deadline(params, float(PROBE_FRACTIONS.shape[0])):
+            return False
         # the probes: the contact test at the poses PROBE_FRACTIONS places, those whose bounding sphere the grid
         # proves free left out (the cover points' bound costs a free pose more than the contact test does)
         for f in PROBE_FRACTIONS:
@@ -406,14 +425,12 @@ def mesh_motion_free(grid, body, clusters, params, a, b):
     island_lo = island_hi = -1.0  # a stretch covered by a pose whose guess left a gap
     last = 0.0  # the travel of the last pose that extended the covered stretch
     s = 0.0
-    placed = 0
     while True:
         interpolate(SPACE_RIGID, a, b, s / length, q)
         c = _pose_clearance(grid, body, clusters, params, q, margin, np.bool_(False), hint)
         if not c > margin:
             return False
-        placed += 1
-        if placed % DEADLINE_EVERY == 0 and _past_deadline(params):
+        if _tick_past_deadline(params, 1.0):
             return False
         if covered < 0.0 or s - c < covered:
             covered = s + c
