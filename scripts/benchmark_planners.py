@@ -230,12 +230,13 @@ def rigid(args) -> int:
     head = ("| problem | planner | runs | time limit (s) | success | median time (s) | ours / OMPL | median tree "
             "states | median checks | time per iteration (us) |\n|---|---|---|---|---|---|---|---|---|---|\n")
     out = io.StringIO()
+    step = MESH_RANGE_FRACTION if args.rigid_step is None else args.rigid_step * DEFAULT_RANGE_FRACTION
     out.write(f"# RRT-Connect and RRT on OMPL.app's problems\n\n{platform.processor() or platform.machine()}, "
-              f"Python {platform.python_version()}, our default step ({MESH_RANGE_FRACTION:g} of the state box's "
-              f"diagonal; OMPL's keep their default range, {DEFAULT_RANGE_FRACTION:g} of the space's extent), RRT's "
-              f"goal bias 0.05, seeds 0 to runs - 1; time excludes compilation; 'ours / OMPL' is the ratio of the "
-              f"median times of the same planner, where both solve at least half the runs; time per iteration is the "
-              f"median over runs of the solve's own time (a sampler's set-up is in the median time only).\n\n" + head)
+              f"Python {platform.python_version()}, our step {step:g} of the state box's diagonal (OMPL's keep "
+              f"their default range, {DEFAULT_RANGE_FRACTION:g} of the space's extent), RRT's goal bias 0.05, seeds 0 "
+              f"to runs - 1; time excludes compilation; 'ours / OMPL' is the ratio of the median times of the same "
+              f"planner, where both solve at least half the runs; time per iteration is the median over runs of the "
+              f"solve's own time (a sampler's set-up is in the median time only).\n\n" + head)
     print(out.getvalue(), end="", flush=True)
     records: list[benchmark.Run] = []
     logs: list[tuple] = []
@@ -256,10 +257,13 @@ def rigid(args) -> int:
             planner_name, kwargs = benchmark.SETUPS[label]
             for sampler_name in samplers:
 
-                def arguments(planner_name=planner_name, kwargs=kwargs, sampler_name=sampler_name):
+                def arguments(planner_name=planner_name, kwargs=kwargs, sampler_name=sampler_name, task=task):
                     kw = kwargs()
                     if sampler_name is not None:  # in place of the set-up's own sampling (RRT's goal bias)
                         kw["sampler"] = make_sampler(sampler_name)
+                    if args.rigid_step is not None:  # shares of OMPL's range, in place of the world's default step
+                        low, high = task.problem.world.bounds
+                        kw["step_size"] = args.rigid_step * DEFAULT_RANGE_FRACTION * float(np.linalg.norm(high - low))
                     return kw
 
                 make_planner(planner_name, task.problem, seed=0, **arguments()).solve(max_iterations=2)  # compile
@@ -340,6 +344,9 @@ def main(argv=None) -> int:
     ap.add_argument("--rigid-restarts", type=int, default=0, metavar="UNIT",
                     help="our runs restart after Luby's sequence times UNIT iterations (planners.solve_with_restarts; "
                          "OMPL's do not); 0: none")
+    ap.add_argument("--rigid-step", type=float, metavar="SHARE",
+                    help="our trees' step as this share of OMPL's default range (default: the mesh world's own, 0.1 "
+                         "of it)")
     ap.add_argument("--rigid-ompl", action="store_true",
                     help="OMPL's planners beside ours (OMPL.app's discrete motion check, our state check)")
     add_backend_arguments(ap, processes=1,
@@ -363,6 +370,8 @@ def main(argv=None) -> int:
         if args.rigid_time_limit is not None:
             check_number("command line", "--rigid-time-limit", args.rigid_time_limit, low=0.0, low_open=True)
         check_int_flags(args, ("rigid_restarts",), low=0)
+        if args.rigid_step is not None:
+            check_number("command line", "--rigid-step", args.rigid_step, low=0.0, low_open=True)
         if args.rigid_samplers:
             from learning.samplers.registry import sampler_names
 

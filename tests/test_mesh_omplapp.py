@@ -321,6 +321,35 @@ def test_the_rigid_benchmark_writes_its_table_runs_and_planner_arena_logs(tmp_pa
     assert refused.value.code == 2
 
 
+def test_the_rigid_benchmark_takes_the_trees_step_as_a_share_of_ompls_range_when_asked(tmp_path):
+    import csv
+
+    from conftest import load_script
+
+    from planners import make_planner
+    from planners.base.world import DEFAULT_RANGE_FRACTION
+
+    folder = tmp_path / "problems"
+    folder.mkdir()
+    write_problem(folder)
+    bp = load_script("benchmark_planners")
+    out = tmp_path / "out"
+    argv = ["--rigid", str(folder), "--rigid-runs", "2", "--rigid-time-limit", "10", "--out", str(out),
+            "--rigid-planners", "RRTConnect", "--rigid-step", "1"]
+    assert bp.main(argv) == 0
+    rows = list(csv.DictReader((out / "rigid_runs.csv").open()))
+    problem = load_omplapp_cfg(folder / "hole.cfg")
+    low, high = problem.world.bounds
+    step = DEFAULT_RANGE_FRACTION * float(np.linalg.norm(high - low))
+    for seed, row in enumerate(rows):  # the run is the planner's at OMPL's range, iteration for iteration
+        r = make_planner("RRTConnect", problem, seed=seed, step_size=step).solve(time_limit=10.0)
+        assert row["solved"] == "True" and int(row["iterations"]) == r.iterations
+    assert "our step 0.2 of the state box's diagonal" in (out / "rigid.md").read_text()
+    with pytest.raises(SystemExit) as refused:  # refused before any run
+        bp.main(argv[:-1] + ["0"])
+    assert refused.value.code == 2
+
+
 def test_the_rigid_benchmark_restarts_our_runs_when_asked(tmp_path):
     import csv
 
