@@ -83,6 +83,32 @@ def write_problem(folder, theta=0.5, name="hole"):
     return path
 
 
+def write_offset_problem(folder, name="offset"):
+    """``write_problem`` with its start off the hole's line: a tree's first connect does not solve it at once."""
+    path = write_problem(folder, name=name)
+    path.write_text(path.read_text().replace("start.y = 5\n", "start.y = 1.5\n").replace("start.z = 5\n",
+                                                                                          "start.z = 1.5\n"))
+    return path
+
+
+def run_rigid_benchmark(tmp_path, *flags):
+    """``benchmark_planners.py --rigid`` with RRT-Connect and ``flags`` on ``write_offset_problem``'s file, 2 runs:
+    the script, its arguments, its runs (rows of ``rigid_runs.csv``) and the problem."""
+    import csv
+
+    from conftest import load_script
+
+    folder = tmp_path / "problems"
+    folder.mkdir()
+    path = write_offset_problem(folder)
+    bp = load_script("benchmark_planners")
+    out = tmp_path / "out"
+    argv = ["--rigid", str(folder), "--rigid-runs", "2", "--rigid-time-limit", "10", "--out", str(out),
+            "--rigid-planners", "RRTConnect", *flags]
+    assert bp.main(argv) == 0
+    return bp, argv, list(csv.DictReader((out / "rigid_runs.csv").open())), load_omplapp_cfg(path)
+
+
 def test_a_problem_file_reads_into_a_mesh_problem(tmp_path):
     task = load_omplapp(write_problem(tmp_path))
     p = task.problem
@@ -322,54 +348,31 @@ def test_the_rigid_benchmark_writes_its_table_runs_and_planner_arena_logs(tmp_pa
 
 
 def test_the_rigid_benchmark_takes_the_trees_step_as_a_share_of_ompls_range_when_asked(tmp_path):
-    import csv
-
-    from conftest import load_script
-
     from planners import make_planner
     from planners.base.world import DEFAULT_RANGE_FRACTION
 
-    folder = tmp_path / "problems"
-    folder.mkdir()
-    write_problem(folder)
-    bp = load_script("benchmark_planners")
-    out = tmp_path / "out"
-    argv = ["--rigid", str(folder), "--rigid-runs", "2", "--rigid-time-limit", "10", "--out", str(out),
-            "--rigid-planners", "RRTConnect", "--rigid-step", "1"]
-    assert bp.main(argv) == 0
-    rows = list(csv.DictReader((out / "rigid_runs.csv").open()))
-    problem = load_omplapp_cfg(folder / "hole.cfg")
+    bp, argv, rows, problem = run_rigid_benchmark(tmp_path, "--rigid-step", "1")
     low, high = problem.world.bounds
     step = DEFAULT_RANGE_FRACTION * float(np.linalg.norm(high - low))
     for seed, row in enumerate(rows):  # the run is the planner's at OMPL's range, iteration for iteration
         r = make_planner("RRTConnect", problem, seed=seed, step_size=step).solve(time_limit=10.0)
         assert row["solved"] == "True" and int(row["iterations"]) == r.iterations
-    assert "our step 0.2 of the state box's diagonal" in (out / "rigid.md").read_text()
+    assert "our step 0.2 of the state box's diagonal" in (tmp_path / "out" / "rigid.md").read_text()
     with pytest.raises(SystemExit) as refused:  # refused before any run
         bp.main(argv[:-1] + ["0"])
     assert refused.value.code == 2
 
 
 def test_the_rigid_benchmark_restarts_our_runs_when_asked(tmp_path):
-    import csv
-
-    from conftest import load_script
-
     from planners import solve_with_restarts
 
-    folder = tmp_path / "problems"
-    folder.mkdir()
-    write_problem(folder)
-    bp = load_script("benchmark_planners")
-    out = tmp_path / "out"
-    argv = ["--rigid", str(folder), "--rigid-runs", "2", "--rigid-time-limit", "10", "--out", str(out),
-            "--rigid-planners", "RRTConnect", "--rigid-restarts", "2"]
-    assert bp.main(argv) == 0
-    rows = list(csv.DictReader((out / "rigid_runs.csv").open()))
+    bp, argv, rows, problem = run_rigid_benchmark(tmp_path, "--rigid-restarts", "2")
     assert [r["planner"] for r in rows] == ["RRTConnect, Luby restarts x 2"] * 2
-    problem = load_omplapp_cfg(folder / "hole.cfg")
+    restarted = 0
     for seed, row in enumerate(rows):  # the run is solve_with_restarts' own, iteration for iteration
         r = solve_with_restarts("RRTConnect", problem, seed=seed, unit=2, time_limit=10.0)
         assert row["solved"] == "True" and int(row["iterations"]) == r.iterations
+        restarted += r.restarts
+    assert restarted >= 1  # the runs restarted
     with pytest.raises(SystemExit):
         bp.main(argv[:-1] + ["-1"])

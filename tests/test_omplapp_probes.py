@@ -99,7 +99,7 @@ def test_the_long_runs_table_counts_an_unsolved_run_beyond_every_solved_one():
 def test_the_long_runs_solve_a_small_problem_file_and_refuse_bad_arguments(tmp_path):
     pytest.importorskip("fcl", reason="the probe plans with FCL (the mesh extra)")
     pytest.importorskip("trimesh", reason="the mesh extra")
-    from test_mesh_omplapp import write_problem
+    from test_mesh_omplapp import write_offset_problem, write_problem
 
     long_runs = load_script("experiments/omplapp_long_runs")
     write_problem(tmp_path, name="hole")
@@ -113,11 +113,7 @@ def test_the_long_runs_solve_a_small_problem_file_and_refuse_bad_arguments(tmp_p
                            "--samplers", "rigid_route_ablation", "--out", str(out)]) == 0
     rows = [json.loads(line) for line in out.read_text().splitlines()]
     assert [r["variant"] for r in rows] == ["ours, delta 0.001 of the diagonal, rigid_route_ablation"]
-    # a start off the hole's line: at a mesh world's short step the first connect through the hole solves "hole" at
-    # once, and a restart needs a run of more than one unit
-    offset = write_problem(tmp_path, name="offset")
-    offset.write_text(offset.read_text().replace("start.y = 5\n", "start.y = 1.5\n").replace("start.z = 5\n",
-                                                                                              "start.z = 1.5\n"))
+    write_offset_problem(tmp_path)  # the first connect through the hole solves "hole" at once: nothing to restart
     assert long_runs.main(["--omplapp", str(tmp_path), "--problem", "offset", "--seeds", "1", "--luby", "3",
                            "--out", str(out)]) == 0
     (row,) = [json.loads(line) for line in out.read_text().splitlines()]
