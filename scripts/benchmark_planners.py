@@ -221,6 +221,7 @@ def rigid(args) -> int:
     samplers = [None] + list(args.rigid_samplers or ())  # None: the set-up's own sampling
     if args.rigid_samplers:
         from learning.samplers.registry import make_sampler
+    from planners.algorithms.rrt import diagonal_step
     from planners.base.world import DEFAULT_RANGE_FRACTION
     from planners.worlds.mesh import MESH_RANGE_FRACTION
 
@@ -262,8 +263,7 @@ def rigid(args) -> int:
                     if sampler_name is not None:  # in place of the set-up's own sampling (RRT's goal bias)
                         kw["sampler"] = make_sampler(sampler_name)
                     if args.rigid_step is not None:  # shares of OMPL's range, in place of the world's default step
-                        low, high = task.problem.world.bounds
-                        kw["step_size"] = args.rigid_step * DEFAULT_RANGE_FRACTION * float(np.linalg.norm(high - low))
+                        kw["step_size"] = diagonal_step(task.problem, args.rigid_step * DEFAULT_RANGE_FRACTION)
                     return kw
 
                 make_planner(planner_name, task.problem, seed=0, **arguments()).solve(max_iterations=2)  # compile

@@ -29,14 +29,18 @@ def max_steps_limit() -> int:
     return env_limit(MAX_STEPS_ENV, DEFAULT_MAX_STEPS)
 
 
+def diagonal_step(problem: Problem, fraction: float) -> float:
+    """``fraction`` of the diagonal of the problem's sampling box: a step given as OMPL gives its default range."""
+    low, high = problem.world.bounds
+    return fraction * float(np.linalg.norm(np.asarray(high, dtype=float) - np.asarray(low, dtype=float)))
+
+
 def default_step(problem: Problem, step_size: float | None) -> float:
     """Validate ``step_size``; None means the world's ``range_fraction`` of the sampling box's diagonal (0.2, OMPL's
     default range, unless the world sets its own: a mesh world's is 0.02).
     """
-    if step_size is None:
-        low, high = problem.world.bounds
-        fraction = getattr(problem.world, "range_fraction", DEFAULT_RANGE_FRACTION)  # a world of the user's own may not
-        return fraction * float(np.linalg.norm(np.asarray(high) - np.asarray(low)))
+    if step_size is None:  # a world of the user's own may not set a fraction
+        return diagonal_step(problem, getattr(problem.world, "range_fraction", DEFAULT_RANGE_FRACTION))
     try:
         step = float(step_size)
     except (TypeError, ValueError):

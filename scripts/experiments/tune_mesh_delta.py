@@ -75,11 +75,10 @@ def _run(task: tuple) -> dict:
                 "refused": problem}
 
     def kwargs() -> dict:  # a fresh sampler for each run (bound in the timed run), the step asked
+        from planners.algorithms.rrt import diagonal_step
         from planners.base.world import DEFAULT_RANGE_FRACTION
 
-        low, high = problem.world.bounds
-        ompl_range = DEFAULT_RANGE_FRACTION * float(np.linalg.norm(np.asarray(high) - np.asarray(low)))
-        out = {} if step_share is None else {"step_size": step_share * ompl_range}
+        out = {} if step_share is None else {"step_size": step_share * diagonal_step(problem, DEFAULT_RANGE_FRACTION)}
         if sampler == "uniform":
             return out
         from learning.samplers.registry import make_sampler
