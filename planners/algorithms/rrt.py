@@ -47,8 +47,7 @@ def default_step(problem: Problem, step_size: float | None) -> float:
         raise ValueError(f"step_size must be a positive number, got {step_size!r}") from None
     if not math.isfinite(step) or step <= 0:
         raise ValueError(f"step_size must be a positive finite number, got {step_size!r}")
-    low, high = problem.world.bounds
-    diag = float(np.linalg.norm(np.asarray(high, dtype=float) - np.asarray(low, dtype=float)))
+    diag = diagonal_step(problem, 1.0)
     limit = max_steps_limit()
     if diag / step > limit:
         raise InputError(f"step_size = {step:g} is {diag / step:.3g} steps across the map's diagonal ({diag:g}); "
