@@ -20,6 +20,7 @@ import torch
 from torch import nn
 
 from learning.models.checkpoint import load_finite_state, read_config_state
+from learning.models.threads import planning_threads
 from planners.base.fileio import InputError, short_repr
 from planners.guidance.rigid_orientation import N_CLASSES, PATCH_HALF
 
@@ -88,4 +89,5 @@ def load_orientation_net(path: str | os.PathLike) -> OrientationNet:
     unknown = sorted(set(config) - {"half", "channels", "hidden"})
     if unknown:
         raise InputError(f"{path}: config has unknown keys {short_repr(unknown)}")
-    return load_finite_state(OrientationNet(**config), state, path, "the config")
+    with planning_threads():  # a sampler loads it per query set: as it plans (two processes side by side)
+        return load_finite_state(OrientationNet(**config), state, path, "the config")

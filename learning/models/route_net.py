@@ -28,6 +28,7 @@ from learning.models.field import (  # re-exported (``__all__``): where users of
     unturn,
 )
 from learning.models.route_vin import RouteVIN
+from learning.models.threads import planning_threads
 from planners.base.fileio import InputError, atomic_write_bytes, atomic_write_text, output_set, short_repr
 
 __all__ = ["BATCH_BYTES", "BYTES_PER_BLOCK", "GOAL_CHANNELS", "KINDS", "MAX_BLOCKS", "MAX_BLOCKS_ENV",
@@ -223,8 +224,9 @@ def load_route_net(path: str | os.PathLike) -> RouteNet | RouteVIN:
             raise InputError(f"{path}: config {key} = {short_repr(v)}, expected an integer in [{lo}, {hi}]")
     shape = tuple(config[k] for k in ("kind", "block", "channels", "depth", "attention", "attention_level",
                                       "trained_side", "step"))
-    try:
-        net = make_route_net(*shape)
-    except ValueError as exc:
-        raise InputError(f"{path}: config {exc}") from None
-    return load_finite_state(net, state, path, f"{type(net).__name__}{shape[1:6]}")
+    with planning_threads():  # built at the planning thread count, as it plans (two processes side by side)
+        try:
+            net = make_route_net(*shape)
+        except ValueError as exc:
+            raise InputError(f"{path}: config {exc}") from None
+        return load_finite_state(net, state, path, f"{type(net).__name__}{shape[1:6]}")
