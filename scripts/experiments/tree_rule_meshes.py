@@ -253,7 +253,10 @@ def main(argv=None) -> int:
     tasks = [(src, planner, seed, item, args.time_limit, args.setup) for src in sources for planner in args.planners
              for seed in range(args.seeds) for item in rules.items()]
     rows = []
-    with ProcessPoolExecutor(args.processes) as pool:  # rules interleaved, so every rule sees the same load
+    from learning.evaluation.runner import worker_init
+
+    # rules interleaved, so every rule sees the same load; one torch thread per worker, as the evaluation's workers
+    with ProcessPoolExecutor(args.processes, initializer=worker_init) as pool:
         for row in pool.map(_run, tasks):
             rows.append(row)
             print(json.dumps(row), flush=True)
