@@ -126,14 +126,18 @@ def test_the_route_samplers_plan_a_mesh_world_seeded(world):
 
 def test_on_a_mesh_world_every_planner_takes_the_roadmaps_rule_and_a_users_setting_holds(world):
     from learning.samplers.registry import make_sampler
-    from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS
+    from learning.samplers.rigid_route import SHIPPED_RIGID_ROADMAP, SHIPPED_RIGID_SETTINGS, TREES_KEEP
     from planners.worlds.rigid_scenes import rigid_scene
 
     problem = Problem(world, np.array([2.0, 2.0, 8.0, 0, 0, 0]), np.array([8.0, 8.0, 2.0, 0, 0, 0]),
                       goal_tolerance=0.5)
     for name in ("RRT", "RRTConnect", "PRM"):
         bound = make_planner(name, problem, seed=0, sampler=make_sampler("rigid_route")).sampler
-        assert all(getattr(bound, k) == v for k, v in SHIPPED_RIGID_ROADMAP.items() if k != "uniform_ramp"), name
+        ours = {**SHIPPED_RIGID_ROADMAP, **({} if name == "PRM" else
+                                            {k: SHIPPED_RIGID_SETTINGS[k] for k in TREES_KEEP})}
+        assert all(getattr(bound, k) == v for k, v in ours.items() if k != "uniform_ramp"), name
+        # a tree keeps its uniform floor; a roadmap draws every sample on the route
+        assert (bound.route_fraction < 1) == (name != "PRM"), name
         assert bound.refs.shape == (len(bound.route), 3, 3)
         # the trees turn to uniform angles as a query goes on; a roadmap keeps every sample and never does
         assert bound.uniform_ramp == (0.0 if name == "PRM" else SHIPPED_RIGID_ROADMAP["uniform_ramp"]), name
@@ -144,10 +148,32 @@ def test_on_a_mesh_world_every_planner_takes_the_roadmaps_rule_and_a_users_setti
     mine = make_sampler("rigid_route", symmetry="ends", angle_noise=0.2)
     bound = make_planner("RRTConnect", problem, seed=0, sampler=mine).sampler
     assert (bound.symmetry, bound.angle_noise) == ("ends", 0.2)
-    assert (bound.route_fraction, bound.uniform_share) == (SHIPPED_RIGID_ROADMAP["route_fraction"],
+    assert (bound.route_fraction, bound.uniform_share) == (SHIPPED_RIGID_SETTINGS["route_fraction"],
                                                           SHIPPED_RIGID_ROADMAP["uniform_share"])
+    assert make_planner("PRM", problem, seed=0, sampler=mine).sampler.route_fraction == 1.0
     # the sampler handed over is unchanged: as given, the rest the trees'
     assert (mine.symmetry, mine.route_fraction) == ("ends", SHIPPED_RIGID_SETTINGS["route_fraction"])
+
+
+def test_a_tree_on_a_mesh_world_comes_to_its_uniform_floor_over_the_ramp(world):
+    from learning.samplers.registry import make_sampler
+
+    problem = Problem(world, np.array([2.0, 2.0, 8.0, 0, 0, 0]), np.array([8.0, 8.0, 2.0, 0, 0, 0]),
+                      goal_tolerance=0.5)
+    floor = make_sampler("rigid_route", goal_share=0.0, uniform_ramp=1000).bind(problem)
+    # every sample on the route (a user's route_fraction holds), the same stream otherwise
+    plain = make_sampler("rigid_route", goal_share=0.0, uniform_ramp=1000, route_fraction=1.0).bind(problem)
+    assert (floor.route_fraction, plain.route_fraction) == (0.75, 1.0)
+    rng = np.random.default_rng(5)
+    q = np.concatenate([floor.draw(rng, 600, None), floor.draw(rng, 1400, None)])  # batches: the count runs on
+    p = plain.draw(np.random.default_rng(5), 2000, None)
+    uniform = np.any(q[:, :3] != p[:, :3], axis=1)  # the floor's uniform states: where the positions part
+    assert uniform[:200].mean() < 0.06 and 0.18 < uniform[1000:].mean() < 0.32  # from none to a quarter
+    assert np.array_equal(q[~uniform], p[~uniform])  # the route samples are the plain stream's, angles and all
+    # seeded; a new query starts the ramp again; a roadmap draws every sample on the route
+    again = make_sampler("rigid_route", goal_share=0.0, uniform_ramp=1000).bind(problem)
+    assert np.array_equal(again.draw(np.random.default_rng(5), 2000, None), q)
+    assert make_sampler("rigid_route").for_planner("roadmap").bind(problem).route_fraction == 1.0
 
 
 def test_the_learned_orientations_put_a_mesh_body_s_long_side_along_a_world_axis():

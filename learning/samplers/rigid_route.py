@@ -24,7 +24,8 @@ samples follow the trees, ``follow``, one compiled call per draw: ``planners.gui
   ``symmetry="chain_start"``, the roadmaps' rule, with every route sample on the route; ``for_planner``; or from
   both ends, ``"chain"``), turned by a random rotation of about ``angle_noise`` radians per axis (a Gaussian
   rotation vector);
-* else a uniform state.
+* else a uniform state (a tree on a mesh world: ``route_fraction`` rises to its own from the roadmap's over the
+  ``uniform_ramp``, ``TREES_KEEP``).
 
 Samples do not depend on the tree, so they come in batches. The orientation model learned on a box body
 among boxes (``RigidBodyWorld``); in a mesh world (``MeshWorld``) the classes carry over to the body by
@@ -76,7 +77,8 @@ SHIPPED_RIGID_SETTINGS = {"uniform_share": 0.1, "angle_noise": 0.1, "centre": 2,
 #: Route positions are drawn 1 + 16 times as densely where the route's patch is solid (``passage_weight``): more
 #: samples in the passages, fewer in the open (PRM's tuning and validation scenes; the mesh trees' time too).
 #: The trees on mesh worlds turn their route samples to uniform angles over their first 4,000 samples
-#: (``uniform_ramp``; a roadmap drops it): on the twisted slot, a passage no class's rotation passes, they then solve
+#: (``uniform_ramp``; a roadmap drops it), and come to their own share of uniform states over it (``TREES_KEEP``):
+#: on the twisted slot, a passage no class's rotation passes, they then solve
 #: every tuning and validation run, and the training families as meshes, at the default step and at the seed
 #: project's small one (where the classes take thousands of samples and a 1,000-sample ramp lost), take 0.97 to 1.01
 #: of the time without the ramp. They compute the route at their first sample (``uniform_first`` 0): uniform states
@@ -97,6 +99,17 @@ SYMMETRY_RULES = ("random", "ends", "chain", "chain_start")
 #: The settings a roadmap may take apart from the trees' (``RigidRouteSampler``'s ``roadmap``).
 ROADMAP_SETTINGS = ("symmetry", "route_fraction", "uniform_share", "angle_noise", "passage_weight", "uniform_ramp",
                     "uniform_first", "stall_window", "follow", "follow_share")
+#: What the trees keep of their own settings where they take the roadmaps' (on a mesh world): their uniform states
+#: (``route_fraction``: a roadmap draws every sample on the route, a tree a quarter of them uniformly), which with a
+#: ``uniform_ramp`` come over the ramp, from the roadmap's none at the first sample to the tree's own share, so that a
+#: query the classes do not solve soon comes to the ablation's samples, positions as well as angles. A tree held to
+#: the workspace route by every sample stays where that route misleads the body: on OMPL.app's Apartment (a tuning
+#: problem), at a mesh world's default step, RRT-Connect with every sample on the route solved 1 of 8 runs within 20 s,
+#: with the floor over the ramp 6 (uniform sampling 7); on the training families as meshes and the twisted slot the
+#: same runs solved in 0.80 to 1.11 of the time (tuning part) and 0.98 to 1.05 (validation part). A floor from the
+#: first sample solved 6 of 8 too but took 1.18 and 1.30 of the time on the validation slots
+#: (``scripts/experiments/tree_rule_meshes.py``; ``docs/rigid-scenes.md``, "The trees' floor").
+TREES_KEEP = ("route_fraction",)
 #: Most samples one draw returns where the draws follow the trees (``follow``): the window moves at least this often.
 FOLLOW_BATCH = 64
 
@@ -173,8 +186,9 @@ class RigidRouteSampler(SamplerBase):
             stays ``uniform_share``): the ``k``-th sample the sampler draws for its query (counted from the route's
             first, after ``uniform_first``) takes uniform angles with
             probability ``uniform_share + (1 - uniform_share) * min(1, k / uniform_ramp)``, so a query the model's
-            classes do not solve soon comes to the ablation's angles. A roadmap planner keeps every sample it draws
-            and ignores it (``for_planner``).
+            classes do not solve soon comes to the ablation's angles; on a mesh world a tree's share of uniform
+            states comes over the same ramp (``TREES_KEEP``). A roadmap planner keeps every sample it draws and
+            ignores it (``for_planner``).
         uniform_first: Samples a tree draws before the route (a tree's; 0: none): the first ``uniform_first`` samples
             of a query are uniform states (the goal with probability ``goal_share``), and the route, its centring and
             the model's pass are computed at the first sample after them, so a query that uniform sampling solves
@@ -200,8 +214,10 @@ class RigidRouteSampler(SamplerBase):
         follow_share: With ``follow``, the probability in [0, 1] that a route sample is drawn in the trees' windows;
             the others are drawn along the whole route, as without ``follow``.
         roadmap: Settings a roadmap (PRM, Lazy-PRM, OB-PRM) takes instead of the ones above (``for_planner``), and
-            every planner on a mesh world (at ``bind``): any of ``ROADMAP_SETTINGS`` (``make_sampler`` gives the
-            validated ``SHIPPED_RIGID_ROADMAP``).
+            every planner on a mesh world (at ``bind``), but a tree's ``route_fraction`` (``TREES_KEEP``: a tree
+            keeps its uniform floor; with a ``uniform_ramp`` and no ``follow`` it starts at the roadmap's share of
+            route samples and comes to its own over the ramp): any of ``ROADMAP_SETTINGS`` (``make_sampler`` gives
+            the validated ``SHIPPED_RIGID_ROADMAP``).
     """
 
     def __init__(self, net, route_fraction: float = 0.75, uniform_share: float = 0.1, angle_noise: float = 0.1,
@@ -263,22 +279,27 @@ class RigidRouteSampler(SamplerBase):
         if family != FAMILY_ROADMAP or not (self.roadmap or self.uniform_ramp or self.uniform_first or self.follow):
             return self
         out = copy.copy(self)
-        out._take_roadmap()
+        out._take_roadmap(())
         out.uniform_ramp = 0.0  # a roadmap keeps every sample: no query is ever stuck on the ones it drew
         out.uniform_first = out.stall_window = out.follow = 0.0
         return out
 
-    def _take_roadmap(self) -> None:
-        """Take the ``roadmap`` settings in place of the trees' (once: they are then this sampler's own)."""
+    def _take_roadmap(self, keep: tuple[str, ...]) -> None:
+        """Take the ``roadmap`` settings in place of the trees', but ``keep`` (once: they are then this sampler's)."""
         for key, value in self.roadmap.items():
-            setattr(self, key, value)
+            if key not in keep:
+                setattr(self, key, value)
         self.roadmap = {}
 
     def _setup(self) -> None:
         world = route_world(self.problem.world, "RigidRouteSampler")
         self._drawn = 0  # samples drawn for this query (``uniform_ramp``, ``uniform_first``)
-        if not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too
-            self._take_roadmap()
+        self._route_from = None  # the share of route samples a tree's ramp starts from (None: no ramp of it)
+        if not hasattr(world, "boxes"):  # a mesh world: the trees take the roadmaps' settings too, but their floor
+            start = self.roadmap.get("route_fraction")
+            self._take_roadmap(TREES_KEEP)
+            if start is not None and start != self.route_fraction and self.uniform_ramp > 0 and self.follow == 0:
+                self._route_from = float(start)
         self._first = int(np.ceil(self.uniform_first))  # the uniform states before the route
         self.route = None
         if self._first == 0:
@@ -381,8 +402,16 @@ class RigidRouteSampler(SamplerBase):
         cls_u, sym_u, rot_z = u[:, 7 + d], u[:, 8 + d], box_muller(u[:, 9 + d:13 + d])[:, :3]
         pts = self._uniform(u[:, 2:2 + d])
         if self.arc[-1] > 0:
-            on = (u[:, 0] >= self.goal_share) & (u[:, 0] < self.goal_share + (1.0 - self.goal_share)
-                                                 * self.route_fraction)
+            if self.uniform_ramp > 0:  # each sample's place on the ramp
+                if self.stall_window > 0:  # the stall clock: it runs only while the trees stand still
+                    k = self._clock + (np.arange(n) if self._stalled else np.zeros(n))
+                else:
+                    k = self._drawn - self._first + np.arange(n)  # counted from the route's first sample
+                ramp = np.minimum(1.0, k / self.uniform_ramp)
+            fraction = self.route_fraction
+            if self._route_from is not None:  # a tree's floor comes over the ramp
+                fraction = self._route_from + (self.route_fraction - self._route_from) * ramp
+            on = (u[:, 0] >= self.goal_share) & (u[:, 0] < self.goal_share + (1.0 - self.goal_share) * fraction)
             s = u[on, 1] * self.warc[-1]
             i = np.clip(np.searchsorted(self.warc, s, side="right") - 1, 0, len(self.route) - 2)
             t = (s - self.warc[i]) / np.maximum(self.warc[i + 1] - self.warc[i], 1e-300)
@@ -391,11 +420,7 @@ class RigidRouteSampler(SamplerBase):
             near = i + (t >= 0.5)
             share = self.uniform_share
             if self.uniform_ramp > 0:
-                if self.stall_window > 0:  # the stall clock: it runs only while the trees stand still
-                    k = self._clock + (np.flatnonzero(on) if self._stalled else 0)
-                else:
-                    k = self._drawn - self._first + np.flatnonzero(on)  # counted from the route's first sample
-                share = share + (1.0 - share) * np.minimum(1.0, k / self.uniform_ramp)
+                share = share + (1.0 - share) * ramp[on]
             take = (u[on, 6 + d] >= share) & self.sure[near]
             learned, near = np.flatnonzero(on)[take], near[take]
             if len(learned):

@@ -14,13 +14,21 @@
         --rules roadmap --rule 'u2500={"uniform_first": 2500}' --rule 'u10000={"uniform_first": 10000}' --out FILE
     PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --families twist --part tuning --scenes 8 \\
         --seeds 2 --rules roadmap --rule 'f4={"follow": 4}' --rule 'g4h={"follow": 4, "follow_share": 0.5}' --out FILE
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --part tuning --scenes 4 --seeds 2 \\
+        --rules roadmap shipped --rule 'rf75={"route_fraction": 0.75}' --out FILE   # also --families twist --scenes 8
+    PYTHONPATH=$PWD python scripts/experiments/tree_rule_meshes.py --omplapp DIR --problems Apartment \\
+        --planners RRTConnect --seeds 8 --rules uniform roadmap shipped --rule 'rf75={"route_fraction": 0.75}' \\
+        --time-limit 20 --out FILE
 
 ``make_sampler("rigid_route")`` hands RRT and RRT-Connect the trees' rule (``SHIPPED_RIGID_SETTINGS``) on box worlds
 and a roadmap the roadmaps' (``SHIPPED_RIGID_ROADMAP``: the chain's rotation from the start, every route sample on the
 route, no uniform angles, no angle noise); on mesh worlds the trees take the roadmaps' rule too, as this script's runs
 chose, and turn their route samples to uniform angles over their first 4,000 samples (``uniform_ramp``, which a
-roadmap drops; chosen on the twisted slot and the families here). This runs the trees with each rule (``--rules``;
-``uniform``: the planner's own sampling; ``--rule NAME=JSON``: the roadmaps' rule with some settings changed) under a
+roadmap drops; chosen on the twisted slot and the families here), over which their share of uniform states comes from
+none to their own quarter (``TREES_KEEP``; chosen on Apartment, the slot and the families at a mesh world's step).
+This runs the trees with each rule (``--rules``; ``uniform``: the planner's own sampling; ``shipped``:
+``make_sampler("rigid_route")`` as it ships, whose mesh trees come to their own share of uniform states over the ramp;
+``--rule NAME=JSON``: the roadmaps' rule with some settings changed) under a
 time limit, on a part of the training box-scene families written as mesh worlds (``mesh_scene`` at the
 default motion resolution; a scene whose box witness meets its meshes is left out, as the mesh scene set leaves it
 out; ``--families twist``: the twisted slot below, a passage only a roll about the body's long axis passes), or
@@ -51,7 +59,7 @@ from planners.maps.generators import TUNING_SEED0, VALIDATION_SEED0
 #: a tree on a mesh world the roadmaps' rule. It draws along the whole route (``follow`` 0), as the runs the docs quote
 #: did, whatever a box world's trees take (``--rule`` asks ``follow`` of meshes).
 RULES = {"uniform": None, "trees": {**{k: SHIPPED_RIGID_SETTINGS[k] for k in ROADMAP_SETTINGS}, "follow": 0.0},
-         "roadmap": dict(SHIPPED_RIGID_ROADMAP)}
+         "roadmap": dict(SHIPPED_RIGID_ROADMAP), "shipped": {}}
 _PROBLEMS: dict = {}
 
 
