@@ -564,6 +564,11 @@ def as_mesh_scene(problem: Problem, delta: float | None = None, band: float | No
     unless one is given (``MeshWorld``'s ``delta``; ``band``, ``MeshWorld``'s, default ``delta / 8``).
     Checks are then exact on the body's whole surface, not on its points.
     """
+    return _mesh_problem(problem, _mesh_world(problem, delta, band))
+
+
+def _mesh_world(problem: Problem, delta: float | None, band: float | None):
+    """``as_mesh_scene``'s world: every box of ``problem``'s world as a closed mesh, the body's box as the robot."""
     from planners.worlds.mesh import MeshWorld
 
     world = problem.world
@@ -571,9 +576,12 @@ def as_mesh_scene(problem: Problem, delta: float | None = None, band: float | No
     verts = np.concatenate([v for v, _ in meshes]) if meshes else np.zeros((0, 3))
     faces = np.concatenate([f + 8 * i for i, (_, f) in enumerate(meshes)]) if meshes else np.zeros((0, 3), int)
     body = np.concatenate([world.body.min(axis=0), world.body.max(axis=0)])
-    mesh_world = MeshWorld((verts, faces), box_mesh(body), low=world.low3, high=world.high3,
-                           delta=world.delta if delta is None else delta, band=band,
-                           name=f"{problem.name}-mesh")
+    return MeshWorld((verts, faces), box_mesh(body), low=world.low3, high=world.high3,
+                     delta=world.delta if delta is None else delta, band=band, name=f"{problem.name}-mesh")
+
+
+def _mesh_problem(problem: Problem, mesh_world) -> Problem:
+    """``problem`` on ``mesh_world``: the same start, goal, tolerance and metric."""
     return Problem(mesh_world, problem.start, problem.goal, goal_tolerance=problem.goal_tolerance,
                    metric=problem.metric, name=f"{problem.name}-mesh")
 
@@ -589,14 +597,14 @@ def mesh_scene(family: str, seed: int, delta: float | None = None, band: float |
             reaches where its points did not), its start or goal included.
     """
     problem, witness = scene_with_witness(family, seed)
-    try:
-        mesh = as_mesh_scene(problem, delta, band)
-    except InputError as e:  # the start or the goal, the witness's ends, meets the mesh environment
+    world = _mesh_world(problem, delta, band)  # a bad delta or band is the world's InputError, not a refusal
+    ends = [name for name, q in (("start", problem.start), ("goal", problem.goal)) if not world.is_valid(q)]
+    if ends:  # checked before the problem, which would refuse them with an InputError
         raise RuntimeError(f"{problem.name}: the witness path of the box scene meets the mesh environment "
-                           f"at its ends ({e})") from e
-    if not mesh.world.path_valid(witness.path):
+                           f"at its ends (its {' and '.join(ends)})")
+    if not world.path_valid(witness.path):
         raise RuntimeError(f"{problem.name}: the witness path of the box scene meets the mesh environment")
-    return mesh
+    return _mesh_problem(problem, world)
 
 
 class MeshSceneSet:
