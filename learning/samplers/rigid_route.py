@@ -279,12 +279,12 @@ class RigidRouteSampler(SamplerBase):
         if family != FAMILY_ROADMAP or not (self.roadmap or self.uniform_ramp or self.uniform_first or self.follow):
             return self
         out = copy.copy(self)
-        out._take_roadmap(())
+        out._take_roadmap()
         out.uniform_ramp = 0.0  # a roadmap keeps every sample: no query is ever stuck on the ones it drew
         out.uniform_first = out.stall_window = out.follow = 0.0
         return out
 
-    def _take_roadmap(self, keep: tuple[str, ...]) -> None:
+    def _take_roadmap(self, keep: tuple[str, ...] = ()) -> None:
         """Take the ``roadmap`` settings in place of the trees', but ``keep`` (once: they are then this sampler's)."""
         for key, value in self.roadmap.items():
             if key not in keep:
