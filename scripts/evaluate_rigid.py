@@ -9,9 +9,13 @@
 
 Runs ``learning.evaluation.rigid.evaluate_rigid`` on a part of the scene set
 (``planners.worlds.rigid_scenes.RigidSceneSet``: every scene proved solvable first) and prints a
-table per planner and sampler, and one per family. Writes ``rows.json`` (every run), ``summary.md``
-(the tables) and ``scenes.json`` (the set's record) under ``--out``. Tune on ``tuning``, choose on
-``validation``; ``test`` is for the reported comparison only.
+table per planner and sampler, one per family, and the targets of each learned sampler per scene set and
+planner, marked held or not (``learning.evaluation.rigid.rigid_targets``; each OMPL.app problem its own set).
+Writes ``rows.json`` (every run), ``summary.md`` (the tables), ``scenes.json`` (the set's record),
+``ecdf-rigid.png`` and ``ecdf-rigid-time.png`` (the fraction of runs solved within n iterations and within t
+seconds, one panel per planner, one line per sampler) and ``passage.png`` (a solved run in 3-D: ``rigid_route``
+with RRT-Connect on a test-only family's scene where one solved, solved again from its seed) under ``--out``.
+Tune on ``tuning``, choose on ``validation``; ``test`` is for the reported comparison only.
 ``--mesh`` runs the test-only mesh set instead (``MeshSceneSet``: the test-only families written as
 meshes, and OMPL.app's problems from ``--omplapp`` or ``$SAMPLERGYM_OMPLAPP_DIR``; the ``mesh``
 extra); ``rigid_route`` runs there too, its box-trained classes carried to each body's own axes.
@@ -36,7 +40,18 @@ from planners.worlds.rigid_scenes import TEST_ONLY_FAMILIES, TRAINING_FAMILIES
 
 
 def main(argv=None) -> int:
-    from learning.evaluation.rigid import PLANNERS, SAMPLERS, check_names, evaluate_rigid, format_table, summarize
+    from learning.evaluation.rigid import (
+        PLANNERS,
+        RIGID_FIGURES,
+        SAMPLERS,
+        check_names,
+        evaluate_rigid,
+        format_table,
+        rigid_targets,
+        save_rigid_figures,
+        summarize,
+        targets_markdown,
+    )
     from learning.samplers.registry import checked_user_samplers
     from planners.worlds.rigid_scenes import RigidSceneSet
 
@@ -126,14 +141,22 @@ def main(argv=None) -> int:
     text = (f"# {args.part} part: {args.scenes} scenes per family"
             + (f" from its scene {args.first_scene} on" if args.first_scene else "") + f", {args.seeds} seeds"
             + (f", runs restarting by Luby's sequence x {args.restarts} iterations" if args.restarts else "") + "\n\n"
-            "Times are wall-clock seconds on whatever machine ran this (compilation left out).\n\n"
-            f"{by_sampler}\n\n## By family\n\n{by_family}\n")
+            "Times are wall-clock seconds on whatever machine ran this (compilation left out), from building the "
+            "planner (the sampler's per-scene work and inference included) to the end of the solve.\n\n"
+            f"{by_sampler}\n\n## By family\n\n{by_family}\n\n## Targets\n\n"
+            f"{targets_markdown(rigid_targets(rows))}\n")
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(args.out / "rows.json", json.dumps([r.as_dict() for r in rows], indent=1) + "\n")
     atomic_write_text(args.out / "summary.md", text)
     atomic_write_text(args.out / "scenes.json", json.dumps(scenes.record(), indent=1) + "\n")
-    print(f"wrote {args.out}/rows.json, summary.md, scenes.json")
+    for name in RIGID_FIGURES:  # an earlier run's figures would pass for this one's where this one draws none
+        (args.out / name).unlink(missing_ok=True)
+    figures = save_rigid_figures(rows, args.out, scenes, sampler_params=sampler_params, user_samplers=users,
+                                 restarts=args.restarts)
+    drawn = [p.name for p in figures]
+    note = "" if RIGID_FIGURES[2] in drawn else " (no passage.png: no run solved again)"
+    print(f"wrote {args.out}/" + ", ".join(["rows.json", "summary.md", "scenes.json", *drawn]) + note)
     return 0
 
 

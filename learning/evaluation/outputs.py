@@ -22,7 +22,7 @@ from planners.tools.benchmark import (
 from planners.tools.benchmark_log import PlannerRuns, experiment_name, write_log
 
 
-def _wrap(text: str, width_in: float, fontsize: float) -> str:
+def wrap_text(text: str, width_in: float, fontsize: float) -> str:
     """``text`` wrapped to lines that fit ``width_in`` inches at ``fontsize`` points."""
     # a character of the default sans-serif font averages well under 0.6 em wide
     return textwrap.fill(text, max(12, int(width_in * 72 / (0.6 * fontsize))))
@@ -98,29 +98,50 @@ def ecdf_figure(runs: Sequence[Run], biases: dict, planner: str = "RRT", extra: 
     size = (4.2 * cols, 3.4 * nrows + 1.4)
     fig = new_figure(size)
     within = "n iterations" if metric == "iterations" else "t ms, the sampler's own work included"
-    fig.suptitle(_wrap(f"{planner} on the test split: fraction of queries solved within {within} (unsolved "
+    fig.suptitle(wrap_text(f"{planner} on the test split: fraction of queries solved within {within} (unsolved "
                        "runs never reach 1); best goal bias tuned on a separate split", size[0], 11), fontsize=11)
     colors = sampler_colors(extra)
     handles: dict = {}
     for i, fam in enumerate(fams):
         ax = fig.add_subplot(nrows, cols, i + 1)
         for role, s in _roles(biases, fam, planner, extra):
-            its = np.sort([(r.iterations if metric == "iterations" else r.wall_time * 1e3) if r.solved else math.inf
-                           for r in test if r.map == fam and r.sampler == s])
-            if len(its) == 0:
-                continue
             style = {"linestyle": "--"} if s in REFERENCES else {}
-            (line,) = ax.step(its, np.arange(1, len(its) + 1) / len(its), where="post", label=LEGEND.get(role, role),
-                              color=colors.get(role, "#7f7f7f"), **style)
-            handles.setdefault(LEGEND.get(role, role), line)
+            line = ecdf_line(ax, [(r.iterations if metric == "iterations" else r.wall_time * 1e3) if r.solved else None
+                                  for r in test if r.map == fam and r.sampler == s],
+                             label=LEGEND.get(role, role), color=colors.get(role, "#7f7f7f"), **style)
+            if line is not None:
+                handles.setdefault(LEGEND.get(role, role), line)
         ax.set_xscale("log")
-        ax.set_title(_wrap(fam, 4.0, 12))
+        ax.set_title(wrap_text(fam, 4.0, 12))
         ax.set_xlabel("iterations to solution" if metric == "iterations" else "time to solution (ms)")
         ax.set_ylabel("fraction solved")
         ax.grid(alpha=0.3)
     fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncols=min(6, len(handles)),
                fontsize=8)
     return fig
+
+
+def ecdf_line(ax, values: Sequence[float | None], *, start: float | None = None, end: float | None = None,
+              **style):
+    """Draw the ECDF of ``values`` on ``ax`` as a step line: the fraction of runs solved within each value.
+
+    ``None`` (or ``inf``) is a run that never solved: it counts in the runs but is never reached, so the line ends
+    below 1. ``start`` and ``end``: the line runs from 0 at ``start`` and on at its last fraction to ``end`` (the
+    axis' ends: so a single run, or none solved, still shows), else from the first value to the last one solved.
+    Returns the line, or None where there are no runs. ``style``: ``Axes.step``'s keywords (label, colour, style).
+    """
+    vals = np.sort([math.inf if v is None else float(v) for v in values])
+    if len(vals) == 0:
+        return None
+    frac = np.arange(1, len(vals) + 1) / len(vals)
+    if start is not None:
+        vals, frac = np.concatenate([[start], vals]), np.concatenate([[0.0], frac])
+    if end is not None:
+        solved = np.isfinite(vals)
+        last = frac[solved][-1] if solved.any() else 0.0
+        vals, frac = np.concatenate([vals[solved], [end]]), np.concatenate([frac[solved], [last]])
+    (line,) = ax.step(vals, frac, where="post", **style)
+    return line
 
 
 def medians_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, planner: str = "RRT",  # noqa: ARG001
@@ -148,7 +169,7 @@ def medians_figure(runs: Sequence[Run], rows: Sequence[dict], biases: dict, plan
     cols = max(1, len(names))
     size = (2.2 + 2.6 * cols, 6.4)
     fig = new_figure(size)
-    fig.suptitle(_wrap(f"{planner} on the test split, every run of a group pooled: median iterations (top) and "
+    fig.suptitle(wrap_text(f"{planner} on the test split, every run of a group pooled: median iterations (top) and "
                        "median time per query, the sampler's own work included (bottom); bars from the first to the "
                        "third quartile, unsolved runs counting as what they ran", size[0], 10), fontsize=10)
     for j, group in enumerate(names):

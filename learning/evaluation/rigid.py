@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -97,24 +97,12 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
     ``restarts``: a tree planner's run restarts after Luby's sequence times this many iterations
     (``planners.solve_with_restarts``, the cap over all attempts); 0: one run.
     """
-    from learning.samplers.registry import make_sampler, user_sampler
-
     if restarts and planner == "PRM":
         raise InputError("restarts are for the tree planners (RRT, RRTConnect): a roadmap would throw its samples away")
-    made = user_sampler(spec) if spec is not None else make_sampler(sampler, **(params or {}))
+    made = make_run_sampler(sampler, params, spec)
     cap = CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
     c0, t0 = compile_seconds(), time.perf_counter()
-    if restarts:
-        counted = []
-        p, kwargs = planner_setup(planner, problem)
-        result = solve_with_restarts(planner, p, seed=seed, unit=restarts, max_iterations=cap, sampler=made,
-                                     on_attempt=lambda pl: counted.append(int(getattr(pl.sampler, "checks", 0))),
-                                     **kwargs)
-        sampler_checks = sum(counted)
-    else:
-        pl, _ = build_planner(planner, problem, made, seed)
-        result = pl.solve(max_iterations=cap)
-        sampler_checks = int(getattr(pl.sampler, "checks", 0))
+    result, _, sampler_checks = solve_run(problem, planner, made, seed, max_iterations=cap, restarts=restarts)
     elapsed = time.perf_counter() - t0 - (compile_seconds() - c0)
     checks = int(result.collision_checks) + sampler_checks  # these planners leave the sampler's checks out
     return RigidRow(scene=problem.name if scene is None else scene.name,
@@ -122,6 +110,36 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
                     planner=planner, sampler=sampler, seed=int(seed), solved=bool(result.solved),
                     iterations=int(result.iterations), cap=int(cap), collision_checks=checks,
                     sampler_checks=sampler_checks, candidates=int(result.candidates), time=float(elapsed))
+
+
+def make_run_sampler(sampler: str, params: dict | None = None, spec: str | None = None):
+    """The sampler of a run: the registry's ``sampler`` with ``params``, or a user's ``spec`` (``run_one``)."""
+    from learning.samplers.registry import make_sampler, user_sampler
+
+    return user_sampler(spec) if spec is not None else make_sampler(sampler, **(params or {}))
+
+
+def solve_run(problem: Problem, planner: str, sampler, seed: int, *, max_iterations: int | None = None,
+              restarts: int = 0):
+    """``run_one``'s solve with a made ``sampler``, untimed: ``(PlanResult, the problem as planned, the sampler's own
+    collision checks)``.
+
+    Every run is seeded, so the same arguments give the same run: a row's path (the rows keep none) is had again
+    from its scene with a fresh sampler (``make_run_sampler``).
+    """
+    if restarts and planner == "PRM":
+        raise InputError("restarts are for the tree planners (RRT, RRTConnect): a roadmap would throw its samples away")
+    cap = CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
+    if restarts:
+        counted = []
+        p, kwargs = planner_setup(planner, problem)
+        result = solve_with_restarts(planner, p, seed=seed, unit=restarts, max_iterations=cap, sampler=sampler,
+                                     on_attempt=lambda pl: counted.append(int(getattr(pl.sampler, "checks", 0))),
+                                     **kwargs)
+        return result, p, sum(counted)
+    pl, _ = build_planner(planner, problem, sampler, seed)
+    result = pl.solve(max_iterations=cap)
+    return result, pl.problem, int(getattr(pl.sampler, "checks", 0))
 
 
 def check_names(planners: Sequence[str], samplers: Sequence[str], users: dict[str, str]) -> None:
@@ -348,10 +366,7 @@ class RigidPart:
                 + format_table(overall) + "\n\nBy scene set:\n\n"
                 + format_table(by_set, ("family", "planner", "sampler")))
         if targets:
-            text += ("\n\nTargets of each learned sampler, per scene set and planner (iterations at most "
-                     f"{VS_CLASSICAL:g}x the best classical option's and {VS_ABLATION:g}x the ablation's, success at "
-                     f"least theirs, time at most {TIME_VS_CLASSICAL:g}x the best classical option's):\n\n"
-                     + _targets_table(targets))
+            text += "\n\n" + targets_markdown(targets)
         return PartReport(text, findings(overall, targets))
 
 
@@ -387,7 +402,40 @@ def target_rows(by_set: Sequence[dict]) -> list[dict]:
     return out
 
 
-def _targets_table(targets: Sequence[dict]) -> str:
+def scene_set_of(row: RigidRow) -> str:
+    """The scene set an ``evaluate_rigid`` row's targets are judged on: its family, ``<family> (mesh)`` for a mesh
+    scene (as ``RigidQuery.map_set`` names it), ``OMPL.app <problem>`` for each of OMPL.app's problems (each its own
+    world, so each its own set).
+    """
+    if row.family == "omplapp":
+        return f"OMPL.app {row.scene}"
+    return f"{row.family} (mesh)" if row.scene.endswith("-mesh") else row.family
+
+
+def rigid_targets(rows: Sequence[RigidRow]) -> list[dict]:
+    """``target_rows`` of ``evaluate_rigid``'s rows, per scene set (``scene_set_of``) and planner: each learned
+    sampler's medians against the best classical option and its ablation, ``held`` True or False.
+
+    Empty where the runs hold no learned sampler or no classical option to judge it against.
+    """
+    labelled = [replace(r, family=scene_set_of(r)) for r in rows]
+    return target_rows(summarize(labelled, ("family", "planner", "sampler")))
+
+
+def targets_markdown(targets: Sequence[dict]) -> str:
+    """``target_rows``' rows as a paragraph naming the targets, the table (``held``: yes or no) and a tally."""
+    if not targets:
+        return ("Targets: none to judge (the runs hold no learned sampler, or no classical option "
+                f"({', '.join(CLASSICAL)}) to judge one against).")
+    held = sum(bool(t["held"]) for t in targets)
+    return ("Targets of each learned sampler, per scene set and planner (iterations at most "
+            f"{VS_CLASSICAL:g}x the best classical option's and {VS_ABLATION:g}x the ablation's, success at "
+            f"least theirs, time at most {TIME_VS_CLASSICAL:g}x the best classical option's):\n\n"
+            + targets_table(targets) + f"\n\nHeld on {held} of {len(targets)} scene sets and planners.")
+
+
+def targets_table(targets: Sequence[dict]) -> str:
+    """``target_rows``' rows as a Markdown table, the ratios to two decimals and ``held`` as yes or no."""
     head = ["scene set", "planner", "sampler", "best classical", "ablation", "iterations vs classical",
             "iterations vs ablation",
             "time vs classical", "success", "classical success", "ablation success", "held"]
@@ -423,3 +471,159 @@ def findings(overall: Sequence[dict], targets: Sequence[dict]) -> list[str]:
         held = sum(t["held"] for t in targets)
         out.append(f"The learned sampler's targets hold on {held} of {len(targets)} scene sets and planners.")
     return out
+
+
+# --- figures: the ECDFs of the runs and a solved passage in 3-D ---------------------------------------------------
+
+#: One colour per sampler of the 6-DoF comparison in every rigid figure (tab10); a user's samplers take
+#: ``learning.evaluation.outputs.EXTRA_COLORS`` in turn. The privileged reference is black and dashed.
+RIGID_COLORS = {"uniform": "#1f77b4", "goal_bias": "#ff7f0e", "gaussian": "#8c564b", "bridge_test": "#e377c2",
+                "obstacle_based": "#bcbd22", "rigid_workspace_route": "#17becf", "rigid_route_ablation": "#9467bd",
+                "rigid_route": "#d62728", "rigid_expert": "#000000"}
+#: The figures ``save_rigid_figures`` writes: the ECDFs of iterations and of time, and the solved passage.
+RIGID_FIGURES = ("ecdf-rigid.png", "ecdf-rigid-time.png", "passage.png")
+
+
+def rigid_ecdf_figure(rows: Sequence[RigidRow], metric: str = "iterations"):
+    """ECDF of iterations to solution per sampler (``metric="time"``: of time to solution), one panel per planner.
+
+    Every run of ``rows`` pooled (all scene sets); an unsolved run counts but is never reached, so a sampler's line
+    ends at its success rate. A run's time is ``RigidRow.time``: from building the planner (the sampler's per-scene
+    work, a learned sampler's inference included) to the end of the solve. One legend below the panels.
+    """
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    from learning.evaluation.outputs import EXTRA_COLORS, ecdf_line, wrap_text
+    from planners.viz.plotting import new_figure
+
+    if metric not in ("iterations", "time"):
+        raise ValueError(f"metric must be 'iterations' or 'time', got {metric!r}")
+    planners = list(dict.fromkeys(r.planner for r in rows))
+    samplers = list(dict.fromkeys(r.sampler for r in rows))
+    extra = iter(EXTRA_COLORS)
+    colors = {s: RIGID_COLORS.get(s) or next(extra, "#7f7f7f") for s in samplers}
+    cols = max(1, len(planners))
+    size = (4.2 * cols, 4.8)
+    fig = new_figure(size)
+    scenes = len({r.scene for r in rows})
+    within = "n iterations" if metric == "iterations" else "t seconds, the sampler's own work and inference included"
+    fig.suptitle(wrap_text(f"6-DoF scenes ({scenes} scenes, every run pooled): fraction of runs solved within {within} "
+                       "(unsolved runs never reached)", size[0], 11), fontsize=11)
+    handles: dict = {}
+    for i, planner in enumerate(planners):
+        ax = fig.add_subplot(1, cols, i + 1)
+        mine = [r for r in rows if r.planner == planner]
+        reached = [r.iterations if metric == "iterations" else r.time for r in mine if r.solved]
+        if reached:  # a log axis from below the first solved run to the cap (or the longest run's time)
+            end = max(r.cap for r in mine) if metric == "iterations" else max(r.time for r in mine)
+            span = (min(reached) / 1.5, max(end, max(reached)) * 1.2)
+            for s in samplers:
+                vals = [(r.iterations if metric == "iterations" else r.time) if r.solved else None
+                        for r in mine if r.sampler == s]
+                line = ecdf_line(ax, vals, start=span[0], end=span[1], label=s, color=colors[s],
+                                 **({"linestyle": "--"} if s in REFERENCES else {}))
+                if line is not None:
+                    handles.setdefault(s, line)
+            ax.set_xscale("log")
+            ax.set_xlim(*span)
+            ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+            ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+            ax.xaxis.set_minor_formatter(NullFormatter())
+        else:
+            ax.text(0.5, 0.5, "no run solved", transform=ax.transAxes, ha="center", va="center")
+        ax.set_ylim(0.0, 1.02)
+        ax.set_title(planner)
+        ax.set_xlabel("iterations to solution" if metric == "iterations" else "time to solution (s)")
+        ax.set_ylabel("fraction of runs solved")
+        ax.grid(alpha=0.3)
+    if handles:
+        fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncols=min(5, len(handles)),
+                   fontsize=8)
+    return fig
+
+
+def passage_candidates(rows: Sequence[RigidRow]) -> list[RigidRow]:
+    """The solved runs in the order ``save_passage`` tries them: ``rigid_route`` first (then a user's or another
+    learned sampler, then the rest), a test-only family's scene first, RRT-Connect first, then the lowest seed and
+    the runs' order.
+    """
+    from planners.worlds.rigid_scenes import TEST_ONLY_FAMILIES
+
+    def rank(item):
+        k, r = item
+        plain = r.sampler in CLASSICAL or r.sampler in NO_LEARNING or r.sampler in REFERENCES
+        sampler = 0 if r.sampler == "rigid_route" else 2 if plain else 1
+        family = r.family.removesuffix(" (mesh)")
+        return (sampler, family not in TEST_ONLY_FAMILIES, r.planner != "RRTConnect", r.seed, k)
+
+    return [r for _, r in sorted(((k, r) for k, r in enumerate(rows) if r.solved), key=rank)]
+
+
+def _scene_problem(scene_set: RigidSceneSet | MeshSceneSet, row: RigidRow) -> Problem | None:
+    """The problem of ``row``'s scene in ``scene_set`` (by the scene's name, else the problem's), or None."""
+    queries = scene_set.queries(row.part or "test")
+    for q in queries:
+        if q.name == row.scene:
+            return scene_set.problem(q)
+    for q in queries:  # a comparison's rows name the problem (``Run.query``)
+        problem = scene_set.problem(q)
+        if problem.name == row.scene:
+            return problem
+    return None
+
+
+def save_passage(rows: Sequence[RigidRow], scene_set: RigidSceneSet | MeshSceneSet, path, *,
+                 sampler_params: dict[str, dict] | None = None, user_samplers: dict[str, str] | None = None,
+                 restarts: int = 0, tries: int = 3):
+    """A 3-D figure of a solved passage (``planners.viz.plotting3d.plot_scene``) written to ``path``; its path, or
+    None where no run solved (or none of the first ``tries`` candidates solves again).
+
+    The rows keep no paths, so the first of ``passage_candidates(rows)`` is solved again from its scene with its
+    planner, sampler (``sampler_params``, or ``user_samplers``' spec for a user's label) and seed, up to the
+    planner's own cap, and drawn. ``restarts``: as the runs were made (``evaluate_rigid``).
+    """
+    from learning.samplers.registry import sampler_names
+    from planners.viz.plotting import save_figure, wrap_title
+    from planners.viz.plotting3d import plot_scene
+
+    params, users = sampler_params or {}, user_samplers or {}
+    known = set(sampler_names())
+    candidates = [r for r in passage_candidates(rows) if r.sampler in users or r.sampler in known]
+    for row in candidates[:tries]:
+        problem = _scene_problem(scene_set, row)
+        if problem is None:
+            continue
+        made = make_run_sampler(row.sampler, params.get(row.sampler), users.get(row.sampler))
+        result, planned, _ = solve_run(problem, row.planner, made, row.seed,
+                                       restarts=0 if row.planner == "PRM" else restarts)
+        if not result.solved:
+            continue
+        fig = plot_scene(planned, result.path, size=(7.0, 7.0))
+        ax = fig.axes[0]
+        ax.set_title(wrap_title(ax, f"{row.scene}: {row.planner} with {row.sampler}, seed {row.seed} "
+                                    f"({int(result.iterations):,} iterations, a path of {len(result.path)} states)"))
+        return save_figure(fig, path, dpi=100)
+    return None
+
+
+def save_rigid_figures(rows: Sequence[RigidRow], out_dir, scene_set: RigidSceneSet | MeshSceneSet | None = None,
+                       **passage) -> list:
+    """Write ``ecdf-rigid.png`` and ``ecdf-rigid-time.png`` (``rigid_ecdf_figure``) and, given the runs'
+    ``scene_set`` and a solved run, ``passage.png`` (``save_passage``; ``passage``: its keywords) under ``out_dir``;
+    returns the paths written. Nothing where ``rows`` is empty.
+    """
+    from pathlib import Path
+
+    from planners.viz.plotting import save_figure
+
+    out_dir = Path(out_dir)
+    if not rows:
+        return []
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = [save_figure(rigid_ecdf_figure(rows), out_dir / RIGID_FIGURES[0], dpi=110),
+             save_figure(rigid_ecdf_figure(rows, "time"), out_dir / RIGID_FIGURES[1], dpi=110)]
+    if scene_set is not None:
+        drawn = save_passage(rows, scene_set, out_dir / RIGID_FIGURES[2], **passage)
+        if drawn is not None:
+            paths.append(drawn)
+    return paths
