@@ -8,7 +8,8 @@
     python scripts/evaluate.py --sampler mine=my_module:make_sampler               # any Sampler factory
     python scripts/evaluate.py --map-set my_maps/ --step 0.2                       # your own maps (world units)
     python scripts/evaluate.py --route mine=runs/route/route.pt                    # your encoder beside the shipped one
-    python scripts/evaluate.py --quick --other-planners all                        # every planner and sampler: 12 min
+    python scripts/evaluate.py --quick --other-planners                            # every planner and sampler: 12 min
+    python scripts/evaluate.py --other-planners none                               # the full run without RRT* and PRM
     python scripts/evaluate.py --quick --convergence                               # and RRT*'s cost convergence
     python scripts/evaluate.py --quick --other-planners PRM --later-queries        # and later queries on PRM's roadmaps
     python scripts/evaluate.py --resume              # continue an interrupted run with the same arguments
@@ -62,8 +63,8 @@ from learning.evaluation.later_queries import LATER
 from learning.evaluation.mapsets import map_set_queries
 from learning.evaluation.protocol import MOVINGAI_MAPS, QUICK
 from learning.evaluation.rigid import PLANNERS as RIGID_PLANNERS
+from learning.evaluation.rigid import RIGID_FIGURES, RigidPart
 from learning.evaluation.rigid import SAMPLERS as RIGID_SAMPLERS
-from learning.evaluation.rigid import RigidPart
 from learning.models.shipped import SHIPPED_POLICY
 from learning.samplers import registry
 from learning.samplers.route import SHIPPED
@@ -90,6 +91,8 @@ DEFAULT_POLICY = SHIPPED_POLICY
 DEFAULT = E.Protocol()
 #: The other planners of the full comparison when --other-planners is not given.
 OTHER_PLANNERS = ["RRTstar", "PRM"]
+#: --other-planners' own words beside the planners' names: every planner but RRT, or none.
+EVERY, NONE = "all", "none"
 
 
 def _fail(message: str):
@@ -99,8 +102,25 @@ def _fail(message: str):
 
 
 def _other_planner(value: str) -> str:
-    """A planner name for --other-planners (aliases as planner_name_arg reads them), or "all"."""
-    return "all" if value == "all" else planner_name_arg(value)
+    """A planner name for --other-planners (aliases as planner_name_arg reads them), "all" or "none"."""
+    return value if value in (EVERY, NONE) else planner_name_arg(value)
+
+
+def other_planners(given: list[str] | None, quick: bool = False) -> list[str]:
+    """The planners besides RRT that --other-planners asks for, each once, in the order given.
+
+    ``given`` as argparse leaves it: None when the flag is absent (the full run's :data:`OTHER_PLANNERS`, none with
+    --quick); the flag bare, or with "all" among its names, every planner but RRT; "none" alone, none.
+    """
+    if given is None:
+        return [] if quick else list(OTHER_PLANNERS)
+    if NONE in given:
+        if len(given) > 1:
+            raise InputError(f"--other-planners: {NONE} takes no planner beside it (given {' '.join(given)})")
+        return []
+    if not given or EVERY in given:
+        return [p for p in planner_names() if p != "RRT"]
+    return list(dict.fromkeys(given))
 
 
 def parse_args(argv=None) -> argparse.Namespace:
@@ -137,8 +157,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--tuning-scenarios", type=int, default=DEFAULT.tuning_scenarios,
                     help="scenarios per MovingAI map for choosing the best goal bias")
     ap.add_argument("--other-planners", nargs="*", default=None, type=_other_planner,
-                    choices=(*planner_names(), "all"), metavar="PLANNER",
-                    help="also run these planners on every test set (all: every planner but RRT; none given: none), "
+                    choices=(*planner_names(), EVERY, NONE), metavar="PLANNER",
+                    help="also run these planners on every test set (given bare or with all: every planner but RRT; "
+                         f"none: none; not given: {' and '.join(OTHER_PLANNERS)}, none with --quick), "
                          "each with uniform sampling, its classical option (the tuned goal bias for a tree, "
                          "obstacle-based sampling for a roadmap), the policy, the route encoder, its ablation and the "
                          "exact reference (OB-PRM: its own obstacle-based sampling only); choose from "
@@ -201,15 +222,11 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.rigid_scenes_given = args.rigid_scenes is not None
     if args.rigid_scenes is None:  # not on the command line: the report's 10 scenes a family, 2 with --quick
         args.rigid_scenes = 2 if args.quick else 10
-    if args.other_planners is None:  # not on the command line: the full run's, none with --quick
-        args.other_planners = [] if args.quick else list(OTHER_PLANNERS)
     if args.unseen_maps is None:
         args.unseen_maps = min(args.maps, DEFAULT.unseen_maps) if isinstance(args.maps, int) else 0
     if args.no_unseen:
         args.unseen_maps = 0
-    if "all" in args.other_planners:
-        args.other_planners = [p for p in planner_names() if p != "RRT"]
-    args.other_planners = list(dict.fromkeys(args.other_planners))
+    check_flags(lambda: setattr(args, "other_planners", other_planners(args.other_planners, args.quick)))
     check_backend_arguments(ap, args)
     check_flags(lambda: _check_values(args))
     check_flags(lambda: _check_rigid(args))
@@ -391,7 +408,7 @@ def _input_files(args) -> dict[str, Path]:
 
 #: What the outputs may hold (``means.png``: the figure's name in earlier versions); --out holding more is refused.
 OUTPUT_NAMES = frozenset({MANIFEST, "summary.md", "details.md", "runs.csv", "ecdf.png", "ecdf-time.png", "medians.png",
-                          "means.png", "map-sets.json", "ompl"})
+                          "means.png", "map-sets.json", "ompl", *RIGID_FIGURES})
 #: Free disk space the outputs need (tables, a few plots, one OMPL log per map set), with room to spare.
 OUTPUT_BYTES = 64 * 2**20
 

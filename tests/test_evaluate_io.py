@@ -25,7 +25,7 @@ from planners.tools.benchmark import Run
 ROOT = Path(__file__).resolve().parents[1]
 #: The smallest comparison: one forest map per split, one seed, no other map sets or planners.
 TINY = ["--families", "forest", "--size", "64", "--maps", "1", "--tuning-maps", "1", "--seeds", "1",
-        "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "--no-expert",
+        "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "none", "--no-expert",
         "--max-iterations", "2000"]
 
 

@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 
 from learning import evaluation as E
+from learning.evaluation import report
+from planners import planner_names
 from planners.maps.generators import SHIFTED_SEED0, SHIFTED_SIZES, TEST_SEED0
 from planners.tools.benchmark import Run, write_runs_csv
 
@@ -22,6 +24,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from conftest import load_script  # noqa: E402
 from test_benchmark_log import read_benchmark_log, runs_table  # noqa: E402
+from test_comparison import _results  # noqa: E402
 
 
 def _load_evaluate():
@@ -318,8 +321,8 @@ def test_evaluate_writes_results_people_can_open(tmp_path, capsys):
     (out / "ompl").mkdir(parents=True)
     (out / "ompl" / "stale.log").write_text("an earlier run's map set")
     rc = ev.main(["--families", "forest", "--size", "64", "--maps", "2", "--tuning-maps", "2", "--seeds", "1",
-                  "--shifted-maps", "1", "--no-unseen", "--movingai-maps", "--other-planners", "--processes", "1",
-                  "--max-iterations", "3000", "--out", str(out)])
+                  "--shifted-maps", "1", "--no-unseen", "--movingai-maps", "--other-planners", "none",
+                  "--processes", "1", "--max-iterations", "3000", "--out", str(out)])
     assert rc == 0
     files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
     assert files == ["MANIFEST.json", "details.md", "ecdf-time.png", "ecdf.png", "map-sets.json", "medians.png",
@@ -502,4 +505,42 @@ def test_quick_keeps_the_other_planners_named_on_the_command_line():
     assert ev.parse_args(["--quick", "--other-planners", "PRM"]).other_planners == ["PRM"]
     every = ev.parse_args(["--quick", "--other-planners", "all"]).other_planners
     assert "RRTConnect" in every and "LazyPRM" in every and "RRT" not in every
-    assert ev.parse_args(["--other-planners"]).other_planners == []  # none given: none
+    assert ev.parse_args(["--other-planners", "none"]).other_planners == []  # the full run's RRT* and PRM left out
+
+
+def test_other_planners_given_bare_means_every_planner_as_all_does(capsys):
+    ev = _load_evaluate()
+    every = [p for p in planner_names() if p != "RRT"]
+    assert ev.parse_args(["--quick", "--other-planners"]).other_planners == every
+    assert ev.parse_args(["--other-planners"]).other_planners == every
+    assert ev.parse_args(["--quick", "--other-planners", "all"]).other_planners == every
+    assert ev.parse_args(["--quick", "--other-planners", "PRM", "prm", "RRTstar"]).other_planners == ["PRM", "RRTstar"]
+    # resolved without a parser: absent, the full run's (none with --quick); bare or all, every one; none, none
+    assert ev.other_planners(None) == ev.OTHER_PLANNERS and ev.other_planners(None, quick=True) == []
+    assert ev.other_planners([]) == ev.other_planners(["all", "PRM"]) == every
+    assert ev.other_planners(["none"], quick=False) == []
+    with pytest.raises(SystemExit) as exc:
+        ev.parse_args(["--other-planners", "none", "PRM"])
+    assert exc.value.code == 2
+    assert "--other-planners: none takes no planner beside it" in capsys.readouterr().err
+
+
+def test_printed_shows_every_other_planners_rows_and_which_planner_to_take():
+    """What the command line prints ends with details.md's "Other planners" and summary.md's "Which planner"."""
+    res = _results({"uniform": (900, 1000), "goal_bias=0.05": (800, 900), E.ROUTE: (50, 60),
+                    E.ROUTE_ABLATION: (150, 200), E.EXACT_ROUTE: (45, 55)},
+                   planners={("PRM", "uniform"): 300, ("PRM", E.OBSTACLE_BASED): 200, ("PRM", E.ROUTE): 90,
+                             ("PRM", E.ROUTE_ABLATION): 150, ("PRM", E.EXACT_ROUTE): 80})
+    text = report.printed(res, "out")
+    others = text.split("Other planners on the test split")[1].split("Which planner and sampler")[0]
+    assert report.markdown_table(report.other_planner_rows(res)) in others  # the very table details.md carries
+    for sampler, its in (("uniform", 300), (E.OBSTACLE_BASED, 200), (E.ROUTE, 90), (E.ROUTE_ABLATION, 150),
+                         (E.EXACT_ROUTE, 80)):
+        assert f"| PRM | {sampler} | generated | 3 | {its} |" in others
+    which = text.split("Which planner and sampler, per group")[1]
+    assert report.markdown_table(report.which_planner(res)) in which
+    assert "| generated | RRT + route encoder: 50" in which
+    assert "numba's compiling" in text and "none in these runs." in text  # what the run times leave out
+    assert text.index("Other planners") < text.index("summary: out/summary.md")
+    alone = report.printed(_results({"uniform": (900, 1000), E.ROUTE: (50, 60)}))
+    assert "Other planners" not in alone and "Which planner and sampler" not in alone

@@ -194,7 +194,7 @@ def test_the_worked_example_ranks_a_user_model_and_a_user_factory(ppo_forest, tm
     opts = "@action_mode=bias@observation=image@obs_size=36@local_size=36@max_iterations=300"
     rc = _load_evaluate().main([
         "--families", "forest", "--size", "64", "--maps", "2", "--tuning-maps", "2", "--seeds", "1",
-        "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "--processes", "1",
+        "--shifted-maps", "0", "--no-unseen", "--movingai-maps", "--other-planners", "none", "--processes", "1",
         "--max-iterations", "600",
         "--no-expert",
         "--sampler", f"mine={path}@SamplerGym/RRT-Forest-v2{opts}",

@@ -346,18 +346,24 @@ def _which_planner_section(results) -> str:
             "work included.\n\n" + markdown_table(rows))
 
 
-def _clock_note(results) -> str:
+def _left_out_note(results) -> str:
+    """What the run times leave out: each model's load (once per process) and numba's compiling, measured."""
     loads = "; ".join(f"{what}: {seconds * 1e3:.0f} ms"
                       for what, seconds in sorted(results.comparison.models.load_seconds.items()))
     compiling = [r.compile_time for r in results.runs + results.pool if r.compile_time > 0]
     compiled, count = sum(compiling), len(compiling)
+    return ("Loading a model is paid once per process, not per query, and is left out"
+            + (f" ({loads})" if loads else "")
+            + "; so is numba's compiling, a kernel's first call in a process (as time limits leave it out)"
+            + (f": {compiled:.1f} s over {count} runs" if count else ": none in these runs"))
+
+
+def _clock_note(results) -> str:
     return ("RRT on the test split: median wall time per query in ms, from the planner's start to its first "
             "solution, the sampler's own work for the query included (the route encoder's pass, the exact "
             "reference's and the expert's grid search, the policy's set-up); the fastest sampler of each set in "
-            "bold, the privileged expert aside. An unsolved run counts with the time it ran. Loading a model is "
-            "paid once per process, not per query, and is left out" + (f" ({loads})" if loads else "")
-            + "; so is numba's compiling, a kernel's first call in a process (as time limits leave it out)"
-            + (f": {compiled:.1f} s over {count} runs" if count else ": none in these runs")
+            "bold, the privileged expert aside. An unsolved run counts with the time it ran. "
+            + _left_out_note(results)
             + f". All runs share one machine, {results.processes} process(es) of one thread each.")
 
 
@@ -466,6 +472,18 @@ def record(results, settings: dict) -> dict:
     return out
 
 
+def _rigid_figures(results, out_dir: Path) -> list[Path]:
+    """The 6-DoF parts' ECDFs of iterations and time and a solved passage in 3-D (``save_rigid_figures``)."""
+    from learning.evaluation.rigid import RigidPart, save_rigid_figures
+
+    paths: list[Path] = []
+    for part in results.comparison.parts:
+        if isinstance(part, RigidPart) and part.name in results.parts:
+            paths += save_rigid_figures(part.rows(results.parts[part.name][0]), out_dir, part.scenes,
+                                        user_samplers=part.users)
+    return paths
+
+
 def write_outputs(results, out: Path, settings: dict) -> list[Path]:
     """Every file of the output set, swapped into ``out`` together; returns the figures' paths."""
     c = results.comparison
@@ -474,6 +492,7 @@ def write_outputs(results, out: Path, settings: dict) -> list[Path]:
         write_runs_csv(results.all_runs, tmp / "runs.csv")
         plots = save_plots([r for r in results.runs if r.map not in results.movingai] + results.pool, results.rows,
                            results.best, tmp, extra=extra)
+        plots += _rigid_figures(results, tmp)
         stems: set[str] = set()  # one file per map set, the parts' included
         write_ompl_logs(results.runs + results.pool, results.best, tmp / "ompl", c.protocol, stems)
         for runs, report in results.parts.values():  # each part's logs under the protocol its runs were made by
@@ -485,7 +504,11 @@ def write_outputs(results, out: Path, settings: dict) -> list[Path]:
 
 
 def printed(results, out: Path | str | None = None) -> str:
-    """What the command line prints at the end: the short table, the findings, then the wide tables."""
+    """What the command line prints at the end: the short table, the findings, then the wide tables.
+
+    With other planners, every planner's rows by group (``details.md``'s "Other planners": each sampler, the
+    learned ones, their ablations and the exact reference) and ``summary.md``'s "Which planner and sampler".
+    """
     if _parts_only(results):
         text = "\n".join(["", *(f"- {f}" for f in findings(results)), "",
                           *(report.markdown.rstrip() + "\n" for _, report in results.parts.values())])
@@ -496,7 +519,8 @@ def printed(results, out: Path | str | None = None) -> str:
                                                                                  w["reach"])
     lines = ["", markdown_table(glance_short(results)), *(f"- {f}" for f in findings(results)), "",
              "Per map set (median iterations, success):", markdown_table(w["glance"]),
-             "Time to solution per query, median ms (the sampler's own work included):\n" + markdown_table(w["clock"])]
+             "Time to solution per query, median ms (the sampler's own work included):\n" + markdown_table(w["clock"]),
+             _left_out_note(results) + "."]
     if w["room"]:
         lines.append("How much of the room between ablation and exact reference learning closes:\n"
                      + markdown_table(w["room"]))
@@ -505,6 +529,14 @@ def printed(results, out: Path | str | None = None) -> str:
               + ", ".join(f"{b}: {v:.3f}" for b, v in sorted(results.batch_scores.items())),
               f"\nTargets: the learned policy meets {met} of {total}, the {ROUTE} {route_met} of {route_total}; the "
               f"privileged expert meets {reach_met} of its {reach_total} ({DETAILS} has which)"]
+    others = other_planner_rows(results)
+    if others:
+        lines.append("\nOther planners on the test split, by group of map sets (iterations are samples for a roadmap; "
+                     "checks include the sampler's own):\n" + markdown_table(others))
+    which = which_planner(results)
+    if which:
+        lines.append("Which planner and sampler, per group (the privileged references left out; a roadmap's "
+                     "iterations are samples):\n" + markdown_table(which))
     if out is not None:
         out = Path(out)
         lines.append(f"summary: {out / SUMMARY}; every table: {out / DETAILS}; raw runs: {out / 'runs.csv'}; plots: "

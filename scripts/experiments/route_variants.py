@@ -1,7 +1,7 @@
 """Route samplers whose encoder (or the exact cost-to-go) ranks the frontier, for ``evaluate.py --sampler``.
 
     python scripts/train_route.py --epochs 80
-    python scripts/evaluate.py --other-planners --sampler "ranked=route_variants:ranked" \\
+    python scripts/evaluate.py --other-planners none --sampler "ranked=route_variants:ranked" \\
         --sampler "ranked-ablation=route_variants:ranked_ablation" --sampler "ranked-exact=route_variants:ranked_exact"
 
 ``uses="frontier"`` (a knob of the private ``_VariantRouteSampler`` below, not of ``RouteSampler``) keeps
