@@ -23,6 +23,10 @@ Registered ids:
   (``source_kwargs={"part": "validation"}`` and so on, ``SceneSetSource``), at the seed project's RRT set-up
   (step 1.0, goal distance 1.0, 20,000 iterations). ``map_source="problem.cfg"`` (an OMPL.app problem, with the
   ``mesh`` extra) or ``"scene.scene"`` plans one 6-DoF problem every episode.
+* ``SamplerGym/RigidOrientation-v1``: the orientation class the 6-DoF route sampler gives its samples, one route
+  point of a generated scene a step (``RigidOrientationEnv``): Dict observations (the occupancy patch about the point
+  and the route's direction), ``Discrete(6)`` actions, a teacher's label in ``info`` for imitation; the shipped
+  orientation model's examples are collected through it (``learning.training.rigid``).
 * ``SamplerGym/Planning-v1``: everything by kwargs (``planner``, ``map_source``, ``step_size``,
   ``max_iterations``, ``action_mode``, ...); ``map=array_or_path, start=(x, y), goal=(x, y)`` plans on
   your own map; ``map_set=DIR, split="train"`` draws episodes from a part of a map set
@@ -52,6 +56,7 @@ from gymnasium.envs.registration import register, registry
 # user's own ``envs/`` folder shadows this one)
 from .actions import ACTION_MODES
 from .env_sampler import EnvSampler, NoExplorationWarning
+from .orientation import Lesson, NoLessons, RigidOrientationEnv, witness_teacher
 from .render import record_episode
 from .sampler_env import SamplerEnv, make_sampler_env
 from .sources import (
@@ -65,9 +70,10 @@ from .sources import (
     sample_map_paths,
 )
 
-__all__ = ["ACTION_MODES", "ENV_IDS", "EnvSampler", "FamilySource", "FileSource", "MapSetSource", "MovingAISource",
-           "NoExplorationWarning", "ProblemListSource", "RigidSceneSource", "SamplerEnv", "SceneSetSource",
-           "make_sampler_env", "record_episode", "sample_map_paths"]
+__all__ = ["ACTION_MODES", "ENV_IDS", "ORIENTATION_ENV_ID", "EnvSampler", "FamilySource", "FileSource", "Lesson",
+           "MapSetSource", "MovingAISource", "NoExplorationWarning", "NoLessons", "ProblemListSource",
+           "RigidOrientationEnv", "RigidSceneSource", "SamplerEnv", "SceneSetSource", "make_sampler_env",
+           "record_episode", "sample_map_paths", "witness_teacher"]
 
 _FAMILY_IDS = {
     "Forest": "forest",
@@ -88,6 +94,8 @@ ENV_IDS["SamplerGym/RRT-Files-v2"] = {"map_source": "files", **V2_DEFAULTS}
 ENV_IDS["SamplerGym/RRT-RigidBody-v1"] = {"map_source": "rigid", "step_size": 0.5, "max_iterations": 5000}
 ENV_IDS["SamplerGym/RRT-RigidScenes-v1"] = {"map_source": "rigid_scenes", "step_size": 1.0, "max_iterations": 20000}
 ENV_IDS["SamplerGym/Planning-v1"] = {}
+#: The orientation environment's id (not a planning environment: ``RigidOrientationEnv``, not ``SamplerEnv``).
+ORIENTATION_ENV_ID = "SamplerGym/RigidOrientation-v1"
 
 
 def _register_all() -> None:
@@ -96,6 +104,8 @@ def _register_all() -> None:
             continue
         # a factory, not the class: it adds TimeLimit at the env's own max_iterations (see make_sampler_env)
         register(id=env_id, entry_point=f"{__name__}.sampler_env:make_sampler_env", kwargs=kwargs)
+    if ORIENTATION_ENV_ID not in registry:
+        register(id=ORIENTATION_ENV_ID, entry_point=f"{__name__}.orientation:RigidOrientationEnv")
 
 
 _register_all()

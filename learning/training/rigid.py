@@ -38,21 +38,21 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import torch
 
+from envs.orientation import Lesson, NoLessons, RigidOrientationEnv, Teacher
 from learning.models.rigid_orientation import HALF_RANGE, OrientationNet
 from learning.references.rigid_expert import LABEL_ABLATION, solve_reference
 from planners.base.fileio import InputError, check_int, check_number
+from planners.base.problem import Problem
 from planners.guidance.rigid_orientation import (
     AXIS_PERMUTATIONS,
     CLASS_PERMUTATIONS,
     PATCH_HALF,
     class_validity,
-    route_directions,
-    route_observation,
+    path_points,
     solution_classes,
 )
-from planners.guidance.workspace_route import voxel_route
 from planners.maps.generators import TRAIN_SEEDS
-from planners.worlds.rigid_scenes import TRAINING_FAMILIES, scene_with_witness
+from planners.worlds.rigid_scenes import TRAINING_FAMILIES
 
 #: The labels a model may learn (``RigidTrainConfig.label``; the module doc).
 LABELS = ("point", "window", "solution")
@@ -142,66 +142,82 @@ class RigidExamples:
     fits: np.ndarray
 
 
-def _densify(path: np.ndarray, spacing: float = 1.0) -> np.ndarray:
-    """Positions along a path's centres, about ``spacing`` apart."""
-    pts = [path[0, :3]]
-    for a, b in zip(path[:-1, :3], path[1:, :3], strict=True):
-        k = max(1, int(np.ceil(np.linalg.norm(b - a) / spacing)))
-        pts.extend(a + (b - a) * (np.arange(1, k + 1) / k)[:, None])
-    return np.array(pts)
+def recipe_teacher(config: RigidTrainConfig) -> Teacher:
+    """The teacher of ``config``'s label (the module doc), for ``envs.RigidOrientationEnv``: the workspace route's
+    points and the solution's (``label="solution"``: the expert's long runs, a scene they do not solve left out) or
+    the witness path's, each labelled, and the points kept where some class fits and, where every class does, at
+    ``open_keep``, drawn with the episode's teacher generator.
+    """
+
+    def teach(problem: Problem, route: np.ndarray | None, witness, rng: np.random.Generator) -> list[Lesson] | None:
+        world = problem.world
+        parts = [] if route is None else [route]
+        solution = None
+        if config.label == "solution":  # the expert's long runs (learning.references.rigid_expert)
+            solution = solve_reference(problem, settings=LABEL_ABLATION)[0]
+            if solution is None:
+                return None
+            parts.append(path_points(solution))
+        else:
+            parts.append(path_points(witness.path))
+        lessons = []
+        for pts in parts:
+            fit = None
+            if solution is not None:
+                y = solution_classes(pts, solution)
+                if config.open_test == "clearance":
+                    fit = (class_validity(world, pts, rng, config.jitter, config.poses, "any") > 0).sum(1)
+            elif config.label == "point":
+                y = class_validity(world, pts, rng, config.jitter, config.poses)
+            else:
+                y = window_labels(pts, class_validity(world, pts, rng, config.jitter, config.poses, "any"),
+                                  config.window)
+            fit = (y > 0).sum(axis=1) if fit is None else fit
+            keep = (fit > 0) & ((fit < y.shape[1]) | (rng.random(len(y)) < config.open_keep))
+            lessons.append(Lesson(pts, y, fit, keep))
+        return lessons
+
+    return teach
 
 
 def collect_rigid_examples(config: RigidTrainConfig, progress: Callable[[str], None] | None = None) -> RigidExamples:
-    """The examples of ``config``'s training scenes (the module doc)."""
+    """The examples of ``config``'s training scenes (the module doc), collected through the orientation environment
+    (``envs.RigidOrientationEnv``, ``SamplerGym/RigidOrientation-v1``) with ``recipe_teacher(config)`` as its
+    teacher: each scene an episode, each step the observation and the teacher's label of one point, the expert's
+    class the action.
+    """
     rng = np.random.default_rng(config.seed)
+    env = RigidOrientationEnv(families=config.families, teacher=recipe_teacher(config), half=config.half)
     patches, dirs, labels, scene, names, fits = [], [], [], [], [], []
     for family in config.families:
         seeds = rng.integers(*TRAIN_SEEDS, size=config.scenes_per_family)
         for s in seeds:
-            problem, witness = scene_with_witness(family, int(s))
-            world = problem.world
-            route = voxel_route(world, problem.start, problem.goal)
-            parts = [] if route is None else [route]
-            solution = None
-            if config.label == "solution":  # the expert's long runs (learning.references.rigid_expert)
-                solution = solve_reference(problem, settings=LABEL_ABLATION)[0]
-                if solution is None:
-                    if progress is not None:
-                        progress(f"{problem.name}: no solution by the long runs, left out")
-                    continue
-                parts.append(_densify(solution))
-            else:
-                parts.append(_densify(witness.path))
-            label_rng = np.random.default_rng([config.seed, int(s), len(names)])
-            for pts in parts:
-                p, _ = route_observation(world, pts, half=config.half)
-                d = route_directions(pts).astype(np.float32)
-                fit = None
-                if solution is not None:
-                    y = solution_classes(pts, solution)
-                    if config.open_test == "clearance":
-                        fit = (class_validity(world, pts, label_rng, config.jitter, config.poses, "any") > 0).sum(1)
-                elif config.label == "point":
-                    y = class_validity(world, pts, label_rng, config.jitter, config.poses)
-                else:
-                    y = window_labels(pts, class_validity(world, pts, label_rng, config.jitter, config.poses, "any"),
-                                      config.window)
-                fit = (y > 0).sum(axis=1) if fit is None else fit
-                keep = (fit > 0) & ((fit < y.shape[1]) | (label_rng.random(len(y)) < config.open_keep))
-                patches.append(p[keep])
-                dirs.append(d[keep])
-                labels.append(y[keep].astype(np.float32))
-                scene.append(np.full(int(keep.sum()), len(names)))
-                fits.append(fit[keep])
-            names.append(problem.name)
+            try:
+                obs, info = env.reset(options={"family": family, "scene_seed": int(s),
+                                               "teacher_seed": [config.seed, int(s), len(names)]})
+            except NoLessons as e:
+                if e.labelled:  # labelled, every point left out: the scene counts, with no example
+                    names.append(env.scene)
+                elif progress is not None:
+                    progress(f"{env.scene}: no solution by the long runs, left out")
+                continue
+            done = False
+            while not done:
+                patches.append(obs["patch"])
+                dirs.append(obs["direction"])
+                labels.append(info["label"].astype(np.float32))
+                fits.append(info["fits"])
+                obs, _, done, _, info = env.step(labels[-1].argmax())
+            scene.append(np.full(info["points"], len(names)))
+            names.append(env.scene)
             if progress is not None:
-                progress(f"{problem.name}: {sum(len(a) for a in labels)} examples so far")
+                progress(f"{env.scene}: {len(labels)} examples so far")
     if not patches:
         raise RuntimeError(f"no training examples: none of the {len(config.families) * config.scenes_per_family} "
                            f"scenes of {', '.join(config.families)} gave one (label {config.label!r}: "
                            "the long runs found no solution in any)")
-    return RigidExamples(np.concatenate(patches), np.concatenate(dirs), np.concatenate(labels),
-                         np.concatenate(scene), names, np.concatenate(fits))
+    return RigidExamples(np.stack(patches), np.stack(dirs), np.stack(labels), np.concatenate(scene), names,
+                         np.array(fits))
 
 
 def augment(patches: np.ndarray, directions: np.ndarray, labels: np.ndarray, rng: np.random.Generator):

@@ -11,6 +11,7 @@ pose under four rotations (``class_rotations``).
 * ``route_patches(grid, points, low, cell, half)``: the ``(2 half + 1)^3`` voxels about each point's
   voxel, voxels outside the workspace counting as covered.
 * ``route_directions(route, reach)``: the route's unit direction at each of its points.
+* ``path_points(path, spacing)``: a solution's or witness path's positions as dense as a route's points.
 * ``route_observation(world, route)``: both, at every route point: the observation of the learned
   orientation model (``learning.models.rigid_orientation``), computed once per query. A mesh world's
   occupancy is its ``solid_share`` (surfaces and what they enclose, seen from the query's free space),
@@ -104,6 +105,18 @@ def route_patches(grid: np.ndarray, points, low, cell: float = 1.0, half: int = 
     windows = np.lib.stride_tricks.sliding_window_view(padded, (side, side, side))
     idx = voxel_index(points, low, cell, grid.shape)
     return np.ascontiguousarray(windows[idx[:, 0], idx[:, 1], idx[:, 2]])
+
+
+def path_points(path, spacing: float = 1.0) -> np.ndarray:
+    """``(n, 3)``: positions along a path's centres (its states' first three entries), about ``spacing`` apart,
+    every vertex kept: where a solution or witness path is read at points as dense as a route's.
+    """
+    path = np.asarray(path, dtype=np.float64)
+    pts = [path[0, :3]]
+    for a, b in zip(path[:-1, :3], path[1:, :3], strict=True):
+        k = max(1, int(np.ceil(np.linalg.norm(b - a) / spacing)))
+        pts.extend(a + (b - a) * (np.arange(1, k + 1) / k)[:, None])
+    return np.array(pts)
 
 
 def route_directions(route, reach: int = DIRECTION_REACH) -> np.ndarray:
