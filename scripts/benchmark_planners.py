@@ -7,6 +7,8 @@
 
 Prints Markdown tables and writes them, with the raw runs as CSV, under --out; also one OMPL
 benchmark log per map (ompl/<map>.log) that OMPL's ompl_benchmark_statistics.py and Planner Arena open.
+On 2-D maps it compares time per iteration; time to a first solution, every sampler's own work included, against
+OMPL's RRT-Connect on the same queries in the same run is ``scripts/benchmark_clock.py``'s.
 
 With ``--rigid DIR`` (OMPL.app's root or its ``resources/3D`` folder; needs the ``mesh`` extra) it runs
 instead our RRT-Connect and goal-biased RRT on every ``.cfg`` problem there, with the problem's own time

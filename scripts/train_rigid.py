@@ -8,8 +8,9 @@ Runs ``learning.training.rigid.train_rigid_orientation``: examples from training
 from ``TRAIN_SEEDS`` with ``--seed``; never a validation, tuning or test scene, nor a test-only family),
 the observation at the workspace route's points and a solution's (found by the privileged expert's long runs),
 the label the orientation class the solution takes there (``--label solution``, the default; ``window`` and
-``point``: which classes keep the motion check's clearance along the witness path). One torch thread: the same
-seed gives the same weights.
+``point``: which classes keep the motion check's clearance along the witness path), each scene an episode of the
+orientation environment ``SamplerGym/RigidOrientation-v1`` (``envs.RigidOrientationEnv``) whose teacher gives the
+label. One torch thread: the same seed gives the same weights.
 
 Writes ``<out>/rigid_route.pt`` (tensors and plain numbers, read with ``torch.load(weights_only=True)``)
 and ``<out>/rigid_route.json`` (the recipe, the log, the time); ``--export PATH`` copies the weights to

@@ -22,6 +22,10 @@ answer for the ``point`` and ``window`` labels; for the one-hot ``solution`` lab
 ``"label"`` (the one-hot label: one class, so every point is kept) or ``"clearance"`` (``class_validity``'s
 ``"any"`` with the same ``poses`` and ``jitter``: the points the body could pass in any class).
 
+The examples are collected through the orientation environment (``envs.RigidOrientationEnv``,
+``SamplerGym/RigidOrientation-v1``): each scene an episode whose teacher is ``recipe_teacher(config)``, each step
+the observation of one point and the teacher's label in ``info``, the expert's class the action.
+
 The model learns the label normalised to a distribution (cross-entropy with soft targets). Each
 example is seen under one of the 48 symmetries of the voxel grid per epoch (a permutation of the
 world's axes and reflections; the classes and the direction move with it), so a passage along x
