@@ -84,7 +84,7 @@ from planners.maps.generators import FAMILIES, SHIFTED_SIZES, check_size
 from planners.maps.mapset import GeneratedMapSet, ShiftedMapSet
 from planners.maps.unseen import UNSEEN_MIN_SIZE
 from planners.tools.parallel import add_backend_arguments, check_backend_arguments
-from planners.worlds.rigid_scenes import RigidSceneSet
+from planners.worlds.rigid_scenes import TEST_ONLY_FAMILIES, RigidSceneSet
 
 DEFAULT_POLICY = SHIPPED_POLICY
 #: The comparison's protocol at its defaults: every default below is taken from it.
@@ -191,9 +191,16 @@ def parse_args(argv=None) -> argparse.Namespace:
                          "policy's mode, draws for guided actions; @stochastic or @deterministic to choose; "
                          "key=value: the env kwargs it was trained with), or NAME=module:callable "
                          "for a factory returning a Sampler")
-    ap.add_argument("--rigid", choices=("validation", "tuning", "test"), default=None, metavar="PART",
+    ap.add_argument("--rigid", choices=("validation", "tuning", "test", "mesh"), default=None, metavar="PART",
                     help="also run the 6-DoF scene sets' PART (validation, tuning or test; docs/rigid-scenes.md): the "
-                         "seed project's planners with every 6-DoF sampler, in the same journal and output set")
+                         "seed project's planners with every 6-DoF sampler, in the same journal and output set; "
+                         "mesh: the test-only mesh set (the test-only families written as meshes, and OMPL.app's "
+                         "problems from --rigid-omplapp; the mesh extra)")
+    ap.add_argument("--rigid-omplapp", metavar="DIR",
+                    help="--rigid mesh: the folder of OMPL.app's problems (its root or resources/3D; default "
+                         "$SAMPLERGYM_OMPLAPP_DIR, else the mesh scenes alone)")
+    ap.add_argument("--rigid-problems", nargs="+", metavar="NAME",
+                    help="--rigid mesh: OMPL.app problems to take, by file stem (default every .cfg there)")
     ap.add_argument("--rigid-scenes", type=int,
                     help="--rigid: scenes per family (default 10, the research report's test part: 70 runs a row; "
                          "2 with --quick)")
@@ -272,7 +279,8 @@ def _check_values(args) -> None:
 def _check_rigid(args) -> None:
     """``--rigid``'s flags, and its part of the comparison (``args.parts``): an ``InputError`` naming the flag."""
     args.parts = []
-    given = [f for f in ("rigid_only", "rigid_max_iterations", "rigid_samplers", "rigid_sampler") if getattr(args, f)]
+    given = [f for f in ("rigid_only", "rigid_max_iterations", "rigid_samplers", "rigid_sampler", "rigid_omplapp",
+                         "rigid_problems") if getattr(args, f)]
     given += ["rigid_scenes"] if args.rigid_scenes_given else []
     if args.rigid is None:
         if given:
@@ -283,10 +291,20 @@ def _check_rigid(args) -> None:
         check_int_flags(args, ("rigid_max_iterations",))
     samplers = args.rigid_samplers or list(RIGID_SAMPLERS)
     users = registry.checked_user_samplers(args.rigid_sampler, "--rigid-sampler", tuple(samplers))
+    if args.rigid != "mesh" and (args.rigid_omplapp or args.rigid_problems):
+        raise InputError("--rigid-omplapp and --rigid-problems go with --rigid mesh")
+    if args.rigid == "mesh":
+        from planners.worlds.omplapp import omplapp_dir
+        from planners.worlds.rigid_scenes import MeshSceneSet
+
+        folder = omplapp_dir(args.rigid_omplapp, flag="--rigid-omplapp")  # a bad folder named by this flag
+        scenes, part = MeshSceneSet(TEST_ONLY_FAMILIES, args.rigid_scenes, folder, args.rigid_problems), "test"
+    else:
+        scenes, part = RigidSceneSet(counts={args.rigid: args.rigid_scenes}), args.rigid
     try:
-        scenes = RigidSceneSet(counts={args.rigid: args.rigid_scenes})
-        args.parts = [RigidPart(scenes, args.rigid, planners=args.rigid_planners, samplers=samplers,
-                                seeds=args.rigid_seeds, max_iterations=args.rigid_max_iterations, users=users)]
+        args.parts = [RigidPart(scenes, part, planners=args.rigid_planners, samplers=samplers,
+                                seeds=args.rigid_seeds, max_iterations=args.rigid_max_iterations, users=users,
+                                name="6-DoF mesh scenes (test)" if args.rigid == "mesh" else "")]
     except InputError as exc:
         raise InputError(f"--rigid-samplers: {exc}") from exc
 

@@ -525,6 +525,25 @@ def test_other_planners_given_bare_means_every_planner_as_all_does(capsys):
     assert "--other-planners: none takes no planner beside it" in capsys.readouterr().err
 
 
+def test_rigid_mesh_runs_the_test_only_mesh_set_and_omplapps_problems_in_the_one_comparison(tmp_path, capsys,
+                                                                                          monkeypatch):
+    from planners.worlds.rigid_scenes import MeshSceneSet
+
+    ev = _load_evaluate()
+    monkeypatch.delenv("SAMPLERGYM_OMPLAPP_DIR", raising=False)
+    args = ev.parse_args(["--rigid", "mesh", "--rigid-only", "--rigid-scenes", "1"])
+    (part,) = args.parts
+    assert isinstance(part.scenes, MeshSceneSet) and part.part == "test" and part.name == "6-DoF mesh scenes (test)"
+    assert [q.family for q in part.scenes.queries("test")] == ["hatch", "elbow"]  # no OMPL.app folder: none of it
+    for flags, message in ((["--rigid", "test", "--rigid-omplapp", str(tmp_path)], "go with --rigid mesh"),
+                           (["--rigid-problems", "Easy"], "needs --rigid PART"),
+                           (["--rigid", "mesh", "--rigid-omplapp", str(tmp_path)],
+                            f"--rigid-omplapp {tmp_path}: no OMPL.app problems there")):
+        with pytest.raises(SystemExit) as exc:
+            ev.parse_args(flags)
+        assert exc.value.code == 2 and message in capsys.readouterr().err
+
+
 def test_printed_shows_every_other_planners_rows_and_which_planner_to_take():
     """What the command line prints ends with details.md's "Other planners" and summary.md's "Which planner"."""
     res = _results({"uniform": (900, 1000), "goal_bias=0.05": (800, 900), E.ROUTE: (50, 60),

@@ -27,6 +27,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -259,9 +260,11 @@ class RigidQuery:
 
     @property
     def map_set(self) -> str:
-        """The set its runs are reported under: the family, ``<family> (mesh)``, or ``OMPL.app``."""
+        """The set its runs are reported under: the family, ``<family> (mesh)``, or ``OMPL.app <problem>`` (each
+        problem its own world, so its own set: ``scene_set_of``).
+        """
         if self.scene.path:
-            return "OMPL.app"
+            return f"OMPL.app {Path(self.scene.path).stem}"
         return f"{self.scene.family} (mesh)" if self.scene.mesh else self.scene.family
 
     @property

@@ -55,10 +55,11 @@ class OMPLAppTask:
     path: Path
 
 
-def omplapp_dir(directory: str | os.PathLike | None = None) -> Path | None:
+def omplapp_dir(directory: str | os.PathLike | None = None, flag: str = "--omplapp") -> Path | None:
     """The folder of OMPL.app's 3-D problems: ``directory``, else ``$SAMPLERGYM_OMPLAPP_DIR``; None if neither is set.
 
-    Either may name OMPL.app's root (``resources/3D`` is taken) or the folder of ``.cfg`` files itself.
+    Either may name OMPL.app's root (``resources/3D`` is taken) or the folder of ``.cfg`` files itself. ``flag``:
+    how the error names a ``directory`` given (the command line's flag).
 
     Raises:
         InputError: The folder given does not exist or holds no ``.cfg`` file.
@@ -70,7 +71,7 @@ def omplapp_dir(directory: str | os.PathLike | None = None) -> Path | None:
     for candidate in (base / "resources" / "3D", base):
         if candidate.is_dir() and any(candidate.glob("*.cfg")):
             return candidate
-    source = "--omplapp" if directory is not None else OMPLAPP_ENV
+    source = flag if directory is not None else OMPLAPP_ENV
     raise InputError(f"{source} {base}: no OMPL.app problems there (expected .cfg files in it or in its "
                      f"resources/3D folder)")
 
