@@ -376,3 +376,25 @@ def test_the_rigid_benchmark_restarts_our_runs_when_asked(tmp_path):
     assert restarted >= 1  # the runs restarted
     with pytest.raises(SystemExit):
         bp.main(argv[:-1] + ["-1"])
+
+
+def test_a_problems_files_are_kept_by_content_digest_with_the_mesh_libraries_versions(tmp_path):
+    import hashlib
+
+    from planners.worlds.omplapp import mesh_library_versions, problem_digests, problem_files
+    from planners.worlds.rigid_scenes import MeshSceneSet
+
+    path = write_problem(tmp_path)
+    files = problem_files(path)
+    assert files == {"cfg": path, "world": tmp_path / "env.obj", "robot": tmp_path / "robot.obj"}
+    digests = problem_digests(path)
+    assert digests["world"] == f"env.obj sha256:{hashlib.sha256((tmp_path / 'env.obj').read_bytes()).hexdigest()}"
+    record = MeshSceneSet(count=0, omplapp=tmp_path).record()
+    assert record["omplapp_files"] == {"hole": digests}
+    assert set(record["mesh_libraries"]) == {"trimesh", "pycollada", "python-fcl"}
+    assert mesh_library_versions()["trimesh"] == trimesh.__version__
+    (tmp_path / "robot.obj").write_bytes(b"# another robot\n")  # another file, another digest
+    assert problem_digests(path)["robot"] != digests["robot"]
+    (tmp_path / "robot.obj").unlink()
+    with pytest.raises(InputError, match=r"robot = robot.obj not found beside it"):
+        problem_files(path)

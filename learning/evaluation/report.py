@@ -469,6 +469,10 @@ def record(results, settings: dict) -> dict:
                          "settings": f"tuned on the {GENERATED_POOL}"}
     if results.parts:
         out["parts"] = sorted(results.parts)
+        scenes = {part.name: part.scenes.record() for part in c.parts
+                  if part.name in results.parts and hasattr(getattr(part, "scenes", None), "record")}
+        if scenes:  # the 6-DoF parts' scene sets (a mesh set's OMPL.app files by digest)
+            out["scene sets"] = scenes
     return out
 
 

@@ -15,6 +15,7 @@ state's translation is where that point goes.
 from __future__ import annotations
 
 import configparser
+import hashlib
 import math
 import os
 from dataclasses import dataclass
@@ -169,17 +170,53 @@ def _read_cfg(path: Path) -> configparser.ConfigParser:
     return cfg
 
 
-def _world(path: Path, prob: configparser.SectionProxy, delta: float | None, grid_cells: int | None,
-           band: float | None = None) -> MeshWorld:
-    meshes = {}
+def problem_files(path: str | os.PathLike) -> dict[str, Path]:
+    """The files an OMPL.app problem is read from: ``{"cfg": ..., "world": ..., "robot": ...}`` (the meshes that its
+    ``[problem]`` section names, beside it); an ``InputError`` names a missing one. Nothing is parsed but the ``.cfg``.
+    """
+    path = Path(path)
+    return {"cfg": path, **_mesh_paths(path, _read_cfg(path)["problem"])}
+
+
+def _mesh_paths(path: Path, prob: configparser.SectionProxy) -> dict[str, Path]:
+    """The world's and the robot's mesh files that the ``[problem]`` section ``prob`` of ``path`` names."""
+    out = {}
     for key in ("world", "robot"):
         name = prob.get(key)
         if not name:
             raise InputError(f"{path}: [problem] {key} is missing (the {key}'s mesh file)")
-        mesh_path = path.parent / name.strip()
-        if not mesh_path.is_file():
-            raise InputError(f"{path}: [problem] {key} = {name.strip()} not found beside it ({mesh_path})")
-        meshes[key] = read_mesh(mesh_path)
+        out[key] = path.parent / name.strip()
+        if not out[key].is_file():
+            raise InputError(f"{path}: [problem] {key} = {name.strip()} not found beside it ({out[key]})")
+    return out
+
+
+def problem_digests(path: str | os.PathLike) -> dict[str, str]:
+    """SHA-256 of each of ``problem_files(path)`` (name and digest by role): what a run's record keeps, so two runs
+    on OMPL.app's problems can tell whether they read the same files (OMPL.app's snapshots differ).
+    """
+    return {role: f"{file.name} sha256:{hashlib.sha256(file.read_bytes()).hexdigest()}"
+            for role, file in problem_files(path).items()}
+
+
+def mesh_library_versions() -> dict[str, str | None]:
+    """The installed versions of the libraries a mesh world reads and checks with (None: not installed), without
+    importing them.
+    """
+    from importlib import metadata
+
+    out = {}
+    for dist in ("trimesh", "pycollada", "python-fcl"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = None
+    return out
+
+
+def _world(path: Path, prob: configparser.SectionProxy, delta: float | None, grid_cells: int | None,
+           band: float | None = None) -> MeshWorld:
+    meshes = {key: read_mesh(file) for key, file in _mesh_paths(path, prob).items()}
     env = meshes["world"]
     robot = centred_robot(*meshes["robot"])
     if any(f"volume.{e}.{a}" in prob for e in ("min", "max") for a in "xyz"):

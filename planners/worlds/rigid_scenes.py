@@ -666,6 +666,14 @@ class MeshSceneSet:
                 f"{where}")
 
     def record(self) -> dict:
-        """The set as JSON-able data."""
-        return {"kind": "mesh scenes", "families": list(self.families), "count": self.count,
-                "omplapp": [p.name for p in self.cfgs], "parts": {"test": [q.name for q in self.queries("test")]}}
+        """The set as JSON-able data: with OMPL.app's problems, each one's files by content digest
+        (``problem_digests``) and the mesh libraries' versions, so two runs tell whether they read the same problems.
+        """
+        out = {"kind": "mesh scenes", "families": list(self.families), "count": self.count,
+               "omplapp": [p.name for p in self.cfgs], "parts": {"test": [q.name for q in self.queries("test")]}}
+        if self.cfgs:
+            from planners.worlds.omplapp import mesh_library_versions, problem_digests
+
+            out["omplapp_files"] = {p.stem: problem_digests(p) for p in self.cfgs}
+            out["mesh_libraries"] = mesh_library_versions()
+        return out
