@@ -40,7 +40,7 @@ from planners.guidance.rigid_orientation import (
 )
 from planners.guidance.workspace_route import voxel_route
 from planners.maps.generators import TRAIN_SEEDS
-from planners.worlds.rigid3d import RRT_SETUP, densify
+from planners.worlds.rigid3d import densify, seed_step
 from planners.worlds.rigid_scenes import (
     PARTS,
     TEST_ONLY_FAMILIES,
@@ -87,8 +87,7 @@ def witness_teacher(problem: Problem, route: np.ndarray | None, witness: Verific
     """The class the scene's witness path (densified at half the seed set-up's step) takes nearest each point of the
     workspace route and of the witness path itself (one-hot; every point kept). ``rng`` is not used.
     """
-    step = RRT_SETUP["step_fraction"] * float(np.max(problem.world.high3 - problem.world.low3))
-    states = densify(witness.path, problem, 0.5 * step)
+    states = densify(witness.path, problem, 0.5 * seed_step(problem.world))
     lessons = []
     for pts in ([] if route is None else [route]) + [path_points(witness.path)]:
         labels = solution_classes(pts, states)

@@ -469,22 +469,27 @@ def record(results, settings: dict) -> dict:
                          "settings": f"tuned on the {GENERATED_POOL}"}
     if results.parts:
         out["parts"] = sorted(results.parts)
-        scenes = {part.name: part.scenes.record() for part in c.parts
-                  if part.name in results.parts and hasattr(getattr(part, "scenes", None), "record")}
+        scenes = {part.name: part.scenes.record() for part in _rigid_parts(results)}
         if scenes:  # the 6-DoF parts' scene sets (a mesh set's OMPL.app files by digest)
             out["scene sets"] = scenes
     return out
 
 
+def _rigid_parts(results) -> list:
+    """The comparison's 6-DoF parts (``RigidPart``) that ran."""
+    from learning.evaluation.rigid import RigidPart
+
+    return [p for p in results.comparison.parts if isinstance(p, RigidPart) and p.name in results.parts]
+
+
 def _rigid_figures(results, out_dir: Path) -> list[Path]:
     """The 6-DoF parts' ECDFs of iterations and time and a solved passage in 3-D (``save_rigid_figures``)."""
-    from learning.evaluation.rigid import RigidPart, save_rigid_figures
+    from learning.evaluation.rigid import save_rigid_figures
 
     paths: list[Path] = []
-    for part in results.comparison.parts:
-        if isinstance(part, RigidPart) and part.name in results.parts:
-            paths += save_rigid_figures(part.rows(results.parts[part.name][0]), out_dir, part.scenes,
-                                        user_samplers=part.users)
+    for part in _rigid_parts(results):
+        paths += save_rigid_figures(part.rows(results.parts[part.name][0]), out_dir, part.scenes,
+                                    user_samplers=part.users)
     return paths
 
 

@@ -36,7 +36,7 @@ from learning.samplers.registry import REFERENCES
 from planners import PRM, RRT, Problem, RRTConnect, solve_with_restarts
 from planners.base.fileio import InputError
 from planners.base.planner import compile_seconds
-from planners.worlds.rigid3d import PRM_SETUP, RRT_SETUP
+from planners.worlds.rigid3d import PRM_SETUP, RRT_SETUP, seed_step
 from planners.worlds.rigid_scenes import MeshSceneSet, RigidSceneSet, SceneQuery
 
 #: The planners of the comparison, and their iteration caps (PRM: samples).
@@ -76,9 +76,8 @@ def planner_setup(name: str, problem: Problem) -> tuple[Problem, dict]:
     if name == "PRM":
         return problem.with_query(problem.start, problem.goal, metric="cossin"), \
             {"k": PRM_SETUP["k"], "search": PRM_SETUP["search"]}
-    step = RRT_SETUP["step_fraction"] * float(np.max(problem.world.high3 - problem.world.low3))
     p = problem.with_query(problem.start, problem.goal, metric="cossin", goal_tolerance=RRT_SETUP["goal_distance"])
-    return p, {"step_size": step}
+    return p, {"step_size": seed_step(problem.world)}
 
 
 def build_planner(name: str, problem: Problem, sampler, seed: int):
@@ -98,10 +97,8 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
     ``restarts``: a tree planner's run restarts after Luby's sequence times this many iterations
     (``planners.solve_with_restarts``, the cap over all attempts); 0: one run.
     """
-    if restarts and planner == "PRM":
-        raise InputError("restarts are for the tree planners (RRT, RRTConnect): a roadmap would throw its samples away")
+    cap = run_cap(planner, max_iterations, restarts)  # before the sampler is made: a bad run costs nothing
     made = make_run_sampler(sampler, params, spec)
-    cap = CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
     c0, t0 = compile_seconds(), time.perf_counter()
     result, _, sampler_checks = solve_run(problem, planner, made, seed, max_iterations=cap, restarts=restarts)
     elapsed = time.perf_counter() - t0 - (compile_seconds() - c0)
@@ -111,6 +108,13 @@ def run_one(problem: Problem, planner: str, sampler: str, seed: int, *, params: 
                     planner=planner, sampler=sampler, seed=int(seed), solved=bool(result.solved),
                     iterations=int(result.iterations), cap=int(cap), collision_checks=checks,
                     sampler_checks=sampler_checks, candidates=int(result.candidates), time=float(elapsed))
+
+
+def run_cap(planner: str, max_iterations: int | None = None, restarts: int = 0) -> int:
+    """A run's iteration cap: the planner's set-up's, lowered to ``max_iterations``; restarts are refused for PRM."""
+    if restarts and planner == "PRM":
+        raise InputError("restarts are for the tree planners (RRT, RRTConnect): a roadmap would throw its samples away")
+    return CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
 
 
 def make_run_sampler(sampler: str, params: dict | None = None, spec: str | None = None):
@@ -128,9 +132,7 @@ def solve_run(problem: Problem, planner: str, sampler, seed: int, *, max_iterati
     Every run is seeded, so the same arguments give the same run: a row's path (the rows keep none) is had again
     from its scene with a fresh sampler (``make_run_sampler``).
     """
-    if restarts and planner == "PRM":
-        raise InputError("restarts are for the tree planners (RRT, RRTConnect): a roadmap would throw its samples away")
-    cap = CAPS[planner] if max_iterations is None else min(CAPS[planner], max_iterations)
+    cap = run_cap(planner, max_iterations, restarts)
     if restarts:
         counted = []
         p, kwargs = planner_setup(planner, problem)
@@ -615,8 +617,6 @@ def save_rigid_figures(rows: Sequence[RigidRow], out_dir, scene_set: RigidSceneS
     ``scene_set`` and a solved run, ``passage.png`` (``save_passage``; ``passage``: its keywords) under ``out_dir``;
     returns the paths written. Nothing where ``rows`` is empty.
     """
-    from pathlib import Path
-
     from planners.viz.plotting import save_figure
 
     out_dir = Path(out_dir)

@@ -37,7 +37,7 @@ from planners.guidance.rigid_orientation import euler_from_matrices, small_rotat
 from planners.guidance.route_draws import watch_reach
 from planners.guidance.workspace_route import box_muller
 from planners.worlds.mesh import rotation_matrices
-from planners.worlds.rigid3d import RRT_SETUP, densify
+from planners.worlds.rigid3d import densify, seed_step
 
 #: Seeds of the long runs: fixed, so the reference's solution belongs to the query, not to a planner's seed.
 REFERENCE_SEEDS = tuple(7919 + k for k in range(16))
@@ -85,7 +85,7 @@ def solve_reference(problem: Problem, attempts: int = 4, budget: int = 100_000,
     from planners.algorithms.smoothing import smooth
 
     world = problem.world
-    step = RRT_SETUP["step_fraction"] * float(np.max(world.high3 - world.low3))
+    step = seed_step(world)
     p = problem.with_query(problem.start, problem.goal, metric="cossin")
     t0, ran = time.perf_counter(), 0
     given = REFERENCE_ABLATION if settings is None else settings

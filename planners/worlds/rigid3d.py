@@ -485,6 +485,13 @@ def euler_from_matrix(R) -> np.ndarray:
 # --- the seed project's planning set-ups -----------------------------------------------------------
 
 
+def seed_step(world) -> float:
+    """The seed set-up's RRT step on a 6-DoF world (a box or mesh world): ``RRT_SETUP["step_fraction"]`` of the
+    workspace's longest side.
+    """
+    return RRT_SETUP["step_fraction"] * float(np.max(world.high3 - world.low3))
+
+
 def setup_planner(problem: Problem, setup: str, *, seed: int = 0):
     """The seed project's planner for a rigid-body problem, and its iteration budget.
 
@@ -517,8 +524,7 @@ def setup_planner(problem: Problem, setup: str, *, seed: int = 0):
         return PRM(p, k=PRM_SETUP["k"], search=PRM_SETUP["search"], seed=seed), PRM_SETUP["samples"]
     world = problem.world
     p = problem.with_query(problem.start, problem.goal, metric="cossin", goal_tolerance=RRT_SETUP["goal_distance"])
-    step = RRT_SETUP["step_fraction"] * float(np.max(world.high3 - world.low3))
-    planner = RRT(p, step_size=step, sampler=GoalBiasedSampler(RRT_SETUP["goal_bias"]), seed=seed)
+    planner = RRT(p, step_size=seed_step(world), sampler=GoalBiasedSampler(RRT_SETUP["goal_bias"]), seed=seed)
     return planner, RRT_SETUP["max_iterations"]
 
 
